@@ -1,0 +1,218 @@
+"""Error metrics of the thesis (section IV-C): RMSE (eq. 18) and relative errors (eq. 19).
+
+Conventions
+-----------
+* The RMSE is taken over every component of the **torque-scaled** wrench
+  (torques multiplied by ``alpha``, eq. 6), i.e. eq. 18 with each of the
+  ``6 n`` values counted once. It has the unit of force [N]. This is the
+  quantity of the thesis' Tables II and IV.
+* The per-sample RMSE is the same quantity for one row (over its 6
+  components); its mean ± std over a test set is the "within the dataset"
+  figure of Table IV.
+* Relative errors (eq. 19) are per sample and separate for force and torque:
+  ``||F - F_hat|| / ||F||`` and ``||T - T_hat|| / ||T||``. Rows whose true
+  force (torque) norm is below ``min_norm`` times the largest one in the set
+  are left out of that ratio, because a ratio to a near-zero load is
+  meaningless; how many were left out is reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, asdict
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._exceptions import CalibrationInputError
+from ._wrench import FORCE, TORQUE, WRENCH_LABELS, scale_torques
+
+__all__ = [
+    "wrench_rmse",
+    "per_sample_rmse",
+    "axis_rmse",
+    "relative_errors",
+    "CalibrationReport",
+    "calibration_report",
+    "neg_scaled_rmse",
+]
+
+
+def _pair(y_true: ArrayLike, y_pred: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    t = np.asarray(y_true, dtype=float)
+    p = np.asarray(y_pred, dtype=float)
+    for name, a in (("y_true", t), ("y_pred", p)):
+        if a.ndim != 2 or a.shape[1] != 6:
+            raise CalibrationInputError(
+                f"{name} must have shape (n_samples, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {a.shape}."
+            )
+        if not np.all(np.isfinite(a)):
+            row = int(np.argwhere(~np.isfinite(a))[0, 0])
+            raise CalibrationInputError(f"{name} contains NaN or inf (first at row {row}).")
+    if t.shape != p.shape:
+        raise CalibrationInputError(f"y_true has shape {t.shape} but y_pred has shape {p.shape}; they must match.")
+    if t.shape[0] == 0:
+        raise CalibrationInputError("y_true and y_pred are empty; metrics need at least one sample.")
+    return t, p
+
+
+def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> float:
+    """RMSE over all components of the torque-scaled wrench (eq. 18) [N].
+
+    Examples
+    --------
+    >>> wrench_rmse([[0, 0, 0, 0, 0, 0.0]], [[6.0, 0, 0, 0, 0, 0]])
+    2.449...
+    >>> wrench_rmse([[0, 0, 0, 0, 0, 0.0]], [[0, 0, 0, 0, 0, 0.1]], alpha=60.0)
+    2.449...
+    """
+    t, p = _pair(y_true, y_pred)
+    return float(np.sqrt(np.mean((scale_torques(t - p, alpha)) ** 2)))
+
+
+def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> NDArray[np.float64]:
+    """RMSE of each row over its 6 torque-scaled components [N], shape (n_samples,).
+
+    Examples
+    --------
+    >>> per_sample_rmse([[0, 0, 0, 0, 0, 0.0], [0, 0, 0, 0, 0, 0]],
+    ...                 [[6.0, 0, 0, 0, 0, 0], [0, 0, 0, 0, 0, 0]])
+    array([2.449..., 0. ])
+    """
+    t, p = _pair(y_true, y_pred)
+    return np.sqrt(np.mean(scale_torques(t - p, alpha) ** 2, axis=1))
+
+
+def axis_rmse(y_true: ArrayLike, y_pred: ArrayLike) -> NDArray[np.float64]:
+    """RMSE of each wrench axis in its own unit, shape (6,): [N] x3 then [N·m] x3.
+
+    Examples
+    --------
+    >>> axis_rmse([[0, 0, 0, 0, 0, 0.0], [0, 0, 0, 0, 0, 0]],
+    ...           [[3.0, 0, 0, 0, 0, 1], [-3.0, 0, 0, 0, 0, 1]])
+    array([3., 0., 0., 0., 0., 1.])
+    """
+    t, p = _pair(y_true, y_pred)
+    return np.sqrt(np.mean((t - p) ** 2, axis=0))
+
+
+def relative_errors(
+    y_true: ArrayLike, y_pred: ArrayLike, min_norm: float = 1e-3
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per-sample relative force and torque errors (eq. 19).
+
+    Parameters
+    ----------
+    y_true, y_pred : array-like of shape (n_samples, 6)
+        Reference and predicted wrenches in [N] and [N·m].
+    min_norm : float, default=1e-3
+        Rows whose true force (torque) norm is below ``min_norm`` times the
+        largest true force (torque) norm are left out of the force (torque)
+        ratios.
+
+    Returns
+    -------
+    force, torque : ndarray
+        The relative errors of the kept rows (dimensionless); their lengths may differ.
+
+    Examples
+    --------
+    >>> f, t = relative_errors([[10.0, 0, 0, 0, 0, 2], [0, 0, 0, 0, 0, 0]],
+    ...                        [[11.0, 0, 0, 0, 0, 2], [0, 0, 0, 0, 0, 0]])
+    >>> f, t
+    (array([0.1]), array([0.]))
+    """
+    t, p = _pair(y_true, y_pred)
+    out = []
+    for part in (FORCE, TORQUE):
+        norm = np.linalg.norm(t[:, part], axis=1)
+        keep = norm > min_norm * max(float(norm.max()), np.finfo(float).tiny)
+        err = np.linalg.norm(t[keep, part] - p[keep, part], axis=1)
+        out.append(err / norm[keep])
+    return out[0], out[1]
+
+
+@dataclass(frozen=True)
+class CalibrationReport:
+    """Summary of a calibrator's errors on one test set.
+
+    Attributes
+    ----------
+    rmse : float
+        RMSE over the torque-scaled wrench [N] (eq. 18).
+    rmse_per_sample_mean, rmse_per_sample_std : float
+        Mean and std of the per-sample RMSE [N] (Table IV's "within the dataset").
+    rel_force_mean, rel_force_std, rel_torque_mean, rel_torque_std : float
+        Mean and std of the relative errors (eq. 19), dimensionless.
+    axis_rmse : dict
+        RMSE per axis in [N] / [N·m], keyed ``Fx`` ... ``Tz``.
+    alpha : float
+        The torque scale used [m⁻¹].
+    n_samples, n_force_ratios, n_torque_ratios : int
+        Sample count and how many rows entered each relative error.
+    """
+
+    rmse: float
+    rmse_per_sample_mean: float
+    rmse_per_sample_std: float
+    rel_force_mean: float
+    rel_force_std: float
+    rel_torque_mean: float
+    rel_torque_std: float
+    axis_rmse: dict
+    alpha: float
+    n_samples: int
+    n_force_ratios: int
+    n_torque_ratios: int
+
+    def to_dict(self) -> dict:
+        """Plain-JSON form of the report."""
+        return asdict(self)
+
+
+def _mean_std(a: NDArray[np.float64]) -> tuple[float, float]:
+    if a.size == 0:
+        return float("nan"), float("nan")
+    return float(np.mean(a)), float(np.std(a))
+
+
+def calibration_report(
+    y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, min_norm: float = 1e-3
+) -> CalibrationReport:
+    """Every metric of section IV-C for one prediction, as a :class:`CalibrationReport`.
+
+    Examples
+    --------
+    >>> r = calibration_report([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
+    >>> round(r.rmse, 4), r.rel_force_mean, r.axis_rmse["Fx"]
+    (0.4082, 0.1, 1.0)
+    """
+    t, p = _pair(y_true, y_pred)
+    ps = per_sample_rmse(t, p, alpha)
+    f, tq = relative_errors(t, p, min_norm)
+    fm, fs = _mean_std(f)
+    tm, ts = _mean_std(tq)
+    return CalibrationReport(
+        rmse=wrench_rmse(t, p, alpha),
+        rmse_per_sample_mean=float(ps.mean()),
+        rmse_per_sample_std=float(ps.std()),
+        rel_force_mean=fm,
+        rel_force_std=fs,
+        rel_torque_mean=tm,
+        rel_torque_std=ts,
+        axis_rmse=dict(zip(WRENCH_LABELS, map(float, axis_rmse(t, p)))),
+        alpha=float(alpha),
+        n_samples=int(t.shape[0]),
+        n_force_ratios=int(f.size),
+        n_torque_ratios=int(tq.size),
+    )
+
+
+def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
+    """scikit-learn scorer: minus the torque-scaled RMSE, with the estimator's own ``alpha_``.
+
+    Use it as ``scoring=neg_scaled_rmse`` in ``cross_validate`` or
+    ``GridSearchCV`` (greater is better, as scikit-learn expects). Estimators
+    without an ``alpha_`` attribute are scored with ``alpha = 1``.
+    """
+    alpha = float(getattr(estimator, "alpha_", 1.0))
+    return -wrench_rmse(y, estimator.predict(X), alpha)

@@ -1,0 +1,91 @@
+"""Wrench conventions and the torque scaling of the thesis (eq. 5-6).
+
+A wrench is a row ``[Fx, Fy, Fz, Tx, Ty, Tz]`` with forces in [N] and torques
+in [N·m]. The *torque-scaled* wrench multiplies the torques by
+``alpha = Fmax / Tmax`` [m⁻¹] so that forces and torques weigh alike in losses
+and metrics (thesis section III-A-a).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ._exceptions import CalibrationInputError
+
+__all__ = [
+    "WRENCH_LABELS",
+    "FORCE",
+    "TORQUE",
+    "alpha_from_wrenches",
+    "scale_torques",
+    "unscale_torques",
+]
+
+#: Column names of a wrench, in order.
+WRENCH_LABELS: tuple[str, ...] = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
+#: Column slice of the forces [N] in a wrench.
+FORCE = slice(0, 3)
+#: Column slice of the torques [N·m] in a wrench.
+TORQUE = slice(3, 6)
+
+
+def alpha_from_wrenches(wrench: ArrayLike) -> float:
+    """Torque scale ``alpha = Fmax / Tmax`` [m⁻¹] estimated from wrenches (eq. 5).
+
+    ``Fmax`` is the largest absolute force component and ``Tmax`` the largest
+    absolute torque component among the rows. This is how the calibrators
+    derive ``alpha`` when none is given; pass the sensor's rated ranges
+    (e.g. ``2000 / 40 = 50``) for the thesis' definition.
+
+    Parameters
+    ----------
+    wrench : array-like of shape (n_samples, 6)
+        Wrenches in [N] and [N·m].
+
+    Returns
+    -------
+    float
+        ``alpha``; ``1.0`` when the data hold no force or no torque at all.
+
+    Examples
+    --------
+    >>> alpha_from_wrenches([[100.0, 0, 0, 0, 0, 2.0], [-50.0, 0, 0, 0, 1.0, 0]])
+    50.0
+    """
+    w = np.asarray(wrench, dtype=float)
+    if w.ndim != 2 or w.shape[1] != 6:
+        raise CalibrationInputError(
+            f"wrench must have shape (n_samples, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {w.shape}."
+        )
+    fmax = float(np.max(np.abs(w[:, FORCE]), initial=0.0))
+    tmax = float(np.max(np.abs(w[:, TORQUE]), initial=0.0))
+    if fmax == 0.0 or tmax == 0.0 or not np.isfinite(fmax / tmax):
+        return 1.0
+    return fmax / tmax
+
+
+def scale_torques(wrench: ArrayLike, alpha: float) -> NDArray[np.float64]:
+    """Return a copy of ``wrench`` with the torque columns multiplied by ``alpha`` (eq. 6).
+
+    Examples
+    --------
+    >>> scale_torques([[1.0, 2, 3, 0.1, 0.2, 0.3]], 10.0)
+    array([[1., 2., 3., 1., 2., 3.]])
+    """
+    w = np.array(wrench, dtype=float, copy=True)
+    w[..., TORQUE] *= alpha
+    return w
+
+
+def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
+    """Inverse of :func:`scale_torques`: divide the torque columns by ``alpha``.
+
+    Examples
+    --------
+    >>> unscale_torques([[1.0, 2, 3, 1, 2, 3]], 10.0)
+    array([[1. , 2. , 3. , 0.1, 0.2, 0.3]])
+    """
+    w = np.array(scaled, dtype=float, copy=True)
+    w[..., TORQUE] /= alpha
+    return w
