@@ -1,0 +1,111 @@
+"""Seed ensembles of calibrators: lower across-dataset variance of the network models (issue 6)."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from joblib import Parallel, delayed
+from numpy.typing import ArrayLike, NDArray
+from sklearn.base import clone
+from sklearn.utils import check_random_state
+
+from ._base import BaseCalibrator
+from ._directional import DirectionalCalibrator
+from ._exceptions import CalibrationInputError
+from ._validation import validate_training_data
+
+__all__ = ["EnsembleCalibrator"]
+
+
+def _fit_member(estimator, X, y):
+    return estimator.fit(X, y)
+
+
+class EnsembleCalibrator(BaseCalibrator):
+    """Average of ``n_members`` copies of a calibrator trained with different seeds.
+
+    The thesis (VI-a) notes that the networks' accuracy varies a lot across
+    datasets and initialisations. Each member is a clone of ``estimator``
+    with its own ``random_state`` (drawn from this ensemble's
+    ``random_state``), so members differ in weight initialisation, batch
+    order and validation split; all see the same data. The prediction is
+    the plain mean of the members' predictions, in [N] and [N·m]. Averaging
+    cancels the members' independent part of the error, so the RMSE moves
+    towards the members' common (bias) part and its spread across datasets
+    shrinks; ``benchmarks/RESULTS.md`` (issue 6) has the measured effect.
+    Fitting costs ``n_members`` fits (run in parallel with ``n_jobs``).
+    ``predict`` (from :class:`~ftcal._base.BaseCalibrator`) validates the
+    readings once and returns the members' mean.
+
+    Parameters
+    ----------
+    estimator : calibrator or None, default=None
+        The member template (e.g. :class:`~ftcal.DirectionalCalibrator` with a
+        schedule); ``None`` means ``DirectionalCalibrator()``. Its own
+        ``random_state`` is replaced per member.
+    n_members : int, default=5
+        Number of members averaged.
+    n_jobs : int or None, default=None
+        joblib workers for fitting the members (``None`` = 1).
+    random_state : int, RandomState or None, default=None
+        Seed of the members' seeds; an int makes the ensemble reproducible.
+
+    Attributes
+    ----------
+    estimators_ : list of fitted calibrators
+        The members.
+    member_seeds_ : ndarray of shape (n_members,)
+        ``random_state`` of each member.
+    alpha_, zero_reading_, n_features_in_
+        As for every calibrator (from the members, which share them).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import DirectionalCalibrator, EnsembleCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> member = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1)
+    >>> ensemble = EnsembleCalibrator(member, n_members=3, random_state=0).fit(raw, w)
+    >>> mean = np.mean([m.predict(raw) for m in ensemble.estimators_], axis=0)
+    >>> bool(np.allclose(ensemble.predict(raw), mean))
+    True
+    """
+
+    def __init__(self, estimator=None, *, n_members=5, n_jobs=None, random_state=None):
+        self.estimator = estimator
+        self.n_members = n_members
+        self.n_jobs = n_jobs
+        self.random_state = random_state
+
+    def _template(self):
+        template = DirectionalCalibrator() if self.estimator is None else self.estimator
+        if not isinstance(template, BaseCalibrator):
+            raise CalibrationInputError(
+                f"estimator must be an ftcal calibrator (e.g. DirectionalCalibrator(...)); got {template!r}."
+            )
+        return template
+
+    def fit(self, X: ArrayLike, y: ArrayLike):
+        """Fit every member on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Returns
+        -------
+        self
+        """
+        n = self.n_members
+        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
+            raise CalibrationInputError(f"n_members must be an integer >= 1; got {n!r}.")
+        template = self._template()
+        X, y = validate_training_data(self, X, y)
+        rng = check_random_state(self.random_state)
+        self.member_seeds_ = rng.randint(np.iinfo(np.int32).max, size=int(n))
+        members = [clone(template).set_params(random_state=int(s)) for s in self.member_seeds_]
+        self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y) for m in members)
+        self.alpha_ = self.estimators_[0].alpha_
+        self.zero_reading_ = self.estimators_[0].zero_reading_
+        return self
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.mean([member.predict(X) for member in self.estimators_], axis=0)

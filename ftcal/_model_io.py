@@ -1,0 +1,278 @@
+"""Model files: one ``.npz`` holding JSON metadata and the weight arrays, no pickle.
+
+Layout (``numpy.savez``; read back with ``allow_pickle=False``, so loading
+never executes code from the file):
+
+* ``__metadata__``: a 0-d unicode array holding a JSON object with
+  ``format`` (``"ftcal-model"``), ``format_version`` (``1``), ``model_type``
+  (the class name), ``ftcal_version``, ``params`` (constructor parameters),
+  ``fitted`` (scalar fitted attributes: ``alpha_``, ``n_features_in_``, ...)
+  and, for networks, a compact ``history`` (epoch, phase, lr, losses);
+* ``fitted/<name>``: fitted arrays (``zero_reading_``, ``calibration_matrix_``,
+  scaling arrays, ...);
+* ``module/<name>``: the torch ``state_dict`` of a network (float32);
+* ``children/<i>/...``: the sub-models of a meta-estimator (e.g. the members
+  of an :class:`~ftcal.EnsembleCalibrator`), each in this same layout, their
+  metadata in the JSON's ``children`` list.
+
+A file that is missing, truncated, not an ftcal model, of another format
+version or of an unexpected model type raises :class:`~ftcal.ModelFileError`
+saying which. Files are written to a temporary file next to the target and
+then renamed, so an interrupted save never leaves half a file, and an
+existing file is only replaced with ``overwrite=True``.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import torch
+from sklearn.utils.validation import check_is_fitted
+from skorch.history import History
+
+from ._comparative import ComparativeCalibrator
+from ._directional import DirectionalCalibrator
+from ._exceptions import ModelFileError
+from ._linear import LinearCalibrator
+from ._network_base import NetworkCalibrator
+
+__all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION"]
+
+FORMAT = "ftcal-model"
+#: Version of the model-file layout written by :func:`save_model`.
+FORMAT_VERSION = 1
+_META_KEY = "__metadata__"
+_HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reason")
+
+#: Fitted attributes stored per model type: (scalars, arrays).
+_MODEL_TYPES: dict[str, tuple[type, tuple[str, ...], tuple[str, ...]]] = {}
+#: Meta-estimators: the fitted attribute holding their list of fitted sub-models.
+_CHILDREN: dict[str, str] = {}
+
+
+def register_model_type(
+    cls: type, scalars: tuple[str, ...], arrays: tuple[str, ...], *, children: str | None = None
+) -> None:
+    """Allow :func:`save_model` / :func:`load_model` for ``cls`` (by class name).
+
+    ``scalars`` are JSON-able fitted attributes, ``arrays`` ndarray ones.
+    Subclasses of the network base get their ``net_`` weights stored as well.
+    ``children`` names the fitted attribute of a meta-estimator that holds a
+    list of fitted sub-models (registered types themselves); each is stored
+    whole (metadata under ``children``, arrays under ``children/<i>/``).
+    A parameter whose value is an estimator of a registered type (e.g. an
+    ensemble's ``estimator``) is stored by type and parameters.
+    """
+    _MODEL_TYPES[cls.__name__] = (cls, tuple(scalars), tuple(arrays))
+    if children is not None:
+        _CHILDREN[cls.__name__] = children
+
+
+_NET_SCALARS = ("alpha_", "n_features_in_", "n_epochs_", "best_epoch_", "stop_reason_")
+register_model_type(LinearCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "calibration_matrix_", "offset_"))
+register_model_type(
+    DirectionalCalibrator, _NET_SCALARS + ("scale_reference_", "n_dropped_zero_load_"), ("zero_reading_",)
+)
+register_model_type(
+    ComparativeCalibrator,
+    _NET_SCALARS,
+    ("zero_reading_", "input_mean_", "input_scale_", "target_mean_", "target_scale_"),
+)
+
+
+def _encode(value):
+    """JSON form of a parameter value (tuples and arrays tagged so they come back as such)."""
+    if isinstance(value, tuple):
+        return {"tuple": [_encode(v) for v in value]}
+    if isinstance(value, np.ndarray):
+        return {"array": value.tolist()}
+    if isinstance(value, (np.integer, np.floating)):
+        return value.item()
+    if isinstance(value, (list, str, int, float, bool)) or value is None:
+        return value
+    if type(value).__name__ in _MODEL_TYPES and type(value) is _MODEL_TYPES[type(value).__name__][0]:
+        return {"estimator": {"model_type": type(value).__name__,
+                              "params": {k: _encode(v) for k, v in value.get_params(deep=False).items()}}}
+    return None  # e.g. a RandomState instance: not reproducible from a file; stored as None
+
+
+def _decode(value):
+    if isinstance(value, dict) and set(value) == {"tuple"}:
+        return tuple(_decode(v) for v in value["tuple"])
+    if isinstance(value, dict) and set(value) == {"array"}:
+        return np.asarray(value["array"], dtype=float)
+    if isinstance(value, dict) and set(value) == {"estimator"}:
+        cls = _MODEL_TYPES[value["estimator"]["model_type"]][0]
+        return cls(**{k: _decode(v) for k, v in value["estimator"]["params"].items()})
+    return value
+
+
+def _history_rows(net) -> list[dict]:
+    return [{k: row[k] for k in _HISTORY_KEYS if k in row} for row in net.history]
+
+
+def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
+    """Write a fitted calibrator to one ``.npz`` model file; returns the path.
+
+    Parameters
+    ----------
+    estimator : LinearCalibrator, ComparativeCalibrator or DirectionalCalibrator
+        A fitted calibrator (or another registered model type).
+    path : str or path-like
+        Target file; written exactly there (no suffix is added).
+    overwrite : bool, default=False
+        Replace an existing file; otherwise an existing file raises
+        ``ModelFileError`` and is left untouched.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> from ftcal import LinearCalibrator, save_model, load_model
+    >>> raw = np.random.default_rng(0).normal(size=(20, 6))
+    >>> model = LinearCalibrator().fit(raw, raw * 2.0)
+    >>> path = save_model(model, os.path.join(tempfile.mkdtemp(), "ltm.npz"))
+    >>> bool(np.array_equal(load_model(path).predict(raw), model.predict(raw)))
+    True
+    """
+    meta, arrays = _state(estimator)
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": _ftcal_version()}
+    arrays[_META_KEY] = np.array(json.dumps(meta))
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise ModelFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
+    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
+    try:
+        with os.fdopen(fd, "wb") as f:
+            np.savez(f, **arrays)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    return path
+
+
+def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
+    """Metadata (model type, parameters, fitted scalars) and arrays of one fitted model."""
+    name = type(estimator).__name__
+    if name not in _MODEL_TYPES or type(estimator) is not _MODEL_TYPES[name][0]:
+        raise ModelFileError(f"cannot save a {name}: model files support {sorted(_MODEL_TYPES)}.")
+    check_is_fitted(estimator)
+    _, scalar_names, array_names = _MODEL_TYPES[name]
+    meta = {
+        "model_type": name,
+        "params": {k: _encode(v) for k, v in estimator.get_params(deep=False).items()},
+        "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names},
+    }
+    arrays = {f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in array_names}
+    if isinstance(estimator, NetworkCalibrator):
+        meta["history"] = _history_rows(estimator.net_)
+        state = estimator.net_.module_.state_dict()
+        arrays.update({f"module/{k}": v.detach().cpu().numpy() for k, v in state.items()})
+    if name in _CHILDREN:
+        meta["children"] = []
+        for i, child in enumerate(getattr(estimator, _CHILDREN[name])):
+            child_meta, child_arrays = _state(child)
+            meta["children"].append(child_meta)
+            arrays.update({f"children/{i}/{k}": v for k, v in child_arrays.items()})
+    return meta, arrays
+
+
+def _ftcal_version() -> str:
+    from . import __version__
+
+    return __version__
+
+
+def _read(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
+    if not path.is_file():
+        raise ModelFileError(f"model file {path} does not exist (or is not a file).")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {k: data[k] for k in data.files}
+    except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError) as exc:
+        raise ModelFileError(
+            f"{path} is not a readable ftcal model file (truncated or not an .npz archive: {exc}). "
+            f"Save the model again with ftcal.save_model."
+        ) from None
+    if _META_KEY not in arrays:
+        raise ModelFileError(f"{path} is an .npz file but not an ftcal model file (no {_META_KEY!r} entry).")
+    try:
+        meta = json.loads(str(arrays.pop(_META_KEY)))
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(f"{path}: the model metadata is not valid JSON ({exc}).") from None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        raise ModelFileError(f"{path} is not an ftcal model file (format {meta.get('format') if isinstance(meta, dict) else meta!r}).")
+    return meta, arrays
+
+
+def load_model(path: str | os.PathLike, *, model_type: str | type | None = None):
+    """Read a calibrator written by :func:`save_model`; no code from the file is executed.
+
+    Parameters
+    ----------
+    path : str or path-like
+        The model file.
+    model_type : str, class or None
+        When given, the file must hold this model type (class or class
+        name), otherwise ``ModelFileError``.
+
+    Returns
+    -------
+    estimator
+        The fitted calibrator, predicting exactly like the saved one.
+    """
+    path = Path(path)
+    meta, arrays = _read(path)
+    version = meta.get("format_version")
+    if version != FORMAT_VERSION:
+        raise ModelFileError(
+            f"{path} has model-file format version {version!r}; this ftcal (version {_ftcal_version()}) "
+            f"reads version {FORMAT_VERSION}. Re-fit and save the model with this ftcal version."
+        )
+    name = meta.get("model_type")
+    expected = model_type.__name__ if isinstance(model_type, type) else model_type
+    if expected is not None and name != expected:
+        raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
+    if name not in _MODEL_TYPES:
+        raise ModelFileError(f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_MODEL_TYPES)}.")
+    try:
+        return _from_state(meta, arrays)
+    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+        raise ModelFileError(f"{path}: the {name} model file is incomplete or inconsistent ({exc!r}).") from None
+
+
+def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
+    """The fitted model of :func:`_state`'s output (``KeyError`` etc. when incomplete)."""
+    name = meta["model_type"]
+    cls, scalar_names, array_names = _MODEL_TYPES[name]
+    estimator = cls(**{k: _decode(v) for k, v in meta["params"].items()})
+    for k in scalar_names:
+        setattr(estimator, k, meta["fitted"][k])
+    for k in array_names:
+        setattr(estimator, k, arrays[f"fitted/{k}"])
+    if isinstance(estimator, NetworkCalibrator):
+        _restore_net(estimator, meta, arrays)
+    if name in _CHILDREN:
+        children = []
+        for i, child_meta in enumerate(meta["children"]):
+            prefix = f"children/{i}/"
+            child_arrays = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
+            children.append(_from_state(child_meta, child_arrays))
+        setattr(estimator, _CHILDREN[name], children)
+    return estimator
+
+
+def _restore_net(estimator: NetworkCalibrator, meta: dict, arrays: dict[str, np.ndarray]) -> None:
+    state = {k[len("module/"):]: torch.from_numpy(v.copy()) for k, v in arrays.items() if k.startswith("module/")}
+    n_inputs = state["layers.0.weight"].shape[1]
+    net = estimator._build_net(n_inputs, seed=0)
+    net.initialize()
+    net.module_.load_state_dict(state)
+    net.history = History(meta.get("history", []))
+    estimator.net_ = net

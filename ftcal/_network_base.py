@@ -1,0 +1,159 @@
+"""Training and inference shared by the two network calibrators (skorch, composed).
+
+A :class:`NetworkCalibrator` builds a ``skorch.NeuralNetRegressor`` inside
+``fit`` and keeps it as ``net_``. Subclasses say which torch module, which
+loss weights, and how readings/wrenches map to network inputs/targets.
+
+* float32 inside the network, float64 out of ``predict``;
+* ``random_state`` seeds the weight initialisation, the batch shuffling and
+  the validation split; the global torch RNG is forked, so a fit leaves the
+  caller's torch random state untouched; the same seed twice gives the same
+  predictions;
+* torch runs single-threaded during ``fit`` and ``predict`` (the nets are
+  small: batch 32 in training, ~64-wide layers; on a shared 2-core machine
+  two threads made a 10 000-sample predict 6x slower); the caller's thread
+  count is restored afterwards, and nothing is changed at import;
+* the schedule (III-A-d) is :mod:`ftcal._schedule`; ``validation_fraction``
+  of the samples (``ValidSplit``) are held out for the monitored loss, or
+  none with ``validation_fraction=None`` (then the training loss is
+  monitored).
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+import torch
+from numpy.typing import NDArray
+from skorch import NeuralNetRegressor
+from skorch.dataset import ValidSplit
+from sklearn.utils import check_random_state
+
+from ._base import BaseCalibrator
+from ._exceptions import CalibrationInputError
+from ._networks import WeightedSquaredError
+from ._schedule import schedule_callbacks
+
+__all__ = ["NetworkCalibrator", "torch_threads"]
+
+_PREDICT_CHUNK = 65536
+
+
+@contextmanager
+def torch_threads(n_threads: int) -> Iterator[None]:
+    """Run the block with ``torch.set_num_threads(n_threads)``, restoring the old count."""
+    old = torch.get_num_threads()
+    torch.set_num_threads(n_threads)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(old)
+
+
+def _check_int(name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise CalibrationInputError(f"{name} must be an integer >= {minimum}; got {value!r}.")
+    return int(value)
+
+
+def _check_real(name: str, value, low: float, high: float, *, low_open: bool = False) -> float:
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(value)
+    if ok:
+        ok = (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        bound = "(" if low_open else "["
+        raise CalibrationInputError(f"{name} must be a number in {bound}{low}, {high}]; got {value!r}.")
+    return float(value)
+
+
+class NetworkCalibrator(BaseCalibrator):
+    """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
+    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
+    ``_decode(outputs, X) -> wrench`` and ``_loss_weights()``.
+    """
+
+    _module_class: type[torch.nn.Module]
+
+    def _check_params(self) -> None:
+        sizes = self.hidden_layer_sizes
+        if not isinstance(sizes, (tuple, list)) or len(sizes) == 0:
+            raise CalibrationInputError(
+                f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); got {sizes!r}."
+            )
+        for width in sizes:
+            _check_int("each entry of hidden_layer_sizes", width, 1)
+        _check_real("lr", self.lr, 0.0, np.inf, low_open=True)
+        _check_int("batch_size", self.batch_size, 1)
+        _check_int("max_epochs", self.max_epochs, 1)
+        _check_int("plateau_epochs", self.plateau_epochs, 0)
+        _check_int("plateau_patience", self.plateau_patience, 0)
+        _check_real("plateau_factor", self.plateau_factor, 0.0, 1.0, low_open=True)
+        _check_real("min_lr", self.min_lr, 0.0, np.inf)
+        _check_real("recover_tolerance", self.recover_tolerance, 0.0, np.inf)
+        _check_int("max_recover_epochs", self.max_recover_epochs, 0)
+        if self.validation_fraction is not None:
+            _check_real("validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
+
+    def _seed(self) -> int:
+        return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
+
+    def _build_net(self, n_inputs: int, seed: int) -> NeuralNetRegressor:
+        """The skorch net with this estimator's module, loss, optimiser and schedule."""
+        monitor = "train_loss" if self.validation_fraction is None else "valid_loss"
+        split = None if self.validation_fraction is None else ValidSplit(self.validation_fraction, random_state=seed)
+        return NeuralNetRegressor(
+            module=self._module_class,
+            module__n_inputs=n_inputs,
+            module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
+            criterion=WeightedSquaredError,
+            criterion__weights=tuple(self._loss_weights()),
+            optimizer=torch.optim.Adam,
+            lr=self.lr,
+            batch_size=self.batch_size,
+            max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs,
+            train_split=split,
+            iterator_train__shuffle=True,
+            callbacks=schedule_callbacks(
+                max_epochs=self.max_epochs,
+                plateau_epochs=self.plateau_epochs,
+                plateau_patience=self.plateau_patience,
+                plateau_factor=self.plateau_factor,
+                min_lr=self.min_lr,
+                recover_tolerance=self.recover_tolerance,
+                max_recover_epochs=self.max_recover_epochs,
+                monitor=monitor,
+            ),
+            verbose=self.verbose,
+            device=self.device,
+        )
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        self._check_params()
+        inputs, targets = self._training_pairs(X, y)
+        seed = self._seed()
+        net = self._build_net(inputs.shape[1], seed)
+        with torch.random.fork_rng(devices=[]), torch_threads(1):
+            torch.manual_seed(seed)
+            net.fit(inputs.astype(np.float32), targets.astype(np.float32))
+        self.net_ = net
+        self.n_epochs_ = len(net.history)
+        self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
+        self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
+
+    def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
+        module = self.net_.module_
+        module.eval()
+        out = []
+        with torch.inference_mode(), torch_threads(1):
+            for start in range(0, inputs.shape[0], _PREDICT_CHUNK):
+                batch = torch.as_tensor(inputs[start : start + _PREDICT_CHUNK], dtype=torch.float32, device=self.device)
+                out.append(module(batch).cpu().numpy())
+        if not out:
+            return np.zeros((0, module.layers[-1].out_features))
+        return np.concatenate(out).astype(np.float64)
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self._decode(self._forward(self._network_inputs(X)), X)

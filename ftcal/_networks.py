@@ -1,0 +1,82 @@
+"""Torch modules and the loss of the two network calibrators.
+
+* :class:`DirectionalNet` (thesis III-C): ReLU hidden layers, a tanh
+  second-to-last layer (the last hidden layer) and a linear output layer of
+  7 units (6-D direction + scale factor).
+* :class:`ComparativeNet` (Oh et al., III-D-a): ReLU hidden layers and a
+  linear output layer of 6 units (the wrench).
+* :class:`WeightedSquaredError`: ``mean_i sum_j w_j (y_ij - ŷ_ij)²``; with unit
+  weights it is eq. 9, with ``[1, 1, 1, a, a, a]`` eq. 10.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import torch
+from torch import nn
+
+__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "mlp"]
+
+
+def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_hidden: type[nn.Module]) -> nn.Sequential:
+    """Fully connected net: ReLU hidden layers, ``last_hidden`` on the last one, linear output.
+
+    Examples
+    --------
+    >>> mlp(6, (8, 4), 7, nn.Tanh)
+    Sequential(
+      (0): Linear(in_features=6, out_features=8, bias=True)
+      (1): ReLU()
+      (2): Linear(in_features=8, out_features=4, bias=True)
+      (3): Tanh()
+      (4): Linear(in_features=4, out_features=7, bias=True)
+    )
+    """
+    layers: list[nn.Module] = []
+    width = n_inputs
+    for i, size in enumerate(hidden_layer_sizes):
+        layers += [nn.Linear(width, int(size)), last_hidden() if i == len(hidden_layer_sizes) - 1 else nn.ReLU()]
+        width = int(size)
+    layers.append(nn.Linear(width, n_outputs))
+    return nn.Sequential(*layers)
+
+
+class DirectionalNet(nn.Module):
+    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)]."""
+
+    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
+        super().__init__()
+        self.layers = mlp(n_inputs, hidden_layer_sizes, 7, nn.Tanh)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.layers(x)
+
+
+class ComparativeNet(nn.Module):
+    """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6)."""
+
+    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
+        super().__init__()
+        self.layers = mlp(n_inputs, hidden_layer_sizes, 6, nn.ReLU)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.layers(x)
+
+
+class WeightedSquaredError(nn.Module):
+    """``mean over samples of sum_j weights[j] * (y_pred[:, j] - y_true[:, j])²``.
+
+    Examples
+    --------
+    >>> loss = WeightedSquaredError((1.0, 2.0))
+    >>> float(loss(torch.tensor([[1.0, 1.0]]), torch.tensor([[0.0, 0.0]])))
+    3.0
+    """
+
+    def __init__(self, weights: Sequence[float]):
+        super().__init__()
+        self.register_buffer("weights", torch.as_tensor(list(weights), dtype=torch.float32))
+
+    def forward(self, y_pred: torch.Tensor, y_true: torch.Tensor) -> torch.Tensor:
+        return (((y_pred - y_true) ** 2) * self.weights).sum(dim=1).mean()

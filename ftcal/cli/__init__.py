@@ -1,0 +1,125 @@
+"""The ``ftcal`` command line: the whole calibration workflow from a shell.
+
+Subcommands
+-----------
+``simulate``   artificial datasets (presets) or virtual-experiment logs, to files
+``plan``       calibration poses / joint configurations for a robot, to CSV
+``prepare``    recorded load / no-load logs -> calibration dataset
+``fit``        train a calibrator on a dataset -> model file
+``tune``       hyperparameter search (cross-validated) -> tuned model file
+``evaluate``   metrics and plots of model(s) on a dataset
+``predict``    raw readings (file or stdin) -> wrenches (file or stdout)
+``benchmark``  the artificial and the real-world benchmark
+``demo``       simulate, fit the three calibrators, compare, plot
+
+Run ``ftcal SUBCOMMAND --help`` for the options and an example of each.
+
+Examples
+--------
+>>> from ftcal.cli import main
+>>> main(["--version"])
+ftcal ...
+0
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+from .._exceptions import FtcalError
+from ._common import EXIT_FAILURE, EXIT_USAGE, Parser
+
+__all__ = ["main", "build_parser"]
+
+#: Modules of the subcommands, in the order ``ftcal --help`` lists them.
+_SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo")
+
+
+def build_parser() -> Parser:
+    """The top-level argument parser with every subcommand registered."""
+    from importlib import metadata
+    from importlib import import_module
+
+    try:
+        version = metadata.version("ftcal")
+    except metadata.PackageNotFoundError:  # running from a source tree
+        version = "unknown"
+    parser = Parser(
+        prog="ftcal",
+        description="Calibrate multi-axis force/torque sensors: raw channels -> wrench [N, N·m].",
+        epilog=(
+            "workflow (artificial data):\n"
+            "  ftcal simulate dataset --preset thesis --out data\n"
+            "  ftcal fit data/train.csv --model directional --out models\n"
+            "  ftcal evaluate data/test.csv models/directional.model.npz --out eval\n"
+            "  cat raw.csv | ftcal predict models/directional.model.npz > wrench.csv\n\n"
+            "start here:  ftcal demo"
+        ),
+    )
+    parser.add_argument("--version", action="version", version=f"ftcal {version}")
+    sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND", parser_class=Parser)
+    sub.required = True
+    for name in _SUBCOMMANDS:
+        import_module(f"{__name__}._{name}").register(sub)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``ftcal`` command line and return its exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after ``ftcal``; ``sys.argv[1:]`` when omitted.
+
+    Returns
+    -------
+    int
+        0 on success, 2 when the arguments or input files are unusable
+        (after one ``ftcal: error: ...`` line on stderr), 1 on an unexpected
+        failure.
+    """
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    try:
+        parser = build_parser()
+        args = parser.parse_args(args_list)
+        return int(args.handler(args) or 0)
+    except SystemExit as exc:  # --help and --version exit through argparse
+        return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
+    except KeyboardInterrupt:
+        print("ftcal: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # `ftcal predict ... | head`: the reader left, not an error
+        _silence_stdout()
+        return 0
+    except (FtcalError, OSError, ValueError) as exc:
+        print(f"ftcal: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except Exception as exc:  # a bug: still one line, with a pointer to where to report it
+        print(
+            f"ftcal: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
+            "(this is a bug in ftcal; please report it with the command you ran)",
+            file=sys.stderr,
+        )
+        return EXIT_FAILURE
+
+
+def _one_line(exc: BaseException) -> str:
+    """The message of ``exc`` folded onto one line (OSError gets its file name)."""
+    if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
+        text = f"{exc.filename}: {exc.strerror}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(text.split())
+
+
+def _silence_stdout() -> None:
+    """After a broken pipe, point stdout at devnull so Python's exit flush stays quiet."""
+    import os
+
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):
+        pass

@@ -1,0 +1,203 @@
+"""``ftcal benchmark``: the artificial (thesis Tables II-III) and real-world (Tables IV-V) benchmarks."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ._common import (
+    CliError,
+    Console,
+    OutputPlan,
+    add_output_options,
+    add_run_options,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    write_json,
+)
+
+ARTIFICIAL_EXAMPLE = """\
+examples:
+  ftcal benchmark artificial --quick --out bench              # smoke run, under 2 minutes
+  ftcal benchmark artificial --schedule short --n-datasets 10 --jobs 2 --out bench
+  ftcal benchmark artificial --preset thesis --preset asymmetric --preset stress --out bench_full
+
+N datasets per preset, every calibrator; writes artificial_results.json / .md (RMSE and
+relative errors mean ± std beside the thesis' Tables II-III, Wilcoxon p-values, noise floor)
+and artificial_rmse_<preset>.png. Finished fits are cached in DIR/cache: re-running the same
+command resumes where it stopped.
+"""
+
+REAL_WORLD_EXAMPLE = """\
+examples:
+  ftcal benchmark real-world --quick --out bench_rw          # 11 poses per configuration, short schedule
+  ftcal benchmark real-world --schedule short --split random20 --out bench_rw
+
+the virtual robot experiment (7 load configurations x ~155 poses) through the real pipeline,
+split by held-out load configurations and by a random 20 %; RMSE and relative errors
+(thesis Tables IV-V) and the per-sample RMSE plot (Fig. 6). The leave-one-config-out split
+(7 fits per model) always uses the short schedule. writes real_world_results.json / .md,
+real_world_rmse.png and the run logs in DIR/logs/.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "benchmark",
+        help="the artificial and the real-world benchmarks",
+        description="Compare calibrators the way the thesis does: on 30 artificial datasets, or on the "
+        "virtual robot experiment.",
+        epilog="examples:\n  ftcal benchmark artificial --quick --out bench\n"
+        "  ftcal benchmark real-world --quick --out bench_rw",
+    )
+    kinds = p.add_subparsers(dest="kind", metavar="KIND", parser_class=type(p))
+    kinds.required = True
+    _register_artificial(kinds)
+    _register_real_world(kinds)
+
+
+def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True) -> None:
+    import ftcal
+
+    p.add_argument(
+        "--model", dest="models", action="append", choices=tuple(ftcal.CALIBRATOR_NAMES), metavar="NAME",
+        help=f"calibrator to include (repeatable; default: linear, comparative, directional; "
+        f"known: {', '.join(ftcal.CALIBRATOR_NAMES)})",
+    )
+    p.add_argument("--schedule", default="thesis", choices=("thesis", "short"), help="training schedule")
+    p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs")
+    if jobs:
+        p.add_argument("--jobs", type=positive_int, default=1, help="parallel joblib workers")
+    add_output_options(p, default_out)
+    add_run_options(p)
+
+
+def _register_artificial(kinds: argparse._SubParsersAction) -> None:
+    from .._presets import ERROR_PRESETS
+
+    a = kinds.add_parser(
+        "artificial",
+        help="N artificial datasets, every calibrator (thesis Tables II-III, Fig. 5)",
+        description="The artificial-data benchmark (thesis IV-A / V-A).",
+        epilog=ARTIFICIAL_EXAMPLE,
+    )
+    a.add_argument(
+        "--preset", dest="presets", action="append", choices=sorted(ERROR_PRESETS),
+        help="error preset (repeatable; default: thesis)",
+    )
+    a.add_argument("--n-datasets", type=positive_int, default=30, help="datasets per preset")
+    _add_common(a, "ftcal-benchmark")
+    a.set_defaults(handler=run_artificial)
+
+
+def _register_real_world(kinds: argparse._SubParsersAction) -> None:
+    from .._presets import ERROR_PRESETS
+
+    r = kinds.add_parser(
+        "real-world",
+        help="the virtual robot experiment through the real pipeline (thesis Tables IV-V, Fig. 6)",
+        description="The real-world benchmark (thesis IV-B / V-B) on a virtual experiment with the KUKA iiwa 14.",
+        epilog=REAL_WORLD_EXAMPLE,
+    )
+    r.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the thesis' load)")
+    r.add_argument("--subdivisions", type=nonnegative_int, default=2, help="icosphere level (2: 155 poses)")
+    r.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
+    r.add_argument(
+        "--split", dest="splits", action="append", choices=("random20", "leave-one-config-out"),
+        help="train/test split (repeatable; default: both)",
+    )
+    _add_common(r, "ftcal-benchmark-real-world", jobs=False)
+    r.set_defaults(handler=run_real_world)
+
+
+def _models(args: argparse.Namespace) -> tuple[str, ...]:
+    return tuple(dict.fromkeys(args.models or ("linear", "comparative", "directional")))
+
+
+def run_artificial(args: argparse.Namespace) -> int:
+    import ftcal
+
+    console = Console(args.quiet)
+    presets = tuple(dict.fromkeys(args.presets or ("thesis",)))
+    with console.progress(total=None, desc="fits", unit="fit") as bar:
+
+        def progress(done: int, total: int, record: dict) -> None:
+            bar.total = total
+            bar.set_postfix_str(f"{record['preset']} #{record['dataset']} {record['model']}", refresh=False)
+            bar.update(done - bar.n)
+
+        result = ftcal.run_artificial_benchmark(
+            n_datasets=args.n_datasets, presets=presets, models=_models(args), schedule=args.schedule,
+            seed=args.seed, n_jobs=args.jobs, out_dir=args.out, quick=args.quick, progress=progress,
+            force=args.force,
+        )
+    _print_markdown(result, console, args.out)
+    return 0
+
+
+def run_real_world(args: argparse.Namespace) -> int:
+    import ftcal
+
+    console = Console(args.quiet)
+    files = ["real_world_results.json", "real_world_results.md", "real_world_rmse.png"]
+    plan = OutputPlan(args.out, files, args.force)
+    log_dir = plan.out_dir / "logs"
+    if log_dir.exists() and any(log_dir.iterdir()) and not args.force:
+        raise CliError(f"{log_dir} holds files already; pass --force to overwrite or choose another --out")
+    kwargs = dict(
+        models=_models(args), splits=tuple(dict.fromkeys(args.splits or ("random20", "leave-one-config-out"))),
+        schedule="short" if args.quick else args.schedule, grouped_schedule="short",
+        subdivisions=0 if args.quick else args.subdivisions, errors=args.preset, random_state=args.seed,
+        log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"),
+    )
+    if args.mass is not None:
+        kwargs["load_mass"] = args.mass
+    console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
+    result = ftcal.run_real_world_benchmark(**kwargs)
+    markdown = real_world_markdown(result)
+    with plan.writing("real_world_results.md") as tmp:
+        tmp.write_text(markdown + "\n", encoding="utf-8")
+    with plan.writing("real_world_results.json") as tmp:
+        write_json(tmp, result)
+    print(markdown)
+    console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
+    return 0
+
+
+def real_world_markdown(result: dict) -> str:
+    """Tables IV-V (per-sample RMSE, relative errors; mean ± std) per split, beside the thesis' values."""
+    ds = result["dataset"]
+    lines = [
+        f"Real-world benchmark (virtual experiment): {ds['n_samples']} samples, {ds['n_configurations']} load "
+        f"configurations, alpha = {ds['alpha']:.4g} 1/m.",
+    ]
+    thesis = result.get("thesis", {})
+    for split, per_model in result["splits"].items():
+        lines += [
+            "",
+            f"### Split `{split}`",
+            "",
+            "| model | schedule | test samples | RMSE [N] | thesis T. IV | rel. force | thesis T. V | rel. torque | thesis T. V |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for name, r in per_model.items():
+            t = thesis.get(name)
+
+            def ref(key: str) -> str:
+                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
+
+            lines.append(
+                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
+                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
+                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
+            )
+    return "\n".join(lines)
+
+
+def _print_markdown(result: dict, console: Console, out: Path) -> None:
+    """Print the benchmark's markdown tables (its .md file) on stdout."""
+    md = result.get("files", {}).get("markdown")
+    if md and Path(md).is_file():
+        print(Path(md).read_text(encoding="utf-8").rstrip())
+    console.info(f"results in {out}/: " + ", ".join(Path(p).name for p in result.get("files", {}).values()))

@@ -1,0 +1,260 @@
+"""What every ``ftcal`` subcommand shares: options, output files, progress bars, messages.
+
+Conventions of the command line
+-------------------------------
+* Results go to files in ``--out DIR``; stdout carries only what a subcommand
+  is *for* (the comparison table of ``evaluate``/``demo``, the wrenches of
+  ``predict``). Status messages and progress bars go to stderr, and
+  ``--quiet`` silences both.
+* An output file that already exists is never overwritten without
+  ``--force``. The check runs *before* any long work, so a refused run costs
+  nothing. Files are written to a temporary name and renamed into place, so a
+  crash never leaves a half-written file where a good one stood.
+* A user mistake (bad argument, bad file) ends the run with exit status 2
+  and one line ``ftcal: error: ...`` on stderr; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import sys
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import Any
+
+from .._exceptions import FtcalError
+
+__all__ = [
+    "CliError",
+    "UsageError",
+    "Parser",
+    "EXIT_USAGE",
+    "EXIT_FAILURE",
+    "add_output_options",
+    "add_run_options",
+    "add_robot_options",
+    "OutputPlan",
+    "Console",
+    "write_json",
+    "positive_int",
+    "nonnegative_int",
+    "positive_float",
+    "existing_file",
+]
+
+#: Exit status of a run refused because of the user's arguments or files.
+EXIT_USAGE = 2
+#: Exit status of a run that failed for another reason (an unexpected error).
+EXIT_FAILURE = 1
+
+
+class CliError(FtcalError):
+    """A problem the user can fix, reported as one ``ftcal: error:`` line."""
+
+
+class UsageError(CliError):
+    """Bad command-line arguments (raised instead of argparse's own exit)."""
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """Keeps the epilog's example lines as written and shows each option's meaningful default."""
+
+    def _get_help_string(self, action: argparse.Action) -> str | None:
+        text = action.help or ""
+        default = action.default
+        if "%(default)" in text or default in (None, False, argparse.SUPPRESS) or not action.option_strings:
+            return text
+        return f"{text} (default: %(default)s)"
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser that raises :class:`UsageError` instead of printing usage and exiting."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        kwargs.setdefault("formatter_class", _Formatter)
+        super().__init__(*args, **kwargs)
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+# ------------------------------------------------------------------ argument types
+def _number(kind: type, text: str, low: float, strict: bool, what: str) -> Any:
+    try:
+        value = kind(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+    if value < low or (strict and value == low) or value != value:
+        raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    return _number(int, text, 0, True, "a positive integer")
+
+
+def nonnegative_int(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    return _number(int, text, 0, False, "an integer >= 0")
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    value = _number(float, text, 0.0, True, "a positive number")
+    if value == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite positive number")
+    return value
+
+
+def existing_file(text: str) -> Path:
+    """argparse type: a path to a file that exists."""
+    path = Path(text)
+    if not path.is_file():
+        what = "is a directory, not a file" if path.is_dir() else "does not exist"
+        raise argparse.ArgumentTypeError(f"{text} {what}")
+    return path
+
+
+# ------------------------------------------------------------------ shared options
+def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> None:
+    """``--out DIR`` and ``--force``."""
+    parser.add_argument(
+        "-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
+        help="directory for the output files (created if missing)",
+    )
+    parser.add_argument(
+        "-f", "--force", action="store_true",
+        help="overwrite output files that already exist (without it, the run stops before any work)",
+    )
+
+
+def add_robot_options(parser: argparse.ArgumentParser) -> None:
+    """``--robot`` and ``--sensor-frame``."""
+    parser.add_argument(
+        "--robot", default="kuka_iiwa14", help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path",
+    )
+    parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
+
+
+def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
+    """``--quiet`` and (optionally) ``--seed``."""
+    parser.add_argument(
+        "-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr",
+    )
+    if seed:
+        parser.add_argument(
+            "--seed", type=nonnegative_int, default=0,
+            help="random seed: the same seed and arguments give the same files",
+        )
+
+
+# ------------------------------------------------------------------ output files
+class OutputPlan:
+    """The files a run will write in ``out_dir``, checked before the work starts.
+
+    Parameters
+    ----------
+    out_dir : Path
+        The ``--out`` directory.
+    names : iterable of str
+        File names (relative to ``out_dir``) the run will write.
+    force : bool
+        Whether existing files may be replaced.
+
+    Raises
+    ------
+    CliError
+        When ``out_dir`` is a file, or when a planned file exists and ``force`` is false.
+    """
+
+    def __init__(self, out_dir: Path, names: Iterable[str], force: bool) -> None:
+        self.out_dir = Path(out_dir)
+        self.names = list(names)
+        self.force = force
+        if self.out_dir.exists() and not self.out_dir.is_dir():
+            raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
+        if not force:
+            taken = [n for n in self.names if (self.out_dir / n).exists()]
+            if taken:
+                listed = ", ".join(str(self.out_dir / n) for n in taken[:3])
+                more = f" (and {len(taken) - 3} more)" if len(taken) > 3 else ""
+                raise CliError(
+                    f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; "
+                    "pass --force to overwrite or choose another --out"
+                )
+
+    def path(self, name: str) -> Path:
+        """The path of planned file ``name``; creates ``out_dir`` on first use."""
+        if name not in self.names:
+            raise AssertionError(f"{name} was not planned; add it to the OutputPlan first")
+        path = self.out_dir / name
+        path.parent.mkdir(parents=True, exist_ok=True)
+        return path
+
+    @contextlib.contextmanager
+    def writing(self, name: str) -> Iterator[Path]:
+        """Yield a temporary path to write ``name`` to; it is renamed into place on success.
+
+        A failure inside the block removes the temporary file and leaves any
+        existing ``name`` untouched.
+        """
+        final = self.path(name)
+        tmp = final.with_name(f".{final.stem}.partial{final.suffix}")
+        try:
+            yield tmp
+            os.replace(tmp, final)
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+
+
+def write_json(path: Path, obj: Any) -> None:
+    """Write ``obj`` as indented JSON (NaN written as ``null``)."""
+    path.write_text(json.dumps(_json_safe(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
+
+
+def _json_safe(obj: Any) -> Any:
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, np.ndarray):
+        return _json_safe(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and obj != obj:
+        return None
+    return obj
+
+
+# ------------------------------------------------------------------ messages
+class Console:
+    """Status messages and progress bars on stderr, both silenced by ``--quiet``."""
+
+    def __init__(self, quiet: bool = False) -> None:
+        self.quiet = quiet
+
+    def info(self, message: str) -> None:
+        """One status line on stderr."""
+        if not self.quiet:
+            print(message, file=sys.stderr, flush=True)
+
+    def progress(self, iterable: Iterable | None = None, **kwargs: Any):
+        """A tqdm progress bar on stderr; use it in a ``with`` block so an error closes it.
+
+        Off with ``--quiet``, and off when stderr is not a terminal (a log
+        file or a pipe gets the status lines, not bar redraws).
+        """
+        from tqdm import tqdm
+
+        kwargs.setdefault("dynamic_ncols", True)
+        kwargs.setdefault("leave", False)
+        return tqdm(iterable, file=sys.stderr, disable=True if self.quiet else None, **kwargs)

@@ -1,0 +1,88 @@
+"""``ftcal evaluate``: metrics (RMSE, relative errors, per axis) and plots of model(s) on a dataset."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, positive_float, write_json
+from ._models import evaluation_alpha, load_dataset, load_model_file, model_label
+from ._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
+
+EXAMPLE = """\
+examples:
+  ftcal evaluate data/test.csv models/directional.model.npz --out eval
+  ftcal evaluate data/test.csv models/*.model.npz --alpha 50 --out eval --force
+
+prints the comparison table (markdown) on stdout and writes to DIR: metrics.json,
+metrics.md, rmse_distribution.png, axis_rmse.png and errors_<model>.png per model.
+RMSE is over the torque-scaled wrench [F, alpha*T] in N (thesis eq. 18); relative
+errors are ||F - F_hat|| / ||F|| and the same for torque (eq. 19).
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "evaluate",
+        help="metrics and plots of one or more models on a dataset",
+        description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis RMSE, plots.",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("dataset", help="evaluation dataset (.csv or .npz)")
+    p.add_argument("models", nargs="+", metavar="MODEL", help="model files written by 'ftcal fit'")
+    p.add_argument(
+        "--alpha", type=positive_float,
+        help="torque scale Fmax/Tmax [1/m] for the RMSE (default: the dataset's meta 'alpha', else from its wrenches)",
+    )
+    p.add_argument("--no-plots", action="store_true", help="write the metrics only")
+    add_output_options(p, "ftcal-eval")
+    add_run_options(p, seed=False)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import ftcal
+
+    console = Console(args.quiet)
+    labels = [model_label(m) for m in args.models]
+    if len(set(labels)) != len(labels):
+        raise CliError(f"two model files share a name ({', '.join(labels)}); give each model file its own name")
+    names = ["metrics.json", "metrics.md"]
+    if not args.no_plots:
+        names += list(EVALUATION_PLOTS) + [predicted_plot_name(label) for label in labels]
+    plan = OutputPlan(args.out, names, args.force)
+    data = load_dataset(args.dataset, "evaluation dataset")
+    alpha = evaluation_alpha(data, args.alpha)
+    noise_floor = data.meta.get("noise_floor")
+    predictions, reports = {}, {}
+    with console.progress(total=len(labels), desc="evaluating", unit="model") as bar:
+        for label, path in zip(labels, args.models):
+            model = load_model_file(path)
+            n_in = getattr(model, "n_features_in_", data.n_channels)
+            if n_in != data.n_channels:
+                raise CliError(f"{path} was fitted on {n_in} raw channels but {args.dataset} has {data.n_channels}")
+            predictions[label] = np.asarray(model.predict(data.raw), dtype=float)
+            reports[label] = ftcal.calibration_report(data.wrench, predictions[label], alpha=alpha)
+            bar.update(1)
+    table = comparison_table(reports, noise_floor)
+    axes = axis_table(reports)
+    with plan.writing("metrics.json") as tmp:
+        write_json(tmp, {
+            "dataset": str(args.dataset),
+            "alpha": alpha,
+            "noise_floor": noise_floor,
+            "models": {label: {"file": str(path), **reports[label].to_dict()} for label, path in zip(labels, args.models)},
+        })
+    with plan.writing("metrics.md") as tmp:
+        tmp.write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n\n{table}\n\nRMSE per axis:\n\n{axes}\n")
+    if not args.no_plots:
+        console.info("plotting ...")
+        paths = {"distribution": plan.path(EVALUATION_PLOTS[0]), "axis": plan.path(EVALUATION_PLOTS[1])}
+        paths.update({label: plan.path(predicted_plot_name(label)) for label in labels})
+        write_evaluation_plots(paths, data.wrench, predictions, alpha, noise_floor, dataset_name=str(args.dataset))
+    print(table)
+    print()
+    print(axes)
+    console.info(f"results in {args.out}/")
+    return 0

@@ -1,0 +1,32 @@
+"""``ftcal simulate experiment``: the virtual robot experiment, written as run logs."""
+
+from __future__ import annotations
+
+import argparse
+
+from ._common import Console, OutputPlan
+from ._plan import write_plan_coverage
+
+
+def simulate_logs(args: argparse.Namespace) -> int:
+    """Plan the poses, simulate the load / no-load runs, write the logs and a coverage plot."""
+    import ftcal
+
+    console = Console(args.quiet)
+    configs = ftcal.thesis_load_configurations()
+    names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
+    plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
+    console.info(f"planning the pose sphere of {robot.name} ...")
+    plan = ftcal.plan_calibration_poses(robot, **kwargs)
+    if plan.n_poses == 0:
+        raise ftcal.KinematicsError(f"no calibration pose of {robot.name} is reachable; try another --robot")
+    mass = {} if args.mass is None else {"load_mass": args.mass}
+    console.info(f"simulating {len(configs)} load configurations x {plan.n_poses} poses (load and no-load runs) ...")
+    paths = ftcal.simulate_experiment(
+        args.out, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=args.force, **mass,
+    )
+    write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
+    console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")
+    return 0

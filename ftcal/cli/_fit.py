@@ -1,0 +1,124 @@
+"""``ftcal fit``: train a calibrator from the registry on a dataset and save the model file."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json
+from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
+from ._training import fit_with_progress
+
+EXAMPLE = """\
+examples:
+  ftcal fit data/train.csv --model directional --out models
+  ftcal fit data/train.csv --model comparative --schedule short --seed 3 --out models
+  ftcal fit real.csv --model linear --param ridge=1e-6 --tare 0.12,-0.3,0.05,0.2,0.01,-0.07 --out models
+  ftcal fit data/train.csv --model directional --param max_epochs=300 --param hidden_layer_sizes=[64,64]
+
+writes DIR/NAME.model.npz (the model) and DIR/NAME.fit.json (what was trained, on what, how long).
+"""
+
+
+def _calibrator_names() -> tuple[str, ...]:
+    import ftcal
+
+    return tuple(getattr(ftcal, "CALIBRATOR_NAMES", ("linear", "comparative", "directional")))
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "fit",
+        help="train a calibrator on a dataset and save the model file",
+        description="Train a calibrator on a calibration dataset (.csv or .npz) and save it as a model file.",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("dataset", help="training dataset (.csv or .npz, as written by 'ftcal simulate' / 'prepare')")
+    p.add_argument("-m", "--model", default="directional", choices=_calibrator_names(), help="calibrator")
+    p.add_argument(
+        "--schedule", default="thesis", choices=("thesis", "short"),
+        help="training schedule of the networks: the thesis' (1700+ epochs) or a short one (minutes)",
+    )
+    p.add_argument(
+        "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
+        help="a calibrator parameter, value read as JSON (repeatable), e.g. max_epochs=200",
+    )
+    p.add_argument(
+        "--alpha", type=positive_float,
+        help="torque scale Fmax/Tmax [1/m] (default: the dataset's meta 'alpha', else from its wrenches)",
+    )
+    p.add_argument(
+        "--tare", metavar="V0,V1,...",
+        help="known zero-load raw reading, one value per channel (default: estimated from the data)",
+    )
+    p.add_argument("--name", help="file name stem of the model (default: the --model name)")
+    add_output_options(p, "ftcal-models")
+    add_run_options(p)
+    p.set_defaults(handler=run)
+
+
+def _parse_tare(text: str | None) -> np.ndarray | None:
+    if text is None:
+        return None
+    try:
+        values = np.array([float(v) for v in text.replace(" ", "").split(",") if v], dtype=float)
+    except ValueError:
+        raise CliError(f"--tare {text!r}: give comma-separated numbers, one per raw channel") from None
+    if values.size == 0 or not np.all(np.isfinite(values)):
+        raise CliError(f"--tare {text!r}: give finite comma-separated numbers, one per raw channel")
+    return values
+
+
+def run(args: argparse.Namespace) -> int:
+    import ftcal
+
+    console = Console(args.quiet)
+    name = args.name or args.model
+    if not name.replace("-", "_").isidentifier():
+        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
+    plan = OutputPlan(args.out, [model_file_name(name), f"{name}.fit.json"], args.force)
+    tare = _parse_tare(args.tare)
+    data = load_dataset(args.dataset, "training dataset")
+    if tare is not None and tare.size != data.n_channels:
+        raise CliError(f"--tare has {tare.size} values but {args.dataset} has {data.n_channels} raw channels")
+    params = dict(args.param)
+    alpha = dataset_alpha(data, args.alpha)
+    if alpha is not None and "alpha" not in params:
+        params["alpha"] = alpha
+    if tare is not None:
+        params["zero_reading"] = tare
+    estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed)
+    known = estimator.get_params(deep=False)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
+    estimator.set_params(**params)
+    schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
+    console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
+    start = time.perf_counter()
+    fit_with_progress(estimator, data.raw, data.wrench, console, label=args.model)
+    seconds = time.perf_counter() - start
+    report = ftcal.calibration_report(data.wrench, estimator.predict(data.raw), alpha=estimator.alpha_)
+    ftcal.save_model(estimator, plan.path(model_file_name(name)), overwrite=True)  # atomic; checked above
+    summary = {
+        "model": args.model,
+        "schedule": args.schedule,
+        "seed": args.seed,
+        "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
+        "dataset": str(args.dataset),
+        "n_samples": data.n_samples,
+        "n_channels": data.n_channels,
+        "alpha": estimator.alpha_,
+        "fit_seconds": round(seconds, 3),
+        "training_rmse": report.rmse,
+        "training_report": report.to_dict(),
+    }
+    with plan.writing(f"{name}.fit.json") as tmp:
+        write_json(tmp, summary)
+    console.info(
+        f"done in {seconds:.1f} s: training RMSE {report.rmse:.4g} N (torque-scaled, alpha={estimator.alpha_:.4g}); "
+        f"model -> {plan.path(model_file_name(name))}"
+    )
+    return 0

@@ -1,0 +1,93 @@
+"""Datasets and model files as the subcommands use them (thin wrappers that add context)."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from .._dataset import CalibrationDataset
+from .._wrench import alpha_from_wrenches
+from ._common import CliError
+
+__all__ = [
+    "MODEL_SUFFIX",
+    "model_file_name",
+    "model_label",
+    "load_model_file",
+    "load_dataset",
+    "parse_param",
+    "dataset_alpha",
+    "evaluation_alpha",
+]
+
+#: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
+MODEL_SUFFIX = ".model.npz"
+
+
+def model_file_name(name: str) -> str:
+    """File name of a fitted model called ``name`` (``directional`` -> ``directional.model.npz``)."""
+    return f"{name}{MODEL_SUFFIX}"
+
+
+def model_label(path: Path) -> str:
+    """Short name of a model file for tables and plots (its name without the suffix)."""
+    name = Path(path).name
+    return name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else Path(path).stem
+
+
+def load_model_file(path: str | Path):
+    """A fitted calibrator from a model file written by :func:`ftcal.save_model`."""
+    import ftcal
+
+    return ftcal.load_model(path)
+
+
+def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
+    """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz``; ``role`` names it in errors."""
+    path = Path(path)
+    if not path.is_file():
+        raise CliError(f"{path}: no such {role} file")
+    return CalibrationDataset.load(path)
+
+
+def parse_param(text: str) -> tuple[str, Any]:
+    """argparse type of ``--param KEY=VALUE``: the value is read as JSON, else kept as text.
+
+    Examples
+    --------
+    >>> parse_param("max_epochs=20"), parse_param("hidden_layer_sizes=[64, 64]")
+    (('max_epochs', 20), ('hidden_layer_sizes', (64, 64)))
+    """
+    key, sep, value = text.partition("=")
+    key = key.strip()
+    if not sep or not key.isidentifier():
+        raise argparse.ArgumentTypeError(f"{text!r} is not KEY=VALUE (e.g. max_epochs=50)")
+    try:
+        parsed = json.loads(value)
+    except json.JSONDecodeError:
+        parsed = value
+    return key, tuple(parsed) if isinstance(parsed, list) else parsed
+
+
+def dataset_alpha(dataset: CalibrationDataset, alpha: float | None) -> float | None:
+    """``--alpha``, else the dataset's ``meta['alpha']`` (the sensor's Fmax / Tmax), else None."""
+    if alpha is not None:
+        return float(alpha)
+    meta_alpha = dataset.meta.get("alpha")
+    if meta_alpha is None:
+        return None
+    try:
+        value = float(meta_alpha)
+    except (TypeError, ValueError):
+        value = float("nan")
+    if not (value > 0 and value != float("inf")):
+        raise CliError(f"dataset meta 'alpha' is {meta_alpha!r}, not a positive number; pass --alpha")
+    return value
+
+
+def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:
+    """Torque scale for metrics: ``--alpha``, else the dataset's ``meta['alpha']``, else from its wrenches."""
+    value = dataset_alpha(dataset, alpha)
+    return alpha_from_wrenches(dataset.wrench) if value is None else value

@@ -1,0 +1,99 @@
+"""``ftcal prepare``: recorded load / no-load run logs -> calibration dataset (the real-world pipeline)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ._common import (
+    CliError,
+    Console,
+    OutputPlan,
+    add_output_options,
+    add_robot_options,
+    add_run_options,
+    positive_float,
+    positive_int,
+    write_json,
+)
+
+EXAMPLE = """\
+examples:
+  ftcal prepare logs/ --out data                          # every *.csv log in logs/
+  ftcal prepare runs/config*_load.csv runs/config*_no-load.csv --mass 2.0 --out data
+  ftcal prepare logs/ --robot my_arm.urdf --sensor-frame ft_frame --format npz --out data
+
+pairs every load run with its no-load run (same configuration, same pose index), aligns
+them with R_delta = P_no-load^T P_load (thesis eq. 17), subtracts the no-load reading and
+computes the reference wrench of the load from the forward kinematics (eq. 15-16).
+writes DIR/dataset.<fmt> (group = load configuration id), prepare.json and coverage.png.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "prepare",
+        help="recorded load / no-load logs -> calibration dataset",
+        description="Turn the run logs of a robot-held calibration experiment into a calibration dataset.",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("logs", nargs="+", metavar="LOG", help="run log files, or directories holding *.csv logs")
+    add_robot_options(p)
+    p.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the logs' load_mass_kg)")
+    p.add_argument("--channels", type=positive_int, help="expected raw channel count (checked in every log)")
+    p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
+    add_output_options(p, "ftcal-data")
+    add_run_options(p, seed=False)
+    p.set_defaults(handler=run)
+
+
+def _log_files(items: list[str]) -> list[Path]:
+    files: list[Path] = []
+    for item in items:
+        path = Path(item)
+        if path.is_dir():
+            found = sorted(path.glob("*.csv"))
+            if not found:
+                raise CliError(f"{path}: directory holds no *.csv run logs")
+            files += found
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise CliError(f"{path}: no such log file or directory")
+    return list(dict.fromkeys(files))
+
+
+def run(args: argparse.Namespace) -> int:
+    import ftcal
+    from .. import _plots
+
+    console = Console(args.quiet)
+    name = f"dataset.{args.format}"
+    plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
+    logs = _log_files(args.logs)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
+    dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels)
+    with plan.writing(name) as tmp:
+        dataset.save(tmp)
+    groups = {} if dataset.group is None else {
+        str(g): int((dataset.group == g).sum()) for g in sorted(set(dataset.group.tolist()))
+    }
+    with plan.writing("prepare.json") as tmp:
+        write_json(tmp, {
+            "logs": [str(p) for p in logs],
+            "robot": robot.name,
+            "sensor_frame": robot.sensor_frame,
+            "n_samples": dataset.n_samples,
+            "n_channels": dataset.n_channels,
+            "samples_per_configuration": groups,
+            "meta": dataset.meta,
+        })
+    alpha = ftcal.alpha_from_wrenches(dataset.wrench)
+    with plan.writing("coverage.png") as tmp:
+        _plots.plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
+    console.info(
+        f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
+        f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)"
+    )
+    return 0

@@ -1,0 +1,169 @@
+"""``ftcal simulate``: artificial datasets (``dataset``) and virtual-experiment logs (``experiment``)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ._common import (
+    CliError,
+    Console,
+    OutputPlan,
+    add_output_options,
+    add_robot_options,
+    add_run_options,
+    existing_file,
+    nonnegative_int,
+    positive_float,
+    positive_int,
+    write_json,
+)
+
+DATASET_EXAMPLE = """\
+examples:
+  ftcal simulate dataset --out data                      # thesis preset: train.csv (5000), test.csv (1250)
+  ftcal simulate dataset --preset asymmetric --n-datasets 5 --seed 7 --out data5
+  ftcal simulate dataset --sensor my_sensor.cal --zero-offset 0.05 --format npz --out mine
+
+writes DIR/train.<fmt>, DIR/test.<fmt> (dataset_<k>/... for --n-datasets > 1), info.json
+(the sampled error parameters and the noise floor) and coverage.png.
+"""
+
+EXPERIMENT_EXAMPLE = """\
+examples:
+  ftcal simulate experiment --out logs                   # KUKA iiwa 14, default sphere, 7 load configurations
+  ftcal simulate experiment --robot panda --mass 2.5 --subdivisions 1 --out logs_panda
+
+writes the load / no-load run logs in the format 'ftcal prepare' reads (the same as a real
+recording), so the whole real-world pipeline can be tried without hardware.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "simulate",
+        help="artificial datasets or virtual-experiment logs, to files",
+        description="Simulate calibration data: 'dataset' (thesis IV-A) or 'experiment' logs (thesis IV-B).",
+        epilog="examples:\n  ftcal simulate dataset --out data\n  ftcal simulate experiment --out logs",
+    )
+    kinds = p.add_subparsers(dest="kind", metavar="KIND", parser_class=type(p))
+    kinds.required = True
+    _register_dataset(kinds)
+    _register_experiment(kinds)
+
+
+def _register_dataset(kinds: argparse._SubParsersAction) -> None:
+    from .._presets import ERROR_PRESETS
+
+    d = kinds.add_parser(
+        "dataset",
+        help="artificial train/test datasets of the thesis (four spheres, continuous test set)",
+        description="Artificial calibration datasets: 4 training spheres in the torque-scaled wrench space, "
+        "a continuous test set, errors from a preset (creep, noise, crosstalk, nonlinearity, ...).",
+        epilog=DATASET_EXAMPLE,
+    )
+    d.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset")
+    d.add_argument("--n-datasets", type=positive_int, default=1, help="independent datasets (each its own errors)")
+    d.add_argument("--n-per-sphere", type=positive_int, default=1250, help="training points per sphere (4 spheres)")
+    d.add_argument("--n-test", type=positive_int, default=1250, help="test points")
+    d.add_argument(
+        "--test-distribution", default="radial", choices=("radial", "box"),
+        help="how test wrenches fill the operating range",
+    )
+    d.add_argument("--sensor", type=existing_file, metavar="CAL", help="vendor calibration file (ATI .cal)")
+    d.add_argument(
+        "--zero-offset", type=float, default=0.0, metavar="RAW",
+        help="raw zero-load offset added to every channel (a sensor that is not tared)",
+    )
+    d.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
+    add_output_options(d, "ftcal-data")
+    add_run_options(d)
+    d.set_defaults(handler=run_dataset)
+
+
+def _dataset_files(n_datasets: int, fmt: str) -> list[str]:
+    stems = ["train", "test"]
+    if n_datasets == 1:
+        return [f"{s}.{fmt}" for s in stems]
+    return [f"dataset_{k:02d}/{s}.{fmt}" for k in range(n_datasets) for s in stems]
+
+
+def run_dataset(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import ftcal
+    from .. import _plots
+
+    console = Console(args.quiet)
+    files = _dataset_files(args.n_datasets, args.format)
+    plan = OutputPlan(args.out, files + ["info.json", "coverage.png"], args.force)
+    profile = _profile(args.sensor)
+    offset = None if args.zero_offset == 0 else np.full(profile.n_channels, args.zero_offset)
+    rng = np.random.default_rng(args.seed)
+    infos = []
+    first_train = None
+    with console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
+        for k in range(args.n_datasets):
+            train, test, info = ftcal.make_artificial_dataset(
+                args.preset, random_state=rng, profile=profile, n_per_sphere=args.n_per_sphere,
+                n_test=args.n_test, test_distribution=args.test_distribution, zero_offset=offset,
+            )
+            for ds, name in zip((train, test), files[2 * k: 2 * k + 2]):
+                ds.meta["seed"] = args.seed
+                ds.meta["dataset_index"] = k
+                with plan.writing(name) as tmp:
+                    ds.save(tmp)
+            infos.append(info)
+            first_train = train if first_train is None else first_train
+            bar.update(1)
+    with plan.writing("info.json") as tmp:
+        write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
+    with plan.writing("coverage.png") as tmp:
+        _plots.plot_wrench_coverage(
+            first_train.wrench, tmp, alpha=profile.alpha,
+            title=f"Training wrenches ({args.preset} preset)",
+        )
+    floors = [i["noise_floor"] for i in infos]
+    console.info(
+        f"wrote {args.n_datasets} dataset(s) to {args.out}/ ({first_train.n_samples} train, {args.n_test} test "
+        f"samples each, {profile.n_channels} channels); noise floor {np.mean(floors):.3g} N"
+    )
+    return 0
+
+
+def _profile(cal_path: Path | None):
+    import ftcal
+
+    if cal_path is None:
+        return ftcal.SensorProfile.default()
+    reader = getattr(ftcal, "read_ati_calibration", None)
+    if reader is None:
+        raise CliError("this ftcal build cannot read vendor calibration files (read_ati_calibration is missing)")
+    return reader(cal_path)
+
+
+def _register_experiment(kinds: argparse._SubParsersAction) -> None:
+    from .._presets import ERROR_PRESETS
+
+    e = kinds.add_parser(
+        "experiment",
+        help="virtual robot experiment: load / no-load run logs as a real recording would give",
+        description="Simulate the robot-held calibration experiment (thesis IV-B) and write its run logs.",
+        epilog=EXPERIMENT_EXAMPLE,
+    )
+    add_robot_options(e)
+    e.add_argument("--mass", type=positive_float, default=None, help="load mass [kg] (default: the thesis' load)")
+    e.add_argument(
+        "--subdivisions", type=nonnegative_int, default=None,
+        help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)",
+    )
+    e.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
+    add_output_options(e, "ftcal-logs")
+    add_run_options(e)
+    e.set_defaults(handler=run_experiment)
+
+
+def run_experiment(args: argparse.Namespace) -> int:
+    from ._experiment import simulate_logs
+
+    return simulate_logs(args)

@@ -1,0 +1,112 @@
+"""Training with a progress bar: epochs of the skorch networks, a timer for closed-form fits."""
+
+from __future__ import annotations
+
+import contextlib
+import threading
+from collections.abc import Iterator
+from typing import Any
+
+from ._common import Console
+
+__all__ = ["fit_with_progress"]
+
+
+def _epoch_budget(params: dict[str, Any]) -> int | None:
+    """Upper bound of the epochs of the three-phase schedule, from the estimator's parameters."""
+    phases = [params.get(k) for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")]
+    known = [int(p) for p in phases if isinstance(p, int) and p >= 0]
+    return sum(known) if known else None
+
+
+def _callback_class():
+    """The skorch callback class (built on first use, so importing the CLI does not import torch)."""
+    from skorch.callbacks import Callback
+
+    class _EpochProgress(Callback):
+        def __init__(self, bar: Any) -> None:
+            self.bar = bar
+
+        def on_epoch_end(self, net, **kwargs: Any) -> None:
+            last = net.history[-1]
+            post = {k: f"{last[k]:.4g}" for k in ("train_loss", "valid_loss") if k in last}
+            if "event_lr" in last:
+                post["lr"] = f"{last['event_lr']:.1e}"
+            self.bar.set_postfix(post, refresh=False)
+            self.bar.update(1)
+            if len(net.history) == 1:  # show the first losses at once, not after tqdm's mininterval
+                self.bar.refresh()
+
+    return _EpochProgress
+
+
+def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: str = "fit") -> Any:
+    """``estimator.fit(X, y)`` with a progress bar on stderr (none when ``console.quiet``).
+
+    Networks whose parameters include ``callbacks`` get a per-epoch bar with
+    the training / validation loss; other estimators get an elapsed-time bar.
+    Returns the fitted estimator.
+    """
+    params = estimator.get_params(deep=False) if hasattr(estimator, "get_params") else {}
+    if console.quiet:
+        return estimator.fit(X, y)
+    if "callbacks" in params or hasattr(estimator, "_build_net"):
+        bar = console.progress(total=_epoch_budget(params), desc=f"{label} epochs", unit="epoch")
+        try:
+            with _progress_callback_installed(estimator, params, _callback_class()(bar)):
+                return estimator.fit(X, y)
+        finally:
+            bar.close()
+    return _fit_with_timer(estimator, X, y, console, label)
+
+
+@contextlib.contextmanager
+def _progress_callback_installed(estimator: Any, params: dict[str, Any], callback: Any) -> Iterator[None]:
+    """Add ``callback`` to the skorch net the estimator builds in ``fit``, for this fit only.
+
+    Uses the public ``callbacks`` parameter when the estimator has one; else
+    wraps the estimator's ``_build_net`` (the skorch net factory of
+    :class:`ftcal._network_base.NetworkCalibrator`) on this instance only,
+    and removes the wrapper afterwards so the fitted model stays a plain one.
+    """
+    if "callbacks" in params:
+        estimator.set_params(callbacks=list(params["callbacks"] or []) + [("cli_progress", callback)])
+        try:
+            yield
+        finally:
+            estimator.set_params(callbacks=params["callbacks"])
+        return
+    build = estimator._build_net
+
+    def build_with_progress(*args: Any, **kwargs: Any) -> Any:
+        net = build(*args, **kwargs)
+        net.callbacks = list(net.callbacks or []) + [("cli_progress", callback)]
+        return net
+
+    estimator._build_net = build_with_progress
+    try:
+        yield
+    finally:
+        del estimator._build_net
+        net = getattr(estimator, "net_", None)
+        if net is not None:  # drop the bar from the fitted net, which is saved and may be pickled
+            net.callbacks_ = [(n, cb) for n, cb in net.callbacks_ if n != "cli_progress"]
+            net.callbacks = [c for c in (net.callbacks or []) if not (isinstance(c, tuple) and c[0] == "cli_progress")]
+
+
+def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str) -> Any:
+    bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
+    done = threading.Event()
+
+    def tick() -> None:
+        while not done.wait(0.5):
+            bar.refresh()
+
+    ticker = threading.Thread(target=tick, daemon=True)
+    ticker.start()
+    try:
+        return estimator.fit(X, y)
+    finally:
+        done.set()
+        ticker.join()
+        bar.close()

@@ -1,0 +1,99 @@
+"""``ftcal tune``: hyperparameter search of a calibrator on a dataset (cross-validated, eq. 18 RMSE)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json
+from ._fit import _calibrator_names
+from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
+
+EXAMPLE = """\
+examples:
+  ftcal tune data/train.csv --model polynomial --out tuned                  # the default search space
+  ftcal tune data/train.csv --model axis_nonlinear --grid 'powers=[[1.5], [1, 2]]' --grid 'ridge=[1e-6, 1e-3]'
+  ftcal tune data/train.csv --model directional --grid 'hidden_layer_sizes=[[64, 64], [128, 128, 128]]' \\
+      --grid 'lr=loguniform(1e-4, 1e-2)' --n-iter 8 --cv 3 --out tuned
+  ftcal tune real.csv --model directional_ensemble --grid 'estimator__lr=[3e-4, 1e-3]' --group-folds
+
+searches the values (a JSON list per parameter: grid search over every combination; with --n-iter,
+a randomized search that also takes loguniform(a, b), uniform(a, b), randint(a, b)) by k-fold
+cross-validation of the torque-scaled RMSE (eq. 18), refits the best on the whole dataset and writes
+DIR/NAME.tune.json (every candidate, ranked) and DIR/NAME.model.npz (the best model).
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "tune",
+        help="search a calibrator's hyperparameters by cross-validation",
+        description="Hyperparameter search (scikit-learn GridSearchCV / RandomizedSearchCV) of a calibrator, "
+        "scored by the cross-validated torque-scaled RMSE.",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("dataset", help="training dataset (.csv or .npz)")
+    p.add_argument("-m", "--model", default="axis_nonlinear", choices=_calibrator_names(), help="calibrator")
+    p.add_argument(
+        "--grid", action="append", default=[], metavar="KEY=VALUES",
+        help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
+        "default: the model's documented search space, ftcal._search.DEFAULT_SEARCH_SPACES)",
+    )
+    p.add_argument("--n-iter", type=positive_int, help="randomized search with this many candidates")
+    p.add_argument("--cv", type=positive_int, default=3, help="number of cross-validation folds (>= 2)")
+    p.add_argument(
+        "--group-folds", action="store_true",
+        help="keep the dataset's groups (e.g. load configurations) whole in the folds",
+    )
+    p.add_argument("--schedule", default="short", choices=("thesis", "short"), help="starting training schedule")
+    p.add_argument(
+        "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
+        help="a fixed calibrator parameter, value read as JSON (repeatable)",
+    )
+    p.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
+    p.add_argument("--jobs", type=positive_int, default=1, help="parallel joblib workers of the search")
+    p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
+    add_output_options(p, "ftcal-tuned")
+    add_run_options(p)
+    p.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from .._search import parse_search_space, search_calibrator, search_summary
+    import ftcal
+
+    console = Console(args.quiet)
+    name = args.name or args.model
+    if not name.replace("-", "_").isidentifier():
+        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
+    if args.cv < 2:
+        raise CliError(f"--cv {args.cv}: cross-validation needs at least 2 folds")
+    plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
+    space = parse_search_space(args.grid) if args.grid else None
+    data = load_dataset(args.dataset, "training dataset")
+    groups = None
+    if args.group_folds:
+        if data.group is None:
+            raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
+        groups = data.group
+    params = dict(args.param)
+    alpha = dataset_alpha(data, args.alpha)
+    if alpha is not None and "alpha" not in params:
+        params["alpha"] = alpha
+    console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
+    start = time.perf_counter()
+    search = search_calibrator(
+        args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
+        schedule=args.schedule, random_state=args.seed, n_jobs=args.jobs, **params,
+    )
+    seconds = time.perf_counter() - start
+    summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
+               "search_seconds": round(seconds, 3), **search_summary(search)}
+    ftcal.save_model(search.best_estimator_, plan.path(model_file_name(name)), overwrite=True)
+    with plan.writing(f"{name}.tune.json") as tmp:
+        write_json(tmp, summary)
+    console.info(
+        f"done in {seconds:.1f} s: best {summary['best_params']} with cross-validated RMSE "
+        f"{summary['best_rmse']:.4g} N; model -> {plan.path(model_file_name(name))}"
+    )
+    return 0

@@ -1,0 +1,51 @@
+"""Shared fixtures of the calibrator tests (issue 2): small data sets and tiny training schedules."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator
+
+#: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
+TINY_SCHEDULE = dict(
+    hidden_layer_sizes=(16, 16),
+    max_epochs=6,
+    plateau_epochs=3,
+    plateau_patience=1,
+    max_recover_epochs=3,
+    batch_size=32,
+)
+
+
+def tiny_calibrators(random_state: int = 0) -> list:
+    """One instance of each calibrator, the networks with :data:`TINY_SCHEDULE`."""
+    return [
+        LinearCalibrator(),
+        ComparativeCalibrator(**TINY_SCHEDULE, random_state=random_state),
+        DirectionalCalibrator(**TINY_SCHEDULE, random_state=random_state),
+    ]
+
+
+def affine_sensor_data(n_samples: int = 120, n_channels: int = 6, seed: int = 0):
+    """Noise-free affine sensor: raw readings ``S``, wrenches ``W = C S + b``, and ``C``, ``b``.
+
+    Forces are O(100 N), torques O(2 N·m), like a mid-range F/T sensor.
+    """
+    rng = np.random.default_rng(seed)
+    calibration = rng.normal(size=(6, n_channels)) * np.array([100.0] * 3 + [2.0] * 3)[:, None]
+    offset = rng.normal(size=6) * np.array([5.0] * 3 + [0.1] * 3)
+    raw = rng.normal(size=(n_samples, n_channels))
+    wrench = raw @ calibration.T + offset
+    return raw, wrench, calibration, offset
+
+
+@pytest.fixture
+def affine_data():
+    return affine_sensor_data()
+
+
+@pytest.fixture(params=["linear", "comparative", "directional"])
+def tiny_calibrator(request):
+    """Each calibrator in turn, networks with the tiny schedule."""
+    return dict(zip(["linear", "comparative", "directional"], tiny_calibrators()))[request.param]

@@ -1,0 +1,118 @@
+"""Artificial datasets of the thesis (IV-A) and the noise floor (issue 3)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ftcal import (
+    CalibrationDataset,
+    CalibrationInputError,
+    ErrorModel,
+    LinearCalibrator,
+    SensorProfile,
+    VirtualSensor,
+    make_artificial_dataset,
+    wrench_rmse,
+)
+from ftcal._wrench import scale_torques
+
+
+@pytest.fixture(scope="module")
+def thesis_data():
+    return make_artificial_dataset("thesis", random_state=7)
+
+
+def test_train_spheres_have_exact_radii_before_errors(thesis_data):
+    train, _, info = thesis_data
+    assert train.n_samples == 5000
+    assert np.bincount(train.group).tolist() == [1250] * 4
+    radius = np.linalg.norm(scale_torques(train.wrench, 50.0), axis=1)
+    for sphere, expected in enumerate([400.0, 800.0, 1200.0, 1600.0]):  # steps of 400 N / 8 N·m
+        np.testing.assert_allclose(radius[train.group == sphere], expected, rtol=1e-12)
+    # the torque part alone: 8 N·m per 400 N step at most
+    assert np.linalg.norm(train.wrench[train.group == 0, 3:], axis=1).max() <= 8.0 + 1e-9
+
+
+def test_test_points_are_continuous_and_in_range(thesis_data):
+    _, test, _ = thesis_data
+    assert test.n_samples == 1250
+    assert np.abs(test.wrench[:, :3]).max() <= 2000.0
+    assert np.abs(test.wrench[:, 3:]).max() <= 40.0
+    radius = np.linalg.norm(scale_torques(test.wrench, 50.0), axis=1)
+    assert radius.max() <= 2000.0
+    # uniform in [0, 2000]: every 400 N band holds about a fifth of the points
+    counts = np.histogram(radius, bins=5, range=(0, 2000))[0]
+    assert counts.min() > 0.15 * 1250
+
+
+def test_box_test_distribution_stays_in_range():
+    _, test, _ = make_artificial_dataset("none", random_state=0, n_per_sphere=2, n_test=500, test_distribution="box")
+    assert np.abs(test.wrench[:, :3]).max() <= 2000.0 and np.abs(test.wrench[:, 3:]).max() <= 40.0
+    assert np.abs(test.wrench[:, 3:]).max() > 35.0  # reaches the corners of the box
+
+
+def test_same_seed_same_data_other_seed_other_data():
+    a = make_artificial_dataset("asymmetric", random_state=3, n_per_sphere=20, n_test=30)
+    b = make_artificial_dataset("asymmetric", random_state=3, n_per_sphere=20, n_test=30)
+    c = make_artificial_dataset("asymmetric", random_state=4, n_per_sphere=20, n_test=30)
+    for x, y in zip(a[:2], b[:2]):
+        np.testing.assert_array_equal(x.raw, y.raw)
+        np.testing.assert_array_equal(x.wrench, y.wrench)
+    assert a[2]["errors"] == b[2]["errors"]
+    assert not np.allclose(a[0].raw, c[0].raw)
+
+
+def test_without_errors_the_raw_readings_invert_the_calibration_matrix():
+    profile = SensorProfile.default()
+    offset = np.linspace(-0.2, 0.3, 6)
+    train, test, info = make_artificial_dataset("none", random_state=0, n_per_sphere=10, n_test=10, zero_offset=offset)
+    for ds in (train, test):
+        np.testing.assert_allclose((ds.raw - offset) @ profile.calibration_matrix.T, ds.wrench, atol=1e-9)
+    assert info["noise_floor"] == 0.0
+
+
+def test_noise_floor_matches_the_configured_sigma():
+    model = ErrorModel(noise=0.01, spread=0.0)
+    _, test, info = make_artificial_dataset(model, random_state=1)
+    # E[(w_i η_i)^2] = σ² E[w_i²]: the floor is σ times the RMS of the torque-scaled test wrench
+    expected = 0.01 * np.sqrt(np.mean(scale_torques(test.wrench, 50.0) ** 2))
+    assert info["noise_floor"] == pytest.approx(expected, rel=0.05)
+
+
+def test_a_linear_calibrator_is_exact_without_errors_and_cannot_beat_the_noise_floor(thesis_data):
+    train, test, _ = make_artificial_dataset("none", random_state=2, n_per_sphere=50, n_test=50)
+    ltm = LinearCalibrator(alpha=50.0).fit(train.raw, train.wrench)
+    assert wrench_rmse(test.wrench, ltm.predict(test.raw), 50.0) < 1e-6
+    train, test, info = thesis_data
+    ltm = LinearCalibrator(alpha=50.0).fit(train.raw, train.wrench)
+    rmse = wrench_rmse(test.wrench, ltm.predict(test.raw), 50.0)
+    assert 0.95 * info["noise_floor"] < rmse < 3 * info["noise_floor"]
+
+
+def test_info_and_files_are_json_friendly(thesis_data, tmp_path):
+    train, test, info = thesis_data
+    json.dumps(info)
+    assert info["sphere_radii"] == [400.0, 800.0, 1200.0, 1600.0]
+    assert 0.0 < info["noise_floor"] < 20.0
+    loaded = CalibrationDataset.load(train.save(tmp_path / "train.npz"))
+    np.testing.assert_array_equal(loaded.raw, train.raw)
+    assert loaded.meta["preset"] == "thesis"
+
+
+def test_virtual_sensor_reads_fresh_noise_with_fixed_errors():
+    s = VirtualSensor(errors="thesis", random_state=0)
+    w = np.tile([[500.0, -200, 300, 5, -3, 2]], (3, 1))
+    raw = s.read(w)
+    assert not np.allclose(raw[0], raw[1])  # noise differs per sample
+    clean = s.read(w, noise=False)
+    np.testing.assert_array_equal(clean[0], clean[1])
+    assert np.abs(raw - clean).max() < 0.05 * np.abs(clean).max()
+    with pytest.raises(CalibrationInputError, match="unknown error preset"):
+        VirtualSensor(errors="thesys")
+    with pytest.raises(CalibrationInputError, match="wrench must have shape"):
+        s.read(np.ones((2, 3)))
+    with pytest.raises(CalibrationInputError, match="unknown test distribution"):
+        make_artificial_dataset(random_state=0, n_per_sphere=2, n_test=2, test_distribution="cube")

@@ -1,0 +1,120 @@
+"""Bad input gets a clear error naming what is wrong and how to fix it (never NaN, never a torch trace)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
+
+from ftcal import CalibrationInputError, DirectionalCalibrator, LinearCalibrator
+
+from conftest import affine_sensor_data
+
+
+@pytest.fixture
+def data():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=21)
+    return raw, wrench
+
+
+def test_nan_in_x_names_x_and_first_row(tiny_calibrator, data):
+    raw, wrench = data
+    raw[7, 2] = np.nan
+    raw[9, 0] = np.nan
+    with pytest.raises(CalibrationInputError, match=r"X \(raw readings\) contains NaN or inf: first at row 7, column 2"):
+        tiny_calibrator.fit(raw, wrench)
+
+
+def test_inf_in_y_names_y_and_first_row(tiny_calibrator, data):
+    raw, wrench = data
+    wrench[3, 4] = -np.inf
+    with pytest.raises(CalibrationInputError, match=r"y \(reference wrenches\) contains NaN or inf: first at row 3"):
+        tiny_calibrator.fit(raw, wrench)
+
+
+def test_nan_at_predict_is_an_error_not_a_nan_result(tiny_calibrator, data):
+    raw, wrench = data
+    model = tiny_calibrator.fit(raw, wrench)
+    bad = raw[:5].copy()
+    bad[1, 1] = np.inf
+    with pytest.raises(CalibrationInputError, match="row 1"):
+        model.predict(bad)
+
+
+@pytest.mark.parametrize("shape", [(40, 5), (40,), (40, 7)])
+def test_y_not_of_width_six(tiny_calibrator, data, shape):
+    raw, wrench = data
+    y = wrench[:, :5] if shape == (40, 5) else wrench[:, 0] if shape == (40,) else np.hstack([wrench, wrench[:, :1]])
+    with pytest.raises(CalibrationInputError, match=r"y must have shape \(n_samples, 6\).*got shape \(40"):
+        tiny_calibrator.fit(raw, y)
+
+
+def test_channel_count_mismatch_at_predict(tiny_calibrator, data):
+    raw, wrench = data
+    model = tiny_calibrator.fit(raw, wrench)
+    with pytest.raises(ValueError, match=f"X has 5 features, but {type(model).__name__} is expecting 6 features"):
+        model.predict(raw[:, :5])
+
+
+def test_predict_before_fit(tiny_calibrator, data):
+    with pytest.raises(NotFittedError, match="not fitted yet"):
+        tiny_calibrator.predict(data[0])
+
+
+def test_fewer_samples_than_the_ltm_needs(tiny_calibrator):
+    raw, wrench, _, _ = affine_sensor_data(n_samples=8, n_channels=8, seed=1)  # needs 8 + 1 = 9
+    with pytest.raises(CalibrationInputError, match=r"X has 8 sample\(s\), but \w+ needs at least 9.*record more"):
+        tiny_calibrator.fit(raw, wrench)
+
+
+def test_fewer_than_three_channels(tiny_calibrator, data):
+    raw, wrench = data
+    with pytest.raises(CalibrationInputError, match=r"X has 2 feature\(s\).*at least 3 raw channels"):
+        tiny_calibrator.fit(raw[:, :2], wrench)
+
+
+def test_mismatched_lengths(tiny_calibrator, data):
+    raw, wrench = data
+    with pytest.raises(ValueError, match="inconsistent numbers of samples"):
+        tiny_calibrator.fit(raw, wrench[:-1])
+
+
+def test_zero_reading_of_wrong_shape(tiny_calibrator, data):
+    raw, wrench = data
+    model = clone(tiny_calibrator).set_params(zero_reading=np.zeros(5))
+    with pytest.raises(CalibrationInputError, match=r"zero_reading must have shape \(6,\).*got shape \(5,\)"):
+        model.fit(raw, wrench)
+
+
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, np.nan, "50"])
+def test_bad_alpha(data, alpha):
+    with pytest.raises(CalibrationInputError, match="alpha must be a positive finite number"):
+        LinearCalibrator(alpha=alpha).fit(*data)
+
+
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        (dict(hidden_layer_sizes=()), "hidden_layer_sizes must be a non-empty tuple"),
+        (dict(hidden_layer_sizes=(8, 0)), "each entry of hidden_layer_sizes must be an integer >= 1"),
+        (dict(max_epochs=0), "max_epochs must be an integer >= 1"),
+        (dict(lr=-0.1), r"lr must be a number in \(0.0"),
+        (dict(validation_fraction=0.9), r"validation_fraction must be a number in \(0.0, 0.5\]"),
+        (dict(min_relative_magnitude=2.0), "min_relative_magnitude must be a number"),
+    ],
+)
+def test_bad_network_parameters(data, params, message):
+    with pytest.raises(CalibrationInputError, match=message):
+        DirectionalCalibrator(**params).fit(*data)
+
+
+def test_bad_ridge(data):
+    with pytest.raises(CalibrationInputError, match="ridge must be a finite number >= 0"):
+        LinearCalibrator(ridge=-1.0).fit(*data)
+
+
+def test_only_zero_load_rows(data):
+    raw, wrench = data
+    with pytest.raises(CalibrationInputError, match="directional model needs loaded samples"):
+        DirectionalCalibrator(zero_reading=np.zeros(6)).fit(np.zeros_like(raw), wrench)

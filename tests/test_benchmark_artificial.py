@@ -1,0 +1,119 @@
+"""The artificial benchmark (issue 3): statistics by hand, resumable cache, output safety, smoke run."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import joblib
+import numpy as np
+import pytest
+
+from ftcal import CalibrationInputError, run_artificial_benchmark
+from ftcal._benchmark_artificial import BenchmarkOutputExistsError, summarize_results, wilcoxon_pvalue
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def records(rmse_by_model: dict, preset="p"):
+    return [
+        dict(preset=preset, dataset=i, model=m, rmse=r, rel_force_mean=r / 100, rel_torque_mean=r / 200,
+             noise_floor=1.0 + i)
+        for m, values in rmse_by_model.items() for i, r in enumerate(values)
+    ]
+
+
+def test_summary_against_hand_computed_values():
+    s = summarize_results(records({"a": [1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "b": [2.0, 3.0, 4.0, 5.0, 6.0, 7.5]}), ["a", "b"], ["p"])["p"]
+    a = s["models"]["a"]
+    assert a["rmse"]["mean"] == 3.5
+    assert a["rmse"]["std"] == pytest.approx(math.sqrt(17.5 / 5))  # sample std: sum of squares 17.5, n-1 = 5
+    assert a["rel_force"]["mean"] == pytest.approx(0.035) and a["rel_torque"]["mean"] == pytest.approx(0.0175)
+    assert s["noise_floor"]["mean"] == 3.5 and s["noise_floor"]["n"] == 6
+    # b > a in all 6 pairs: exact two-sided p = 2 / 2**6
+    w = s["wilcoxon"]["a vs b"]
+    assert w["p"] == pytest.approx(2 / 64) and w["n"] == 6 and w["note"] == ""
+
+
+def test_wilcoxon_edge_cases_give_nan_with_a_note():
+    p, note = wilcoxon_pvalue([1, 2, 3], [2, 3, 4])
+    assert math.isnan(p) and "only 3 paired datasets" in note
+    p, note = wilcoxon_pvalue([1.0] * 8, [1.0] * 8)
+    assert math.isnan(p) and "all paired differences are zero" in note
+    s = summarize_results(records({"a": [1.0], "b": []}), ["a", "b"], ["p"])["p"]
+    assert s["models"]["b"]["n_datasets"] == 0 and math.isnan(s["models"]["b"]["rmse"]["mean"])
+    assert s["models"]["a"]["rmse"]["std"] == 0.0 and math.isnan(s["wilcoxon"]["a vs b"]["p"])
+
+
+def test_quick_smoke_run_writes_outputs_and_resumes_from_cache(tmp_path):
+    done = []
+    first = run_artificial_benchmark(quick=True, out_dir=tmp_path, progress=lambda d, t, r: done.append((d, t)))
+    meta = first["meta"]
+    assert meta["n_expected"] == meta["n_complete"] == meta["n_computed"] == 9  # 3 datasets x 3 models
+    assert done[-1] == (9, 9)
+    for key in ("json", "markdown", "png_thesis"):
+        assert Path(first["files"][key]).stat().st_size > 0
+    saved = json.loads((tmp_path / "artificial_results.json").read_text())
+    table = saved["summary"]["thesis"]
+    assert set(table["models"]) == {"linear", "comparative", "directional"}
+    floor = table["noise_floor"]["mean"]
+    assert 2.0 < floor < 10.0
+    assert table["models"]["linear"]["rmse"]["mean"] > 0.9 * floor  # nobody beats the noise floor
+    assert "| linear | 3 |" in (tmp_path / "artificial_results.md").read_text()
+    assert len(list((tmp_path / "cache" / "thesis").glob("*.json"))) == 9
+    again = run_artificial_benchmark(quick=True, out_dir=tmp_path)
+    assert again["meta"]["n_from_cache"] == 9 and again["meta"]["n_computed"] == 0
+    assert json.dumps(again["summary"], sort_keys=True) == json.dumps(first["summary"], sort_keys=True)
+
+
+def test_other_configuration_is_not_mixed_in_and_parallel_backend_is_pluggable(tmp_path):
+    kw = dict(quick=True, models=("linear",), presets=("thesis", "stress"), plot=False)
+    serial = run_artificial_benchmark(out_dir=tmp_path / "s", seed=0, **kw)
+    other_seed = run_artificial_benchmark(out_dir=tmp_path / "s", seed=1, **kw)
+    assert other_seed["meta"]["n_from_cache"] == 0 and other_seed["meta"]["n_computed"] == 6
+    with joblib.parallel_config(backend="threading"):
+        threaded = run_artificial_benchmark(out_dir=tmp_path / "t", seed=0, n_jobs=2, **kw)
+    assert json.dumps(threaded["summary"], sort_keys=True) == json.dumps(serial["summary"], sort_keys=True)
+    stress, thesis = serial["summary"]["stress"]["models"]["linear"], serial["summary"]["thesis"]["models"]["linear"]
+    assert stress["rmse"]["mean"] > 1.5 * thesis["rmse"]["mean"]  # strong nonlinearity hurts the LTM
+
+
+def test_user_files_are_never_overwritten_without_force(tmp_path):
+    mine = tmp_path / "artificial_results.md"
+    mine.write_text("my notes")
+    with pytest.raises(BenchmarkOutputExistsError, match="artificial_results.md exists.*force"):
+        run_artificial_benchmark(out_dir=tmp_path, compute=False)
+    assert mine.read_text() == "my notes"
+    result = run_artificial_benchmark(out_dir=tmp_path, compute=False, force=True)
+    assert result["meta"]["n_complete"] == 0 and mine.read_text() != "my notes"
+    run_artificial_benchmark(out_dir=tmp_path, compute=False)  # its own, unchanged file: rewritten freely
+
+
+@pytest.mark.parametrize(
+    "kwargs, words",
+    [
+        (dict(models=("linear", "svm")), "unknown models"),
+        (dict(presets=("thesis", "bogus")), "unknown error preset"),
+        (dict(schedule="long"), "unknown schedule"),
+        (dict(n_datasets=0), "n_datasets must be >= 1"),
+    ],
+)
+def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):
+    with pytest.raises(CalibrationInputError, match=words):
+        run_artificial_benchmark(out_dir=tmp_path, **kwargs)
+    assert not (tmp_path / "cache").exists()
+
+
+def test_command_line_wrapper(tmp_path, capsys):
+    spec = importlib.util.spec_from_file_location("bench_artificial", ROOT / "benchmarks" / "artificial.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    out = tmp_path / "cli"
+    assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 0
+    assert "3/3 results" in capsys.readouterr().out
+    (out / "artificial_results.md").write_text("edited by hand")
+    assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 2
+    assert "--force" in capsys.readouterr().err
+    assert (out / "artificial_results.md").read_text() == "edited by hand"

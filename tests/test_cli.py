@@ -1,0 +1,251 @@
+"""The ``ftcal`` command line through ``main(argv)``: framework, errors, --force, fit/evaluate/predict."""
+
+from __future__ import annotations
+
+import io
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ftcal
+from ftcal import CalibrationDataset
+from ftcal.cli import main
+
+SUBCOMMANDS = ["simulate", "plan", "prepare", "fit", "evaluate", "predict", "benchmark", "demo"]
+
+# A known affine sensor: raw = A @ wrench + b, so the exact calibration is wrench = A^-1 (raw - b).
+_RNG = np.random.default_rng(42)
+A = np.eye(6) * 1e-3 + _RNG.normal(scale=1e-4, size=(6, 6))
+B = np.array([0.1, -0.2, 0.05, 0.0, 0.3, -0.1])
+
+
+def raw_of(wrench: np.ndarray) -> np.ndarray:
+    return wrench @ A.T + B
+
+
+def wrenches(n: int, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return rng.uniform(-1, 1, size=(n, 6)) * [500, 500, 500, 10, 10, 10]
+
+
+@pytest.fixture(scope="module")
+def affine_dir(tmp_path_factory) -> Path:
+    """train.csv / test.csv from the exact affine sensor, and a linear model fitted by the CLI."""
+    d = tmp_path_factory.mktemp("affine")
+    for name, seed, n in (("train", 0, 60), ("test", 1, 25)):
+        w = wrenches(n, seed)
+        CalibrationDataset(raw=raw_of(w), wrench=w, meta={"alpha": 50.0}).save(d / f"{name}.csv")
+    assert main(["fit", str(d / "train.csv"), "--model", "linear", "--out", str(d / "models"), "-q"]) == 0
+    return d
+
+
+def one_error_line(capsys) -> str:
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("ftcal: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def read_csv(text: str) -> tuple[list[str], np.ndarray]:
+    lines = text.strip().splitlines()
+    return lines[0].split(","), np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+
+
+# ------------------------------------------------------------------ framework
+@pytest.mark.parametrize("command", SUBCOMMANDS)
+def test_every_subcommand_has_help_with_an_example(command, capsys):
+    assert main([command, "--help"]) == 0
+    out = capsys.readouterr().out
+    assert f"ftcal {command}" in out
+    assert "example" in out.lower()
+
+
+def test_version_and_top_level_help(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"ftcal {ftcal.__version__}"
+    assert main(["--help"]) == 0
+    out = capsys.readouterr().out
+    assert all(c in out for c in SUBCOMMANDS)
+
+
+@pytest.mark.parametrize(
+    "argv, fragment",
+    [
+        ([], "required"),
+        (["calibrate"], "invalid choice"),
+        (["fit", "x.csv", "--model", "quadratic"], "invalid choice"),
+        (["simulate", "dataset", "--seed", "-3"], "--seed"),
+        (["simulate", "dataset", "--n-test", "zero"], "positive integer"),
+        (["fit"], "dataset"),
+        (["predict", "no_such_model.npz"], "no_such_model.npz does not exist"),
+    ],
+)
+def test_bad_arguments_give_one_line_and_exit_2(argv, fragment, capsys):
+    assert main(argv) == 2
+    assert fragment in one_error_line(capsys)
+
+
+def test_missing_dataset_file_names_it(tmp_path, capsys):
+    assert main(["fit", str(tmp_path / "nope.csv"), "--out", str(tmp_path / "m")]) == 2
+    assert "nope.csv" in one_error_line(capsys)
+    assert not (tmp_path / "m").exists()
+
+
+def test_malformed_dataset_names_file_and_problem(tmp_path, capsys):
+    bad = tmp_path / "bad.csv"
+    bad.write_text("s0,s1,s2,Fx,Fy,Fz\n1,2,3,4,5,6\n")
+    assert main(["fit", str(bad), "--out", str(tmp_path / "m"), "-q"]) == 2
+    line = one_error_line(capsys)
+    assert "bad.csv" in line and "Tx" in line
+
+
+def test_garbage_model_file_gives_one_line(tmp_path, affine_dir, capsys):
+    garbage = tmp_path / "model.npz"
+    garbage.write_bytes(b"this is not a model")
+    assert main(["predict", str(garbage), str(affine_dir / "test.csv")]) == 2
+    assert "model.npz" in one_error_line(capsys)
+
+
+def test_out_that_is_a_file_is_refused(tmp_path, affine_dir, capsys):
+    (tmp_path / "taken").write_text("mine")
+    assert main(["fit", str(affine_dir / "train.csv"), "--model", "linear", "--out", str(tmp_path / "taken")]) == 2
+    assert "not a directory" in one_error_line(capsys)
+    assert (tmp_path / "taken").read_text() == "mine"
+
+
+# ------------------------------------------------------------------ --force
+def test_existing_outputs_are_kept_without_force_and_checked_before_work(tmp_path, affine_dir, capsys, monkeypatch):
+    out = tmp_path / "models"
+    out.mkdir()
+    (out / "linear.model.npz").write_text("the user's own file")
+
+    def must_not_be_called(*args, **kwargs):
+        raise AssertionError("the model was built although the output file exists")
+
+    monkeypatch.setattr(ftcal, "make_calibrator", must_not_be_called)
+    assert main(["fit", str(affine_dir / "train.csv"), "--model", "linear", "--out", str(out)]) == 2
+    line = one_error_line(capsys)
+    assert "--force" in line and "linear.model.npz" in line
+    assert (out / "linear.model.npz").read_text() == "the user's own file"
+    assert not (out / "linear.fit.json").exists()
+
+
+def test_force_overwrites(tmp_path, affine_dir):
+    out = tmp_path / "models"
+    out.mkdir()
+    (out / "linear.model.npz").write_text("old")
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--out", str(out), "-q", "--force"]
+    assert main(argv) == 0
+    model = ftcal.load_model(out / "linear.model.npz")
+    assert model.n_features_in_ == 6
+
+
+# ------------------------------------------------------------------ fit / predict / evaluate
+def test_fit_linear_recovers_the_known_sensor(affine_dir):
+    model = ftcal.load_model(affine_dir / "models" / "linear.model.npz")
+    w = wrenches(5, 99)
+    np.testing.assert_allclose(model.predict(raw_of(w)), w, atol=1e-6)
+    summary = json.loads((affine_dir / "models" / "linear.fit.json").read_text())
+    assert summary["n_samples"] == 60 and summary["model"] == "linear"
+    assert summary["alpha"] == 50.0  # taken from the dataset's meta
+    assert summary["training_rmse"] < 1e-6
+
+
+def test_fit_passes_params_and_tare(tmp_path, affine_dir):
+    tare = ",".join(str(v) for v in B)
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--tare", tare,
+            "--param", "ridge=0.0", "--name", "tared", "--out", str(tmp_path), "-q"]
+    assert main(argv) == 0
+    model = ftcal.load_model(tmp_path / "tared.model.npz")
+    np.testing.assert_allclose(model.zero_reading_, B)
+
+
+def test_fit_unknown_param_names_the_known_ones(tmp_path, affine_dir, capsys):
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--param", "max_epochs=3", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    line = one_error_line(capsys)
+    assert "max_epochs" in line and "ridge" in line
+
+
+def test_fit_tare_of_wrong_length_is_refused(tmp_path, affine_dir, capsys):
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--tare", "1,2,3", "--out", str(tmp_path)]
+    assert main(argv) == 2
+    assert "--tare has 3 values" in one_error_line(capsys)
+
+
+def test_predict_stdin_to_stdout_is_a_clean_csv(affine_dir, capsys, monkeypatch):
+    w = wrenches(4, 7)
+    text = "# a comment\n" + "\n".join(" ".join(f"{v:.12g}" for v in row) for row in raw_of(w)) + "\n\n"
+    monkeypatch.setattr("sys.stdin", io.StringIO(text))
+    assert main(["predict", str(affine_dir / "models" / "linear.model.npz")]) == 0
+    captured = capsys.readouterr()
+    assert captured.err == ""
+    header, values = read_csv(captured.out)
+    assert header == ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
+    np.testing.assert_allclose(values, w, atol=1e-5)
+
+
+def test_predict_line_buffered_and_headed_input(affine_dir, capsys, monkeypatch):
+    w = wrenches(3, 8)
+    raw = raw_of(w)
+    # columns in another order with extra ones: only s0..s5 are used, in channel order
+    lines = ["t,s5,s4,s3,s2,s1,s0"] + [",".join([str(i)] + [f"{v:.12g}" for v in r[::-1]]) for i, r in enumerate(raw)]
+    monkeypatch.setattr("sys.stdin", io.StringIO("\n".join(lines)))
+    model = str(affine_dir / "models" / "linear.model.npz")
+    assert main(["predict", model, "-", "--line-buffered", "--no-header"]) == 0
+    out = capsys.readouterr().out
+    np.testing.assert_allclose(np.loadtxt(io.StringIO(out), delimiter=",", ndmin=2), w, atol=1e-5)
+
+
+def test_predict_bad_line_names_source_and_line(tmp_path, affine_dir, capsys):
+    src = tmp_path / "raw.txt"
+    src.write_text("1,2,3,4,5,6\n1,2,3,4,5,6\n1,2,x,4,5,6\n")
+    assert main(["predict", str(affine_dir / "models" / "linear.model.npz"), str(src)]) == 2
+    line = one_error_line(capsys)
+    assert "raw.txt: line 3" in line and "'x'" in line
+
+
+def test_predict_to_file_respects_force(tmp_path, affine_dir, capsys):
+    model = str(affine_dir / "models" / "linear.model.npz")
+    target = tmp_path / "wrench.csv"
+    target.write_text("keep me")
+    assert main(["predict", model, str(affine_dir / "test.csv"), "--output", str(target)]) == 2
+    one_error_line(capsys)
+    assert target.read_text() == "keep me"
+    assert main(["predict", model, str(affine_dir / "test.csv"), "--output", str(target), "--force", "-q"]) == 0
+    header, values = read_csv(target.read_text())
+    np.testing.assert_allclose(values, CalibrationDataset.load(affine_dir / "test.csv").wrench, atol=1e-5)
+
+
+def test_evaluate_reports_hand_computable_errors(tmp_path, affine_dir, capsys):
+    # The exact model on a test set whose reference Fx is off by +2 N and Tz by -0.1 N·m:
+    # axis RMSE (2, 0, 0, 0, 0, 0.1); eq. 18 with alpha 50: sqrt((2² + (50·0.1)²) / 6).
+    test = CalibrationDataset.load(affine_dir / "test.csv")
+    shifted = test.wrench + [2.0, 0, 0, 0, 0, -0.1]
+    CalibrationDataset(raw=test.raw, wrench=shifted, meta={"alpha": 50.0}).save(tmp_path / "shifted.csv")
+    argv = ["evaluate", str(tmp_path / "shifted.csv"), str(affine_dir / "models" / "linear.model.npz"),
+            "--out", str(tmp_path / "eval"), "-q"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("| model | RMSE [N]")
+    metrics = json.loads((tmp_path / "eval" / "metrics.json").read_text())
+    rep = metrics["models"]["linear"]
+    assert rep["rmse"] == pytest.approx(np.sqrt((4 + 25) / 6), rel=1e-5)
+    assert rep["axis_rmse"]["Fx"] == pytest.approx(2.0, rel=1e-5)
+    assert rep["axis_rmse"]["Tz"] == pytest.approx(0.1, rel=1e-4)
+    assert rep["axis_rmse"]["Fy"] == pytest.approx(0.0, abs=1e-5)
+    for name in ("rmse_distribution.png", "axis_rmse.png", "errors_linear.png", "metrics.md"):
+        assert (tmp_path / "eval" / name).stat().st_size > 0
+
+
+def test_evaluate_channel_mismatch_is_one_line(tmp_path, affine_dir, capsys):
+    w = wrenches(10, 3)
+    CalibrationDataset(raw=np.hstack([raw_of(w), raw_of(w)[:, :2]]), wrench=w).save(tmp_path / "eight.csv")
+    argv = ["evaluate", str(tmp_path / "eight.csv"), str(affine_dir / "models" / "linear.model.npz"),
+            "--out", str(tmp_path / "e")]
+    assert main(argv) == 2
+    assert "8" in one_error_line(capsys)

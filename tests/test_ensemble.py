@@ -1,0 +1,83 @@
+"""EnsembleCalibrator: the mean of its seeded members, reproducible, registry and model files, sklearn checks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from ftcal import (
+    CalibrationInputError,
+    ComparativeCalibrator,
+    DirectionalCalibrator,
+    EnsembleCalibrator,
+    LinearCalibrator,
+    load_model,
+    make_calibrator,
+    save_model,
+)
+
+from conftest import TINY_SCHEDULE, affine_sensor_data
+from test_sklearn_compat import _EXPECTED_FAILURES
+
+
+@pytest.fixture(scope="module")
+def data():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=80, seed=21)
+    return raw, wrench
+
+
+@pytest.fixture(scope="module")
+def fitted(data):
+    return EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=3, random_state=0).fit(*data)
+
+
+def test_prediction_is_the_mean_of_the_members(fitted, data):
+    raw = data[0]
+    members = np.stack([m.predict(raw) for m in fitted.estimators_])
+    np.testing.assert_allclose(fitted.predict(raw), members.sum(axis=0) / 3, rtol=1e-12)
+    assert len({tuple(m.predict(raw[:1]).ravel()) for m in fitted.estimators_}) == 3  # members really differ
+
+
+def test_members_are_seeded_from_random_state(fitted, data):
+    again = EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=3, random_state=0).fit(*data)
+    np.testing.assert_array_equal(again.predict(data[0]), fitted.predict(data[0]))
+    assert [m.random_state for m in fitted.estimators_] == [int(s) for s in fitted.member_seeds_]
+    assert len(set(fitted.member_seeds_)) == 3
+    assert fitted.alpha_ == fitted.estimators_[0].alpha_ and fitted.n_features_in_ == data[0].shape[1]
+
+
+def test_registry_names_route_the_schedule_to_the_members():
+    ens = make_calibrator("directional_ensemble", schedule="short", random_state=1, n_members=4, alpha=50.0)
+    assert ens.n_members == 4 and ens.random_state == 1
+    assert ens.estimator.max_epochs == 150 and ens.estimator.alpha == 50.0  # the "short" directional schedule
+    assert isinstance(make_calibrator("comparative_ensemble").estimator, ComparativeCalibrator)
+
+
+def test_model_file_round_trip(fitted, data, tmp_path):
+    loaded = load_model(save_model(fitted, tmp_path / "ensemble.npz"))
+    assert isinstance(loaded, EnsembleCalibrator) and len(loaded.estimators_) == 3
+    assert loaded.estimator.get_params() == fitted.estimator.get_params()
+    np.testing.assert_array_equal(loaded.predict(data[0]), fitted.predict(data[0]))
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [(dict(n_members=0), "n_members"), (dict(n_members=2.5), "n_members"), (dict(estimator="directional"), "estimator")],
+)
+def test_bad_parameters_raise_clear_errors(data, kwargs, match):
+    with pytest.raises(CalibrationInputError, match=match):
+        EnsembleCalibrator(**kwargs).fit(*data)
+
+
+def test_ensemble_of_deterministic_models_equals_the_model(data):
+    ens = EnsembleCalibrator(LinearCalibrator(), n_members=2, random_state=0).fit(*data)
+    np.testing.assert_allclose(ens.predict(data[0]), LinearCalibrator().fit(*data).predict(data[0]), rtol=1e-12)
+
+
+@parametrize_with_checks(
+    [EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=2, random_state=0)],
+    expected_failed_checks=lambda est: _EXPECTED_FAILURES,
+)
+def test_sklearn_estimator_checks(estimator, check):
+    check(estimator)

@@ -1,0 +1,120 @@
+"""Run log format (issue 4): round trip and every reader error, naming file and line."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftcal import LogFormatError, read_run_log, write_run_log
+
+
+def _write(tmp_path, name="run.csv", n=3, **kw):
+    args = dict(timestamp=np.arange(n, dtype=float), run_kind=["load"] * n, config=[2] * n, pose=np.arange(n),
+                q=np.linspace(-1, 1, n * 7).reshape(n, 7), raw=np.arange(n * 6, dtype=float).reshape(n, 6),
+                load_mass=1.25, robot="kuka_iiwa14", sensor_frame="ft_sensor", meta={"operator": "x"})
+    args.update(kw)
+    return write_run_log(tmp_path / name, **args)
+
+
+def test_round_trip(tmp_path):
+    p = _write(tmp_path)
+    log = read_run_log(p, n_channels=6, n_joints=7)
+    np.testing.assert_allclose(log.q, np.linspace(-1, 1, 21).reshape(3, 7))
+    np.testing.assert_allclose(log.raw, np.arange(18.0).reshape(3, 6))
+    assert list(log.run_kind) == ["load"] * 3 and log.config.tolist() == [2, 2, 2]
+    assert log.load_mass == 1.25 and log.robot == "kuka_iiwa14" and log.meta == {"operator": "x"}
+    assert log.line.tolist() == [10, 11, 12]  # 8 comment lines, header on line 9
+
+
+def test_writer_never_overwrites(tmp_path):
+    p = _write(tmp_path)
+    before = p.read_text()
+    with pytest.raises(LogFormatError, match="exists"):
+        _write(tmp_path)
+    assert p.read_text() == before
+
+
+def test_degrees_are_converted_when_declared(tmp_path):
+    p = tmp_path / "deg.csv"
+    p.write_text("# time_unit: ms\n# joint_unit: deg\ntimestamp,run,config,pose,q1,q2,s0,s1,s2\n"
+                 "1500,no-load,-1,0,90,-45,1,2,3\n")
+    log = read_run_log(p)
+    np.testing.assert_allclose(log.q, [[np.pi / 2, -np.pi / 4]])
+    np.testing.assert_allclose(log.timestamp, [1.5])
+    assert log.config.tolist() == [-1]
+
+
+def _edit(p, old, new):
+    p.write_text(p.read_text().replace(old, new, 1))
+    return p
+
+
+@pytest.mark.parametrize(
+    "old, new, match",
+    [
+        (",q3,", ",qq3,", r"contiguous"),
+        ("timestamp,", "time,", r"header lacks columns \['timestamp'\]"),
+        (",s0,", ",x0,", r"contiguous from 0"),
+        ("# joint_unit: rad\n", "", r"missing comment '# joint_unit: <unit>'"),
+        ("# joint_unit: rad", "# joint_unit: grad", r"unknown joint_unit 'grad'"),
+        ("# time_unit: s", "# time_unit: h", r"unknown time_unit"),
+        ("# load_mass_kg: 1.25", "# load_mass_kg: heavy", r"load_mass_kg"),
+    ],
+)
+def test_header_errors(tmp_path, old, new, match):
+    p = _edit(_write(tmp_path), old, new)
+    with pytest.raises(LogFormatError, match=match) as exc:
+        read_run_log(p)
+    assert str(p) in str(exc.value)
+
+
+def _break_row(p, line_no, column, value):
+    lines = p.read_text().splitlines()
+    header = lines[8].split(",")
+    fields = lines[line_no - 1].split(",")
+    fields[header.index(column)] = value
+    lines[line_no - 1] = ",".join(fields)
+    p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+@pytest.mark.parametrize(
+    "column, value, match",
+    [
+        ("s3", "nan", r"line 11: column s3 is 'nan' \(NaN or inf\)"),
+        ("q2", "inf", r"line 11: column q2 is 'inf'"),
+        ("s0", "abc", r"line 11: column s0 holds 'abc', not a number"),
+        ("run", "loaded", r"line 11: run is 'loaded'"),
+        ("pose", "1.5", r"line 11: column pose must be an integer"),
+        ("config", "-1", r"line 11: config -1 is invalid"),
+        ("q4", "95.0", r"line 11: q4 = 95 exceeds 2\*pi .* degrees"),
+    ],
+)
+def test_row_errors_name_file_and_line(tmp_path, column, value, match):
+    p = _break_row(_write(tmp_path), 11, column, value)
+    with pytest.raises(LogFormatError, match=match) as exc:
+        read_run_log(p)
+    assert str(p) in str(exc.value)
+
+
+def test_field_count_channel_count_and_empty(tmp_path):
+    p = _write(tmp_path)
+    with pytest.raises(LogFormatError, match=r"6 raw channels \(s0..s5\) but 8 expected"):
+        read_run_log(p, n_channels=8)
+    with pytest.raises(LogFormatError, match=r"7 joint columns but the robot has 6"):
+        read_run_log(p, n_joints=6)
+    lines = p.read_text().splitlines()
+    lines[10] += ",7"
+    p.write_text("\n".join(lines) + "\n")
+    with pytest.raises(LogFormatError, match=r"line 11: 18 fields but the header names 17"):
+        read_run_log(p)
+    empty = tmp_path / "empty.csv"
+    empty.write_text("# time_unit: s\n# joint_unit: rad\ntimestamp,run,config,pose,q1,s0,s1,s2\n")
+    with pytest.raises(LogFormatError, match="no data rows"):
+        read_run_log(empty)
+    with pytest.raises(LogFormatError, match="no such log file"):
+        read_run_log(tmp_path / "missing.csv")
+    two = tmp_path / "two.csv"
+    two.write_text("# time_unit: s\n# joint_unit: rad\ntimestamp,run,config,pose,q1,s0,s1\n0,load,0,0,0,1,2\n")
+    with pytest.raises(LogFormatError, match="2 raw channels; a sensor needs at least 3"):
+        read_run_log(two)

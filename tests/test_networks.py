@@ -1,0 +1,136 @@
+"""The network calibrators: architecture, eq. 3-10 preprocessing and losses, the science, reproducibility."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+import torch
+from torch import nn
+
+from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator, wrench_rmse
+from ftcal._networks import ComparativeNet, DirectionalNet, WeightedSquaredError
+
+from conftest import TINY_SCHEDULE, affine_sensor_data
+
+FULL_SCALE = np.array([100.0] * 3 + [2.0] * 3)  # [N] x3, [N·m] x3
+
+
+def homogeneous_loads(n: int, seed: int) -> np.ndarray:
+    """Wrenches in random 6-D directions with magnitudes 20-100 % of full scale."""
+    rng = np.random.default_rng(seed)
+    direction = rng.normal(size=(n, 6))
+    direction /= np.linalg.norm(direction, axis=1, keepdims=True)
+    return direction * rng.uniform(0.2, 1.0, size=(n, 1)) * FULL_SCALE
+
+
+def asymmetric_sensor(wrench: np.ndarray) -> np.ndarray:
+    """Positively homogeneous, nonlinear: Fz and Ty have half the gain under negative load."""
+    gains = np.array([1.0, 1.0, 0.5, 1.0, 0.5, 1.0])
+    u = wrench / FULL_SCALE
+    u = np.where(u > 0, u, gains * u)
+    mixing = np.random.default_rng(42).normal(size=(6, 6)) + 3.0 * np.eye(6)
+    return u @ mixing.T
+
+
+def test_asymmetric_sensor_is_positively_homogeneous_but_not_linear():
+    w = homogeneous_loads(5, 0)
+    np.testing.assert_allclose(asymmetric_sensor(2.5 * w), 2.5 * asymmetric_sensor(w))
+    assert not np.allclose(asymmetric_sensor(-w), -asymmetric_sensor(w))
+
+
+def test_directional_beats_ltm_on_direction_dependent_gains():
+    train, test = homogeneous_loads(1000, 1), homogeneous_loads(400, 2)
+    x_train, x_test = asymmetric_sensor(train), asymmetric_sensor(test)
+    ltm = LinearCalibrator().fit(x_train, train)
+    directional = DirectionalCalibrator(
+        hidden_layer_sizes=(64, 64), lr=1e-2, batch_size=128, max_epochs=150, plateau_epochs=30,
+        plateau_patience=5, max_recover_epochs=10, zero_reading=np.zeros(6), random_state=0,
+    ).fit(x_train, train)
+    ltm_rmse = wrench_rmse(test, ltm.predict(x_test), 50.0)
+    dnn_rmse = wrench_rmse(test, directional.predict(x_test), 50.0)
+    assert ltm_rmse > 1.0  # [N]: the asymmetry is far outside what an affine map can absorb
+    assert dnn_rmse < 0.6 * ltm_rmse, (dnn_rmse, ltm_rmse)
+
+
+def test_directional_net_architecture():
+    net = DirectionalNet(n_inputs=8, hidden_layer_sizes=(16, 12, 10))
+    kinds = [type(m) for m in net.layers]
+    assert kinds == [nn.Linear, nn.ReLU, nn.Linear, nn.ReLU, nn.Linear, nn.Tanh, nn.Linear]
+    assert net.layers[0].in_features == 8 and net.layers[-1].out_features == 7
+    comparative = ComparativeNet(n_inputs=12, hidden_layer_sizes=(5,))
+    assert [type(m) for m in comparative.layers] == [nn.Linear, nn.ReLU, nn.Linear]
+    assert comparative.layers[-1].out_features == 6
+
+
+def test_directional_training_targets_follow_eq_3_to_8():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=30, seed=1)
+    model = DirectionalCalibrator(alpha=10.0, zero_reading=np.zeros(6))
+    model.alpha_, model.zero_reading_ = 10.0, np.zeros(6)
+    inputs, targets = model._training_pairs(raw, wrench)
+    np.testing.assert_allclose(inputs, raw / np.linalg.norm(raw, axis=1, keepdims=True))  # eq. 4
+    scaled = wrench * [1, 1, 1, 10, 10, 10]  # eq. 6
+    np.testing.assert_allclose(targets[:, :6], scaled / np.linalg.norm(scaled, axis=1, keepdims=True))  # eq. 8
+    s = np.linalg.norm(scaled, axis=1) / np.linalg.norm(raw, axis=1)  # v_out / v_in
+    np.testing.assert_allclose(targets[:, 6] * model.scale_reference_, s)
+    assert np.median(targets[:, 6]) == pytest.approx(1.0)  # the normalised scale target is ~1
+
+
+def test_comparative_loss_is_eq_10_up_to_a_constant():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=2)
+    model = ComparativeCalibrator(**TINY_SCHEDULE, alpha=20.0, random_state=0).fit(raw, wrench)
+    pred = model.predict(raw)
+    err = (wrench - pred) ** 2
+    eq10 = np.mean(err[:, :3].sum(1) + 20.0 * err[:, 3:].sum(1))
+    criterion = WeightedSquaredError(model._loss_weights())
+    to_net = lambda w: torch.tensor((w - model.target_mean_) / model.target_scale_, dtype=torch.float64)
+    internal = float(criterion.double()(to_net(pred), to_net(wrench)))
+    weights = np.array([1, 1, 1, 20, 20, 20.0]) * model.target_scale_**2
+    assert internal * weights.mean() == pytest.approx(eq10, rel=1e-6)
+
+
+def test_zero_load_rows_dropped_with_warning_and_zero_reading_predicts_zero():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
+    tare = np.full(6, 0.25)
+    raw = raw + tare
+    raw[:4], wrench[:4] = tare, 0.0  # zero-load rows: reading == tare, wrench == 0
+    with pytest.warns(UserWarning, match="dropped 4 of 60 training rows"):
+        model = DirectionalCalibrator(**TINY_SCHEDULE, random_state=0).fit(raw, wrench)
+    assert model.n_dropped_zero_load_ == 4
+    np.testing.assert_allclose(model.zero_reading_, tare)
+    at_zero = model.predict(np.vstack([tare, tare + 1e-9]))
+    assert np.all(np.isfinite(at_zero))
+    np.testing.assert_array_equal(at_zero[0], np.zeros(6))
+    assert np.abs(at_zero[1]).max() < 1e-3  # near-zero reading -> near-zero wrench [N], [N·m]
+
+
+@pytest.mark.parametrize("cls", [ComparativeCalibrator, DirectionalCalibrator])
+def test_same_seed_same_predictions_and_global_rng_untouched(cls):
+    raw, wrench, _, _ = affine_sensor_data(n_samples=50, seed=4)
+    torch.manual_seed(123)
+    before = torch.rand(1)
+    torch.manual_seed(123)
+    first = cls(**TINY_SCHEDULE, random_state=7).fit(raw, wrench).predict(raw)
+    assert torch.rand(1) == before  # fit forked the global torch RNG
+    second = cls(**TINY_SCHEDULE, random_state=7).fit(raw, wrench).predict(raw)
+    other = cls(**TINY_SCHEDULE, random_state=8).fit(raw, wrench).predict(raw)
+    np.testing.assert_array_equal(first, second)
+    assert not np.array_equal(first, other)
+    assert first.dtype == np.float64
+
+
+def test_fit_restores_callers_torch_thread_count():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=30, seed=5)
+    threads = torch.get_num_threads()
+    DirectionalCalibrator(**TINY_SCHEDULE, random_state=0).fit(raw, wrench)
+    assert torch.get_num_threads() == threads
+
+
+def test_networks_fit_every_channel_count():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no zero-load rows here: no warning expected
+        for n_channels in (3, 12):
+            raw, wrench, _, _ = affine_sensor_data(n_samples=40, n_channels=n_channels, seed=n_channels)
+            for cls in (ComparativeCalibrator, DirectionalCalibrator):
+                assert cls(**TINY_SCHEDULE, random_state=0).fit(raw, wrench).predict(raw[:3]).shape == (3, 6)

@@ -1,0 +1,98 @@
+"""Hyperparameter search: from Python (grid, randomized, grouped folds, networks) and through ``ftcal tune``."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
+
+from ftcal import CalibrationDataset, CalibrationInputError, PolynomialCalibrator, load_model, search_calibrator
+from ftcal._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
+from ftcal.cli import main
+
+from conftest import TINY_SCHEDULE
+
+
+def _cubic_sensor(n: int = 150, seed: int = 0):
+    """Forces and torques as an odd cubic of the readings: degree 3 fits, degree 1 cannot."""
+    rng = np.random.default_rng(seed)
+    raw = rng.uniform(-1, 1, size=(n, 6))
+    wrench = (raw + 0.3 * raw**3) @ rng.normal(size=(6, 6)).T * 100 + 0.01 * rng.normal(size=(n, 6))
+    return raw, wrench
+
+
+def test_grid_search_picks_the_degree_the_data_need():
+    raw, wrench = _cubic_sensor()
+    search = search_calibrator("polynomial", raw, wrench, space={"degree": [1, 3], "ridge": [1e-8]}, cv=3)
+    assert isinstance(search, GridSearchCV)
+    assert search.best_params_["degree"] == 3
+    assert isinstance(search.best_estimator_, PolynomialCalibrator)
+    summary = search_summary(search)
+    assert summary["n_candidates"] == 2 and summary["candidates"][0]["params"]["degree"] == 3
+    assert summary["best_rmse"] < summary["candidates"][1]["rmse_mean"]
+
+
+def test_randomized_search_with_distributions_and_groups():
+    raw, wrench = _cubic_sensor(seed=1)
+    groups = np.repeat(np.arange(5), 30)
+    space = parse_search_space(["ridge=loguniform(1e-8, 1e-2)", "powers=[[1.0], [2.0]]"])
+    search = search_calibrator("axis_nonlinear", raw, wrench, space=space, n_iter=3, cv=5, groups=groups)
+    assert isinstance(search, RandomizedSearchCV) and len(search.cv_results_["params"]) == 3
+    assert search.n_splits_ == 5 and 1e-8 <= search.best_params_["ridge"] <= 1e-2
+
+
+def test_network_search_end_to_end():
+    raw, wrench = _cubic_sensor(n=60, seed=2)
+    search = search_calibrator(
+        "directional", raw, wrench, space={"hidden_layer_sizes": [(4,), (8, 8)], "lr": [1e-3]}, cv=2,
+        **{k: v for k, v in TINY_SCHEDULE.items() if k != "hidden_layer_sizes"},
+    )
+    assert search.best_estimator_.predict(raw).shape == (60, 6)
+
+
+def test_default_spaces_name_real_parameters():
+    from ftcal import make_calibrator
+
+    for name, space in DEFAULT_SEARCH_SPACES.items():
+        assert set(space) <= set(make_calibrator(name).get_params(deep=True)), name
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [(dict(space={"bogus": [1]}), "no parameter"), (dict(space={}), "empty"), (dict(cv=1), "cv"),
+     (dict(space={"degree": [1, 2]}, groups=np.zeros(150)), "distinct"),
+     (dict(space=parse_search_space(["ridge=uniform(0, 1)"])), "n_iter")],
+)
+def test_bad_search_requests(kwargs, match):
+    with pytest.raises(CalibrationInputError, match=match):
+        search_calibrator("polynomial", *_cubic_sensor(), **kwargs)
+
+
+@pytest.mark.parametrize("entry", ["degree", "degree=3", "degree=[]", "lr=gauss(1, 2)", "=[1]"])
+def test_bad_search_entries(entry):
+    with pytest.raises(CalibrationInputError, match="search entry"):
+        parse_search_space([entry])
+
+
+def test_cli_tune_writes_the_best_model_and_the_ranking(tmp_path, capsys):
+    raw, wrench = _cubic_sensor()
+    data = CalibrationDataset(raw=raw, wrench=wrench).save(tmp_path / "train.csv")
+    out = tmp_path / "tuned"
+    argv = ["tune", str(data), "--model", "polynomial", "--grid", "degree=[1, 3]", "--cv", "2", "--out", str(out), "-q"]
+    assert main(argv) == 0
+    summary = json.loads((out / "polynomial.tune.json").read_text())
+    assert summary["best_params"] == {"degree": 3} and len(summary["candidates"]) == 2
+    model = load_model(out / "polynomial.model.npz")
+    assert model.degree == 3 and model.predict(raw).shape == (150, 6)
+    assert main(argv) == 2  # outputs exist: refused without --force
+    assert "already exist" in capsys.readouterr().err
+
+
+def test_cli_tune_reports_bad_parameters(tmp_path, capsys):
+    raw, wrench = _cubic_sensor()
+    data = CalibrationDataset(raw=raw, wrench=wrench).save(tmp_path / "train.csv")
+    assert main(["tune", str(data), "--grid", "bogus=[1]", "--out", str(tmp_path / "o"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ftcal: error:") and "bogus" in err and "Traceback" not in err
