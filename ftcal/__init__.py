@@ -9,6 +9,7 @@ robot-held calibration experiment of that thesis.
 
 from ._dataset import CalibrationDataset
 from ._exceptions import (
+    BenchmarkOutputExistsError,
     CalFileError,
     CalibrationInputError,
     DatasetFileError,
@@ -75,6 +76,7 @@ from ._virtual_experiment import MountingDevice, simulate_experiment
 __version__ = "0.1.0"
 
 __all__ = [
+    "BenchmarkOutputExistsError",
     "CalibrationDataset",
     "CalibrationReport",
     "CalFileError",

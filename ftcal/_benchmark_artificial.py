@@ -51,13 +51,13 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ._artificial import make_artificial_dataset
-from ._exceptions import CalibrationInputError, FtcalError
+from ._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ._metrics import calibration_report
 from ._presets import error_preset
 from ._sampling import TEST_DISTRIBUTIONS
 from ._sensor import SensorProfile
 
-__all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "BenchmarkOutputExistsError",
+__all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue",
            "THESIS_TABLES"]
 
 _FORMAT = 1
@@ -72,10 +72,6 @@ THESIS_TABLES = {
     "comparative": {"rmse": (48.3, 4.47), "rel_force": (0.044, 0.0042), "rel_torque": (0.042, 0.0043)},
     "linear": {"rmse": (62.3, 0.76), "rel_force": (0.070, 0.0007), "rel_torque": (0.062, 0.0005)},
 }
-
-
-class BenchmarkOutputExistsError(FtcalError, FileExistsError):
-    """An output file exists that the benchmark did not write (or that was changed since)."""
 
 
 # ----------------------------------------------------------------- statistics

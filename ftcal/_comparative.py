@@ -72,6 +72,7 @@ class ComparativeCalibrator(NetworkCalibrator):
         zero_reading=None,
         random_state=None,
         verbose=0,
+        callbacks=None,
         device="cpu",
     ):
         self.hidden_layer_sizes = hidden_layer_sizes
@@ -89,6 +90,7 @@ class ComparativeCalibrator(NetworkCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
         self.verbose = verbose
+        self.callbacks = callbacks
         self.device = device
 
     def _loss_weights(self) -> list[float]:

@@ -95,6 +95,11 @@ class DirectionalCalibrator(NetworkCalibrator):
         Seed of initialisation, shuffling and validation split.
     verbose : int, default=0
         skorch's per-epoch log when > 0.
+    callbacks : list or None, default=None
+        Extra skorch callbacks (instances or ``(name, callback)`` pairs) run
+        every epoch once the schedule has recorded its phase and learning
+        rate, e.g. a progress bar or a logger.
+        They affect one training run only and are not stored in model files.
     device : str, default='cpu'
         Torch device.
 
@@ -144,6 +149,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         zero_reading=None,
         random_state=None,
         verbose=0,
+        callbacks=None,
         device="cpu",
     ):
         self.hidden_layer_sizes = hidden_layer_sizes
@@ -162,6 +168,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
         self.verbose = verbose
+        self.callbacks = callbacks
         self.device = device
 
     def _loss_weights(self) -> list[float]:

@@ -15,6 +15,7 @@ __all__ = [
     "CalFileError",
     "KinematicsError",
     "DatasetFileError",
+    "BenchmarkOutputExistsError",
 ]
 
 
@@ -44,3 +45,7 @@ class KinematicsError(FtcalError, ValueError):
 
 class DatasetFileError(FtcalError, ValueError):
     """A calibration dataset file that is missing columns, values or is malformed."""
+
+
+class BenchmarkOutputExistsError(FtcalError, FileExistsError):
+    """A benchmark output file exists that the benchmark did not write (or that was changed since)."""

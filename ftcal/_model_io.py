@@ -98,8 +98,14 @@ def _encode(value):
         return value
     if type(value).__name__ in _MODEL_TYPES and type(value) is _MODEL_TYPES[type(value).__name__][0]:
         return {"estimator": {"model_type": type(value).__name__,
-                              "params": {k: _encode(v) for k, v in value.get_params(deep=False).items()}}}
+                              "params": _stored_params(value)}}
     return None  # e.g. a RandomState instance: not reproducible from a file; stored as None
+
+
+def _stored_params(estimator) -> dict:
+    """JSON form of the constructor parameters; transient ones (e.g. ``callbacks``) are stored as None."""
+    transient = getattr(estimator, "_transient_params", ())
+    return {k: None if k in transient else _encode(v) for k, v in estimator.get_params(deep=False).items()}
 
 
 def _decode(value):
@@ -166,7 +172,7 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
     _, scalar_names, array_names = _MODEL_TYPES[name]
     meta = {
         "model_type": name,
-        "params": {k: _encode(v) for k, v in estimator.get_params(deep=False).items()},
+        "params": _stored_params(estimator),
         "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names},
     }
     arrays = {f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in array_names}

@@ -76,6 +76,8 @@ class NetworkCalibrator(BaseCalibrator):
     """
 
     _module_class: type[torch.nn.Module]
+    #: Parameters that only affect one training run and are not stored in model files.
+    _transient_params: tuple[str, ...] = ("callbacks",)
 
     def _check_params(self) -> None:
         sizes = self.hidden_layer_sizes
@@ -94,6 +96,10 @@ class NetworkCalibrator(BaseCalibrator):
         _check_real("min_lr", self.min_lr, 0.0, np.inf)
         _check_real("recover_tolerance", self.recover_tolerance, 0.0, np.inf)
         _check_int("max_recover_epochs", self.max_recover_epochs, 0)
+        if self.callbacks is not None and not isinstance(self.callbacks, (list, tuple)):
+            raise CalibrationInputError(
+                f"callbacks must be None or a list of skorch callbacks or (name, callback) pairs; got {self.callbacks!r}."
+            )
         if self.validation_fraction is not None:
             _check_real("validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
 
@@ -125,6 +131,7 @@ class NetworkCalibrator(BaseCalibrator):
                 recover_tolerance=self.recover_tolerance,
                 max_recover_epochs=self.max_recover_epochs,
                 monitor=monitor,
+                extra=list(self.callbacks or []),
             ),
             verbose=self.verbose,
             device=self.device,

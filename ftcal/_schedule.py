@@ -146,11 +146,18 @@ def schedule_callbacks(
     recover_tolerance: float,
     max_recover_epochs: int,
     monitor: str,
-) -> list[tuple[str, Callback]]:
-    """The named callbacks of the whole schedule, in the order they must run."""
+    extra: list | tuple = (),
+) -> list:
+    """The named callbacks of the whole schedule, in the order they must run.
+
+    ``extra`` callbacks (a user's progress bar or logger) run after the
+    schedule has recorded the epoch's phase and learning rate and before the
+    phase-3 stop rule, so they also see the last epoch.
+    """
     return [
         ("training_phase", TrainingPhase(max_epochs, plateau_epochs)),
         ("plateau_lr", PlateauLR(plateau_factor, plateau_patience, min_lr, monitor)),
         ("restore_best_weights", RestoreBestWeights(monitor)),
+        *extra,
         ("recover_stop", RecoverStop(recover_tolerance, max_recover_epochs, max_epochs + plateau_epochs + 1, monitor)),
     ]

@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator
+from ftcal import (
+    AxisNonlinearCalibrator,
+    ComparativeCalibrator,
+    DirectionalCalibrator,
+    EnsembleCalibrator,
+    LinearCalibrator,
+    PolynomialCalibrator,
+)
 
 #: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
 TINY_SCHEDULE = dict(
@@ -18,12 +25,19 @@ TINY_SCHEDULE = dict(
 )
 
 
+#: Names of :func:`tiny_calibrators`' instances, in order: every public calibrator of ftcal.
+CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble")
+
+
 def tiny_calibrators(random_state: int = 0) -> list:
-    """One instance of each calibrator, the networks with :data:`TINY_SCHEDULE`."""
+    """One instance of every public calibrator, the networks with :data:`TINY_SCHEDULE`."""
     return [
         LinearCalibrator(),
         ComparativeCalibrator(**TINY_SCHEDULE, random_state=random_state),
         DirectionalCalibrator(**TINY_SCHEDULE, random_state=random_state),
+        PolynomialCalibrator(degree=2),
+        AxisNonlinearCalibrator(),
+        EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=2, random_state=random_state),
     ]
 
 
@@ -45,7 +59,7 @@ def affine_data():
     return affine_sensor_data()
 
 
-@pytest.fixture(params=["linear", "comparative", "directional"])
+@pytest.fixture(params=CALIBRATOR_KINDS)
 def tiny_calibrator(request):
-    """Each calibrator in turn, networks with the tiny schedule."""
-    return dict(zip(["linear", "comparative", "directional"], tiny_calibrators()))[request.param]
+    """Each public calibrator in turn, networks with the tiny schedule."""
+    return dict(zip(CALIBRATOR_KINDS, tiny_calibrators()))[request.param]

@@ -13,7 +13,7 @@ import ftcal
 from ftcal import CalibrationDataset
 from ftcal.cli import main
 
-SUBCOMMANDS = ["simulate", "plan", "prepare", "fit", "evaluate", "predict", "benchmark", "demo"]
+SUBCOMMANDS = ["simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo"]
 
 # A known affine sensor: raw = A @ wrench + b, so the exact calibration is wrench = A^-1 (raw - b).
 _RNG = np.random.default_rng(42)

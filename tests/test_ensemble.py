@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from ftcal import (
     CalibrationInputError,
@@ -18,7 +17,6 @@ from ftcal import (
 )
 
 from conftest import TINY_SCHEDULE, affine_sensor_data
-from test_sklearn_compat import _EXPECTED_FAILURES
 
 
 @pytest.fixture(scope="module")
@@ -73,11 +71,3 @@ def test_bad_parameters_raise_clear_errors(data, kwargs, match):
 def test_ensemble_of_deterministic_models_equals_the_model(data):
     ens = EnsembleCalibrator(LinearCalibrator(), n_members=2, random_state=0).fit(*data)
     np.testing.assert_allclose(ens.predict(data[0]), LinearCalibrator().fit(*data).predict(data[0]), rtol=1e-12)
-
-
-@parametrize_with_checks(
-    [EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=2, random_state=0)],
-    expected_failed_checks=lambda est: _EXPECTED_FAILURES,
-)
-def test_sklearn_estimator_checks(estimator, check):
-    check(estimator)

@@ -5,11 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from ftcal import AxisNonlinearCalibrator, CalibrationInputError, LinearCalibrator, load_model, save_model, wrench_rmse
 
-from test_sklearn_compat import _EXPECTED_FAILURES
 
 ALPHA = 1.0  # the synthetic wrenches below share one unit
 
@@ -122,8 +120,3 @@ def test_model_file_round_trip(tmp_path):
     loaded = load_model(save_model(model, tmp_path / "hybrid.npz"), model_type=AxisNonlinearCalibrator)
     assert loaded.get_params() == model.get_params()
     np.testing.assert_array_equal(loaded.predict(raw_t), model.predict(raw_t))
-
-
-@parametrize_with_checks([AxisNonlinearCalibrator()], expected_failed_checks=lambda est: _EXPECTED_FAILURES)
-def test_sklearn_estimator_checks(estimator, check):
-    check(estimator)

@@ -134,3 +134,32 @@ def test_networks_fit_every_channel_count():
             raw, wrench, _, _ = affine_sensor_data(n_samples=40, n_channels=n_channels, seed=n_channels)
             for cls in (ComparativeCalibrator, DirectionalCalibrator):
                 assert cls(**TINY_SCHEDULE, random_state=0).fit(raw, wrench).predict(raw[:3]).shape == (3, 6)
+
+
+@pytest.mark.parametrize("cls", [ComparativeCalibrator, DirectionalCalibrator])
+def test_extra_callbacks_run_every_epoch_and_are_not_saved(cls, tmp_path):
+    from skorch.callbacks import Callback
+
+    from ftcal import load_model, save_model
+
+    class EpochCounter(Callback):
+        def initialize(self):
+            self.epochs = 0
+            return self
+
+        def on_epoch_end(self, net, **kwargs):
+            self.epochs += 1
+
+    counter = EpochCounter()
+    raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
+    model = cls(**TINY_SCHEDULE, callbacks=[("counter", counter)], random_state=0).fit(raw, wrench)
+    assert counter.epochs == model.n_epochs_ >= TINY_SCHEDULE["max_epochs"]
+    loaded = load_model(save_model(model, tmp_path / "m.npz"))
+    assert loaded.callbacks is None
+    np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
+
+
+def test_callbacks_must_be_a_list():
+    raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
+    with pytest.raises(ValueError, match="callbacks must be None or a list"):
+        DirectionalCalibrator(**TINY_SCHEDULE, callbacks="progress").fit(raw, wrench)

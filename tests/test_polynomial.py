@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from ftcal import CalibrationInputError, LinearCalibrator, PolynomialCalibrator, load_model, make_calibrator, save_model
 
-from test_sklearn_compat import _EXPECTED_FAILURES
 
 
 def _noisy_sensor(seed: int, n: int = 300, n_channels: int = 6):
@@ -65,8 +63,3 @@ def test_model_file_round_trip_and_registry(tmp_path):
     loaded = load_model(save_model(model, tmp_path / "poly.npz"))
     assert isinstance(loaded, PolynomialCalibrator) and loaded.degree == 4
     np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
-
-
-@parametrize_with_checks([PolynomialCalibrator(degree=2)], expected_failed_checks=lambda est: _EXPECTED_FAILURES)
-def test_sklearn_estimator_checks(estimator, check):
-    check(estimator)

@@ -11,6 +11,8 @@ from ._common import Console
 
 __all__ = ["fit_with_progress"]
 
+_PROGRESS = "cli_progress"
+
 
 def _epoch_budget(params: dict[str, Any]) -> int | None:
     """Upper bound of the epochs of the three-phase schedule, from the estimator's parameters."""
@@ -43,17 +45,17 @@ def _callback_class():
 def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: str = "fit") -> Any:
     """``estimator.fit(X, y)`` with a progress bar on stderr (none when ``console.quiet``).
 
-    Networks whose parameters include ``callbacks`` get a per-epoch bar with
-    the training / validation loss; other estimators get an elapsed-time bar.
-    Returns the fitted estimator.
+    Networks (estimators with a ``callbacks`` parameter) get a per-epoch bar
+    with the training / validation loss; other estimators get an elapsed-time
+    bar. Returns the fitted estimator.
     """
     params = estimator.get_params(deep=False) if hasattr(estimator, "get_params") else {}
     if console.quiet:
         return estimator.fit(X, y)
-    if "callbacks" in params or hasattr(estimator, "_build_net"):
+    if "callbacks" in params:
         bar = console.progress(total=_epoch_budget(params), desc=f"{label} epochs", unit="epoch")
         try:
-            with _progress_callback_installed(estimator, params, _callback_class()(bar)):
+            with _progress_callback_installed(estimator, params["callbacks"], _callback_class()(bar)):
                 return estimator.fit(X, y)
         finally:
             bar.close()
@@ -61,37 +63,22 @@ def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: s
 
 
 @contextlib.contextmanager
-def _progress_callback_installed(estimator: Any, params: dict[str, Any], callback: Any) -> Iterator[None]:
-    """Add ``callback`` to the skorch net the estimator builds in ``fit``, for this fit only.
+def _progress_callback_installed(estimator: Any, callbacks: Any, callback: Any) -> Iterator[None]:
+    """Add ``callback`` to the estimator's ``callbacks`` parameter for this fit only.
 
-    Uses the public ``callbacks`` parameter when the estimator has one; else
-    wraps the estimator's ``_build_net`` (the skorch net factory of
-    :class:`ftcal._network_base.NetworkCalibrator`) on this instance only,
-    and removes the wrapper afterwards so the fitted model stays a plain one.
+    Afterwards the parameter is restored and the bar is dropped from the
+    fitted skorch net, so the fitted model stays a plain one (it may be
+    pickled or cloned later).
     """
-    if "callbacks" in params:
-        estimator.set_params(callbacks=list(params["callbacks"] or []) + [("cli_progress", callback)])
-        try:
-            yield
-        finally:
-            estimator.set_params(callbacks=params["callbacks"])
-        return
-    build = estimator._build_net
-
-    def build_with_progress(*args: Any, **kwargs: Any) -> Any:
-        net = build(*args, **kwargs)
-        net.callbacks = list(net.callbacks or []) + [("cli_progress", callback)]
-        return net
-
-    estimator._build_net = build_with_progress
+    estimator.set_params(callbacks=list(callbacks or []) + [(_PROGRESS, callback)])
     try:
         yield
     finally:
-        del estimator._build_net
+        estimator.set_params(callbacks=callbacks)
         net = getattr(estimator, "net_", None)
-        if net is not None:  # drop the bar from the fitted net, which is saved and may be pickled
-            net.callbacks_ = [(n, cb) for n, cb in net.callbacks_ if n != "cli_progress"]
-            net.callbacks = [c for c in (net.callbacks or []) if not (isinstance(c, tuple) and c[0] == "cli_progress")]
+        if net is not None:
+            net.callbacks_ = [(n, cb) for n, cb in net.callbacks_ if n != _PROGRESS]
+            net.callbacks = [c for c in (net.callbacks or []) if not (isinstance(c, tuple) and c[0] == _PROGRESS)]
 
 
 def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str) -> Any:
