@@ -25,7 +25,7 @@ writes DIR/NAME.model.npz (the model) and DIR/NAME.fit.json (what was trained, o
 def _calibrator_names() -> tuple[str, ...]:
     import ftcal
 
-    return tuple(getattr(ftcal, "CALIBRATOR_NAMES", ("linear", "comparative", "directional")))
+    return tuple(ftcal.CALIBRATOR_NAMES)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
