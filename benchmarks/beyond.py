@@ -13,7 +13,8 @@ checks the issue's targets on the datasets both have in common and writes
 * hybrid mean RMSE vs. the best of linear / comparative / directional, per preset;
 * hybrid RMSE / noise floor (target <= 1.15 on ``thesis`` and ``asymmetric``);
 * hybrid / LTM on ``stress`` (target <= 0.8);
-* across-dataset RMSE std of the directional ensemble / directional (target <= 0.5);
+* across-dataset RMSE std of the directional ensemble / directional (target <= 0.5), and the same ratio for
+  the excess over the noise floor (RMSE - floor per dataset), which removes the datasets' own spread;
 * Wilcoxon signed-rank p-values of the hybrid against every other model.
 
 Examples::
@@ -101,8 +102,18 @@ def targets(summary: dict, results: list[dict], models: list[str]) -> dict:
         common = sorted(set(d) & set(e))
         if len(common) > 1:
             sd, se = _stats([d[i] for i in common]), _stats([e[i] for i in common])
+            # the across-dataset std of any model near the floor is bounded by the floor's own spread; the
+            # excess over the floor (RMSE - floor, per dataset) isolates what the model itself adds
+            xd, xe = _stats([d[i] - floors[i] for i in common]), _stats([e[i] - floors[i] for i in common])
             row["ensemble"] = {"n": len(common), "directional": sd, "directional_ensemble": se,
-                               "std_ratio": se["std"] / sd["std"] if sd["std"] > 0 else math.nan}
+                               "std_ratio": se["std"] / sd["std"] if sd["std"] > 0 else math.nan,
+                               "noise_floor": _stats([floors[i] for i in common]),
+                               "excess_directional": xd, "excess_directional_ensemble": xe,
+                               "excess_std_ratio": xe["std"] / xd["std"] if xd["std"] > 0 else math.nan}
+            # seed-to-seed spread of a single directional net on one dataset: the std of the 5 members' RMSEs
+            spread = [float(np.std(r["member_rmse"], ddof=1)) for r in results
+                      if r["preset"] == preset and r["model"] == "directional_ensemble" and r.get("member_rmse")]
+            row["ensemble"]["member_seed_std"] = _stats(spread)
         out[preset] = row
     return out
 
@@ -123,7 +134,13 @@ def markdown(meta: dict, tgt: dict, real_world: dict | None) -> str:
         if "ensemble" in row:
             e = row["ensemble"]
             lines += ["", f"Ensemble: directional {f(e['directional'])}, directional_ensemble "
-                          f"{f(e['directional_ensemble'])}; std ratio {e['std_ratio']:.3f} (target <= 0.5)."]
+                          f"{f(e['directional_ensemble'])}; std ratio {e['std_ratio']:.3f} (target <= 0.5). "
+                          f"Noise floor on the same datasets {f(e['noise_floor'])}. Excess over the floor "
+                          f"(RMSE - floor): directional {f(e['excess_directional'], 3)}, directional_ensemble "
+                          f"{f(e['excess_directional_ensemble'], 3)}; std ratio {e['excess_std_ratio']:.3f}."
+                          + ("" if not e["member_seed_std"]["n"] else
+                             f" Seed-to-seed std of one directional net on one dataset (its 5 members), mean over "
+                             f"datasets: {f(e['member_seed_std'], 3)}.")]
         lines.append("")
     if real_world is not None:
         lines += ["#### Virtual robot experiment", "", "| split | model | RMSE [N] | rel. force | rel. torque |",

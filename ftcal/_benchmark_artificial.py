@@ -52,7 +52,7 @@ from joblib import Parallel, delayed
 
 from ._artificial import make_artificial_dataset
 from ._exceptions import BenchmarkOutputExistsError, CalibrationInputError
-from ._metrics import calibration_report
+from ._metrics import calibration_report, wrench_rmse
 from ._presets import error_preset
 from ._sampling import TEST_DISTRIBUTIONS
 from ._sensor import SensorProfile
@@ -186,6 +186,10 @@ def _run_one(task: dict) -> dict:
         model.fit(train.raw, train.wrench)
         fit_seconds = time.perf_counter() - start
         report = calibration_report(test.wrench, model.predict(test.raw), alpha=profile.alpha)
+        # ensembles: every member's own test RMSE, i.e. the seed-to-seed spread on this one dataset
+        members = getattr(model, "estimators_", None)
+        member_rmse = None if members is None else [
+            wrench_rmse(test.wrench, m.predict(test.raw), profile.alpha) for m in members]
     finally:
         torch.set_num_threads(threads)
     net = getattr(model, "net_", None)
@@ -203,6 +207,7 @@ def _run_one(task: dict) -> dict:
         "fit_seconds": fit_seconds,
         "epochs": None if history is None else len(history),
         "stop_reason": None if not history else history[-1].get("stop_reason"),
+        "member_rmse": member_rmse,
     }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -13,10 +14,10 @@ from ._exceptions import CalibrationInputError
 from ._ridge import ridge_least_squares
 from ._wrench import scale_torques, unscale_torques
 
-__all__ = ["AxisNonlinearCalibrator", "signed_power_features", "RIDGE_GRID"]
+__all__ = ["AxisNonlinearCalibrator", "signed_power_features", "one_standard_error_choice", "RIDGE_GRID"]
 
-#: Penalties tried by ``ridge="auto"`` (5-fold cross-validation inside ``fit``).
-RIDGE_GRID: tuple[float, ...] = (1e-6, 1e-4, 1e-2, 1e-1, 1.0)
+#: Penalties tried by ``ridge="auto"`` (5-fold cross-validation inside ``fit``); ``inf`` is the LTM itself.
+RIDGE_GRID: tuple[float, ...] = (1e-6, 1e-4, 1e-2, 1e-1, 1.0, math.inf)
 
 
 def signed_power_features(u: NDArray[np.float64], power: float) -> NDArray[np.float64]:
@@ -36,6 +37,31 @@ def signed_power_features(u: NDArray[np.float64], power: float) -> NDArray[np.fl
     inside = np.minimum(a, 1.0)
     value = inside ** (power + 1.0) + (power + 1.0) * np.maximum(a - 1.0, 0.0)
     return np.sign(u) * value
+
+
+def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
+    """Index of the simplest candidate whose error is within one standard error of the best one's.
+
+    ``errors[k, i]`` is candidate ``k``'s held-out error on sample ``i``;
+    candidates are ordered from the most flexible to the simplest. The best
+    candidate has the lowest mean error; a simpler one is preferred when its
+    mean error exceeds the best's by at most one standard error of the
+    paired per-sample difference (the one-standard-error rule of Breiman et
+    al., with a paired standard error).
+
+    Examples
+    --------
+    >>> errors = np.array([[1.0, 1.0, 1.0, 1.0], [1.1, 0.9, 1.2, 0.9], [2.0, 2.0, 2.1, 1.9]])
+    >>> one_standard_error_choice(errors)  # 1 is within noise of 0; 2 is clearly worse
+    1
+    """
+    errors = np.asarray(errors, dtype=float)
+    best = int(np.argmin(errors.mean(axis=1)))
+    for k in range(errors.shape[0] - 1, best, -1):
+        diff = errors[k] - errors[best]
+        if diff.mean() <= diff.std(ddof=1) / np.sqrt(diff.size):
+            return k
+    return best
 
 
 def _check_number(name: str, value, low: float, *, integer: bool = False) -> float:
@@ -112,13 +138,16 @@ class AxisNonlinearCalibrator(BaseCalibrator):
     ridge : float or "auto", default="auto"
         Ridge penalty on all but the base's linear coefficients; the features
         are dimensionless (``|u| <= 1`` on the training data), and the
-        penalty is multiplied by the number of samples. ``"auto"`` picks the
-        value of :data:`RIDGE_GRID` with the lowest 5-fold cross-validated
-        error of the whole model (shuffled folds seeded by ``random_state``,
-        0 when ``None``): small penalties where the nonlinear terms pay
-        (artificial presets), large ones where the data do not support them
-        (the virtual robot experiment, few and small loads), so the model
-        falls back to the LTM there.
+        penalty is multiplied by the number of samples. ``inf`` switches the
+        corrections off: the model is then exactly the LTM. ``"auto"`` picks
+        a value of :data:`RIDGE_GRID` (which ends with ``inf``) by 5-fold
+        cross-validation of the whole model (shuffled folds seeded by
+        ``random_state``, 0 when ``None``) with the one-standard-error rule
+        (:func:`one_standard_error_choice`): the largest penalty whose
+        held-out error is within one standard error of the best. Small
+        penalties where the nonlinear terms pay (artificial presets), the LTM
+        itself where the data do not show that they do (the virtual robot
+        experiment: few, small loads).
     n_refinements : int, default=1
         Extra passes whose gates are the signs of the previous pass' prediction.
     alpha : float or None, default=None
@@ -178,9 +207,15 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         for p in powers:
             if isinstance(p, bool) or not isinstance(p, numbers.Real) or not np.isfinite(p) or p <= 0:
                 raise CalibrationInputError(f"each entry of powers must be a finite number > 0; got {p!r}.")
-        if isinstance(self.ridge, str) and self.ridge != "auto":
-            raise CalibrationInputError(f"ridge must be a finite number >= 0 or 'auto'; got {self.ridge!r}.")
-        ridge = "auto" if isinstance(self.ridge, str) else float(_check_number("ridge", self.ridge, 0.0))
+        r = self.ridge
+        if isinstance(r, str):
+            if r != "auto":
+                raise CalibrationInputError(f"ridge must be a number >= 0 (inf allowed) or 'auto'; got {r!r}.")
+            ridge = "auto"
+        elif isinstance(r, bool) or not isinstance(r, numbers.Real) or np.isnan(r) or r < 0:
+            raise CalibrationInputError(f"ridge must be a number >= 0 (inf allowed) or 'auto'; got {r!r}.")
+        else:
+            ridge = float(r)
         n_ref = int(_check_number("n_refinements", self.n_refinements, 0, integer=True))
         return tuple(float(p) for p in powers), ridge, n_ref
 
@@ -224,20 +259,26 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         return np.array(coefs), np.array(intercepts)
 
     def _cross_validated_ridge(self, block, z, ys, n_ref: int) -> float:
-        """The penalty of :data:`RIDGE_GRID` with the lowest 5-fold cross-validated squared error."""
+        """The penalty of :data:`RIDGE_GRID` chosen by 5-fold cross-validation with the one-standard-error rule.
+
+        Every penalty is scored by the per-sample squared error of the whole
+        model on held-out folds. The chosen penalty is the largest one (the
+        simplest model, ``inf`` being the LTM) whose mean error exceeds the
+        best penalty's by at most one standard error of the paired per-sample
+        difference (:func:`one_standard_error_choice`): a correction is kept
+        only when the data show that it pays.
+        """
         seed = 0 if self.random_state is None else self.random_state
         folds = KFold(n_splits=min(5, len(ys)), shuffle=True, random_state=seed)
-        errors = []
-        for ridge in RIDGE_GRID:
-            sse = 0.0
+        errors = np.zeros((len(RIDGE_GRID), len(ys)))
+        for k, ridge in enumerate(RIDGE_GRID):
             for train, valid in folds.split(block):
                 coefs, intercepts = self._fit_passes(block[train], z[train], ys[train], ridge, n_ref)
                 previous = z[valid]
                 for c, b in zip(coefs, intercepts):
                     previous = self._apply(block[valid], previous, c, b)
-                sse += float(np.sum((previous - ys[valid]) ** 2))
-            errors.append(sse)
-        return RIDGE_GRID[int(np.argmin(errors))]
+                errors[k, valid] = np.sum((previous - ys[valid]) ** 2, axis=1)
+        return RIDGE_GRID[one_standard_error_choice(errors)]
 
     def _apply(self, block, previous, coefs, intercepts) -> NDArray[np.float64]:
         """One pass: each output from its gated features (gate = sign of the previous pass' output)."""

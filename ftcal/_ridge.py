@@ -14,7 +14,8 @@ def ridge_least_squares(
     """``coef, intercept`` minimising ``||y - features @ coef - intercept||² + penalty ||coef[n_unpenalised:]||²``.
 
     The intercept and the first ``n_unpenalised`` columns' coefficients are
-    not penalised. Solved as an augmented least-squares problem on centred
+    not penalised; ``penalty = inf`` is the limit (penalised coefficients
+    exactly zero, the rest ordinary least squares). Solved as an augmented least-squares problem on centred
     data (``numpy.linalg.lstsq``), which stays exact for ``penalty = 0`` and
     rank-deficient features.
 
@@ -30,6 +31,10 @@ def ridge_least_squares(
     fc = features - f_mean
     yc = y - y_mean
     n_penalised = features.shape[1] - n_unpenalised
+    if np.isinf(penalty):  # the limit: penalised coefficients are zero, the rest is plain least squares
+        coef = np.zeros((features.shape[1], y.shape[1]))
+        coef[:n_unpenalised], *_ = np.linalg.lstsq(fc[:, :n_unpenalised], yc, rcond=None)
+        return coef, y_mean - f_mean @ coef
     if penalty > 0 and n_penalised > 0:
         rows = np.hstack([np.zeros((n_penalised, n_unpenalised)), np.sqrt(penalty) * np.eye(n_penalised)])
         fc = np.vstack([fc, rows])

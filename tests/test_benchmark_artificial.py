@@ -68,6 +68,17 @@ def test_quick_smoke_run_writes_outputs_and_resumes_from_cache(tmp_path):
     assert json.dumps(again["summary"], sort_keys=True) == json.dumps(first["summary"], sort_keys=True)
 
 
+def test_ensemble_records_keep_every_members_rmse(tmp_path):
+    res = run_artificial_benchmark(quick=True, n_datasets=1, models=("directional_ensemble", "linear"),
+                                   out_dir=tmp_path, plot=False)
+    by_model = {r["model"]: r for r in res["results"]}
+    members = by_model["directional_ensemble"]["member_rmse"]
+    assert len(members) == 5 and len(set(members)) == 5  # five seeds, five different networks
+    # the RMSE is a norm of the error: the mean prediction's RMSE is at most the members' mean RMSE (convexity)
+    assert by_model["directional_ensemble"]["rmse"] <= np.mean(members)
+    assert by_model["linear"]["member_rmse"] is None
+
+
 def test_other_configuration_is_not_mixed_in_and_parallel_backend_is_pluggable(tmp_path):
     kw = dict(quick=True, models=("linear",), presets=("thesis", "stress"), plot=False)
     serial = run_artificial_benchmark(out_dir=tmp_path / "s", seed=0, **kw)

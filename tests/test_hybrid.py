@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ftcal._hybrid import one_standard_error_choice
 from ftcal import AxisNonlinearCalibrator, CalibrationInputError, LinearCalibrator, load_model, save_model, wrench_rmse
 
 
@@ -92,8 +93,32 @@ def test_extrapolates_linearly_in_magnitude():
     assert np.abs(second_difference).max() < 1e-9 * np.abs(pred).max()
 
 
+def test_infinite_ridge_is_the_ltm():
+    sensor = _Sensor(seed=20, asymmetric=True, gamma=0.05, noise=0.01)
+    raw, w, raw_t, _ = _train_test(sensor, seed=21)
+    hybrid = AxisNonlinearCalibrator(alpha=ALPHA, ridge=np.inf).fit(raw, w)
+    ltm = LinearCalibrator(alpha=ALPHA).fit(raw, w)
+    np.testing.assert_allclose(hybrid.predict(raw_t), ltm.predict(raw_t), rtol=0, atol=1e-9 * np.abs(w).max())
+
+
+def test_one_standard_error_rule():
+    base = np.random.default_rng(22).uniform(1.0, 2.0, 400)
+    sign = np.tile([1.0, -1.0], 200)
+    # candidates from flexible to simple; paired differences to candidate 0 with known mean and standard error:
+    # candidate 1: mean 0; candidate 2: mean 0.002, standard error 0.1 / sqrt(400) = 0.005
+    errors = np.stack([base, base + 0.01 * sign, base + 0.1 * sign + 0.002])
+    assert one_standard_error_choice(errors) == 2  # within one standard error: the simplest wins
+    worse = errors.copy()
+    worse[2] += 0.5
+    assert one_standard_error_choice(worse) == 1  # the simplest is clearly worse; the next one is not
+    better = errors.copy()
+    better[0] -= 0.5
+    assert one_standard_error_choice(better) == 0  # the flexible one wins by many standard errors
+
+
 def test_auto_ridge_follows_the_evidence():
-    # cross-validation inside fit: heavy penalty where the nonlinear terms only fit noise, light where they pay
+    # cross-validation inside fit: heavy penalty (or the LTM itself, inf) where the nonlinear terms only fit
+    # noise, a light one where they pay
     affine = _Sensor(seed=16, asymmetric=False, gamma=0.0, noise=0.02)
     raw, w, _, _ = _train_test(affine, seed=17)
     assert AxisNonlinearCalibrator(alpha=ALPHA).fit(raw, w).ridge_ >= 1e-2
@@ -103,7 +128,8 @@ def test_auto_ridge_follows_the_evidence():
 
 
 @pytest.mark.parametrize(
-    "params", [dict(ridge="fast"), dict(powers=(0.0,)), dict(powers=1.5), dict(ridge=-1.0), dict(n_refinements=-1),
+    "params", [dict(ridge="fast"), dict(powers=(0.0,)), dict(powers=1.5), dict(ridge=-1.0), dict(ridge=float("nan")),
+               dict(n_refinements=-1),
                dict(n_refinements=1.5)],
 )
 def test_bad_parameters_raise_clear_errors(params):
@@ -119,4 +145,13 @@ def test_model_file_round_trip(tmp_path):
     model = AxisNonlinearCalibrator(powers=(1.0, 2.0), n_refinements=2).fit(raw, w)
     loaded = load_model(save_model(model, tmp_path / "hybrid.npz"), model_type=AxisNonlinearCalibrator)
     assert loaded.get_params() == model.get_params()
+    np.testing.assert_array_equal(loaded.predict(raw_t), model.predict(raw_t))
+
+
+def test_model_file_round_trip_of_the_ltm_fallback(tmp_path):
+    sensor = _Sensor(seed=16, asymmetric=False, gamma=0.0, noise=0.02)
+    raw, w, raw_t, _ = _train_test(sensor, seed=17)
+    model = AxisNonlinearCalibrator(ridge=np.inf).fit(raw, w)
+    loaded = load_model(save_model(model, tmp_path / "hybrid.npz"))
+    assert loaded.ridge_ == model.ridge_ == np.inf
     np.testing.assert_array_equal(loaded.predict(raw_t), model.predict(raw_t))
