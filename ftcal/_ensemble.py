@@ -36,10 +36,10 @@ class EnsembleCalibrator(BaseCalibrator):
     bias. Measured on the artificial benchmark (30 datasets per preset, 5
     directional members, short schedule; ``benchmarks/RESULTS.md``, issue
     6): the excess RMSE over the noise floor drops from 1.82 to 0.49 N
-    (`thesis`) and 2.17 to 0.89 N (`asymmetric`), and its across-dataset
-    std by 7x and 3.7x; the std of the RMSE itself only by 0.72x-0.73x,
-    because the noise floor's own std (0.39-0.49 N) is part of every
-    model's. On `stress` it barely helps (0.91x): there the directional
+    (``thesis``) and 2.17 to 0.89 N (``asymmetric``), and its
+    across-dataset std 7x and 3.7x; the std of the RMSE itself only falls to
+    0.72x-0.73x, because the noise floor's own std (0.39-0.49 N) is part of
+    every model's. On ``stress`` it barely helps (0.91x): there the directional
     model's error is bias (it cannot represent intra-axis nonlinearity),
     which every seed shares; use :class:`~ftcal.AxisNonlinearCalibrator`.
     Fitting costs ``n_members`` fits (run in parallel with ``n_jobs``).
