@@ -37,8 +37,8 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
-from ftcal._benchmark_artificial import _seeds, _strict_json, wilcoxon_pvalue
-from ftcal._search import search_summary
+from ftcal._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, _strict_json, wilcoxon_pvalue
+from ftcal._search import _plain, search_summary
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "tune_networks"
 OUTPUTS = ("tune_networks.json", "tune_networks.md")
@@ -90,15 +90,10 @@ def _validate_one(preset: str, model: str, params: dict, index: int, args) -> fl
     return wrench_rmse(test.wrench, calibrator.predict(test.raw), profile.alpha)
 
 
-def _stats(values: list[float]) -> dict:
-    a = np.asarray(values, dtype=float)
-    return {"mean": float(a.mean()), "std": float(a.std(ddof=1)) if a.size > 1 else 0.0, "n": int(a.size)}
-
-
 def tune_one(preset: str, model: str, args) -> dict:
     if args.setting is not None:  # no search: validate the given setting
         best, search_seconds = dict(args.setting), 0.0
-        summary = {"best_params": {k: list(v) if isinstance(v, tuple) else v for k, v in best.items()},
+        summary = {"best_params": {k: _plain(v) for k, v in best.items()},
                    "best_rmse": float("nan"), "n_folds": 0, "candidates": []}
     else:
         profile = SensorProfile.default()
@@ -117,7 +112,7 @@ def tune_one(preset: str, model: str, args) -> dict:
         for params in ({}, best) for i in range(args.validate))
     default_rmse, tuned_rmse = runs[:args.validate], runs[args.validate:]
     p_value, note = wilcoxon_pvalue(tuned_rmse, default_rmse)
-    default, tuned = _stats(default_rmse), _stats(tuned_rmse)
+    default, tuned = _mean_std(default_rmse), _mean_std(tuned_rmse)
     return {
         "preset": preset, "model": model, "search": summary, "search_seconds": search_seconds,
         "validate_seconds": time.perf_counter() - start,
@@ -127,8 +122,8 @@ def tune_one(preset: str, model: str, args) -> dict:
     }
 
 
-def _fmt(s: dict) -> str:
-    return f"{s['mean']:.3f} ± {s['std']:.3f} (n={s['n']})"
+def _fmt(stat: dict) -> str:
+    return f"{_mean_pm_std(stat, 3)} (n={stat['n']})"
 
 
 def markdown(rows: list[dict], command: str, seconds: float) -> str:
