@@ -34,7 +34,7 @@ from ._comparative import ComparativeCalibrator
 from ._directional import DirectionalCalibrator
 from ._linear import LinearCalibrator
 from ._model_io import load_model, save_model
-from ._registry import CALIBRATOR_NAMES, make_calibrator, register_calibrator, training_schedule
+from ._registry import CALIBRATOR_NAMES, calibrator_parameters, make_calibrator, register_calibrator, training_schedule
 from ._ensemble import EnsembleCalibrator
 from ._hybrid import AxisNonlinearCalibrator
 from ._polynomial import PolynomialCalibrator
@@ -98,6 +98,7 @@ __all__ = [
     "wrench_rmse",
     # calibrators (issue 2, issue 6)
     "CALIBRATOR_NAMES",
+    "calibrator_parameters",
     "ComparativeCalibrator",
     "DirectionalCalibrator",
     "LinearCalibrator",

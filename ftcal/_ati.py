@@ -80,6 +80,10 @@ def _number(path: Path, element: ET.Element, attribute: str) -> float:
     return value
 
 
+#: Largest rated range [N or N·m] accepted from a calibration file (the largest F/T sensors are rated ~1e5 N).
+_MAX_RATED_RANGE = 1e7
+
+
 def _axis_rows(path: Path, cal: ET.Element, tag: str, n_gauges: int | None) -> tuple[NDArray, NDArray, list]:
     """Matrix rows (6, N), the ``max`` per axis and the elements, in Fx..Tz order."""
     elements = {}
@@ -195,7 +199,8 @@ def read_ati_calibration(path: str | Path, calibration_index: int = 0) -> Sensor
     root = _parse(path)
     cals = [root] if root.tag == "Calibration" else root.findall(".//Calibration")
     if not cals:
-        raise CalFileError(f"{path}: no <Calibration> element; root element is <{root.tag}>, expected <FTSensor>.")
+        raise CalFileError(f"{path}: no <Calibration> element inside <{root.tag}>; an ATI .cal file holds "
+                          "<FTSensor> with at least one <Calibration> (with its <Axis> or <UserAxis> rows).")
     if not 0 <= calibration_index < len(cals):
         raise CalFileError(f"{path}: calibration_index={calibration_index} but the file holds {len(cals)} <Calibration>.")
     cal = cals[calibration_index]
@@ -223,6 +228,12 @@ def read_ati_calibration(path: str | Path, calibration_index: int = 0) -> Sensor
         bad = [a for a, m in zip(WRENCH_LABELS, maxima) if m <= 0]
         raise CalFileError(f"{path}: axes {bad} have max <= 0; 'max' is the rated range and must be positive.")
     axis_max = maxima * to_si
+    implausible = [f"{a}={m:g}" for a, m in zip(WRENCH_LABELS, axis_max) if m > _MAX_RATED_RANGE]
+    if implausible:
+        raise CalFileError(
+            f"{path}: rated ranges {implausible} (in N and N·m) exceed {_MAX_RATED_RANGE:g}, more than any "
+            "force/torque sensor is rated for; check the 'max' attributes and the units."
+        )
     meta = {
         "source": str(path),
         "form": form,

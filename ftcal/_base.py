@@ -33,7 +33,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ._exceptions import CalibrationInputError
-from ._validation import check_zero_reading, validate_readings, validate_training_data
+from ._validation import check_finite_output, check_zero_reading, validate_readings, validate_training_data
 from ._wrench import alpha_from_wrenches
 from ._zero_load import estimate_zero_reading
 
@@ -87,7 +87,10 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         """
         check_is_fitted(self)
         X = validate_readings(self, X)
-        return np.asarray(self._predict_wrench(X), dtype=np.float64)
+        with np.errstate(over="ignore", invalid="ignore"):
+            wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)
+        check_finite_output(X, wrench, self)
+        return wrench
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:  # pragma: no cover
         raise NotImplementedError

@@ -23,10 +23,48 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from ._columns import check_plain_numbers, read_header
 from ._exceptions import DatasetFileError
+from ._files import atomic_output
 from ._wrench import WRENCH_LABELS
 
 __all__ = ["CalibrationDataset"]
+
+_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group]"
+
+
+def _parse_meta(text: str, where: str) -> dict:
+    """The JSON object of a ``# meta:`` comment (an object, not a list or a number)."""
+    try:
+        meta = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise DatasetFileError(f"{where}: bad JSON in the meta comment ({str(exc)[:80]}).") from None
+    if not isinstance(meta, dict):
+        raise DatasetFileError(
+            f"{where}: the meta comment holds a JSON {type(meta).__name__}; it must be a JSON object "
+            "such as {\"alpha\": 50}."
+        )
+    return meta
+
+
+def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
+    """``group`` as int64, refusing fractional, non-finite or non-numeric labels (no silent truncation)."""
+    g = np.asarray(group)
+    if g.shape != (n_rows,):
+        raise DatasetFileError(f"group must have shape ({n_rows},), one label per row; got shape {g.shape}.")
+    if g.dtype.kind in "iu":
+        return g.astype(np.int64)
+    if g.dtype.kind == "b" or g.dtype.kind not in "f":
+        raise DatasetFileError(
+            f"group must hold integer labels (a load configuration or pose number); got dtype {g.dtype}."
+        )
+    bad = ~np.isfinite(g) | (g != np.round(g))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DatasetFileError(
+            f"group must hold integer labels; row {i} holds {g[i]!r}. Fix: number the groups 0, 1, 2, ..."
+        )
+    return g.astype(np.int64)
 
 
 @dataclass
@@ -59,8 +97,12 @@ class CalibrationDataset:
     meta: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        self.raw = np.asarray(self.raw, dtype=float)
-        self.wrench = np.asarray(self.wrench, dtype=float)
+        for name in ("raw", "wrench"):
+            value = np.asarray(getattr(self, name))
+            if np.iscomplexobj(value):
+                raise DatasetFileError(f"{name} holds complex numbers (shape {value.shape}); readings and wrenches "
+                                       "are real. Fix: pass the real part explicitly if that is what you mean.")
+            setattr(self, name, np.asarray(value, dtype=float))
         if self.raw.ndim != 2:
             raise DatasetFileError(f"raw must be 2-D (n_samples, n_channels); got shape {self.raw.shape}.")
         if self.wrench.ndim != 2 or self.wrench.shape[1] != 6:
@@ -70,11 +112,9 @@ class CalibrationDataset:
                 f"raw has {self.raw.shape[0]} rows but wrench has {self.wrench.shape[0]}; they must match."
             )
         if self.group is not None:
-            self.group = np.asarray(self.group).astype(np.int64)
-            if self.group.shape != (self.raw.shape[0],):
-                raise DatasetFileError(
-                    f"group must have shape ({self.raw.shape[0]},); got shape {self.group.shape}."
-                )
+            self.group = _integer_labels(self.group, self.raw.shape[0])
+        if not isinstance(self.meta, dict):
+            raise DatasetFileError(f"meta must be a dict (JSON object); got {type(self.meta).__name__}.")
 
     @property
     def n_samples(self) -> int:
@@ -96,30 +136,36 @@ class CalibrationDataset:
         )
 
     # ------------------------------------------------------------------ files
-    def save(self, path: str | Path) -> Path:
-        """Write the dataset to ``path`` (``.csv`` or ``.npz``, chosen by suffix) and return it."""
+    def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write the dataset to ``path`` (``.csv`` or ``.npz``, chosen by suffix) and return it.
+
+        The file is written to a unique temporary file beside ``path`` and
+        renamed into place, so an interrupted save never leaves half a file.
+        An existing ``path`` raises :class:`~ftcal.DatasetFileError` unless
+        ``overwrite=True``.
+        """
         path = Path(path)
-        if path.suffix == ".npz":
-            arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(json.dumps(self.meta))}
-            if self.group is not None:
-                arrays["group"] = self.group
-            with open(path, "wb") as fh:
-                np.savez(fh, **arrays)
-        elif path.suffix == ".csv":
-            cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
-            data = np.hstack([self.raw, self.wrench])
-            fmt = ["%.10g"] * data.shape[1]
-            if self.group is not None:
-                cols.append("group")
-                data = np.hstack([data, self.group[:, None].astype(float)])
-                fmt.append("%d")
-            header = f"meta: {json.dumps(self.meta)}\n" + ",".join(cols)
-            np.savetxt(path, data, delimiter=",", header=header, comments="", fmt=fmt)
-            # np.savetxt does not prefix the meta line with '#': do it here.
-            text = path.read_text()
-            path.write_text("# " + text)
-        else:
+        if path.suffix not in (".csv", ".npz"):
             raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv or .npz.")
+        if path.exists() and not overwrite:
+            raise DatasetFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
+        with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
+            if path.suffix == ".npz":
+                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(json.dumps(self.meta))}
+                if self.group is not None:
+                    arrays["group"] = self.group
+                with open(tmp, "wb") as fh:
+                    np.savez(fh, **arrays)
+            else:
+                cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
+                data = np.hstack([self.raw, self.wrench])
+                fmt = ["%.10g"] * data.shape[1]
+                if self.group is not None:
+                    cols.append("group")
+                    data = np.hstack([data, self.group[:, None].astype(float)])
+                    fmt.append("%d")
+                header = f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols)
+                np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt=fmt)
         return path
 
     @classmethod
@@ -155,41 +201,40 @@ class CalibrationDataset:
     @classmethod
     def _load_csv(cls, path: Path) -> "CalibrationDataset":
         meta: dict = {}
-        header: list[str] | None = None
-        n_comment = 0
-        with open(path, encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("#"):
-                    n_comment += 1
-                    body = line[1:].strip()
-                    if body.startswith("meta:"):
-                        try:
-                            meta = json.loads(body[len("meta:"):])
-                        except json.JSONDecodeError as exc:
-                            raise DatasetFileError(f"{path}: line {n_comment}: bad JSON in meta comment ({exc}).") from exc
-                    continue
-                header = [c.strip() for c in line.strip().split(",")]
-                break
-        if not header or header == [""]:
-            raise DatasetFileError(f"{path}: no header line; expected s0,...,s{{N-1}},Fx,Fy,Fz,Tx,Ty,Tz[,group].")
-        missing = [c for c in WRENCH_LABELS if c not in header]
-        if missing:
-            raise DatasetFileError(f"{path}: header lacks wrench columns {missing}; expected Fx,Fy,Fz,Tx,Ty,Tz.")
-        chan = [c for c in header if c.startswith("s") and c[1:].isdigit()]
-        if not chan:
-            raise DatasetFileError(f"{path}: header has no raw channel columns s0, s1, ...")
         try:
-            data = np.loadtxt(path, delimiter=",", skiprows=n_comment + 1, ndmin=2)
+            # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
+            lines = path.read_text(encoding="utf-8-sig").splitlines()
+        except UnicodeDecodeError as exc:
+            raise DatasetFileError(f"{path}: not a UTF-8 text file ({exc}).") from None
+        n_comment = 0
+        for line in lines:
+            if not line.startswith("#"):
+                break
+            n_comment += 1
+            body = line[1:].strip()
+            if body.startswith("meta:"):
+                meta = _parse_meta(body[len("meta:"):], f"{path}: line {n_comment}")
+        if n_comment >= len(lines) or not lines[n_comment].strip():
+            raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
+        header = read_header(
+            lines[n_comment].split(","), where=f"{path}: line {n_comment + 1}", error=DatasetFileError,
+            required=WRENCH_LABELS, optional=("group",), expected=_CSV_LAYOUT,
+        )
+        body_lines = lines[n_comment + 1:]
+        check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)
+        try:
+            data = np.loadtxt(body_lines, delimiter=",", ndmin=2)
         except ValueError as exc:
-            raise DatasetFileError(f"{path}: unreadable number ({exc}).") from exc
+            raise DatasetFileError(f"{path}: unreadable number ({exc}).") from None
         if data.shape[0] == 0:
             raise DatasetFileError(f"{path}: no data rows after the header.")
-        if data.shape[1] != len(header):
-            raise DatasetFileError(f"{path}: rows have {data.shape[1]} values but the header names {len(header)} columns.")
-        col = {c: i for i, c in enumerate(header)}
-        raw = data[:, [col[c] for c in sorted(chan, key=lambda c: int(c[1:]))]]
-        wrench = data[:, [col[c] for c in WRENCH_LABELS]]
-        group = data[:, col["group"]].astype(np.int64) if "group" in col else None
+        if data.shape[1] != len(header.names):
+            raise DatasetFileError(
+                f"{path}: rows have {data.shape[1]} values but the header names {len(header.names)} columns."
+            )
+        raw = data[:, header.numbered("s")]
+        wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
+        group = data[:, header.index["group"]] if "group" in header else None
         ds = cls(raw=raw, wrench=wrench, group=group, meta=meta)
         ds._check_finite(path, first_data_line=n_comment + 2)
         return ds

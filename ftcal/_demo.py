@@ -177,8 +177,8 @@ def _write(out: Path, result: DemoResult, alpha: float) -> list[Path]:
     from .cli._report import axis_table, predicted_plot_name, write_evaluation_plots, EVALUATION_PLOTS
 
     (out / "models").mkdir(parents=True, exist_ok=True)
-    result.train.save(out / "train.csv")
-    result.test.save(out / "test.csv")
+    result.train.save(out / "train.csv", overwrite=True)  # the caller (ftcal demo) checked --force
+    result.test.save(out / "test.csv", overwrite=True)
     _plots.plot_wrench_coverage(
         result.train.wrench, out / "coverage.png", alpha=alpha, title="Demo training wrenches (4 spheres)"
     )

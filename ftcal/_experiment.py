@@ -271,7 +271,7 @@ def _check_limits(robot: RobotModel, q: NDArray[np.float64], sources: list[str],
 
 
 def prepare_dataset(
-    log_paths: Sequence[str | Path],
+    log_paths: Sequence[str | Path] | str | Path,
     robot: RobotModel | str | Path = "kuka_iiwa14",
     load_mass: float | None = None,
     *,
@@ -285,8 +285,9 @@ def prepare_dataset(
 
     Parameters
     ----------
-    log_paths : sequence of paths
-        Every log file of the experiment (any split of runs into files).
+    log_paths : sequence of paths, or one path
+        Every log file of the experiment (any split of runs into files); a
+        single path is one log file, or a folder whose ``*.csv`` are the logs.
     robot : RobotModel, built-in name or URDF path, default="kuka_iiwa14"
         The arm the joint angles belong to (its sensor frame gives the poses).
     load_mass : float, optional
@@ -317,7 +318,15 @@ def prepare_dataset(
     """
     if isinstance(robot, (str, Path)):
         robot = load_robot(robot)
-    paths = [Path(p) for p in log_paths]
+    if isinstance(log_paths, (str, Path)):  # one file or a folder of logs, not a string of characters
+        one = Path(log_paths)
+        paths = sorted(one.glob("*.csv")) if one.is_dir() else [one]
+        if not paths:
+            raise LogFormatError(f"{one}: the folder holds no .csv run logs.")
+    else:
+        paths = [Path(p) for p in log_paths]
+    if not paths:
+        raise LogFormatError("no run logs given; pass the load and no-load log files (or their folder).")
     logs = [read_run_log(p, n_channels=n_channels, n_joints=robot.n_joints) for p in paths]
     masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
     if load_mass is None:

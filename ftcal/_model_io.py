@@ -27,7 +27,7 @@ from __future__ import annotations
 import io
 import json
 import os
-import tempfile
+import warnings
 import zipfile
 from pathlib import Path
 
@@ -39,8 +39,9 @@ from skorch.history import History
 from ._comparative import ComparativeCalibrator
 from ._directional import DirectionalCalibrator
 from ._exceptions import ModelFileError
+from ._files import atomic_output
 from ._linear import LinearCalibrator
-from ._network_base import NetworkCalibrator
+from ._network_base import NetworkCalibrator, device_available
 
 __all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION"]
 
@@ -152,14 +153,8 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
     path = Path(path)
     if path.exists() and not overwrite:
         raise ModelFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
-    try:
-        with os.fdopen(fd, "wb") as f:
-            np.savez(f, **arrays)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    with atomic_output(path, overwrite=overwrite, error=ModelFileError) as tmp, open(tmp, "wb") as f:
+        np.savez(f, **arrays)
     return path
 
 
@@ -210,8 +205,14 @@ def _read(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
         raise ModelFileError(f"{path} is an .npz file but not an ftcal model file (no {_META_KEY!r} entry).")
     try:
         meta = json.loads(str(arrays.pop(_META_KEY)))
-    except json.JSONDecodeError as exc:
-        raise ModelFileError(f"{path}: the model metadata is not valid JSON ({exc}).") from None
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise ModelFileError(f"{path}: the model metadata is not valid JSON ({str(exc)[:80]}).") from None
+    bad = [k for k, v in arrays.items() if v.dtype.kind not in "biuf" or (v.dtype.kind == "f" and not np.isfinite(v).all())]
+    if bad:
+        raise ModelFileError(
+            f"{path}: array {bad[0]!r} holds NaN, inf or non-numeric values; the file is damaged. "
+            "Fit and save the model again."
+        )
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise ModelFileError(f"{path} is not an ftcal model file (format {meta.get('format') if isinstance(meta, dict) else meta!r}).")
     return meta, arrays
@@ -248,16 +249,62 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
     if name not in _MODEL_TYPES:
         raise ModelFileError(f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_MODEL_TYPES)}.")
     try:
-        return _from_state(meta, arrays)
-    except (KeyError, TypeError, ValueError, RuntimeError) as exc:
+        estimator = _from_state(meta, arrays)
+    except ModelFileError as exc:
+        raise ModelFileError(f"{path}: {exc}") from None
+    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, RecursionError) as exc:
         raise ModelFileError(f"{path}: the {name} model file is incomplete or inconsistent ({exc!r}).") from None
+    _check_consistent(estimator, path)
+    return estimator
+
+
+def _check_consistent(estimator, path: Path) -> None:
+    """Predict one tare reading; a model whose stored arrays do not fit together fails here, not at the user's predict."""
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            out = estimator.predict(np.asarray(estimator.zero_reading_, dtype=float)[None, :])
+    except Exception as exc:  # any failure means the stored arrays are inconsistent
+        raise ModelFileError(
+            f"{path}: the stored arrays do not fit together ({type(exc).__name__}: {str(exc)[:120]}); "
+            "the file is damaged or was edited. Fit and save the model again."
+        ) from None
+    if out.shape != (1, 6):
+        raise ModelFileError(f"{path}: the model gives output of shape {out.shape[1:]} instead of (6,); the file is damaged.")
+
+
+def _check_fitted_scalars(name: str, fitted: dict) -> None:
+    """Types and ranges of the stored scalars (a ``null`` or a string would fail later, at predict)."""
+    for key, value in fitted.items():
+        if key == "stop_reason_":
+            ok = isinstance(value, str)
+        elif key in ("n_features_in_", "n_epochs_", "best_epoch_", "n_dropped_zero_load_"):
+            ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
+        elif key == "ridge_":  # inf is the LTM fallback of the hybrid
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
+        else:
+            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
+        if key in ("alpha_", "scale_reference_") and ok:
+            ok = value > 0
+        if key == "n_features_in_" and ok:
+            ok = value >= 1
+        if not ok:
+            raise ModelFileError(f"the {name}'s stored {key} is {value!r}, which is not a valid value; the file is damaged.")
 
 
 def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
     """The fitted model of :func:`_state`'s output (``KeyError`` etc. when incomplete)."""
     name = meta["model_type"]
     cls, scalar_names, array_names = _MODEL_TYPES[name]
-    estimator = cls(**{k: _decode(v) for k, v in meta["params"].items()})
+    params = {k: _decode(v) for k, v in meta["params"].items()}
+    if params.get("device") not in (None, "cpu") and not device_available(params["device"]):
+        warnings.warn(
+            f"the model was saved with device={params['device']!r}, which this machine does not have; "
+            "it runs on the CPU instead.", UserWarning, stacklevel=3,
+        )
+        params["device"] = "cpu"
+    estimator = cls(**params)
+    _check_fitted_scalars(name, {k: meta["fitted"][k] for k in scalar_names})
     for k in scalar_names:
         setattr(estimator, k, meta["fitted"][k])
     for k in array_names:
@@ -274,9 +321,33 @@ def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
     return estimator
 
 
+def _expected_module_shapes(estimator: NetworkCalibrator, n_inputs: int) -> dict[str, tuple[int, ...]]:
+    """Shapes of the state_dict the declared ``hidden_layer_sizes`` would build (checked before building it)."""
+    sizes = estimator.hidden_layer_sizes
+    if not isinstance(sizes, (tuple, list)) or not all(isinstance(w, int) and w >= 1 for w in sizes):
+        raise ModelFileError(f"hidden_layer_sizes {sizes!r} is not a tuple of positive widths; the file is damaged.")
+    widths = [n_inputs, *sizes, estimator._module_class.n_outputs]
+    shapes = {}
+    for i in range(len(widths) - 1):
+        shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
+        shapes[f"layers.{2 * i}.bias"] = (widths[i + 1],)
+    return shapes
+
+
 def _restore_net(estimator: NetworkCalibrator, meta: dict, arrays: dict[str, np.ndarray]) -> None:
-    state = {k[len("module/"):]: torch.from_numpy(v.copy()) for k, v in arrays.items() if k.startswith("module/")}
-    n_inputs = state["layers.0.weight"].shape[1]
+    stored = {k[len("module/"):]: v for k, v in arrays.items() if k.startswith("module/")}
+    n_inputs = int(meta["fitted"]["n_features_in_"])
+    expected = _expected_module_shapes(estimator, n_inputs)
+    got = {k: tuple(v.shape) for k, v in stored.items()}
+    if got != expected:
+        diff = sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
+        k = diff[0]
+        raise ModelFileError(
+            f"the network weights do not match the declared layers (hidden_layer_sizes="
+            f"{estimator.hidden_layer_sizes}, {n_inputs} inputs): {k} is {got.get(k, 'missing')}, expected "
+            f"{expected.get(k, 'absent')}; the file is damaged or was edited."
+        )
+    state = {k: torch.from_numpy(v.astype(np.float32)) for k, v in stored.items()}
     net = estimator._build_net(n_inputs, seed=0)
     net.initialize()
     net.module_.load_state_dict(state)

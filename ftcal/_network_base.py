@@ -22,6 +22,8 @@ loss weights, and how readings/wrenches map to network inputs/targets.
 from __future__ import annotations
 
 import numbers
+import signal
+import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -37,9 +39,51 @@ from ._exceptions import CalibrationInputError
 from ._networks import WeightedSquaredError
 from ._schedule import schedule_callbacks
 
-__all__ = ["NetworkCalibrator", "torch_threads"]
+__all__ = ["NetworkCalibrator", "torch_threads", "device_available", "interrupt_flag"]
 
 _PREDICT_CHUNK = 65536
+#: Largest magnitude of a network input or target that float32 training handles with room to spare.
+_FLOAT32_SAFE = 1e30
+
+
+def device_available(device: str) -> bool:
+    """Whether torch can place tensors on ``device`` here (``"cuda"`` on a CPU-only build: False)."""
+    try:
+        torch.empty(0, device=device)
+    except (RuntimeError, AssertionError, ValueError, TypeError):
+        return False
+    return True
+
+
+@contextmanager
+def interrupt_flag() -> Iterator[threading.Event]:
+    """Notice Ctrl-C (SIGINT) during the block, even though skorch's fit loop swallows ``KeyboardInterrupt``.
+
+    skorch ends ``fit`` quietly on ``KeyboardInterrupt`` (its early-stopping
+    callbacks, and ours, stop training that way), so a real Ctrl-C would
+    return a half-trained net as if it had finished. Inside this block a
+    SIGINT sets the yielded event and still raises ``KeyboardInterrupt`` to
+    end the loop; the caller re-raises after ``fit``. Outside the main thread
+    (where signal handlers cannot be set) the event is never set.
+    """
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN:  # a background job that ignores Ctrl-C: nothing to notice
+        yield flag
+        return
+
+    def handler(signum, frame):
+        flag.set()
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextmanager
@@ -139,16 +183,41 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         self._check_params()
+        if not isinstance(self.device, str) or not device_available(self.device):
+            raise CalibrationInputError(
+                f"device={self.device!r} is not available on this machine (this torch build has "
+                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."
+            )
         inputs, targets = self._training_pairs(X, y)
+        too_large = np.abs(inputs).max(initial=0.0) > _FLOAT32_SAFE or np.abs(targets).max(initial=0.0) > _FLOAT32_SAFE
+        if too_large:
+            raise CalibrationInputError(
+                f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
+                "beyond what float32 training handles; check the units of X and y."
+            )
         seed = self._seed()
         net = self._build_net(inputs.shape[1], seed)
-        with torch.random.fork_rng(devices=[]), torch_threads(1):
+        with interrupt_flag() as interrupted, torch.random.fork_rng(devices=[]), torch_threads(1):
             torch.manual_seed(seed)
             net.fit(inputs.astype(np.float32), targets.astype(np.float32))
+        if interrupted.is_set():
+            raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
+        self._check_converged(net)
         self.net_ = net
         self.n_epochs_ = len(net.history)
         self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
         self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
+
+    def _check_converged(self, net: NeuralNetRegressor) -> None:
+        """A diverged run (a NaN or inf loss) is an error that names the epoch, not a model predicting NaN."""
+        for key in ("train_loss", "valid_loss"):
+            losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
+            bad = np.flatnonzero(~np.isfinite(losses))
+            if bad.size:
+                raise CalibrationInputError(
+                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} "
+                    f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
+                )
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
         module = self.net_.module_

@@ -45,9 +45,11 @@ def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_h
 class DirectionalNet(nn.Module):
     """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)]."""
 
+    n_outputs = 7
+
     def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
         super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, 7, nn.Tanh)
+        self.layers = mlp(n_inputs, hidden_layer_sizes, self.n_outputs, nn.Tanh)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.layers(x)
@@ -56,9 +58,11 @@ class DirectionalNet(nn.Module):
 class ComparativeNet(nn.Module):
     """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6)."""
 
+    n_outputs = 6
+
     def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
         super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, 6, nn.ReLU)
+        self.layers = mlp(n_inputs, hidden_layer_sizes, self.n_outputs, nn.ReLU)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.layers(x)

@@ -27,13 +27,14 @@ The linear model has no schedule (``{}``).
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping, Sequence
+import inspect
 from typing import Any
 
 from ._comparative import ComparativeCalibrator
 from ._directional import DirectionalCalibrator
 from ._linear import LinearCalibrator
 
-__all__ = ["CALIBRATOR_NAMES", "make_calibrator", "register_calibrator", "training_schedule", "SCHEDULE_NAMES"]
+__all__ = ["CALIBRATOR_NAMES", "calibrator_parameters", "make_calibrator", "register_calibrator", "training_schedule", "SCHEDULE_NAMES"]
 
 #: Names accepted by :func:`training_schedule` and ``make_calibrator(schedule=...)``.
 SCHEDULE_NAMES: tuple[str, ...] = ("thesis", "short")
@@ -138,6 +139,20 @@ def training_schedule(name: str, model: str) -> dict[str, Any]:
     return dict(_SCHEDULES[model].get(name, {}))
 
 
+def calibrator_parameters(name: str) -> tuple[str, ...]:
+    """The keyword parameters ``make_calibrator(name, ...)`` accepts (besides ``schedule`` and ``random_state``).
+
+    Examples
+    --------
+    >>> "max_epochs" in calibrator_parameters("directional_ensemble")
+    True
+    """
+    _check_name(name)
+    signature = inspect.signature(_FACTORIES[name])
+    return tuple(p for p, v in signature.parameters.items()
+                 if v.kind is not inspect.Parameter.VAR_KEYWORD and p != "random_state")
+
+
 def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **params) -> Any:
     """A new, unfitted calibrator by registry name with the named schedule.
 
@@ -150,7 +165,10 @@ def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **pa
     >>> make_calibrator("linear", ridge=0.1)
     LinearCalibrator(ridge=0.1)
     """
-    _check_name(name)
+    known = calibrator_parameters(name)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ValueError(f"{name} has no parameter {unknown[0]!r}; its parameters are: {', '.join(sorted(known))}.")
     merged = {**training_schedule(schedule, name), **params}
     return _FACTORIES[name](random_state=random_state, **merged)
 

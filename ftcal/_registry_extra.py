@@ -16,6 +16,7 @@ It also registers the three classes with :mod:`ftcal._model_io`, so
 
 from __future__ import annotations
 
+import inspect
 from collections.abc import Callable
 
 from ._comparative import ComparativeCalibrator
@@ -45,6 +46,12 @@ def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:
                                   random_state=random_state)
 
     build.__name__ = f"{member_class.__name__}_ensemble"
+    # The registry (and `ftcal fit --param`) read the accepted names from the signature: the ensemble's own
+    # parameters plus every member parameter.
+    own = [p for p in inspect.signature(build).parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    members = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY)
+               for p in inspect.signature(member_class).parameters.values() if p.name != "random_state"]
+    build.__signature__ = inspect.Signature(own + members)
     return build
 
 

@@ -21,6 +21,8 @@ __all__ = [
     "validate_training_data",
     "validate_readings",
     "min_training_samples",
+    "check_identifiable",
+    "check_finite_output",
 ]
 
 #: Fewest raw channels a calibrator accepts.
@@ -45,6 +47,78 @@ def check_all_finite(a: NDArray[np.float64], name: str, fix: str) -> None:
         value = a[tuple(where)]
         raise CalibrationInputError(
             f"{name} contains NaN or inf: first at row {row}, column {col} (value {value}). Fix: {fix}."
+        )
+
+
+def _check_real_2d(X, name: str, what: str) -> None:
+    """Complex, 1-D or 3-D input gets a short message (scikit-learn's would print the whole array)."""
+    if X is None or not hasattr(X, "__len__") and not hasattr(X, "shape"):
+        return  # None and scalars: validate_data's own message
+    if hasattr(X, "format") and hasattr(X, "tocsr"):  # sparse: validate_data says it is not supported
+        return
+    try:
+        a = np.asarray(X)
+    except (ValueError, TypeError):  # ragged lists: validate_data reports them
+        return
+    if np.iscomplexobj(a):
+        raise CalibrationInputError(
+            f"Complex data not supported: {name} has complex dtype {a.dtype} and shape {a.shape}; {what} are real "
+            f"numbers. Fix: pass the real part (e.g. {name}.real) if that is what you mean."
+        )
+    if a.dtype.kind in "OUS":
+        return  # strings / objects: validate_data converts or reports them
+    if a.ndim != 2:
+        hint = f" For one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
+        raise CalibrationInputError(
+            f"{name} must be a 2-D array of {what} (n_samples, n_columns); got a {a.ndim}-D array of shape "
+            f"{a.shape}.{hint}"
+        )
+
+
+def _rank(a: NDArray[np.float64]) -> int:
+    """Numerical rank of the centred, column-scaled ``a`` (columns that never change count for nothing)."""
+    centred = a - a.mean(axis=0)
+    scale = np.abs(centred).max(axis=0)
+    if not np.any(scale > 0):
+        return 0
+    return int(np.linalg.matrix_rank(centred[:, scale > 0] / scale[scale > 0]))
+
+
+def check_identifiable(X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    """Refuse data from which no calibration can be identified.
+
+    The readings must vary (not only duplicate rows, a constant or an
+    all-zero X), the wrenches must vary, and the readings must span at least
+    as many independent directions as the loads do (up to the channel
+    count): otherwise two different loads give the same reading, e.g. a dead
+    or duplicated channel.
+
+    Examples
+    --------
+    >>> check_identifiable(np.zeros((10, 6)), np.eye(10, 6))
+    Traceback (most recent call last):
+    ...
+    ftcal._exceptions.CalibrationInputError: X (raw readings) is the same in all 10 rows (constant or all-zero channels, or only duplicate rows): there is nothing to calibrate from. Fix: record readings under different loads.
+    """
+    n = X.shape[0]
+    rank_x = _rank(X)
+    if rank_x == 0:
+        raise CalibrationInputError(
+            f"X (raw readings) is the same in all {n} rows (constant or all-zero channels, or only duplicate rows): "
+            "there is nothing to calibrate from. Fix: record readings under different loads."
+        )
+    rank_y = _rank(y)
+    if rank_y == 0:
+        raise CalibrationInputError(
+            f"y (reference wrenches) is the same in all {n} rows: there is no load change to calibrate against. "
+            "Fix: record several different loads."
+        )
+    need = min(X.shape[1], rank_y)
+    if rank_x < need:
+        raise CalibrationInputError(
+            f"X (raw readings, shape {X.shape}) spans only {rank_x} independent direction(s) but the wrenches y span "
+            f"{rank_y}: different loads give the same reading, so no calibration can tell them apart (a dead, "
+            "constant or duplicated channel?). Fix: check the channels, or record loads that excite every channel."
         )
 
 
@@ -78,6 +152,9 @@ def validate_training_data(
             f"{type(estimator).__name__} requires y to be passed, but the target y is None. "
             f"Fix: pass the reference wrenches (n_samples, 6)."
         )
+    _check_real_2d(X, "X", "raw readings")
+    if y is not None and np.iscomplexobj(y):
+        _check_real_2d(y, "y", "reference wrenches")
     X = validate_data(estimator, X, reset=True, dtype=np.float64, ensure_all_finite=False)
     check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings before fitting")
     # y is checked here, not by validate_data, so that NaN/inf get the row-naming message below.
@@ -102,11 +179,13 @@ def validate_training_data(
             f"y must have shape (n_samples, 6): the wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m]; "
             f"got shape {y.shape}. Fix: pass all six reference wrench components per sample."
         )
+    check_identifiable(X, y)
     return X, y
 
 
 def validate_readings(estimator, X: ArrayLike) -> NDArray[np.float64]:
     """Validate ``predict`` readings against the fitted channel count; float64 (n, N)."""
+    _check_real_2d(X, "X", "raw readings")
     X = validate_data(estimator, X, reset=False, dtype=np.float64, ensure_all_finite=False)
     check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings")
     return X
@@ -128,3 +207,24 @@ def check_zero_reading(zero_reading: ArrayLike, n_channels: int) -> NDArray[np.f
         )
     check_all_finite(z[None, :], "zero_reading", "pass a finite tare reading or None to estimate it")
     return z
+
+
+def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], estimator) -> None:
+    """Raise when a prediction is NaN or inf, naming the reading that caused it (never print NaN rows).
+
+    Examples
+    --------
+    >>> check_finite_output(np.ones((2, 3)), np.array([[0.0] * 6, [np.inf] + [0.0] * 5]), "model")
+    Traceback (most recent call last):
+    ...
+    ftcal._exceptions.CalibrationInputError: X row 1 (largest |value| 1) gives a non-finite wrench with str: ...
+    """
+    bad = ~np.isfinite(wrench)
+    if bad.any():
+        row = int(np.argmax(bad.any(axis=1)))
+        big = float(np.abs(X[row]).max()) if X.size else float("nan")
+        raise CalibrationInputError(
+            f"X row {row} (largest |value| {big:.3g}) gives a non-finite wrench with {type(estimator).__name__}: the "
+            "reading is outside the range the model can compute (the networks compute in float32, at most "
+            "~3.4e38, and squared norms overflow from ~1e154). Fix: check the reading's units, or remove that row."
+        )

@@ -118,5 +118,9 @@ def test_bad_ridge(data):
 
 def test_only_zero_load_rows(data):
     raw, wrench = data
-    with pytest.raises(CalibrationInputError, match="directional model needs loaded samples"):
+    with pytest.raises(CalibrationInputError, match="nothing to calibrate from"):
         DirectionalCalibrator(zero_reading=np.zeros(6)).fit(np.zeros_like(raw), wrench)
+    one_load = np.zeros_like(wrench)
+    one_load[0] = wrench[0]  # the readings vary, but only one row carries a load
+    with pytest.raises(CalibrationInputError, match="directional model needs loaded samples"):
+        DirectionalCalibrator(zero_reading=np.zeros(6)).fit(raw, one_load)

@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ftcal._virtual_experiment import JITTER_TRUNCATION
+
 from ftcal import (
     LogFormatError,
     VirtualSensor,
@@ -77,11 +79,16 @@ def test_perfect_sensor_gives_the_exact_external_load(tmp_path, iiwa, small_plan
     np.testing.assert_allclose(ds.raw, expected, atol=1e-7 * scale)
 
 
-def test_alignment_beats_plain_subtraction(tmp_path, iiwa, small_plan):
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_alignment_beats_plain_subtraction(tmp_path, iiwa, small_plan, seed):
+    # The largest jitter whose pose pairs stay within the pairing limit by construction: the rotation between
+    # the two poses of a pair is at most the sum of the joint differences, each truncated at 3 std.
+    limit_deg = 3.0
+    jitter_deg = 0.95 * limit_deg / (JITTER_TRUNCATION * iiwa.n_joints)
     sensor = VirtualSensor(errors="none")
     paths = simulate_experiment(tmp_path, robot=iiwa, plan=small_plan, sensor=sensor, joint_error_max=0.0,
-                                load_pose_jitter_deg=0.5, random_state=2)
-    ds = prepare_dataset(paths, iiwa)
+                                load_pose_jitter_deg=jitter_deg, random_state=seed)
+    ds = prepare_dataset(paths, iiwa, max_pair_rotation_deg=limit_deg)
     logs = [read_run_log(p) for p in paths]
     naive = np.vstack([logs[i + 1].raw - logs[i].raw for i in range(0, len(logs), 2)])
     expected = sensor.profile.reading_from_wrench(ds.wrench)

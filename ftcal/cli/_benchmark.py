@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (
+    int_in_range,
     CliError,
     Console,
     OutputPlan,
@@ -68,7 +69,7 @@ def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True)
     p.add_argument("--schedule", default="thesis", choices=("thesis", "short"), help="training schedule")
     p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs")
     if jobs:
-        p.add_argument("--jobs", type=positive_int, default=1, help="parallel joblib workers")
+        p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers")
     add_output_options(p, default_out)
     add_run_options(p)
 
@@ -86,7 +87,7 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
         "--preset", dest="presets", action="append", choices=sorted(ERROR_PRESETS),
         help="error preset (repeatable; default: thesis)",
     )
-    a.add_argument("--n-datasets", type=positive_int, default=30, help="datasets per preset")
+    a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
     _add_common(a, "ftcal-benchmark")
     a.set_defaults(handler=run_artificial)
 
@@ -101,7 +102,7 @@ def _register_real_world(kinds: argparse._SubParsersAction) -> None:
         epilog=REAL_WORLD_EXAMPLE,
     )
     r.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the thesis' load)")
-    r.add_argument("--subdivisions", type=nonnegative_int, default=2, help="icosphere level (2: 155 poses)")
+    r.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2, help="icosphere level (2: 155 poses)")
     r.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
     r.add_argument(
         "--split", dest="splits", action="append", choices=("random20", "leave-one-config-out"),

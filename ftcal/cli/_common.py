@@ -19,13 +19,13 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import os
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from .._exceptions import FtcalError
+from .._files import atomic_output, check_writable_dir
 
 __all__ = [
     "CliError",
@@ -42,6 +42,7 @@ __all__ = [
     "positive_int",
     "nonnegative_int",
     "positive_float",
+    "int_in_range",
     "existing_file",
 ]
 
@@ -100,6 +101,25 @@ def positive_int(text: str) -> int:
 def nonnegative_int(text: str) -> int:
     """argparse type: an integer >= 0."""
     return _number(int, text, 0, False, "an integer >= 0")
+
+
+def int_in_range(low: int, high: int, what: str):
+    """argparse type factory: an integer in ``[low, high]`` (a bound keeps a typo from exhausting memory).
+
+    Examples
+    --------
+    >>> int_in_range(1, 10, "points per sphere")("3")
+    3
+    """
+
+    def parse(text: str) -> int:
+        value = _number(int, text, low, False, f"an integer >= {low}")
+        if value > high:
+            raise argparse.ArgumentTypeError(f"{text} is more {what} than ftcal handles (at most {high})")
+        return value
+
+    parse.__name__ = "integer"
+    return parse
 
 
 def positive_float(text: str) -> float:
@@ -177,6 +197,7 @@ class OutputPlan:
         self.force = force
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
+        check_writable_dir(self.out_dir, CliError)
         if not force:
             taken = [n for n in self.names if (self.out_dir / n).exists()]
             if taken:
@@ -200,16 +221,12 @@ class OutputPlan:
         """Yield a temporary path to write ``name`` to; it is renamed into place on success.
 
         A failure inside the block removes the temporary file and leaves any
-        existing ``name`` untouched.
+        existing ``name`` untouched; each run gets its own temporary file, and
+        without ``--force`` a file that another run wrote meanwhile is not
+        replaced (:func:`ftcal._files.atomic_output`).
         """
-        final = self.path(name)
-        tmp = final.with_name(f".{final.stem}.partial{final.suffix}")
-        try:
+        with atomic_output(self.path(name), overwrite=self.force, error=CliError) as tmp:
             yield tmp
-            os.replace(tmp, final)
-        finally:
-            with contextlib.suppress(FileNotFoundError):
-                tmp.unlink()
 
 
 def write_json(path: Path, obj: Any) -> None:

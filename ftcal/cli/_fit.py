@@ -89,19 +89,19 @@ def run(args: argparse.Namespace) -> int:
         params["alpha"] = alpha
     if tare is not None:
         params["zero_reading"] = tare
-    estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed)
-    known = estimator.get_params(deep=False)
+    known = ftcal.calibrator_parameters(args.model)
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
-    estimator.set_params(**params)
+    estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed, **params)
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
     fit_with_progress(estimator, data.raw, data.wrench, console, label=args.model)
     seconds = time.perf_counter() - start
     report = ftcal.calibration_report(data.wrench, estimator.predict(data.raw), alpha=estimator.alpha_)
-    ftcal.save_model(estimator, plan.path(model_file_name(name)), overwrite=True)  # atomic; checked above
+    with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
+        ftcal.save_model(estimator, tmp, overwrite=True)
     summary = {
         "model": args.model,
         "schedule": args.schedule,

@@ -7,6 +7,7 @@ import argparse
 import numpy as np
 
 from ._common import (
+    int_in_range,
     Console,
     OutputPlan,
     add_output_options,
@@ -38,7 +39,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EXAMPLE,
     )
     add_robot_options(p)
-    p.add_argument("--subdivisions", type=nonnegative_int, default=2, help="icosphere subdivisions (2: 162 vertices)")
+    p.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2, help="icosphere subdivisions (2: 162 vertices)")
     p.add_argument(
         "--excluded-cap-deg", type=float, default=20.0,
         help="leave out directions within this angle of 'tool face up' [deg] (20: 162 -> 155 poses)",

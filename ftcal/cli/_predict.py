@@ -9,7 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from ._common import Console, OutputPlan, add_run_options, existing_file, positive_int
+from .._files import same_file
+from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_int, int_in_range
 from ._readings import iter_reading_chunks, read_readings_npz, write_wrench_rows
 
 EXAMPLE = """\
@@ -39,7 +40,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
     p.add_argument("--no-header", action="store_true", help="do not write the Fx,...,Tz header line")
     p.add_argument(
-        "--chunk-size", type=positive_int, default=4096,
+        "--chunk-size", type=int_in_range(1, 1_000_000, "rows per chunk"), default=4096,
         help="readings predicted together (memory vs. latency)",
     )
     p.add_argument(
@@ -58,6 +59,11 @@ def run(args: argparse.Namespace) -> int:
         plan = OutputPlan(out.parent if str(out.parent) else Path("."), [out.name], args.force)
     if args.input != "-" and not Path(args.input).is_file():
         raise FileNotFoundError(2, "No such file (the raw readings to predict)", args.input)
+    if args.output != "-":
+        for role, other in (("input", args.input), ("model", args.model)):
+            if other != "-" and (same_file(args.output, other) or Path(args.output).resolve() == Path(other).resolve()):
+                raise CliError(f"--output {args.output} is the {role} file; writing there would destroy it. "
+                               "Choose another --output")
     model = load_model_file(args.model)
     n_channels = int(model.n_features_in_)
     chunk = 1 if args.line_buffered else args.chunk_size

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (
+    int_in_range,
     CliError,
     Console,
     OutputPlan,
@@ -40,7 +41,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("logs", nargs="+", metavar="LOG", help="run log files, or directories holding *.csv logs")
     add_robot_options(p)
     p.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the logs' load_mass_kg)")
-    p.add_argument("--channels", type=positive_int, help="expected raw channel count (checked in every log)")
+    p.add_argument("--channels", type=int_in_range(3, 1024, "channels"), help="expected raw channel count (checked in every log)")
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_output_options(p, "ftcal-data")
     add_run_options(p, seed=False)
@@ -75,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
     console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
     dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels)
     with plan.writing(name) as tmp:
-        dataset.save(tmp)
+        dataset.save(tmp, overwrite=True)
     groups = {} if dataset.group is None else {
         str(g): int((dataset.group == g).sum()) for g in sorted(set(dataset.group.tolist()))
     }

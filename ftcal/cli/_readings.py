@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .._wrench import WRENCH_LABELS
+from .._columns import is_number, parse_number, read_header
 from ._common import CliError
 
 __all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows"]
@@ -34,25 +35,11 @@ def _split(line: str) -> list[str]:
     return [v.strip() for v in line.split(",")] if "," in line else line.split()
 
 
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
-
-
-def _channel_columns(header: list[str], source: str, line_no: int) -> list[int]:
-    chan = {name: i for i, name in enumerate(header) if name[:1] == "s" and name[1:].isdigit()}
-    if not chan:
-        raise CliError(
-            f"{source}: line {line_no}: header {','.join(header)!r} names no raw channel columns s0, s1, ...; "
-            "name the channels s0..s{N-1} or drop the header"
-        )
-    order = sorted(chan, key=lambda name: int(name[1:]))
-    if [int(n[1:]) for n in order] != list(range(len(order))):
-        raise CliError(f"{source}: line {line_no}: channel columns must be s0..s{len(order) - 1} without gaps; got {order}")
-    return [chan[n] for n in order]
+def _channel_columns(fields: list[str], source: str, line_no: int) -> list[int]:
+    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal._columns`)."""
+    header = read_header(fields, where=f"{source}: line {line_no}", error=CliError, allow_other=True,
+                         expected="s0,...,s{N-1} (other columns are ignored)")
+    return header.numbered("s")
 
 
 def iter_reading_chunks(
@@ -82,22 +69,19 @@ def iter_reading_chunks(
     rows: list[list[float]] = []
     seen_data = False
     for line_no, line in enumerate(stream, start=1):
-        text = line.strip()
+        text = line.lstrip("\ufeff").strip() if line_no == 1 else line.strip()
         if not text or text.startswith("#"):
             continue
         fields = _split(text)
-        if not seen_data and columns is None and not all(_is_number(f) for f in fields):
+        if not seen_data and columns is None and not all(is_number(f) for f in fields):
             columns = _channel_columns(fields, source, line_no)
             width = len(fields)
             continue
         seen_data = True
         if width is not None and len(fields) != width:
             raise CliError(f"{source}: line {line_no}: {len(fields)} values but the header names {width} columns")
-        try:
-            values = [float(f) for f in fields]
-        except ValueError:
-            bad = next(f for f in fields if not _is_number(f))
-            raise CliError(f"{source}: line {line_no}: {bad!r} is not a number") from None
+        where = f"{source}: line {line_no}"
+        values = [parse_number(f, where, CliError) for f in fields]
         if columns is not None:
             values = [values[i] for i in columns]
         if len(values) != n_channels:

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (
+    int_in_range,
     CliError,
     Console,
     OutputPlan,
@@ -63,9 +64,9 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
         epilog=DATASET_EXAMPLE,
     )
     d.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset")
-    d.add_argument("--n-datasets", type=positive_int, default=1, help="independent datasets (each its own errors)")
-    d.add_argument("--n-per-sphere", type=positive_int, default=1250, help="training points per sphere (4 spheres)")
-    d.add_argument("--n-test", type=positive_int, default=1250, help="test points")
+    d.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=1, help="independent datasets (each its own errors)")
+    d.add_argument("--n-per-sphere", type=int_in_range(1, 1_000_000, "points per sphere"), default=1250, help="training points per sphere (4 spheres)")
+    d.add_argument("--n-test", type=int_in_range(1, 1_000_000, "test points"), default=1250, help="test points")
     d.add_argument(
         "--test-distribution", default="radial", choices=("radial", "box"),
         help="how test wrenches fill the operating range",
@@ -112,7 +113,7 @@ def run_dataset(args: argparse.Namespace) -> int:
                 ds.meta["seed"] = args.seed
                 ds.meta["dataset_index"] = k
                 with plan.writing(name) as tmp:
-                    ds.save(tmp)
+                    ds.save(tmp, overwrite=True)
             infos.append(info)
             first_train = train if first_train is None else first_train
             bar.update(1)
@@ -154,7 +155,7 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
     add_robot_options(e)
     e.add_argument("--mass", type=positive_float, default=None, help="load mass [kg] (default: the thesis' load)")
     e.add_argument(
-        "--subdivisions", type=nonnegative_int, default=None,
+        "--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=None,
         help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)",
     )
     e.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")

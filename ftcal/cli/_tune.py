@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json
+from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
 from ._fit import _calibrator_names
 from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
 
@@ -39,8 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
         "default: the model's documented search space, ftcal._search.DEFAULT_SEARCH_SPACES)",
     )
-    p.add_argument("--n-iter", type=positive_int, help="randomized search with this many candidates")
-    p.add_argument("--cv", type=positive_int, default=3, help="number of cross-validation folds (>= 2)")
+    p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
+    p.add_argument("--cv", type=int_in_range(1, 100, "folds"), default=3, help="number of cross-validation folds (>= 2)")
     p.add_argument(
         "--group-folds", action="store_true",
         help="keep the dataset's groups (e.g. load configurations) whole in the folds",
@@ -51,7 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="a fixed calibrator parameter, value read as JSON (repeatable)",
     )
     p.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
-    p.add_argument("--jobs", type=positive_int, default=1, help="parallel joblib workers of the search")
+    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
     p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
     add_output_options(p, "ftcal-tuned")
     add_run_options(p)
@@ -89,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
                "search_seconds": round(seconds, 3), **search_summary(search)}
-    ftcal.save_model(search.best_estimator_, plan.path(model_file_name(name)), overwrite=True)
+    with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
+        ftcal.save_model(search.best_estimator_, tmp, overwrite=True)
     with plan.writing(f"{name}.tune.json") as tmp:
         write_json(tmp, summary)
     console.info(
