@@ -62,7 +62,7 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
     if bad.any():
         i = int(np.argmax(bad))
         raise DatasetFileError(
-            f"group must hold integer labels; row {i} holds {g[i]!r}. Fix: number the groups 0, 1, 2, ..."
+            f"group must hold integer labels; row {i} holds {float(g[i])!r}. Fix: number the groups 0, 1, 2, ..."
         )
     return g.astype(np.int64)
 

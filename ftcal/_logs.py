@@ -43,13 +43,13 @@ from __future__ import annotations
 
 import csv
 import json
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ._columns import parse_number, read_header
 from ._exceptions import LogFormatError
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
@@ -62,8 +62,6 @@ SHARED_NO_LOAD_CONFIG: int = -1
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 _JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
 _FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
-_Q = re.compile(r"^q(\d+)$")
-_S = re.compile(r"^s(\d+)$")
 # Joint values beyond this magnitude in a file that says "rad" are almost surely degrees.
 _MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
 
@@ -123,16 +121,6 @@ class RunLog:
         return int(self.raw.shape[1])
 
 
-def _numbered(names: list[str], pattern: re.Pattern, first: int, what: str, path: Path, line: int) -> list[str]:
-    found = sorted((int(m.group(1)), n) for n in names if (m := pattern.match(n)))
-    idx = [i for i, _ in found]
-    if idx != list(range(first, first + len(idx))):
-        raise LogFormatError(
-            f"{path}: line {line}: {what} columns must be contiguous from {first}; got {[n for _, n in found]}."
-        )
-    return [n for _, n in found]
-
-
 def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int]:
     info: dict[str, str] = {}
     n = 0
@@ -186,7 +174,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     if not path.is_file():
         raise LogFormatError(f"{path}: no such log file.")
     try:
-        text_lines = path.read_text(encoding="utf-8").splitlines()
+        text_lines = path.read_text(encoding="utf-8-sig").splitlines()
     except UnicodeDecodeError as exc:
         raise LogFormatError(f"{path}: not a UTF-8 text file ({exc}).") from exc
     info, n_comment = _parse_comments(path, text_lines)
@@ -202,20 +190,14 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         if info[key] not in table:
             raise LogFormatError(f"{path}: unknown {key} {info[key]!r}; use one of {', '.join(table)}.")
         units[key] = table[info[key]]
-    header = [c.strip() for c in text_lines[n_comment].split(",")]
-    missing = [c for c in _FIXED_COLUMNS if c not in header]
-    q_cols = _numbered(header, _Q, 1, "joint (q1, q2, ...)", path, head_line)
-    s_cols = _numbered(header, _S, 0, "raw channel (s0, s1, ...)", path, head_line)
-    if not q_cols:
-        missing.append("q1..qJ")
-    if not s_cols:
-        missing.append("s0..s{N-1}")
-    if missing:
-        raise LogFormatError(f"{path}: line {head_line}: header lacks columns {missing}; "
-                             "expected timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}.")
-    if len(set(header)) != len(header):
-        dup = sorted({c for c in header if header.count(c) > 1})
-        raise LogFormatError(f"{path}: line {head_line}: duplicate columns {dup}.")
+    head = read_header(
+        text_lines[n_comment].split(","), where=f"{path}: line {head_line}", error=LogFormatError,
+        required=_FIXED_COLUMNS, numbered=(("q", 1, "joint"), ("s", 0, "raw channel")), allow_other=True,
+        expected="timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}",
+    )
+    header = list(head.names)
+    q_cols = [header[i] for i in head.numbered("q")]
+    s_cols = [header[i] for i in head.numbered("s")]
     if len(s_cols) < 3:
         raise LogFormatError(f"{path}: line {head_line}: {len(s_cols)} raw channels; a sensor needs at least 3.")
     if n_channels is not None and len(s_cols) != n_channels:
@@ -238,10 +220,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
 
     def number(lineno: int, fields: list[str], name: str) -> float:
         text = fields[col[name]]
-        try:
-            value = float(text)
-        except ValueError:
-            raise LogFormatError(f"{path}: line {lineno}: column {name} holds {text!r}, not a number.") from None
+        value = parse_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
         if not np.isfinite(value):
             raise LogFormatError(f"{path}: line {lineno}: column {name} is {text!r} (NaN or inf); "
                                  "repair or remove that row.")

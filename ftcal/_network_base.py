@@ -42,6 +42,8 @@ from ._schedule import schedule_callbacks
 __all__ = ["NetworkCalibrator", "torch_threads", "device_available", "interrupt_flag"]
 
 _PREDICT_CHUNK = 65536
+#: A net whose best loss exceeds this multiple of the constant (mean) prediction's loss has diverged.
+_DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
 
@@ -202,22 +204,35 @@ class NetworkCalibrator(BaseCalibrator):
             net.fit(inputs.astype(np.float32), targets.astype(np.float32))
         if interrupted.is_set():
             raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
-        self._check_converged(net)
+        self._check_converged(net, targets)
         self.net_ = net
         self.n_epochs_ = len(net.history)
         self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
         self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
 
-    def _check_converged(self, net: NeuralNetRegressor) -> None:
-        """A diverged run (a NaN or inf loss) is an error that names the epoch, not a model predicting NaN."""
+    def _check_converged(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+        """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
+
+        Diverged means a NaN or inf loss, or a best loss more than
+        :data:`_DIVERGENCE_FACTOR` times the loss of the constant prediction
+        (the mean target): such a net has learned nothing.
+        """
+        fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
         for key in ("train_loss", "valid_loss"):
             losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
             bad = np.flatnonzero(~np.isfinite(losses))
             if bad.size:
                 raise CalibrationInputError(
-                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} "
-                    f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
+                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}"
                 )
+        weights = np.asarray(self._loss_weights(), dtype=float)
+        constant = float(np.mean(((targets - targets.mean(axis=0)) ** 2) @ weights))
+        best = float(dict(net.callbacks_)["restore_best_weights"].best_loss_)
+        if constant > 0 and best > _DIVERGENCE_FACTOR * constant:
+            raise CalibrationInputError(
+                f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
+                f"times that of predicting the mean ({constant:.3g}) {fix}"
+            )
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
         module = self.net_.module_

@@ -79,9 +79,11 @@ def _rank(a: NDArray[np.float64]) -> int:
     """Numerical rank of the centred, column-scaled ``a`` (columns that never change count for nothing)."""
     centred = a - a.mean(axis=0)
     scale = np.abs(centred).max(axis=0)
-    if not np.any(scale > 0):
+    # a column that varies only by rounding (the mean of identical values is not always exact) is constant
+    varies = scale > 1e-12 * np.abs(a).max(axis=0)
+    if not np.any(varies):
         return 0
-    return int(np.linalg.matrix_rank(centred[:, scale > 0] / scale[scale > 0]))
+    return int(np.linalg.matrix_rank(centred[:, varies] / scale[varies]))
 
 
 def check_identifiable(X: NDArray[np.float64], y: NDArray[np.float64]) -> None:

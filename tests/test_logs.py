@@ -52,9 +52,9 @@ def _edit(p, old, new):
 @pytest.mark.parametrize(
     "old, new, match",
     [
-        (",q3,", ",qq3,", r"contiguous"),
+        (",q3,", ",qq3,", r"joint column q3 is missing"),
         ("timestamp,", "time,", r"header lacks columns \['timestamp'\]"),
-        (",s0,", ",x0,", r"contiguous from 0"),
+        (",s0,", ",x0,", r"raw channel column s0 is missing"),
         ("# joint_unit: rad\n", "", r"missing comment '# joint_unit: <unit>'"),
         ("# joint_unit: rad", "# joint_unit: grad", r"unknown joint_unit 'grad'"),
         ("# time_unit: s", "# time_unit: h", r"unknown time_unit"),
@@ -83,7 +83,7 @@ def _break_row(p, line_no, column, value):
     [
         ("s3", "nan", r"line 11: column s3 is 'nan' \(NaN or inf\)"),
         ("q2", "inf", r"line 11: column q2 is 'inf'"),
-        ("s0", "abc", r"line 11: column s0 holds 'abc', not a number"),
+        ("s0", "abc", r"line 11: column s0: 'abc' is not a number"),
         ("run", "loaded", r"line 11: run is 'loaded'"),
         ("pose", "1.5", r"line 11: column pose must be an integer"),
         ("config", "-1", r"line 11: config -1 is invalid"),

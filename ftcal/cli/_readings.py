@@ -73,7 +73,8 @@ def iter_reading_chunks(
         if not text or text.startswith("#"):
             continue
         fields = _split(text)
-        if not seen_data and columns is None and not all(is_number(f) for f in fields):
+        first_word = next((f for f in fields if not is_number(f)), None)
+        if not seen_data and columns is None and first_word is not None and first_word[:1].isalpha():
             columns = _channel_columns(fields, source, line_no)
             width = len(fields)
             continue
