@@ -35,7 +35,9 @@ from ._directional import DirectionalCalibrator
 from ._linear import LinearCalibrator
 from ._model_io import load_model, save_model
 from ._registry import CALIBRATOR_NAMES, calibrator_parameters, make_calibrator, register_calibrator, training_schedule
+from ._auto import AutoCalibrator
 from ._ensemble import EnsembleCalibrator
+from ._gaussian_process import GaussianProcessCalibrator
 from ._hybrid import AxisNonlinearCalibrator
 from ._polynomial import PolynomialCalibrator
 from . import _registry_extra  # registers "polynomial", "axis_nonlinear", "*_ensemble" (issue 6)
@@ -107,8 +109,10 @@ __all__ = [
     "register_calibrator",
     "save_model",
     "training_schedule",
+    "AutoCalibrator",
     "AxisNonlinearCalibrator",
     "EnsembleCalibrator",
+    "GaussianProcessCalibrator",
     "PolynomialCalibrator",
     "search_calibrator",
     # artificial data and sensors (issue 3)

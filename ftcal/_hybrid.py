@@ -7,10 +7,10 @@ import numbers
 
 import numpy as np
 from numpy.typing import NDArray
-from sklearn.model_selection import KFold
 
 from ._base import BaseCalibrator
 from ._exceptions import CalibrationInputError
+from ._model_selection import calibration_folds, check_groups, simplest_within_one_se
 from ._ridge import ridge_least_squares
 from ._wrench import scale_torques, unscale_torques
 
@@ -141,7 +141,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         penalty is multiplied by the number of samples. ``inf`` switches the
         corrections off: the model is then exactly the LTM. ``"auto"`` picks
         a value of :data:`RIDGE_GRID` (which ends with ``inf``) by 5-fold
-        cross-validation of the whole model (shuffled folds seeded by
+        cross-validation of the whole model (whole groups held out when
+        ``fit`` gets ``groups``, else shuffled folds seeded by
         ``random_state``, 0 when ``None``) with the one-standard-error rule
         (:func:`one_standard_error_choice`): the largest penalty whose
         held-out error is within one standard error of the best. Small
@@ -199,6 +200,26 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
+
+    def fit(self, X, y, groups=None):
+        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, load configuration): ``ridge="auto"``
+            then holds out whole groups, so the corrections it keeps are the
+            ones that transfer to poses the fit has not seen.
+
+        Returns
+        -------
+        self
+        """
+        self._fit_groups = groups
+        try:
+            return super().fit(X, y)
+        finally:
+            del self._fit_groups
 
     def _check_params(self) -> tuple[tuple[float, ...], float | str, int]:
         powers = self.powers
@@ -269,15 +290,18 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         only when the data show that it pays.
         """
         seed = 0 if self.random_state is None else self.random_state
-        folds = KFold(n_splits=min(5, len(ys)), shuffle=True, random_state=seed)
+        groups = check_groups(getattr(self, "_fit_groups", None), len(ys))
+        folds = calibration_folds(len(ys), groups, 5, seed)
         errors = np.zeros((len(RIDGE_GRID), len(ys)))
         for k, ridge in enumerate(RIDGE_GRID):
-            for train, valid in folds.split(block):
+            for train, valid in folds:
                 coefs, intercepts = self._fit_passes(block[train], z[train], ys[train], ridge, n_ref)
                 previous = z[valid]
                 for c, b in zip(coefs, intercepts):
                     previous = self._apply(block[valid], previous, c, b)
                 errors[k, valid] = np.sum((previous - ys[valid]) ** 2, axis=1)
+        if groups is not None:  # rows of a group are not independent: the standard error is over groups
+            return RIDGE_GRID[len(RIDGE_GRID) - 1 - simplest_within_one_se(errors[::-1], groups)]
         return RIDGE_GRID[one_standard_error_choice(errors)]
 
     def _apply(self, block, previous, coefs, intercepts) -> NDArray[np.float64]:

@@ -65,7 +65,7 @@ def register_model_type(
     ``scalars`` are JSON-able fitted attributes, ``arrays`` ndarray ones.
     Subclasses of the network base get their ``net_`` weights stored as well.
     ``children`` names the fitted attribute of a meta-estimator that holds a
-    list of fitted sub-models (registered types themselves); each is stored
+    list of fitted sub-models, or one (registered types themselves); each is stored
     whole (metadata under ``children``, arrays under ``children/<i>/``).
     A parameter whose value is an estimator of a registered type (e.g. an
     ensemble's ``estimator``) is stored by type and parameters.
@@ -95,7 +95,11 @@ def _encode(value):
         return {"array": value.tolist()}
     if isinstance(value, (np.integer, np.floating)):
         return value.item()
-    if isinstance(value, (list, str, int, float, bool)) or value is None:
+    if isinstance(value, list):
+        return [_encode(v) for v in value]
+    if isinstance(value, dict):
+        return {str(k): _encode(v) for k, v in value.items()}
+    if isinstance(value, (str, int, float, bool)) or value is None:
         return value
     if type(value).__name__ in _MODEL_TYPES and type(value) is _MODEL_TYPES[type(value).__name__][0]:
         return {"estimator": {"model_type": type(value).__name__,
@@ -117,6 +121,8 @@ def _decode(value):
     if isinstance(value, dict) and set(value) == {"estimator"}:
         cls = _MODEL_TYPES[value["estimator"]["model_type"]][0]
         return cls(**{k: _decode(v) for k, v in value["estimator"]["params"].items()})
+    if isinstance(value, list):
+        return [_decode(v) for v in value]
     return value
 
 
@@ -177,7 +183,9 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
         arrays.update({f"module/{k}": v.detach().cpu().numpy() for k, v in state.items()})
     if name in _CHILDREN:
         meta["children"] = []
-        for i, child in enumerate(getattr(estimator, _CHILDREN[name])):
+        kids = getattr(estimator, _CHILDREN[name])
+        meta["single_child"] = not isinstance(kids, list)
+        for i, child in enumerate([kids] if meta["single_child"] else kids):
             child_meta, child_arrays = _state(child)
             meta["children"].append(child_meta)
             arrays.update({f"children/{i}/{k}": v for k, v in child_arrays.items()})
@@ -276,8 +284,10 @@ def _check_consistent(estimator, path: Path) -> None:
 def _check_fitted_scalars(name: str, fitted: dict) -> None:
     """Types and ranges of the stored scalars (a ``null`` or a string would fail later, at predict)."""
     for key, value in fitted.items():
-        if key == "stop_reason_":
+        if key in ("stop_reason_", "best_name_"):
             ok = isinstance(value, str)
+        elif key == "cv_results_":
+            ok = isinstance(value, dict)
         elif key in ("n_features_in_", "n_epochs_", "best_epoch_", "n_dropped_zero_load_"):
             ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
         elif key == "ridge_":  # inf is the LTM fallback of the hybrid
@@ -317,7 +327,7 @@ def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
             prefix = f"children/{i}/"
             child_arrays = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
             children.append(_from_state(child_meta, child_arrays))
-        setattr(estimator, _CHILDREN[name], children)
+        setattr(estimator, _CHILDREN[name], children[0] if meta.get("single_child") else children)
     return estimator
 
 

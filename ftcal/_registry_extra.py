@@ -21,7 +21,9 @@ from collections.abc import Callable
 
 from ._comparative import ComparativeCalibrator
 from ._directional import DirectionalCalibrator
+from ._auto import AutoCalibrator
 from ._ensemble import EnsembleCalibrator
+from ._gaussian_process import GaussianProcessCalibrator
 from ._hybrid import AxisNonlinearCalibrator
 from ._model_io import register_model_type
 from ._polynomial import PolynomialCalibrator
@@ -57,6 +59,7 @@ def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:
 
 register_calibrator("polynomial", PolynomialCalibrator)
 register_calibrator("axis_nonlinear", AxisNonlinearCalibrator)
+register_calibrator("gaussian_process", GaussianProcessCalibrator)
 for _name, _cls in (("directional", DirectionalCalibrator), ("comparative", ComparativeCalibrator)):
     register_calibrator(
         f"{_name}_ensemble",
@@ -74,4 +77,17 @@ register_model_type(
 )
 register_model_type(
     EnsembleCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "member_seeds_"), children="estimators_"
+)
+register_model_type(
+    GaussianProcessCalibrator,
+    ("alpha_", "n_features_in_", "constant_", "noise_level_"),
+    ("zero_reading_", "linear_matrix_", "linear_offset_", "input_scale_", "train_inputs_", "dual_coef_",
+     "cholesky_", "residual_mean_", "residual_scale_", "output_variance_", "length_scale_"),
+)
+
+# "auto" chooses among the names above, so it is registered last (its schedule goes to its network candidates).
+register_calibrator("auto", AutoCalibrator, schedules={s: {"schedule": s} for s in SCHEDULE_NAMES})
+register_model_type(
+    AutoCalibrator, ("alpha_", "n_features_in_", "best_name_", "cv_results_"), ("zero_reading_",),
+    children="best_estimator_",
 )

@@ -111,7 +111,9 @@ def test_ctrl_c_stops_training_and_saves_nothing(workdir, tmp_path, command):
     good.write_bytes((workdir / "models" / "directional.model.npz").read_bytes())  # the user's good model
     before = sha(good)
     code, err = _interrupt_after_training_starts(_start_cli(args, tmp_path), "fitting" if command == "fit" else "searching")
-    assert code == 130, err
+    # 130 is main()'s status for an interrupt; under load CPython sometimes ends the process by SIGINT itself
+    # (status -2), which a shell reports the same way. Either way the run must say so and save nothing.
+    assert code in (130, -signal.SIGINT), err
     assert "interrupted" in err and "Traceback" not in err
     assert sha(good) == before  # --force did not replace the good model with a half-trained one
     assert not list(out.glob(".*partial*"))

@@ -56,6 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     kinds.required = True
     _register_artificial(kinds)
     _register_real_world(kinds)
+    _register_dataset(kinds)
 
 
 def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True) -> None:
@@ -110,6 +111,106 @@ def _register_real_world(kinds: argparse._SubParsersAction) -> None:
     )
     _add_common(r, "ftcal-benchmark-real-world", jobs=False)
     r.set_defaults(handler=run_real_world)
+
+
+DATASET_EXAMPLE = """\
+examples:
+  ftcal benchmark dataset my_sensor.csv --out bench_mine                 # closed-form models and the GP
+  ftcal benchmark dataset my_sensor.csv --model linear --model directional --schedule short --out b
+  ftcal benchmark dataset robot.csv --folds kfold --cv 10 --out b
+
+which calibration should I use for my sensor? every chosen calibrator, cross-validated on the
+same folds: whole groups held out when the dataset has a 'group' column (a pose or load
+configuration per row: the score of a calibration on poses it has not seen), else shuffled
+k-fold. writes dataset_results.json / .md (held-out RMSE ± standard error, per-axis RMSE, fit
+time, the one-standard-error choice) and dataset_rmse.png.
+"""
+
+#: Default models of ``ftcal benchmark dataset``: the ones that fit in seconds to a minute on 2 cores.
+DATASET_DEFAULT_MODELS = ("linear", "polynomial", "axis_nonlinear", "gaussian_process")
+
+
+def _register_dataset(kinds: argparse._SubParsersAction) -> None:
+    d = kinds.add_parser(
+        "dataset",
+        help="every calibrator on YOUR dataset, cross-validated: which one to use for your sensor",
+        description="Cross-validate calibrators on your own calibration dataset (.csv or .npz).",
+        epilog=DATASET_EXAMPLE,
+    )
+    d.add_argument("dataset", help="calibration dataset (.csv or .npz, as written by 'ftcal prepare')")
+    d.add_argument(
+        "--folds", choices=("auto", "group", "kfold"), default="auto",
+        help="group: hold out whole groups (needs a group column); kfold: shuffled folds; auto: group if present",
+    )
+    d.add_argument("--cv", type=int_in_range(2, 100, "folds"), default=5, help="number of folds")
+    d.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
+    _add_common(d, "ftcal-benchmark-dataset", jobs=False)
+    d.set_defaults(handler=run_dataset)
+
+
+def run_dataset(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    import ftcal
+    from .._auto import score_candidates
+    from .._model_selection import simplest_within_one_se
+    from .._plots import plot_axis_errors
+    from ._models import dataset_alpha, load_dataset
+
+    console = Console(args.quiet)
+    names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
+    if "auto" in names:
+        raise CliError("--model auto: 'auto' is itself this comparison; list the calibrators to compare instead")
+    plan = OutputPlan(args.out, ["dataset_results.json", "dataset_results.md", "dataset_rmse.png"], args.force)
+    data = load_dataset(args.dataset, "dataset")
+    if args.folds == "group" and data.group is None:
+        raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
+    groups = data.group if args.folds in ("auto", "group") else None
+    alpha = ftcal.alpha_from_wrenches(data.wrench) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
+    schedule = "short" if args.quick else args.schedule
+    candidates = []
+    for name in names:
+        extra = {"max_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
+            ftcal.training_schedule(schedule, name) else {}
+        candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
+    split = f"{len(np.unique(groups))} groups" if groups is not None else "shuffled rows"
+    console.info(f"cross-validating {len(candidates)} calibrators on {data.n_samples} samples, {args.cv} folds "
+                 f"over {split}")
+    results, errors, predictions = score_candidates(
+        candidates, data.raw, data.wrench, groups=groups, cv=args.cv, alpha=alpha, random_state=args.seed,
+    )
+    chosen = simplest_within_one_se(errors, groups)
+    results["chosen"] = results["name"][chosen]
+    results.update(dataset=str(args.dataset), alpha=alpha, folds="group" if groups is not None else "kfold",
+                   cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels)
+    with plan.writing("dataset_results.json") as tmp:
+        write_json(tmp, results)
+    table = _dataset_table(results)
+    with plan.writing("dataset_results.md") as tmp:
+        tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
+    axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
+    with plan.writing("dataset_rmse.png") as tmp:
+        plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({results['folds']} folds)")
+    print(table)
+    console.info(f"choose {results['chosen']} (the simplest within one standard error of the best); "
+                 f"files in {args.out}")
+    return 0
+
+
+def _dataset_table(results: dict) -> str:
+    from .._wrench import WRENCH_LABELS
+
+    head = "| calibrator | held-out RMSE [N] | ± SE | " + " | ".join(f"{a}" for a in WRENCH_LABELS) + " | fit [s/fold] |"
+    lines = [head, "|" + "---|" * (4 + len(WRENCH_LABELS))]
+    for i, name in enumerate(results["name"]):
+        if results["rmse"][i] is None:
+            lines.append(f"| {name} | {results['status'][i]} |" + " |" * (2 + len(WRENCH_LABELS)))
+            continue
+        mark = " (chosen)" if name == results["chosen"] else ""
+        axes = " | ".join(f"{v:.3g}" for v in results["axis_rmse"][i])
+        lines.append(f"| {name}{mark} | {results['rmse'][i]:.4g} | {results['rmse_se'][i]:.2g} | {axes} | "
+                     f"{results['fit_seconds'][i]:.2f} |")
+    return "\n".join(lines)
 
 
 def _models(args: argparse.Namespace) -> tuple[str, ...]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import time
 
 import numpy as np
@@ -97,7 +98,10 @@ def run(args: argparse.Namespace) -> int:
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
-    fit_with_progress(estimator, data.raw, data.wrench, console, label=args.model)
+    fit_params = {}
+    if data.group is not None and "groups" in inspect.signature(estimator.fit).parameters:
+        fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
+    fit_with_progress(estimator, data.raw, data.wrench, console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
     report = ftcal.calibration_report(data.wrench, estimator.predict(data.raw), alpha=estimator.alpha_)
     with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
@@ -115,6 +119,10 @@ def run(args: argparse.Namespace) -> int:
         "training_rmse": report.rmse,
         "training_report": report.to_dict(),
     }
+    if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
+        summary["chosen"] = estimator.best_name_
+        summary["cv_results"] = estimator.cv_results_
+        console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
     with plan.writing(f"{name}.fit.json") as tmp:
         write_json(tmp, summary)
     console.info(

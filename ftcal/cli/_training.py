@@ -42,7 +42,7 @@ def _callback_class():
     return _EpochProgress
 
 
-def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: str = "fit") -> Any:
+def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: str = "fit", **fit_params: Any) -> Any:
     """``estimator.fit(X, y)`` with a progress bar on stderr (none when ``console.quiet``).
 
     Networks (estimators with a ``callbacks`` parameter) get a per-epoch bar
@@ -51,15 +51,15 @@ def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: s
     """
     params = estimator.get_params(deep=False) if hasattr(estimator, "get_params") else {}
     if console.quiet:
-        return estimator.fit(X, y)
+        return estimator.fit(X, y, **fit_params)
     if "callbacks" in params:
         bar = console.progress(total=_epoch_budget(params), desc=f"{label} epochs", unit="epoch")
         try:
             with _progress_callback_installed(estimator, params["callbacks"], _callback_class()(bar)):
-                return estimator.fit(X, y)
+                return estimator.fit(X, y, **fit_params)
         finally:
             bar.close()
-    return _fit_with_timer(estimator, X, y, console, label)
+    return _fit_with_timer(estimator, X, y, console, label, **fit_params)
 
 
 @contextlib.contextmanager
@@ -81,7 +81,7 @@ def _progress_callback_installed(estimator: Any, callbacks: Any, callback: Any) 
             net.callbacks = [c for c in (net.callbacks or []) if not (isinstance(c, tuple) and c[0] == _PROGRESS)]
 
 
-def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str) -> Any:
+def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str, **fit_params: Any) -> Any:
     bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
     done = threading.Event()
 
@@ -92,7 +92,7 @@ def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str
     ticker = threading.Thread(target=tick, daemon=True)
     ticker.start()
     try:
-        return estimator.fit(X, y)
+        return estimator.fit(X, y, **fit_params)
     finally:
         done.set()
         ticker.join()
