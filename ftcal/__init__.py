@@ -74,6 +74,7 @@ from ._pose_planning import (
 )
 from ._robot import BUILTIN_ROBOTS, RobotModel, example_robot_data_dir, frame_pose_in_base, load_robot, sensor_pose_in_base
 from ._virtual_experiment import MountingDevice, simulate_experiment
+from ._tool_load import ToolLoad, identify_tool_load
 
 __version__ = "0.1.0"
 
@@ -160,5 +161,7 @@ __all__ = [
     "solve_gravity_direction_ik",
     "solve_orientation_ik",
     "thesis_load_configurations",
+    "ToolLoad",
+    "identify_tool_load",
     "write_run_log",
 ]

@@ -16,7 +16,7 @@ from ._exceptions import CalibrationInputError
 from ._model_selection import calibration_folds, check_groups, simplest_within_one_se
 from ._validation import check_zero_reading, validate_training_data
 from ._wrench import scale_torques
-from ._zero_load import estimate_zero_reading
+from ._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["AutoCalibrator", "default_candidates", "score_candidates", "with_alpha_and_tare"]
 
@@ -292,6 +292,8 @@ class AutoCalibrator(BaseCalibrator):
         self.best_estimator_ = _fit(best, X, y, groups)
         self.zero_reading_ = np.asarray(getattr(self.best_estimator_, "zero_reading_",
                                                 estimate_zero_reading(X, y, self.alpha_)))
+        self.reading_noise_ = reading_noise(X, y)
+        self.__dict__.pop("tare_reading_", None)
         return self
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -113,6 +113,8 @@ class EnsembleCalibrator(BaseCalibrator):
         self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y) for m in members)
         self.alpha_ = self.estimators_[0].alpha_
         self.zero_reading_ = self.estimators_[0].zero_reading_
+        self.reading_noise_ = self.estimators_[0].reading_noise_
+        self.__dict__.pop("tare_reading_", None)
         return self
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

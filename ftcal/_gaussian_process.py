@@ -193,7 +193,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
         if not return_std:
             return super().predict(X)
         check_is_fitted(self)
-        X = validate_readings(self, X)
+        X = self._retared(validate_readings(self, X))
         mean, std = self._predict_scaled(X, True)
         wrench = unscale_torques(mean, self.alpha_)
         check_finite_output(X, wrench, self)

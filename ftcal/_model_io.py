@@ -53,6 +53,8 @@ _HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reaso
 
 #: Fitted attributes stored per model type: (scalars, arrays).
 _MODEL_TYPES: dict[str, tuple[type, tuple[str, ...], tuple[str, ...]]] = {}
+#: Fitted arrays every calibrator may have (files written before they existed lack them).
+_OPTIONAL_ARRAYS = ("reading_noise_", "tare_reading_")
 #: Meta-estimators: the fitted attribute holding their list of fitted sub-models.
 _CHILDREN: dict[str, str] = {}
 
@@ -177,6 +179,7 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
         "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names},
     }
     arrays = {f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in array_names}
+    arrays.update({f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in _OPTIONAL_ARRAYS if hasattr(estimator, k)})
     if isinstance(estimator, NetworkCalibrator):
         meta["history"] = _history_rows(estimator.net_)
         state = estimator.net_.module_.state_dict()
@@ -317,7 +320,7 @@ def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
     _check_fitted_scalars(name, {k: meta["fitted"][k] for k in scalar_names})
     for k in scalar_names:
         setattr(estimator, k, meta["fitted"][k])
-    for k in array_names:
+    for k in array_names + tuple(k for k in _OPTIONAL_ARRAYS if f"fitted/{k}" in arrays):
         setattr(estimator, k, arrays[f"fitted/{k}"])
     if isinstance(estimator, NetworkCalibrator):
         _restore_net(estimator, meta, arrays)

@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from ._wrench import scale_torques
 
-__all__ = ["estimate_zero_reading", "ZERO_LOAD_TOLERANCE", "GATED_MIN_SAMPLES"]
+__all__ = ["estimate_zero_reading", "reading_noise", "ZERO_LOAD_TOLERANCE", "GATED_MIN_SAMPLES"]
 
 #: A row is a zero-load row when its torque-scaled wrench norm is below this
 #: fraction of the largest one in the data set.
@@ -73,6 +73,13 @@ def estimate_zero_reading(
     unloaded = norm <= ZERO_LOAD_TOLERANCE * norm.max()
     if unloaded.any() and norm.max() > 0:
         return raw[unloaded].mean(axis=0)
+    coef, _ = _forward_fit(raw, wrench)
+    return coef[-1]
+
+
+def _forward_fit(raw: NDArray[np.float64], wrench: NDArray[np.float64]):
+    """Least-squares forward model ``raw ≈ f(wrench)`` (sign-gated when there are enough rows): coefficients
+    in raw units per design column (the last is the intercept) and the residuals."""
     if wrench.shape[0] >= GATED_MIN_SAMPLES:
         design = np.hstack([np.maximum(wrench, 0.0), np.minimum(wrench, 0.0), np.ones((wrench.shape[0], 1))])
     else:
@@ -81,4 +88,26 @@ def estimate_zero_reading(
     scale = np.max(np.abs(design), axis=0)
     scale[scale == 0.0] = 1.0
     coef, *_ = np.linalg.lstsq(design / scale, raw, rcond=None)
-    return coef[-1] / scale[-1]
+    residual = raw - (design / scale) @ coef
+    return coef / scale[:, None], residual
+
+
+def reading_noise(raw: NDArray[np.float64], wrench: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Scatter of each raw channel about the forward model of :func:`estimate_zero_reading`, shape (N,).
+
+    The sensor noise in raw units as the training data show it (an upper
+    bound for a nonlinear sensor, whose nonlinearity adds to it); the
+    quietness check of :meth:`ftcal._base.BaseCalibrator.retare` compares
+    new zero-load readings with it.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(2000, 6))
+    >>> raw = w @ rng.normal(size=(6, 3)) + 0.1 * rng.normal(size=(2000, 3))
+    >>> np.round(reading_noise(raw, w), 2)
+    array([0.1, 0.1, 0.1])
+    """
+    coef, residual = _forward_fit(raw, wrench)
+    dof = max(raw.shape[0] - coef.shape[0], 1)
+    return np.sqrt((residual**2).sum(axis=0) / dof)

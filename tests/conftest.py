@@ -6,10 +6,12 @@ import numpy as np
 import pytest
 
 from ftcal import (
+    AutoCalibrator,
     AxisNonlinearCalibrator,
     ComparativeCalibrator,
     DirectionalCalibrator,
     EnsembleCalibrator,
+    GaussianProcessCalibrator,
     LinearCalibrator,
     PolynomialCalibrator,
 )
@@ -26,7 +28,8 @@ TINY_SCHEDULE = dict(
 
 
 #: Names of :func:`tiny_calibrators`' instances, in order: every public calibrator of ftcal.
-CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble")
+CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
+                    "gaussian_process", "auto")
 
 
 def tiny_calibrators(random_state: int = 0) -> list:
@@ -38,6 +41,9 @@ def tiny_calibrators(random_state: int = 0) -> list:
         PolynomialCalibrator(degree=2),
         AxisNonlinearCalibrator(),
         EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=2, random_state=random_state),
+        GaussianProcessCalibrator(max_samples=100, random_state=random_state),
+        AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator(degree=2))],
+                       cv=3),
     ]
 
 

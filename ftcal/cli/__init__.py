@@ -11,6 +11,9 @@ Subcommands
 ``predict``    raw readings (file or stdin) -> wrenches (file or stdout)
 ``benchmark``  the artificial and the real-world benchmark
 ``demo``       simulate, fit the three calibrators, compare, plot
+``identify-load``  a tool's mass, centre of mass and the sensor bias from static poses
+``compensate``     run logs -> external wrenches (tool weight and bias removed)
+``retare``         re-zero a model from zero-load readings (no refit)
 
 Run ``ftcal SUBCOMMAND --help`` for the options and an example of each.
 
@@ -33,7 +36,8 @@ from ._common import EXIT_FAILURE, EXIT_USAGE, Parser
 __all__ = ["main", "build_parser"]
 
 #: Modules of the subcommands, in the order ``ftcal --help`` lists them.
-_SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo")
+_SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo",
+                "identify_load", "retare")
 
 
 def build_parser() -> Parser:

@@ -41,9 +41,16 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
     p.add_argument("--cv", type=int_in_range(1, 100, "folds"), default=3, help="number of cross-validation folds (>= 2)")
-    p.add_argument(
+    folds = p.add_mutually_exclusive_group()
+    folds.add_argument(
         "--group-folds", action="store_true",
-        help="keep the dataset's groups (e.g. load configurations) whole in the folds",
+        help="keep the dataset's groups (e.g. poses, load configurations) whole in the folds; the default when "
+        "the dataset has a group column (it is an error without one)",
+    )
+    folds.add_argument(
+        "--random-folds", action="store_true",
+        help="shuffled folds even when the dataset has groups (flatters flexible models: rows of one pose "
+        "land on both sides of a split)",
     )
     p.add_argument("--schedule", default="short", choices=("thesis", "short"), help="starting training schedule")
     p.add_argument(
@@ -71,11 +78,9 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
     space = parse_search_space(args.grid) if args.grid else None
     data = load_dataset(args.dataset, "training dataset")
-    groups = None
-    if args.group_folds:
-        if data.group is None:
-            raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
-        groups = data.group
+    if args.group_folds and data.group is None:
+        raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
+    groups = None if args.random_folds else data.group
     params = dict(args.param)
     alpha = dataset_alpha(data, args.alpha)
     if alpha is not None and "alpha" not in params:

@@ -1,0 +1,75 @@
+"""``ftcal retare``: re-zero a saved calibration from zero-load readings, without refitting."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from .._files import same_file
+from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_float
+from ._models import MODEL_SUFFIX
+
+EXAMPLE = """\
+examples:
+  ftcal retare models/directional.model.npz zero_readings.csv
+  my_sensor_reader --samples 200 | ftcal retare models/linear.model.npz - --output models/linear-today.model.npz
+
+READINGS: raw readings taken now with nothing attached (the format of 'ftcal predict': one reading per
+line, optional s0..s{N-1} header, or a .npz with array 'raw'). The new model file holds the same
+calibration with the zero-load reading replaced by their mean; the old file is never replaced
+without --force. The readings must be quiet (each channel's spread at most --max-spread times the
+noise seen in training), else the run stops.
+"""
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "retare",
+        help="re-zero a model from zero-load readings (no refit) -> a new model file",
+        description="Replace a model's zero-load reading by the mean of new zero-load readings.",
+        epilog=EXAMPLE,
+    )
+    p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
+    p.add_argument("readings", help="zero-load raw readings: a text file, a .npz with array 'raw', or '-' (stdin)")
+    p.add_argument("--output", metavar="FILE", help="new model file (default: MODEL with '-retared' before the suffix)")
+    p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists (even the model itself)")
+    p.add_argument("--max-spread", type=positive_float, default=5.0,
+                   help="largest per-channel std of the readings, in units of the training noise")
+    add_run_options(p, seed=False)
+    p.set_defaults(handler=run)
+
+
+def _default_output(model: Path) -> Path:
+    name = model.name
+    stem = name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else model.stem
+    return model.with_name(f"{stem}-retared{MODEL_SUFFIX}")
+
+
+def run(args: argparse.Namespace) -> int:
+    import ftcal
+    from ._predict import _raw_chunks
+
+    console = Console(args.quiet)
+    output = Path(args.output) if args.output else _default_output(args.model)
+    if (same_file(output, args.model) or output.resolve() == args.model.resolve()) and not args.force:
+        raise CliError(f"--output {output} is the model file itself; pass --force to replace it")
+    if args.readings != "-" and not Path(args.readings).is_file():
+        raise CliError(f"{args.readings}: no such readings file")
+    plan = OutputPlan(output.parent if str(output.parent) else Path("."), [output.name], args.force)
+    model = ftcal.load_model(args.model)
+    n_channels = int(model.n_features_in_)
+    chunks = list(_raw_chunks(args.readings, n_channels, 4096))
+    if not chunks:
+        raise CliError(f"{args.readings}: no readings; record some zero-load readings first")
+    readings = np.vstack(chunks)
+    model.retare(readings, max_spread=args.max_spread)
+    with plan.writing(output.name) as tmp:
+        ftcal.save_model(model, tmp, overwrite=True)
+    shift = model.tare_reading_ - model.zero_reading_
+    console.info(
+        f"re-tared from {len(readings)} readings: zero-load reading moved by "
+        f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}"
+    )
+    return 0
