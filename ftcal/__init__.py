@@ -75,6 +75,7 @@ from ._pose_planning import (
 from ._robot import BUILTIN_ROBOTS, RobotModel, example_robot_data_dir, frame_pose_in_base, load_robot, sensor_pose_in_base
 from ._virtual_experiment import MountingDevice, simulate_experiment
 from ._tool_load import ToolLoad, identify_tool_load
+from ._temperature import TemperatureCompensatedCalibrator, ThermalDrift
 
 __version__ = "0.1.0"
 
@@ -163,5 +164,7 @@ __all__ = [
     "thesis_load_configurations",
     "ToolLoad",
     "identify_tool_load",
+    "TemperatureCompensatedCalibrator",
+    "ThermalDrift",
     "write_run_log",
 ]

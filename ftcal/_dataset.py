@@ -7,7 +7,7 @@ CSV (``.csv``)
     the raw channels (any unit the sensor gives: counts, mV, ...), then
     ``Fx, Fy, Fz`` in [N] and ``Tx, Ty, Tz`` in [N·m]; an optional ``group``
     column holds an integer label per row (a load configuration, a sphere,
-    ...). Lines starting with ``#`` before the header are comments; a comment
+    ...), an optional ``temperature`` column the sensor temperature [deg C]. Lines starting with ``#`` before the header are comments; a comment
     ``# meta: {...}`` carries JSON metadata.
 NumPy archive (``.npz``)
     Arrays ``raw`` (n, N), ``wrench`` (n, 6), optional ``group`` (n,), and
@@ -24,13 +24,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ._columns import check_plain_numbers, read_header
-from ._exceptions import DatasetFileError
+from ._exceptions import CalibrationInputError, DatasetFileError
 from ._files import atomic_output
+from ._temperature import check_temperature
 from ._wrench import WRENCH_LABELS
 
 __all__ = ["CalibrationDataset"]
 
-_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group]"
+_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature]"
 
 
 def _parse_meta(text: str, where: str) -> dict:
@@ -82,6 +83,9 @@ class CalibrationDataset:
         grouped splits such as ``GroupKFold``.
     meta : dict
         JSON-serialisable facts about where the data came from.
+    temperature : ndarray of shape (n_samples,), optional
+        Sensor temperature [deg C] per sample (for
+        :class:`~ftcal.TemperatureCompensatedCalibrator`: ``features(temperature=True)``).
 
     Examples
     --------
@@ -95,6 +99,7 @@ class CalibrationDataset:
     wrench: NDArray[np.float64]
     group: NDArray[np.int64] | None = None
     meta: dict = field(default_factory=dict)
+    temperature: NDArray[np.float64] | None = None
 
     def __post_init__(self) -> None:
         for name in ("raw", "wrench"):
@@ -113,6 +118,11 @@ class CalibrationDataset:
             )
         if self.group is not None:
             self.group = _integer_labels(self.group, self.raw.shape[0])
+        if self.temperature is not None:
+            try:
+                self.temperature = check_temperature(self.temperature, self.raw.shape[0])
+            except CalibrationInputError as exc:
+                raise DatasetFileError(str(exc)) from None
         if not isinstance(self.meta, dict):
             raise DatasetFileError(f"meta must be a dict (JSON object); got {type(self.meta).__name__}.")
 
@@ -133,7 +143,17 @@ class CalibrationDataset:
             wrench=self.wrench[index],
             group=None if self.group is None else self.group[index],
             meta=dict(self.meta),
+            temperature=None if self.temperature is None else self.temperature[index],
         )
+
+    def features(self, temperature: bool = False) -> NDArray[np.float64]:
+        """The calibrators' ``X``: the raw channels, with the temperature [deg C] as a last column if asked."""
+        if not temperature:
+            return self.raw
+        if self.temperature is None:
+            raise DatasetFileError("this dataset has no temperature column; record the sensor temperature "
+                                   "(a 'temperature' column in deg C) to compensate thermal drift.")
+        return np.column_stack([self.raw, self.temperature])
 
     # ------------------------------------------------------------------ files
     def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
@@ -154,6 +174,8 @@ class CalibrationDataset:
                 arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(json.dumps(self.meta))}
                 if self.group is not None:
                     arrays["group"] = self.group
+                if self.temperature is not None:
+                    arrays["temperature"] = self.temperature
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
@@ -164,6 +186,10 @@ class CalibrationDataset:
                     cols.append("group")
                     data = np.hstack([data, self.group[:, None].astype(float)])
                     fmt.append("%d")
+                if self.temperature is not None:
+                    cols.append("temperature")
+                    data = np.hstack([data, self.temperature[:, None]])
+                    fmt.append("%.10g")
                 header = f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols)
                 np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt=fmt)
         return path
@@ -189,12 +215,16 @@ class CalibrationDataset:
                     raise DatasetFileError(f"{path}: missing arrays {sorted(missing)}; expected raw and wrench.")
                 raw, wrench = z["raw"], z["wrench"]
                 group = z["group"] if "group" in z.files else None
+                temperature = z["temperature"] if "temperature" in z.files else None
                 meta = json.loads(str(z["meta_json"])) if "meta_json" in z.files else {}
         except DatasetFileError:
             raise
         except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
             raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
-        ds = cls(raw=raw, wrench=wrench, group=group, meta=meta)
+        try:
+            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+        except DatasetFileError as exc:
+            raise DatasetFileError(f"{path}: {exc}") from None
         ds._check_finite(path)
         return ds
 
@@ -218,7 +248,7 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         header = read_header(
             lines[n_comment].split(","), where=f"{path}: line {n_comment + 1}", error=DatasetFileError,
-            required=WRENCH_LABELS, optional=("group",), expected=_CSV_LAYOUT,
+            required=WRENCH_LABELS, optional=("group", "temperature"), expected=_CSV_LAYOUT,
         )
         body_lines = lines[n_comment + 1:]
         check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)
@@ -235,7 +265,11 @@ class CalibrationDataset:
         raw = data[:, header.numbered("s")]
         wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
         group = data[:, header.index["group"]] if "group" in header else None
-        ds = cls(raw=raw, wrench=wrench, group=group, meta=meta)
+        temperature = data[:, header.index["temperature"]] if "temperature" in header else None
+        try:
+            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+        except DatasetFileError as exc:
+            raise DatasetFileError(f"{path}: {exc}") from None
         ds._check_finite(path, first_data_line=n_comment + 2)
         return ds
 

@@ -153,6 +153,8 @@ class PairedRuns:
         ``config`` value of the no-load run each pair used (its own id or -1).
     source : list of str
         ``"file:line"`` of each pair's first load row.
+    temperature_load : ndarray of shape (m,) or None
+        Sensor temperature [deg C] of each load pose, when every load row has one.
     no_load : dict
         No-load run id -> (q (k, n_joints), raw (k, n_channels)) of all its poses.
     """
@@ -166,10 +168,11 @@ class PairedRuns:
     no_load_run: NDArray[np.int64]
     source: list[str]
     no_load: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]]
+    temperature_load: NDArray[np.float64] | None = None
 
 
 def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
-    """(kind, config, pose) -> (mean q, mean raw, first 'file:line')."""
+    """(kind, config, pose) -> (mean q, mean raw, first 'file:line', mean temperature or None)."""
     groups: dict[tuple[str, int, int], list[tuple[RunLog, int]]] = defaultdict(list)
     for log in logs:
         for i in range(log.n_rows):
@@ -188,7 +191,9 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
                 f"{first} and {other}: {key[0]} rows of config {key[1]}, pose {key[2]} differ by {spread:.4f} rad "
                 f"in q{j + 1}; one pose index was used for two different poses. Give each pose its own index."
             )
-        out[key] = (q.mean(axis=0), raw.mean(axis=0), first)
+        temps = [lg.temperature[i] for lg, i in members if lg.temperature is not None]
+        temperature = float(np.mean(temps)) if len(temps) == len(members) else None
+        out[key] = (q.mean(axis=0), raw.mean(axis=0), first, temperature)
     return out
 
 
@@ -234,7 +239,7 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
     no_loads = [samples[k] for k in partners]
     load_set = {(c, p) for _, c, p in load_keys}
     no_load: dict[int, tuple[list, list]] = defaultdict(lambda: ([], []))
-    for (kind, c, p), (q, raw, where) in sorted(samples.items()):
+    for (kind, c, p), (q, raw, where, _) in sorted(samples.items()):
         if kind != "no-load":
             continue
         if c != SHARED_NO_LOAD_CONFIG and (c, p) not in load_set:
@@ -249,6 +254,7 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
         raw_load=np.array([s[1] for s in loads]), raw_no_load=np.array([s[1] for s in no_loads]),
         no_load_run=np.array([k[1] for k in partners], dtype=np.int64), source=[s[2] for s in loads],
         no_load={k: (np.array(v[0]), np.array(v[1])) for k, v in no_load.items()},
+        temperature_load=(np.array([s[3] for s in loads]) if all(s[3] is not None for s in loads) else None),
     )
 
 
@@ -383,4 +389,5 @@ def prepare_dataset(
         "method": "raw = load - (no-load + B (R_delta^T - I) u_no-load); wrench = eq. 15-16 at the load pose",
         "raw_unit": logs[0].raw_unit,
     }
-    return CalibrationDataset(raw=raw, wrench=wrench, group=pairs.config, meta=meta)
+    return CalibrationDataset(raw=raw, wrench=wrench, group=pairs.config, meta=meta,
+                              temperature=pairs.temperature_load)

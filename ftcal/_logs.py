@@ -50,7 +50,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._columns import parse_number, read_header
-from ._exceptions import LogFormatError
+from ._exceptions import CalibrationInputError, LogFormatError
+from ._temperature import check_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -104,6 +105,7 @@ class RunLog:
     robot: str | None = None
     sensor_frame: str | None = None
     meta: dict = field(default_factory=dict)
+    temperature: NDArray[np.float64] | None = None
 
     @property
     def n_rows(self) -> int:
@@ -236,6 +238,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     ts, kind = np.empty(n), np.empty(n, dtype=object)
     config, pose, line = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
     q, raw = np.empty((n, len(q_cols))), np.empty((n, len(s_cols)))
+    temp = np.empty(n) if "temperature" in col else None
     for i, (lineno, fields) in enumerate(rows):
         line[i] = lineno
         kind[i] = fields[col["run"]].lower()
@@ -251,6 +254,8 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             raise LogFormatError(f"{path}: line {lineno}: pose {pose[i]} is negative.")
         q[i] = [number(lineno, fields, c) for c in q_cols]
         raw[i] = [number(lineno, fields, c) for c in s_cols]
+        if temp is not None:
+            temp[i] = number(lineno, fields, "temperature")
     if units["joint_unit"] == 1.0:
         bad = np.argwhere(np.abs(q) > _MAX_PLAUSIBLE_RAD)
         if bad.size:
@@ -273,9 +278,15 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             meta = json.loads(info["meta"])
         except json.JSONDecodeError as exc:
             raise LogFormatError(f"{path}: the '# meta:' comment is not valid JSON ({exc}).") from exc
+    if temp is not None:
+        try:
+            check_temperature(temp, n)
+        except CalibrationInputError as exc:
+            row = int(str(exc).split("row ")[1].split(" ")[0]) if "row " in str(exc) else 0
+            raise LogFormatError(f"{path}: line {line[row]}: {exc}") from None
     return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
                   line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
-                  sensor_frame=info.get("sensor_frame"), meta=meta)
+                  sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)
 
 
 def write_run_log(
@@ -293,6 +304,7 @@ def write_run_log(
     sensor_frame: str | None = None,
     meta: dict | None = None,
     overwrite: bool = False,
+    temperature: ArrayLike | None = None,
 ) -> Path:
     """Write samples as a run log (timestamps [s], joint angles [rad]) and return the path.
 
@@ -314,6 +326,8 @@ def write_run_log(
         Header comments (``load_mass`` in [kg]).
     overwrite : bool, default=False
         Replace an existing file.
+    temperature : array-like of shape (n,), optional
+        Sensor temperature [deg C] per row (an optional ``temperature`` column).
     """
     path = Path(path)
     if path.exists() and not overwrite:
@@ -338,10 +352,19 @@ def write_run_log(
     if meta:
         header.append(f"# meta: {json.dumps(meta)}")
     names = list(_FIXED_COLUMNS) + [f"q{j + 1}" for j in range(q_arr.shape[1])] + [f"s{k}" for k in range(raw_arr.shape[1])]
+    temp = None
+    if temperature is not None:
+        try:
+            temp = check_temperature(temperature, n)
+        except CalibrationInputError as exc:
+            raise LogFormatError(f"{path}: {exc}") from None
+        names.append("temperature")
     out = header + [",".join(names)]
     for i in range(n):
         vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
         vals += [f"{v:.10g}" for v in q_arr[i]] + [f"{v:.10g}" for v in raw_arr[i]]
+        if temp is not None:
+            vals.append(f"{temp[i]:.6g}")
         out.append(",".join(vals))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(out) + "\n", encoding="utf-8")

@@ -24,6 +24,7 @@ from ._directional import DirectionalCalibrator
 from ._auto import AutoCalibrator
 from ._ensemble import EnsembleCalibrator
 from ._gaussian_process import GaussianProcessCalibrator
+from ._temperature import TemperatureCompensatedCalibrator
 from ._hybrid import AxisNonlinearCalibrator
 from ._model_io import register_model_type
 from ._polynomial import PolynomialCalibrator
@@ -83,6 +84,11 @@ register_model_type(
     ("alpha_", "n_features_in_", "constant_", "noise_level_"),
     ("zero_reading_", "linear_matrix_", "linear_offset_", "input_scale_", "train_inputs_", "dual_coef_",
      "cholesky_", "residual_mean_", "residual_scale_", "output_variance_", "length_scale_"),
+)
+
+register_model_type(
+    TemperatureCompensatedCalibrator, ("alpha_", "n_features_in_"),
+    ("zero_reading_", "offset_per_deg_", "gain_per_deg_"), children="estimator_",
 )
 
 # "auto" chooses among the names above, so it is registered last (its schedule goes to its network candidates).

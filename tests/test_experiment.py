@@ -66,14 +66,22 @@ def test_no_load_fit_recovers_an_affine_model():
         fit_no_load_model(np.tile([[1.0, 0, 0], [0, 1.0, 0]], (3, 1)), np.zeros((6, 6)))
 
 
+def largest_jitter_within(limit_deg: float, n_joints: int) -> float:
+    """The per-joint jitter std whose pose pairs stay within ``limit_deg`` by construction: the rotation
+    between two poses is at most the sum of the joint differences, each truncated at JITTER_TRUNCATION std."""
+    return 0.95 * limit_deg / (JITTER_TRUNCATION * n_joints)
+
+
 def test_perfect_sensor_gives_the_exact_external_load(tmp_path, iiwa, small_plan):
-    # No sensor errors, no robot error, but 0.3 deg pose differences between the runs:
-    # the prepared raw must be exactly the sensor's image of the external load's wrench.
+    # No sensor errors, no robot error, but pose differences between the runs (within the pairing limit by
+    # construction): the prepared raw must be exactly the sensor's image of the external load's wrench.
     sensor = VirtualSensor(errors="none", zero_offset=np.linspace(-0.5, 0.5, 6))
+    jitter = largest_jitter_within(3.0, iiwa.n_joints)
     paths = simulate_experiment(tmp_path, robot=iiwa, plan=small_plan, sensor=sensor, joint_error_max=0.0,
-                                load_pose_jitter_deg=0.3, load_mass=3.0, random_state=1)
-    ds = prepare_dataset(paths, iiwa)
-    assert ds.raw.shape == (7 * 42, 6) and ds.meta["pair_rotation_deg_max"] > 0.2
+                                load_pose_jitter_deg=jitter, load_mass=3.0, random_state=1)
+    ds = prepare_dataset(paths, iiwa, max_pair_rotation_deg=3.0)
+    # the poses do differ: the largest of 294 pair rotations (7 joints' differences combined) exceeds one joint's std
+    assert ds.raw.shape == (7 * 42, 6) and ds.meta["pair_rotation_deg_max"] > jitter
     expected = sensor.profile.reading_from_wrench(ds.wrench)
     scale = np.abs(expected).max()
     np.testing.assert_allclose(ds.raw, expected, atol=1e-7 * scale)
@@ -81,10 +89,8 @@ def test_perfect_sensor_gives_the_exact_external_load(tmp_path, iiwa, small_plan
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
 def test_alignment_beats_plain_subtraction(tmp_path, iiwa, small_plan, seed):
-    # The largest jitter whose pose pairs stay within the pairing limit by construction: the rotation between
-    # the two poses of a pair is at most the sum of the joint differences, each truncated at 3 std.
     limit_deg = 3.0
-    jitter_deg = 0.95 * limit_deg / (JITTER_TRUNCATION * iiwa.n_joints)
+    jitter_deg = largest_jitter_within(limit_deg, iiwa.n_joints)
     sensor = VirtualSensor(errors="none")
     paths = simulate_experiment(tmp_path, robot=iiwa, plan=small_plan, sensor=sensor, joint_error_max=0.0,
                                 load_pose_jitter_deg=jitter_deg, random_state=seed)

@@ -7,7 +7,7 @@ import argparse
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, positive_float, write_json
-from ._models import evaluation_alpha, load_dataset, load_model_file, model_label
+from ._models import evaluation_alpha, load_dataset, load_model_file, model_label, model_inputs
 from ._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
@@ -59,10 +59,7 @@ def run(args: argparse.Namespace) -> int:
     with console.progress(total=len(labels), desc="evaluating", unit="model") as bar:
         for label, path in zip(labels, args.models):
             model = load_model_file(path)
-            n_in = getattr(model, "n_features_in_", data.n_channels)
-            if n_in != data.n_channels:
-                raise CliError(f"{path} was fitted on {n_in} raw channels but {args.dataset} has {data.n_channels}")
-            predictions[label] = np.asarray(model.predict(data.raw), dtype=float)
+            predictions[label] = np.asarray(model.predict(model_inputs(model, data)), dtype=float)
             reports[label] = ftcal.calibration_report(data.wrench, predictions[label], alpha=alpha)
             bar.update(1)
     table = comparison_table(reports, noise_floor)

@@ -54,6 +54,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--tare", metavar="V0,V1,...",
         help="known zero-load raw reading, one value per channel (default: estimated from the data)",
     )
+    p.add_argument(
+        "--temperature", action="store_true",
+        help="compensate thermal drift: learn per-channel offset and gain coefficients from the dataset's "
+        "temperature column [deg C] in front of the calibrator",
+    )
     p.add_argument("--name", help="file name stem of the model (default: the --model name)")
     add_output_options(p, "ftcal-models")
     add_run_options(p)
@@ -95,20 +100,28 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
     estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed, **params)
+    X = data.raw
+    if args.temperature:
+        if data.temperature is None:
+            raise CliError(f"--temperature: {args.dataset} has no temperature column; record the sensor "
+                           "temperature (deg C) with the data, or drop the option")
+        estimator = ftcal.TemperatureCompensatedCalibrator(estimator)
+        X = data.features(temperature=True)
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
     fit_params = {}
     if data.group is not None and "groups" in inspect.signature(estimator.fit).parameters:
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
-    fit_with_progress(estimator, data.raw, data.wrench, console, label=args.model, **fit_params)
+    fit_with_progress(estimator, X, data.wrench, console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
-    report = ftcal.calibration_report(data.wrench, estimator.predict(data.raw), alpha=estimator.alpha_)
+    report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_)
     with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
         ftcal.save_model(estimator, tmp, overwrite=True)
     summary = {
         "model": args.model,
         "schedule": args.schedule,
+        "temperature_compensation": bool(args.temperature),
         "seed": args.seed,
         "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
         "dataset": str(args.dataset),

@@ -5,7 +5,8 @@ Input (a file or standard input)
 * One sample per line, values separated by commas, or by spaces / tabs when a
   line has no comma. Blank lines and lines starting with ``#`` are skipped.
 * An optional header line (any line holding a non-number). When present, the
-  columns named ``s0, s1, ...`` are the raw channels and every other column is
+  columns named ``s0, s1, ...`` are the raw channels (then ``temperature`` [deg C]
+  if present, for temperature-compensated models) and every other column is
   ignored, so a dataset CSV written by ``ftcal simulate`` / ``prepare`` can be
   fed as is. Without a header every column is a raw channel.
 * A ``.npz`` file holding an array ``raw`` of shape (n, N) is read too.
@@ -35,11 +36,15 @@ def _split(line: str) -> list[str]:
     return [v.strip() for v in line.split(",")] if "," in line else line.split()
 
 
-def _channel_columns(fields: list[str], source: str, line_no: int) -> list[int]:
-    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal._columns`)."""
+def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int) -> list[int]:
+    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal._columns`), then of
+    ``temperature`` when the model takes one input more than there are channels."""
     header = read_header(fields, where=f"{source}: line {line_no}", error=CliError, allow_other=True,
-                         expected="s0,...,s{N-1} (other columns are ignored)")
-    return header.numbered("s")
+                         expected="s0,...,s{N-1}[,temperature] (other columns are ignored)")
+    channels = header.numbered("s")
+    if "temperature" in header and len(channels) + 1 == n_inputs:
+        channels.append(header.index["temperature"])
+    return channels
 
 
 def iter_reading_chunks(
@@ -75,7 +80,7 @@ def iter_reading_chunks(
         fields = _split(text)
         first_word = next((f for f in fields if not is_number(f)), None)
         if not seen_data and columns is None and first_word is not None and first_word[:1].isalpha():
-            columns = _channel_columns(fields, source, line_no)
+            columns = _channel_columns(fields, source, line_no, n_channels)
             width = len(fields)
             continue
         seen_data = True

@@ -73,6 +73,11 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     )
     d.add_argument("--sensor", type=existing_file, metavar="CAL", help="vendor calibration file (ATI .cal)")
     d.add_argument(
+        "--temperature-range", metavar="LOW,HIGH",
+        help="simulate thermal drift: each sample at a random temperature in LOW..HIGH deg C, the sensor's zero "
+        "and span drifting by data-sheet magnitudes (ftcal.ThermalDrift.typical); adds a temperature column",
+    )
+    d.add_argument(
         "--zero-offset", type=float, default=0.0, metavar="RAW",
         help="raw zero-load offset added to every channel (a sensor that is not tared)",
     )
@@ -101,6 +106,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     profile = _profile(args.sensor)
     offset = None if args.zero_offset == 0 else np.full(profile.n_channels, args.zero_offset)
     rng = np.random.default_rng(args.seed)
+    thermal = _temperature_range(args.temperature_range)
     infos = []
     first_train = None
     with console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
@@ -109,6 +115,8 @@ def run_dataset(args: argparse.Namespace) -> int:
                 args.preset, random_state=rng, profile=profile, n_per_sphere=args.n_per_sphere,
                 n_test=args.n_test, test_distribution=args.test_distribution, zero_offset=offset,
             )
+            if thermal is not None:
+                train, test, info["thermal_drift"] = _with_thermal_drift(train, test, thermal, rng)
             for ds, name in zip((train, test), files[2 * k: 2 * k + 2]):
                 ds.meta["seed"] = args.seed
                 ds.meta["dataset_index"] = k
@@ -130,6 +138,36 @@ def run_dataset(args: argparse.Namespace) -> int:
         f"samples each, {profile.n_channels} channels); noise floor {np.mean(floors):.3g} N"
     )
     return 0
+
+
+def _temperature_range(text: str | None):
+    if text is None:
+        return None
+    try:
+        low, high = (float(v) for v in text.split(","))
+    except ValueError:
+        raise CliError(f"--temperature-range {text!r}: give LOW,HIGH in deg C, e.g. 15,35") from None
+    if not (-60 <= low < high <= 200):
+        raise CliError(f"--temperature-range {text!r}: need -60 <= LOW < HIGH <= 200 (deg C)")
+    return low, high
+
+
+def _with_thermal_drift(train, test, bounds, rng):
+    """The datasets as read at random temperatures by a sensor with typical thermal drift (and the drift)."""
+    import numpy as np
+
+    import ftcal
+
+    drift = ftcal.ThermalDrift.typical(np.abs(train.raw).max(axis=0), random_state=rng)
+    out = []
+    for ds in (train, test):
+        temperature = rng.uniform(*bounds, size=ds.n_samples)
+        meta = {**ds.meta, "temperature_range_deg_c": list(bounds)}
+        out.append(ftcal.CalibrationDataset(raw=drift.apply(ds.raw, temperature), wrench=ds.wrench, group=ds.group,
+                                            meta=meta, temperature=temperature))
+    info = {"offset_per_deg": drift.offset_per_deg.tolist(), "gain_per_deg": drift.gain_per_deg.tolist(),
+            "reference_temperature": drift.reference_temperature, "range_deg_c": list(bounds)}
+    return out[0], out[1], info
 
 
 def _profile(cal_path: Path | None):
