@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import inspect
 import numbers
+from collections.abc import Callable
 
 import numpy as np
 from joblib import Parallel, delayed
@@ -15,7 +17,7 @@ from ._directional import DirectionalCalibrator
 from ._exceptions import CalibrationInputError
 from ._validation import validate_training_data
 
-__all__ = ["EnsembleCalibrator"]
+__all__ = ["EnsembleCalibrator", "ensemble_factory"]
 
 
 def _fit_member(estimator, X, y):
@@ -119,3 +121,28 @@ class EnsembleCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.mean([member.predict(X) for member in self.estimators_], axis=0)
+
+
+def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:
+    """A registry factory building an :class:`EnsembleCalibrator` of ``member_class`` networks.
+
+    Examples
+    --------
+    >>> from ftcal import DirectionalCalibrator
+    >>> ens = ensemble_factory(DirectionalCalibrator)(random_state=0, n_members=3, max_epochs=5)
+    >>> ens.n_members, ens.estimator.max_epochs
+    (3, 5)
+    """
+
+    def build(random_state=None, n_members=5, n_jobs=None, **member_params) -> EnsembleCalibrator:
+        return EnsembleCalibrator(member_class(**member_params), n_members=n_members, n_jobs=n_jobs,
+                                  random_state=random_state)
+
+    build.__name__ = f"{member_class.__name__}_ensemble"
+    # The registry (and `ftcal fit --param`) read the accepted names from the signature: the ensemble's own
+    # parameters plus every member parameter.
+    own = [p for p in inspect.signature(build).parameters.values() if p.kind is not inspect.Parameter.VAR_KEYWORD]
+    members = [p.replace(kind=inspect.Parameter.KEYWORD_ONLY)
+               for p in inspect.signature(member_class).parameters.values() if p.name != "random_state"]
+    build.__signature__ = inspect.Signature(own + members)
+    return build

@@ -36,12 +36,18 @@ import torch
 from sklearn.utils.validation import check_is_fitted
 from skorch.history import History
 
+from ._auto import AutoCalibrator
 from ._comparative import ComparativeCalibrator
 from ._directional import DirectionalCalibrator
+from ._ensemble import EnsembleCalibrator
 from ._exceptions import ModelFileError
 from ._files import atomic_output
+from ._gaussian_process import GaussianProcessCalibrator
+from ._hybrid import AxisNonlinearCalibrator
 from ._linear import LinearCalibrator
 from ._network_base import NetworkCalibrator, device_available
+from ._polynomial import PolynomialCalibrator
+from ._temperature_compensation import TemperatureCompensatedCalibrator
 
 __all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION"]
 
@@ -86,6 +92,35 @@ register_model_type(
     ComparativeCalibrator,
     _NET_SCALARS,
     ("zero_reading_", "input_mean_", "input_scale_", "target_mean_", "target_scale_"),
+)
+
+
+register_model_type(
+    PolynomialCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "input_scale_", "coef_", "intercept_")
+)
+register_model_type(
+    AxisNonlinearCalibrator,
+    ("alpha_", "n_features_in_", "ridge_"),
+    ("zero_reading_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_"),
+)
+register_model_type(
+    EnsembleCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "member_seeds_"), children="estimators_"
+)
+register_model_type(
+    GaussianProcessCalibrator,
+    ("alpha_", "n_features_in_", "constant_", "noise_level_"),
+    ("zero_reading_", "linear_matrix_", "linear_offset_", "input_scale_", "train_inputs_", "dual_coef_",
+     "cholesky_", "residual_mean_", "residual_scale_", "output_variance_", "length_scale_"),
+)
+
+register_model_type(
+    TemperatureCompensatedCalibrator, ("alpha_", "n_features_in_"),
+    ("zero_reading_", "offset_per_deg_", "gain_per_deg_"), children="estimator_",
+)
+
+register_model_type(
+    AutoCalibrator, ("alpha_", "n_features_in_", "best_name_", "cv_results_"), ("zero_reading_",),
+    children="best_estimator_",
 )
 
 

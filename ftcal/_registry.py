@@ -1,8 +1,11 @@
 """Registry of calibrators by name, and the named training schedules.
 
 Benchmarks and the CLI build every model through :func:`make_calibrator`, so
-a new model (issue 6: polynomial, hybrid, ensembles) only has to be
-registered with :func:`register_calibrator` to appear everywhere.
+a new model only has to be registered with :func:`register_calibrator` to
+appear everywhere. This is the one registry: the built-in calibrators are
+listed at the end of this module by module and class *name*, and imported
+only when one is built, so that listing the names (``ftcal --help``) does not
+import torch.
 
 Schedules (:func:`training_schedule`), counts in epochs:
 
@@ -30,9 +33,7 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 import inspect
 from typing import Any
 
-from ._comparative import ComparativeCalibrator
-from ._directional import DirectionalCalibrator
-from ._linear import LinearCalibrator
+from importlib import import_module
 
 __all__ = ["CALIBRATOR_NAMES", "calibrator_parameters", "make_calibrator", "register_calibrator", "training_schedule", "SCHEDULE_NAMES"]
 
@@ -44,6 +45,28 @@ _THESIS = dict(_COMMON, plateau_epochs=100, plateau_patience=30, max_recover_epo
 _SHORT = dict(_COMMON, plateau_epochs=30, plateau_patience=10, max_recover_epochs=50)
 
 _FACTORIES: dict[str, Callable[..., Any]] = {}
+
+
+class _Lazy:
+    """A factory named by module and attribute, imported on first use (keeps heavy imports out of listings)."""
+
+    def __init__(self, module: str, attribute: str, ensemble_of: str | None = None):
+        self.module, self.attribute, self.ensemble_of = module, attribute, ensemble_of
+
+    def resolve(self) -> Callable[..., Any]:
+        target = getattr(import_module(self.module, __package__), self.attribute)
+        if self.ensemble_of is not None:
+            from ._ensemble import ensemble_factory
+
+            return ensemble_factory(target)
+        return target
+
+
+def _factory(name: str) -> Callable[..., Any]:
+    factory = _FACTORIES[name]
+    if isinstance(factory, _Lazy):
+        factory = _FACTORIES[name] = factory.resolve()
+    return factory
 _SCHEDULES: dict[str, dict[str, dict[str, Any]]] = {}
 
 
@@ -107,7 +130,7 @@ def register_calibrator(
     """
     if not isinstance(name, str) or not name:
         raise ValueError(f"calibrator name must be a non-empty string; got {name!r}.")
-    if not callable(factory):
+    if not callable(factory) and not isinstance(factory, _Lazy):
         raise ValueError(f"factory for {name!r} must be callable; got {factory!r}.")
     if name in _FACTORIES and not overwrite:
         raise ValueError(f"a calibrator named {name!r} is already registered; pass overwrite=True to replace it.")
@@ -148,7 +171,7 @@ def calibrator_parameters(name: str) -> tuple[str, ...]:
     True
     """
     _check_name(name)
-    signature = inspect.signature(_FACTORIES[name])
+    signature = inspect.signature(_factory(name))
     return tuple(p for p, v in signature.parameters.items()
                  if v.kind is not inspect.Parameter.VAR_KEYWORD and p != "random_state")
 
@@ -170,17 +193,21 @@ def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **pa
     if unknown:
         raise ValueError(f"{name} has no parameter {unknown[0]!r}; its parameters are: {', '.join(sorted(known))}.")
     merged = {**training_schedule(schedule, name), **params}
-    return _FACTORIES[name](random_state=random_state, **merged)
+    return _factory(name)(random_state=random_state, **merged)
 
 
-register_calibrator("linear", LinearCalibrator)
-register_calibrator(
-    "comparative",
-    ComparativeCalibrator,
-    schedules={"thesis": dict(_THESIS, max_epochs=3000), "short": dict(_SHORT, max_epochs=250)},
-)
-register_calibrator(
-    "directional",
-    DirectionalCalibrator,
-    schedules={"thesis": dict(_THESIS, max_epochs=1700), "short": dict(_SHORT, max_epochs=150)},
-)
+_DIRECTIONAL = {"thesis": dict(_THESIS, max_epochs=1700), "short": dict(_SHORT, max_epochs=150)}
+_COMPARATIVE = {"thesis": dict(_THESIS, max_epochs=3000), "short": dict(_SHORT, max_epochs=250)}
+register_calibrator("linear", _Lazy("._linear", "LinearCalibrator"))
+register_calibrator("comparative", _Lazy("._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE)
+register_calibrator("directional", _Lazy("._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL)
+register_calibrator("polynomial", _Lazy("._polynomial", "PolynomialCalibrator"))
+register_calibrator("axis_nonlinear", _Lazy("._hybrid", "AxisNonlinearCalibrator"))
+register_calibrator("gaussian_process", _Lazy("._gaussian_process", "GaussianProcessCalibrator"))
+# ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
+register_calibrator("directional_ensemble", _Lazy("._directional", "DirectionalCalibrator", ensemble_of="directional"),
+                    schedules=_DIRECTIONAL)
+register_calibrator("comparative_ensemble", _Lazy("._comparative", "ComparativeCalibrator", ensemble_of="comparative"),
+                    schedules=_COMPARATIVE)
+# "auto" chooses among the names above; its schedule goes to its network candidates
+register_calibrator("auto", _Lazy("._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})

@@ -39,13 +39,17 @@ __all__ = [
     "frame_pose_in_base",
 ]
 
-_DATA_DIR = Path(__file__).resolve().parent / "data"
+def _robots_dir() -> Path:
+    """The repository's ``robots/`` folder, shipped in the wheel as the data package ``ftcal.robots``."""
+    from importlib.resources import files
+
+    return Path(str(files("ftcal.robots")))
 _ERD_SUBDIR = Path("cmeel.prefix") / "share" / "example-robot-data" / "robots"
 
 
 @dataclass(frozen=True)
 class _BuiltinRobot:
-    urdf: str  # "ftcal:<file>" for ftcal/data, "erd:<relative path>" for example-robot-data
+    urdf: str  # "ftcal:<file>" for robots/ (package ftcal.robots), "erd:<relative path>" for example-robot-data
     sensor_frame: str
     home_deg: tuple[float, ...]
     anchor_frame: str | None = None
@@ -187,7 +191,7 @@ def example_robot_data_dir() -> Path:
 
 def _builtin_urdf(spec: _BuiltinRobot) -> Path:
     source, _, rel = spec.urdf.partition(":")
-    return _DATA_DIR / rel if source == "ftcal" else example_robot_data_dir() / rel
+    return _robots_dir() / rel if source == "ftcal" else example_robot_data_dir() / rel
 
 
 def _arm_model(full: pin.Model, sensor_frame: str, urdf: Path) -> pin.Model:

@@ -250,3 +250,14 @@ def test_evaluate_channel_mismatch_is_one_line(tmp_path, affine_dir, capsys):
             "--out", str(tmp_path / "e")]
     assert main(argv) == 2
     assert "8" in one_error_line(capsys)
+
+
+def test_the_command_line_starts_without_torch_or_pinocchio():
+    # `ftcal --help` must be instant: the heavy libraries load only inside the subcommand that needs them
+    import subprocess
+    import sys
+
+    code = ("import sys, ftcal.cli; ftcal.cli.build_parser(); "
+            "print(sorted(m for m in ('torch', 'pinocchio', 'skorch', 'sklearn') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert out.strip() == "[]"

@@ -7,6 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import ftcal
+
 from ftcal import KinematicsError, example_robot_data_dir, frame_pose_in_base, load_robot, sensor_pose_in_base
 
 REPO = Path(__file__).resolve().parents[1]
@@ -33,10 +35,11 @@ def iiwa():
     return load_robot("kuka_iiwa14")
 
 
-def test_packaged_urdf_is_the_documented_one():
-    assert (REPO / "robots" / "kuka_iiwa14_ft.urdf").read_bytes() == (
-        REPO / "ftcal" / "data" / "kuka_iiwa14_ft.urdf"
-    ).read_bytes()
+def test_builtin_urdf_is_this_folders_file():
+    # one copy: robots/ is installed as the data package ftcal.robots
+    assert not (REPO / "ftcal" / "data").exists()
+    loaded = ftcal.load_robot("kuka_iiwa14").urdf_path
+    assert Path(loaded).read_bytes() == (REPO / "robots" / "kuka_iiwa14_ft.urdf").read_bytes()
 
 
 def test_iiwa_joints_and_limits_match_the_datasheet(iiwa):
