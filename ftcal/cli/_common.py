@@ -208,6 +208,14 @@ class OutputPlan:
                     "pass --force to overwrite or choose another --out"
                 )
 
+    @classmethod
+    def single_file(cls, output: str | Path, force: bool) -> "OutputPlan | None":
+        """The plan of one ``--output FILE`` (``None`` for ``-``, standard output)."""
+        if str(output) == "-":
+            return None
+        out = Path(output)
+        return cls(out.parent if str(out.parent) else Path("."), [out.name], force)
+
     def path(self, name: str) -> Path:
         """The path of planned file ``name``; creates ``out_dir`` on first use."""
         if name not in self.names:

@@ -46,9 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of static poses.",
         epilog=IDENTIFY_EXAMPLE,
     )
-    p.add_argument("logs", nargs="+", metavar="LOG", help="run log files or directories of *.csv logs")
-    p.add_argument("--model", type=existing_file, required=True, help="calibration model file (ftcal fit)")
-    add_robot_options(p)
+    _add_log_inputs(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
     p.add_argument("--name", default="tool", help="file name stem of the tool file")
     add_output_options(p, "ftcal-tool")
@@ -61,14 +59,19 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Calibrate run logs with a model and subtract the identified tool load at each pose.",
         epilog=COMPENSATE_EXAMPLE,
     )
-    c.add_argument("logs", nargs="+", metavar="LOG", help="run log files or directories of *.csv logs")
-    c.add_argument("--model", type=existing_file, required=True, help="calibration model file (ftcal fit)")
+    _add_log_inputs(c)
     c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
-    add_robot_options(c)
     c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
     c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
     add_run_options(c, seed=False)
     c.set_defaults(handler=run_compensate)
+
+
+def _add_log_inputs(p: argparse.ArgumentParser) -> None:
+    """The run logs, the model that calibrates them and the robot whose kinematics give their poses."""
+    p.add_argument("logs", nargs="+", metavar="LOG", help="run log files or directories of *.csv logs")
+    p.add_argument("--model", type=existing_file, required=True, help="calibration model file (ftcal fit)")
+    add_robot_options(p)
 
 
 def _gravity(text: str):
@@ -124,10 +127,7 @@ def run_compensate(args: argparse.Namespace) -> int:
     from .._wrench import WRENCH_LABELS
 
     console = Console(args.quiet)
-    plan = None
-    if args.output != "-":
-        out = Path(args.output)
-        plan = OutputPlan(out.parent if str(out.parent) else Path("."), [out.name], args.force)
+    plan = OutputPlan.single_file(args.output, args.force)
     tool = ftcal.ToolLoad.load(args.tool)
     logs, rotations, wrenches = _poses_and_wrenches(args)
     external = tool.compensate(rotations, wrenches)

@@ -53,10 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
-    plan = None
-    if args.output != "-":
-        out = Path(args.output)
-        plan = OutputPlan(out.parent if str(out.parent) else Path("."), [out.name], args.force)
+    plan = OutputPlan.single_file(args.output, args.force)
     if args.input != "-" and not Path(args.input).is_file():
         raise FileNotFoundError(2, "No such file (the raw readings to predict)", args.input)
     if args.output != "-":

@@ -57,7 +57,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--output {output} is the model file itself; pass --force to replace it")
     if args.readings != "-" and not Path(args.readings).is_file():
         raise CliError(f"{args.readings}: no such readings file")
-    plan = OutputPlan(output.parent if str(output.parent) else Path("."), [output.name], args.force)
+    plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
     chunks = list(_raw_chunks(args.readings, n_channels, 4096))
