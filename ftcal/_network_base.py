@@ -39,9 +39,11 @@ from ._exceptions import CalibrationInputError
 from ._networks import WeightedSquaredError
 from ._schedule import schedule_callbacks
 
-__all__ = ["NetworkCalibrator", "torch_threads", "device_available", "interrupt_flag"]
+__all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available", "interrupt_flag"]
 
 _PREDICT_CHUNK = 65536
+#: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
+_NUMPY_FORWARD_ROWS = 256
 #: A net whose best loss exceeds this multiple of the constant (mean) prediction's loss has diverged.
 _DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
@@ -115,6 +117,68 @@ def _check_real(name: str, value, low: float, high: float, *, low_open: bool = F
     return float(value)
 
 
+def _tensors(dataset) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(X, y)`` tensors of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
+    indices = None
+    if isinstance(dataset, torch.utils.data.Subset):
+        dataset, indices = dataset.dataset, np.asarray(dataset.indices)
+    cache = dataset.__dict__.setdefault("_ftcal_tensors", {})
+    key = None if indices is None else indices.tobytes()
+    if key not in cache:
+        X = np.asarray(dataset.X if indices is None else dataset.X[indices])
+        y = np.asarray(dataset.y if indices is None else dataset.y[indices])
+        cache[key] = (torch.as_tensor(X), torch.as_tensor(y))
+    return cache[key]
+
+
+class LeanNeuralNetRegressor(NeuralNetRegressor):
+    """skorch's ``NeuralNetRegressor`` with a lean inner loop: tensors loaded once, batches sliced from them.
+
+    skorch's loop builds every mini-batch with a ``DataLoader`` (one ``__getitem__``
+    and a collate per sample) and calls the batch-level callbacks and history
+    twice per batch; for ftcal's small nets and batches of 32 that costs several
+    times the arithmetic. This subclass keeps everything epoch-level as it is
+    (``fit_loop``, the history, every callback, the three-phase schedule, early
+    stopping, ``net.history[-1, 'train_loss']``) and replaces only the inner
+    loop of an epoch: the training tensors are loaded once, each epoch shuffles
+    them with ``torch.randperm`` (seeded by the caller's torch RNG) and runs
+    ``zero_grad / forward / loss / backward / step`` per batch; validation is
+    one forward pass. The epoch's losses are recorded as one batch of the
+    epoch's size (the batch-size-weighted mean, as skorch computes it).
+    ``on_batch_begin`` / ``on_batch_end`` callbacks are not called.
+    """
+
+    def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
+        if iterator is None:
+            return
+        X, y = _tensors(iterator.dataset)
+        n = len(X)
+        module, criterion = self.module_, self.criterion_
+        if training:
+            module.train()
+            order = torch.randperm(n) if getattr(self, "iterator_train__shuffle", False) else torch.arange(n)
+            total = torch.zeros(())
+            batch = int(self.batch_size)
+            for start in range(0, n, batch):
+                index = order[start:start + batch]
+                self.optimizer_.zero_grad(set_to_none=True)
+                loss = criterion(module(X[index]), y[index])
+                loss.backward()
+                self.optimizer_.step()
+                total += loss.detach() * len(index)
+            mean = float(total) / max(n, 1)
+            batches = -(-n // batch)
+        else:
+            module.eval()
+            with torch.no_grad():
+                mean = float(criterion(module(X), y)) if n else 0.0
+            batches = 1
+        self.history.new_batch()
+        self.history.record_batch(prefix + "_loss", mean)
+        self.history.record_batch(prefix + "_batch_size", n)
+        self.history.record(prefix + "_batch_count", batches)
+
+
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
     ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
@@ -156,13 +220,15 @@ class NetworkCalibrator(BaseCalibrator):
         """The skorch net with this estimator's module, loss, optimiser and schedule."""
         monitor = "train_loss" if self.validation_fraction is None else "valid_loss"
         split = None if self.validation_fraction is None else ValidSplit(self.validation_fraction, random_state=seed)
-        return NeuralNetRegressor(
+        return LeanNeuralNetRegressor(
             module=self._module_class,
             module__n_inputs=n_inputs,
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
             criterion=WeightedSquaredError,
             criterion__weights=tuple(self._loss_weights()),
             optimizer=torch.optim.Adam,
+            # the fused CPU kernel does Adam's update in one pass: 2.5x faster steps for these small nets
+            optimizer__fused=True,
             lr=self.lr,
             batch_size=self.batch_size,
             max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs,
@@ -234,7 +300,39 @@ class NetworkCalibrator(BaseCalibrator):
                 f"times that of predicting the mean ({constant:.3g}) {fix}"
             )
 
+    def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
+        """The fitted layers as float32 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
+        cached = self.__dict__.get("_numpy_layers_cache")
+        if cached is not None and cached[0] is self.net_.module_:
+            return cached[1]
+        layers, pending = [], None
+        for layer in self.net_.module_.layers:
+            if isinstance(layer, torch.nn.Linear):
+                if pending is not None:
+                    layers.append((*pending, "identity"))
+                pending = (layer.weight.detach().cpu().numpy().T.copy(), layer.bias.detach().cpu().numpy().copy())
+            else:
+                layers.append((*pending, "tanh" if isinstance(layer, torch.nn.Tanh) else "relu"))
+                pending = None
+        if pending is not None:
+            layers.append((*pending, "identity"))
+        self.__dict__["_numpy_layers_cache"] = (self.net_.module_, layers)
+        return layers
+
+    def _forward_numpy(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The forward pass in numpy float32 (the network's precision): no torch dispatch, no thread changes."""
+        h = inputs.astype(np.float32)
+        for weight, bias, activation in self._numpy_layers():
+            h = h @ weight + bias
+            if activation == "relu":
+                np.maximum(h, 0.0, out=h)
+            elif activation == "tanh":
+                np.tanh(h, out=h)
+        return h.astype(np.float64)
+
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
+        if inputs.shape[0] <= _NUMPY_FORWARD_ROWS:  # small batches (a control loop): numpy is ~20x cheaper
+            return self._forward_numpy(inputs)
         module = self.net_.module_
         module.eval()
         out = []

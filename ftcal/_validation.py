@@ -187,6 +187,12 @@ def validate_training_data(
 
 def validate_readings(estimator, X: ArrayLike) -> NDArray[np.float64]:
     """Validate ``predict`` readings against the fitted channel count; float64 (n, N)."""
+    if (type(X) is np.ndarray and X.dtype == np.float64 and X.ndim == 2 and X.shape[1] == estimator.n_features_in_
+            and X.shape[0] > 0 and not hasattr(estimator, "feature_names_in_")):
+        # the control-loop case (one float64 reading at a time): the checks validate_data would make, at a
+        # fraction of its cost
+        check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings")
+        return X
     _check_real_2d(X, "X", "raw readings")
     X = validate_data(estimator, X, reset=False, dtype=np.float64, ensure_all_finite=False)
     check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings")

@@ -1,0 +1,123 @@
+"""Issue 13 figures: the lean skorch training loop and the numpy inference path, as ratios in one process.
+
+Usage::
+
+    python benchmarks/network_speed.py [--repeats 3] [--epochs 20] [--latency-calls 3000]
+
+* fit: ``DirectionalCalibrator`` with a fixed number of epochs (phase 1 only) against a plain
+  ``skorch.NeuralNetRegressor`` with the same net (64, 64, 64), data (4000 x 6), batch size (32), epochs,
+  Adam lr and 20 % validation split; medians of ``--repeats`` runs; also the final held-out RMSE of both;
+* predict: one-sample ``predict`` latency against the numpy forward pass of the same fitted net (median of
+  ``--latency-calls`` calls), and 100 000-row ``predict`` throughput against the numpy forward's.
+
+Everything runs single-threaded (torch and BLAS), as ftcal's networks do.
+"""
+
+from __future__ import annotations
+
+import argparse
+import platform
+import statistics
+import time
+
+import numpy as np
+import torch
+from skorch import NeuralNetRegressor
+from skorch.dataset import ValidSplit
+from threadpoolctl import threadpool_limits
+
+import ftcal
+from ftcal._networks import DirectionalNet, WeightedSquaredError
+
+
+def data(n: int, seed: int):
+    rng = np.random.default_rng(seed)
+    w = rng.normal(size=(n, 6)) * np.array([100.0] * 3 + [2.0] * 3)
+    seen = w + 2e-5 * w * np.abs(w)  # mildly nonlinear gauges (up to ~1 % at 300 N)
+    return seen @ np.random.default_rng(99).normal(size=(6, 6)) * 0.01, w  # one sensor for every seed
+
+
+def median_time(fn, repeats: int) -> tuple[float, object]:
+    times, out = [], None
+    for _ in range(repeats):
+        start = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - start)
+    return statistics.median(times), out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--epochs", type=int, default=20)
+    parser.add_argument("--latency-calls", type=int, default=3000)
+    args = parser.parse_args(argv)
+    raw, w = data(4000, 0)
+    test_raw, test_w = data(2000, 1)
+    torch.set_num_threads(1)
+
+    def ftcal_fit():
+        return ftcal.DirectionalCalibrator(max_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0,
+                                           alpha=50.0, random_state=0).fit(raw, w)
+
+    model = ftcal_fit()  # warm-up; also provides the directional inputs/targets for the plain net
+    inputs, targets = model._training_pairs(raw, w)  # the same network inputs and targets as the calibrator
+
+    def plain_fit():
+        torch.manual_seed(0)
+        net = NeuralNetRegressor(
+            DirectionalNet, criterion=WeightedSquaredError, criterion__weights=(1.0,) * 7,
+            module__n_inputs=6, module__hidden_layer_sizes=(64, 64, 64), optimizer=torch.optim.Adam, lr=1e-3,
+            batch_size=32, max_epochs=args.epochs, train_split=ValidSplit(0.2, random_state=0),
+            iterator_train__shuffle=True, verbose=0,
+        )
+        return net.fit(inputs.astype(np.float32), targets.astype(np.float32))
+
+    with threadpool_limits(1):
+        t_plain, _ = median_time(plain_fit, args.repeats)
+        t_ftcal, model = median_time(ftcal_fit, args.repeats)
+    rmse = ftcal.wrench_rmse(test_w, model.predict(test_raw), alpha=50.0)
+    ltm = ftcal.wrench_rmse(test_w, ftcal.LinearCalibrator(alpha=50.0).fit(raw, w).predict(test_raw), alpha=50.0)
+
+    one = test_raw[:1].copy()
+    layers = model._numpy_layers()
+
+    def numpy_forward(x):
+        h = x.astype(np.float32)
+        for weight, bias, activation in layers:
+            h = h @ weight + bias
+            if activation == "relu":
+                np.maximum(h, 0.0, out=h)
+            elif activation == "tanh":
+                np.tanh(h, out=h)
+        return h
+
+    unit_one = model._network_inputs(one)
+    lat_numpy, _ = median_time(lambda: numpy_forward(unit_one), args.latency_calls)
+    lat_predict, _ = median_time(lambda: model.predict(one), args.latency_calls)
+    big = np.repeat(test_raw, 50, axis=0)
+    unit_big = model._network_inputs(big)
+    with threadpool_limits(1):
+        thr_numpy, _ = median_time(lambda: numpy_forward(unit_big), 5)
+        thr_predict, _ = median_time(lambda: model.predict(big), 5)
+    lines = [
+        f"machine: {platform.machine()}, {torch.get_num_threads()} torch thread, Python {platform.python_version()}, "
+        f"torch {torch.__version__}",
+        "",
+        "| measure | ftcal | baseline (same process) | ratio | target |",
+        "|---|---|---|---|---|",
+        f"| fit, {args.epochs} epochs, 4000 x 6, batch 32, (64, 64, 64) | {t_ftcal:.2f} s | plain skorch "
+        f"NeuralNetRegressor {t_plain:.2f} s | {t_ftcal / t_plain:.2f} | <= 0.33 |",
+        f"| one-sample predict (directional) | {lat_predict * 1e6:.1f} us | numpy forward {lat_numpy * 1e6:.1f} us "
+        f"| {lat_predict / lat_numpy:.2f} | <= 5 |",
+        f"| 100 000-row predict throughput | {len(big) / thr_predict:,.0f} rows/s | numpy forward "
+        f"{len(big) / thr_numpy:,.0f} rows/s | {thr_numpy / thr_predict:.2f} of numpy's | >= 0.5 |",
+        "",
+        f"held-out RMSE after {args.epochs} epochs: directional {rmse:.3f} N (LTM {ltm:.3f} N)",
+    ]
+    print("\n".join(lines))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
