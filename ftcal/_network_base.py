@@ -117,8 +117,8 @@ def _check_real(name: str, value, low: float, high: float, *, low_open: bool = F
     return float(value)
 
 
-def _tensors(dataset) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(X, y)`` tensors of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
+def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(X, y)`` tensors on ``device`` of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
     indices = None
     if isinstance(dataset, torch.utils.data.Subset):
         dataset, indices = dataset.dataset, np.asarray(dataset.indices)
@@ -127,7 +127,7 @@ def _tensors(dataset) -> tuple[torch.Tensor, torch.Tensor]:
     if key not in cache:
         X = np.asarray(dataset.X if indices is None else dataset.X[indices])
         y = np.asarray(dataset.y if indices is None else dataset.y[indices])
-        cache[key] = (torch.as_tensor(X), torch.as_tensor(y))
+        cache[key] = (torch.as_tensor(X, device=device), torch.as_tensor(y, device=device))
     return cache[key]
 
 
@@ -151,13 +151,14 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
     def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
         if iterator is None:
             return
-        X, y = _tensors(iterator.dataset)
+        X, y = _tensors(iterator.dataset, self.device)
         n = len(X)
         module, criterion = self.module_, self.criterion_
         if training:
             module.train()
             order = torch.randperm(n) if getattr(self, "iterator_train__shuffle", False) else torch.arange(n)
-            total = torch.zeros(())
+            order = order.to(X.device)
+            total = torch.zeros((), device=X.device)
             batch = int(self.batch_size)
             for start in range(0, n, batch):
                 index = order[start:start + batch]

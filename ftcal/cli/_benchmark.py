@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (
+    add_scheduler_option,
     int_in_range,
     CliError,
     Console,
@@ -23,6 +24,7 @@ examples:
   ftcal benchmark artificial --quick --out bench              # smoke run, under 2 minutes
   ftcal benchmark artificial --schedule short --n-datasets 10 --jobs 2 --out bench
   ftcal benchmark artificial --preset thesis --preset asymmetric --preset stress --out bench_full
+  ftcal benchmark artificial --n-datasets 30 --preset thesis --scheduler tcp://head-node:8786 --out bench_full
 
 N datasets per preset, every calibrator; writes artificial_results.json / .md (RMSE and
 relative errors mean ± std beside the thesis' Tables II-III, Wilcoxon p-values, noise floor)
@@ -89,6 +91,7 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
         help="error preset (repeatable; default: thesis)",
     )
     a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
+    add_scheduler_option(a)
     _add_common(a, "ftcal-benchmark")
     a.set_defaults(handler=run_artificial)
 
@@ -220,9 +223,12 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
 
+    from .._scale_out import dask_backend
+
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))
-    with console.progress(total=None, desc="fits", unit="fit") as bar:
+    n_jobs = -1 if args.scheduler else args.jobs  # on a cluster: as many tasks at once as it has workers
+    with dask_backend(args.scheduler), console.progress(total=None, desc="fits", unit="fit") as bar:
 
         def progress(done: int, total: int, record: dict) -> None:
             bar.total = total
@@ -231,7 +237,7 @@ def run_artificial(args: argparse.Namespace) -> int:
 
         result = ftcal.run_artificial_benchmark(
             n_datasets=args.n_datasets, presets=presets, models=_models(args), schedule=args.schedule,
-            seed=args.seed, n_jobs=args.jobs, out_dir=args.out, quick=args.quick, progress=progress,
+            seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
             force=args.force,
         )
     _print_markdown(result, console, args.out)

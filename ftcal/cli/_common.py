@@ -35,6 +35,7 @@ __all__ = [
     "EXIT_FAILURE",
     "add_output_options",
     "add_run_options",
+    "add_scheduler_option",
     "add_robot_options",
     "OutputPlan",
     "Console",
@@ -158,6 +159,15 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
         "--robot", default="kuka_iiwa14", help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path",
     )
     parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
+
+
+def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
+    """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal._scale_out`)."""
+    parser.add_argument(
+        "--scheduler", metavar="ADDRESS|local",
+        help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "
+        "tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs",
+    )
 
 
 def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:

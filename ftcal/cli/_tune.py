@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
+from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
 from ._fit import _calibrator_names
 from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
 
@@ -59,6 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
+    add_scheduler_option(p)
     p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
     add_output_options(p, "ftcal-tuned")
     add_run_options(p)
@@ -87,10 +88,13 @@ def run(args: argparse.Namespace) -> int:
         params["alpha"] = alpha
     console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
     start = time.perf_counter()
-    search = search_calibrator(
-        args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
-        schedule=args.schedule, random_state=args.seed, n_jobs=args.jobs, **params,
-    )
+    from .._scale_out import dask_backend
+
+    with dask_backend(args.scheduler):
+        search = search_calibrator(
+            args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
+            schedule=args.schedule, random_state=args.seed, n_jobs=-1 if args.scheduler else args.jobs, **params,
+        )
     seconds = time.perf_counter() - start
     summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
                "search_seconds": round(seconds, 3), **search_summary(search)}
