@@ -78,9 +78,15 @@ def data_lines(workdir) -> tuple[list[str], list[str]]:
 
 
 # ------------------------------------------------------------------ 1. interrupts propagate, nothing is saved
+def _default_sigint() -> None:
+    # A test run started in the background (CI, `cmd &`) ignores SIGINT and its children inherit that; give the
+    # child the default disposition, as a terminal gives a program the user may Ctrl-C.
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def _start_cli(args, cwd) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "ftcal", *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
 
 
 def _interrupt_after_training_starts(proc: subprocess.Popen, marker: str) -> tuple[int, str]:
