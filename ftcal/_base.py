@@ -149,7 +149,8 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         -------
         ndarray of shape (n_samples, 6), float64
         """
-        check_is_fitted(self)
+        if "n_features_in_" not in self.__dict__:  # cheap test first: predict sits in control loops
+            check_is_fitted(self)
         X = self._retared(validate_readings(self, X))
         with np.errstate(over="ignore", invalid="ignore"):
             wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)

@@ -210,6 +210,14 @@ class DirectionalCalibrator(NetworkCalibrator):
     def _network_inputs(self, X):
         return _unit_rows(X - self.zero_reading_)[1]
 
+    def _predict_wrench(self, X):
+        # the input norm is computed once (eq. 3) and serves both the unit input and the decoding (III-B)
+        v_in, unit = _unit_rows(X - self.zero_reading_)
+        outputs = self._forward(unit)
+        scaled = outputs[:, :6] * (outputs[:, 6] * self.scale_reference_ * v_in)[:, None]
+        scaled[:, 3:] /= self.alpha_
+        return scaled
+
     def _decode(self, outputs, X):
         v_in = np.linalg.norm(X - self.zero_reading_, axis=1)
         magnitude = outputs[:, 6] * self.scale_reference_ * v_in
