@@ -21,7 +21,7 @@ from collections.abc import Iterator
 
 from ._exceptions import FtcalError
 
-__all__ = ["dask_backend", "SchedulerError", "CONNECT_TIMEOUT_S"]
+__all__ = ["dask_backend", "check_scheduler", "SchedulerError", "CONNECT_TIMEOUT_S"]
 
 #: Seconds to wait for a remote scheduler before giving up with a clear error.
 CONNECT_TIMEOUT_S = 10.0
@@ -30,6 +30,19 @@ _ADDRESS = re.compile(r"(tcp|tls|inproc|ucx)://[^\s/]+(:\d+)?|[A-Za-z0-9_.\-]+:\
 
 class SchedulerError(FtcalError, ValueError):
     """A Dask scheduler that cannot be used: a malformed address, unreachable, or Dask not installed."""
+
+
+def check_scheduler(scheduler: str) -> str:
+    """``scheduler`` if it is ``"local"`` or looks like a scheduler address, else :class:`SchedulerError`.
+
+    Examples
+    --------
+    >>> check_scheduler("tcp://10.0.0.5:8786"), check_scheduler("local")
+    ('tcp://10.0.0.5:8786', 'local')
+    """
+    if scheduler != "local" and not _ADDRESS.fullmatch(scheduler):
+        raise SchedulerError(f"--scheduler {scheduler!r} is not 'local' nor a scheduler address like tcp://host:8786.")
+    return scheduler
 
 
 @contextlib.contextmanager
@@ -58,8 +71,7 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
     if scheduler is None:
         yield None
         return
-    if scheduler != "local" and not _ADDRESS.fullmatch(scheduler):
-        raise SchedulerError(f"--scheduler {scheduler!r} is not 'local' nor a scheduler address like tcp://host:8786.")
+    check_scheduler(scheduler)
     try:
         import joblib
         from distributed import Client, LocalCluster

@@ -484,3 +484,25 @@ def test_write_errors_name_the_users_file_not_the_temporary_one(tmp_path):
 def test_prepare_dataset_takes_one_path(tmp_path):
     with pytest.raises(LogFormatError, match=r"x\.csv: no such log file"):
         ftcal.prepare_dataset(str(tmp_path / "x.csv"))
+
+
+# ------------------------------------------------------------------ the new entry points (issues 12, 13, 15)
+@pytest.mark.parametrize("argv, message", [
+    (["benchmark", "dataset", "{nogroup}", "--folds", "group", "--out", "{tmp}/b"], "has no group column"),
+    (["benchmark", "dataset", "{train}", "--model", "auto", "--out", "{tmp}/b"], "'auto' is itself this comparison"),
+    (["fit", "{train}", "--model", "linear", "--temperature", "--out", "{tmp}/m"], "has no temperature column"),
+    (["simulate", "dataset", "--temperature-range", "35,15", "--out", "{tmp}/s"], "need -60 <= LOW < HIGH"),
+    (["simulate", "dataset", "--temperature-range", "warm", "--out", "{tmp}/s"], "give LOW,HIGH in deg C"),
+    (["identify-load", "{train}", "--model", "{model}", "--gravity", "0,-9.81", "--out", "{tmp}/t"],
+     "give three comma-separated numbers"),
+    (["identify-load", "{train}", "--model", "{model}", "--out", "{tmp}/t"], "missing comment '# time_unit: <unit>'"),
+    (["retare", "{model}", "{tmp}/missing.csv"], "no such readings file"),
+    (["tune", "{train}", "--model", "linear", "--grid", "ridge=[0,1]", "--scheduler", "tcp//x", "--out", "{tmp}/u"],
+     "is not 'local' nor a scheduler address"),
+])
+def test_new_entry_points_reject_bad_input(workdir, tmp_path, capsys, argv, message):
+    train = CalibrationDataset.load(workdir / "data" / "train.csv")
+    nogroup = CalibrationDataset(raw=train.raw, wrench=train.wrench).save(tmp_path / "nogroup.csv")
+    fill = {"train": workdir / "data" / "train.csv", "model": workdir / "models" / "linear.model.npz", "tmp": tmp_path,
+            "nogroup": nogroup}
+    assert message in cli_error([a.format(**fill) for a in argv], capsys)

@@ -161,10 +161,20 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
 
 
+def _scheduler(text: str) -> str:
+    """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
+    from .._scale_out import SchedulerError, check_scheduler
+
+    try:
+        return check_scheduler(text)
+    except SchedulerError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
     """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal._scale_out`)."""
     parser.add_argument(
-        "--scheduler", metavar="ADDRESS|local",
+        "--scheduler", metavar="ADDRESS|local", type=_scheduler,
         help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "
         "tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs",
     )
