@@ -106,8 +106,8 @@ def score_candidates(
                     warnings.simplefilter("ignore", UserWarning)
                     _fit(estimator, X[train], y[train], None if groups is None else np.asarray(groups)[train])
                 pred[test] = estimator.predict(X[test])
-            except (ValueError, np.linalg.LinAlgError) as exc:
-                status = f"failed: {' '.join(str(exc).split())[:200]}"
+            except Exception as exc:  # a candidate that cannot fit these data is recorded, not fatal
+                status = f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
                 break
             seconds.append(time.perf_counter() - t0)
         if seconds:

@@ -45,7 +45,7 @@ _EXPECTED_FAILURES = {
 }
 
 
-@parametrize_with_checks(tiny_calibrators(), expected_failed_checks=lambda est: _EXPECTED_FAILURES)
+@parametrize_with_checks(tiny_calibrators(), expected_failed_checks=lambda est: _EXPECTED_FAILURES, xfail_strict=True)
 def test_sklearn_estimator_checks(estimator, check):
     try:
         check(estimator)
