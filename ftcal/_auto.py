@@ -290,8 +290,8 @@ class AutoCalibrator(BaseCalibrator):
         self.best_name_ = results["name"][chosen]
         best = with_alpha_and_tare(candidates[chosen][1], self.alpha_, given)
         self.best_estimator_ = _fit(best, X, y, groups)
-        self.zero_reading_ = np.asarray(getattr(self.best_estimator_, "zero_reading_",
-                                                estimate_zero_reading(X, y, self.alpha_)))
+        best_zero = getattr(self.best_estimator_, "zero_reading_", None)
+        self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
         self.reading_noise_ = reading_noise(X, y)
         self.__dict__.pop("tare_reading_", None)
         return self
