@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from ._artificial import VirtualSensor
 from ._exceptions import LogFormatError
 from ._loads import GRAVITY_IN_BASE, LoadConfiguration, reference_wrench, thesis_load_configurations
+from ._temperature import ThermalDrift
 from ._logs import write_run_log
 from ._pose_planning import THESIS_EXCLUDED_CAP_DEG, THESIS_SUBDIVISIONS, CalibrationPlan, plan_calibration_poses
 from ._robot import RobotModel, load_robot, sensor_pose_in_base
@@ -99,6 +100,8 @@ def simulate_experiment(
     gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
     random_state: int | None = None,
     overwrite: bool = False,
+    thermal_drift: ThermalDrift | str | None = None,
+    temperature_range_deg: tuple[float, float] = (20.0, 30.0),
 ) -> list[Path]:
     """Simulate the load / no-load runs and write one log per run into ``out_dir``.
 
@@ -131,6 +134,14 @@ def simulate_experiment(
         Rows recorded per pose (each with fresh sensor noise).
     gravity_in_base : array-like of shape (3,)
         [m/s²].
+    thermal_drift : ThermalDrift, "typical" or None
+        Simulate the sensor's thermal zero and span drift (``"typical"``: data-sheet
+        magnitudes for this sensor, :meth:`ThermalDrift.typical` of its full-scale readings): each run's
+        temperature ramps linearly between two random values in
+        ``temperature_range_deg`` [deg C] (a slow drift over the run), the
+        readings drift accordingly and the logs carry a ``temperature`` column.
+    temperature_range_deg : (float, float), default=(20, 30)
+        Range of the simulated temperatures [deg C].
     random_state : int, optional
     overwrite : bool, default=False
         Replace existing logs; otherwise an existing file is an error and
@@ -200,19 +211,34 @@ def simulate_experiment(
                 wrench += reference_wrench(R_true, load_mass, c.position_in_sensor, g)
             rows_w = np.repeat(wrench, reps, axis=0)
             raw = sensor.read(rows_w)
+            temperature = None
+            if isinstance(thermal_drift, str):
+                if thermal_drift != "typical":
+                    raise LogFormatError(f"thermal_drift must be a ThermalDrift, 'typical' or None; got {thermal_drift!r}.")
+                full_scale = np.abs(sensor.profile.reading_from_wrench(np.diag(sensor.profile.full_scale))).sum(axis=0)
+                thermal_drift = ThermalDrift.typical(full_scale, random_state=rng)
+            if thermal_drift is not None:
+                start, end = rng.uniform(*temperature_range_deg, size=2)
+                temperature = np.linspace(start, end, len(raw))
+                raw = thermal_drift.apply(raw, temperature)
             t = clock + np.repeat(np.arange(n) * _POSE_PERIOD_S, reps) + np.tile(np.arange(reps) * _SAMPLE_PERIOD_S, n)
             clock = float(t[-1]) + _POSE_PERIOD_S
             write_run_log(path, timestamp=t, run_kind=[kind] * (n * reps), config=[c.config_id] * (n * reps),
                           pose=np.repeat(np.arange(n), reps), q=np.repeat(q_logged, reps, axis=0), raw=raw,
                           raw_unit=sensor.profile.raw_unit, load_mass=load_mass if kind == "load" else None,
                           robot=robot.name, sensor_frame=robot.sensor_frame,
-                          meta={"simulated": True, "load_configuration": c.name}, overwrite=overwrite)
+                          meta={"simulated": True, "load_configuration": c.name}, overwrite=overwrite,
+                          temperature=temperature)
     truth = {
         "robot": robot.name, "load_mass_kg": load_mass, "mounting_device": asdict(mounting),
         "load_configurations": [asdict(c) for c in configs], "n_poses": n, "samples_per_pose": reps,
         "joint_error_max_rad": joint_error_max, "load_pose_jitter_deg": load_pose_jitter_deg,
         "sensor_errors": sensor.errors_.to_dict() if hasattr(sensor.errors_, "to_dict") else repr(sensor.errors_),
         "zero_offset": np.asarray(sensor.zero_offset).tolist(), "random_state": random_state,
+        "thermal_drift": None if thermal_drift is None else {
+            "offset_per_deg": thermal_drift.offset_per_deg.tolist(), "gain_per_deg": thermal_drift.gain_per_deg.tolist(),
+            "reference_temperature": thermal_drift.reference_temperature,
+            "temperature_range_deg": list(temperature_range_deg)},
         "plan": plan.settings,
     }
     (out / "virtual_experiment.json").write_text(json.dumps(truth, indent=2, default=str), encoding="utf-8")

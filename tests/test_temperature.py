@@ -139,3 +139,17 @@ def test_temperature_workflow_through_the_cli(tmp_path, capsys):
     assert main(["predict", str(models / "linear.model.npz"), str(data / "test.csv")]) == 0
     assert main(["fit", str(data / "train.csv"), "--model", "linear", "--temperature", "--out",
                  str(tmp_path / "x"), "-q", "--name", "bad", "--tare", "1,2"]) == 2
+
+
+def test_virtual_experiment_with_thermal_drift_through_the_cli(tmp_path):
+    logs, data, models = tmp_path / "logs", tmp_path / "data", tmp_path / "models"
+    assert main(["simulate", "experiment", "--subdivisions", "0", "--temperature-range", "15,35", "--out", str(logs),
+                 "-q"]) == 0
+    log = ftcal.read_run_log(logs / "config0_load.csv")
+    assert log.temperature is not None and 15 <= log.temperature.min() and log.temperature.max() <= 35
+    truth = json.loads((logs / "virtual_experiment.json").read_text())
+    assert truth["thermal_drift"]["temperature_range_deg"] == [15.0, 35.0]
+    assert main(["prepare", str(logs), "--out", str(data), "-q"]) == 0
+    assert CalibrationDataset.load(data / "dataset.csv").temperature is not None
+    assert main(["fit", str(data / "dataset.csv"), "--model", "linear", "--temperature", "--out", str(models),
+                 "-q"]) == 0

@@ -197,6 +197,11 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
         help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)",
     )
     e.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
+    e.add_argument(
+        "--temperature-range", metavar="LOW,HIGH",
+        help="simulate thermal drift: each run's temperature ramps within LOW..HIGH deg C and the sensor's zero and "
+        "span drift by data-sheet magnitudes; the logs get a temperature column",
+    )
     add_output_options(e, "ftcal-logs")
     add_run_options(e)
     e.set_defaults(handler=run_experiment)
