@@ -75,7 +75,7 @@ def interrupt_flag() -> Iterator[threading.Event]:
         yield flag
         return
     previous = signal.getsignal(signal.SIGINT)
-    if previous is signal.SIG_IGN:  # a background job that ignores Ctrl-C: nothing to notice
+    if previous is signal.SIG_IGN or previous is None:  # ignored (a background job), or a handler set outside Python
         yield flag
         return
 
