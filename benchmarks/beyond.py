@@ -39,7 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
-from ftcal._benchmark_artificial import _strict_json, wilcoxon_pvalue
+from ftcal._benchmark_artificial import wilcoxon_pvalue
+from ftcal._files import plain_json
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "beyond"
 HYBRID = "axis_nonlinear"
@@ -186,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
     rw = None if real_world is None else {"splits": {
         s: {m: {k: r.get(k) for k in ("rmse_mean", "rel_force_mean", "rel_torque_mean")} for m, r in by.items()}
         for s, by in real_world["splits"].items()}}
-    (out / "beyond_summary.json").write_text(json.dumps(_strict_json({"meta": meta, "targets": tgt,
+    (out / "beyond_summary.json").write_text(json.dumps(plain_json({"meta": meta, "targets": tgt,
                                                                       "real_world": rw}), indent=1))
     text = markdown(meta, tgt, rw)
     (out / "beyond_summary.md").write_text(text)

@@ -37,8 +37,9 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
-from ftcal._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, _strict_json, wilcoxon_pvalue
-from ftcal._search import _plain, search_summary
+from ftcal._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, wilcoxon_pvalue
+from ftcal._files import plain_json
+from ftcal._search import search_summary
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "tune_networks"
 OUTPUTS = ("tune_networks.json", "tune_networks.md")
@@ -93,7 +94,7 @@ def _validate_one(preset: str, model: str, params: dict, index: int, args) -> fl
 def tune_one(preset: str, model: str, args) -> dict:
     if args.setting is not None:  # no search: validate the given setting
         best, search_seconds = dict(args.setting), 0.0
-        summary = {"best_params": {k: _plain(v) for k, v in best.items()},
+        summary = {"best_params": {k: plain_json(v) for k, v in best.items()},
                    "best_rmse": float("nan"), "n_folds": 0, "candidates": []}
     else:
         profile = SensorProfile.default()
@@ -175,7 +176,7 @@ def main(argv: list[str] | None = None) -> int:
                   f"{r['tuned_over_default']:.3f} (p={r['wilcoxon_p']:.3g})", file=sys.stderr, flush=True)
     seconds = time.perf_counter() - start
     text = markdown(rows, command.strip(), seconds)
-    (args.out / "tune_networks.json").write_text(json.dumps(_strict_json(
+    (args.out / "tune_networks.json").write_text(json.dumps(plain_json(
         {"command": command.strip(), "wall_seconds": seconds, "rows": rows}), indent=2) + "\n")
     (args.out / "tune_networks.md").write_text(text + "\n")
     print(text)

@@ -51,6 +51,7 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ._artificial import make_artificial_dataset
+from ._files import plain_json
 from ._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ._metrics import calibration_report, wrench_rmse
 from ._presets import error_preset
@@ -458,21 +459,8 @@ def run_artificial_benchmark(
     (out_dir / "artificial_results.md").write_text(markdown_tables(summary, meta))
     files["markdown"] = str(outputs.written("artificial_results.md"))
     payload = {"meta": meta, "summary": summary, "results": results, "files": files}
-    (out_dir / "artificial_results.json").write_text(json.dumps(_strict_json(payload), indent=1))
+    (out_dir / "artificial_results.json").write_text(json.dumps(plain_json(payload), indent=1))
     files["json"] = str(outputs.written("artificial_results.json"))
     return payload
 
 
-def _strict_json(obj):
-    """Plain JSON: numpy scalars to Python numbers, NaN and inf to null."""
-    if isinstance(obj, dict):
-        return {str(k): _strict_json(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_strict_json(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return _strict_json(obj.tolist())
-    if isinstance(obj, (np.floating, np.integer)):
-        obj = obj.item()
-    if isinstance(obj, float) and not math.isfinite(obj):
-        return None
-    return obj

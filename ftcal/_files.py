@@ -19,7 +19,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_output", "check_writable_dir", "same_file"]
+__all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json"]
 
 
 @contextlib.contextmanager
@@ -109,3 +109,33 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
         return os.path.samefile(a, b)
     except OSError:
         return False
+
+
+def plain_json(obj):
+    """``obj`` as plain JSON values: numpy arrays and scalars to lists and numbers, tuples to lists, paths to
+    strings, and NaN / inf to ``null`` (strict JSON has no such numbers). The one converter of every JSON file
+    ftcal writes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> plain_json({"a": np.arange(2), "b": (np.float64(1.5), float("nan")), "c": Path("x")})
+    {'a': [0, 1], 'b': [1.5, None], 'c': 'x'}
+    """
+    import math
+
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): plain_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain_json(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, np.ndarray):
+        return plain_json(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj

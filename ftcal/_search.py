@@ -32,6 +32,7 @@ from numpy.typing import ArrayLike
 from scipy import stats
 from sklearn.model_selection import GridSearchCV, GroupKFold, KFold, RandomizedSearchCV
 
+from ._files import plain_json
 from ._exceptions import CalibrationInputError
 from ._metrics import neg_scaled_rmse
 
@@ -223,7 +224,7 @@ def search_summary(search) -> dict[str, Any]:
     candidates = [
         {
             "rank": int(res["rank_test_score"][i]),
-            "params": {k: _plain(v) for k, v in res["params"][i].items()},
+            "params": {k: plain_json(v) for k, v in res["params"][i].items()},
             "rmse_mean": float(-res["mean_test_score"][i]),
             "rmse_std": float(res["std_test_score"][i]),
             "fit_seconds_mean": float(res["mean_fit_time"][i]),
@@ -231,17 +232,9 @@ def search_summary(search) -> dict[str, Any]:
         for i in order
     ]
     return {
-        "best_params": {k: _plain(v) for k, v in search.best_params_.items()},
+        "best_params": {k: plain_json(v) for k, v in search.best_params_.items()},
         "best_rmse": float(-search.best_score_),
         "n_candidates": len(candidates),
         "n_folds": int(search.n_splits_),
         "candidates": candidates,
     }
-
-
-def _plain(value):
-    if isinstance(value, tuple):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.generic):
-        return value.item()
-    return value

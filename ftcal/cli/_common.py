@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from .._exceptions import FtcalError
-from .._files import atomic_output, check_writable_dir
+from .._files import atomic_output, check_writable_dir, plain_json
 
 __all__ = [
     "CliError",
@@ -258,26 +258,8 @@ class OutputPlan:
 
 
 def write_json(path: Path, obj: Any) -> None:
-    """Write ``obj`` as indented JSON (NaN written as ``null``)."""
-    path.write_text(json.dumps(_json_safe(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
-
-
-def _json_safe(obj: Any) -> Any:
-    import numpy as np
-
-    if isinstance(obj, dict):
-        return {str(k): _json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_json_safe(v) for v in obj]
-    if isinstance(obj, Path):
-        return str(obj)
-    if isinstance(obj, np.ndarray):
-        return _json_safe(obj.tolist())
-    if isinstance(obj, np.generic):
-        obj = obj.item()
-    if isinstance(obj, float) and obj != obj:
-        return None
-    return obj
+    """Write ``obj`` as indented JSON (NaN and inf written as ``null``, see :func:`ftcal._files.plain_json`)."""
+    path.write_text(json.dumps(plain_json(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
 
 
 # ------------------------------------------------------------------ messages
