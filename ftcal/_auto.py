@@ -85,7 +85,8 @@ def score_candidates(
     start = time.perf_counter()
     n = len(candidates)
     errors = np.full((n, len(X)), np.nan)
-    results: dict[str, list] = {k: [] for k in ("name", "status", "rmse", "rmse_se", "axis_rmse", "fit_seconds")}
+    results: dict = {k: [] for k in ("name", "status", "rmse", "rmse_se", "axis_rmse", "fit_seconds")}
+    results["n_splits"] = len(folds)
     predictions: list = []
     previous_fold_seconds = 0.0
     for k, (name, template) in enumerate(candidates):
@@ -285,7 +286,6 @@ class AutoCalibrator(BaseCalibrator):
         chosen = simplest_within_one_se(errors, groups)
         results["chosen"] = results["name"][chosen]
         results["folds"] = "group" if groups is not None else "kfold"
-        results["n_splits"] = len(calibration_folds(len(X), groups, self.cv, seed))
         self.cv_results_ = results
         self.best_name_ = results["name"][chosen]
         best = with_alpha_and_tare(candidates[chosen][1], self.alpha_, given)

@@ -31,6 +31,8 @@ __all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_nu
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
 _NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE)
 _BOM = "\ufeff"
+#: A character no plain number or separator has: lines holding one are parsed field by field.
+_NOT_PLAIN = re.compile(r"[^0-9eE+\-.,\s]")
 
 
 def is_number(text: str) -> bool:
@@ -67,9 +69,8 @@ def check_plain_numbers(lines: Iterable[str], first_line_no: int, source: str, e
     A fast guard in front of ``numpy.loadtxt`` (which, like ``float``, reads
     ``1_000`` as 1000).
     """
-    suspicious = re.compile(r"[^0-9eE+\-.,\s]")
     for offset, line in enumerate(lines):
-        if suspicious.search(line):
+        if _NOT_PLAIN.search(line):
             for field in line.split(","):
                 if field.strip() and not is_number(field):
                     parse_number(field, f"{source}: line {first_line_no + offset}", error)

@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._columns import parse_number, read_header
 from ._exceptions import CalibrationInputError, LogFormatError
-from ._temperature import check_temperature
+from ._temperature import TemperatureValueError, check_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -281,9 +281,9 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     if temp is not None:
         try:
             check_temperature(temp, n)
-        except CalibrationInputError as exc:
-            row = int(str(exc).split("row ")[1].split(" ")[0]) if "row " in str(exc) else 0
-            raise LogFormatError(f"{path}: line {line[row]}: {exc}") from None
+        except TemperatureValueError as exc:
+            where = "" if exc.row is None else f" line {line[exc.row]}:"
+            raise LogFormatError(f"{path}:{where} {exc}") from None
     return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
                   line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
                   sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)

@@ -36,12 +36,21 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
 
-__all__ = ["ThermalDrift", "check_temperature", "REFERENCE_TEMPERATURE", "PLAUSIBLE_TEMPERATURE"]
+__all__ = ["ThermalDrift", "check_temperature", "TemperatureValueError", "REFERENCE_TEMPERATURE",
+           "PLAUSIBLE_TEMPERATURE"]
 
 #: Temperature [deg C] at which drift is zero by convention (room temperature).
 REFERENCE_TEMPERATURE = 25.0
 #: Temperatures outside this range [deg C] are refused as implausible for a strain-gauge sensor.
 PLAUSIBLE_TEMPERATURE = (-60.0, 200.0)
+
+
+class TemperatureValueError(CalibrationInputError):
+    """A temperature that is not a usable value in deg C; ``row`` is the offending row (None for a shape error)."""
+
+    def __init__(self, message: str, row: int | None = None):
+        super().__init__(message)
+        self.row = row
 
 
 def check_temperature(temperature: ArrayLike, n_rows: int, name: str = "temperature") -> NDArray[np.float64]:
@@ -54,7 +63,7 @@ def check_temperature(temperature: ArrayLike, n_rows: int, name: str = "temperat
     >>> check_temperature([20.0, 2500.0], 2)
     Traceback (most recent call last):
     ...
-    ftcal._exceptions.CalibrationInputError: temperature row 1 is 2500 deg C, outside -60..200 deg C: is it in kelvin, or in tenths of a degree? Give deg C.
+    ftcal._temperature.TemperatureValueError: temperature row 1 is 2500 deg C, outside -60..200 deg C: is it in kelvin, or in tenths of a degree? Give deg C.
     """
     t = np.asarray(temperature)
     if np.iscomplexobj(t) or t.dtype.kind not in "iuf":
@@ -64,14 +73,15 @@ def check_temperature(temperature: ArrayLike, n_rows: int, name: str = "temperat
         raise CalibrationInputError(f"{name} must have shape ({n_rows},), one value per row; got {t.shape}.")
     bad = ~np.isfinite(t)
     if bad.any():
-        raise CalibrationInputError(f"{name} row {int(np.argmax(bad))} is NaN or inf; repair or drop that row.")
+        row = int(np.argmax(bad))
+        raise TemperatureValueError(f"{name} row {row} is NaN or inf; repair or drop that row.", row)
     low, high = PLAUSIBLE_TEMPERATURE
     out = (t < low) | (t > high)
     if out.any():
         i = int(np.argmax(out))
-        raise CalibrationInputError(
+        raise TemperatureValueError(
             f"{name} row {i} is {t[i]:g} deg C, outside {low:g}..{high:g} deg C: is it in kelvin, or in tenths "
-            "of a degree? Give deg C."
+            "of a degree? Give deg C.", i
         )
     return t
 
