@@ -10,7 +10,8 @@ Examples::
     python benchmarks/artificial.py --quick --out /tmp/ftcal-quick
     python benchmarks/artificial.py --datasets 30 --aggregate-only   # tables from whatever is cached
     python benchmarks/artificial.py --datasets 5 --presets thesis asymmetric stress --schedule short
-    python benchmarks/artificial.py --datasets 30 --presets thesis asymmetric stress --schedule thesis --jobs 2
+    python benchmarks/artificial.py --datasets 30 --presets thesis asymmetric stress --schedule thesis \
+        --stack 15 --jobs 2 --out benchmarks/out/artificial_thesis
 """
 
 from __future__ import annotations
@@ -35,6 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--schedule", default="thesis", choices=["thesis", "short"], help="network training schedule")
     p.add_argument("--seed", type=int, default=0, help="master seed of data and model initialisation")
     p.add_argument("--jobs", type=int, default=1, help="parallel joblib workers (-1: all cores)")
+    p.add_argument("--stack", type=int, default=1,
+                   help="network fits of one preset and model trained together as one stacked module")
     p.add_argument("--out", default=str(DEFAULT_OUT), help=f"output and cache folder (default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true", help="smoke mode: 3 small datasets, a few epochs")
     p.add_argument("--test-distribution", default="radial", choices=["radial", "box"], help="test-set sampling")
@@ -57,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
             n_datasets=args.datasets, presets=args.presets, models=args.models, schedule=args.schedule,
             seed=args.seed, n_jobs=args.jobs, out_dir=args.out, quick=args.quick, progress=progress,
             force=args.force, compute=not args.aggregate_only, test_distribution=args.test_distribution,
-            plot=not args.no_plot,
+            plot=not args.no_plot, stack=args.stack,
         )
     except FtcalError as exc:
         print(f"error: {exc}", file=sys.stderr)

@@ -7,6 +7,9 @@ Usage::
 * fit: ``DirectionalCalibrator`` with a fixed number of epochs (phase 1 only) against a plain
   ``skorch.NeuralNetRegressor`` with the same net (64, 64, 64), data (4000 x 6), batch size (32), epochs,
   Adam lr and 20 % validation split; medians of ``--repeats`` runs; also the final held-out RMSE of both;
+* stacked training: a 5-member ``EnsembleCalibrator`` of that directional model (members trained together
+  as one stacked module) against one member's fit, and ``ftcal.fit_stacked`` of ``--stack`` nets (one per
+  seed) against one fit, per net;
 * predict: one-sample ``predict`` latency against the numpy forward pass of the same fitted net (median of
   ``--latency-calls`` calls), and 100 000-row ``predict`` throughput against the numpy forward's.
 
@@ -24,6 +27,7 @@ import numpy as np
 import torch
 from skorch import NeuralNetRegressor
 from skorch.dataset import ValidSplit
+from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 import ftcal
@@ -51,6 +55,7 @@ def main(argv=None) -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--epochs", type=int, default=20)
     parser.add_argument("--latency-calls", type=int, default=3000)
+    parser.add_argument("--stack", type=int, default=30, help="nets in the fit_stacked measurement")
     args = parser.parse_args(argv)
     raw, w = data(4000, 0)
     test_raw, test_w = data(2000, 1)
@@ -76,7 +81,15 @@ def main(argv=None) -> int:
     with threadpool_limits(1):
         t_plain, _ = median_time(plain_fit, args.repeats)
         t_ftcal, model = median_time(ftcal_fit, args.repeats)
+    member = ftcal.DirectionalCalibrator(max_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0, alpha=50.0)
+    with threadpool_limits(1):
+        t_ensemble, ensemble = median_time(
+            lambda: ftcal.EnsembleCalibrator(member, n_members=5, random_state=0).fit(raw, w), args.repeats)
+        t_stack, _ = median_time(
+            lambda: ftcal.fit_stacked([clone(member).set_params(random_state=s) for s in range(args.stack)], raw, w),
+            1)
     rmse = ftcal.wrench_rmse(test_w, model.predict(test_raw), alpha=50.0)
+    rmse_ensemble = ftcal.wrench_rmse(test_w, ensemble.predict(test_raw), alpha=50.0)
     ltm = ftcal.wrench_rmse(test_w, ftcal.LinearCalibrator(alpha=50.0).fit(raw, w).predict(test_raw), alpha=50.0)
 
     one = test_raw[:1].copy()
@@ -108,12 +121,19 @@ def main(argv=None) -> int:
         "|---|---|---|---|---|",
         f"| fit, {args.epochs} epochs, 4000 x 6, batch 32, (64, 64, 64) | {t_ftcal:.2f} s | plain skorch "
         f"NeuralNetRegressor {t_plain:.2f} s | {t_ftcal / t_plain:.2f} | <= 0.33 |",
+        f"| 5-member directional ensemble fit, {args.epochs} epochs (members stacked) | {t_ensemble:.2f} s | "
+        f"one member's fit {t_ftcal:.2f} s | {t_ensemble / t_ftcal:.2f} | <= 1.5 |",
+        f"| fit_stacked of {args.stack} nets, per net | {t_stack / args.stack:.3f} s | one fit {t_ftcal:.2f} s | "
+        f"{t_stack / args.stack / t_ftcal:.3f} | |",
+        f"| fit_stacked of {args.stack} nets, per net, vs plain skorch | {t_stack / args.stack:.3f} s | plain skorch "
+        f"{t_plain:.2f} s | {t_stack / args.stack / t_plain:.3f} | |",
         f"| one-sample predict (directional) | {lat_predict * 1e6:.1f} us | numpy forward {lat_numpy * 1e6:.1f} us "
         f"| {lat_predict / lat_numpy:.2f} | <= 5 |",
         f"| 100 000-row predict throughput | {len(big) / thr_predict:,.0f} rows/s | numpy forward "
         f"{len(big) / thr_numpy:,.0f} rows/s | {thr_numpy / thr_predict:.2f} of numpy's | >= 0.5 |",
         "",
-        f"held-out RMSE after {args.epochs} epochs: directional {rmse:.3f} N (LTM {ltm:.3f} N)",
+        f"held-out RMSE after {args.epochs} epochs: directional {rmse:.3f} N, its 5-member ensemble "
+        f"{rmse_ensemble:.3f} N (LTM {ltm:.3f} N)",
     ]
     print("\n".join(lines))
     return 0

@@ -70,15 +70,19 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         # One BLAS thread: the least-squares problems are tall and thin; on a busy 2-core machine
         # threaded OpenBLAS made a 5000-sample fit ~300x slower (0.25 s instead of < 1 ms).
         with threadpool_limits(1, user_api="blas"):
-            self.alpha_ = _resolve_alpha(self.alpha, y)
-            if self.zero_reading is None:
-                self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_)
-            else:
-                self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
-            self.reading_noise_ = reading_noise(X, y)
+            self._fit_scale_and_tare(X, y)
             self._fit(X, y)
         self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
         return self
+
+    def _fit_scale_and_tare(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        """Set ``alpha_``, ``zero_reading_`` and ``reading_noise_`` from validated training data."""
+        self.alpha_ = _resolve_alpha(self.alpha, y)
+        if self.zero_reading is None:
+            self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_)
+        else:
+            self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
+        self.reading_noise_ = reading_noise(X, y)
 
     def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
         """Re-zero the fitted calibration: readings taken now with no load define the new zero-load reading.

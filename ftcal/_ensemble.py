@@ -15,6 +15,8 @@ from sklearn.utils import check_random_state
 from ._base import BaseCalibrator
 from ._directional import DirectionalCalibrator
 from ._exceptions import CalibrationInputError
+from ._network_base import NetworkCalibrator
+from ._stacked import fit_stacked
 from ._validation import validate_training_data
 
 __all__ = ["EnsembleCalibrator", "ensemble_factory"]
@@ -44,7 +46,12 @@ class EnsembleCalibrator(BaseCalibrator):
     every model's. On ``stress`` it barely helps (0.91x): there the directional
     model's error is bias (it cannot represent intra-axis nonlinearity),
     which every seed shares; use :class:`~ftcal.AxisNonlinearCalibrator`.
-    Fitting costs ``n_members`` fits (run in parallel with ``n_jobs``).
+    Network members (:class:`~ftcal.DirectionalCalibrator`,
+    :class:`~ftcal.ComparativeCalibrator` on the CPU, without ``callbacks``)
+    are trained together as one stacked module (:func:`~ftcal.fit_stacked`):
+    five members cost about one fit's time (``benchmarks/network_speed.py``),
+    with the weights separate fits would reach. Other members cost one fit
+    each, run in parallel with ``n_jobs``.
     ``predict`` (from :class:`~ftcal._base.BaseCalibrator`) validates the
     readings once and returns the members' mean.
 
@@ -57,7 +64,8 @@ class EnsembleCalibrator(BaseCalibrator):
     n_members : int, default=5
         Number of members averaged.
     n_jobs : int or None, default=None
-        joblib workers for fitting the members (``None`` = 1).
+        joblib workers for fitting members that are not stacked networks
+        (``None`` = 1).
     random_state : int, RandomState or None, default=None
         Seed of the members' seeds; an int makes the ensemble reproducible.
 
@@ -112,7 +120,10 @@ class EnsembleCalibrator(BaseCalibrator):
         rng = check_random_state(self.random_state)
         self.member_seeds_ = rng.randint(np.iinfo(np.int32).max, size=int(n))
         members = [clone(template).set_params(random_state=int(s)) for s in self.member_seeds_]
-        self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y) for m in members)
+        if isinstance(template, NetworkCalibrator) and not template.callbacks and template.device == "cpu":
+            self.estimators_ = fit_stacked(members, X, y)  # one stacked module: ~1 fit's time, not n_members'
+        else:
+            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y) for m in members)
         self.alpha_ = self.estimators_[0].alpha_
         self.zero_reading_ = self.estimators_[0].zero_reading_
         self.reading_noise_ = self.estimators_[0].reading_noise_

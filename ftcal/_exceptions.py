@@ -16,6 +16,7 @@ __all__ = [
     "KinematicsError",
     "DatasetFileError",
     "BenchmarkOutputExistsError",
+    "ExportError",
 ]
 
 
@@ -49,3 +50,7 @@ class DatasetFileError(FtcalError, ValueError):
 
 class BenchmarkOutputExistsError(FtcalError, FileExistsError):
     """A benchmark output file exists that the benchmark did not write (or that was changed since)."""
+
+
+class ExportError(FtcalError, ValueError):
+    """A calibrator that cannot be exported (to ONNX): its type, or a missing optional package."""

@@ -250,7 +250,12 @@ class NetworkCalibrator(BaseCalibrator):
             device=self.device,
         )
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
+        """Checks, network inputs and targets, seed and the (unfitted) skorch net of one fit.
+
+        Shared by :meth:`_fit` and :func:`ftcal.fit_stacked` (several nets trained as one module).
+        Returns ``(inputs, targets, seed, net)``, inputs and targets float64.
+        """
         self._check_params()
         if not isinstance(self.device, str) or not device_available(self.device):
             raise CalibrationInputError(
@@ -265,17 +270,25 @@ class NetworkCalibrator(BaseCalibrator):
                 "beyond what float32 training handles; check the units of X and y."
             )
         seed = self._seed()
-        net = self._build_net(inputs.shape[1], seed)
+        return inputs, targets, seed, self._build_net(inputs.shape[1], seed)
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        inputs, targets, seed, net = self._training_setup(X, y)
         with interrupt_flag() as interrupted, torch.random.fork_rng(devices=[]), torch_threads(1):
             torch.manual_seed(seed)
             net.fit(inputs.astype(np.float32), targets.astype(np.float32))
         if interrupted.is_set():
             raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
+        self._finish_training(net, targets)
+
+    def _finish_training(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+        """Refuse a diverged run; keep the trained net and its schedule's outcome."""
         self._check_converged(net, targets)
         self.net_ = net
         self.n_epochs_ = len(net.history)
         self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
         self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
+        self.__dict__.pop("_numpy_layers_cache", None)
 
     def _check_converged(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
         """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.

@@ -14,6 +14,7 @@ Subcommands
 ``identify-load``  a tool's mass, centre of mass and the sensor bias from static poses
 ``compensate``     run logs -> external wrenches (tool weight and bias removed)
 ``retare``         re-zero a model from zero-load readings (no refit)
+``export``         a model as an ONNX file (raw readings -> wrench) for deployment
 
 Run ``ftcal SUBCOMMAND --help`` for the options and an example of each.
 
@@ -37,7 +38,7 @@ __all__ = ["main", "build_parser"]
 
 #: Modules of the subcommands, in the order ``ftcal --help`` lists them.
 _SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo",
-                "identify_load", "retare")
+                "identify_load", "retare", "export")
 
 
 def build_parser() -> Parser:

@@ -91,6 +91,11 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
         help="error preset (repeatable; default: thesis)",
     )
     a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
+    a.add_argument(
+        "--stack", type=int_in_range(1, 1000, "stack"), default=1,
+        help="train up to this many network fits (one preset and model, several datasets) together as one "
+             "stacked module: same results up to float32 rounding, ~10x less CPU with 30 (default 1)",
+    )
     add_scheduler_option(a)
     _add_common(a, "ftcal-benchmark")
     a.set_defaults(handler=run_artificial)
@@ -238,7 +243,7 @@ def run_artificial(args: argparse.Namespace) -> int:
         result = ftcal.run_artificial_benchmark(
             n_datasets=args.n_datasets, presets=presets, models=_models(args), schedule=args.schedule,
             seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
-            force=args.force,
+            force=args.force, stack=args.stack,
         )
     _print_markdown(result, console, args.out)
     return 0

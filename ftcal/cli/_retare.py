@@ -9,7 +9,7 @@ import numpy as np
 
 from .._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_float
-from ._models import MODEL_SUFFIX
+from ._models import MODEL_SUFFIX, model_label
 
 EXAMPLE = """\
 examples:
@@ -41,18 +41,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def _default_output(model: Path) -> Path:
-    name = model.name
-    stem = name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else model.stem
-    return model.with_name(f"{stem}-retared{MODEL_SUFFIX}")
-
-
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ._predict import _raw_chunks
 
     console = Console(args.quiet)
-    output = Path(args.output) if args.output else _default_output(args.model)
+    output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
     if (same_file(output, args.model) or output.resolve() == args.model.resolve()) and not args.force:
         raise CliError(f"--output {output} is the model file itself; pass --force to replace it")
     if args.readings != "-" and not Path(args.readings).is_file():
