@@ -31,7 +31,7 @@ from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 import ftcal
-from ftcal._networks import DirectionalNet, WeightedSquaredError
+from ftcal.neural_network._modules import DirectionalNet, WeightedSquaredError
 
 
 def data(n: int, seed: int):

@@ -4,7 +4,7 @@
 For each preset:
 
 1. **search** -- :func:`ftcal.search_calibrator` (scikit-learn's randomized search over
-   :data:`ftcal._search.DEFAULT_SEARCH_SPACES`, k-fold cross-validated torque-scaled RMSE, eq. 18) on a *tuning*
+   :data:`ftcal.models._search.DEFAULT_SEARCH_SPACES`, k-fold cross-validated torque-scaled RMSE, eq. 18) on a *tuning*
    dataset whose seed is not one of the benchmark's (``--tuning-seed``), so the validation below is not
    scored on data the search has seen;
 2. **validate** -- the documented defaults and the search's best setting are trained on the first
@@ -37,9 +37,9 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
-from ftcal._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, wilcoxon_pvalue
-from ftcal._files import plain_json
-from ftcal._search import search_summary
+from ftcal.evaluation._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, wilcoxon_pvalue
+from ftcal.core._files import plain_json
+from ftcal.models._search import search_summary
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "tune_networks"
 OUTPUTS = ("tune_networks.json", "tune_networks.md")

@@ -17,7 +17,7 @@ from ftcal import (
     make_artificial_dataset,
     wrench_rmse,
 )
-from ftcal._wrench import scale_torques
+from ftcal.core._wrench import scale_torques
 
 
 @pytest.fixture(scope="module")

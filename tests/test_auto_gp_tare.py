@@ -17,8 +17,8 @@ from ftcal import (
     LinearCalibrator,
     PolynomialCalibrator,
 )
-from ftcal._model_selection import calibration_folds
-from ftcal._zero_load import estimate_zero_reading
+from ftcal.core._model_selection import calibration_folds
+from ftcal.calibrators._zero_load import estimate_zero_reading
 from ftcal.cli import main
 
 NOISE = 0.01

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ftcal import CalibrationInputError, run_artificial_benchmark
-from ftcal._benchmark_artificial import BenchmarkOutputExistsError, summarize_results, wilcoxon_pvalue
+from ftcal.evaluation._benchmark_artificial import BenchmarkOutputExistsError, summarize_results, wilcoxon_pvalue
 
 ROOT = Path(__file__).resolve().parents[1]
 

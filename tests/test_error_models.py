@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ftcal import CalibrationInputError, ErrorModel, SampledErrors, VirtualSensor, error_preset
-from ftcal._wrench import scale_torques
+from ftcal.core._wrench import scale_torques
 
 ALPHA = 50.0
 FULL_SCALE = np.array([2000.0] * 3 + [40.0] * 3)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal._virtual_experiment import JITTER_TRUNCATION
+from ftcal.experiment._virtual_experiment import JITTER_TRUNCATION
 
 from ftcal import (
     LogFormatError,

@@ -33,7 +33,7 @@ from ftcal import (
     ModelFileError,
     PolynomialCalibrator,
 )
-from ftcal._files import atomic_output
+from ftcal.core._files import atomic_output
 from ftcal.cli import main
 
 TINY = dict(hidden_layer_sizes=(8,), max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal._hybrid import one_standard_error_choice
+from ftcal.calibrators._axis_nonlinear import one_standard_error_choice
 from ftcal import AxisNonlinearCalibrator, CalibrationInputError, LinearCalibrator, load_model, save_model, wrench_rmse
 
 

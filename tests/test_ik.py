@@ -14,7 +14,7 @@ from ftcal import (
     solve_gravity_direction_ik,
     solve_orientation_ik,
 )
-from ftcal._ik import DEFAULT_LIMIT_MARGIN_RAD
+from ftcal.robot._ik import DEFAULT_LIMIT_MARGIN_RAD
 
 ORIENTATION_TOL = 1e-6  # [rad]
 POSITION_TOL = 1e-5  # [m]

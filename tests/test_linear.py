@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ftcal import LinearCalibrator
-from ftcal._zero_load import estimate_zero_reading
+from ftcal.calibrators._zero_load import estimate_zero_reading
 
 from conftest import affine_sensor_data
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ftcal import ModelFileError, load_model, save_model
-from ftcal._model_io import FORMAT_VERSION
+from ftcal.models._model_io import FORMAT_VERSION
 
 from conftest import affine_sensor_data
 

@@ -10,7 +10,7 @@ import torch
 from torch import nn
 
 from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator, wrench_rmse
-from ftcal._networks import ComparativeNet, DirectionalNet, WeightedSquaredError
+from ftcal.neural_network._modules import ComparativeNet, DirectionalNet, WeightedSquaredError
 
 from conftest import TINY_SCHEDULE, affine_sensor_data
 
@@ -186,8 +186,8 @@ def test_lean_loop_trains_like_skorchs_loop():
     import torch
     from skorch import NeuralNetRegressor
 
-    from ftcal._network_base import LeanNeuralNetRegressor
-    from ftcal._networks import ComparativeNet, WeightedSquaredError
+    from ftcal.neural_network._base import LeanNeuralNetRegressor
+    from ftcal.neural_network._modules import ComparativeNet, WeightedSquaredError
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(1000, 6)).astype(np.float32)

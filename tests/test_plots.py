@@ -1,4 +1,4 @@
-"""PNG plots of ftcal._plots: real files, the right content on the axes, clear errors on bad input."""
+"""PNG plots of ftcal.evaluation._plots: real files, the right content on the axes, clear errors on bad input."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ftcal import CalibrationInputError
-from ftcal import _plots
+from ftcal.evaluation import _plots
 
 
 def png_size(path) -> tuple[int, int]:

@@ -9,7 +9,7 @@ import pytest
 from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 
 from ftcal import CalibrationDataset, CalibrationInputError, PolynomialCalibrator, load_model, search_calibrator
-from ftcal._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
+from ftcal.models._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
 from ftcal.cli import main
 
 from conftest import TINY_SCHEDULE

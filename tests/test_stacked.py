@@ -88,7 +88,7 @@ def test_stacked_fits_datasets_of_different_sizes():
 def test_stacked_module_is_the_members_forward():
     import torch
 
-    from ftcal._networks import ComparativeNet
+    from ftcal.neural_network._modules import ComparativeNet
 
     nets = [ComparativeNet(5, (7, 3)) for _ in range(4)]
     stacked = StackedMLP(nets)

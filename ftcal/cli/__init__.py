@@ -18,6 +18,9 @@ Subcommands
 
 Run ``ftcal SUBCOMMAND --help`` for the options and an example of each.
 
+The top layer: may import every ftcal package, but only inside the subcommand handlers that need
+them (``ftcal --help`` imports neither torch nor pinocchio).
+
 Examples
 --------
 >>> from ftcal.cli import main
@@ -31,7 +34,7 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-from .._exceptions import FtcalError
+from ..core._exceptions import FtcalError
 from ._common import EXIT_FAILURE, EXIT_USAGE, Parser
 
 __all__ = ["main", "build_parser"]

@@ -78,7 +78,7 @@ def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True)
 
 
 def _register_artificial(kinds: argparse._SubParsersAction) -> None:
-    from .._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS
 
     a = kinds.add_parser(
         "artificial",
@@ -102,7 +102,7 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
 
 
 def _register_real_world(kinds: argparse._SubParsersAction) -> None:
-    from .._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS
 
     r = kinds.add_parser(
         "real-world",
@@ -160,9 +160,9 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from .._auto import score_candidates
-    from .._model_selection import simplest_within_one_se
-    from .._plots import plot_axis_errors
+    from ..models._auto import score_candidates
+    from ..core._model_selection import simplest_within_one_se
+    from ..evaluation._plots import plot_axis_errors
     from ._models import dataset_alpha, load_dataset
 
     console = Console(args.quiet)
@@ -206,7 +206,7 @@ def run_dataset(args: argparse.Namespace) -> int:
 
 
 def _dataset_table(results: dict) -> str:
-    from .._wrench import WRENCH_LABELS
+    from ..core._wrench import WRENCH_LABELS
 
     head = "| calibrator | held-out RMSE [N] | ± SE | " + " | ".join(f"{a}" for a in WRENCH_LABELS) + " | fit [s/fold] |"
     lines = [head, "|" + "---|" * (4 + len(WRENCH_LABELS))]
@@ -228,7 +228,7 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
 
-    from .._scale_out import dask_backend
+    from ..core._scale_out import dask_backend
 
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))

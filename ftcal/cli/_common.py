@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-from .._exceptions import FtcalError
-from .._files import atomic_output, check_writable_dir, plain_json
+from ..core._exceptions import FtcalError
+from ..core._files import atomic_output, check_writable_dir, write_json
 
 __all__ = [
     "CliError",
@@ -163,7 +162,7 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
 
 def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
-    from .._scale_out import SchedulerError, check_scheduler
+    from ..core._scale_out import SchedulerError, check_scheduler
 
     try:
         return check_scheduler(text)
@@ -172,7 +171,7 @@ def _scheduler(text: str) -> str:
 
 
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
-    """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal._scale_out`)."""
+    """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal.core._scale_out`)."""
     parser.add_argument(
         "--scheduler", metavar="ADDRESS|local", type=_scheduler,
         help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "
@@ -251,15 +250,11 @@ class OutputPlan:
         A failure inside the block removes the temporary file and leaves any
         existing ``name`` untouched; each run gets its own temporary file, and
         without ``--force`` a file that another run wrote meanwhile is not
-        replaced (:func:`ftcal._files.atomic_output`).
+        replaced (:func:`ftcal.core._files.atomic_output`).
         """
         with atomic_output(self.path(name), overwrite=self.force, error=CliError) as tmp:
             yield tmp
 
-
-def write_json(path: Path, obj: Any) -> None:
-    """Write ``obj`` as indented JSON (NaN and inf written as ``null``, see :func:`ftcal._files.plain_json`)."""
-    path.write_text(json.dumps(plain_json(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
 
 
 # ------------------------------------------------------------------ messages

@@ -22,7 +22,7 @@ model files, metrics.json/.md and PNG plots to DIR.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from .._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS
 
     p = sub.add_parser(
         "demo",
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .._demo import demo_files, run_demo
+    from ..evaluation._demo import demo_files, run_demo
 
     console = Console(args.quiet)
     OutputPlan(args.out, demo_files(), args.force)  # refuse before any work

@@ -8,7 +8,7 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, positive_float, write_json
 from ._models import evaluation_alpha, load_dataset, load_model_file, model_label, model_inputs
-from ._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
+from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
 examples:

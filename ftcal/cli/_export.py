@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .._files import same_file
+from ..core._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file
 from ._models import model_label
 

@@ -124,7 +124,7 @@ def run_compensate(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from .._wrench import WRENCH_LABELS
+    from ..core._wrench import WRENCH_LABELS
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)

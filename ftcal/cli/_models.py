@@ -7,8 +7,9 @@ import json
 from pathlib import Path
 from typing import Any
 
-from .._dataset import CalibrationDataset
-from .._wrench import alpha_from_wrenches
+from ..io._dataset import CalibrationDataset
+from ..core._wrench import alpha_from_wrenches
+from ..models._model_io import MODEL_SUFFIX, model_file_name
 from ._common import CliError
 
 __all__ = [
@@ -22,15 +23,6 @@ __all__ = [
     "dataset_alpha",
     "evaluation_alpha",
 ]
-
-#: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
-MODEL_SUFFIX = ".model.npz"
-
-
-def model_file_name(name: str) -> str:
-    """File name of a fitted model called ``name`` (``directional`` -> ``directional.model.npz``)."""
-    return f"{name}{MODEL_SUFFIX}"
-
 
 def model_label(path: Path) -> str:
     """Short name of a model file for tables and plots (its name without the suffix)."""

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from .._files import same_file
+from ..core._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_int, int_in_range
 from ._readings import iter_reading_chunks, read_readings_npz, write_wrench_rows
 

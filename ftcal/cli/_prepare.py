@@ -66,7 +66,7 @@ def _log_files(items: list[str]) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from .. import _plots
+    from ..evaluation import _plots
 
     console = Console(args.quiet)
     name = f"dataset.{args.format}"

@@ -25,8 +25,8 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from .._wrench import WRENCH_LABELS
-from .._columns import is_number, parse_number, read_header
+from ..core._wrench import WRENCH_LABELS
+from ..core._columns import is_number, parse_number, read_header
 from ._common import CliError
 
 __all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows"]
@@ -37,7 +37,7 @@ def _split(line: str) -> list[str]:
 
 
 def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int) -> list[int]:
-    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal._columns`), then of
+    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal.core._columns`), then of
     ``temperature`` when the model takes one input more than there are channels."""
     header = read_header(fields, where=f"{source}: line {line_no}", error=CliError, allow_other=True,
                          expected="s0,...,s{N-1}[,temperature] (other columns are ignored)")

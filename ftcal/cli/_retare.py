@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._files import same_file
+from ..core._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_float
 from ._models import MODEL_SUFFIX, model_label
 

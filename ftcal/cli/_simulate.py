@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
-    from .._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS
 
     d = kinds.add_parser(
         "dataset",
@@ -98,7 +98,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from .. import _plots
+    from ..evaluation import _plots
 
     console = Console(args.quiet)
     files = _dataset_files(args.n_datasets, args.format)
@@ -182,7 +182,7 @@ def _profile(cal_path: Path | None):
 
 
 def _register_experiment(kinds: argparse._SubParsersAction) -> None:
-    from .._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS
 
     e = kinds.add_parser(
         "experiment",

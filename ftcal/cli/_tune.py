@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--grid", action="append", default=[], metavar="KEY=VALUES",
         help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
-        "default: the model's documented search space, ftcal._search.DEFAULT_SEARCH_SPACES)",
+        "default: the model's documented search space, ftcal.models._search.DEFAULT_SEARCH_SPACES)",
     )
     p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
     p.add_argument("--cv", type=int_in_range(1, 100, "folds"), default=3, help="number of cross-validation folds (>= 2)")
@@ -67,7 +67,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .._search import parse_search_space, search_calibrator, search_summary
+    from ..models._search import parse_search_space, search_calibrator, search_summary
     import ftcal
 
     console = Console(args.quiet)
@@ -88,7 +88,7 @@ def run(args: argparse.Namespace) -> int:
         params["alpha"] = alpha
     console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
     start = time.perf_counter()
-    from .._scale_out import dask_backend
+    from ..core._scale_out import dask_backend
 
     with dask_backend(args.scheduler):
         search = search_calibrator(

@@ -1,0 +1,181 @@
+"""Shared scikit-learn behaviour of every calibrator.
+
+:class:`BaseCalibrator` does what the three calibrators of the thesis have in
+common, so each model only implements ``_fit(X, y)`` and
+``_predict_wrench(X)``:
+
+* **validation** (``validate_data``): ``X`` (n, N >= 3) raw readings and ``y``
+  (n, 6) wrenches, finite; NaN/inf give an error naming ``X`` or ``y`` and
+  the first bad row; at ``predict`` the channel count must match ``fit``;
+  ``predict`` before ``fit`` raises scikit-learn's ``NotFittedError``;
+* **torque scale** ``alpha_`` (eq. 5-6): the ``alpha`` parameter, or
+  :func:`~ftcal.alpha_from_wrenches` of the training targets when ``None``.
+  Models apply it inside their losses; ``predict`` always returns the
+  wrench in [N] and [N·m];
+* **zero-load reading** ``zero_reading_`` (N,): the ``zero_reading``
+  parameter (a known tare reading), or, when ``None``, the mean reading of
+  the zero-load rows of the data, or failing those the intercept of an
+  affine least-squares fit of the raw channels on the wrench (see
+  :func:`ftcal.calibrators._zero_load.estimate_zero_reading`);
+* ``score`` is the usual coefficient of determination R² of
+  :class:`~sklearn.base.RegressorMixin` (averaged over the 6 components);
+  use :func:`ftcal.neg_scaled_rmse` as ``scoring`` for the thesis' eq. 18.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
+from threadpoolctl import threadpool_limits
+
+from ..core._exceptions import CalibrationInputError
+from ..core._validation import check_finite_output, check_zero_reading, validate_readings, validate_training_data
+from ..core._wrench import alpha_from_wrenches
+from ._zero_load import estimate_zero_reading, reading_noise
+
+__all__ = ["BaseCalibrator"]
+
+
+def _resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
+    if alpha is None:
+        return alpha_from_wrenches(y)
+    if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not np.isfinite(alpha) or alpha <= 0:
+        raise CalibrationInputError(
+            f"alpha must be a positive finite number (Fmax / Tmax in [m⁻¹], eq. 5) or None to derive "
+            f"it from y; got {alpha!r}."
+        )
+    return float(alpha)
+
+
+class BaseCalibrator(RegressorMixin, BaseEstimator):
+    """Common base of the calibrators; not meant to be used directly.
+
+    Subclasses implement ``_fit(X, y)`` (``X`` float64 (n, N), ``y`` float64
+    (n, 6) in [N] / [N·m]; ``alpha_`` and ``zero_reading_`` already set) and
+    ``_predict_wrench(X)`` returning (n, 6) in [N] / [N·m].
+    """
+
+    def fit(self, X: ArrayLike, y: ArrayLike):
+        """Fit the calibration on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Returns
+        -------
+        self
+        """
+        X, y = validate_training_data(self, X, y)
+        # One BLAS thread: the least-squares problems are tall and thin; on a busy 2-core machine
+        # threaded OpenBLAS made a 5000-sample fit ~300x slower (0.25 s instead of < 1 ms).
+        with threadpool_limits(1, user_api="blas"):
+            self._fit_scale_and_tare(X, y)
+            self._fit(X, y)
+        self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
+        return self
+
+    def _fit_scale_and_tare(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        """Set ``alpha_``, ``zero_reading_`` and ``reading_noise_`` from validated training data."""
+        self.alpha_ = _resolve_alpha(self.alpha, y)
+        if self.zero_reading is None:
+            self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_)
+        else:
+            self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
+        self.reading_noise_ = reading_noise(X, y)
+
+    def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
+        """Re-zero the fitted calibration: readings taken now with no load define the new zero-load reading.
+
+        A sensor's zero moves (a restart, a re-mount, temperature, creep); its
+        gain does not. ``retare`` replaces the zero-load reading by the mean of
+        ``X_no_load`` without refitting: from then on ``predict`` shifts every
+        reading by ``tare_reading_ - zero_reading_`` before the calibration
+        sees it, so a reading equal to the new tare gives what the training
+        tare gave (zero, up to the model's own offset). Calling it again
+        replaces the previous re-tare. Saved and loaded with the model file.
+        Its accuracy is bounded by that of the training tare ``zero_reading_``:
+        estimated from the data it is known to about ``noise * sqrt(13 / n)``
+        per channel; a tare measured at calibration time (``zero_reading=``)
+        makes re-taring as exact as the new readings.
+
+        Parameters
+        ----------
+        X_no_load : array-like of shape (n, N)
+            Raw readings with nothing attached beyond what the calibration was
+            zeroed with (hold the sensor still).
+        max_spread : float, default=5.0
+            The readings must be quiet: each channel's standard deviation may be
+            at most ``max_spread`` times the noise the training data showed
+            (``reading_noise_``); more means something touched or moved the
+            sensor while they were taken.
+
+        Returns
+        -------
+        self
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from ftcal import LinearCalibrator
+        >>> rng = np.random.default_rng(0)
+        >>> w = rng.normal(size=(200, 6)); raw = w @ rng.normal(size=(6, 6)) + 1.0
+        >>> model = LinearCalibrator().fit(raw + 0.01 * rng.normal(size=raw.shape), w)
+        >>> drifted_zero = np.full((10, 6), 1.5) + 0.01 * rng.normal(size=(10, 6))   # the tare moved by +0.5
+        >>> bool(np.abs(model.retare(drifted_zero).predict(raw + 0.5) - w).max() < 0.1)
+        True
+        """
+        check_is_fitted(self)
+        if isinstance(max_spread, bool) or not isinstance(max_spread, numbers.Real) or not max_spread > 0:
+            raise CalibrationInputError(f"max_spread must be a positive number; got {max_spread!r}.")
+        X = validate_readings(self, X_no_load)
+        if len(X) == 0:
+            raise CalibrationInputError("X_no_load holds no readings; pass at least one zero-load reading.")
+        noise = getattr(self, "reading_noise_", None)
+        if noise is not None and len(X) > 1:
+            spread = X.std(axis=0, ddof=1)
+            limit = max_spread * np.maximum(noise, np.finfo(float).tiny)
+            bad = np.flatnonzero(spread > limit)
+            if bad.size:
+                c = int(bad[0])
+                raise CalibrationInputError(
+                    f"X_no_load is not quiet: channel s{c} varies by {spread[c]:.4g} (std) over the {len(X)} "
+                    f"readings, more than {max_spread:g} times the noise of the training data ({noise[c]:.4g}). "
+                    "Was something touching or moving the sensor? Take the readings again, holding it still."
+                )
+        self.tare_reading_ = X.mean(axis=0)
+        return self
+
+    def predict(self, X: ArrayLike) -> NDArray[np.float64]:
+        """Wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m] for raw readings ``X`` (n, N).
+
+        Returns
+        -------
+        ndarray of shape (n_samples, 6), float64
+        """
+        if "n_features_in_" not in self.__dict__:  # cheap test first: predict sits in control loops
+            check_is_fitted(self)
+        X = self._retared(validate_readings(self, X))
+        with np.errstate(over="ignore", invalid="ignore"):
+            wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)
+        check_finite_output(X, wrench, self)
+        return wrench
+
+    def _retared(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``X`` shifted by the re-tare (:meth:`retare`), if any."""
+        tare = getattr(self, "tare_reading_", None)
+        return X if tare is None else X - (tare - self.zero_reading_)
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:  # pragma: no cover
+        raise NotImplementedError
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover
+        raise NotImplementedError
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.required = True
+        tags.target_tags.multi_output = True
+        tags.target_tags.single_output = False
+        tags.input_tags.allow_nan = False
+        return tags

@@ -1,0 +1,88 @@
+"""The linear transformation model (LTM) of the thesis, eq. 1-2."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ._base import BaseCalibrator
+from ..core._exceptions import CalibrationInputError
+
+__all__ = ["LinearCalibrator"]
+
+
+class LinearCalibrator(BaseCalibrator):
+    """Affine least-squares calibration ``W = C S + b`` (eq. 1-2).
+
+    ``C`` (6 x N) and ``b`` (6,) minimise ``sum_i ||W_i - C S_i - b||²``
+    (eq. 2), optionally plus ``ridge * ||C||²`` (the offset is not
+    penalised). The per-component least-squares solution does not depend on
+    the torque scale, so ``alpha_`` only enters the metrics.
+
+    Parameters
+    ----------
+    ridge : float, default=0.0
+        Ridge penalty on ``C``, in the squared units of ``raw`` (0 = plain
+        least squares). Raw channels are centred first.
+    alpha : float or None, default=None
+        Torque scale ``Fmax / Tmax`` [m⁻¹] (eq. 5); ``None`` derives it from
+        ``y`` with :func:`~ftcal.alpha_from_wrenches`.
+    zero_reading : array-like of shape (N,) or None, default=None
+        Known raw reading at zero load; ``None`` estimates it from the data
+        (affine fit ``raw ≈ A w + z``). The LTM's offset absorbs it; it is
+        exposed so every calibrator reports the same quantity.
+    random_state : int, RandomState or None, default=None
+        Unused (the fit is deterministic); accepted so that all calibrators
+        share one signature.
+
+    Attributes
+    ----------
+    calibration_matrix_ : ndarray of shape (6, N)
+        ``C`` in [N] / [N·m] per raw unit.
+    offset_ : ndarray of shape (6,)
+        ``b`` in [N] / [N·m].
+    alpha_ : float
+        Torque scale used [m⁻¹].
+    zero_reading_ : ndarray of shape (N,)
+        Raw reading at zero load.
+    n_features_in_ : int
+        Number of raw channels N.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import LinearCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> C = rng.normal(size=(6, 6)); b = np.arange(6.0)
+    >>> raw = rng.normal(size=(50, 6))
+    >>> model = LinearCalibrator().fit(raw, raw @ C.T + b)
+    >>> bool(np.allclose(model.calibration_matrix_, C)), bool(np.allclose(model.offset_, b))
+    (True, True)
+    """
+
+    def __init__(self, *, ridge=0.0, alpha=None, zero_reading=None, random_state=None):
+        self.ridge = ridge
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        ridge = self.ridge
+        if isinstance(ridge, bool) or not isinstance(ridge, numbers.Real) or not np.isfinite(ridge) or ridge < 0:
+            raise CalibrationInputError(f"ridge must be a finite number >= 0; got {ridge!r}.")
+        x_mean = X.mean(axis=0)
+        y_mean = y.mean(axis=0)
+        xc = X - x_mean
+        yc = y - y_mean
+        if ridge > 0:
+            n_channels = X.shape[1]
+            xc = np.vstack([xc, np.sqrt(ridge) * np.eye(n_channels)])
+            yc = np.vstack([yc, np.zeros((n_channels, 6))])
+        coef, *_ = np.linalg.lstsq(xc, yc, rcond=None)
+        self.calibration_matrix_ = coef.T
+        self.offset_ = y_mean - self.calibration_matrix_ @ x_mean
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        return X @ self.calibration_matrix_.T + self.offset_

@@ -1,0 +1,114 @@
+"""Polynomial calibration: polynomial features of the raw channels with a ridge penalty (issue 6)."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import NDArray
+from sklearn.preprocessing import PolynomialFeatures
+
+from ._base import BaseCalibrator
+from ..core._exceptions import CalibrationInputError
+from ._ridge import ridge_least_squares
+
+__all__ = ["PolynomialCalibrator"]
+
+#: Batch size of ``predict`` (degree 5 on 6 channels makes 461 features per row).
+_PREDICT_CHUNK = 8192
+
+
+class PolynomialCalibrator(BaseCalibrator):
+    """Wrench as a polynomial of the zero-corrected raw channels, fitted by ridge least squares.
+
+    The model published for in-situ calibration of humanoid-robot sensors
+    (a 4th-degree polynomial halved the affine model's RMSE). It is a thin
+    composition of scikit-learn's :class:`~sklearn.preprocessing.PolynomialFeatures`
+    and ridge least squares:
+
+    1. ``u = (X - zero_reading_) / input_scale_``, where ``input_scale_`` is the
+       largest absolute zero-corrected training reading of each channel, so
+       ``|u| <= 1`` on the training data and the monomials stay well conditioned;
+    2. all monomials of ``u`` up to ``degree`` (without the constant),
+       ``PolynomialFeatures(degree, include_bias=False)``;
+    3. ``W = P(u) @ coef_ + intercept_`` minimising
+       ``||W - P(u) coef - b||² + ridge * ||coef_nonlinear||²``: the penalty
+       acts on the coefficients of the monomials of degree >= 2 only (not on
+       the linear terms nor the intercept), so ``degree=1`` is exactly the LTM
+       (:class:`~ftcal.LinearCalibrator`) for any ``ridge``.
+
+    Every output component is fitted separately (the torque scale ``alpha_``
+    only enters the metrics, as for the LTM). A polynomial extrapolates
+    poorly beyond the training range; keep test loads inside the calibrated
+    range or prefer :class:`~ftcal.AxisNonlinearCalibrator`.
+
+    Parameters
+    ----------
+    degree : int, default=3
+        Highest total degree of the monomials, 1 to 5 (1 = LTM). The number
+        of features grows fast: 83 (degree 3), 209 (4), 461 (5) for 6 channels.
+    ridge : float, default=1e-4
+        Penalty on the nonlinear coefficients; ``u`` is dimensionless, and the
+        penalty is multiplied by the number of samples. Tuned on the
+        artificial presets (5 datasets each, degree 3): 1e-3 is best on
+        ``thesis`` / ``asymmetric`` by ~1 % but 28 % worse on ``stress``;
+        1e-6 overfits (see ``benchmarks/RESULTS.md``, issue 6). Use
+        ``ftcal tune --model polynomial`` for your data.
+    alpha : float or None, default=None
+        Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
+    zero_reading : array-like of shape (N,) or None, default=None
+        Raw reading at zero load; ``None`` estimates it (see :mod:`ftcal.calibrators._zero_load`).
+    random_state : None
+        Unused (the fit is deterministic); accepted for a common signature.
+
+    Attributes
+    ----------
+    input_scale_ : ndarray of shape (N,)
+        Normalisation of each zero-corrected channel (raw units).
+    coef_ : ndarray of shape (n_monomials, 6)
+        Coefficients in [N] / [N·m], in ``PolynomialFeatures`` order.
+    intercept_ : ndarray of shape (6,)
+        [N] / [N·m].
+    alpha_, zero_reading_, n_features_in_
+        As for every calibrator.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import PolynomialCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> raw = rng.uniform(-1, 1, size=(200, 6))
+    >>> wrench = raw + 0.1 * raw**2
+    >>> model = PolynomialCalibrator(degree=2, ridge=0.0, zero_reading=np.zeros(6)).fit(raw, wrench)
+    >>> bool(np.allclose(model.predict(raw), wrench))
+    True
+    """
+
+    def __init__(self, *, degree=3, ridge=1e-4, alpha=None, zero_reading=None, random_state=None):
+        self.degree = degree
+        self.ridge = ridge
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+
+    def _monomials(self) -> PolynomialFeatures:
+        # Fitted on one row only to learn the channel count: the monomials depend on nothing else.
+        return PolynomialFeatures(int(self.degree), include_bias=False).fit(np.zeros((1, self.n_features_in_)))
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        degree, ridge = self.degree, self.ridge
+        if isinstance(degree, bool) or not isinstance(degree, numbers.Integral) or not 1 <= degree <= 5:
+            raise CalibrationInputError(f"degree must be an integer from 1 (the LTM) to 5; got {degree!r}.")
+        if isinstance(ridge, bool) or not isinstance(ridge, numbers.Real) or not np.isfinite(ridge) or ridge < 0:
+            raise CalibrationInputError(f"ridge must be a finite number >= 0; got {ridge!r}.")
+        xc = X - self.zero_reading_
+        scale = np.abs(xc).max(axis=0)
+        self.input_scale_ = np.where(scale > 0, scale, 1.0)
+        features = self._monomials().transform(xc / self.input_scale_)
+        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * len(y), n_unpenalised=X.shape[1])
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        monomials = self._monomials()
+        u = (X - self.zero_reading_) / self.input_scale_
+        out = [monomials.transform(u[i : i + _PREDICT_CHUNK]) @ self.coef_ for i in range(0, len(u), _PREDICT_CHUNK)]
+        return (np.concatenate(out) if out else np.zeros((0, 6))) + self.intercept_

@@ -1,0 +1,160 @@
+"""Temperature compensation in front of any calibrator (issue 15); the drift model is in :mod:`ftcal.core._temperature`."""
+
+from __future__ import annotations
+
+import numbers
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from sklearn.base import clone
+from sklearn.utils.validation import check_is_fitted
+
+from ._base import BaseCalibrator
+from ..core._exceptions import CalibrationInputError
+from ._linear import LinearCalibrator
+from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
+from ..core._validation import validate_readings, validate_training_data
+from ._zero_load import GATED_MIN_SAMPLES
+
+__all__ = ["TemperatureCompensatedCalibrator"]
+
+
+class TemperatureCompensatedCalibrator(BaseCalibrator):
+    """A calibrator behind per-channel thermal offset and gain compensation (iCub-style temperature coefficients).
+
+    ``X`` holds the raw channels **and, as its last column, the sensor
+    temperature [deg C]**. ``fit`` learns, per channel ``c``, the coefficients
+    of ``raw_c(T) = raw_c(T0) (1 + g_c ΔT) + o_c ΔT`` from the calibration
+    data: a forward model of each channel (the sign-gated least-squares model
+    of :mod:`ftcal.calibrators._zero_load`) with temperature terms, solved by a few
+    alternating least-squares passes (the equation is bilinear in the gain).
+    The readings are then brought to ``reference_temperature``,
+    ``raw_c(T0) = (raw_c(T) - o_c ΔT) / (1 + g_c ΔT)``, and ``estimator`` is fitted
+    on them; ``predict`` applies the same correction. The calibration data must
+    span the temperatures of use (a drift cannot be learned at one temperature).
+
+    Parameters
+    ----------
+    estimator : calibrator or None, default=None
+        The calibrator fed the compensated readings; ``None``: :class:`~ftcal.LinearCalibrator`.
+    reference_temperature : float, default=25
+        ``T0`` [deg C].
+    n_iterations : int, default=5
+        Alternating least-squares passes.
+    alpha : float or None, default=None
+        Torque scale; given to ``estimator`` when it has this parameter.
+    zero_reading : array-like of shape (N,) or None, default=None
+        Raw zero-load reading at ``T0``; given to ``estimator``.
+    random_state : int or None, default=None
+        Given to ``estimator``.
+
+    Attributes
+    ----------
+    offset_per_deg_ : ndarray of shape (N,)
+        Learned ``o`` [raw unit / deg C].
+    gain_per_deg_ : ndarray of shape (N,)
+        Learned ``g`` [1 / deg C].
+    estimator_ : calibrator
+        The fitted calibrator on compensated readings.
+    alpha_, zero_reading_, n_features_in_
+        ``n_features_in_`` counts the temperature column too.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import TemperatureCompensatedCalibrator, ThermalDrift
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(400, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> T = rng.uniform(15, 35, size=400)
+    >>> drift = ThermalDrift(offset_per_deg=np.full(6, 0.02), gain_per_deg=np.full(6, 2e-3))
+    >>> X = np.column_stack([drift.apply(raw, T), T])
+    >>> model = TemperatureCompensatedCalibrator(alpha=1.0).fit(X, w)
+    >>> np.round(model.offset_per_deg_, 3), np.round(model.gain_per_deg_, 4)
+    (array([0.02, 0.02, 0.02, 0.02, 0.02, 0.02]), array([0.002, 0.002, 0.002, 0.002, 0.002, 0.002]))
+    """
+
+    def __init__(self, estimator=None, *, reference_temperature=REFERENCE_TEMPERATURE, n_iterations=5,
+                 alpha=None, zero_reading=None, random_state=None):
+        self.estimator = estimator
+        self.reference_temperature = reference_temperature
+        self.n_iterations = n_iterations
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+
+    def _split(self, X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        if X.shape[1] < 4:
+            raise CalibrationInputError(
+                f"X has {X.shape[1]} columns; TemperatureCompensatedCalibrator needs the raw channels and, last, "
+                "the temperature [deg C] (at least 3 + 1 columns)."
+            )
+        raw, temperature = X[:, :-1], X[:, -1]
+        return raw, check_temperature(temperature, len(X), "temperature (the last column of X)")
+
+    def _compensate(self, raw: NDArray[np.float64], temperature: NDArray[np.float64]) -> NDArray[np.float64]:
+        dt = (temperature - self.reference_temperature)[:, None]
+        return (raw - dt * self.offset_per_deg_) / (1.0 + dt * self.gain_per_deg_)
+
+    def fit(self, X: ArrayLike, y: ArrayLike):
+        """Learn the thermal coefficients, then fit ``estimator`` on compensated readings.
+
+        Returns
+        -------
+        self
+        """
+        t0 = self.reference_temperature
+        if isinstance(t0, bool) or not isinstance(t0, numbers.Real) or not np.isfinite(t0):
+            raise CalibrationInputError(f"reference_temperature must be a finite number in deg C; got {t0!r}.")
+        n_it = self.n_iterations
+        if isinstance(n_it, bool) or not isinstance(n_it, numbers.Integral) or n_it < 1:
+            raise CalibrationInputError(f"n_iterations must be an integer >= 1; got {n_it!r}.")
+        X, y = validate_training_data(self, X, y)
+        raw, temperature = self._split(X)
+        dt = temperature - t0
+        if np.ptp(temperature) < 1.0:
+            raise CalibrationInputError(
+                f"the temperatures span only {np.ptp(temperature):.2g} deg C; a thermal drift can only be learned "
+                "from calibration data recorded over the temperature range of use (several deg C)."
+            )
+        if len(y) >= GATED_MIN_SAMPLES:
+            design = np.hstack([np.maximum(y, 0.0), np.minimum(y, 0.0), np.ones((len(y), 1))])
+        else:
+            design = np.hstack([y, np.ones((len(y), 1))])
+        scale = np.max(np.abs(design), axis=0)
+        design = design / np.where(scale > 0, scale, 1.0)
+        gain = np.zeros(raw.shape[1])
+        offset = np.zeros(raw.shape[1])
+        for _ in range(int(n_it)):
+            for c in range(raw.shape[1]):
+                # raw_c = f_c(w) (1 + g ΔT) + o ΔT, with f_c = design @ beta: linear in beta for fixed g ...
+                a = design * (1.0 + gain[c] * dt)[:, None]
+                beta, *_ = np.linalg.lstsq(np.hstack([a, dt[:, None]]), raw[:, c], rcond=None)
+                f = design @ beta[:-1]
+                # ... and linear in (g, o) for fixed f
+                (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
+        self.gain_per_deg_, self.offset_per_deg_ = gain, offset
+        inner = LinearCalibrator() if self.estimator is None else clone(self.estimator)
+        params = inner.get_params()
+        inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state") if k in params})
+        self.estimator_ = inner.fit(self._compensate(raw, temperature), y)
+        self.alpha_ = self.estimator_.alpha_
+        self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)
+        return self
+
+    def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
+        """Re-zero from zero-load readings ``[raw, temperature]`` taken now: compensated first, then passed to
+        the inner calibrator's :meth:`~ftcal.calibrators._base.BaseCalibrator.retare`.
+
+        Returns
+        -------
+        self
+        """
+        check_is_fitted(self)
+        raw, temperature = self._split(validate_readings(self, X_no_load))
+        self.estimator_.retare(self._compensate(raw, temperature), max_spread=max_spread)
+        return self
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        raw, temperature = self._split(X)
+        return self.estimator_.predict(self._compensate(raw, temperature))
+

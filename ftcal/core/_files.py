@@ -1,0 +1,147 @@
+"""Safe output files: a unique temporary file, then an atomic rename that never replaces what it must not.
+
+Every file ftcal writes (datasets, model files, CLI outputs) goes through
+:func:`atomic_output`, so that
+
+* an interrupted or failed write never leaves half a file where a good one stood;
+* two runs writing the same target at once never share a temporary file
+  (each gets its own from :func:`tempfile.mkstemp`);
+* without ``overwrite`` a file that appeared while the run worked (another
+  run finished first) is not replaced: the new output is kept beside it
+  under a unique name and the error says where.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+
+__all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json"]
+
+
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Exception]) -> Iterator[Path]:
+    """Yield a fresh temporary path beside ``path``; move it to ``path`` when the block succeeds.
+
+    Parameters
+    ----------
+    path : path-like
+        The final file.
+    overwrite : bool
+        Whether an existing ``path`` may be replaced. Without it the final
+        step is a link that fails if ``path`` exists (no window in which
+        another run's file could be replaced).
+    error : exception class
+        Raised (with both paths named) when ``path`` appeared meanwhile.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> target = pathlib.Path(tempfile.mkdtemp()) / "out.txt"
+    >>> with atomic_output(target, overwrite=False, error=FileExistsError) as tmp:
+    ...     _ = tmp.write_text("hello")
+    >>> target.read_text()
+    'hello'
+    """
+    path = Path(path)
+    directory = path.parent if str(path.parent) else Path(".")
+    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
+    os.close(fd)
+    tmp = Path(tmp_name)
+    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
+    try:
+        try:
+            yield tmp
+        except OSError as exc:
+            if exc.filename is not None and Path(exc.filename) == tmp:  # name the user's file, not ours
+                raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+            raise
+        if overwrite:
+            os.replace(tmp, path)
+            return
+        try:
+            os.link(tmp, path)
+        except FileExistsError:
+            kept = path.with_name(f"{path.stem}.{os.getpid()}{path.suffix}")
+            os.replace(tmp, kept)
+            raise error(
+                f"{path} appeared while this run was working (another run wrote it?); it was left as it is and "
+                f"this run's output was kept as {kept}."
+            ) from None
+        except OSError:  # a file system without hard links: check, then rename
+            if path.exists():
+                raise error(f"{path} appeared while this run was working; it was left as it is.") from None
+            os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def check_writable_dir(directory: str | os.PathLike, error: type[Exception], what: str = "--out") -> None:
+    """Raise ``error`` now if files cannot be created in ``directory`` (or in its nearest existing parent)."""
+    d = Path(directory)
+    while not d.exists():
+        if d.parent == d:
+            break
+        d = d.parent
+    if d.exists() and not d.is_dir():
+        raise error(f"{what} {directory}: {d} is a file, not a directory; choose another {what}.")
+    try:
+        fd, probe = tempfile.mkstemp(prefix=".ftcal-write-test.", dir=d)
+    except OSError as exc:
+        raise error(f"{what} {directory}: cannot create files in {d} ({exc.strerror}); choose another {what}.") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
+def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
+    """Whether two paths name the same existing file (links and relative paths resolved)."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:
+        return False
+
+
+def plain_json(obj):
+    """``obj`` as plain JSON values: numpy arrays and scalars to lists and numbers, tuples to lists, paths to
+    strings, and NaN / inf to ``null`` (strict JSON has no such numbers). The one converter of every JSON file
+    ftcal writes.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> plain_json({"a": np.arange(2), "b": (np.float64(1.5), float("nan")), "c": Path("x")})
+    {'a': [0, 1], 'b': [1.5, None], 'c': 'x'}
+    """
+    import math
+
+    import numpy as np
+
+    if isinstance(obj, dict):
+        return {str(k): plain_json(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [plain_json(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if isinstance(obj, np.ndarray):
+        return plain_json(obj.tolist())
+    if isinstance(obj, np.generic):
+        obj = obj.item()
+    if isinstance(obj, float) and not math.isfinite(obj):
+        return None
+    return obj
+
+
+def write_json(path: str | os.PathLike, obj) -> None:
+    """Write ``obj`` as indented JSON (NaN and inf written as ``null``, see :func:`plain_json`)."""
+    Path(path).write_text(json.dumps(plain_json(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")

@@ -1,0 +1,238 @@
+"""Input validation shared by every calibrator.
+
+All checks raise :class:`~ftcal.CalibrationInputError` (a ``ValueError``) with
+a message that names the array, its shape or the first offending row, and
+says how to fix it. Shape and dtype handling goes through scikit-learn's
+``validate_data`` so ``n_features_in_`` and the feature-count check at
+``predict`` follow the scikit-learn conventions.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from sklearn.utils.validation import check_array, check_consistent_length, validate_data
+
+from ._exceptions import CalibrationInputError
+
+__all__ = [
+    "check_all_finite",
+    "check_zero_reading",
+    "validate_training_data",
+    "validate_readings",
+    "min_training_samples",
+    "check_identifiable",
+    "check_finite_output",
+]
+
+#: Fewest raw channels a calibrator accepts.
+MIN_CHANNELS = 3
+
+
+def check_all_finite(a: NDArray[np.float64], name: str, fix: str) -> None:
+    """Raise if ``a`` holds NaN or inf, naming the first bad row and column.
+
+    Examples
+    --------
+    >>> check_all_finite(np.array([[1.0, 2.0], [np.nan, 0.0]]), "X", "drop that row")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: X contains NaN or inf: first at row 1, column 0 (value nan). Fix: drop that row.
+    """
+    bad = ~np.isfinite(a)
+    if bad.any():
+        where = np.argwhere(bad)[0]
+        row = int(where[0])
+        col = int(where[1]) if where.size > 1 else 0
+        value = a[tuple(where)]
+        raise CalibrationInputError(
+            f"{name} contains NaN or inf: first at row {row}, column {col} (value {value}). Fix: {fix}."
+        )
+
+
+def _check_real_2d(X, name: str, what: str) -> None:
+    """Complex, 1-D or 3-D input gets a short message (scikit-learn's would print the whole array)."""
+    if X is None or not hasattr(X, "__len__") and not hasattr(X, "shape"):
+        return  # None and scalars: validate_data's own message
+    if hasattr(X, "format") and hasattr(X, "tocsr"):  # sparse: validate_data says it is not supported
+        return
+    try:
+        a = np.asarray(X)
+    except (ValueError, TypeError):  # ragged lists: validate_data reports them
+        return
+    if np.iscomplexobj(a):
+        raise CalibrationInputError(
+            f"Complex data not supported: {name} has complex dtype {a.dtype} and shape {a.shape}; {what} are real "
+            f"numbers. Fix: pass the real part (e.g. {name}.real) if that is what you mean."
+        )
+    if a.dtype.kind in "OUS":
+        return  # strings / objects: validate_data converts or reports them
+    if a.ndim != 2:
+        hint = f" For one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
+        raise CalibrationInputError(
+            f"{name} must be a 2-D array of {what} (n_samples, n_columns); got a {a.ndim}-D array of shape "
+            f"{a.shape}.{hint}"
+        )
+
+
+def _rank(a: NDArray[np.float64]) -> int:
+    """Numerical rank of the centred, column-scaled ``a`` (columns that never change count for nothing)."""
+    centred = a - a.mean(axis=0)
+    scale = np.abs(centred).max(axis=0)
+    # a column that varies only by rounding (the mean of identical values is not always exact) is constant
+    varies = scale > 1e-12 * np.abs(a).max(axis=0)
+    if not np.any(varies):
+        return 0
+    return int(np.linalg.matrix_rank(centred[:, varies] / scale[varies]))
+
+
+def check_identifiable(X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    """Refuse data from which no calibration can be identified.
+
+    The readings must vary (not only duplicate rows, a constant or an
+    all-zero X), the wrenches must vary, and the readings must span at least
+    as many independent directions as the loads do (up to the channel
+    count): otherwise two different loads give the same reading, e.g. a dead
+    or duplicated channel.
+
+    Examples
+    --------
+    >>> check_identifiable(np.zeros((10, 6)), np.eye(10, 6))
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: X (raw readings) is the same in all 10 rows (constant or all-zero channels, or only duplicate rows): there is nothing to calibrate from. Fix: record readings under different loads.
+    """
+    n = X.shape[0]
+    rank_x = _rank(X)
+    if rank_x == 0:
+        raise CalibrationInputError(
+            f"X (raw readings) is the same in all {n} rows (constant or all-zero channels, or only duplicate rows): "
+            "there is nothing to calibrate from. Fix: record readings under different loads."
+        )
+    rank_y = _rank(y)
+    if rank_y == 0:
+        raise CalibrationInputError(
+            f"y (reference wrenches) is the same in all {n} rows: there is no load change to calibrate against. "
+            "Fix: record several different loads."
+        )
+    need = min(X.shape[1], rank_y)
+    if rank_x < need:
+        raise CalibrationInputError(
+            f"X (raw readings, shape {X.shape}) spans only {rank_x} independent direction(s) but the wrenches y span "
+            f"{rank_y}: different loads give the same reading, so no calibration can tell them apart (a dead, "
+            "constant or duplicated channel?). Fix: check the channels, or record loads that excite every channel."
+        )
+
+
+def min_training_samples(n_channels: int) -> int:
+    """Fewest samples a fit needs: ``max(n_channels + 1, 7)``.
+
+    The affine LTM has ``n_channels + 1`` unknowns per wrench component, and
+    the zero-load estimate (an affine fit of each channel on the 6 wrench
+    components) has 7.
+
+    Examples
+    --------
+    >>> min_training_samples(6), min_training_samples(12)
+    (7, 13)
+    """
+    return max(n_channels + 1, 7)
+
+
+def validate_training_data(
+    estimator, X: ArrayLike, y: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Validate ``fit`` data and set ``estimator.n_features_in_``.
+
+    Returns ``X`` (n, N) and ``y`` (n, 6) as float64. Checks, in order: both
+    are numeric 2-D arrays of the same length; no NaN/inf in ``X`` then ``y``;
+    ``X`` has at least 3 channels; there are enough samples
+    (:func:`min_training_samples`); ``y`` has 6 columns.
+    """
+    if y is None:
+        raise CalibrationInputError(
+            f"{type(estimator).__name__} requires y to be passed, but the target y is None. "
+            f"Fix: pass the reference wrenches (n_samples, 6)."
+        )
+    _check_real_2d(X, "X", "raw readings")
+    if y is not None and np.iscomplexobj(y):
+        _check_real_2d(y, "y", "reference wrenches")
+    X = validate_data(estimator, X, reset=True, dtype=np.float64, ensure_all_finite=False)
+    check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings before fitting")
+    # y is checked here, not by validate_data, so that NaN/inf get the row-naming message below.
+    y = check_array(y, ensure_2d=False, dtype=np.float64, ensure_all_finite=False, input_name="y")
+    check_consistent_length(X, y)
+    check_all_finite(y, "y (reference wrenches)", "remove or repair the rows with missing reference wrenches")
+    n, n_channels = X.shape
+    if n_channels < MIN_CHANNELS:
+        raise CalibrationInputError(
+            f"X has {n_channels} feature(s) (raw channels, shape {X.shape}); a 6-axis calibration needs at least "
+            f"{MIN_CHANNELS} raw channels. Fix: pass one column per strain-gauge channel."
+        )
+    need = min_training_samples(n_channels)
+    if n < need:
+        raise CalibrationInputError(
+            f"X has {n} sample(s), but {type(estimator).__name__} needs at least {need} "
+            f"(n_channels + 1 = {n_channels + 1} for the affine calibration, 7 for the zero-load "
+            f"estimate). Fix: record more load cases."
+        )
+    if y.ndim != 2 or y.shape[1] != 6:
+        raise CalibrationInputError(
+            f"y must have shape (n_samples, 6): the wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m]; "
+            f"got shape {y.shape}. Fix: pass all six reference wrench components per sample."
+        )
+    check_identifiable(X, y)
+    return X, y
+
+
+def validate_readings(estimator, X: ArrayLike) -> NDArray[np.float64]:
+    """Validate ``predict`` readings against the fitted channel count; float64 (n, N)."""
+    if (type(X) is np.ndarray and X.dtype == np.float64 and X.ndim == 2 and X.shape[1] == estimator.n_features_in_
+            and X.shape[0] > 0 and not hasattr(estimator, "feature_names_in_")):
+        # the control-loop case (one float64 reading at a time): the checks validate_data would make, at a
+        # fraction of its cost
+        check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings")
+        return X
+    _check_real_2d(X, "X", "raw readings")
+    X = validate_data(estimator, X, reset=False, dtype=np.float64, ensure_all_finite=False)
+    check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings")
+    return X
+
+
+def check_zero_reading(zero_reading: ArrayLike, n_channels: int) -> NDArray[np.float64]:
+    """Validate a user-given tare reading: finite, shape (n_channels,).
+
+    Examples
+    --------
+    >>> check_zero_reading([0.1, 0.2, 0.3], 3)
+    array([0.1, 0.2, 0.3])
+    """
+    z = np.asarray(zero_reading, dtype=np.float64)
+    if z.shape != (n_channels,):
+        raise CalibrationInputError(
+            f"zero_reading must have shape ({n_channels},), one raw value per channel of X; "
+            f"got shape {z.shape}. Fix: pass the raw reading recorded at zero load, or None to estimate it."
+        )
+    check_all_finite(z[None, :], "zero_reading", "pass a finite tare reading or None to estimate it")
+    return z
+
+
+def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], estimator) -> None:
+    """Raise when a prediction is NaN or inf, naming the reading that caused it (never print NaN rows).
+
+    Examples
+    --------
+    >>> check_finite_output(np.ones((2, 3)), np.array([[0.0] * 6, [np.inf] + [0.0] * 5]), "model")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: X row 1 (largest |value| 1) gives a non-finite wrench with str: ...
+    """
+    bad = ~np.isfinite(wrench)
+    if bad.any():
+        row = int(np.argmax(bad.any(axis=1)))
+        big = float(np.abs(X[row]).max()) if X.size else float("nan")
+        raise CalibrationInputError(
+            f"X row {row} (largest |value| {big:.3g}) gives a non-finite wrench with {type(estimator).__name__}: the "
+            "reading is outside the range the model can compute (the networks compute in float32, at most "
+            "~3.4e38, and squared norms overflow from ~1e154). Fix: check the reading's units, or remove that row."
+        )

@@ -1,0 +1,521 @@
+"""The artificial-data benchmark of the thesis (section IV-A, results V-A, Tables II-III, Fig. 5).
+
+For every preset and dataset index ``0 .. n_datasets-1`` a dataset is drawn
+with :func:`~ftcal.make_artificial_dataset`, every model is built with
+:func:`~ftcal.make_calibrator`, fitted on the four-sphere train set and
+scored on the continuous test set.
+
+Resumable cache
+---------------
+Each (preset, dataset, model) result is one small JSON file
+``<out_dir>/cache/<preset>/ds<index>_<model>_<config hash>.json``, written as
+soon as that fit ends. A later call with the same configuration skips every
+result already there, so a long run can be spread over many sessions (or
+killed and restarted); results of another configuration (schedule, seed,
+sizes, preset definition) have another hash and are never mixed in. The
+summary is built from whatever is complete and reports the counts.
+
+Outputs (in ``out_dir``)
+------------------------
+``artificial_results.json`` (everything), ``artificial_results.md`` (the
+tables) and ``artificial_rmse_<preset>.png`` (Fig. 5). These are rewritten
+only if the benchmark wrote them itself and nobody changed them since (a
+manifest keeps their hashes); any other existing file of that name stops the
+run with :class:`BenchmarkOutputExistsError` unless ``force=True``.
+
+Statistics
+----------
+* RMSE (Table II): eq. 18 on the torque-scaled test wrench [N], per dataset;
+  mean ± std (sample std, ``ddof=1``) across datasets.
+* Relative errors (Table III): eq. 19 per test sample, averaged per dataset;
+  mean ± std across datasets.
+* Wilcoxon signed-rank test (two-sided) of the per-dataset RMSE of every
+  model pair, paired by dataset. With fewer than 6 pairs even the most
+  extreme outcome has p >= 0.0625, so the test cannot show a difference:
+  p is reported as NaN with a note; likewise when every difference is zero.
+* Noise floor: per dataset (see :mod:`ftcal.simulation._artificial`); mean ± std.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+from joblib import Parallel, delayed
+
+from ..simulation._artificial import make_artificial_dataset
+from ..core._files import plain_json
+from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
+from ..core._metrics import calibration_report, wrench_rmse
+from ..simulation._presets import error_preset
+from ..simulation._sampling import TEST_DISTRIBUTIONS
+from ..simulation._sensor import SensorProfile
+
+__all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue",
+           "THESIS_TABLES"]
+
+_FORMAT = 1
+_MANIFEST = ".ftcal-benchmark-manifest.json"
+#: Sizes and epoch caps of ``quick=True`` (the smoke mode): 3 datasets, 100 points per sphere, 200 test points,
+#: networks capped at 60 + 10 + 10 epochs.
+QUICK = {"n_datasets": 3, "n_per_sphere": 100, "n_test": 200, "max_epochs": 60, "plateau_epochs": 10, "max_recover_epochs": 10}
+
+#: The thesis' Tables II and III (mean, std), by our model names.
+THESIS_TABLES = {
+    "directional": {"rmse": (36.9, 3.44), "rel_force": (0.040, 0.0037), "rel_torque": (0.038, 0.0044)},
+    "comparative": {"rmse": (48.3, 4.47), "rel_force": (0.044, 0.0042), "rel_torque": (0.042, 0.0043)},
+    "linear": {"rmse": (62.3, 0.76), "rel_force": (0.070, 0.0007), "rel_torque": (0.062, 0.0005)},
+}
+
+
+# ----------------------------------------------------------------- statistics
+def wilcoxon_pvalue(a: Sequence[float], b: Sequence[float]) -> tuple[float, str]:
+    """Two-sided Wilcoxon signed-rank p-value of paired samples, with a note when it cannot be computed.
+
+    Returns ``(nan, note)`` for fewer than 6 pairs or all-zero differences.
+
+    Examples
+    --------
+    >>> wilcoxon_pvalue([1, 2, 3, 4, 5, 6], [2, 3, 4, 5, 6, 7])
+    (0.03125, '')
+    >>> wilcoxon_pvalue([1.0, 2.0], [1.5, 2.5])[1]
+    'only 2 paired datasets; the signed-rank test needs at least 6 to reach p < 0.05'
+    """
+    from scipy.stats import wilcoxon
+
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    n = a.size
+    if n < 6:
+        return float("nan"), f"only {n} paired datasets; the signed-rank test needs at least 6 to reach p < 0.05"
+    if np.all(a == b):
+        return float("nan"), "all paired differences are zero; the test is undefined"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        try:
+            p = float(wilcoxon(a, b, alternative="two-sided").pvalue)
+        except ValueError as exc:
+            return float("nan"), f"scipy could not compute the test ({exc})"
+    return p, ""
+
+
+def _mean_std(values: Sequence[float]) -> dict:
+    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=float)
+    if v.size == 0:
+        return {"mean": float("nan"), "std": float("nan"), "n": 0}
+    return {"mean": float(v.mean()), "std": float(v.std(ddof=1)) if v.size > 1 else 0.0, "n": int(v.size)}
+
+
+def summarize_results(results: list[dict], models: Sequence[str], presets: Sequence[str]) -> dict:
+    """Tables II/III, noise floors and Wilcoxon p-values from per-result records.
+
+    Each record needs ``preset``, ``dataset``, ``model``, ``rmse``,
+    ``rel_force_mean``, ``rel_torque_mean`` and ``noise_floor``.
+
+    Examples
+    --------
+    >>> recs = [dict(preset="p", dataset=i, model=m, rmse=r, rel_force_mean=0.1, rel_torque_mean=0.2,
+    ...              noise_floor=1.0) for i, (m, r) in enumerate([("a", 2.0), ("a", 4.0)])]
+    >>> s = summarize_results(recs, ["a"], ["p"])
+    >>> s["p"]["models"]["a"]["rmse"]
+    {'mean': 3.0, 'std': 1.414..., 'n': 2}
+    """
+    out: dict = {}
+    for preset in presets:
+        recs = [r for r in results if r["preset"] == preset]
+        by_model = {m: {r["dataset"]: r for r in recs if r["model"] == m} for m in models}
+        floors = {r["dataset"]: r["noise_floor"] for r in recs}
+        table = {}
+        for m in models:
+            rows = [by_model[m][i] for i in sorted(by_model[m])]
+            table[m] = {
+                "rmse": _mean_std([r["rmse"] for r in rows]),
+                "rel_force": _mean_std([r["rel_force_mean"] for r in rows]),
+                "rel_torque": _mean_std([r["rel_torque_mean"] for r in rows]),
+                "rmse_per_dataset": {str(r["dataset"]): r["rmse"] for r in rows},
+                "n_datasets": len(rows),
+            }
+        pairs = {}
+        for m1, m2 in itertools.combinations(models, 2):
+            common = sorted(set(by_model[m1]) & set(by_model[m2]))
+            p, note = wilcoxon_pvalue([by_model[m1][i]["rmse"] for i in common], [by_model[m2][i]["rmse"] for i in common])
+            pairs[f"{m1} vs {m2}"] = {"p": p, "n": len(common), "note": note}
+        out[preset] = {
+            "models": table,
+            "wilcoxon": pairs,
+            "noise_floor": _mean_std(list(floors.values())),
+        }
+    return out
+
+
+# ----------------------------------------------------------------- one result
+def _config_hash(config: dict) -> str:
+    return hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
+
+
+def _seeds(seed: int, index: int) -> tuple[int, int]:
+    """(dataset seed, model seed) of a dataset index: the same data for every preset and model."""
+    ss = np.random.SeedSequence(entropy=seed, spawn_key=(index,))
+    data_seed, model_seed = ss.generate_state(2)
+    return int(data_seed), int(model_seed % (2**31 - 1))
+
+
+def _data_and_model(task: dict):
+    """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
+    from ..models._registry import make_calibrator
+
+    data_seed, model_seed = _seeds(task["seed"], task["dataset"])
+    profile = SensorProfile.default()
+    train, test, info = make_artificial_dataset(
+        task["preset"], random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
+        n_test=task["n_test"], test_distribution=task["test_distribution"],
+    )
+    model = make_calibrator(task["model"], schedule=task["schedule"], random_state=model_seed,
+                            alpha=profile.alpha, **task["overrides"])
+    return (train, test, info), model, profile
+
+
+def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int = 1) -> dict:
+    """Score a fitted model on the task's test set: one cached result."""
+    _, test, info = data
+    report = calibration_report(test.wrench, model.predict(test.raw), alpha=profile.alpha)
+    # ensembles: every member's own test RMSE, i.e. the seed-to-seed spread on this one dataset
+    members = getattr(model, "estimators_", None)
+    member_rmse = None if members is None else [
+        wrench_rmse(test.wrench, m.predict(test.raw), profile.alpha) for m in members]
+    net = getattr(model, "net_", None)
+    history = getattr(net, "history", None)
+    return {
+        **{k: task[k] for k in ("preset", "dataset", "model")},
+        "config_hash": task["hash"],
+        "config": task["config"],
+        "rmse": report.rmse,
+        "rel_force_mean": report.rel_force_mean,
+        "rel_torque_mean": report.rel_torque_mean,
+        "report": report.to_dict(),
+        "noise_floor": info["noise_floor"],
+        "errors": info["errors"],
+        "fit_seconds": fit_seconds,
+        "stacked": stacked,
+        "epochs": None if history is None else len(history),
+        "stop_reason": None if not history else history[-1].get("stop_reason"),
+        "member_rmse": member_rmse,
+    }
+
+
+def _run_group(tasks: list[dict]) -> list[dict]:
+    """Fit and score the tasks' models. Runs in a joblib worker.
+
+    One task: one ordinary fit. Several (network models of one preset and
+    model name on several datasets): the nets train together as one stacked
+    module (:func:`~ftcal.fit_stacked`); each record's ``fit_seconds`` is
+    its share of that fit's wall time, ``stacked`` the number of nets.
+    """
+    import torch
+
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        prepared = [_data_and_model(task) for task in tasks]
+        start = time.perf_counter()
+        if len(tasks) == 1:
+            (data, model, _), = prepared
+            model.fit(data[0].raw, data[0].wrench)
+        else:
+            from ..neural_network._stacked import fit_stacked
+
+            fit_stacked([m for _, m, _ in prepared], [d[0].raw for d, _, _ in prepared],
+                        [d[0].wrench for d, _, _ in prepared])
+        share = (time.perf_counter() - start) / len(tasks)
+        return [_record(task, data, model, profile, share, len(tasks))
+                for task, (data, model, profile) in zip(tasks, prepared)]
+    finally:
+        torch.set_num_threads(threads)
+
+
+def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
+    """Pending tasks as work units: network fits of one preset and model in chunks of ``stack``; others alone."""
+    from ..neural_network._base import NetworkCalibrator
+    from ..models._registry import make_calibrator
+
+    if stack <= 1:
+        return [[t] for t in pending]
+    groups: dict[tuple, list[dict]] = {}
+    units = []
+    for task in pending:
+        if isinstance(make_calibrator(task["model"]), NetworkCalibrator):
+            groups.setdefault((task["preset"], task["model"]), []).append(task)
+        else:
+            units.append([task])
+    for chunk_of in groups.values():
+        units += [chunk_of[i:i + stack] for i in range(0, len(chunk_of), stack)]
+    return units
+
+
+# ----------------------------------------------------------------- outputs
+def _sha(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+class _Outputs:
+    """Writes summary files, refusing to replace files the benchmark did not write itself."""
+
+    def __init__(self, out_dir: Path, force: bool) -> None:
+        self.out_dir = out_dir
+        self.force = force
+        self.manifest_path = out_dir / _MANIFEST
+        try:
+            self.manifest = json.loads(self.manifest_path.read_text()) if self.manifest_path.is_file() else {}
+        except (OSError, json.JSONDecodeError):
+            self.manifest = {}
+
+    def check(self, names: Sequence[str]) -> None:
+        for name in names:
+            path = self.out_dir / name
+            if path.exists() and not self.force and self.manifest.get(name) != _sha(path):
+                raise BenchmarkOutputExistsError(
+                    f"{path} exists and was not written by this benchmark (or was edited since); "
+                    "choose another out_dir or pass force=True (--force) to overwrite it."
+                )
+
+    def written(self, name: str) -> Path:
+        path = self.out_dir / name
+        self.manifest[name] = _sha(path)
+        self.manifest_path.write_text(json.dumps(self.manifest, indent=1))
+        return path
+
+
+def _fmt(stat: dict, digits: int) -> str:
+    if stat["n"] == 0:
+        return "—"
+    return f"{stat['mean']:.{digits}f} ± {stat['std']:.{digits}f}"
+
+
+def _thesis_cell(preset: str, model: str, key: str, digits: int) -> str:
+    """The thesis' value for the ``thesis`` preset (it simulated no other), else a dash."""
+    ref = THESIS_TABLES.get(model, {}).get(key) if preset == "thesis" else None
+    return "—" if ref is None else f"{ref[0]:.{digits}f} ± {ref[1]:.{digits + 1}g}"
+
+
+def markdown_tables(summary: dict, meta: dict) -> str:
+    """Markdown of Tables II-III (ours beside the thesis'), noise floors and Wilcoxon p-values."""
+    lines = [
+        f"Artificial benchmark: schedule `{meta['schedule']}`, seed {meta['seed']}, "
+        f"{meta['n_per_sphere']} points per sphere, {meta['n_test']} test points"
+        + (" (quick smoke mode)" if meta["quick"] else "") + ".",
+        "",
+    ]
+    for preset, s in summary.items():
+        nf = s["noise_floor"]
+        lines += [
+            f"### Preset `{preset}`",
+            "",
+            f"Noise floor (perfect calibrator): {_fmt(nf, 2)} N over {nf['n']} datasets.",
+            "",
+            "| Model | datasets | RMSE [N] (ours) | RMSE (thesis T. II) | rel. force (ours) | rel. force (thesis T. III)"
+            " | rel. torque (ours) | rel. torque (thesis T. III) |",
+            "|---|---|---|---|---|---|---|---|",
+        ]
+        for m, t in s["models"].items():
+            lines.append(
+                f"| {m} | {t['n_datasets']} | {_fmt(t['rmse'], 2)} | {_thesis_cell(preset, m, 'rmse', 1)} | "
+                f"{_fmt(t['rel_force'], 4)} | {_thesis_cell(preset, m, 'rel_force', 3)} | {_fmt(t['rel_torque'], 4)} | "
+                f"{_thesis_cell(preset, m, 'rel_torque', 3)} |"
+            )
+        lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]
+        for pair, w in s["wilcoxon"].items():
+            p = "NaN" if math.isnan(w["p"]) else f"{w['p']:.3g}"
+            lines.append(f"| {pair} | {w['n']} | {p} | {w['note']} |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+# ----------------------------------------------------------------- driver
+def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
+    from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
+
+    if int(n_datasets) < 1:
+        raise CalibrationInputError(f"n_datasets must be >= 1; got {n_datasets}.")
+    for p in presets:
+        error_preset(p)
+    unknown = [m for m in models if m not in tuple(CALIBRATOR_NAMES)]
+    if unknown or not models:
+        raise CalibrationInputError(f"unknown models {unknown or models}; choose from {tuple(CALIBRATOR_NAMES)}.")
+    if schedule not in SCHEDULE_NAMES:
+        raise CalibrationInputError(f"unknown schedule {schedule!r}; choose one of {SCHEDULE_NAMES}.")
+    if n_jobs == 0:
+        raise CalibrationInputError("n_jobs must not be 0 (use 1 for serial, -1 for every core).")
+    if isinstance(stack, bool) or not isinstance(stack, int) or stack < 1:
+        raise CalibrationInputError(f"stack must be an integer >= 1 (nets trained together); got {stack!r}.")
+
+
+def _tasks(n_datasets, presets, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution) -> list[dict]:
+    from ..models._registry import training_schedule
+
+    tasks = []
+    # dataset-major order: a run stopped early still covers every preset and model
+    for index, preset, model in itertools.product(range(n_datasets), presets, models):
+        overrides = {}
+        if quick and training_schedule(schedule, model):
+            overrides = {k: QUICK[k] for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")}
+        config = {
+            "format": _FORMAT, "preset": preset, "error_model": error_preset(preset).to_dict(), "model": model,
+            "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,
+            "n_test": n_test, "test_distribution": test_distribution,
+        }
+        tasks.append({**config, "dataset": index, "config": config, "hash": _config_hash(config)})
+    return tasks
+
+
+def _cache_path(cache_dir: Path, task: dict) -> Path:
+    return cache_dir / task["preset"] / f"ds{task['dataset']:03d}_{task['model']}_{task['hash']}.json"
+
+
+def _load_cached(path: Path, task: dict) -> dict | None:
+    try:
+        rec = json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError):
+        return None  # missing or half-written: recompute
+    return rec if rec.get("config") == task["config"] and rec.get("dataset") == task["dataset"] else None
+
+
+def run_artificial_benchmark(
+    n_datasets: int = 30,
+    presets: Sequence[str] = ("thesis",),
+    models: Sequence[str] = ("linear", "comparative", "directional"),
+    schedule: str = "thesis",
+    seed: int = 0,
+    n_jobs: int = 1,
+    out_dir: str | Path = "benchmark-artificial",
+    quick: bool = False,
+    progress: Callable[[int, int, dict], None] | None = None,
+    *,
+    force: bool = False,
+    compute: bool = True,
+    n_per_sphere: int | None = None,
+    n_test: int | None = None,
+    test_distribution: str = "radial",
+    plot: bool = True,
+    stack: int = 1,
+) -> dict:
+    """Run (or resume) the artificial benchmark and write its summary files.
+
+    Parameters
+    ----------
+    n_datasets : int, default=30
+        Datasets per preset (indices 0 .. n-1; the same data for every model).
+    presets : sequence of str, default=("thesis",)
+        Error presets (:data:`~ftcal.ERROR_PRESETS`).
+    models : sequence of str
+        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`).
+    schedule : {"thesis", "short"}
+        Training schedule of the networks.
+    seed : int, default=0
+        Master seed of datasets and model initialisations.
+    n_jobs : int, default=1
+        joblib workers. The backend is not fixed, so
+        ``with joblib.parallel_config(backend=...)`` (e.g. a dask or ray
+        cluster) takes effect.
+    out_dir : str or Path
+        Where the cache and the summary files go (created if missing).
+    quick : bool, default=False
+        Smoke mode: :data:`QUICK` sizes and epoch caps (well under a minute).
+    progress : callable, optional
+        ``progress(done, total, record)`` after each new result.
+    force : bool, default=False
+        Overwrite summary files the benchmark did not write itself.
+    compute : bool, default=True
+        ``False``: only aggregate what the cache already holds.
+    n_per_sphere, n_test : int, optional
+        Dataset sizes (default 1250 / 1250, or the quick sizes).
+    test_distribution : {"radial", "box"}
+        See :mod:`ftcal.simulation._sampling`.
+    plot : bool, default=True
+        Write the Fig. 5 PNG per preset.
+    stack : int, default=1
+        Train up to ``stack`` network fits of one preset and model (on
+        different datasets) together as one stacked module
+        (:func:`~ftcal.fit_stacked`): the same results up to float32
+        rounding, about 10x less CPU time with 30. 1 fits one by one.
+
+    Returns
+    -------
+    dict
+        ``meta`` (configuration, counts, wall time), ``summary`` (per preset:
+        ``models`` -> ``rmse`` / ``rel_force`` / ``rel_torque`` mean, std, n;
+        ``wilcoxon``; ``noise_floor``), ``results`` (every record) and ``files``.
+    """
+    t0 = time.perf_counter()
+    presets, models = tuple(presets), tuple(models)
+    _check_args(n_datasets, presets, models, schedule, n_jobs, stack)
+    if test_distribution not in TEST_DISTRIBUTIONS:
+        raise CalibrationInputError(f"unknown test distribution {test_distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
+    if quick:
+        n_datasets = min(int(n_datasets), QUICK["n_datasets"])
+    n_per_sphere = int(n_per_sphere or (QUICK["n_per_sphere"] if quick else 1250))
+    n_test = int(n_test or (QUICK["n_test"] if quick else 1250))
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    outputs = _Outputs(out_dir, force)
+    names = ["artificial_results.json", "artificial_results.md"] + (
+        [f"artificial_rmse_{p}.png" for p in presets] if plot else [])
+    outputs.check(names)  # fail before hours of work, not after
+
+    cache_dir = out_dir / "cache"
+    tasks = _tasks(int(n_datasets), presets, models, schedule, int(seed), quick, n_per_sphere, n_test, test_distribution)
+    results, pending = [], []
+    for task in tasks:
+        rec = _load_cached(_cache_path(cache_dir, task), task)
+        (results.append(rec) if rec is not None else pending.append(task))
+    n_cached = len(results)
+    if compute and pending:
+        units = _groups(pending, int(stack))
+        gen = Parallel(n_jobs=n_jobs, return_as="generator_unordered")(delayed(_run_group)(u) for u in units)
+        for rec in itertools.chain.from_iterable(gen):
+            path = cache_dir / rec["preset"] / f"ds{rec['dataset']:03d}_{rec['model']}_{rec['config_hash']}.json"
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps(rec, indent=1))
+            tmp.replace(path)  # atomic: a killed run never leaves a half-written result
+            results.append(rec)
+            if progress is not None:
+                progress(len(results), len(tasks), rec)
+
+    results.sort(key=lambda r: (presets.index(r["preset"]), r["dataset"], models.index(r["model"])))
+    summary = summarize_results(results, models, presets)
+    meta = {
+        "n_datasets": int(n_datasets), "presets": list(presets), "models": list(models), "schedule": schedule,
+        "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_test": n_test,
+        "test_distribution": test_distribution, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
+        "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
+        "wall_seconds": None,
+    }
+    files = {}
+    if plot:
+        from ._plots import plot_error_distributions
+
+        for preset in presets:
+            per_model = {m: list(summary[preset]["models"][m]["rmse_per_dataset"].values()) for m in models}
+            per_model = {m: v for m, v in per_model.items() if v}
+            if per_model:
+                name = f"artificial_rmse_{preset}.png"
+                plot_error_distributions(
+                    per_model, out_dir / name, noise_floor=summary[preset]["noise_floor"]["mean"],
+                    title=f"RMSE across artificial datasets, preset '{preset}' (thesis Fig. 5)",
+                )
+                files[f"png_{preset}"] = str(outputs.written(name))
+    meta["wall_seconds"] = time.perf_counter() - t0
+    (out_dir / "artificial_results.md").write_text(markdown_tables(summary, meta))
+    files["markdown"] = str(outputs.written("artificial_results.md"))
+    payload = {"meta": meta, "summary": summary, "results": results, "files": files}
+    (out_dir / "artificial_results.json").write_text(json.dumps(plain_json(payload), indent=1))
+    files["json"] = str(outputs.written("artificial_results.json"))
+    return payload
+
+

@@ -1,0 +1,384 @@
+"""PNG plots of calibration results, drawn with matplotlib's Agg canvas (no display needed).
+
+Each ``plot_*`` function takes arrays, writes one PNG and returns its path;
+the matching ``*_figure`` function returns the :class:`matplotlib.figure.Figure`
+instead, for notebooks. Nothing here touches ``pyplot``'s global state, so the
+functions are safe in scripts, servers and threads.
+
+Colours follow the thesis' figures: the directional DNN blue, the comparative
+DNN red, the linear model grey; other models get the next colours of
+matplotlib's ``tab10`` cycle.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from numpy.typing import ArrayLike, NDArray
+
+from ..core._exceptions import CalibrationInputError
+from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS
+
+__all__ = [
+    "model_color",
+    "error_distributions_figure",
+    "plot_error_distributions",
+    "axis_errors_figure",
+    "plot_axis_errors",
+    "predicted_vs_reference_figure",
+    "plot_predicted_vs_reference",
+    "sphere_coverage_figure",
+    "plot_sphere_coverage",
+    "wrench_coverage_figure",
+    "plot_wrench_coverage",
+]
+
+_KNOWN_COLORS = {"directional": "#1f77b4", "comparative": "#d62728", "linear": "#7f7f7f"}
+_OTHER_COLORS = ("#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
+_DPI = 120
+# matplotlib 3.10 replaced ``vert=False`` by ``orientation="horizontal"`` (and deprecated ``vert`` in 3.11).
+_HORIZONTAL = (
+    {"orientation": "horizontal"}
+    if tuple(int(p) for p in matplotlib.__version__.split(".")[:2]) >= (3, 10)
+    else {"vert": False}
+)
+
+
+def model_color(name: str, index: int = 0) -> str:
+    """Colour of a model in every plot: by name for the thesis' three, else by position.
+
+    Examples
+    --------
+    >>> model_color("directional"), model_color("Linear")
+    ('#1f77b4', '#7f7f7f')
+    """
+    key = name.lower()
+    for known, color in _KNOWN_COLORS.items():
+        if known in key:
+            return color
+    return _OTHER_COLORS[index % len(_OTHER_COLORS)]
+
+
+def _save(fig: Figure, path: str | Path) -> Path:
+    path = Path(path)
+    if path.suffix.lower() != ".png":
+        raise CalibrationInputError(f"plot path {path} must end in .png")
+    FigureCanvasAgg(fig)
+    fig.savefig(path, dpi=_DPI, format="png")
+    return path
+
+
+def _wrench_array(name: str, a: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(a, dtype=float)
+    if arr.ndim != 2 or arr.shape[1] != 6 or arr.shape[0] == 0:
+        raise CalibrationInputError(
+            f"{name} must have shape (n_samples >= 1, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {arr.shape}."
+        )
+    return arr
+
+
+def _model_arrays(name: str, data: Mapping[str, ArrayLike], width: int | None) -> dict[str, NDArray]:
+    if not data:
+        raise CalibrationInputError(f"{name} is empty; give at least one model.")
+    out = {}
+    for model, values in data.items():
+        arr = np.asarray(values, dtype=float).ravel()
+        if arr.size == 0 or (width is not None and arr.size != width):
+            want = f"{width} values" if width else "at least one value"
+            raise CalibrationInputError(f"{name}[{model!r}] must hold {want}; got {arr.size}.")
+        out[str(model)] = arr
+    return out
+
+
+# ------------------------------------------------------------------ error distributions
+def error_distributions_figure(
+    errors: Mapping[str, ArrayLike],
+    *,
+    noise_floor: float | None = None,
+    overall: Mapping[str, float] | None = None,
+    title: str = "Error distribution per model",
+    xlabel: str = "RMSE of the torque-scaled wrench [N]",
+) -> Figure:
+    """Violin + box plot of each model's errors, one row per model (the thesis' Fig. 5 and 6).
+
+    Parameters
+    ----------
+    errors : mapping of str to array-like
+        Model name -> error values (per sample, or per dataset).
+    noise_floor : float, optional
+        The error a perfect calibrator would still make; drawn as a dashed line.
+    overall : mapping of str to float, optional
+        Model name -> the RMSE over the whole set (eq. 18), drawn as a black
+        diamond; the number to hold against ``noise_floor`` when ``errors``
+        are per-sample values.
+    title, xlabel : str
+        Figure title and axis label (with the unit).
+    """
+    data = _model_arrays("errors", errors, None)
+    names = list(data)
+    fig = Figure(figsize=(8.0, 1.2 + 1.1 * len(names)), layout="constrained")
+    ax = fig.add_subplot()
+    positions = np.arange(len(names))[::-1]
+    rng = np.random.default_rng(0)
+    for i, (name, pos) in enumerate(zip(names, positions)):
+        values = data[name]
+        color = model_color(name, i)
+        if values.size > 1 and np.ptp(values) > 0:
+            parts = ax.violinplot(values, positions=[pos], showextrema=False, widths=0.8, **_HORIZONTAL)
+            for body in parts["bodies"]:
+                body.set_facecolor(color)
+                body.set_edgecolor(color)
+                body.set_alpha(0.35)
+        ax.boxplot(
+            values, positions=[pos], widths=0.25, showfliers=False, **_HORIZONTAL,
+            medianprops={"color": "black"}, boxprops={"color": color}, whiskerprops={"color": color},
+            capprops={"color": color},
+        )
+        if values.size <= 200:  # few values (e.g. one per dataset): show each one
+            ax.scatter(values, pos + rng.uniform(-0.12, 0.12, values.size), s=10, color=color, alpha=0.7, zorder=3)
+        ax.annotate(
+            f"mean {values.mean():.3g} ± {values.std():.2g}", xy=(1.0, pos), xycoords=("axes fraction", "data"),
+            xytext=(-4, 10), textcoords="offset points", ha="right", fontsize=8, color=color,
+        )
+    for i, (name, pos) in enumerate(zip(names, positions)):
+        if overall is not None and name in overall:
+            ax.scatter([overall[name]], [pos], marker="D", s=36, color="black", zorder=4,
+                       label="RMSE over the set" if i == 0 else None)
+    if noise_floor is not None and np.isfinite(noise_floor):
+        ax.axvline(noise_floor, color="black", linestyle="--", linewidth=1, label=f"noise floor {noise_floor:.3g}")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(loc="lower right", fontsize=8)
+    ax.set_yticks(positions, names)
+    ax.set_xlabel(xlabel)
+    ax.set_title(title)
+    ax.grid(axis="x", alpha=0.3)
+    return fig
+
+
+def plot_error_distributions(errors: Mapping[str, ArrayLike], path: str | Path, **kwargs) -> Path:
+    """Write :func:`error_distributions_figure` to ``path`` (PNG) and return the path.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> d = tempfile.mkdtemp()
+    >>> p = plot_error_distributions({"linear": [3.0, 4.0, 3.5], "directional": [1.0, 1.5, 1.2]},
+    ...                              os.path.join(d, "rmse.png"), noise_floor=0.8)
+    >>> p.stat().st_size > 0
+    True
+    """
+    return _save(error_distributions_figure(errors, **kwargs), path)
+
+
+# ------------------------------------------------------------------ per-axis errors
+def axis_errors_figure(
+    axis_errors: Mapping[str, ArrayLike], *, title: str = "RMSE per axis"
+) -> Figure:
+    """Grouped bars of each model's per-axis RMSE: forces [N] left, torques [N·m] right.
+
+    Parameters
+    ----------
+    axis_errors : mapping of str to array-like of shape (6,)
+        Model name -> RMSE of ``Fx, Fy, Fz, Tx, Ty, Tz`` in [N] and [N·m].
+    """
+    data = _model_arrays("axis_errors", axis_errors, 6)
+    fig = Figure(figsize=(9.0, 4.0), layout="constrained")
+    axes = fig.subplots(1, 2)
+    width = 0.8 / len(data)
+    for ax, part, unit in ((axes[0], FORCE, "N"), (axes[1], TORQUE, "N·m")):
+        labels = WRENCH_LABELS[part]
+        x = np.arange(len(labels))
+        for i, (name, values) in enumerate(data.items()):
+            bars = ax.bar(x + (i - (len(data) - 1) / 2) * width, values[part], width, label=name,
+                          color=model_color(name, i))
+            ax.bar_label(bars, fmt="%.3g", fontsize=7, padding=2)
+        ax.set_xticks(x, labels)
+        ax.set_ylabel(f"RMSE [{unit}]")
+        ax.set_title("forces" if unit == "N" else "torques")
+        ax.grid(axis="y", alpha=0.3)
+        ax.margins(y=0.15)
+    axes[0].legend(fontsize=8)
+    fig.suptitle(title)
+    return fig
+
+
+def plot_axis_errors(axis_errors: Mapping[str, ArrayLike], path: str | Path, **kwargs) -> Path:
+    """Write :func:`axis_errors_figure` to ``path`` (PNG) and return the path."""
+    return _save(axis_errors_figure(axis_errors, **kwargs), path)
+
+
+# ------------------------------------------------------------------ predicted vs reference
+def predicted_vs_reference_figure(
+    y_true: ArrayLike,
+    y_pred: ArrayLike,
+    *,
+    model_name: str = "model",
+    kind: str = "error",
+    max_points: int = 5000,
+) -> Figure:
+    """Predictions against the reference wrench, one panel per axis.
+
+    Parameters
+    ----------
+    y_true, y_pred : array-like of shape (n_samples, 6)
+        Reference and predicted wrenches in [N] and [N·m].
+    model_name : str
+        Shown in the title and used for the colour.
+    kind : {"error", "value"}
+        ``"error"`` (default) plots the prediction error ``predicted - reference``
+        against the reference, with the ±RMSE band: calibration errors are a
+        percent of the range, invisible on a plain predicted-vs-reference
+        diagonal. ``"value"`` plots the predicted value with the identity line.
+    max_points : int
+        At most this many points are drawn (an evenly spaced subset), to keep
+        the PNG readable; the RMSE in each panel uses every sample.
+    """
+    t = _wrench_array("y_true", y_true)
+    p = _wrench_array("y_pred", y_pred)
+    if t.shape != p.shape:
+        raise CalibrationInputError(f"y_true has shape {t.shape} but y_pred has shape {p.shape}; they must match.")
+    if kind not in ("error", "value"):
+        raise CalibrationInputError(f"kind must be 'error' or 'value'; got {kind!r}.")
+    shown = np.linspace(0, len(t) - 1, min(len(t), max_points)).astype(int)
+    fig = Figure(figsize=(11.0, 6.5), layout="constrained")
+    axes = fig.subplots(2, 3)
+    color = model_color(model_name)
+    for k, ax in enumerate(axes.ravel()):
+        unit = "N" if k < 3 else "N·m"
+        err = p[:, k] - t[:, k]
+        rmse = float(np.sqrt(np.mean(err**2)))
+        lo, hi = float(t[:, k].min()), float(t[:, k].max())
+        pad = 0.05 * (hi - lo or 1.0)
+        line_x = [lo - pad, hi + pad]
+        if kind == "error":
+            ax.axhline(0.0, color="black", linewidth=0.8, label="ideal")
+            ax.axhspan(-rmse, rmse, color=color, alpha=0.12, label="± RMSE")
+            ax.scatter(t[shown, k], err[shown], s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
+            ax.set_ylabel(f"predicted - reference [{unit}]")
+        else:
+            ax.plot(line_x, line_x, color="black", linewidth=0.8, label="ideal")
+            ax.scatter(t[shown, k], p[shown, k], s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
+            ax.set_ylabel(f"predicted [{unit}]")
+        ax.set_title(f"{WRENCH_LABELS[k]}   RMSE {rmse:.3g} {unit}", fontsize=10)
+        ax.set_xlabel(f"reference {WRENCH_LABELS[k]} [{unit}]")
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8, loc="upper left", markerscale=3)
+    what = "Prediction error" if kind == "error" else "Predicted"
+    fig.suptitle(f"{what} vs reference wrench — {model_name} ({len(t)} samples)")
+    return fig
+
+
+def plot_predicted_vs_reference(y_true: ArrayLike, y_pred: ArrayLike, path: str | Path, **kwargs) -> Path:
+    """Write :func:`predicted_vs_reference_figure` to ``path`` (PNG) and return the path."""
+    return _save(predicted_vs_reference_figure(y_true, y_pred, **kwargs), path)
+
+
+# ------------------------------------------------------------------ coverage
+def sphere_coverage_figure(
+    directions: ArrayLike,
+    *,
+    reached: ArrayLike | None = None,
+    title: str = "Gravity directions in the sensor frame",
+) -> Figure:
+    """Where on the sphere of load directions the calibration poses lie.
+
+    Left: the unit directions in 3-D; right: the same as a longitude/latitude
+    map, so gaps are easy to see. Points that the robot cannot reach (``reached``
+    false) are drawn as grey crosses.
+
+    Parameters
+    ----------
+    directions : array-like of shape (n, 3)
+        Directions (normalised here), e.g. gravity in the sensor frame.
+    reached : array-like of bool, shape (n,), optional
+        Which directions have a feasible pose; all when omitted.
+    """
+    d = np.asarray(directions, dtype=float)
+    if d.ndim != 2 or d.shape[1] != 3 or d.shape[0] == 0:
+        raise CalibrationInputError(f"directions must have shape (n >= 1, 3); got shape {d.shape}.")
+    norm = np.linalg.norm(d, axis=1)
+    if not np.all(np.isfinite(norm)) or np.any(norm == 0):
+        raise CalibrationInputError("directions must be finite and non-zero.")
+    d = d / norm[:, None]
+    ok = np.ones(len(d), bool) if reached is None else np.asarray(reached, dtype=bool).ravel()
+    if ok.shape != (len(d),):
+        raise CalibrationInputError(f"reached must have shape ({len(d)},); got shape {ok.shape}.")
+    fig = Figure(figsize=(11.0, 5.0), layout="constrained")
+    ax3 = fig.add_subplot(1, 2, 1, projection="3d")
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 37), np.linspace(0, np.pi, 19))
+    ax3.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", linewidth=0.4)
+    ax3.scatter(*d[ok].T, s=12, color="#1f77b4", label=f"reachable ({ok.sum()})", depthshade=False)
+    if (~ok).any():
+        ax3.scatter(*d[~ok].T, s=14, marker="x", color="0.5", label=f"unreachable ({(~ok).sum()})")
+    for axis, label in ((ax3.xaxis, "x"), (ax3.yaxis, "y"), (ax3.zaxis, "z")):
+        axis.set_ticks([-1, 0, 1])
+        axis.set_label_text(label)
+    ax3.set_box_aspect((1, 1, 1))
+    ax3.legend(fontsize=8, loc="upper left")
+    ax2 = fig.add_subplot(1, 2, 2)
+    lon = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    lat = np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+    ax2.scatter(lon[ok], lat[ok], s=12, color="#1f77b4")
+    if (~ok).any():
+        ax2.scatter(lon[~ok], lat[~ok], s=14, marker="x", color="0.5")
+    ax2.set_xlim(-180, 180)
+    ax2.set_ylim(-90, 90)
+    ax2.set_xticks(np.arange(-180, 181, 60))
+    ax2.set_yticks(np.arange(-90, 91, 30))
+    ax2.set_xlabel("azimuth atan2(y, x) [deg]")
+    ax2.set_ylabel("elevation asin(z) [deg]")
+    ax2.grid(alpha=0.3)
+    ax2.set_title(f"{len(d)} directions, map view", fontsize=10)
+    fig.suptitle(title)
+    return fig
+
+
+def plot_sphere_coverage(directions: ArrayLike, path: str | Path, **kwargs) -> Path:
+    """Write :func:`sphere_coverage_figure` to ``path`` (PNG) and return the path."""
+    return _save(sphere_coverage_figure(directions, **kwargs), path)
+
+
+def wrench_coverage_figure(
+    wrench: ArrayLike, *, alpha: float = 1.0, title: str = "Wrench coverage of the dataset"
+) -> Figure:
+    """Which loads a dataset holds: the torque-scaled magnitude and two projections.
+
+    Left: histogram of ``||[F, alpha T]||`` [N] (the thesis' training spheres
+    show as sharp peaks); middle: ``Fx`` against ``Fy`` [N]; right: ``Tx``
+    against ``Ty`` [N·m].
+
+    Parameters
+    ----------
+    wrench : array-like of shape (n, 6)
+        Wrenches in [N] and [N·m].
+    alpha : float
+        Torque scale [m⁻¹] for the magnitude.
+    """
+    w = _wrench_array("wrench", wrench)
+    if not np.isfinite(alpha) or alpha <= 0:
+        raise CalibrationInputError(f"alpha must be a finite positive number; got {alpha}.")
+    scaled = np.hstack([w[:, FORCE], alpha * w[:, TORQUE]])
+    fig = Figure(figsize=(12.0, 4.0), layout="constrained")
+    axes = fig.subplots(1, 3)
+    axes[0].hist(np.linalg.norm(scaled, axis=1), bins=60, color="#1f77b4")
+    axes[0].set_xlabel(f"‖[F, α·T]‖ [N]   (α = {alpha:.3g} m⁻¹)")
+    axes[0].set_ylabel("samples")
+    for ax, (i, j), unit in ((axes[1], (0, 1), "N"), (axes[2], (3, 4), "N·m")):
+        ax.scatter(w[:, i], w[:, j], s=3, alpha=0.4, color="#1f77b4", linewidths=0)
+        ax.set_xlabel(f"{WRENCH_LABELS[i]} [{unit}]")
+        ax.set_ylabel(f"{WRENCH_LABELS[j]} [{unit}]")
+        ax.set_aspect("equal", adjustable="datalim")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    fig.suptitle(f"{title} ({len(w)} samples)")
+    return fig
+
+
+def plot_wrench_coverage(wrench: ArrayLike, path: str | Path, **kwargs) -> Path:
+    """Write :func:`wrench_coverage_figure` to ``path`` (PNG) and return the path."""
+    return _save(wrench_coverage_figure(wrench, **kwargs), path)

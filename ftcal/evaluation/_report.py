@@ -1,0 +1,94 @@
+"""Comparison tables of calibration reports (markdown, readable in a terminal), and evaluation plots."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from ..core._metrics import CalibrationReport, per_sample_rmse
+from ..core._wrench import WRENCH_LABELS
+
+__all__ = ["comparison_table", "axis_table", "EVALUATION_PLOTS", "predicted_plot_name", "write_evaluation_plots"]
+
+
+def _pm(mean: float, std: float, scale: float = 1.0, digits: int = 3) -> str:
+    if not np.isfinite(mean):
+        return "n/a"
+    return f"{mean * scale:.{digits}g} ± {std * scale:.2g}"
+
+
+def comparison_table(reports: Mapping[str, CalibrationReport], noise_floor: float | None = None) -> str:
+    """Markdown table: RMSE, per-sample RMSE, relative force / torque errors per model.
+
+    Examples
+    --------
+    >>> from ftcal import calibration_report
+    >>> r = calibration_report([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
+    >>> print(comparison_table({"linear": r}))  # doctest: +NORMALIZE_WHITESPACE
+    | model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |
+    |---|---|---|---|---|
+    | linear | 0.408 | 0.408 ± 0 | 10 ± 0 | 0 ± 0 |
+    """
+    lines = [
+        "| model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |",
+        "|---|---|---|---|---|",
+    ]
+    for name, r in reports.items():
+        lines.append(
+            f"| {name} | {r.rmse:.3g} | {_pm(r.rmse_per_sample_mean, r.rmse_per_sample_std)} | "
+            f"{_pm(r.rel_force_mean, r.rel_force_std, 100)} | {_pm(r.rel_torque_mean, r.rel_torque_std, 100)} |"
+        )
+    if noise_floor is not None and np.isfinite(noise_floor):
+        lines.append(f"| noise floor | {noise_floor:.3g} | | | |")
+    return "\n".join(lines)
+
+
+def axis_table(reports: Mapping[str, CalibrationReport]) -> str:
+    """Markdown table of the RMSE per axis: forces [N], torques [N·m]."""
+    head = " | ".join(f"{k} [{'N' if k.startswith('F') else 'N·m'}]" for k in WRENCH_LABELS)
+    lines = [f"| model | {head} |", "|---" * 7 + "|"]
+    for name, r in reports.items():
+        lines.append(f"| {name} | " + " | ".join(f"{r.axis_rmse[k]:.3g}" for k in WRENCH_LABELS) + " |")
+    return "\n".join(lines)
+
+
+#: File names of the evaluation plots (the per-model one takes the model label).
+EVALUATION_PLOTS = ("rmse_distribution.png", "axis_rmse.png")
+
+
+def predicted_plot_name(label: str) -> str:
+    """File name of a model's prediction-error plot."""
+    return f"errors_{label}.png"
+
+
+def write_evaluation_plots(
+    paths: Mapping[str, Path],
+    y_true: np.ndarray,
+    predictions: Mapping[str, np.ndarray],
+    alpha: float,
+    noise_floor: float | None = None,
+    dataset_name: str = "test set",
+) -> None:
+    """The three evaluation plots: per-sample RMSE distributions, per-axis RMSE, errors vs reference.
+
+    ``paths`` maps ``"distribution"``, ``"axis"`` and each model label to a PNG path.
+    """
+    from . import _plots
+    from ..core._metrics import axis_rmse, wrench_rmse
+
+    _plots.plot_error_distributions(
+        {name: per_sample_rmse(y_true, p, alpha) for name, p in predictions.items()},
+        paths["distribution"],
+        noise_floor=noise_floor,
+        overall={name: wrench_rmse(y_true, p, alpha) for name, p in predictions.items()},
+        title=f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples, α = {alpha:.3g} m⁻¹)",
+    )
+    _plots.plot_axis_errors(
+        {name: axis_rmse(y_true, p) for name, p in predictions.items()},
+        paths["axis"],
+        title=f"RMSE per axis on the {dataset_name}",
+    )
+    for name, p in predictions.items():
+        _plots.plot_predicted_vs_reference(y_true, p, paths[name], model_name=name)

@@ -1,0 +1,273 @@
+"""Tool load identification and gravity compensation (issue 15).
+
+A sensor on a robot carries a tool (gripper, probe, mounting plate): its
+weight shows in every reading and changes with the orientation. With the
+sensor's orientation from forward kinematics (:func:`ftcal.sensor_pose_in_base`),
+the tool's mass ``m`` [kg], centre of mass ``c`` [m] (sensor frame) and the
+reading's bias ``b`` (6,) [N, N·m] follow from a few static poses by linear
+least squares, in closed form. With the gravity vector in the sensor frame
+``g_s = Rᵀ g`` (``R`` maps sensor to base frame, ``g`` [m/s²] in the base frame):
+
+* force rows:  ``F = m g_s + b_F``                   (unknowns ``m``, ``b_F``: 4)
+* torque rows: ``τ = c × (m g_s) + b_τ = -[g_s]× p + b_τ`` with ``p = m c``
+  (unknowns ``p``, ``b_τ``: 6), then ``c = p / m``.
+
+Each block is an ordinary least-squares problem; the standard errors come
+from its residual variance and ``(AᵀA)⁻¹`` (``c``'s by the delta method).
+The problem is only solvable when the poses tilt the tool in two independent
+directions: :func:`identify_tool_load` refuses poses whose gravity directions
+(in the sensor frame) vary by less than :data:`MIN_TILT_DEG` in two
+directions. The 11 poses of ``ftcal plan --subdivisions 0`` (the 12 vertices
+of an icosahedron of gravity directions, minus the one straight up) are a
+minimal well-conditioned set.
+
+This is the method of the gravity-compensation tools robot users rely on
+(ROS' force_torque_tools and ros2_control's GravityCompensation take the
+same mass, centre of mass and bias); ftcal adds the identification from its
+own pose planner, logs and calibrators, with standard errors.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core._exceptions import CalibrationInputError
+from ..core._files import atomic_output
+
+__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY"]
+
+#: Gravity in the base frame [m/s²] (z up).
+DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+#: The gravity directions (sensor frame) must vary by at least this much in two independent directions [deg].
+MIN_TILT_DEG = 10.0
+
+
+def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[v]×`` for each row of ``v`` (n, 3) -> (n, 3, 3)."""
+    z = np.zeros(len(v))
+    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
+                     np.stack([-v[:, 1], v[:, 0], z], -1)], axis=1)
+
+
+def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None):
+    R = np.asarray(sensor_rotations, dtype=float)
+    if R.ndim != 3 or R.shape[1:] != (3, 3):
+        raise CalibrationInputError(
+            f"sensor_rotations must have shape (n, 3, 3), one rotation (sensor to base frame) per pose; got "
+            f"shape {R.shape}. Take them from ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]."
+        )
+    if not np.isfinite(R).all():
+        raise CalibrationInputError("sensor_rotations holds NaN or inf.")
+    orthonormal = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2))
+    if orthonormal.max() > 1e-6:
+        i = int(np.argmax(orthonormal))
+        raise CalibrationInputError(
+            f"sensor_rotations[{i}] is not a rotation matrix (RᵀR differs from the identity by "
+            f"{orthonormal[i]:.2g}); pass rotations, e.g. the upper-left 3x3 of the sensor poses."
+        )
+    if wrenches is None:
+        return R, None
+    W = np.asarray(wrenches, dtype=float)
+    if W.shape != (len(R), 6):
+        raise CalibrationInputError(
+            f"wrenches must have shape ({len(R)}, 6), one [Fx, Fy, Fz, Tx, Ty, Tz] per rotation; got {W.shape}."
+        )
+    if not np.isfinite(W).all():
+        row = int(np.argwhere(~np.isfinite(W))[0, 0])
+        raise CalibrationInputError(f"wrenches holds NaN or inf (first at row {row}); repair or drop that pose.")
+    return R, W
+
+
+def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np.float64]:
+    g = np.asarray(gravity, dtype=float)
+    if g.shape != (3,) or not np.isfinite(g).all() or np.linalg.norm(g) == 0:
+        raise CalibrationInputError(f"gravity must be a finite non-zero 3-vector in [m/s²]; got {gravity!r}.")
+    return np.einsum("nji,j->ni", R, g)  # Rᵀ g per pose
+
+
+@dataclass(frozen=True)
+class ToolLoad:
+    """A tool's gravity load on the sensor, and the sensor's bias.
+
+    Attributes
+    ----------
+    mass : float
+        [kg].
+    center_of_mass : ndarray of shape (3,)
+        In the sensor frame [m].
+    bias : ndarray of shape (6,)
+        The reading's offset [N, N·m] (what the sensor reads with no load at all).
+    mass_std_error, center_of_mass_std_error, bias_std_error
+        Standard errors of the above (same units).
+    gravity : ndarray of shape (3,)
+        Gravity in the base frame [m/s²] used for the identification.
+    residual_rms : ndarray of shape (2,)
+        RMS of the force [N] and torque [N·m] residuals of the identification poses.
+    """
+
+    mass: float
+    center_of_mass: NDArray[np.float64]
+    bias: NDArray[np.float64]
+    mass_std_error: float = 0.0
+    center_of_mass_std_error: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    bias_std_error: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
+    gravity: NDArray[np.float64] = field(default_factory=lambda: np.asarray(DEFAULT_GRAVITY))
+    residual_rms: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+
+    def gravity_wrench(self, sensor_rotations: ArrayLike) -> NDArray[np.float64]:
+        """The wrench [N, N·m] the tool's weight plus the bias produce at each pose (n, 6), sensor frame."""
+        R, _ = _check_inputs(sensor_rotations)
+        force = self.mass * _gravity_in_sensor(R, self.gravity)
+        torque = np.cross(np.asarray(self.center_of_mass), force)
+        return np.hstack([force, torque]) + np.asarray(self.bias)
+
+    def compensate(self, sensor_rotations: ArrayLike, wrenches: ArrayLike) -> NDArray[np.float64]:
+        """The external wrench: measured ``wrenches`` (n, 6) minus the tool's gravity wrench and the bias.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> tool = ToolLoad(mass=1.0, center_of_mass=np.array([0.0, 0.0, 0.1]), bias=np.zeros(6))
+        >>> R = np.eye(3)[None]                      # sensor frame = base frame, z up
+        >>> tool.compensate(R, tool.gravity_wrench(R)).round(12)
+        array([[0., 0., 0., 0., 0., 0.]])
+        """
+        R, W = _check_inputs(sensor_rotations, wrenches)
+        return W - self.gravity_wrench(R)
+
+    def to_dict(self) -> dict:
+        """JSON-able form (what :meth:`save` writes)."""
+        return {
+            "format": "ftcal-tool-load", "format_version": 1,
+            "mass_kg": self.mass, "center_of_mass_m": np.asarray(self.center_of_mass).tolist(),
+            "bias": np.asarray(self.bias).tolist(), "mass_std_error_kg": self.mass_std_error,
+            "center_of_mass_std_error_m": np.asarray(self.center_of_mass_std_error).tolist(),
+            "bias_std_error": np.asarray(self.bias_std_error).tolist(),
+            "gravity_m_s2": np.asarray(self.gravity).tolist(), "residual_rms": np.asarray(self.residual_rms).tolist(),
+        }
+
+    def save(self, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
+        """Write the tool file (JSON); an existing file is only replaced with ``overwrite=True``."""
+        path = Path(path)
+        if path.exists() and not overwrite:
+            raise CalibrationInputError(f"{path} already exists; pass overwrite=True or choose another path.")
+        with atomic_output(path, overwrite=overwrite, error=CalibrationInputError) as tmp:
+            tmp.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
+        return path
+
+    @classmethod
+    def load(cls, path: str | os.PathLike) -> "ToolLoad":
+        """Read a tool file written by :meth:`save`."""
+        path = Path(path)
+        try:
+            d = json.loads(path.read_text(encoding="utf-8"))
+        except FileNotFoundError:
+            raise CalibrationInputError(f"{path}: no such tool file.") from None
+        except (json.JSONDecodeError, UnicodeDecodeError, RecursionError) as exc:
+            raise CalibrationInputError(f"{path}: not a tool file (not JSON: {str(exc)[:80]}).") from None
+        if not isinstance(d, dict) or d.get("format") != "ftcal-tool-load":
+            raise CalibrationInputError(f"{path}: not an ftcal tool file (written by 'ftcal identify-load').")
+        try:
+            tool = cls(
+                mass=float(d["mass_kg"]), center_of_mass=np.asarray(d["center_of_mass_m"], dtype=float),
+                bias=np.asarray(d["bias"], dtype=float), mass_std_error=float(d.get("mass_std_error_kg", 0.0)),
+                center_of_mass_std_error=np.asarray(d.get("center_of_mass_std_error_m", [0.0] * 3), dtype=float),
+                bias_std_error=np.asarray(d.get("bias_std_error", [0.0] * 6), dtype=float),
+                gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
+                residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
+            )
+        except (KeyError, TypeError, ValueError) as exc:
+            raise CalibrationInputError(f"{path}: the tool file is incomplete ({exc!r}).") from None
+        shapes = {"center_of_mass_m": (tool.center_of_mass, (3,)), "bias": (tool.bias, (6,)),
+                  "gravity_m_s2": (tool.gravity, (3,))}
+        for key, (value, shape) in shapes.items():
+            if value.shape != shape or not np.isfinite(value).all():
+                raise CalibrationInputError(f"{path}: {key} must be {shape[0]} finite numbers; got {value.tolist()}.")
+        if not (np.isfinite(tool.mass) and tool.mass >= 0):
+            raise CalibrationInputError(f"{path}: mass_kg must be a finite mass >= 0; got {tool.mass!r}.")
+        return tool
+
+
+def _least_squares(A: NDArray, b: NDArray) -> tuple[NDArray, NDArray, float]:
+    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
+    residual = b - A @ coef
+    dof = max(len(b) - A.shape[1], 1)
+    sigma2 = float(residual @ residual) / dof
+    cov = sigma2 * np.linalg.pinv(A.T @ A)
+    return coef, np.sqrt(np.maximum(np.diag(cov), 0.0)), float(np.sqrt(np.mean(residual**2)))
+
+
+def identify_tool_load(
+    sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY
+) -> ToolLoad:
+    """Identify a tool's mass, centre of mass and the sensor bias from static poses (closed form).
+
+    Parameters
+    ----------
+    sensor_rotations : array-like of shape (n, 3, 3)
+        Rotation from the sensor frame to the base frame at each pose
+        (``ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]``).
+    wrenches : array-like of shape (n, 6)
+        Calibrated readings at those poses [N, N·m] (the tool mounted, nothing else touching it).
+    gravity : array-like of shape (3,), default=(0, 0, -9.81)
+        Gravity in the base frame [m/s²].
+
+    Returns
+    -------
+    ToolLoad
+
+    Raises
+    ------
+    CalibrationInputError
+        Bad shapes or values, or poses that do not tilt the tool in two
+        independent directions by at least :data:`MIN_TILT_DEG`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> R = Rotation.random(20, random_state=0).as_matrix()
+    >>> truth = ToolLoad(mass=1.2, center_of_mass=np.array([0.01, -0.02, 0.08]), bias=np.arange(6.0) / 10)
+    >>> tool = identify_tool_load(R, truth.gravity_wrench(R))
+    >>> round(tool.mass, 9), tool.center_of_mass.round(9).tolist()
+    (1.2, [0.01, -0.02, 0.08])
+    """
+    R, W = _check_inputs(sensor_rotations, wrenches)
+    g_s = _gravity_in_sensor(R, gravity)
+    n = len(R)
+    directions = g_s / np.linalg.norm(g_s, axis=1, keepdims=True)
+    spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False) / np.sqrt(max(n, 1))
+    tilt_deg = np.degrees(np.arcsin(np.clip(spread, 0.0, 1.0)))
+    if n < 4 or tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
+        second = float(tilt_deg[1]) if tilt_deg.size > 1 else 0.0
+        raise CalibrationInputError(
+            f"the {n} poses do not excite the tool load: gravity (in the sensor frame) varies by about "
+            f"{second:.1f} deg in its second direction, but mass, centre of mass and bias need at least "
+            f"{MIN_TILT_DEG:g} deg in two independent directions (and 4 poses). Fix: add poses tilted about two "
+            "axes, e.g. the 11 of 'ftcal plan --subdivisions 0'."
+        )
+    eye = np.tile(np.eye(3), (n, 1))
+    force_design = np.hstack([g_s.reshape(-1, 1), eye])                      # [m, b_F]
+    torque_design = np.hstack([(-_skew(g_s)).reshape(-1, 3), eye])          # [p = m c, b_τ]
+    f_coef, f_se, f_rms = _least_squares(force_design, W[:, :3].reshape(-1))
+    t_coef, t_se, t_rms = _least_squares(torque_design, W[:, 3:].reshape(-1))
+    mass, p = float(f_coef[0]), t_coef[:3]
+    if not mass > 0:
+        raise CalibrationInputError(
+            f"the identified mass is {mass:.4g} kg (not positive): the wrenches do not show a tool's weight. "
+            "Check the gravity direction and that the wrenches are in the sensor frame."
+        )
+    com = p / mass
+    com_se = np.sqrt((t_se[:3] / mass) ** 2 + (p * f_se[0] / mass**2) ** 2)
+    return ToolLoad(
+        mass=mass, center_of_mass=com, bias=np.concatenate([f_coef[1:], t_coef[3:]]),
+        mass_std_error=float(f_se[0]), center_of_mass_std_error=com_se,
+        bias_std_error=np.concatenate([f_se[1:], t_se[3:]]), gravity=np.asarray(gravity, dtype=float),
+        residual_rms=np.array([f_rms, t_rms]),
+    )

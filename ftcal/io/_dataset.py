@@ -1,0 +1,282 @@
+"""The calibration dataset: raw readings paired with reference wrenches, and its file formats.
+
+File formats
+------------
+CSV (``.csv``)
+    One header line, then one row per sample. Columns ``s0 ... s{N-1}`` hold
+    the raw channels (any unit the sensor gives: counts, mV, ...), then
+    ``Fx, Fy, Fz`` in [N] and ``Tx, Ty, Tz`` in [N·m]; an optional ``group``
+    column holds an integer label per row (a load configuration, a sphere,
+    ...), an optional ``temperature`` column the sensor temperature [deg C]. Lines starting with ``#`` before the header are comments; a comment
+    ``# meta: {...}`` carries JSON metadata.
+NumPy archive (``.npz``)
+    Arrays ``raw`` (n, N), ``wrench`` (n, 6), optional ``group`` (n,), and
+    ``meta_json`` (a JSON string). Read with ``allow_pickle=False``.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core._columns import check_plain_numbers, read_header
+from ..core._exceptions import CalibrationInputError, DatasetFileError
+from ..core._files import atomic_output
+from ..core._temperature import check_temperature
+from ..core._wrench import WRENCH_LABELS
+
+__all__ = ["CalibrationDataset"]
+
+_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature]"
+
+
+def _parse_meta(text: str, where: str) -> dict:
+    """The JSON object of a ``# meta:`` comment (an object, not a list or a number)."""
+    try:
+        meta = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise DatasetFileError(f"{where}: bad JSON in the meta comment ({str(exc)[:80]}).") from None
+    if not isinstance(meta, dict):
+        raise DatasetFileError(
+            f"{where}: the meta comment holds a JSON {type(meta).__name__}; it must be a JSON object "
+            "such as {\"alpha\": 50}."
+        )
+    return meta
+
+
+def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
+    """``group`` as int64, refusing fractional, non-finite or non-numeric labels (no silent truncation)."""
+    g = np.asarray(group)
+    if g.shape != (n_rows,):
+        raise DatasetFileError(f"group must have shape ({n_rows},), one label per row; got shape {g.shape}.")
+    if g.dtype.kind in "iu":
+        return g.astype(np.int64)
+    if g.dtype.kind == "b" or g.dtype.kind not in "f":
+        raise DatasetFileError(
+            f"group must hold integer labels (a load configuration or pose number); got dtype {g.dtype}."
+        )
+    bad = ~np.isfinite(g) | (g != np.round(g))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise DatasetFileError(
+            f"group must hold integer labels; row {i} holds {float(g[i])!r}. Fix: number the groups 0, 1, 2, ..."
+        )
+    return g.astype(np.int64)
+
+
+@dataclass
+class CalibrationDataset:
+    """Raw readings and the reference wrenches they were recorded under.
+
+    Parameters
+    ----------
+    raw : ndarray of shape (n_samples, n_channels)
+        Raw sensor readings, one row per sample.
+    wrench : ndarray of shape (n_samples, 6)
+        Reference wrench ``[Fx, Fy, Fz, Tx, Ty, Tz]`` in [N] and [N·m].
+    group : ndarray of shape (n_samples,), optional
+        Integer label per sample (load configuration, sphere index, ...), for
+        grouped splits such as ``GroupKFold``.
+    meta : dict
+        JSON-serialisable facts about where the data came from.
+    temperature : ndarray of shape (n_samples,), optional
+        Sensor temperature [deg C] per sample (for
+        :class:`~ftcal.TemperatureCompensatedCalibrator`: ``features(temperature=True)``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> ds = CalibrationDataset(raw=np.ones((4, 6)), wrench=np.zeros((4, 6)))
+    >>> ds.n_samples, ds.n_channels
+    (4, 6)
+    """
+
+    raw: NDArray[np.float64]
+    wrench: NDArray[np.float64]
+    group: NDArray[np.int64] | None = None
+    meta: dict = field(default_factory=dict)
+    temperature: NDArray[np.float64] | None = None
+
+    def __post_init__(self) -> None:
+        for name in ("raw", "wrench"):
+            value = np.asarray(getattr(self, name))
+            if np.iscomplexobj(value):
+                raise DatasetFileError(f"{name} holds complex numbers (shape {value.shape}); readings and wrenches "
+                                       "are real. Fix: pass the real part explicitly if that is what you mean.")
+            setattr(self, name, np.asarray(value, dtype=float))
+        if self.raw.ndim != 2:
+            raise DatasetFileError(f"raw must be 2-D (n_samples, n_channels); got shape {self.raw.shape}.")
+        if self.wrench.ndim != 2 or self.wrench.shape[1] != 6:
+            raise DatasetFileError(f"wrench must have shape (n_samples, 6); got shape {self.wrench.shape}.")
+        if self.raw.shape[0] != self.wrench.shape[0]:
+            raise DatasetFileError(
+                f"raw has {self.raw.shape[0]} rows but wrench has {self.wrench.shape[0]}; they must match."
+            )
+        if self.group is not None:
+            self.group = _integer_labels(self.group, self.raw.shape[0])
+        if self.temperature is not None:
+            try:
+                self.temperature = check_temperature(self.temperature, self.raw.shape[0])
+            except CalibrationInputError as exc:
+                raise DatasetFileError(str(exc)) from None
+        if not isinstance(self.meta, dict):
+            raise DatasetFileError(f"meta must be a dict (JSON object); got {type(self.meta).__name__}.")
+
+    @property
+    def n_samples(self) -> int:
+        """Number of rows."""
+        return int(self.raw.shape[0])
+
+    @property
+    def n_channels(self) -> int:
+        """Number of raw channels."""
+        return int(self.raw.shape[1])
+
+    def subset(self, index: NDArray) -> "CalibrationDataset":
+        """The rows selected by ``index`` (a boolean mask or integer indices), as a new dataset."""
+        return CalibrationDataset(
+            raw=self.raw[index],
+            wrench=self.wrench[index],
+            group=None if self.group is None else self.group[index],
+            meta=dict(self.meta),
+            temperature=None if self.temperature is None else self.temperature[index],
+        )
+
+    def features(self, temperature: bool = False) -> NDArray[np.float64]:
+        """The calibrators' ``X``: the raw channels, with the temperature [deg C] as a last column if asked."""
+        if not temperature:
+            return self.raw
+        if self.temperature is None:
+            raise DatasetFileError("this dataset has no temperature column; record the sensor temperature "
+                                   "(a 'temperature' column in deg C) to compensate thermal drift.")
+        return np.column_stack([self.raw, self.temperature])
+
+    # ------------------------------------------------------------------ files
+    def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
+        """Write the dataset to ``path`` (``.csv`` or ``.npz``, chosen by suffix) and return it.
+
+        The file is written to a unique temporary file beside ``path`` and
+        renamed into place, so an interrupted save never leaves half a file.
+        An existing ``path`` raises :class:`~ftcal.DatasetFileError` unless
+        ``overwrite=True``.
+        """
+        path = Path(path)
+        if path.suffix not in (".csv", ".npz"):
+            raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv or .npz.")
+        if path.exists() and not overwrite:
+            raise DatasetFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
+        with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
+            if path.suffix == ".npz":
+                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(json.dumps(self.meta))}
+                if self.group is not None:
+                    arrays["group"] = self.group
+                if self.temperature is not None:
+                    arrays["temperature"] = self.temperature
+                with open(tmp, "wb") as fh:
+                    np.savez(fh, **arrays)
+            else:
+                cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
+                data = np.hstack([self.raw, self.wrench])
+                fmt = ["%.10g"] * data.shape[1]
+                if self.group is not None:
+                    cols.append("group")
+                    data = np.hstack([data, self.group[:, None].astype(float)])
+                    fmt.append("%d")
+                if self.temperature is not None:
+                    cols.append("temperature")
+                    data = np.hstack([data, self.temperature[:, None]])
+                    fmt.append("%.10g")
+                header = f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols)
+                np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt=fmt)
+        return path
+
+    @classmethod
+    def load(cls, path: str | Path) -> "CalibrationDataset":
+        """Read a dataset written by :meth:`save` (or by hand in the CSV layout above)."""
+        path = Path(path)
+        if not path.is_file():
+            raise DatasetFileError(f"{path}: no such dataset file.")
+        if path.suffix == ".npz":
+            return cls._load_npz(path)
+        if path.suffix == ".csv":
+            return cls._load_csv(path)
+        raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv or .npz.")
+
+    @classmethod
+    def _load_npz(cls, path: Path) -> "CalibrationDataset":
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                missing = {"raw", "wrench"} - set(z.files)
+                if missing:
+                    raise DatasetFileError(f"{path}: missing arrays {sorted(missing)}; expected raw and wrench.")
+                raw, wrench = z["raw"], z["wrench"]
+                group = z["group"] if "group" in z.files else None
+                temperature = z["temperature"] if "temperature" in z.files else None
+                meta = json.loads(str(z["meta_json"])) if "meta_json" in z.files else {}
+        except DatasetFileError:
+            raise
+        except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
+            raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
+        try:
+            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+        except DatasetFileError as exc:
+            raise DatasetFileError(f"{path}: {exc}") from None
+        ds._check_finite(path)
+        return ds
+
+    @classmethod
+    def _load_csv(cls, path: Path) -> "CalibrationDataset":
+        meta: dict = {}
+        try:
+            # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
+            lines = path.read_text(encoding="utf-8-sig").splitlines()
+        except UnicodeDecodeError as exc:
+            raise DatasetFileError(f"{path}: not a UTF-8 text file ({exc}).") from None
+        n_comment = 0
+        for line in lines:
+            if not line.startswith("#"):
+                break
+            n_comment += 1
+            body = line[1:].strip()
+            if body.startswith("meta:"):
+                meta = _parse_meta(body[len("meta:"):], f"{path}: line {n_comment}")
+        if n_comment >= len(lines) or not lines[n_comment].strip():
+            raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
+        header = read_header(
+            lines[n_comment].split(","), where=f"{path}: line {n_comment + 1}", error=DatasetFileError,
+            required=WRENCH_LABELS, optional=("group", "temperature"), expected=_CSV_LAYOUT,
+        )
+        body_lines = lines[n_comment + 1:]
+        check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)
+        try:
+            data = np.loadtxt(body_lines, delimiter=",", ndmin=2)
+        except ValueError as exc:
+            raise DatasetFileError(f"{path}: unreadable number ({exc}).") from None
+        if data.shape[0] == 0:
+            raise DatasetFileError(f"{path}: no data rows after the header.")
+        if data.shape[1] != len(header.names):
+            raise DatasetFileError(
+                f"{path}: rows have {data.shape[1]} values but the header names {len(header.names)} columns."
+            )
+        raw = data[:, header.numbered("s")]
+        wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
+        group = data[:, header.index["group"]] if "group" in header else None
+        temperature = data[:, header.index["temperature"]] if "temperature" in header else None
+        try:
+            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+        except DatasetFileError as exc:
+            raise DatasetFileError(f"{path}: {exc}") from None
+        ds._check_finite(path, first_data_line=n_comment + 2)
+        return ds
+
+    def _check_finite(self, path: Path, first_data_line: int | None = None) -> None:
+        for name, arr in (("raw", self.raw), ("wrench", self.wrench)):
+            bad = np.argwhere(~np.isfinite(arr))
+            if bad.size:
+                row = int(bad[0, 0])
+                where = f"line {row + first_data_line}" if first_data_line else f"row {row}"
+                raise DatasetFileError(f"{path}: {where}: {name} holds NaN or inf; remove or repair that row.")

@@ -1,0 +1,371 @@
+"""Log files of recorded calibration runs: the layout, a writer and a validating reader.
+
+Layout (CSV, UTF-8)
+-------------------
+Comment lines starting with ``#`` come first, as ``# key: value``:
+
+=================  ========  ==================================================
+key                required  meaning
+=================  ========  ==================================================
+``ftcal-run-log``  no        format version, ``1``
+``time_unit``      yes       unit of ``timestamp``: ``s`` or ``ms``
+``joint_unit``     yes       unit of ``q1..qJ``: ``rad`` or ``deg``
+``raw_unit``       no        unit of the raw channels (free text: counts, mV)
+``load_mass_kg``   no        mass of the external load of the load rows [kg]
+``robot``          no        robot name or URDF the joint angles belong to
+``sensor_frame``   no        the frame the sensor sits at
+``meta``           no        JSON object with anything else
+=================  ========  ==================================================
+
+Then one header line and one row per sample with these columns (any order)::
+
+    timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}
+
+* ``timestamp``: time of the sample, in ``time_unit``.
+* ``run``: ``load`` (external load attached) or ``no-load``.
+* ``config``: integer load configuration id (thesis Table I: 0-6). A no-load
+  row carries the id of the configuration whose load run it belongs to, or
+  ``-1`` for a no-load run shared by every configuration.
+* ``pose``: integer index of the commanded pose on the sphere; a load row and
+  a no-load row with the same ``config`` (or ``-1``) and ``pose`` are a pair.
+  Several rows with the same ``run``, ``config`` and ``pose`` are samples of
+  one static pose and are averaged.
+* ``q1..qJ``: measured joint angles, ``J`` >= 1 contiguous columns.
+* ``s0..s{N-1}``: raw sensor channels, ``N`` >= 3 contiguous columns.
+
+Runs may be split over several files in any way (one file per run is usual).
+:func:`read_run_log` checks each file; pairing across files happens in
+:func:`ftcal.prepare_dataset`. Every error is a :class:`ftcal.LogFormatError`
+naming the file and the line.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core._columns import parse_number, read_header
+from ..core._exceptions import CalibrationInputError, LogFormatError
+from ..core._temperature import TemperatureValueError, check_temperature
+
+__all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
+
+#: Allowed values of the ``run`` column.
+RUN_KINDS: tuple[str, str] = ("load", "no-load")
+#: ``config`` value of a no-load run shared by every load configuration.
+SHARED_NO_LOAD_CONFIG: int = -1
+
+_TIME_UNITS = {"s": 1.0, "ms": 1e-3}
+_JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
+_FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
+# Joint values beyond this magnitude in a file that says "rad" are almost surely degrees.
+_MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
+
+
+@dataclass
+class RunLog:
+    """The rows of one log file, checked and converted to SI units.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    timestamp : ndarray of shape (n,)
+        [s].
+    run_kind : ndarray of shape (n,)
+        ``"load"`` or ``"no-load"`` per row.
+    config, pose : ndarray of shape (n,), int
+    q : ndarray of shape (n, n_joints)
+        Joint angles [rad].
+    raw : ndarray of shape (n, n_channels)
+        Raw channels, in ``raw_unit``.
+    line : ndarray of shape (n,), int
+        1-based line number of each row in the file (for error messages).
+    raw_unit : str
+    load_mass : float or None
+        [kg], from the ``load_mass_kg`` comment.
+    robot, sensor_frame : str or None
+    meta : dict
+    """
+
+    path: Path
+    timestamp: NDArray[np.float64]
+    run_kind: NDArray[np.str_]
+    config: NDArray[np.int64]
+    pose: NDArray[np.int64]
+    q: NDArray[np.float64]
+    raw: NDArray[np.float64]
+    line: NDArray[np.int64]
+    raw_unit: str = "counts"
+    load_mass: float | None = None
+    robot: str | None = None
+    sensor_frame: str | None = None
+    meta: dict = field(default_factory=dict)
+    temperature: NDArray[np.float64] | None = None
+
+    @property
+    def n_rows(self) -> int:
+        """Number of sample rows."""
+        return int(self.q.shape[0])
+
+    @property
+    def n_joints(self) -> int:
+        """Number of joint columns."""
+        return int(self.q.shape[1])
+
+    @property
+    def n_channels(self) -> int:
+        """Number of raw channels."""
+        return int(self.raw.shape[1])
+
+
+def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int]:
+    info: dict[str, str] = {}
+    n = 0
+    for text in lines:
+        if not text.startswith("#"):
+            break
+        n += 1
+        body = text[1:].strip()
+        if ":" in body:
+            key, _, value = body.partition(":")
+            info[key.strip()] = value.strip()
+    return info, n
+
+
+def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:
+    """Read and validate one run log (layout in the module docstring).
+
+    Parameters
+    ----------
+    path : str or path
+        The ``.csv`` file.
+    n_channels : int, optional
+        Expected number of raw channels; a file with another count is an error.
+    n_joints : int, optional
+        Expected number of joint columns (the robot's).
+
+    Returns
+    -------
+    RunLog
+
+    Raises
+    ------
+    LogFormatError
+        Missing file, unit comment or column; unknown unit; a row with the wrong
+        number of fields, a non-number, NaN or inf, an unknown run kind, a
+        non-integer config or pose, joint angles that look like degrees in a
+        ``rad`` file, or an unexpected channel/joint count. The message names the
+        file and the line.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "run.csv"
+    >>> _ = write_run_log(p, timestamp=[0.0, 1.0], run_kind=["no-load", "load"], config=[0, 0],
+    ...                   pose=[0, 0], q=np.zeros((2, 7)), raw=np.ones((2, 6)), load_mass=2.0)
+    >>> log = read_run_log(p, n_channels=6)
+    >>> log.n_rows, log.n_joints, log.load_mass, log.run_kind.tolist()
+    (2, 7, 2.0, ['no-load', 'load'])
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise LogFormatError(f"{path}: no such log file.")
+    try:
+        text_lines = path.read_text(encoding="utf-8-sig").splitlines()
+    except UnicodeDecodeError as exc:
+        raise LogFormatError(f"{path}: not a UTF-8 text file ({exc}).") from exc
+    info, n_comment = _parse_comments(path, text_lines)
+    head_line = n_comment + 1
+    if n_comment >= len(text_lines) or not text_lines[n_comment].strip():
+        raise LogFormatError(f"{path}: line {head_line}: no header line; expected "
+                             "timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}.")
+    units = {}
+    for key, table in (("time_unit", _TIME_UNITS), ("joint_unit", _JOINT_UNITS)):
+        if key not in info:
+            raise LogFormatError(f"{path}: missing comment '# {key}: <unit>' before the header "
+                                 f"(allowed units: {', '.join(table)}).")
+        if info[key] not in table:
+            raise LogFormatError(f"{path}: unknown {key} {info[key]!r}; use one of {', '.join(table)}.")
+        units[key] = table[info[key]]
+    head = read_header(
+        text_lines[n_comment].split(","), where=f"{path}: line {head_line}", error=LogFormatError,
+        required=_FIXED_COLUMNS, numbered=(("q", 1, "joint"), ("s", 0, "raw channel")), allow_other=True,
+        expected="timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}",
+    )
+    header = list(head.names)
+    q_cols = [header[i] for i in head.numbered("q")]
+    s_cols = [header[i] for i in head.numbered("s")]
+    if len(s_cols) < 3:
+        raise LogFormatError(f"{path}: line {head_line}: {len(s_cols)} raw channels; a sensor needs at least 3.")
+    if n_channels is not None and len(s_cols) != n_channels:
+        raise LogFormatError(f"{path}: line {head_line}: {len(s_cols)} raw channels (s0..s{len(s_cols) - 1}) "
+                             f"but {n_channels} expected; is this the right sensor's log?")
+    if n_joints is not None and len(q_cols) != n_joints:
+        raise LogFormatError(f"{path}: line {head_line}: {len(q_cols)} joint columns but the robot has "
+                             f"{n_joints} joints.")
+    col = {c: i for i, c in enumerate(header)}
+    rows = []
+    for offset, fields in enumerate(csv.reader(text_lines[head_line:])):
+        lineno = head_line + 1 + offset
+        if not fields or all(not f.strip() for f in fields):
+            continue
+        if len(fields) != len(header):
+            raise LogFormatError(f"{path}: line {lineno}: {len(fields)} fields but the header names {len(header)}.")
+        rows.append((lineno, [f.strip() for f in fields]))
+    if not rows:
+        raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
+
+    def number(lineno: int, fields: list[str], name: str) -> float:
+        text = fields[col[name]]
+        value = parse_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
+        if not np.isfinite(value):
+            raise LogFormatError(f"{path}: line {lineno}: column {name} is {text!r} (NaN or inf); "
+                                 "repair or remove that row.")
+        return value
+
+    def integer(lineno: int, fields: list[str], name: str) -> int:
+        value = number(lineno, fields, name)
+        if value != int(value):
+            raise LogFormatError(f"{path}: line {lineno}: column {name} must be an integer; got {value!r}.")
+        return int(value)
+
+    n = len(rows)
+    ts, kind = np.empty(n), np.empty(n, dtype=object)
+    config, pose, line = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    q, raw = np.empty((n, len(q_cols))), np.empty((n, len(s_cols)))
+    temp = np.empty(n) if "temperature" in col else None
+    for i, (lineno, fields) in enumerate(rows):
+        line[i] = lineno
+        kind[i] = fields[col["run"]].lower()
+        if kind[i] not in RUN_KINDS:
+            raise LogFormatError(f"{path}: line {lineno}: run is {fields[col['run']]!r}; use 'load' or 'no-load'.")
+        ts[i] = number(lineno, fields, "timestamp") * units["time_unit"]
+        config[i] = integer(lineno, fields, "config")
+        pose[i] = integer(lineno, fields, "pose")
+        if config[i] < SHARED_NO_LOAD_CONFIG or (kind[i] == "load" and config[i] < 0):
+            raise LogFormatError(f"{path}: line {lineno}: config {config[i]} is invalid; load rows need an id >= 0, "
+                                 "no-load rows an id >= 0 or -1 (shared).")
+        if pose[i] < 0:
+            raise LogFormatError(f"{path}: line {lineno}: pose {pose[i]} is negative.")
+        q[i] = [number(lineno, fields, c) for c in q_cols]
+        raw[i] = [number(lineno, fields, c) for c in s_cols]
+        if temp is not None:
+            temp[i] = number(lineno, fields, "temperature")
+    if units["joint_unit"] == 1.0:
+        bad = np.argwhere(np.abs(q) > _MAX_PLAUSIBLE_RAD)
+        if bad.size:
+            r, c = bad[0]
+            raise LogFormatError(f"{path}: line {line[r]}: {q_cols[c]} = {q[r, c]:g} exceeds 2*pi although the file "
+                                 "declares '# joint_unit: rad'; were the angles logged in degrees? "
+                                 "Then declare '# joint_unit: deg'.")
+    q *= units["joint_unit"]
+    mass = None
+    if "load_mass_kg" in info:
+        try:
+            mass = float(info["load_mass_kg"])
+        except ValueError:
+            mass = float("nan")
+        if not np.isfinite(mass) or mass < 0:
+            raise LogFormatError(f"{path}: load_mass_kg is {info['load_mass_kg']!r}; it must be a mass >= 0 in kg.")
+    meta: dict = {}
+    if "meta" in info:
+        try:
+            meta = json.loads(info["meta"])
+        except json.JSONDecodeError as exc:
+            raise LogFormatError(f"{path}: the '# meta:' comment is not valid JSON ({exc}).") from exc
+    if temp is not None:
+        try:
+            check_temperature(temp, n)
+        except TemperatureValueError as exc:
+            where = "" if exc.row is None else f" line {line[exc.row]}:"
+            raise LogFormatError(f"{path}:{where} {exc}") from None
+    return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
+                  line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
+                  sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)
+
+
+def write_run_log(
+    path: str | Path,
+    *,
+    timestamp: ArrayLike,
+    run_kind: ArrayLike,
+    config: ArrayLike,
+    pose: ArrayLike,
+    q: ArrayLike,
+    raw: ArrayLike,
+    raw_unit: str = "counts",
+    load_mass: float | None = None,
+    robot: str | None = None,
+    sensor_frame: str | None = None,
+    meta: dict | None = None,
+    overwrite: bool = False,
+    temperature: ArrayLike | None = None,
+) -> Path:
+    """Write samples as a run log (timestamps [s], joint angles [rad]) and return the path.
+
+    Parameters
+    ----------
+    path : str or path
+        Destination ``.csv``; an existing file is kept unless ``overwrite``.
+    timestamp : array-like of shape (n,)
+        [s].
+    run_kind : array-like of shape (n,)
+        ``"load"`` or ``"no-load"``.
+    config, pose : array-like of shape (n,)
+        Integer load configuration id and pose index.
+    q : array-like of shape (n, n_joints)
+        Joint angles [rad].
+    raw : array-like of shape (n, n_channels)
+        Raw readings.
+    raw_unit, load_mass, robot, sensor_frame, meta
+        Header comments (``load_mass`` in [kg]).
+    overwrite : bool, default=False
+        Replace an existing file.
+    temperature : array-like of shape (n,), optional
+        Sensor temperature [deg C] per row (an optional ``temperature`` column).
+    """
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise LogFormatError(f"{path}: file exists; pass overwrite=True to replace it or choose another path.")
+    q_arr, raw_arr = np.atleast_2d(np.asarray(q, dtype=float)), np.atleast_2d(np.asarray(raw, dtype=float))
+    n = q_arr.shape[0]
+    cols = {"timestamp": np.asarray(timestamp, dtype=float), "run": np.asarray(run_kind, dtype=str),
+            "config": np.asarray(config), "pose": np.asarray(pose)}
+    for name, arr in list(cols.items()) + [("raw", raw_arr)]:
+        if arr.shape[0] != n:
+            raise LogFormatError(f"{path}: {name} has {arr.shape[0]} rows but q has {n}; they must match.")
+    bad_kind = sorted(set(cols["run"]) - set(RUN_KINDS))
+    if bad_kind:
+        raise LogFormatError(f"{path}: run_kind holds {bad_kind}; use 'load' or 'no-load'.")
+    header = ["# ftcal-run-log: 1", "# time_unit: s", "# joint_unit: rad", f"# raw_unit: {raw_unit}"]
+    if load_mass is not None:
+        header.append(f"# load_mass_kg: {float(load_mass)!r}")
+    if robot is not None:
+        header.append(f"# robot: {robot}")
+    if sensor_frame is not None:
+        header.append(f"# sensor_frame: {sensor_frame}")
+    if meta:
+        header.append(f"# meta: {json.dumps(meta)}")
+    names = list(_FIXED_COLUMNS) + [f"q{j + 1}" for j in range(q_arr.shape[1])] + [f"s{k}" for k in range(raw_arr.shape[1])]
+    temp = None
+    if temperature is not None:
+        try:
+            temp = check_temperature(temperature, n)
+        except CalibrationInputError as exc:
+            raise LogFormatError(f"{path}: {exc}") from None
+        names.append("temperature")
+    out = header + [",".join(names)]
+    for i in range(n):
+        vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
+        vals += [f"{v:.10g}" for v in q_arr[i]] + [f"{v:.10g}" for v in raw_arr[i]]
+        if temp is not None:
+            vals.append(f"{temp[i]:.6g}")
+        out.append(",".join(vals))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text("\n".join(out) + "\n", encoding="utf-8")
+    return path

@@ -1,0 +1,216 @@
+"""Registry of calibrators by name, and the named training schedules.
+
+Benchmarks and the CLI build every model through :func:`make_calibrator`, so
+a new model only has to be registered with :func:`register_calibrator` to
+appear everywhere. This is the one registry: the built-in calibrators are
+listed at the end of this module by module and class *name*, and imported
+only when one is built, so that listing the names (``ftcal --help``) does not
+import torch.
+
+Schedules (:func:`training_schedule`), counts in epochs:
+
+=============  =========  ==============  ================  ===================
+schedule        model      ``max_epochs``  ``plateau_epochs``  ``max_recover_epochs``
+=============  =========  ==============  ================  ===================
+``"thesis"``   directional  1700           100               500
+``"thesis"``   comparative  3000           100               500
+``"short"``    directional  150            30                50
+``"short"``    comparative  250            30                50
+=============  =========  ==============  ================  ===================
+
+Both use Adam with ``lr = 1e-3``, ``batch_size = 32``, ``min_lr = 1e-5``,
+``plateau_factor = 0.1``, ``recover_tolerance = 0.05`` and
+``validation_fraction = 0.2``; the patience is 30 (thesis) or 10 (short).
+The thesis stops phase 3 only by the 5 % rule; 500 is our hard cap. The
+short schedule (at most 230 / 330 epochs) is for quick benchmark runs; it
+keeps the comparative model's longer phase 1 in about the thesis' ratio.
+The linear model has no schedule (``{}``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+import inspect
+from typing import Any
+
+from importlib import import_module
+
+__all__ = ["CALIBRATOR_NAMES", "calibrator_parameters", "make_calibrator", "register_calibrator", "training_schedule", "SCHEDULE_NAMES"]
+
+#: Names accepted by :func:`training_schedule` and ``make_calibrator(schedule=...)``.
+SCHEDULE_NAMES: tuple[str, ...] = ("thesis", "short")
+
+_COMMON = dict(lr=1e-3, batch_size=32, plateau_factor=0.1, min_lr=1e-5, recover_tolerance=0.05, validation_fraction=0.2)
+_THESIS = dict(_COMMON, plateau_epochs=100, plateau_patience=30, max_recover_epochs=500)
+_SHORT = dict(_COMMON, plateau_epochs=30, plateau_patience=10, max_recover_epochs=50)
+
+_FACTORIES: dict[str, Callable[..., Any]] = {}
+
+
+class _Lazy:
+    """A factory named by module (dotted, inside ``ftcal``) and attribute, imported on first use.
+
+    Keeps heavy imports (torch) out of listings such as ``ftcal fit --help``.
+    """
+
+    def __init__(self, module: str, attribute: str, ensemble_of: str | None = None):
+        self.module, self.attribute, self.ensemble_of = module, attribute, ensemble_of
+
+    def resolve(self) -> Callable[..., Any]:
+        target = getattr(import_module(f"ftcal.{self.module}"), self.attribute)
+        if self.ensemble_of is not None:
+            from ._ensemble import ensemble_factory
+
+            return ensemble_factory(target)
+        return target
+
+
+def _factory(name: str) -> Callable[..., Any]:
+    factory = _FACTORIES[name]
+    if isinstance(factory, _Lazy):
+        factory = _FACTORIES[name] = factory.resolve()
+    return factory
+_SCHEDULES: dict[str, dict[str, dict[str, Any]]] = {}
+
+
+class _RegisteredNames(Sequence):
+    """Tuple-like live view of the registered calibrator names (in registration order).
+
+    It follows later :func:`register_calibrator` calls; ``tuple(CALIBRATOR_NAMES)`` is a snapshot.
+    """
+
+    def __getitem__(self, index):
+        return tuple(_FACTORIES)[index]
+
+    def __len__(self) -> int:
+        return len(_FACTORIES)
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(tuple(_FACTORIES))
+
+    def __eq__(self, other) -> bool:
+        return tuple(self) == (tuple(other) if isinstance(other, (tuple, _RegisteredNames)) else other)
+
+    __hash__ = None
+
+    def __repr__(self) -> str:
+        return repr(tuple(_FACTORIES))
+
+
+#: Names accepted by :func:`make_calibrator` (a live, tuple-like view).
+CALIBRATOR_NAMES = _RegisteredNames()
+
+
+def register_calibrator(
+    name: str,
+    factory: Callable[..., Any],
+    *,
+    schedules: Mapping[str, Mapping[str, Any]] | None = None,
+    overwrite: bool = False,
+) -> None:
+    """Make ``make_calibrator(name, ...)`` build ``factory(random_state=..., **params)``.
+
+    Parameters
+    ----------
+    name : str
+        Registry name, e.g. ``"polynomial"``.
+    factory : callable
+        Usually the estimator class; it must accept ``random_state`` and the
+        keyword parameters of the schedules.
+    schedules : mapping or None
+        ``{schedule_name: params}`` for :func:`training_schedule`; schedules
+        not listed give ``{}`` (a model without a training schedule).
+    overwrite : bool, default=False
+        Replace an existing registration instead of raising ``ValueError``.
+
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator
+    >>> register_calibrator("ridge_ltm", lambda **p: LinearCalibrator(ridge=1e-3, **p))
+    >>> "ridge_ltm" in CALIBRATOR_NAMES
+    True
+    >>> _ = _FACTORIES.pop("ridge_ltm")
+    """
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"calibrator name must be a non-empty string; got {name!r}.")
+    if not callable(factory) and not isinstance(factory, _Lazy):
+        raise ValueError(f"factory for {name!r} must be callable; got {factory!r}.")
+    if name in _FACTORIES and not overwrite:
+        raise ValueError(f"a calibrator named {name!r} is already registered; pass overwrite=True to replace it.")
+    unknown = set(schedules or {}) - set(SCHEDULE_NAMES)
+    if unknown:
+        raise ValueError(f"unknown schedule name(s) {sorted(unknown)}; known: {SCHEDULE_NAMES}.")
+    _FACTORIES[name] = factory
+    _SCHEDULES[name] = {k: dict(v) for k, v in (schedules or {}).items()}
+
+
+def _check_name(model: str) -> None:
+    if model not in _FACTORIES:
+        raise ValueError(f"unknown calibrator {model!r}; choose one of {tuple(_FACTORIES)}.")
+
+
+def training_schedule(name: str, model: str) -> dict[str, Any]:
+    """Constructor parameters of the named schedule for the named model (a fresh dict).
+
+    Examples
+    --------
+    >>> training_schedule("thesis", "comparative")["max_epochs"]
+    3000
+    >>> training_schedule("short", "linear")
+    {}
+    """
+    if name not in SCHEDULE_NAMES:
+        raise ValueError(f"unknown schedule {name!r}; choose one of {SCHEDULE_NAMES}.")
+    _check_name(model)
+    return dict(_SCHEDULES[model].get(name, {}))
+
+
+def calibrator_parameters(name: str) -> tuple[str, ...]:
+    """The keyword parameters ``make_calibrator(name, ...)`` accepts (besides ``schedule`` and ``random_state``).
+
+    Examples
+    --------
+    >>> "max_epochs" in calibrator_parameters("directional_ensemble")
+    True
+    """
+    _check_name(name)
+    signature = inspect.signature(_factory(name))
+    return tuple(p for p, v in signature.parameters.items()
+                 if v.kind is not inspect.Parameter.VAR_KEYWORD and p != "random_state")
+
+
+def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **params) -> Any:
+    """A new, unfitted calibrator by registry name with the named schedule.
+
+    ``params`` override the schedule's values (e.g. ``hidden_layer_sizes``).
+
+    Examples
+    --------
+    >>> make_calibrator("directional", schedule="short", random_state=0).max_epochs
+    150
+    >>> make_calibrator("linear", ridge=0.1)
+    LinearCalibrator(ridge=0.1)
+    """
+    known = calibrator_parameters(name)
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ValueError(f"{name} has no parameter {unknown[0]!r}; its parameters are: {', '.join(sorted(known))}.")
+    merged = {**training_schedule(schedule, name), **params}
+    return _factory(name)(random_state=random_state, **merged)
+
+
+_DIRECTIONAL = {"thesis": dict(_THESIS, max_epochs=1700), "short": dict(_SHORT, max_epochs=150)}
+_COMPARATIVE = {"thesis": dict(_THESIS, max_epochs=3000), "short": dict(_SHORT, max_epochs=250)}
+register_calibrator("linear", _Lazy("calibrators._linear", "LinearCalibrator"))
+register_calibrator("comparative", _Lazy("neural_network._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE)
+register_calibrator("directional", _Lazy("neural_network._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL)
+register_calibrator("polynomial", _Lazy("calibrators._polynomial", "PolynomialCalibrator"))
+register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "AxisNonlinearCalibrator"))
+register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"))
+# ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
+register_calibrator("directional_ensemble", _Lazy("neural_network._directional", "DirectionalCalibrator", ensemble_of="directional"),
+                    schedules=_DIRECTIONAL)
+register_calibrator("comparative_ensemble", _Lazy("neural_network._comparative", "ComparativeCalibrator", ensemble_of="comparative"),
+                    schedules=_COMPARATIVE)
+# "auto" chooses among the names above; its schedule goes to its network candidates
+register_calibrator("auto", _Lazy("models._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})

@@ -1,0 +1,362 @@
+"""Training and inference shared by the two network calibrators (skorch, composed).
+
+A :class:`NetworkCalibrator` builds a ``skorch.NeuralNetRegressor`` inside
+``fit`` and keeps it as ``net_``. Subclasses say which torch module, which
+loss weights, and how readings/wrenches map to network inputs/targets.
+
+* float32 inside the network, float64 out of ``predict``;
+* ``random_state`` seeds the weight initialisation, the batch shuffling and
+  the validation split; the global torch RNG is forked, so a fit leaves the
+  caller's torch random state untouched; the same seed twice gives the same
+  predictions;
+* torch runs single-threaded during ``fit`` and ``predict`` (the nets are
+  small: batch 32 in training, ~64-wide layers; on a shared 2-core machine
+  two threads made a 10 000-sample predict 6x slower); the caller's thread
+  count is restored afterwards, and nothing is changed at import;
+* the schedule (III-A-d) is :mod:`ftcal.neural_network._schedule`; ``validation_fraction``
+  of the samples (``ValidSplit``) are held out for the monitored loss, or
+  none with ``validation_fraction=None`` (then the training loss is
+  monitored).
+"""
+
+from __future__ import annotations
+
+import numbers
+import signal
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import numpy as np
+import torch
+from numpy.typing import NDArray
+from skorch import NeuralNetRegressor
+from skorch.dataset import ValidSplit
+from sklearn.utils import check_random_state
+
+from ..calibrators._base import BaseCalibrator
+from ..core._exceptions import CalibrationInputError
+from ._modules import WeightedSquaredError
+from ._schedule import schedule_callbacks
+
+__all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available", "interrupt_flag"]
+
+_PREDICT_CHUNK = 65536
+#: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
+_NUMPY_FORWARD_ROWS = 256
+#: A net whose best loss exceeds this multiple of the constant (mean) prediction's loss has diverged.
+_DIVERGENCE_FACTOR = 100.0
+#: Largest magnitude of a network input or target that float32 training handles with room to spare.
+_FLOAT32_SAFE = 1e30
+
+
+def device_available(device: str) -> bool:
+    """Whether torch can place tensors on ``device`` here (``"cuda"`` on a CPU-only build: False)."""
+    try:
+        torch.empty(0, device=device)
+    except (RuntimeError, AssertionError, ValueError, TypeError):
+        return False
+    return True
+
+
+@contextmanager
+def interrupt_flag() -> Iterator[threading.Event]:
+    """Notice Ctrl-C (SIGINT) during the block, even though skorch's fit loop swallows ``KeyboardInterrupt``.
+
+    skorch ends ``fit`` quietly on ``KeyboardInterrupt`` (its early-stopping
+    callbacks, and ours, stop training that way), so a real Ctrl-C would
+    return a half-trained net as if it had finished. Inside this block a
+    SIGINT sets the yielded event and still raises ``KeyboardInterrupt`` to
+    end the loop; the caller re-raises after ``fit``. Outside the main thread
+    (where signal handlers cannot be set) the event is never set.
+    """
+    flag = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield flag
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is signal.SIG_IGN or previous is None:  # ignored (a background job), or a handler set outside Python
+        yield flag
+        return
+
+    def handler(signum, frame):
+        flag.set()
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGINT, handler)
+    try:
+        yield flag
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextmanager
+def torch_threads(n_threads: int) -> Iterator[None]:
+    """Run the block with ``torch.set_num_threads(n_threads)``, restoring the old count."""
+    old = torch.get_num_threads()
+    torch.set_num_threads(n_threads)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(old)
+
+
+def _check_int(name: str, value, minimum: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
+        raise CalibrationInputError(f"{name} must be an integer >= {minimum}; got {value!r}.")
+    return int(value)
+
+
+def _check_real(name: str, value, low: float, high: float, *, low_open: bool = False) -> float:
+    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(value)
+    if ok:
+        ok = (value > low if low_open else value >= low) and value <= high
+    if not ok:
+        bound = "(" if low_open else "["
+        raise CalibrationInputError(f"{name} must be a number in {bound}{low}, {high}]; got {value!r}.")
+    return float(value)
+
+
+def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(X, y)`` tensors on ``device`` of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
+    indices = None
+    if isinstance(dataset, torch.utils.data.Subset):
+        dataset, indices = dataset.dataset, np.asarray(dataset.indices)
+    cache = dataset.__dict__.setdefault("_ftcal_tensors", {})
+    key = None if indices is None else indices.tobytes()
+    if key not in cache:
+        X = np.asarray(dataset.X if indices is None else dataset.X[indices])
+        y = np.asarray(dataset.y if indices is None else dataset.y[indices])
+        cache[key] = (torch.as_tensor(X, device=device), torch.as_tensor(y, device=device))
+    return cache[key]
+
+
+class LeanNeuralNetRegressor(NeuralNetRegressor):
+    """skorch's ``NeuralNetRegressor`` with a lean inner loop: tensors loaded once, batches sliced from them.
+
+    skorch's loop builds every mini-batch with a ``DataLoader`` (one ``__getitem__``
+    and a collate per sample) and calls the batch-level callbacks and history
+    twice per batch; for ftcal's small nets and batches of 32 that costs several
+    times the arithmetic. This subclass keeps everything epoch-level as it is
+    (``fit_loop``, the history, every callback, the three-phase schedule, early
+    stopping, ``net.history[-1, 'train_loss']``) and replaces only the inner
+    loop of an epoch: the training tensors are loaded once, each epoch shuffles
+    them with ``torch.randperm`` (seeded by the caller's torch RNG) and runs
+    ``zero_grad / forward / loss / backward / step`` per batch; validation is
+    one forward pass. The epoch's losses are recorded as one batch of the
+    epoch's size (the batch-size-weighted mean, as skorch computes it).
+    ``on_batch_begin`` / ``on_batch_end`` callbacks are not called.
+    """
+
+    def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
+        if iterator is None:
+            return
+        X, y = _tensors(iterator.dataset, self.device)
+        n = len(X)
+        module, criterion = self.module_, self.criterion_
+        if training:
+            module.train()
+            order = torch.randperm(n) if getattr(self, "iterator_train__shuffle", False) else torch.arange(n)
+            order = order.to(X.device)
+            total = torch.zeros((), device=X.device)
+            batch = int(self.batch_size)
+            for start in range(0, n, batch):
+                index = order[start:start + batch]
+                self.optimizer_.zero_grad(set_to_none=True)
+                loss = criterion(module(X[index]), y[index])
+                loss.backward()
+                self.optimizer_.step()
+                total += loss.detach() * len(index)
+            mean = float(total) / max(n, 1)
+            batches = -(-n // batch)
+        else:
+            module.eval()
+            with torch.no_grad():
+                mean = float(criterion(module(X), y)) if n else 0.0
+            batches = 1
+        self.history.new_batch()
+        self.history.record_batch(prefix + "_loss", mean)
+        self.history.record_batch(prefix + "_batch_size", n)
+        self.history.record(prefix + "_batch_count", batches)
+
+
+class NetworkCalibrator(BaseCalibrator):
+    """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
+    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
+    ``_decode(outputs, X) -> wrench`` and ``_loss_weights()``.
+    """
+
+    _module_class: type[torch.nn.Module]
+    #: Parameters that only affect one training run and are not stored in model files.
+    _transient_params: tuple[str, ...] = ("callbacks",)
+
+    def _check_params(self) -> None:
+        sizes = self.hidden_layer_sizes
+        if not isinstance(sizes, (tuple, list)) or len(sizes) == 0:
+            raise CalibrationInputError(
+                f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); got {sizes!r}."
+            )
+        for width in sizes:
+            _check_int("each entry of hidden_layer_sizes", width, 1)
+        _check_real("lr", self.lr, 0.0, np.inf, low_open=True)
+        _check_int("batch_size", self.batch_size, 1)
+        _check_int("max_epochs", self.max_epochs, 1)
+        _check_int("plateau_epochs", self.plateau_epochs, 0)
+        _check_int("plateau_patience", self.plateau_patience, 0)
+        _check_real("plateau_factor", self.plateau_factor, 0.0, 1.0, low_open=True)
+        _check_real("min_lr", self.min_lr, 0.0, np.inf)
+        _check_real("recover_tolerance", self.recover_tolerance, 0.0, np.inf)
+        _check_int("max_recover_epochs", self.max_recover_epochs, 0)
+        if self.callbacks is not None and not isinstance(self.callbacks, (list, tuple)):
+            raise CalibrationInputError(
+                f"callbacks must be None or a list of skorch callbacks or (name, callback) pairs; got {self.callbacks!r}."
+            )
+        if self.validation_fraction is not None:
+            _check_real("validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
+
+    def _seed(self) -> int:
+        return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
+
+    def _build_net(self, n_inputs: int, seed: int) -> NeuralNetRegressor:
+        """The skorch net with this estimator's module, loss, optimiser and schedule."""
+        monitor = "train_loss" if self.validation_fraction is None else "valid_loss"
+        split = None if self.validation_fraction is None else ValidSplit(self.validation_fraction, random_state=seed)
+        return LeanNeuralNetRegressor(
+            module=self._module_class,
+            module__n_inputs=n_inputs,
+            module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
+            criterion=WeightedSquaredError,
+            criterion__weights=tuple(self._loss_weights()),
+            optimizer=torch.optim.Adam,
+            # the fused CPU kernel does Adam's update in one pass: 2.5x faster steps for these small nets
+            optimizer__fused=True,
+            lr=self.lr,
+            batch_size=self.batch_size,
+            max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs,
+            train_split=split,
+            iterator_train__shuffle=True,
+            callbacks=schedule_callbacks(
+                max_epochs=self.max_epochs,
+                plateau_epochs=self.plateau_epochs,
+                plateau_patience=self.plateau_patience,
+                plateau_factor=self.plateau_factor,
+                min_lr=self.min_lr,
+                recover_tolerance=self.recover_tolerance,
+                max_recover_epochs=self.max_recover_epochs,
+                monitor=monitor,
+                extra=list(self.callbacks or []),
+            ),
+            verbose=self.verbose,
+            device=self.device,
+        )
+
+    def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
+        """Checks, network inputs and targets, seed and the (unfitted) skorch net of one fit.
+
+        Shared by :meth:`_fit` and :func:`ftcal.fit_stacked` (several nets trained as one module).
+        Returns ``(inputs, targets, seed, net)``, inputs and targets float64.
+        """
+        self._check_params()
+        if not isinstance(self.device, str) or not device_available(self.device):
+            raise CalibrationInputError(
+                f"device={self.device!r} is not available on this machine (this torch build has "
+                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."
+            )
+        inputs, targets = self._training_pairs(X, y)
+        too_large = np.abs(inputs).max(initial=0.0) > _FLOAT32_SAFE or np.abs(targets).max(initial=0.0) > _FLOAT32_SAFE
+        if too_large:
+            raise CalibrationInputError(
+                f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
+                "beyond what float32 training handles; check the units of X and y."
+            )
+        seed = self._seed()
+        return inputs, targets, seed, self._build_net(inputs.shape[1], seed)
+
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        inputs, targets, seed, net = self._training_setup(X, y)
+        with interrupt_flag() as interrupted, torch.random.fork_rng(devices=[]), torch_threads(1):
+            torch.manual_seed(seed)
+            net.fit(inputs.astype(np.float32), targets.astype(np.float32))
+        if interrupted.is_set():
+            raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
+        self._finish_training(net, targets)
+
+    def _finish_training(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+        """Refuse a diverged run; keep the trained net and its schedule's outcome."""
+        self._check_converged(net, targets)
+        self.net_ = net
+        self.n_epochs_ = len(net.history)
+        self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
+        self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
+        self.__dict__.pop("_numpy_layers_cache", None)
+
+    def _check_converged(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+        """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
+
+        Diverged means a NaN or inf loss, or a best loss more than
+        :data:`_DIVERGENCE_FACTOR` times the loss of the constant prediction
+        (the mean target): such a net has learned nothing.
+        """
+        fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
+        for key in ("train_loss", "valid_loss"):
+            losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
+            bad = np.flatnonzero(~np.isfinite(losses))
+            if bad.size:
+                raise CalibrationInputError(
+                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}"
+                )
+        weights = np.asarray(self._loss_weights(), dtype=float)
+        constant = float(np.mean(((targets - targets.mean(axis=0)) ** 2) @ weights))
+        best = float(dict(net.callbacks_)["restore_best_weights"].best_loss_)
+        if constant > 0 and best > _DIVERGENCE_FACTOR * constant:
+            raise CalibrationInputError(
+                f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
+                f"times that of predicting the mean ({constant:.3g}) {fix}"
+            )
+
+    def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
+        """The fitted layers as float32 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
+        cached = self.__dict__.get("_numpy_layers_cache")
+        if cached is not None and cached[0] is self.net_.module_:
+            return cached[1]
+        layers, pending = [], None
+        for layer in self.net_.module_.layers:
+            if isinstance(layer, torch.nn.Linear):
+                if pending is not None:
+                    layers.append((*pending, "identity"))
+                pending = (layer.weight.detach().cpu().numpy().T.copy(), layer.bias.detach().cpu().numpy().copy())
+            else:
+                layers.append((*pending, "tanh" if isinstance(layer, torch.nn.Tanh) else "relu"))
+                pending = None
+        if pending is not None:
+            layers.append((*pending, "identity"))
+        self.__dict__["_numpy_layers_cache"] = (self.net_.module_, layers)
+        return layers
+
+    def _forward_numpy(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The forward pass in numpy float32 (the network's precision): no torch dispatch, no thread changes."""
+        h = inputs.astype(np.float32)
+        for weight, bias, activation in self._numpy_layers():
+            h = h @ weight + bias
+            if activation == "relu":
+                np.maximum(h, 0.0, out=h)
+            elif activation == "tanh":
+                np.tanh(h, out=h)
+        return h.astype(np.float64)
+
+    def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
+        if inputs.shape[0] <= _NUMPY_FORWARD_ROWS:  # small batches (a control loop): numpy is ~20x cheaper
+            return self._forward_numpy(inputs)
+        module = self.net_.module_
+        module.eval()
+        out = []
+        with torch.inference_mode(), torch_threads(1):
+            for start in range(0, inputs.shape[0], _PREDICT_CHUNK):
+                batch = torch.as_tensor(inputs[start : start + _PREDICT_CHUNK], dtype=torch.float32, device=self.device)
+                out.append(module(batch).cpu().numpy())
+        if not out:
+            return np.zeros((0, module.layers[-1].out_features))
+        return np.concatenate(out).astype(np.float64)
+
+    def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self._decode(self._forward(self._network_inputs(X)), X)

@@ -1,0 +1,224 @@
+"""The directional DNN calibrator of the thesis (section III-A to III-C)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core._exceptions import CalibrationInputError
+from ._base import NetworkCalibrator, _check_real
+from ._modules import DirectionalNet
+from ..core._wrench import scale_torques, unscale_torques
+
+__all__ = ["DirectionalCalibrator"]
+
+
+def _unit_rows(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Row norms and unit rows of ``a``; an all-zero row stays zero (no NaN)."""
+    norm = np.linalg.norm(a, axis=1)
+    unit = np.divide(a, norm[:, None], out=np.zeros_like(a), where=norm[:, None] > 0)
+    return norm, unit
+
+
+class DirectionalCalibrator(NetworkCalibrator):
+    """Directional DNN: learns the wrench direction and a scale factor (Kolff 2024, III).
+
+    Training (III-A): with the centred reading ``x_c = X - zero_reading_``,
+    the input magnitude ``v_in = ||x_c||`` (eq. 3) and the unit input
+    ``x_c / v_in`` (eq. 4) are formed; the target wrench is torque-scaled,
+    ``y_s = [F, alpha_ T]`` (eq. 5-6), split into ``v_out = ||y_s||`` (eq. 7)
+    and the unit direction ``y_s / v_out`` (eq. 8), and the scale factor is
+    ``s = v_out / v_in``. The network maps the unit input to 7 outputs
+    (direction, scale) with loss eq. 9, the sum of the squared direction error
+    and the squared scale error.
+
+    **Scale normalisation.** ``s`` has the units of wrench per raw unit and
+    may be ~1e-3 or ~1e3, which would make one term of eq. 9 dominate. The
+    network is therefore trained on ``s / scale_reference_``, where
+    ``scale_reference_`` is the median of ``s`` over the training rows; the
+    normalised target is ~1, the same order as the unit direction's
+    components, so both terms of eq. 9 weigh alike.
+
+    Prediction (III-B): ``y_s_hat = s_hat * v_in * direction_hat`` (the
+    predicted direction is used as output, not re-normalised, as in the
+    thesis), then the torques are divided by ``alpha_``.
+
+    **Zero-load rows.** A row whose ``v_in`` or ``v_out`` is at most
+    ``min_relative_magnitude`` times the largest in the training set has no
+    meaningful direction (its reading is only noise); such rows are dropped
+    from ``fit`` with a ``UserWarning`` saying how many. At ``predict`` a zero
+    reading (``X == zero_reading_``) gives exactly the zero wrench and a
+    near-zero reading a wrench of the same small magnitude order
+    (``s_hat * v_in``), never NaN.
+
+    Architecture (III-C): ReLU hidden layers of widths
+    ``hidden_layer_sizes[:-1]``, a tanh layer of width
+    ``hidden_layer_sizes[-1]`` (the second-to-last layer), a linear output
+    layer of 7. The thesis gives no widths; (64, 64, 64) is our default.
+
+    Hyperparameters: ``lr`` and the epochs are the thesis' (III-A-d). A
+    randomized search on the artificial benchmark (issue 6,
+    ``benchmarks/tune_networks.py``) found ``max_epochs=1000, lr=3e-3,
+    hidden_layer_sizes=(64, 64)`` with the short schedule's phases 2-3:
+    0.86x and 0.81x the short schedule's RMSE on the ``thesis`` and
+    ``asymmetric`` presets (0.97x, not significant, on ``stress``) and
+    about the thesis schedule's accuracy in a third of its training time,
+    not better; so the defaults stay (``benchmarks/RESULTS.md``).
+
+    Parameters
+    ----------
+    hidden_layer_sizes : tuple of int, default=(64, 64, 64)
+        Width of each hidden layer; the last one uses tanh.
+    lr : float, default=1e-3
+        Adam learning rate of phase 1.
+    batch_size : int, default=32
+        Mini-batch size.
+    max_epochs : int, default=1700
+        Phase 1 length (constant ``lr``).
+    plateau_epochs : int, default=100
+        Phase 2 length (``ReduceLROnPlateau``).
+    plateau_patience : int, default=30
+        Epochs without improvement before phase 2 reduces the rate.
+    plateau_factor : float, default=0.1
+        Factor of each reduction.
+    min_lr : float, default=1e-5
+        Floor of the learning rate.
+    recover_tolerance : float, default=0.05
+        Phase 3 stops at the first epoch whose monitored loss is within this
+        fraction of the best one.
+    max_recover_epochs : int, default=500
+        Hard cap on phase 3 epochs (0 = no phase 3).
+    validation_fraction : float or None, default=0.2
+        Share of samples held out (``ValidSplit``) for the monitored loss;
+        ``None`` monitors the training loss.
+    min_relative_magnitude : float, default=1e-3
+        Relative threshold of the zero-load rows dropped in ``fit``.
+    alpha : float or None, default=None
+        Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
+    zero_reading : array-like of shape (N,) or None, default=None
+        Raw reading at zero load; ``None`` estimates it (see
+        :mod:`ftcal.calibrators._zero_load`). Give it for sensors with asymmetric gains.
+    random_state : int, RandomState or None, default=None
+        Seed of initialisation, shuffling and validation split.
+    verbose : int, default=0
+        skorch's per-epoch log when > 0.
+    callbacks : list or None, default=None
+        Extra skorch callbacks (instances or ``(name, callback)`` pairs) run
+        every epoch once the schedule has recorded its phase and learning
+        rate, e.g. a progress bar or a logger.
+        They affect one training run only and are not stored in model files.
+    device : str, default='cpu'
+        Torch device.
+
+    Attributes
+    ----------
+    net_ : skorch.NeuralNetRegressor
+        The trained net; ``net_.history`` has ``phase``, ``lr`` per epoch.
+    scale_reference_ : float
+        Median training scale factor (see above).
+    alpha_, zero_reading_, n_features_in_
+        As for every calibrator.
+    n_epochs_, best_epoch_, stop_reason_
+        Epochs run, epoch whose weights were kept, why training ended.
+    n_dropped_zero_load_ : int
+        Training rows dropped as zero-load rows.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import DirectionalCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> model = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1,
+    ...                               random_state=0).fit(raw, w)
+    >>> model.predict(raw[:2]).shape
+    (2, 6)
+    """
+
+    _module_class = DirectionalNet
+
+    def __init__(
+        self,
+        *,
+        hidden_layer_sizes=(64, 64, 64),
+        lr=1e-3,
+        batch_size=32,
+        max_epochs=1700,
+        plateau_epochs=100,
+        plateau_patience=30,
+        plateau_factor=0.1,
+        min_lr=1e-5,
+        recover_tolerance=0.05,
+        max_recover_epochs=500,
+        validation_fraction=0.2,
+        min_relative_magnitude=1e-3,
+        alpha=None,
+        zero_reading=None,
+        random_state=None,
+        verbose=0,
+        callbacks=None,
+        device="cpu",
+    ):
+        self.hidden_layer_sizes = hidden_layer_sizes
+        self.lr = lr
+        self.batch_size = batch_size
+        self.max_epochs = max_epochs
+        self.plateau_epochs = plateau_epochs
+        self.plateau_patience = plateau_patience
+        self.plateau_factor = plateau_factor
+        self.min_lr = min_lr
+        self.recover_tolerance = recover_tolerance
+        self.max_recover_epochs = max_recover_epochs
+        self.validation_fraction = validation_fraction
+        self.min_relative_magnitude = min_relative_magnitude
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+        self.verbose = verbose
+        self.callbacks = callbacks
+        self.device = device
+
+    def _loss_weights(self) -> list[float]:
+        return [1.0] * 7  # eq. 9: direction (6) and normalised scale (1) alike
+
+    def _training_pairs(self, X, y):
+        threshold = _check_real("min_relative_magnitude", self.min_relative_magnitude, 0.0, 1.0)
+        v_in, unit_in = _unit_rows(X - self.zero_reading_)
+        v_out, unit_out = _unit_rows(scale_torques(y, self.alpha_))
+        keep = (v_in > threshold * v_in.max()) & (v_out > threshold * v_out.max())
+        self.n_dropped_zero_load_ = int(np.count_nonzero(~keep))
+        if np.count_nonzero(keep) < 2:
+            raise CalibrationInputError(
+                f"only {np.count_nonzero(keep)} of {len(keep)} training rows have a non-zero load and a "
+                f"non-zero reading (|X - zero_reading_| and |y| above {threshold} of their largest); the "
+                f"directional model needs loaded samples. Fix: record load cases, or check zero_reading."
+            )
+        if self.n_dropped_zero_load_:
+            warnings.warn(
+                f"DirectionalCalibrator: dropped {self.n_dropped_zero_load_} of {len(keep)} training rows with "
+                f"(near-)zero reading or load (below {threshold} of the largest): their direction is undefined.",
+                UserWarning,
+                stacklevel=4,
+            )
+        scale = v_out[keep] / v_in[keep]
+        self.scale_reference_ = float(np.median(scale))
+        targets = np.hstack([unit_out[keep], (scale / self.scale_reference_)[:, None]])
+        return unit_in[keep], targets
+
+    def _network_inputs(self, X):
+        return _unit_rows(X - self.zero_reading_)[1]
+
+    def _predict_wrench(self, X):
+        # the input norm is computed once (eq. 3) and serves both the unit input and the decoding (III-B)
+        v_in, unit = _unit_rows(X - self.zero_reading_)
+        outputs = self._forward(unit)
+        scaled = outputs[:, :6] * (outputs[:, 6] * self.scale_reference_ * v_in)[:, None]
+        scaled[:, 3:] /= self.alpha_
+        return scaled
+
+    def _decode(self, outputs, X):
+        v_in = np.linalg.norm(X - self.zero_reading_, axis=1)
+        magnitude = outputs[:, 6] * self.scale_reference_ * v_in
+        return unscale_torques(magnitude[:, None] * outputs[:, :6], self.alpha_)

@@ -1,0 +1,416 @@
+"""Several network calibrators trained at once as one stacked module (issue 13).
+
+Training one small net costs far more than its arithmetic: every mini-batch
+is a dozen tiny torch calls. :func:`fit_stacked` trains ``K`` nets of one
+architecture together: their weights are stacked into one ``(K, D)``
+parameter, a mini-batch step runs each layer of all ``K`` nets as one
+``torch.baddbmm``, and one Adam update moves all of them. The members stay
+independent:
+
+* the loss is the sum of the members' own losses, so member ``k``'s gradient
+  is exactly that of its own loss; Adam is elementwise, so its update is
+  exactly that of member ``k`` alone;
+* each member keeps its own seed, hence its own weight initialisation,
+  validation split (``ValidSplit``) and per-epoch batch order, the same
+  ones a separate ``fit`` would draw;
+* each runs its own three-phase schedule (:mod:`ftcal.neural_network._schedule`): its own
+  learning rate (``ReduceLROnPlateau`` in phase 2), its own phase-3 stop,
+  its own best weights. A member that has stopped leaves the stack.
+
+The result equals separate fits up to float32 rounding (the batched matrix
+products sum in another order); ``tests/test_stacked.py`` checks the
+predictions agree.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+
+import numpy as np
+import torch
+from numpy.typing import ArrayLike, NDArray
+from skorch.history import History
+from threadpoolctl import threadpool_limits
+
+from ..core._exceptions import CalibrationInputError
+from ._base import NetworkCalibrator, interrupt_flag, torch_threads
+from ._schedule import phase_of_epoch
+from ..core._validation import validate_training_data
+
+__all__ = ["StackedMLP", "fit_stacked"]
+
+_BETA1, _BETA2, _EPS = 0.9, 0.999, 1e-8  # torch.optim.Adam's defaults, which the member nets use
+
+
+class StackedMLP(torch.nn.Module):
+    """``K`` fully connected nets of one architecture as one module: ``(K, B, n_in) -> (K, B, n_out)``.
+
+    Built from ``K`` modules whose ``layers`` is an ``nn.Sequential`` of
+    ``Linear`` layers and ``ReLU`` / ``Tanh`` activations (the calibrators'
+    nets, :func:`ftcal.neural_network._modules.mlp`). All weights live in one parameter
+    ``flat`` of shape ``(K, D)``; each layer is a view of it, so one
+    optimiser step updates every member.
+
+    Examples
+    --------
+    >>> import torch
+    >>> from ftcal.neural_network._modules import DirectionalNet
+    >>> nets = [DirectionalNet(6, (8, 4)) for _ in range(3)]
+    >>> stacked = StackedMLP(nets)
+    >>> x = torch.randn(3, 5, 6)
+    >>> bool(torch.allclose(stacked(x)[1], nets[1](x[1]), atol=1e-6))
+    True
+    """
+
+    def __init__(self, modules: Sequence[torch.nn.Module]):
+        super().__init__()
+        if len(modules) < 1:
+            raise CalibrationInputError("StackedMLP needs at least one module (K >= 1); got none.")
+        self.layout: list[tuple[int, int, int, int, str]] = []  # (weight offset, n_in, n_out, bias offset, activation)
+        rows: list[list[torch.Tensor]] = [[] for _ in modules]
+        signature = None
+        for k, module in enumerate(modules):
+            layers, offset = list(module.layers), 0
+            shape = []
+            for i, layer in enumerate(layers):
+                if not isinstance(layer, torch.nn.Linear):
+                    continue
+                following = layers[i + 1] if i + 1 < len(layers) else None
+                activation = ("relu" if isinstance(following, torch.nn.ReLU)
+                              else "tanh" if isinstance(following, torch.nn.Tanh) else "identity")
+                n_out, n_in = layer.weight.shape
+                shape.append((n_in, n_out, activation))
+                if k == 0:
+                    self.layout.append((offset, n_in, n_out, offset + n_in * n_out, activation))
+                rows[k] += [layer.weight.detach().T.reshape(-1), layer.bias.detach().reshape(-1)]
+                offset += n_in * n_out + n_out
+            if signature is None:
+                signature = shape
+            elif shape != signature:
+                raise CalibrationInputError(
+                    f"StackedMLP: module {k} has layers {shape}, module 0 {signature}; stacked nets must share "
+                    "one architecture."
+                )
+        self.flat = torch.nn.Parameter(torch.stack([torch.cat(r) for r in rows]))
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        K, h = self.flat.shape[0], x
+        for w_off, n_in, n_out, b_off, activation in self.layout:
+            weight = self.flat[:, w_off:w_off + n_in * n_out].view(K, n_in, n_out)
+            h = torch.baddbmm(self.flat[:, b_off:b_off + n_out].unsqueeze(1), h, weight)
+            if activation == "relu":
+                h = torch.relu(h)
+            elif activation == "tanh":
+                h = torch.tanh(h)
+        return h
+
+    def load_member(self, row: torch.Tensor, module: torch.nn.Module) -> None:
+        """Copy one member's weights (a row of ``flat``) into ``module`` (an unstacked net of the same shape)."""
+        linears = [layer for layer in module.layers if isinstance(layer, torch.nn.Linear)]
+        with torch.no_grad():
+            for layer, (w_off, n_in, n_out, b_off, _) in zip(linears, self.layout):
+                layer.weight.copy_(row[w_off:w_off + n_in * n_out].view(n_in, n_out).T)
+                layer.bias.copy_(row[b_off:b_off + n_out])
+
+
+class _Member:
+    """One calibrator's data, schedule state and history while it trains in the stack."""
+
+    def __init__(self, estimator: NetworkCalibrator, inputs, targets, seed: int, net) -> None:
+        self.estimator, self.targets, self.net = estimator, targets, net
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(seed)  # what a separate fit does: the same initial weights ...
+            net.initialize()
+            self.generator = torch.Generator().manual_seed(0)
+            self.generator.set_state(torch.get_rng_state())  # ... and then the same batch orders
+        train_ds, valid_ds = net.get_split_datasets(inputs.astype(np.float32), targets.astype(np.float32))
+        train_idx = getattr(train_ds, "indices", np.arange(len(inputs)))
+        valid_idx = None if valid_ds is None else valid_ds.indices
+        X = torch.as_tensor(inputs, dtype=torch.float32)
+        y = torch.as_tensor(targets, dtype=torch.float32)
+        self.X_train, self.y_train = X[train_idx], y[train_idx]
+        self.X_valid = None if valid_idx is None else X[valid_idx]
+        self.y_valid = None if valid_idx is None else y[valid_idx]
+        self.weights = net.criterion_.weights.detach().clone()
+        self.monitor = "train_loss" if valid_idx is None else "valid_loss"
+        self.lr = float(net.lr)
+        self.rows: list[dict] = []
+        self.best_loss, self.best_epoch, self.best_row = math.inf, 0, None
+        self.plateau = None
+        self.stop_reason: str | None = None
+
+
+def _padded(tensors: list[torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor]:
+    """Stack row blocks of unequal length into ``(K, n_max, width)`` with a ``(K, n_max)`` row mask."""
+    n_max = max(len(t) for t in tensors)
+    out = torch.zeros(len(tensors), n_max, tensors[0].shape[1])
+    mask = torch.zeros(len(tensors), n_max)
+    for k, t in enumerate(tensors):
+        out[k, : len(t)] = t
+        mask[k, : len(t)] = 1.0
+    return out, mask
+
+
+class _StackedRun:
+    """The epoch loop of :func:`fit_stacked` over the members still training."""
+
+    def __init__(self, members: list[_Member], template: NetworkCalibrator) -> None:
+        self.members = members
+        self.template = template
+        self.batch = int(template.batch_size)
+        self._restack(list(range(len(members))), StackedMLP([m.net.module_ for m in members]).flat.detach())
+        self.m = torch.zeros_like(self.flat)
+        self.v = torch.zeros_like(self.flat)
+        self.step = torch.zeros(len(members), 1)
+
+    def _restack(self, active: list[int], flat: torch.Tensor) -> None:
+        self.active = active
+        members = [self.members[i] for i in active]
+        self.module = StackedMLP([m.net.module_ for m in members])
+        self.module.flat = torch.nn.Parameter(flat.clone())
+        self.flat = self.module.flat
+        self.X_train, self.train_mask = _padded([m.X_train for m in members])
+        self.y_train, _ = _padded([m.y_train for m in members])
+        self.n_train = torch.tensor([len(m.X_train) for m in members])
+        self.weights = torch.stack([m.weights for m in members]).unsqueeze(1)
+        if members[0].X_valid is not None:
+            self.X_valid, self.valid_mask = _padded([m.X_valid for m in members])
+            self.y_valid, _ = _padded([m.y_valid for m in members])
+
+    def _drop_stopped(self) -> None:
+        keep = [i for i, k in enumerate(self.active) if self.members[k].stop_reason is None]
+        if len(keep) == len(self.active):
+            return
+        if not keep:
+            self.active = []
+            return
+        index = torch.tensor(keep)
+        flat = self.flat.detach()[index]
+        self.m, self.v, self.step = self.m[index], self.v[index], self.step[index]
+        self._restack([self.active[i] for i in keep], flat)
+
+    def _adam(self, grad: torch.Tensor, lr: torch.Tensor, moving: torch.Tensor | None) -> None:
+        """One Adam step of every member (torch.optim.Adam's arithmetic); ``moving``: members with a batch."""
+        with torch.no_grad():
+            if moving is None:
+                self.step += 1
+                self.m.lerp_(grad, 1 - _BETA1)
+                self.v.mul_(_BETA2).addcmul_(grad, grad, value=1 - _BETA2)
+            else:
+                self.step += moving
+                self.m.copy_(torch.where(moving.bool(), torch.lerp(self.m, grad, 1 - _BETA1), self.m))
+                self.v.copy_(torch.where(moving.bool(), self.v * _BETA2 + (1 - _BETA2) * grad * grad, self.v))
+                lr = lr * moving
+            correction1 = 1 - _BETA1 ** self.step
+            correction2 = (1 - _BETA2 ** self.step).sqrt()
+            denom = (self.v.sqrt() / correction2).add_(_EPS)
+            self.flat.sub_(lr / correction1 * self.m / denom)
+
+    def train_epoch(self) -> list[float]:
+        """One epoch of every active member; their mean training losses."""
+        members = [self.members[k] for k in self.active]
+        K, n_max, batch = len(members), self.X_train.shape[1], self.batch
+        order = torch.zeros(K, n_max, dtype=torch.long)
+        mask = torch.zeros(K, n_max)
+        for i, member in enumerate(members):
+            n = len(member.X_train)
+            order[i, :n] = torch.randperm(n, generator=member.generator)
+            mask[i, :n] = 1.0
+        uneven = bool((self.n_train != n_max).any())
+        lr = torch.tensor([m.lr for m in members]).unsqueeze(1)
+        rows = torch.arange(K).unsqueeze(1)
+        total = torch.zeros(K)
+        self.module.train()
+        for start in range(0, n_max, batch):
+            index = order[:, start:start + batch]
+            X, y = self.X_train[rows, index], self.y_train[rows, index]
+            squared = (((self.module(X) - y) ** 2) * self.weights).sum(dim=2)
+            if uneven:
+                rows_mask = mask[:, start:start + batch]
+                count = rows_mask.sum(dim=1)
+                losses = (squared * rows_mask).sum(dim=1) / count.clamp(min=1)
+                moving = (count > 0).float().unsqueeze(1)
+            else:
+                count = torch.full((K,), float(index.shape[1]))
+                losses = squared.mean(dim=1)
+                moving = None
+            self.flat.grad = None
+            losses.sum().backward()
+            self._adam(self.flat.grad, lr, moving)
+            total += losses.detach() * count
+        return (total / self.n_train).tolist()
+
+    def valid_losses(self) -> list[float]:
+        self.module.eval()
+        with torch.no_grad():
+            squared = (((self.module(self.X_valid) - self.y_valid) ** 2) * self.weights).sum(dim=2)
+            return ((squared * self.valid_mask).sum(dim=1) / self.valid_mask.sum(dim=1)).tolist()
+
+    def run(self) -> None:
+        t = self.template
+        n_epochs = t.max_epochs + t.plateau_epochs + t.max_recover_epochs
+        phase_3_start = t.max_epochs + t.plateau_epochs + 1
+        for epoch in range(1, n_epochs + 1):
+            began = time.perf_counter()
+            phase = phase_of_epoch(epoch, t.max_epochs, t.plateau_epochs)
+            members = [self.members[k] for k in self.active]
+            lrs = [m.lr for m in members]
+            train = self.train_epoch()
+            valid = self.valid_losses() if members[0].X_valid is not None else [None] * len(members)
+            seconds = (time.perf_counter() - began) / len(members)
+            for i, member in enumerate(members):
+                row = {"epoch": epoch, "phase": phase, "lr": lrs[i], "train_loss": train[i], "dur": seconds,
+                       "train_batch_count": -(-len(member.X_train) // self.batch)}
+                if valid[i] is not None:
+                    row.update(valid_loss=valid[i], valid_batch_count=1)
+                member.rows.append(row)
+                self._schedule(member, i, row, epoch, phase, phase_3_start)
+            self._drop_stopped()
+            if not self.active:
+                return
+
+    def _schedule(self, member: _Member, i: int, row: dict, epoch: int, phase: int, phase_3_start: int) -> None:
+        """The callbacks of :mod:`ftcal.neural_network._schedule` for one member, in their order."""
+        t = self.template
+        loss = float(row[member.monitor])
+        if phase == 2:  # PlateauLR: torch's own ReduceLROnPlateau on a stand-in optimiser holding the member's rate
+            if member.plateau is None:
+                stand_in = torch.optim.SGD([torch.zeros(1, requires_grad=True)], lr=member.lr)
+                member.plateau = torch.optim.lr_scheduler.ReduceLROnPlateau(
+                    stand_in, mode="min", factor=t.plateau_factor, patience=t.plateau_patience, min_lr=t.min_lr)
+            member.plateau.step(loss)
+            member.lr = float(member.plateau.optimizer.param_groups[0]["lr"])
+        if loss < member.best_loss:  # RestoreBestWeights
+            member.best_loss, member.best_epoch = loss, epoch
+            member.best_row = self.flat.detach()[i].clone()
+        recover_epochs = epoch - phase_3_start + 1  # RecoverStop
+        if recover_epochs <= 0:
+            if epoch == phase_3_start - 1 and t.max_recover_epochs == 0:
+                member.stop_reason = "schedule_end"
+        else:
+            losses = [r[member.monitor] for r in member.rows]
+            if losses[-1] <= (1.0 + t.recover_tolerance) * min(losses):
+                member.stop_reason = "within_tolerance"
+            elif recover_epochs >= t.max_recover_epochs:
+                member.stop_reason = "recover_cap"
+        if member.stop_reason is not None:
+            row["stop_reason"] = member.stop_reason
+
+    def finish(self) -> None:
+        """Give every member's skorch net its best weights, its history and its schedule's outcome."""
+        for member in self.members:
+            net = member.net
+            if member.best_row is not None:
+                self.module.load_member(member.best_row, net.module_)
+            net.history = History()
+            for row in member.rows:
+                net.history.new_epoch()
+                for key, value in row.items():
+                    net.history.record(key, value)
+            best = dict(net.callbacks_)["restore_best_weights"]
+            best.best_loss_, best.best_epoch_, best.best_state_ = member.best_loss, member.best_epoch, None
+
+
+def _stacking_key(estimator) -> tuple:
+    """What stacked members must share: class and every training parameter (not seed, tare or scale)."""
+    params = estimator.get_params(deep=False)
+    for name in ("random_state", "alpha", "zero_reading", "verbose"):
+        params.pop(name, None)
+    return type(estimator), tuple(sorted((k, repr(v)) for k, v in params.items()))
+
+
+def _datasets(X, y, K: int) -> list[tuple]:
+    if isinstance(X, (list, tuple)) != isinstance(y, (list, tuple)):
+        raise CalibrationInputError(
+            "fit_stacked: pass X and y both as arrays (one dataset for every estimator) or both as lists "
+            f"(one dataset per estimator); got X as {type(X).__name__} and y as {type(y).__name__}."
+        )
+    if not isinstance(X, (list, tuple)):
+        return [(X, y)] * K
+    if len(X) != K or len(y) != K:
+        raise CalibrationInputError(
+            f"fit_stacked: {K} estimators need {K} datasets; got {len(X)} X and {len(y)} y."
+        )
+    return list(zip(X, y))
+
+
+def fit_stacked(
+    estimators: Sequence[NetworkCalibrator],
+    X: ArrayLike | Sequence[ArrayLike],
+    y: ArrayLike | Sequence[ArrayLike],
+) -> list[NetworkCalibrator]:
+    """Fit ``K`` network calibrators of one kind together, as one stacked module (see the module doc).
+
+    Each estimator ends fitted exactly as its own ``fit`` would leave it (the
+    skorch ``net_`` with its history, the schedule's outcome, the scales and
+    tare), with the weights a separate fit would reach up to float32
+    rounding. Training ``K`` nets this way costs far less than ``K`` fits
+    (``benchmarks/network_speed.py``).
+
+    Parameters
+    ----------
+    estimators : sequence of DirectionalCalibrator or ComparativeCalibrator
+        ``K >= 1`` calibrators of one class with the same parameters except
+        ``random_state``, ``alpha``, ``zero_reading`` and ``verbose`` (they
+        share the architecture and the schedule), and no ``callbacks`` (the
+        skorch callbacks run per net; fit such an estimator by itself).
+    X : array-like of shape (n, N), or a list of K of them
+        Raw readings: one dataset for every estimator (seed ensembles), or
+        one per estimator (K datasets at once).
+    y : array-like of shape (n, 6), or a list of K of them
+        Reference wrenches, like ``X``.
+
+    Returns
+    -------
+    list
+        The fitted estimators (the same objects).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import DirectionalCalibrator, fit_stacked
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> nets = [DirectionalCalibrator(max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=s)
+    ...         for s in range(3)]
+    >>> fitted = fit_stacked(nets, raw, w)
+    >>> [m.predict(raw[:1]).shape for m in fitted]
+    [(1, 6), (1, 6), (1, 6)]
+    """
+    estimators = list(estimators)
+    if not estimators:
+        raise CalibrationInputError("fit_stacked needs at least one estimator (K >= 1); got an empty list.")
+    for k, est in enumerate(estimators):
+        if not isinstance(est, NetworkCalibrator):
+            raise CalibrationInputError(
+                f"fit_stacked trains network calibrators (DirectionalCalibrator, ComparativeCalibrator); "
+                f"estimator {k} is {type(est).__name__}. Fit it with its own fit()."
+            )
+        if est.callbacks:
+            raise CalibrationInputError(
+                f"fit_stacked: estimator {k} has callbacks={est.callbacks!r}; skorch callbacks run per net, "
+                "so fit that estimator by itself."
+            )
+        if _stacking_key(est) != _stacking_key(estimators[0]):
+            raise CalibrationInputError(
+                f"fit_stacked: estimator {k} differs from estimator 0 in a training parameter; stacked nets "
+                "share the architecture and the schedule (only random_state, alpha and zero_reading may differ)."
+            )
+        if est.device != "cpu":
+            raise CalibrationInputError(f"fit_stacked trains on the CPU; estimator {k} has device={est.device!r}.")
+    members = []
+    with threadpool_limits(1, user_api="blas"):
+        for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators))):
+            X_k, y_k = validate_training_data(est, X_k, y_k)
+            est._fit_scale_and_tare(X_k, y_k)
+            members.append(_Member(est, *est._training_setup(X_k, y_k)))
+    run = _StackedRun(members, estimators[0])
+    with interrupt_flag(), torch_threads(1):
+        run.run()
+    run.finish()
+    for member in members:
+        member.estimator._finish_training(member.net, member.targets)
+        member.estimator.__dict__.pop("tare_reading_", None)
+    return estimators

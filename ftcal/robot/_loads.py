@@ -1,0 +1,177 @@
+"""Load configurations (thesis IV-B-b, Table I) and reference wrenches (eq. 15-16).
+
+A load configuration is the position of the external load's centre of mass in
+the sensor frame [m]. The thesis uses a centre at ``[186, 0, 79]`` mm from the
+sensing origin and six translations of it (Table I), so that all three torque
+axes are excited.
+
+Table I, transcribed as printed (translations in mm, added to the centre)::
+
+    axis   positive            negative
+    x      ( 161, 93,  0)      (-161, 93,   0)
+    y      (   0, 29,  0)      (   0, -42,  0)
+    z      (   0,  0, 15)      (   0,  0, -48)
+
+The x row carries y = 93 mm in both directions; it is kept as printed (the
+holder's x positions are offset sideways). The load mass is not given in the
+thesis; it is a parameter everywhere here.
+
+Reference wrench
+----------------
+``F = R^T (m g)`` (eq. 15) and ``tau = r x F`` (eq. 16), with ``R`` the sensor's
+rotation in the base (gravitational) frame, ``g`` gravity in the base frame
+[m/s²], ``m`` the load mass [kg] and ``r`` the load's centre of mass in the
+sensor frame [m]. ``F`` is the force the load exerts on the sensor [N].
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core._exceptions import KinematicsError
+from ._robot import RobotModel, sensor_pose_in_base
+
+__all__ = [
+    "STANDARD_GRAVITY",
+    "GRAVITY_IN_BASE",
+    "THESIS_LOAD_CENTER_MM",
+    "TABLE_I_TRANSLATIONS_MM",
+    "LoadConfiguration",
+    "thesis_load_configurations",
+    "reference_wrench",
+    "reference_wrench_at_joints",
+]
+
+#: Standard gravity [m/s²].
+STANDARD_GRAVITY: float = 9.80665
+#: Gravity in the base frame of a robot on a flat table [m/s²].
+GRAVITY_IN_BASE: tuple[float, float, float] = (0.0, 0.0, -STANDARD_GRAVITY)
+#: Centre load position in the sensor frame [mm] (thesis IV-B-b).
+THESIS_LOAD_CENTER_MM: tuple[float, float, float] = (186.0, 0.0, 79.0)
+#: Table I: translations from the centre [mm], keyed by principal axis and sign.
+TABLE_I_TRANSLATIONS_MM: dict[str, tuple[float, float, float]] = {
+    "+x": (161.0, 93.0, 0.0),
+    "-x": (-161.0, 93.0, 0.0),
+    "+y": (0.0, 29.0, 0.0),
+    "-y": (0.0, -42.0, 0.0),
+    "+z": (0.0, 0.0, 15.0),
+    "-z": (0.0, 0.0, -48.0),
+}
+
+
+@dataclass(frozen=True)
+class LoadConfiguration:
+    """Where the external load's centre of mass sits in the sensor frame.
+
+    Attributes
+    ----------
+    config_id : int
+        Label used in logs and as the dataset's group.
+    name : str
+        Human-readable name (``"centre"``, ``"+x"``, ...).
+    position_in_sensor : tuple of 3 floats
+        Centre of mass in the sensor frame [m].
+    """
+
+    config_id: int
+    name: str
+    position_in_sensor: tuple[float, float, float]
+
+
+def thesis_load_configurations() -> tuple[LoadConfiguration, ...]:
+    """The seven load configurations of the thesis: id 0 the centre, ids 1-6 Table I.
+
+    Examples
+    --------
+    >>> cfgs = thesis_load_configurations()
+    >>> [(c.config_id, c.name) for c in cfgs][:3]
+    [(0, 'centre'), (1, '+x'), (2, '-x')]
+    >>> cfgs[1].position_in_sensor  # [m]
+    (0.347, 0.093, 0.079)
+    """
+    centre = np.array(THESIS_LOAD_CENTER_MM)
+    out = [LoadConfiguration(0, "centre", tuple(float(v) for v in np.round(centre / 1000.0, 9)))]
+    for i, (name, shift) in enumerate(TABLE_I_TRANSLATIONS_MM.items(), start=1):
+        pos = np.round((centre + np.array(shift)) / 1000.0, 9)
+        out.append(LoadConfiguration(i, name, tuple(float(v) for v in pos)))
+    return tuple(out)
+
+
+def _vector3(v: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
+    a = np.asarray(v, dtype=float)
+    if a.shape != (3,) and not (a.ndim == 2 and a.shape[1] == 3 and (n is None or a.shape[0] == n)):
+        want = "(3,)" if n is None else f"(3,) or ({n}, 3)"
+        raise KinematicsError(f"{name} must have shape {want}; got shape {a.shape}.")
+    if not np.all(np.isfinite(a)):
+        raise KinematicsError(f"{name} holds NaN or inf; got {a.tolist()!r}.")
+    return a
+
+
+def reference_wrench(
+    sensor_rotation_in_base: ArrayLike,
+    load_mass: float,
+    load_position_in_sensor: ArrayLike,
+    gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
+) -> NDArray[np.float64]:
+    """Wrench of a point load on the sensor, in the sensor frame (eq. 15-16).
+
+    Parameters
+    ----------
+    sensor_rotation_in_base : array-like of shape (3, 3) or (n, 3, 3)
+        ``R_sensor``: maps sensor-frame vectors to the base frame.
+    load_mass : float
+        Mass of the load [kg], >= 0.
+    load_position_in_sensor : array-like of shape (3,) or (n, 3)
+        The load's centre of mass in the sensor frame [m].
+    gravity_in_base : array-like of shape (3,), default=(0, 0, -9.80665)
+        Gravitational acceleration in the base frame [m/s²].
+
+    Returns
+    -------
+    ndarray of shape (n, 6)
+        ``[Fx, Fy, Fz, Tx, Ty, Tz]`` in [N] and [N·m].
+
+    Examples
+    --------
+    Sensor upright (R = I), 1 kg at 0.1 m along x: the load pulls with
+    ``Fz = -9.81 N`` and, 0.1 m out along x, gives ``Ty = -x Fz = +0.98 N·m``:
+
+    >>> import numpy as np
+    >>> reference_wrench(np.eye(3), 1.0, [0.1, 0, 0]).round(4) + 0.0
+    array([[ 0.    ,  0.    , -9.8066,  0.    ,  0.9807,  0.    ]])
+    """
+    R = np.asarray(sensor_rotation_in_base, dtype=float)
+    if R.shape == (3, 3):
+        R = R[None]
+    if R.ndim != 3 or R.shape[1:] != (3, 3) or not np.all(np.isfinite(R)):
+        raise KinematicsError(f"sensor_rotation_in_base must be finite with shape (3, 3) or (n, 3, 3); got {R.shape}.")
+    if not np.isfinite(load_mass) or load_mass < 0:
+        raise KinematicsError(f"load_mass must be a finite mass >= 0 [kg]; got {load_mass!r}.")
+    g = _vector3(gravity_in_base, "gravity_in_base")
+    r = _vector3(load_position_in_sensor, "load_position_in_sensor", R.shape[0])
+    force = load_mass * np.einsum("nji,j->ni", R, g)
+    torque = np.cross(np.broadcast_to(r, force.shape), force)
+    return np.hstack([force, torque])
+
+
+def reference_wrench_at_joints(
+    robot: RobotModel,
+    q: ArrayLike,
+    load_mass: float,
+    load_position_in_sensor: ArrayLike,
+    gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
+) -> NDArray[np.float64]:
+    """:func:`reference_wrench` with the sensor rotation from forward kinematics of ``q`` (n, n_joints) [rad].
+
+    Examples
+    --------
+    >>> from ftcal import load_robot
+    >>> w = reference_wrench_at_joints(load_robot(), [0.0] * 7, 2.0, [0, 0, 0.1])
+    >>> w.round(3) + 0.0  # arm upright: load straight down the sensor z axis
+    array([[ 0.   ,  0.   , -19.613,  0.   ,  0.   ,  0.   ]])
+    """
+    P = np.asarray(sensor_pose_in_base(robot, robot.check_joints(q)))
+    return reference_wrench(P[:, :3, :3], load_mass, load_position_in_sensor, gravity_in_base)

@@ -1,0 +1,218 @@
+"""Artificial calibration data (thesis section IV-A): a virtual sensor and the 30-dataset generator.
+
+The pipeline per dataset: sample true wrenches (:mod:`ftcal.simulation._sampling`), draw
+the dataset's error parameters from a preset (:mod:`ftcal.simulation._presets`), apply
+them (:mod:`ftcal.simulation._error_models`), map the erroneous wrench to raw readings
+through the inverse (pseudo-inverse) calibration matrix (IV-A-d), add the
+optional zero-load offset. The calibrators then learn ``raw -> true wrench``.
+
+The noise floor
+---------------
+The RMSE (eq. 18, torque-scaled, [N]) that a *perfect* calibrator, one that
+knows and inverts every deterministic error exactly, would still make on the
+test set because of the simulated noise: the RMSE between the noisy and the
+noise-free erroneous wrenches of the actual test set. (A perfect calibrator
+maps a noisy reading back through the inverse error map, whose Jacobian
+differs from identity by a few per cent, so this is the floor to within that.)
+With eq. 12 and the default radial test set (torque-scaled norm uniform in
+``[0, 2000]`` N, so ``rms(|w_scaled|) = 2000 / sqrt(3) ≈ 1155`` N) it is about
+``σ rms(|w_scaled|) / sqrt(6)``: 1 % of 471 N ≈ 4.7 N.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..io._dataset import CalibrationDataset
+from ._error_models import ErrorModel, SampledErrors
+from ..core._exceptions import CalibrationInputError
+from ..core._metrics import wrench_rmse
+from ._presets import error_preset
+from ._sampling import continuous_wrenches, sphere_wrenches
+from ._sensor import SensorProfile
+
+__all__ = ["VirtualSensor", "make_artificial_dataset", "noise_floor"]
+
+#: Training-sphere radii as fractions of Fmax: 400, 800, 1200, 1600 N for 2000 N (IV-A-a).
+SPHERE_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
+
+
+def noise_floor(wrench_noise_free: ArrayLike, wrench_noisy: ArrayLike, alpha: float) -> float:
+    """RMSE [N] between noise-free and noisy erroneous wrenches, torque-scaled (see the module notes).
+
+    Examples
+    --------
+    >>> noise_floor([[100.0, 0, 0, 0, 0, 0]], [[101.0, 0, 0, 0, 0, 0]], alpha=50.0)
+    0.408...
+    """
+    return wrench_rmse(wrench_noise_free, wrench_noisy, alpha)
+
+
+class VirtualSensor:
+    """A simulated force/torque sensor: wrench in, erroneous raw readings out.
+
+    Parameters
+    ----------
+    calibration_matrix : ndarray of shape (6, N) or SensorProfile, optional
+        The sensor's calibration matrix (``wrench = C @ raw``) or a whole
+        profile; ``None`` -> :meth:`SensorProfile.default`. A bare matrix
+        takes ``fmax`` / ``tmax`` for its ranges.
+    errors : str, ErrorModel or SampledErrors, default="thesis"
+        A preset name, a nominal model (its parameters are drawn once, here,
+        from ``random_state``) or concrete parameters.
+    zero_offset : array-like of shape (N,), optional
+        Raw reading at zero load, added to every reading [raw unit].
+    random_state : int or numpy.random.Generator, optional
+        Seeds the error parameters and the noise.
+    fmax, tmax : float
+        Ranges [N] / [N·m] when ``calibration_matrix`` is a bare matrix.
+
+    Attributes
+    ----------
+    profile : SensorProfile
+    errors_ : SampledErrors
+        The concrete error parameters in use.
+
+    Examples
+    --------
+    >>> s = VirtualSensor(errors="thesis", zero_offset=np.full(6, 0.1), random_state=0)
+    >>> raw = s.read(np.array([[100.0, 0, 0, 0, 0, 1.0]]))
+    >>> raw.shape
+    (1, 6)
+    >>> clean = VirtualSensor(errors="none").read(np.array([[100.0, 0, 0, 0, 0, 1.0]]))
+    >>> np.allclose(clean @ VirtualSensor().profile.calibration_matrix.T, [[100.0, 0, 0, 0, 0, 1.0]])
+    True
+    """
+
+    def __init__(
+        self,
+        calibration_matrix: ArrayLike | SensorProfile | None = None,
+        *,
+        errors: str | ErrorModel | SampledErrors = "thesis",
+        zero_offset: ArrayLike | None = None,
+        random_state: int | np.random.Generator | None = None,
+        fmax: float = 2000.0,
+        tmax: float = 40.0,
+    ) -> None:
+        if calibration_matrix is None:
+            self.profile = SensorProfile.default()
+        elif isinstance(calibration_matrix, SensorProfile):
+            self.profile = calibration_matrix
+        else:
+            self.profile = SensorProfile(calibration_matrix=calibration_matrix, fmax=fmax, tmax=tmax, name="user matrix")
+        self._rng = np.random.default_rng(random_state)
+        if isinstance(errors, SampledErrors):
+            self.errors_ = errors
+        else:
+            self.errors_ = error_preset(errors).sample(self.profile.full_scale, self.profile.alpha, self._rng)
+        n = self.profile.n_channels
+        if zero_offset is None:
+            self.zero_offset = np.zeros(n)
+        else:
+            self.zero_offset = np.asarray(zero_offset, dtype=float)
+            if self.zero_offset.shape != (n,) or not np.all(np.isfinite(self.zero_offset)):
+                raise CalibrationInputError(
+                    f"zero_offset must be a finite array of shape ({n},), one raw value per channel; "
+                    f"got shape {self.zero_offset.shape}."
+                )
+        self._pinv = np.linalg.pinv(self.profile.calibration_matrix)
+
+    def erroneous_wrench(self, wrench: ArrayLike, noise: bool = True) -> NDArray[np.float64]:
+        """The wrench the gauges 'see' [N, N·m]: the errors applied, with or without noise."""
+        w = self.errors_.apply_deterministic(wrench)
+        return self.errors_.apply_noise(w, self._rng) if noise else w
+
+    def raw_from_erroneous(self, erroneous: ArrayLike) -> NDArray[np.float64]:
+        """Raw readings (n, N) of an already erroneous wrench: inverse calibration matrix plus offset."""
+        return np.asarray(erroneous, dtype=float) @ self._pinv.T + self.zero_offset
+
+    def read(self, wrench: ArrayLike, noise: bool = True) -> NDArray[np.float64]:
+        """Raw readings (n, N) under true wrenches (n, 6) [N, N·m]; each call draws fresh noise."""
+        return self.raw_from_erroneous(self.erroneous_wrench(wrench, noise=noise))
+
+    def __repr__(self) -> str:
+        return f"VirtualSensor(profile={self.profile.name!r}, n_channels={self.profile.n_channels})"
+
+
+def _sample_split(sensor: VirtualSensor, wrench: NDArray[np.float64]) -> tuple[NDArray, float]:
+    clean = sensor.erroneous_wrench(wrench, noise=False)
+    noisy = sensor.errors_.apply_noise(clean, sensor._rng)
+    return sensor.raw_from_erroneous(noisy), noise_floor(clean, noisy, sensor.profile.alpha)
+
+
+def make_artificial_dataset(
+    preset: str | ErrorModel = "thesis",
+    random_state: int | np.random.Generator | None = None,
+    *,
+    profile: SensorProfile | None = None,
+    n_per_sphere: int = 1250,
+    n_test: int = 1250,
+    test_distribution: str = "radial",
+    zero_offset: ArrayLike | None = None,
+) -> tuple[CalibrationDataset, CalibrationDataset, dict]:
+    """One artificial dataset of the thesis (IV-A): four-sphere train set, continuous test set.
+
+    Parameters
+    ----------
+    preset : str or ErrorModel, default="thesis"
+        Error preset (``"thesis"``, ``"asymmetric"``, ``"stress"``, ``"none"``) or a model.
+    random_state : int or numpy.random.Generator, optional
+        Seed; the same seed gives the same data.
+    profile : SensorProfile, optional
+        Sensor; default :meth:`SensorProfile.default`. The sphere radii are
+        0.2, 0.4, 0.6, 0.8 of its ``fmax`` in the torque-scaled space
+        (400 ... 1600 N for the thesis sensor).
+    n_per_sphere : int, default=1250
+        Training points per sphere (5000 in all, IV-A-a).
+    n_test : int, default=1250
+        Test points (IV-A-b).
+    test_distribution : {"radial", "box"}, default="radial"
+        See :mod:`ftcal.simulation._sampling`.
+    zero_offset : array-like of shape (N,), optional
+        Raw zero-load offset added to every reading.
+
+    Returns
+    -------
+    train, test : CalibrationDataset
+        ``train.group`` is the sphere index (0-3); ``test.group`` is None.
+    info : dict
+        ``preset``, ``errors`` (the sampled parameters), ``noise_floor``
+        (on the test set, [N]), ``noise_floor_train``, ``alpha``, ``profile``
+        name, sizes.
+
+    Examples
+    --------
+    >>> train, test, info = make_artificial_dataset(random_state=0, n_per_sphere=5, n_test=4)
+    >>> train.raw.shape, test.raw.shape, sorted(set(train.group.tolist()))
+    ((20, 6), (4, 6), [0, 1, 2, 3])
+    """
+    rng = np.random.default_rng(random_state)
+    profile = SensorProfile.default() if profile is None else profile
+    model = error_preset(preset)
+    sensor = VirtualSensor(profile, errors=model, zero_offset=zero_offset, random_state=rng)
+    radii = np.array(SPHERE_FRACTIONS) * profile.fmax
+    train_wrench, sphere = sphere_wrenches(radii, n_per_sphere, profile.alpha, rng)
+    test_wrench = continuous_wrenches(n_test, profile.fmax, profile.tmax, rng, test_distribution)
+    train_raw, floor_train = _sample_split(sensor, train_wrench)
+    test_raw, floor_test = _sample_split(sensor, test_wrench)
+    info = {
+        "preset": preset if isinstance(preset, str) else "custom",
+        "error_model": model.to_dict(),
+        "errors": sensor.errors_.to_dict(),
+        "noise_floor": floor_test,
+        "noise_floor_train": floor_train,
+        "alpha": profile.alpha,
+        "profile": profile.name,
+        "sphere_radii": radii.tolist(),
+        "n_train": int(train_wrench.shape[0]),
+        "n_test": int(n_test),
+        "test_distribution": test_distribution,
+        "zero_offset": sensor.zero_offset.tolist(),
+    }
+    meta = {k: info[k] for k in ("preset", "alpha", "profile", "noise_floor")}
+    train = CalibrationDataset(raw=train_raw, wrench=train_wrench, group=sphere, meta={**meta, "split": "train"})
+    test = CalibrationDataset(raw=test_raw, wrench=test_wrench, group=None, meta={**meta, "split": "test"})
+    return train, test, info

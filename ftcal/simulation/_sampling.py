@@ -1,0 +1,134 @@
+"""Load sampling for the artificial datasets (thesis section IV-A-a and IV-A-b).
+
+Both samplers work in the **torque-scaled** 6-D wrench space (torques times
+``alpha = Fmax / Tmax``, eq. 6), where a force of ``r`` [N] and a torque of
+``r / alpha`` [N·m] have the same length, and return ordinary wrenches
+([N] and [N·m]).
+
+Interpretations of the thesis text
+----------------------------------
+Train set (IV-A-a)
+    "four concentric spheres, radius steps of 400 N (force) and 8 Nm
+    (torque)": spheres of radius 400, 800, 1200 and 1600 in the torque-scaled
+    space (8 N·m times alpha = 50 is 400), 1250 points on each, uniformly
+    distributed on the 5-sphere (normalised Gaussian vectors). Every point is
+    a combined load with all six components non-zero.
+Test set (IV-A-b)
+    "randomly sampled from the sensor's operational range to capture
+    continuous variations": by default (``"radial"``) a uniform direction
+    on the 5-sphere times a radius uniform in ``[0, Fmax]``, so load
+    magnitudes are spread evenly from zero to full scale, every component
+    stays inside its rated range (``|F_i| <= Fmax``, ``|T_i| <= Tmax``), most
+    points lie between the training spheres and 20 % lie beyond the outer one
+    (1600 < r <= 2000), testing mild extrapolation. ``"box"`` samples every
+    component independently and uniformly in its rated range instead; its
+    loads reach ``sqrt(6) Fmax`` in norm, far outside the training spheres.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core._exceptions import CalibrationInputError
+from ..core._wrench import unscale_torques
+
+__all__ = ["sphere_wrenches", "continuous_wrenches", "TEST_DISTRIBUTIONS"]
+
+#: Names accepted by :func:`continuous_wrenches`.
+TEST_DISTRIBUTIONS = ("radial", "box")
+
+
+def _unit_directions(n: int, rng: np.random.Generator) -> NDArray[np.float64]:
+    """``n`` directions uniform on the unit 5-sphere, shape (n, 6)."""
+    v = rng.standard_normal((n, 6))
+    return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+
+def sphere_wrenches(
+    radii: NDArray[np.float64] | list[float],
+    n_per_sphere: int,
+    alpha: float,
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Wrenches uniformly spread on concentric spheres of the torque-scaled space.
+
+    Parameters
+    ----------
+    radii : sequence of float
+        Sphere radii in the torque-scaled space [N].
+    n_per_sphere : int
+        Points on each sphere.
+    alpha : float
+        Torque scale [m⁻¹].
+    rng : numpy.random.Generator
+        Random source.
+
+    Returns
+    -------
+    wrench : ndarray of shape (len(radii) * n_per_sphere, 6)
+        Wrenches in [N] and [N·m].
+    sphere : ndarray of shape (len(radii) * n_per_sphere,)
+        Index of the sphere of each row.
+
+    Examples
+    --------
+    >>> from ftcal.core._wrench import scale_torques
+    >>> w, g = sphere_wrenches([400.0, 800.0], 3, 50.0, np.random.default_rng(0))
+    >>> np.linalg.norm(scale_torques(w, 50.0), axis=1).round(6)
+    array([400., 400., 400., 800., 800., 800.])
+    """
+    radii = np.asarray(radii, dtype=float)
+    if radii.ndim != 1 or radii.size == 0 or not np.all(radii > 0):
+        raise CalibrationInputError(f"radii must be a non-empty list of positive radii; got {radii!r}.")
+    if int(n_per_sphere) < 1:
+        raise CalibrationInputError(f"n_per_sphere must be >= 1; got {n_per_sphere}.")
+    n = int(n_per_sphere)
+    scaled = np.vstack([r * _unit_directions(n, rng) for r in radii])
+    sphere = np.repeat(np.arange(radii.size, dtype=np.int64), n)
+    return unscale_torques(scaled, alpha), sphere
+
+
+def continuous_wrenches(
+    n: int,
+    fmax: float,
+    tmax: float,
+    rng: np.random.Generator,
+    distribution: str = "radial",
+) -> NDArray[np.float64]:
+    """Wrenches sampled continuously over the operating range (see the module notes).
+
+    Parameters
+    ----------
+    n : int
+        Number of wrenches.
+    fmax, tmax : float
+        Force range [N] and torque range [N·m].
+    rng : numpy.random.Generator
+        Random source.
+    distribution : {"radial", "box"}, default="radial"
+        ``"radial"``: uniform direction, torque-scaled norm uniform in
+        ``[0, fmax]``. ``"box"``: each component uniform in ``[-fmax, fmax]``
+        (forces) or ``[-tmax, tmax]`` (torques).
+
+    Returns
+    -------
+    ndarray of shape (n, 6)
+        Wrenches in [N] and [N·m].
+
+    Examples
+    --------
+    >>> w = continuous_wrenches(100, 2000.0, 40.0, np.random.default_rng(0))
+    >>> bool(np.all(np.abs(w[:, :3]) <= 2000) and np.all(np.abs(w[:, 3:]) <= 40))
+    True
+    """
+    if int(n) < 1:
+        raise CalibrationInputError(f"n must be >= 1; got {n}.")
+    alpha = fmax / tmax
+    if distribution == "radial":
+        scaled = _unit_directions(int(n), rng) * rng.uniform(0.0, fmax, size=(int(n), 1))
+        return unscale_torques(scaled, alpha)
+    if distribution == "box":
+        ranges = np.array([fmax] * 3 + [tmax] * 3)
+        return rng.uniform(-1.0, 1.0, size=(int(n), 6)) * ranges
+    raise CalibrationInputError(f"unknown test distribution {distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")

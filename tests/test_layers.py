@@ -1,0 +1,80 @@
+"""The package layout is the architecture (issue 14): a package imports only the layers below it.
+
+The allowed imports are the table of ``docs/architecture.md``; every ``from .x import`` and
+``import ftcal.x`` in every module is checked, including imports inside functions.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import ftcal
+
+PACKAGE = Path(ftcal.__file__).parent
+ALLOWED = {
+    "core": set(),
+    "io": {"core"},
+    "calibrators": {"core"},
+    "robot": {"core"},
+    "neural_network": {"core", "calibrators"},
+    "simulation": {"core", "io"},
+    "models": {"core", "calibrators", "neural_network"},
+    "experiment": {"core", "io", "robot", "simulation"},
+    "evaluation": {"core", "io", "calibrators", "robot", "neural_network", "simulation", "models", "experiment"},
+    "cli": {"core", "io", "calibrators", "robot", "neural_network", "simulation", "models", "experiment",
+            "evaluation"},
+}
+
+
+def _imported_packages(path: Path, package: str) -> set[str]:
+    """The ftcal packages (first component under ``ftcal``) that the module at ``path`` imports."""
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom):
+            if node.level == 0:
+                parts = (node.module or "").split(".")
+                if parts[0] == "ftcal":
+                    found.add(parts[1] if len(parts) > 1 else "ftcal")
+                continue
+            # a relative import from ftcal/<package>/<module>.py: level 1 is <package>, level 2 is ftcal
+            if node.level == 1:
+                found.add(package)
+            else:
+                target = (node.module or "").split(".")[0]
+                found.add(target or "ftcal")
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                parts = alias.name.split(".")
+                if parts[0] == "ftcal":
+                    found.add(parts[1] if len(parts) > 1 else "ftcal")
+    return found
+
+
+@pytest.mark.parametrize("package", sorted(ALLOWED))
+def test_a_package_imports_only_the_layers_below_it(package):
+    modules = sorted((PACKAGE / package).glob("*.py"))
+    assert modules, f"ftcal/{package} is empty"
+    for path in modules:
+        imported = _imported_packages(path, package) - {package}
+        imported.discard("ftcal")  # ``from .. import __version__`` only
+        assert imported <= ALLOWED[package], (
+            f"ftcal/{package}/{path.name} imports {sorted(imported - ALLOWED[package])}, above its layer"
+        )
+
+
+def test_every_module_lives_in_a_layer_package():
+    top_level = {p.name for p in PACKAGE.glob("*.py")}
+    assert top_level == {"__init__.py", "__main__.py"}
+    packages = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
+    assert packages == set(ALLOWED)
+    for name in packages:  # each says what it holds and what it may import
+        doc = ast.get_docstring(ast.parse((PACKAGE / name / "__init__.py").read_text()))
+        assert doc and "import" in doc.lower(), f"ftcal/{name}/__init__.py needs a docstring naming its imports"
+
+
+def test_the_public_names_resolve():
+    for name in ftcal.__all__:
+        assert getattr(ftcal, name) is not None
