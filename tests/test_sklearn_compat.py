@@ -10,49 +10,54 @@ from sklearn.base import clone
 from sklearn.model_selection import GridSearchCV, KFold, cross_validate
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
-from sklearn.utils.estimator_checks import parametrize_with_checks
+from sklearn.utils.estimator_checks import estimator_checks_generator
 
 from ftcal import CalibrationInputError, neg_scaled_rmse
 
 from conftest import TINY_SCHEDULE, affine_sensor_data, tiny_calibrators
 
-# The calibrators take a wrench y of shape (n, 6) and a sensor with >= 3 channels; asking for anything
-# else is a user error that must raise (issue 2, "Bad input"). These generic checks fit on y of shape
-# (n,) / (n, 1) / (n, 5) or on X with 2 features, so they fail by design. The same properties are
-# tested below on wrench-shaped data (clone, pickle, idempotent fit, dtypes, subset invariance, ...).
-_Y_SHAPE = "fits on a y of shape (n,), (n, 1) or (n, 5); calibrators require the (n, 6) wrench"
-_TWO_FEATURES = "fits on X with 2 features; calibrators require >= 3 raw channels"
+# The calibrators are regressors of any targets (the wrench rule, y of shape (n, 6) from >= 3 channels, is
+# enforced where calibration data enter: CalibrationDataset and the CLI), so scikit-learn's generic checks
+# run on them as on any regressor. The few expected failures, each strict and matched to its exception:
+_UNDERTRAINED = (
+    "the common checks use the tiny test schedule (a few epochs): too short for the network to reach the "
+    "R² > 0.5 this check asks on its data (the training itself is tested in test_networks.py)"
+)
+_TOO_FEW_FOR_CV = (
+    "AutoCalibrator cross-validates its candidates: on the check's 10-20 samples every fold holds fewer "
+    "rows than any candidate needs (n_channels + 1 and 7 for the zero-load estimate), so it refuses with "
+    "'no candidate could be fitted' (tested in test_auto_gp_tare.py)"
+)
 _EXPECTED_FAILURES = {
-    **dict.fromkeys(
-        [
-            "check_fit_score_takes_y", "check_dont_overwrite_parameters", "check_n_features_in_after_fitting",
-            "check_positive_only_tag_during_fit", "check_estimators_dtypes", "check_dtype_object",
-            "check_pipeline_consistency", "check_estimators_nan_inf", "check_estimators_pickle",
-            "check_f_contiguous_array_estimator", "check_regressors_train", "check_regressor_data_not_an_array",
-            "check_regressor_multioutput", "check_regressors_no_decision_function", "check_regressors_int",
-            "check_methods_sample_order_invariance", "check_methods_subset_invariance", "check_dict_unchanged",
-            "check_fit2d_predict1d", "check_array_api_input",
-        ],
-        _Y_SHAPE,
-    ),
-    **dict.fromkeys(
-        [
-            "check_readonly_memmap_input", "check_n_features_in", "check_fit_idempotent",
-            "check_fit_check_is_fitted", "check_estimators_overwrite_params", "check_estimators_fit_returns_self",
-        ],
-        _TWO_FEATURES,
-    ),
+    "ComparativeCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
+    "DirectionalCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
+    "EnsembleCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
+    "AutoCalibrator": {
+        name: (CalibrationInputError if name != "check_fit2d_1feature" else AssertionError, _TOO_FEW_FOR_CV)
+        for name in ("check_estimators_nan_inf", "check_regressor_multioutput",
+                     "check_regressors_no_decision_function", "check_fit2d_1feature")
+    },
 }
 
 
-@parametrize_with_checks(tiny_calibrators(), expected_failed_checks=lambda est: _EXPECTED_FAILURES, xfail_strict=True)
+def _common_checks():
+    """Every (estimator, check) pair of scikit-learn's common checks, expected failures marked exactly."""
+    params = []
+    for estimator in tiny_calibrators():
+        owner = type(estimator).__name__
+        for est, check in estimator_checks_generator(estimator, legacy=True, mark=None):
+            name = getattr(check, "func", check).__name__
+            marks = ()
+            if name in _EXPECTED_FAILURES.get(owner, {}):
+                raises, reason = _EXPECTED_FAILURES[owner][name]
+                marks = pytest.mark.xfail(raises=raises, strict=True, reason=reason)
+            params.append(pytest.param(est, check, marks=marks, id=f"{owner}-{name}-{len(params)}"))
+    return params
+
+
+@pytest.mark.parametrize(("estimator", "check"), _common_checks())
 def test_sklearn_estimator_checks(estimator, check):
-    try:
-        check(estimator)
-    except CalibrationInputError as exc:
-        # Our deliberate input errors (the expected failures above): re-raised from here so that pytest
-        # does not re-parse the 5000-line estimator_checks.py for every traceback (~0.3 s each).
-        raise CalibrationInputError(str(exc)) from None
+    check(estimator)
 
 
 @pytest.fixture

@@ -269,7 +269,7 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         previous, coefs, intercepts = z, [], []
         for _ in range(n_ref + 1):
             pass_coefs, pass_intercepts = [], []
-            for j in range(6):
+            for j in range(ys.shape[1]):
                 features = self._gated(block, (previous[:, j] > 0).astype(float))
                 c, b = ridge_least_squares(features, ys[:, [j]], ridge * len(ys), n_unpenalised=z.shape[1])
                 pass_coefs.append(c[:, 0])
@@ -306,7 +306,7 @@ class AxisNonlinearCalibrator(BaseCalibrator):
 
     def _apply(self, block, previous, coefs, intercepts) -> NDArray[np.float64]:
         """One pass: each output from its gated features (gate = sign of the previous pass' output)."""
-        columns = [self._gated(block, (previous[:, j] > 0).astype(float)) @ coefs[j] for j in range(6)]
+        columns = [self._gated(block, (previous[:, j] > 0).astype(float)) @ coefs[j] for j in range(len(coefs))]
         return np.stack(columns, axis=1) + intercepts
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

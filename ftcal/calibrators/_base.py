@@ -42,7 +42,8 @@ __all__ = ["BaseCalibrator"]
 
 def _resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
     if alpha is None:
-        return alpha_from_wrenches(y)
+        # only a 6-component wrench has torques to scale; other targets keep their units (alpha_ = 1)
+        return alpha_from_wrenches(y) if y.shape[1] == 6 else 1.0
     if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not np.isfinite(alpha) or alpha <= 0:
         raise CalibrationInputError(
             f"alpha must be a positive finite number (Fmax / Tmax in [m⁻¹], eq. 5) or None to derive "
@@ -152,6 +153,8 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         Returns
         -------
         ndarray of shape (n_samples, 6), float64
+            (``(n_samples, k)`` or ``(n_samples,)`` for a calibrator fitted on
+            other targets of that shape.)
         """
         if "n_features_in_" not in self.__dict__:  # cheap test first: predict sits in control loops
             check_is_fitted(self)
@@ -159,7 +162,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         with np.errstate(over="ignore", invalid="ignore"):
             wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)
         check_finite_output(X, wrench, self)
-        return wrench
+        return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
 
     def _retared(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         """``X`` shifted by the re-tare (:meth:`retare`), if any."""

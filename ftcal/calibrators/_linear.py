@@ -79,7 +79,7 @@ class LinearCalibrator(BaseCalibrator):
         if ridge > 0:
             n_channels = X.shape[1]
             xc = np.vstack([xc, np.sqrt(ridge) * np.eye(n_channels)])
-            yc = np.vstack([yc, np.zeros((n_channels, 6))])
+            yc = np.vstack([yc, np.zeros((n_channels, yc.shape[1]))])
         coef, *_ = np.linalg.lstsq(xc, yc, rcond=None)
         self.calibration_matrix_ = coef.T
         self.offset_ = y_mean - self.calibration_matrix_ @ x_mean

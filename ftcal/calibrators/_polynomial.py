@@ -111,4 +111,4 @@ class PolynomialCalibrator(BaseCalibrator):
         monomials = self._monomials()
         u = (X - self.zero_reading_) / self.input_scale_
         out = [monomials.transform(u[i : i + _PREDICT_CHUNK]) @ self.coef_ for i in range(0, len(u), _PREDICT_CHUNK)]
-        return (np.concatenate(out) if out else np.zeros((0, 6))) + self.intercept_
+        return (np.concatenate(out) if out else np.zeros((0, len(self.intercept_)))) + self.intercept_

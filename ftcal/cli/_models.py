@@ -9,7 +9,7 @@ from typing import Any
 
 from ..io._dataset import CalibrationDataset
 from ..core._wrench import alpha_from_wrenches
-from ..models._model_io import MODEL_SUFFIX, model_file_name
+from ..core._files import MODEL_SUFFIX, model_file_name
 from ._common import CliError
 
 __all__ = [

@@ -20,8 +20,17 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json"]
+__all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
+           "model_file_name"]
 
+
+#: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
+MODEL_SUFFIX = ".model.npz"
+
+
+def model_file_name(name: str) -> str:
+    """File name of a fitted model called ``name`` (``directional`` -> ``directional.model.npz``)."""
+    return f"{name}{MODEL_SUFFIX}"
 
 @contextlib.contextmanager
 def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Exception]) -> Iterator[Path]:

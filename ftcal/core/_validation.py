@@ -25,8 +25,6 @@ __all__ = [
     "check_finite_output",
 ]
 
-#: Fewest raw channels a calibrator accepts.
-MIN_CHANNELS = 3
 
 
 def check_all_finite(a: NDArray[np.float64], name: str, fix: str) -> None:
@@ -68,7 +66,7 @@ def _check_real_2d(X, name: str, what: str) -> None:
     if a.dtype.kind in "OUS":
         return  # strings / objects: validate_data converts or reports them
     if a.ndim != 2:
-        hint = f" For one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
+        hint = f" Reshape your data: for one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
         raise CalibrationInputError(
             f"{name} must be a 2-D array of {what} (n_samples, n_columns); got a {a.ndim}-D array of shape "
             f"{a.shape}.{hint}"
@@ -142,12 +140,18 @@ def min_training_samples(n_channels: int) -> int:
 def validate_training_data(
     estimator, X: ArrayLike, y: ArrayLike
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Validate ``fit`` data and set ``estimator.n_features_in_``.
+    """Validate ``fit`` data; set ``n_features_in_``, ``n_outputs_`` and ``y_1d_`` of the estimator.
 
-    Returns ``X`` (n, N) and ``y`` (n, 6) as float64. Checks, in order: both
-    are numeric 2-D arrays of the same length; no NaN/inf in ``X`` then ``y``;
-    ``X`` has at least 3 channels; there are enough samples
-    (:func:`min_training_samples`); ``y`` has 6 columns.
+    Returns ``X`` (n, N) and ``y`` (n, k) as float64. Checks, in order: ``X``
+    is a numeric 2-D array and ``y`` a numeric 1-D or 2-D one of the same
+    length; no NaN/inf in ``X`` then ``y``; there are enough samples
+    (:func:`min_training_samples`); the data identify an affine map.
+
+    A calibrator is a regressor of any outputs: ``y`` is the wrench (n, 6)
+    in ftcal's use, and only then are torques scaled (``alpha_``). The
+    wrench rule (6 components, at least 3 raw channels) is enforced where
+    calibration data enter: :class:`~ftcal.CalibrationDataset` and the CLI.
+    A 1-D ``y`` gives 1-D predictions, as in scikit-learn.
     """
     if y is None:
         raise CalibrationInputError(
@@ -155,7 +159,7 @@ def validate_training_data(
             f"Fix: pass the reference wrenches (n_samples, 6)."
         )
     _check_real_2d(X, "X", "raw readings")
-    if y is not None and np.iscomplexobj(y):
+    if y is not None and np.asarray(y).dtype.kind == "c":
         _check_real_2d(y, "y", "reference wrenches")
     X = validate_data(estimator, X, reset=True, dtype=np.float64, ensure_all_finite=False)
     check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings before fitting")
@@ -164,11 +168,6 @@ def validate_training_data(
     check_consistent_length(X, y)
     check_all_finite(y, "y (reference wrenches)", "remove or repair the rows with missing reference wrenches")
     n, n_channels = X.shape
-    if n_channels < MIN_CHANNELS:
-        raise CalibrationInputError(
-            f"X has {n_channels} feature(s) (raw channels, shape {X.shape}); a 6-axis calibration needs at least "
-            f"{MIN_CHANNELS} raw channels. Fix: pass one column per strain-gauge channel."
-        )
     need = min_training_samples(n_channels)
     if n < need:
         raise CalibrationInputError(
@@ -176,11 +175,14 @@ def validate_training_data(
             f"(n_channels + 1 = {n_channels + 1} for the affine calibration, 7 for the zero-load "
             f"estimate). Fix: record more load cases."
         )
-    if y.ndim != 2 or y.shape[1] != 6:
+    if y.ndim not in (1, 2) or (y.ndim == 2 and y.shape[1] == 0):
         raise CalibrationInputError(
-            f"y must have shape (n_samples, 6): the wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m]; "
-            f"got shape {y.shape}. Fix: pass all six reference wrench components per sample."
+            f"y must have shape (n_samples, 6) (the wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m]) or, for "
+            f"other targets, (n_samples,) or (n_samples, k); got shape {y.shape}."
         )
+    estimator.y_1d_ = y.ndim == 1
+    y = y.reshape(n, -1)
+    estimator.n_outputs_ = y.shape[1]
     check_identifiable(X, y)
     return X, y
 

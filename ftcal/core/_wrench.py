@@ -30,6 +30,11 @@ FORCE = slice(0, 3)
 TORQUE = slice(3, 6)
 
 
+#: Fewest raw channels of a 6-axis calibration (enforced where calibration data enter:
+#: :class:`~ftcal.CalibrationDataset` and the CLI).
+MIN_CHANNELS = 3
+
+
 def alpha_from_wrenches(wrench: ArrayLike) -> float:
     """Torque scale ``alpha = Fmax / Tmax`` [m⁻¹] estimated from wrenches (eq. 5).
 
@@ -68,13 +73,18 @@ def alpha_from_wrenches(wrench: ArrayLike) -> float:
 def scale_torques(wrench: ArrayLike, alpha: float) -> NDArray[np.float64]:
     """Return a copy of ``wrench`` with the torque columns multiplied by ``alpha`` (eq. 6).
 
+    Only a 6-column wrench has torques; targets of another width (a calibrator
+    fitted on other outputs, e.g. by scikit-learn's generic checks) are
+    returned unchanged.
+
     Examples
     --------
     >>> scale_torques([[1.0, 2, 3, 0.1, 0.2, 0.3]], 10.0)
     array([[1., 2., 3., 1., 2., 3.]])
     """
     w = np.array(wrench, dtype=float, copy=True)
-    w[..., TORQUE] *= alpha
+    if w.shape[-1] == 6:
+        w[..., TORQUE] *= alpha
     return w
 
 
@@ -87,5 +97,6 @@ def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
     array([[1. , 2. , 3. , 0.1, 0.2, 0.3]])
     """
     w = np.array(scaled, dtype=float, copy=True)
-    w[..., TORQUE] /= alpha
+    if w.shape[-1] == 6:
+        w[..., TORQUE] /= alpha
     return w

@@ -75,7 +75,7 @@ class DemoResult:
 
 def demo_files(models: tuple[str, ...] = DEMO_MODELS) -> list[str]:
     """Names (relative to the output directory) of every file :func:`run_demo` writes."""
-    from ..models._model_io import model_file_name
+    from ..core._files import model_file_name
     from ._report import EVALUATION_PLOTS, predicted_plot_name
 
     return (
@@ -173,7 +173,7 @@ def _write(out: Path, result: DemoResult, alpha: float) -> list[Path]:
 
     from . import _plots
     from ..core._files import write_json
-    from ..models._model_io import model_file_name
+    from ..core._files import model_file_name
     from ._report import axis_table, predicted_plot_name, write_evaluation_plots, EVALUATION_PLOTS
 
     (out / "models").mkdir(parents=True, exist_ok=True)

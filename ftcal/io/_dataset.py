@@ -27,7 +27,7 @@ from ..core._columns import check_plain_numbers, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
 from ..core._temperature import check_temperature
-from ..core._wrench import WRENCH_LABELS
+from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
 
 __all__ = ["CalibrationDataset"]
 
@@ -110,6 +110,11 @@ class CalibrationDataset:
             setattr(self, name, np.asarray(value, dtype=float))
         if self.raw.ndim != 2:
             raise DatasetFileError(f"raw must be 2-D (n_samples, n_channels); got shape {self.raw.shape}.")
+        if self.raw.shape[1] < MIN_CHANNELS:
+            raise DatasetFileError(
+                f"raw has {self.raw.shape[1]} channel(s) (shape {self.raw.shape}); a 6-axis calibration needs at "
+                f"least {MIN_CHANNELS} raw channels. Fix: one column per strain-gauge channel."
+            )
         if self.wrench.ndim != 2 or self.wrench.shape[1] != 6:
             raise DatasetFileError(f"wrench must have shape (n_samples, 6); got shape {self.wrench.shape}.")
         if self.raw.shape[0] != self.wrench.shape[0]:

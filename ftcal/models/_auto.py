@@ -90,7 +90,7 @@ def score_candidates(
     predictions: list = []
     previous_fold_seconds = 0.0
     for k, (name, template) in enumerate(candidates):
-        status, seconds, pred = "scored", [], np.full((len(X), 6), np.nan)
+        status, seconds, pred = "scored", [], np.full(y.shape, np.nan)
         for i, (train, test) in enumerate(folds):
             # Projected time of the remaining folds: this candidate's own fold time once known, before that the
             # previous candidate's (candidates come cheapest first, so that is a lower bound).

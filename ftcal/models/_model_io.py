@@ -49,27 +49,20 @@ from ..neural_network._base import NetworkCalibrator, device_available
 from ..calibrators._polynomial import PolynomialCalibrator
 from ..calibrators._temperature_compensation import TemperatureCompensatedCalibrator
 
-__all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION", "MODEL_SUFFIX", "model_file_name"]
+__all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION"]
 
 FORMAT = "ftcal-model"
 #: Version of the model-file layout written by :func:`save_model`.
 FORMAT_VERSION = 1
 _META_KEY = "__metadata__"
-#: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
-MODEL_SUFFIX = ".model.npz"
-
-
-def model_file_name(name: str) -> str:
-    """File name of a fitted model called ``name`` (``directional`` -> ``directional.model.npz``)."""
-    return f"{name}{MODEL_SUFFIX}"
-
-
 _HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reason")
 
 #: Fitted attributes stored per model type: (scalars, arrays).
 _MODEL_TYPES: dict[str, tuple[type, tuple[str, ...], tuple[str, ...]]] = {}
 #: Fitted arrays every calibrator may have (files written before they existed lack them).
 _OPTIONAL_ARRAYS = ("reading_noise_", "tare_reading_")
+#: Fitted scalars of every calibrator that older files lack (then: a wrench, 6 outputs, 2-D).
+_OPTIONAL_SCALARS = ("n_outputs_", "y_1d_")
 #: Meta-estimators: the fitted attribute holding their list of fitted sub-models.
 _CHILDREN: dict[str, str] = {}
 
@@ -220,7 +213,8 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
     meta = {
         "model_type": name,
         "params": _stored_params(estimator),
-        "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names},
+        "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names + tuple(
+            k for k in _OPTIONAL_SCALARS if k in estimator.__dict__ and k not in scalar_names)},
     }
     arrays = {f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in array_names}
     arrays.update({f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in _OPTIONAL_ARRAYS if hasattr(estimator, k)})
@@ -364,6 +358,9 @@ def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
     _check_fitted_scalars(name, {k: meta["fitted"][k] for k in scalar_names})
     for k in scalar_names:
         setattr(estimator, k, meta["fitted"][k])
+    for k in _OPTIONAL_SCALARS:
+        if k in meta["fitted"] and k not in scalar_names:
+            setattr(estimator, k, _optional_scalar(name, k, meta["fitted"][k]))
     for k in array_names + tuple(k for k in _OPTIONAL_ARRAYS if f"fitted/{k}" in arrays):
         setattr(estimator, k, arrays[f"fitted/{k}"])
     if isinstance(estimator, NetworkCalibrator):
@@ -378,12 +375,21 @@ def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
     return estimator
 
 
+def _optional_scalar(name: str, key: str, value):
+    """``n_outputs_`` (a positive int) or ``y_1d_`` (a bool) read from a file, checked."""
+    ok = isinstance(value, bool) if key == "y_1d_" else (
+        isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10_000)
+    if not ok:
+        raise ModelFileError(f"{name} model file: fitted {key} is {value!r}, not a valid value; the file is damaged.")
+    return value
+
+
 def _expected_module_shapes(estimator: NetworkCalibrator, n_inputs: int) -> dict[str, tuple[int, ...]]:
     """Shapes of the state_dict the declared ``hidden_layer_sizes`` would build (checked before building it)."""
     sizes = estimator.hidden_layer_sizes
     if not isinstance(sizes, (tuple, list)) or not all(isinstance(w, int) and w >= 1 for w in sizes):
         raise ModelFileError(f"hidden_layer_sizes {sizes!r} is not a tuple of positive widths; the file is damaged.")
-    widths = [n_inputs, *sizes, estimator._module_class.n_outputs]
+    widths = [n_inputs, *sizes, estimator._network_outputs()]
     shapes = {}
     for i in range(len(widths) - 1):
         shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
@@ -410,3 +416,4 @@ def _restore_net(estimator: NetworkCalibrator, meta: dict, arrays: dict[str, np.
     net.module_.load_state_dict(state)
     net.history = History(meta.get("history", []))
     estimator.net_ = net
+    estimator._cache_numpy_layers()

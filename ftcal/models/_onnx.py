@@ -69,7 +69,9 @@ class _Graph:
         y = self.op("MatMul", x, self.const(matrix_t))
         return y if offset is None else self.op("Add", y, self.const(offset))
 
-    def unscale_torques(self, y: str, alpha: float) -> str:
+    def unscale_torques(self, y: str, alpha: float, n_outputs: int) -> str:
+        if n_outputs != 6:  # only a wrench has torques (as in ftcal.core._wrench.unscale_torques)
+            return y
         return self.op("Div", y, self.const([1.0, 1.0, 1.0, alpha, alpha, alpha]))
 
     def columns(self, x: str, start: int, end: int) -> str:
@@ -89,6 +91,11 @@ class _Graph:
 
 
 # ------------------------------------------------------------------------------------ the calibrators
+def _n_outputs(model) -> int:
+    """Output width: 6 for a wrench calibrator (and for model files written before ``n_outputs_`` existed)."""
+    return int(getattr(model, "n_outputs_", 6))
+
+
 def _linear(model, g: _Graph, x: str) -> str:
     return g.affine(x, model.calibration_matrix_.T, model.offset_)
 
@@ -104,6 +111,7 @@ def _polynomial(model, g: _Graph, x: str) -> str:
 def _axis_nonlinear(model, g: _Graph, x: str) -> str:
     z = g.affine(g.op("Sub", x, g.const(model.zero_reading_)), model.base_matrix_.T, model.base_offset_)
     u = g.op("Div", z, g.const(model.axis_scale_))
+    u_width = len(model.axis_scale_)
     parts = [u]
     for power in model.powers:  # signed_power_features, term by term
         a = g.op("Abs", u)
@@ -111,15 +119,15 @@ def _axis_nonlinear(model, g: _Graph, x: str) -> str:
         beyond = g.op("Mul", g.const(power + 1.0), g.op("Max", g.op("Sub", a, g.const(1.0)), g.const(0.0)))
         parts.append(g.op("Mul", g.op("Sign", u), g.op("Add", inside, beyond)))
     block = g.op("Concat", *parts, axis=1)
-    width = len(parts) * 6
+    width = len(parts) * u_width
     previous = z
     for coefs, intercepts in zip(model.coefs_, model.intercepts_):
-        coefs = np.asarray(coefs)  # (6, 2 * width + 1): [block, gate, gate * block] per output
+        coefs = np.asarray(coefs)  # (k, 2 * width + 1): [block, gate, gate * block] per output
         gate = g.op("Cast", g.op("Greater", previous, g.const(0.0)), to=g.onnx.TensorProto.DOUBLE)
         plain = g.affine(block, coefs[:, :width].T)
         gated = g.op("Add", g.affine(block, coefs[:, width + 1:].T), g.const(coefs[:, width]))
         previous = g.op("Add", g.op("Add", plain, g.op("Mul", gate, gated)), g.const(intercepts))
-    return g.unscale_torques(previous, model.alpha_)
+    return g.unscale_torques(previous, model.alpha_, _n_outputs(model))
 
 
 def _gaussian_process(model, g: _Graph, x: str) -> str:
@@ -133,7 +141,7 @@ def _gaussian_process(model, g: _Graph, x: str) -> str:
     residual = g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(model.dual_coef_)), g.const(model.residual_scale_)),
                     g.const(model.residual_mean_))
     mean = g.op("Add", g.affine(xc, model.linear_matrix_.T, model.linear_offset_), residual)
-    return g.unscale_torques(mean, model.alpha_)
+    return g.unscale_torques(mean, model.alpha_, _n_outputs(model))
 
 
 def _directional(model, g: _Graph, x: str) -> str:
@@ -141,8 +149,9 @@ def _directional(model, g: _Graph, x: str) -> str:
     v_in = g.op("ReduceL2", xc, axes=[1], keepdims=1)
     unit = g.op("Where", g.op("Greater", v_in, g.const(0.0)), g.op("Div", xc, v_in), g.const(0.0))
     out = g.mlp(unit, model._numpy_layers())
-    magnitude = g.op("Mul", g.op("Mul", g.columns(out, 6, 7), g.const(model.scale_reference_)), v_in)
-    return g.unscale_torques(g.op("Mul", g.columns(out, 0, 6), magnitude), model.alpha_)
+    k = _n_outputs(model)
+    magnitude = g.op("Mul", g.op("Mul", g.columns(out, k, k + 1), g.const(model.scale_reference_)), v_in)
+    return g.unscale_torques(g.op("Mul", g.columns(out, 0, k), magnitude), model.alpha_, k)
 
 
 def _comparative(model, g: _Graph, x: str) -> str:
@@ -267,7 +276,7 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     graph = onnx.helper.make_graph(
         g.nodes, f"ftcal_{type(model).__name__}",
         [onnx.helper.make_tensor_value_info("readings", double, ["n", n_inputs])],
-        [onnx.helper.make_tensor_value_info("wrench", double, ["n", 6])],
+        [onnx.helper.make_tensor_value_info("wrench", double, ["n", _n_outputs(model)])],
         initializer=g.initializers,
         doc_string=("readings: raw channels (n, N) in the training order"
                     + (", temperature [deg C] last" if type(model).__name__ == "TemperatureCompensatedCalibrator"

@@ -44,8 +44,10 @@ __all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "devi
 _PREDICT_CHUNK = 65536
 #: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
 _NUMPY_FORWARD_ROWS = 256
-#: A net whose best loss exceeds this multiple of the constant (mean) prediction's loss has diverged.
+#: A net whose best loss exceeds this multiple of the loss of predicting zero has diverged.
 _DIVERGENCE_FACTOR = 100.0
+#: Largest finite float32: the networks' arithmetic range.
+_FLOAT32_MAX = float(np.finfo(np.float32).max)
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
 
@@ -214,6 +216,10 @@ class NetworkCalibrator(BaseCalibrator):
         if self.validation_fraction is not None:
             _check_real("validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
 
+    def _network_outputs(self) -> int:
+        """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""
+        raise NotImplementedError
+
     def _seed(self) -> int:
         return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
 
@@ -225,6 +231,7 @@ class NetworkCalibrator(BaseCalibrator):
             module=self._module_class,
             module__n_inputs=n_inputs,
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
+            module__n_outputs=self._network_outputs(),
             criterion=WeightedSquaredError,
             criterion__weights=tuple(self._loss_weights()),
             optimizer=torch.optim.Adam,
@@ -288,14 +295,17 @@ class NetworkCalibrator(BaseCalibrator):
         self.n_epochs_ = len(net.history)
         self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
         self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
-        self.__dict__.pop("_numpy_layers_cache", None)
+        self._cache_numpy_layers()
 
     def _check_converged(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
         """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
 
         Diverged means a NaN or inf loss, or a best loss more than
-        :data:`_DIVERGENCE_FACTOR` times the loss of the constant prediction
-        (the mean target): such a net has learned nothing.
+        :data:`_DIVERGENCE_FACTOR` times the loss of predicting zero (the
+        mean squared target): such a net is worse than no net at all. (The
+        loss of predicting the mean would be too strict a yardstick: the
+        directional model's targets can be nearly constant, e.g. a single
+        positive output, and a short schedule does not beat it 100-fold.)
         """
         fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
         for key in ("train_loss", "valid_loss"):
@@ -306,16 +316,21 @@ class NetworkCalibrator(BaseCalibrator):
                     f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}"
                 )
         weights = np.asarray(self._loss_weights(), dtype=float)
-        constant = float(np.mean(((targets - targets.mean(axis=0)) ** 2) @ weights))
+        nothing = float(np.mean((targets**2) @ weights))
         best = float(dict(net.callbacks_)["restore_best_weights"].best_loss_)
-        if constant > 0 and best > _DIVERGENCE_FACTOR * constant:
+        if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:
             raise CalibrationInputError(
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
-                f"times that of predicting the mean ({constant:.3g}) {fix}"
+                f"times that of predicting zero ({nothing:.3g}) {fix}"
             )
 
+    def _cache_numpy_layers(self) -> None:
+        """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
+        self.__dict__.pop("_numpy_layers_cache", None)
+        self._numpy_layers()
+
     def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
-        """The fitted layers as float32 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
+        """The fitted layers as float64 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
         cached = self.__dict__.get("_numpy_layers_cache")
         if cached is not None and cached[0] is self.net_.module_:
             return cached[1]
@@ -324,7 +339,8 @@ class NetworkCalibrator(BaseCalibrator):
             if isinstance(layer, torch.nn.Linear):
                 if pending is not None:
                     layers.append((*pending, "identity"))
-                pending = (layer.weight.detach().cpu().numpy().T.copy(), layer.bias.detach().cpu().numpy().copy())
+                pending = (layer.weight.detach().cpu().double().numpy().T.copy(),
+                           layer.bias.detach().cpu().double().numpy().copy())
             else:
                 layers.append((*pending, "tanh" if isinstance(layer, torch.nn.Tanh) else "relu"))
                 pending = None
@@ -334,15 +350,28 @@ class NetworkCalibrator(BaseCalibrator):
         return layers
 
     def _forward_numpy(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The forward pass in numpy float32 (the network's precision): no torch dispatch, no thread changes."""
-        h = inputs.astype(np.float32)
+        """The forward pass in numpy with the fitted (float32) weights, computed in float64.
+
+        No torch dispatch, no thread changes. float64 keeps each row's result
+        independent of the other rows (float32 BLAS kernels round a row
+        differently depending on where it sits in the batch); it agrees with
+        the float32 torch pass of large batches to ~1e-7 relative. A row whose
+        inputs or activations leave float32's range gives inf, as the float32
+        pass (and the exported ONNX graph) would, so that ``predict`` refuses
+        it whatever the batch size.
+        """
+        h = inputs
+        overflow = np.abs(h).max(axis=1, initial=0.0) > _FLOAT32_MAX
         for weight, bias, activation in self._numpy_layers():
             h = h @ weight + bias
+            overflow |= np.abs(h).max(axis=1, initial=0.0) > _FLOAT32_MAX
             if activation == "relu":
                 np.maximum(h, 0.0, out=h)
             elif activation == "tanh":
                 np.tanh(h, out=h)
-        return h.astype(np.float64)
+        if overflow.any():
+            h[overflow] = np.inf
+        return h
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
         if inputs.shape[0] <= _NUMPY_FORWARD_ROWS:  # small batches (a control loop): numpy is ~20x cheaper

@@ -100,9 +100,13 @@ class ComparativeCalibrator(NetworkCalibrator):
         self.callbacks = callbacks
         self.device = device
 
+    def _network_outputs(self) -> int:
+        return int(getattr(self, "n_outputs_", 6))
+
     def _loss_weights(self) -> list[float]:
-        eq10 = np.ones(6)
-        eq10[TORQUE] = self.alpha_
+        eq10 = np.ones(self._network_outputs())
+        if len(eq10) == 6:  # a wrench: torques weighted by alpha_ (eq. 10)
+            eq10[TORQUE] = self.alpha_
         weights = eq10 * self.target_scale_**2
         return list(weights / weights.mean())
 

@@ -180,8 +180,11 @@ class DirectionalCalibrator(NetworkCalibrator):
         self.callbacks = callbacks
         self.device = device
 
+    def _network_outputs(self) -> int:
+        return int(getattr(self, "n_outputs_", 6)) + 1  # the direction and the scale
+
     def _loss_weights(self) -> list[float]:
-        return [1.0] * 7  # eq. 9: direction (6) and normalised scale (1) alike
+        return [1.0] * self._network_outputs()  # eq. 9: direction (6) and normalised scale (1) alike
 
     def _training_pairs(self, X, y):
         threshold = _check_real("min_relative_magnitude", self.min_relative_magnitude, 0.0, 1.0)
@@ -214,11 +217,9 @@ class DirectionalCalibrator(NetworkCalibrator):
         # the input norm is computed once (eq. 3) and serves both the unit input and the decoding (III-B)
         v_in, unit = _unit_rows(X - self.zero_reading_)
         outputs = self._forward(unit)
-        scaled = outputs[:, :6] * (outputs[:, 6] * self.scale_reference_ * v_in)[:, None]
-        scaled[:, 3:] /= self.alpha_
-        return scaled
+        return unscale_torques(outputs[:, :-1] * (outputs[:, -1] * self.scale_reference_ * v_in)[:, None], self.alpha_)
 
     def _decode(self, outputs, X):
         v_in = np.linalg.norm(X - self.zero_reading_, axis=1)
-        magnitude = outputs[:, 6] * self.scale_reference_ * v_in
-        return unscale_torques(magnitude[:, None] * outputs[:, :6], self.alpha_)
+        magnitude = outputs[:, -1] * self.scale_reference_ * v_in
+        return unscale_torques(magnitude[:, None] * outputs[:, :-1], self.alpha_)

@@ -43,26 +43,25 @@ def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_h
 
 
 class DirectionalNet(nn.Module):
-    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)]."""
+    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)].
 
-    n_outputs = 7
+    ``n_outputs`` is 7 for a wrench (k + 1 for k targets).
+    """
 
-    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
+    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64), n_outputs: int = 7):
         super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, self.n_outputs, nn.Tanh)
+        self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, nn.Tanh)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.layers(x)
 
 
 class ComparativeNet(nn.Module):
-    """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6)."""
+    """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6, or k targets)."""
 
-    n_outputs = 6
-
-    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64)):
+    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64), n_outputs: int = 6):
         super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, self.n_outputs, nn.ReLU)
+        self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, nn.ReLU)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         return self.layers(x)
