@@ -98,9 +98,10 @@ def test_auto_model_file_round_trip(tmp_path):
     [
         ({}, np.zeros(10), r"groups must have shape \(300,\)"),
         ({}, np.zeros(300), "one group only"),
-        ({"time_budget": 0}, None, "time_budget must be a positive number"),
+        ({"time_budget": 0}, None, r"'time_budget' parameter of AutoCalibrator must be a float in the range "
+                                   r"\(0(\.0)?, inf\) or None\. Got 0 instead"),
         ({"candidates": []}, None, "candidates must be a non-empty list"),
-        ({"cv": 1}, None, "cv must be an integer >= 2"),
+        ({"cv": 1}, None, r"'cv' parameter of AutoCalibrator must be an int in the range \[2, inf\)\. Got 1 instead"),
     ],
 )
 def test_auto_bad_input(kwargs, fit_groups, message):
@@ -195,7 +196,8 @@ def test_gp_model_file_round_trip(tmp_path):
 
 def test_gp_bad_parameters():
     raw, w = smooth_data(100, seed=1)
-    with pytest.raises(CalibrationInputError, match="max_samples must be an integer >= 10"):
+    with pytest.raises(CalibrationInputError, match=r"'max_samples' parameter of GaussianProcessCalibrator must be an "
+                                                     r"int in the range \[10, inf\)\. Got 0 instead"):
         GaussianProcessCalibrator(max_samples=0).fit(raw, w)
 
 

@@ -97,7 +97,9 @@ def test_zero_reading_of_wrong_shape(tiny_calibrator, data):
 
 @pytest.mark.parametrize("alpha", [-1.0, 0.0, np.nan, "50"])
 def test_bad_alpha(data, alpha):
-    with pytest.raises(CalibrationInputError, match="alpha must be a positive finite number"):
+    # the parameter table (_parameter_constraints): named parameter, allowed range, value given
+    with pytest.raises(CalibrationInputError, match=r"The 'alpha' parameter of LinearCalibrator must be a float in the "
+                                                     r"range \(0(\.0)?, inf\) or None\. Got .* instead"):
         LinearCalibrator(alpha=alpha).fit(*data)
 
 
@@ -106,10 +108,13 @@ def test_bad_alpha(data, alpha):
     [
         (dict(hidden_layer_sizes=()), "hidden_layer_sizes must be a non-empty tuple"),
         (dict(hidden_layer_sizes=(8, 0)), "each entry of hidden_layer_sizes must be an integer >= 1"),
-        (dict(max_epochs=0), "max_epochs must be an integer >= 1"),
-        (dict(lr=-0.1), r"lr must be a number in \(0.0"),
-        (dict(validation_fraction=0.9), r"validation_fraction must be a number in \(0.0, 0.5\]"),
-        (dict(min_relative_magnitude=2.0), "min_relative_magnitude must be a number"),
+        (dict(max_epochs=0), r"'max_epochs' parameter of DirectionalCalibrator must be an int in the range \[1, inf\)\. "
+                             "Got 0 instead"),
+        (dict(lr=-0.1), r"'lr' parameter of DirectionalCalibrator must be a float in the range \(0(\.0)?, inf\)\. "
+                        "Got -0.1 instead"),
+        (dict(validation_fraction=0.9), r"'validation_fraction' parameter .* range \(0(\.0)?, 0\.5\] or None\. Got 0\.9"),
+        (dict(min_relative_magnitude=2.0), r"'min_relative_magnitude' parameter .* range \[0(\.0)?, 1(\.0)?\]\. Got 2\.0"),
+        (dict(max_epochs=True), r"'max_epochs' parameter .* Got True instead"),
     ],
 )
 def test_bad_network_parameters(data, params, message):
@@ -118,7 +123,8 @@ def test_bad_network_parameters(data, params, message):
 
 
 def test_bad_ridge(data):
-    with pytest.raises(CalibrationInputError, match="ridge must be a finite number >= 0"):
+    with pytest.raises(CalibrationInputError, match=r"The 'ridge' parameter of LinearCalibrator must be a float in the "
+                                                     r"range \[0(\.0)?, inf\)\. Got -1\.0 instead"):
         LinearCalibrator(ridge=-1.0).fit(*data)
 
 

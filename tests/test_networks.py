@@ -161,7 +161,8 @@ def test_extra_callbacks_run_every_epoch_and_are_not_saved(cls, tmp_path):
 
 def test_callbacks_must_be_a_list():
     raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
-    with pytest.raises(ValueError, match="callbacks must be None or a list"):
+    with pytest.raises(ValueError, match=r"'callbacks' parameter of DirectionalCalibrator must be an instance of "
+                                         r"'list', an instance of 'tuple' or None\. Got 'progress' instead"):
         DirectionalCalibrator(**TINY_SCHEDULE, callbacks="progress").fit(raw, wrench)
 
 

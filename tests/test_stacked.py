@@ -155,7 +155,8 @@ def test_bad_stacks_are_clear_errors(estimators, X_kind, match):
 
 def test_ensemble_needs_at_least_one_member():
     X, y = _data(60, 0)
-    with pytest.raises(CalibrationInputError, match="n_members must be an integer >= 1; got 0"):
+    with pytest.raises(CalibrationInputError, match=r"'n_members' parameter of EnsembleCalibrator must be an int in "
+                                                     r"the range \[1, inf\)\. Got 0 instead"):
         EnsembleCalibrator(DirectionalCalibrator(), n_members=0).fit(X, y)
 
 

@@ -3,10 +3,11 @@
 from __future__ import annotations
 
 import math
-import numbers
+from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.utils._param_validation import Interval, Options, StrOptions
 
 from ._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
@@ -62,14 +63,6 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
         if diff.mean() <= diff.std(ddof=1) / np.sqrt(diff.size):
             return k
     return best
-
-
-def _check_number(name: str, value, low: float, *, integer: bool = False) -> float:
-    kind = numbers.Integral if integer else numbers.Real
-    if isinstance(value, bool) or not isinstance(value, kind) or not np.isfinite(value) or value < low:
-        what = "an integer" if integer else "a finite number"
-        raise CalibrationInputError(f"{name} must be {what} >= {low}; got {value!r}.")
-    return value
 
 
 class AxisNonlinearCalibrator(BaseCalibrator):
@@ -192,6 +185,13 @@ class AxisNonlinearCalibrator(BaseCalibrator):
     True
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "powers": [tuple, list],
+        "ridge": [StrOptions({"auto"}), Interval(Real, 0, None, closed="left"), Options(Real, {np.inf})],
+        "n_refinements": [Interval(Integral, 0, None, closed="left")],
+    }
+
     def __init__(self, *, powers=(1.5,), ridge="auto", n_refinements=1, alpha=None, zero_reading=None,
                  random_state=None):
         self.powers = powers
@@ -221,24 +221,10 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         finally:
             del self._fit_groups
 
-    def _check_params(self) -> tuple[tuple[float, ...], float | str, int]:
-        powers = self.powers
-        if not isinstance(powers, (tuple, list)):
-            raise CalibrationInputError(f"powers must be a tuple of exponents > 0, e.g. (1.5,); got {powers!r}.")
-        for p in powers:
-            if isinstance(p, bool) or not isinstance(p, numbers.Real) or not np.isfinite(p) or p <= 0:
+    def _check_params(self) -> None:
+        for p in self.powers:  # the table checks that powers is array-like; its entries here
+            if isinstance(p, bool) or not isinstance(p, Real) or not np.isfinite(p) or p <= 0:
                 raise CalibrationInputError(f"each entry of powers must be a finite number > 0; got {p!r}.")
-        r = self.ridge
-        if isinstance(r, str):
-            if r != "auto":
-                raise CalibrationInputError(f"ridge must be a number >= 0 (inf allowed) or 'auto'; got {r!r}.")
-            ridge = "auto"
-        elif isinstance(r, bool) or not isinstance(r, numbers.Real) or np.isnan(r) or r < 0:
-            raise CalibrationInputError(f"ridge must be a number >= 0 (inf allowed) or 'auto'; got {r!r}.")
-        else:
-            ridge = float(r)
-        n_ref = int(_check_number("n_refinements", self.n_refinements, 0, integer=True))
-        return tuple(float(p) for p in powers), ridge, n_ref
 
     def _block(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
         """Per-axis features ``[u, u|u|^p for p in powers]`` of the normalised linear base."""
@@ -251,7 +237,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         return np.hstack([block, g, block * g])
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        _, ridge, n_ref = self._check_params()
+        ridge = self.ridge if isinstance(self.ridge, str) else float(self.ridge)
+        n_ref = int(self.n_refinements)
         ys = scale_torques(y, self.alpha_)
         xc = X - self.zero_reading_
         coef, *_ = np.linalg.lstsq(np.hstack([xc, np.ones((len(xc), 1))]), ys, rcond=None)

@@ -25,10 +25,12 @@ common, so each model only implements ``_fit(X, y)`` and
 from __future__ import annotations
 
 import numbers
+from numbers import Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils._param_validation import InvalidParameterError, Interval
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
@@ -58,7 +60,41 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     Subclasses implement ``_fit(X, y)`` (``X`` float64 (n, N), ``y`` float64
     (n, 6) in [N] / [N·m]; ``alpha_`` and ``zero_reading_`` already set) and
     ``_predict_wrench(X)`` returning (n, 6) in [N] / [N·m].
+
+    **Parameters** are declared, as in scikit-learn, in a class table
+    ``_parameter_constraints`` (name -> allowed types and ranges, see
+    ``sklearn.utils._param_validation``), extended by each subclass and
+    checked once, at the start of ``fit`` (:meth:`_check_parameters`); a
+    bad value raises :class:`~ftcal.CalibrationInputError` naming the
+    parameter, the allowed values and the value given. Checks a table cannot
+    express (the entries of ``hidden_layer_sizes``) follow it in
+    ``_check_params`` of the subclass.
     """
+
+    _parameter_constraints: dict = {
+        "alpha": [Interval(Real, 0, None, closed="neither"), None],
+        "zero_reading": ["array-like", None],
+        "random_state": ["random_state"],
+    }
+
+    def _check_parameters(self) -> None:
+        """Check every parameter against ``_parameter_constraints`` (and the subclass' ``_check_params``)."""
+        try:
+            self._validate_params()
+        except InvalidParameterError as exc:
+            raise CalibrationInputError(str(exc)) from None
+        for name, value in self.get_params(deep=False).items():
+            # scikit-learn's intervals take True for 1: a flag where a number belongs is a mistake
+            allowed = [c for c in self._parameter_constraints.get(name, ["boolean"]) if c is not None]
+            if isinstance(value, bool) and allowed and all(isinstance(c, Interval) for c in allowed):
+                raise CalibrationInputError(
+                    f"The {name!r} parameter of {type(self).__name__} must be a number, not a bool. Got {value!r} "
+                    "instead."
+                )
+        self._check_params()
+
+    def _check_params(self) -> None:
+        """Checks beyond the table (none by default)."""
 
     def fit(self, X: ArrayLike, y: ArrayLike):
         """Fit the calibration on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
@@ -67,6 +103,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         -------
         self
         """
+        self._check_parameters()
         X, y = validate_training_data(self, X, y)
         # One BLAS thread: the least-squares problems are tall and thin; on a busy 2-core machine
         # threaded OpenBLAS made a 5000-sample fit ~300x slower (0.25 s instead of < 1 ms).

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import numbers
+from numbers import Integral
 import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from sklearn.utils._param_validation import Interval
 from scipy.linalg import solve_triangular
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
@@ -16,7 +17,6 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator
-from ..core._exceptions import CalibrationInputError
 from ..core._validation import check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -110,6 +110,12 @@ class GaussianProcessCalibrator(BaseCalibrator):
     ((2, 6), (2, 6), True)
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "max_samples": [Interval(Integral, 10, None, closed="left")],
+        "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
+    }
+
     def __init__(self, *, max_samples=1000, n_restarts_optimizer=0, alpha=None, zero_reading=None,
                  random_state=None):
         self.max_samples = max_samples
@@ -118,14 +124,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
-    def _check_params(self) -> None:
-        for name, low in (("max_samples", 10), ("n_restarts_optimizer", 0)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < low:
-                raise CalibrationInputError(f"{name} must be an integer >= {low}; got {value!r}.")
-
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        self._check_params()
         xc = X - self.zero_reading_
         ys = scale_torques(y, self.alpha_)
         coef, *_ = np.linalg.lstsq(np.hstack([xc, np.ones((len(xc), 1))]), ys, rcond=None)

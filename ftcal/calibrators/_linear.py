@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import numbers
+from numbers import Real
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.utils._param_validation import Interval
 
 from ._base import BaseCalibrator
-from ..core._exceptions import CalibrationInputError
 
 __all__ = ["LinearCalibrator"]
 
@@ -62,6 +62,11 @@ class LinearCalibrator(BaseCalibrator):
     (True, True)
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "ridge": [Interval(Real, 0, None, closed="left")],
+    }
+
     def __init__(self, *, ridge=0.0, alpha=None, zero_reading=None, random_state=None):
         self.ridge = ridge
         self.alpha = alpha
@@ -69,9 +74,7 @@ class LinearCalibrator(BaseCalibrator):
         self.random_state = random_state
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        ridge = self.ridge
-        if isinstance(ridge, bool) or not isinstance(ridge, numbers.Real) or not np.isfinite(ridge) or ridge < 0:
-            raise CalibrationInputError(f"ridge must be a finite number >= 0; got {ridge!r}.")
+        ridge = float(self.ridge)
         x_mean = X.mean(axis=0)
         y_mean = y.mean(axis=0)
         xc = X - x_mean

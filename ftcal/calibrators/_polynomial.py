@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-import numbers
+from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.utils._param_validation import Interval
 from sklearn.preprocessing import PolynomialFeatures
 
 from ._base import BaseCalibrator
-from ..core._exceptions import CalibrationInputError
 from ._ridge import ridge_least_squares
 
 __all__ = ["PolynomialCalibrator"]
@@ -84,6 +84,12 @@ class PolynomialCalibrator(BaseCalibrator):
     True
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "degree": [Interval(Integral, 1, 5, closed="both")],
+        "ridge": [Interval(Real, 0, None, closed="left")],
+    }
+
     def __init__(self, *, degree=3, ridge=1e-4, alpha=None, zero_reading=None, random_state=None):
         self.degree = degree
         self.ridge = ridge
@@ -96,11 +102,7 @@ class PolynomialCalibrator(BaseCalibrator):
         return PolynomialFeatures(int(self.degree), include_bias=False).fit(np.zeros((1, self.n_features_in_)))
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        degree, ridge = self.degree, self.ridge
-        if isinstance(degree, bool) or not isinstance(degree, numbers.Integral) or not 1 <= degree <= 5:
-            raise CalibrationInputError(f"degree must be an integer from 1 (the LTM) to 5; got {degree!r}.")
-        if isinstance(ridge, bool) or not isinstance(ridge, numbers.Real) or not np.isfinite(ridge) or ridge < 0:
-            raise CalibrationInputError(f"ridge must be a finite number >= 0; got {ridge!r}.")
+        ridge = float(self.ridge)
         xc = X - self.zero_reading_
         scale = np.abs(xc).max(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)

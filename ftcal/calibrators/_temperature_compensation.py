@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
-import numbers
+from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import clone
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ._base import BaseCalibrator
@@ -73,6 +74,13 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     (array([0.02, 0.02, 0.02, 0.02, 0.02, 0.02]), array([0.002, 0.002, 0.002, 0.002, 0.002, 0.002]))
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "estimator": [BaseCalibrator, None],
+        "reference_temperature": [Interval(Real, -273.15, None, closed="neither")],
+        "n_iterations": [Interval(Integral, 1, None, closed="left")],
+    }
+
     def __init__(self, estimator=None, *, reference_temperature=REFERENCE_TEMPERATURE, n_iterations=5,
                  alpha=None, zero_reading=None, random_state=None):
         self.estimator = estimator
@@ -102,12 +110,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         -------
         self
         """
-        t0 = self.reference_temperature
-        if isinstance(t0, bool) or not isinstance(t0, numbers.Real) or not np.isfinite(t0):
-            raise CalibrationInputError(f"reference_temperature must be a finite number in deg C; got {t0!r}.")
-        n_it = self.n_iterations
-        if isinstance(n_it, bool) or not isinstance(n_it, numbers.Integral) or n_it < 1:
-            raise CalibrationInputError(f"n_iterations must be an integer >= 1; got {n_it!r}.")
+        self._check_parameters()
+        t0 = float(self.reference_temperature)
         X, y = validate_training_data(self, X, y)
         raw, temperature = self._split(X)
         dt = temperature - t0
@@ -124,7 +128,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         design = design / np.where(scale > 0, scale, 1.0)
         gain = np.zeros(raw.shape[1])
         offset = np.zeros(raw.shape[1])
-        for _ in range(int(n_it)):
+        for _ in range(int(self.n_iterations)):
             for c in range(raw.shape[1]):
                 # raw_c = f_c(w) (1 + g ΔT) + o ΔT, with f_c = design @ beta: linear in beta for fixed g ...
                 a = design * (1.0 + gain[c] * dt)[:, None]

@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import inspect
-import numbers
+from numbers import Integral, Real
 import time
 import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import clone
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..calibrators._base import BaseCalibrator, _resolve_alpha
 from ..core._exceptions import CalibrationInputError
@@ -224,6 +225,14 @@ class AutoCalibrator(BaseCalibrator):
     'linear'
     """
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "candidates": [list, tuple, None],
+        "cv": [Interval(Integral, 2, None, closed="left")],
+        "time_budget": [Interval(Real, 0, None, closed="neither"), None],
+        "schedule": [StrOptions({"short", "thesis"})],
+    }
+
     def __init__(self, *, candidates=None, cv=5, time_budget=150.0, schedule="short", alpha=None,
                  zero_reading=None, random_state=None):
         self.candidates = candidates
@@ -236,8 +245,6 @@ class AutoCalibrator(BaseCalibrator):
 
     def _candidates(self) -> list[tuple[str, BaseCalibrator]]:
         if self.candidates is None:
-            if self.schedule not in ("short", "thesis"):
-                raise CalibrationInputError(f"schedule must be 'short' or 'thesis'; got {self.schedule!r}.")
             return default_candidates(self.schedule)
         pairs = list(self.candidates)
         if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[1], BaseCalibrator)
@@ -248,14 +255,6 @@ class AutoCalibrator(BaseCalibrator):
                 f"{self.candidates!r:.120}."
             )
         return pairs
-
-    def _check_params(self) -> None:
-        budget = self.time_budget
-        if budget is not None and (isinstance(budget, bool) or not isinstance(budget, numbers.Real)
-                                   or not np.isfinite(budget) or budget <= 0):
-            raise CalibrationInputError(
-                f"time_budget must be a positive number of seconds or None (no limit); got {budget!r}."
-            )
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Cross-validate the candidates on ``X`` (n, N), ``y`` (n, 6), refit the best on all rows.
@@ -269,7 +268,7 @@ class AutoCalibrator(BaseCalibrator):
         -------
         self
         """
-        self._check_params()
+        self._check_parameters()
         candidates = self._candidates()
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))

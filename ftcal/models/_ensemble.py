@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import inspect
-import numbers
+from numbers import Integral
 from collections.abc import Callable
 
 import numpy as np
@@ -11,6 +11,7 @@ from joblib import Parallel, delayed
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import clone
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval
 
 from ..calibrators._base import BaseCalibrator
 from ..neural_network._directional import DirectionalCalibrator
@@ -91,6 +92,13 @@ class EnsembleCalibrator(BaseCalibrator):
     True
     """
 
+    _parameter_constraints: dict = {
+        "estimator": [BaseCalibrator, None],
+        "n_members": [Interval(Integral, 1, None, closed="left")],
+        "n_jobs": [Integral, None],
+        "random_state": ["random_state"],
+    }
+
     def __init__(self, estimator=None, *, n_members=5, n_jobs=None, random_state=None):
         self.estimator = estimator
         self.n_members = n_members
@@ -112,9 +120,8 @@ class EnsembleCalibrator(BaseCalibrator):
         -------
         self
         """
+        self._check_parameters()
         n = self.n_members
-        if isinstance(n, bool) or not isinstance(n, numbers.Integral) or n < 1:
-            raise CalibrationInputError(f"n_members must be an integer >= 1; got {n!r}.")
         template = self._template()
         X, y = validate_training_data(self, X, y)
         rng = check_random_state(self.random_state)

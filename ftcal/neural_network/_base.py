@@ -22,6 +22,7 @@ loss weights, and how readings/wrenches map to network inputs/targets.
 from __future__ import annotations
 
 import numbers
+from numbers import Integral, Real
 import signal
 import threading
 from collections.abc import Iterator
@@ -33,6 +34,7 @@ from numpy.typing import NDArray
 from skorch import NeuralNetRegressor
 from skorch.dataset import ValidSplit
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
@@ -192,29 +194,33 @@ class NetworkCalibrator(BaseCalibrator):
     #: Parameters that only affect one training run and are not stored in model files.
     _transient_params: tuple[str, ...] = ("callbacks",)
 
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "hidden_layer_sizes": [tuple, list],
+        "lr": [Interval(Real, 0, None, closed="neither")],
+        "batch_size": [Interval(Integral, 1, None, closed="left")],
+        "max_epochs": [Interval(Integral, 1, None, closed="left")],
+        "plateau_epochs": [Interval(Integral, 0, None, closed="left")],
+        "plateau_patience": [Interval(Integral, 0, None, closed="left")],
+        "plateau_factor": [Interval(Real, 0, 1, closed="right")],
+        "min_lr": [Interval(Real, 0, None, closed="left")],
+        "recover_tolerance": [Interval(Real, 0, None, closed="left")],
+        "max_recover_epochs": [Interval(Integral, 0, None, closed="left")],
+        "validation_fraction": [Interval(Real, 0, 0.5, closed="right"), None],
+        "verbose": ["verbose"],
+        "callbacks": [list, tuple, None],
+        "device": [str],
+    }
+
     def _check_params(self) -> None:
+        """What the table cannot say: the layer widths are positive integers, and there is at least one."""
         sizes = self.hidden_layer_sizes
-        if not isinstance(sizes, (tuple, list)) or len(sizes) == 0:
+        if len(sizes) == 0:
             raise CalibrationInputError(
                 f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); got {sizes!r}."
             )
         for width in sizes:
             _check_int("each entry of hidden_layer_sizes", width, 1)
-        _check_real("lr", self.lr, 0.0, np.inf, low_open=True)
-        _check_int("batch_size", self.batch_size, 1)
-        _check_int("max_epochs", self.max_epochs, 1)
-        _check_int("plateau_epochs", self.plateau_epochs, 0)
-        _check_int("plateau_patience", self.plateau_patience, 0)
-        _check_real("plateau_factor", self.plateau_factor, 0.0, 1.0, low_open=True)
-        _check_real("min_lr", self.min_lr, 0.0, np.inf)
-        _check_real("recover_tolerance", self.recover_tolerance, 0.0, np.inf)
-        _check_int("max_recover_epochs", self.max_recover_epochs, 0)
-        if self.callbacks is not None and not isinstance(self.callbacks, (list, tuple)):
-            raise CalibrationInputError(
-                f"callbacks must be None or a list of skorch callbacks or (name, callback) pairs; got {self.callbacks!r}."
-            )
-        if self.validation_fraction is not None:
-            _check_real("validation_fraction", self.validation_fraction, 0.0, 0.5, low_open=True)
 
     def _network_outputs(self) -> int:
         """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""
@@ -263,8 +269,7 @@ class NetworkCalibrator(BaseCalibrator):
         Shared by :meth:`_fit` and :func:`ftcal.fit_stacked` (several nets trained as one module).
         Returns ``(inputs, targets, seed, net)``, inputs and targets float64.
         """
-        self._check_params()
-        if not isinstance(self.device, str) or not device_available(self.device):
+        if not device_available(self.device):
             raise CalibrationInputError(
                 f"device={self.device!r} is not available on this machine (this torch build has "
                 f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."

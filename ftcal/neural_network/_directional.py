@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import warnings
+from numbers import Real
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.utils._param_validation import Interval
 
 from ..core._exceptions import CalibrationInputError
-from ._base import NetworkCalibrator, _check_real
+from ._base import NetworkCalibrator
 from ._modules import DirectionalNet
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -138,6 +140,10 @@ class DirectionalCalibrator(NetworkCalibrator):
     """
 
     _module_class = DirectionalNet
+    _parameter_constraints: dict = {
+        **NetworkCalibrator._parameter_constraints,
+        "min_relative_magnitude": [Interval(Real, 0, 1, closed="both")],
+    }
 
     def __init__(
         self,
@@ -187,7 +193,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         return [1.0] * self._network_outputs()  # eq. 9: direction (6) and normalised scale (1) alike
 
     def _training_pairs(self, X, y):
-        threshold = _check_real("min_relative_magnitude", self.min_relative_magnitude, 0.0, 1.0)
+        threshold = float(self.min_relative_magnitude)
         v_in, unit_in = _unit_rows(X - self.zero_reading_)
         v_out, unit_out = _unit_rows(scale_torques(y, self.alpha_))
         keep = (v_in > threshold * v_in.max()) & (v_out > threshold * v_out.max())

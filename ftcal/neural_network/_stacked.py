@@ -30,7 +30,7 @@ from collections.abc import Sequence
 
 import numpy as np
 import torch
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
 from skorch.history import History
 from threadpoolctl import threadpool_limits
 
@@ -403,6 +403,7 @@ def fit_stacked(
     members = []
     with threadpool_limits(1, user_api="blas"):
         for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators))):
+            est._check_parameters()
             X_k, y_k = validate_training_data(est, X_k, y_k)
             est._fit_scale_and_tare(X_k, y_k)
             members.append(_Member(est, *est._training_setup(X_k, y_k)))
