@@ -39,8 +39,8 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
-from ftcal.evaluation._benchmark_artificial import wilcoxon_pvalue
-from ftcal.core._files import plain_json
+from ftcal.core import plain_json
+from ftcal.evaluation import wilcoxon_pvalue
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "beyond"
 HYBRID = "axis_nonlinear"

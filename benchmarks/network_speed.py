@@ -31,7 +31,7 @@ from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 import ftcal
-from ftcal.neural_network._modules import DirectionalNet, WeightedSquaredError
+from ftcal.neural_network import DirectionalNet, WeightedSquaredError
 
 
 def data(n: int, seed: int):
@@ -66,7 +66,12 @@ def main(argv=None) -> int:
                                            alpha=50.0, random_state=0).fit(raw, w)
 
     model = ftcal_fit()  # warm-up; also provides the directional inputs/targets for the plain net
-    inputs, targets = model._training_pairs(raw, w)  # the same network inputs and targets as the calibrator
+    # the same network inputs and targets as the calibrator's (thesis eq. 3-8, scale normalised as documented)
+    inputs = model.network_inputs(raw)
+    scaled = ftcal.scale_torques(w, model.alpha_)
+    magnitude = np.linalg.norm(scaled, axis=1, keepdims=True)
+    v_in = np.linalg.norm(raw - model.zero_reading_, axis=1, keepdims=True)
+    targets = np.hstack([scaled / magnitude, magnitude / v_in / model.scale_reference_])
 
     def plain_fit():
         torch.manual_seed(0)
@@ -93,7 +98,7 @@ def main(argv=None) -> int:
     ltm = ftcal.wrench_rmse(test_w, ftcal.LinearCalibrator(alpha=50.0).fit(raw, w).predict(test_raw), alpha=50.0)
 
     one = test_raw[:1].copy()
-    layers = model._numpy_layers()
+    layers = [(w.astype(np.float32), b.astype(np.float32), a) for w, b, a in model.fitted_layers()]  # the float32 floor
 
     def numpy_forward(x):
         h = x.astype(np.float32)
@@ -105,11 +110,11 @@ def main(argv=None) -> int:
                 np.tanh(h, out=h)
         return h
 
-    unit_one = model._network_inputs(one)
+    unit_one = model.network_inputs(one)
     lat_numpy, _ = median_time(lambda: numpy_forward(unit_one), args.latency_calls)
     lat_predict, _ = median_time(lambda: model.predict(one), args.latency_calls)
     big = np.repeat(test_raw, 50, axis=0)
-    unit_big = model._network_inputs(big)
+    unit_big = model.network_inputs(big)
     with threadpool_limits(1):
         thr_numpy, _ = median_time(lambda: numpy_forward(unit_big), 5)
         thr_predict, _ = median_time(lambda: model.predict(big), 5)

@@ -18,7 +18,7 @@ from pathlib import Path
 import torch
 
 from ftcal import CALIBRATOR_NAMES, run_real_world_benchmark
-from ftcal.evaluation._benchmark_real_world import SPLIT_NAMES
+from ftcal.evaluation import SPLIT_NAMES
 
 HERE = Path(__file__).resolve().parent
 

@@ -37,9 +37,9 @@ import numpy as np
 from joblib import Parallel, delayed
 
 from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
-from ftcal.evaluation._benchmark_artificial import _fmt as _mean_pm_std, _mean_std, _seeds, wilcoxon_pvalue
-from ftcal.core._files import plain_json
-from ftcal.models._search import search_summary
+from ftcal.core import mean_std, plain_json
+from ftcal.evaluation import dataset_seeds, format_mean_std, wilcoxon_pvalue
+from ftcal.models import search_summary
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "tune_networks"
 OUTPUTS = ("tune_networks.json", "tune_networks.md")
@@ -81,7 +81,7 @@ def _validate_one(preset: str, model: str, params: dict, index: int, args) -> fl
     import torch
 
     torch.set_num_threads(1)
-    data_seed, model_seed = _seeds(args.seed, index)
+    data_seed, model_seed = dataset_seeds(args.seed, index)
     profile = SensorProfile.default()
     train, test, _ = make_artificial_dataset(preset, random_state=data_seed, profile=profile,
                                              n_per_sphere=args.n_per_sphere)
@@ -113,7 +113,7 @@ def tune_one(preset: str, model: str, args) -> dict:
         for params in ({}, best) for i in range(args.validate))
     default_rmse, tuned_rmse = runs[:args.validate], runs[args.validate:]
     p_value, note = wilcoxon_pvalue(tuned_rmse, default_rmse)
-    default, tuned = _mean_std(default_rmse), _mean_std(tuned_rmse)
+    default, tuned = mean_std(default_rmse, ddof=1), mean_std(tuned_rmse, ddof=1)
     return {
         "preset": preset, "model": model, "search": summary, "search_seconds": search_seconds,
         "validate_seconds": time.perf_counter() - start,
@@ -124,7 +124,7 @@ def tune_one(preset: str, model: str, args) -> dict:
 
 
 def _fmt(stat: dict) -> str:
-    return f"{_mean_pm_std(stat, 3)} (n={stat['n']})"
+    return f"{format_mean_std(stat, 3)} (n={stat['n']})"
 
 
 def markdown(rows: list[dict], command: str, seconds: float) -> str:

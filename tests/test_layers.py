@@ -78,3 +78,17 @@ def test_every_module_lives_in_a_layer_package():
 def test_the_public_names_resolve():
     for name in ftcal.__all__:
         assert getattr(ftcal, name) is not None
+
+
+def test_benchmark_scripts_use_only_public_names():
+    """The scripts in benchmarks/ are thin callers of the library: no ``ftcal._x`` module, no ``_private`` name."""
+    scripts = sorted((PACKAGE.parent / "benchmarks").glob("*.py"))
+    assert scripts
+    for path in scripts:
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("ftcal"):
+                private = [p for p in node.module.split(".") if p.startswith("_")]
+                private += [a.name for a in node.names if a.name.startswith("_")]
+                assert not private, f"{path.name}:{node.lineno} imports private {private} from {node.module}"
+            elif isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__"):
+                raise AssertionError(f"{path.name}:{node.lineno} uses the private attribute .{node.attr}")

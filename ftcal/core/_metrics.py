@@ -34,6 +34,7 @@ __all__ = [
     "CalibrationReport",
     "calibration_report",
     "neg_scaled_rmse",
+    "mean_std",
 ]
 
 
@@ -169,10 +170,27 @@ class CalibrationReport:
         return asdict(self)
 
 
-def _mean_std(a: NDArray[np.float64]) -> tuple[float, float]:
-    if a.size == 0:
-        return float("nan"), float("nan")
-    return float(np.mean(a)), float(np.std(a))
+def mean_std(values: ArrayLike, *, ddof: int) -> dict:
+    """Mean, standard deviation and count of the finite entries of ``values`` (NaN, inf and None left out).
+
+    The one mean/std of ftcal: ``ddof=0`` for the spread of a whole test set
+    (per-sample errors, Tables III-IV "within the dataset"), ``ddof=1`` for a
+    sample of datasets or seeds (Table II's "across datasets"). With no
+    finite value the mean and std are NaN; with one and ``ddof=1`` the std is 0.
+
+    Examples
+    --------
+    >>> mean_std([1.0, 2.0, 3.0, float("nan")], ddof=1)
+    {'mean': 2.0, 'std': 1.0, 'n': 3}
+    >>> mean_std([1.0, 3.0], ddof=0)
+    {'mean': 2.0, 'std': 1.0, 'n': 2}
+    """
+    v = np.asarray([x for x in np.ravel(np.asarray(values, dtype=object)) if x is not None], dtype=float)
+    v = v[np.isfinite(v)]
+    if v.size == 0:
+        return {"mean": float("nan"), "std": float("nan"), "n": 0}
+    std = float(v.std(ddof=ddof)) if v.size > ddof else 0.0
+    return {"mean": float(v.mean()), "std": std, "n": int(v.size)}
 
 
 def calibration_report(
@@ -189,16 +207,15 @@ def calibration_report(
     t, p = _pair(y_true, y_pred)
     ps = per_sample_rmse(t, p, alpha)
     f, tq = relative_errors(t, p, min_norm)
-    fm, fs = _mean_std(f)
-    tm, ts = _mean_std(tq)
+    force, torque, per_sample = mean_std(f, ddof=0), mean_std(tq, ddof=0), mean_std(ps, ddof=0)
     return CalibrationReport(
         rmse=wrench_rmse(t, p, alpha),
-        rmse_per_sample_mean=float(ps.mean()),
-        rmse_per_sample_std=float(ps.std()),
-        rel_force_mean=fm,
-        rel_force_std=fs,
-        rel_torque_mean=tm,
-        rel_torque_std=ts,
+        rmse_per_sample_mean=per_sample["mean"],
+        rmse_per_sample_std=per_sample["std"],
+        rel_force_mean=force["mean"],
+        rel_force_std=force["std"],
+        rel_torque_mean=torque["mean"],
+        rel_torque_std=torque["std"],
         axis_rmse=dict(zip(WRENCH_LABELS, map(float, axis_rmse(t, p)))),
         alpha=float(alpha),
         n_samples=int(t.shape[0]),

@@ -53,12 +53,12 @@ from joblib import Parallel, delayed
 from ..simulation._artificial import make_artificial_dataset
 from ..core._files import plain_json
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
-from ..core._metrics import calibration_report, wrench_rmse
+from ..core._metrics import calibration_report, mean_std, wrench_rmse
 from ..simulation._presets import error_preset
 from ..simulation._sampling import TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
 
-__all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue",
+__all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "format_mean_std", "dataset_seeds",
            "THESIS_TABLES"]
 
 _FORMAT = 1
@@ -105,11 +105,8 @@ def wilcoxon_pvalue(a: Sequence[float], b: Sequence[float]) -> tuple[float, str]
     return p, ""
 
 
-def _mean_std(values: Sequence[float]) -> dict:
-    v = np.asarray([x for x in values if x is not None and np.isfinite(x)], dtype=float)
-    if v.size == 0:
-        return {"mean": float("nan"), "std": float("nan"), "n": 0}
-    return {"mean": float(v.mean()), "std": float(v.std(ddof=1)) if v.size > 1 else 0.0, "n": int(v.size)}
+def _across_datasets(values: Sequence[float]) -> dict:
+    return mean_std(values, ddof=1)
 
 
 def summarize_results(results: list[dict], models: Sequence[str], presets: Sequence[str]) -> dict:
@@ -135,9 +132,9 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
         for m in models:
             rows = [by_model[m][i] for i in sorted(by_model[m])]
             table[m] = {
-                "rmse": _mean_std([r["rmse"] for r in rows]),
-                "rel_force": _mean_std([r["rel_force_mean"] for r in rows]),
-                "rel_torque": _mean_std([r["rel_torque_mean"] for r in rows]),
+                "rmse": _across_datasets([r["rmse"] for r in rows]),
+                "rel_force": _across_datasets([r["rel_force_mean"] for r in rows]),
+                "rel_torque": _across_datasets([r["rel_torque_mean"] for r in rows]),
                 "rmse_per_dataset": {str(r["dataset"]): r["rmse"] for r in rows},
                 "n_datasets": len(rows),
             }
@@ -149,7 +146,7 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
         out[preset] = {
             "models": table,
             "wilcoxon": pairs,
-            "noise_floor": _mean_std(list(floors.values())),
+            "noise_floor": _across_datasets(list(floors.values())),
         }
     return out
 
@@ -159,8 +156,14 @@ def _config_hash(config: dict) -> str:
     return hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
 
 
-def _seeds(seed: int, index: int) -> tuple[int, int]:
-    """(dataset seed, model seed) of a dataset index: the same data for every preset and model."""
+def dataset_seeds(seed: int, index: int) -> tuple[int, int]:
+    """(dataset seed, model seed) of dataset ``index`` under master ``seed``: the same data for every preset and model.
+
+    Examples
+    --------
+    >>> dataset_seeds(0, 3) == dataset_seeds(0, 3) != dataset_seeds(0, 4)
+    True
+    """
     ss = np.random.SeedSequence(entropy=seed, spawn_key=(index,))
     data_seed, model_seed = ss.generate_state(2)
     return int(data_seed), int(model_seed % (2**31 - 1))
@@ -170,7 +173,7 @@ def _data_and_model(task: dict):
     """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
     from ..models._registry import make_calibrator
 
-    data_seed, model_seed = _seeds(task["seed"], task["dataset"])
+    data_seed, model_seed = dataset_seeds(task["seed"], task["dataset"])
     profile = SensorProfile.default()
     train, test, info = make_artificial_dataset(
         task["preset"], random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
@@ -291,7 +294,14 @@ class _Outputs:
         return path
 
 
-def _fmt(stat: dict, digits: int) -> str:
+def format_mean_std(stat: dict, digits: int = 2) -> str:
+    """``"mean ± std"`` of a :func:`~ftcal.core.mean_std` result, ``"—"`` when it counted nothing.
+
+    Examples
+    --------
+    >>> format_mean_std({"mean": 36.91, "std": 3.444, "n": 30}, 1)
+    '36.9 ± 3.4'
+    """
     if stat["n"] == 0:
         return "—"
     return f"{stat['mean']:.{digits}f} ± {stat['std']:.{digits}f}"
@@ -316,7 +326,7 @@ def markdown_tables(summary: dict, meta: dict) -> str:
         lines += [
             f"### Preset `{preset}`",
             "",
-            f"Noise floor (perfect calibrator): {_fmt(nf, 2)} N over {nf['n']} datasets.",
+            f"Noise floor (perfect calibrator): {format_mean_std(nf, 2)} N over {nf['n']} datasets.",
             "",
             "| Model | datasets | RMSE [N] (ours) | RMSE (thesis T. II) | rel. force (ours) | rel. force (thesis T. III)"
             " | rel. torque (ours) | rel. torque (thesis T. III) |",
@@ -324,8 +334,8 @@ def markdown_tables(summary: dict, meta: dict) -> str:
         ]
         for m, t in s["models"].items():
             lines.append(
-                f"| {m} | {t['n_datasets']} | {_fmt(t['rmse'], 2)} | {_thesis_cell(preset, m, 'rmse', 1)} | "
-                f"{_fmt(t['rel_force'], 4)} | {_thesis_cell(preset, m, 'rel_force', 3)} | {_fmt(t['rel_torque'], 4)} | "
+                f"| {m} | {t['n_datasets']} | {format_mean_std(t['rmse'], 2)} | {_thesis_cell(preset, m, 'rmse', 1)} | "
+                f"{format_mean_std(t['rel_force'], 4)} | {_thesis_cell(preset, m, 'rel_force', 3)} | {format_mean_std(t['rel_torque'], 4)} | "
                 f"{_thesis_cell(preset, m, 'rel_torque', 3)} |"
             )
         lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]

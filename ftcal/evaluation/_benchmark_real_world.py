@@ -37,7 +37,7 @@ from sklearn.model_selection import LeaveOneGroupOut, ShuffleSplit
 
 from ..io._dataset import CalibrationDataset
 from ..experiment._experiment import prepare_dataset
-from ..core._metrics import per_sample_rmse, relative_errors
+from ..core._metrics import mean_std, per_sample_rmse, relative_errors
 from ..models._registry import make_calibrator
 from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
@@ -80,9 +80,8 @@ def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     return {
         "schedule": schedule if model_name != "linear" else "-",
         "n_test": int(yt.shape[0]),
-        "rmse_mean": float(rmse.mean()), "rmse_std": float(rmse.std()),
-        "rel_force_mean": float(rf.mean()), "rel_force_std": float(rf.std()),
-        "rel_torque_mean": float(rt.mean()), "rel_torque_std": float(rt.std()),
+        **{f"{name}_{k}": stat[k] for name, values in (("rmse", rmse), ("rel_force", rf), ("rel_torque", rt))
+           for stat in [mean_std(values, ddof=0)] for k in ("mean", "std")},
         "fit_seconds": fit_s,
         "per_sample_rmse": rmse.tolist(),
     }

@@ -5,3 +5,13 @@
 Imports :mod:`ftcal.core`, :mod:`ftcal.calibrators` and :mod:`ftcal.neural_network`. Register a new
 calibrator in ``_registry.py`` (its name) and ``_model_io.py`` (its fitted arrays).
 """
+
+from ..core._lazy import lazy_namespace
+
+#: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
+_PUBLIC = {
+    "search_summary": "_search",
+    "DEFAULT_SEARCH_SPACES": "_search",
+}
+__all__ = list(_PUBLIC)
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -34,10 +34,12 @@ from numpy.typing import NDArray
 from skorch import NeuralNetRegressor
 from skorch.dataset import ValidSplit
 from sklearn.utils import check_random_state
+from sklearn.utils.validation import check_is_fitted
 from sklearn.utils._param_validation import Interval
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
+from ..core._validation import validate_readings
 from ._modules import WeightedSquaredError
 from ._schedule import schedule_callbacks
 
@@ -394,3 +396,26 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return self._decode(self._forward(self._network_inputs(X)), X)
+
+    def network_inputs(self, X) -> NDArray[np.float64]:
+        """What the fitted network sees for raw readings ``X`` (n, N): the pre-processing of ``predict``.
+
+        For a deployment that runs the network elsewhere (with
+        :meth:`fitted_layers`); the re-tare is applied as in ``predict``.
+
+        Returns
+        -------
+        ndarray of shape (n_samples, n_network_inputs), float64
+        """
+        check_is_fitted(self)
+        return self._network_inputs(self._retared(validate_readings(self, X)))
+
+    def fitted_layers(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], str]]:
+        """The fitted network as ``(weight (n_in, n_out), bias (n_out,), activation)`` per layer, float64 copies.
+
+        ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"``;
+        ``h = activation(h @ weight + bias)`` layer after layer maps
+        :meth:`network_inputs` to the network's outputs.
+        """
+        check_is_fitted(self)
+        return [(w.copy(), b.copy(), a) for w, b, a in self._numpy_layers()]
