@@ -8,13 +8,9 @@ Imports only numpy, scipy, scikit-learn and the standard library; never another 
 from ._lazy import lazy_namespace
 
 #: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
-_PUBLIC = {
-    "plain_json": "_files",
-    "write_json": "_files",
-    "atomic_output": "_files",
-    "mean_std": "_metrics",
-    "calibration_folds": "_model_selection",
-    "MIN_CHANNELS": "_wrench",
-}
+_PUBLIC = dict(
+    plain_json="_files", write_json="_files", atomic_output="_files", mean_std="_metrics",
+    calibration_folds="_model_selection", MIN_CHANNELS="_wrench",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

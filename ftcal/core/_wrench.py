@@ -96,7 +96,4 @@ def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
     >>> unscale_torques([[1.0, 2, 3, 1, 2, 3]], 10.0)
     array([[1. , 2. , 3. , 0.1, 0.2, 0.3]])
     """
-    w = np.array(scaled, dtype=float, copy=True)
-    if w.shape[-1] == 6:
-        w[..., TORQUE] /= alpha
-    return w
+    return scale_torques(scaled, 1.0 / alpha)

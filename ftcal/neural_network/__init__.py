@@ -8,13 +8,9 @@ Imports :mod:`ftcal.core` and :mod:`ftcal.calibrators` (the base class); nothing
 from ..core._lazy import lazy_namespace
 
 #: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
-_PUBLIC = {
-    "DirectionalNet": "_modules",
-    "ComparativeNet": "_modules",
-    "WeightedSquaredError": "_modules",
-    "StackedMLP": "_stacked",
-    "fit_stacked": "_stacked",
-    "NetworkCalibrator": "_base",
-}
+_PUBLIC = dict(
+    DirectionalNet="_modules", ComparativeNet="_modules", WeightedSquaredError="_modules",
+    StackedMLP="_stacked", fit_stacked="_stacked", NetworkCalibrator="_base",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -42,29 +42,38 @@ def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_h
     return nn.Sequential(*layers)
 
 
-class DirectionalNet(nn.Module):
+class _MLPNet(nn.Module):
+    """An :func:`mlp` as a module whose activation of the last hidden layer is ``last_hidden``."""
+
+    last_hidden: type[nn.Module]
+
+    def __init__(self, n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int):
+        super().__init__()
+        self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, self.last_hidden)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.layers(x)
+
+
+class DirectionalNet(_MLPNet):
     """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)].
 
     ``n_outputs`` is 7 for a wrench (k + 1 for k targets).
     """
 
+    last_hidden = nn.Tanh
+
     def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64), n_outputs: int = 7):
-        super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, nn.Tanh)
-
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.layers(x)
+        super().__init__(n_inputs, hidden_layer_sizes, n_outputs)
 
 
-class ComparativeNet(nn.Module):
+class ComparativeNet(_MLPNet):
     """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6, or k targets)."""
 
-    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64), n_outputs: int = 6):
-        super().__init__()
-        self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, nn.ReLU)
+    last_hidden = nn.ReLU
 
-    def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.layers(x)
+    def __init__(self, n_inputs: int = 6, hidden_layer_sizes: Sequence[int] = (64, 64, 64), n_outputs: int = 6):
+        super().__init__(n_inputs, hidden_layer_sizes, n_outputs)
 
 
 class WeightedSquaredError(nn.Module):
