@@ -50,8 +50,6 @@ _PREDICT_CHUNK = 65536
 _NUMPY_FORWARD_ROWS = 256
 #: A net whose best loss exceeds this multiple of the loss of predicting zero has diverged.
 _DIVERGENCE_FACTOR = 100.0
-#: Largest finite float32: the networks' arithmetic range.
-_FLOAT32_MAX = float(np.finfo(np.float32).max)
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
 
@@ -363,22 +361,19 @@ class NetworkCalibrator(BaseCalibrator):
         independent of the other rows (float32 BLAS kernels round a row
         differently depending on where it sits in the batch); it agrees with
         the float32 torch pass of large batches to ~1e-7 relative. A row whose
-        inputs or activations leave float32's range gives inf, as the float32
+        inputs or outputs leave float32's range gives inf, as the float32
         pass (and the exported ONNX graph) would, so that ``predict`` refuses
         it whatever the batch size.
         """
-        h = inputs
-        overflow = np.abs(h).max(axis=1, initial=0.0) > _FLOAT32_MAX
-        for weight, bias, activation in self._numpy_layers():
-            h = h @ weight + bias
-            overflow |= np.abs(h).max(axis=1, initial=0.0) > _FLOAT32_MAX
-            if activation == "relu":
-                np.maximum(h, 0.0, out=h)
-            elif activation == "tanh":
-                np.tanh(h, out=h)
-        if overflow.any():
-            h[overflow] = np.inf
-        return h
+        with np.errstate(over="ignore"):
+            h = inputs.astype(np.float32)  # the network's input precision; beyond float32's range: inf
+            for weight, bias, activation in self._numpy_layers():
+                h = h @ weight + bias  # float64 arithmetic (the weights are float64 copies)
+                if activation == "relu":
+                    np.maximum(h, 0.0, out=h)
+                elif activation == "tanh":
+                    np.tanh(h, out=h)
+            return h.astype(np.float32).astype(np.float64)  # the network's output precision and range
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
         if inputs.shape[0] <= _NUMPY_FORWARD_ROWS:  # small batches (a control loop): numpy is ~20x cheaper
