@@ -14,8 +14,12 @@ The figures are written to ``benchmarks/RESULTS.md`` under ``## Speed (issue 2)`
 (other sections are kept); the short/predict figures are written before the
 thesis runs start and completed afterwards.
 
+Then the network figures of issue 13 (``benchmarks/network_speed.py``: the
+lean loop against plain skorch, stacked ensembles against one member,
+one-sample and bulk ``predict`` against the numpy forward pass).
+
 Run: ``python benchmarks/speed.py`` (about 10-40 min on 2 cores, mostly the
-thesis schedule); ``python benchmarks/speed.py --skip-thesis`` takes about a minute.
+thesis schedule); ``python benchmarks/speed.py --skip-thesis`` takes about two minutes.
 """
 
 from __future__ import annotations
@@ -139,6 +143,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--repeats", type=int, default=3, help="runs of the short-schedule fit (median)")
     parser.add_argument("--latency-calls", type=int, default=1000)
     parser.add_argument("--skip-thesis", action="store_true", help="do not run the (slow) thesis schedule")
+    parser.add_argument("--skip-networks", action="store_true",
+                        help="do not run the issue-13 network figures (benchmarks/network_speed.py)")
     args = parser.parse_args(argv)
     assert set(MODELS) <= set(CALIBRATOR_NAMES)
     raw, wrench = sensor_data(args.n_samples)
@@ -156,6 +162,10 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{name}: thesis fit {seconds:.1f} s, {thesis[name][1]} epochs", flush=True)
             write_section(render(args, short, thesis, predict))
     print(f"wrote {RESULTS}")
+    if not args.skip_networks:  # issue 13: lean loop, stacked nets, inference, as ratios in this process
+        import network_speed
+
+        network_speed.main([])
 
 
 if __name__ == "__main__":
