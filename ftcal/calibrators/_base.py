@@ -42,7 +42,7 @@ from ._zero_load import estimate_zero_reading, reading_noise
 __all__ = ["BaseCalibrator"]
 
 
-def _resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
+def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
     if alpha is None:
         # only a 6-component wrench has torques to scale; other targets keep their units (alpha_ = 1)
         return alpha_from_wrenches(y) if y.shape[1] == 6 else 1.0
@@ -115,7 +115,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
 
     def _fit_scale_and_tare(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         """Set ``alpha_``, ``zero_reading_`` and ``reading_noise_`` from validated training data."""
-        self.alpha_ = _resolve_alpha(self.alpha, y)
+        self.alpha_ = resolve_alpha(self.alpha, y)
         if self.zero_reading is None:
             self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_)
         else:

@@ -12,7 +12,7 @@ def simulate_logs(args: argparse.Namespace) -> int:
     """Plan the poses, simulate the load / no-load runs, write the logs and a coverage plot."""
     import ftcal
 
-    from ._simulate import _temperature_range
+    from ._simulate import temperature_range
 
     console = Console(args.quiet)
     configs = ftcal.thesis_load_configurations()
@@ -25,7 +25,7 @@ def simulate_logs(args: argparse.Namespace) -> int:
     if plan.n_poses == 0:
         raise ftcal.KinematicsError(f"no calibration pose of {robot.name} is reachable; try another --robot")
     mass = {} if args.mass is None else {"load_mass": args.mass}
-    thermal = _temperature_range(args.temperature_range)
+    thermal = temperature_range(args.temperature_range)
     if thermal is not None:
         mass.update(thermal_drift="typical", temperature_range_deg=thermal)
     console.info(f"simulating {len(configs)} load configurations x {plan.n_poses} poses (load and no-load runs) ...")

@@ -23,7 +23,7 @@ writes DIR/NAME.model.npz (the model) and DIR/NAME.fit.json (what was trained, o
 """
 
 
-def _calibrator_names() -> tuple[str, ...]:
+def calibrator_names() -> tuple[str, ...]:
     import ftcal
 
     return tuple(ftcal.CALIBRATOR_NAMES)
@@ -37,7 +37,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EXAMPLE,
     )
     p.add_argument("dataset", help="training dataset (.csv or .npz, as written by 'ftcal simulate' / 'prepare')")
-    p.add_argument("-m", "--model", default="directional", choices=_calibrator_names(), help="calibrator")
+    p.add_argument("-m", "--model", default="directional", choices=calibrator_names(), help="calibrator")
     p.add_argument(
         "--schedule", default="thesis", choices=("thesis", "short"),
         help="training schedule of the networks: the thesis' (1700+ epochs) or a short one (minutes)",

@@ -16,7 +16,7 @@ from ._common import (
     existing_file,
     write_json,
 )
-from ._prepare import _log_files
+from ._prepare import log_files
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -92,7 +92,7 @@ def _poses_and_wrenches(args):
     robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
     model = ftcal.load_model(args.model)
     logs = [ftcal.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
-            for p in _log_files(args.logs)]
+            for p in log_files(args.logs)]
     q = np.vstack([lg.q for lg in logs])
     raw = np.vstack([lg.raw for lg in logs])
     rotations = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]

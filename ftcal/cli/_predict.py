@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
     def emit(out) -> int:
         header = not args.no_header
         total = 0
-        for raw in _raw_chunks(args.input, n_channels, chunk):
+        for raw in raw_chunks(args.input, n_channels, chunk):
             wrench = np.asarray(model.predict(raw), dtype=float)
             write_wrench_rows(out, wrench, header)
             header = False
@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _raw_chunks(source: str, n_channels: int, chunk: int):
+def raw_chunks(source: str, n_channels: int, chunk: int):
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)

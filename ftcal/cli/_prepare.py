@@ -48,7 +48,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def _log_files(items: list[str]) -> list[Path]:
+def log_files(items: list[str]) -> list[Path]:
     files: list[Path] = []
     for item in items:
         path = Path(item)
@@ -71,7 +71,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
-    logs = _log_files(args.logs)
+    logs = log_files(args.logs)
     robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
     console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
     dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels)

@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ._predict import _raw_chunks
+    from ._predict import raw_chunks
 
     console = Console(args.quiet)
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
@@ -54,7 +54,7 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
-    chunks = list(_raw_chunks(args.readings, n_channels, 4096))
+    chunks = list(raw_chunks(args.readings, n_channels, 4096))
     if not chunks:
         raise CliError(f"{args.readings}: no readings; record some zero-load readings first")
     readings = np.vstack(chunks)

@@ -106,7 +106,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     profile = _profile(args.sensor)
     offset = None if args.zero_offset == 0 else np.full(profile.n_channels, args.zero_offset)
     rng = np.random.default_rng(args.seed)
-    thermal = _temperature_range(args.temperature_range)
+    thermal = temperature_range(args.temperature_range)
     infos = []
     first_train = None
     with console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
@@ -140,7 +140,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
-def _temperature_range(text: str | None):
+def temperature_range(text: str | None):
     if text is None:
         return None
     try:

@@ -6,7 +6,7 @@ import argparse
 import time
 
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
-from ._fit import _calibrator_names
+from ._fit import calibrator_names
 from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
 
 EXAMPLE = """\
@@ -33,7 +33,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EXAMPLE,
     )
     p.add_argument("dataset", help="training dataset (.csv or .npz)")
-    p.add_argument("-m", "--model", default="axis_nonlinear", choices=_calibrator_names(), help="calibrator")
+    p.add_argument("-m", "--model", default="axis_nonlinear", choices=calibrator_names(), help="calibrator")
     p.add_argument(
         "--grid", action="append", default=[], metavar="KEY=VALUES",
         help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "

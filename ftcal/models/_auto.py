@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..calibrators._base import BaseCalibrator, _resolve_alpha
+from ..calibrators._base import BaseCalibrator, resolve_alpha
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
 from ..core._validation import check_zero_reading, validate_training_data
@@ -272,7 +272,7 @@ class AutoCalibrator(BaseCalibrator):
         candidates = self._candidates()
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
-        self.alpha_ = _resolve_alpha(self.alpha, y)
+        self.alpha_ = resolve_alpha(self.alpha, y)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
         seed = 0 if self.random_state is None else self.random_state
         results, errors, _ = score_candidates(

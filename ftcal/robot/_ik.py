@@ -110,7 +110,7 @@ def _solve(
 ) -> IKResult:
     model, data = robot.model, robot.data
     seeds = _seeds(robot, q_seed, n_random_seeds, random_state)
-    anchor_position = _anchor(robot, anchor_position_in_base)
+    anchor_position = anchor_configuration(robot, anchor_position_in_base)
     lo = robot.lower_limits + limit_margin
     hi = robot.upper_limits - limit_margin
     if np.any(lo > hi):
@@ -285,7 +285,7 @@ def solve_orientation_ik(
                   damping, limit_margin, n_random_seeds, random_state)
 
 
-def _anchor(robot: RobotModel, anchor_position_in_base: ArrayLike | None) -> NDArray[np.float64]:
+def anchor_configuration(robot: RobotModel, anchor_position_in_base: ArrayLike | None) -> NDArray[np.float64]:
     if anchor_position_in_base is None:
         pin.framesForwardKinematics(robot.model, robot.data, robot.home_configuration)
         return robot.data.oMf[robot.anchor_frame_id].translation.copy()

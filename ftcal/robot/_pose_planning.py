@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import KinematicsError
-from ._ik import DEFAULT_LIMIT_MARGIN_RAD, _anchor, solve_gravity_direction_ik
+from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_direction_ik
 from ._robot import RobotModel, sensor_pose_in_base
 
 __all__ = [
@@ -283,7 +283,7 @@ def plan_calibration_poses(
     """
     dirs = gravity_directions_in_sensor(subdivisions, excluded_direction=excluded_direction,
                                         excluded_cap_deg=excluded_cap_deg)
-    anchor = _anchor(robot, anchor_position_in_base)
+    anchor = anchor_configuration(robot, anchor_position_in_base)
     g_base = np.asarray(gravity_in_base, dtype=float)
     R_home = sensor_pose_in_base(robot, robot.home_configuration)[:3, :3]
     order = _travel_order(dirs, R_home.T @ (g_base / np.linalg.norm(g_base)))
