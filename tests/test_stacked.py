@@ -98,7 +98,7 @@ def test_stacked_module_is_the_members_forward():
     for k, net in enumerate(nets):
         torch.testing.assert_close(out[k], net(x[k]))
     copy = ComparativeNet(5, (7, 3))
-    stacked.load_member(stacked.flat[2].detach(), copy)
+    stacked.load_member(stacked.member_row(2), copy)
     torch.testing.assert_close(copy(x[0]), nets[2](x[0]))
 
 

@@ -2,10 +2,11 @@
 
 Training one small net costs far more than its arithmetic: every mini-batch
 is a dozen tiny torch calls. :func:`fit_stacked` trains ``K`` nets of one
-architecture together: their weights are stacked into one ``(K, D)``
-parameter, a mini-batch step runs each layer of all ``K`` nets as one
-``torch.baddbmm``, and one Adam update moves all of them. The members stay
-independent:
+architecture together: each layer's weights of all ``K`` nets are stacked
+into one ``(K, n_in, n_out)`` parameter, a mini-batch step runs each layer
+of all ``K`` nets as one ``torch.baddbmm``, and one Adam update (torch's
+fused kernel while the members share a learning rate) moves all of them.
+The members stay independent:
 
 * the loss is the sum of the members' own losses, so member ``k``'s gradient
   is exactly that of its own loss; Adam is elementwise, so its update is
@@ -49,14 +50,16 @@ class StackedMLP(torch.nn.Module):
 
     Built from ``K`` modules whose ``layers`` is an ``nn.Sequential`` of
     ``Linear`` layers and ``ReLU`` / ``Tanh`` activations (the calibrators'
-    nets, :func:`ftcal.neural_network._modules.mlp`). All weights live in one parameter
-    ``flat`` of shape ``(K, D)``; each layer is a view of it, so one
+    nets, :func:`ftcal.neural_network._modules.mlp`), or from ``rows``: one
+    member's weights per row, as :meth:`member_row` gives them. Each layer's
+    weights of all members are one parameter of shape ``(K, n_in, n_out)``
+    (the bias ``(K, 1, n_out)``), so a layer is one ``torch.baddbmm`` and one
     optimiser step updates every member.
 
     Examples
     --------
     >>> import torch
-    >>> from ftcal.neural_network._modules import DirectionalNet
+    >>> from ftcal.neural_network import DirectionalNet
     >>> nets = [DirectionalNet(6, (8, 4)) for _ in range(3)]
     >>> stacked = StackedMLP(nets)
     >>> x = torch.randn(3, 5, 6)
@@ -64,12 +67,13 @@ class StackedMLP(torch.nn.Module):
     True
     """
 
-    def __init__(self, modules: Sequence[torch.nn.Module]):
+    def __init__(self, modules: Sequence[torch.nn.Module], rows: torch.Tensor | None = None):
         super().__init__()
         if len(modules) < 1:
             raise CalibrationInputError("StackedMLP needs at least one module (K >= 1); got none.")
-        self.layout: list[tuple[int, int, int, int, str]] = []  # (weight offset, n_in, n_out, bias offset, activation)
-        rows: list[list[torch.Tensor]] = [[] for _ in modules]
+        #: per layer: (offset of its weight in a member row, n_in, n_out, offset of its bias, activation)
+        self.layout: list[tuple[int, int, int, int, str]] = []
+        member_rows: list[list[torch.Tensor]] = [[] for _ in modules]
         signature = None
         for k, module in enumerate(modules):
             layers, offset = list(module.layers), 0
@@ -84,7 +88,7 @@ class StackedMLP(torch.nn.Module):
                 shape.append((n_in, n_out, activation))
                 if k == 0:
                     self.layout.append((offset, n_in, n_out, offset + n_in * n_out, activation))
-                rows[k] += [layer.weight.detach().T.reshape(-1), layer.bias.detach().reshape(-1)]
+                member_rows[k] += [layer.weight.detach().T.reshape(-1), layer.bias.detach().reshape(-1)]
                 offset += n_in * n_out + n_out
             if signature is None:
                 signature = shape
@@ -93,21 +97,35 @@ class StackedMLP(torch.nn.Module):
                     f"StackedMLP: module {k} has layers {shape}, module 0 {signature}; stacked nets must share "
                     "one architecture."
                 )
-        self.flat = torch.nn.Parameter(torch.stack([torch.cat(r) for r in rows]))
+        if rows is None:
+            rows = torch.stack([torch.cat(r) for r in member_rows])
+        K = rows.shape[0]
+        self.weights = torch.nn.ParameterList()
+        self.biases = torch.nn.ParameterList()
+        for w_off, n_in, n_out, b_off, _ in self.layout:
+            self.weights.append(torch.nn.Parameter(rows[:, w_off:w_off + n_in * n_out].reshape(K, n_in, n_out).clone()))
+            self.biases.append(torch.nn.Parameter(rows[:, b_off:b_off + n_out].reshape(K, 1, n_out).clone()))
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        K, h = self.flat.shape[0], x
-        for w_off, n_in, n_out, b_off, activation in self.layout:
-            weight = self.flat[:, w_off:w_off + n_in * n_out].view(K, n_in, n_out)
-            h = torch.baddbmm(self.flat[:, b_off:b_off + n_out].unsqueeze(1), h, weight)
+        h = x
+        for weight, bias, (*_, activation) in zip(self.weights, self.biases, self.layout):
+            h = torch.baddbmm(bias, h, weight)
             if activation == "relu":
                 h = torch.relu(h)
             elif activation == "tanh":
                 h = torch.tanh(h)
         return h
 
+    def ordered_parameters(self) -> list[torch.nn.Parameter]:
+        """Weight and bias of each layer, in the order of a member row."""
+        return [p for pair in zip(self.weights, self.biases) for p in pair]
+
+    def member_row(self, k: int) -> torch.Tensor:
+        """Member ``k``'s weights as one row (a copy): what :meth:`load_member` and ``rows=`` take."""
+        return torch.cat([p.detach()[k].reshape(-1) for p in self.ordered_parameters()])
+
     def load_member(self, row: torch.Tensor, module: torch.nn.Module) -> None:
-        """Copy one member's weights (a row of ``flat``) into ``module`` (an unstacked net of the same shape)."""
+        """Copy one member's weights (a :meth:`member_row`) into ``module`` (an unstacked net of the same shape)."""
         linears = [layer for layer in module.layers if isinstance(layer, torch.nn.Linear)]
         with torch.no_grad():
             for layer, (w_off, n_in, n_out, b_off, _) in zip(linears, self.layout):
@@ -160,17 +178,25 @@ class _StackedRun:
         self.members = members
         self.template = template
         self.batch = int(template.batch_size)
-        self._restack(list(range(len(members))), StackedMLP([m.net.module_ for m in members]).flat.detach())
-        self.m = torch.zeros_like(self.flat)
-        self.v = torch.zeros_like(self.flat)
-        self.step = torch.zeros(len(members), 1)
+        self._restack(list(range(len(members))), None)
+        self.m = [torch.zeros_like(p) for p in self.params]
+        self.v = [torch.zeros_like(p) for p in self.params]
+        self.step = torch.zeros(len(members), 1, 1)
+        self._share_moments()
 
-    def _restack(self, active: list[int], flat: torch.Tensor) -> None:
+    def _share_moments(self) -> None:
+        """Give the fused optimiser this run's moment buffers (it then updates them in place)."""
+        for p, m, v in zip(self.params, self.m, self.v):
+            self.fused.state[p] = {"step": torch.tensor(float(self.step[0, 0, 0])), "exp_avg": m, "exp_avg_sq": v}
+
+    def _restack(self, active: list[int], rows: torch.Tensor | None) -> None:
         self.active = active
         members = [self.members[i] for i in active]
-        self.module = StackedMLP([m.net.module_ for m in members])
-        self.module.flat = torch.nn.Parameter(flat.clone())
-        self.flat = self.module.flat
+        self.module = StackedMLP([m.net.module_ for m in members], rows=rows)
+        self.params = self.module.ordered_parameters()
+        # torch's fused Adam kernel for the epochs in which every member steps alike with one learning rate
+        # (all but the plateau phase); it shares its moment buffers with the per-member path of _adam
+        self.fused = torch.optim.Adam(self.params, lr=1e-3, fused=True)
         self.X_train, self.train_mask = _padded([m.X_train for m in members])
         self.y_train, _ = _padded([m.y_train for m in members])
         self.n_train = torch.tensor([len(m.X_train) for m in members])
@@ -187,26 +213,31 @@ class _StackedRun:
             self.active = []
             return
         index = torch.tensor(keep)
-        flat = self.flat.detach()[index]
-        self.m, self.v, self.step = self.m[index], self.v[index], self.step[index]
-        self._restack([self.active[i] for i in keep], flat)
+        rows = torch.stack([self.module.member_row(i) for i in keep])
+        self.m, self.v = [m[index] for m in self.m], [v[index] for v in self.v]
+        self.step = self.step[index]
+        self._restack([self.active[i] for i in keep], rows)
+        self._share_moments()
 
-    def _adam(self, grad: torch.Tensor, lr: torch.Tensor, moving: torch.Tensor | None) -> None:
-        """One Adam step of every member (torch.optim.Adam's arithmetic); ``moving``: members with a batch."""
+    def _adam(self, lr: torch.Tensor, moving: torch.Tensor | None) -> None:
+        """One Adam step of every member (torch.optim.Adam's arithmetic) with its own rate ``lr`` (K, 1, 1);
+        ``moving``: the members that had a batch (the others keep their weights, moments and step count)."""
         with torch.no_grad():
-            if moving is None:
-                self.step += 1
-                self.m.lerp_(grad, 1 - _BETA1)
-                self.v.mul_(_BETA2).addcmul_(grad, grad, value=1 - _BETA2)
-            else:
-                self.step += moving
-                self.m.copy_(torch.where(moving.bool(), torch.lerp(self.m, grad, 1 - _BETA1), self.m))
-                self.v.copy_(torch.where(moving.bool(), self.v * _BETA2 + (1 - _BETA2) * grad * grad, self.v))
-                lr = lr * moving
+            self.step += 1 if moving is None else moving
             correction1 = 1 - _BETA1 ** self.step
             correction2 = (1 - _BETA2 ** self.step).sqrt()
-            denom = (self.v.sqrt() / correction2).add_(_EPS)
-            self.flat.sub_(lr / correction1 * self.m / denom)
+            rate = lr if moving is None else lr * moving
+            for p, m, v in zip(self.params, self.m, self.v):
+                grad = p.grad
+                if moving is None:
+                    m.lerp_(grad, 1 - _BETA1)
+                    v.mul_(_BETA2).addcmul_(grad, grad, value=1 - _BETA2)
+                else:
+                    on = moving.bool()
+                    m.copy_(torch.where(on, torch.lerp(m, grad, 1 - _BETA1), m))
+                    v.copy_(torch.where(on, v * _BETA2 + (1 - _BETA2) * grad * grad, v))
+                denom = (v.sqrt() / correction2).add_(_EPS)
+                p.sub_(rate / correction1 * m / denom)
 
     def train_epoch(self) -> list[float]:
         """One epoch of every active member; their mean training losses."""
@@ -219,27 +250,41 @@ class _StackedRun:
             order[i, :n] = torch.randperm(n, generator=member.generator)
             mask[i, :n] = 1.0
         uneven = bool((self.n_train != n_max).any())
-        lr = torch.tensor([m.lr for m in members]).unsqueeze(1)
+        lr = torch.tensor([m.lr for m in members]).view(K, 1, 1)
+        # one rate and one step count for all: torch's fused Adam does the update in one kernel
+        fused = not uneven and bool((lr == lr[0]).all()) and bool((self.step == self.step[0]).all())
+        if fused:
+            self.fused.param_groups[0]["lr"] = float(lr[0, 0, 0])
+            for p in self.params:
+                self.fused.state[p]["step"].fill_(float(self.step[0, 0, 0]))
         rows = torch.arange(K).unsqueeze(1)
+        n_steps = -(-n_max // batch)
         total = torch.zeros(K)
         self.module.train()
+        X_epoch, y_epoch = self.X_train[rows, order], self.y_train[rows, order]  # shuffled once; batches are views
         for start in range(0, n_max, batch):
             index = order[:, start:start + batch]
-            X, y = self.X_train[rows, index], self.y_train[rows, index]
+            X, y = X_epoch[:, start:start + batch], y_epoch[:, start:start + batch]
             squared = (((self.module(X) - y) ** 2) * self.weights).sum(dim=2)
             if uneven:
                 rows_mask = mask[:, start:start + batch]
                 count = rows_mask.sum(dim=1)
                 losses = (squared * rows_mask).sum(dim=1) / count.clamp(min=1)
-                moving = (count > 0).float().unsqueeze(1)
+                moving = (count > 0).float().view(K, 1, 1)
             else:
                 count = torch.full((K,), float(index.shape[1]))
                 losses = squared.mean(dim=1)
                 moving = None
-            self.flat.grad = None
+            for p in self.params:
+                p.grad = None
             losses.sum().backward()
-            self._adam(self.flat.grad, lr, moving)
+            if fused:
+                self.fused.step()
+            else:
+                self._adam(lr, moving)
             total += losses.detach() * count
+        if fused:
+            self.step += n_steps
         return (total / self.n_train).tolist()
 
     def valid_losses(self) -> list[float]:
@@ -284,7 +329,7 @@ class _StackedRun:
             member.lr = float(member.plateau.optimizer.param_groups[0]["lr"])
         if loss < member.best_loss:  # RestoreBestWeights
             member.best_loss, member.best_epoch = loss, epoch
-            member.best_row = self.flat.detach()[i].clone()
+            member.best_row = self.module.member_row(i)
         recover_epochs = epoch - phase_3_start + 1  # RecoverStop
         if recover_epochs <= 0:
             if epoch == phase_3_start - 1 and t.max_recover_epochs == 0:
