@@ -135,6 +135,62 @@ def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
     return cache[key]
 
 
+def _manual_layers(module, criterion) -> list[tuple[torch.nn.Linear, str]] | None:
+    """``(Linear, activation)`` per layer when ``module`` is a plain MLP trained on the weighted squared error.
+
+    Then :func:`_mlp_backward` computes the gradients by hand; anything else (a user's own module or loss)
+    goes through autograd.
+    """
+    if not isinstance(criterion, WeightedSquaredError) or not isinstance(getattr(module, "layers", None),
+                                                                         torch.nn.Sequential):
+        return None
+    layers, out = list(module.layers), []
+    for i, layer in enumerate(layers):
+        if isinstance(layer, torch.nn.Linear):
+            following = layers[i + 1] if i + 1 < len(layers) else None
+            if following is not None and not isinstance(following, (torch.nn.ReLU, torch.nn.Tanh)):
+                return None
+            out.append((layer, "relu" if isinstance(following, torch.nn.ReLU)
+                        else "tanh" if isinstance(following, torch.nn.Tanh) else "identity"))
+        elif not isinstance(layer, (torch.nn.ReLU, torch.nn.Tanh)):
+            return None
+    return out
+
+
+def _mlp_backward(layers: list[tuple[torch.nn.Linear, str]], weights: torch.Tensor, X: torch.Tensor,
+                  y: torch.Tensor) -> torch.Tensor:
+    """Forward pass, loss ``mean_i sum_j w_j (f(x_i)_j - y_ij)²`` and its gradients, set on the layers' ``.grad``.
+
+    The same arithmetic as autograd's (a ``Linear`` is ``addmm``; ReLU's derivative is ``h > 0``, tanh's
+    ``1 - h²``) in half the calls: autograd's bookkeeping costs as much as the arithmetic of these small
+    nets. Returns the loss.
+    """
+    with torch.no_grad():
+        hs = [X]
+        h = X
+        for layer, activation in layers:
+            h = torch.addmm(layer.bias, h, layer.weight.t())
+            if activation == "relu":
+                h = torch.relu(h)
+            elif activation == "tanh":
+                h = torch.tanh(h)
+            hs.append(h)
+        error = h - y
+        loss = (error * error * weights).sum(dim=1).mean()
+        grad = error * (weights * (2.0 / len(X)))
+        for i in range(len(layers) - 1, -1, -1):
+            layer, activation = layers[i]
+            if activation == "relu":
+                grad = grad * (hs[i + 1] > 0)
+            elif activation == "tanh":
+                grad = grad * (1.0 - hs[i + 1] * hs[i + 1])
+            layer.weight.grad = grad.t().mm(hs[i])
+            layer.bias.grad = grad.sum(dim=0)
+            if i:
+                grad = grad.mm(layer.weight)
+    return loss
+
+
 class LeanNeuralNetRegressor(NeuralNetRegressor):
     """skorch's ``NeuralNetRegressor`` with a lean inner loop: tensors loaded once, batches sliced from them.
 
@@ -149,7 +205,11 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
     ``zero_grad / forward / loss / backward / step`` per batch; validation is
     one forward pass. The epoch's losses are recorded as one batch of the
     epoch's size (the batch-size-weighted mean, as skorch computes it).
-    ``on_batch_begin`` / ``on_batch_end`` callbacks are not called.
+    ``on_batch_begin`` / ``on_batch_end`` callbacks are not called. For
+    ftcal's own nets (an MLP of ``Linear`` / ``ReLU`` / ``Tanh`` layers on the
+    weighted squared error) the gradients are computed by hand
+    (:func:`_mlp_backward`), the same arithmetic as autograd's in half the
+    torch calls; any other module or loss goes through autograd.
     """
 
     def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
@@ -164,13 +224,18 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
             order = order.to(X.device)
             total = torch.zeros((), device=X.device)
             batch = int(self.batch_size)
+            manual = _manual_layers(module, criterion)
+            X_epoch, y_epoch = X[order], y[order]  # shuffled once; the batches are views
             for start in range(0, n, batch):
-                index = order[start:start + batch]
-                self.optimizer_.zero_grad(set_to_none=True)
-                loss = criterion(module(X[index]), y[index])
-                loss.backward()
+                X_batch, y_batch = X_epoch[start:start + batch], y_epoch[start:start + batch]
+                if manual is None:
+                    self.optimizer_.zero_grad(set_to_none=True)
+                    loss = criterion(module(X_batch), y_batch)
+                    loss.backward()
+                else:  # sets every .grad afresh: no zero_grad needed
+                    loss = _mlp_backward(manual, criterion.weights, X_batch, y_batch)
                 self.optimizer_.step()
-                total += loss.detach() * len(index)
+                total += loss.detach() * len(X_batch)
             mean = float(total) / max(n, 1)
             batches = -(-n // batch)
         else:

@@ -116,6 +116,35 @@ class StackedMLP(torch.nn.Module):
                 h = torch.tanh(h)
         return h
 
+    def loss_and_gradients(self, X: torch.Tensor, y: torch.Tensor, weights: torch.Tensor, row_weight) -> torch.Tensor:
+        """Each member's loss ``sum_i row_weight_i sum_j weights_j (f(x_i)_j - y_ij)²``, its gradients set on the
+        parameters' ``.grad`` by hand (the arithmetic of autograd in half the calls; ``tests/test_stacked.py``
+        compares). ``weights`` (K, 1, n_out); ``row_weight`` a number (1 / batch) or (K, B, 1). Returns (K,)."""
+        with torch.no_grad():
+            hs, h = [X], X
+            for weight, bias, (*_, activation) in zip(self.weights, self.biases, self.layout):
+                h = torch.baddbmm(bias, h, weight)
+                if activation == "relu":
+                    h = torch.relu(h)
+                elif activation == "tanh":
+                    h = torch.tanh(h)
+                hs.append(h)
+            error = h - y
+            weighted = error * weights * row_weight
+            losses = (weighted * error).sum(dim=(1, 2))
+            grad = 2.0 * weighted
+            for i in range(len(self.layout) - 1, -1, -1):
+                activation = self.layout[i][4]
+                if activation == "relu":
+                    grad = grad * (hs[i + 1] > 0)
+                elif activation == "tanh":
+                    grad = grad * (1.0 - hs[i + 1] * hs[i + 1])
+                self.weights[i].grad = torch.bmm(hs[i].transpose(1, 2), grad)
+                self.biases[i].grad = grad.sum(dim=1, keepdim=True)
+                if i:
+                    grad = torch.bmm(grad, self.weights[i].transpose(1, 2))
+        return losses
+
     def ordered_parameters(self) -> list[torch.nn.Parameter]:
         """Weight and bias of each layer, in the order of a member row."""
         return [p for pair in zip(self.weights, self.biases) for p in pair]
@@ -265,19 +294,16 @@ class _StackedRun:
         for start in range(0, n_max, batch):
             index = order[:, start:start + batch]
             X, y = X_epoch[:, start:start + batch], y_epoch[:, start:start + batch]
-            squared = (((self.module(X) - y) ** 2) * self.weights).sum(dim=2)
             if uneven:
                 rows_mask = mask[:, start:start + batch]
                 count = rows_mask.sum(dim=1)
-                losses = (squared * rows_mask).sum(dim=1) / count.clamp(min=1)
+                row_weight = (rows_mask / count.clamp(min=1).unsqueeze(1)).unsqueeze(2)
                 moving = (count > 0).float().view(K, 1, 1)
             else:
                 count = torch.full((K,), float(index.shape[1]))
-                losses = squared.mean(dim=1)
+                row_weight = 1.0 / index.shape[1]
                 moving = None
-            for p in self.params:
-                p.grad = None
-            losses.sum().backward()
+            losses = self.module.loss_and_gradients(X, y, self.weights, row_weight)
             if fused:
                 self.fused.step()
             else:
