@@ -189,14 +189,12 @@ def test_hand_written_gradients_equal_autograd(uneven):
         row_weight[1, :20] = 1.0 / 20
     stacked = StackedMLP(nets)
     losses = stacked.loss_and_gradients(X, y, weights, row_weight)
-    by_hand = [p.grad.clone() for p in stacked.ordered_parameters()]
-    for p in stacked.ordered_parameters():
-        p.grad = None
+    by_hand = stacked.flat.grad.clone()
+    stacked.flat.grad = None
     reference = ((((stacked(X) - y) ** 2) * weights).sum(dim=2, keepdim=True) * row_weight).sum(dim=(1, 2))
     reference.sum().backward()
     torch.testing.assert_close(losses, reference.detach())
-    for a, b in zip(by_hand, stacked.ordered_parameters()):
-        torch.testing.assert_close(a, b.grad, rtol=1e-5, atol=1e-6)
+    torch.testing.assert_close(by_hand, stacked.flat.grad, rtol=1e-5, atol=1e-6)
     # the single-net loop of LeanNeuralNetRegressor
     net, criterion = nets[0], WeightedSquaredError(weights[0, 0].tolist())
     loss = _mlp_backward(_manual_layers(net, criterion), criterion.weights, X[0], y[0])

@@ -40,7 +40,7 @@ from sklearn.utils._param_validation import Interval
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
 from ..core._validation import validate_readings
-from ._modules import WeightedSquaredError
+from ._modules import WeightedSquaredError, activate, activation_backward, mlp_layers
 from ._schedule import schedule_callbacks
 
 __all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available", "interrupt_flag"]
@@ -136,25 +136,12 @@ def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
 
 
 def _manual_layers(module, criterion) -> list[tuple[torch.nn.Linear, str]] | None:
-    """``(Linear, activation)`` per layer when ``module`` is a plain MLP trained on the weighted squared error.
+    """The layers of ``module`` when it is an MLP trained on the weighted squared error, else None.
 
     Then :func:`_mlp_backward` computes the gradients by hand; anything else (a user's own module or loss)
     goes through autograd.
     """
-    if not isinstance(criterion, WeightedSquaredError) or not isinstance(getattr(module, "layers", None),
-                                                                         torch.nn.Sequential):
-        return None
-    layers, out = list(module.layers), []
-    for i, layer in enumerate(layers):
-        if isinstance(layer, torch.nn.Linear):
-            following = layers[i + 1] if i + 1 < len(layers) else None
-            if following is not None and not isinstance(following, (torch.nn.ReLU, torch.nn.Tanh)):
-                return None
-            out.append((layer, "relu" if isinstance(following, torch.nn.ReLU)
-                        else "tanh" if isinstance(following, torch.nn.Tanh) else "identity"))
-        elif not isinstance(layer, (torch.nn.ReLU, torch.nn.Tanh)):
-            return None
-    return out
+    return mlp_layers(module) if isinstance(criterion, WeightedSquaredError) else None
 
 
 def _mlp_backward(layers: list[tuple[torch.nn.Linear, str]], weights: torch.Tensor, X: torch.Tensor,
@@ -166,24 +153,16 @@ def _mlp_backward(layers: list[tuple[torch.nn.Linear, str]], weights: torch.Tens
     nets. Returns the loss.
     """
     with torch.no_grad():
-        hs = [X]
-        h = X
+        hs, h = [X], X
         for layer, activation in layers:
-            h = torch.addmm(layer.bias, h, layer.weight.t())
-            if activation == "relu":
-                h = torch.relu(h)
-            elif activation == "tanh":
-                h = torch.tanh(h)
+            h = activate(torch.addmm(layer.bias, h, layer.weight.t()), activation)
             hs.append(h)
         error = h - y
         loss = (error * error * weights).sum(dim=1).mean()
         grad = error * (weights * (2.0 / len(X)))
         for i in range(len(layers) - 1, -1, -1):
             layer, activation = layers[i]
-            if activation == "relu":
-                grad = grad * (hs[i + 1] > 0)
-            elif activation == "tanh":
-                grad = grad * (1.0 - hs[i + 1] * hs[i + 1])
+            grad = activation_backward(grad, hs[i + 1], activation)
             layer.weight.grad = grad.t().mm(hs[i])
             layer.bias.grad = grad.sum(dim=0)
             if i:
@@ -404,18 +383,9 @@ class NetworkCalibrator(BaseCalibrator):
         cached = self.__dict__.get("_numpy_layers_cache")
         if cached is not None and cached[0] is self.net_.module_:
             return cached[1]
-        layers, pending = [], None
-        for layer in self.net_.module_.layers:
-            if isinstance(layer, torch.nn.Linear):
-                if pending is not None:
-                    layers.append((*pending, "identity"))
-                pending = (layer.weight.detach().cpu().double().numpy().T.copy(),
-                           layer.bias.detach().cpu().double().numpy().copy())
-            else:
-                layers.append((*pending, "tanh" if isinstance(layer, torch.nn.Tanh) else "relu"))
-                pending = None
-        if pending is not None:
-            layers.append((*pending, "identity"))
+        layers = [(layer.weight.detach().cpu().double().numpy().T.copy(),
+                   layer.bias.detach().cpu().double().numpy().copy(), activation)
+                  for layer, activation in mlp_layers(self.net_.module_)]
         self.__dict__["_numpy_layers_cache"] = (self.net_.module_, layers)
         return layers
 

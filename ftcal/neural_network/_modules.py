@@ -16,7 +16,8 @@ from collections.abc import Sequence
 import torch
 from torch import nn
 
-__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "mlp"]
+__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "mlp", "mlp_layers", "activate",
+           "activation_backward"]
 
 
 def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_hidden: type[nn.Module]) -> nn.Sequential:
@@ -40,6 +41,50 @@ def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_h
         width = int(size)
     layers.append(nn.Linear(width, n_outputs))
     return nn.Sequential(*layers)
+
+
+def mlp_layers(module: nn.Module) -> list[tuple[nn.Linear, str]] | None:
+    """``(Linear, activation)`` per layer of an :func:`mlp` (``module.layers``), or None for any other module.
+
+    ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"`` (the output layer).
+
+    Examples
+    --------
+    >>> [a for _, a in mlp_layers(DirectionalNet(6, (8, 4)))]
+    ['relu', 'tanh', 'identity']
+    """
+    layers = getattr(module, "layers", None)
+    if not isinstance(layers, nn.Sequential):
+        return None
+    layers, out = list(layers), []
+    for i, layer in enumerate(layers):
+        if isinstance(layer, nn.Linear):
+            following = layers[i + 1] if i + 1 < len(layers) else None
+            if following is not None and not isinstance(following, (nn.ReLU, nn.Tanh)):
+                return None
+            out.append((layer, "relu" if isinstance(following, nn.ReLU)
+                        else "tanh" if isinstance(following, nn.Tanh) else "identity"))
+        elif not isinstance(layer, (nn.ReLU, nn.Tanh)):
+            return None
+    return out
+
+
+def activate(h: torch.Tensor, activation: str) -> torch.Tensor:
+    """``h`` through ``"relu"``, ``"tanh"`` or ``"identity"``."""
+    if activation == "relu":
+        return torch.relu(h)
+    if activation == "tanh":
+        return torch.tanh(h)
+    return h
+
+
+def activation_backward(grad: torch.Tensor, out: torch.Tensor, activation: str) -> torch.Tensor:
+    """The gradient before the activation, from the one after it and the activation's output ``out``."""
+    if activation == "relu":
+        return grad * (out > 0)
+    if activation == "tanh":
+        return grad * (1.0 - out * out)
+    return grad
 
 
 class _MLPNet(nn.Module):

@@ -34,9 +34,11 @@ import torch
 from numpy.typing import ArrayLike
 from skorch.history import History
 from threadpoolctl import threadpool_limits
+from torch.optim.adam import adam as _functional_adam
 
 from ..core._exceptions import CalibrationInputError
 from ._base import NetworkCalibrator, interrupt_flag, torch_threads
+from ._modules import activate, activation_backward, mlp_layers
 from ._schedule import phase_of_epoch
 from ..core._validation import validate_training_data
 
@@ -50,11 +52,11 @@ class StackedMLP(torch.nn.Module):
 
     Built from ``K`` modules whose ``layers`` is an ``nn.Sequential`` of
     ``Linear`` layers and ``ReLU`` / ``Tanh`` activations (the calibrators'
-    nets, :func:`ftcal.neural_network._modules.mlp`), or from ``rows``: one
-    member's weights per row, as :meth:`member_row` gives them. Each layer's
-    weights of all members are one parameter of shape ``(K, n_in, n_out)``
-    (the bias ``(K, 1, n_out)``), so a layer is one ``torch.baddbmm`` and one
-    optimiser step updates every member.
+    nets, :func:`ftcal.neural_network._modules.mlp`). All weights live in one
+    1-D parameter ``flat``, layer after layer: the weights of layer ``l`` of
+    all members are one contiguous ``(K, n_in, n_out)`` block (the bias
+    ``(K, 1, n_out)``), so a layer is one ``torch.baddbmm`` and one optimiser
+    step over one tensor updates every member.
 
     Examples
     --------
@@ -67,29 +69,13 @@ class StackedMLP(torch.nn.Module):
     True
     """
 
-    def __init__(self, modules: Sequence[torch.nn.Module], rows: torch.Tensor | None = None):
+    def __init__(self, modules: Sequence[torch.nn.Module], flat: torch.Tensor | None = None):
         super().__init__()
         if len(modules) < 1:
             raise CalibrationInputError("StackedMLP needs at least one module (K >= 1); got none.")
-        #: per layer: (offset of its weight in a member row, n_in, n_out, offset of its bias, activation)
-        self.layout: list[tuple[int, int, int, int, str]] = []
-        member_rows: list[list[torch.Tensor]] = [[] for _ in modules]
         signature = None
         for k, module in enumerate(modules):
-            layers, offset = list(module.layers), 0
-            shape = []
-            for i, layer in enumerate(layers):
-                if not isinstance(layer, torch.nn.Linear):
-                    continue
-                following = layers[i + 1] if i + 1 < len(layers) else None
-                activation = ("relu" if isinstance(following, torch.nn.ReLU)
-                              else "tanh" if isinstance(following, torch.nn.Tanh) else "identity")
-                n_out, n_in = layer.weight.shape
-                shape.append((n_in, n_out, activation))
-                if k == 0:
-                    self.layout.append((offset, n_in, n_out, offset + n_in * n_out, activation))
-                member_rows[k] += [layer.weight.detach().T.reshape(-1), layer.bias.detach().reshape(-1)]
-                offset += n_in * n_out + n_out
+            shape = [(layer.in_features, layer.out_features, activation) for layer, activation in mlp_layers(module)]
             if signature is None:
                 signature = shape
             elif shape != signature:
@@ -97,69 +83,86 @@ class StackedMLP(torch.nn.Module):
                     f"StackedMLP: module {k} has layers {shape}, module 0 {signature}; stacked nets must share "
                     "one architecture."
                 )
-        if rows is None:
-            rows = torch.stack([torch.cat(r) for r in member_rows])
-        K = rows.shape[0]
-        self.weights = torch.nn.ParameterList()
-        self.biases = torch.nn.ParameterList()
-        for w_off, n_in, n_out, b_off, _ in self.layout:
-            self.weights.append(torch.nn.Parameter(rows[:, w_off:w_off + n_in * n_out].reshape(K, n_in, n_out).clone()))
-            self.biases.append(torch.nn.Parameter(rows[:, b_off:b_off + n_out].reshape(K, 1, n_out).clone()))
+        #: per layer: (n_in, n_out, activation)
+        self.layout: list[tuple[int, int, str]] = signature
+        self.n_members = len(modules) if flat is None else flat.numel() // self._row_size()
+        if flat is None:
+            blocks = []
+            for i in range(len(self.layout)):
+                pairs = [mlp_layers(m)[i][0] for m in modules]
+                blocks += [torch.stack([layer.weight.detach().T for layer in pairs]).reshape(-1),
+                           torch.stack([layer.bias.detach() for layer in pairs]).reshape(-1)]
+            flat = torch.cat(blocks)
+        self.flat = torch.nn.Parameter(flat.detach().clone())
+        self.flat.grad = torch.zeros_like(self.flat)
+        # the storage never moves (updates are in place): its layer views are made once
+        self._param_views = self.views(self.flat.detach())
+        self._grad_views = self.views(self.flat.grad)
+
+    def _row_size(self) -> int:
+        return sum(n_in * n_out + n_out for n_in, n_out, _ in self.layout)
+
+    def views(self, t: torch.Tensor) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        """``(weight (K, n_in, n_out), bias (K, 1, n_out))`` per layer: views of ``t``, laid out like ``flat``."""
+        K, out, offset = self.n_members, [], 0
+        for n_in, n_out, _ in self.layout:
+            weight = t[offset:offset + K * n_in * n_out].view(K, n_in, n_out)
+            offset += K * n_in * n_out
+            bias = t[offset:offset + K * n_out].view(K, 1, n_out)
+            offset += K * n_out
+            out.append((weight, bias))
+        return out
+
+    def select(self, t: torch.Tensor, index: torch.Tensor) -> torch.Tensor:
+        """The members ``index`` of ``t`` (laid out like ``flat``), laid out for ``len(index)`` members."""
+        return torch.cat([block.reshape(self.n_members, -1)[index].reshape(-1)
+                          for pair in self.views(t) for block in pair])
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         h = x
-        for weight, bias, (*_, activation) in zip(self.weights, self.biases, self.layout):
-            h = torch.baddbmm(bias, h, weight)
-            if activation == "relu":
-                h = torch.relu(h)
-            elif activation == "tanh":
-                h = torch.tanh(h)
+        for (weight, bias), (*_, activation) in zip(self.views(self.flat), self.layout):
+            h = activate(torch.baddbmm(bias, h, weight), activation)
         return h
 
     def loss_and_gradients(self, X: torch.Tensor, y: torch.Tensor, weights: torch.Tensor, row_weight) -> torch.Tensor:
-        """Each member's loss ``sum_i row_weight_i sum_j weights_j (f(x_i)_j - y_ij)²``, its gradients set on the
-        parameters' ``.grad`` by hand (the arithmetic of autograd in half the calls; ``tests/test_stacked.py``
+        """Each member's loss ``sum_i row_weight_i sum_j weights_j (f(x_i)_j - y_ij)²``, its gradient written to
+        ``flat.grad`` by hand (the arithmetic of autograd in half the calls; ``tests/test_stacked.py``
         compares). ``weights`` (K, 1, n_out); ``row_weight`` a number (1 / batch) or (K, B, 1). Returns (K,)."""
         with torch.no_grad():
+            params = self._param_views
             hs, h = [X], X
-            for weight, bias, (*_, activation) in zip(self.weights, self.biases, self.layout):
-                h = torch.baddbmm(bias, h, weight)
-                if activation == "relu":
-                    h = torch.relu(h)
-                elif activation == "tanh":
-                    h = torch.tanh(h)
+            for (weight, bias), (*_, activation) in zip(params, self.layout):
+                h = activate(torch.baddbmm(bias, h, weight), activation)
                 hs.append(h)
             error = h - y
             weighted = error * weights * row_weight
             losses = (weighted * error).sum(dim=(1, 2))
+            if self.flat.grad is None or self.flat.grad.data_ptr() != self._grad_views[0][0].data_ptr():
+                self.flat.grad = torch.zeros_like(self.flat)  # autograd replaced or dropped the buffer
+                self._grad_views = self.views(self.flat.grad)
+            grads = self._grad_views
             grad = 2.0 * weighted
             for i in range(len(self.layout) - 1, -1, -1):
-                activation = self.layout[i][4]
-                if activation == "relu":
-                    grad = grad * (hs[i + 1] > 0)
-                elif activation == "tanh":
-                    grad = grad * (1.0 - hs[i + 1] * hs[i + 1])
-                self.weights[i].grad = torch.bmm(hs[i].transpose(1, 2), grad)
-                self.biases[i].grad = grad.sum(dim=1, keepdim=True)
+                grad = activation_backward(grad, hs[i + 1], self.layout[i][2])
+                torch.bmm(hs[i].transpose(1, 2), grad, out=grads[i][0])
+                torch.sum(grad, dim=1, keepdim=True, out=grads[i][1])
                 if i:
-                    grad = torch.bmm(grad, self.weights[i].transpose(1, 2))
+                    grad = torch.bmm(grad, params[i][0].transpose(1, 2))
         return losses
 
-    def ordered_parameters(self) -> list[torch.nn.Parameter]:
-        """Weight and bias of each layer, in the order of a member row."""
-        return [p for pair in zip(self.weights, self.biases) for p in pair]
-
     def member_row(self, k: int) -> torch.Tensor:
-        """Member ``k``'s weights as one row (a copy): what :meth:`load_member` and ``rows=`` take."""
-        return torch.cat([p.detach()[k].reshape(-1) for p in self.ordered_parameters()])
+        """Member ``k``'s weights as one row (a copy), layer after layer: what :meth:`load_member` takes."""
+        return torch.cat([block.detach()[k].reshape(-1) for pair in self.views(self.flat) for block in pair])
 
     def load_member(self, row: torch.Tensor, module: torch.nn.Module) -> None:
         """Copy one member's weights (a :meth:`member_row`) into ``module`` (an unstacked net of the same shape)."""
-        linears = [layer for layer in module.layers if isinstance(layer, torch.nn.Linear)]
+        offset = 0
         with torch.no_grad():
-            for layer, (w_off, n_in, n_out, b_off, _) in zip(linears, self.layout):
-                layer.weight.copy_(row[w_off:w_off + n_in * n_out].view(n_in, n_out).T)
-                layer.bias.copy_(row[b_off:b_off + n_out])
+            for (layer, _), (n_in, n_out, _) in zip(mlp_layers(module), self.layout):
+                layer.weight.copy_(row[offset:offset + n_in * n_out].view(n_in, n_out).T)
+                offset += n_in * n_out
+                layer.bias.copy_(row[offset:offset + n_out])
+                offset += n_out
 
 
 class _Member:
@@ -208,24 +211,14 @@ class _StackedRun:
         self.template = template
         self.batch = int(template.batch_size)
         self._restack(list(range(len(members))), None)
-        self.m = [torch.zeros_like(p) for p in self.params]
-        self.v = [torch.zeros_like(p) for p in self.params]
+        self.m = torch.zeros_like(self.module.flat)
+        self.v = torch.zeros_like(self.module.flat)
         self.step = torch.zeros(len(members), 1, 1)
-        self._share_moments()
 
-    def _share_moments(self) -> None:
-        """Give the fused optimiser this run's moment buffers (it then updates them in place)."""
-        for p, m, v in zip(self.params, self.m, self.v):
-            self.fused.state[p] = {"step": torch.tensor(float(self.step[0, 0, 0])), "exp_avg": m, "exp_avg_sq": v}
-
-    def _restack(self, active: list[int], rows: torch.Tensor | None) -> None:
+    def _restack(self, active: list[int], flat: torch.Tensor | None) -> None:
         self.active = active
         members = [self.members[i] for i in active]
-        self.module = StackedMLP([m.net.module_ for m in members], rows=rows)
-        self.params = self.module.ordered_parameters()
-        # torch's fused Adam kernel for the epochs in which every member steps alike with one learning rate
-        # (all but the plateau phase); it shares its moment buffers with the per-member path of _adam
-        self.fused = torch.optim.Adam(self.params, lr=1e-3, fused=True)
+        self.module = StackedMLP([m.net.module_ for m in members], flat=flat)
         self.X_train, self.train_mask = _padded([m.X_train for m in members])
         self.y_train, _ = _padded([m.y_train for m in members])
         self.n_train = torch.tensor([len(m.X_train) for m in members])
@@ -242,31 +235,32 @@ class _StackedRun:
             self.active = []
             return
         index = torch.tensor(keep)
-        rows = torch.stack([self.module.member_row(i) for i in keep])
-        self.m, self.v = [m[index] for m in self.m], [v[index] for v in self.v]
+        select = self.module.select
+        flat, self.m, self.v = select(self.module.flat.detach(), index), select(self.m, index), select(self.v, index)
         self.step = self.step[index]
-        self._restack([self.active[i] for i in keep], rows)
-        self._share_moments()
+        self._restack([self.active[i] for i in keep], flat)
 
     def _adam(self, lr: torch.Tensor, moving: torch.Tensor | None) -> None:
         """One Adam step of every member (torch.optim.Adam's arithmetic) with its own rate ``lr`` (K, 1, 1);
         ``moving``: the members that had a batch (the others keep their weights, moments and step count)."""
+        views = self.module.views
         with torch.no_grad():
             self.step += 1 if moving is None else moving
             correction1 = 1 - _BETA1 ** self.step
             correction2 = (1 - _BETA2 ** self.step).sqrt()
             rate = lr if moving is None else lr * moving
-            for p, m, v in zip(self.params, self.m, self.v):
-                grad = p.grad
-                if moving is None:
-                    m.lerp_(grad, 1 - _BETA1)
-                    v.mul_(_BETA2).addcmul_(grad, grad, value=1 - _BETA2)
-                else:
-                    on = moving.bool()
-                    m.copy_(torch.where(on, torch.lerp(m, grad, 1 - _BETA1), m))
-                    v.copy_(torch.where(on, v * _BETA2 + (1 - _BETA2) * grad * grad, v))
-                denom = (v.sqrt() / correction2).add_(_EPS)
-                p.sub_(rate / correction1 * m / denom)
+            blocks = zip(views(self.module.flat.detach()), views(self.module.flat.grad), views(self.m), views(self.v))
+            for param_pair, grad_pair, m_pair, v_pair in blocks:
+                for p, grad, m, v in zip(param_pair, grad_pair, m_pair, v_pair):
+                    if moving is None:
+                        m.lerp_(grad, 1 - _BETA1)
+                        v.mul_(_BETA2).addcmul_(grad, grad, value=1 - _BETA2)
+                    else:
+                        on = moving.bool()
+                        m.copy_(torch.where(on, torch.lerp(m, grad, 1 - _BETA1), m))
+                        v.copy_(torch.where(on, v * _BETA2 + (1 - _BETA2) * grad * grad, v))
+                    denom = (v.sqrt() / correction2).add_(_EPS)
+                    p.sub_(rate / correction1 * m / denom)
 
     def train_epoch(self) -> list[float]:
         """One epoch of every active member; their mean training losses."""
@@ -283,9 +277,11 @@ class _StackedRun:
         # one rate and one step count for all: torch's fused Adam does the update in one kernel
         fused = not uneven and bool((lr == lr[0]).all()) and bool((self.step == self.step[0]).all())
         if fused:
-            self.fused.param_groups[0]["lr"] = float(lr[0, 0, 0])
-            for p in self.params:
-                self.fused.state[p]["step"].fill_(float(self.step[0, 0, 0]))
+            fused_step = torch.tensor(float(self.step[0, 0, 0]))
+            fused_state = dict(params=[self.module.flat.detach()], grads=[self.module.flat.grad], exp_avgs=[self.m],
+                               exp_avg_sqs=[self.v], max_exp_avg_sqs=[], state_steps=[fused_step], fused=True,
+                               amsgrad=False, beta1=_BETA1, beta2=_BETA2, lr=float(lr[0, 0, 0]), weight_decay=0.0,
+                               eps=_EPS, maximize=False)
         rows = torch.arange(K).unsqueeze(1)
         n_steps = -(-n_max // batch)
         total = torch.zeros(K)
@@ -304,8 +300,8 @@ class _StackedRun:
                 row_weight = 1.0 / index.shape[1]
                 moving = None
             losses = self.module.loss_and_gradients(X, y, self.weights, row_weight)
-            if fused:
-                self.fused.step()
+            if fused:  # torch's fused Adam kernel (what the members' own fits use), functional form
+                _functional_adam(**fused_state)
             else:
                 self._adam(lr, moving)
             total += losses.detach() * count
