@@ -125,9 +125,9 @@ def main(argv=None) -> int:
         "| measure | ftcal | baseline (same process) | ratio | target |",
         "|---|---|---|---|---|",
         f"| fit, {args.epochs} epochs, 4000 x 6, batch 32, (64, 64, 64) | {t_ftcal:.2f} s | plain skorch "
-        f"NeuralNetRegressor {t_plain:.2f} s | {t_ftcal / t_plain:.2f} | <= 0.33 |",
+        f"NeuralNetRegressor {t_plain:.2f} s | {t_ftcal / t_plain:.3f} | <= 0.33 |",
         f"| 5-member directional ensemble fit, {args.epochs} epochs (members stacked) | {t_ensemble:.2f} s | "
-        f"one member's fit {t_ftcal:.2f} s | {t_ensemble / t_ftcal:.2f} | <= 1.5 |",
+        f"one member's fit {t_ftcal:.2f} s | {t_ensemble / t_ftcal:.3f} | <= 1.5 |",
         f"| fit_stacked of {args.stack} nets, per net | {t_stack / args.stack:.3f} s | one fit {t_ftcal:.2f} s | "
         f"{t_stack / args.stack / t_ftcal:.3f} | |",
         f"| fit_stacked of {args.stack} nets, per net, vs plain skorch | {t_stack / args.stack:.3f} s | plain skorch "

@@ -36,6 +36,7 @@ from skorch.dataset import ValidSplit
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 from sklearn.utils._param_validation import Interval
+from torch.optim.adam import adam as _functional_adam
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
@@ -170,6 +171,48 @@ def _mlp_backward(layers: list[tuple[torch.nn.Linear, str]], weights: torch.Tens
     return loss
 
 
+class _FusedAdamStep:
+    """``optimizer.step()`` of a plain fused ``torch.optim.Adam`` as one call of torch's functional ``adam``.
+
+    The same kernel, state and learning rate (read from the param group at every step, so schedulers keep
+    working) without ``Optimizer.step``'s per-call bookkeeping, which costs as much as the update of these
+    small nets. Any other optimiser, or options this does not handle, keeps its own ``step``.
+    """
+
+    def __init__(self, optimizer: torch.optim.Adam) -> None:
+        self.optimizer = optimizer
+        self.group = optimizer.param_groups[0]
+        self.params = list(self.group["params"])
+        for p in self.params:
+            state = optimizer.state[p]
+            if not state:  # what Adam's _init_group creates
+                state["step"] = torch.zeros((), dtype=torch.float32)
+                state["exp_avg"] = torch.zeros_like(p, memory_format=torch.preserve_format)
+                state["exp_avg_sq"] = torch.zeros_like(p, memory_format=torch.preserve_format)
+        self.states = [optimizer.state[p] for p in self.params]
+
+    @classmethod
+    def of(cls, optimizer):
+        g = optimizer.param_groups[0] if len(optimizer.param_groups) == 1 else None
+        plain = (type(optimizer) is torch.optim.Adam and g is not None and g.get("fused") and not g["amsgrad"]
+                 and not g["maximize"] and g["weight_decay"] == 0 and not g["capturable"] and not g["differentiable"]
+                 and not g.get("decoupled_weight_decay", False) and all(p.device.type == "cpu" for p in g["params"]))
+        return cls(optimizer).__call__ if plain else optimizer.step
+
+    def __call__(self) -> None:
+        g = self.group
+        beta1, beta2 = g["betas"]
+        with torch.no_grad():
+            self._update(beta1, beta2)
+
+    def _update(self, beta1: float, beta2: float) -> None:
+        g = self.group
+        _functional_adam(self.params, [p.grad for p in self.params], [s["exp_avg"] for s in self.states],
+                         [s["exp_avg_sq"] for s in self.states], [], [s["step"] for s in self.states], fused=True,
+                         amsgrad=False, beta1=beta1, beta2=beta2, lr=g["lr"], weight_decay=0.0, eps=g["eps"],
+                         maximize=False)
+
+
 class LeanNeuralNetRegressor(NeuralNetRegressor):
     """skorch's ``NeuralNetRegressor`` with a lean inner loop: tensors loaded once, batches sliced from them.
 
@@ -204,6 +247,7 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
             total = torch.zeros((), device=X.device)
             batch = int(self.batch_size)
             manual = _manual_layers(module, criterion)
+            step = _FusedAdamStep.of(self.optimizer_) if manual is not None else self.optimizer_.step
             X_epoch, y_epoch = X[order], y[order]  # shuffled once; the batches are views
             for start in range(0, n, batch):
                 X_batch, y_batch = X_epoch[start:start + batch], y_epoch[start:start + batch]
@@ -213,7 +257,7 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
                     loss.backward()
                 else:  # sets every .grad afresh: no zero_grad needed
                     loss = _mlp_backward(manual, criterion.weights, X_batch, y_batch)
-                self.optimizer_.step()
+                step()
                 total += loss.detach() * len(X_batch)
             mean = float(total) / max(n, 1)
             batches = -(-n // batch)

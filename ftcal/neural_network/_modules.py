@@ -79,11 +79,15 @@ def activate(h: torch.Tensor, activation: str) -> torch.Tensor:
 
 
 def activation_backward(grad: torch.Tensor, out: torch.Tensor, activation: str) -> torch.Tensor:
-    """The gradient before the activation, from the one after it and the activation's output ``out``."""
+    """The gradient before the activation, from the one after it and the activation's output ``out``.
+
+    ReLU: ``grad`` where ``out > 0``, else 0; tanh: ``grad * (1 - out²)``; each one kernel, the ones
+    autograd itself runs (``threshold_backward``, ``tanh_backward``).
+    """
     if activation == "relu":
-        return grad * (out > 0)
+        return torch.ops.aten.threshold_backward(grad, out, 0)
     if activation == "tanh":
-        return grad * (1.0 - out * out)
+        return torch.ops.aten.tanh_backward(grad, out)
     return grad
 
 

@@ -94,10 +94,10 @@ class StackedMLP(torch.nn.Module):
                            torch.stack([layer.bias.detach() for layer in pairs]).reshape(-1)]
             flat = torch.cat(blocks)
         self.flat = torch.nn.Parameter(flat.detach().clone())
-        self.flat.grad = torch.zeros_like(self.flat)
+        self.flat.grad = self._grad = torch.zeros_like(self.flat)
         # the storage never moves (updates are in place): its layer views are made once
         self._param_views = self.views(self.flat.detach())
-        self._grad_views = self.views(self.flat.grad)
+        self._grad_views = self.views(self._grad)
 
     def _row_size(self) -> int:
         return sum(n_in * n_out + n_out for n_in, n_out, _ in self.layout)
@@ -137,9 +137,9 @@ class StackedMLP(torch.nn.Module):
             error = h - y
             weighted = error * weights * row_weight
             losses = (weighted * error).sum(dim=(1, 2))
-            if self.flat.grad is None or self.flat.grad.data_ptr() != self._grad_views[0][0].data_ptr():
-                self.flat.grad = torch.zeros_like(self.flat)  # autograd replaced or dropped the buffer
-                self._grad_views = self.views(self.flat.grad)
+            if self.flat.grad is not self._grad:  # autograd (a user's backward) replaced or dropped the buffer
+                self.flat.grad = self._grad = torch.zeros_like(self.flat)
+                self._grad_views = self.views(self._grad)
             grads = self._grad_views
             grad = 2.0 * weighted
             for i in range(len(self.layout) - 1, -1, -1):
@@ -287,24 +287,26 @@ class _StackedRun:
         total = torch.zeros(K)
         self.module.train()
         X_epoch, y_epoch = self.X_train[rows, order], self.y_train[rows, order]  # shuffled once; batches are views
+        loss_and_gradients = self.module.loss_and_gradients
         for start in range(0, n_max, batch):
-            index = order[:, start:start + batch]
-            X, y = X_epoch[:, start:start + batch], y_epoch[:, start:start + batch]
+            stop = min(start + batch, n_max)
+            X, y = X_epoch[:, start:stop], y_epoch[:, start:stop]
             if uneven:
-                rows_mask = mask[:, start:start + batch]
+                rows_mask = mask[:, start:stop]
                 count = rows_mask.sum(dim=1)
                 row_weight = (rows_mask / count.clamp(min=1).unsqueeze(1)).unsqueeze(2)
                 moving = (count > 0).float().view(K, 1, 1)
             else:
-                count = torch.full((K,), float(index.shape[1]))
-                row_weight = 1.0 / index.shape[1]
-                moving = None
-            losses = self.module.loss_and_gradients(X, y, self.weights, row_weight)
+                row_weight, moving = 1.0 / (stop - start), None
+            losses = loss_and_gradients(X, y, self.weights, row_weight)
             if fused:  # torch's fused Adam kernel (what the members' own fits use), functional form
                 _functional_adam(**fused_state)
             else:
                 self._adam(lr, moving)
-            total += losses.detach() * count
+            if uneven:
+                total += losses * count
+            else:
+                total.add_(losses, alpha=float(stop - start))
         if fused:
             self.step += n_steps
         return (total / self.n_train).tolist()
