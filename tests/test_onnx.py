@@ -143,3 +143,11 @@ def test_cli_export_writes_the_onnx_beside_the_model(fitted_models, tmp_path, ca
     err = capsys.readouterr().err
     assert err.startswith("ftcal: error: ") and "model file itself" in err
     assert main(["export", str(model_path), "--force"]) == 0
+
+
+def test_cli_export_wants_an_onnx_file_name(fitted_models, tmp_path, capsys):
+    model_path = save_model(fitted_models["linear"], tmp_path / "lin.model.npz")
+    assert main(["export", str(model_path), "--output", str(tmp_path / "lin.txt")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ftcal: error: ") and "should end in .onnx" in err
+    assert not (tmp_path / "lin.txt").exists()

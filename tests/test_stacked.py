@@ -206,3 +206,18 @@ def test_hand_written_gradients_equal_autograd(uneven):
     torch.testing.assert_close(loss, reference.detach())
     for a, p in zip(by_hand, net.parameters()):
         torch.testing.assert_close(a, p.grad, rtol=1e-5, atol=1e-6)
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "two"])
+def test_cli_stack_must_be_a_positive_integer(value, capsys, tmp_path):
+    from ftcal.cli import main
+
+    assert main(["benchmark", "artificial", "--quick", "--stack", value, "--out", str(tmp_path / "b")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ftcal: error: ") and "stack" in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "b").exists()
+
+
+def test_benchmark_refuses_a_bad_stack_before_any_work(tmp_path):
+    with pytest.raises(CalibrationInputError, match=r"stack must be an integer >= 1 \(nets trained together\); got 0"):
+        run_artificial_benchmark(n_datasets=1, quick=True, stack=0, out_dir=tmp_path / "b", plot=False)
