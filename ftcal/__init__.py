@@ -9,7 +9,7 @@ robot-held calibration experiment of that thesis.
 
 from __future__ import annotations
 
-from importlib import import_module
+from .core._lazy import lazy_namespace
 
 __version__ = "0.1.0"
 
@@ -107,16 +107,4 @@ _PUBLIC: dict[str, str] = {
 }
 
 __all__ = list(_PUBLIC)
-
-
-def __getattr__(name: str):
-    module = _PUBLIC.get(name)
-    if module is None:
-        raise AttributeError(f"module 'ftcal' has no attribute {name!r}")
-    value = getattr(import_module(f".{module}", __name__), name)
-    globals()[name] = value  # later look-ups skip this function
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

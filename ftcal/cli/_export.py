@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}.onnx")
-    if same_file(output, args.model) or output.resolve() == args.model.resolve():
+    if same_file(output, args.model):
         raise CliError(f"--output {output} is the model file itself; writing there would destroy it. "
                        "Choose another --output")
     if output.suffix.lower() != ".onnx":

@@ -58,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
         raise FileNotFoundError(2, "No such file (the raw readings to predict)", args.input)
     if args.output != "-":
         for role, other in (("input", args.input), ("model", args.model)):
-            if other != "-" and (same_file(args.output, other) or Path(args.output).resolve() == Path(other).resolve()):
+            if other != "-" and same_file(args.output, other):
                 raise CliError(f"--output {args.output} is the {role} file; writing there would destroy it. "
                                "Choose another --output")
     model = load_model_file(args.model)

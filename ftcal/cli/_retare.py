@@ -47,7 +47,7 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
-    if (same_file(output, args.model) or output.resolve() == args.model.resolve()) and not args.force:
+    if same_file(output, args.model) and not args.force:
         raise CliError(f"--output {output} is the model file itself; pass --force to replace it")
     if args.readings != "-" and not Path(args.readings).is_file():
         raise CliError(f"{args.readings}: no such readings file")

@@ -114,11 +114,12 @@ def check_writable_dir(directory: str | os.PathLike, error: type[Exception], wha
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
-    """Whether two paths name the same existing file (links and relative paths resolved)."""
+    """Whether two paths name the same file: the same existing file (hard links too), or, when either does
+    not exist yet, the same path once links and relative parts are resolved."""
     try:
         return os.path.samefile(a, b)
     except OSError:
-        return False
+        return Path(a).resolve() == Path(b).resolve()
 
 
 def plain_json(obj):

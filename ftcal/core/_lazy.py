@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable
 from importlib import import_module
 
@@ -11,8 +12,9 @@ __all__ = ["lazy_namespace"]
 def lazy_namespace(package: str, names: dict[str, str]) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
     """``__getattr__`` and ``__dir__`` for ``package`` that import ``names[attr]`` (a submodule) on first use.
 
-    Keeps ``import ftcal.<package>`` as light as its docstring: torch and pinocchio load only when a name
-    that needs them is used.
+    Keeps ``import ftcal`` and ``import ftcal.<package>`` light: torch and pinocchio load only when a name
+    that needs them is used. ``names`` values are module paths relative to ``package``. A resolved name is
+    stored in the package, so later look-ups do not come here.
 
     Examples
     --------
@@ -25,9 +27,11 @@ def lazy_namespace(package: str, names: dict[str, str]) -> tuple[Callable[[str],
         module = names.get(name)
         if module is None:
             raise AttributeError(f"module {package!r} has no attribute {name!r}")
-        return getattr(import_module(f"{package}.{module}"), name)
+        value = getattr(import_module(f"{package}.{module}"), name)
+        setattr(sys.modules[package], name, value)  # later look-ups skip this function
+        return value
 
     def __dir__() -> list[str]:
-        return sorted(names)
+        return sorted(set(vars(sys.modules[package])) | set(names))
 
     return __getattr__, __dir__

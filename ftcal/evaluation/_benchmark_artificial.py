@@ -251,8 +251,9 @@ def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
         return [[t] for t in pending]
     groups: dict[tuple, list[dict]] = {}
     units = []
+    stackable = {m: isinstance(make_calibrator(m), NetworkCalibrator) for m in {t["model"] for t in pending}}
     for task in pending:
-        if isinstance(make_calibrator(task["model"]), NetworkCalibrator):
+        if stackable[task["model"]]:
             groups.setdefault((task["preset"], task["model"]), []).append(task)
         else:
             units.append([task])

@@ -23,6 +23,7 @@ exporter.
 
 from __future__ import annotations
 
+import functools
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -179,6 +180,7 @@ def _temperature_compensated(model, g: _Graph, x: str) -> str:
     return _calibration(model.estimator_, g, compensated)
 
 
+@functools.cache
 def _emitters() -> dict[type, Callable]:
     from ._auto import AutoCalibrator
     from ..neural_network._comparative import ComparativeCalibrator

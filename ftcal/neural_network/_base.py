@@ -106,22 +106,6 @@ def torch_threads(n_threads: int) -> Iterator[None]:
         torch.set_num_threads(old)
 
 
-def _check_int(name: str, value, minimum: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < minimum:
-        raise CalibrationInputError(f"{name} must be an integer >= {minimum}; got {value!r}.")
-    return int(value)
-
-
-def _check_real(name: str, value, low: float, high: float, *, low_open: bool = False) -> float:
-    ok = isinstance(value, numbers.Real) and not isinstance(value, bool) and np.isfinite(value)
-    if ok:
-        ok = (value > low if low_open else value >= low) and value <= high
-    if not ok:
-        bound = "(" if low_open else "["
-        raise CalibrationInputError(f"{name} must be a number in {bound}{low}, {high}]; got {value!r}.")
-    return float(value)
-
-
 def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
     """``(X, y)`` tensors on ``device`` of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
     indices = None
@@ -189,7 +173,10 @@ class _FusedAdamStep:
                 state["step"] = torch.zeros((), dtype=torch.float32)
                 state["exp_avg"] = torch.zeros_like(p, memory_format=torch.preserve_format)
                 state["exp_avg_sq"] = torch.zeros_like(p, memory_format=torch.preserve_format)
-        self.states = [optimizer.state[p] for p in self.params]
+        states = [optimizer.state[p] for p in self.params]
+        self.exp_avgs = [s["exp_avg"] for s in states]
+        self.exp_avg_sqs = [s["exp_avg_sq"] for s in states]
+        self.steps = [s["step"] for s in states]
 
     @classmethod
     def of(cls, optimizer):
@@ -201,16 +188,10 @@ class _FusedAdamStep:
 
     def __call__(self) -> None:
         g = self.group
-        beta1, beta2 = g["betas"]
         with torch.no_grad():
-            self._update(beta1, beta2)
-
-    def _update(self, beta1: float, beta2: float) -> None:
-        g = self.group
-        _functional_adam(self.params, [p.grad for p in self.params], [s["exp_avg"] for s in self.states],
-                         [s["exp_avg_sq"] for s in self.states], [], [s["step"] for s in self.states], fused=True,
-                         amsgrad=False, beta1=beta1, beta2=beta2, lr=g["lr"], weight_decay=0.0, eps=g["eps"],
-                         maximize=False)
+            _functional_adam(self.params, [p.grad for p in self.params], self.exp_avgs, self.exp_avg_sqs, [],
+                             self.steps, fused=True, amsgrad=False, beta1=g["betas"][0], beta2=g["betas"][1],
+                             lr=g["lr"], weight_decay=0.0, eps=g["eps"], maximize=False)
 
 
 class LeanNeuralNetRegressor(NeuralNetRegressor):
@@ -275,7 +256,8 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
     ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
-    ``_decode(outputs, X) -> wrench`` and ``_loss_weights()``.
+    ``_decode(outputs, X) -> wrench`` (or override ``_predict_wrench``), ``_network_outputs()`` and
+    ``_loss_weights()``.
     """
 
     _module_class: type[torch.nn.Module]
@@ -308,7 +290,8 @@ class NetworkCalibrator(BaseCalibrator):
                 f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); got {sizes!r}."
             )
         for width in sizes:
-            _check_int("each entry of hidden_layer_sizes", width, 1)
+            if isinstance(width, bool) or not isinstance(width, numbers.Integral) or width < 1:
+                raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
 
     def _network_outputs(self) -> int:
         """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""

@@ -224,8 +224,3 @@ class DirectionalCalibrator(NetworkCalibrator):
         v_in, unit = _unit_rows(X - self.zero_reading_)
         outputs = self._forward(unit)
         return unscale_torques(outputs[:, :-1] * (outputs[:, -1] * self.scale_reference_ * v_in)[:, None], self.alpha_)
-
-    def _decode(self, outputs, X):
-        v_in = np.linalg.norm(X - self.zero_reading_, axis=1)
-        magnitude = outputs[:, -1] * self.scale_reference_ * v_in
-        return unscale_torques(magnitude[:, None] * outputs[:, :-1], self.alpha_)

@@ -32,6 +32,7 @@ __all__ = [
     "RecoverStop",
     "RestoreBestWeights",
     "schedule_callbacks",
+    "recover_stop_reason",
 ]
 
 
@@ -85,6 +86,29 @@ class PlateauLR(Callback):
         self.scheduler_.step(net.history[-1, self.monitor])
 
 
+def recover_stop_reason(losses: list[float], phase_3_start: int, tolerance: float, max_recover_epochs: int) -> str | None:
+    """Why training stops after the last of ``losses`` (the monitored loss per epoch so far), or None.
+
+    Examples
+    --------
+    >>> recover_stop_reason([1.0, 0.5, 0.6], phase_3_start=3, tolerance=0.05, max_recover_epochs=10) is None
+    True
+    >>> recover_stop_reason([1.0, 0.5, 0.51], phase_3_start=3, tolerance=0.05, max_recover_epochs=10)
+    'within_tolerance'
+    >>> recover_stop_reason([1.0, 0.5], phase_3_start=3, tolerance=0.05, max_recover_epochs=0)
+    'schedule_end'
+    """
+    epoch = len(losses)
+    recover_epochs = epoch - phase_3_start + 1
+    if recover_epochs <= 0:
+        return "schedule_end" if epoch == phase_3_start - 1 and max_recover_epochs == 0 else None
+    if losses[-1] <= (1.0 + tolerance) * min(losses):
+        return "within_tolerance"
+    if recover_epochs >= max_recover_epochs:
+        return "recover_cap"
+    return None
+
+
 class RecoverStop(Callback):
     """Stop in phase 3 once the loss is within ``tolerance`` of the best, or at the cap."""
 
@@ -95,17 +119,12 @@ class RecoverStop(Callback):
         self.monitor = monitor
 
     def on_epoch_end(self, net, **kwargs):
-        epoch = len(net.history)
-        recover_epochs = epoch - self.phase_3_start + 1
-        if recover_epochs <= 0:
-            if epoch == self.phase_3_start - 1 and self.max_recover_epochs == 0:
-                self._stop(net, "schedule_end")
+        if len(net.history) < self.phase_3_start - 1:  # phases 1-2: nothing to decide, no need to read the losses
             return
-        losses = net.history[:, self.monitor]
-        if losses[-1] <= (1.0 + self.tolerance) * min(losses):
-            self._stop(net, "within_tolerance")
-        if recover_epochs >= self.max_recover_epochs:
-            self._stop(net, "recover_cap")
+        reason = recover_stop_reason(net.history[:, self.monitor], self.phase_3_start, self.tolerance,
+                                     self.max_recover_epochs)
+        if reason is not None:
+            self._stop(net, reason)
 
     @staticmethod
     def _stop(net, reason: str) -> None:

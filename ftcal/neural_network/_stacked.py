@@ -37,10 +37,9 @@ from threadpoolctl import threadpool_limits
 from torch.optim.adam import adam as _functional_adam
 
 from ..core._exceptions import CalibrationInputError
-from ._base import NetworkCalibrator, interrupt_flag, torch_threads
+from ._base import NetworkCalibrator, torch_threads
 from ._modules import activate, activation_backward, mlp_layers
-from ._schedule import phase_of_epoch
-from ..core._validation import validate_training_data
+from ._schedule import phase_of_epoch, recover_stop_reason
 
 __all__ = ["StackedMLP", "fit_stacked"]
 
@@ -73,9 +72,15 @@ class StackedMLP(torch.nn.Module):
         super().__init__()
         if len(modules) < 1:
             raise CalibrationInputError("StackedMLP needs at least one module (K >= 1); got none.")
+        per_module = [mlp_layers(module) for module in modules]
         signature = None
-        for k, module in enumerate(modules):
-            shape = [(layer.in_features, layer.out_features, activation) for layer, activation in mlp_layers(module)]
+        for k, layers in enumerate(per_module):
+            if layers is None:
+                raise CalibrationInputError(
+                    f"StackedMLP: module {k} ({type(modules[k]).__name__}) is not an MLP of Linear / ReLU / Tanh "
+                    "layers in a `layers` Sequential."
+                )
+            shape = [(layer.in_features, layer.out_features, activation) for layer, activation in layers]
             if signature is None:
                 signature = shape
             elif shape != signature:
@@ -89,9 +94,9 @@ class StackedMLP(torch.nn.Module):
         if flat is None:
             blocks = []
             for i in range(len(self.layout)):
-                pairs = [mlp_layers(m)[i][0] for m in modules]
-                blocks += [torch.stack([layer.weight.detach().T for layer in pairs]).reshape(-1),
-                           torch.stack([layer.bias.detach() for layer in pairs]).reshape(-1)]
+                linears = [layers[i][0] for layers in per_module]
+                blocks += [torch.stack([layer.weight.detach().T for layer in linears]).reshape(-1),
+                           torch.stack([layer.bias.detach() for layer in linears]).reshape(-1)]
             flat = torch.cat(blocks)
         self.flat = torch.nn.Parameter(flat.detach().clone())
         self.flat.grad = self._grad = torch.zeros_like(self.flat)
@@ -173,7 +178,7 @@ class _Member:
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(seed)  # what a separate fit does: the same initial weights ...
             net.initialize()
-            self.generator = torch.Generator().manual_seed(0)
+            self.generator = torch.Generator()
             self.generator.set_state(torch.get_rng_state())  # ... and then the same batch orders
         train_ds, valid_ds = net.get_split_datasets(inputs.astype(np.float32), targets.astype(np.float32))
         train_idx = getattr(train_ds, "indices", np.arange(len(inputs)))
@@ -267,11 +272,9 @@ class _StackedRun:
         members = [self.members[k] for k in self.active]
         K, n_max, batch = len(members), self.X_train.shape[1], self.batch
         order = torch.zeros(K, n_max, dtype=torch.long)
-        mask = torch.zeros(K, n_max)
         for i, member in enumerate(members):
-            n = len(member.X_train)
-            order[i, :n] = torch.randperm(n, generator=member.generator)
-            mask[i, :n] = 1.0
+            order[i, :len(member.X_train)] = torch.randperm(len(member.X_train), generator=member.generator)
+        mask = self.train_mask  # a member's shuffled rows stay its first n_train rows
         uneven = bool((self.n_train != n_max).any())
         lr = torch.tensor([m.lr for m in members]).view(K, 1, 1)
         # one rate and one step count for all: torch's fused Adam does the update in one kernel
@@ -354,16 +357,9 @@ class _StackedRun:
         if loss < member.best_loss:  # RestoreBestWeights
             member.best_loss, member.best_epoch = loss, epoch
             member.best_row = self.module.member_row(i)
-        recover_epochs = epoch - phase_3_start + 1  # RecoverStop
-        if recover_epochs <= 0:
-            if epoch == phase_3_start - 1 and t.max_recover_epochs == 0:
-                member.stop_reason = "schedule_end"
-        else:
-            losses = [r[member.monitor] for r in member.rows]
-            if losses[-1] <= (1.0 + t.recover_tolerance) * min(losses):
-                member.stop_reason = "within_tolerance"
-            elif recover_epochs >= t.max_recover_epochs:
-                member.stop_reason = "recover_cap"
+        if epoch >= phase_3_start - 1:  # RecoverStop
+            member.stop_reason = recover_stop_reason([r[member.monitor] for r in member.rows], phase_3_start,
+                                                     t.recover_tolerance, t.max_recover_epochs)
         if member.stop_reason is not None:
             row["stop_reason"] = member.stop_reason
 
@@ -472,15 +468,12 @@ def fit_stacked(
     members = []
     with threadpool_limits(1, user_api="blas"):
         for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators))):
-            est._check_parameters()
-            X_k, y_k = validate_training_data(est, X_k, y_k)
-            est._fit_scale_and_tare(X_k, y_k)
+            X_k, y_k = est._prepare_fit(X_k, y_k)
             members.append(_Member(est, *est._training_setup(X_k, y_k)))
     run = _StackedRun(members, estimators[0])
-    with interrupt_flag(), torch_threads(1):
+    with torch_threads(1):  # a Ctrl-C is a plain KeyboardInterrupt here: no skorch loop swallows it
         run.run()
     run.finish()
     for member in members:
         member.estimator._finish_training(member.net, member.targets)
-        member.estimator.__dict__.pop("tare_reading_", None)
     return estimators
