@@ -11,6 +11,7 @@ from ._lazy import lazy_namespace
 _PUBLIC = dict(
     plain_json="_files", write_json="_files", atomic_output="_files", mean_std="_metrics",
     calibration_folds="_model_selection", MIN_CHANNELS="_wrench",
+    check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
