@@ -190,7 +190,7 @@ def test_training_progress_bar_on_a_terminal_and_quiet_silences_it(tmp_path, mon
     monkeypatch.setattr("sys.stderr", terminal)
     assert main(argv + ["--out", str(tmp_path / "loud")]) == 0
     text = terminal.getvalue()
-    assert "directional epochs" in text and "train_loss=" in text and "valid_loss=" in text
+    assert "directional epochs" in text and "train_loss=" in text and "valid_loss=" in text and "lr=1.0e-03" in text
     model = ftcal.load_model(tmp_path / "loud" / "directional.model.npz")
     assert model.predict(w).shape == (40, 6)
     quiet = _Terminal()

@@ -183,26 +183,96 @@ def test_numpy_forward_matches_torch(cls):
                                rtol=1e-5, atol=1e-5 * np.abs(w).max())
 
 
-def test_lean_loop_trains_like_skorchs_loop():
+def test_engine_trains_like_skorchs_own_loop():
+    """The engine is skorch's loop with pre-sliced batches: the same optimiser on the same data, the same losses."""
     import torch
     from skorch import NeuralNetRegressor
 
-    from ftcal.neural_network._base import LeanNeuralNetRegressor
+    from ftcal.neural_network import NetworkRegressor
+    from ftcal.neural_network._engine import MemberSquaredError
     from ftcal.neural_network._modules import ComparativeNet, WeightedSquaredError
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(1000, 6)).astype(np.float32)
     y = (X @ rng.normal(size=(6, 6))).astype(np.float32)
-    losses = {}
-    for cls in (NeuralNetRegressor, LeanNeuralNetRegressor):
-        torch.manual_seed(0)
-        net = cls(ComparativeNet, module__n_inputs=6, module__hidden_layer_sizes=(32,), criterion=WeightedSquaredError,
-                  criterion__weights=(1.0,) * 6, optimizer=torch.optim.Adam, lr=3e-3, batch_size=32, max_epochs=30,
-                  train_split=None, iterator_train__shuffle=True, verbose=0).fit(X, y)
-        losses[cls.__name__] = np.array(net.history[:, "train_loss"])
-    plain, lean = losses["NeuralNetRegressor"], losses["LeanNeuralNetRegressor"]
+    common = dict(module__n_inputs=6, module__hidden_layer_sizes=(32,), optimizer=torch.optim.Adam, lr=3e-3,
+                  batch_size=32, max_epochs=30, train_split=None, verbose=0)
+    torch.manual_seed(0)
+    plain = NeuralNetRegressor(ComparativeNet, criterion=WeightedSquaredError, criterion__weights=(1.0,) * 6,
+                               iterator_train__shuffle=True, **common).fit(X, y)
+    engine = NetworkRegressor(ComparativeNet, criterion=MemberSquaredError, criterion__weights=[[1.0] * 6],
+                              seeds=[0], **common).fit([X], [y])
+    plain, lean = np.array(plain.history[:, "train_loss"]), np.array(engine.history[:, "train_loss"])
     assert len(lean) == len(plain) == 30
-    # the same optimiser on the same data: both cut the loss by orders of magnitude, to the same level
-    # (within a factor 2: different shuffles, not a different algorithm)
+    np.testing.assert_allclose(engine.history[:, "member_train_loss"], lean[:, None], rtol=1e-6)
+    # the same initial weights (seed 0) and the same first batches' losses cannot differ by more than the shuffle
+    assert lean[0] == pytest.approx(plain[0], rel=0.2)
+    # both cut the loss by orders of magnitude, to the same level (within a factor 2: different shuffles)
     assert lean[-1] < 0.02 * lean[0] and plain[-1] < 0.02 * plain[0]
     assert 0.5 < lean[-1] / plain[-1] < 2.0
+
+
+@pytest.mark.parametrize("cls", [DirectionalCalibrator, ComparativeCalibrator])
+def test_a_users_skorch_callback_sees_every_batch_epoch_and_gradient(cls):
+    """skorch's contract: on_batch_begin/end per batch, on_grad_computed per step, on_epoch_* per epoch."""
+    from skorch.callbacks import Callback
+
+    class Count(Callback):
+        def initialize(self):
+            self.calls = {"batch_begin": 0, "batch_end": 0, "train_batches": 0, "grad": 0, "epoch_begin": 0,
+                          "epoch_end": 0, "lrs": []}
+            return self
+
+        def on_batch_begin(self, net, batch=None, training=False, **kwargs):
+            self.calls["batch_begin"] += 1
+
+        def on_batch_end(self, net, batch=None, training=False, **kwargs):
+            self.calls["batch_end"] += 1
+            self.calls["train_batches"] += bool(training)
+
+        def on_grad_computed(self, net, named_parameters, **kwargs):
+            self.calls["grad"] += all(p.grad is not None for _, p in named_parameters)
+
+        def on_epoch_begin(self, net, **kwargs):
+            self.calls["epoch_begin"] += 1
+
+        def on_epoch_end(self, net, **kwargs):
+            self.calls["epoch_end"] += 1
+            self.calls["lrs"].append(net.history[-1, "lr"])
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=90, seed=3)
+    count = Count()
+    model = cls(max_epochs=3, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2, batch_size=8,
+                callbacks=[count], random_state=0).fit(raw, wrench)
+    n_train = len(raw) - int(np.ceil(0.2 * len(raw)))  # ValidSplit(0.2) holds out ceil(20 %)
+    per_epoch = -(-n_train // 8)
+    calls, epochs = count.calls, model.n_epochs_
+    assert calls["epoch_begin"] == calls["epoch_end"] == epochs >= 5
+    assert calls["train_batches"] == calls["grad"] == per_epoch * epochs
+    assert calls["batch_begin"] == calls["batch_end"] == (per_epoch + 1) * epochs  # + one validation batch
+    assert calls["lrs"] == model.net_.history[:, "lr"]
+
+
+def test_skorch_overrides_of_the_engine_are_honoured():
+    """A calibrator whose engine overrides skorch's get_loss / train_step: both run for every batch."""
+    from ftcal.neural_network import NetworkRegressor
+
+    calls = {"get_loss": 0, "train_step": 0}
+
+    class Penalised(NetworkRegressor):
+        def get_loss(self, y_pred, y_true, *args, **kwargs):
+            calls["get_loss"] += 1
+            return super().get_loss(y_pred, y_true, *args, **kwargs) + 0.0 * y_pred.sum()
+
+        def train_step(self, batch, **fit_params):
+            calls["train_step"] += 1
+            return super().train_step(batch, **fit_params)
+
+    class Calibrator(DirectionalCalibrator):
+        _net_class = Penalised
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
+    model = Calibrator(**{**TINY_SCHEDULE, "batch_size": 8}, random_state=0).fit(raw, wrench)
+    batches = sum(row["train_batch_count"] for row in model.net_.history)
+    assert calls["train_step"] == batches
+    assert calls["get_loss"] == batches + model.n_epochs_  # and once per validation batch

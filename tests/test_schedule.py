@@ -52,17 +52,20 @@ def test_phase_three_cap_and_no_phase_three():
 
 
 class _Holder:
-    """Minimal owner of a real skorch History, as the callback sees a net."""
+    """Minimal owner of a real skorch History and one member's stop state, as the callback sees a net."""
 
     def __init__(self):
         self.history = History()
+        self.optimizers_ = [None]
+        self.stop_reasons_ = [None]
 
 
 def run_recover_stop(losses, tolerance, cap, phase_3_start):
-    net, callback = _Holder(), RecoverStop(tolerance, cap, phase_3_start)
+    net, callback = _Holder(), RecoverStop(tolerance, cap, phase_3_start, monitor="member_valid_loss")
+    callback.on_train_begin(net)
     for loss in losses:
         net.history.new_epoch()
-        net.history.record("valid_loss", loss)
+        net.history.record("member_valid_loss", [loss])
         try:
             callback.on_epoch_end(net)
         except KeyboardInterrupt:
@@ -81,9 +84,12 @@ def test_best_weights_are_restored():
     model = fit_with(lr=0.05, max_epochs=12, plateau_epochs=0, max_recover_epochs=0)
     losses = np.array(model.net_.history[:, "valid_loss"])
     assert model.best_epoch_ == int(np.argmin(losses)) + 1
-    best = dict(model.net_.callbacks_)["restore_best_weights"].best_state_
-    for name, value in model.net_.module_.state_dict().items():
-        assert torch.equal(value, best[name])
+    best = dict(model.net_.callbacks_)["restore_best_weights"]
+    assert best.best_epoch_ == [model.best_epoch_]
+    for value, kept in zip(model.net_.module_.parameters(), best.best_state_[0]):
+        assert torch.equal(value, kept)
+    # the restored weights are the best epoch's: their validation loss is the lowest recorded one
+    assert model.best_epoch_ < len(losses) or losses[-1] == min(losses)
 
 
 def test_phase_of_epoch_boundaries():

@@ -32,8 +32,8 @@ def _callback_class():
         def on_epoch_end(self, net, **kwargs: Any) -> None:
             last = net.history[-1]
             post = {k: f"{last[k]:.4g}" for k in ("train_loss", "valid_loss") if k in last}
-            if "event_lr" in last:
-                post["lr"] = f"{last['event_lr']:.1e}"
+            if "lr" in last:  # recorded every epoch by the schedule (its TrainingPhase callback)
+                post["lr"] = f"{last['lr']:.1e}"
             self.bar.set_postfix(post, refresh=False)
             self.bar.update(1)
             if len(net.history) == 1:  # show the first losses at once, not after tqdm's mininterval

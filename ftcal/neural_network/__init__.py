@@ -1,6 +1,7 @@
 """The network calibrators (torch, trained through skorch): the torch modules and loss, the thesis'
-three-phase schedule, the shared network base (lean training loop, numpy inference), the directional
-and comparative calibrators, and stacked training of several nets as one module.
+three-phase schedule (skorch callbacks), the one training engine for K >= 1 nets (a skorch
+NeuralNetRegressor), the shared network base (numpy inference), the directional and comparative
+calibrators, and stacked training of several nets as one module.
 
 Imports :mod:`ftcal.core` and :mod:`ftcal.calibrators` (the base class); nothing above.
 """
@@ -10,7 +11,8 @@ from ..core._lazy import lazy_namespace
 #: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
 _PUBLIC = dict(
     DirectionalNet="_modules", ComparativeNet="_modules", WeightedSquaredError="_modules",
-    StackedMLP="_stacked", fit_stacked="_stacked", NetworkCalibrator="_base",
+    StackedMLP="_modules", fit_stacked="_stacked", NetworkCalibrator="_base",
+    NetworkRegressor="_engine",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -1,50 +1,50 @@
-"""Training and inference shared by the two network calibrators (skorch, composed).
+"""The network calibrators' base: training through the one engine, numpy inference.
 
-A :class:`NetworkCalibrator` builds a ``skorch.NeuralNetRegressor`` inside
-``fit`` and keeps it as ``net_``. Subclasses say which torch module, which
-loss weights, and how readings/wrenches map to network inputs/targets.
+A :class:`NetworkCalibrator` builds a skorch net (:class:`~ftcal.neural_network._engine.NetworkRegressor`)
+inside ``fit`` and keeps it as ``net_``. Subclasses say which torch module, which loss weights, and how
+readings/wrenches map to network inputs/targets.
 
 * float32 inside the network, float64 out of ``predict``;
 * ``random_state`` seeds the weight initialisation, the batch shuffling and
   the validation split; the global torch RNG is forked, so a fit leaves the
   caller's torch random state untouched; the same seed twice gives the same
   predictions;
-* torch runs single-threaded during ``fit`` and ``predict`` (the nets are
-  small: batch 32 in training, ~64-wide layers; on a shared 2-core machine
-  two threads made a 10 000-sample predict 6x slower); the caller's thread
-  count is restored afterwards, and nothing is changed at import;
-* the schedule (III-A-d) is :mod:`ftcal.neural_network._schedule`; ``validation_fraction``
-  of the samples (``ValidSplit``) are held out for the monitored loss, or
-  none with ``validation_fraction=None`` (then the training loss is
-  monitored).
+* ``n_threads`` (default 1) limits torch's and BLAS's threads inside ``fit``
+  and a large ``predict`` through a ``threadpoolctl`` context, which restores
+  the caller's settings; ``None`` leaves them alone. Nothing else
+  process-wide is touched (no signal handler, nothing at import);
+* one calibrator's ``fit`` and :func:`~ftcal.fit_stacked` (``K`` calibrators
+  at once) run the same code, :func:`train_networks`: one engine, one
+  schedule (:mod:`ftcal.neural_network._schedule`), one optimiser path;
+  ``validation_fraction`` of each net's samples (``ValidSplit``) are held
+  out for the monitored loss, or none with ``validation_fraction=None`` (then
+  the training loss is monitored).
 """
 
 from __future__ import annotations
 
+import contextlib
 import numbers
 from numbers import Integral, Real
-import signal
-import threading
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Sequence
 
 import numpy as np
 import torch
 from numpy.typing import NDArray
-from skorch import NeuralNetRegressor
-from skorch.dataset import ValidSplit
+from skorch.history import History
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 from sklearn.utils._param_validation import Interval
-from torch.optim.adam import adam as _functional_adam
+from threadpoolctl import threadpool_limits
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
 from ..core._validation import validate_readings
-from ._modules import WeightedSquaredError, activate, activation_backward, mlp_layers
+from ._engine import MemberSquaredError, NetworkRegressor
+from ._modules import mlp_layers
 from ._schedule import schedule_callbacks
 
-__all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available", "interrupt_flag"]
+__all__ = ["NetworkCalibrator", "train_networks", "device_available"]
 
 _PREDICT_CHUNK = 65536
 #: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
@@ -53,6 +53,8 @@ _NUMPY_FORWARD_ROWS = 256
 _DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
+#: History keys of a member of a stack (``K > 1``): its own values, read from the engine's ``member_*`` lists.
+_MEMBER_KEYS = {"lr": "member_lr", "train_loss": "member_train_loss", "valid_loss": "member_valid_loss"}
 
 
 def device_available(device: str) -> bool:
@@ -64,193 +66,27 @@ def device_available(device: str) -> bool:
     return True
 
 
-@contextmanager
-def interrupt_flag() -> Iterator[threading.Event]:
-    """Notice Ctrl-C (SIGINT) during the block, even though skorch's fit loop swallows ``KeyboardInterrupt``.
+def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence[tuple]) -> None:
+    """Train ``K >= 1`` network calibrators of one kind as one engine run; each ends fitted as by its own ``fit``.
 
-    skorch ends ``fit`` quietly on ``KeyboardInterrupt`` (its early-stopping
-    callbacks, and ours, stop training that way), so a real Ctrl-C would
-    return a half-trained net as if it had finished. Inside this block a
-    SIGINT sets the yielded event and still raises ``KeyboardInterrupt`` to
-    end the loop; the caller re-raises after ``fit``. Outside the main thread
-    (where signal handlers cannot be set) the event is never set.
+    ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``). The estimators share the
+    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C (which skorch's loop ends
+    quietly, as its early stopping does) is raised again as ``KeyboardInterrupt``: a finished schedule always
+    leaves a stop reason for every member, an interrupted one does not.
     """
-    flag = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-    previous = signal.getsignal(signal.SIGINT)
-    if previous is signal.SIG_IGN or previous is None:  # ignored (a background job), or a handler set outside Python
-        yield flag
-        return
-
-    def handler(signum, frame):
-        flag.set()
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGINT, handler)
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
-
-
-@contextmanager
-def torch_threads(n_threads: int) -> Iterator[None]:
-    """Run the block with ``torch.set_num_threads(n_threads)``, restoring the old count."""
-    old = torch.get_num_threads()
-    torch.set_num_threads(n_threads)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(old)
-
-
-def _tensors(dataset, device) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(X, y)`` tensors on ``device`` of a skorch ``Dataset`` or of a ``Subset`` of one (``ValidSplit``), loaded once."""
-    indices = None
-    if isinstance(dataset, torch.utils.data.Subset):
-        dataset, indices = dataset.dataset, np.asarray(dataset.indices)
-    cache = dataset.__dict__.setdefault("_ftcal_tensors", {})
-    key = None if indices is None else indices.tobytes()
-    if key not in cache:
-        X = np.asarray(dataset.X if indices is None else dataset.X[indices])
-        y = np.asarray(dataset.y if indices is None else dataset.y[indices])
-        cache[key] = (torch.as_tensor(X, device=device), torch.as_tensor(y, device=device))
-    return cache[key]
-
-
-def _manual_layers(module, criterion) -> list[tuple[torch.nn.Linear, str]] | None:
-    """The layers of ``module`` when it is an MLP trained on the weighted squared error, else None.
-
-    Then :func:`_mlp_backward` computes the gradients by hand; anything else (a user's own module or loss)
-    goes through autograd.
-    """
-    return mlp_layers(module) if isinstance(criterion, WeightedSquaredError) else None
-
-
-def _mlp_backward(layers: list[tuple[torch.nn.Linear, str]], weights: torch.Tensor, X: torch.Tensor,
-                  y: torch.Tensor) -> torch.Tensor:
-    """Forward pass, loss ``mean_i sum_j w_j (f(x_i)_j - y_ij)²`` and its gradients, set on the layers' ``.grad``.
-
-    The same arithmetic as autograd's (a ``Linear`` is ``addmm``; ReLU's derivative is ``h > 0``, tanh's
-    ``1 - h²``) in half the calls: autograd's bookkeeping costs as much as the arithmetic of these small
-    nets. Returns the loss.
-    """
-    with torch.no_grad():
-        hs, h = [X], X
-        for layer, activation in layers:
-            h = activate(torch.addmm(layer.bias, h, layer.weight.t()), activation)
-            hs.append(h)
-        error = h - y
-        loss = (error * error * weights).sum(dim=1).mean()
-        grad = error * (weights * (2.0 / len(X)))
-        for i in range(len(layers) - 1, -1, -1):
-            layer, activation = layers[i]
-            grad = activation_backward(grad, hs[i + 1], activation)
-            layer.weight.grad = grad.t().mm(hs[i])
-            layer.bias.grad = grad.sum(dim=0)
-            if i:
-                grad = grad.mm(layer.weight)
-    return loss
-
-
-class _FusedAdamStep:
-    """``optimizer.step()`` of a plain fused ``torch.optim.Adam`` as one call of torch's functional ``adam``.
-
-    The same kernel, state and learning rate (read from the param group at every step, so schedulers keep
-    working) without ``Optimizer.step``'s per-call bookkeeping, which costs as much as the update of these
-    small nets. Any other optimiser, or options this does not handle, keeps its own ``step``.
-    """
-
-    def __init__(self, optimizer: torch.optim.Adam) -> None:
-        self.optimizer = optimizer
-        self.group = optimizer.param_groups[0]
-        self.params = list(self.group["params"])
-        for p in self.params:
-            state = optimizer.state[p]
-            if not state:  # what Adam's _init_group creates
-                state["step"] = torch.zeros((), dtype=torch.float32)
-                state["exp_avg"] = torch.zeros_like(p, memory_format=torch.preserve_format)
-                state["exp_avg_sq"] = torch.zeros_like(p, memory_format=torch.preserve_format)
-        states = [optimizer.state[p] for p in self.params]
-        self.exp_avgs = [s["exp_avg"] for s in states]
-        self.exp_avg_sqs = [s["exp_avg_sq"] for s in states]
-        self.steps = [s["step"] for s in states]
-
-    @classmethod
-    def of(cls, optimizer):
-        g = optimizer.param_groups[0] if len(optimizer.param_groups) == 1 else None
-        plain = (type(optimizer) is torch.optim.Adam and g is not None and g.get("fused") and not g["amsgrad"]
-                 and not g["maximize"] and g["weight_decay"] == 0 and not g["capturable"] and not g["differentiable"]
-                 and not g.get("decoupled_weight_decay", False) and all(p.device.type == "cpu" for p in g["params"]))
-        return cls(optimizer).__call__ if plain else optimizer.step
-
-    def __call__(self) -> None:
-        g = self.group
-        with torch.no_grad():
-            _functional_adam(self.params, [p.grad for p in self.params], self.exp_avgs, self.exp_avg_sqs, [],
-                             self.steps, fused=True, amsgrad=False, beta1=g["betas"][0], beta2=g["betas"][1],
-                             lr=g["lr"], weight_decay=0.0, eps=g["eps"], maximize=False)
-
-
-class LeanNeuralNetRegressor(NeuralNetRegressor):
-    """skorch's ``NeuralNetRegressor`` with a lean inner loop: tensors loaded once, batches sliced from them.
-
-    skorch's loop builds every mini-batch with a ``DataLoader`` (one ``__getitem__``
-    and a collate per sample) and calls the batch-level callbacks and history
-    twice per batch; for ftcal's small nets and batches of 32 that costs several
-    times the arithmetic. This subclass keeps everything epoch-level as it is
-    (``fit_loop``, the history, every callback, the three-phase schedule, early
-    stopping, ``net.history[-1, 'train_loss']``) and replaces only the inner
-    loop of an epoch: the training tensors are loaded once, each epoch shuffles
-    them with ``torch.randperm`` (seeded by the caller's torch RNG) and runs
-    ``zero_grad / forward / loss / backward / step`` per batch; validation is
-    one forward pass. The epoch's losses are recorded as one batch of the
-    epoch's size (the batch-size-weighted mean, as skorch computes it).
-    ``on_batch_begin`` / ``on_batch_end`` callbacks are not called. For
-    ftcal's own nets (an MLP of ``Linear`` / ``ReLU`` / ``Tanh`` layers on the
-    weighted squared error) the gradients are computed by hand
-    (:func:`_mlp_backward`), the same arithmetic as autograd's in half the
-    torch calls; any other module or loss goes through autograd.
-    """
-
-    def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
-        if iterator is None:
-            return
-        X, y = _tensors(iterator.dataset, self.device)
-        n = len(X)
-        module, criterion = self.module_, self.criterion_
-        if training:
-            module.train()
-            order = torch.randperm(n) if getattr(self, "iterator_train__shuffle", False) else torch.arange(n)
-            order = order.to(X.device)
-            total = torch.zeros((), device=X.device)
-            batch = int(self.batch_size)
-            manual = _manual_layers(module, criterion)
-            step = _FusedAdamStep.of(self.optimizer_) if manual is not None else self.optimizer_.step
-            X_epoch, y_epoch = X[order], y[order]  # shuffled once; the batches are views
-            for start in range(0, n, batch):
-                X_batch, y_batch = X_epoch[start:start + batch], y_epoch[start:start + batch]
-                if manual is None:
-                    self.optimizer_.zero_grad(set_to_none=True)
-                    loss = criterion(module(X_batch), y_batch)
-                    loss.backward()
-                else:  # sets every .grad afresh: no zero_grad needed
-                    loss = _mlp_backward(manual, criterion.weights, X_batch, y_batch)
-                step()
-                total += loss.detach() * len(X_batch)
-            mean = float(total) / max(n, 1)
-            batches = -(-n // batch)
-        else:
-            module.eval()
-            with torch.no_grad():
-                mean = float(criterion(module(X), y)) if n else 0.0
-            batches = 1
-        self.history.new_batch()
-        self.history.record_batch(prefix + "_loss", mean)
-        self.history.record_batch(prefix + "_batch_size", n)
-        self.history.record(prefix + "_batch_count", batches)
+    setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
+    template = estimators[0]
+    net = template._build_net(setups[0][0].shape[1], [seed for _, _, seed in setups],
+                              [est._loss_weights() for est in estimators])
+    with torch.random.fork_rng(devices=[]), template._thread_limit():
+        net.fit([inputs.astype(np.float32) for inputs, _, _ in setups],
+                [targets.astype(np.float32) for _, targets, _ in setups])
+    if any(reason is None for reason in net.stop_reasons_):
+        raise KeyboardInterrupt(f"{type(template).__name__}.fit interrupted at epoch {len(net.history)}")
+    best = dict(net.callbacks_)["restore_best_weights"]
+    for k, (est, (_, targets, seed)) in enumerate(zip(estimators, setups)):
+        member = net if len(estimators) == 1 else template._member_net(net, k, est, seed)
+        est._finish_training(member, targets, best.best_loss_[k], best.best_epoch_[k], net.stop_reasons_[k])
 
 
 class NetworkCalibrator(BaseCalibrator):
@@ -261,6 +97,8 @@ class NetworkCalibrator(BaseCalibrator):
     """
 
     _module_class: type[torch.nn.Module]
+    #: The training engine (a subclass may override skorch's ``get_loss``, ``train_step``, ...: they are honoured).
+    _net_class: type[NetworkRegressor] = NetworkRegressor
     #: Parameters that only affect one training run and are not stored in model files.
     _transient_params: tuple[str, ...] = ("callbacks",)
 
@@ -280,6 +118,7 @@ class NetworkCalibrator(BaseCalibrator):
         "verbose": ["verbose"],
         "callbacks": [list, tuple, None],
         "device": [str],
+        "n_threads": [Interval(Integral, 1, None, closed="left"), None],
     }
 
     def _check_params(self) -> None:
@@ -293,6 +132,11 @@ class NetworkCalibrator(BaseCalibrator):
             if isinstance(width, bool) or not isinstance(width, numbers.Integral) or width < 1:
                 raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
 
+    def _thread_limit(self):
+        """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
+        n = getattr(self, "n_threads", 1)
+        return threadpool_limits(n) if n is not None else contextlib.nullcontext()
+
     def _network_outputs(self) -> int:
         """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""
         raise NotImplementedError
@@ -300,25 +144,31 @@ class NetworkCalibrator(BaseCalibrator):
     def _seed(self) -> int:
         return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
 
-    def _build_net(self, n_inputs: int, seed: int) -> NeuralNetRegressor:
-        """The skorch net with this estimator's module, loss, optimiser and schedule."""
+    def _build_net(self, n_inputs: int, seed: int | Sequence[int], loss_weights: Sequence | None = None
+                   ) -> NetworkRegressor:
+        """The (unfitted) engine with this estimator's module, loss, optimiser and schedule.
+
+        ``seed``: one seed, or one per member of a stack; ``loss_weights``: one row per member (default: this
+        estimator's own).
+        """
+        seeds = [int(seed)] if isinstance(seed, numbers.Integral) else [int(s) for s in seed]
         monitor = "train_loss" if self.validation_fraction is None else "valid_loss"
-        split = None if self.validation_fraction is None else ValidSplit(self.validation_fraction, random_state=seed)
-        return LeanNeuralNetRegressor(
+        return self._net_class(
             module=self._module_class,
             module__n_inputs=n_inputs,
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
             module__n_outputs=self._network_outputs(),
-            criterion=WeightedSquaredError,
-            criterion__weights=tuple(self._loss_weights()),
+            criterion=MemberSquaredError,
+            criterion__weights=[list(w) for w in (loss_weights or [self._loss_weights()])],
             optimizer=torch.optim.Adam,
             # the fused CPU kernel does Adam's update in one pass: 2.5x faster steps for these small nets
-            optimizer__fused=True,
+            optimizer__fused=self.device == "cpu",
             lr=self.lr,
             batch_size=self.batch_size,
             max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs,
-            train_split=split,
-            iterator_train__shuffle=True,
+            seeds=seeds,
+            validation_fraction=self.validation_fraction,
+            train_split=None,
             callbacks=schedule_callbacks(
                 max_epochs=self.max_epochs,
                 plateau_epochs=self.plateau_epochs,
@@ -335,11 +185,7 @@ class NetworkCalibrator(BaseCalibrator):
         )
 
     def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
-        """Checks, network inputs and targets, seed and the (unfitted) skorch net of one fit.
-
-        Shared by :meth:`_fit` and :func:`ftcal.fit_stacked` (several nets trained as one module).
-        Returns ``(inputs, targets, seed, net)``, inputs and targets float64.
-        """
+        """Checks, network inputs and targets, and the seed of one fit: ``(inputs, targets, seed)``, float64."""
         if not device_available(self.device):
             raise CalibrationInputError(
                 f"device={self.device!r} is not available on this machine (this torch build has "
@@ -352,28 +198,43 @@ class NetworkCalibrator(BaseCalibrator):
                 f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
                 "beyond what float32 training handles; check the units of X and y."
             )
-        seed = self._seed()
-        return inputs, targets, seed, self._build_net(inputs.shape[1], seed)
+        return inputs, targets, self._seed()
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        inputs, targets, seed, net = self._training_setup(X, y)
-        with interrupt_flag() as interrupted, torch.random.fork_rng(devices=[]), torch_threads(1):
-            torch.manual_seed(seed)
-            net.fit(inputs.astype(np.float32), targets.astype(np.float32))
-        if interrupted.is_set():
-            raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
-        self._finish_training(net, targets)
+        train_networks([self], [(X, y)])
 
-    def _finish_training(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+    def _member_net(self, stack: NetworkRegressor, k: int, estimator: "NetworkCalibrator", seed: int
+                    ) -> NetworkRegressor:
+        """Member ``k`` of a trained stack as a net of its own: its module with its weights, its history rows.
+
+        Its history is its slice of the stack's (``member_*`` values, up to the epoch it stopped at).
+        """
+        net = estimator._build_net(stack.module_.layout[0][0], seed)
+        with torch.random.fork_rng(devices=[]):
+            net.initialize()
+        stack.module_.load_member(stack.module_.member_row(k), net.module_)
+        rows = []
+        for row in stack.history:
+            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"],
+                         **{key: row[member][k] for key, member in _MEMBER_KEYS.items() if member in row}})
+            reason = (row.get("member_stop_reason") or [None] * (k + 1))[k]
+            if reason is not None:
+                rows[-1]["stop_reason"] = reason
+                break
+        net.history = History(rows)
+        return net
+
+    def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best_loss: float,
+                         best_epoch: int, stop_reason: str) -> None:
         """Refuse a diverged run; keep the trained net and its schedule's outcome."""
-        self._check_converged(net, targets)
+        self._check_converged(net, targets, best_loss)
         self.net_ = net
         self.n_epochs_ = len(net.history)
-        self.stop_reason_ = net.history[-1].get("stop_reason", "max_epochs")
-        self.best_epoch_ = int(dict(net.callbacks_)["restore_best_weights"].best_epoch_)
+        self.stop_reason_ = stop_reason
+        self.best_epoch_ = int(best_epoch)
         self._cache_numpy_layers()
 
-    def _check_converged(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
+    def _check_converged(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float) -> None:
         """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
 
         Diverged means a NaN or inf loss, or a best loss more than
@@ -393,7 +254,6 @@ class NetworkCalibrator(BaseCalibrator):
                 )
         weights = np.asarray(self._loss_weights(), dtype=float)
         nothing = float(np.mean((targets**2) @ weights))
-        best = float(dict(net.callbacks_)["restore_best_weights"].best_loss_)
         if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:
             raise CalibrationInputError(
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
@@ -443,7 +303,7 @@ class NetworkCalibrator(BaseCalibrator):
         module = self.net_.module_
         module.eval()
         out = []
-        with torch.inference_mode(), torch_threads(1):
+        with torch.inference_mode(), self._thread_limit():
             for start in range(0, inputs.shape[0], _PREDICT_CHUNK):
                 batch = torch.as_tensor(inputs[start : start + _PREDICT_CHUNK], dtype=torch.float32, device=self.device)
                 out.append(module(batch).cpu().numpy())

@@ -81,6 +81,7 @@ class ComparativeCalibrator(NetworkCalibrator):
         verbose=0,
         callbacks=None,
         device="cpu",
+        n_threads=1,
     ):
         self.hidden_layer_sizes = hidden_layer_sizes
         self.lr = lr
@@ -99,6 +100,7 @@ class ComparativeCalibrator(NetworkCalibrator):
         self.verbose = verbose
         self.callbacks = callbacks
         self.device = device
+        self.n_threads = n_threads
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6))

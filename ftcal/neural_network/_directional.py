@@ -113,6 +113,12 @@ class DirectionalCalibrator(NetworkCalibrator):
         They affect one training run only and are not stored in model files.
     device : str, default='cpu'
         Torch device.
+    n_threads : int or None, default=1
+        Threads torch and BLAS may use inside ``fit`` and a large ``predict``
+        (a ``threadpoolctl`` context; the caller's settings are restored
+        afterwards). These nets are small: one thread is fastest, and on a
+        busy machine two made a fit over 10x slower. ``None`` leaves the
+        caller's thread settings as they are.
 
     Attributes
     ----------
@@ -166,6 +172,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         verbose=0,
         callbacks=None,
         device="cpu",
+        n_threads=1,
     ):
         self.hidden_layer_sizes = hidden_layer_sizes
         self.lr = lr
@@ -185,6 +192,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         self.verbose = verbose
         self.callbacks = callbacks
         self.device = device
+        self.n_threads = n_threads
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6)) + 1  # the direction and the scale

@@ -16,8 +16,10 @@ from collections.abc import Sequence
 import torch
 from torch import nn
 
-__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "mlp", "mlp_layers", "activate",
-           "activation_backward"]
+from ..core._exceptions import CalibrationInputError
+
+__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "StackedMLP", "mlp", "mlp_layers",
+           "activate", "weighted_squared_error"]
 
 
 def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_hidden: type[nn.Module]) -> nn.Sequential:
@@ -78,19 +80,6 @@ def activate(h: torch.Tensor, activation: str) -> torch.Tensor:
     return h
 
 
-def activation_backward(grad: torch.Tensor, out: torch.Tensor, activation: str) -> torch.Tensor:
-    """The gradient before the activation, from the one after it and the activation's output ``out``.
-
-    ReLU: ``grad`` where ``out > 0``, else 0; tanh: ``grad * (1 - out²)``; each one kernel, the ones
-    autograd itself runs (``threshold_backward``, ``tanh_backward``).
-    """
-    if activation == "relu":
-        return torch.ops.aten.threshold_backward(grad, out, 0)
-    if activation == "tanh":
-        return torch.ops.aten.tanh_backward(grad, out)
-    return grad
-
-
 class _MLPNet(nn.Module):
     """An :func:`mlp` as a module whose activation of the last hidden layer is ``last_hidden``."""
 
@@ -140,4 +129,81 @@ class WeightedSquaredError(nn.Module):
         self.register_buffer("weights", torch.as_tensor(list(weights), dtype=torch.float32))
 
     def forward(self, y_pred: torch.Tensor, y_true: torch.Tensor) -> torch.Tensor:
-        return (((y_pred - y_true) ** 2) * self.weights).sum(dim=1).mean()
+        return weighted_squared_error(y_pred, y_true, self.weights).mean()
+
+
+def weighted_squared_error(y_pred: torch.Tensor, y_true: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
+    """``sum_j weights[..., j] * (y_pred[..., j] - y_true[..., j])²`` per row (the last axis summed)."""
+    return (((y_pred - y_true) ** 2) * weights).sum(dim=-1)
+
+
+class StackedMLP(nn.Module):
+    """``K`` :func:`mlp` nets of one architecture as one module: ``(K, B, n_in) -> (K, B, n_out)``.
+
+    Layer ``l`` of all ``K`` members is one parameter ``weight_l`` of shape
+    ``(K, n_in, n_out)`` and one ``bias_l`` of shape ``(K, 1, n_out)``, so a
+    layer of every member is one ``torch.baddbmm``; autograd differentiates
+    it. :meth:`member_parameters` gives member ``k``'s slices (views sharing
+    storage: an optimiser over them moves that member only).
+
+    Examples
+    --------
+    >>> import torch
+    >>> nets = [DirectionalNet(6, (8, 4)) for _ in range(3)]
+    >>> stacked = StackedMLP(nets)
+    >>> x = torch.randn(3, 5, 6)
+    >>> bool(torch.allclose(stacked(x)[1], nets[1](x[1]), atol=1e-6))
+    True
+    """
+
+    def __init__(self, modules: Sequence[nn.Module]):
+        super().__init__()
+        per_module = [mlp_layers(module) for module in modules]
+        if not per_module:
+            raise CalibrationInputError("StackedMLP needs at least one module (K >= 1); got none.")
+        layout = None
+        for k, layers in enumerate(per_module):
+            if layers is None:
+                raise CalibrationInputError(
+                    f"StackedMLP: module {k} ({type(modules[k]).__name__}) is not an MLP of Linear / ReLU / Tanh "
+                    "layers in a `layers` Sequential.")
+            shape = [(layer.in_features, layer.out_features, activation) for layer, activation in layers]
+            if layout is not None and shape != layout:
+                raise CalibrationInputError(f"StackedMLP: module {k} has layers {shape}, module 0 {layout}; stacked "
+                                            "nets must share one architecture.")
+            layout = shape
+        #: per layer: (n_in, n_out, activation)
+        self.layout: list[tuple[int, int, str]] = layout
+        self.n_members = len(modules)
+        for i in range(len(layout)):
+            linears = [layers[i][0] for layers in per_module]
+            self.register_parameter(f"weight_{i}", nn.Parameter(torch.stack([m.weight.detach().T for m in linears])))
+            self.register_parameter(f"bias_{i}", nn.Parameter(torch.stack([m.bias.detach()[None] for m in linears])))
+
+    def _layers(self) -> list[tuple[torch.Tensor, torch.Tensor, str]]:
+        return [(getattr(self, f"weight_{i}"), getattr(self, f"bias_{i}"), a) for i, (*_, a) in enumerate(self.layout)]
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        h = x
+        for weight, bias, activation in self._layers():
+            h = activate(torch.baddbmm(bias, h, weight), activation)
+        return h
+
+    def member_parameters(self, k: int) -> list[torch.Tensor]:
+        """Member ``k``'s weights and biases: detached views of the stacked parameters (updates reach them)."""
+        return [p.detach()[k] for p in self.parameters()]
+
+    def member_row(self, k: int) -> torch.Tensor:
+        """Member ``k``'s weights as one row (a copy), layer after layer: what :meth:`load_member` takes."""
+        return torch.cat([p.detach().reshape(-1) for p in self.member_parameters(k)])
+
+    def load_member(self, row: torch.Tensor, module: nn.Module) -> nn.Module:
+        """Copy one member's weights (a :meth:`member_row`) into ``module``, an unstacked net of the same shape."""
+        offset = 0
+        with torch.no_grad():
+            for (layer, _), (n_in, n_out, _) in zip(mlp_layers(module), self.layout):
+                layer.weight.copy_(row[offset:offset + n_in * n_out].view(n_in, n_out).T)
+                offset += n_in * n_out
+                layer.bias.copy_(row[offset:offset + n_out])
+                offset += n_out
+        return module

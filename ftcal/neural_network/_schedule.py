@@ -1,10 +1,10 @@
-"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks.
+"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks, for ``K >= 1`` members.
 
 Epochs are numbered from 1 (as in ``net.history``). With ``max_epochs = P1``
 and ``plateau_epochs = P2``:
 
 * **phase 1**, epochs ``1 .. P1``: Adam at the constant initial ``lr``;
-* **phase 2**, epochs ``P1+1 .. P1+P2``: ``ReduceLROnPlateau`` on the
+* **phase 2**, epochs ``P1+1 .. P1+P2``: torch's ``ReduceLROnPlateau`` on the
   monitored loss (factor ``plateau_factor``, patience ``plateau_patience``,
   floor ``min_lr``); the rate it reaches is kept afterwards;
 * **phase 3**, from epoch ``P1+P2+1``: training continues until an epoch's
@@ -13,27 +13,31 @@ and ``plateau_epochs = P2``:
   have run (the hard cap; 0 skips phase 3).
 
 The weights of the epoch with the lowest monitored loss are restored at the
-end (:class:`RestoreBestWeights`). Each epoch of ``net.history`` records
-``phase`` (1, 2, 3) and ``lr`` (the rate used in that epoch); the last one
-records ``stop_reason``: ``"within_tolerance"``, ``"recover_cap"`` or
-``"schedule_end"`` (no phase 3). The monitored loss is ``valid_loss`` when
-the net has a validation split, ``train_loss`` otherwise.
+end (:class:`RestoreBestWeights`, skorch's ``EarlyStopping(load_best=True)``
+rule with the phase-3 stop instead of a patience).
+
+These callbacks are the only definition of the schedule. They run in the one
+training engine (:class:`ftcal.neural_network._engine.NetworkRegressor`),
+which trains ``K`` nets at once (``K = 1`` for one calibrator's ``fit``):
+each member has its own Adam optimiser (``net.optimizers_[k]``), its own
+plateau scheduler, best weights and stop, driven by its own monitored loss
+(``net.history[-1, "member_valid_loss"][k]``, or ``member_train_loss``
+without a validation split). A member that has stopped is frozen; the fit
+ends when every member has stopped. Each epoch records ``phase``,
+``member_lr`` (and ``lr``, member 0's rate); the epoch at which member ``k``
+stops records its reason in ``member_stop_reason`` (and ``stop_reason`` for
+``K = 1``): ``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``.
 """
 
 from __future__ import annotations
 
+import math
+
 import torch
 from skorch.callbacks import Callback
 
-__all__ = [
-    "phase_of_epoch",
-    "TrainingPhase",
-    "PlateauLR",
-    "RecoverStop",
-    "RestoreBestWeights",
-    "schedule_callbacks",
-    "recover_stop_reason",
-]
+__all__ = ["phase_of_epoch", "TrainingPhase", "PlateauLR", "RecoverStop", "RestoreBestWeights",
+           "schedule_callbacks", "recover_stop_reason"]
 
 
 def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
@@ -51,58 +55,65 @@ def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
     return 3
 
 
+def _member_losses(net, monitor: str) -> list[float]:
+    return net.history[-1, monitor]
+
+
 class TrainingPhase(Callback):
-    """Record each epoch's ``phase`` and learning rate ``lr`` in ``net.history``."""
+    """Record each epoch's ``phase`` and learning rates (``member_lr``; ``lr``: member 0's) in ``net.history``."""
 
     def __init__(self, max_epochs: int, plateau_epochs: int):
         self.max_epochs = max_epochs
         self.plateau_epochs = plateau_epochs
 
     def on_epoch_begin(self, net, **kwargs):
-        epoch = len(net.history)
-        net.history.record("phase", phase_of_epoch(epoch, self.max_epochs, self.plateau_epochs))
-        net.history.record("lr", float(net.optimizer_.param_groups[0]["lr"]))
+        net.history.record("phase", phase_of_epoch(len(net.history), self.max_epochs, self.plateau_epochs))
+        rates = [float(opt.param_groups[0]["lr"]) for opt in net.optimizers_]
+        net.history.record("member_lr", rates)
+        net.history.record("lr", rates[0])
 
 
 class PlateauLR(Callback):
-    """``ReduceLROnPlateau`` stepped on the monitored loss, in phase 2 only."""
+    """torch's ``ReduceLROnPlateau`` on each member's optimiser, stepped on its monitored loss, in phase 2 only."""
 
-    def __init__(self, factor: float, patience: int, min_lr: float, monitor: str = "valid_loss"):
+    def __init__(self, factor: float, patience: int, min_lr: float, monitor: str = "member_valid_loss"):
         self.factor = factor
         self.patience = patience
         self.min_lr = min_lr
         self.monitor = monitor
 
     def on_train_begin(self, net, **kwargs):
-        self.scheduler_ = None
+        self.schedulers_ = None
 
     def on_epoch_end(self, net, **kwargs):
         if net.history[-1, "phase"] != 2:
             return
-        if self.scheduler_ is None:
-            self.scheduler_ = torch.optim.lr_scheduler.ReduceLROnPlateau(
-                net.optimizer_, mode="min", factor=self.factor, patience=self.patience, min_lr=self.min_lr
-            )
-        self.scheduler_.step(net.history[-1, self.monitor])
+        if self.schedulers_ is None:
+            self.schedulers_ = [torch.optim.lr_scheduler.ReduceLROnPlateau(
+                opt, mode="min", factor=self.factor, patience=self.patience, min_lr=self.min_lr)
+                for opt in net.optimizers_]
+        for k, loss in enumerate(_member_losses(net, self.monitor)):
+            if net.stop_reasons_[k] is None:
+                self.schedulers_[k].step(loss)
 
 
-def recover_stop_reason(losses: list[float], phase_3_start: int, tolerance: float, max_recover_epochs: int) -> str | None:
-    """Why training stops after the last of ``losses`` (the monitored loss per epoch so far), or None.
+def recover_stop_reason(loss: float, best: float, epoch: int, phase_3_start: int, tolerance: float,
+                        max_recover_epochs: int) -> str | None:
+    """Why training stops after ``epoch`` with monitored ``loss`` (``best``: the lowest so far, this one included).
 
     Examples
     --------
-    >>> recover_stop_reason([1.0, 0.5, 0.6], phase_3_start=3, tolerance=0.05, max_recover_epochs=10) is None
+    >>> recover_stop_reason(0.6, 0.5, epoch=3, phase_3_start=3, tolerance=0.05, max_recover_epochs=10) is None
     True
-    >>> recover_stop_reason([1.0, 0.5, 0.51], phase_3_start=3, tolerance=0.05, max_recover_epochs=10)
+    >>> recover_stop_reason(0.51, 0.5, epoch=3, phase_3_start=3, tolerance=0.05, max_recover_epochs=10)
     'within_tolerance'
-    >>> recover_stop_reason([1.0, 0.5], phase_3_start=3, tolerance=0.05, max_recover_epochs=0)
+    >>> recover_stop_reason(0.5, 0.5, epoch=2, phase_3_start=3, tolerance=0.05, max_recover_epochs=0)
     'schedule_end'
     """
-    epoch = len(losses)
     recover_epochs = epoch - phase_3_start + 1
     if recover_epochs <= 0:
         return "schedule_end" if epoch == phase_3_start - 1 and max_recover_epochs == 0 else None
-    if losses[-1] <= (1.0 + tolerance) * min(losses):
+    if loss <= (1.0 + tolerance) * best:
         return "within_tolerance"
     if recover_epochs >= max_recover_epochs:
         return "recover_cap"
@@ -110,49 +121,61 @@ def recover_stop_reason(losses: list[float], phase_3_start: int, tolerance: floa
 
 
 class RecoverStop(Callback):
-    """Stop in phase 3 once the loss is within ``tolerance`` of the best, or at the cap."""
+    """Stop each member in phase 3 once its loss is within ``tolerance`` of its best, or at the cap.
 
-    def __init__(self, tolerance: float, max_recover_epochs: int, phase_3_start: int, monitor: str = "valid_loss"):
+    A stopped member is frozen (``net.stop_reasons_[k]`` set); when every
+    member has stopped, training ends the skorch way (``KeyboardInterrupt``,
+    as ``EarlyStopping`` does).
+    """
+
+    def __init__(self, tolerance: float, max_recover_epochs: int, phase_3_start: int,
+                 monitor: str = "member_valid_loss"):
         self.tolerance = tolerance
         self.max_recover_epochs = max_recover_epochs
         self.phase_3_start = phase_3_start
         self.monitor = monitor
 
-    def on_epoch_end(self, net, **kwargs):
-        if len(net.history) < self.phase_3_start - 1:  # phases 1-2: nothing to decide, no need to read the losses
-            return
-        reason = recover_stop_reason(net.history[:, self.monitor], self.phase_3_start, self.tolerance,
-                                     self.max_recover_epochs)
-        if reason is not None:
-            self._stop(net, reason)
+    def on_train_begin(self, net, **kwargs):
+        self.best_ = [math.inf] * len(net.optimizers_)
 
-    @staticmethod
-    def _stop(net, reason: str) -> None:
-        net.history.record("stop_reason", reason)
-        raise KeyboardInterrupt  # skorch's way to end fit_loop early (as in EarlyStopping)
+    def on_epoch_end(self, net, **kwargs):
+        epoch, reasons = len(net.history), net.stop_reasons_
+        stopped = [None] * len(reasons)
+        for k, loss in enumerate(_member_losses(net, self.monitor)):
+            if reasons[k] is not None:
+                continue
+            self.best_[k] = min(self.best_[k], loss)
+            stopped[k] = reasons[k] = recover_stop_reason(loss, self.best_[k], epoch, self.phase_3_start,
+                                                          self.tolerance, self.max_recover_epochs)
+        if any(stopped):
+            net.history.record("member_stop_reason", stopped)
+            if len(reasons) == 1:
+                net.history.record("stop_reason", stopped[0])
+        if all(reasons):
+            raise KeyboardInterrupt  # skorch's way to end fit_loop early (as in EarlyStopping)
 
 
 class RestoreBestWeights(Callback):
-    """Keep a copy of the weights of the epoch with the lowest loss; load it at the end."""
+    """Keep each member's weights of its epoch with the lowest monitored loss; load them at the end."""
 
-    def __init__(self, monitor: str = "valid_loss"):
+    def __init__(self, monitor: str = "member_valid_loss"):
         self.monitor = monitor
 
     def on_train_begin(self, net, **kwargs):
-        self.best_loss_ = float("inf")
-        self.best_epoch_ = 0
-        self.best_state_ = None
+        K = len(net.optimizers_)
+        self.best_loss_, self.best_epoch_, self.best_state_ = [math.inf] * K, [0] * K, [None] * K
 
     def on_epoch_end(self, net, **kwargs):
-        loss = float(net.history[-1, self.monitor])
-        if loss < self.best_loss_:
-            self.best_loss_ = loss
-            self.best_epoch_ = len(net.history)
-            self.best_state_ = {k: v.detach().clone() for k, v in net.module_.state_dict().items()}
+        for k, loss in enumerate(_member_losses(net, self.monitor)):
+            if net.stop_reasons_[k] is None and loss < self.best_loss_[k]:
+                self.best_loss_[k], self.best_epoch_[k] = float(loss), len(net.history)
+                self.best_state_[k] = [p.detach().clone() for p in net.member_parameters(k)]
 
     def on_train_end(self, net, **kwargs):
-        if self.best_state_ is not None:
-            net.module_.load_state_dict(self.best_state_)
+        with torch.no_grad():
+            for k, state in enumerate(self.best_state_):
+                for p, best in zip(net.member_parameters(k), state or ()):
+                    p.copy_(best)
 
 
 def schedule_callbacks(
@@ -169,14 +192,16 @@ def schedule_callbacks(
 ) -> list:
     """The named callbacks of the whole schedule, in the order they must run.
 
-    ``extra`` callbacks (a user's progress bar or logger) run after the
-    schedule has recorded the epoch's phase and learning rate and before the
-    phase-3 stop rule, so they also see the last epoch.
+    ``monitor`` is ``"valid_loss"`` or ``"train_loss"``; each member's own
+    (``member_...``) is followed. ``extra`` callbacks (a user's progress bar
+    or logger) run after the schedule has recorded the epoch's phase and
+    learning rate and before the phase-3 stop rule, so they also see the last epoch.
     """
+    member = f"member_{monitor}"
     return [
         ("training_phase", TrainingPhase(max_epochs, plateau_epochs)),
-        ("plateau_lr", PlateauLR(plateau_factor, plateau_patience, min_lr, monitor)),
-        ("restore_best_weights", RestoreBestWeights(monitor)),
+        ("plateau_lr", PlateauLR(plateau_factor, plateau_patience, min_lr, member)),
+        ("restore_best_weights", RestoreBestWeights(member)),
         *extra,
-        ("recover_stop", RecoverStop(recover_tolerance, max_recover_epochs, max_epochs + plateau_epochs + 1, monitor)),
+        ("recover_stop", RecoverStop(recover_tolerance, max_recover_epochs, max_epochs + plateau_epochs + 1, member)),
     ]

@@ -1,0 +1,231 @@
+"""The one training engine of ftcal's networks: skorch's loop over ``K >= 1`` nets of one architecture.
+
+:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor``; one
+calibrator's ``fit`` is ``K = 1``, :func:`ftcal.fit_stacked` and the seed
+ensembles ``K > 1``. It keeps skorch's loop as it is — ``fit_loop``,
+``run_single_epoch``, ``train_step`` / ``train_step_single`` / ``get_loss``,
+the history and every callback hook (``on_batch_begin`` / ``on_batch_end``
+per batch, ``on_grad_computed``, ``on_epoch_*``) — and changes only where
+the data and parameters come from:
+
+* **data**: member ``k`` has its own dataset, its own ``ValidSplit``
+  (seeded with its seed) and its own batch order (a ``torch.Generator``
+  seeded with its seed). The members' rows are laid side by side, batch
+  first: a batch is ``X (B, K, n_in)`` and ``y (B, K, n_out + 1)``, whose
+  last column marks real rows (1) and padding (0; a member with fewer rows
+  runs out of batches first). Batches are slices of tensors loaded once,
+  not a ``DataLoader`` collating one sample at a time.
+* **module**: ``K = 1`` trains the calibrator's own module (any
+  ``torch.nn.Module``; its forward sees ``(B, 1, n_in)``); ``K > 1`` a
+  :class:`~ftcal.neural_network._modules.StackedMLP` (each layer of every
+  member one ``baddbmm``; ``infer`` puts the members first for it).
+  Gradients are autograd's.
+* **loss**: :class:`MemberSquaredError`, the sum over members of each
+  member's own weighted mean squared error (so member ``k``'s gradient is
+  its own loss's); each member's epoch losses are recorded as
+  ``member_train_loss`` / ``member_valid_loss``.
+* **optimiser**: one ``torch.optim.Adam`` per member (``optimizers_``;
+  ``optimizer_`` is member 0's) over that member's parameters, so each keeps
+  its own learning rate, moments and step count, exactly as alone. skorch's
+  ``train_step`` calls its closure once (forward, loss, backward,
+  ``on_grad_computed``); then each member that had rows in the batch and has
+  not stopped takes its Adam step.
+
+The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from skorch import NeuralNetRegressor
+from skorch.dataset import ValidSplit
+
+from ._modules import StackedMLP, weighted_squared_error
+
+__all__ = ["NetworkRegressor", "MemberSquaredError", "MemberBatches"]
+
+
+class MemberSquaredError(torch.nn.Module):
+    """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows.
+
+    ``y_true`` carries the row mask as its last column (see the module doc).
+    """
+
+    def __init__(self, weights):
+        super().__init__()
+        self.register_buffer("weights", torch.as_tensor(np.asarray(weights, dtype=np.float32)).reshape(
+            1, -1, np.shape(weights)[-1]))
+
+    def member_losses(self, y_pred: torch.Tensor, y_true: torch.Tensor) -> torch.Tensor:
+        """Each member's mean loss over its real rows of the batch, shape ``(K,)``."""
+        mask = y_true[..., -1]
+        squared = weighted_squared_error(y_pred, y_true[..., :-1], self.weights) * mask
+        return squared.sum(dim=0) / mask.sum(dim=0).clamp(min=1.0)
+
+    def forward(self, y_pred: torch.Tensor, y_true: torch.Tensor) -> torch.Tensor:
+        losses = self.member_losses(y_pred, y_true)
+        self.last_ = (y_pred, losses.detach())  # read back by NetworkRegressor.on_batch_end (no second pass)
+        return losses.sum()
+
+
+class MemberBatches:
+    """Mini-batches of ``K`` members' padded rows; each iteration reshuffles every member with its generator.
+
+    ``generators=None``: one batch of every row, in order (validation).
+    """
+
+    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int | None = None,
+                 generators: list[torch.Generator] | None = None):
+        self.X, self.y, self.counts, self.batch_size, self.generators = X, y, counts, batch_size, generators
+
+    def __len__(self) -> int:
+        return 1 if self.generators is None else -(-len(self.X) // self.batch_size)
+
+    def __iter__(self):
+        if self.generators is None:
+            yield self.X, self.y
+            return
+        n_max, K = self.y.shape[:2]
+        order = torch.arange(n_max).repeat(K, 1)
+        for k, (n, generator) in enumerate(zip(self.counts, self.generators)):
+            order[k, :n] = torch.randperm(n, generator=generator)  # a member's padding rows stay at its end
+        order = order.T
+        members = torch.arange(K)
+        X, y = self.X[order, members], self.y[order, members]  # shuffled once; the batches are views
+        for start in range(0, n_max, self.batch_size):
+            yield X[start:start + self.batch_size], y[start:start + self.batch_size]
+
+
+def _side_by_side(blocks: list[np.ndarray]) -> torch.Tensor:
+    """Row blocks of unequal length as one ``(n_max, K, width + 1)`` float32 tensor, a row mask last."""
+    n_max, width = max(len(b) for b in blocks), blocks[0].shape[1]
+    out = np.zeros((n_max, len(blocks), width + 1), dtype=np.float32)
+    for k, block in enumerate(blocks):
+        out[: len(block), k, :width] = block
+        out[: len(block), k, width] = 1.0
+    return torch.from_numpy(out)
+
+
+class NetworkRegressor(NeuralNetRegressor):
+    """skorch's ``NeuralNetRegressor`` training ``len(seeds)`` nets of one architecture at once (module doc).
+
+    Parameters beyond skorch's
+    --------------------------
+    seeds : sequence of int
+        One per member: its initial weights (``torch.manual_seed(seed)`` before
+        building its module), validation split and batch order.
+    validation_fraction : float or None
+        Each member's share of rows held out (``ValidSplit``); None: no split.
+
+    ``fit(X, y)`` takes lists of ``K`` arrays (one dataset per member), float32.
+    """
+
+    def __init__(self, module, *args, seeds=(0,), validation_fraction=None, **kwargs):
+        super().__init__(module, *args, **kwargs)
+        self.seeds = seeds
+        self.validation_fraction = validation_fraction
+
+    # -- parameters: a member's own module (K = 1) or the stack, and one Adam per member --------------------
+    def initialize_module(self):
+        kwargs = self.get_params_for("module")
+        members = []
+        for seed in self.seeds:
+            torch.manual_seed(int(seed))
+            members.append(self.module(**kwargs))
+        self.module_ = members[0] if len(members) == 1 else StackedMLP(members)
+        return self
+
+    def member_parameters(self, k: int) -> list[torch.Tensor]:
+        """Member ``k``'s parameters (views into the stack when ``K > 1``): what its optimiser moves."""
+        if len(self.seeds) == 1:
+            return list(self.module_.parameters())
+        return self.module_.member_parameters(k)
+
+    def initialize_optimizer(self, triggered_directly=None):
+        _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
+        self.optimizers_ = [self.optimizer(self.member_parameters(k), **kwargs) for k in range(len(self.seeds))]
+        self.optimizer_ = self.optimizers_[0]
+        return self
+
+    def infer(self, x, **fit_params):
+        if isinstance(self.module_, StackedMLP):  # members first inside the stack
+            return self.module_(x.transpose(0, 1), **fit_params).transpose(0, 1)
+        return super().infer(x, **fit_params)
+
+    def _set_training(self, training=True):
+        if self.module_.training != training or self.criterion_.training != training:  # a no-op costs a tree walk
+            super()._set_training(training)
+
+    def _zero_grad_optimizer(self, set_to_none=None):
+        self.module_.zero_grad(set_to_none=True)
+
+    def train_step(self, batch, **fit_params):
+        rows = batch[1][..., -1].sum(dim=0).tolist()
+        self.moving_ = [n > 0 and reason is None for n, reason in zip(rows, self.stop_reasons_)]
+        return super().train_step(batch, **fit_params)
+
+    def _step_optimizer(self, step_fn):
+        step_fn()  # forward, loss, backward and on_grad_computed, once for all members
+        stacked = len(self.optimizers_) > 1
+        grads = [p.grad for p in self.module_.parameters()] if stacked else None
+        for k, optimizer in enumerate(self.optimizers_):
+            if not self.moving_[k]:
+                continue
+            if stacked:
+                for view, grad in zip(optimizer.param_groups[0]["params"], grads):
+                    view.grad = None if grad is None else grad[k]
+            optimizer.step()
+
+    # -- data: each member's split and batch order ----------------------------------------------------------
+    def check_data(self, X, y):
+        pass  # the calibrators validated every member's data
+
+    def get_split_datasets(self, X, y=None, **fit_params):
+        train, valid = [], []
+        for seed, X_k, y_k in zip(self.seeds, X, y):
+            data = np.hstack([X_k, y_k])
+            if self.validation_fraction is None:
+                train.append(data)
+                continue
+            train_ds, valid_ds = ValidSplit(self.validation_fraction, random_state=int(seed))(self.get_dataset(X_k, y_k))
+            train.append(data[train_ds.indices])
+            valid.append(data[valid_ds.indices])
+        n_in = np.shape(X[0])[1]
+
+        def split(blocks):
+            both = _side_by_side(blocks)
+            return both[..., :n_in], both[..., n_in:], [len(b) for b in blocks]
+
+        self.generators_ = [torch.Generator().manual_seed(int(seed)) for seed in self.seeds]
+        return split(train), (split(valid) if valid else None)
+
+    def get_iterator(self, dataset, training=False):
+        X, y, counts = dataset
+        if training:
+            return MemberBatches(X, y, counts, int(self.batch_size), self.generators_)
+        return MemberBatches(X, y, counts)
+
+    # -- each member's epoch losses -------------------------------------------------------------------------
+    def on_train_begin(self, net, X=None, y=None, **kwargs):
+        self.stop_reasons_ = [None] * len(self.seeds)
+
+    def on_epoch_begin(self, net, **kwargs):
+        super().on_epoch_begin(net, **kwargs)
+        self._loss_sums = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+        self._row_counts = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+
+    def on_batch_end(self, net, batch=None, training=False, y_pred=None, **kwargs):
+        rows = batch[1][..., -1].sum(dim=0)
+        last = getattr(self.criterion_, "last_", None)
+        if last is None or last[0] is not y_pred:  # a get_loss override that bypassed the criterion
+            with torch.no_grad():
+                last = (y_pred, self.criterion_.member_losses(y_pred, batch[1]))
+        self._loss_sums[training] += last[1] * rows
+        self._row_counts[training] += rows
+
+    def on_epoch_end(self, net, **kwargs):
+        for training, prefix in ((True, "train"), (False, "valid")):
+            if self._row_counts[training].any():
+                losses = self._loss_sums[training] / self._row_counts[training].clamp(min=1.0)
+                self.history.record(f"member_{prefix}_loss", losses.tolist())
