@@ -24,6 +24,7 @@ readings/wrenches map to network inputs/targets.
 from __future__ import annotations
 
 import contextlib
+import inspect
 import numbers
 from numbers import Integral, Real
 from collections.abc import Sequence
@@ -46,9 +47,8 @@ from ._schedule import schedule_callbacks
 
 __all__ = ["NetworkCalibrator", "train_networks", "device_available"]
 
-_PREDICT_CHUNK = 65536
-#: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
-_NUMPY_FORWARD_ROWS = 256
+#: Rows per chunk of the numpy forward pass (bounds its memory).
+_PREDICT_CHUNK = 16384
 #: A net whose best loss exceeds this multiple of the loss of predicting zero has diverged.
 _DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
@@ -64,6 +64,33 @@ def device_available(device: str) -> bool:
     except (RuntimeError, AssertionError, ValueError, TypeError):
         return False
     return True
+
+
+#: The parameters both network calibrators take, with their defaults (the thesis' schedule, III-A-d).
+NETWORK_DEFAULTS = dict(hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32, max_epochs=1700, plateau_epochs=100,
+                        plateau_patience=30, plateau_factor=0.1, min_lr=1e-5, recover_tolerance=0.05,
+                        max_recover_epochs=500, validation_fraction=0.2, alpha=None, zero_reading=None,
+                        random_state=None, verbose=0, callbacks=None, device="cpu", n_threads=1)
+
+
+def keyword_init(defaults: dict):
+    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else.
+
+    Its signature is the explicit list scikit-learn reads (``get_params``, ``clone``), one definition shared
+    by the network calibrators instead of two copied twenty-line ``__init__`` bodies.
+    """
+
+    def __init__(self, **params):
+        unknown = set(params) - set(defaults)
+        if unknown:
+            raise TypeError(f"{type(self).__name__}() got unexpected keyword argument(s) {sorted(unknown)}")
+        for name, default in defaults.items():
+            setattr(self, name, params.get(name, default))
+
+    __init__.__signature__ = inspect.Signature(
+        [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)]
+        + [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=d) for name, d in defaults.items()])
+    return __init__
 
 
 def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence[tuple]) -> None:
@@ -152,7 +179,6 @@ class NetworkCalibrator(BaseCalibrator):
         estimator's own).
         """
         seeds = [int(seed)] if isinstance(seed, numbers.Integral) else [int(s) for s in seed]
-        monitor = "train_loss" if self.validation_fraction is None else "valid_loss"
         return self._net_class(
             module=self._module_class,
             module__n_inputs=n_inputs,
@@ -169,17 +195,7 @@ class NetworkCalibrator(BaseCalibrator):
             seeds=seeds,
             validation_fraction=self.validation_fraction,
             train_split=None,
-            callbacks=schedule_callbacks(
-                max_epochs=self.max_epochs,
-                plateau_epochs=self.plateau_epochs,
-                plateau_patience=self.plateau_patience,
-                plateau_factor=self.plateau_factor,
-                min_lr=self.min_lr,
-                recover_tolerance=self.recover_tolerance,
-                max_recover_epochs=self.max_recover_epochs,
-                monitor=monitor,
-                extra=list(self.callbacks or []),
-            ),
+            callbacks=schedule_callbacks(self),
             verbose=self.verbose,
             device=self.device,
         )
@@ -276,40 +292,27 @@ class NetworkCalibrator(BaseCalibrator):
         self.__dict__["_numpy_layers_cache"] = (self.net_.module_, layers)
         return layers
 
-    def _forward_numpy(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The forward pass in numpy with the fitted (float32) weights, computed in float64.
-
-        No torch dispatch, no thread changes. float64 keeps each row's result
-        independent of the other rows (float32 BLAS kernels round a row
-        differently depending on where it sits in the batch); it agrees with
-        the float32 torch pass of large batches to ~1e-7 relative. A row whose
-        inputs or outputs leave float32's range gives inf, as the float32
-        pass (and the exported ONNX graph) would, so that ``predict`` refuses
-        it whatever the batch size.
-        """
-        with np.errstate(over="ignore"):
-            h = inputs.astype(np.float32)  # the network's input precision; beyond float32's range: inf
-            for weight, bias, activation in self._numpy_layers():
-                h = h @ weight + bias  # float64 arithmetic (the weights are float64 copies)
-                if activation == "relu":
-                    np.maximum(h, 0.0, out=h)
-                elif activation == "tanh":
-                    np.tanh(h, out=h)
-            return h.astype(np.float32).astype(np.float64)  # the network's output precision and range
-
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
-        if inputs.shape[0] <= _NUMPY_FORWARD_ROWS:  # small batches (a control loop): numpy is ~20x cheaper
-            return self._forward_numpy(inputs)
-        module = self.net_.module_
-        module.eval()
-        out = []
-        with torch.inference_mode(), self._thread_limit():
-            for start in range(0, inputs.shape[0], _PREDICT_CHUNK):
-                batch = torch.as_tensor(inputs[start : start + _PREDICT_CHUNK], dtype=torch.float32, device=self.device)
-                out.append(module(batch).cpu().numpy())
-        if not out:
-            return np.zeros((0, module.layers[-1].out_features))
-        return np.concatenate(out).astype(np.float64)
+        """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks.
+
+        No torch dispatch (a one-sample predict costs a few numpy calls). float64 keeps each row's result
+        independent of the other rows (float32 BLAS kernels round a row differently depending on where it
+        sits in the batch). A row whose inputs or outputs leave float32's range gives inf, as the float32
+        net (and the exported ONNX graph) would, so that ``predict`` refuses it.
+        """
+        layers = self._numpy_layers()
+        out = np.empty((len(inputs), layers[-1][1].shape[0]))
+        with np.errstate(over="ignore"):
+            for start in range(0, len(inputs), _PREDICT_CHUNK):
+                h = inputs[start:start + _PREDICT_CHUNK].astype(np.float32)  # the net's input precision
+                for weight, bias, activation in layers:
+                    h = h @ weight + bias  # float64 arithmetic (the weights are float64 copies)
+                    if activation == "relu":
+                        np.maximum(h, 0.0, out=h)
+                    elif activation == "tanh":
+                        np.tanh(h, out=h)
+                out[start:start + _PREDICT_CHUNK] = h.astype(np.float32)  # the net's output precision and range
+        return out
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return self._decode(self._forward(self._network_inputs(X)), X)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import NetworkCalibrator
+from ._base import NetworkCalibrator, NETWORK_DEFAULTS, keyword_init
 from ._modules import ComparativeNet
 from ..core._wrench import TORQUE
 
@@ -35,13 +35,8 @@ class ComparativeCalibrator(NetworkCalibrator):
     Same architecture family as the directional model but with ReLU on every
     hidden layer and 6 linear outputs. Phase 1 is 3000 epochs by default
     (III-E-a); the rest of the schedule is the directional one (III-A-d).
-    A randomized search (issue 6, ``benchmarks/tune_networks.py``) found
-    ``max_epochs=150, lr=1e-3, hidden_layer_sizes=(32, 32)`` with the
-    short schedule's phases 2-3. It scores 0.84x and 0.88x the short
-    schedule's RMSE on the ``thesis`` and ``asymmetric`` presets, because the
-    default net overfits near-linear data, and 1.03x (not significant) on
-    ``stress``. It does not win on every preset, so the defaults stay the
-    thesis' (``benchmarks/RESULTS.md``).
+    A randomized search (issue 6, ``benchmarks/RESULTS.md``) found no setting
+    better on every preset, so the defaults stay the thesis'.
     Parameters and attributes are those of
     :class:`~ftcal.DirectionalCalibrator` except ``min_relative_magnitude``
     (no zero-load rows to drop: the direct mapping handles them), plus
@@ -61,46 +56,7 @@ class ComparativeCalibrator(NetworkCalibrator):
 
     _module_class = ComparativeNet
 
-    def __init__(
-        self,
-        *,
-        hidden_layer_sizes=(64, 64, 64),
-        lr=1e-3,
-        batch_size=32,
-        max_epochs=3000,
-        plateau_epochs=100,
-        plateau_patience=30,
-        plateau_factor=0.1,
-        min_lr=1e-5,
-        recover_tolerance=0.05,
-        max_recover_epochs=500,
-        validation_fraction=0.2,
-        alpha=None,
-        zero_reading=None,
-        random_state=None,
-        verbose=0,
-        callbacks=None,
-        device="cpu",
-        n_threads=1,
-    ):
-        self.hidden_layer_sizes = hidden_layer_sizes
-        self.lr = lr
-        self.batch_size = batch_size
-        self.max_epochs = max_epochs
-        self.plateau_epochs = plateau_epochs
-        self.plateau_patience = plateau_patience
-        self.plateau_factor = plateau_factor
-        self.min_lr = min_lr
-        self.recover_tolerance = recover_tolerance
-        self.max_recover_epochs = max_recover_epochs
-        self.validation_fraction = validation_fraction
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
-        self.verbose = verbose
-        self.callbacks = callbacks
-        self.device = device
-        self.n_threads = n_threads
+    __init__ = keyword_init({**NETWORK_DEFAULTS, "max_epochs": 3000})
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6))

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval
 
 from ..core._exceptions import CalibrationInputError
-from ._base import NetworkCalibrator
+from ._base import NetworkCalibrator, NETWORK_DEFAULTS, keyword_init
 from ._modules import DirectionalNet
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -60,14 +60,9 @@ class DirectionalCalibrator(NetworkCalibrator):
     ``hidden_layer_sizes[-1]`` (the second-to-last layer), a linear output
     layer of 7. The thesis gives no widths; (64, 64, 64) is our default.
 
-    Hyperparameters: ``lr`` and the epochs are the thesis' (III-A-d). A
-    randomized search on the artificial benchmark (issue 6,
-    ``benchmarks/tune_networks.py``) found ``max_epochs=1000, lr=3e-3,
-    hidden_layer_sizes=(64, 64)`` with the short schedule's phases 2-3:
-    0.86x and 0.81x the short schedule's RMSE on the ``thesis`` and
-    ``asymmetric`` presets (0.97x, not significant, on ``stress``) and
-    about the thesis schedule's accuracy in a third of its training time,
-    not better; so the defaults stay (``benchmarks/RESULTS.md``).
+    Hyperparameters: ``lr`` and the epochs are the thesis' (III-A-d); a
+    randomized search (issue 6, ``benchmarks/RESULTS.md``) found no setting
+    better on every preset, so the defaults stay.
 
     Parameters
     ----------
@@ -151,48 +146,7 @@ class DirectionalCalibrator(NetworkCalibrator):
         "min_relative_magnitude": [Interval(Real, 0, 1, closed="both")],
     }
 
-    def __init__(
-        self,
-        *,
-        hidden_layer_sizes=(64, 64, 64),
-        lr=1e-3,
-        batch_size=32,
-        max_epochs=1700,
-        plateau_epochs=100,
-        plateau_patience=30,
-        plateau_factor=0.1,
-        min_lr=1e-5,
-        recover_tolerance=0.05,
-        max_recover_epochs=500,
-        validation_fraction=0.2,
-        min_relative_magnitude=1e-3,
-        alpha=None,
-        zero_reading=None,
-        random_state=None,
-        verbose=0,
-        callbacks=None,
-        device="cpu",
-        n_threads=1,
-    ):
-        self.hidden_layer_sizes = hidden_layer_sizes
-        self.lr = lr
-        self.batch_size = batch_size
-        self.max_epochs = max_epochs
-        self.plateau_epochs = plateau_epochs
-        self.plateau_patience = plateau_patience
-        self.plateau_factor = plateau_factor
-        self.min_lr = min_lr
-        self.recover_tolerance = recover_tolerance
-        self.max_recover_epochs = max_recover_epochs
-        self.validation_fraction = validation_fraction
-        self.min_relative_magnitude = min_relative_magnitude
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
-        self.verbose = verbose
-        self.callbacks = callbacks
-        self.device = device
-        self.n_threads = n_threads
+    __init__ = keyword_init({**NETWORK_DEFAULTS, "min_relative_magnitude": 1e-3})
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6)) + 1  # the direction and the scale

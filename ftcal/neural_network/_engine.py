@@ -1,35 +1,26 @@
 """The one training engine of ftcal's networks: skorch's loop over ``K >= 1`` nets of one architecture.
 
-:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor``; one
-calibrator's ``fit`` is ``K = 1``, :func:`ftcal.fit_stacked` and the seed
-ensembles ``K > 1``. It keeps skorch's loop as it is — ``fit_loop``,
-``run_single_epoch``, ``train_step`` / ``train_step_single`` / ``get_loss``,
-the history and every callback hook (``on_batch_begin`` / ``on_batch_end``
-per batch, ``on_grad_computed``, ``on_epoch_*``) — and changes only where
-the data and parameters come from:
+:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor`` (one ``fit``:
+``K = 1``; :func:`ftcal.fit_stacked` and seed ensembles: ``K > 1``). skorch's
+loop runs as it is — ``fit_loop``, ``run_single_epoch``, ``train_step``,
+``get_loss``, the history and every callback hook, per batch and per epoch.
+What it changes:
 
-* **data**: member ``k`` has its own dataset, its own ``ValidSplit``
-  (seeded with its seed) and its own batch order (a ``torch.Generator``
-  seeded with its seed). The members' rows are laid side by side, batch
-  first: a batch is ``X (B, K, n_in)`` and ``y (B, K, n_out + 1)``, whose
-  last column marks real rows (1) and padding (0; a member with fewer rows
-  runs out of batches first). Batches are slices of tensors loaded once,
-  not a ``DataLoader`` collating one sample at a time.
-* **module**: ``K = 1`` trains the calibrator's own module (any
-  ``torch.nn.Module``; its forward sees ``(B, 1, n_in)``); ``K > 1`` a
-  :class:`~ftcal.neural_network._modules.StackedMLP` (each layer of every
-  member one ``baddbmm``; ``infer`` puts the members first for it).
+* **data**: member ``k`` has its own dataset, ``ValidSplit`` and batch order
+  (seeded with its seed). Batches are slices of tensors loaded once (no
+  ``DataLoader``), batch first: ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``
+  whose last column marks real rows (1) and padding (0: a member with fewer
+  rows runs out of batches first).
+* **module**: ``K = 1`` trains the calibrator's own module (its forward sees
+  ``(B, 1, n_in)``); ``K > 1`` a :class:`~ftcal.neural_network._modules.StackedMLP`.
   Gradients are autograd's.
-* **loss**: :class:`MemberSquaredError`, the sum over members of each
-  member's own weighted mean squared error (so member ``k``'s gradient is
-  its own loss's); each member's epoch losses are recorded as
-  ``member_train_loss`` / ``member_valid_loss``.
-* **optimiser**: one ``torch.optim.Adam`` per member (``optimizers_``;
-  ``optimizer_`` is member 0's) over that member's parameters, so each keeps
-  its own learning rate, moments and step count, exactly as alone. skorch's
-  ``train_step`` calls its closure once (forward, loss, backward,
-  ``on_grad_computed``); then each member that had rows in the batch and has
-  not stopped takes its Adam step.
+* **loss**: :class:`MemberSquaredError`, the sum of the members' own losses
+  (member ``k``'s gradient is its own loss's); each member's epoch losses
+  are recorded as ``member_train_loss`` / ``member_valid_loss``.
+* **optimiser**: one ``torch.optim.Adam`` per member over its parameters
+  (``optimizers_``; ``optimizer_`` is member 0's): its own rate, moments and
+  step count. ``train_step``'s closure runs once; then every member that had
+  rows in the batch and has not stopped steps.
 
 The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
 """

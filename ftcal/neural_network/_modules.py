@@ -27,22 +27,16 @@ def mlp(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int, last_h
 
     Examples
     --------
-    >>> mlp(6, (8, 4), 7, nn.Tanh)
-    Sequential(
-      (0): Linear(in_features=6, out_features=8, bias=True)
-      (1): ReLU()
-      (2): Linear(in_features=8, out_features=4, bias=True)
-      (3): Tanh()
-      (4): Linear(in_features=4, out_features=7, bias=True)
-    )
+    >>> [type(m).__name__ for m in mlp(6, (8, 4), 7, nn.Tanh)]
+    ['Linear', 'ReLU', 'Linear', 'Tanh', 'Linear']
     """
-    layers: list[nn.Module] = []
-    width = n_inputs
-    for i, size in enumerate(hidden_layer_sizes):
-        layers += [nn.Linear(width, int(size)), last_hidden() if i == len(hidden_layer_sizes) - 1 else nn.ReLU()]
-        width = int(size)
-    layers.append(nn.Linear(width, n_outputs))
-    return nn.Sequential(*layers)
+    widths, layers = [n_inputs, *map(int, hidden_layer_sizes)], []
+    for i in range(len(widths) - 1):
+        layers += [nn.Linear(widths[i], widths[i + 1]), last_hidden() if i == len(widths) - 2 else nn.ReLU()]
+    return nn.Sequential(*layers, nn.Linear(widths[-1], n_outputs))
+
+
+_ACTIVATIONS = {nn.ReLU: "relu", nn.Tanh: "tanh"}
 
 
 def mlp_layers(module: nn.Module) -> list[tuple[nn.Linear, str]] | None:
@@ -55,29 +49,21 @@ def mlp_layers(module: nn.Module) -> list[tuple[nn.Linear, str]] | None:
     >>> [a for _, a in mlp_layers(DirectionalNet(6, (8, 4)))]
     ['relu', 'tanh', 'identity']
     """
-    layers = getattr(module, "layers", None)
-    if not isinstance(layers, nn.Sequential):
+    sequential = getattr(module, "layers", None)
+    if not isinstance(sequential, nn.Sequential):
         return None
-    layers, out = list(layers), []
-    for i, layer in enumerate(layers):
-        if isinstance(layer, nn.Linear):
-            following = layers[i + 1] if i + 1 < len(layers) else None
-            if following is not None and not isinstance(following, (nn.ReLU, nn.Tanh)):
-                return None
-            out.append((layer, "relu" if isinstance(following, nn.ReLU)
-                        else "tanh" if isinstance(following, nn.Tanh) else "identity"))
-        elif not isinstance(layer, (nn.ReLU, nn.Tanh)):
+    modules, out = list(sequential), []
+    for i in range(0, len(modules), 2):  # Linear, activation, Linear, ..., Linear
+        following = type(modules[i + 1]) if i + 1 < len(modules) else None
+        if type(modules[i]) is not nn.Linear or (following is not None and following not in _ACTIVATIONS):
             return None
+        out.append((modules[i], _ACTIVATIONS.get(following, "identity")))
     return out
 
 
 def activate(h: torch.Tensor, activation: str) -> torch.Tensor:
     """``h`` through ``"relu"``, ``"tanh"`` or ``"identity"``."""
-    if activation == "relu":
-        return torch.relu(h)
-    if activation == "tanh":
-        return torch.tanh(h)
-    return h
+    return torch.relu(h) if activation == "relu" else torch.tanh(h) if activation == "tanh" else h
 
 
 class _MLPNet(nn.Module):

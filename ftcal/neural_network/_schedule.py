@@ -16,17 +16,16 @@ The weights of the epoch with the lowest monitored loss are restored at the
 end (:class:`RestoreBestWeights`, skorch's ``EarlyStopping(load_best=True)``
 rule with the phase-3 stop instead of a patience).
 
-These callbacks are the only definition of the schedule. They run in the one
-training engine (:class:`ftcal.neural_network._engine.NetworkRegressor`),
-which trains ``K`` nets at once (``K = 1`` for one calibrator's ``fit``):
-each member has its own Adam optimiser (``net.optimizers_[k]``), its own
-plateau scheduler, best weights and stop, driven by its own monitored loss
-(``net.history[-1, "member_valid_loss"][k]``, or ``member_train_loss``
-without a validation split). A member that has stopped is frozen; the fit
-ends when every member has stopped. Each epoch records ``phase``,
-``member_lr`` (and ``lr``, member 0's rate); the epoch at which member ``k``
-stops records its reason in ``member_stop_reason`` (and ``stop_reason`` for
-``K = 1``): ``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``.
+These callbacks are the only definition of the schedule, for every path
+(one ``fit`` is ``K = 1``; :func:`~ftcal.fit_stacked` trains ``K`` nets in
+the same engine, :class:`~ftcal.neural_network._engine.NetworkRegressor`).
+Each member follows its own monitored loss (``member_valid_loss[k]``, or
+``member_train_loss[k]`` without a validation split) with its own optimiser
+(``net.optimizers_[k]``), plateau scheduler, best weights and stop; a stopped
+member is frozen; the fit ends when all have stopped. Each epoch records
+``phase``, ``member_lr`` and ``lr`` (member 0's); the stop epoch records
+``member_stop_reason`` (and ``stop_reason`` for ``K = 1``):
+``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``.
 """
 
 from __future__ import annotations
@@ -53,10 +52,6 @@ def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
     if epoch <= max_epochs + plateau_epochs:
         return 2
     return 3
-
-
-def _member_losses(net, monitor: str) -> list[float]:
-    return net.history[-1, monitor]
 
 
 class TrainingPhase(Callback):
@@ -92,7 +87,7 @@ class PlateauLR(Callback):
             self.schedulers_ = [torch.optim.lr_scheduler.ReduceLROnPlateau(
                 opt, mode="min", factor=self.factor, patience=self.patience, min_lr=self.min_lr)
                 for opt in net.optimizers_]
-        for k, loss in enumerate(_member_losses(net, self.monitor)):
+        for k, loss in enumerate(net.history[-1, self.monitor]):
             if net.stop_reasons_[k] is None:
                 self.schedulers_[k].step(loss)
 
@@ -141,7 +136,7 @@ class RecoverStop(Callback):
     def on_epoch_end(self, net, **kwargs):
         epoch, reasons = len(net.history), net.stop_reasons_
         stopped = [None] * len(reasons)
-        for k, loss in enumerate(_member_losses(net, self.monitor)):
+        for k, loss in enumerate(net.history[-1, self.monitor]):
             if reasons[k] is not None:
                 continue
             self.best_[k] = min(self.best_[k], loss)
@@ -166,7 +161,7 @@ class RestoreBestWeights(Callback):
         self.best_loss_, self.best_epoch_, self.best_state_ = [math.inf] * K, [0] * K, [None] * K
 
     def on_epoch_end(self, net, **kwargs):
-        for k, loss in enumerate(_member_losses(net, self.monitor)):
+        for k, loss in enumerate(net.history[-1, self.monitor]):
             if net.stop_reasons_[k] is None and loss < self.best_loss_[k]:
                 self.best_loss_[k], self.best_epoch_[k] = float(loss), len(net.history)
                 self.best_state_[k] = [p.detach().clone() for p in net.member_parameters(k)]
@@ -178,30 +173,20 @@ class RestoreBestWeights(Callback):
                     p.copy_(best)
 
 
-def schedule_callbacks(
-    *,
-    max_epochs: int,
-    plateau_epochs: int,
-    plateau_patience: int,
-    plateau_factor: float,
-    min_lr: float,
-    recover_tolerance: float,
-    max_recover_epochs: int,
-    monitor: str,
-    extra: list | tuple = (),
-) -> list:
-    """The named callbacks of the whole schedule, in the order they must run.
+def schedule_callbacks(estimator) -> list:
+    """The named callbacks of ``estimator``'s whole schedule, in the order they must run.
 
-    ``monitor`` is ``"valid_loss"`` or ``"train_loss"``; each member's own
-    (``member_...``) is followed. ``extra`` callbacks (a user's progress bar
-    or logger) run after the schedule has recorded the epoch's phase and
-    learning rate and before the phase-3 stop rule, so they also see the last epoch.
+    Its ``callbacks`` (a user's progress bar or logger) run after the schedule
+    has recorded the epoch's phase and learning rate and before the phase-3
+    stop rule, so they also see the last epoch.
     """
-    member = f"member_{monitor}"
+    e = estimator
+    monitor = "member_train_loss" if e.validation_fraction is None else "member_valid_loss"
     return [
-        ("training_phase", TrainingPhase(max_epochs, plateau_epochs)),
-        ("plateau_lr", PlateauLR(plateau_factor, plateau_patience, min_lr, member)),
-        ("restore_best_weights", RestoreBestWeights(member)),
-        *extra,
-        ("recover_stop", RecoverStop(recover_tolerance, max_recover_epochs, max_epochs + plateau_epochs + 1, member)),
+        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs)),
+        ("plateau_lr", PlateauLR(e.plateau_factor, e.plateau_patience, e.min_lr, monitor)),
+        ("restore_best_weights", RestoreBestWeights(monitor)),
+        *list(e.callbacks or []),
+        ("recover_stop", RecoverStop(e.recover_tolerance, e.max_recover_epochs, e.max_epochs + e.plateau_epochs + 1,
+                                     monitor)),
     ]

@@ -1,26 +1,11 @@
-"""Several network calibrators trained at once as one stacked module (issue 13), through the one engine.
+"""Several network calibrators trained at once (issue 13) in the engine every network fit uses.
 
-Training one small net costs far more than its arithmetic: every mini-batch
-is a dozen tiny torch calls. :func:`fit_stacked` trains ``K`` nets of one
-architecture together in the engine every network fit uses
-(:func:`~ftcal.neural_network._base.train_networks`, ``K = 1`` for a plain
-``fit``): each layer's weights of all ``K`` nets are one ``(K, n_in, n_out)``
-parameter of a :class:`StackedMLP`, so a mini-batch step runs each layer of
-all ``K`` nets as one ``torch.baddbmm``. The members stay independent:
-
-* the loss is the sum of the members' own losses, so member ``k``'s gradient
-  is exactly that of its own loss, and each member has its own Adam
-  optimiser (own learning rate, moments and step count);
-* each member keeps its own seed, hence its own weight initialisation,
-  validation split (``ValidSplit``) and per-epoch batch order, the ones a
-  separate ``fit`` draws;
-* each runs its own three-phase schedule (:mod:`ftcal.neural_network._schedule`):
-  its own learning rate (``ReduceLROnPlateau`` in phase 2), its own phase-3
-  stop, its own best weights. A member that has stopped is frozen.
-
-The result equals separate fits up to float32 rounding (the batched matrix
-products sum in another order); ``tests/test_stacked.py`` checks the
-predictions agree.
+:func:`fit_stacked` trains ``K`` nets of one architecture in one run of
+:func:`~ftcal.neural_network._base.train_networks` (a plain ``fit`` is
+``K = 1``): a :class:`StackedMLP` runs each layer of all ``K`` nets as one
+``torch.baddbmm``; each member keeps its own seed (initial weights, split,
+batch order), loss, Adam optimiser and schedule, so the nets equal separate
+fits up to float32 rounding (``tests/test_stacked.py``).
 """
 
 from __future__ import annotations
