@@ -1,4 +1,4 @@
-"""Issue 13 figures: the lean skorch training loop and the numpy inference path, as ratios in one process.
+"""Issues 13 and 21 figures: the one training engine (skorch's loop) and the numpy inference path, as ratios in one process.
 
 Usage::
 
@@ -13,7 +13,8 @@ Usage::
 * predict: one-sample ``predict`` latency against the numpy forward pass of the same fitted net (median of
   ``--latency-calls`` calls), and 100 000-row ``predict`` throughput against the numpy forward's.
 
-Everything runs single-threaded (torch and BLAS), as ftcal's networks do.
+Everything runs single-threaded (torch and BLAS): the script sets it for the plain skorch baseline too;
+ftcal's networks limit themselves to ``n_threads=1`` (a threadpoolctl context) by default.
 """
 
 from __future__ import annotations
