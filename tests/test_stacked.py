@@ -1,7 +1,8 @@
 """Several nets trained as one stacked module (issue 13): the same nets as separate fits, much cheaper.
 
-Tolerance: the stacked step does the same arithmetic as a separate fit in
-another summation order (``baddbmm`` instead of ``addmm``), so the two runs
+Both run the one engine (a separate fit is K = 1). Tolerance: the stacked
+step does the same arithmetic as a separate fit in another summation order
+(``baddbmm`` instead of ``addmm``), so the two runs
 start out equal up to float32 rounding (~1e-7 relative; we measured <= 2e-5
 over the first epochs). Later a ReLU that switches on one run and not on the
 other can lift the difference in one epoch (measured: to 3e-4 in the losses,
@@ -169,21 +170,6 @@ def test_benchmark_stacks_datasets_with_the_results_of_separate_fits(tmp_path):
         assert (a["dataset"], a["stacked"], b["stacked"]) == (b["dataset"], 1, 3)
         assert b["rmse"] == pytest.approx(a["rmse"], rel=PREDICTION_RTOL)
         assert b["epochs"] == a["epochs"]
-
-
-def test_stacked_members_keep_their_own_optimiser_state():
-    """One Adam per member: a member that ran out of rows, or stopped, takes no step (its step count says so)."""
-    datasets = [_data(n, seed) for n, seed in ((120, 1), (200, 2))]
-    template = DirectionalCalibrator(max_epochs=2, plateau_epochs=0, max_recover_epochs=0, batch_size=16,
-                                     validation_fraction=None, random_state=0)
-    stack = [clone(template) for _ in datasets]
-    fit_stacked(stack, [X for X, _ in datasets], [y for _, y in datasets])
-    # without a validation split every row trains: ceil(n / 16) steps per epoch, 2 epochs
-    from ftcal.neural_network._base import train_networks  # noqa: F401  (the one engine both paths use)
-
-    for model, (X, _) in zip(stack, datasets):
-        assert model.n_epochs_ == 2
-        assert len(model.net_.history) == 2
 
 
 @pytest.mark.parametrize("value", ["0", "-3", "two"])

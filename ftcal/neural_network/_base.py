@@ -1,24 +1,12 @@
 """The network calibrators' base: training through the one engine, numpy inference.
 
-A :class:`NetworkCalibrator` builds a skorch net (:class:`~ftcal.neural_network._engine.NetworkRegressor`)
-inside ``fit`` and keeps it as ``net_``. Subclasses say which torch module, which loss weights, and how
-readings/wrenches map to network inputs/targets.
-
-* float32 inside the network, float64 out of ``predict``;
-* ``random_state`` seeds the weight initialisation, the batch shuffling and
-  the validation split; the global torch RNG is forked, so a fit leaves the
-  caller's torch random state untouched; the same seed twice gives the same
-  predictions;
-* ``n_threads`` (default 1) limits torch's and BLAS's threads inside ``fit``
-  and a large ``predict`` through a ``threadpoolctl`` context, which restores
-  the caller's settings; ``None`` leaves them alone. Nothing else
-  process-wide is touched (no signal handler, nothing at import);
-* one calibrator's ``fit`` and :func:`~ftcal.fit_stacked` (``K`` calibrators
-  at once) run the same code, :func:`train_networks`: one engine, one
-  schedule (:mod:`ftcal.neural_network._schedule`), one optimiser path;
-  ``validation_fraction`` of each net's samples (``ValidSplit``) are held
-  out for the monitored loss, or none with ``validation_fraction=None`` (then
-  the training loss is monitored).
+One calibrator's ``fit`` and :func:`~ftcal.fit_stacked` run the same code, :func:`train_networks`: the
+engine (:class:`~ftcal.neural_network._engine.NetworkRegressor`, kept as ``net_``), the schedule
+(:mod:`~ftcal.neural_network._schedule`), one optimiser path. float32 inside the network, float64 out of
+``predict``. ``random_state`` seeds the initial weights, batch order and ``ValidSplit``
+(``validation_fraction``; ``None`` monitors the training loss) in a forked torch RNG: the caller's random
+state is untouched and a seed gives the same predictions. ``n_threads`` limits torch's and BLAS's threads
+in ``fit`` through a ``threadpoolctl`` context; nothing process-wide is changed.
 """
 
 from __future__ import annotations
@@ -152,17 +140,15 @@ class NetworkCalibrator(BaseCalibrator):
         """What the table cannot say: the layer widths are positive integers, and there is at least one."""
         sizes = self.hidden_layer_sizes
         if len(sizes) == 0:
-            raise CalibrationInputError(
-                f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); got {sizes!r}."
-            )
+            raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); "
+                                        f"got {sizes!r}.")
         for width in sizes:
             if isinstance(width, bool) or not isinstance(width, numbers.Integral) or width < 1:
                 raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
 
     def _thread_limit(self):
         """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
-        n = getattr(self, "n_threads", 1)
-        return threadpool_limits(n) if n is not None else contextlib.nullcontext()
+        return contextlib.nullcontext() if self.n_threads is None else threadpool_limits(self.n_threads)
 
     def _network_outputs(self) -> int:
         """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""

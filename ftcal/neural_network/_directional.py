@@ -102,22 +102,22 @@ class DirectionalCalibrator(NetworkCalibrator):
     verbose : int, default=0
         skorch's per-epoch log when > 0.
     callbacks : list or None, default=None
-        Extra skorch callbacks (instances or ``(name, callback)`` pairs) run
-        every epoch once the schedule has recorded its phase and learning
-        rate, e.g. a progress bar or a logger.
-        They affect one training run only and are not stored in model files.
+        Extra skorch callbacks (instances or ``(name, callback)`` pairs), e.g.
+        a progress bar or a logger, called at skorch's documented points
+        (``on_batch_*`` every batch, ``on_grad_computed`` every step,
+        ``on_epoch_*`` after the schedule has recorded the epoch's phase and
+        ``lr``). Not stored in model files; ``fit_stacked`` and ensembles fit
+        an estimator with callbacks by itself.
     device : str, default='cpu'
         Torch device.
     n_threads : int or None, default=1
-        Threads torch and BLAS may use inside ``fit`` and a large ``predict``
-        (a ``threadpoolctl`` context; the caller's settings are restored
-        afterwards). These nets are small: one thread is fastest, and on a
-        busy machine two made a fit over 10x slower. ``None`` leaves the
-        caller's thread settings as they are.
+        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl``
+        context, restored afterwards): one is fastest for these small nets (on
+        a busy machine two made a fit over 10x slower). ``None``: the caller's.
 
     Attributes
     ----------
-    net_ : skorch.NeuralNetRegressor
+    net_ : NetworkRegressor (a skorch ``NeuralNetRegressor``)
         The trained net; ``net_.history`` has ``phase``, ``lr`` per epoch.
     scale_reference_ : float
         Median training scale factor (see above).

@@ -17,10 +17,11 @@ What it changes:
 * **loss**: :class:`MemberSquaredError`, the sum of the members' own losses
   (member ``k``'s gradient is its own loss's); each member's epoch losses
   are recorded as ``member_train_loss`` / ``member_valid_loss``.
-* **optimiser**: one ``torch.optim.Adam`` per member over its parameters
-  (``optimizers_``; ``optimizer_`` is member 0's): its own rate, moments and
-  step count. ``train_step``'s closure runs once; then every member that had
-  rows in the batch and has not stopped steps.
+* **optimiser**: one ``torch.optim.Adam`` (``optimizer_``) steps every member
+  (its groups: the members grouped by rate); ``optimizers_[k]`` holds member
+  ``k``'s rate for its scheduler. Adam's state is per parameter: each member
+  keeps its own moments and step count. ``train_step``'s closure runs once;
+  a member out of rows or stopped gets no gradient, so Adam skips it.
 
 The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
 """
@@ -135,9 +136,23 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def initialize_optimizer(self, triggered_directly=None):
         _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
+        self.trained_parameters_ = list(self.module_.parameters())
         self.optimizers_ = [self.optimizer(self.member_parameters(k), **kwargs) for k in range(len(self.seeds))]
-        self.optimizer_ = self.optimizers_[0]
+        # K = 1: the member's optimiser steps. K > 1: one Adam over every member's parameters steps (one fused
+        # kernel); its param groups are the members' grouped by learning rate, regrouped when a member's
+        # scheduler changes its rate in optimizers_[k]. Adam's state is per parameter, so each member keeps
+        # its own moments and step count.
+        self.optimizer_ = self.optimizers_[0] if len(self.optimizers_) == 1 else self.optimizer(
+            [p for optimizer in self.optimizers_ for p in optimizer.param_groups[0]["params"]], **kwargs)
         return self
+
+    def _group_by_rate(self) -> None:
+        groups: dict[float, dict] = {}
+        for optimizer in self.optimizers_:
+            member = optimizer.param_groups[0]
+            group = groups.setdefault(member["lr"], {**member, "params": []})
+            group["params"] += member["params"]
+        self.optimizer_.param_groups = list(groups.values())
 
     def infer(self, x, **fit_params):
         if isinstance(self.module_, StackedMLP):  # members first inside the stack
@@ -149,24 +164,23 @@ class NetworkRegressor(NeuralNetRegressor):
             super()._set_training(training)
 
     def _zero_grad_optimizer(self, set_to_none=None):
-        self.module_.zero_grad(set_to_none=True)
+        for p in self.trained_parameters_:
+            p.grad = None
 
     def train_step(self, batch, **fit_params):
-        rows = batch[1][..., -1].sum(dim=0).tolist()
-        self.moving_ = [n > 0 and reason is None for n, reason in zip(rows, self.stop_reasons_)]
+        if len(self.seeds) > 1:
+            rows = batch[1][..., -1].sum(dim=0).tolist()
+            self.moving_ = [n > 0 and reason is None for n, reason in zip(rows, self.stop_reasons_)]
         return super().train_step(batch, **fit_params)
 
     def _step_optimizer(self, step_fn):
         step_fn()  # forward, loss, backward and on_grad_computed, once for all members
-        stacked = len(self.optimizers_) > 1
-        grads = [p.grad for p in self.module_.parameters()] if stacked else None
-        for k, optimizer in enumerate(self.optimizers_):
-            if not self.moving_[k]:
-                continue
-            if stacked:
+        if len(self.optimizers_) > 1:  # each member's gradient slice; none (no step) for a member out of rows or stopped
+            grads = [p.grad for p in self.trained_parameters_]
+            for k, optimizer in enumerate(self.optimizers_):
                 for view, grad in zip(optimizer.param_groups[0]["params"], grads):
-                    view.grad = None if grad is None else grad[k]
-            optimizer.step()
+                    view.grad = grad[k] if self.moving_[k] and grad is not None else None
+        self.optimizer_.step()
 
     # -- data: each member's split and batch order ----------------------------------------------------------
     def check_data(self, X, y):
@@ -203,6 +217,8 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def on_epoch_begin(self, net, **kwargs):
         super().on_epoch_begin(net, **kwargs)
+        if len(self.optimizers_) > 1:
+            self._group_by_rate()
         self._loss_sums = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
         self._row_counts = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
 

@@ -108,6 +108,7 @@ def fit_stacked(
             )
         if est.device != "cpu":
             raise CalibrationInputError(f"fit_stacked trains on the CPU; estimator {k} has device={est.device!r}.")
-    datasets = [est._prepare_fit(X_k, y_k) for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators)))]
+    with estimators[0]._thread_limit():  # as BaseCalibrator.fit does around _prepare_fit
+        datasets = [est._prepare_fit(X_k, y_k) for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators)))]
     train_networks(estimators, datasets)
     return estimators
