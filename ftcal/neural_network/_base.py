@@ -166,24 +166,14 @@ class NetworkCalibrator(BaseCalibrator):
         """
         seeds = [int(seed)] if isinstance(seed, numbers.Integral) else [int(s) for s in seed]
         return self._net_class(
-            module=self._module_class,
-            module__n_inputs=n_inputs,
+            module=self._module_class, module__n_inputs=n_inputs, module__n_outputs=self._network_outputs(),
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
-            module__n_outputs=self._network_outputs(),
-            criterion=MemberSquaredError,
-            criterion__weights=[list(w) for w in (loss_weights or [self._loss_weights()])],
-            optimizer=torch.optim.Adam,
+            criterion=MemberSquaredError, criterion__weights=[list(w) for w in loss_weights or [self._loss_weights()]],
             # the fused CPU kernel does Adam's update in one pass: 2.5x faster steps for these small nets
-            optimizer__fused=self.device == "cpu",
-            lr=self.lr,
-            batch_size=self.batch_size,
-            max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs,
-            seeds=seeds,
-            validation_fraction=self.validation_fraction,
-            train_split=None,
-            callbacks=schedule_callbacks(self),
-            verbose=self.verbose,
-            device=self.device,
+            optimizer=torch.optim.Adam, optimizer__fused=self.device == "cpu", lr=self.lr, batch_size=self.batch_size,
+            max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs, seeds=seeds,
+            validation_fraction=self.validation_fraction, train_split=None, callbacks=schedule_callbacks(self),
+            verbose=self.verbose, device=self.device,
         )
 
     def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
