@@ -89,7 +89,9 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
     quietly, as its early stopping does) is raised again as ``KeyboardInterrupt``: a finished schedule always
     leaves a stop reason for every member, an interrupted one does not.
     """
-    setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
+    setups = []
+    for est, (X, y) in zip(estimators, datasets):
+        setups.append(est._training_setup(X, y))
     template = estimators[0]
     net = template._build_net(setups[0][0].shape[1], [seed for _, _, seed in setups],
                               [est._loss_weights() for est in estimators])

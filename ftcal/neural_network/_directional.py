@@ -171,7 +171,7 @@ class DirectionalCalibrator(NetworkCalibrator):
                 f"DirectionalCalibrator: dropped {self.n_dropped_zero_load_} of {len(keep)} training rows with "
                 f"(near-)zero reading or load (below {threshold} of the largest): their direction is undefined.",
                 UserWarning,
-                stacklevel=4,
+                stacklevel=6,  # the caller of fit (_training_setup, train_networks, _fit, fit)
             )
         scale = v_out[keep] / v_in[keep]
         self.scale_reference_ = float(np.median(scale))

@@ -74,9 +74,12 @@ class _MLPNet(nn.Module):
     def __init__(self, n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int):
         super().__init__()
         self.layers = mlp(n_inputs, hidden_layer_sizes, n_outputs, self.last_hidden)
+        self._plan = mlp_layers(self)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.layers(x)
+        for layer, activation in self._plan:  # the layers' arithmetic without a module call per layer
+            x = activate(nn.functional.linear(x, layer.weight, layer.bias), activation)
+        return x
 
 
 class DirectionalNet(_MLPNet):

@@ -51,10 +51,9 @@ def fit_stacked(
 ) -> list[NetworkCalibrator]:
     """Fit ``K`` network calibrators of one kind together, as one stacked module (see the module doc).
 
-    Each estimator ends fitted exactly as its own ``fit`` would leave it (the
-    skorch ``net_`` with its history, the schedule's outcome, the scales and
-    tare), with the weights a separate fit would reach up to float32
-    rounding. Training ``K`` nets this way costs far less than ``K`` fits
+    Each estimator ends fitted as its own ``fit`` would leave it (``net_``
+    with its weights and its slice of the history, the schedule's outcome,
+    scales and tare), up to float32 rounding, for far less than ``K`` fits
     (``benchmarks/network_speed.py``).
 
     Parameters
@@ -62,8 +61,8 @@ def fit_stacked(
     estimators : sequence of DirectionalCalibrator or ComparativeCalibrator
         ``K >= 1`` calibrators of one class with the same parameters except
         ``random_state``, ``alpha``, ``zero_reading`` and ``verbose`` (they
-        share the architecture and the schedule), and no ``callbacks`` (the
-        skorch callbacks run per net; fit such an estimator by itself).
+        share the architecture and the schedule); for ``K > 1`` without
+        ``callbacks`` (a skorch callback sees one net: fit such an estimator by itself).
     X : array-like of shape (n, N), or a list of K of them
         Raw readings: one dataset for every estimator (seed ensembles), or
         one per estimator (K datasets at once).
