@@ -16,16 +16,10 @@ The weights of the epoch with the lowest monitored loss are restored at the
 end (:class:`RestoreBestWeights`, skorch's ``EarlyStopping(load_best=True)``
 rule with the phase-3 stop instead of a patience).
 
-These callbacks are the only definition of the schedule, for every path
-(one ``fit`` is ``K = 1``; :func:`~ftcal.fit_stacked` trains ``K`` nets in
-the same engine, :class:`~ftcal.neural_network._engine.NetworkRegressor`).
-Each member follows its own monitored loss (``member_valid_loss[k]``, or
-``member_train_loss[k]`` without a validation split) with its own optimiser
-(``net.optimizers_[k]``), plateau scheduler, best weights and stop; a stopped
-member is frozen; the fit ends when all have stopped. Each epoch records
-``phase``, ``member_lr`` and ``lr`` (member 0's); the stop epoch records
-``member_stop_reason`` (and ``stop_reason`` for ``K = 1``):
-``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``.
+These callbacks are the only definition of the schedule; they run in the one engine
+(:mod:`~ftcal.neural_network._engine`), each member ``k`` of a stack on its own monitored loss
+(``member_valid_loss[k]``, or ``member_train_loss[k]`` without a split), rate, best weights and stop
+(``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``); a stopped member is frozen.
 """
 
 from __future__ import annotations
@@ -47,11 +41,7 @@ def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
     >>> [phase_of_epoch(e, 2, 1) for e in range(1, 6)]
     [1, 1, 2, 3, 3]
     """
-    if epoch <= max_epochs:
-        return 1
-    if epoch <= max_epochs + plateau_epochs:
-        return 2
-    return 3
+    return 1 if epoch <= max_epochs else 2 if epoch <= max_epochs + plateau_epochs else 3
 
 
 class TrainingPhase(Callback):

@@ -1,11 +1,7 @@
-"""Several network calibrators trained at once (issue 13) in the engine every network fit uses.
+"""Several network calibrators trained at once (issue 13) in the one engine (:mod:`~ftcal.neural_network._engine`).
 
-:func:`fit_stacked` trains ``K`` nets of one architecture in one run of
-:func:`~ftcal.neural_network._base.train_networks` (a plain ``fit`` is
-``K = 1``): a :class:`StackedMLP` runs each layer of all ``K`` nets as one
-``torch.baddbmm``; each member keeps its own seed (initial weights, split,
-batch order), loss, Adam optimiser and schedule, so the nets equal separate
-fits up to float32 rounding (``tests/test_stacked.py``).
+Each member keeps its own seed, data, loss, Adam state and schedule, so the nets equal separate fits up to
+float32 rounding (``tests/test_stacked.py``); a layer of all ``K`` nets is one ``torch.baddbmm``.
 """
 
 from __future__ import annotations
