@@ -232,6 +232,7 @@ class NetworkRegressor(NeuralNetRegressor):
         self._row_counts[training] += rows
 
     def on_epoch_end(self, net, **kwargs):
+        self.criterion_.last_ = None  # a training batch's output holds its graph: not kept (nor pickled)
         for training, prefix in ((True, "train"), (False, "valid")):
             if self._row_counts[training].any():
                 losses = self._loss_sums[training] / self._row_counts[training].clamp(min=1.0)
