@@ -12,7 +12,7 @@ What it changes:
   whose last column marks real rows (1) and padding (0: a member with fewer
   rows runs out of batches first).
 * **module**: ``K = 1`` trains the calibrator's own module (its forward sees
-  ``(B, 1, n_in)``); ``K > 1`` a :class:`~ftcal.neural_network._modules.StackedMLP`.
+  ``(B, n_in)``); ``K > 1`` a :class:`~ftcal.neural_network._modules.StackedMLP`.
   Gradients are autograd's.
 * **loss**: :class:`MemberSquaredError`, the sum of the members' own losses
   (member ``k``'s gradient is its own loss's); each member's epoch losses
@@ -41,7 +41,7 @@ __all__ = ["NetworkRegressor", "MemberSquaredError", "MemberBatches"]
 class MemberSquaredError(torch.nn.Module):
     """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows.
 
-    ``y_true`` carries the row mask as its last column (see the module doc).
+    ``y_true`` carries the row mask as its last column when the batch has padding rows (see the module doc).
     """
 
     def __init__(self, weights):
@@ -51,6 +51,8 @@ class MemberSquaredError(torch.nn.Module):
 
     def member_losses(self, y_pred: torch.Tensor, y_true: torch.Tensor) -> torch.Tensor:
         """Each member's mean loss over its real rows of the batch, shape ``(K,)``."""
+        if y_true.shape[-1] == y_pred.shape[-1]:  # no padding in this batch (no mask column): every row is real
+            return weighted_squared_error(y_pred, y_true, self.weights).mean(dim=0)
         mask = y_true[..., -1]
         squared = weighted_squared_error(y_pred, y_true[..., :-1], self.weights) * mask
         return squared.sum(dim=0) / mask.sum(dim=0).clamp(min=1.0)
@@ -71,9 +73,6 @@ class MemberBatches:
                  generators: list[torch.Generator] | None = None):
         self.X, self.y, self.counts, self.batch_size, self.generators = X, y, counts, batch_size, generators
 
-    def __len__(self) -> int:
-        return 1 if self.generators is None else -(-len(self.X) // self.batch_size)
-
     def __iter__(self):
         if self.generators is None:
             yield self.X, self.y
@@ -86,7 +85,9 @@ class MemberBatches:
         members = torch.arange(K)
         X, y = self.X[order, members], self.y[order, members]  # shuffled once; the batches are views
         for start in range(0, n_max, self.batch_size):
-            yield X[start:start + self.batch_size], y[start:start + self.batch_size]
+            stop = start + self.batch_size
+            padded = min(self.counts) < min(stop, n_max)  # else the mask column is all ones: left out
+            yield X[start:stop], y[start:stop] if padded else y[start:stop, :, :-1]
 
 
 def _side_by_side(blocks: list[np.ndarray]) -> torch.Tensor:
@@ -157,7 +158,7 @@ class NetworkRegressor(NeuralNetRegressor):
     def infer(self, x, **fit_params):
         if isinstance(self.module_, StackedMLP):  # members first inside the stack
             return self.module_(x.transpose(0, 1), **fit_params).transpose(0, 1)
-        return super().infer(x, **fit_params)
+        return super().infer(x[:, 0], **fit_params)[:, None]  # K = 1: the module sees (B, n_in), as in any skorch net
 
     def _set_training(self, training=True):
         if self.module_.training != training or self.criterion_.training != training:  # a no-op costs a tree walk
@@ -167,10 +168,14 @@ class NetworkRegressor(NeuralNetRegressor):
         for p in self.trained_parameters_:
             p.grad = None
 
+    def _rows(self, batch) -> torch.Tensor:
+        """Each member's number of real rows in ``batch``."""
+        y, width = batch[1], self.criterion_.weights.shape[-1]
+        return y[..., -1].sum(dim=0) if y.shape[-1] > width else torch.full((y.shape[1],), float(len(y)))
+
     def train_step(self, batch, **fit_params):
         if len(self.seeds) > 1:
-            rows = batch[1][..., -1].sum(dim=0).tolist()
-            self.moving_ = [n > 0 and reason is None for n, reason in zip(rows, self.stop_reasons_)]
+            self.moving_ = [n > 0 and reason is None for n, reason in zip(self._rows(batch).tolist(), self.stop_reasons_)]
         return super().train_step(batch, **fit_params)
 
     def _step_optimizer(self, step_fn):
@@ -223,7 +228,7 @@ class NetworkRegressor(NeuralNetRegressor):
         self._row_counts = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
 
     def on_batch_end(self, net, batch=None, training=False, y_pred=None, **kwargs):
-        rows = batch[1][..., -1].sum(dim=0)
+        rows = self._rows(batch)
         last = getattr(self.criterion_, "last_", None)
         if last is None or last[0] is not y_pred:  # a get_loss override that bypassed the criterion
             with torch.no_grad():
