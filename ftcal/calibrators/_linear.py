@@ -62,6 +62,7 @@ class LinearCalibrator(BaseCalibrator):
     (True, True)
     """
 
+    _fitted_state = ("calibration_matrix_", "offset_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "ridge": [Interval(Real, 0, None, closed="left")],
@@ -89,3 +90,6 @@ class LinearCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return X @ self.calibration_matrix_.T + self.offset_
+
+    def _emit_onnx(self, g, x: str) -> str:
+        return g.affine(x, self.calibration_matrix_.T, self.offset_)

@@ -74,6 +74,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     (array([0.02, 0.02, 0.02, 0.02, 0.02, 0.02]), array([0.002, 0.002, 0.002, 0.002, 0.002, 0.002]))
     """
 
+    _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [BaseCalibrator, None],
@@ -161,4 +162,12 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         raw, temperature = self._split(X)
         return self.estimator_.predict(self._compensate(raw, temperature))
+
+    def _emit_onnx(self, g, x: str) -> str:
+        n = int(self.n_features_in_)
+        raw, temperature = g.columns(x, 0, n - 1), g.columns(x, n - 1, n)
+        dt = g.op("Sub", temperature, g.const(float(self.reference_temperature)))
+        shifted = g.op("Sub", raw, g.op("Mul", dt, g.const(self.offset_per_deg_)))
+        scale = g.op("Add", g.const(1.0), g.op("Mul", dt, g.const(self.gain_per_deg_)))
+        return g.calibration(self.estimator_, g.op("Div", shifted, scale))
 

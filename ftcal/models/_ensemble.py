@@ -92,6 +92,7 @@ class EnsembleCalibrator(BaseCalibrator):
     True
     """
 
+    _fitted_state = ("member_seeds_", "estimators_")
     _parameter_constraints: dict = {
         "estimator": [BaseCalibrator, None],
         "n_members": [Interval(Integral, 1, None, closed="left")],
@@ -139,6 +140,11 @@ class EnsembleCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.mean([member.predict(X) for member in self.estimators_], axis=0)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        members = [g.calibration(member, x) for member in self.estimators_]
+        total = members[0] if len(members) == 1 else g.op("Sum", *members)
+        return g.op("Div", total, g.const(float(len(members))))
 
 
 def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:
