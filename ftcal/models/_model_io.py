@@ -277,11 +277,11 @@ class _Archive:
                     raise ModelFileError(f"{what} holds Python objects (a pickle); ftcal model files never do, and "
                                          "ftcal does not unpickle. The file is not an ftcal model.")
                 n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
-                check_allocation(n_bytes, f"{what} (declared shape {shape}, {dtype})", fix)
-                if n_bytes > info.file_size:
+                if n_bytes > info.file_size:  # checked before any allocation
                     raise ModelFileError(f"{what} declares shape {shape} ({format_bytes(n_bytes)}) but holds only "
                                          f"{format_bytes(info.file_size)}; the file is damaged. Fit and save the "
                                          "model again.")
+                check_allocation(n_bytes, f"{what} (declared shape {shape}, {dtype})", fix)
                 data = f.read(int(n_bytes))
         except (zipfile.BadZipFile, EOFError, OSError, ValueError, zlib.error) as exc:
             if isinstance(exc, (ModelFileError, MemoryLimitError)):
