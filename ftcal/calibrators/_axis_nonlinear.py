@@ -186,6 +186,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("ridge_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_")
+    #: ``ridge="auto"`` holds out whole groups: requested by default (metadata routing, like a group splitter).
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "powers": [tuple, list],

@@ -11,6 +11,7 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ._base import BaseCalibrator
+from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
@@ -75,6 +76,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
+    #: Accepts the groups of the rows and passes them on when the inner calibrator requests them.
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [BaseCalibrator, None],
@@ -104,8 +107,23 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         dt = (temperature - self.reference_temperature)[:, None]
         return (raw - dt * self.offset_per_deg_) / (1.0 + dt * self.gain_per_deg_)
 
-    def fit(self, X: ArrayLike, y: ArrayLike):
+    def _inner(self) -> BaseCalibrator:
+        return LinearCalibrator() if self.estimator is None else self.estimator
+
+    def get_metadata_routing(self):
+        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
+        return wrapper_routing(self, self._inner())
+
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Learn the thermal coefficients, then fit ``estimator`` on compensated readings.
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, load configuration), passed to
+            ``estimator`` when it requests them (metadata routing), so that
+            an inner model choice (``auto``, the hybrid's ridge) holds out
+            whole groups.
 
         Returns
         -------
@@ -138,10 +156,11 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 # ... and linear in (g, o) for fixed f
                 (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
         self.gain_per_deg_, self.offset_per_deg_ = gain, offset
-        inner = LinearCalibrator() if self.estimator is None else clone(self.estimator)
+        routed = routed_fit_params(self, groups)
+        inner = clone(self._inner())
         params = inner.get_params()
         inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state") if k in params})
-        self.estimator_ = inner.fit(self._compensate(raw, temperature), y)
+        self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
         self.alpha_ = self.estimator_.alpha_
         self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)
         return self

@@ -226,6 +226,8 @@ class AutoCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("best_name_", "cv_results_", "best_estimator_")
+    #: The folds hold out whole groups: requested by default (metadata routing, like a group splitter).
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "candidates": [list, tuple, None],
