@@ -12,6 +12,7 @@ from sklearn.utils._param_validation import Interval, Options, StrOptions
 from ._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
+from ._linear import affine_fit
 from ._ridge import ridge_least_squares
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -244,9 +245,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         n_ref = int(self.n_refinements)
         ys = scale_torques(y, self.alpha_)
         xc = X - self.zero_reading_
-        coef, *_ = np.linalg.lstsq(np.hstack([xc, np.ones((len(xc), 1))]), ys, rcond=None)
-        self.base_matrix_ = coef[:-1].T
-        self.base_offset_ = coef[-1]
+        base = affine_fit(xc, ys)  # the LTM in the torque-scaled space
+        self.base_matrix_, self.base_offset_ = base.coef_, base.intercept_
         z = xc @ self.base_matrix_.T + self.base_offset_
         scale = np.abs(z).max(axis=0)
         self.axis_scale_ = np.where(scale > 0, scale, 1.0)

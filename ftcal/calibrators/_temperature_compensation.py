@@ -16,7 +16,7 @@ from ..core._exceptions import CalibrationInputError
 from ._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
 from ..core._validation import validate_readings, validate_training_data
-from ._zero_load import GATED_MIN_SAMPLES
+from ._zero_load import forward_design
 
 __all__ = ["TemperatureCompensatedCalibrator"]
 
@@ -139,12 +139,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 f"the temperatures span only {np.ptp(temperature):.2g} deg C; a thermal drift can only be learned "
                 "from calibration data recorded over the temperature range of use (several deg C)."
             )
-        if len(y) >= GATED_MIN_SAMPLES:
-            design = np.hstack([np.maximum(y, 0.0), np.minimum(y, 0.0), np.ones((len(y), 1))])
-        else:
-            design = np.hstack([y, np.ones((len(y), 1))])
-        scale = np.max(np.abs(design), axis=0)
-        design = design / np.where(scale > 0, scale, 1.0)
+        design = forward_design(y)  # the forward model of the zero-load estimate, with temperature terms below
         gain = np.zeros(raw.shape[1])
         offset = np.zeros(raw.shape[1])
         for _ in range(int(self.n_iterations)):
