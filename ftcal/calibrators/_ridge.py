@@ -37,12 +37,14 @@ def ridge_least_squares(
     """
     k = y.shape[1]
     free, penalised = features[:, :n_unpenalised], features[:, n_unpenalised:]
+    if penalty == 0 or penalised.shape[1] == 0:  # no penalty: one ordinary least-squares fit
+        free, penalised = features, features[:, :0]
     if np.isinf(penalty) or penalised.shape[1] == 0:
         coef_penalised = np.zeros((penalised.shape[1], k))
     else:
         both = np.hstack([y, penalised])
         residual = both - LinearRegression().fit(free, both).predict(free)
-        solver = LinearRegression(fit_intercept=False) if penalty == 0 else Ridge(penalty, fit_intercept=False)
-        coef_penalised = solver.fit(residual[:, k:], residual[:, :k]).coef_.reshape(k, -1).T
+        coef_penalised = Ridge(penalty, fit_intercept=False).fit(residual[:, k:], residual[:, :k]).coef_
+        coef_penalised = coef_penalised.reshape(k, -1).T
     final = LinearRegression().fit(free, y - penalised @ coef_penalised)
     return np.vstack([final.coef_.reshape(k, -1).T, coef_penalised]), np.asarray(final.intercept_).reshape(k)
