@@ -151,3 +151,40 @@ def test_cli_export_wants_an_onnx_file_name(fitted_models, tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.startswith("ftcal: error: ") and "should end in .onnx" in err
     assert not (tmp_path / "lin.txt").exists()
+
+
+class ClippedLinearCalibrator(LinearCalibrator):
+    """A new calibrator as a user would add one: its state and its graph declared next to it, nothing else."""
+
+    _fitted_state = ("limit_",)
+
+    def _fit(self, X, y):
+        super()._fit(X, y)
+        self.limit_ = np.abs(y).max(axis=0)
+
+    def _predict_wrench(self, X):
+        return np.clip(super()._predict_wrench(X), -self.limit_, self.limit_)
+
+    def _emit_onnx(self, g, x):
+        out = g.affine(x, self.calibration_matrix_.T, self.offset_)
+        return g.op("Min", g.op("Max", out, g.const(-self.limit_)), g.const(self.limit_))
+
+
+def test_a_new_calibrator_needs_one_registry_line_to_be_saved_and_exported(tmp_path):
+    from ftcal.models import _registry
+
+    raw, w = _sensor()
+    model = ClippedLinearCalibrator().fit(raw[:200], w[:200])
+    far = raw * 3.0  # beyond the training loads: the clipping is in the graph
+    with pytest.raises(ExportError, match="ClippedLinearCalibrator cannot be exported"):
+        export_onnx(model, tmp_path / "before.onnx")
+    _registry.register_calibrator("clipped_linear", ClippedLinearCalibrator)
+    try:
+        _assert_parity(model, export_onnx(model, tmp_path / "clipped.onnx"), far)
+        loaded = load_model(save_model(model, tmp_path / "clipped.model.npz"))
+        np.testing.assert_array_equal(loaded.limit_, model.limit_)
+        np.testing.assert_array_equal(loaded.predict(far), model.predict(far))
+        assert np.any(np.abs(model.predict(far)) == model.limit_)  # the clipping is exercised
+    finally:
+        _registry._FACTORIES.pop("clipped_linear")
+        _registry._SCHEDULES.pop("clipped_linear")

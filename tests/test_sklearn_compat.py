@@ -97,8 +97,10 @@ def test_grid_search(tiny_calibrator, data):
     search = GridSearchCV(tiny_calibrator, grid, cv=KFold(2), scoring=neg_scaled_rmse).fit(*data)
     assert search.best_params_.keys() == grid.keys()
     assert search.best_estimator_.predict(data[0]).shape == (60, 6)
-    if "ridge" in grid:  # noise-free affine data: no penalty is best
-        assert search.best_params_ == {"ridge": 0.0}
+    if "ridge" in grid:  # noise-free affine data: a penalty cannot help; where the penalised terms are zero (the
+        # polynomial's and the hybrid's corrections) both are exact, and only rounding (~1e-13 N) tells them apart
+        no_penalty, penalty = search.cv_results_["mean_test_score"]
+        assert no_penalty >= penalty - 1e-9 * np.abs(data[1]).max()
 
 
 def test_clone_and_pickle_round_trip(tiny_calibrator, data):

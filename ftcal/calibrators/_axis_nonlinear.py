@@ -12,6 +12,7 @@ from sklearn.utils._param_validation import Interval, Options, StrOptions
 from ._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
+from ._linear import affine_fit
 from ._ridge import ridge_least_squares
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -185,6 +186,9 @@ class AxisNonlinearCalibrator(BaseCalibrator):
     True
     """
 
+    _fitted_state = ("ridge_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_")
+    #: ``ridge="auto"`` holds out whole groups: requested by default (metadata routing, like a group splitter).
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "powers": [tuple, list],
@@ -241,9 +245,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         n_ref = int(self.n_refinements)
         ys = scale_torques(y, self.alpha_)
         xc = X - self.zero_reading_
-        coef, *_ = np.linalg.lstsq(np.hstack([xc, np.ones((len(xc), 1))]), ys, rcond=None)
-        self.base_matrix_ = coef[:-1].T
-        self.base_offset_ = coef[-1]
+        base = affine_fit(xc, ys)  # the LTM in the torque-scaled space
+        self.base_matrix_, self.base_offset_ = base.coef_, base.intercept_
         z = xc @ self.base_matrix_.T + self.base_offset_
         scale = np.abs(z).max(axis=0)
         self.axis_scale_ = np.where(scale > 0, scale, 1.0)
@@ -303,4 +306,24 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         for coefs, intercepts in zip(self.coefs_, self.intercepts_):
             previous = self._apply(block, previous, coefs, intercepts)
         return unscale_torques(previous, self.alpha_)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        z = g.affine(g.op("Sub", x, g.const(self.zero_reading_)), self.base_matrix_.T, self.base_offset_)
+        u = g.op("Div", z, g.const(self.axis_scale_))
+        parts = [u]
+        for power in self.powers:  # signed_power_features, term by term
+            a = g.op("Abs", u)
+            inside = g.op("Pow", g.op("Min", a, g.const(1.0)), g.const(power + 1.0))
+            beyond = g.op("Mul", g.const(power + 1.0), g.op("Max", g.op("Sub", a, g.const(1.0)), g.const(0.0)))
+            parts.append(g.op("Mul", g.op("Sign", u), g.op("Add", inside, beyond)))
+        block = g.op("Concat", *parts, axis=1)
+        width = len(parts) * len(self.axis_scale_)
+        previous = z
+        for coefs, intercepts in zip(self.coefs_, self.intercepts_):
+            coefs = np.asarray(coefs)  # (k, 2 * width + 1): [block, gate, gate * block] per output
+            gate = g.op("Cast", g.op("Greater", previous, g.const(0.0)), to=g.onnx.TensorProto.DOUBLE)
+            plain = g.affine(block, coefs[:, :width].T)
+            gated = g.op("Add", g.affine(block, coefs[:, width + 1:].T), g.const(coefs[:, width]))
+            previous = g.op("Add", g.op("Add", plain, g.op("Mul", gate, gated)), g.const(intercepts))
+        return g.unscale_torques(previous, self.alpha_, int(getattr(self, "n_outputs_", 6)))
 

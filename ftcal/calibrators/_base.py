@@ -71,6 +71,11 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     ``_check_params`` of the subclass.
     """
 
+    #: Fitted attributes a model file stores (:func:`ftcal.save_model`); each subclass declares its own
+    #: next to its class, and ``_emit_onnx(graph, x)`` for its ONNX graph (:func:`ftcal.export_onnx`).
+    _fitted_state: tuple[str, ...] = ("alpha_", "n_features_in_", "feature_names_in_", "n_outputs_", "y_1d_",
+                                      "zero_reading_", "reading_noise_", "tare_reading_")
+
     _parameter_constraints: dict = {
         "alpha": [Interval(Real, 0, None, closed="neither"), None],
         "zero_reading": ["array-like", None],

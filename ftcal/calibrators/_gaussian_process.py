@@ -110,6 +110,9 @@ class GaussianProcessCalibrator(BaseCalibrator):
     ((2, 6), (2, 6), True)
     """
 
+    _fitted_state = ("constant_", "noise_level_", "linear_matrix_", "linear_offset_", "input_scale_",
+                     "train_inputs_", "dual_coef_", "cholesky_", "residual_mean_", "residual_scale_",
+                     "output_variance_", "length_scale_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "max_samples": [Interval(Integral, 10, None, closed="left")],
@@ -179,6 +182,20 @@ class GaussianProcessCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return unscale_torques(self._predict_scaled(X, False)[0], self.alpha_)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        xc = g.op("Sub", x, g.const(self.zero_reading_))
+        scaled = g.op("Div", xc, g.const(self.input_scale_ * self.length_scale_))
+        train = self.train_inputs_ / self.length_scale_
+        cross = g.op("MatMul", scaled, g.const(train.T))
+        squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1),
+                       g.const((train * train).sum(axis=1)))
+        distances = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), cross)), g.const(0.0))
+        kernel = g.op("Mul", g.const(self.constant_), g.op("Exp", g.op("Mul", g.const(-0.5), distances)))
+        residual = g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_)),
+                                    g.const(self.residual_scale_)), g.const(self.residual_mean_))
+        mean = g.op("Add", g.affine(xc, self.linear_matrix_.T, self.linear_offset_), residual)
+        return g.unscale_torques(mean, self.alpha_, int(getattr(self, "n_outputs_", 6)))
 
     def predict(self, X: ArrayLike, return_std: bool = False):
         """Wrench in [N] and [N·m] for raw readings ``X`` (n, N); with ``return_std`` also its standard deviation.

@@ -6,11 +6,29 @@ from numbers import Real
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.linear_model import LinearRegression, Ridge
 from sklearn.utils._param_validation import Interval
 
 from ._base import BaseCalibrator
 
-__all__ = ["LinearCalibrator"]
+__all__ = ["LinearCalibrator", "affine_fit"]
+
+
+def affine_fit(X: NDArray[np.float64], y: NDArray[np.float64], ridge: float = 0.0) -> LinearRegression | Ridge:
+    """The affine least-squares fit ``y ≈ X C.T + b`` of scikit-learn (``Ridge`` on ``C`` when ``ridge > 0``).
+
+    The one affine fit of ftcal: the LTM, the hybrid's and the GP's linear
+    bases, the zero-load forward model. ``coef_`` is ``C`` (k, N) and
+    ``intercept_`` is ``b`` (k,); the offset is never penalised.
+
+    Examples
+    --------
+    >>> X = np.array([[0.0], [1.0], [2.0]])
+    >>> fit = affine_fit(X, 3.0 * X + 1.0)
+    >>> np.round(fit.coef_, 6).tolist(), np.round(fit.intercept_, 6).tolist()
+    ([[3.0]], [1.0])
+    """
+    return (Ridge(ridge) if ridge > 0 else LinearRegression()).fit(X, y)
 
 
 class LinearCalibrator(BaseCalibrator):
@@ -62,6 +80,7 @@ class LinearCalibrator(BaseCalibrator):
     (True, True)
     """
 
+    _fitted_state = ("calibration_matrix_", "offset_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "ridge": [Interval(Real, 0, None, closed="left")],
@@ -74,18 +93,11 @@ class LinearCalibrator(BaseCalibrator):
         self.random_state = random_state
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        ridge = float(self.ridge)
-        x_mean = X.mean(axis=0)
-        y_mean = y.mean(axis=0)
-        xc = X - x_mean
-        yc = y - y_mean
-        if ridge > 0:
-            n_channels = X.shape[1]
-            xc = np.vstack([xc, np.sqrt(ridge) * np.eye(n_channels)])
-            yc = np.vstack([yc, np.zeros((n_channels, yc.shape[1]))])
-        coef, *_ = np.linalg.lstsq(xc, yc, rcond=None)
-        self.calibration_matrix_ = coef.T
-        self.offset_ = y_mean - self.calibration_matrix_ @ x_mean
+        fit = affine_fit(X, y, float(self.ridge))
+        self.calibration_matrix_, self.offset_ = fit.coef_.reshape(y.shape[1], -1), np.reshape(fit.intercept_, -1)
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return X @ self.calibration_matrix_.T + self.offset_
+
+    def _emit_onnx(self, g, x: str) -> str:
+        return g.affine(x, self.calibration_matrix_.T, self.offset_)

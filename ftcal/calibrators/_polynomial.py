@@ -84,6 +84,7 @@ class PolynomialCalibrator(BaseCalibrator):
     True
     """
 
+    _fitted_state = ("input_scale_", "coef_", "intercept_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "degree": [Interval(Integral, 1, 5, closed="both")],
@@ -114,3 +115,10 @@ class PolynomialCalibrator(BaseCalibrator):
         u = (X - self.zero_reading_) / self.input_scale_
         out = [monomials.transform(u[i : i + _PREDICT_CHUNK]) @ self.coef_ for i in range(0, len(u), _PREDICT_CHUNK)]
         return (np.concatenate(out) if out else np.zeros((0, len(self.intercept_)))) + self.intercept_
+
+    def _emit_onnx(self, g, x: str) -> str:
+        u = g.op("Div", g.op("Sub", x, g.const(self.zero_reading_)), g.const(self.input_scale_))
+        powers = self._monomials().powers_.astype(np.float64)  # (n_monomials, N)
+        expanded = g.op("Unsqueeze", u, g.const([1], np.int64))  # (n, 1, N)
+        monomials = g.op("ReduceProd", g.op("Pow", expanded, g.const(powers)), axes=[2], keepdims=0)
+        return g.affine(monomials, self.coef_, self.intercept_)

@@ -1,9 +1,19 @@
-"""Ridge least squares that leaves the linear terms unpenalised (shared by the polynomial and hybrid models)."""
+"""Ridge least squares that leaves the linear terms unpenalised (shared by the polynomial and hybrid models).
+
+scikit-learn's :class:`~sklearn.linear_model.Ridge` penalises every
+coefficient alike; these models penalise only their corrections. The
+Frisch-Waugh-Lovell theorem reduces that to scikit-learn's estimators: the
+penalised features and the targets are residualised on the unpenalised ones
+(:class:`~sklearn.linear_model.LinearRegression` with intercept), ``Ridge``
+(no intercept) fits the residuals, and a last ``LinearRegression`` gives the
+unpenalised coefficients and the intercept. The result is the exact minimiser.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
+from sklearn.linear_model import LinearRegression, Ridge
 
 __all__ = ["ridge_least_squares"]
 
@@ -15,9 +25,8 @@ def ridge_least_squares(
 
     The intercept and the first ``n_unpenalised`` columns' coefficients are
     not penalised; ``penalty = inf`` is the limit (penalised coefficients
-    exactly zero, the rest ordinary least squares). Solved as an augmented least-squares problem on centred
-    data (``numpy.linalg.lstsq``), which stays exact for ``penalty = 0`` and
-    rank-deficient features.
+    exactly zero, the rest ordinary least squares), ``penalty = 0`` ordinary
+    least squares (the minimum-norm solution for rank-deficient features).
 
     Examples
     --------
@@ -26,18 +35,16 @@ def ridge_least_squares(
     >>> np.round(coef.ravel(), 6).tolist(), np.round(b, 6).tolist()
     ([2.0, 0.5], [1.0])
     """
-    f_mean = features.mean(axis=0)
-    y_mean = y.mean(axis=0)
-    fc = features - f_mean
-    yc = y - y_mean
-    n_penalised = features.shape[1] - n_unpenalised
-    if np.isinf(penalty):  # the limit: penalised coefficients are zero, the rest is plain least squares
-        coef = np.zeros((features.shape[1], y.shape[1]))
-        coef[:n_unpenalised], *_ = np.linalg.lstsq(fc[:, :n_unpenalised], yc, rcond=None)
-        return coef, y_mean - f_mean @ coef
-    if penalty > 0 and n_penalised > 0:
-        rows = np.hstack([np.zeros((n_penalised, n_unpenalised)), np.sqrt(penalty) * np.eye(n_penalised)])
-        fc = np.vstack([fc, rows])
-        yc = np.vstack([yc, np.zeros((n_penalised, y.shape[1]))])
-    coef, *_ = np.linalg.lstsq(fc, yc, rcond=None)
-    return coef, y_mean - f_mean @ coef
+    k = y.shape[1]
+    free, penalised = features[:, :n_unpenalised], features[:, n_unpenalised:]
+    if penalty == 0 or penalised.shape[1] == 0:  # no penalty: one ordinary least-squares fit
+        free, penalised = features, features[:, :0]
+    if np.isinf(penalty) or penalised.shape[1] == 0:
+        coef_penalised = np.zeros((penalised.shape[1], k))
+    else:
+        both = np.hstack([y, penalised])
+        residual = both - LinearRegression().fit(free, both).predict(free)
+        coef_penalised = Ridge(penalty, fit_intercept=False).fit(residual[:, k:], residual[:, :k]).coef_
+        coef_penalised = coef_penalised.reshape(k, -1).T
+    final = LinearRegression().fit(free, y - penalised @ coef_penalised)
+    return np.vstack([final.coef_.reshape(k, -1).T, coef_penalised]), np.asarray(final.intercept_).reshape(k)

@@ -11,11 +11,12 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ._base import BaseCalibrator
+from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
 from ..core._validation import validate_readings, validate_training_data
-from ._zero_load import GATED_MIN_SAMPLES
+from ._zero_load import forward_design
 
 __all__ = ["TemperatureCompensatedCalibrator"]
 
@@ -74,6 +75,9 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     (array([0.02, 0.02, 0.02, 0.02, 0.02, 0.02]), array([0.002, 0.002, 0.002, 0.002, 0.002, 0.002]))
     """
 
+    _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
+    #: Accepts the groups of the rows and passes them on when the inner calibrator requests them.
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [BaseCalibrator, None],
@@ -103,8 +107,23 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         dt = (temperature - self.reference_temperature)[:, None]
         return (raw - dt * self.offset_per_deg_) / (1.0 + dt * self.gain_per_deg_)
 
-    def fit(self, X: ArrayLike, y: ArrayLike):
+    def _inner(self) -> BaseCalibrator:
+        return LinearCalibrator() if self.estimator is None else self.estimator
+
+    def get_metadata_routing(self):
+        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
+        return wrapper_routing(self, self._inner())
+
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Learn the thermal coefficients, then fit ``estimator`` on compensated readings.
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, load configuration), passed to
+            ``estimator`` when it requests them (metadata routing), so that
+            an inner model choice (``auto``, the hybrid's ridge) holds out
+            whole groups.
 
         Returns
         -------
@@ -120,12 +139,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 f"the temperatures span only {np.ptp(temperature):.2g} deg C; a thermal drift can only be learned "
                 "from calibration data recorded over the temperature range of use (several deg C)."
             )
-        if len(y) >= GATED_MIN_SAMPLES:
-            design = np.hstack([np.maximum(y, 0.0), np.minimum(y, 0.0), np.ones((len(y), 1))])
-        else:
-            design = np.hstack([y, np.ones((len(y), 1))])
-        scale = np.max(np.abs(design), axis=0)
-        design = design / np.where(scale > 0, scale, 1.0)
+        design = forward_design(y)  # the forward model of the zero-load estimate, with temperature terms below
         gain = np.zeros(raw.shape[1])
         offset = np.zeros(raw.shape[1])
         for _ in range(int(self.n_iterations)):
@@ -137,10 +151,11 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 # ... and linear in (g, o) for fixed f
                 (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
         self.gain_per_deg_, self.offset_per_deg_ = gain, offset
-        inner = LinearCalibrator() if self.estimator is None else clone(self.estimator)
+        routed = routed_fit_params(self, groups)
+        inner = clone(self._inner())
         params = inner.get_params()
         inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state") if k in params})
-        self.estimator_ = inner.fit(self._compensate(raw, temperature), y)
+        self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
         self.alpha_ = self.estimator_.alpha_
         self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)
         return self
@@ -161,4 +176,12 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         raw, temperature = self._split(X)
         return self.estimator_.predict(self._compensate(raw, temperature))
+
+    def _emit_onnx(self, g, x: str) -> str:
+        n = int(self.n_features_in_)
+        raw, temperature = g.columns(x, 0, n - 1), g.columns(x, n - 1, n)
+        dt = g.op("Sub", temperature, g.const(float(self.reference_temperature)))
+        shifted = g.op("Sub", raw, g.op("Mul", dt, g.const(self.offset_per_deg_)))
+        scale = g.op("Add", g.const(1.0), g.op("Mul", dt, g.const(self.gain_per_deg_)))
+        return g.calibration(self.estimator_, g.op("Div", shifted, scale))
 

@@ -29,9 +29,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from sklearn.linear_model import LinearRegression
+
 from ..core._wrench import scale_torques
 
-__all__ = ["estimate_zero_reading", "reading_noise", "ZERO_LOAD_TOLERANCE", "GATED_MIN_SAMPLES"]
+__all__ = ["estimate_zero_reading", "reading_noise", "forward_design", "ZERO_LOAD_TOLERANCE", "GATED_MIN_SAMPLES"]
 
 #: A row is a zero-load row when its torque-scaled wrench norm is below this
 #: fraction of the largest one in the data set.
@@ -77,19 +79,25 @@ def estimate_zero_reading(
     return coef[-1]
 
 
-def _forward_fit(raw: NDArray[np.float64], wrench: NDArray[np.float64]):
-    """Least-squares forward model ``raw ≈ f(wrench)`` (sign-gated when there are enough rows): coefficients
-    in raw units per design column (the last is the intercept) and the residuals."""
-    if wrench.shape[0] >= GATED_MIN_SAMPLES:
-        design = np.hstack([np.maximum(wrench, 0.0), np.minimum(wrench, 0.0), np.ones((wrench.shape[0], 1))])
-    else:
-        design = np.hstack([wrench, np.ones((wrench.shape[0], 1))])
-    # Column scaling keeps the fit well conditioned when forces [N] and torques [N·m] differ a lot.
+def forward_design(wrench: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Columns of the forward model ``raw ≈ f(wrench)``, each scaled to at most 1 in magnitude, and a last
+    column of ones: ``[max(w, 0), min(w, 0), 1]`` (sign-gated) from :data:`GATED_MIN_SAMPLES` rows on, else
+    ``[w, 1]``. The scaling keeps the fit well conditioned when forces [N] and torques [N·m] differ a lot.
+    Shared with the temperature compensation, whose drift model multiplies it."""
+    gated = [np.maximum(wrench, 0.0), np.minimum(wrench, 0.0)] if wrench.shape[0] >= GATED_MIN_SAMPLES else [wrench]
+    design = np.hstack(gated)
     scale = np.max(np.abs(design), axis=0)
-    scale[scale == 0.0] = 1.0
-    coef, *_ = np.linalg.lstsq(design / scale, raw, rcond=None)
-    residual = raw - (design / scale) @ coef
-    return coef / scale[:, None], residual
+    return np.hstack([design / np.where(scale > 0, scale, 1.0), np.ones((wrench.shape[0], 1))])
+
+
+def _forward_fit(raw: NDArray[np.float64], wrench: NDArray[np.float64]):
+    """Least-squares forward model ``raw ≈ f(wrench)`` on :func:`forward_design`'s columns (scikit-learn's
+    ``LinearRegression``): the coefficients per design column (the last, the intercept, is the reading at zero
+    load, in raw units) and the residuals."""
+    design = forward_design(wrench)[:, :-1]
+    fit = LinearRegression().fit(design, raw)
+    coef = np.vstack([fit.coef_.reshape(raw.shape[1], -1).T, fit.intercept_])
+    return coef, raw - fit.predict(design).reshape(raw.shape)
 
 
 def reading_noise(raw: NDArray[np.float64], wrench: NDArray[np.float64]) -> NDArray[np.float64]:

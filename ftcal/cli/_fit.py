@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import inspect
 import time
 
 import numpy as np
@@ -79,6 +78,7 @@ def _parse_tare(text: str | None) -> np.ndarray | None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ftcal.calibrators._routing import requests_groups
 
     console = Console(args.quiet)
     name = args.name or args.model
@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
     fit_params = {}
-    if data.group is not None and "groups" in inspect.signature(estimator.fit).parameters:
+    if data.group is not None and requests_groups(estimator):
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
     fit_with_progress(estimator, X, data.wrench, console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start

@@ -35,6 +35,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 import numpy as np
+from sklearn.linear_model import LinearRegression
 from numpy.typing import ArrayLike, NDArray
 
 from ..io._dataset import CalibrationDataset
@@ -132,9 +133,9 @@ def fit_no_load_model(gravity_in_sensor: ArrayLike, raw: ArrayLike) -> NoLoadMod
             f"the no-load run has {u.shape[0]} poses whose gravity directions do not span 3-D; "
             "record at least 4 poses in different directions (a calibration sphere) without the load."
         )
-    coef, *_ = np.linalg.lstsq(A, r, rcond=None)
-    resid = r - A @ coef
-    return NoLoadModel(matrix=coef[:3].T.copy(), offset=coef[3].copy(),
+    fit = LinearRegression().fit(u, r)  # the affine model r = B u + offset
+    resid = r - fit.predict(u).reshape(r.shape)
+    return NoLoadModel(matrix=fit.coef_.reshape(r.shape[1], 3).copy(), offset=np.reshape(fit.intercept_, -1).copy(),
                        residual_rms=np.sqrt(np.mean(resid**2, axis=0)), n_poses=int(u.shape[0]))
 
 

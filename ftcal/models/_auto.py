@@ -225,6 +225,9 @@ class AutoCalibrator(BaseCalibrator):
     'linear'
     """
 
+    _fitted_state = ("best_name_", "cv_results_", "best_estimator_")
+    #: The folds hold out whole groups: requested by default (metadata routing, like a group splitter).
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "candidates": [list, tuple, None],
@@ -297,6 +300,9 @@ class AutoCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.best_estimator_.predict(X)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        return g.calibration(self.best_estimator_, x)
 
     def summary(self) -> str:
         """The comparison as a markdown table (held-out RMSE ± standard error, fit time, status)."""

@@ -14,6 +14,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 
 from ..calibrators._base import BaseCalibrator
+from ..calibrators._routing import routed_fit_params, wrapper_routing
 from ..neural_network._directional import DirectionalCalibrator
 from ..core._exceptions import CalibrationInputError
 from ..neural_network._base import NetworkCalibrator
@@ -23,8 +24,8 @@ from ..core._validation import validate_training_data
 __all__ = ["EnsembleCalibrator", "ensemble_factory"]
 
 
-def _fit_member(estimator, X, y):
-    return estimator.fit(X, y)
+def _fit_member(estimator, X, y, fit_params):
+    return estimator.fit(X, y, **fit_params)
 
 
 class EnsembleCalibrator(BaseCalibrator):
@@ -92,6 +93,9 @@ class EnsembleCalibrator(BaseCalibrator):
     True
     """
 
+    _fitted_state = ("member_seeds_", "estimators_")
+    #: Accepts the groups of the rows and passes them on when the members request them.
+    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         "estimator": [BaseCalibrator, None],
         "n_members": [Interval(Integral, 1, None, closed="left")],
@@ -113,8 +117,18 @@ class EnsembleCalibrator(BaseCalibrator):
             )
         return template
 
-    def fit(self, X: ArrayLike, y: ArrayLike):
+    def get_metadata_routing(self):
+        """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.calibrators._routing`)."""
+        return wrapper_routing(self, self._template())
+
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Fit every member on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row, passed to every member that requests them
+            (metadata routing; e.g. members that choose by cross-validation).
 
         Returns
         -------
@@ -124,13 +138,15 @@ class EnsembleCalibrator(BaseCalibrator):
         n = self.n_members
         template = self._template()
         X, y = validate_training_data(self, X, y)
+        routed = routed_fit_params(self, groups)
         rng = check_random_state(self.random_state)
         self.member_seeds_ = rng.randint(np.iinfo(np.int32).max, size=int(n))
         members = [clone(template).set_params(random_state=int(s)) for s in self.member_seeds_]
-        if isinstance(template, NetworkCalibrator) and not template.callbacks and template.device == "cpu":
+        if (isinstance(template, NetworkCalibrator) and not template.callbacks and template.device == "cpu"
+                and not routed):
             self.estimators_ = fit_stacked(members, X, y)  # one stacked module: ~1 fit's time, not n_members'
         else:
-            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y) for m in members)
+            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y, routed) for m in members)
         self.alpha_ = self.estimators_[0].alpha_
         self.zero_reading_ = self.estimators_[0].zero_reading_
         self.reading_noise_ = self.estimators_[0].reading_noise_
@@ -139,6 +155,11 @@ class EnsembleCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.mean([member.predict(X) for member in self.estimators_], axis=0)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        members = [g.calibration(member, x) for member in self.estimators_]
+        total = members[0] if len(members) == 1 else g.op("Sum", *members)
+        return g.op("Div", total, g.const(float(len(members))))
 
 
 def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:

@@ -1,129 +1,104 @@
 """Model files: one ``.npz`` holding JSON metadata and the weight arrays, no pickle.
 
-Layout (``numpy.savez``; read back with ``allow_pickle=False``, so loading
-never executes code from the file):
+Layout (a zip of ``.npy`` members, as ``numpy.savez`` writes; read member by
+member without pickle, so loading never executes code from the file):
 
 * ``__metadata__``: a 0-d unicode array holding a JSON object with
-  ``format`` (``"ftcal-model"``), ``format_version`` (``1``), ``model_type``
+  ``format`` (``"ftcal-model"``), ``format_version`` (``2``), ``model_type``
   (the class name), ``ftcal_version``, ``params`` (constructor parameters),
-  ``fitted`` (scalar fitted attributes: ``alpha_``, ``n_features_in_``, ...)
-  and, for networks, a compact ``history`` (epoch, phase, lr, losses);
+  ``fitted`` (JSON-able fitted attributes: ``alpha_``, ``n_features_in_``,
+  ``feature_names_in_`` as ``{"strings": [...]}``, ...) and, for networks, a
+  compact ``history`` (epoch, phase, lr, losses);
 * ``fitted/<name>``: fitted arrays (``zero_reading_``, ``calibration_matrix_``,
-  scaling arrays, ...);
+  ...);
 * ``module/<name>``: the torch ``state_dict`` of a network (float32);
-* ``children/<i>/...``: the sub-models of a meta-estimator (e.g. the members
-  of an :class:`~ftcal.EnsembleCalibrator`), each in this same layout, their
-  metadata in the JSON's ``children`` list.
+* ``children/<i>/...``: fitted sub-models (the members of an
+  :class:`~ftcal.EnsembleCalibrator`, the inner calibrator of a wrapper), each
+  in this same layout, their metadata in the JSON's ``children`` list with the
+  attribute they belong to.
 
-A file that is missing, truncated, not an ftcal model, of another format
-version or of an unexpected model type raises :class:`~ftcal.ModelFileError`
-saying which. Files are written to a temporary file next to the target and
-then renamed, so an interrupted save never leaves half a file, and an
-existing file is only replaced with ``overwrite=True``.
+**What is stored is declared once, next to each class**: ``_fitted_state``, a
+tuple of fitted attribute names (collected over the class' bases, so every
+calibrator stores :class:`~ftcal.calibrators._base.BaseCalibrator`'s
+``alpha_``, ``zero_reading_``, ``feature_names_in_``, ...). Each value is
+stored by what it is: a numeric array as a member, a number, string, flag or
+plain dict as JSON, a fitted calibrator (or a list of them) as children, a
+skorch network as its weights and history. Which classes a file may name is
+the registry's list (:func:`ftcal.models._registry.model_classes`): adding a
+calibrator is one module and one registry line.
+
+Reading is bounded: only the members the model type needs are read (others
+are never decompressed), each member's declared size and the shape in its
+``.npy`` header are checked against ftcal's memory limit
+(:func:`~ftcal.core.check_allocation`) and against each other before anything
+is allocated, and at most the declared bytes are decompressed. A file that is
+missing, not a zip archive, truncated, not an ftcal model, of another format
+version, of an unknown model type, or inconsistent raises
+:class:`~ftcal.ModelFileError` saying which. Files of format version 1 (ftcal
+before the declarations) are read too. Files are written to a temporary file
+next to the target and then renamed, so an interrupted save never leaves half
+a file, and an existing file is only replaced with ``overwrite=True``.
 """
 
 from __future__ import annotations
 
-import io
 import json
 import os
+import stat
 import warnings
 import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
-import torch
 from sklearn.utils.validation import check_is_fitted
-from skorch.history import History
 
-from ._auto import AutoCalibrator
-from ..neural_network._comparative import ComparativeCalibrator
-from ..neural_network._directional import DirectionalCalibrator
-from ._ensemble import EnsembleCalibrator
+from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output
-from ..calibrators._gaussian_process import GaussianProcessCalibrator
-from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
-from ..calibrators._linear import LinearCalibrator
-from ..neural_network._base import NetworkCalibrator, device_available
-from ..calibrators._polynomial import PolynomialCalibrator
-from ..calibrators._temperature_compensation import TemperatureCompensatedCalibrator
+from ..core._memory import MemoryLimitError, check_allocation, format_bytes
 
-__all__ = ["save_model", "load_model", "register_model_type", "FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "fitted_state_names", "FORMAT_VERSION"]
 
 FORMAT = "ftcal-model"
-#: Version of the model-file layout written by :func:`save_model`.
-FORMAT_VERSION = 1
+#: Version of the model-file layout written by :func:`save_model` (1: before the per-class declarations).
+FORMAT_VERSION = 2
+_READABLE_VERSIONS = (1, 2)
 _META_KEY = "__metadata__"
 _HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reason")
-
-#: Fitted attributes stored per model type: (scalars, arrays).
-_MODEL_TYPES: dict[str, tuple[type, tuple[str, ...], tuple[str, ...]]] = {}
-#: Fitted arrays every calibrator may have (files written before they existed lack them).
-_OPTIONAL_ARRAYS = ("reading_noise_", "tare_reading_")
-#: Fitted scalars of every calibrator that older files lack (then: a wrench, 6 outputs, 2-D).
-_OPTIONAL_SCALARS = ("n_outputs_", "y_1d_")
-#: Meta-estimators: the fitted attribute holding their list of fitted sub-models.
-_CHILDREN: dict[str, str] = {}
+#: Largest metadata member read [bytes]: an ftcal model's JSON is a few kB (a long training history: ~1 MB).
+_MAX_METADATA_BYTES = 64 * 2**20
+#: Version-1 files name no attribute for their sub-models; these were the only meta-estimators then.
+_V1_CHILDREN = {"EnsembleCalibrator": "estimators_", "TemperatureCompensatedCalibrator": "estimator_",
+                "AutoCalibrator": "best_estimator_"}
 
 
-def register_model_type(
-    cls: type, scalars: tuple[str, ...], arrays: tuple[str, ...], *, children: str | None = None
-) -> None:
-    """Allow :func:`save_model` / :func:`load_model` for ``cls`` (by class name).
+def fitted_state_names(cls: type) -> tuple[str, ...]:
+    """The fitted attributes a model file stores for ``cls``: every ``_fitted_state`` along its bases.
 
-    ``scalars`` are JSON-able fitted attributes, ``arrays`` ndarray ones.
-    Subclasses of the network base get their ``net_`` weights stored as well.
-    ``children`` names the fitted attribute of a meta-estimator that holds a
-    list of fitted sub-models, or one (registered types themselves); each is stored
-    whole (metadata under ``children``, arrays under ``children/<i>/``).
-    A parameter whose value is an estimator of a registered type (e.g. an
-    ensemble's ``estimator``) is stored by type and parameters.
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator
+    >>> names = fitted_state_names(LinearCalibrator)
+    >>> "calibration_matrix_" in names and "zero_reading_" in names and "feature_names_in_" in names
+    True
     """
-    _MODEL_TYPES[cls.__name__] = (cls, tuple(scalars), tuple(arrays))
-    if children is not None:
-        _CHILDREN[cls.__name__] = children
+    names: list[str] = []
+    for klass in reversed(cls.__mro__):
+        for name in klass.__dict__.get("_fitted_state", ()):
+            if name not in names:
+                names.append(name)
+    return tuple(names)
 
 
-_NET_SCALARS = ("alpha_", "n_features_in_", "n_epochs_", "best_epoch_", "stop_reason_")
-register_model_type(LinearCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "calibration_matrix_", "offset_"))
-register_model_type(
-    DirectionalCalibrator, _NET_SCALARS + ("scale_reference_", "n_dropped_zero_load_"), ("zero_reading_",)
-)
-register_model_type(
-    ComparativeCalibrator,
-    _NET_SCALARS,
-    ("zero_reading_", "input_mean_", "input_scale_", "target_mean_", "target_scale_"),
-)
+def _known_types() -> dict[str, type]:
+    from ._registry import model_classes
+
+    return model_classes()
 
 
-register_model_type(
-    PolynomialCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "input_scale_", "coef_", "intercept_")
-)
-register_model_type(
-    AxisNonlinearCalibrator,
-    ("alpha_", "n_features_in_", "ridge_"),
-    ("zero_reading_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_"),
-)
-register_model_type(
-    EnsembleCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "member_seeds_"), children="estimators_"
-)
-register_model_type(
-    GaussianProcessCalibrator,
-    ("alpha_", "n_features_in_", "constant_", "noise_level_"),
-    ("zero_reading_", "linear_matrix_", "linear_offset_", "input_scale_", "train_inputs_", "dual_coef_",
-     "cholesky_", "residual_mean_", "residual_scale_", "output_variance_", "length_scale_"),
-)
-
-register_model_type(
-    TemperatureCompensatedCalibrator, ("alpha_", "n_features_in_"),
-    ("zero_reading_", "offset_per_deg_", "gain_per_deg_"), children="estimator_",
-)
-
-register_model_type(
-    AutoCalibrator, ("alpha_", "n_features_in_", "best_name_", "cv_results_"), ("zero_reading_",),
-    children="best_estimator_",
-)
+def _is_known(estimator) -> bool:
+    return _known_types().get(type(estimator).__name__) is type(estimator)
 
 
 def _encode(value):
@@ -132,7 +107,7 @@ def _encode(value):
         return {"tuple": [_encode(v) for v in value]}
     if isinstance(value, np.ndarray):
         return {"array": value.tolist()}
-    if isinstance(value, (np.integer, np.floating)):
+    if isinstance(value, (np.integer, np.floating, np.bool_)):
         return value.item()
     if isinstance(value, list):
         return [_encode(v) for v in value]
@@ -140,9 +115,8 @@ def _encode(value):
         return {str(k): _encode(v) for k, v in value.items()}
     if isinstance(value, (str, int, float, bool)) or value is None:
         return value
-    if type(value).__name__ in _MODEL_TYPES and type(value) is _MODEL_TYPES[type(value).__name__][0]:
-        return {"estimator": {"model_type": type(value).__name__,
-                              "params": _stored_params(value)}}
+    if isinstance(value, BaseCalibrator) and _is_known(value):
+        return {"estimator": {"model_type": type(value).__name__, "params": _stored_params(value)}}
     return None  # e.g. a RandomState instance: not reproducible from a file; stored as None
 
 
@@ -158,15 +132,18 @@ def _decode(value):
     if isinstance(value, dict) and set(value) == {"array"}:
         return np.asarray(value["array"], dtype=float)
     if isinstance(value, dict) and set(value) == {"estimator"}:
-        cls = _MODEL_TYPES[value["estimator"]["model_type"]][0]
+        name = value["estimator"]["model_type"]
+        cls = _known_types().get(name)
+        if cls is None:
+            raise ModelFileError(f"a parameter names an unknown model type {name!r}.")
         return cls(**{k: _decode(v) for k, v in value["estimator"]["params"].items()})
     if isinstance(value, list):
         return [_decode(v) for v in value]
     return value
 
 
-def _history_rows(net) -> list[dict]:
-    return [{k: row[k] for k in _HISTORY_KEYS if k in row} for row in net.history]
+def _is_net(value) -> bool:
+    return hasattr(value, "module_") and hasattr(value, "history")
 
 
 def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
@@ -174,8 +151,11 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
 
     Parameters
     ----------
-    estimator : LinearCalibrator, ComparativeCalibrator or DirectionalCalibrator
-        A fitted calibrator (or another registered model type).
+    estimator : fitted calibrator
+        Any calibrator of the registry (:data:`~ftcal.CALIBRATOR_NAMES`), an
+        :class:`~ftcal.EnsembleCalibrator` or a
+        :class:`~ftcal.TemperatureCompensatedCalibrator`, fitted on targets of
+        any width.
     path : str or path-like
         Target file; written exactly there (no suffix is added).
     overwrite : bool, default=False
@@ -204,31 +184,40 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
 
 
 def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
-    """Metadata (model type, parameters, fitted scalars) and arrays of one fitted model."""
+    """Metadata (model type, parameters, fitted values) and arrays of one fitted model, from its declarations."""
     name = type(estimator).__name__
-    if name not in _MODEL_TYPES or type(estimator) is not _MODEL_TYPES[name][0]:
-        raise ModelFileError(f"cannot save a {name}: model files support {sorted(_MODEL_TYPES)}.")
+    if not _is_known(estimator):
+        raise ModelFileError(
+            f"cannot save a {name}: model files hold the registry's calibrator classes ({sorted(_known_types())}); "
+            "register the class with ftcal.register_calibrator to save it.")
     check_is_fitted(estimator)
-    _, scalar_names, array_names = _MODEL_TYPES[name]
-    meta = {
-        "model_type": name,
-        "params": _stored_params(estimator),
-        "fitted": {k: _encode(getattr(estimator, k)) for k in scalar_names + tuple(
-            k for k in _OPTIONAL_SCALARS if k in estimator.__dict__ and k not in scalar_names)},
-    }
-    arrays = {f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in array_names}
-    arrays.update({f"fitted/{k}": np.asarray(getattr(estimator, k)) for k in _OPTIONAL_ARRAYS if hasattr(estimator, k)})
-    if isinstance(estimator, NetworkCalibrator):
-        meta["history"] = _history_rows(estimator.net_)
-        state = estimator.net_.module_.state_dict()
-        arrays.update({f"module/{k}": v.detach().cpu().numpy() for k, v in state.items()})
-    if name in _CHILDREN:
+    meta: dict = {"model_type": name, "params": _stored_params(estimator), "fitted": {}}
+    arrays: dict[str, np.ndarray] = {}
+    children: list[tuple[str, bool, object]] = []
+    meta["state"] = []  # what is stored, so that a reader can tell a missing entry from an absent attribute
+    for key in fitted_state_names(type(estimator)):
+        value = estimator.__dict__.get(key)
+        if value is None:
+            continue
+        meta["state"].append(key)
+        if isinstance(value, BaseCalibrator):
+            children.append((key, True, value))
+        elif isinstance(value, list) and value and all(isinstance(v, BaseCalibrator) for v in value):
+            children.extend((key, False, v) for v in value)
+        elif _is_net(value):
+            meta["history"] = [{k: row[k] for k in _HISTORY_KEYS if k in row} for row in value.history]
+            arrays.update({f"module/{k}": v.detach().cpu().numpy() for k, v in value.module_.state_dict().items()})
+        elif isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            arrays[f"fitted/{key}"] = value
+        elif isinstance(value, np.ndarray) and all(isinstance(v, str) for v in value.ravel()):
+            meta["fitted"][key] = {"strings": [str(v) for v in value.ravel()]}
+        else:
+            meta["fitted"][key] = _encode(value)
+    if children:
         meta["children"] = []
-        kids = getattr(estimator, _CHILDREN[name])
-        meta["single_child"] = not isinstance(kids, list)
-        for i, child in enumerate([kids] if meta["single_child"] else kids):
+        for i, (key, single, child) in enumerate(children):
             child_meta, child_arrays = _state(child)
-            meta["children"].append(child_meta)
+            meta["children"].append({**child_meta, "attribute": key, "single": single})
             arrays.update({f"children/{i}/{k}": v for k, v in child_arrays.items()})
     return meta, arrays
 
@@ -239,32 +228,126 @@ def _ftcal_version() -> str:
     return __version__
 
 
-def _read(path: Path) -> tuple[dict, dict[str, np.ndarray]]:
-    if not path.is_file():
-        raise ModelFileError(f"model file {path} does not exist (or is not a file).")
+class _Archive:
+    """A model file opened as a zip of ``.npy`` members, read one checked member at a time."""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        _check_is_regular_file(path)
+        try:
+            self.zip = zipfile.ZipFile(path)
+        except zipfile.BadZipFile:
+            raise ModelFileError(f"{path} is not a readable ftcal model file (truncated or not an .npz archive: "
+                                 f"{_what_it_is(path)}). Save the model again with ftcal.save_model.") from None
+        except OSError as exc:
+            raise ModelFileError(f"{path} cannot be read ({exc.strerror or exc}).") from None
+        self.members = {info.filename[:-4]: info for info in self.zip.infolist() if info.filename.endswith(".npy")}
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.zip.close()
+
+    def has(self, key: str) -> bool:
+        return key in self.members
+
+    def keys(self, prefix: str) -> list[str]:
+        return [k for k in self.members if k.startswith(prefix)]
+
+    def read(self, key: str, *, limit: float | None = None) -> np.ndarray:
+        """The array of member ``key``: sizes checked before decompressing, at most the declared bytes read."""
+        info = self.members[key]
+        what = f"{self.path}: member {key!r}"
+        fix = "this is not a model file ftcal wrote; fit and save the model again"
+        check_allocation(float(info.file_size), f"{what} (declared {format_bytes(info.file_size)} uncompressed)", fix)
+        if limit is not None and info.file_size > limit:
+            raise ModelFileError(f"{what} declares {format_bytes(info.file_size)}, more than an ftcal model's "
+                                 f"{format_bytes(limit)}; {fix}.")
+        try:
+            with self.zip.open(info) as f:
+                version = np.lib.format.read_magic(f)
+                if version == (1, 0):
+                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(f)
+                elif version == (2, 0):
+                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(f)
+                else:
+                    raise ValueError(f"unsupported .npy version {version}")
+                if dtype.hasobject:
+                    raise ModelFileError(f"{what} holds Python objects (a pickle); ftcal model files never do, and "
+                                         "ftcal does not unpickle. The file is not an ftcal model.")
+                n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+                if n_bytes > info.file_size:  # checked before any allocation
+                    raise ModelFileError(f"{what} declares shape {shape} ({format_bytes(n_bytes)}) but holds only "
+                                         f"{format_bytes(info.file_size)}; the file is damaged. Fit and save the "
+                                         "model again.")
+                check_allocation(n_bytes, f"{what} (declared shape {shape}, {dtype})", fix)
+                data = f.read(int(n_bytes))
+        except (zipfile.BadZipFile, EOFError, OSError, ValueError, zlib.error) as exc:
+            if isinstance(exc, (ModelFileError, MemoryLimitError)):
+                raise
+            raise ModelFileError(f"{self.path} is not a readable ftcal model file (truncated or not an .npz "
+                                 f"archive: member {key!r}: {str(exc)[:120]}). Save the model again with "
+                                 "ftcal.save_model.") from None
+        if len(data) != int(n_bytes):
+            raise ModelFileError(f"{what} is truncated ({len(data)} of {int(n_bytes)} bytes); the file is damaged.")
+        array = np.frombuffer(data, dtype=dtype)
+        array = array.reshape(shape[::-1]).T if fortran else array.reshape(shape)
+        return np.array(array)  # an owned, writable copy
+
+
+def _check_is_regular_file(path: Path) -> None:
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError, KeyError) as exc:
-        raise ModelFileError(
-            f"{path} is not a readable ftcal model file (truncated or not an .npz archive: {exc}). "
-            f"Save the model again with ftcal.save_model."
-        ) from None
-    if _META_KEY not in arrays:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        raise ModelFileError(f"model file {path} does not exist (or is not a file).") from None
+    except OSError as exc:
+        raise ModelFileError(f"model file {path} cannot be read ({exc.strerror or exc}).") from None
+    if stat.S_ISDIR(mode):
+        raise ModelFileError(f"{path} is a directory, not a model file; give the .model.npz file inside it.")
+    if not stat.S_ISREG(mode):
+        raise ModelFileError(f"{path} is not a regular file (a device, pipe or socket); give a .model.npz file.")
+
+
+def _what_it_is(path: Path) -> str:
+    """What a file that is not a zip archive looks like, from its first bytes (for the error message)."""
+    with open(path, "rb") as f:
+        head = f.read(512)
+    if not head:
+        return "the file is empty"
+    if head.startswith(b"\x93NUMPY"):
+        return "it is a single .npy array, not an .npz model file"
+    if head[:1] == b"\x80" or head.startswith((b"(dp", b"(lp", b"cnumpy", b"ccopy_reg")):
+        return "it looks like a Python pickle, which ftcal never loads"
+    if head.startswith(b"PK"):
+        return "a damaged zip archive"
+    if head.startswith(b"\x89HDF"):
+        return "it is an HDF5 file"
+    if head.startswith(b"\x08") and b"onnx" in head.lower():
+        return "it looks like an ONNX file (export, not a model file)"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError:
+        return f"binary data starting with {head[:8]!r}"
+    first = text.splitlines()[0][:60] if text.splitlines() else ""
+    return f"it is a text file (first line {first!r}), e.g. a CSV or JSON file"
+
+
+def _read_metadata(archive: _Archive) -> dict:
+    path = archive.path
+    if not archive.has(_META_KEY):
         raise ModelFileError(f"{path} is an .npz file but not an ftcal model file (no {_META_KEY!r} entry).")
+    raw = archive.read(_META_KEY, limit=_MAX_METADATA_BYTES)
+    if raw.dtype.kind != "U" or raw.ndim != 0:
+        raise ModelFileError(f"{path} is not an ftcal model file ({_META_KEY!r} is not a text entry).")
     try:
-        meta = json.loads(str(arrays.pop(_META_KEY)))
+        meta = json.loads(str(raw))
     except (json.JSONDecodeError, RecursionError) as exc:
         raise ModelFileError(f"{path}: the model metadata is not valid JSON ({str(exc)[:80]}).") from None
-    bad = [k for k, v in arrays.items() if v.dtype.kind not in "biuf" or (v.dtype.kind == "f" and not np.isfinite(v).all())]
-    if bad:
-        raise ModelFileError(
-            f"{path}: array {bad[0]!r} holds NaN, inf or non-numeric values; the file is damaged. "
-            "Fit and save the model again."
-        )
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise ModelFileError(f"{path} is not an ftcal model file (format {meta.get('format') if isinstance(meta, dict) else meta!r}).")
-    return meta, arrays
+        raise ModelFileError(
+            f"{path} is not an ftcal model file (format {meta.get('format') if isinstance(meta, dict) else meta!r}).")
+    return meta
 
 
 def load_model(path: str | os.PathLike, *, model_type: str | type | None = None):
@@ -284,25 +367,34 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         The fitted calibrator, predicting exactly like the saved one.
     """
     path = Path(path)
-    meta, arrays = _read(path)
-    version = meta.get("format_version")
-    if version != FORMAT_VERSION:
-        raise ModelFileError(
-            f"{path} has model-file format version {version!r}; this ftcal (version {_ftcal_version()}) "
-            f"reads version {FORMAT_VERSION}. Re-fit and save the model with this ftcal version."
-        )
-    name = meta.get("model_type")
-    expected = model_type.__name__ if isinstance(model_type, type) else model_type
-    if expected is not None and name != expected:
-        raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
-    if name not in _MODEL_TYPES:
-        raise ModelFileError(f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_MODEL_TYPES)}.")
-    try:
-        estimator = _from_state(meta, arrays)
-    except ModelFileError as exc:
-        raise ModelFileError(f"{path}: {exc}") from None
-    except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, RecursionError) as exc:
-        raise ModelFileError(f"{path}: the {name} model file is incomplete or inconsistent ({exc!r}).") from None
+    with _Archive(path) as archive:
+        try:
+            meta = _read_metadata(archive)
+        except MemoryLimitError as exc:
+            raise ModelFileError(str(exc)) from None
+        version = meta.get("format_version")
+        if version not in _READABLE_VERSIONS:
+            raise ModelFileError(
+                f"{path} has model-file format version {version!r}; this ftcal (version {_ftcal_version()}) "
+                f"reads versions {', '.join(map(str, _READABLE_VERSIONS))}. Re-fit and save the model with this "
+                "ftcal version.")
+        name = meta.get("model_type")
+        expected = model_type.__name__ if isinstance(model_type, type) else model_type
+        if expected is not None and name != expected:
+            raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
+        if name not in _known_types():
+            raise ModelFileError(
+                f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_known_types())}.")
+        try:
+            estimator = _from_state(meta, archive, "")
+        except MemoryLimitError as exc:
+            raise ModelFileError(str(exc)) from None
+        except ModelFileError as exc:
+            message = str(exc)
+            raise ModelFileError(message if message.startswith(str(path)) else f"{path}: {message}") from None
+        except (KeyError, TypeError, ValueError, RuntimeError, AttributeError, RecursionError, IndexError) as exc:
+            raise ModelFileError(
+                f"{path}: the {name} model file is incomplete or inconsistent ({exc!r}).") from None
     _check_consistent(estimator, path)
     return estimator
 
@@ -318,102 +410,147 @@ def _check_consistent(estimator, path: Path) -> None:
             f"{path}: the stored arrays do not fit together ({type(exc).__name__}: {str(exc)[:120]}); "
             "the file is damaged or was edited. Fit and save the model again."
         ) from None
-    if out.shape != (1, 6):
-        raise ModelFileError(f"{path}: the model gives output of shape {out.shape[1:]} instead of (6,); the file is damaged.")
+    width = int(getattr(estimator, "n_outputs_", 6))
+    expected = (1,) if getattr(estimator, "y_1d_", False) else (1, width)
+    if out.shape != expected:
+        raise ModelFileError(f"{path}: the model gives output of shape {out.shape[1:]} instead of "
+                             f"{expected[1:]}; the file is damaged.")
 
 
-def _check_fitted_scalars(name: str, fitted: dict) -> None:
-    """Types and ranges of the stored scalars (a ``null`` or a string would fail later, at predict)."""
-    for key, value in fitted.items():
-        if key in ("stop_reason_", "best_name_"):
-            ok = isinstance(value, str)
-        elif key == "cv_results_":
-            ok = isinstance(value, dict)
-        elif key in ("n_features_in_", "n_epochs_", "best_epoch_", "n_dropped_zero_load_"):
-            ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
-        elif key == "ridge_":  # inf is the LTM fallback of the hybrid
-            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and value >= 0
-        else:
-            ok = isinstance(value, (int, float)) and not isinstance(value, bool) and np.isfinite(value)
-        if key in ("alpha_", "scale_reference_") and ok:
-            ok = value > 0
-        if key == "n_features_in_" and ok:
-            ok = value >= 1
-        if not ok:
-            raise ModelFileError(f"the {name}'s stored {key} is {value!r}, which is not a valid value; the file is damaged.")
+def _is_int(value) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
 
 
-def _from_state(meta: dict, arrays: dict[str, np.ndarray]):
-    """The fitted model of :func:`_state`'s output (``KeyError`` etc. when incomplete)."""
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and not np.isnan(value)
+
+
+#: Checks of the fitted values every calibrator has (others: any JSON value but NaN and null).
+_SCALAR_RULES = {
+    "alpha_": lambda v: _is_number(v) and 0 < v < np.inf,
+    "n_features_in_": lambda v: _is_int(v) and v >= 1,
+    "n_outputs_": lambda v: _is_int(v) and 1 <= v <= 10_000,
+    "y_1d_": lambda v: isinstance(v, bool),
+    "feature_names_in_": lambda v: isinstance(v, dict) and isinstance(v.get("strings"), list)
+    and all(isinstance(s, str) for s in v["strings"]),
+}
+
+
+def _check_scalar(name: str, key: str, value) -> None:
+    rule = _SCALAR_RULES.get(key)
+    ok = rule(value) if rule is not None else (
+        value is not None and not (isinstance(value, float) and np.isnan(value)))
+    if not ok:
+        raise ModelFileError(f"the {name}'s stored {key} is {value!r:.80}, which is not a valid value; the file is "
+                             "damaged.")
+
+
+def _from_state(meta: dict, archive: _Archive, prefix: str):
+    """The fitted model of :func:`_state`'s output, reading only the members its declarations name."""
     name = meta["model_type"]
-    cls, scalar_names, array_names = _MODEL_TYPES[name]
+    cls = _known_types().get(name)
+    if cls is None:
+        raise ModelFileError(f"a sub-model has an unknown model type {name!r}.")
     params = {k: _decode(v) for k, v in meta["params"].items()}
-    if params.get("device") not in (None, "cpu") and not device_available(params["device"]):
-        warnings.warn(
-            f"the model was saved with device={params['device']!r}, which this machine does not have; "
-            "it runs on the CPU instead.", UserWarning, stacklevel=3,
-        )
-        params["device"] = "cpu"
+    if params.get("device") not in (None, "cpu"):
+        from ..neural_network._base import device_available
+
+        if not device_available(params["device"]):
+            warnings.warn(
+                f"the model was saved with device={params['device']!r}, which this machine does not have; "
+                "it runs on the CPU instead.", UserWarning, stacklevel=4,
+            )
+            params["device"] = "cpu"
     estimator = cls(**params)
-    _check_fitted_scalars(name, {k: meta["fitted"][k] for k in scalar_names})
-    for k in scalar_names:
-        setattr(estimator, k, meta["fitted"][k])
-    for k in _OPTIONAL_SCALARS:
-        if k in meta["fitted"] and k not in scalar_names:
-            setattr(estimator, k, _optional_scalar(name, k, meta["fitted"][k]))
-    for k in array_names + tuple(k for k in _OPTIONAL_ARRAYS if f"fitted/{k}" in arrays):
-        setattr(estimator, k, arrays[f"fitted/{k}"])
-    if isinstance(estimator, NetworkCalibrator):
-        _restore_net(estimator, meta, arrays)
-    if name in _CHILDREN:
-        children = []
-        for i, child_meta in enumerate(meta["children"]):
-            prefix = f"children/{i}/"
-            child_arrays = {k[len(prefix):]: v for k, v in arrays.items() if k.startswith(prefix)}
-            children.append(_from_state(child_meta, child_arrays))
-        setattr(estimator, _CHILDREN[name], children[0] if meta.get("single_child") else children)
+    declared = fitted_state_names(cls)
+    fitted = meta.get("fitted", {})
+    for key in declared:
+        if key in fitted:
+            value = fitted[key]
+            _check_scalar(name, key, value)
+            if isinstance(value, dict) and set(value) == {"strings"}:
+                value = np.asarray(value["strings"], dtype=object)
+            setattr(estimator, key, _decode(value))
+        elif archive.has(f"{prefix}fitted/{key}"):
+            array = archive.read(f"{prefix}fitted/{key}")
+            if array.dtype.kind not in "biuf" or (array.dtype.kind == "f" and not np.isfinite(array).all()):
+                raise ModelFileError(f"array 'fitted/{key}' holds NaN, inf or non-numeric values; the file is "
+                                     "damaged. Fit and save the model again.")
+            setattr(estimator, key, array)
+    if meta.get("history") is not None or archive.keys(f"{prefix}module/"):
+        _restore_net(estimator, meta, archive, prefix)
+    children = meta.get("children") or []
+    if meta.get("format_version", FORMAT_VERSION) == 1 and children:  # version 1: one attribute, named nowhere
+        attribute = _V1_CHILDREN[name]
+        children = [{**c, "attribute": attribute, "single": bool(meta.get("single_child"))} for c in children]
+    lists: dict[str, list] = {}
+    for i, child_meta in enumerate(children):
+        key = child_meta["attribute"]
+        if key not in declared:
+            raise ModelFileError(f"a sub-model is stored as {key!r}, which a {name} does not have.")
+        child = _from_state({"format_version": meta.get("format_version"), **child_meta}, archive,
+                            f"{prefix}children/{i}/")
+        if child_meta.get("single"):
+            setattr(estimator, key, child)
+        else:
+            lists.setdefault(key, []).append(child)
+    for key, value in lists.items():
+        setattr(estimator, key, value)
+    required = meta.get("state") or [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]
+    missing = [k for k in required if k not in estimator.__dict__]
+    if missing:
+        raise ModelFileError(f"the {name} model file is incomplete or inconsistent: its fitted {missing[0]!r} is "
+                             "missing; the file is damaged or was edited. Fit and save the model again.")
     return estimator
 
 
-def _optional_scalar(name: str, key: str, value):
-    """``n_outputs_`` (a positive int) or ``y_1d_`` (a bool) read from a file, checked."""
-    ok = isinstance(value, bool) if key == "y_1d_" else (
-        isinstance(value, int) and not isinstance(value, bool) and 1 <= value <= 10_000)
-    if not ok:
-        raise ModelFileError(f"{name} model file: fitted {key} is {value!r}, not a valid value; the file is damaged.")
-    return value
+def _restore_net(estimator, meta: dict, archive: _Archive, prefix: str) -> None:
+    """The skorch network of a network calibrator, from its ``module/`` weights (shapes checked first)."""
+    import torch
+    from skorch.history import History
 
-
-def _expected_module_shapes(estimator: NetworkCalibrator, n_inputs: int) -> dict[str, tuple[int, ...]]:
-    """Shapes of the state_dict the declared ``hidden_layer_sizes`` would build (checked before building it)."""
-    sizes = estimator.hidden_layer_sizes
-    if not isinstance(sizes, (tuple, list)) or not all(isinstance(w, int) and w >= 1 for w in sizes):
-        raise ModelFileError(f"hidden_layer_sizes {sizes!r} is not a tuple of positive widths; the file is damaged.")
-    widths = [n_inputs, *sizes, estimator._network_outputs()]
-    shapes = {}
-    for i in range(len(widths) - 1):
-        shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
-        shapes[f"layers.{2 * i}.bias"] = (widths[i + 1],)
-    return shapes
-
-
-def _restore_net(estimator: NetworkCalibrator, meta: dict, arrays: dict[str, np.ndarray]) -> None:
-    stored = {k[len("module/"):]: v for k, v in arrays.items() if k.startswith("module/")}
-    n_inputs = int(meta["fitted"]["n_features_in_"])
+    keys = archive.keys(f"{prefix}module/")
+    n_inputs = meta["fitted"]["n_features_in_"]
+    _check_scalar(meta["model_type"], "n_features_in_", n_inputs)
     expected = _expected_module_shapes(estimator, n_inputs)
-    got = {k: tuple(v.shape) for k, v in stored.items()}
-    if got != expected:
-        diff = sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
+    got_names = {k[len(prefix) + len("module/"):]: k for k in keys}
+    shapes = {}
+    for short in expected:  # members are read only when the declared layers name them
+        if short in got_names:
+            shapes[short] = archive.read(got_names[short])
+    got = {k: tuple(v.shape) for k, v in shapes.items()}
+    extra = sorted(set(got_names) - set(expected))
+    if got != expected or extra:
+        diff = extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
         k = diff[0]
         raise ModelFileError(
             f"the network weights do not match the declared layers (hidden_layer_sizes="
             f"{estimator.hidden_layer_sizes}, {n_inputs} inputs): {k} is {got.get(k, 'missing')}, expected "
             f"{expected.get(k, 'absent')}; the file is damaged or was edited."
         )
-    state = {k: torch.from_numpy(v.astype(np.float32)) for k, v in stored.items()}
+    bad = [k for k, v in shapes.items() if v.dtype.kind != "f" or not np.isfinite(v).all()]
+    if bad:
+        raise ModelFileError(f"array 'module/{bad[0]}' holds NaN, inf or non-numeric values; the file is damaged.")
+    state = {k: torch.from_numpy(v.astype(np.float32)) for k, v in shapes.items()}
     net = estimator._build_net(n_inputs, seed=0)
     net.initialize()
     net.module_.load_state_dict(state)
     net.history = History(meta.get("history", []))
     estimator.net_ = net
     estimator._cache_numpy_layers()
+
+
+def _expected_module_shapes(estimator, n_inputs: int) -> dict[str, tuple[int, ...]]:
+    """Shapes of the state_dict the declared ``hidden_layer_sizes`` would build (checked before building it)."""
+    sizes = estimator.hidden_layer_sizes
+    if not isinstance(sizes, (tuple, list)) or not all(_is_int(w) and 1 <= w <= 1_000_000 for w in sizes):
+        raise ModelFileError(f"hidden_layer_sizes {sizes!r:.80} is not a tuple of positive widths; the file is "
+                             "damaged.")
+    widths = [n_inputs, *sizes, estimator._network_outputs()]
+    check_allocation(4.0 * sum(float(a) * b for a, b in zip(widths[:-1], widths[1:])),
+                     f"the network of hidden_layer_sizes={tuple(sizes)}", "this is not a model ftcal wrote")
+    shapes = {}
+    for i in range(len(widths) - 1):
+        shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
+        shapes[f"layers.{2 * i}.bias"] = (widths[i + 1],)
+    return shapes

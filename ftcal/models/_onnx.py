@@ -23,7 +23,6 @@ exporter.
 
 from __future__ import annotations
 
-import functools
 import os
 from collections.abc import Callable
 from pathlib import Path
@@ -64,7 +63,7 @@ class _Graph:
         self.nodes.append(self.onnx.helper.make_node(op_type, list(inputs), [out], **attributes))
         return out
 
-    # the building blocks the calibrators share ------------------------------------------------------
+    # the building blocks the calibrators' ``_emit_onnx`` share ------------------------------------------------------
     def affine(self, x: str, matrix_t, offset=None) -> str:
         """``x @ matrix_t (+ offset)`` in float64."""
         y = self.op("MatMul", x, self.const(matrix_t))
@@ -92,134 +91,47 @@ class _Graph:
 
 
 # ------------------------------------------------------------------------------------ the calibrators
+    def calibration(self, model, x: str) -> str:
+        """The graph of ``model.predict`` (after validation) on the float64 node ``x``: re-tare, then the model.
+
+        The model's own part is the ``_emit_onnx(graph, x)`` its class declares next to itself; a wrapper's
+        calls this again for its inner calibrators.
+        """
+        emit = _emitter(type(model))
+        if emit is None:
+            names = ", ".join(t.__name__ for t in exportable_types())
+            raise ExportError(
+                f"{type(model).__name__} cannot be exported to ONNX: ftcal knows how to write the graphs of {names} "
+                "(a subclass or a registered custom calibrator may compute something else). Export one of those, "
+                "or call predict from Python."
+            )
+        check_is_fitted(model)
+        tare = getattr(model, "tare_reading_", None)
+        if tare is not None:
+            x = self.op("Sub", x, self.const(tare - model.zero_reading_))
+        return emit(model, self, x)
+
+
 def _n_outputs(model) -> int:
     """Output width: 6 for a wrench calibrator (and for model files written before ``n_outputs_`` existed)."""
     return int(getattr(model, "n_outputs_", 6))
 
 
-def _linear(model, g: _Graph, x: str) -> str:
-    return g.affine(x, model.calibration_matrix_.T, model.offset_)
+def _emitter(cls: type) -> Callable | None:
+    """The class' own ``_emit_onnx`` if it is a registry class that declares one (never inherited: a subclass
+    may compute something else)."""
+    from ._registry import model_classes
 
-
-def _polynomial(model, g: _Graph, x: str) -> str:
-    u = g.op("Div", g.op("Sub", x, g.const(model.zero_reading_)), g.const(model.input_scale_))
-    powers = model._monomials().powers_.astype(np.float64)  # (n_monomials, N)
-    expanded = g.op("Unsqueeze", u, g.const([1], np.int64))  # (n, 1, N)
-    monomials = g.op("ReduceProd", g.op("Pow", expanded, g.const(powers)), axes=[2], keepdims=0)
-    return g.affine(monomials, model.coef_, model.intercept_)
-
-
-def _axis_nonlinear(model, g: _Graph, x: str) -> str:
-    z = g.affine(g.op("Sub", x, g.const(model.zero_reading_)), model.base_matrix_.T, model.base_offset_)
-    u = g.op("Div", z, g.const(model.axis_scale_))
-    u_width = len(model.axis_scale_)
-    parts = [u]
-    for power in model.powers:  # signed_power_features, term by term
-        a = g.op("Abs", u)
-        inside = g.op("Pow", g.op("Min", a, g.const(1.0)), g.const(power + 1.0))
-        beyond = g.op("Mul", g.const(power + 1.0), g.op("Max", g.op("Sub", a, g.const(1.0)), g.const(0.0)))
-        parts.append(g.op("Mul", g.op("Sign", u), g.op("Add", inside, beyond)))
-    block = g.op("Concat", *parts, axis=1)
-    width = len(parts) * u_width
-    previous = z
-    for coefs, intercepts in zip(model.coefs_, model.intercepts_):
-        coefs = np.asarray(coefs)  # (k, 2 * width + 1): [block, gate, gate * block] per output
-        gate = g.op("Cast", g.op("Greater", previous, g.const(0.0)), to=g.onnx.TensorProto.DOUBLE)
-        plain = g.affine(block, coefs[:, :width].T)
-        gated = g.op("Add", g.affine(block, coefs[:, width + 1:].T), g.const(coefs[:, width]))
-        previous = g.op("Add", g.op("Add", plain, g.op("Mul", gate, gated)), g.const(intercepts))
-    return g.unscale_torques(previous, model.alpha_, _n_outputs(model))
-
-
-def _gaussian_process(model, g: _Graph, x: str) -> str:
-    xc = g.op("Sub", x, g.const(model.zero_reading_))
-    scaled = g.op("Div", xc, g.const(model.input_scale_ * model.length_scale_))
-    train = model.train_inputs_ / model.length_scale_
-    cross = g.op("MatMul", scaled, g.const(train.T))
-    squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1), g.const((train * train).sum(axis=1)))
-    distances = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), cross)), g.const(0.0))
-    kernel = g.op("Mul", g.const(model.constant_), g.op("Exp", g.op("Mul", g.const(-0.5), distances)))
-    residual = g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(model.dual_coef_)), g.const(model.residual_scale_)),
-                    g.const(model.residual_mean_))
-    mean = g.op("Add", g.affine(xc, model.linear_matrix_.T, model.linear_offset_), residual)
-    return g.unscale_torques(mean, model.alpha_, _n_outputs(model))
-
-
-def _directional(model, g: _Graph, x: str) -> str:
-    xc = g.op("Sub", x, g.const(model.zero_reading_))
-    v_in = g.op("ReduceL2", xc, axes=[1], keepdims=1)
-    unit = g.op("Where", g.op("Greater", v_in, g.const(0.0)), g.op("Div", xc, v_in), g.const(0.0))
-    out = g.mlp(unit, model._numpy_layers())
-    k = _n_outputs(model)
-    magnitude = g.op("Mul", g.op("Mul", g.columns(out, k, k + 1), g.const(model.scale_reference_)), v_in)
-    return g.unscale_torques(g.op("Mul", g.columns(out, 0, k), magnitude), model.alpha_, k)
-
-
-def _comparative(model, g: _Graph, x: str) -> str:
-    inputs = g.op("Div", g.op("Sub", x, g.const(model.input_mean_)), g.const(model.input_scale_))
-    out = g.mlp(inputs, model._numpy_layers())
-    return g.op("Add", g.op("Mul", out, g.const(model.target_scale_)), g.const(model.target_mean_))
-
-
-def _ensemble(model, g: _Graph, x: str) -> str:
-    members = [_calibration(member, g, x) for member in model.estimators_]
-    total = members[0] if len(members) == 1 else g.op("Sum", *members)
-    return g.op("Div", total, g.const(float(len(members))))
-
-
-def _auto(model, g: _Graph, x: str) -> str:
-    return _calibration(model.best_estimator_, g, x)
-
-
-def _temperature_compensated(model, g: _Graph, x: str) -> str:
-    n = int(model.n_features_in_)
-    raw, temperature = g.columns(x, 0, n - 1), g.columns(x, n - 1, n)
-    dt = g.op("Sub", temperature, g.const(float(model.reference_temperature)))
-    shifted = g.op("Sub", raw, g.op("Mul", dt, g.const(model.offset_per_deg_)))
-    compensated = g.op("Div", shifted, g.op("Add", g.const(1.0), g.op("Mul", dt, g.const(model.gain_per_deg_))))
-    return _calibration(model.estimator_, g, compensated)
-
-
-@functools.cache
-def _emitters() -> dict[type, Callable]:
-    from ._auto import AutoCalibrator
-    from ..neural_network._comparative import ComparativeCalibrator
-    from ..neural_network._directional import DirectionalCalibrator
-    from ._ensemble import EnsembleCalibrator
-    from ..calibrators._gaussian_process import GaussianProcessCalibrator
-    from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
-    from ..calibrators._linear import LinearCalibrator
-    from ..calibrators._polynomial import PolynomialCalibrator
-    from ..calibrators._temperature_compensation import TemperatureCompensatedCalibrator
-
-    return {
-        LinearCalibrator: _linear, PolynomialCalibrator: _polynomial, AxisNonlinearCalibrator: _axis_nonlinear,
-        GaussianProcessCalibrator: _gaussian_process, DirectionalCalibrator: _directional,
-        ComparativeCalibrator: _comparative, EnsembleCalibrator: _ensemble, AutoCalibrator: _auto,
-        TemperatureCompensatedCalibrator: _temperature_compensated,
-    }
+    if model_classes().get(cls.__name__) is not cls:
+        return None
+    return cls.__dict__.get("_emit_onnx")
 
 
 def exportable_types() -> tuple[type, ...]:
     """The calibrator classes :func:`export_onnx` knows (exactly these, not their subclasses)."""
-    return tuple(_emitters())
+    from ._registry import model_classes
 
-
-def _calibration(model, g: _Graph, x: str) -> str:
-    """The graph of ``model.predict`` (after validation) on the float64 node ``x``: re-tare, then the model."""
-    emit = _emitters().get(type(model))
-    if emit is None:
-        names = ", ".join(t.__name__ for t in exportable_types())
-        raise ExportError(
-            f"{type(model).__name__} cannot be exported to ONNX: ftcal knows how to write the graphs of {names} "
-            "(a subclass or a registered custom calibrator may compute something else). Export one of those, "
-            "or call predict from Python."
-        )
-    check_is_fitted(model)
-    tare = getattr(model, "tare_reading_", None)
-    if tare is not None:
-        x = g.op("Sub", x, g.const(tare - model.zero_reading_))
-    return emit(model, g, x)
+    return tuple(cls for cls in model_classes().values() if _emitter(cls) is not None)
 
 
 def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
@@ -271,7 +183,7 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     if path.exists() and not overwrite:
         raise FileExistsError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it.")
     g = _Graph(onnx)
-    wrench = _calibration(model, g, "readings")
+    wrench = g.calibration(model, "readings")
     g.nodes.append(onnx.helper.make_node("Identity", [wrench], ["wrench"]))
     n_inputs = int(model.n_features_in_)
     double = onnx.TensorProto.DOUBLE

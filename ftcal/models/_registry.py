@@ -214,3 +214,38 @@ register_calibrator("comparative_ensemble", _Lazy("neural_network._comparative",
                     schedules=_COMPARATIVE)
 # "auto" chooses among the names above; its schedule goes to its network candidates
 register_calibrator("auto", _Lazy("models._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})
+
+
+#: Meta-estimators that wrap registered calibrators without being registry names themselves.
+_WRAPPERS: tuple[tuple[str, str], ...] = (
+    ("models._ensemble", "EnsembleCalibrator"),
+    ("calibrators._temperature_compensation", "TemperatureCompensatedCalibrator"),
+)
+
+
+def model_classes() -> dict[str, type]:
+    """The calibrator classes of the registry by class name: the only types model files may name.
+
+    Model files (:func:`~ftcal.save_model`) and the ONNX export
+    (:func:`~ftcal.export_onnx`) read the fitted state and the graph each class
+    declares next to itself (``_fitted_state``, ``_emit_onnx``); this is the
+    list of classes they trust, so a file never names code to run. A
+    calibrator registered by class (or by a lazy module/class name) is in it;
+    one registered by a function is not (save it by registering its class).
+
+    Examples
+    --------
+    >>> sorted(model_classes())[:3]
+    ['AutoCalibrator', 'AxisNonlinearCalibrator', 'ComparativeCalibrator']
+    """
+    classes: dict[str, type] = {}
+    for module, attribute in _WRAPPERS:
+        cls = getattr(import_module(f"ftcal.{module}"), attribute)
+        classes[cls.__name__] = cls
+    for name, factory in list(_FACTORIES.items()):
+        target = factory
+        if isinstance(factory, _Lazy):
+            target = getattr(import_module(f"ftcal.{factory.module}"), factory.attribute)
+        if isinstance(target, type):
+            classes.setdefault(target.__name__, target)
+    return classes

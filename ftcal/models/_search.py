@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
+from sklearn import config_context
 from sklearn.model_selection import GridSearchCV, GroupKFold, KFold, RandomizedSearchCV
 
 from ..core._files import plain_json
@@ -153,7 +154,10 @@ def search_calibrator(
     cv : int, default=3
         Number of folds.
     groups : array-like of shape (n,) or None
-        Group of each sample (e.g. load configuration); folds keep groups whole.
+        Group of each sample (e.g. load configuration); folds keep groups
+        whole, and each fold's training groups reach the calibrators that
+        request them (metadata routing: the hybrid's ``ridge="auto"``,
+        ``auto``, wrappers of them).
     schedule : {"short", "thesis"}, default="short"
         Training schedule the networks start from (a searched parameter
         overrides it).
@@ -211,7 +215,12 @@ def search_calibrator(
         if isinstance(n_iter, bool) or not isinstance(n_iter, (int, np.integer)) or n_iter < 1:
             raise CalibrationInputError(f"n_iter must be an integer >= 1; got {n_iter!r}.")
         search = RandomizedSearchCV(estimator, space, n_iter=int(n_iter), random_state=random_state, **common)
-    return search.fit(X, y, groups=groups)
+    if groups is None:
+        return search.fit(X, y)
+    # groups go to the splitter and, through scikit-learn's metadata routing, to every calibrator that requests
+    # them (the hybrid's and auto's own cross-validation inside each fit then hold out whole groups too)
+    with config_context(enable_metadata_routing=True):
+        return search.fit(X, y, groups=groups)
 
 
 def search_summary(search) -> dict[str, Any]:

@@ -118,6 +118,8 @@ class NetworkCalibrator(BaseCalibrator):
     _net_class: type[NetworkRegressor] = NetworkRegressor
     #: Parameters that only affect one training run and are not stored in model files.
     _transient_params: tuple[str, ...] = ("callbacks",)
+    #: Stored by model files (``net_``: the weights and the history).
+    _fitted_state = ("n_epochs_", "best_epoch_", "stop_reason_", "net_")
 
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,

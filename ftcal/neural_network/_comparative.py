@@ -80,3 +80,10 @@ class ComparativeCalibrator(NetworkCalibrator):
 
     def _decode(self, outputs, X):
         return outputs * self.target_scale_ + self.target_mean_
+
+    _fitted_state = ("input_mean_", "input_scale_", "target_mean_", "target_scale_")
+
+    def _emit_onnx(self, g, x: str) -> str:
+        inputs = g.op("Div", g.op("Sub", x, g.const(self.input_mean_)), g.const(self.input_scale_))
+        out = g.mlp(inputs, self._numpy_layers())
+        return g.op("Add", g.op("Mul", out, g.const(self.target_scale_)), g.const(self.target_mean_))

@@ -181,6 +181,17 @@ class DirectionalCalibrator(NetworkCalibrator):
     def _network_inputs(self, X):
         return _unit_rows(X - self.zero_reading_)[1]
 
+    _fitted_state = ("scale_reference_", "n_dropped_zero_load_")
+
+    def _emit_onnx(self, g, x: str) -> str:
+        xc = g.op("Sub", x, g.const(self.zero_reading_))
+        v_in = g.op("ReduceL2", xc, axes=[1], keepdims=1)
+        unit = g.op("Where", g.op("Greater", v_in, g.const(0.0)), g.op("Div", xc, v_in), g.const(0.0))
+        out = g.mlp(unit, self._numpy_layers())
+        k = self._network_outputs() - 1
+        magnitude = g.op("Mul", g.op("Mul", g.columns(out, k, k + 1), g.const(self.scale_reference_)), v_in)
+        return g.unscale_torques(g.op("Mul", g.columns(out, 0, k), magnitude), self.alpha_, k)
+
     def _predict_wrench(self, X):
         # the input norm is computed once (eq. 3) and serves both the unit input and the decoding (III-B)
         v_in, unit = _unit_rows(X - self.zero_reading_)

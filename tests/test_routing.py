@@ -1,0 +1,157 @@
+"""``groups`` reach every calibrator that asks for them through scikit-learn's metadata routing (issue 21).
+
+The calibrator that receives them here is a real one: a :class:`~ftcal.LinearCalibrator` subclass that fits
+as usual and keeps the groups its ``fit`` was given (and is registered, so it is saved like any calibrator).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from sklearn import config_context
+from sklearn.model_selection import GridSearchCV, GroupKFold, cross_validate
+from sklearn.pipeline import Pipeline
+from sklearn.preprocessing import FunctionTransformer
+
+from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, CalibrationDataset, EnsembleCalibrator,
+                   LinearCalibrator, TemperatureCompensatedCalibrator, load_model, search_calibrator)
+from ftcal.calibrators._routing import requests_groups
+from ftcal.models import _registry
+
+from conftest import affine_sensor_data
+
+
+class GroupRecordingCalibrator(LinearCalibrator):
+    """The LTM, keeping the ``groups`` its ``fit`` received (``None`` when none were routed to it)."""
+
+    __metadata_request__fit = {"groups": True}
+    _fitted_state = ("groups_seen_",)
+
+    def fit(self, X, y, groups=None):
+        super().fit(X, y)
+        self.groups_seen_ = None if groups is None else np.asarray(groups).copy()
+        return self
+
+
+@pytest.fixture
+def registered_recorder():
+    _registry.register_calibrator("group_recorder", GroupRecordingCalibrator)
+    yield "group_recorder"
+    _registry._FACTORIES.pop("group_recorder")
+    _registry._SCHEDULES.pop("group_recorder")
+
+
+def grouped_data(n_groups=6, per_group=12, seed=0):
+    raw, wrench, _, _ = affine_sensor_data(n_samples=n_groups * per_group, seed=seed)
+    groups = np.repeat(np.arange(n_groups) * 10 + 3, per_group)  # labels that are not row positions
+    temperature = np.random.default_rng(seed).uniform(15.0, 35.0, len(raw))
+    return raw, wrench, groups, temperature
+
+
+def test_wrappers_route_groups_to_their_inner_calibrator():
+    raw, wrench, groups, temperature = grouped_data()
+    ensemble = EnsembleCalibrator(GroupRecordingCalibrator(), n_members=2, random_state=0).fit(raw, wrench,
+                                                                                             groups=groups)
+    for member in ensemble.estimators_:
+        np.testing.assert_array_equal(member.groups_seen_, groups)
+    compensated = TemperatureCompensatedCalibrator(GroupRecordingCalibrator()).fit(
+        np.column_stack([raw, temperature]), wrench, groups=groups)
+    np.testing.assert_array_equal(compensated.estimator_.groups_seen_, groups)
+    without = TemperatureCompensatedCalibrator(GroupRecordingCalibrator()).fit(np.column_stack([raw, temperature]),
+                                                                               wrench)
+    assert without.estimator_.groups_seen_ is None
+
+
+def test_a_wrapper_accepts_groups_its_inner_calibrator_does_not_use():
+    raw, wrench, groups, temperature = grouped_data()
+    EnsembleCalibrator(LinearCalibrator(), n_members=2).fit(raw, wrench, groups=groups)  # was a TypeError
+    TemperatureCompensatedCalibrator().fit(np.column_stack([raw, temperature]), wrench, groups=groups)
+
+
+def test_a_calibrator_that_declines_groups_does_not_get_them():
+    raw, wrench, groups, _ = grouped_data()
+    with config_context(enable_metadata_routing=True):
+        inner = GroupRecordingCalibrator().set_fit_request(groups=False)
+        ensemble = EnsembleCalibrator(inner, n_members=1).fit(raw, wrench, groups=groups)
+    assert ensemble.estimators_[0].groups_seen_ is None
+
+
+def test_wrappers_route_groups_to_an_inner_auto():
+    raw, wrench, groups, temperature = grouped_data()
+    auto = AutoCalibrator(candidates=[("recorder", GroupRecordingCalibrator())], cv=3)
+    model = TemperatureCompensatedCalibrator(auto).fit(np.column_stack([raw, temperature]), wrench, groups=groups)
+    assert model.estimator_.cv_results_["folds"] == "group"
+    np.testing.assert_array_equal(model.estimator_.best_estimator_.groups_seen_, groups)
+    ensemble = EnsembleCalibrator(auto, n_members=1).fit(raw, wrench, groups=groups)
+    assert ensemble.estimators_[0].cv_results_["folds"] == "group"
+
+
+def test_routing_declarations():
+    assert requests_groups(AxisNonlinearCalibrator()) and requests_groups(AutoCalibrator())
+    assert not requests_groups(LinearCalibrator())
+    assert requests_groups(TemperatureCompensatedCalibrator(AxisNonlinearCalibrator()))
+    assert set(AxisNonlinearCalibrator().get_metadata_routing().fit.requests) == {"groups"}
+
+
+def test_pipeline_grid_search_and_cross_validate_pass_groups_through():
+    raw, wrench, groups, _ = grouped_data()
+    with config_context(enable_metadata_routing=True):
+        pipe = Pipeline([("identity", FunctionTransformer()),
+                         ("cal", EnsembleCalibrator(GroupRecordingCalibrator(), n_members=1))])
+        pipe.fit(raw, wrench, groups=groups)
+        np.testing.assert_array_equal(pipe[-1].estimators_[0].groups_seen_, groups)
+
+        search = GridSearchCV(EnsembleCalibrator(GroupRecordingCalibrator(), n_members=1), {"n_members": [1, 2]},
+                              cv=GroupKFold(n_splits=3)).fit(raw, wrench, groups=groups)
+        np.testing.assert_array_equal(search.best_estimator_.estimators_[0].groups_seen_, groups)
+
+        result = cross_validate(TemperatureCompensatedCalibrator(GroupRecordingCalibrator()),
+                                np.column_stack([raw, grouped_data()[3]]), wrench,
+                                cv=GroupKFold(n_splits=3), params={"groups": groups}, return_estimator=True,
+                                return_indices=True)
+    for fitted, train in zip(result["estimator"], result["indices"]["train"]):
+        np.testing.assert_array_equal(fitted.estimator_.groups_seen_, groups[train])  # each fold's own groups
+
+
+def test_search_calibrator_routes_each_folds_groups(registered_recorder):
+    raw, wrench, groups, _ = grouped_data()
+    search = search_calibrator(registered_recorder, raw, wrench, space={"ridge": [0.0, 1e-3]}, cv=3, groups=groups)
+    np.testing.assert_array_equal(search.best_estimator_.groups_seen_, groups)  # the refit on all rows
+    assert search.best_estimator_.groups_seen_ is not None
+
+
+def test_cli_fit_with_temperature_routes_the_dataset_groups(registered_recorder, tmp_path):
+    """``ftcal fit --temperature`` gives the dataset's groups to the model inside the compensation."""
+    from ftcal.cli import main
+
+    raw, wrench, groups, temperature = grouped_data()
+    path = CalibrationDataset(raw=raw, wrench=wrench, group=groups, temperature=temperature).save(
+        tmp_path / "train.csv")
+    assert main(["fit", str(path), "--model", registered_recorder, "--temperature", "--out", str(tmp_path / "m"),
+                 "-q"]) == 0
+    model = load_model(tmp_path / "m" / f"{registered_recorder}.model.npz")  # the recorder's state is saved too
+    np.testing.assert_array_equal(model.estimator_.groups_seen_, groups)
+
+
+def test_hybrid_inner_cv_gets_the_groups_inside_the_temperature_wrapper():
+    """The hybrid's ridge chosen inside the wrapper is the one grouped folds choose, not shuffled ones.
+
+    Each group is a cluster of loads with its own reference error: shuffled folds reward a flexible fit of those
+    errors, grouped folds do not.
+    """
+    rng = np.random.default_rng(7)
+    n_groups, per_group = 10, 12
+    centers = rng.uniform(-1, 1, size=(n_groups, 6))
+    w = centers.repeat(per_group, axis=0) + 0.1 * rng.normal(size=(n_groups * per_group, 6))
+    raw = w @ rng.normal(size=(6, 6))
+    groups = np.repeat(np.arange(n_groups), per_group)
+    wrench = w + 0.1 * rng.normal(size=(n_groups, 6)).repeat(per_group, axis=0) + 0.001 * rng.normal(size=w.shape)
+    X = np.column_stack([raw, rng.uniform(15.0, 35.0, len(raw))])
+    wrapped = TemperatureCompensatedCalibrator(AxisNonlinearCalibrator(), alpha=1.0).fit(X, wrench, groups=groups)
+    compensated = wrapped._compensate(raw, X[:, -1])
+    grouped = AxisNonlinearCalibrator(alpha=1.0).fit(compensated, wrench, groups=groups).ridge_
+    shuffled = AxisNonlinearCalibrator(alpha=1.0).fit(compensated, wrench).ridge_
+    assert grouped != shuffled  # the data tell grouped from shuffled folds apart ...
+    assert wrapped.estimator_.ridge_ == grouped  # ... and the wrapped hybrid used the groups
