@@ -10,7 +10,7 @@ from typing import Any
 from ..io._dataset import CalibrationDataset
 from ..core._wrench import alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
-from ._common import CliError
+from ._common import CliError, path_problem
 
 __all__ = [
     "MODEL_SUFFIX",
@@ -52,8 +52,9 @@ def model_inputs(model, dataset: CalibrationDataset):
 def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
     """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz``; ``role`` names it in errors."""
     path = Path(path)
-    if not path.is_file():
-        raise CliError(f"{path}: no such {role} file")
+    problem = path_problem(path)
+    if problem is not None:
+        raise CliError(f"{problem} (the {role})")
     return CalibrationDataset.load(path)
 
 

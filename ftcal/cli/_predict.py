@@ -9,8 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from ..core._files import same_file
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_int, int_in_range
+from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
 from ._readings import iter_reading_chunks, read_readings_npz, write_wrench_rows
 
 EXAMPLE = """\
@@ -54,13 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
-    if args.input != "-" and not Path(args.input).is_file():
-        raise FileNotFoundError(2, "No such file (the raw readings to predict)", args.input)
-    if args.output != "-":
-        for role, other in (("input", args.input), ("model", args.model)):
-            if other != "-" and same_file(args.output, other):
-                raise CliError(f"--output {args.output} is the {role} file; writing there would destroy it. "
-                               "Choose another --output")
+    problem = None if args.input == "-" else path_problem(args.input, streams=True)
+    if problem is not None:
+        raise CliError(f"{problem} (the raw readings to predict)")
     model = load_model_file(args.model)
     n_channels = int(model.n_features_in_)
     chunk = 1 if args.line_buffered else args.chunk_size

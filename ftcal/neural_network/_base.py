@@ -23,8 +23,6 @@ from __future__ import annotations
 
 import numbers
 from numbers import Integral, Real
-import signal
-import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
 
@@ -44,7 +42,7 @@ from ..core._validation import validate_readings
 from ._modules import WeightedSquaredError, activate, activation_backward, mlp_layers
 from ._schedule import schedule_callbacks
 
-__all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available", "interrupt_flag"]
+__all__ = ["NetworkCalibrator", "LeanNeuralNetRegressor", "torch_threads", "device_available"]
 
 _PREDICT_CHUNK = 65536
 #: Batches up to this many rows are predicted by the numpy forward pass (:meth:`NetworkCalibrator._forward_numpy`).
@@ -62,37 +60,6 @@ def device_available(device: str) -> bool:
     except (RuntimeError, AssertionError, ValueError, TypeError):
         return False
     return True
-
-
-@contextmanager
-def interrupt_flag() -> Iterator[threading.Event]:
-    """Notice Ctrl-C (SIGINT) during the block, even though skorch's fit loop swallows ``KeyboardInterrupt``.
-
-    skorch ends ``fit`` quietly on ``KeyboardInterrupt`` (its early-stopping
-    callbacks, and ours, stop training that way), so a real Ctrl-C would
-    return a half-trained net as if it had finished. Inside this block a
-    SIGINT sets the yielded event and still raises ``KeyboardInterrupt`` to
-    end the loop; the caller re-raises after ``fit``. Outside the main thread
-    (where signal handlers cannot be set) the event is never set.
-    """
-    flag = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield flag
-        return
-    previous = signal.getsignal(signal.SIGINT)
-    if previous is signal.SIG_IGN or previous is None:  # ignored (a background job), or a handler set outside Python
-        yield flag
-        return
-
-    def handler(signum, frame):
-        flag.set()
-        raise KeyboardInterrupt
-
-    signal.signal(signal.SIGINT, handler)
-    try:
-        yield flag
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 @contextmanager
@@ -214,6 +181,30 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
     (:func:`_mlp_backward`), the same arithmetic as autograd's in half the
     torch calls; any other module or loss goes through autograd.
     """
+
+    def notify(self, method_name, **cb_kwargs):
+        # skorch's convention: a callback ends training by raising KeyboardInterrupt at the end of an epoch
+        # (EarlyStopping, the three-phase schedule); note that it was a callback, not the user's Ctrl-C.
+        try:
+            super().notify(method_name, **cb_kwargs)
+        except KeyboardInterrupt:
+            if method_name == "on_epoch_end":
+                self.__dict__["_stopped_by_callback"] = True
+            raise
+
+    def fit_loop(self, X, y=None, **fit_params):
+        """skorch's loop, except that a Ctrl-C is not swallowed: skorch's ``partial_fit`` ends a fit quietly on
+        any ``KeyboardInterrupt`` (the callbacks' way to stop), which would return a half-trained net as if it
+        had finished. A ``KeyboardInterrupt`` that no callback raised is recorded in ``interrupted_epoch_`` and
+        re-raised by :meth:`NetworkCalibrator._fit` after skorch's loop returns. No signal handler is installed."""
+        self.__dict__["_stopped_by_callback"] = False
+        self.__dict__.pop("interrupted_epoch_", None)
+        try:
+            return super().fit_loop(X, y, **fit_params)
+        except KeyboardInterrupt:
+            if not self.__dict__.pop("_stopped_by_callback", False):
+                self.__dict__["interrupted_epoch_"] = len(self.history)
+            raise
 
     def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
         if iterator is None:
@@ -357,11 +348,12 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         inputs, targets, seed, net = self._training_setup(X, y)
-        with interrupt_flag() as interrupted, torch.random.fork_rng(devices=[]), torch_threads(1):
+        with torch.random.fork_rng(devices=[]), torch_threads(1):
             torch.manual_seed(seed)
             net.fit(inputs.astype(np.float32), targets.astype(np.float32))
-        if interrupted.is_set():
-            raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {len(net.history)}")
+        interrupted_at = net.__dict__.pop("interrupted_epoch_", None)
+        if interrupted_at is not None:  # a Ctrl-C that skorch's loop swallowed: the caller must see it
+            raise KeyboardInterrupt(f"{type(self).__name__}.fit interrupted at epoch {interrupted_at}")
         self._finish_training(net, targets)
 
     def _finish_training(self, net: NeuralNetRegressor, targets: NDArray[np.float64]) -> None:
