@@ -212,7 +212,7 @@ def path_problem(path: str | os.PathLike, streams: bool = False) -> str | None:
     except FileNotFoundError:
         if os.path.islink(path):
             return f"{text} is a broken symbolic link (to {os.readlink(path)}); point it at an existing file"
-        return f"{text}: no such file"
+        return f"{text} does not exist"
     except OSError as exc:
         return f"{text}: {exc.strerror or exc}"
     if stat.S_ISDIR(st.st_mode):
