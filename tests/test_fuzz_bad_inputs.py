@@ -496,7 +496,7 @@ def test_prepare_dataset_takes_one_path(tmp_path):
     (["identify-load", "{train}", "--model", "{model}", "--gravity", "0,-9.81", "--out", "{tmp}/t"],
      "give three comma-separated numbers"),
     (["identify-load", "{train}", "--model", "{model}", "--out", "{tmp}/t"], "missing comment '# time_unit: <unit>'"),
-    (["retare", "{model}", "{tmp}/missing.csv"], "no such readings file"),
+    (["retare", "{model}", "{tmp}/missing.csv"], "missing.csv does not exist (the zero-load readings)"),
     (["tune", "{train}", "--model", "linear", "--grid", "ridge=[0,1]", "--scheduler", "tcp//x", "--out", "{tmp}/u"],
      "is not 'local' nor a scheduler address"),
 ])

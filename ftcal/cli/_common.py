@@ -343,6 +343,27 @@ def check_not_an_input(output: str | os.PathLike) -> None:
         )
 
 
+def _check_regular_target(path: Path) -> None:
+    """An existing output must be a regular file: ftcal writes beside it and renames into place, which would
+    replace a device (``/dev/null``), a named pipe or a directory entry instead of writing into it."""
+    import stat
+
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return
+    if stat.S_ISLNK(st.st_mode):
+        try:
+            st = os.stat(path)
+        except OSError:
+            return  # a dangling link is replaced by the file, as a missing file would be created
+    if stat.S_ISDIR(st.st_mode):
+        raise CliError(f"{path} is a directory; name a file to write")
+    if not stat.S_ISREG(st.st_mode):
+        raise CliError(f"{path} is not a regular file (a device or a pipe); ftcal writes a new file and renames "
+                       "it into place. Write to '-' (standard output) and redirect it instead")
+
+
 class OutputPlan:
     """The files a run will write in ``out_dir``, checked before the work starts.
 
@@ -370,6 +391,7 @@ class OutputPlan:
         check_writable_dir(self.out_dir, CliError)
         for n in self.names:
             check_not_an_input(self.out_dir / n)
+            _check_regular_target(self.out_dir / n)
         if not force:
             taken = [n for n in self.names if (self.out_dir / n).exists()]
             if taken:
