@@ -31,6 +31,7 @@ ftcal ...
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Sequence
 
@@ -113,6 +114,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (FtcalError, OSError, ValueError) as exc:
         print(f"ftcal: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
+    except MemoryError as exc:  # a step whose size no guard estimated: still the user's input that is too large
+        detail = f" ({_one_line(exc)})" if str(exc) else ""
+        print(f"ftcal: error: out of memory{detail}; the input is too large for this machine: use a smaller file "
+              "or fewer samples (--param max_samples=... where the model has it)", file=sys.stderr)
+        return EXIT_USAGE
     except Exception as exc:  # a bug: still one line, with a pointer to where to report it
         print(
             f"ftcal: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
@@ -122,12 +128,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILURE
 
 
+#: The library's advice in terms of its API, and what a command-line user does instead.
+_CLI_ADVICE = (
+    (re.compile(r"Fix: pass groups=None for random folds\.?"),
+     "Fix: give the dataset's group column at least 2 distinct groups, or remove that column for random folds."),
+    (re.compile(r"pass overwrite=True(?: \((?:CLI: )?--force\))?"), "pass --force"),
+    (re.compile(r"pass sensor_frame=<[^>]*>"), "pass --sensor-frame NAME (the frame at the sensing origin)"),
+    (re.compile(r"pass space=\{\{?param: values\}?\}"), "pass --grid KEY=[values]"),
+)
+
+
 def _one_line(exc: BaseException) -> str:
-    """The message of ``exc`` folded onto one line (OSError gets its file name)."""
+    """The message of ``exc`` folded onto one line (OSError gets its file name), its API advice (``pass
+    groups=None``) put in command-line terms."""
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         text = f"{exc.filename}: {exc.strerror}"
     else:
         text = str(exc) or type(exc).__name__
+    for pattern, advice in _CLI_ADVICE:
+        text = pattern.sub(advice, text)
     return " ".join(text.split())
 
 

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -65,6 +66,8 @@ _JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
 _FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
 # Joint values beyond this magnitude in a file that says "rad" are almost surely degrees.
 _MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
+#: An integer as written (config and pose ids are read exactly, not through float64).
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass
@@ -229,10 +232,19 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         return value
 
     def integer(lineno: int, fields: list[str], name: str) -> int:
-        value = number(lineno, fields, name)
-        if value != int(value):
-            raise LogFormatError(f"{path}: line {lineno}: column {name} must be an integer; got {value!r}.")
-        return int(value)
+        # parsed exactly (never through float64, which merges 100000000000000001 with ...000), and within int64
+        text = fields[col[name]].strip()
+        if _INTEGER.fullmatch(text):
+            value = int(text)
+        else:
+            number_value = number(lineno, fields, name)
+            if number_value != int(number_value) or abs(number_value) > 2**53:
+                raise LogFormatError(f"{path}: line {lineno}: column {name} must be an integer; got {text!r}.")
+            value = int(number_value)
+        if not -(2**63) <= value < 2**63:
+            raise LogFormatError(f"{path}: line {lineno}: column {name} is {text}, beyond the 64-bit integers "
+                                 "ftcal stores; number the configurations and poses 0, 1, 2, ...")
+        return value
 
     n = len(rows)
     ts, kind = np.empty(n), np.empty(n, dtype=object)
