@@ -68,7 +68,7 @@ def run(args: argparse.Namespace) -> int:
             try:
                 wrench = np.asarray(model.predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
-                raise located_error(exc, args.input, lines) from None
+                raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
             write_wrench_rows(out, wrench, header)
             header = False
             total += len(wrench)

@@ -86,11 +86,11 @@ def run(args: argparse.Namespace) -> int:
     alpha = dataset_alpha(data, args.alpha)
     if alpha is not None and "alpha" not in params:
         params["alpha"] = alpha
-    console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
     start = time.perf_counter()
     from ..core._scale_out import dask_backend
 
-    with dask_backend(args.scheduler):
+    with dask_backend(args.scheduler):  # a scheduler that cannot be used fails here, before any status line
+        console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
         search = search_calibrator(
             args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
             schedule=args.schedule, random_state=args.seed, n_jobs=-1 if args.scheduler else args.jobs, **params,
