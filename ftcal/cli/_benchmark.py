@@ -164,7 +164,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..models._auto import score_candidates
     from ..core._model_selection import simplest_within_one_se
     from ..evaluation._plots import plot_axis_errors
-    from ._models import dataset_alpha, load_dataset
+    from ._models import check_fold_count, dataset_alpha, load_dataset
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -174,6 +174,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     data = load_dataset(args.dataset, "dataset")
     if args.folds == "group" and data.group is None:
         raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
+    check_fold_count(data, args.cv, args.dataset)
     groups = data.group if args.folds in ("auto", "group") else None
     alpha = ftcal.alpha_from_wrenches(data.wrench) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule

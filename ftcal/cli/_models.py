@@ -22,6 +22,7 @@ __all__ = [
     "parse_param",
     "dataset_alpha",
     "evaluation_alpha",
+    "check_fold_count",
 ]
 
 def model_label(path: Path) -> str:
@@ -40,13 +41,18 @@ def load_model_file(path: str | Path):
 def model_inputs(model, dataset: CalibrationDataset):
     """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
     temperature-compensated model (one input more than the dataset has channels)."""
+    from ._readings import takes_temperature
+
     n = int(model.n_features_in_)
-    if n == dataset.n_channels:
+    temperature = takes_temperature(model)
+    if n == dataset.n_channels and not temperature:
         return dataset.raw
-    if n == dataset.n_channels + 1 and dataset.temperature is not None:
+    if temperature and n == dataset.n_channels + 1 and dataset.temperature is not None:
         return dataset.features(temperature=True)
-    extra = " and a temperature column" if n == dataset.n_channels + 1 else ""
-    raise CliError(f"the model takes {n} inputs but the dataset has {dataset.n_channels} raw channels{extra}")
+    wants = f"{n - 1} raw channels and a temperature column" if temperature else f"{n} raw channels"
+    has = f"{dataset.n_channels} raw channels" + (" and no temperature column" if temperature and
+                                                  dataset.temperature is None else "")
+    raise CliError(f"the model takes {wants} but the dataset has {has}; use the dataset the model was made for")
 
 
 def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
@@ -97,3 +103,11 @@ def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:
     """Torque scale for metrics: ``--alpha``, else the dataset's ``meta['alpha']``, else from its wrenches."""
     value = dataset_alpha(dataset, alpha)
     return alpha_from_wrenches(dataset.wrench) if value is None else value
+
+
+def check_fold_count(dataset: CalibrationDataset, cv: int, path) -> None:
+    """Refuse ``--cv`` folds a dataset cannot fill (one sample per fold at least), before scikit-learn does in its
+    own terms (``n_splits``)."""
+    if dataset.n_samples < cv:
+        raise CliError(f"{path} has {dataset.n_samples} sample(s), fewer than the {cv} folds of --cv; record more "
+                       "load cases or lower --cv (each fold also needs enough samples left to fit on)")

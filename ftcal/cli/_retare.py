@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
+from ..core._memory import check_allocation
 from ._models import MODEL_SUFFIX, model_label
 
 EXAMPLE = """\
@@ -52,7 +53,12 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
-    chunks = list(raw_chunks(args.readings, n_channels, 4096))
+    chunks, n_bytes = [], 0.0
+    for chunk in raw_chunks(args.readings, n_channels, 4096):  # a stream of readings may be endless
+        n_bytes += chunk.nbytes
+        check_allocation(2 * n_bytes, f"the zero-load readings of {args.readings} ({n_bytes / chunk.itemsize / n_channels:.0f}"
+                         " so far)", "a few hundred readings are enough; pass fewer")
+        chunks.append(chunk)
     if not chunks:
         raise CliError(f"{args.readings}: no readings; record some zero-load readings first")
     readings = np.vstack(chunks)

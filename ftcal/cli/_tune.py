@@ -7,7 +7,7 @@ import time
 
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
 from ._fit import calibrator_names
-from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
+from ._models import check_fold_count, dataset_alpha, load_dataset, model_file_name, parse_param
 
 EXAMPLE = """\
 examples:
@@ -79,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
     space = parse_search_space(args.grid) if args.grid else None
     data = load_dataset(args.dataset, "training dataset")
+    check_fold_count(data, args.cv, args.dataset)
     if args.group_folds and data.group is None:
         raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
     groups = None if args.random_folds else data.group

@@ -52,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
+from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
@@ -66,6 +67,8 @@ _JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
 _FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
 # Joint values beyond this magnitude in a file that says "rad" are almost surely degrees.
 _MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
+#: Memory of a log read into Python strings, per byte of the file (the text, its lines, the rows' fields).
+_TEXT_MEMORY_FACTOR = 8
 #: An integer as written (config and pose ids are read exactly, not through float64).
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 
@@ -178,10 +181,15 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     path = Path(path)
     if not path.is_file():
         raise LogFormatError(f"{path}: no such log file.")
+    # the text, its lines and each row's fields as Python strings take several times the file's size
+    check_allocation(_TEXT_MEMORY_FACTOR * path.stat().st_size, f"reading the run log {path}",
+                     "split the log into several files (one per run or configuration)")
     try:
         text_lines = path.read_text(encoding="utf-8-sig").splitlines()
     except UnicodeDecodeError as exc:
-        raise LogFormatError(f"{path}: not a UTF-8 text file ({exc}).") from exc
+        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a run log is a CSV text file.") \
+            from None
     info, n_comment = _parse_comments(path, text_lines)
     head_line = n_comment + 1
     if n_comment >= len(text_lines) or not text_lines[n_comment].strip():
