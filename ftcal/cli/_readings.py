@@ -75,6 +75,9 @@ def iter_reading_chunks(
         Naming the source and line of a value that is not a number, a row of
         the wrong width, or a NaN / inf.
     """
+    # a chunk is held as Python floats (~32 bytes each) before it becomes an array: bound its memory, whatever
+    # --chunk-size and the channel count (the answers do not depend on how rows are grouped)
+    chunk_size = max(1, min(chunk_size, _CHUNK_BYTES // (32 * max(n_channels, 1))))
     columns: list[int] | None = None
     width: int | None = None
     rows: list[list[float]] = []
@@ -117,6 +120,8 @@ def iter_reading_chunks(
         yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
 
 
+#: Largest chunk of text readings held at once [bytes].
+_CHUNK_BYTES = 256 * 2**20
 #: Longest input line read [characters] (1000 channels of 25-character numbers take 26 000).
 MAX_LINE_CHARS = 1 << 20
 

@@ -18,9 +18,10 @@ examples:
 
 READINGS: raw readings taken now with nothing attached (the format of 'ftcal predict': one reading per
 line, optional s0..s{N-1} header, or a .npz with array 'raw'). The new model file holds the same
-calibration with the zero-load reading replaced by their mean; the old file is never replaced
-without --force. The readings must be quiet (each channel's spread at most --max-spread times the
-noise seen in training), else the run stops.
+calibration with the zero-load reading replaced by their mean; no input file is ever replaced, --force
+or not. The readings must be quiet (each channel's spread at most --max-spread times the noise seen in
+training, which counts as at least 1e-4 of the channel's training span) and lie near the training
+readings (within half their span beyond them), else the run stops.
 """
 
 
