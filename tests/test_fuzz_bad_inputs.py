@@ -1016,3 +1016,17 @@ def test_npz_readings_declaring_huge_arrays_are_refused_before_reading(workdir, 
     with zipfile.ZipFile(path, "w") as z:
         z.writestr("raw.npy", header.getvalue() + b"\0" * 96)
     assert expected in cli_error(["predict", workdir / "models" / "linear.model.npz", path], capsys)
+
+
+@pytest.mark.parametrize("command", ["fit", "evaluate"])
+def test_values_no_fit_can_square_are_named_by_file_line(workdir, tmp_path, capsys, command):
+    comments, body = data_lines(workdir)
+    fields = body[7].split(",")
+    fields[2] = "1e308"
+    body[7] = ",".join(fields)
+    path = tmp_path / "huge.csv"
+    path.write_text("\n".join(comments + body) + "\n")
+    argv = (["fit", path, "--model", "linear"] if command == "fit"
+            else ["evaluate", path, workdir / "models" / "linear.model.npz"]) + ["--out", tmp_path / "o"]
+    msg = cli_error(argv, capsys)
+    assert f"{path}: line {len(comments) + 8}: a raw reading of 1e+308 (column 2)" in msg

@@ -7,6 +7,9 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from ..core._validation import MAX_TRAINING_MAGNITUDE
 from ..io._dataset import CalibrationDataset
 from ..core._wrench import alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
@@ -61,7 +64,31 @@ def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
     problem = path_problem(path)
     if problem is not None:
         raise CliError(f"{problem} (the {role})")
-    return CalibrationDataset.load(path)
+    dataset = CalibrationDataset.load(path)
+    for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
+        big = np.abs(array) > MAX_TRAINING_MAGNITUDE
+        if big.any():
+            row, col = (int(v) for v in np.argwhere(big)[0])
+            raise CliError(f"{path}: {data_row_location(path, row)}: a {name} of {array[row, col]:.6g} (column "
+                           f"{col}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
+                           "overflow; check the units and that line")
+    return dataset
+
+
+def data_row_location(path: str | Path, row: int) -> str:
+    """``"line N"`` of data row ``row`` (from 0) of a CSV file (comments, the header and blank lines skipped), or
+    ``"row N"`` of an ``.npz``."""
+    path = Path(path)
+    if path.suffix != ".csv":
+        return f"row {row}"
+    seen = -2  # the header line comes first
+    with open(path, encoding="utf-8-sig") as fh:
+        for line_no, line in enumerate(fh, start=1):
+            if line.strip() and not line.lstrip().startswith("#"):
+                seen += 1
+                if seen == row:
+                    return f"line {line_no}"
+    return f"row {row}"
 
 
 def parse_param(text: str) -> tuple[str, Any]:
