@@ -9,7 +9,6 @@ from typing import Any
 
 import numpy as np
 
-from ..core._validation import MAX_TRAINING_MAGNITUDE
 from ..io._dataset import CalibrationDataset
 from ..core._wrench import alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
@@ -64,6 +63,8 @@ def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
     problem = path_problem(path)
     if problem is not None:
         raise CliError(f"{problem} (the {role})")
+    from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
+
     dataset = CalibrationDataset.load(path)
     for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
