@@ -202,9 +202,11 @@ class LeanNeuralNetRegressor(NeuralNetRegressor):
         try:
             return super().fit_loop(X, y, **fit_params)
         except KeyboardInterrupt:
-            if not self.__dict__.pop("_stopped_by_callback", False):
+            if not self.__dict__.get("_stopped_by_callback", False):
                 self.__dict__["interrupted_epoch_"] = len(self.history)
             raise
+        finally:
+            self.__dict__.pop("_stopped_by_callback", None)
 
     def run_single_epoch(self, iterator, training, prefix, step_fn, **fit_params):
         if iterator is None:
