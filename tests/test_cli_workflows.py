@@ -157,7 +157,7 @@ def test_end_to_end_logs_prepare_fit_evaluate_predict(tmp_path, capsys):
 
 def test_prepare_bad_inputs_give_one_line(tmp_path, capsys):
     assert main(["prepare", str(tmp_path / "missing_dir"), "--out", str(tmp_path / "d")]) == 2
-    assert "no such log file or directory" in capsys.readouterr().err
+    assert "missing_dir does not exist (a run log, or a directory of" in capsys.readouterr().err
     bad = tmp_path / "run.csv"
     bad.write_text("timestamp,run_kind\n0,load\n")
     assert main(["prepare", str(bad), "--out", str(tmp_path / "d"), "-q"]) == 2

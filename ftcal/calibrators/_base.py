@@ -54,6 +54,14 @@ def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
     return float(alpha)
 
 
+#: A re-tare reading may lie outside the training readings of its channel by at most this fraction of their span.
+RETARE_RANGE_MARGIN = 0.5
+#: Smallest noise :meth:`BaseCalibrator.retare` assumes, as a fraction of the training readings' span per channel
+#: (a 16-bit converter's step is 1.5e-5 of its range; a real sensor's noise a few steps): training data that were
+#: averaged or noise-free show ~1e-13 and would otherwise make every real reading "not quiet".
+RETARE_NOISE_FLOOR = 1e-4
+
+
 class BaseCalibrator(RegressorMixin, BaseEstimator):
     """Common base of the calibrators; not meant to be used directly.
 
@@ -74,7 +82,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     #: Fitted attributes a model file stores (:func:`ftcal.save_model`); each subclass declares its own
     #: next to its class, and ``_emit_onnx(graph, x)`` for its ONNX graph (:func:`ftcal.export_onnx`).
     _fitted_state: tuple[str, ...] = ("alpha_", "n_features_in_", "feature_names_in_", "n_outputs_", "y_1d_",
-                                      "zero_reading_", "reading_noise_", "tare_reading_")
+                                      "zero_reading_", "reading_noise_", "tare_reading_", "reading_range_")
 
     _parameter_constraints: dict = {
         "alpha": [Interval(Real, 0, None, closed="neither"), None],
@@ -129,6 +137,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         else:
             self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
         self.reading_noise_ = reading_noise(X, y)
+        self.reading_range_ = np.vstack([X.min(axis=0), X.max(axis=0)])
         self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
         return X, y
 
@@ -155,8 +164,12 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         max_spread : float, default=5.0
             The readings must be quiet: each channel's standard deviation may be
             at most ``max_spread`` times the noise the training data showed
-            (``reading_noise_``); more means something touched or moved the
-            sensor while they were taken.
+            (``reading_noise_``, at least :data:`RETARE_NOISE_FLOOR` of the
+            channel's training span); more means something touched or moved
+            the sensor while they were taken. Each reading must also lie within
+            the channel's training readings widened by half their span on each
+            side (``reading_range_``): a zero-load reading far outside them is
+            a wrong unit, channel order or sensor.
 
         Returns
         -------
@@ -179,8 +192,26 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         X = validate_readings(self, X_no_load)
         if len(X) == 0:
             raise CalibrationInputError("X_no_load holds no readings; pass at least one zero-load reading.")
+        reading_range = getattr(self, "reading_range_", None)
+        span = None
+        if reading_range is not None:
+            low, high = np.asarray(reading_range, dtype=float)
+            span = high - low
+            margin = RETARE_RANGE_MARGIN * np.maximum(span, np.abs(high) + np.abs(low))
+            outside = (X < low - margin) | (X > high + margin)
+            if outside.any():
+                r, c = (int(v) for v in np.argwhere(outside)[0])
+                raise CalibrationInputError(
+                    f"X_no_load[{r}, {c}] = {X[r, c]:.6g} lies far outside the readings channel s{c} gave in training "
+                    f"([{low[c]:.6g}, {high[c]:.6g}]); a zero-load reading does not. Check the units, the channel "
+                    "order and the sensor, or fit the calibration again."
+                )
         noise = getattr(self, "reading_noise_", None)
         if noise is not None and len(X) > 1:
+            noise = np.asarray(noise, dtype=float)
+            # floor: noise-free or averaged training data (noise ~ 1e-13) must not refuse every real reading
+            floor = RETARE_NOISE_FLOOR * span if span is not None else 0.0
+            noise = np.maximum(noise, np.maximum(floor, 16 * np.finfo(float).eps * np.abs(X).max(axis=0)))
             spread = X.std(axis=0, ddof=1)
             limit = max_spread * np.maximum(noise, np.finfo(float).tiny)
             bad = np.flatnonzero(spread > limit)

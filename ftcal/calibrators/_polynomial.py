@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from numbers import Integral, Real
 
 import numpy as np
@@ -9,6 +10,7 @@ from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval
 from sklearn.preprocessing import PolynomialFeatures
 
+from ..core._memory import check_allocation
 from ._base import BaseCalibrator
 from ._ridge import ridge_least_squares
 
@@ -16,6 +18,8 @@ __all__ = ["PolynomialCalibrator"]
 
 #: Batch size of ``predict`` (degree 5 on 6 channels makes 461 features per row).
 _PREDICT_CHUNK = 8192
+#: Largest batch of monomials ``predict`` builds at once [bytes].
+_PREDICT_BYTES = 256 * 2**20
 
 
 class PolynomialCalibrator(BaseCalibrator):
@@ -102,7 +106,21 @@ class PolynomialCalibrator(BaseCalibrator):
         # Fitted on one row only to learn the channel count: the monomials depend on nothing else.
         return PolynomialFeatures(int(self.degree), include_bias=False).fit(np.zeros((1, self.n_features_in_)))
 
+    def _n_monomials(self, n_channels: int) -> int:
+        """Monomials of degree 1..``degree`` of ``n_channels`` variables: ``C(N + d, d) - 1``."""
+        return math.comb(n_channels + int(self.degree), int(self.degree)) - 1
+
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        n, n_channels = X.shape
+        n_features = self._n_monomials(n_channels)
+        penalised = n_features - n_channels
+        # the features, their centred copy and the ridge-augmented system lstsq copies, plus its identity block
+        check_allocation(
+            8.0 * (3.0 * (n + penalised) * n_features + float(penalised) ** 2),
+            f"PolynomialCalibrator(degree={self.degree}) on {n} samples x {n_channels} channels "
+            f"({n_features} monomials)",
+            "lower degree (degree=1 is the LTM), use fewer channels, or try AxisNonlinearCalibrator",
+        )
         ridge = float(self.ridge)
         xc = X - self.zero_reading_
         scale = np.abs(xc).max(axis=0)
@@ -113,7 +131,9 @@ class PolynomialCalibrator(BaseCalibrator):
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         monomials = self._monomials()
         u = (X - self.zero_reading_) / self.input_scale_
-        out = [monomials.transform(u[i : i + _PREDICT_CHUNK]) @ self.coef_ for i in range(0, len(u), _PREDICT_CHUNK)]
+        # rows per batch: at most _PREDICT_CHUNK, and a batch of monomials of at most 256 MiB
+        chunk = int(max(1, min(_PREDICT_CHUNK, _PREDICT_BYTES // (8 * max(len(self.coef_), 1)))))
+        out = [monomials.transform(u[i : i + chunk]) @ self.coef_ for i in range(0, len(u), chunk)]
         return (np.concatenate(out) if out else np.zeros((0, len(self.intercept_)))) + self.intercept_
 
     def _emit_onnx(self, g, x: str) -> str:

@@ -31,11 +31,12 @@ ftcal ...
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Sequence
 
 from ..core._exceptions import FtcalError
-from ._common import EXIT_FAILURE, EXIT_USAGE, Parser
+from ._common import EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, note_inputs, signals_interrupt
 
 __all__ = ["main", "build_parser"]
 
@@ -85,24 +86,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     -------
     int
         0 on success, 2 when the arguments or input files are unusable
-        (after one ``ftcal: error: ...`` line on stderr), 1 on an unexpected
-        failure.
+        (after one ``ftcal: error: ...`` line on stderr), 130 after SIGINT
+        (Ctrl-C) and 143 after SIGTERM (the output being written is removed),
+        1 on an unexpected failure.
     """
     args_list = list(sys.argv[1:] if argv is None else argv)
     try:
-        parser = build_parser()
-        args = parser.parse_args(args_list)
-        return int(args.handler(args) or 0)
+        with signals_interrupt():
+            parser = build_parser()
+            args = parser.parse_args(args_list)
+            note_inputs(args)  # no output may replace one of these (OutputPlan checks)
+            return int(args.handler(args) or 0)
     except SystemExit as exc:  # --help and --version exit through argparse
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
-    except KeyboardInterrupt:
-        print("ftcal: interrupted", file=sys.stderr)
+    except Interrupted as exc:  # SIGINT / SIGTERM: outputs in progress were removed while unwinding
+        import signal
+
+        print(f"ftcal: interrupted by {signal.Signals(exc.signum).name} (no half-written file is left)",
+              file=sys.stderr)
+        return exc.exit_status
+    except KeyboardInterrupt:  # a Ctrl-C from a library (or before the handlers were installed)
+        print("ftcal: interrupted (no half-written file is left)", file=sys.stderr)
         return 130
     except BrokenPipeError:  # `ftcal predict ... | head`: the reader left, not an error
         _silence_stdout()
         return 0
     except (FtcalError, OSError, ValueError) as exc:
         print(f"ftcal: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except MemoryError as exc:  # a step whose size no guard estimated: still the user's input that is too large
+        detail = f" ({_one_line(exc)})" if str(exc) else ""
+        print(f"ftcal: error: out of memory{detail}; the input is too large for this machine: use a smaller file "
+              "or fewer samples (--param max_samples=... where the model has it)", file=sys.stderr)
         return EXIT_USAGE
     except Exception as exc:  # a bug: still one line, with a pointer to where to report it
         print(
@@ -113,12 +128,25 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILURE
 
 
+#: The library's advice in terms of its API, and what a command-line user does instead.
+_CLI_ADVICE = (
+    (re.compile(r"Fix: pass groups=None for random folds\.?"),
+     "Fix: give the dataset's group column at least 2 distinct groups, or remove that column for random folds."),
+    (re.compile(r"pass overwrite=True(?: \((?:CLI: )?--force\))?"), "pass --force"),
+    (re.compile(r"pass sensor_frame=<[^>]*>"), "pass --sensor-frame NAME (the frame at the sensing origin)"),
+    (re.compile(r"pass space=\{\{?param: values\}?\}"), "pass --grid KEY=[values]"),
+)
+
+
 def _one_line(exc: BaseException) -> str:
-    """The message of ``exc`` folded onto one line (OSError gets its file name)."""
+    """The message of ``exc`` folded onto one line (OSError gets its file name), its API advice (``pass
+    groups=None``) put in command-line terms."""
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         text = f"{exc.filename}: {exc.strerror}"
     else:
         text = str(exc) or type(exc).__name__
+    for pattern, advice in _CLI_ADVICE:
+        text = pattern.sub(advice, text)
     return " ".join(text.split())
 
 

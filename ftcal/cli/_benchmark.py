@@ -61,12 +61,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     _register_dataset(kinds)
 
 
-def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True) -> None:
+def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True,
+                default_models: tuple[str, ...] = ("linear", "comparative", "directional")) -> None:
     import ftcal
 
     p.add_argument(
         "--model", dest="models", action="append", choices=tuple(ftcal.CALIBRATOR_NAMES), metavar="NAME",
-        help=f"calibrator to include (repeatable; default: linear, comparative, directional; "
+        help=f"calibrator to include (repeatable; default: {', '.join(default_models)}; "
         f"known: {', '.join(ftcal.CALIBRATOR_NAMES)})",
     )
     p.add_argument("--schedule", default="thesis", choices=("thesis", "short"), help="training schedule")
@@ -152,7 +153,7 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     )
     d.add_argument("--cv", type=int_in_range(2, 100, "folds"), default=5, help="number of folds")
     d.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
-    _add_common(d, "ftcal-benchmark-dataset", jobs=False)
+    _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
     d.set_defaults(handler=run_dataset)
 
 
@@ -163,7 +164,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..models._auto import score_candidates
     from ..core._model_selection import simplest_within_one_se
     from ..evaluation._plots import plot_axis_errors
-    from ._models import dataset_alpha, load_dataset
+    from ._models import check_fold_count, dataset_alpha, load_dataset
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -173,6 +174,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     data = load_dataset(args.dataset, "dataset")
     if args.folds == "group" and data.group is None:
         raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
+    check_fold_count(data, args.cv, args.dataset)
     groups = data.group if args.folds in ("auto", "group") else None
     alpha = ftcal.alpha_from_wrenches(data.wrench) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule

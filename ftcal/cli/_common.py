@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
+import re
 import sys
 from collections.abc import Iterable, Iterator
 from pathlib import Path
@@ -29,6 +31,8 @@ from ..core._files import atomic_output, check_writable_dir, write_json
 __all__ = [
     "CliError",
     "UsageError",
+    "Interrupted",
+    "signals_interrupt",
     "Parser",
     "EXIT_USAGE",
     "EXIT_FAILURE",
@@ -37,6 +41,8 @@ __all__ = [
     "add_scheduler_option",
     "add_robot_options",
     "OutputPlan",
+    "note_inputs",
+    "check_not_an_input",
     "Console",
     "write_json",
     "positive_int",
@@ -44,6 +50,7 @@ __all__ = [
     "positive_float",
     "int_in_range",
     "existing_file",
+    "path_problem",
 ]
 
 #: Exit status of a run refused because of the user's arguments or files.
@@ -77,9 +84,69 @@ class Parser(argparse.ArgumentParser):
     def __init__(self, *args: Any, **kwargs: Any) -> None:
         kwargs.setdefault("formatter_class", _Formatter)
         super().__init__(*args, **kwargs)
+        # A value that starts with a minus and a digit is a value, not an option (no ftcal option name starts
+        # with a digit): argparse's own rule takes only a lone number, so `--tare -0.001,0.2` or
+        # `--gravity -9.81,0,0` would fail with "expected one argument".
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message: str) -> None:  # type: ignore[override]
         raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+# ------------------------------------------------------------------ signals
+class Interrupted(BaseException):
+    """SIGINT (Ctrl-C) or SIGTERM received by the ``ftcal`` command.
+
+    Raised by the handlers of :func:`signals_interrupt` in the main thread. It unwinds the run like
+    ``KeyboardInterrupt`` (every ``finally`` runs, so outputs being written are removed, SIGTERM as SIGINT)
+    but is not one: skorch's fit loop swallows ``KeyboardInterrupt`` (its callbacks stop training that way),
+    and CPython ends a process whose ``KeyboardInterrupt`` was once left unhandled in code it ran through
+    ``PyRun_*`` by killing itself with SIGINT (status -2 instead of 130).
+    """
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
+
+    @property
+    def exit_status(self) -> int:
+        """``128 + signal number`` (130 for SIGINT, 143 for SIGTERM), as a shell reports a signal."""
+        return 128 + self.signum
+
+
+@contextlib.contextmanager
+def signals_interrupt() -> Iterator[None]:
+    """Within the block, SIGINT and SIGTERM raise :class:`Interrupted` in the main thread (the CLI only: the
+    library installs no signal handler). Signals ignored by the caller (a background job's SIGINT) stay ignored.
+    A second signal while the run unwinds is ignored so the clean-up finishes; a third ends the process."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    received: list[int] = []
+
+    def handler(signum, frame):
+        received.append(signum)
+        if len(received) == 1:
+            raise Interrupted(signum)
+        if len(received) >= 3:
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+
+    previous = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        old = signal.getsignal(sig)
+        if old is signal.SIG_IGN:
+            continue
+        previous[sig] = old
+        signal.signal(sig, handler)
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old if old is not None else signal.SIG_DFL)
 
 
 # ------------------------------------------------------------------ argument types
@@ -130,13 +197,43 @@ def positive_float(text: str) -> float:
     return value
 
 
+def path_problem(path: str | os.PathLike, streams: bool = False) -> str | None:
+    """What keeps ``path`` from being read as an input file, or ``None`` when it can be read.
+
+    A missing file, a broken symbolic link, a directory, a device (``/dev/null``), a named pipe or socket
+    (``/dev/fd/N`` of a shell's ``<(...)``) and an unreadable file are told apart. With ``streams`` a pipe or a
+    character device is fine (it is read once, line by line, as standard input would be).
+    """
+    import stat
+
+    text = str(path)
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        if os.path.islink(path):
+            return f"{text} is a broken symbolic link (to {os.readlink(path)}); point it at an existing file"
+        return f"{text} does not exist"
+    except OSError as exc:
+        return f"{text}: {exc.strerror or exc}"
+    if stat.S_ISDIR(st.st_mode):
+        return f"{text} is a directory, not a file; name a file in it"
+    if not stat.S_ISREG(st.st_mode):
+        kind = ("a named pipe" if stat.S_ISFIFO(st.st_mode) else "a socket" if stat.S_ISSOCK(st.st_mode)
+                else "a device" if stat.S_ISCHR(st.st_mode) or stat.S_ISBLK(st.st_mode) else "not a regular file")
+        if streams and (stat.S_ISFIFO(st.st_mode) or stat.S_ISCHR(st.st_mode)):
+            return None
+        return f"{text} is {kind}, not a regular file; save the data to a file first"
+    if not os.access(path, os.R_OK):
+        return f"{text}: permission denied (the file is not readable by this user)"
+    return None
+
+
 def existing_file(text: str) -> Path:
-    """argparse type: a path to a file that exists."""
-    path = Path(text)
-    if not path.is_file():
-        what = "is a directory, not a file" if path.is_dir() else "does not exist"
-        raise argparse.ArgumentTypeError(f"{text} {what}")
-    return path
+    """argparse type: a path to a readable regular file (a directory, device or pipe is named as such)."""
+    problem = path_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
+    return Path(text)
 
 
 # ------------------------------------------------------------------ shared options
@@ -192,6 +289,81 @@ def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
 
 
 # ------------------------------------------------------------------ output files
+#: Arguments that name outputs (a directory or a file); every other argument that names an existing file, or a
+#: directory of files, is an input of the run.
+OUTPUT_ARGUMENTS = ("out", "output")
+#: The regular files the current command reads: (device, inode) -> which input it is, for the message.
+_input_files: dict[tuple[int, int], str] = {}
+
+
+def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
+    import stat
+
+    try:
+        st = os.stat(path)
+    except (OSError, ValueError):
+        return None
+    return (st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+
+
+def note_inputs(args: argparse.Namespace) -> None:
+    """Record every file the parsed command may read, so that no output replaces one (``--force`` or not).
+
+    Every argument but the outputs (:data:`OUTPUT_ARGUMENTS`) is looked at: a value naming an existing regular
+    file is an input, a directory contributes the files directly in it (logs directories). Files are compared
+    by device and inode, so another spelling of the path, a symbolic link or a hard link is the same file.
+    """
+    _input_files.clear()
+    for dest, value in vars(args).items():
+        if dest in OUTPUT_ARGUMENTS or callable(value):
+            continue
+        for item in value if isinstance(value, (list, tuple)) else [value]:
+            if not isinstance(item, (str, Path)) or str(item) in ("", "-"):
+                continue
+            path = Path(item)
+            try:
+                children = sorted(path.iterdir()) if path.is_dir() else [path]
+            except OSError:
+                continue
+            role = dest.replace("_", " ")
+            for child in children[:100_000]:
+                file_id = _regular_file_id(child)
+                if file_id is not None:
+                    _input_files.setdefault(
+                        file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
+
+
+def check_not_an_input(output: str | os.PathLike) -> None:
+    """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
+    file_id = _regular_file_id(output)
+    if file_id is not None and file_id in _input_files:
+        raise CliError(
+            f"{output} is {_input_files[file_id]}, an input of this command; writing there would destroy it, "
+            "--force or not. Choose another output name or directory"
+        )
+
+
+def _check_regular_target(path: Path) -> None:
+    """An existing output must be a regular file: ftcal writes beside it and renames into place, which would
+    replace a device (``/dev/null``), a named pipe or a directory entry instead of writing into it."""
+    import stat
+
+    try:
+        st = os.lstat(path)
+    except OSError:
+        return
+    if stat.S_ISLNK(st.st_mode):
+        try:
+            st = os.stat(path)
+        except OSError:
+            return  # a dangling link is replaced by the file, as a missing file would be created
+    if stat.S_ISDIR(st.st_mode):
+        raise CliError(f"{path} is a directory; name a file to write")
+    if not stat.S_ISREG(st.st_mode):
+        raise CliError(f"{path} is not a regular file (a device or a pipe); ftcal writes a new file and renames "
+                       "it into place. Write to '-' (standard output) and redirect it instead")
+
+
 class OutputPlan:
     """The files a run will write in ``out_dir``, checked before the work starts.
 
@@ -217,6 +389,9 @@ class OutputPlan:
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
         check_writable_dir(self.out_dir, CliError)
+        for n in self.names:
+            check_not_an_input(self.out_dir / n)
+            _check_regular_target(self.out_dir / n)
         if not force:
             taken = [n for n in self.names if (self.out_dir / n).exists()]
             if taken:

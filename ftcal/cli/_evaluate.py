@@ -6,7 +6,7 @@ import argparse
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, positive_float, write_json
+from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, positive_float, write_json
 from ._models import evaluation_alpha, load_dataset, load_model_file, model_label, model_inputs
 from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
@@ -30,7 +30,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=EXAMPLE,
     )
     p.add_argument("dataset", help="evaluation dataset (.csv or .npz)")
-    p.add_argument("models", nargs="+", metavar="MODEL", help="model files written by 'ftcal fit'")
+    p.add_argument("models", nargs="+", metavar="MODEL", type=existing_file, help="model files written by 'ftcal fit'")
     p.add_argument(
         "--alpha", type=positive_float,
         help="torque scale Fmax/Tmax [1/m] for the RMSE (default: the dataset's meta 'alpha', else from its wrenches)",

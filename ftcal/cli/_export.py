@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..core._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file
 from ._models import model_label
 
@@ -41,12 +40,9 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}.onnx")
-    if same_file(output, args.model):
-        raise CliError(f"--output {output} is the model file itself; writing there would destroy it. "
-                       "Choose another --output")
+    plan = OutputPlan.single_file(output, args.force)  # first: never over an input, whatever its name
     if output.suffix.lower() != ".onnx":
         raise CliError(f"--output {output} should end in .onnx (the file is an ONNX model)")
-    plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     with plan.writing(output.name) as tmp:
         ftcal.export_onnx(model, tmp, overwrite=True)

@@ -7,10 +7,12 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from ..io._dataset import CalibrationDataset
 from ..core._wrench import alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
-from ._common import CliError
+from ._common import CliError, path_problem
 
 __all__ = [
     "MODEL_SUFFIX",
@@ -22,6 +24,7 @@ __all__ = [
     "parse_param",
     "dataset_alpha",
     "evaluation_alpha",
+    "check_fold_count",
 ]
 
 def model_label(path: Path) -> str:
@@ -40,21 +43,53 @@ def load_model_file(path: str | Path):
 def model_inputs(model, dataset: CalibrationDataset):
     """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
     temperature-compensated model (one input more than the dataset has channels)."""
+    from ._readings import takes_temperature
+
     n = int(model.n_features_in_)
-    if n == dataset.n_channels:
+    temperature = takes_temperature(model)
+    if n == dataset.n_channels and not temperature:
         return dataset.raw
-    if n == dataset.n_channels + 1 and dataset.temperature is not None:
+    if temperature and n == dataset.n_channels + 1 and dataset.temperature is not None:
         return dataset.features(temperature=True)
-    extra = " and a temperature column" if n == dataset.n_channels + 1 else ""
-    raise CliError(f"the model takes {n} inputs but the dataset has {dataset.n_channels} raw channels{extra}")
+    wants = f"{n - 1} raw channels and a temperature column" if temperature else f"{n} raw channels"
+    has = f"{dataset.n_channels} raw channels" + (" and no temperature column" if temperature and
+                                                  dataset.temperature is None else "")
+    raise CliError(f"the model takes {wants} but the dataset has {has}; use the dataset the model was made for")
 
 
 def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
     """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz``; ``role`` names it in errors."""
     path = Path(path)
-    if not path.is_file():
-        raise CliError(f"{path}: no such {role} file")
-    return CalibrationDataset.load(path)
+    problem = path_problem(path)
+    if problem is not None:
+        raise CliError(f"{problem} (the {role})")
+    from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
+
+    dataset = CalibrationDataset.load(path)
+    for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
+        big = np.abs(array) > MAX_TRAINING_MAGNITUDE
+        if big.any():
+            row, col = (int(v) for v in np.argwhere(big)[0])
+            raise CliError(f"{path}: {data_row_location(path, row)}: a {name} of {array[row, col]:.6g} (column "
+                           f"{col}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
+                           "overflow; check the units and that line")
+    return dataset
+
+
+def data_row_location(path: str | Path, row: int) -> str:
+    """``"line N"`` of data row ``row`` (from 0) of a CSV file (comments, the header and blank lines skipped), or
+    ``"row N"`` of an ``.npz``."""
+    path = Path(path)
+    if path.suffix != ".csv":
+        return f"row {row}"
+    seen = -2  # the header line comes first
+    with open(path, encoding="utf-8-sig") as fh:
+        for line_no, line in enumerate(fh, start=1):
+            if line.strip() and not line.lstrip().startswith("#"):
+                seen += 1
+                if seen == row:
+                    return f"line {line_no}"
+    return f"row {row}"
 
 
 def parse_param(text: str) -> tuple[str, Any]:
@@ -96,3 +131,11 @@ def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:
     """Torque scale for metrics: ``--alpha``, else the dataset's ``meta['alpha']``, else from its wrenches."""
     value = dataset_alpha(dataset, alpha)
     return alpha_from_wrenches(dataset.wrench) if value is None else value
+
+
+def check_fold_count(dataset: CalibrationDataset, cv: int, path) -> None:
+    """Refuse ``--cv`` folds a dataset cannot fill (one sample per fold at least), before scikit-learn does in its
+    own terms (``n_splits``)."""
+    if dataset.n_samples < cv:
+        raise CliError(f"{path} has {dataset.n_samples} sample(s), fewer than the {cv} folds of --cv; record more "
+                       "load cases or lower --cv (each fold also needs enough samples left to fit on)")

@@ -9,9 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from ..core._files import same_file
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_int, int_in_range
-from ._readings import iter_reading_chunks, read_readings_npz, write_wrench_rows
+from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
+from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -54,22 +53,22 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
-    if args.input != "-" and not Path(args.input).is_file():
-        raise FileNotFoundError(2, "No such file (the raw readings to predict)", args.input)
-    if args.output != "-":
-        for role, other in (("input", args.input), ("model", args.model)):
-            if other != "-" and same_file(args.output, other):
-                raise CliError(f"--output {args.output} is the {role} file; writing there would destroy it. "
-                               "Choose another --output")
+    problem = None if args.input == "-" else path_problem(args.input, streams=True)
+    if problem is not None:
+        raise CliError(f"{problem} (the raw readings to predict)")
     model = load_model_file(args.model)
     n_channels = int(model.n_features_in_)
+    temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
 
     def emit(out) -> int:
         header = not args.no_header
         total = 0
-        for raw in raw_chunks(args.input, n_channels, chunk):
-            wrench = np.asarray(model.predict(raw), dtype=float)
+        for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature):
+            try:
+                wrench = np.asarray(model.predict(raw), dtype=float)
+            except ValueError as exc:  # name the input's line, not the row inside a chunk
+                raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
             write_wrench_rows(out, wrench, header)
             header = False
             total += len(wrench)
@@ -89,15 +88,20 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def raw_chunks(source: str, n_channels: int, chunk: int):
+def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False):
+    """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
+    rows of a ``.npz`` are numbered from 0)."""
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
-        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk)
+        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, with_lines=with_lines,
+                                       temperature=temperature)
     elif source.endswith(".npz"):
         raw = read_readings_npz(source, n_channels)
         for start in range(0, len(raw), chunk):
-            yield raw[start:start + chunk]
+            yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
+                else raw[start:start + chunk]
     else:
         with open(source, encoding="utf-8") as fh:
-            yield from iter_reading_chunks(fh, source, n_channels, chunk)
+            yield from iter_reading_chunks(fh, source, n_channels, chunk, with_lines=with_lines,
+                                           temperature=temperature)

@@ -14,6 +14,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     positive_float,
+    path_problem,
     positive_int,
     write_json,
 )
@@ -57,10 +58,10 @@ def log_files(items: list[str]) -> list[Path]:
             if not found:
                 raise CliError(f"{path}: directory holds no *.csv run logs")
             files += found
-        elif path.is_file():
+        elif path_problem(path) is None:
             files.append(path)
         else:
-            raise CliError(f"{path}: no such log file or directory")
+            raise CliError(f"{path_problem(path)} (a run log, or a directory of *.csv run logs)")
     return list(dict.fromkeys(files))
 
 

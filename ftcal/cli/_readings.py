@@ -29,7 +29,7 @@ from ..core._wrench import WRENCH_LABELS
 from ..core._columns import is_number, parse_number, read_header
 from ._common import CliError
 
-__all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows"]
+__all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows", "takes_temperature", "located_error"]
 
 
 def _split(line: str) -> list[str]:
@@ -48,7 +48,8 @@ def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int
 
 
 def iter_reading_chunks(
-    stream: IO[str], source: str, n_channels: int, chunk_size: int
+    stream: IO[str], source: str, n_channels: int, chunk_size: int, *, with_lines: bool = False,
+    temperature: bool = False,
 ) -> Iterator[NDArray[np.float64]]:
     """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows.
 
@@ -62,6 +63,11 @@ def iter_reading_chunks(
         The channel count the model expects; a row with another count is an error.
     chunk_size : int
         Rows per yielded array; 1 gives one answer per input line (live streams).
+    with_lines : bool
+        Yield ``(array, line_numbers)``: the line of the input each row came from (for messages).
+    temperature : bool
+        Whether the model's last input is the temperature [deg C] (a temperature-compensated model): the
+        messages then count ``n_channels - 1`` raw channels plus the temperature.
 
     Raises
     ------
@@ -69,11 +75,17 @@ def iter_reading_chunks(
         Naming the source and line of a value that is not a number, a row of
         the wrong width, or a NaN / inf.
     """
+    # a chunk is held as Python floats (~32 bytes each) before it becomes an array: bound its memory, whatever
+    # --chunk-size and the channel count (the answers do not depend on how rows are grouped)
+    chunk_size = max(1, min(chunk_size, _CHUNK_BYTES // (32 * max(n_channels, 1))))
     columns: list[int] | None = None
     width: int | None = None
     rows: list[list[float]] = []
+    lines: list[int] = []
     seen_data = False
-    for line_no, line in enumerate(stream, start=1):
+    n_raw = n_channels - 1 if temperature else n_channels
+    expected = f"{n_raw} raw channels and the temperature" if temperature else f"{n_raw} raw channels"
+    for line_no, line in enumerate(_bounded_lines(stream, source), start=1):
         text = line.lstrip("\ufeff").strip() if line_no == 1 else line.strip()
         if not text or text.startswith("#"):
             continue
@@ -91,36 +103,126 @@ def iter_reading_chunks(
         if columns is not None:
             values = [values[i] for i in columns]
         if len(values) != n_channels:
+            given = f"{len(values)} values" if columns is None else f"{len(values)} columns of s0..s{{N-1}}" + (
+                "[,temperature]" if temperature else "")
             raise CliError(
-                f"{source}: line {line_no}: {len(values)} raw channels but the model was fitted on {n_channels}"
+                f"{source}: line {line_no}: {given} but the model takes {expected} per line; check the file is "
+                "for this model"
             )
         if not all(np.isfinite(values)):
             raise CliError(f"{source}: line {line_no}: NaN or inf in the raw reading; repair or remove that line")
         rows.append(values)
+        lines.append(line_no)
         if len(rows) >= chunk_size:
-            yield np.asarray(rows, dtype=float)
-            rows = []
+            yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+            rows, lines = [], []
     if rows:
-        yield np.asarray(rows, dtype=float)
+        yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+
+
+#: Largest chunk of text readings held at once [bytes].
+_CHUNK_BYTES = 256 * 2**20
+#: Longest input line read [characters] (1000 channels of 25-character numbers take 26 000).
+MAX_LINE_CHARS = 1 << 20
+
+
+def _bounded_lines(stream: IO[str], source: str) -> Iterator[str]:
+    """The lines of ``stream``, refusing one longer than :data:`MAX_LINE_CHARS` (a binary file or a file without
+    line breaks would otherwise be read whole into memory); undecodable bytes are named with their line."""
+    line_no = 0
+    while True:
+        line_no += 1
+        try:
+            line = stream.readline(MAX_LINE_CHARS + 1)
+        except UnicodeDecodeError as exc:
+            raise CliError(f"{source}: around line {line_no}: not UTF-8 text ({exc.reason}); raw readings are "
+                           "a text file of numbers, or a .npz with array 'raw'") from None
+        if not line:
+            return
+        if len(line) > MAX_LINE_CHARS:
+            raise CliError(f"{source}: line {line_no} is longer than {MAX_LINE_CHARS} characters; raw readings are "
+                           "one reading per line (is it a binary file?)")
+        if "\0" in line:
+            raise CliError(f"{source}: line {line_no} holds a NUL byte: a binary file, not raw readings as text")
+        yield line
+
+
+def _npz_member_header(archive, member: str, path: str) -> tuple[tuple[int, ...], np.dtype]:
+    """Shape and dtype an ``.npy`` member of a zip declares, checked against its stored size and ftcal's memory
+    limit *before* anything is decompressed into an array."""
+    from ..core._memory import check_allocation
+
+    info = archive.getinfo(member)
+    with archive.open(member) as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+            shape, _, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
+                               else np.lib.format.read_array_header_2_0(fh))
+        except (ValueError, EOFError, SyntaxError) as exc:
+            raise CliError(f"{path}: array 'raw' is not a numpy array ({' '.join(str(exc).split())[:120]})") from None
+    n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+    check_allocation(n_bytes, f"{path}: array 'raw' of shape {shape}", "split the readings into smaller files")
+    if n_bytes > info.file_size:
+        raise CliError(f"{path}: array 'raw' declares shape {shape} ({n_bytes:.0f} bytes) but holds only "
+                       f"{info.file_size} bytes; the file is damaged or not written by numpy")
+    return shape, dtype
 
 
 def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
-    """The array ``raw`` of a ``.npz`` file, checked for shape and finiteness."""
+    """The array ``raw`` of a ``.npz`` file, checked for size (before reading), type, shape and finiteness."""
+    import zipfile
+
+    from ..core._memory import MemoryLimitError
+
     try:
-        with np.load(path, allow_pickle=False) as z:
-            if "raw" not in z.files:
-                raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(z.files)})")
-            raw = np.asarray(z["raw"], dtype=float)
-    except CliError:
+        with zipfile.ZipFile(path) as archive:
+            names = {n[:-4] if n.endswith(".npy") else n: n for n in archive.namelist()}
+            if "raw" not in names:
+                raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(names)}); save the readings "
+                               "with numpy.savez(path, raw=readings)")
+            _, dtype = _npz_member_header(archive, names["raw"], path)
+            if dtype.kind not in "iuf":
+                kind = "complex numbers" if dtype.kind == "c" else f"values of type {dtype}"
+                raise CliError(f"{path}: array 'raw' holds {kind}; raw readings are real numbers (float or int)")
+            with archive.open(names["raw"]) as fh:
+                raw = np.asarray(np.lib.format.read_array(fh, allow_pickle=False), dtype=float)
+    except (CliError, MemoryLimitError):
         raise
-    except (OSError, ValueError) as exc:
-        raise CliError(f"{path}: not a readable .npz file ({exc})") from exc
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        reason = "not a zip archive" if isinstance(exc, zipfile.BadZipFile) else " ".join(str(exc).split())[:120]
+        raise CliError(f"{path}: not a readable .npz file ({reason}); save the readings with "
+                       "numpy.savez(path, raw=readings)") from None
     if raw.ndim != 2 or raw.shape[1] != n_channels:
         raise CliError(f"{path}: array 'raw' has shape {raw.shape}; the model needs (n_samples, {n_channels})")
     bad = np.argwhere(~np.isfinite(raw))
     if bad.size:
         raise CliError(f"{path}: raw row {int(bad[0, 0])} holds NaN or inf; repair or remove that row")
     return raw
+
+
+def takes_temperature(model) -> bool:
+    """Whether the model's last input is the temperature [deg C] (a temperature-compensated model)."""
+    from ..calibrators._temperature_compensation import TemperatureCompensatedCalibrator
+
+    return isinstance(model, TemperatureCompensatedCalibrator)
+
+
+def located_error(exc: Exception, source: str, lines: NDArray) -> CliError:
+    """``exc`` of a model's ``predict`` on one chunk, with the chunk's ``row i`` turned into the input's line (or
+    the ``.npz`` row) it came from and the input named."""
+    import re
+
+    text = " ".join(str(exc).split())
+    found = re.search(r"\b(?:X )?row (\d+)\b", text)
+    unit = "row" if source.endswith(".npz") else "line"
+    if found and int(found.group(1)) < len(lines):
+        where = f"{unit} {int(lines[int(found.group(1))])}"
+        text = (text[:found.start()] + "the reading" + text[found.end():]).strip()
+    elif len(lines):
+        where = f"{unit}s {int(lines[0])}-{int(lines[-1])}"
+    else:
+        where = "no readings"
+    return CliError(f"{source}: {where}: {text}")
 
 
 def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], header: bool) -> None:

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._files import same_file
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_float
+from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
+from ..core._memory import check_allocation
 from ._models import MODEL_SUFFIX, model_label
 
 EXAMPLE = """\
@@ -18,9 +18,10 @@ examples:
 
 READINGS: raw readings taken now with nothing attached (the format of 'ftcal predict': one reading per
 line, optional s0..s{N-1} header, or a .npz with array 'raw'). The new model file holds the same
-calibration with the zero-load reading replaced by their mean; the old file is never replaced
-without --force. The readings must be quiet (each channel's spread at most --max-spread times the
-noise seen in training), else the run stops.
+calibration with the zero-load reading replaced by their mean; no input file is ever replaced, --force
+or not. The readings must be quiet (each channel's spread at most --max-spread times the noise seen in
+training, which counts as at least 1e-4 of the channel's training span) and lie near the training
+readings (within half their span beyond them), else the run stops.
 """
 
 
@@ -34,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
     p.add_argument("readings", help="zero-load raw readings: a text file, a .npz with array 'raw', or '-' (stdin)")
     p.add_argument("--output", metavar="FILE", help="new model file (default: MODEL with '-retared' before the suffix)")
-    p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists (even the model itself)")
+    p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists (never one of the inputs)")
     p.add_argument("--max-spread", type=positive_float, default=5.0,
                    help="largest per-channel std of the readings, in units of the training noise")
     add_run_options(p, seed=False)
@@ -47,14 +48,18 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
-    if same_file(output, args.model) and not args.force:
-        raise CliError(f"--output {output} is the model file itself; pass --force to replace it")
-    if args.readings != "-" and not Path(args.readings).is_file():
-        raise CliError(f"{args.readings}: no such readings file")
+    problem = None if args.readings == "-" else path_problem(args.readings, streams=True)
+    if problem is not None:
+        raise CliError(f"{problem} (the zero-load readings)")
     plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
-    chunks = list(raw_chunks(args.readings, n_channels, 4096))
+    chunks, n_bytes = [], 0.0
+    for chunk in raw_chunks(args.readings, n_channels, 4096):  # a stream of readings may be endless
+        n_bytes += chunk.nbytes
+        check_allocation(2 * n_bytes, f"the zero-load readings of {args.readings} ({n_bytes / chunk.itemsize / n_channels:.0f}"
+                         " so far)", "a few hundred readings are enough; pass fewer")
+        chunks.append(chunk)
     if not chunks:
         raise CliError(f"{args.readings}: no readings; record some zero-load readings first")
     readings = np.vstack(chunks)

@@ -7,7 +7,7 @@ import time
 
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
 from ._fit import calibrator_names
-from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
+from ._models import check_fold_count, dataset_alpha, load_dataset, model_file_name, parse_param
 
 EXAMPLE = """\
 examples:
@@ -79,6 +79,7 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
     space = parse_search_space(args.grid) if args.grid else None
     data = load_dataset(args.dataset, "training dataset")
+    check_fold_count(data, args.cv, args.dataset)
     if args.group_folds and data.group is None:
         raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
     groups = None if args.random_folds else data.group
@@ -86,11 +87,11 @@ def run(args: argparse.Namespace) -> int:
     alpha = dataset_alpha(data, args.alpha)
     if alpha is not None and "alpha" not in params:
         params["alpha"] = alpha
-    console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
     start = time.perf_counter()
     from ..core._scale_out import dask_backend
 
-    with dask_backend(args.scheduler):
+    with dask_backend(args.scheduler):  # a scheduler that cannot be used fails here, before any status line
+        console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
         search = search_calibrator(
             args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
             schedule=args.schedule, random_state=args.seed, n_jobs=-1 if args.scheduler else args.jobs, **params,

@@ -21,10 +21,10 @@ from collections.abc import Iterator
 
 from ._exceptions import FtcalError
 
-__all__ = ["dask_backend", "check_scheduler", "SchedulerError", "CONNECT_TIMEOUT_S"]
+__all__ = ["dask_backend", "check_scheduler", "probe_scheduler", "SchedulerError", "CONNECT_TIMEOUT_S"]
 
 #: Seconds to wait for a remote scheduler before giving up with a clear error.
-CONNECT_TIMEOUT_S = 10.0
+CONNECT_TIMEOUT_S = 5.0
 _ADDRESS = re.compile(r"(tcp|tls|inproc|ucx)://[^\s/]+(:\d+)?|[A-Za-z0-9_.\-]+:\d+")
 
 
@@ -43,6 +43,76 @@ def check_scheduler(scheduler: str) -> str:
     if scheduler != "local" and not _ADDRESS.fullmatch(scheduler):
         raise SchedulerError(f"--scheduler {scheduler!r} is not 'local' nor a scheduler address like tcp://host:8786.")
     return scheduler
+
+
+#: Largest first message a Dask scheduler sends (its handshake: a small dict) [bytes].
+_MAX_HANDSHAKE_BYTES = 1 << 20
+
+
+def _tcp_host_port(scheduler: str) -> tuple[str, int] | None:
+    """``(host, port)`` of a ``tcp://`` or ``host:port`` address; ``None`` for other protocols."""
+    rest = scheduler[len("tcp://"):] if scheduler.startswith("tcp://") else scheduler
+    if "://" in rest:
+        return None
+    host, sep, port = rest.rpartition(":")
+    if not sep or not port.isdigit():
+        return None
+    return host.strip("[]"), int(port)
+
+
+def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
+    """Check, within ``timeout_s``, that a Dask scheduler answers at a ``tcp://`` address; else
+    :class:`SchedulerError`.
+
+    A Dask scheduler speaks first: on a new connection it sends its handshake, an 8-byte length then a small
+    message. Anything else is refused before Dask's own client sees it: nothing listening, nothing said within
+    the deadline (a plain HTTP server waits for a request: Dask's client would wait for ever), or a first message
+    whose length is absurd (an HTTP answer read as a length made Dask try to allocate exabytes).
+    """
+    import socket
+    import struct
+    import time
+
+    target = _tcp_host_port(scheduler)
+    if target is None:  # tls://, inproc://, ucx://: Dask's own timeout applies
+        return
+    host, port = target
+    deadline = time.monotonic() + timeout_s
+    hint = "is a Dask scheduler (dask scheduler) running there, and is the address right?"
+    if not 0 < port < 65536:
+        raise SchedulerError(f"--scheduler {scheduler}: port {port} is not a TCP port (1-65535).")
+    try:
+        sock = socket.create_connection((host, port), timeout=timeout_s)
+    except socket.timeout:
+        raise SchedulerError(f"cannot reach the Dask scheduler at {scheduler} within {timeout_s:g} s; {hint}") from None
+    except OSError as exc:
+        raise SchedulerError(f"cannot reach the Dask scheduler at {scheduler} ({exc.strerror or exc}); {hint}") from None
+
+    def read_exactly(n: int) -> bytes:
+        data = b""
+        while len(data) < n:
+            sock.settimeout(max(deadline - time.monotonic(), 1e-3))
+            chunk = sock.recv(min(n - len(data), 65536))
+            if not chunk:
+                raise ConnectionResetError("the server closed the connection")
+            data += chunk
+        return data
+
+    with sock:
+        try:
+            (n_bytes,) = struct.unpack("<Q", read_exactly(8))
+            if not 0 < n_bytes <= _MAX_HANDSHAKE_BYTES:
+                raise SchedulerError(
+                    f"{scheduler} answered, but not as a Dask scheduler does (its first message announces "
+                    f"{n_bytes} bytes; is it a web server or another service?); {hint}")
+            read_exactly(n_bytes)
+        except socket.timeout:
+            raise SchedulerError(
+                f"{scheduler} accepted the connection but sent no Dask handshake within {timeout_s:g} s (a web "
+                f"server or another service?); {hint}") from None
+        except OSError as exc:
+            raise SchedulerError(
+                f"{scheduler} closed the connection before a Dask handshake ({exc.strerror or exc}); {hint}") from None
 
 
 @contextlib.contextmanager
@@ -84,12 +154,16 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
                                    dashboard_address=None)
             client = Client(cluster)
         else:
+            probe_scheduler(scheduler, timeout_s)
             client = Client(scheduler, timeout=timeout_s)
-    except (OSError, TimeoutError) as exc:
+    except SchedulerError:
+        raise
+    except Exception as exc:  # every failure of Dask's connection (OSError, TimeoutError, its own errors): one line
         if cluster is not None:
             cluster.close()
+        what = "start a local Dask cluster" if scheduler == "local" else f"connect to the Dask scheduler at {scheduler}"
         raise SchedulerError(
-            f"cannot reach the Dask scheduler at {scheduler} within {timeout_s:g} s ({type(exc).__name__}); "
+            f"cannot {what} within {timeout_s:g} s ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}); "
             "is it running, and is the address right?"
         ) from None
     try:

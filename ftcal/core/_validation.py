@@ -23,6 +23,7 @@ __all__ = [
     "min_training_samples",
     "check_identifiable",
     "check_finite_output",
+    "check_magnitude",
 ]
 
 
@@ -45,6 +46,31 @@ def check_all_finite(a: NDArray[np.float64], name: str, fix: str) -> None:
         value = a[tuple(where)]
         raise CalibrationInputError(
             f"{name} contains NaN or inf: first at row {row}, column {col} (value {value}). Fix: {fix}."
+        )
+
+
+#: Largest magnitude of a training value: the least-squares fits square and sum values, which overflows float64
+#: (~1.8e308) from ~1e154 on; no sensor reading or wrench in any unit comes near.
+MAX_TRAINING_MAGNITUDE = 1e100
+
+
+def check_magnitude(a: NDArray[np.float64], name: str) -> None:
+    """Raise when a value of ``a`` exceeds :data:`MAX_TRAINING_MAGNITUDE` (a unit or parsing error, not data).
+
+    Examples
+    --------
+    >>> check_magnitude(np.array([[1.0, 2e200]]), "X")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: X holds 2e+200 at row 0, column 1, beyond the 1e+100 ftcal's fits can square without overflow. Fix: check the units and the file (a parsing error?).
+    """
+    big = np.abs(a) > MAX_TRAINING_MAGNITUDE
+    if big.any():
+        where = np.argwhere(big)[0]
+        row, col = int(where[0]), int(where[1]) if where.size > 1 else 0
+        raise CalibrationInputError(
+            f"{name} holds {a[tuple(where)]:.6g} at row {row}, column {col}, beyond the {MAX_TRAINING_MAGNITUDE:g} "
+            "ftcal's fits can square without overflow. Fix: check the units and the file (a parsing error?)."
         )
 
 
@@ -167,6 +193,8 @@ def validate_training_data(
     y = check_array(y, ensure_2d=False, dtype=np.float64, ensure_all_finite=False, input_name="y")
     check_consistent_length(X, y)
     check_all_finite(y, "y (reference wrenches)", "remove or repair the rows with missing reference wrenches")
+    for a, name in ((X, "X (raw readings)"), (y, "y (reference wrenches)")):
+        check_magnitude(a, name)
     n, n_channels = X.shape
     need = min_training_samples(n_channels)
     if n < need:

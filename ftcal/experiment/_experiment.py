@@ -237,6 +237,13 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
                                  "record that pose without the load, or remove it.")
         partners.append(partner)
     loads = [samples[k] for k in load_keys]
+    with_temperature = [s[3] is not None for s in loads]
+    if any(with_temperature) and not all(with_temperature):  # never drop the temperature of the others silently
+        has, lacks = loads[with_temperature.index(True)][2], loads[with_temperature.index(False)][2]
+        raise LogFormatError(
+            f"{lacks}: this load row has no temperature but {has} has a temperature column; the dataset's "
+            "temperature [deg C] needs it for every load row. Record it in every log, or remove the temperature "
+            "column from all of them.")
     no_loads = [samples[k] for k in partners]
     load_set = {(c, p) for _, c, p in load_keys}
     no_load: dict[int, tuple[list, list]] = defaultdict(lambda: ([], []))

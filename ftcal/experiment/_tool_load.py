@@ -40,10 +40,13 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 
-__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY"]
+__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE"]
 
 #: Gravity in the base frame [m/s²] (z up).
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
+#: Largest entry of ``RᵀR - I`` accepted as rounding of a rotation matrix (a 3-decimal log gives ~1e-3); the
+#: matrix is then projected onto the nearest rotation.
+ROTATION_TOLERANCE = 5e-3
 #: The gravity directions (sensor frame) must vary by at least this much in two independent directions [deg].
 MIN_TILT_DEG = 10.0
 
@@ -64,13 +67,7 @@ def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None
         )
     if not np.isfinite(R).all():
         raise CalibrationInputError("sensor_rotations holds NaN or inf.")
-    orthonormal = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2))
-    if orthonormal.max() > 1e-6:
-        i = int(np.argmax(orthonormal))
-        raise CalibrationInputError(
-            f"sensor_rotations[{i}] is not a rotation matrix (RᵀR differs from the identity by "
-            f"{orthonormal[i]:.2g}); pass rotations, e.g. the upper-left 3x3 of the sensor poses."
-        )
+    R = _nearest_rotations(R)
     if wrenches is None:
         return R, None
     W = np.asarray(wrenches, dtype=float)
@@ -84,11 +81,40 @@ def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None
     return R, W
 
 
+def _nearest_rotations(R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The nearest proper rotations (SVD projection onto SO(3)) of matrices that are rotations up to
+    :data:`ROTATION_TOLERANCE` (rounding in a log file); a mirror (det = -1) or a matrix further off is refused."""
+    orthonormal = np.abs(np.einsum("nji,njk->nik", R, R) - np.eye(3)).max(axis=(1, 2))
+    if orthonormal.max() > ROTATION_TOLERANCE:
+        i = int(np.argmax(orthonormal))
+        raise CalibrationInputError(
+            f"sensor_rotations[{i}] is not a rotation matrix (RᵀR differs from the identity by "
+            f"{orthonormal[i]:.2g}, more than {ROTATION_TOLERANCE:g}); pass rotations, e.g. the upper-left 3x3 of "
+            "the sensor poses."
+        )
+    det = np.linalg.det(R)
+    if (det < 0).any():
+        i = int(np.argmax(det < 0))
+        raise CalibrationInputError(
+            f"sensor_rotations[{i}] is a reflection (determinant {det[i]:.3g}), not a rotation: a mirrored frame "
+            "(one axis flipped) would give a wrong mass and centre of mass. Check the handedness of the frames."
+        )
+    U, _, Vt = np.linalg.svd(R)
+    return U @ Vt
+
+
 def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np.float64]:
     g = np.asarray(gravity, dtype=float)
     if g.shape != (3,) or not np.isfinite(g).all() or np.linalg.norm(g) == 0:
         raise CalibrationInputError(f"gravity must be a finite non-zero 3-vector in [m/s²]; got {gravity!r}.")
     return np.einsum("nji,j->ni", R, g)  # Rᵀ g per pose
+
+
+#: The tool file's key of each ToolLoad field.
+_FILE_KEYS = {"mass_std_error": "mass_std_error_kg", "mass": "mass_kg",
+              "center_of_mass_std_error": "center_of_mass_std_error_m", "center_of_mass": "center_of_mass_m",
+              "bias_std_error": "bias_std_error", "bias": "bias", "gravity": "gravity_m_s2",
+              "residual_rms": "residual_rms"}
 
 
 @dataclass(frozen=True)
@@ -119,6 +145,32 @@ class ToolLoad:
     bias_std_error: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
     gravity: NDArray[np.float64] = field(default_factory=lambda: np.asarray(DEFAULT_GRAVITY))
     residual_rms: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+
+    def __post_init__(self) -> None:
+        """Check every field: finite values of the right shapes, a mass and standard errors >= 0, a gravity."""
+        def array(name: str, shape: tuple[int, ...], nonnegative: bool = False) -> None:
+            value = getattr(self, name)
+            try:
+                a = np.array(value, dtype=float)
+            except (TypeError, ValueError):
+                raise CalibrationInputError(f"ToolLoad {name} must be numbers; got {value!r}.") from None
+            if a.shape != shape or not np.isfinite(a).all() or (nonnegative and (a < 0).any()):
+                need = "finite number" if shape == () else f"{shape[0]} finite numbers"
+                raise CalibrationInputError(
+                    f"ToolLoad {name} must be {'a ' if shape == () else ''}{need}{' >= 0' if nonnegative else ''}; "
+                    f"got {value!r}.")
+            object.__setattr__(self, name, float(a) if shape == () else a)
+
+        array("mass", (), nonnegative=True)
+        array("center_of_mass", (3,))
+        array("bias", (6,))
+        array("mass_std_error", (), nonnegative=True)
+        array("center_of_mass_std_error", (3,), nonnegative=True)
+        array("bias_std_error", (6,), nonnegative=True)
+        array("gravity", (3,))
+        array("residual_rms", (2,), nonnegative=True)
+        if not np.linalg.norm(self.gravity) > 0:
+            raise CalibrationInputError(f"ToolLoad gravity must be a non-zero vector in [m/s²]; got {self.gravity!r}.")
 
     def gravity_wrench(self, sensor_rotations: ArrayLike) -> NDArray[np.float64]:
         """The wrench [N, N·m] the tool's weight plus the bias produce at each pose (n, 6), sensor frame."""
@@ -182,15 +234,15 @@ class ToolLoad:
                 gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
                 residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
             )
-        except (KeyError, TypeError, ValueError) as exc:
-            raise CalibrationInputError(f"{path}: the tool file is incomplete ({exc!r}).") from None
-        shapes = {"center_of_mass_m": (tool.center_of_mass, (3,)), "bias": (tool.bias, (6,)),
-                  "gravity_m_s2": (tool.gravity, (3,))}
-        for key, (value, shape) in shapes.items():
-            if value.shape != shape or not np.isfinite(value).all():
-                raise CalibrationInputError(f"{path}: {key} must be {shape[0]} finite numbers; got {value.tolist()}.")
-        if not (np.isfinite(tool.mass) and tool.mass >= 0):
-            raise CalibrationInputError(f"{path}: mass_kg must be a finite mass >= 0; got {tool.mass!r}.")
+        except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
+            text = str(exc)
+            for field_name, key in _FILE_KEYS.items():
+                text = text.replace(f"ToolLoad {field_name} ", f"{key} ", 1)
+            raise CalibrationInputError(f"{path}: {text}") from None
+        except KeyError as exc:
+            raise CalibrationInputError(f"{path}: the tool file lacks {exc}; write it with 'ftcal identify-load'.") from None
+        except (TypeError, ValueError) as exc:
+            raise CalibrationInputError(f"{path}: the tool file holds a value that is not a number ({exc}).") from None
         return tool
 
 

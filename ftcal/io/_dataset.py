@@ -17,6 +17,8 @@ NumPy archive (``.npz``)
 from __future__ import annotations
 
 import json
+import re
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -54,6 +56,10 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
     if g.shape != (n_rows,):
         raise DatasetFileError(f"group must have shape ({n_rows},), one label per row; got shape {g.shape}.")
     if g.dtype.kind in "iu":
+        if g.dtype.kind == "u" and g.size and g.max() > np.iinfo(np.int64).max:  # would wrap to negative labels
+            i = int(np.argmax(g > np.iinfo(np.int64).max))
+            raise DatasetFileError(f"group row {i} holds {int(g[i])}, beyond the 64-bit integer labels ftcal stores. "
+                                   "Fix: number the groups 0, 1, 2, ...")
         return g.astype(np.int64)
     if g.dtype.kind == "b" or g.dtype.kind not in "f":
         raise DatasetFileError(
@@ -66,6 +72,23 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
             f"group must hold integer labels; row {i} holds {float(g[i])!r}. Fix: number the groups 0, 1, 2, ..."
         )
     return g.astype(np.int64)
+
+
+def _exact_group_column(body_lines: list[str], column: int, first_line: int, path) -> NDArray:
+    """The ``group`` column of CSV data lines as exact int64 labels (float64 merges labels above 2^53 and turns
+    those above 2^63 into -2^63); a label that is no integer is left to :func:`_integer_labels`."""
+    texts = [(first_line + k, line.split(",")[column].strip()) for k, line in enumerate(body_lines)
+             if line.strip() and not line.lstrip().startswith("#")]
+    if not all(_INTEGER.fullmatch(t) for _, t in texts):
+        return np.array([float(t) for _, t in texts])
+    for line_no, text in texts:
+        if not -(2**63) <= int(text) < 2**63:
+            raise DatasetFileError(f"{path}: line {line_no}: group {text} is beyond the 64-bit integer labels ftcal "
+                                   "stores. Fix: number the groups 0, 1, 2, ...")
+    return np.array([int(t) for _, t in texts], dtype=np.int64)
+
+
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass
@@ -187,9 +210,9 @@ class CalibrationDataset:
                 cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
                 data = np.hstack([self.raw, self.wrench])
                 fmt = ["%.10g"] * data.shape[1]
-                if self.group is not None:
+                if self.group is not None:  # exact integer labels: object columns, never through float64
                     cols.append("group")
-                    data = np.hstack([data, self.group[:, None].astype(float)])
+                    data = np.hstack([data.astype(object), self.group[:, None].astype(object)])
                     fmt.append("%d")
                 if self.temperature is not None:
                     cols.append("temperature")
@@ -257,10 +280,17 @@ class CalibrationDataset:
         )
         body_lines = lines[n_comment + 1:]
         check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)
+        width = len(header.names)
+        for offset, line in enumerate(body_lines):  # numpy's own message counts data rows, not the file's lines
+            if line.strip() and not line.lstrip().startswith("#") and line.count(",") + 1 != width:
+                raise DatasetFileError(f"{path}: line {n_comment + 2 + offset}: {line.count(',') + 1} values but the "
+                                       f"header names {width} columns; repair or remove that line.")
         try:
-            data = np.loadtxt(body_lines, delimiter=",", ndmin=2)
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")  # "input contained no data": reported below, in one line
+                data = np.loadtxt(body_lines, delimiter=",", ndmin=2, comments="#")
         except ValueError as exc:
-            raise DatasetFileError(f"{path}: unreadable number ({exc}).") from None
+            raise DatasetFileError(f"{path}: unreadable number ({' '.join(str(exc).split())[:100]}).") from None
         if data.shape[0] == 0:
             raise DatasetFileError(f"{path}: no data rows after the header.")
         if data.shape[1] != len(header.names):
@@ -269,7 +299,8 @@ class CalibrationDataset:
             )
         raw = data[:, header.numbered("s")]
         wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
-        group = data[:, header.index["group"]] if "group" in header else None
+        group = _exact_group_column(body_lines, header.index["group"], n_comment + 2, path) if "group" in header \
+            else None
         temperature = data[:, header.index["temperature"]] if "temperature" in header else None
         try:
             ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)

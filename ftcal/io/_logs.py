@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import csv
 import json
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -51,6 +52,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
+from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
@@ -65,6 +67,10 @@ _JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
 _FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
 # Joint values beyond this magnitude in a file that says "rad" are almost surely degrees.
 _MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
+#: Memory of a log read into Python strings, per byte of the file (the text, its lines, the rows' fields).
+_TEXT_MEMORY_FACTOR = 8
+#: An integer as written (config and pose ids are read exactly, not through float64).
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass
@@ -175,10 +181,15 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     path = Path(path)
     if not path.is_file():
         raise LogFormatError(f"{path}: no such log file.")
+    # the text, its lines and each row's fields as Python strings take several times the file's size
+    check_allocation(_TEXT_MEMORY_FACTOR * path.stat().st_size, f"reading the run log {path}",
+                     "split the log into several files (one per run or configuration)")
     try:
         text_lines = path.read_text(encoding="utf-8-sig").splitlines()
     except UnicodeDecodeError as exc:
-        raise LogFormatError(f"{path}: not a UTF-8 text file ({exc}).") from exc
+        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a run log is a CSV text file.") \
+            from None
     info, n_comment = _parse_comments(path, text_lines)
     head_line = n_comment + 1
     if n_comment >= len(text_lines) or not text_lines[n_comment].strip():
@@ -229,10 +240,19 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         return value
 
     def integer(lineno: int, fields: list[str], name: str) -> int:
-        value = number(lineno, fields, name)
-        if value != int(value):
-            raise LogFormatError(f"{path}: line {lineno}: column {name} must be an integer; got {value!r}.")
-        return int(value)
+        # parsed exactly (never through float64, which merges 100000000000000001 with ...000), and within int64
+        text = fields[col[name]].strip()
+        if _INTEGER.fullmatch(text):
+            value = int(text)
+        else:
+            number_value = number(lineno, fields, name)
+            if number_value != int(number_value) or abs(number_value) > 2**53:
+                raise LogFormatError(f"{path}: line {lineno}: column {name} must be an integer; got {text!r}.")
+            value = int(number_value)
+        if not -(2**63) <= value < 2**63:
+            raise LogFormatError(f"{path}: line {lineno}: column {name} is {text}, beyond the 64-bit integers "
+                                 "ftcal stores; number the configurations and poses 0, 1, 2, ...")
+        return value
 
     n = len(rows)
     ts, kind = np.empty(n), np.empty(n, dtype=object)

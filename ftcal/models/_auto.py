@@ -295,6 +295,7 @@ class AutoCalibrator(BaseCalibrator):
         best_zero = getattr(self.best_estimator_, "zero_reading_", None)
         self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
         self.reading_noise_ = reading_noise(X, y)
+        self.reading_range_ = np.vstack([X.min(axis=0), X.max(axis=0)])
         self.__dict__.pop("tare_reading_", None)
         return self
 
