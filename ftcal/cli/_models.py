@@ -49,12 +49,13 @@ def model_inputs(model, dataset: CalibrationDataset):
     raise CliError(f"the model takes {n} inputs but the dataset has {dataset.n_channels} raw channels{extra}")
 
 
-def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
-    """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz``; ``role`` names it in errors."""
+def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> CalibrationDataset:
+    """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz`` / ``.mat``; ``role`` names it in errors;
+    ``columns`` (a :class:`~ftcal.io.ColumnMap`) maps other layouts and units."""
     path = Path(path)
     if not path.is_file():
         raise CliError(f"{path}: no such {role} file")
-    return CalibrationDataset.load(path)
+    return CalibrationDataset.load(path, columns=columns)
 
 
 def parse_param(text: str) -> tuple[str, Any]:
