@@ -180,3 +180,29 @@ def test_predict_flags_readings_beyond_the_calibrated_range(linear_model, capsys
     assert lines[0] == "Fx,Fy,Fz,Tx,Ty,Tz,out_of_range"
     assert [line.rsplit(",", 1)[1] for line in lines[1:]] == ["0", "0", "0", "1"]
     assert "1 of 4 readings lie beyond the calibrated range" in err
+
+
+def test_tool_export_as_ros_gravity_compensation_yaml(tmp_path, capsys):
+    """The YAML's ROS 2 filter parameters reproduce the tool's gravity wrench at any pose (the filter's formula:
+    f_sensor = R^T CoG.force, t_sensor = CoG.pos x f_sensor), and the ROS 1 keys carry mass, centre and bias."""
+    import yaml
+    from scipy.spatial.transform import Rotation
+
+    from ftcal import ToolLoad
+
+    tool = ToolLoad(mass=1.7, center_of_mass=np.array([0.01, -0.02, 0.08]), bias=np.arange(6) * 0.1)
+    tool.save(tmp_path / "grip.tool.json")
+    assert main(["export", str(tmp_path / "grip.tool.json"), "--format", "ros", "--sensor-frame", "my_ft", "-q"]) == 0
+    doc = yaml.safe_load((tmp_path / "grip.ros.yaml").read_text())
+    assert doc["gripper_mass"] == 1.7 and doc["gripper_com_frame_id"] == "my_ft"
+    assert doc["bias"] == pytest.approx(list(np.arange(6) * 0.1))
+    assert doc["gripper_com_pose"] == pytest.approx([0.01, -0.02, 0.08, 0, 0, 0])
+    params = doc["gravity_compensation"]["ros__parameters"]
+    assert params["sensor_frame"] == "my_ft"
+    R = Rotation.random(5, random_state=0).as_matrix()  # sensor orientations in the world frame
+    f = np.einsum("nji,j->ni", R, params["CoG"]["force"])
+    t = np.cross(params["CoG"]["pos"], f)
+    np.testing.assert_allclose(np.hstack([f, t]), tool.gravity_wrench(R) - tool.bias, atol=1e-12)
+    err = one_line_error(capsys, main(["export", str(tmp_path / "grip.tool.json"), "--format", "ros", "--output",
+                                       str(tmp_path / "x.json")]))
+    assert ".yaml" in err
