@@ -21,7 +21,7 @@ def simulate_logs(args: argparse.Namespace) -> int:
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
     kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
     console.info(f"planning the pose sphere of {robot.name} ...")
     plan = ftcal.plan_calibration_poses(robot, **kwargs)
