@@ -130,6 +130,7 @@ def test_recorded_logs_blocks_run_as_written(tmp_path):
                  "-q"]) == 0
     assert main(["prepare", str(tmp_path / "logs2"), "--out", str(tmp_path / "check"), "-q"]) == 0
     blocks = shell_blocks()["Calibrating a real sensor from recorded logs"]
+    blocks = [b for b in blocks if "--fixture" not in b]
     assert len(blocks) == 2
     env = _shim(tmp_path)
     done = run_block(blocks[0], tmp_path, env)
@@ -177,3 +178,14 @@ def test_tool_and_temperature_block_runs_as_written(tmp_path):
     assert (tmp_path / "tool" / "tool.tool.json").is_file()
     assert (tmp_path / "models" / "linear-retared.model.npz").is_file()
     assert (tmp_path / "models" / "linear-thermal.model.npz").is_file()
+    assert "gripper_mass:" in (tmp_path / "tool" / "gravity_compensation.yaml").read_text()
+
+
+def test_fixture_and_mounting_block_runs_as_written(tmp_path):
+    (block,) = [b for b in shell_blocks()["Calibrating a real sensor from recorded logs"] if "--fixture" in b]
+    (tmp_path / "my_fixture.csv").write_text("id,name,mass_kg,com_x_m,com_y_m,com_z_m\n0,plate,1.5,0.1,0,0.05\n"
+                                             "1,arm,3.0,0,0.15,0.05\n")
+    done = run_block(block, tmp_path, _shim(tmp_path))
+    assert "fixture: my_fixture.csv (2 load configurations" in done.stderr
+    facts = json.loads((tmp_path / "my_data" / "prepare.json").read_text())
+    assert facts["samples_per_configuration"].keys() == {"0", "1"} and facts["sensor_frame"] == "ftcal_mounted_sensor"
