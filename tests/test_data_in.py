@@ -206,3 +206,18 @@ def test_tool_export_as_ros_gravity_compensation_yaml(tmp_path, capsys):
     err = one_line_error(capsys, main(["export", str(tmp_path / "grip.tool.json"), "--format", "ros", "--output",
                                        str(tmp_path / "x.json")]))
     assert ".yaml" in err
+
+
+def test_evaluate_warns_when_given_the_training_file(linear_model, capsys):
+    """The README's old evaluation step printed training errors without a word."""
+    work, _ = linear_model
+    capsys.readouterr()
+    assert main(["evaluate", str(work / "d.csv"), str(work / "m" / "linear.model.npz"), "--no-plots", "--out",
+                 str(work / "e1")]) == 0
+    err = capsys.readouterr().err
+    assert "is the training data of linear" in err and "ftcal report" in err
+    assert json.loads((work / "e1" / "metrics.json").read_text())["models"]["linear"]["training_data"] is True
+    sensor_dataset(seed=0).subset(slice(0, 80)).save(work / "held_out.csv")  # other rows: another file, no warning
+    assert main(["evaluate", str(work / "held_out.csv"), str(work / "m" / "linear.model.npz"), "--no-plots", "--out",
+                 str(work / "e2")]) == 0
+    assert "training data" not in capsys.readouterr().err

@@ -40,13 +40,9 @@ def load_model_file(path: str | Path):
 def model_inputs(model, dataset: CalibrationDataset):
     """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
     temperature-compensated model (one input more than the dataset has channels)."""
-    n = int(model.n_features_in_)
-    if n == dataset.n_channels:
-        return dataset.raw
-    if n == dataset.n_channels + 1 and dataset.temperature is not None:
-        return dataset.features(temperature=True)
-    extra = " and a temperature column" if n == dataset.n_channels + 1 else ""
-    raise CliError(f"the model takes {n} inputs but the dataset has {dataset.n_channels} raw channels{extra}")
+    from ..evaluation._calibration_report import model_inputs as library_model_inputs
+
+    return library_model_inputs(model, dataset)
 
 
 def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> CalibrationDataset:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
+from ._common import Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
 from ._data_options import add_dataset_options, load_dataset_from_args
 
 EXAMPLE = """\
@@ -75,16 +75,13 @@ def write_report(plan: OutputPlan, label: str, model, data, args: argparse.Names
 
 
 def run(args: argparse.Namespace) -> int:
-    from ._models import load_model_file, model_label
+    from ._models import load_model_file, model_inputs, model_label
 
     console = Console(args.quiet)
     label = model_label(args.model)
     plan = OutputPlan(args.out, report_file_names(label), args.force)
     model = load_model_file(args.model)
     data = load_dataset_from_args(args, args.dataset, "calibration dataset")
-    n = int(model.n_features_in_)
-    if n not in (data.n_channels, data.n_channels + 1) or (n == data.n_channels + 1 and data.temperature is None):
-        raise CliError(f"{args.model} takes {n} inputs but {args.dataset} has {data.n_channels} raw channels; a report "
-                       "needs the data this model was calibrated on (same sensor, same channel order)")
+    model_inputs(model, data)  # a dataset of another sensor is refused before the cross-validation starts
     write_report(plan, label, model, data, args, args.model, args.dataset, console)
     return 0

@@ -44,7 +44,7 @@ from ..core._model_selection import calibration_folds
 from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS, alpha_from_wrenches, scale_torques
 from ..io._dataset import CalibrationDataset
 
-__all__ = ["calibration_certificate", "render_report_html", "write_calibration_report", "report_json", "file_sha256",
+__all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json", "file_sha256",
            "COVERAGE_FACTOR"]
 
 #: k of the expanded uncertainty U = k u (about 95 % for normal errors).
@@ -61,7 +61,9 @@ def file_sha256(path: str | Path) -> str:
     return digest.hexdigest()
 
 
-def _model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
+def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
+    """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
+    temperature-compensated model; a dataset of another sensor (other channel count) is refused."""
     n = int(getattr(model, "n_features_in_", data.n_channels))
     if n == data.n_channels:
         return data.raw
@@ -217,7 +219,7 @@ def calibration_certificate(
     import ftcal
     from ..models._baselines import stock_baselines
 
-    X = _model_inputs(model, dataset)
+    X = model_inputs(model, dataset)
     y = dataset.wrench
     groups = dataset.group
     if groups is not None and np.unique(groups).size < 2:
