@@ -222,3 +222,13 @@ def test_evaluate_warns_when_given_the_training_file(linear_model, capsys):
     assert main(["evaluate", str(work / "held_out.csv"), str(work / "m" / "linear.model.npz"), "--no-plots", "--out",
                  str(work / "e2")]) == 0
     assert "training data" not in capsys.readouterr().err
+
+
+def test_an_implausibly_short_lever_arm_is_only_pointed_out(tmp_path, capsys):
+    """A 3-axis cell's torque columns may hold noise only: a warning, not a refusal."""
+    data = sensor_dataset()
+    data.wrench[:, 3:] *= 1e-5  # arm ~ 2e-7 m
+    data.save(tmp_path / "cell.csv")
+    assert main(["fit", str(tmp_path / "cell.csv"), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "ftcal: warning:" in err and "lever arm" in err

@@ -2,7 +2,8 @@
 
 ``ftcal fit``, ``evaluate`` and ``report`` take ``--channels``, ``--wrench``, ``--force-unit`` and
 ``--torque-unit``; a dataset whose loads' lever arm is implausible (torques in N·mm read as N·m) is
-refused with the likely unit and the option that fixes it, unless the torque unit was declared.
+refused with the likely unit and the option that fixes it, unless the unit was declared (an implausibly short
+arm is only warned about: a 3-axis cell's torque columns may hold noise alone).
 """
 
 from __future__ import annotations
@@ -42,7 +43,7 @@ def add_dataset_options(p: argparse.ArgumentParser) -> None:
 
 def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"):
     """The dataset at ``path`` read as the options say, its units checked by the loads' lever arm."""
-    from ..io._readers import ColumnMap, lever_arm_problem
+    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, ColumnMap, lever_arm_m, lever_arm_problem
     from ._models import load_dataset
 
     columns = ColumnMap(channels=args.channels, wrench=args.wrench, force_unit=args.force_unit or "N",
@@ -50,7 +51,10 @@ def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"
     data = load_dataset(path, role, columns=columns)
     problem = lever_arm_problem(data.wrench, columns.torque_unit)
     if problem is not None:
-        if args.torque_unit is None and args.force_unit is None:
+        # too long an arm (torques in N·mm read as N·m) is refused unless a unit was declared; too short a one
+        # (a 3-axis cell whose torque columns hold only noise) is only pointed out
+        too_long = lever_arm_m(data.wrench) > PLAUSIBLE_LEVER_ARM_M[1]
+        if too_long and args.torque_unit is None and args.force_unit is None:
             raise CliError(f"{path}: {problem}")
         print(f"ftcal: warning: {path}: {problem}", file=sys.stderr)
     return data

@@ -48,7 +48,7 @@ TORQUE_UNITS: dict[str, float] = {
     "lbf.in": 0.1129848290276167, "lbf.ft": 1.3558179483314004,
 }
 #: Lever arms [m] outside this range are implausible for a force/torque calibration.
-PLAUSIBLE_LEVER_ARM_M = (1e-4, 1.0)
+PLAUSIBLE_LEVER_ARM_M = (1e-4, 2.0)
 
 
 def _unit_key(text: str) -> str:
@@ -197,9 +197,10 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m") -> str | None
     """What looks wrong with the units of ``wrench`` ([N], [N·m] after conversion), or None when plausible.
 
     The ratio max‖T‖ / max‖F‖ is the lever arm [m] of the loads. A calibration
-    fixture holds its loads within about a metre of the sensor and not closer
-    than 0.1 mm; outside that range the torques (or forces) are almost certainly
-    in another unit, and the message says which and how to declare it.
+    fixture holds its loads within about two metres of the sensor and not closer
+    than 0.1 mm; outside that range the torques (or forces) are probably in
+    another unit, and the message says which and how to declare it. (Beyond 2 m
+    is what torques in N·mm read as N·m give for any arm over 2 mm.)
 
     Examples
     --------
