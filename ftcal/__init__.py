@@ -18,6 +18,11 @@ __version__ = "0.1.0"
 _PUBLIC: dict[str, str] = {
     "BenchmarkOutputExistsError": "core._exceptions",
     "CalibrationDataset": "io._dataset",
+    "ColumnMap": "io._readers",
+    "calibration_certificate": "evaluation._calibration_report",
+    "linear_calibration_matrix": "models._matrix",
+    "read_load_configurations": "robot._loads",
+    "tool_gravity_compensation_yaml": "experiment._tool_load",
     "CalibrationReport": "core._metrics",
     "CalFileError": "core._exceptions",
     "CalibrationInputError": "core._exceptions",

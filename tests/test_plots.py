@@ -109,4 +109,5 @@ def test_plot_path_must_be_png(tmp_path):
 def test_model_colours_follow_the_thesis():
     assert _plots.model_color("directional") == "#1f77b4"  # blue, as in Fig. 5
     assert _plots.model_color("comparative") == "#d62728"  # red
-    assert _plots.model_color("polynomial", 0) != _plots.model_color("polynomial", 1)
+    # one colour per name, whatever the model's position in a figure (issue 22: one model, two colours)
+    assert _plots.model_color("polynomial", 0) == _plots.model_color("polynomial", 1)

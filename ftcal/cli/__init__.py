@@ -14,7 +14,8 @@ Subcommands
 ``identify-load``  a tool's mass, centre of mass and the sensor bias from static poses
 ``compensate``     run logs -> external wrenches (tool weight and bias removed)
 ``retare``         re-zero a model from zero-load readings (no refit)
-``export``         a model as an ONNX file (raw readings -> wrench) for deployment
+``export``         a model as an ONNX file (raw readings -> wrench) or a 6xN matrix for deployment
+``report``         the calibration report (HTML): held-out accuracy per axis, model choice, range
 
 Run ``ftcal SUBCOMMAND --help`` for the options and an example of each.
 
@@ -42,7 +43,7 @@ __all__ = ["main", "build_parser"]
 
 #: Modules of the subcommands, in the order ``ftcal --help`` lists them.
 _SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo",
-                "identify_load", "retare", "export")
+                "identify_load", "retare", "export", "report")
 
 
 def build_parser() -> Parser:

@@ -255,6 +255,22 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
         "--robot", default="kuka_iiwa14", help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path",
     )
     parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
+    parser.add_argument(
+        "--sensor-mounting", metavar="RX,RY,RZ,X,Y,Z", type=_mounting,
+        help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation vector [deg] "
+        "and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z on a 12 mm adapter)",
+    )
+
+
+def _mounting(text: str) -> tuple[float, ...]:
+    """argparse type of ``--sensor-mounting``: six numbers."""
+    try:
+        values = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        values = ()
+    if len(values) != 6 or not all(v == v and abs(v) != float("inf") for v in values):
+        raise argparse.ArgumentTypeError(f"{text!r}: give six numbers rx,ry,rz [deg],x,y,z [m], e.g. 0,0,45,0,0,0.012")
+    return values
 
 
 def _scheduler(text: str) -> str:

@@ -3,10 +3,14 @@
 from __future__ import annotations
 
 import argparse
+import json
+import sys
+from pathlib import Path
 
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, positive_float, write_json
+from ._data_options import add_dataset_options, load_dataset_from_args
 from ._models import evaluation_alpha, load_dataset, load_model_file, model_label, model_inputs
 from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
@@ -19,6 +23,11 @@ prints the comparison table (markdown) on stdout and writes to DIR: metrics.json
 metrics.md, rmse_distribution.png, axis_rmse.png and errors_<model>.png per model.
 RMSE is over the torque-scaled wrench [F, alpha*T] in N (thesis eq. 18); relative
 errors are ||F - F_hat|| / ||F|| and the same for torque (eq. 19).
+
+evaluate on data the model was NOT fitted on (a held-out recording). Given the training file
+of a model (recognised by the hash 'ftcal fit' keeps in NAME.fit.json beside the model), it warns
+that the figures are training errors; 'ftcal report MODEL DATASET' gives held-out figures by
+grouped cross-validation instead.
 """
 
 
@@ -36,6 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="torque scale Fmax/Tmax [1/m] for the RMSE (default: the dataset's meta 'alpha', else from its wrenches)",
     )
     p.add_argument("--no-plots", action="store_true", help="write the metrics only")
+    add_dataset_options(p)
     add_output_options(p, "ftcal-eval")
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
@@ -52,7 +62,12 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_plots:
         names += list(EVALUATION_PLOTS) + [predicted_plot_name(label) for label in labels]
     plan = OutputPlan(args.out, names, args.force)
-    data = load_dataset(args.dataset, "evaluation dataset")
+    data = load_dataset_from_args(args, args.dataset, "evaluation dataset")
+    trained_on = training_data_of(args.dataset, args.models)
+    for label in trained_on:
+        print(f"ftcal: warning: {args.dataset} is the training data of {label}: its figures below are training "
+              "errors, not the accuracy on new data. Evaluate on a held-out recording, or run 'ftcal report MODEL "
+              "DATASET' for held-out figures by grouped cross-validation.", file=sys.stderr)
     alpha = evaluation_alpha(data, args.alpha)
     noise_floor = data.meta.get("noise_floor")
     predictions, reports = {}, {}
@@ -69,10 +84,14 @@ def run(args: argparse.Namespace) -> int:
             "dataset": str(args.dataset),
             "alpha": alpha,
             "noise_floor": noise_floor,
-            "models": {label: {"file": str(path), **reports[label].to_dict()} for label, path in zip(labels, args.models)},
+            "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict()}
+                       for label, path in zip(labels, args.models)},
         })
     with plan.writing("metrics.md") as tmp:
-        tmp.write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n\n{table}\n\nRMSE per axis:\n\n{axes}\n")
+        note = (f"\n**Training data of {', '.join(trained_on)}**: these are training errors, not held-out ones.\n"
+                if trained_on else "")
+        tmp.write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n{note}\n{table}\n\nRMSE per axis:"
+                       f"\n\n{axes}\n")
     if not args.no_plots:
         console.info("plotting ...")
         paths = {"distribution": plan.path(EVALUATION_PLOTS[0]), "axis": plan.path(EVALUATION_PLOTS[1])}
@@ -83,3 +102,27 @@ def run(args: argparse.Namespace) -> int:
     print(axes)
     console.info(f"results in {args.out}/")
     return 0
+
+
+def training_data_of(dataset, model_paths) -> list[str]:
+    """Labels of the models whose ``NAME.fit.json`` (beside the model file) says they were fitted on ``dataset``."""
+    from ..core._files import same_file
+    from ..evaluation._calibration_report import file_sha256
+
+    found, digest = [], None
+    for path in model_paths:
+        label = model_label(path)
+        fit_json = Path(path).with_name(f"{label}.fit.json")
+        try:
+            facts = json.loads(fit_json.read_text(encoding="utf-8"))
+        except (OSError, ValueError, UnicodeDecodeError):
+            continue
+        if not isinstance(facts, dict):
+            continue
+        if facts.get("dataset_sha256"):
+            digest = digest or file_sha256(dataset)
+            if facts["dataset_sha256"] == digest:
+                found.append(label)
+        elif isinstance(facts.get("dataset"), str) and same_file(facts["dataset"], dataset):
+            found.append(label)
+    return found

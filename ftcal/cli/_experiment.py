@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 from ._common import Console, OutputPlan
 from ._plan import write_plan_coverage
@@ -15,10 +16,12 @@ def simulate_logs(args: argparse.Namespace) -> int:
     from ._simulate import temperature_range
 
     console = Console(args.quiet)
-    configs = ftcal.thesis_load_configurations()
+    from ..robot._loads import load_fixture
+
+    fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
     kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
     console.info(f"planning the pose sphere of {robot.name} ...")
     plan = ftcal.plan_calibration_poses(robot, **kwargs)
@@ -28,9 +31,11 @@ def simulate_logs(args: argparse.Namespace) -> int:
     thermal = temperature_range(args.temperature_range)
     if thermal is not None:
         mass.update(thermal_drift="typical", temperature_range_deg=thermal)
+    console.info(f"fixture: {fixture}")  # never silent: the simulated loads rest on it
     console.info(f"simulating {len(configs)} load configurations x {plan.n_poses} poses (load and no-load runs) ...")
     paths = ftcal.simulate_experiment(
-        args.out, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=args.force, **mass,
+        args.out, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=args.force,
+        load_configurations=configs, **mass,
     )
     write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
     console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")

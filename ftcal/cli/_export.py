@@ -1,4 +1,5 @@
-"""``ftcal export``: a saved model as an ONNX file, for a C++ / C# / embedded program with onnxruntime."""
+"""``ftcal export``: a saved model as an ONNX file (C++ / C# / embedded with onnxruntime), or a linear model as its
+6 x N matrix and offset (CSV or JSON) for a vendor driver."""
 
 from __future__ import annotations
 
@@ -12,11 +13,22 @@ EXAMPLE = """\
 examples:
   ftcal export models/directional.model.npz --format onnx
   ftcal export models/auto.model.npz --format onnx --output deploy/sensor.onnx
+  ftcal export models/linear.model.npz --format matrix --output deploy/matrix.csv
+  ftcal export models/linear.model.npz --format matrix --output deploy/matrix.json
+  ftcal export tool/tool.tool.json --format ros --output deploy/gravity_compensation.yaml
 
 The ONNX graph holds the whole calibration (re-tare, zero-load reading, scaling, the networks,
 torque scaling): input 'readings' float64 (n, N) raw channels in the training order (temperature
 [deg C] last for a temperature-compensated model), output 'wrench' float64 (n, 6) Fx,Fy,Fz [N],
 Tx,Ty,Tz [N·m]. Needs the onnx package: pip install "ftcal[onnx]".
+
+--format matrix (a linear model only): wrench = matrix @ raw + offset, the 6 x N matrix and the
+offset (6) in N and N·m. CSV: a header 'axis,s0,...,s{N-1},offset', one row per Fx..Tz; JSON: keys
+matrix, offset, inputs, outputs, units. A nonlinear model has no such matrix and is refused.
+
+--format ros (a tool file of 'ftcal identify-load'): the tool's gravity-compensation parameters as
+YAML for ROS: force_torque_tools' keys (bias, gripper_mass, gripper_com_pose, ...) and a ROS 2
+control_toolbox GravityCompensation filter block (CoG.pos, CoG.force, frames).
 """
 
 
@@ -27,9 +39,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Export a saved calibration model to ONNX, pre- and post-processing included.",
         epilog=EXAMPLE,
     )
-    p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
-    p.add_argument("--format", choices=("onnx",), default="onnx", help="export format (default onnx)")
-    p.add_argument("--output", metavar="FILE", help="the exported file (default: MODEL with the suffix .onnx)")
+    p.add_argument("model", type=existing_file,
+                   help="model file written by 'ftcal fit' (a tool file of 'ftcal identify-load' for --format ros)")
+    p.add_argument("--format", choices=("onnx", "matrix", "ros"), default="onnx",
+                   help="onnx: the whole model as an ONNX graph; matrix: a linear model's 6xN matrix and offset; "
+                   "ros: a tool file as gravity-compensation YAML")
+    p.add_argument("--sensor-frame", default="ft_sensor", help="--format ros: the sensor's frame name in your TF tree")
+    p.add_argument("--world-frame", default="world", help="--format ros: the frame gravity is given in")
+    p.add_argument("--output", metavar="FILE",
+                   help="the exported file (default: MODEL with the suffix .onnx, or .matrix.csv for --format matrix)")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists")
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
@@ -39,12 +57,46 @@ def run(args: argparse.Namespace) -> int:
     import ftcal
 
     console = Console(args.quiet)
-    output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}.onnx")
+    default = {"onnx": ".onnx", "matrix": ".matrix.csv", "ros": ".ros.yaml"}[args.format]
+    stem = args.model.name.removesuffix(".tool.json") if args.format == "ros" else model_label(args.model)
+    output = Path(args.output) if args.output else args.model.with_name(f"{stem}{default}")
     plan = OutputPlan.single_file(output, args.force)  # first: never over an input, whatever its name
-    if output.suffix.lower() != ".onnx":
-        raise CliError(f"--output {output} should end in .onnx (the file is an ONNX model)")
+    suffixes = {"onnx": (".onnx",), "matrix": (".csv", ".json"), "ros": (".yaml", ".yml")}[args.format]
+    if output.suffix.lower() not in suffixes:
+        raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
+    if args.format == "ros":
+        from ..experiment._tool_load import tool_gravity_compensation_yaml
+
+        tool = ftcal.ToolLoad.load(args.model)
+        text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
+        with plan.writing(output.name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+        console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
+        return 0
     model = ftcal.load_model(args.model)
+    if args.format == "matrix":
+        return _export_matrix(model, output, plan, console)
     with plan.writing(output.name) as tmp:
         ftcal.export_onnx(model, tmp, overwrite=True)
     console.info(f"exported {type(model).__name__} ({model.n_features_in_} inputs -> 6) to {output}")
+    return 0
+
+
+def _export_matrix(model, output: Path, plan: OutputPlan, console: Console) -> int:
+    import json
+
+    from ..models._matrix import matrix_export_dict
+
+    facts = matrix_export_dict(model)
+    with plan.writing(output.name) as tmp:
+        if output.suffix.lower() == ".json":
+            tmp.write_text(json.dumps(facts, indent=2) + "\n", encoding="utf-8")
+        else:
+            lines = ["# wrench = matrix @ raw + offset; Fx,Fy,Fz [N], Tx,Ty,Tz [N·m], sensor frame",
+                     ",".join(["axis", *facts["inputs"], "offset"])]
+            for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
+                lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
+            tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    console.info(f"exported the 6x{len(facts['inputs'])} calibration matrix and offset of {type(model).__name__} "
+                 f"to {output}")
     return 0

@@ -8,7 +8,8 @@ import time
 import numpy as np
 
 from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json
-from ._models import dataset_alpha, load_dataset, model_file_name, parse_param
+from ._data_options import add_dataset_options, load_dataset_from_args
+from ._models import dataset_alpha, model_file_name, parse_param
 from ._training import fit_with_progress
 
 EXAMPLE = """\
@@ -17,8 +18,11 @@ examples:
   ftcal fit data/train.csv --model comparative --schedule short --seed 3 --out models
   ftcal fit real.csv --model linear --param ridge=1e-6 --tare 0.12,-0.3,0.05,0.2,0.01,-0.07 --out models
   ftcal fit data/train.csv --model directional --param max_epochs=300 --param hidden_layer_sizes=[64,64]
+  ftcal fit recording.mat --torque-unit N.mm --model linear --report --out models
+  ftcal fit log.csv --channels g1,g2,g3,g4,g5,g6 --wrench Fx,Fy,Fz,Mx,My,Mz --model linear --out models
 
-writes DIR/NAME.model.npz (the model) and DIR/NAME.fit.json (what was trained, on what, how long).
+writes DIR/NAME.model.npz (the model) and DIR/NAME.fit.json (what was trained, on what, how long);
+with --report also DIR/NAME.report.html / .json, the calibration report (see 'ftcal report --help').
 """
 
 
@@ -59,6 +63,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         "temperature column [deg C] in front of the calibrator",
     )
     p.add_argument("--name", help="file name stem of the model (default: the --model name)")
+    p.add_argument("--report", action="store_true",
+                   help="also write the calibration report (NAME.report.html): held-out accuracy per axis by grouped "
+                   "cross-validation beside the stock baselines (refits the model --cv times)")
+    from ._report import add_report_options
+
+    add_report_options(p)
+    add_dataset_options(p)
     add_output_options(p, "ftcal-models")
     add_run_options(p)
     p.set_defaults(handler=run)
@@ -84,9 +95,13 @@ def run(args: argparse.Namespace) -> int:
     name = args.name or args.model
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
-    plan = OutputPlan(args.out, [model_file_name(name), f"{name}.fit.json"], args.force)
+    from ..evaluation._calibration_report import file_sha256
+    from ._report import report_file_names, write_report
+
+    names = [model_file_name(name), f"{name}.fit.json"] + (report_file_names(name) if args.report else [])
+    plan = OutputPlan(args.out, names, args.force)
     tare = _parse_tare(args.tare)
-    data = load_dataset(args.dataset, "training dataset")
+    data = load_dataset_from_args(args, args.dataset, "training dataset")
     if tare is not None and tare.size != data.n_channels:
         raise CliError(f"--tare has {tare.size} values but {args.dataset} has {data.n_channels} raw channels")
     params = dict(args.param)
@@ -105,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
         if data.temperature is None:
             raise CliError(f"--temperature: {args.dataset} has no temperature column; record the sensor "
                            "temperature (deg C) with the data, or drop the option")
-        estimator = ftcal.TemperatureCompensatedCalibrator(estimator)
+        # the wrapper hands its own alpha / tare / seed to the inner calibrator: give them to the wrapper
+        estimator = ftcal.TemperatureCompensatedCalibrator(
+            estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
         X = data.features(temperature=True)
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
@@ -125,6 +142,7 @@ def run(args: argparse.Namespace) -> int:
         "seed": args.seed,
         "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
         "dataset": str(args.dataset),
+        "dataset_sha256": file_sha256(args.dataset),  # lets 'ftcal evaluate' tell training data from held-out data
         "n_samples": data.n_samples,
         "n_channels": data.n_channels,
         "alpha": estimator.alpha_,
@@ -138,6 +156,8 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
     with plan.writing(f"{name}.fit.json") as tmp:
         write_json(tmp, summary)
+    if args.report:
+        write_report(plan, name, estimator, data, args, plan.path(model_file_name(name)), args.dataset, console)
     console.info(
         f"done in {seconds:.1f} s: training RMSE {report.rmse:.4g} N (torque-scaled, alpha={estimator.alpha_:.4g}); "
         f"model -> {plan.path(model_file_name(name))}"

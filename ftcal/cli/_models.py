@@ -57,15 +57,16 @@ def model_inputs(model, dataset: CalibrationDataset):
     raise CliError(f"the model takes {wants} but the dataset has {has}; use the dataset the model was made for")
 
 
-def load_dataset(path: str | Path, role: str = "dataset") -> CalibrationDataset:
-    """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz``; ``role`` names it in errors."""
+def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> CalibrationDataset:
+    """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz`` / ``.mat``; ``role`` names it in errors;
+    ``columns`` (a :class:`~ftcal.io.ColumnMap`) maps other layouts and units."""
     path = Path(path)
     problem = path_problem(path)
     if problem is not None:
         raise CliError(f"{problem} (the {role})")
     from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
 
-    dataset = CalibrationDataset.load(path)
+    dataset = CalibrationDataset.load(path, columns=columns)
     for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
         if big.any():

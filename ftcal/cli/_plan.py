@@ -55,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan_files = OutputPlan(args.out, ["poses.csv", "plan.json", "coverage.png"], args.force)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
     console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
     plan = ftcal.plan_calibration_poses(
         robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg

@@ -11,6 +11,7 @@ import numpy as np
 from ._models import load_model_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
+from ..core._wrench import WRENCH_LABELS
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -20,6 +21,11 @@ examples:
   ftcal predict models/directional.model.npz readings.csv --output wrench.csv
   my_sensor_reader | ftcal predict models/directional.model.npz --line-buffered | my_controller
   ftcal predict models/linear.model.npz data/test.csv --no-header | head -3
+  ftcal predict models/linear.model.npz live.csv --range models/linear.report.json   # + out_of_range column
+
+--range FILE (a calibration report .json, or the calibration dataset) adds a column out_of_range:
+1 when a reading lies beyond the calibrated range (a channel below its smallest or above its
+largest calibration reading), else 0; a count of such readings goes to stderr at the end.
 """
 
 
@@ -46,8 +52,43 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--line-buffered", action="store_true",
         help="answer each input line at once and flush (live streams; same as --chunk-size 1)",
     )
+    p.add_argument(
+        "--range", metavar="FILE", dest="range_file",
+        help="the calibrated range: a calibration report .json ('ftcal report') or the calibration dataset; adds "
+        "an out_of_range column (1 = a reading beyond it)",
+    )
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
+
+
+def calibrated_raw_range(path: str, n_channels: int) -> tuple[np.ndarray, np.ndarray]:
+    """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
+
+    Until model files carry their own fitted range, this is where ``predict`` takes it from.
+    """
+    import json
+
+    from ..io._dataset import CalibrationDataset
+
+    file = Path(path)
+    if not file.is_file():
+        raise CliError(f"--range {path}: no such file (give the report .json of 'ftcal report' or the dataset)")
+    if file.suffix.lower() == ".json":
+        try:
+            facts = json.loads(file.read_text(encoding="utf-8"))
+            lo = np.asarray(facts["calibrated_range"]["raw_min"], dtype=float)
+            hi = np.asarray(facts["calibrated_range"]["raw_max"], dtype=float)
+        except (ValueError, KeyError, TypeError, UnicodeDecodeError):
+            raise CliError(f"--range {path}: not a calibration report .json (written by 'ftcal report')") from None
+    else:
+        data = CalibrationDataset.load(file)
+        lo, hi = data.raw.min(axis=0), data.raw.max(axis=0)
+    n = n_channels
+    if lo.shape != hi.shape or lo.size not in (n, n - 1):
+        raise CliError(f"--range {path} covers {lo.size} raw channels but the model takes {n} inputs")
+    if lo.size == n - 1:  # a temperature-compensated model: the temperature column is not range-checked
+        lo, hi = np.append(lo, -np.inf), np.append(hi, np.inf)
+    return lo, hi
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,31 +101,40 @@ def run(args: argparse.Namespace) -> int:
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
+    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels)
+    beyond = [0]
 
     def emit(out) -> int:
-        header = not args.no_header
         total = 0
+        if not args.no_header:  # at once: a reader waiting for the header must not wait for the first reading
+            out.write(",".join(WRENCH_LABELS) + (",out_of_range" if limits is not None else "") + "\n")
+            out.flush()
         for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature):
             try:
                 wrench = np.asarray(model.predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
-            write_wrench_rows(out, wrench, header)
-            header = False
+            if limits is None:
+                write_wrench_rows(out, wrench, False)
+            else:
+                flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
+                beyond[0] += int(flags.sum())
+                out.write("".join(",".join(f"{v:.9g}" for v in row) + f",{int(f)}\n" for row, f in zip(wrench, flags)))
             total += len(wrench)
             if chunk == 1 or out is sys.stdout:
                 out.flush()
-        if header:  # no data at all: still a valid (empty) table
-            write_wrench_rows(out, np.empty((0, 6)), True)
         return total
 
     if plan is None:
-        emit(sys.stdout)
+        total = emit(sys.stdout)
         sys.stdout.flush()
-        return 0
-    with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
-        total = emit(fh)
-    console.info(f"wrote {total} wrenches to {args.output}")
+    else:
+        with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
+            total = emit(fh)
+        console.info(f"wrote {total} wrenches to {args.output}")
+    if beyond[0]:
+        print(f"ftcal: warning: {beyond[0]} of {total} readings lie beyond the calibrated range of {args.range_file} "
+              "(out_of_range = 1); their wrenches are extrapolations", file=sys.stderr)
     return 0
 
 

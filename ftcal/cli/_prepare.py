@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from ._common import (
@@ -23,6 +24,13 @@ EXAMPLE = """\
 examples:
   ftcal prepare logs/ --out data                          # every *.csv log in logs/
   ftcal prepare runs/config*_load.csv runs/config*_no-load.csv --mass 2.0 --out data
+  ftcal prepare logs/ --fixture my_fixture.csv --out data     # your own load configurations
+
+--fixture FILE: your load configurations, CSV with a header id,name,mass_kg,com_x_m,com_y_m,com_z_m
+(optional ixx,iyy,izz,ixy,ixz,iyz [kg·m²]) or JSON [{"id": 0, "mass_kg": 2.0, "center_of_mass_m":
+[x, y, z]}, ...]; centres of mass in the sensor frame [m], ids as in the logs' config column. The
+default, 'thesis', is the thesis' seven configurations (centre and Table I); the fixture used is
+always named on stderr and in prepare.json.
   ftcal prepare logs/ --robot my_arm.urdf --sensor-frame ft_frame --format npz --out data
 
 pairs every load run with its no-load run (same configuration, same pose index), aligns
@@ -41,7 +49,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("logs", nargs="+", metavar="LOG", help="run log files, or directories holding *.csv logs")
     add_robot_options(p)
-    p.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the logs' load_mass_kg)")
+    p.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the fixture's masses, else the logs' "
+                   "load_mass_kg)")
+    p.add_argument("--fixture", default="thesis", metavar="FILE|thesis",
+                   help="your load configurations (id, mass, centre of mass in the sensor frame, optional inertia) "
+                   "from a .json or .csv file; 'thesis' is the thesis' seven (see 'ftcal prepare --help')")
     p.add_argument("--channels", type=int_in_range(3, 1024, "channels"), help="expected raw channel count (checked in every log)")
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_output_options(p, "ftcal-data")
@@ -73,9 +85,21 @@ def run(args: argparse.Namespace) -> int:
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
     logs = log_files(args.logs)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame)
+    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
     console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
-    dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels)
+    from ..robot._loads import load_fixture
+
+    fixture, configurations = load_fixture(args.fixture)
+    console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
+    try:
+        dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels,
+                                        load_configurations=configurations)
+    except ftcal.LogFormatError as exc:
+        if "not among the known ones" not in str(exc):
+            raise
+        raise CliError(f"{exc} The fixture used was {fixture}: describe yours in a file and pass --fixture FILE "
+                       "(see 'ftcal prepare --help').") from None
+    dataset.meta["fixture"] = fixture
     with plan.writing(name) as tmp:
         dataset.save(tmp, overwrite=True)
     groups = {} if dataset.group is None else {
@@ -89,6 +113,7 @@ def run(args: argparse.Namespace) -> int:
             "n_samples": dataset.n_samples,
             "n_channels": dataset.n_channels,
             "samples_per_configuration": groups,
+            "fixture": fixture,
             "meta": dataset.meta,
         })
     alpha = ftcal.alpha_from_wrenches(dataset.wrench)

@@ -192,6 +192,9 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
     )
     add_robot_options(e)
     e.add_argument("--mass", type=positive_float, default=None, help="load mass [kg] (default: the thesis' load)")
+    e.add_argument("--fixture", default="thesis", metavar="FILE|thesis",
+                   help="load configurations (id, mass, centre of mass [m], optional inertia) from a .json/.csv file; "
+                   "'thesis' is the thesis' seven")
     e.add_argument(
         "--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=None,
         help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)",

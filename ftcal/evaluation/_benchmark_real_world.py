@@ -95,13 +95,13 @@ def _plot(results: dict, path: Path) -> Path:
 
     splits = list(results["splits"])
     fig, axes = plt.subplots(1, len(splits), figsize=(6 * len(splits), 4), squeeze=False)
-    colors = {"directional": "tab:blue", "comparative": "tab:red", "linear": "tab:green"}
+    from ._plots import model_color
     for ax, split in zip(axes[0], splits):
         per_model = results["splits"][split]
         top = max(max(r["per_sample_rmse"]) for r in per_model.values())
         grid = np.linspace(0, top, 400)
         for name, r in per_model.items():
-            c = colors.get(name)
+            c = model_color(name)
             data = np.asarray(r["per_sample_rmse"])
             ax.hist(data, bins=40, range=(0, top), density=True, alpha=0.25, color=c)
             mu, sd = r["rmse_mean"], max(r["rmse_std"], 1e-12)

@@ -5,9 +5,12 @@ the matching ``*_figure`` function returns the :class:`matplotlib.figure.Figure`
 instead, for notebooks. Nothing here touches ``pyplot``'s global state, so the
 functions are safe in scripts, servers and threads.
 
-Colours follow the thesis' figures: the directional DNN blue, the comparative
-DNN red, the linear model grey; other models get the next colours of
-matplotlib's ``tab10`` cycle.
+Colours: one table, one colour per model name, the same in every figure
+(:func:`model_color`). The thesis' figures set three: the directional DNN blue,
+the comparative DNN red, the linear model grey; every other registered
+calibrator and every stock scikit-learn baseline has its own distinct colour;
+a name outside the table gets a colour derived from the name itself (never
+from its position in a figure), so it too keeps its colour across figures.
 """
 
 from __future__ import annotations
@@ -25,7 +28,9 @@ from ..core._exceptions import CalibrationInputError
 from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS
 
 __all__ = [
+    "MODEL_COLORS",
     "model_color",
+    "model_colors",
     "error_distributions_figure",
     "plot_error_distributions",
     "axis_errors_figure",
@@ -38,8 +43,18 @@ __all__ = [
     "plot_wrench_coverage",
 ]
 
-_KNOWN_COLORS = {"directional": "#1f77b4", "comparative": "#d62728", "linear": "#7f7f7f"}
-_OTHER_COLORS = ("#2ca02c", "#9467bd", "#ff7f0e", "#8c564b", "#e377c2", "#17becf", "#bcbd22")
+#: The one colour table: model name -> colour, pairwise distinct (a label containing a name, e.g.
+#: ``"linear (this calibration)"``, takes the colour of the longest name it contains).
+MODEL_COLORS: dict[str, str] = {
+    "directional": "#1f77b4", "comparative": "#d62728", "linear": "#7f7f7f",
+    "polynomial": "#2ca02c", "axis_nonlinear": "#9467bd", "gaussian_process": "#ff7f0e", "auto": "#8c564b",
+    "directional_ensemble": "#aec7e8", "comparative_ensemble": "#ff9896",
+    "sk_linear": "#17becf", "sk_poly2": "#bcbd22", "sk_poly3": "#e377c2", "sk_kernel_ridge": "#98df8a",
+    "sk_gp": "#c49c94",
+}
+#: Colours for names outside the table (chosen by a hash of the name).
+_OTHER_COLORS = ("#393b79", "#637939", "#8c6d31", "#843c39", "#7b4173", "#3182bd", "#e6550d", "#31a354",
+                 "#756bb1", "#636363", "#6baed6", "#fd8d3c")
 _DPI = 120
 # matplotlib 3.10 replaced ``vert=False`` by ``orientation="horizontal"`` (and deprecated ``vert`` in 3.11).
 _HORIZONTAL = (
@@ -50,18 +65,37 @@ _HORIZONTAL = (
 
 
 def model_color(name: str, index: int = 0) -> str:
-    """Colour of a model in every plot: by name for the thesis' three, else by position.
+    """Colour of a model in every plot, by its name only (``index`` is ignored; kept for old callers).
 
     Examples
     --------
-    >>> model_color("directional"), model_color("Linear")
-    ('#1f77b4', '#7f7f7f')
+    >>> model_color("directional"), model_color("Linear"), model_color("axis_nonlinear") != model_color("linear")
+    ('#1f77b4', '#7f7f7f', True)
     """
-    key = name.lower()
-    for known, color in _KNOWN_COLORS.items():
-        if known in key:
-            return color
-    return _OTHER_COLORS[index % len(_OTHER_COLORS)]
+    key = str(name).lower()
+    if key in MODEL_COLORS:
+        return MODEL_COLORS[key]
+    contained = [known for known in MODEL_COLORS if known in key]
+    if contained:
+        return MODEL_COLORS[max(contained, key=len)]
+    import zlib
+
+    return _OTHER_COLORS[zlib.crc32(key.encode("utf-8")) % len(_OTHER_COLORS)]
+
+
+def model_colors(names) -> dict[str, str]:
+    """Colours of the models of one figure: :func:`model_color` each, a clash between two names outside the
+    table moved to the next free colour (names in the table never clash)."""
+    out: dict[str, str] = {}
+    for name in names:
+        color = model_color(name)
+        if color in out.values() and color in _OTHER_COLORS:
+            free = [c for c in _OTHER_COLORS if c not in out.values()]
+            start = _OTHER_COLORS.index(color)
+            ordered = _OTHER_COLORS[start:] + _OTHER_COLORS[:start]
+            color = next((c for c in ordered if c in free), color)
+        out[name] = color
+    return out
 
 
 def _save(fig: Figure, path: str | Path) -> Path:
@@ -125,9 +159,10 @@ def error_distributions_figure(
     ax = fig.add_subplot()
     positions = np.arange(len(names))[::-1]
     rng = np.random.default_rng(0)
+    colors = model_colors(names)
     for i, (name, pos) in enumerate(zip(names, positions)):
         values = data[name]
-        color = model_color(name, i)
+        color = colors[name]
         if values.size > 1 and np.ptp(values) > 0:
             parts = ax.violinplot(values, positions=[pos], showextrema=False, widths=0.8, **_HORIZONTAL)
             for body in parts["bodies"]:
@@ -187,24 +222,36 @@ def axis_errors_figure(
         Model name -> RMSE of ``Fx, Fy, Fz, Tx, Ty, Tz`` in [N] and [N·m].
     """
     data = _model_arrays("axis_errors", axis_errors, 6)
-    fig = Figure(figsize=(9.0, 4.0), layout="constrained")
+    colors = model_colors(data)
+    fig = Figure(figsize=(9.0 + 0.35 * max(0, len(data) - 3), 4.0), layout="constrained")
     axes = fig.subplots(1, 2)
     width = 0.8 / len(data)
     for ax, part, unit in ((axes[0], FORCE, "N"), (axes[1], TORQUE, "N·m")):
         labels = WRENCH_LABELS[part]
         x = np.arange(len(labels))
         for i, (name, values) in enumerate(data.items()):
-            bars = ax.bar(x + (i - (len(data) - 1) / 2) * width, values[part], width, label=name,
-                          color=model_color(name, i))
-            ax.bar_label(bars, fmt="%.3g", fontsize=7, padding=2)
+            ax.bar(x + (i - (len(data) - 1) / 2) * width, values[part], width, label=name, color=colors[name])
+        _label_bars(ax, x, width, [values[part] for values in data.values()])
         ax.set_xticks(x, labels)
         ax.set_ylabel(f"RMSE [{unit}]")
         ax.set_title("forces" if unit == "N" else "torques")
         ax.grid(axis="y", alpha=0.3)
-        ax.margins(y=0.15)
-    axes[0].legend(fontsize=8)
+        top = max(float(np.nanmax(values[part])) for values in data.values())
+        ax.set_ylim(0, (top if top > 0 else 1.0) * 1.25)
+    # the legend goes below the panels, where it cannot hide a bar or its value
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=min(len(data), 5), fontsize=8)
     fig.suptitle(title)
     return fig
+
+
+def _label_bars(ax, x: NDArray, width: float, heights: list[NDArray]) -> None:
+    """Write each bar's value above it, vertically, so the labels of neighbouring (e.g. equal) bars never overlap."""
+    n = len(heights)
+    for i, values in enumerate(heights):
+        for xi, v in zip(x + (i - (n - 1) / 2) * width, values):
+            if np.isfinite(v):
+                ax.annotate(f"{v:.3g}", xy=(xi, v), xytext=(0, 2), textcoords="offset points", ha="center",
+                            va="bottom", rotation=90, fontsize=7)
 
 
 def plot_axis_errors(axis_errors: Mapping[str, ArrayLike], path: str | Path, **kwargs) -> Path:

@@ -343,6 +343,12 @@ def prepare_dataset(
         raise LogFormatError("no run logs given; pass the load and no-load log files (or their folder).")
     logs = [read_run_log(p, n_channels=n_channels, n_joints=robot.n_joints) for p in paths]
     masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
+    fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
+                    if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
+    if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
+        # the fixture states every configuration's mass (the logs' per-file masses then need not agree)
+        load_mass = float(np.median(list(fixture_mass.values())))
+        masses = set()
     if load_mass is None:
         if len(masses) != 1:
             raise LogFormatError(f"load_mass not given and the logs declare {sorted(masses) or 'none'}; "
@@ -385,11 +391,13 @@ def prepare_dataset(
         aligned[sel] += du[sel] @ fit.matrix.T
     raw = pairs.raw_load - aligned
     r = np.array([positions[c] for c in pairs.config])
-    wrench = reference_wrench(P_load[:, :3, :3], load_mass, r, g)
+    row_mass = np.array([fixture_mass.get(int(c), load_mass) for c in pairs.config])
+    wrench = reference_wrench(P_load[:, :3, :3], 1.0, r, g) * row_mass[:, None]  # eq. 15-16 are linear in the mass
     meta = {
         "source": "ftcal.prepare_dataset",
         "robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": robot.sensor_frame,
         "load_mass_kg": float(load_mass), "gravity_in_base_m_s2": g.tolist(),
+        "load_mass_kg_by_config": {str(k): float(v) for k, v in sorted(fixture_mass.items())},
         "load_positions_in_sensor_m": {str(k): v.tolist() for k, v in sorted(positions.items())},
         "log_files": [str(p) for p in paths], "n_pairs": int(raw.shape[0]),
         "pair_rotation_deg_max": float(angle.max()), "pair_rotation_deg_mean": float(angle.mean()),

@@ -40,7 +40,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 
-__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE"]
+__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
+           "tool_gravity_compensation_yaml"]
 
 #: Gravity in the base frame [m/s²] (z up).
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
@@ -323,3 +324,54 @@ def identify_tool_load(
         bias_std_error=np.concatenate([f_se[1:], t_se[3:]]), gravity=np.asarray(gravity, dtype=float),
         residual_rms=np.array([f_rms, t_rms]),
     )
+
+
+def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",
+                                   node: str = "gravity_compensation") -> str:
+    """The tool's parameters as the gravity-compensation YAML ROS users load (text).
+
+    Two documents' worth of keys in one file:
+
+    * ROS 1 ``force_torque_tools`` (``gravity_compensation`` node, as ``ft_calib`` writes them): ``bias``
+      (6 values, N and N·m, sensor frame), ``gripper_mass`` [kg], ``gripper_com_frame_id``,
+      ``gripper_com_pose`` (x, y, z [m] and roll, pitch, yaw = 0), ``gripper_com_child_frame_id``;
+    * ROS 2 ``control_toolbox`` ``control_filters/GravityCompensation`` under ``<node>: ros__parameters``:
+      ``world_frame``, ``sensor_frame``, ``CoG.pos`` [m] (sensor frame) and ``CoG.force`` (the tool's weight
+      as a force in the world frame, m g [N]).
+
+    The bias is not part of the ROS 2 filter; re-tare (``ftcal retare``) or subtract it upstream.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> text = tool_gravity_compensation_yaml(ToolLoad(mass=1.0, center_of_mass=np.array([0.0, 0.0, 0.1]),
+    ...                                                bias=np.zeros(6)))
+    >>> "gripper_mass: 1.0" in text and "pos: [0.0, 0.0, 0.1]" in text
+    True
+    """
+    for name, value in (("sensor_frame", sensor_frame), ("world_frame", world_frame), ("node", node)):
+        if not value or any(c in value for c in ":#{}[],\"'\n"):
+            raise CalibrationInputError(f"{name} {value!r} must be a plain frame / node name.")
+    fmt = lambda v: repr(float(v))  # noqa: E731 - shortest round-trip decimal
+    com = [fmt(v) for v in tool.center_of_mass]
+    weight = [fmt(tool.mass * g) for g in np.asarray(tool.gravity, dtype=float)]
+    lines = [
+        "# Tool gravity compensation parameters written by ftcal (identify-load): sensor frame, SI units.",
+        f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in {sensor_frame} [m],",
+        "# bias [N, N·m] = what the sensor reads with no load at all.",
+        "# --- ROS 1 force_torque_tools (gravity_compensation node) ---",
+        f"bias: [{', '.join(fmt(b) for b in tool.bias)}]",
+        f"gripper_mass: {fmt(tool.mass)}",
+        f"gripper_com_frame_id: {sensor_frame}",
+        f"gripper_com_pose: [{', '.join(com)}, 0.0, 0.0, 0.0]",
+        "gripper_com_child_frame_id: gripper_com",
+        "# --- ROS 2 control_toolbox control_filters/GravityCompensation ---",
+        f"{node}:",
+        "  ros__parameters:",
+        f"    world_frame: {world_frame}",
+        f"    sensor_frame: {sensor_frame}",
+        "    CoG:",
+        f"      pos: [{', '.join(com)}]",
+        f"      force: [{', '.join(weight)}]",
+    ]
+    return "\n".join(lines) + "\n"

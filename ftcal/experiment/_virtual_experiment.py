@@ -208,7 +208,7 @@ def simulate_experiment(
             R_true = sensor_pose_in_base(robot, q_true)[:, :3, :3]
             wrench = reference_wrench(R_true, mounting.mass, mounting.center_of_mass_in_sensor, g)
             if kind == "load":
-                wrench += reference_wrench(R_true, load_mass, c.position_in_sensor, g)
+                wrench += reference_wrench(R_true, load_mass if c.mass_kg is None else c.mass_kg, c.position_in_sensor, g)
             rows_w = np.repeat(wrench, reps, axis=0)
             raw = sensor.read(rows_w)
             temperature = None
@@ -225,7 +225,8 @@ def simulate_experiment(
             clock = float(t[-1]) + _POSE_PERIOD_S
             write_run_log(path, timestamp=t, run_kind=[kind] * (n * reps), config=[c.config_id] * (n * reps),
                           pose=np.repeat(np.arange(n), reps), q=np.repeat(q_logged, reps, axis=0), raw=raw,
-                          raw_unit=sensor.profile.raw_unit, load_mass=load_mass if kind == "load" else None,
+                          raw_unit=sensor.profile.raw_unit,
+                          load_mass=(load_mass if c.mass_kg is None else c.mass_kg) if kind == "load" else None,
                           robot=robot.name, sensor_frame=robot.sensor_frame,
                           meta={"simulated": True, "load_configuration": c.name}, overwrite=overwrite,
                           temperature=temperature)

@@ -12,6 +12,15 @@ CSV (``.csv``)
 NumPy archive (``.npz``)
     Arrays ``raw`` (n, N), ``wrench`` (n, 6), optional ``group`` (n,), and
     ``meta_json`` (a JSON string). Read with ``allow_pickle=False``.
+MATLAB (``.mat``, v4-v7, read only)
+    Variables ``raw`` (n, N) and ``wrench`` (n, 6) (or one row per component),
+    optional ``group`` and ``temperature``; or any variables named by a
+    :class:`~ftcal.io.ColumnMap`.
+
+Other layouts and units are read through a :class:`~ftcal.io.ColumnMap`
+(``CalibrationDataset.load(path, columns=ColumnMap(...))``, the CLI's
+``--channels``, ``--wrench``, ``--force-unit``, ``--torque-unit``); torque
+columns may be named ``Mx, My, Mz`` as well as ``Tx, Ty, Tz``.
 """
 
 from __future__ import annotations
@@ -25,11 +34,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import check_plain_numbers, read_header
+from ..core._columns import check_plain_numbers, is_number, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
+from ._readers import ColumnMap, canonical_wrench_name, read_mat_arrays, select_arrays
 
 __all__ = ["CalibrationDataset"]
 
@@ -89,6 +99,34 @@ def _exact_group_column(body_lines: list[str], column: int, first_line: int, pat
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
+def _mapped_names(fields: list[str], columns: ColumnMap, where: str) -> list[str]:
+    """Header names with the mapped columns renamed to ftcal's (``s0..``, ``Fx..Tz``) and aliases resolved.
+
+    Unmapped columns that would clash with a mapped name are renamed out of the way (they are ignored).
+    """
+    names = list(fields)
+    renamed: dict[int, str] = {}
+    for mapping, targets, what in ((columns.channels, None, "--channels"), (columns.wrench, WRENCH_LABELS, "--wrench")):
+        if mapping is None:
+            continue
+        if len(mapping) == 1 and targets is not None:
+            raise DatasetFileError(f"{where}: --wrench names one column; a CSV needs the six Fx,Fy,Fz,Tx,Ty,Tz columns.")
+        for k, name in enumerate(mapping):
+            if name not in names:
+                raise DatasetFileError(f"{where}: {what} names column {name!r}, which the header lacks; the header "
+                                       f"has {', '.join(names)}.")
+            renamed[names.index(name)] = f"s{k}" if targets is None else targets[k]
+    out = []
+    for i, name in enumerate(names):
+        if i in renamed:
+            out.append(renamed[i])
+        elif columns.wrench is None and canonical_wrench_name(name) is not None:
+            out.append(canonical_wrench_name(name))  # Mx -> Tx, fx -> Fx
+        elif renamed and (name in renamed.values() or (name[:1] == "s" and name[1:].isdigit())):
+            out.append(f"_unmapped_{i}")  # an unmapped column that would clash with a mapped one: ignored
+        else:
+            out.append(name)
+    return out
 
 
 @dataclass
@@ -223,41 +261,78 @@ class CalibrationDataset:
         return path
 
     @classmethod
-    def load(cls, path: str | Path) -> "CalibrationDataset":
-        """Read a dataset written by :meth:`save` (or by hand in the CSV layout above)."""
+    def load(cls, path: str | Path, *, columns: ColumnMap | None = None) -> "CalibrationDataset":
+        """Read a dataset: ``.csv`` / ``.npz`` as written by :meth:`save` (or by hand), or a MATLAB ``.mat``.
+
+        Parameters
+        ----------
+        path : path
+            The file; its suffix chooses the reader.
+        columns : ColumnMap, optional
+            Which columns / variables hold the raw channels and the wrench, and the
+            units of the file's forces and torques (converted to [N] and [N·m]).
+        """
         path = Path(path)
+        columns = ColumnMap() if columns is None else columns
         if not path.is_file():
             raise DatasetFileError(f"{path}: no such dataset file.")
-        if path.suffix == ".npz":
-            return cls._load_npz(path)
-        if path.suffix == ".csv":
-            return cls._load_csv(path)
-        raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv or .npz.")
+        readers = {".npz": cls._load_npz, ".csv": cls._load_csv, ".mat": cls._load_mat}
+        reader = readers.get(path.suffix.lower())
+        if reader is None:
+            raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv, .npz or .mat.")
+        ds = reader(path, columns)
+        if not columns.is_default:
+            ds.wrench = columns.to_si(ds.wrench)
+            ds.meta = {**ds.meta, **columns.units_meta()}
+        return ds
 
     @classmethod
-    def _load_npz(cls, path: Path) -> "CalibrationDataset":
+    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict) -> "CalibrationDataset":
+        """A dataset from named arrays (``.npz``, ``.mat``), selected by ``columns``."""
+        where = str(path)
+        vector_wrench = []
+        for label in WRENCH_LABELS:
+            found = [n for n in arrays if canonical_wrench_name(n) == label]
+            vector_wrench.append(found[0] if len(found) == 1 else label)
+        channel_vectors = sorted((n for n in arrays if n[:1] == "s" and n[1:].isdigit()), key=lambda n: int(n[1:]))
+        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6)
+        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None)
+        if raw.shape[0] != wrench.shape[0] and raw.shape[1] == wrench.shape[0]:
+            raw = raw.T
+        extra = {}
+        for name in ("group", "temperature"):
+            if name in arrays:
+                value = np.asarray(arrays[name])
+                extra[name] = value.ravel() if value.ndim == 2 and 1 in value.shape else value
         try:
-            with np.load(path, allow_pickle=False) as z:
-                missing = {"raw", "wrench"} - set(z.files)
-                if missing:
-                    raise DatasetFileError(f"{path}: missing arrays {sorted(missing)}; expected raw and wrench.")
-                raw, wrench = z["raw"], z["wrench"]
-                group = z["group"] if "group" in z.files else None
-                temperature = z["temperature"] if "temperature" in z.files else None
-                meta = json.loads(str(z["meta_json"])) if "meta_json" in z.files else {}
-        except DatasetFileError:
-            raise
-        except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
-            raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
-        try:
-            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+            ds = cls(raw=raw, wrench=wrench, meta=meta, **extra)
         except DatasetFileError as exc:
             raise DatasetFileError(f"{path}: {exc}") from None
         ds._check_finite(path)
         return ds
 
     @classmethod
-    def _load_csv(cls, path: Path) -> "CalibrationDataset":
+    def _load_mat(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
+        return cls._from_arrays(path, read_mat_arrays(path), columns, {"source_file": path.name})
+
+    @classmethod
+    def _load_npz(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
+        try:
+            with np.load(path, allow_pickle=False) as z:
+                arrays = {name: z[name] for name in z.files}
+        except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
+            raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
+        meta_json = arrays.pop("meta_json", None)
+        try:
+            meta = json.loads(str(meta_json)) if meta_json is not None else {}
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
+        if not isinstance(meta, dict):
+            raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
+        return cls._from_arrays(path, arrays, columns, meta)
+
+    @classmethod
+    def _load_csv(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
         meta: dict = {}
         try:
             # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
@@ -274,9 +349,19 @@ class CalibrationDataset:
                 meta = _parse_meta(body[len("meta:"):], f"{path}: line {n_comment}")
         if n_comment >= len(lines) or not lines[n_comment].strip():
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
+        where = f"{path}: line {n_comment + 1}"
+        fields = [f.strip() for f in lines[n_comment].split(",")]
+        if all(f and is_number(f) for f in fields):
+            raise DatasetFileError(
+                f"{where}: the file has no header: its first line holds numbers, not column names. Fix: add a "
+                f"header line naming the columns ({_CSV_LAYOUT}), or name them with --channels/--wrench after adding "
+                "one."
+            )
+        fields = _mapped_names(fields, columns, where)
         header = read_header(
-            lines[n_comment].split(","), where=f"{path}: line {n_comment + 1}", error=DatasetFileError,
+            fields, where=where, error=DatasetFileError,
             required=WRENCH_LABELS, optional=("group", "temperature"), expected=_CSV_LAYOUT,
+            allow_other=not columns.is_default and (columns.channels is not None or columns.wrench is not None),
         )
         body_lines = lines[n_comment + 1:]
         check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)

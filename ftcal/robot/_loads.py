@@ -41,6 +41,9 @@ __all__ = [
     "TABLE_I_TRANSLATIONS_MM",
     "LoadConfiguration",
     "thesis_load_configurations",
+    "THESIS_FIXTURE",
+    "read_load_configurations",
+    "load_fixture",
     "reference_wrench",
     "reference_wrench_at_joints",
 ]
@@ -74,11 +77,18 @@ class LoadConfiguration:
         Human-readable name (``"centre"``, ``"+x"``, ...).
     position_in_sensor : tuple of 3 floats
         Centre of mass in the sensor frame [m].
+    mass_kg : float or None
+        The load's mass [kg] when the fixture says it (else the logs' or the caller's mass).
+    inertia_kg_m2 : tuple of 6 floats or None
+        ``Ixx, Iyy, Izz, Ixy, Ixz, Iyz`` about the centre of mass [kg·m²], if known. Recorded only: a static
+        calibration pose loads the sensor with the weight alone.
     """
 
     config_id: int
     name: str
     position_in_sensor: tuple[float, float, float]
+    mass_kg: float | None = None
+    inertia_kg_m2: tuple[float, ...] | None = None
 
 
 def thesis_load_configurations() -> tuple[LoadConfiguration, ...]:
@@ -175,3 +185,125 @@ def reference_wrench_at_joints(
     """
     P = np.asarray(sensor_pose_in_base(robot, robot.check_joints(q)))
     return reference_wrench(P[:, :3, :3], load_mass, load_position_in_sensor, gravity_in_base)
+
+
+#: Name of the default fixture: the thesis' seven load configurations (ids 0-6).
+THESIS_FIXTURE = "thesis"
+_FIXTURE_CSV = "id,name,mass_kg,com_x_m,com_y_m,com_z_m[,ixx,iyy,izz,ixy,ixz,iyz]"
+
+
+def _configuration(entry: dict, where: str) -> LoadConfiguration:
+    from ..core._exceptions import CalibrationInputError
+
+    try:
+        cid = entry["id"]
+        com = [float(v) for v in entry["center_of_mass_m"]]
+        mass = entry.get("mass_kg")
+        mass = None if mass is None else float(mass)
+        inertia = entry.get("inertia_kg_m2")
+        inertia = None if inertia is None else tuple(float(v) for v in np.ravel(inertia))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise CalibrationInputError(f"{where}: each configuration needs 'id' and 'center_of_mass_m' (3 numbers, m), "
+                                    f"optional 'mass_kg', 'name', 'inertia_kg_m2' ({exc!r}).") from None
+    if isinstance(cid, bool) or not isinstance(cid, (int, np.integer)) and not (isinstance(cid, float) and cid.is_integer()):
+        raise CalibrationInputError(f"{where}: id {cid!r} must be an integer (the logs' config column).")
+    if len(com) != 3 or not np.all(np.isfinite(com)):
+        raise CalibrationInputError(f"{where}: center_of_mass_m must be 3 finite numbers [m]; got {com}.")
+    if np.linalg.norm(com) > 5.0:
+        raise CalibrationInputError(f"{where}: center_of_mass_m {com} is {np.linalg.norm(com):.3g} m from the sensor; "
+                                    "give it in metres (not mm).")
+    if mass is not None and not (np.isfinite(mass) and mass > 0):
+        raise CalibrationInputError(f"{where}: mass_kg must be a positive mass in kg; got {mass!r}.")
+    if inertia is not None:
+        if len(inertia) == 9:  # a 3x3 matrix
+            m = np.reshape(inertia, (3, 3))
+            inertia = (m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
+        if len(inertia) != 6 or not np.all(np.isfinite(inertia)) or min(inertia[:3]) < 0:
+            raise CalibrationInputError(f"{where}: inertia_kg_m2 must be Ixx,Iyy,Izz (>= 0),Ixy,Ixz,Iyz [kg·m²] or a "
+                                        f"3x3 matrix; got {list(inertia)}.")
+    return LoadConfiguration(int(cid), str(entry.get("name", f"config{int(cid)}")), tuple(com), mass, inertia)
+
+
+def read_load_configurations(path) -> tuple[LoadConfiguration, ...]:
+    """Your fixture's load configurations from a small file (JSON or CSV).
+
+    JSON: ``{"name": "...", "configurations": [{"id": 0, "name": "centre", "mass_kg": 2.0,
+    "center_of_mass_m": [0.186, 0, 0.079], "inertia_kg_m2": [Ixx, Iyy, Izz, Ixy, Ixz, Iyz]}, ...]}`` (or the
+    list alone). CSV: a header ``id,name,mass_kg,com_x_m,com_y_m,com_z_m[,ixx,iyy,izz,ixy,ixz,iyz]``, one row
+    per configuration (``mass_kg`` may be empty: then the logs' mass). Centres of mass in the sensor frame [m].
+
+    Examples
+    --------
+    >>> import json, tempfile, pathlib
+    >>> p = pathlib.Path(tempfile.mkdtemp()) / "fixture.json"
+    >>> _ = p.write_text(json.dumps([{"id": 0, "mass_kg": 1.5, "center_of_mass_m": [0, 0, 0.1]}]))
+    >>> read_load_configurations(p)[0].mass_kg
+    1.5
+    """
+    import csv
+    import json
+    from pathlib import Path
+
+    from ..core._exceptions import CalibrationInputError
+
+    path = Path(path)
+    if not path.is_file():
+        raise CalibrationInputError(f"{path}: no such fixture file (JSON or CSV, or the name '{THESIS_FIXTURE}').")
+    try:
+        text = path.read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError:
+        raise CalibrationInputError(f"{path}: not a UTF-8 text file.") from None
+    entries: list[tuple[dict, str]] = []
+    if path.suffix.lower() == ".json":
+        try:
+            doc = json.loads(text)
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise CalibrationInputError(f"{path}: bad JSON ({str(exc)[:80]}).") from None
+        items = doc.get("configurations") if isinstance(doc, dict) else doc
+        if not isinstance(items, list) or not all(isinstance(e, dict) for e in items):
+            raise CalibrationInputError(f"{path}: expected a list of configurations (objects) or "
+                                        "{\"configurations\": [...]}.")
+        entries = [(e, f"{path}: configuration {i + 1}") for i, e in enumerate(items)]
+    elif path.suffix.lower() == ".csv":
+        rows = [r for r in csv.reader(line for line in text.splitlines() if line.strip() and not line.startswith("#"))]
+        if not rows:
+            raise CalibrationInputError(f"{path}: empty fixture file; expected a header {_FIXTURE_CSV}.")
+        head = [h.strip() for h in rows[0]]
+        needed = ["id", "com_x_m", "com_y_m", "com_z_m"]
+        if any(n not in head for n in needed):
+            raise CalibrationInputError(f"{path}: line 1: the header lacks {[n for n in needed if n not in head]}; "
+                                        f"expected {_FIXTURE_CSV}.")
+        inertia_cols = ["ixx", "iyy", "izz", "ixy", "ixz", "iyz"]
+        for k, row in enumerate(rows[1:], start=2):
+            if len(row) != len(head):
+                raise CalibrationInputError(f"{path}: line {k}: {len(row)} values for {len(head)} columns.")
+            d = dict(zip(head, (v.strip() for v in row)))
+            try:
+                entry = {"id": float(d["id"]), "name": d.get("name") or f"config{d['id']}",
+                         "center_of_mass_m": [float(d[c]) for c in needed[1:]],
+                         "mass_kg": float(d["mass_kg"]) if d.get("mass_kg") else None}
+                if all(d.get(c) for c in inertia_cols):
+                    entry["inertia_kg_m2"] = [float(d[c]) for c in inertia_cols]
+            except ValueError as exc:
+                raise CalibrationInputError(f"{path}: line {k}: {exc}.") from None
+            entries.append((entry, f"{path}: line {k}"))
+    else:
+        raise CalibrationInputError(f"{path}: a fixture file is .json or .csv; got {path.suffix!r}.")
+    if not entries:
+        raise CalibrationInputError(f"{path}: the fixture lists no load configuration.")
+    configs = tuple(_configuration(e, where) for e, where in entries)
+    ids = [c.config_id for c in configs]
+    dup = sorted({i for i in ids if ids.count(i) > 1})
+    if dup:
+        raise CalibrationInputError(f"{path}: configuration id {dup[0]} appears {ids.count(dup[0])} times.")
+    return configs
+
+
+def load_fixture(spec: str | None) -> tuple[str, tuple[LoadConfiguration, ...]]:
+    """``(description, configurations)`` of ``--fixture``: the thesis' default, or a fixture file."""
+    if spec is None or spec == THESIS_FIXTURE:
+        configs = thesis_load_configurations()
+        return (f"the thesis' fixture ({len(configs)} load configurations, ids 0-{len(configs) - 1}: centre and "
+                "Table I)", configs)
+    configs = read_load_configurations(spec)
+    return f"{spec} ({len(configs)} load configurations, ids {', '.join(str(c.config_id) for c in configs)})", configs

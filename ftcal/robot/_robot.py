@@ -31,6 +31,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import KinematicsError
 
 __all__ = [
+    "sensor_mounting_transform",
+    "MOUNTED_SENSOR_FRAME",
     "RobotModel",
     "BUILTIN_ROBOTS",
     "load_robot",
@@ -207,7 +209,52 @@ def _arm_model(full: pin.Model, sensor_frame: str, urdf: Path) -> pin.Model:
     return pin.buildReducedModel(full, locked, pin.neutral(full))
 
 
-def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str | None = None) -> RobotModel:
+#: Name of the frame :func:`load_robot` adds for a ``sensor_mounting``.
+MOUNTED_SENSOR_FRAME = "ftcal_mounted_sensor"
+
+
+def sensor_mounting_transform(mounting) -> pin.SE3:
+    """A sensor mounting as ``pin.SE3``: from ``pin.SE3``, a 4x4 matrix, or 6 numbers
+    ``(rx, ry, rz, x, y, z)`` = a rotation vector [deg] (axis times angle, about the frame's own axes) and an
+    offset [m], both expressed in the URDF's sensor frame.
+
+    Examples
+    --------
+    >>> M = sensor_mounting_transform([0, 0, 90, 0, 0, 0.02])   # turned 90 deg about z, 2 cm further out
+    >>> M.rotation.round(6) + 0.0
+    array([[ 0., -1.,  0.],
+           [ 1.,  0.,  0.],
+           [ 0.,  0.,  1.]])
+    """
+    if isinstance(mounting, pin.SE3):
+        return mounting
+    a = np.asarray(mounting, dtype=float)
+    if a.shape == (4, 4):
+        R, p = a[:3, :3], a[:3, 3]
+        if not np.allclose(R @ R.T, np.eye(3), atol=1e-9) or not np.isclose(np.linalg.det(R), 1.0, atol=1e-9) \
+                or not np.allclose(a[3], [0, 0, 0, 1]):
+            raise KinematicsError("sensor_mounting: a 4x4 mounting must be a rigid transform (rotation, offset).")
+        return pin.SE3(R, p)
+    if a.shape != (6,) or not np.all(np.isfinite(a)):
+        raise KinematicsError(f"sensor_mounting must be rx,ry,rz [deg],x,y,z [m] (6 finite numbers), a 4x4 transform "
+                              f"or a pin.SE3; got {np.asarray(mounting).tolist()!r}.")
+    if np.linalg.norm(a[3:]) > 2.0:
+        raise KinematicsError(f"sensor_mounting offset {a[3:].tolist()} is {np.linalg.norm(a[3:]):.3g} m long; give "
+                              "it in metres.")
+    return pin.SE3(pin.exp3(np.deg2rad(a[:3])), a[3:])
+
+
+def _mount_sensor(model: pin.Model, frame: str, mounting) -> str:
+    """Add the mounted sensor frame (``frame`` composed with ``mounting``) to ``model``; return its name."""
+    fid = model.getFrameId(frame)
+    parent = model.frames[fid]
+    placement = parent.placement * sensor_mounting_transform(mounting)
+    model.addFrame(pin.Frame(MOUNTED_SENSOR_FRAME, parent.parentJoint, fid, placement, pin.FrameType.OP_FRAME))
+    return MOUNTED_SENSOR_FRAME
+
+
+def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str | None = None, *,
+               sensor_mounting=None) -> RobotModel:
     """Load a built-in robot or a URDF file as a :class:`RobotModel`.
 
     Parameters
@@ -218,6 +265,11 @@ def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str 
     sensor_frame : str, optional
         Frame at the sensing origin. Defaults to the built-in's sensor frame;
         required for a URDF path.
+    sensor_mounting : pin.SE3, 4x4 array or 6 numbers, optional
+        How the sensor actually sits relative to ``sensor_frame`` (rotated on
+        the flange, offset by an adapter), without editing the URDF: see
+        :func:`sensor_mounting_transform`. The model's sensor frame becomes
+        ``sensor_frame`` composed with it (frame ``ftcal_mounted_sensor``).
 
     Returns
     -------
@@ -270,6 +322,8 @@ def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str 
     else:
         home = np.clip(np.zeros(model.nq), lower, upper)
     anchor = spec.anchor_frame if spec is not None and spec.anchor_frame and frame == spec.sensor_frame else frame
+    if sensor_mounting is not None:
+        frame = _mount_sensor(model, frame, sensor_mounting)  # the anchor (a wrist centre) stays where it is
     return RobotModel(name=name, model=model, sensor_frame=frame, urdf_path=urdf,
                       home_configuration=home, anchor_frame=anchor)
 

@@ -1,0 +1,84 @@
+"""A linear calibration as a plain 6 x N matrix and offset, for a vendor driver or a fieldbus device.
+
+``wrench = matrix @ raw + offset``: ``matrix`` (6, N) maps the raw channels to ``Fx, Fy, Fz`` [N] and
+``Tx, Ty, Tz`` [N·m], ``offset`` (6,) holds the tare. Any fitted calibrator whose prediction is affine in
+the raw readings has one (the LTM, a degree-1 polynomial, ``auto`` when it chose one, after a re-tare);
+it is read off the model's own ``predict`` and checked on probe readings, so the numbers a driver gets
+are exactly what ``predict`` computes. A nonlinear model has no such matrix and is refused.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core._exceptions import ExportError
+from ..core._wrench import WRENCH_LABELS
+
+__all__ = ["linear_calibration_matrix", "matrix_export_dict"]
+
+
+def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """``(matrix (6, N), offset (6,))`` with ``model.predict(X) == X @ matrix.T + offset``.
+
+    Raises
+    ------
+    ExportError
+        When the model's prediction is not affine in the readings (a network, a GP, a polynomial,
+        temperature compensation).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import LinearCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> raw = rng.normal(size=(50, 6)); w = raw @ rng.normal(size=(6, 6)) + 2.0
+    >>> C, b = linear_calibration_matrix(LinearCalibrator().fit(raw, w))
+    >>> bool(np.allclose(raw @ C.T + b, w))
+    True
+    """
+    n = int(getattr(model, "n_features_in_", 0))
+    if n < 1:
+        raise ExportError(f"{type(model).__name__} is not a fitted calibrator (no n_features_in_); fit it first.")
+    center = np.asarray(getattr(model, "zero_reading_", np.zeros(n)), dtype=float).ravel()
+    if center.shape != (n,):
+        center = np.zeros(n)
+    scale = max(1.0, float(np.max(np.abs(center), initial=0.0)))
+    points = np.vstack([center, center + scale * np.eye(n)])
+    rng = np.random.default_rng(0)
+    probes = center + scale * rng.normal(size=(4 * n + 4, n))
+    try:
+        out = np.asarray(model.predict(np.vstack([points, probes])), dtype=float)
+    except Exception as exc:
+        raise ExportError(f"{type(model).__name__} could not be evaluated for a matrix export "
+                          f"({type(exc).__name__}: {exc}).") from None
+    if out.ndim != 2 or out.shape[1] != 6:
+        raise ExportError(f"{type(model).__name__} does not predict 6 wrench components; got shape {out.shape}.")
+    offset_at_center = out[0]
+    matrix = ((out[1:n + 1] - offset_at_center) / scale).T
+    offset = offset_at_center - matrix @ center
+    expected = probes @ matrix.T + offset
+    got = out[n + 1:]
+    gap = float(np.max(np.abs(got - expected)))
+    if not gap <= 1e-7 * (1.0 + float(np.max(np.abs(got)))):
+        raise ExportError(
+            f"{type(model).__name__} is not a linear calibration (its prediction departs from the best 6x{n} matrix "
+            f"by {gap:.3g} on probe readings), so it has no calibration matrix. Fix: fit --model linear for a matrix, "
+            "or export this model with --format onnx."
+        )
+    return matrix, offset
+
+
+def matrix_export_dict(model: Any) -> dict:
+    """The matrix export as a JSON-able dict (what ``ftcal export --format matrix`` writes to ``.json``)."""
+    matrix, offset = linear_calibration_matrix(model)
+    return {
+        "format": "ftcal-calibration-matrix", "format_version": 1,
+        "equation": "wrench = matrix @ raw + offset",
+        "inputs": [f"s{i}" for i in range(matrix.shape[1])], "outputs": list(WRENCH_LABELS),
+        "units": {"raw": "the sensor's own unit (as in the calibration data)",
+                  "wrench": "Fx, Fy, Fz in N; Tx, Ty, Tz in N·m, sensor frame"},
+        "matrix": matrix.tolist(), "offset": offset.tolist(),
+    }

@@ -1,0 +1,142 @@
+"""``ftcal report`` / ``ftcal fit --report`` (issue 22): the calibration report, checked in a real browser.
+
+The held-out figures are checked against an independent computation (scikit-learn's own
+``LinearRegression`` on the same ``GroupKFold`` folds), the page in headless Chromium (no console message, no
+request of its own, a PDF through the same browser)."""
+
+from __future__ import annotations
+
+import base64
+import hashlib
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LinearRegression
+from sklearn.model_selection import GroupKFold
+
+import browser
+from ftcal import CalibrationDataset
+from ftcal.cli import main
+
+N_GROUPS, PER_GROUP, NOISE = 8, 20, 0.01
+
+
+def sensor_dataset(n_channels: int = 6, seed: int = 0, temperature: bool = False) -> CalibrationDataset:
+    """A noisy affine sensor: loads of O(100 N) / O(2 N·m) in 8 groups (load configurations)."""
+    rng = np.random.default_rng(seed)
+    wrench = rng.normal(size=(N_GROUPS * PER_GROUP, 6)) * [100, 100, 100, 2, 2, 2]
+    gains = rng.normal(size=(n_channels, 6)) / [100, 100, 100, 2, 2, 2]
+    raw = wrench @ gains.T + 0.5 + NOISE * rng.normal(size=(len(wrench), n_channels))
+    extra = {"temperature": rng.uniform(15, 35, len(wrench))} if temperature else {}
+    return CalibrationDataset(raw=raw, wrench=wrench, group=np.repeat(np.arange(N_GROUPS), PER_GROUP),
+                              meta={"sensor": "test sensor SN-1"}, **extra)
+
+
+@pytest.fixture(scope="module")
+def fitted(tmp_path_factory):
+    """``ftcal fit --report`` once (with the stock baselines): its files."""
+    work = tmp_path_factory.mktemp("report")
+    data = sensor_dataset()
+    data.save(work / "data.csv")
+    assert main(["fit", str(work / "data.csv"), "--model", "linear", "--report", "--cv", "4", "--out",
+                 str(work / "models"), "-q"]) == 0
+    return work, data
+
+
+def test_report_states_held_out_accuracy_per_axis_as_independently_computed(fitted):
+    work, data = fitted
+    facts = json.loads((work / "models" / "linear.report.json").read_text())
+    # independent: scikit-learn's OLS on GroupKFold(4) folds of the same groups
+    pred = np.empty_like(data.wrench)
+    for train, test in GroupKFold(4).split(data.raw, groups=data.group):
+        pred[test] = LinearRegression().fit(data.raw[train], data.wrench[train]).predict(data.raw[test])
+    err = pred - data.wrench
+    rms = np.sqrt(np.mean(err**2, axis=0))
+    fs = np.abs(data.wrench).max(axis=0)
+    acc = {a["axis"]: a for a in facts["accuracy"]}
+    for k, axis in enumerate(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")):
+        assert acc[axis]["rms"] == pytest.approx(rms[k], rel=1e-6)
+        assert acc[axis]["max"] == pytest.approx(np.abs(err[:, k]).max(), rel=1e-6)
+        assert acc[axis]["rms_pct_fs"] == pytest.approx(100 * rms[k] / fs[k], rel=1e-6)
+        assert acc[axis]["u95"] == pytest.approx(2 * rms[k], rel=1e-6)
+        # normal errors: about 95 % within 2 RMS (160 rows: binomial spread ~2 %)
+        assert 0.85 <= acc[axis]["coverage_u95"] <= 1.0
+    assert facts["validation"]["folds"] == 4 and "GroupKFold" in facts["validation"]["split"]
+    assert facts["data"]["rows"] == 160 and facts["data"]["groups"] == 8
+    assert facts["sensor"] == "test sensor SN-1"
+    model_file = work / "models" / "linear.model.npz"
+    assert facts["model"]["sha256"] == hashlib.sha256(model_file.read_bytes()).hexdigest()
+
+
+def test_report_compares_with_every_stock_baseline_on_the_same_folds(fitted):
+    work, _ = fitted
+    choice = json.loads((work / "models" / "linear.report.json").read_text())["model_choice"]
+    names = [c["model"] for c in choice]
+    assert names == ["LinearCalibrator (this calibration)", "sk_linear", "sk_poly2", "sk_poly3", "sk_kernel_ridge",
+                     "sk_gp"]
+    # the LTM and scikit-learn's OLS are the same least-squares problem: equal held-out RMSE on the same folds
+    assert choice[0]["rmse"] == pytest.approx(choice[1]["rmse"], rel=1e-6)
+    assert all(c["status"] == "scored" and c["rmse"] > 0 for c in choice)
+
+
+def test_report_page_is_self_contained(fitted):
+    work, _ = fitted
+    page = (work / "models" / "linear.report.html").read_text()
+    assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:)", page)  # nothing to fetch
+    assert "http://" not in page and "https://" not in page
+    images = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
+    assert len(images) == 2
+    assert all(base64.b64decode(i).startswith(b"\x89PNG\r\n\x1a\n") for i in images)
+    for heading in ("Held-out accuracy per axis", "Model choice", "Calibrated range", "Frames and units",
+                    "Residuals against load magnitude", "Residuals against load direction"):
+        assert heading in page
+
+
+def test_report_loads_in_chromium_without_console_errors_or_requests(fitted, tmp_path):
+    work, _ = fitted
+    shown = browser.render(work / "models" / "linear.report.html", tmp_path / "chromium")
+    assert shown.console == [] and shown.page_requests == []
+    assert shown.dom.count("<tr") > 6 + 6 and "Held-out accuracy per axis" in shown.dom
+
+
+def test_the_browser_check_catches_console_errors_and_requests(tmp_path):
+    """The harness above can fail: a page that logs an error and fetches a picture is caught on both counts."""
+    bad = tmp_path / "bad.html"
+    bad.write_text('<!DOCTYPE html><html><body><img src="http://example.invalid/x.png">'
+                   '<script>console.error("boom")</script></body></html>')
+    shown = browser.render(bad, tmp_path / "chromium")
+    assert any('"boom"' in line for line in shown.console)
+    assert shown.page_requests == ["http://example.invalid/x.png"]
+
+
+def test_report_prints_to_pdf_through_the_browser(fitted, tmp_path):
+    work, _ = fitted
+    pdf = browser.print_pdf(work / "models" / "linear.report.html", tmp_path / "report.pdf", tmp_path / "chromium")
+    body = pdf.read_bytes()
+    assert body.startswith(b"%PDF-") and len(body) > 20_000  # text and two pictures
+
+
+def test_report_for_a_dataset_of_another_sensor_is_one_line(fitted, tmp_path, capsys):
+    work, _ = fitted
+    sensor_dataset(n_channels=8, seed=1).save(tmp_path / "other.csv")
+    code = main(["report", str(work / "models" / "linear.model.npz"), str(tmp_path / "other.csv"),
+                 "--out", str(tmp_path / "r"), "--no-baselines"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert err.startswith("ftcal: error:") and "6 inputs" in err and "8 raw channels" in err
+    assert not (tmp_path / "r").exists() or not any((tmp_path / "r").iterdir())
+
+
+def test_temperature_fit_honours_alpha_and_reports_coefficients(tmp_path):
+    sensor_dataset(temperature=True).save(tmp_path / "warm.csv")
+    assert main(["fit", str(tmp_path / "warm.csv"), "--model", "linear", "--temperature", "--alpha", "50",
+                 "--report", "--no-baselines", "--out", str(tmp_path / "m"), "-q"]) == 0
+    assert json.loads((tmp_path / "m" / "linear.fit.json").read_text())["alpha"] == 50.0
+    facts = json.loads((tmp_path / "m" / "linear.report.json").read_text())
+    assert facts["model"]["alpha"] == 50.0
+    assert len(facts["temperature_coefficients"]["gain_per_deg"]) == 6
+    assert facts["data"]["temperature_range"][0] >= 15 and facts["data"]["temperature_range"][1] <= 35
+    assert "Temperature coefficients" in (tmp_path / "m" / "linear.report.html").read_text()
