@@ -128,3 +128,15 @@ def test_command_line_wrapper(tmp_path, capsys):
     assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 2
     assert "--force" in capsys.readouterr().err
     assert (out / "artificial_results.md").read_text() == "edited by hand"
+
+
+def test_stock_baselines_sit_beside_the_calibrators_and_presets_bring_their_test_loads(tmp_path):
+    res = run_artificial_benchmark(quick=True, n_datasets=1, presets=("reconstructed", "thesis"),
+                                   models=("linear", "sk_linear"), out_dir=tmp_path, plot=False)
+    assert res["meta"]["test_distributions"] == {"reconstructed": "ball", "thesis": "radial"}
+    table = res["summary"]["reconstructed"]["models"]
+    # the same estimator (unregularised affine least squares) on the same data: the same error
+    assert table["sk_linear"]["rmse"]["mean"] == pytest.approx(table["linear"]["rmse"]["mean"], rel=1e-6)
+    md = (tmp_path / "artificial_results.md").read_text()
+    assert "| sk_linear | 1 |" in md and "Test loads: `ball`" in md
+    assert "62.3" in md.split("### Preset `thesis`")[0]  # the thesis' Table II beside `reconstructed`

@@ -92,6 +92,15 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
     )
     a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
     a.add_argument(
+        "--test-distribution", choices=("radial", "box", "ball"), default=None,
+        help="test-load sampling (default: the preset's own, 'ball' for reconstructed, else 'radial')",
+    )
+    a.add_argument(
+        "--baselines", action=argparse.BooleanOptionalAction, default=None,
+        help="also fit the stock scikit-learn baselines (sk_linear ... sk_gp) on the same data "
+             "(default: yes unless --model is given)",
+    )
+    a.add_argument(
         "--stack", type=int_in_range(1, 1000, "stack"), default=1,
         help="train up to this many network fits (one preset and model, several datasets) together as one "
              "stacked module: same results up to float32 rounding, ~10x less CPU with 30 (default 1)",
@@ -225,6 +234,13 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(dict.fromkeys(args.models or ("linear", "comparative", "directional")))
 
 
+def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
+    from ..models._baselines import STOCK_BASELINE_NAMES
+
+    baselines = not args.models if args.baselines is None else args.baselines
+    return _models(args) + (STOCK_BASELINE_NAMES if baselines else ())
+
+
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
 
@@ -241,7 +257,8 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
         result = ftcal.run_artificial_benchmark(
-            n_datasets=args.n_datasets, presets=presets, models=_models(args), schedule=args.schedule,
+            n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
+            test_distribution=args.test_distribution,
             seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
             force=args.force, stack=args.stack,
         )

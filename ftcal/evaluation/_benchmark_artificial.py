@@ -30,7 +30,7 @@ Statistics
 * Relative errors (Table III): eq. 19 per test sample, averaged per dataset;
   mean ± std across datasets.
 * Wilcoxon signed-rank test (two-sided) of the per-dataset RMSE of every
-  model pair, paired by dataset. With fewer than 6 pairs even the most
+  model pair (but no pair of two stock baselines), paired by dataset. With fewer than 6 pairs even the most
   extreme outcome has p >= 0.0625, so the test cannot show a difference:
   p is reported as NaN with a note; likewise when every difference is zero.
 * Noise floor: per dataset (see :mod:`ftcal.simulation._artificial`); mean ± std.
@@ -54,7 +54,7 @@ from ..simulation._artificial import make_artificial_dataset
 from ..core._files import plain_json
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
-from ..simulation._presets import error_preset
+from ..simulation._presets import default_test_distribution, error_preset
 from ..simulation._sampling import TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
 
@@ -140,6 +140,8 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
             }
         pairs = {}
         for m1, m2 in itertools.combinations(models, 2):
+            if m1.startswith("sk_") and m2.startswith("sk_"):
+                continue  # the baselines are compared with ftcal's models, not with each other
             common = sorted(set(by_model[m1]) & set(by_model[m2]))
             p, note = wilcoxon_pvalue([by_model[m1][i]["rmse"] for i in common], [by_model[m2][i]["rmse"] for i in common])
             pairs[f"{m1} vs {m2}"] = {"p": p, "n": len(common), "note": note}
@@ -171,17 +173,33 @@ def dataset_seeds(seed: int, index: int) -> tuple[int, int]:
 
 def _data_and_model(task: dict):
     """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
-    from ..models._registry import make_calibrator
-
     data_seed, model_seed = dataset_seeds(task["seed"], task["dataset"])
     profile = SensorProfile.default()
     train, test, info = make_artificial_dataset(
         task["preset"], random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
         n_test=task["n_test"], test_distribution=task["test_distribution"],
     )
-    model = make_calibrator(task["model"], schedule=task["schedule"], random_state=model_seed,
-                            alpha=profile.alpha, **task["overrides"])
+    model = make_model(task["model"], profile, task["schedule"], model_seed, task["overrides"])
     return (train, test, info), model, profile
+
+
+def make_model(name: str, profile: SensorProfile, schedule: str, random_state: int, overrides: dict | None = None):
+    """An unfitted model by name: a registered calibrator, or a stock scikit-learn baseline (``sk_*``).
+
+    The stock baselines (:func:`~ftcal.models.stock_baselines`) are what a
+    user gets for free; every table shows them beside ftcal's calibrators.
+
+    Examples
+    --------
+    >>> make_model("sk_linear", SensorProfile.default(), "short", 0)
+    LinearRegression()
+    """
+    from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
+    from ..models._registry import make_calibrator
+
+    if name in STOCK_BASELINE_NAMES:
+        return stock_baselines(profile.n_channels, random_state=int(random_state))[name]
+    return make_calibrator(name, schedule=schedule, random_state=random_state, alpha=profile.alpha, **(overrides or {}))
 
 
 def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int = 1) -> dict:
@@ -245,13 +263,14 @@ def _run_group(tasks: list[dict]) -> list[dict]:
 def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
     """Pending tasks as work units: network fits of one preset and model in chunks of ``stack``; others alone."""
     from ..neural_network._base import NetworkCalibrator
-    from ..models._registry import make_calibrator
+    from ..models._registry import CALIBRATOR_NAMES, make_calibrator
 
     if stack <= 1:
         return [[t] for t in pending]
     groups: dict[tuple, list[dict]] = {}
     units = []
-    stackable = {m: isinstance(make_calibrator(m), NetworkCalibrator) for m in {t["model"] for t in pending}}
+    stackable = {m: m in CALIBRATOR_NAMES and isinstance(make_calibrator(m), NetworkCalibrator)
+                 for m in {t["model"] for t in pending}}
     for task in pending:
         if stackable[task["model"]]:
             groups.setdefault((task["preset"], task["model"]), []).append(task)
@@ -309,8 +328,8 @@ def format_mean_std(stat: dict, digits: int = 2) -> str:
 
 
 def _thesis_cell(preset: str, model: str, key: str, digits: int) -> str:
-    """The thesis' value for the ``thesis`` preset (it simulated no other), else a dash."""
-    ref = THESIS_TABLES.get(model, {}).get(key) if preset == "thesis" else None
+    """The thesis' value for the presets meant to match its study (``thesis``, ``reconstructed``), else a dash."""
+    ref = THESIS_TABLES.get(model, {}).get(key) if preset in ("thesis", "reconstructed") else None
     return "—" if ref is None else f"{ref[0]:.{digits}f} ± {ref[1]:.{digits + 1}g}"
 
 
@@ -324,9 +343,11 @@ def markdown_tables(summary: dict, meta: dict) -> str:
     ]
     for preset, s in summary.items():
         nf = s["noise_floor"]
+        distribution = meta.get("test_distributions", {}).get(preset, meta.get("test_distribution"))
         lines += [
             f"### Preset `{preset}`",
             "",
+            f"Test loads: `{distribution}`. "
             f"Noise floor (perfect calibrator): {format_mean_std(nf, 2)} N over {nf['n']} datasets.",
             "",
             "| Model | datasets | RMSE [N] (ours) | RMSE (thesis T. II) | rel. force (ours) | rel. force (thesis T. III)"
@@ -349,15 +370,17 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 
 # ----------------------------------------------------------------- driver
 def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
+    from ..models._baselines import STOCK_BASELINE_NAMES
     from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
 
     if int(n_datasets) < 1:
         raise CalibrationInputError(f"n_datasets must be >= 1; got {n_datasets}.")
     for p in presets:
         error_preset(p)
-    unknown = [m for m in models if m not in tuple(CALIBRATOR_NAMES)]
+    known = tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES
+    unknown = [m for m in models if m not in known]
     if unknown or not models:
-        raise CalibrationInputError(f"unknown models {unknown or models}; choose from {tuple(CALIBRATOR_NAMES)}.")
+        raise CalibrationInputError(f"unknown models {unknown or models}; choose from {known}.")
     if schedule not in SCHEDULE_NAMES:
         raise CalibrationInputError(f"unknown schedule {schedule!r}; choose one of {SCHEDULE_NAMES}.")
     if n_jobs == 0:
@@ -367,18 +390,19 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
 
 
 def _tasks(n_datasets, presets, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution) -> list[dict]:
-    from ..models._registry import training_schedule
+    from ..models._registry import CALIBRATOR_NAMES, training_schedule
 
     tasks = []
     # dataset-major order: a run stopped early still covers every preset and model
     for index, preset, model in itertools.product(range(n_datasets), presets, models):
         overrides = {}
-        if quick and training_schedule(schedule, model):
+        distribution = test_distribution or default_test_distribution(preset)
+        if quick and model in CALIBRATOR_NAMES and training_schedule(schedule, model):
             overrides = {k: QUICK[k] for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")}
         config = {
             "format": _FORMAT, "preset": preset, "error_model": error_preset(preset).to_dict(), "model": model,
             "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,
-            "n_test": n_test, "test_distribution": test_distribution,
+            "n_test": n_test, "test_distribution": distribution,
         }
         tasks.append({**config, "dataset": index, "config": config, "hash": _config_hash(config)})
     return tasks
@@ -411,7 +435,7 @@ def run_artificial_benchmark(
     compute: bool = True,
     n_per_sphere: int | None = None,
     n_test: int | None = None,
-    test_distribution: str = "radial",
+    test_distribution: str | None = None,
     plot: bool = True,
     stack: int = 1,
 ) -> dict:
@@ -424,7 +448,9 @@ def run_artificial_benchmark(
     presets : sequence of str, default=("thesis",)
         Error presets (:data:`~ftcal.ERROR_PRESETS`).
     models : sequence of str
-        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`).
+        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`) and stock
+        scikit-learn baselines (:data:`~ftcal.models.STOCK_BASELINE_NAMES`,
+        ``sk_linear`` ... ``sk_gp``), fitted on the same data.
     schedule : {"thesis", "short"}
         Training schedule of the networks.
     seed : int, default=0
@@ -445,8 +471,9 @@ def run_artificial_benchmark(
         ``False``: only aggregate what the cache already holds.
     n_per_sphere, n_test : int, optional
         Dataset sizes (default 1250 / 1250, or the quick sizes).
-    test_distribution : {"radial", "box"}
-        See :mod:`ftcal.simulation._sampling`.
+    test_distribution : {"radial", "box", "ball"}, optional
+        See :mod:`ftcal.simulation._sampling`; default: each preset's own
+        (``"ball"`` for ``reconstructed``, else ``"radial"``).
     plot : bool, default=True
         Write the Fig. 5 PNG per preset.
     stack : int, default=1
@@ -465,7 +492,7 @@ def run_artificial_benchmark(
     t0 = time.perf_counter()
     presets, models = tuple(presets), tuple(models)
     _check_args(n_datasets, presets, models, schedule, n_jobs, stack)
-    if test_distribution not in TEST_DISTRIBUTIONS:
+    if test_distribution is not None and test_distribution not in TEST_DISTRIBUTIONS:
         raise CalibrationInputError(f"unknown test distribution {test_distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])
@@ -503,7 +530,8 @@ def run_artificial_benchmark(
     meta = {
         "n_datasets": int(n_datasets), "presets": list(presets), "models": list(models), "schedule": schedule,
         "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_test": n_test,
-        "test_distribution": test_distribution, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
+        "test_distribution": test_distribution,
+        "test_distributions": {p: test_distribution or default_test_distribution(p) for p in presets}, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
         "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
         "wall_seconds": None,
     }

@@ -30,7 +30,7 @@ from ..io._dataset import CalibrationDataset
 from ._error_models import ErrorModel, SampledErrors
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import wrench_rmse
-from ._presets import error_preset
+from ._presets import default_test_distribution, error_preset
 from ._sampling import continuous_wrenches, sphere_wrenches
 from ._sensor import SensorProfile
 
@@ -150,7 +150,7 @@ def make_artificial_dataset(
     profile: SensorProfile | None = None,
     n_per_sphere: int = 1250,
     n_test: int = 1250,
-    test_distribution: str = "radial",
+    test_distribution: str | None = None,
     zero_offset: ArrayLike | None = None,
 ) -> tuple[CalibrationDataset, CalibrationDataset, dict]:
     """One artificial dataset of the thesis (IV-A): four-sphere train set, continuous test set.
@@ -158,7 +158,8 @@ def make_artificial_dataset(
     Parameters
     ----------
     preset : str or ErrorModel, default="thesis"
-        Error preset (``"thesis"``, ``"asymmetric"``, ``"stress"``, ``"none"``) or a model.
+        Error preset (``"thesis"``, ``"asymmetric"``, ``"stress"``, ``"reconstructed"``,
+        ``"none"``) or a model.
     random_state : int or numpy.random.Generator, optional
         Seed; the same seed gives the same data.
     profile : SensorProfile, optional
@@ -169,8 +170,10 @@ def make_artificial_dataset(
         Training points per sphere (5000 in all, IV-A-a).
     n_test : int, default=1250
         Test points (IV-A-b).
-    test_distribution : {"radial", "box"}, default="radial"
-        See :mod:`ftcal.simulation._sampling`.
+    test_distribution : {"radial", "box", "ball"}, optional
+        See :mod:`ftcal.simulation._sampling`. Default: the preset's
+        (:func:`~ftcal.simulation._presets.default_test_distribution`:
+        ``"ball"`` for ``"reconstructed"``, else ``"radial"``).
     zero_offset : array-like of shape (N,), optional
         Raw zero-load offset added to every reading.
 
@@ -190,6 +193,8 @@ def make_artificial_dataset(
     ((20, 6), (4, 6), [0, 1, 2, 3])
     """
     rng = np.random.default_rng(random_state)
+    if test_distribution is None:
+        test_distribution = default_test_distribution(preset)
     profile = SensorProfile.default() if profile is None else profile
     model = error_preset(preset)
     sensor = VirtualSensor(profile, errors=model, zero_offset=zero_offset, random_state=rng)
