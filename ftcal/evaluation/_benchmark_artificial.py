@@ -44,7 +44,7 @@ import json
 import math
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -54,6 +54,7 @@ from ..simulation._artificial import make_artificial_dataset
 from ..core._files import plain_json
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
+from ..simulation._error_models import ErrorModel
 from ..simulation._presets import default_test_distribution, error_preset
 from ..simulation._sampling import TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
@@ -176,8 +177,8 @@ def _data_and_model(task: dict):
     data_seed, model_seed = dataset_seeds(task["seed"], task["dataset"])
     profile = SensorProfile.default()
     train, test, info = make_artificial_dataset(
-        task["preset"], random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
-        n_test=task["n_test"], test_distribution=task["test_distribution"],
+        ErrorModel(**task["error_model"]), random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
+        n_test=task["n_test"], test_distribution=task["test_distribution"], n_spheres=task.get("n_spheres", 4),
     )
     model = make_model(task["model"], profile, task["schedule"], model_seed, task["overrides"])
     return (train, test, info), model, profile
@@ -376,7 +377,8 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
     if int(n_datasets) < 1:
         raise CalibrationInputError(f"n_datasets must be >= 1; got {n_datasets}.")
     for p in presets:
-        error_preset(p)
+        if not isinstance(p, str):
+            raise CalibrationInputError(f"preset names must be strings; got {p!r}.")
     known = tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES
     unknown = [m for m in models if m not in known]
     if unknown or not models:
@@ -389,7 +391,18 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
         raise CalibrationInputError(f"stack must be an integer >= 1 (nets trained together); got {stack!r}.")
 
 
-def _tasks(n_datasets, presets, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution) -> list[dict]:
+def _preset_models(presets: Sequence[str] | Mapping[str, ErrorModel]) -> dict[str, ErrorModel]:
+    """Preset name -> error model: named presets looked up, a mapping's models checked."""
+    if isinstance(presets, Mapping):
+        bad = {k: v for k, v in presets.items() if not isinstance(v, ErrorModel)}
+        if bad:
+            raise CalibrationInputError(f"presets maps names to ErrorModel instances; got {bad!r:.120}.")
+        return dict(presets)
+    return {p: error_preset(p) for p in presets}
+
+
+def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution,
+           n_spheres=4) -> list[dict]:
     from ..models._registry import CALIBRATOR_NAMES, training_schedule
 
     tasks = []
@@ -400,9 +413,10 @@ def _tasks(n_datasets, presets, models, schedule, seed, quick, n_per_sphere, n_t
         if quick and model in CALIBRATOR_NAMES and training_schedule(schedule, model):
             overrides = {k: QUICK[k] for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")}
         config = {
-            "format": _FORMAT, "preset": preset, "error_model": error_preset(preset).to_dict(), "model": model,
+            "format": _FORMAT, "preset": preset, "error_model": presets[preset].to_dict(), "model": model,
             "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,
             "n_test": n_test, "test_distribution": distribution,
+            **({} if n_spheres == 4 else {"n_spheres": int(n_spheres)}),  # 4: the hash of earlier caches
         }
         tasks.append({**config, "dataset": index, "config": config, "hash": _config_hash(config)})
     return tasks
@@ -422,7 +436,7 @@ def _load_cached(path: Path, task: dict) -> dict | None:
 
 def run_artificial_benchmark(
     n_datasets: int = 30,
-    presets: Sequence[str] = ("thesis",),
+    presets: Sequence[str] | Mapping[str, ErrorModel] = ("thesis",),
     models: Sequence[str] = ("linear", "comparative", "directional"),
     schedule: str = "thesis",
     seed: int = 0,
@@ -438,6 +452,7 @@ def run_artificial_benchmark(
     test_distribution: str | None = None,
     plot: bool = True,
     stack: int = 1,
+    n_spheres: int = 4,
 ) -> dict:
     """Run (or resume) the artificial benchmark and write its summary files.
 
@@ -445,8 +460,9 @@ def run_artificial_benchmark(
     ----------
     n_datasets : int, default=30
         Datasets per preset (indices 0 .. n-1; the same data for every model).
-    presets : sequence of str, default=("thesis",)
-        Error presets (:data:`~ftcal.ERROR_PRESETS`).
+    presets : sequence of str or mapping of str to ErrorModel, default=("thesis",)
+        Error presets (:data:`~ftcal.ERROR_PRESETS`), or names mapped to
+        error models of your own (e.g. a sweep of one parameter).
     models : sequence of str
         Registry names (:data:`~ftcal.CALIBRATOR_NAMES`) and stock
         scikit-learn baselines (:data:`~ftcal.models.STOCK_BASELINE_NAMES`,
@@ -481,6 +497,8 @@ def run_artificial_benchmark(
         different datasets) together as one stacked module
         (:func:`~ftcal.fit_stacked`): the same results up to float32
         rounding, about 10x less CPU time with 30. 1 fits one by one.
+    n_spheres : int, default=4
+        Training spheres, the outermost ones (see :func:`~ftcal.make_artificial_dataset`).
 
     Returns
     -------
@@ -490,7 +508,8 @@ def run_artificial_benchmark(
         ``wilcoxon``; ``noise_floor``), ``results`` (every record) and ``files``.
     """
     t0 = time.perf_counter()
-    presets, models = tuple(presets), tuple(models)
+    preset_models = _preset_models(presets)
+    presets, models = tuple(preset_models), tuple(models)
     _check_args(n_datasets, presets, models, schedule, n_jobs, stack)
     if test_distribution is not None and test_distribution not in TEST_DISTRIBUTIONS:
         raise CalibrationInputError(f"unknown test distribution {test_distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
@@ -506,7 +525,8 @@ def run_artificial_benchmark(
     outputs.check(names)  # fail before hours of work, not after
 
     cache_dir = out_dir / "cache"
-    tasks = _tasks(int(n_datasets), presets, models, schedule, int(seed), quick, n_per_sphere, n_test, test_distribution)
+    tasks = _tasks(int(n_datasets), preset_models, models, schedule, int(seed), quick, n_per_sphere, n_test,
+                   test_distribution, n_spheres)
     results, pending = [], []
     for task in tasks:
         rec = _load_cached(_cache_path(cache_dir, task), task)
@@ -529,7 +549,8 @@ def run_artificial_benchmark(
     summary = summarize_results(results, models, presets)
     meta = {
         "n_datasets": int(n_datasets), "presets": list(presets), "models": list(models), "schedule": schedule,
-        "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_test": n_test,
+        "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_spheres": int(n_spheres),
+        "n_test": n_test,
         "test_distribution": test_distribution,
         "test_distributions": {p: test_distribution or default_test_distribution(p) for p in presets}, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
         "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
