@@ -180,11 +180,13 @@ def _data_and_model(task: dict):
         ErrorModel(**task["error_model"]), random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
         n_test=task["n_test"], test_distribution=task["test_distribution"], n_spheres=task.get("n_spheres", 4),
     )
-    model = make_model(task["model"], profile, task["schedule"], model_seed, task["overrides"])
+    model = make_model(task["model"], n_channels=profile.n_channels, alpha=profile.alpha, schedule=task["schedule"],
+                       random_state=model_seed, overrides=task["overrides"])
     return (train, test, info), model, profile
 
 
-def make_model(name: str, profile: SensorProfile, schedule: str, random_state: int, overrides: dict | None = None):
+def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "thesis", random_state: int = 0,
+               overrides: dict | None = None):
     """An unfitted model by name: a registered calibrator, or a stock scikit-learn baseline (``sk_*``).
 
     The stock baselines (:func:`~ftcal.models.stock_baselines`) are what a
@@ -192,15 +194,17 @@ def make_model(name: str, profile: SensorProfile, schedule: str, random_state: i
 
     Examples
     --------
-    >>> make_model("sk_linear", SensorProfile.default(), "short", 0)
+    >>> make_model("sk_linear", n_channels=6, alpha=50.0)
     LinearRegression()
+    >>> make_model("linear", n_channels=6, alpha=50.0).alpha
+    50.0
     """
     from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
     from ..models._registry import make_calibrator
 
     if name in STOCK_BASELINE_NAMES:
-        return stock_baselines(profile.n_channels, random_state=int(random_state))[name]
-    return make_calibrator(name, schedule=schedule, random_state=random_state, alpha=profile.alpha, **(overrides or {}))
+        return stock_baselines(int(n_channels), random_state=int(random_state))[name]
+    return make_calibrator(name, schedule=schedule, random_state=random_state, alpha=alpha, **(overrides or {}))
 
 
 def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int = 1) -> dict:
