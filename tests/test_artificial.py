@@ -147,3 +147,25 @@ def test_reconstructed_preset_uses_ball_loads_and_puts_the_ltm_far_above_the_noi
     assert rmse > 4 * info["noise_floor"]  # noise: 1 % of rms |w| / sqrt(6) ≈ 9 N
     # the thesis' own figure (62.3 N) is of this size, not of the noise floor's
     assert 40.0 < rmse < 90.0
+
+
+def test_fewer_spheres_are_the_outermost_ones():
+    train, _, info = make_artificial_dataset("none", random_state=0, n_per_sphere=3, n_test=2, n_spheres=2)
+    radius = np.linalg.norm(scale_torques(train.wrench, 50.0), axis=1)
+    np.testing.assert_allclose(np.unique(radius.round(6)), [1200.0, 1600.0])
+    assert info["sphere_radii"] == [1200.0, 1600.0] and train.group.tolist() == [0, 0, 0, 1, 1, 1]
+    for bad in (0, 5, 2.5, True):
+        with pytest.raises(CalibrationInputError, match="n_spheres"):
+            make_artificial_dataset("none", random_state=0, n_per_sphere=3, n_test=2, n_spheres=bad)
+
+
+def test_simulate_dataset_cli_takes_the_presets_test_distribution(tmp_path):
+    from ftcal.cli import main
+
+    out = tmp_path / "data"
+    assert main(["simulate", "dataset", "--preset", "reconstructed", "--n-per-sphere", "5", "--n-test", "50",
+                 "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "info.json").read_text())["datasets"][0]["test_distribution"] == "ball"
+    assert main(["simulate", "dataset", "--preset", "reconstructed", "--test-distribution", "radial",
+                 "--n-per-sphere", "5", "--n-test", "50", "--out", str(tmp_path / "radial"), "--quiet"]) == 0
+    assert json.loads((tmp_path / "radial" / "info.json").read_text())["datasets"][0]["test_distribution"] == "radial"

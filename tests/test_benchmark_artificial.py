@@ -140,3 +140,16 @@ def test_stock_baselines_sit_beside_the_calibrators_and_presets_bring_their_test
     md = (tmp_path / "artificial_results.md").read_text()
     assert "| sk_linear | 1 |" in md and "Test loads: `ball`" in md
     assert "62.3" in md.split("### Preset `thesis`")[0]  # the thesis' Table II beside `reconstructed`
+
+
+def test_custom_error_models_by_name_and_fewer_spheres(tmp_path):
+    from ftcal import ErrorModel
+
+    presets = {"clean": ErrorModel(), "gain10": ErrorModel(asymmetry=0.1, asymmetry_axes=6)}
+    res = run_artificial_benchmark(quick=True, n_datasets=1, presets=presets, models=("linear",), out_dir=tmp_path,
+                                   plot=False, n_spheres=1, test_distribution="ball")
+    rmse = {p: res["summary"][p]["models"]["linear"]["rmse"]["mean"] for p in presets}
+    assert rmse["clean"] < 1e-6 < rmse["gain10"]  # no errors: the LTM is exact; a sign-dependent gain it cannot fit
+    assert res["results"][0]["config"]["n_spheres"] == 1
+    with pytest.raises(CalibrationInputError, match="ErrorModel"):
+        run_artificial_benchmark(presets={"x": "thesis"}, out_dir=tmp_path / "bad")
