@@ -61,7 +61,7 @@ def eq18_effect(n: int) -> dict:
 
 
 def spread_explained(cache: Path) -> dict | None:
-    recs = [json.loads(p.read_text()) for p in cache.glob("ds*_linear_*.json")]
+    recs = [r for r in (json.loads(p.read_text()) for p in cache.glob("ds*_linear_*.json")) if r["model"] == "linear"]
     if len(recs) < 3:
         return None
     rmse = np.array([r["rmse"] for r in recs])
