@@ -87,7 +87,7 @@ def summarise(result: dict, levels, models) -> dict:
         if rival in models and "directional" in models:
             usable = [r for r in rows if r["models"]["directional"]["n"] and r["models"][rival]["n"]]
             diff = [r["models"][rival]["mean"] - r["models"]["directional"]["mean"] for r in usable]
-            crossing[rival] = crossover_level([r["asymmetry"] for r in usable], diff) if usable else None
+            crossing[rival] = crossover_level([r["asymmetry"] for r in usable], diff) if usable else "no data yet"
     return {"levels": rows, "crossover": crossing}
 
 
@@ -107,7 +107,8 @@ def markdown(table: dict, meta: dict, models) -> str:
         lines.append(f"| {100 * r['asymmetry']:.0f} % | {r['noise_floor']:.2f} | " + " | ".join(cells) + f" | {wins} |")
     lines += ["", "Directional DNN better than (mean RMSE, linear interpolation between levels) from a gain of:", ""]
     for rival, a in table["crossover"].items():
-        lines.append(f"- {rival}: " + ("never in the sweep" if a is None else f"{100 * a:.1f} %"))
+        lines.append(f"- {rival}: " + ("never in the sweep" if a is None else a if isinstance(a, str)
+                                       else f"{100 * a:.1f} %"))
     return "\n".join(lines) + "\n"
 
 
@@ -126,7 +127,7 @@ def plot(table: dict, models, path: Path) -> None:
             ax.errorbar(xs, mu, yerr=sd, marker="o", capsize=3, label=m)
     ax.plot(x, [r["noise_floor"] for r in table["levels"]], "k--", label="noise floor")
     for rival, a in table["crossover"].items():
-        if a is not None and rival == "linear":
+        if isinstance(a, float) and rival == "linear":
             ax.axvline(100 * a, color="grey", lw=0.8, ls=":")
     ax.set_xlabel("sign-dependent gain a on all six axes [%]  (reconstructed preset: 20 %)")
     ax.set_ylabel("test RMSE, eq. 18 [N]")
