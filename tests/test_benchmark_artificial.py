@@ -117,10 +117,15 @@ def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):
     assert not (tmp_path / "cache").exists()
 
 
-def test_command_line_wrapper(tmp_path, capsys):
+def _load_script():
     spec = importlib.util.spec_from_file_location("bench_artificial", ROOT / "benchmarks" / "artificial.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
+    return module
+
+
+def test_command_line_wrapper(tmp_path, capsys):
+    module = _load_script()
     out = tmp_path / "cli"
     assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 0
     assert "3/3 results" in capsys.readouterr().out
@@ -153,3 +158,21 @@ def test_custom_error_models_by_name_and_fewer_spheres(tmp_path):
     assert res["results"][0]["config"]["n_spheres"] == 1
     with pytest.raises(CalibrationInputError, match="ErrorModel"):
         run_artificial_benchmark(presets={"x": "thesis"}, out_dir=tmp_path / "bad")
+
+
+def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_asked_for():
+    import argparse
+
+    from ftcal.cli._benchmark import _artificial_models
+    from ftcal.models import STOCK_BASELINE_NAMES
+
+    def models(names, baselines):
+        return _artificial_models(argparse.Namespace(models=names, baselines=baselines))
+
+    assert models(None, None) == ("linear", "comparative", "directional") + STOCK_BASELINE_NAMES
+    assert models(["linear"], None) == ("linear",)
+    assert models(["linear"], True) == ("linear",) + STOCK_BASELINE_NAMES
+    assert models(None, False) == ("linear", "comparative", "directional")
+    script = _load_script()
+    assert script._models(script.build_parser().parse_args([]))[-5:] == list(STOCK_BASELINE_NAMES)
+    assert script._models(script.build_parser().parse_args(["--models", "linear"])) == ["linear"]

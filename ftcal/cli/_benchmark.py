@@ -24,9 +24,11 @@ examples:
   ftcal benchmark artificial --quick --out bench              # smoke run, under 2 minutes
   ftcal benchmark artificial --schedule short --n-datasets 10 --jobs 2 --out bench
   ftcal benchmark artificial --preset thesis --preset asymmetric --preset stress --out bench_full
+  ftcal benchmark artificial --preset reconstructed --model linear --model directional --baselines --out rec
   ftcal benchmark artificial --n-datasets 30 --preset thesis --scheduler tcp://head-node:8786 --out bench_full
 
-N datasets per preset, every calibrator; writes artificial_results.json / .md (RMSE and
+N datasets per preset, every calibrator and (unless --model is given) the stock scikit-learn
+baselines on the same data; writes artificial_results.json / .md (RMSE and
 relative errors mean ± std beside the thesis' Tables II-III, Wilcoxon p-values, noise floor)
 and artificial_rmse_<preset>.png. Finished fits are cached in DIR/cache: re-running the same
 command resumes where it stopped.

@@ -24,6 +24,7 @@ DATASET_EXAMPLE = """\
 examples:
   ftcal simulate dataset --out data                      # thesis preset: train.csv (5000), test.csv (1250)
   ftcal simulate dataset --preset asymmetric --n-datasets 5 --seed 7 --out data5
+  ftcal simulate dataset --preset reconstructed --out rec   # 20 % sign-dependent gains, ball test loads
   ftcal simulate dataset --sensor my_sensor.cal --zero-offset 0.05 --format npz --out mine
 
 writes DIR/train.<fmt>, DIR/test.<fmt> (dataset_<k>/... for --n-datasets > 1), info.json
