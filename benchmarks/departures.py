@@ -25,9 +25,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, wrench_rmse
-from ftcal.core._metrics import per_sample_rmse
-from ftcal.evaluation._benchmark_artificial import dataset_seeds, make_model
+from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
+from ftcal.evaluation import dataset_seeds, make_model
 
 ROOT = Path(__file__).resolve().parent
 
@@ -71,10 +70,10 @@ def spread_explained(cache: Path) -> dict | None:
 
 
 def restore_effect(models, presets) -> dict:
-    from ftcal.neural_network import _schedule
+    from ftcal.neural_network import RestoreBestWeights
 
     out = {}
-    original = _schedule.RestoreBestWeights.on_train_end
+    original = RestoreBestWeights.on_train_end
     profile = SensorProfile.default()
     for preset in presets:
         data_seed, model_seed = dataset_seeds(0, 0)
@@ -82,12 +81,12 @@ def restore_effect(models, presets) -> dict:
         for name in models:
             row = {}
             for restore in (True, False):
-                _schedule.RestoreBestWeights.on_train_end = original if restore else (lambda self, net, **kw: None)
+                RestoreBestWeights.on_train_end = original if restore else (lambda self, net, **kw: None)
                 try:
                     est = make_model(name, n_channels=6, alpha=profile.alpha, schedule="short", random_state=model_seed)
                     est.fit(train.raw, train.wrench)
                 finally:
-                    _schedule.RestoreBestWeights.on_train_end = original
+                    RestoreBestWeights.on_train_end = original
                 row["with_restore" if restore else "last_epoch"] = wrench_rmse(test.wrench, est.predict(test.raw), 50.0)
                 row["epochs"], row["best_epoch"] = int(est.n_epochs_), int(est.best_epoch_)
             out[f"{preset}/{name}"] = row

@@ -48,7 +48,7 @@ from typing import Callable
 import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
-from ftcal.evaluation._benchmark_artificial import make_model
+from ftcal.evaluation import make_model
 from ftcal.models import STOCK_BASELINE_NAMES
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "learning_curves"

@@ -27,9 +27,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import SensorProfile, make_artificial_dataset
-from ftcal.core._wrench import scale_torques
-from ftcal.evaluation._benchmark_artificial import dataset_seeds, make_model
+from ftcal import SensorProfile, make_artificial_dataset, scale_torques
+from ftcal.evaluation import dataset_seeds, make_model
 
 MODELS = ("linear", "sk_poly2", "axis_nonlinear", "directional", "comparative", "gaussian_process", "sk_gp")
 AXES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")

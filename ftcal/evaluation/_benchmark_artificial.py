@@ -60,7 +60,7 @@ from ..simulation._sampling import TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
 
 __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "format_mean_std", "dataset_seeds",
-           "THESIS_TABLES"]
+           "THESIS_TABLES", "make_model"]
 
 _FORMAT = 1
 _MANIFEST = ".ftcal-benchmark-manifest.json"

@@ -11,6 +11,7 @@ from ..core._lazy import lazy_namespace
 _PUBLIC = dict(
     DirectionalNet="_modules", ComparativeNet="_modules", WeightedSquaredError="_modules",
     StackedMLP="_stacked", fit_stacked="_stacked", NetworkCalibrator="_base",
+    RestoreBestWeights="_schedule",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
