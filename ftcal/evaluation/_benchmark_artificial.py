@@ -367,6 +367,8 @@ def markdown_tables(summary: dict, meta: dict) -> str:
             )
         lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]
         for pair, w in s["wilcoxon"].items():
+            if w["n"] == 0:
+                continue  # a model not run yet (the JSON keeps every pair)
             p = "NaN" if math.isnan(w["p"]) else f"{w['p']:.3g}"
             lines.append(f"| {pair} | {w['n']} | {p} | {w['note']} |")
         lines.append("")
