@@ -176,3 +176,36 @@ def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_aske
     script = _load_script()
     assert script._models(script.build_parser().parse_args([]))[-5:] == list(STOCK_BASELINE_NAMES)
     assert script._models(script.build_parser().parse_args(["--models", "linear"])) == ["linear"]
+
+
+def _script(name):
+    import sys
+
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_crossover_level_interpolates_the_first_sign_change():
+    crossover = _script("crossover")
+    assert crossover.crossover_level([0.0, 0.1, 0.2], [-2.0, 2.0, 5.0]) == pytest.approx(0.05)
+    assert crossover.crossover_level([0.0, 0.1], [-1.0, -0.5]) is None
+    assert crossover.crossover_level([0.0, 0.1], [1.0, 2.0]) == 0.0
+    models = crossover.level_presets([0.0, 0.2])
+    assert models["asym0.200"].asymmetry_axes == 6 and models["asym0.000"].asymmetry == 0.0
+
+
+def test_learning_curve_sizes_are_the_outermost_spheres_and_the_first_points():
+    from ftcal.core._wrench import scale_torques
+
+    lc = _script("learning_curves")
+    factory = lc.artificial_factory("none", spheres=(1, 2), points=(3, 7))
+    assert factory.sizes == ((1, 3), (1, 7), (2, 3), (2, 7))
+    pool = factory.make(0)
+    rows = pool.select((2, 3))
+    radius = np.linalg.norm(scale_torques(pool.y[rows], 50.0), axis=1)
+    np.testing.assert_allclose(sorted(radius), [1200.0] * 3 + [1600.0] * 3)
+    assert set(pool.select((1, 3))) <= set(pool.select((1, 7)))  # nested: more data adds, never swaps
+    assert pool.X_test.shape == (1250, 6)
