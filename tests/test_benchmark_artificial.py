@@ -118,10 +118,7 @@ def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):
 
 
 def _load_script():
-    spec = importlib.util.spec_from_file_location("bench_artificial", ROOT / "benchmarks" / "artificial.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return _script("artificial")
 
 
 def test_command_line_wrapper(tmp_path, capsys):
