@@ -136,7 +136,7 @@ def plot(table: dict, models, path: Path) -> None:
     ax.set_xlabel("sign-dependent gain a on all six axes [%]  (reconstructed preset: 20 %)")
     ax.set_ylabel("test RMSE, eq. 18 [N]")
     ax.set_yscale("log")
-    ax.set_title("Where the directional DNN pays: thesis errors + sign-dependent gain, ball test loads")
+    ax.set_title("Where the directional DNN pays (thesis errors + sign-dependent gain, ball loads)", fontsize=10)
     ax.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
