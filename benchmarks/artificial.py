@@ -22,6 +22,7 @@ import time
 from pathlib import Path
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, FtcalError, run_artificial_benchmark
+from ftcal.models import STOCK_BASELINE_NAMES
 
 #: Default output folder (git-ignored): benchmarks/out/artificial.
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "artificial"
@@ -31,8 +32,12 @@ def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--datasets", type=int, default=30, help="datasets per preset (default 30)")
     p.add_argument("--presets", nargs="+", default=["thesis"], choices=sorted(ERROR_PRESETS), help="error presets")
-    p.add_argument("--models", nargs="+", default=["linear", "comparative", "directional"],
-                   help=f"registered calibrators ({', '.join(CALIBRATOR_NAMES)})")
+    p.add_argument("--models", nargs="+", default=None,
+                   help=f"registered calibrators ({', '.join(CALIBRATOR_NAMES)}) or stock baselines "
+                        f"({', '.join(STOCK_BASELINE_NAMES)}); default: linear comparative directional")
+    p.add_argument("--baselines", action=argparse.BooleanOptionalAction, default=None,
+                   help="also fit every stock scikit-learn baseline on the same data "
+                        "(default: yes unless --models is given)")
     p.add_argument("--schedule", default="thesis", choices=["thesis", "short"], help="network training schedule")
     p.add_argument("--seed", type=int, default=0, help="master seed of data and model initialisation")
     p.add_argument("--jobs", type=int, default=1, help="parallel joblib workers (-1: all cores)")
@@ -40,11 +45,19 @@ def build_parser() -> argparse.ArgumentParser:
                    help="network fits of one preset and model trained together as one stacked module")
     p.add_argument("--out", default=str(DEFAULT_OUT), help=f"output and cache folder (default {DEFAULT_OUT})")
     p.add_argument("--quick", action="store_true", help="smoke mode: 3 small datasets, a few epochs")
-    p.add_argument("--test-distribution", default="radial", choices=["radial", "box"], help="test-set sampling")
+    p.add_argument("--test-distribution", default=None, choices=["radial", "box", "ball"],
+                   help="test-set sampling (default: the preset's own: 'ball' for reconstructed, else 'radial')")
     p.add_argument("--aggregate-only", action="store_true", help="only summarise the cached results")
     p.add_argument("--no-plot", action="store_true", help="skip the PNG")
     p.add_argument("--force", action="store_true", help="overwrite existing summary files not written by the benchmark")
     return p
+
+
+def _models(args: argparse.Namespace) -> list[str]:
+    """The models asked for, plus the stock baselines unless only named models were asked for."""
+    models = args.models or ["linear", "comparative", "directional"]
+    baselines = args.models is None if args.baselines is None else args.baselines
+    return list(dict.fromkeys(models + (list(STOCK_BASELINE_NAMES) if baselines else [])))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -57,7 +70,8 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         result = run_artificial_benchmark(
-            n_datasets=args.datasets, presets=args.presets, models=args.models, schedule=args.schedule,
+            n_datasets=args.datasets, presets=args.presets, schedule=args.schedule,
+            models=_models(args),
             seed=args.seed, n_jobs=args.jobs, out_dir=args.out, quick=args.quick, progress=progress,
             force=args.force, compute=not args.aggregate_only, test_distribution=args.test_distribution,
             plot=not args.no_plot, stack=args.stack,

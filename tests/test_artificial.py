@@ -116,3 +116,56 @@ def test_virtual_sensor_reads_fresh_noise_with_fixed_errors():
         s.read(np.ones((2, 3)))
     with pytest.raises(CalibrationInputError, match="unknown test distribution"):
         make_artificial_dataset(random_state=0, n_per_sphere=2, n_test=2, test_distribution="cube")
+
+
+def test_ball_test_distribution_fills_the_force_and_torque_balls_independently():
+    _, test, info = make_artificial_dataset("none", random_state=1, n_per_sphere=2, n_test=4000,
+                                            test_distribution="ball")
+    assert info["test_distribution"] == "ball"
+    force, torque = np.linalg.norm(test.wrench[:, :3], axis=1), np.linalg.norm(test.wrench[:, 3:], axis=1)
+    assert force.max() <= 2000.0 and torque.max() <= 40.0  # the rated balls, never beyond
+    assert force.max() > 1900.0 and torque.max() > 38.0  # ... and up to their surface
+    # uniform in a 3-D ball: P(|F| <= R/2) = 1/8 (binomial sd 0.005 at n = 4000)
+    assert abs(np.mean(force <= 1000.0) - 0.125) < 0.025 and abs(np.mean(torque <= 20.0) - 0.125) < 0.025
+    assert abs(np.corrcoef(force, torque)[0, 1]) < 0.1  # drawn independently
+    # twice the radial set's size: rms of the torque-scaled norm sqrt(6/5) * 2000 against 2000 / sqrt(3)
+    rms = np.sqrt(np.mean(np.sum(scale_torques(test.wrench, 50.0) ** 2, axis=1)))
+    assert rms == pytest.approx(np.sqrt(1.2) * 2000.0, rel=0.05)
+
+
+def test_reconstructed_preset_uses_ball_loads_and_puts_the_ltm_far_above_the_noise_floor():
+    train, test, info = make_artificial_dataset("reconstructed", random_state=2, n_per_sphere=250, n_test=1000)
+    assert info["test_distribution"] == "ball"
+    assert np.count_nonzero(info["errors"]["asymmetry"]) == 6  # the sign-dependent gain on every axis
+    rmse = wrench_rmse(test.wrench, LinearCalibrator().fit(train.raw, train.wrench).predict(test.raw), 50.0)
+    # A gain 1 ± a/2 adds (a/2)|c| to component c; |c| is uncorrelated with every component (the loads are
+    # sign-symmetric), so no affine map removes more than its mean: per component the LTM keeps at least
+    # (a/2) sd(|c|). For a component of a uniform 3-D ball of radius R (2000 N torque-scaled),
+    # sd(|c|) = R sqrt(19/320) = 487 N; a >= 0.16 (the 20 % mean minus two 10 % spreads) -> >= 39 N.
+    bound = 0.08 * 2000.0 * np.sqrt(19 / 320)
+    assert rmse > 0.9 * bound
+    assert rmse > 4 * info["noise_floor"]  # noise: 1 % of rms |w| / sqrt(6) ≈ 9 N
+    # the thesis' own figure (62.3 N) is of this size, not of the noise floor's
+    assert 40.0 < rmse < 90.0
+
+
+def test_fewer_spheres_are_the_outermost_ones():
+    train, _, info = make_artificial_dataset("none", random_state=0, n_per_sphere=3, n_test=2, n_spheres=2)
+    radius = np.linalg.norm(scale_torques(train.wrench, 50.0), axis=1)
+    np.testing.assert_allclose(np.unique(radius.round(6)), [1200.0, 1600.0])
+    assert info["sphere_radii"] == [1200.0, 1600.0] and train.group.tolist() == [0, 0, 0, 1, 1, 1]
+    for bad in (0, 5, 2.5, True):
+        with pytest.raises(CalibrationInputError, match="n_spheres"):
+            make_artificial_dataset("none", random_state=0, n_per_sphere=3, n_test=2, n_spheres=bad)
+
+
+def test_simulate_dataset_cli_takes_the_presets_test_distribution(tmp_path):
+    from ftcal.cli import main
+
+    out = tmp_path / "data"
+    assert main(["simulate", "dataset", "--preset", "reconstructed", "--n-per-sphere", "5", "--n-test", "50",
+                 "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "info.json").read_text())["datasets"][0]["test_distribution"] == "ball"
+    assert main(["simulate", "dataset", "--preset", "reconstructed", "--test-distribution", "radial",
+                 "--n-per-sphere", "5", "--n-test", "50", "--out", str(tmp_path / "radial"), "--quiet"]) == 0
+    assert json.loads((tmp_path / "radial" / "info.json").read_text())["datasets"][0]["test_distribution"] == "radial"

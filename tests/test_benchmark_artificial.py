@@ -117,10 +117,12 @@ def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):
     assert not (tmp_path / "cache").exists()
 
 
+def _load_script():
+    return _script("artificial")
+
+
 def test_command_line_wrapper(tmp_path, capsys):
-    spec = importlib.util.spec_from_file_location("bench_artificial", ROOT / "benchmarks" / "artificial.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _load_script()
     out = tmp_path / "cli"
     assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 0
     assert "3/3 results" in capsys.readouterr().out
@@ -128,3 +130,79 @@ def test_command_line_wrapper(tmp_path, capsys):
     assert module.main(["--quick", "--models", "linear", "--no-plot", "--out", str(out)]) == 2
     assert "--force" in capsys.readouterr().err
     assert (out / "artificial_results.md").read_text() == "edited by hand"
+
+
+def test_stock_baselines_sit_beside_the_calibrators_and_presets_bring_their_test_loads(tmp_path):
+    res = run_artificial_benchmark(quick=True, n_datasets=1, presets=("reconstructed", "thesis"),
+                                   models=("linear", "sk_linear"), out_dir=tmp_path, plot=False)
+    assert res["meta"]["test_distributions"] == {"reconstructed": "ball", "thesis": "radial"}
+    table = res["summary"]["reconstructed"]["models"]
+    # the same estimator (unregularised affine least squares) on the same data: the same error
+    assert table["sk_linear"]["rmse"]["mean"] == pytest.approx(table["linear"]["rmse"]["mean"], rel=1e-6)
+    md = (tmp_path / "artificial_results.md").read_text()
+    assert "| sk_linear | 1 |" in md and "Test loads: `ball`" in md
+    assert "62.3" in md.split("### Preset `thesis`")[0]  # the thesis' Table II beside `reconstructed`
+
+
+def test_custom_error_models_by_name_and_fewer_spheres(tmp_path):
+    from ftcal import ErrorModel
+
+    presets = {"clean": ErrorModel(), "gain10": ErrorModel(asymmetry=0.1, asymmetry_axes=6)}
+    res = run_artificial_benchmark(quick=True, n_datasets=1, presets=presets, models=("linear",), out_dir=tmp_path,
+                                   plot=False, n_spheres=1, test_distribution="ball")
+    rmse = {p: res["summary"][p]["models"]["linear"]["rmse"]["mean"] for p in presets}
+    assert rmse["clean"] < 1e-6 < rmse["gain10"]  # no errors: the LTM is exact; a sign-dependent gain it cannot fit
+    assert res["results"][0]["config"]["n_spheres"] == 1
+    with pytest.raises(CalibrationInputError, match="ErrorModel"):
+        run_artificial_benchmark(presets={"x": "thesis"}, out_dir=tmp_path / "bad")
+
+
+def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_asked_for():
+    import argparse
+
+    from ftcal.cli._benchmark import _artificial_models
+    from ftcal.models import STOCK_BASELINE_NAMES
+
+    def models(names, baselines):
+        return _artificial_models(argparse.Namespace(models=names, baselines=baselines))
+
+    assert models(None, None) == ("linear", "comparative", "directional") + STOCK_BASELINE_NAMES
+    assert models(["linear"], None) == ("linear",)
+    assert models(["linear"], True) == ("linear",) + STOCK_BASELINE_NAMES
+    assert models(None, False) == ("linear", "comparative", "directional")
+    script = _load_script()
+    assert script._models(script.build_parser().parse_args([]))[-5:] == list(STOCK_BASELINE_NAMES)
+    assert script._models(script.build_parser().parse_args(["--models", "linear"])) == ["linear"]
+
+
+def _script(name):
+    import sys
+
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_crossover_level_interpolates_the_first_sign_change():
+    crossover = _script("crossover")
+    assert crossover.crossover_level([0.0, 0.1, 0.2], [-2.0, 2.0, 5.0]) == pytest.approx(0.05)
+    assert crossover.crossover_level([0.0, 0.1], [-1.0, -0.5]) is None
+    assert crossover.crossover_level([0.0, 0.1], [1.0, 2.0]) == 0.0
+    models = crossover.level_presets([0.0, 0.2])
+    assert models["asym0.200"].asymmetry_axes == 6 and models["asym0.000"].asymmetry == 0.0
+
+
+def test_learning_curve_sizes_are_the_outermost_spheres_and_the_first_points():
+    from ftcal.core._wrench import scale_torques
+
+    lc = _script("learning_curves")
+    factory = lc.artificial_factory("none", spheres=(1, 2), points=(3, 7))
+    assert factory.sizes == ((1, 3), (1, 7), (2, 3), (2, 7))
+    pool = factory.make(0)
+    rows = pool.select((2, 3))
+    radius = np.linalg.norm(scale_torques(pool.y[rows], 50.0), axis=1)
+    np.testing.assert_allclose(sorted(radius), [1200.0] * 3 + [1600.0] * 3)
+    assert set(pool.select((1, 3))) <= set(pool.select((1, 7)))  # nested: more data adds, never swaps
+    assert pool.X_test.shape == (1250, 6)

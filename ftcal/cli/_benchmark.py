@@ -24,9 +24,11 @@ examples:
   ftcal benchmark artificial --quick --out bench              # smoke run, under 2 minutes
   ftcal benchmark artificial --schedule short --n-datasets 10 --jobs 2 --out bench
   ftcal benchmark artificial --preset thesis --preset asymmetric --preset stress --out bench_full
+  ftcal benchmark artificial --preset reconstructed --model linear --model directional --baselines --out rec
   ftcal benchmark artificial --n-datasets 30 --preset thesis --scheduler tcp://head-node:8786 --out bench_full
 
-N datasets per preset, every calibrator; writes artificial_results.json / .md (RMSE and
+N datasets per preset, every calibrator and (unless --model is given) the stock scikit-learn
+baselines on the same data; writes artificial_results.json / .md (RMSE and
 relative errors mean ± std beside the thesis' Tables II-III, Wilcoxon p-values, noise floor)
 and artificial_rmse_<preset>.png. Finished fits are cached in DIR/cache: re-running the same
 command resumes where it stopped.
@@ -92,6 +94,15 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
         help="error preset (repeatable; default: thesis)",
     )
     a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
+    a.add_argument(
+        "--test-distribution", choices=("radial", "box", "ball"), default=None,
+        help="test-load sampling (default: the preset's own, 'ball' for reconstructed, else 'radial')",
+    )
+    a.add_argument(
+        "--baselines", action=argparse.BooleanOptionalAction, default=None,
+        help="also fit the stock scikit-learn baselines (sk_linear ... sk_gp) on the same data "
+             "(default: yes unless --model is given)",
+    )
     a.add_argument(
         "--stack", type=int_in_range(1, 1000, "stack"), default=1,
         help="train up to this many network fits (one preset and model, several datasets) together as one "
@@ -227,6 +238,13 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(dict.fromkeys(args.models or ("linear", "comparative", "directional")))
 
 
+def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
+    from ..models._baselines import STOCK_BASELINE_NAMES
+
+    baselines = not args.models if args.baselines is None else args.baselines
+    return _models(args) + (STOCK_BASELINE_NAMES if baselines else ())
+
+
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
 
@@ -243,7 +261,8 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
         result = ftcal.run_artificial_benchmark(
-            n_datasets=args.n_datasets, presets=presets, models=_models(args), schedule=args.schedule,
+            n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
+            test_distribution=args.test_distribution,
             seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
             force=args.force, stack=args.stack,
         )

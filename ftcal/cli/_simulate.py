@@ -24,6 +24,7 @@ DATASET_EXAMPLE = """\
 examples:
   ftcal simulate dataset --out data                      # thesis preset: train.csv (5000), test.csv (1250)
   ftcal simulate dataset --preset asymmetric --n-datasets 5 --seed 7 --out data5
+  ftcal simulate dataset --preset reconstructed --out rec   # 20 % sign-dependent gains, ball test loads
   ftcal simulate dataset --sensor my_sensor.cal --zero-offset 0.05 --format npz --out mine
 
 writes DIR/train.<fmt>, DIR/test.<fmt> (dataset_<k>/... for --n-datasets > 1), info.json
@@ -68,8 +69,9 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     d.add_argument("--n-per-sphere", type=int_in_range(1, 1_000_000, "points per sphere"), default=1250, help="training points per sphere (4 spheres)")
     d.add_argument("--n-test", type=int_in_range(1, 1_000_000, "test points"), default=1250, help="test points")
     d.add_argument(
-        "--test-distribution", default="radial", choices=("radial", "box"),
-        help="how test wrenches fill the operating range",
+        "--test-distribution", default=None, choices=("radial", "box", "ball"),
+        help="how test wrenches fill the operating range (default: the preset's own, 'ball' for "
+             "reconstructed, else 'radial')",
     )
     d.add_argument("--sensor", type=existing_file, metavar="CAL", help="vendor calibration file (ATI .cal)")
     d.add_argument(

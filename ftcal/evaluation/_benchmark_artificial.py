@@ -30,7 +30,7 @@ Statistics
 * Relative errors (Table III): eq. 19 per test sample, averaged per dataset;
   mean ± std across datasets.
 * Wilcoxon signed-rank test (two-sided) of the per-dataset RMSE of every
-  model pair, paired by dataset. With fewer than 6 pairs even the most
+  model pair (but no pair of two stock baselines), paired by dataset. With fewer than 6 pairs even the most
   extreme outcome has p >= 0.0625, so the test cannot show a difference:
   p is reported as NaN with a note; likewise when every difference is zero.
 * Noise floor: per dataset (see :mod:`ftcal.simulation._artificial`); mean ± std.
@@ -44,7 +44,7 @@ import json
 import math
 import time
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -54,12 +54,13 @@ from ..simulation._artificial import make_artificial_dataset
 from ..core._files import plain_json
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
-from ..simulation._presets import error_preset
+from ..simulation._error_models import ErrorModel
+from ..simulation._presets import default_test_distribution, error_preset
 from ..simulation._sampling import TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
 
 __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "format_mean_std", "dataset_seeds",
-           "THESIS_TABLES"]
+           "THESIS_TABLES", "make_model"]
 
 _FORMAT = 1
 _MANIFEST = ".ftcal-benchmark-manifest.json"
@@ -140,6 +141,8 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
             }
         pairs = {}
         for m1, m2 in itertools.combinations(models, 2):
+            if m1.startswith("sk_") and m2.startswith("sk_"):
+                continue  # the baselines are compared with ftcal's models, not with each other
             common = sorted(set(by_model[m1]) & set(by_model[m2]))
             p, note = wilcoxon_pvalue([by_model[m1][i]["rmse"] for i in common], [by_model[m2][i]["rmse"] for i in common])
             pairs[f"{m1} vs {m2}"] = {"p": p, "n": len(common), "note": note}
@@ -171,17 +174,37 @@ def dataset_seeds(seed: int, index: int) -> tuple[int, int]:
 
 def _data_and_model(task: dict):
     """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
-    from ..models._registry import make_calibrator
-
     data_seed, model_seed = dataset_seeds(task["seed"], task["dataset"])
     profile = SensorProfile.default()
     train, test, info = make_artificial_dataset(
-        task["preset"], random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
-        n_test=task["n_test"], test_distribution=task["test_distribution"],
+        ErrorModel(**task["error_model"]), random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
+        n_test=task["n_test"], test_distribution=task["test_distribution"], n_spheres=task.get("n_spheres", 4),
     )
-    model = make_calibrator(task["model"], schedule=task["schedule"], random_state=model_seed,
-                            alpha=profile.alpha, **task["overrides"])
+    model = make_model(task["model"], n_channels=profile.n_channels, alpha=profile.alpha, schedule=task["schedule"],
+                       random_state=model_seed, overrides=task["overrides"])
     return (train, test, info), model, profile
+
+
+def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "thesis", random_state: int = 0,
+               overrides: dict | None = None):
+    """An unfitted model by name: a registered calibrator, or a stock scikit-learn baseline (``sk_*``).
+
+    The stock baselines (:func:`~ftcal.models.stock_baselines`) are what a
+    user gets for free; every table shows them beside ftcal's calibrators.
+
+    Examples
+    --------
+    >>> make_model("sk_linear", n_channels=6, alpha=50.0)
+    LinearRegression()
+    >>> make_model("linear", n_channels=6, alpha=50.0).alpha
+    50.0
+    """
+    from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
+    from ..models._registry import make_calibrator
+
+    if name in STOCK_BASELINE_NAMES:
+        return stock_baselines(int(n_channels), random_state=int(random_state))[name]
+    return make_calibrator(name, schedule=schedule, random_state=random_state, alpha=alpha, **(overrides or {}))
 
 
 def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int = 1) -> dict:
@@ -245,13 +268,14 @@ def _run_group(tasks: list[dict]) -> list[dict]:
 def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
     """Pending tasks as work units: network fits of one preset and model in chunks of ``stack``; others alone."""
     from ..neural_network._base import NetworkCalibrator
-    from ..models._registry import make_calibrator
+    from ..models._registry import CALIBRATOR_NAMES, make_calibrator
 
     if stack <= 1:
         return [[t] for t in pending]
     groups: dict[tuple, list[dict]] = {}
     units = []
-    stackable = {m: isinstance(make_calibrator(m), NetworkCalibrator) for m in {t["model"] for t in pending}}
+    stackable = {m: m in CALIBRATOR_NAMES and isinstance(make_calibrator(m), NetworkCalibrator)
+                 for m in {t["model"] for t in pending}}
     for task in pending:
         if stackable[task["model"]]:
             groups.setdefault((task["preset"], task["model"]), []).append(task)
@@ -309,8 +333,8 @@ def format_mean_std(stat: dict, digits: int = 2) -> str:
 
 
 def _thesis_cell(preset: str, model: str, key: str, digits: int) -> str:
-    """The thesis' value for the ``thesis`` preset (it simulated no other), else a dash."""
-    ref = THESIS_TABLES.get(model, {}).get(key) if preset == "thesis" else None
+    """The thesis' value for the presets meant to match its study (``thesis``, ``reconstructed``), else a dash."""
+    ref = THESIS_TABLES.get(model, {}).get(key) if preset in ("thesis", "reconstructed") else None
     return "—" if ref is None else f"{ref[0]:.{digits}f} ± {ref[1]:.{digits + 1}g}"
 
 
@@ -324,9 +348,11 @@ def markdown_tables(summary: dict, meta: dict) -> str:
     ]
     for preset, s in summary.items():
         nf = s["noise_floor"]
+        distribution = meta.get("test_distributions", {}).get(preset, meta.get("test_distribution"))
         lines += [
             f"### Preset `{preset}`",
             "",
+            f"Test loads: `{distribution}`. "
             f"Noise floor (perfect calibrator): {format_mean_std(nf, 2)} N over {nf['n']} datasets.",
             "",
             "| Model | datasets | RMSE [N] (ours) | RMSE (thesis T. II) | rel. force (ours) | rel. force (thesis T. III)"
@@ -341,6 +367,8 @@ def markdown_tables(summary: dict, meta: dict) -> str:
             )
         lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]
         for pair, w in s["wilcoxon"].items():
+            if w["n"] == 0:
+                continue  # a model not run yet (the JSON keeps every pair)
             p = "NaN" if math.isnan(w["p"]) else f"{w['p']:.3g}"
             lines.append(f"| {pair} | {w['n']} | {p} | {w['note']} |")
         lines.append("")
@@ -349,15 +377,18 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 
 # ----------------------------------------------------------------- driver
 def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
+    from ..models._baselines import STOCK_BASELINE_NAMES
     from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
 
     if int(n_datasets) < 1:
         raise CalibrationInputError(f"n_datasets must be >= 1; got {n_datasets}.")
     for p in presets:
-        error_preset(p)
-    unknown = [m for m in models if m not in tuple(CALIBRATOR_NAMES)]
+        if not isinstance(p, str):
+            raise CalibrationInputError(f"preset names must be strings; got {p!r}.")
+    known = tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES
+    unknown = [m for m in models if m not in known]
     if unknown or not models:
-        raise CalibrationInputError(f"unknown models {unknown or models}; choose from {tuple(CALIBRATOR_NAMES)}.")
+        raise CalibrationInputError(f"unknown models {unknown or models}; choose from {known}.")
     if schedule not in SCHEDULE_NAMES:
         raise CalibrationInputError(f"unknown schedule {schedule!r}; choose one of {SCHEDULE_NAMES}.")
     if n_jobs == 0:
@@ -366,19 +397,32 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
         raise CalibrationInputError(f"stack must be an integer >= 1 (nets trained together); got {stack!r}.")
 
 
-def _tasks(n_datasets, presets, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution) -> list[dict]:
-    from ..models._registry import training_schedule
+def _preset_models(presets: Sequence[str] | Mapping[str, ErrorModel]) -> dict[str, ErrorModel]:
+    """Preset name -> error model: named presets looked up, a mapping's models checked."""
+    if isinstance(presets, Mapping):
+        bad = {k: v for k, v in presets.items() if not isinstance(v, ErrorModel)}
+        if bad:
+            raise CalibrationInputError(f"presets maps names to ErrorModel instances; got {bad!r:.120}.")
+        return dict(presets)
+    return {p: error_preset(p) for p in presets}
+
+
+def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution,
+           n_spheres=4) -> list[dict]:
+    from ..models._registry import CALIBRATOR_NAMES, training_schedule
 
     tasks = []
     # dataset-major order: a run stopped early still covers every preset and model
     for index, preset, model in itertools.product(range(n_datasets), presets, models):
         overrides = {}
-        if quick and training_schedule(schedule, model):
+        distribution = test_distribution or default_test_distribution(preset)
+        if quick and model in CALIBRATOR_NAMES and training_schedule(schedule, model):
             overrides = {k: QUICK[k] for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")}
         config = {
-            "format": _FORMAT, "preset": preset, "error_model": error_preset(preset).to_dict(), "model": model,
+            "format": _FORMAT, "preset": preset, "error_model": presets[preset].to_dict(), "model": model,
             "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,
-            "n_test": n_test, "test_distribution": test_distribution,
+            "n_test": n_test, "test_distribution": distribution,
+            **({} if n_spheres == 4 else {"n_spheres": int(n_spheres)}),  # 4: the hash of earlier caches
         }
         tasks.append({**config, "dataset": index, "config": config, "hash": _config_hash(config)})
     return tasks
@@ -398,7 +442,7 @@ def _load_cached(path: Path, task: dict) -> dict | None:
 
 def run_artificial_benchmark(
     n_datasets: int = 30,
-    presets: Sequence[str] = ("thesis",),
+    presets: Sequence[str] | Mapping[str, ErrorModel] = ("thesis",),
     models: Sequence[str] = ("linear", "comparative", "directional"),
     schedule: str = "thesis",
     seed: int = 0,
@@ -411,9 +455,10 @@ def run_artificial_benchmark(
     compute: bool = True,
     n_per_sphere: int | None = None,
     n_test: int | None = None,
-    test_distribution: str = "radial",
+    test_distribution: str | None = None,
     plot: bool = True,
     stack: int = 1,
+    n_spheres: int = 4,
 ) -> dict:
     """Run (or resume) the artificial benchmark and write its summary files.
 
@@ -421,10 +466,13 @@ def run_artificial_benchmark(
     ----------
     n_datasets : int, default=30
         Datasets per preset (indices 0 .. n-1; the same data for every model).
-    presets : sequence of str, default=("thesis",)
-        Error presets (:data:`~ftcal.ERROR_PRESETS`).
+    presets : sequence of str or mapping of str to ErrorModel, default=("thesis",)
+        Error presets (:data:`~ftcal.ERROR_PRESETS`), or names mapped to
+        error models of your own (e.g. a sweep of one parameter).
     models : sequence of str
-        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`).
+        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`) and stock
+        scikit-learn baselines (:data:`~ftcal.models.STOCK_BASELINE_NAMES`,
+        ``sk_linear`` ... ``sk_gp``), fitted on the same data.
     schedule : {"thesis", "short"}
         Training schedule of the networks.
     seed : int, default=0
@@ -445,8 +493,9 @@ def run_artificial_benchmark(
         ``False``: only aggregate what the cache already holds.
     n_per_sphere, n_test : int, optional
         Dataset sizes (default 1250 / 1250, or the quick sizes).
-    test_distribution : {"radial", "box"}
-        See :mod:`ftcal.simulation._sampling`.
+    test_distribution : {"radial", "box", "ball"}, optional
+        See :mod:`ftcal.simulation._sampling`; default: each preset's own
+        (``"ball"`` for ``reconstructed``, else ``"radial"``).
     plot : bool, default=True
         Write the Fig. 5 PNG per preset.
     stack : int, default=1
@@ -454,6 +503,8 @@ def run_artificial_benchmark(
         different datasets) together as one stacked module
         (:func:`~ftcal.fit_stacked`): the same results up to float32
         rounding, about 10x less CPU time with 30. 1 fits one by one.
+    n_spheres : int, default=4
+        Training spheres, the outermost ones (see :func:`~ftcal.make_artificial_dataset`).
 
     Returns
     -------
@@ -463,9 +514,10 @@ def run_artificial_benchmark(
         ``wilcoxon``; ``noise_floor``), ``results`` (every record) and ``files``.
     """
     t0 = time.perf_counter()
-    presets, models = tuple(presets), tuple(models)
+    preset_models = _preset_models(presets)
+    presets, models = tuple(preset_models), tuple(models)
     _check_args(n_datasets, presets, models, schedule, n_jobs, stack)
-    if test_distribution not in TEST_DISTRIBUTIONS:
+    if test_distribution is not None and test_distribution not in TEST_DISTRIBUTIONS:
         raise CalibrationInputError(f"unknown test distribution {test_distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])
@@ -479,7 +531,8 @@ def run_artificial_benchmark(
     outputs.check(names)  # fail before hours of work, not after
 
     cache_dir = out_dir / "cache"
-    tasks = _tasks(int(n_datasets), presets, models, schedule, int(seed), quick, n_per_sphere, n_test, test_distribution)
+    tasks = _tasks(int(n_datasets), preset_models, models, schedule, int(seed), quick, n_per_sphere, n_test,
+                   test_distribution, n_spheres)
     results, pending = [], []
     for task in tasks:
         rec = _load_cached(_cache_path(cache_dir, task), task)
@@ -502,8 +555,10 @@ def run_artificial_benchmark(
     summary = summarize_results(results, models, presets)
     meta = {
         "n_datasets": int(n_datasets), "presets": list(presets), "models": list(models), "schedule": schedule,
-        "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_test": n_test,
-        "test_distribution": test_distribution, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
+        "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_spheres": int(n_spheres),
+        "n_test": n_test,
+        "test_distribution": test_distribution,
+        "test_distributions": {p: test_distribution or default_test_distribution(p) for p in presets}, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
         "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
         "wall_seconds": None,
     }

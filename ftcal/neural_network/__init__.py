@@ -12,7 +12,7 @@ from ..core._lazy import lazy_namespace
 _PUBLIC = dict(
     DirectionalNet="_modules", ComparativeNet="_modules", WeightedSquaredError="_modules",
     StackedMLP="_modules", fit_stacked="_stacked", NetworkCalibrator="_base",
-    NetworkRegressor="_engine",
+    NetworkRegressor="_engine", RestoreBestWeights="_schedule",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -30,7 +30,7 @@ from ..io._dataset import CalibrationDataset
 from ._error_models import ErrorModel, SampledErrors
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import wrench_rmse
-from ._presets import error_preset
+from ._presets import default_test_distribution, error_preset
 from ._sampling import continuous_wrenches, sphere_wrenches
 from ._sensor import SensorProfile
 
@@ -150,15 +150,17 @@ def make_artificial_dataset(
     profile: SensorProfile | None = None,
     n_per_sphere: int = 1250,
     n_test: int = 1250,
-    test_distribution: str = "radial",
+    test_distribution: str | None = None,
     zero_offset: ArrayLike | None = None,
+    n_spheres: int = 4,
 ) -> tuple[CalibrationDataset, CalibrationDataset, dict]:
     """One artificial dataset of the thesis (IV-A): four-sphere train set, continuous test set.
 
     Parameters
     ----------
     preset : str or ErrorModel, default="thesis"
-        Error preset (``"thesis"``, ``"asymmetric"``, ``"stress"``, ``"none"``) or a model.
+        Error preset (``"thesis"``, ``"asymmetric"``, ``"stress"``, ``"reconstructed"``,
+        ``"none"``) or a model.
     random_state : int or numpy.random.Generator, optional
         Seed; the same seed gives the same data.
     profile : SensorProfile, optional
@@ -169,15 +171,21 @@ def make_artificial_dataset(
         Training points per sphere (5000 in all, IV-A-a).
     n_test : int, default=1250
         Test points (IV-A-b).
-    test_distribution : {"radial", "box"}, default="radial"
-        See :mod:`ftcal.simulation._sampling`.
+    test_distribution : {"radial", "box", "ball"}, optional
+        See :mod:`ftcal.simulation._sampling`. Default: the preset's
+        (:func:`~ftcal.simulation._presets.default_test_distribution`:
+        ``"ball"`` for ``"reconstructed"``, else ``"radial"``).
     zero_offset : array-like of shape (N,), optional
         Raw zero-load offset added to every reading.
+    n_spheres : int, default=4
+        Training spheres, 1-4: the *outermost* ones (1: 0.8 Fmax only; 2:
+        0.6 and 0.8 Fmax, ...), so that fewer spheres mean less calibration
+        data over the same range, not a smaller range.
 
     Returns
     -------
     train, test : CalibrationDataset
-        ``train.group`` is the sphere index (0-3); ``test.group`` is None.
+        ``train.group`` is the sphere index (0 .. n_spheres-1, innermost first); ``test.group`` is None.
     info : dict
         ``preset``, ``errors`` (the sampled parameters), ``noise_floor``
         (on the test set, [N]), ``noise_floor_train``, ``alpha``, ``profile``
@@ -190,10 +198,14 @@ def make_artificial_dataset(
     ((20, 6), (4, 6), [0, 1, 2, 3])
     """
     rng = np.random.default_rng(random_state)
+    if test_distribution is None:
+        test_distribution = default_test_distribution(preset)
     profile = SensorProfile.default() if profile is None else profile
     model = error_preset(preset)
     sensor = VirtualSensor(profile, errors=model, zero_offset=zero_offset, random_state=rng)
-    radii = np.array(SPHERE_FRACTIONS) * profile.fmax
+    if isinstance(n_spheres, bool) or int(n_spheres) != n_spheres or not 1 <= n_spheres <= len(SPHERE_FRACTIONS):
+        raise CalibrationInputError(f"n_spheres must be an integer from 1 to {len(SPHERE_FRACTIONS)}; got {n_spheres!r}.")
+    radii = np.array(SPHERE_FRACTIONS[len(SPHERE_FRACTIONS) - int(n_spheres):]) * profile.fmax
     train_wrench, sphere = sphere_wrenches(radii, n_per_sphere, profile.alpha, rng)
     test_wrench = continuous_wrenches(n_test, profile.fmax, profile.tmax, rng, test_distribution)
     train_raw, floor_train = _sample_split(sensor, train_wrench)

@@ -23,6 +23,24 @@
     near full scale, this is what it takes for a linear model to miss by
     clearly more than the noise floor (about 2x on the radial test set;
     5 % FS gives only 1.4x).
+``reconstructed`` — **reverse-engineered, not from the text**
+    ``thesis`` plus a sign-dependent gain a ~ N(20 %, 2 %) on **all six**
+    axes (the mechanism of II-A-d, ``1 ± a/2``), and test loads drawn from
+    the ``"ball"`` distribution (force uniform in the 2000 N ball, torque
+    independently uniform in the 40 N·m ball) by default. The thesis gives
+    neither number. This is the one setting found (issue 20) that gives the
+    thesis' Table II-III figures *and* ordering with ftcal's generator and
+    calibrators: the LTM at 65.0 ± 2.9 N over 30 datasets (relative errors
+    0.069 / 0.069; thesis 62.3 N, 0.070 / 0.062) and, on one dataset with the
+    short schedule (issue 20), the directional DNN (13.2 N) below the
+    comparative one (15.4 N), both far below the LTM. Evidence: more eq. 14
+    nonlinearity (``stress``) favours the direct-mapping network, not the
+    directional one; more noise favours no model; none of 16 readings of
+    eq. 11-14 gives the thesis' LTM figure together with its ordering; and
+    the thesis' RMSE-to-relative-error ratio (944) matches the ball test set
+    (about 1029) rather than the radial one (about 529), i.e. test loads about
+    twice the size of ftcal's default. Use it to test the thesis' claims where
+    they can hold; do not cite it as the thesis' sensor.
 """
 
 from __future__ import annotations
@@ -32,7 +50,7 @@ from dataclasses import replace
 from ._error_models import ErrorModel
 from ..core._exceptions import CalibrationInputError
 
-__all__ = ["ERROR_PRESETS", "error_preset"]
+__all__ = ["ERROR_PRESETS", "PRESET_TEST_DISTRIBUTIONS", "error_preset", "default_test_distribution"]
 
 _THESIS = ErrorModel(
     creep=0.003,
@@ -51,8 +69,23 @@ ERROR_PRESETS: dict[str, ErrorModel] = {
     "thesis": _THESIS,
     "asymmetric": replace(_THESIS, asymmetry=0.02, asymmetry_axes=3),
     "stress": replace(_THESIS, nonlinearity=0.10, nonlinearity_axes=6),
+    "reconstructed": replace(_THESIS, asymmetry=0.20, asymmetry_axes=6),
     "none": ErrorModel(),
 }
+
+#: Test-load distribution of a preset when none is asked for (every other preset: ``"radial"``).
+PRESET_TEST_DISTRIBUTIONS: dict[str, str] = {"reconstructed": "ball"}
+
+
+def default_test_distribution(preset: str | ErrorModel) -> str:
+    """The test-load distribution a preset uses unless told otherwise.
+
+    Examples
+    --------
+    >>> default_test_distribution("reconstructed"), default_test_distribution("thesis")
+    ('ball', 'radial')
+    """
+    return PRESET_TEST_DISTRIBUTIONS.get(preset, "radial") if isinstance(preset, str) else "radial"
 
 
 def error_preset(name: str | ErrorModel) -> ErrorModel:

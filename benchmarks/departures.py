@@ -1,0 +1,116 @@
+#!/usr/bin/env python
+"""Measured effects of ftcal's departures from the thesis (issue 20, RESULTS.md "Departures from the thesis").
+
+1. Nonlinearity γ: 1 % of full scale (ftcal) against the printed 1e-3 (0.1 %), LTM RMSE and noise floor on
+   ``thesis`` data (the LTM is the model eq. 14 hurts).
+2. eq. 18 per component (ftcal) against per sample (the norm of the 6-component error): the same predictions
+   scored both ways.
+3. Table II's "± std": how much of the LTM's spread across datasets the per-dataset noise floor explains (R²),
+   from the cached study results.
+4. The best-weights restore: the same net (same seed, same data) with and without restoring the weights of
+   the best epoch at the end of training (the restore switched off for the measurement only).
+
+Examples::
+
+    python benchmarks/departures.py --out benchmarks/results/departures
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
+from ftcal.evaluation import dataset_seeds, make_model
+
+ROOT = Path(__file__).resolve().parent
+
+
+def gamma_effect(n: int) -> dict:
+    out = {}
+    for gamma in (0.001, 0.01):
+        model = replace(ERROR_PRESETS["thesis"], nonlinearity=gamma)
+        ltm, floor = [], []
+        for i in range(n):
+            train, test, info = make_artificial_dataset(model, random_state=dataset_seeds(0, i)[0])
+            ltm.append(wrench_rmse(test.wrench, LinearCalibrator().fit(train.raw, train.wrench).predict(test.raw), 50.0))
+            floor.append(info["noise_floor"])
+        out[f"gamma={gamma:g}"] = {"ltm_rmse": float(np.mean(ltm)), "noise_floor": float(np.mean(floor)), "n": n}
+    return out
+
+
+def eq18_effect(n: int) -> dict:
+    out = {}
+    for preset in ("thesis", "reconstructed"):
+        comp, sample = [], []
+        for i in range(n):
+            train, test, _ = make_artificial_dataset(preset, random_state=dataset_seeds(0, i)[0])
+            pred = LinearCalibrator().fit(train.raw, train.wrench).predict(test.raw)
+            comp.append(wrench_rmse(test.wrench, pred, 50.0))
+            # per sample: RMSE over samples of the 6-D error norm = sqrt(6) x the per-component RMSE
+            sample.append(float(np.sqrt(np.mean((np.sqrt(6) * per_sample_rmse(test.wrench, pred, 50.0)) ** 2))))
+        out[preset] = {"ltm_per_component": float(np.mean(comp)), "ltm_per_sample_norm": float(np.mean(sample)),
+                       "ratio": float(np.mean(sample) / np.mean(comp)), "n": n}
+    return out
+
+
+def spread_explained(cache: Path) -> dict | None:
+    recs = [r for r in (json.loads(p.read_text()) for p in cache.glob("ds*_linear_*.json")) if r["model"] == "linear"]
+    if len(recs) < 3:
+        return None
+    rmse = np.array([r["rmse"] for r in recs])
+    floor = np.array([r["noise_floor"] for r in recs])
+    r = np.corrcoef(rmse, floor)[0, 1]
+    return {"n": len(recs), "r2": float(r**2), "ltm_std": float(rmse.std(ddof=1)), "floor_std": float(floor.std(ddof=1))}
+
+
+def restore_effect(models, presets) -> dict:
+    from ftcal.neural_network import RestoreBestWeights
+
+    out = {}
+    original = RestoreBestWeights.on_train_end
+    profile = SensorProfile.default()
+    for preset in presets:
+        data_seed, model_seed = dataset_seeds(0, 0)
+        train, test, _ = make_artificial_dataset(preset, random_state=data_seed)
+        for name in models:
+            row = {}
+            for restore in (True, False):
+                RestoreBestWeights.on_train_end = original if restore else (lambda self, net, **kw: None)
+                try:
+                    est = make_model(name, n_channels=6, alpha=profile.alpha, schedule="short", random_state=model_seed)
+                    est.fit(train.raw, train.wrench)
+                finally:
+                    RestoreBestWeights.on_train_end = original
+                row["with_restore" if restore else "last_epoch"] = wrench_rmse(test.wrench, est.predict(test.raw), 50.0)
+                row["epochs"], row["best_epoch"] = int(est.n_epochs_), int(est.best_epoch_)
+            out[f"{preset}/{name}"] = row
+            print(preset, name, row, flush=True)
+    return out
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--datasets", type=int, default=5)
+    p.add_argument("--out", default=str(ROOT / "out" / "departures"))
+    args = p.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    result = {"gamma": gamma_effect(args.datasets), "eq18": eq18_effect(args.datasets),
+              "spread_thesis": spread_explained(ROOT / "results" / "artificial_thesis" / "cache" / "thesis"),
+              "spread_reconstructed": spread_explained(ROOT / "results" / "artificial_reconstructed" / "cache" / "reconstructed")}
+    (out / "departures.json").write_text(json.dumps(result, indent=1))
+    print(json.dumps(result, indent=1), flush=True)
+    result["restore"] = restore_effect(("directional", "comparative"), ("reconstructed", "thesis"))
+    (out / "departures.json").write_text(json.dumps(result, indent=1))
+    print(json.dumps(result["restore"], indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
