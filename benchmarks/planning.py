@@ -145,7 +145,9 @@ def run(sensors, seeds, sizes, next_step: int, out: Path) -> None:
             sensor = make_sensor(sensor_name, seed)
             alpha = float(sensor.profile.alpha)
             test = run_plan(robot, as_plan(robot, g_test, q_test, "held-out"), sensor, 10_000 + seed)
-            jobs = [("geodesic", n) for n in GEODESIC] + [(s, n) for s in ("d-optimal", "random") for n in sizes]
+            # largest first: the geodesic reference and the plans of the target size come before the rest
+            jobs = sorted([("geodesic", n) for n in GEODESIC] + [(s, n) for s in ("d-optimal", "random") for n in sizes],
+                          key=lambda job: (-job[1], ("geodesic", "d-optimal", "random").index(job[0])))
             for strategy, n in jobs:
                 def compute(strategy=strategy, n=n):
                     if strategy == "geodesic":

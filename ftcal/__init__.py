@@ -73,6 +73,7 @@ _PUBLIC: dict[str, str] = {
     "CandidatePoses": "robot._pose_planning",
     "reachable_candidates": "robot._pose_planning",
     "select_poses": "robot._pose_planning",
+    "select_load_configurations": "robot._pose_planning",
     "d_criterion": "robot._pose_planning",
     "PLAN_STRATEGIES": "robot._pose_planning",
     "propose_next_poses": "experiment._next_poses",

@@ -134,6 +134,22 @@ def test_robot_plans_are_reachable_and_short(robot, candidates, strategy):
     np.testing.assert_allclose(again.q, plan.q)
 
 
+def test_which_load_configurations(robot, candidates):
+    from ftcal import select_load_configurations, thesis_load_configurations
+
+    positions = np.array([c.position_in_sensor for c in thesis_load_configurations()])
+    chosen = select_load_configurations(CANDIDATES, 3)
+    # the best 3 of 7 beat every other subset of 3 on the D-criterion (exhaustive check, independent of the code path)
+    from itertools import combinations
+    scores = {c: d_criterion(CANDIDATES, positions[list(c)]) for c in combinations(range(7), 3)}
+    assert scores[tuple(chosen.tolist())] == max(scores.values())
+    with pytest.raises(PlanningError, match="at least 3 configurations"):
+        select_load_configurations(CANDIDATES, 2)
+    plan = plan_calibration_poses(robot, strategy="d-optimal", n_poses=8, candidates=candidates, n_load_configurations=4)
+    assert len(plan.settings["load_configurations"]) == 4 and plan.n_poses == 8
+    np.testing.assert_allclose(plan.settings["load_positions_in_sensor_m"], positions[plan.settings["load_configurations"]])
+
+
 def test_plan_bad_input_raises_planning_error(robot, candidates):
     with pytest.raises(PlanningError, match="only 42 candidate directions are reachable"):
         plan_calibration_poses(robot, strategy="d-optimal", n_poses=43, candidates=candidates)

@@ -65,6 +65,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    default=3, help="icosphere level of the candidates of random, d-optimal and --next (3: 642)")
     p.add_argument("--space-filling", type=float, default=0.25,
                    help="weight of the space-filling term of the d-optimal criterion (0: pure D-optimality)")
+    p.add_argument("--load-configurations", type=positive_int, default=None, metavar="K",
+                   help="with --strategy d-optimal: also choose which K of the thesis' 7 load configurations to run "
+                   "(at least 3; listed in plan.json settings.load_configurations); default all")
     p.add_argument("--next", type=positive_int, default=None, metavar="K", dest="next_poses",
                    help="propose the K poses where the model's predicted wrench is most uncertain "
                    "(needs --dataset and --model)")
@@ -95,6 +98,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
                        "direction of its sphere; choose its size with --subdivisions)")
     if args.strategy != "geodesic" and args.poses is None:
         raise CliError(f"--strategy {args.strategy} needs --poses N (how many poses to choose)")
+    if args.load_configurations is not None and args.strategy != "d-optimal":
+        raise CliError("--load-configurations needs --strategy d-optimal")
     if not (args.space_filling >= 0 and np.isfinite(args.space_filling)):
         raise CliError(f"--space-filling must be a finite weight >= 0; got {args.space_filling}")
 
@@ -128,7 +133,8 @@ def run(args: argparse.Namespace) -> int:
         plan = ftcal.plan_calibration_poses(
             robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg, strategy=args.strategy,
             n_poses=args.poses, candidate_subdivisions=args.candidate_subdivisions,
-            space_filling=args.space_filling, random_state=args.seed,
+            space_filling=args.space_filling, n_load_configurations=args.load_configurations,
+            random_state=args.seed,
         )
         unreachable, n_candidates = plan.unreachable, plan.n_candidates
         anchor, anchor_frame = plan.anchor_position_in_base, plan.anchor_frame

@@ -20,15 +20,17 @@ uncertainty is then evaluated at those predicted readings.
 
 The uncertainty
 ---------------
-* A Gaussian-process model (:class:`ftcal.GaussianProcessCalibrator`, or a
-  wrapper whose ``chosen_`` / ``best_estimator_`` / ``estimator_`` is one):
-  its own kernel and fitted hyperparameters give the joint posterior
-  covariance of the candidates, ``K_cc - K_ct K_tt^-1 K_tc`` (its
-  ``predict(X, return_std=True)`` is the diagonal of this, plus noise).
-* Any other model: the linear model's predictive covariance on the same
+* Any model: the linear model's predictive covariance on the dataset's
   regressors, ``s^2 phi_a^T (Phi^T Phi)^-1 phi_b`` with ``phi = [1, x]`` and
-  ``s^2`` the LTM's residual variance on the dataset: proposing by it is
-  sequential D-optimal design for the LTM.
+  ``s^2`` the LTM's residual variance on the dataset: proposing by it alone is
+  sequential D-optimal design for the LTM (``uncertainty="linear"``).
+* A Gaussian-process model (:class:`ftcal.GaussianProcessCalibrator`, or a
+  wrapper whose ``chosen_`` / ``best_estimator_`` / ``estimator_`` is one)
+  adds the posterior covariance of its residual GP, from its own kernel and
+  fitted hyperparameters, ``K_cc - K_ct K_tt^-1 K_tc`` (its
+  ``predict(X, return_std=True)`` is the diagonal of this plus the noise; it
+  leaves out the uncertainty of the GP's linear part, which the first term
+  carries). ``uncertainty="gaussian_process"``; the noise is the GP's.
 
 Variances are summed over the six wrench components in the torque-scaled
 space ``[F, alpha T]`` [N²] (``alpha`` the model's torque scale), the
@@ -259,14 +261,15 @@ def propose_next_poses(
     raw = np.hstack([wrench, np.ones((len(wrench), 1))]) @ B
 
     gp = _gaussian_process_of(model)
-    if gp is not None:
-        columns, diag, noise = _covariance_gp(gp, raw)
+    alpha = float(gp.alpha_) if gp is not None else _torque_scale(model, dataset.wrench)
+    y_scaled = np.hstack([dataset.wrench[:, :3], alpha * dataset.wrench[:, 3:]])
+    columns, diag, noise = _covariance_linear(dataset, y_scaled, raw)
+    kind = "linear"
+    if gp is not None:  # the GP's residual covariance on top of its linear part's parameter uncertainty
+        lin_columns, (gp_columns, gp_diag, noise) = columns, _covariance_gp(gp, raw)
+        columns = lambda idx: lin_columns(idx) + gp_columns(idx)  # noqa: E731
+        diag = diag + gp_diag
         kind = "gaussian_process"
-    else:
-        alpha = _torque_scale(model, dataset.wrench)
-        y_scaled = np.hstack([dataset.wrench[:, :3], alpha * dataset.wrench[:, 3:]])
-        columns, diag, noise = _covariance_linear(dataset, y_scaled, raw)
-        kind = "linear"
     noise = max(noise, 1e-12 * max(float(diag.max()), 1e-300))
 
     var = diag.copy()

@@ -73,6 +73,14 @@ grows). Deterministic: ties go to the lower candidate index. The poses are
 then ordered for short robot motions and solved by IK from the previous pose,
 as for the geodesic plan. ``strategy="random"`` draws ``n_poses`` reachable
 candidates uniformly with ``random_state``.
+
+Which load configurations: ``n_load_configurations=K`` keeps the ``K`` of the
+given configurations (the thesis' seven by default) whose design over the
+reachable candidates has the largest D-criterion (all subsets when there are
+at most 5000, else forward selection), then chooses the poses for them. The
+choice is made on the whole candidate sphere, not jointly with the poses: the
+D-optimal pose sets are nearly uniform on the sphere, so the two decouple. At
+least 3 configurations are needed (two share all torques but one plane's).
 """
 
 from __future__ import annotations
@@ -98,6 +106,7 @@ __all__ = [
     "plan_calibration_poses",
     "reachable_candidates",
     "select_poses",
+    "select_load_configurations",
     "d_criterion",
     "linear_design_rows",
     "PLAN_STRATEGIES",
@@ -490,6 +499,53 @@ class _GreedyDesign:
         return gain
 
 
+def select_load_configurations(gravity_in_sensor: ArrayLike, n_load_configurations: int,
+                               load_positions_in_sensor: ArrayLike | None = None) -> NDArray[np.int64]:
+    """Indices of the ``n_load_configurations`` load positions most informative over the candidate directions.
+
+    Maximises :func:`d_criterion` of all candidate directions (m, 3) run with the chosen configurations
+    (every subset when there are at most 5000, else greedy forward selection).
+
+    Raises
+    ------
+    PlanningError
+        ``n_load_configurations`` outside ``1 .. n_configurations`` or too few to identify the LTM.
+
+    Examples
+    --------
+    >>> from ftcal import gravity_directions_in_sensor
+    >>> select_load_configurations(gravity_directions_in_sensor(2), 3).tolist()  # of the thesis' seven
+    [1, 2, 4]
+    """
+    from itertools import combinations
+    from math import comb
+
+    u = np.asarray(gravity_in_sensor, dtype=float).reshape(-1, 3)
+    r = _load_positions(load_positions_in_sensor)
+    k = n_load_configurations
+    if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 1 <= k <= len(r):
+        raise PlanningError(f"n_load_configurations must be an integer in 1..{len(r)} (the load configurations "
+                            f"given); got {k!r}.")
+    if comb(len(r), k) <= 5000:
+        subsets = [list(c) for c in combinations(range(len(r)), k)]
+        scores = [d_criterion(u, r[c]) for c in subsets]
+        best = subsets[int(np.argmax(scores))]
+        score = max(scores)
+    else:
+        best = []
+        for _ in range(k):
+            left = [i for i in range(len(r)) if i not in best]
+            trial = [d_criterion(u, r[best + [i]]) if len(best) >= 2 else
+                     float(np.linalg.norm(r[i] - (r[best].mean(axis=0) if best else 0))) for i in left]
+            best.append(left[int(np.argmax(trial))])
+        score = d_criterion(u, r[best])
+    if not np.isfinite(score):
+        raise PlanningError(f"{k} load configuration(s) can not identify the linear calibration model (its torque "
+                            "part needs positions whose differences span 3-D: at least 3 configurations); "
+                            "ask for more.")
+    return np.array(sorted(best), dtype=np.int64)
+
+
 def select_poses(
     gravity_in_sensor: ArrayLike,
     n_poses: int,
@@ -595,6 +651,7 @@ def plan_calibration_poses(
     candidates: CandidatePoses | None = None,
     load_positions_in_sensor: ArrayLike | None = None,
     space_filling: float = 0.25,
+    n_load_configurations: int | None = None,
     random_state: int | np.random.Generator | None = None,
 ) -> CalibrationPlan:
     """Plan calibration poses: a geodesic sphere, or ``n_poses`` chosen from a dense one.
@@ -634,6 +691,9 @@ def plan_calibration_poses(
         Load configurations run at every pose [m] (D-optimal design); default the thesis' seven.
     space_filling : float, default=0.25
         Weight of the space-filling term of the D-optimal criterion.
+    n_load_configurations : int, optional
+        Also choose this many of the load configurations (D-optimal only; see the module
+        docstring); ``plan.settings["load_configurations"]`` lists their indices. Default: all.
     random_state : int, Generator or None
         Seed of the random strategy (the D-optimal plan is deterministic).
 
@@ -683,6 +743,13 @@ def plan_calibration_poses(
                 excluded_cap_deg=excluded_cap_deg, gravity_in_base=gravity_in_base,
                 anchor_position_in_base=anchor_position_in_base, orientation_tol=orientation_tol,
                 limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
+        positions = _load_positions(load_positions_in_sensor)
+        configs = np.arange(len(positions))
+        if n_load_configurations is not None:
+            if strategy != "d-optimal":
+                raise PlanningError("n_load_configurations (which load configurations) needs strategy 'd-optimal'.")
+            configs = select_load_configurations(candidates.gravity_in_sensor, n_load_configurations, positions)
+        load_positions_in_sensor = positions[configs]
         picked = select_poses(candidates.gravity_in_sensor, n_poses, strategy=strategy,
                               load_positions_in_sensor=load_positions_in_sensor, space_filling=space_filling,
                               random_state=random_state)
@@ -697,7 +764,9 @@ def plan_calibration_poses(
                     "n_reachable_candidates": len(candidates),
                     "space_filling": float(space_filling) if strategy == "d-optimal" else None,
                     "random_state": random_state if isinstance(random_state, (int, np.integer)) else None,
-                    "d_criterion": d_criterion(dirs, load_positions_in_sensor)}
+                    "d_criterion": d_criterion(dirs, load_positions_in_sensor),
+                    "load_configurations": configs.tolist(),
+                    "load_positions_in_sensor_m": load_positions_in_sensor.tolist()}
         settings.pop("subdivisions", None)
     g = dirs[reached].reshape(-1, 3)
     pitch, yaw = pitch_yaw_from_gravity_in_sensor(g)
