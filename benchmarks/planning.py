@@ -25,11 +25,12 @@ in a shared 2-core session.
 Usage::
 
     nice -n 19 python benchmarks/planning.py [--sensors thesis,reconstructed,soft] [--seeds 0,1,2]
-        [--sizes 12,24,36,52] [--out benchmarks/results/planning]
+        [--sizes 12,24,52] [--models linear,auto] [--out benchmarks/results/planning]
 
 ``--sensors`` takes error-preset names of :func:`ftcal.error_preset` (``ftcal.ERROR_PRESETS``); presets
 added later (``reconstructed``, the soft-sensor preset) are used by name once they exist. Every fit
-is cached as one JSON file in ``<out>/cache/`` (out of git), so an interrupted run resumes; the
+is cached as one JSON file in ``<out>/cache/`` (out of git), so an interrupted run resumes; the LTM pass
+runs over every seed before the (much slower) ``auto`` pass. The
 summary (``summary.json``, ``summary.md``) and the plot ``benchmarks/figures/planning_rmse.png`` are
 rewritten from the cache at the end (``--report-only`` does only that).
 """
@@ -98,20 +99,19 @@ def as_plan(robot, g, q, name: str) -> "ftcal.CalibrationPlan":
                                  n_candidates=len(g), settings={"strategy": name})
 
 
-def score(train, test, alpha: float, seed: int) -> dict:
-    out = {}
-    for name, model in (("linear", ftcal.LinearCalibrator(alpha=alpha)), ("auto", auto_calibrator(seed))):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            t0 = time.perf_counter()
-            if name == "auto":
-                model.fit(train.raw, train.wrench, groups=train.group)
-            else:
-                model.fit(train.raw, train.wrench)
-            out[f"{name}_fit_seconds"] = time.perf_counter() - t0
-        out[name] = ftcal.wrench_rmse(test.wrench, model.predict(test.raw), alpha=alpha)
-        if name == "auto":
-            out["auto_chosen"] = str(model.best_name_)
+def score(model_name: str, train, test, alpha: float, seed: int) -> dict:
+    model = ftcal.LinearCalibrator(alpha=alpha) if model_name == "linear" else auto_calibrator(seed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        t0 = time.perf_counter()
+        if model_name == "auto":
+            model.fit(train.raw, train.wrench, groups=train.group)
+        else:
+            model.fit(train.raw, train.wrench)
+        seconds = time.perf_counter() - t0
+    out = {"rmse": ftcal.wrench_rmse(test.wrench, model.predict(test.raw), alpha=alpha), "fit_seconds": seconds}
+    if model_name == "auto":
+        out["chosen"] = str(model.best_name_)
     return out
 
 
@@ -125,86 +125,97 @@ def cached(path: Path, compute) -> dict:
     return result
 
 
-def run(sensors, seeds, sizes, next_step: int, out: Path) -> None:
+def load_candidates(robot, cache: Path):
+    path = cache / "candidates_level3.npz"
+    if path.exists():
+        d = np.load(path, allow_pickle=False)
+        return ftcal.CandidatePoses(gravity_in_sensor=d["g"], q=d["q"], unreachable=d["u"],
+                                    anchor_position_in_base=d["a"], n_candidates=int(d["n"]),
+                                    settings=json.loads(str(d["s"])))
+    c = ftcal.reachable_candidates(robot, subdivisions=3)
+    np.savez(path, g=c.gravity_in_sensor, q=c.q, u=c.unreachable, a=c.anchor_position_in_base, n=c.n_candidates,
+             s=json.dumps(c.settings))
+    return c
+
+
+def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
+    """One pass per model (the cheap LTM first, over every seed; then ``auto``), every result cached."""
     cache = out / "cache"
     cache.mkdir(parents=True, exist_ok=True)
     robot = ftcal.load_robot()
-    cand_path = cache / "candidates_level3.npz"
-    if cand_path.exists():
-        d = np.load(cand_path, allow_pickle=False)
-        candidates = ftcal.CandidatePoses(gravity_in_sensor=d["g"], q=d["q"], unreachable=d["u"],
-                                          anchor_position_in_base=d["a"], n_candidates=int(d["n"]),
-                                          settings=json.loads(str(d["s"])))
-    else:
-        candidates = ftcal.reachable_candidates(robot, subdivisions=3)
-        np.savez(cand_path, g=candidates.gravity_in_sensor, q=candidates.q, u=candidates.unreachable,
-                 a=candidates.anchor_position_in_base, n=candidates.n_candidates, s=json.dumps(candidates.settings))
+    candidates = load_candidates(robot, cache)
     g_test, q_test = held_out_plan(robot, cache)
-    for seed in seeds:
-        for sensor_name in sensors:
-            sensor = make_sensor(sensor_name, seed)
-            alpha = float(sensor.profile.alpha)
-            test = run_plan(robot, as_plan(robot, g_test, q_test, "held-out"), sensor, 10_000 + seed)
-            # largest first: the geodesic reference and the plans of the target size come before the rest
-            jobs = sorted([("geodesic", n) for n in GEODESIC] + [(s, n) for s in ("d-optimal", "random") for n in sizes],
-                          key=lambda job: (-job[1], ("geodesic", "d-optimal", "random").index(job[0])))
-            for strategy, n in jobs:
-                def compute(strategy=strategy, n=n):
-                    if strategy == "geodesic":
-                        plan = ftcal.plan_calibration_poses(robot, subdivisions=GEODESIC[n],
-                                                            excluded_cap_deg=0 if n == 12 else 20)
-                    else:
-                        plan = ftcal.plan_calibration_poses(robot, strategy=strategy, n_poses=n, candidates=candidates,
-                                                            random_state=seed)
-                    train = run_plan(robot, plan, sensor, 100 * seed + n)
-                    return {"sensor": sensor_name, "seed": seed, "strategy": strategy, "n_poses": plan.n_poses,
-                            "d_criterion": ftcal.d_criterion(plan.gravity_in_sensor),
-                            **score(train, test, alpha, seed)}
-                r = cached(cache / f"{sensor_name}_s{seed}_{strategy}_{n}.json", compute)
-                print(f"{sensor_name} seed {seed} {strategy:9s} {r['n_poses']:4d} poses: LTM {r['linear']:.4f} N, "
-                      f"auto {r['auto']:.4f} N", flush=True)
-            # sequential "next" rounds from the smallest D-optimal plan
-            plan = ftcal.plan_calibration_poses(robot, strategy="d-optimal", n_poses=min(sizes), candidates=candidates)
-            g, q = plan.gravity_in_sensor, plan.q
-            train = run_plan(robot, plan, sensor, 100 * seed + len(g))
-            while len(g) + next_step <= max(sizes):
-                gp = ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed).fit(train.raw, train.wrench)
-                prop = ftcal.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
-                g, q = np.vstack([g, prop.gravity_in_sensor]), np.vstack([q, prop.q])
-                key = cache / f"{sensor_name}_s{seed}_next_{len(g)}.json"
-                train = run_plan(robot, as_plan(robot, g, q, "next"), sensor, 100 * seed + len(g) + 7)
-                r = cached(key, lambda: {"sensor": sensor_name, "seed": seed, "strategy": "next", "n_poses": len(g),
-                                         "d_criterion": ftcal.d_criterion(g),
-                                         "expected_gain": float(prop.expected_gain.sum()),
-                                         **score(train, test, alpha, seed)})
-                print(f"{sensor_name} seed {seed} next      {len(g):4d} poses: LTM {r['linear']:.4f} N, "
-                      f"auto {r['auto']:.4f} N", flush=True)
+    for model_name in models:
+        for seed in seeds:
+            for sensor_name in sensors:
+                sensor = make_sensor(sensor_name, seed)
+                alpha = float(sensor.profile.alpha)
+                test = run_plan(robot, as_plan(robot, g_test, q_test, "held-out"), sensor, 10_000 + seed)
+                # largest first: the geodesic reference and the plans of the target size come before the rest
+                jobs = sorted([("geodesic", n) for n in GEODESIC] +
+                              [(s, n) for s in ("d-optimal", "random") for n in sizes],
+                              key=lambda job: (-job[1], ("geodesic", "d-optimal", "random").index(job[0])))
+                for strategy, n in jobs:
+                    def compute(strategy=strategy, n=n):
+                        if strategy == "geodesic":
+                            plan = ftcal.plan_calibration_poses(robot, subdivisions=GEODESIC[n],
+                                                                excluded_cap_deg=0 if n == 12 else 20)
+                        else:
+                            plan = ftcal.plan_calibration_poses(robot, strategy=strategy, n_poses=n,
+                                                                candidates=candidates, random_state=seed)
+                        train = run_plan(robot, plan, sensor, 100 * seed + n)
+                        return {"sensor": sensor_name, "seed": seed, "strategy": strategy, "n_poses": plan.n_poses,
+                                "model": model_name, "d_criterion": ftcal.d_criterion(plan.gravity_in_sensor),
+                                **score(model_name, train, test, alpha, seed)}
+                    r = cached(cache / f"{sensor_name}_s{seed}_{strategy}_{n}_{model_name}.json", compute)
+                    print(f"{model_name:6s} {sensor_name} seed {seed} {strategy:9s} {r['n_poses']:4d} poses: "
+                          f"{r['rmse']:.4f} N", flush=True)
+                # sequential "next" rounds from the smallest D-optimal plan, a GP telling where to measure
+                plan = ftcal.plan_calibration_poses(robot, strategy="d-optimal", n_poses=min(sizes),
+                                                    candidates=candidates)
+                g, q = plan.gravity_in_sensor, plan.q
+                train = run_plan(robot, plan, sensor, 100 * seed + len(g))
+                while len(g) + next_step <= max(sizes):
+                    key = cache / f"{sensor_name}_s{seed}_next_{len(g) + next_step}_{model_name}.json"
+                    gp = ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed).fit(train.raw, train.wrench)
+                    prop = ftcal.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
+                    g, q = np.vstack([g, prop.gravity_in_sensor]), np.vstack([q, prop.q])
+                    train = run_plan(robot, as_plan(robot, g, q, "next"), sensor, 100 * seed + len(g) + 7)
+                    r = cached(key, lambda: {"sensor": sensor_name, "seed": seed, "strategy": "next",
+                                             "n_poses": len(g), "model": model_name,
+                                             "d_criterion": ftcal.d_criterion(g),
+                                             "expected_gain": float(prop.expected_gain.sum()),
+                                             **score(model_name, train, test, alpha, seed)})
+                    print(f"{model_name:6s} {sensor_name} seed {seed} next      {len(g):4d} poses: {r['rmse']:.4f} N",
+                          flush=True)
 
 
 def report(out: Path) -> None:
-    rows = [json.loads(p.read_text()) for p in sorted((out / "cache").glob("*_s*_*.json"))]
+    rows = [json.loads(p.read_text()) for p in sorted((out / "cache").glob("*_s*_*_*.json"))]
+    rows = [r for r in rows if "model" in r]
     if not rows:
         return
-    table: dict = {}
+    by: dict = {}
     for r in rows:
-        table.setdefault((r["sensor"], r["strategy"], r["n_poses"]), []).append(r)
+        by.setdefault((r["sensor"], r["model"], r["strategy"], r["n_poses"]), {})[r["seed"]] = r
     summary = []
-    lines = ["| sensor | plan | poses | seeds | LTM RMSE [N] | auto RMSE [N] | LTM / geodesic-155 | auto / geodesic-155 | log det M |",
-             "|---|---|---|---|---|---|---|---|---|"]
-    for (sensor, strategy, n), rs in sorted(table.items(), key=lambda kv: (kv[0][0], kv[0][1], kv[0][2])):
-        seeds = sorted(r["seed"] for r in rs)
-        ref = {r["seed"]: r for r in table.get((sensor, "geodesic", 155), [])}
-        common = [r for r in rs if r["seed"] in ref]
-        ratio = {m: (float(np.mean([r[m] / ref[r["seed"]][m] for r in common])) if common else None)
-                 for m in ("linear", "auto")}
-        entry = {"sensor": sensor, "strategy": strategy, "n_poses": n, "seeds": seeds,
-                 "linear_mean": float(np.mean([r["linear"] for r in rs])), "auto_mean": float(np.mean([r["auto"] for r in rs])),
-                 "linear_ratio_to_geodesic155": ratio["linear"], "auto_ratio_to_geodesic155": ratio["auto"],
-                 "d_criterion_mean": float(np.mean([r["d_criterion"] for r in rs]))}
+    lines = ["| sensor | model | plan | poses | seeds | held-out RMSE [N], mean | ratio to geodesic 155 (same seeds), mean [min, max] | log det M |",
+             "|---|---|---|---|---|---|---|---|"]
+    order = {"geodesic": 0, "d-optimal": 1, "random": 2, "next": 3}
+    for (sensor, model, strategy, n), rs in sorted(by.items(), key=lambda kv: (kv[0][0], kv[0][1], order[kv[0][2]], kv[0][3])):
+        ref = by.get((sensor, model, "geodesic", 155), {})
+        ratios = [rs[s]["rmse"] / ref[s]["rmse"] for s in rs if s in ref]
+        entry = {"sensor": sensor, "model": model, "strategy": strategy, "n_poses": n, "seeds": sorted(rs),
+                 "rmse_mean": float(np.mean([r["rmse"] for r in rs.values()])),
+                 "ratio_mean": float(np.mean(ratios)) if ratios else None,
+                 "ratio_min": float(np.min(ratios)) if ratios else None,
+                 "ratio_max": float(np.max(ratios)) if ratios else None,
+                 "d_criterion_mean": float(np.mean([r["d_criterion"] for r in rs.values()])),
+                 "auto_chosen": sorted({r.get("chosen", "") for r in rs.values()} - {""})}
         summary.append(entry)
-        fmt = lambda v: "-" if v is None else f"{v:.3f}"
-        lines.append(f"| {sensor} | {strategy} | {n} | {len(seeds)} | {entry['linear_mean']:.4f} | {entry['auto_mean']:.4f} "
-                     f"| {fmt(ratio['linear'])} | {fmt(ratio['auto'])} | {entry['d_criterion_mean']:.2f} |")
+        ratio = "-" if not ratios else f"{entry['ratio_mean']:.3f} [{entry['ratio_min']:.3f}, {entry['ratio_max']:.3f}]"
+        lines.append(f"| {sensor} | {model} | {strategy} | {n} | {len(rs)} | {entry['rmse_mean']:.4f} | {ratio} "
+                     f"| {entry['d_criterion_mean']:.2f} |")
     (out / "summary.json").write_text(json.dumps({"rows": summary, "machine": platform.platform(),
                                                   "note": "machine NOT idle (7 helpers on 2 cores)"}, indent=1))
     (out / "summary.md").write_text("\n".join(lines) + "\n")
@@ -215,23 +226,24 @@ def report(out: Path) -> None:
     import matplotlib.pyplot as plt
 
     sensors = sorted({e["sensor"] for e in summary})
-    fig, axes = plt.subplots(len(sensors), 2, figsize=(10, 3.6 * len(sensors)), squeeze=False)
+    models = [m for m in ("linear", "auto") if any(e["model"] == m for e in summary)]
+    fig, axes = plt.subplots(len(sensors), len(models), figsize=(5 * len(models), 3.6 * len(sensors)), squeeze=False)
     for i, sensor in enumerate(sensors):
-        for j, model in enumerate(("linear", "auto")):
+        for j, model in enumerate(models):
             ax = axes[i, j]
             for strategy, style in (("geodesic", "o-"), ("random", "s--"), ("d-optimal", "^-"), ("next", "d-.")):
-                pts = sorted((e["n_poses"], e[f"{model}_mean"]) for e in summary
-                             if e["sensor"] == sensor and e["strategy"] == strategy)
+                pts = sorted((e["n_poses"], e["rmse_mean"]) for e in summary
+                             if e["sensor"] == sensor and e["model"] == model and e["strategy"] == strategy)
                 if pts:
                     ax.plot(*zip(*pts), style, label=strategy)
-            ref = [e[f"{model}_mean"] for e in summary if e["sensor"] == sensor and e["strategy"] == "geodesic"
-                   and e["n_poses"] == 155]
+            ref = [e["rmse_mean"] for e in summary if e["sensor"] == sensor and e["model"] == model
+                   and e["strategy"] == "geodesic" and e["n_poses"] == 155]
             if ref:
                 ax.axhline(1.05 * ref[0], color="gray", lw=0.8, ls=":", label="1.05 x geodesic 155")
             ax.set_xscale("log")
             ax.set_xlabel("poses (x 7 load configurations)")
             ax.set_ylabel("held-out RMSE [N] (torque-scaled)")
-            ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form)'}")
+            ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form candidates)'}")
             ax.legend(fontsize=7)
     fig.tight_layout()
     fig_path = HERE / "figures" / "planning_rmse.png"
@@ -243,14 +255,15 @@ def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--sensors", default="thesis")
     ap.add_argument("--seeds", default="0,1,2")
-    ap.add_argument("--sizes", default="12,24,36,52", help="poses of the random and d-optimal plans")
+    ap.add_argument("--sizes", default="12,24,52", help="poses of the random and d-optimal plans")
     ap.add_argument("--next-step", type=int, default=20, help="poses added per 'next' round")
+    ap.add_argument("--models", default="linear,auto", help="one pass per model, in this order")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "planning")
     ap.add_argument("--report-only", action="store_true")
     a = ap.parse_args(argv)
     if not a.report_only:
         run(a.sensors.split(","), [int(s) for s in a.seeds.split(",")], [int(s) for s in a.sizes.split(",")],
-            a.next_step, a.out)
+            a.next_step, a.models.split(","), a.out)
     report(a.out)
 
 

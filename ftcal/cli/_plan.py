@@ -126,8 +126,6 @@ def run(args: argparse.Namespace) -> int:
                  "expected_gain": plan.expected_gain, "total_variance_before_N2": plan.total_variance_before,
                  "total_variance_after_N2": plan.total_variance_after, "dataset": str(args.dataset),
                  "model": str(args.model)}
-        unreachable, n_candidates = candidates.unreachable, candidates.n_candidates
-        anchor, anchor_frame = candidates.anchor_position_in_base, robot.anchor_frame
     else:
         console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
         plan = ftcal.plan_calibration_poses(
@@ -136,8 +134,6 @@ def run(args: argparse.Namespace) -> int:
             space_filling=args.space_filling, n_load_configurations=args.load_configurations,
             random_state=args.seed,
         )
-        unreachable, n_candidates = plan.unreachable, plan.n_candidates
-        anchor, anchor_frame = plan.anchor_position_in_base, plan.anchor_frame
     unit = "deg" if args.degrees else "rad"
     to_unit = np.degrees if args.degrees else (lambda a: np.asarray(a, dtype=float))
     columns = ["pose", *(f"{j}_{unit}" for j in robot.joint_names), "g_x", "g_y", "g_z", f"pitch_{unit}", f"yaw_{unit}"]
@@ -152,35 +148,33 @@ def run(args: argparse.Namespace) -> int:
         write_json(tmp, {
             "robot": robot.name,
             "urdf": str(robot.urdf_path),
-            "sensor_frame": robot.sensor_frame,
-            "anchor_frame": anchor_frame,
-            "anchor_position_in_base_m": anchor,
+            "sensor_frame": plan.sensor_frame,
+            "anchor_frame": plan.anchor_frame,
+            "anchor_position_in_base_m": plan.anchor_position_in_base,
             "joint_names": list(robot.joint_names),
             "angle_unit": unit,
-            "n_candidates": n_candidates,
+            "n_candidates": plan.n_candidates,
             "n_poses": plan.n_poses,
-            "unreachable_gravity_in_sensor": unreachable,
+            "unreachable_gravity_in_sensor": plan.unreachable,
             "settings": plan.settings,
             **extra,
         })
-    write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame",
-                        unreachable=unreachable)
+    write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
     if args.next_poses is not None:
         console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
                      f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance; poses -> "
                      f"{plan_files.path('poses.csv')}")
     else:
-        console.info(f"{plan.n_poses} poses ({args.strategy}) of {n_candidates} directions; poses -> "
+        console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
                      f"{plan_files.path('poses.csv')}")
     return 0
 
 
-def write_plan_coverage(files: OutputPlan, plan, title: str, unreachable=None) -> None:
-    """``coverage.png``: the plan's reachable and unreachable (default ``plan.unreachable``) gravity directions."""
+def write_plan_coverage(files: OutputPlan, plan, title: str) -> None:
+    """``coverage.png``: the plan's reachable and unreachable gravity directions on the sphere."""
     from ..evaluation import _plots
 
-    unreachable = plan.unreachable if unreachable is None else np.asarray(unreachable).reshape(-1, 3)
-    directions = np.vstack([plan.gravity_in_sensor, unreachable])
-    reached = np.r_[np.ones(plan.n_poses, bool), np.zeros(len(unreachable), bool)]
+    directions = np.vstack([plan.gravity_in_sensor, plan.unreachable])
+    reached = np.r_[np.ones(plan.n_poses, bool), np.zeros(len(plan.unreachable), bool)]
     with files.writing("coverage.png") as tmp:
         _plots.plot_sphere_coverage(directions, tmp, reached=reached, title=title)

@@ -58,7 +58,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import PlanningError
 from ..io._dataset import CalibrationDataset
 from ..robot._loads import STANDARD_GRAVITY
-from ..robot._pose_planning import CandidatePoses, pitch_yaw_from_gravity_in_sensor, reachable_candidates
+from ..robot._pose_planning import (CalibrationPlan, CandidatePoses, pitch_yaw_from_gravity_in_sensor,
+                                     reachable_candidates)
 from ..robot._robot import RobotModel
 
 __all__ = ["PoseProposal", "propose_next_poses"]
@@ -68,16 +69,14 @@ _GP_ATTRIBUTES = ("cholesky_", "train_inputs_", "length_scale_", "constant_", "n
 
 
 @dataclass
-class PoseProposal:
-    """The poses proposed next, most informative first.
+class PoseProposal(CalibrationPlan):
+    """The poses proposed next, most informative first: a :class:`ftcal.CalibrationPlan` plus the gains.
+
+    Its ``q`` are reachable (IK residual and joint limits checked), so it can be run (and simulated,
+    ``simulate_experiment(plan=...)``) like any plan; ``unreachable`` are the candidates IK missed.
 
     Attributes
     ----------
-    q : ndarray of shape (k, n_joints)
-        Joint configurations [rad] (IK residual and joint limits checked).
-    gravity_in_sensor : ndarray of shape (k, 3)
-    pitch, yaw : ndarray of shape (k,)
-        [rad].
     predicted_std : ndarray of shape (k,)
         Predictive standard deviation of the wrench at the pose before measuring it:
         RMS over its load configurations of the summed torque-scaled variance [N].
@@ -88,23 +87,13 @@ class PoseProposal:
         ``"gaussian_process"`` or ``"linear"`` (see the module docstring).
     total_variance_before, total_variance_after : float
         Summed predictive variance over all candidates and configurations [N²].
-    settings : dict
     """
 
-    q: NDArray[np.float64]
-    gravity_in_sensor: NDArray[np.float64]
-    pitch: NDArray[np.float64]
-    yaw: NDArray[np.float64]
-    predicted_std: NDArray[np.float64]
-    expected_gain: NDArray[np.float64]
-    uncertainty: str
-    total_variance_before: float
-    total_variance_after: float
-    settings: dict = field(default_factory=dict)
-
-    @property
-    def n_poses(self) -> int:
-        return int(self.q.shape[0])
+    predicted_std: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    expected_gain: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0))
+    uncertainty: str = "linear"
+    total_variance_before: float = 0.0
+    total_variance_after: float = 0.0
 
 
 def _gaussian_process_of(model):
@@ -295,7 +284,10 @@ def propose_next_poses(
     gsens = candidates.gravity_in_sensor[pick]
     pitch, yaw = pitch_yaw_from_gravity_in_sensor(gsens)
     return PoseProposal(
-        q=candidates.q[pick], gravity_in_sensor=gsens, pitch=pitch, yaw=yaw, predicted_std=np.array(stds),
+        q=candidates.q[pick], gravity_in_sensor=gsens, pitch=pitch, yaw=yaw, unreachable=candidates.unreachable,
+        anchor_position_in_base=candidates.anchor_position_in_base, robot_name=robot.name,
+        sensor_frame=robot.sensor_frame, anchor_frame=robot.anchor_frame, n_candidates=candidates.n_candidates,
+        predicted_std=np.array(stds),
         expected_gain=np.array(gains), uncertainty=kind, total_variance_before=total_before,
         total_variance_after=float(var.sum()),
         settings={"strategy": "next", "uncertainty": kind, "n_poses": int(n_poses), **candidates.settings,
