@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
-from ftcal.models._auto import default_candidates
+from ftcal.models import default_candidates
 
 HERE = Path(__file__).resolve().parent
 GEODESIC = {12: 0, 42: 1, 155: 2}
