@@ -36,9 +36,9 @@ uncertainty and expected gain of each proposal) and coverage.png.
 --strategy d-optimal chooses --poses N of the reachable directions of a dense sphere
 (--candidate-subdivisions, 3: 642 before the cap rule) maximising the information of the
 linear calibration model plus a space-filling term; random draws N of them (--seed).
---next K ranks the candidates by the fitted model's predicted wrench uncertainty (a Gaussian
-process model's own, else the linear model's) given the dataset measured so far; rows are
-the proposals, most informative first.
+--next K ranks the candidates by the predicted wrench uncertainty given the dataset measured
+so far (the linear model's, plus a Gaussian-process model's own); rows are the proposals,
+most informative first.
 """
 
 

@@ -217,7 +217,8 @@ def propose_next_poses(
         positions = meta.get("load_positions_in_sensor_m")
         if not positions:
             raise PlanningError("the dataset's metadata holds no load_positions_in_sensor_m (it was not made by "
-                                "ftcal prepare); pass load_positions_in_sensor (API) / --load-positions (CLI).")
+                                "ftcal prepare, which records them); prepare it from the run logs, or pass "
+                                "load_positions_in_sensor to ftcal.propose_next_poses.")
         load_positions_in_sensor = [positions[k] for k in sorted(positions, key=lambda k: int(k))]
     r = np.asarray(load_positions_in_sensor, dtype=float)
     if r.ndim != 2 or r.shape[1] != 3 or not len(r) or not np.isfinite(r).all():
