@@ -177,14 +177,18 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
                 train = run_plan(robot, plan, sensor, 100 * seed + len(g))
                 while len(g) + next_step <= max(sizes):
                     key = cache / f"{sensor_name}_s{seed}_next_{len(g) + next_step}_{model_name}.json"
-                    gp = ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed).fit(train.raw, train.wrench)
-                    prop = ftcal.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
-                    g, q = np.vstack([g, prop.gravity_in_sensor]), np.vstack([q, prop.q])
+                    poses = cache / f"{sensor_name}_s{seed}_next_{len(g) + next_step}_poses.npz"
+                    if not poses.exists():  # the proposals of a round, shared by the model passes
+                        gp = ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed).fit(train.raw, train.wrench)
+                        prop = ftcal.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
+                        np.savez(poses, g=prop.gravity_in_sensor, q=prop.q, gain=prop.expected_gain.sum())
+                    d = np.load(poses)
+                    g, q, gain = np.vstack([g, d["g"]]), np.vstack([q, d["q"]]), float(d["gain"])
                     train = run_plan(robot, as_plan(robot, g, q, "next"), sensor, 100 * seed + len(g) + 7)
                     r = cached(key, lambda: {"sensor": sensor_name, "seed": seed, "strategy": "next",
                                              "n_poses": len(g), "model": model_name,
                                              "d_criterion": ftcal.d_criterion(g),
-                                             "expected_gain": float(prop.expected_gain.sum()),
+                                             "expected_gain": gain,
                                              **score(model_name, train, test, alpha, seed)})
                     print(f"{model_name:6s} {sensor_name} seed {seed} next      {len(g):4d} poses: {r['rmse']:.4f} N",
                           flush=True)
