@@ -229,26 +229,34 @@ def report(out: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    sensors = sorted({e["sensor"] for e in summary})
-    models = [m for m in ("linear", "auto") if any(e["model"] == m for e in summary)]
-    fig, axes = plt.subplots(len(sensors), len(models), figsize=(5 * len(models), 3.6 * len(sensors)), squeeze=False)
-    for i, sensor in enumerate(sensors):
-        for j, model in enumerate(models):
-            ax = axes[i, j]
-            for strategy, style in (("geodesic", "o-"), ("random", "s--"), ("d-optimal", "^-"), ("next", "d-.")):
-                pts = sorted((e["n_poses"], e["rmse_mean"]) for e in summary
-                             if e["sensor"] == sensor and e["model"] == model and e["strategy"] == strategy)
-                if pts:
-                    ax.plot(*zip(*pts), style, label=strategy)
-            ref = [e["rmse_mean"] for e in summary if e["sensor"] == sensor and e["model"] == model
-                   and e["strategy"] == "geodesic" and e["n_poses"] == 155]
-            if ref:
-                ax.axhline(1.05 * ref[0], color="gray", lw=0.8, ls=":", label="1.05 x geodesic 155")
-            ax.set_xscale("log")
-            ax.set_xlabel("poses (x 7 load configurations)")
-            ax.set_ylabel("held-out RMSE [N] (torque-scaled)")
-            ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form candidates)'}")
-            ax.legend(fontsize=7)
+    panels = [(sensor, model) for sensor in sorted({e["sensor"] for e in summary}) for model in ("linear", "auto")
+              if any(e["sensor"] == sensor and e["model"] == model and e["ratio_mean"] is not None
+                     and e["strategy"] != "geodesic" for e in summary)]
+    if not panels:
+        return
+    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.8), squeeze=False)
+    for ax, (sensor, model) in zip(axes[0], panels):
+        for k, (strategy, style) in enumerate((("geodesic", "o-"), ("random", "s--"), ("d-optimal", "^-"),
+                                               ("next", "d-."))):
+            pts = sorted((e["n_poses"], e["ratio_mean"], e["ratio_min"], e["ratio_max"], len(e["seeds"]))
+                         for e in summary if e["sensor"] == sensor and e["model"] == model
+                         and e["strategy"] == strategy and e["ratio_mean"] is not None)
+            if pts:
+                n, mean, lo, hi, seeds = map(np.array, zip(*pts))
+                x = n * (1 + 0.02 * (k - 1.5))  # a small offset so the bars do not hide each other
+                ax.errorbar(x, mean, yerr=[mean - lo, hi - mean], fmt=style, capsize=2,
+                            label=f"{strategy} ({seeds.min()}-{seeds.max()} seeds)" if seeds.min() != seeds.max()
+                            else f"{strategy} ({seeds.min()} seed{'s' if seeds.min() > 1 else ''})")
+        ax.axhline(1.05, color="gray", lw=0.8, ls=":", label="goal: 1.05")
+        ax.axvline(155 / 3, color="gray", lw=0.6, ls="--")
+        ax.set_xscale("log")
+        ax.set_xticks([12, 24, 41, 52, 155])
+        ax.set_xticklabels(["12", "24", "41", "52", "155"])
+        ax.minorticks_off()
+        ax.set_xlabel("poses (each x 7 load configurations)")
+        ax.set_ylabel("held-out RMSE / geodesic-155 RMSE")
+        ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form)'}", fontsize=10)
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig_path = HERE / "figures" / "planning_rmse.png"
     fig.savefig(fig_path, dpi=110)
