@@ -57,7 +57,7 @@ A purely D-optimal plan piles poses near a few extreme directions (for a
 model linear in ``u`` any design with ``sum u = 0`` and ``sum u u^T ~ I``, an
 octahedron, is optimal); a nonlinear model needs the whole sphere. The
 **space-filling term** is the D-criterion of a degree-``L`` polynomial in ``u``
-(``(L + 1)^2 >= n_poses`` harmonics, orthonormalised on the candidates):
+(``(L + 1)^2 >= n_poses`` harmonics, ``L <= 8``, orthonormalised on the candidates):
 ``log det(I + Psi_P^T Psi_P)``, a repulsive kernel determinant whose kernel is
 the reproducing kernel of those polynomials (width about ``pi / L``), so it
 rewards directions far from the chosen ones. The criterion is
@@ -464,6 +464,11 @@ def d_criterion(gravity_in_sensor: ArrayLike, load_positions_in_sensor: ArrayLik
     return float(logdet)
 
 
+#: Highest polynomial degree of the space-filling term (81 harmonics, a kernel about 20 degrees wide):
+#: plans of more than 81 poses keep it, which bounds the cost of an exchange pass.
+_MAX_SPACE_FILLING_DEGREE = 8
+
+
 def _sphere_polynomial_features(u: NDArray[np.float64], degree: int) -> NDArray[np.float64]:
     """Polynomials of degree <= ``degree`` in ``u`` (m, 3), orthonormal in the mean over the rows of ``u``."""
     powers = [(a, b, c) for a in range(degree + 1) for b in range(degree + 1 - a) for c in range(degree + 1 - a - b)]
@@ -613,7 +618,7 @@ def select_poses(
         return np.sort(rng.choice(m, size=int(n_poses), replace=False))
     if strategy != "d-optimal":
         raise PlanningError(f"strategy must be 'random' or 'd-optimal' to select poses; got {strategy!r}.")
-    degree = int(np.ceil(np.sqrt(n_poses))) - 1
+    degree = min(int(np.ceil(np.sqrt(n_poses))) - 1, _MAX_SPACE_FILLING_DEGREE)
     design = _GreedyDesign(linear_design_rows(u, load_positions_in_sensor),
                            _sphere_polynomial_features(u, max(degree, 1)), space_filling)
     chosen: list[int] = []
