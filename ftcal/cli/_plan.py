@@ -13,7 +13,9 @@ from ._common import (
     add_output_options,
     add_robot_options,
     add_run_options,
+    existing_file,
     nonnegative_int,
+    positive_int,
     write_json,
 )
 
@@ -22,11 +24,21 @@ examples:
   ftcal plan --out plan                                   # KUKA iiwa 14, 155 poses (thesis sphere)
   ftcal plan --robot panda --subdivisions 1 --degrees --out plan_panda
   ftcal plan --robot my_arm.urdf --sensor-frame ft_frame --excluded-cap-deg 0 --out plan_mine
+  ftcal plan --poses 52 --strategy d-optimal --out plan52   # a third of the poses, chosen to teach the most
+  ftcal plan --next 10 --dataset data.csv --model m.model.npz --out next10   # where to measure next
 
 writes DIR/poses.csv: one row per pose in execution order (greedy shortest tour):
   pose, <joint names>_rad (or _deg with --degrees), g_x, g_y, g_z (unit gravity direction
   in the sensor frame), pitch_<unit>, yaw_<unit>
-plus plan.json (robot, frames, settings, unreachable directions) and coverage.png.
+plus plan.json (robot, frames, settings, unreachable directions; with --next the predicted
+uncertainty and expected gain of each proposal) and coverage.png.
+
+--strategy d-optimal chooses --poses N of the reachable directions of a dense sphere
+(--candidate-subdivisions, 3: 642 before the cap rule) maximising the information of the
+linear calibration model plus a space-filling term; random draws N of them (--seed).
+--next K ranks the candidates by the predicted wrench uncertainty given the dataset measured
+so far (the linear model's, plus a Gaussian-process model's own); rows are the proposals,
+most informative first.
 """
 
 
@@ -44,22 +56,84 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--excluded-cap-deg", type=float, default=20.0,
         help="leave out directions within this angle of 'tool face up' [deg] (20: 162 -> 155 poses)",
     )
+    p.add_argument("--strategy", choices=("geodesic", "random", "d-optimal"), default="geodesic",
+                   help="geodesic: every direction of the --subdivisions sphere (the thesis); random / d-optimal: "
+                   "--poses of the reachable directions of a dense sphere")
+    p.add_argument("--poses", type=positive_int, default=None, metavar="N",
+                   help="number of poses of a random or d-optimal plan (at least 7, the linear model's parameters)")
+    p.add_argument("--candidate-subdivisions", type=int_in_range(0, 5, "candidate icosphere subdivisions"),
+                   default=3, help="icosphere level of the candidates of random, d-optimal and --next (3: 642)")
+    p.add_argument("--space-filling", type=float, default=0.25,
+                   help="weight of the space-filling term of the d-optimal criterion (0: pure D-optimality)")
+    p.add_argument("--load-configurations", type=positive_int, default=None, metavar="K",
+                   help="with --strategy d-optimal: also choose which K of the thesis' 7 load configurations to run "
+                   "(at least 3; listed in plan.json settings.load_configurations); default all")
+    p.add_argument("--next", type=positive_int, default=None, metavar="K", dest="next_poses",
+                   help="propose the K poses where the model's predicted wrench is most uncertain "
+                   "(needs --dataset and --model)")
+    p.add_argument("--dataset", type=existing_file, default=None, help="with --next: the dataset measured so far")
+    p.add_argument("--model", type=existing_file, default=None, help="with --next: a model file fitted on it")
+    p.add_argument("--load-mass", type=float, default=None,
+                   help="with --next: load mass [kg] if the dataset's metadata lacks it")
     p.add_argument("--degrees", action="store_true", help="write joint angles, pitch and yaw in degrees")
     add_output_options(p, "ftcal-plan")
-    add_run_options(p, seed=False)
+    add_run_options(p, seed=True)
     p.set_defaults(handler=run)
+
+
+def _check_arguments(args: argparse.Namespace) -> None:
+    from ._common import CliError
+
+    if args.next_poses is not None:
+        missing = [flag for flag, value in (("--dataset", args.dataset), ("--model", args.model)) if value is None]
+        if missing:
+            raise CliError(f"--next needs {' and '.join(missing)} (the dataset measured so far and a model fitted on it)")
+        if args.poses is not None or args.strategy != "geodesic":
+            raise CliError("--next proposes poses from a dataset and a model; do not combine it with --poses/--strategy")
+        return
+    if args.dataset is not None or args.model is not None:
+        raise CliError("--dataset and --model are for --next K (which poses to measure next)")
+    if args.strategy == "geodesic" and args.poses is not None:
+        raise CliError(f"--poses {args.poses} needs --strategy d-optimal or random (the geodesic plan takes every "
+                       "direction of its sphere; choose its size with --subdivisions)")
+    if args.strategy != "geodesic" and args.poses is None:
+        raise CliError(f"--strategy {args.strategy} needs --poses N (how many poses to choose)")
+    if args.load_configurations is not None and args.strategy != "d-optimal":
+        raise CliError("--load-configurations needs --strategy d-optimal")
+    if not (args.space_filling >= 0 and np.isfinite(args.space_filling)):
+        raise CliError(f"--space-filling must be a finite weight >= 0; got {args.space_filling}")
 
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
 
+    _check_arguments(args)
     console = Console(args.quiet)
     plan_files = OutputPlan(args.out, ["poses.csv", "plan.json", "coverage.png"], args.force)
     robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
-    console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
-    plan = ftcal.plan_calibration_poses(
-        robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg
-    )
+    extra: dict = {}
+    if args.next_poses is not None:
+        from ._models import load_dataset, load_model_file
+
+        dataset = load_dataset(args.dataset, "dataset")
+        model = load_model_file(args.model)
+        console.info(f"ranking the reachable poses of {robot.name} by the predicted uncertainty of {args.model} ...")
+        candidates = ftcal.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,
+                                                excluded_cap_deg=args.excluded_cap_deg)
+        plan = ftcal.propose_next_poses(robot, dataset, model, args.next_poses, candidates=candidates,
+                                        load_mass=args.load_mass)
+        extra = {"uncertainty": plan.uncertainty, "predicted_std_N": plan.predicted_std,
+                 "expected_gain": plan.expected_gain, "total_variance_before_N2": plan.total_variance_before,
+                 "total_variance_after_N2": plan.total_variance_after, "dataset": str(args.dataset),
+                 "model": str(args.model)}
+    else:
+        console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
+        plan = ftcal.plan_calibration_poses(
+            robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg, strategy=args.strategy,
+            n_poses=args.poses, candidate_subdivisions=args.candidate_subdivisions,
+            space_filling=args.space_filling, n_load_configurations=args.load_configurations,
+            random_state=args.seed,
+        )
     unit = "deg" if args.degrees else "rad"
     to_unit = np.degrees if args.degrees else (lambda a: np.asarray(a, dtype=float))
     columns = ["pose", *(f"{j}_{unit}" for j in robot.joint_names), "g_x", "g_y", "g_z", f"pitch_{unit}", f"yaw_{unit}"]
@@ -83,11 +157,16 @@ def run(args: argparse.Namespace) -> int:
             "n_poses": plan.n_poses,
             "unreachable_gravity_in_sensor": plan.unreachable,
             "settings": plan.settings,
+            **extra,
         })
     write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
-    console.info(
-        f"{plan.n_poses} of {plan.n_candidates} directions reachable; poses -> {plan_files.path('poses.csv')}"
-    )
+    if args.next_poses is not None:
+        console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
+                     f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance; poses -> "
+                     f"{plan_files.path('poses.csv')}")
+    else:
+        console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
+                     f"{plan_files.path('poses.csv')}")
     return 0
 
 

@@ -17,6 +17,7 @@ __all__ = [
     "DatasetFileError",
     "BenchmarkOutputExistsError",
     "ExportError",
+    "PlanningError",
 ]
 
 
@@ -54,3 +55,8 @@ class BenchmarkOutputExistsError(FtcalError, FileExistsError):
 
 class ExportError(FtcalError, ValueError):
     """A calibrator that cannot be exported (to ONNX): its type, or a missing optional package."""
+
+
+class PlanningError(FtcalError, ValueError):
+    """A pose plan or proposal that cannot be made: more poses than reachable candidates, fewer than the
+    calibration model's parameters, a dataset and a model of different channel counts."""
