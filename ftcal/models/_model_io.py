@@ -36,7 +36,7 @@ import torch
 from sklearn.utils.validation import check_is_fitted
 from skorch.history import History
 
-from ._auto import AutoCalibrator
+from ._auto import AutoCalibrator, StackedCalibrator
 from ..neural_network._comparative import ComparativeCalibrator
 from ..neural_network._directional import DirectionalCalibrator
 from ._ensemble import EnsembleCalibrator
@@ -110,9 +110,9 @@ register_model_type(
 )
 register_model_type(
     GaussianProcessCalibrator,
-    ("alpha_", "n_features_in_", "constant_", "noise_level_"),
-    ("zero_reading_", "linear_matrix_", "linear_offset_", "input_scale_", "train_inputs_", "dual_coef_",
-     "cholesky_", "residual_mean_", "residual_scale_", "output_variance_", "length_scale_"),
+    ("alpha_", "n_features_in_", "mean_", "kernel_", "per_output_", "log_marginal_likelihood_"),
+    ("zero_reading_", "linear_matrix_", "linear_offset_", "input_mean_", "input_scale_", "train_inputs_", "theta_",
+     "dual_coef_", "cholesky_", "target_mean_", "target_scale_"),
 )
 
 register_model_type(
@@ -120,6 +120,8 @@ register_model_type(
     ("zero_reading_", "offset_per_deg_", "gain_per_deg_"), children="estimator_",
 )
 
+register_model_type(StackedCalibrator, ("alpha_", "n_features_in_"), ("zero_reading_", "weights_"),
+                    children="estimators_")
 register_model_type(
     AutoCalibrator, ("alpha_", "n_features_in_", "best_name_", "cv_results_"), ("zero_reading_",),
     children="best_estimator_",
