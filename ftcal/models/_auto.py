@@ -17,7 +17,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
-from ..calibrators._base import BaseCalibrator, resolve_alpha
+from ..calibrators._base import BaseCalibrator, calibrated_range, resolve_alpha
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, check_groups, rmse_and_se, simplest_within_one_se
 from ..core._validation import check_zero_reading, validate_training_data
@@ -515,6 +515,7 @@ class AutoCalibrator(BaseCalibrator):
         best_zero = getattr(self.best_estimator_, "zero_reading_", None)
         self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
         self.reading_noise_ = reading_noise(X, y)
+        self.calibrated_range_ = calibrated_range(X)
         self.__dict__.pop("tare_reading_", None)
         return self
 

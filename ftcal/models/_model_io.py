@@ -60,7 +60,7 @@ _HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reaso
 #: Fitted attributes stored per model type: (scalars, arrays).
 _MODEL_TYPES: dict[str, tuple[type, tuple[str, ...], tuple[str, ...]]] = {}
 #: Fitted arrays every calibrator may have (files written before they existed lack them).
-_OPTIONAL_ARRAYS = ("reading_noise_", "tare_reading_")
+_OPTIONAL_ARRAYS = ("reading_noise_", "tare_reading_", "calibrated_range_")
 #: Fitted scalars of every calibrator that older files lack (then: a wrench, 6 outputs, 2-D).
 _OPTIONAL_SCALARS = ("n_outputs_", "y_1d_")
 #: Meta-estimators: the fitted attribute holding their list of fitted sub-models.
