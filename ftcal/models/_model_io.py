@@ -110,7 +110,7 @@ register_model_type(
 )
 register_model_type(
     GaussianProcessCalibrator,
-    ("alpha_", "n_features_in_", "mean_", "kernel_", "per_output_", "log_marginal_likelihood_"),
+    ("alpha_", "n_features_in_", "mean_", "kernel_", "per_output_"),
     ("zero_reading_", "linear_matrix_", "linear_offset_", "input_mean_", "input_scale_", "train_inputs_", "theta_",
      "dual_coef_", "cholesky_", "target_mean_", "target_scale_"),
 )
@@ -331,6 +331,10 @@ def _check_fitted_scalars(name: str, fitted: dict) -> None:
             ok = isinstance(value, str)
         elif key == "cv_results_":
             ok = isinstance(value, dict)
+        elif key in ("mean_", "kernel_"):  # the GP's choices
+            ok = value in ("none", "linear", "rbf", "matern52", "rbf+linear", "matern52+linear")
+        elif key == "per_output_":
+            ok = isinstance(value, bool)
         elif key in ("n_features_in_", "n_epochs_", "best_epoch_", "n_dropped_zero_load_"):
             ok = isinstance(value, int) and not isinstance(value, bool) and value >= 0
         elif key == "ridge_":  # inf is the LTM fallback of the hybrid
