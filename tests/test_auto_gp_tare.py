@@ -127,7 +127,7 @@ def test_fit_auto_and_benchmark_dataset_through_the_cli(tmp_path, capsys):
     assert summary["chosen"] == "linear" and summary["cv_results"]["folds"] == "group"
     assert main(["benchmark", "dataset", str(path), "--out", str(tmp_path / "b"), "-q"]) == 0
     table = capsys.readouterr().out
-    assert "linear (chosen)" in table and "gaussian_process" in table
+    assert "linear **(chosen)**" in table and "gaussian_process" in table and "sk_gp" in table
     assert (tmp_path / "b" / "dataset_rmse.png").stat().st_size > 0
     results = json.loads((tmp_path / "b" / "dataset_results.json").read_text())
     assert results["folds"] == "group" and len(results["axis_rmse"][0]) == 6

@@ -196,3 +196,25 @@ def test_simulated_presets_have_the_documented_shape_and_a_noise_floor():
     # the soft sensor is strongly nonlinear: the LTM is far above the floor even on its own training rows
     ltm = LinearCalibrator(alpha=soft.meta["alpha"]).fit(soft.raw, soft.wrench)
     assert ftcal.wrench_rmse(soft.wrench, ltm.predict(soft.raw), soft.meta["alpha"]) > 4 * soft.meta["noise_floor_rmse"]
+
+
+# ------------------------------------------------------------------ CLI: predict --std
+def test_cli_predict_std_writes_std_columns_and_refuses_models_without_one(tmp_path, capsys):
+    from ftcal.cli import main
+
+    raw, w = cubic(100)
+    data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
+    np.savetxt(tmp_path / "r.csv", raw[:5], delimiter=",")
+    for model in ("gaussian_process", "linear"):
+        assert main(["fit", str(data), "--model", model, "--out", str(tmp_path / "m"), "-q"]) == 0
+    out = tmp_path / "w.csv"
+    assert main(["predict", str(tmp_path / "m" / "gaussian_process.model.npz"), str(tmp_path / "r.csv"), "--std",
+                 "--output", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",")[6:] == ["std_Fx", "std_Fy", "std_Fz", "std_Tx", "std_Ty", "std_Tz"]
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert table.shape == (5, 12) and (table[:, 6:] > 0).all()
+    capsys.readouterr()
+    assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "r.csv"), "--std"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ftcal: error: --std:") and "no standard deviation" in err[0]

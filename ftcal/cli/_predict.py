@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from ._models import load_model_file
 from ..core._files import same_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, positive_int, int_in_range
 from ._readings import iter_reading_chunks, read_readings_npz, write_wrench_rows
+from ..core._wrench import WRENCH_LABELS
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -21,6 +23,7 @@ examples:
   ftcal predict models/directional.model.npz readings.csv --output wrench.csv
   my_sensor_reader | ftcal predict models/directional.model.npz --line-buffered | my_controller
   ftcal predict models/linear.model.npz data/test.csv --no-header | head -3
+  ftcal predict models/gaussian_process.model.npz readings.csv --std     # + std_Fx..std_Tz columns
 """
 
 
@@ -47,6 +50,11 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--line-buffered", action="store_true",
         help="answer each input line at once and flush (live streams; same as --chunk-size 1)",
     )
+    p.add_argument(
+        "--std", action="store_true",
+        help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
+             "models, also when auto chose one)",
+    )
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
 
@@ -64,13 +72,24 @@ def run(args: argparse.Namespace) -> int:
     model = load_model_file(args.model)
     n_channels = int(model.n_features_in_)
     chunk = 1 if args.line_buffered else args.chunk_size
+    if args.std and "return_std" not in inspect.signature(getattr(model, "best_estimator_", model).predict).parameters:
+        chosen = getattr(model, "best_name_", type(model).__name__)
+        raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
+                       "models do (ftcal fit --model gaussian_process). Drop --std")
 
     def emit(out) -> int:
         header = not args.no_header
         total = 0
         for raw in raw_chunks(args.input, n_channels, chunk):
-            wrench = np.asarray(model.predict(raw), dtype=float)
-            write_wrench_rows(out, wrench, header)
+            if args.std:
+                wrench, std = model.predict(raw, return_std=True)
+                if header:
+                    out.write(",".join([*WRENCH_LABELS, *(f"std_{a}" for a in WRENCH_LABELS)]) + "\n")
+                write_wrench_rows(out, np.hstack([wrench, std]), False)
+                wrench = np.asarray(wrench)
+            else:
+                wrench = np.asarray(model.predict(raw), dtype=float)
+                write_wrench_rows(out, wrench, header)
             header = False
             total += len(wrench)
             if chunk == 1 or out is sys.stdout:

@@ -173,7 +173,7 @@ def score_candidates(
 
     Every figure is eq. 18's RMSE (over the 6 n torque-scaled values, [N]).
     Candidates whose training folds hold fewer rows than
-    :func:`minimum_training_rows` are scored but marked not eligible. With
+    :func:`minimum_training_rows` are skipped (recorded, never chosen). With
     ``stack``, a non-negative combination of the best (up to
     :data:`STACK_SIZE`) eligible candidates is scored too, its weights
     cross-fitted on the out-of-fold predictions (each fold's weights from the
@@ -185,7 +185,7 @@ def score_candidates(
     -------
     results : dict of lists
         Per row: ``name``, ``kind`` (``"candidate"``, ``"stack"``,
-        ``"baseline"``), ``status`` (``"scored"``, ``"failed: ..."``),
+        ``"baseline"``), ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``),
         ``eligible``, ``rmse`` (held-out, eq. 18 [N]), ``rmse_se`` (its
         standard error over groups or rows), ``axis_rmse`` (6 values, [N] and
         [N·m]), ``fit_seconds`` (all folds); plus ``n_splits``,
@@ -244,11 +244,12 @@ def _score_all(candidates, baselines, stack, prefitted, alpha, zero_reading, net
         if prefitted and name in prefitted:  # fitted on all rows already: CV its structure, refit per fold
             estimator.set_params(**prefitted[name].structure_params())
         needed = minimum_training_rows(estimator, n_channels)
+        if smallest_train < needed:  # too few rows to judge it: not fitted, never chosen
+            record(name, "candidate", f"skipped: training folds of {smallest_train} rows < the {needed} it needs",
+                   False, None, None)
+            continue
         pred, status, seconds = attempt(estimator, network_samples=network_samples, seed=seed)
-        eligible = smallest_train >= needed
-        if pred is not None and not eligible:
-            status = f"scored, not eligible: training folds of {smallest_train} rows < the {needed} it needs"
-        record(name, "candidate", status, eligible, pred, seconds)
+        record(name, "candidate", status, True, pred, seconds)
     if stack:
         _score_stack(results, errors, predictions, record, y, alpha, folds)
     for name, regressor in (baselines or {}).items():
@@ -365,7 +366,7 @@ class AutoCalibrator(BaseCalibrator):
        best-scoring candidate and every one within one paired standard error
        of it (over groups, or rows) qualify, and the simplest in the order
        above wins. A candidate whose training folds are smaller than
-       :func:`minimum_training_rows` is reported but never chosen (on 15-50
+       :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``).
 
