@@ -7,16 +7,16 @@ Usage::
 Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file exists, so a run resumes):
 
 ``soft``
-    :func:`ftcal.simulation._field_sensors.make_soft_sensor_dataset` (418 rows, 8 channels), outer 5-fold
+    :func:`ftcal.make_soft_sensor_dataset` (418 rows, 8 channels), outer 5-fold
     shuffled CV: ``auto`` (default candidates, networks included) fitted on each outer training fold, the
     stock baselines and the LTM on the same folds; held-out RMSE (eq. 18), the GP's 2-std coverage, fit time.
 ``robot_held``
-    :func:`~ftcal.simulation._field_sensors.make_robot_held_dataset` (90 000 rows, 47 poses), one outer
+    :func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses), one outer
     pose-grouped hold-out (a fifth of the poses): ``auto`` with the groups, baselines, LTM.
 ``thesis``, ``asymmetric``
     :func:`ftcal.make_artificial_dataset` (5000 training rows, 1250 test rows), noise floor from the dataset.
 ``dead_weight_15``, ``dead_weight_30``, ``dead_weight_50``
-    :func:`~ftcal.simulation._field_sensors.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
+    :func:`ftcal.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
     with loads up to 2x the calibrated range (target: auto <= 1.1x the LTM).
 
 Every RMSE is eq. 18 (all 6 n torque-scaled values, [N]). ``summary.md`` is rewritten from the parts found.
@@ -35,16 +35,15 @@ import numpy as np
 from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
-from ftcal.core._wrench import alpha_from_wrenches, scale_torques
+from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
 from ftcal.models import stock_baselines
-from ftcal.simulation._field_sensors import (make_dead_weight_dataset, make_robot_held_dataset,
-                                             make_soft_sensor_dataset)
 
 CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "thesis", "asymmetric", "robot_held")
 
 
 def rmse(y, pred, alpha):
-    return float(np.sqrt(np.mean(scale_torques(np.asarray(pred) - y, alpha) ** 2)))
+    """Eq. 18: over all 6 n torque-scaled values [N]."""
+    return ftcal.wrench_rmse(y, pred, alpha)
 
 
 def outer(raw, wrench, groups, splits, alpha, seed=0):

@@ -263,6 +263,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
         if not combos:  # a combination outside the automatic list, asked for explicitly
             combos = [(self.mean, self.kernel)]
         self.log_marginal_likelihood_ = {}
+        if len(combos) == 1 and self.per_output is False:  # nothing to choose: the final fit starts from the default
+            return (*combos[0], False, make_kernel(combos[0][1], n_channels).theta[None, :])
         scores, fitted = {}, {}
         for mean, family in combos:
             gp = _fit_quietly(_regressor(make_kernel(family, n_channels), seed, 0), u, targets[mean])
