@@ -218,3 +218,16 @@ def test_cli_predict_std_writes_std_columns_and_refuses_models_without_one(tmp_p
     assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "r.csv"), "--std"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("ftcal: error: --std:") and "no standard deviation" in err[0]
+
+
+def test_cross_validate_routes_groups_to_auto_through_metadata_routing():
+    import sklearn
+    from sklearn.model_selection import GroupKFold, cross_validate
+
+    raw, w, groups = affine(n=120, n_groups=6)
+    with sklearn.config_context(enable_metadata_routing=True):
+        auto = AutoCalibrator(candidates=FAST[:2], alpha=1.0, baselines=False, stack=False).set_fit_request(
+            groups=True)
+        out = cross_validate(auto, raw, w, cv=GroupKFold(2), params={"groups": groups},
+                             scoring=ftcal.neg_scaled_rmse, return_estimator=True)
+    assert [e.cv_results_["folds"] for e in out["estimator"]] == ["group", "group"]
