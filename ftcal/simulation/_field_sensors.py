@@ -8,7 +8,8 @@ simulated here so that the gaps can be seen and closed on data anyone can run:
   channels, a few hundred rows (some at zero load), a smooth strong
   saturation of every channel, cross-coupling between channels, and a
   hysteresis-like dependence on the load history (an exponentially lagged
-  copy of the load). A stock Gaussian process beats the LTM by a factor ~4 here.
+  copy of the load). A stock Gaussian process beats the LTM by a factor ~1.7 here
+  (5-fold, ``benchmarks/gp_vs_stock_soft.py``); the lag is what no memoryless model can learn.
 * :func:`make_robot_held_dataset`: a rigid 8-channel sensor on a robot arm,
   tens of thousands of rows in 40-50 poses (the ``group``); each pose holds a
   tool's gravity wrench plus loads applied by hand, and carries its own small
