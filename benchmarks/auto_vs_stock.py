@@ -122,7 +122,7 @@ def run_case(case: str) -> dict:
 
 def summary(out: Path) -> str:
     lines = ["| case | rows | auto | LTM | ftcal GP | sk_gp | best stock | auto / best stock | ftcal GP / sk_gp | "
-             "GP 2-std coverage | auto choices | auto fit [s] |", "|---|" * 12]
+             "GP 2-std coverage | auto choices | auto fit [s] |", "|" + "---|" * 12]
     for case in CASES:
         path = out / f"{case}.json"
         if not path.exists() or case.startswith("dead_weight"):
@@ -135,7 +135,7 @@ def summary(out: Path) -> str:
                      f"{r['gp_coverage_2std']:.3f} | {', '.join(sorted(set(r['auto_choices'])))} | "
                      f"{r['fit_seconds_total']['auto'] / r['n_outer_splits']:.0f} |")
     lines += ["", "| dead-weight rows | seed | auto chose | auto RMSE at 2x range | LTM | auto / LTM | fit [s] |",
-              "|---|" * 7]
+              "|" + "---|" * 7]
     for case in CASES:
         path = out / f"{case}.json"
         if path.exists() and case.startswith("dead_weight"):

@@ -253,7 +253,6 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.cholesky_ = np.stack([np.asarray(g.L_) for g in regressors])
         self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
         self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
-        self.__dict__.pop("_regressors", None)
 
     def _choose(self, u, targets, seed):
         """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
@@ -304,12 +303,10 @@ class GaussianProcessCalibrator(BaseCalibrator):
     def regressors(self) -> list[GaussianProcessRegressor]:
         """The fitted :class:`~sklearn.gaussian_process.GaussianProcessRegressor` (one, or one per component).
 
-        Rebuilt from the fitted arrays (so a loaded model has them too) and cached.
+        Rebuilt from the fitted arrays on each call (cheap: no computation), so a loaded model has them too
+        and ``predict`` changes nothing in the calibrator.
         """
         check_is_fitted(self)
-        cached = self.__dict__.get("_regressors")
-        if cached is not None:
-            return cached
         n_channels = self.train_inputs_.shape[1]
         k = self.theta_.shape[0]
         regressors = []
@@ -324,7 +321,6 @@ class GaussianProcessCalibrator(BaseCalibrator):
             gp._y_train_std = self.target_scale_[cols]
             gp.n_features_in_ = n_channels
             regressors.append(gp)
-        self.__dict__["_regressors"] = regressors
         return regressors
 
     def _predict_scaled(self, X: NDArray[np.float64], return_std: bool):
