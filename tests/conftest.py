@@ -41,9 +41,10 @@ def tiny_calibrators(random_state: int = 0) -> list:
         PolynomialCalibrator(degree=2),
         AxisNonlinearCalibrator(),
         EnsembleCalibrator(DirectionalCalibrator(**TINY_SCHEDULE), n_members=2, random_state=random_state),
-        GaussianProcessCalibrator(max_samples=100, random_state=random_state),
+        GaussianProcessCalibrator(max_samples=100, mean="linear", kernel="rbf", per_output=False,
+                                  random_state=random_state),
         AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator(degree=2))],
-                       cv=3),
+                       cv=3, baselines=False),
     ]
 
 

@@ -46,7 +46,7 @@ CLOSED_FORM = [("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrat
 # ------------------------------------------------------------------ auto
 def test_auto_picks_the_ltm_on_affine_data():
     raw, w, groups = affine_data()
-    auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0).fit(raw, w, groups=groups)
+    auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     assert auto.best_name_ == "linear"
     assert auto.cv_results_["folds"] == "group" and auto.cv_results_["n_splits"] == 5
     assert set(auto.cv_results_["status"]) == {"scored"}
@@ -55,7 +55,7 @@ def test_auto_picks_the_ltm_on_affine_data():
 
 def test_auto_picks_a_nonlinear_model_on_nonlinear_data():
     raw, w = nonlinear_data()
-    auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0).fit(raw, w)
+    auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0, baselines=False).fit(raw, w)
     assert auto.best_name_ != "linear"
     r = auto.cv_results_
     chosen = r["name"].index(auto.best_name_)
@@ -76,7 +76,7 @@ def test_grouped_folds_never_split_a_group():
 def test_auto_in_a_pipeline_and_grid_search_routes_groups():
     raw, w, groups = affine_data(n=240, n_groups=8)
     with sklearn.config_context(enable_metadata_routing=True):
-        auto = AutoCalibrator(candidates=CLOSED_FORM[:2], alpha=1.0).set_fit_request(groups=True)
+        auto = AutoCalibrator(candidates=CLOSED_FORM[:2], alpha=1.0, baselines=False).set_fit_request(groups=True)
         search = GridSearchCV(Pipeline([("auto", auto)]), {"auto__cv": [2, 3]}, cv=GroupKFold(2),
                               scoring=ftcal.neg_scaled_rmse)
         search.fit(raw, w, groups=groups)
@@ -86,7 +86,7 @@ def test_auto_in_a_pipeline_and_grid_search_routes_groups():
 
 def test_auto_model_file_round_trip(tmp_path):
     raw, w, groups = affine_data()
-    auto = AutoCalibrator(candidates=CLOSED_FORM[:3], alpha=1.0).fit(raw, w, groups=groups)
+    auto = AutoCalibrator(candidates=CLOSED_FORM[:3], alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     path = ftcal.save_model(auto, tmp_path / "auto.model.npz")
     back = ftcal.load_model(path)
     assert back.best_name_ == auto.best_name_ and back.cv_results_ == auto.cv_results_
@@ -98,8 +98,6 @@ def test_auto_model_file_round_trip(tmp_path):
     [
         ({}, np.zeros(10), r"groups must have shape \(300,\)"),
         ({}, np.zeros(300), "one group only"),
-        ({"time_budget": 0}, None, r"'time_budget' parameter of AutoCalibrator must be a float in the range "
-                                   r"\(0(\.0)?, inf\) or None\. Got 0 instead"),
         ({"candidates": []}, None, "candidates must be a non-empty list"),
         ({"cv": 1}, None, r"'cv' parameter of AutoCalibrator must be an int in the range \[2, inf\)\. Got 1 instead"),
     ],
@@ -108,16 +106,6 @@ def test_auto_bad_input(kwargs, fit_groups, message):
     raw, w, _ = affine_data()
     with pytest.raises(CalibrationInputError, match=message):
         AutoCalibrator(**{"candidates": CLOSED_FORM[:1], **kwargs}).fit(raw, w, groups=fit_groups)
-
-
-def test_auto_time_budget_skips_and_records():
-    raw, w, groups = affine_data()
-    slow = ftcal.make_calibrator("directional", schedule="short", random_state=0)
-    auto = AutoCalibrator(candidates=[CLOSED_FORM[0], ("gp", GaussianProcessCalibrator(max_samples=300)),
-                                      ("directional", slow)], time_budget=1e-3, alpha=1.0).fit(raw, w)
-    statuses = auto.cv_results_["status"]
-    assert statuses[-1].startswith("skipped: time budget")
-    assert auto.best_name_ in ("linear", "gp")
 
 
 def test_hybrid_ridge_choice_honours_groups():
@@ -129,9 +117,9 @@ def test_hybrid_ridge_choice_honours_groups():
 
 
 def test_fit_auto_and_benchmark_dataset_through_the_cli(tmp_path, capsys):
-    raw, w, groups = affine_data()
+    raw, w, groups = affine_data(n=150)  # 120 training rows a fold: the networks are skipped (too few), the GP runs
     path = ftcal.CalibrationDataset(raw=raw, wrench=w, group=groups).save(tmp_path / "d.csv")
-    assert main(["fit", str(path), "--model", "auto", "--param", "time_budget=20", "--schedule", "short",
+    assert main(["fit", str(path), "--model", "auto", "--param", "baselines=false", "--param", "stack=false",
                  "--out", str(tmp_path / "m"), "-q"]) == 0
     import json
 
@@ -139,7 +127,7 @@ def test_fit_auto_and_benchmark_dataset_through_the_cli(tmp_path, capsys):
     assert summary["chosen"] == "linear" and summary["cv_results"]["folds"] == "group"
     assert main(["benchmark", "dataset", str(path), "--out", str(tmp_path / "b"), "-q"]) == 0
     table = capsys.readouterr().out
-    assert "linear (chosen)" in table and "gaussian_process" in table
+    assert "linear **(chosen)**" in table and "gaussian_process" in table and "sk_gp" in table
     assert (tmp_path / "b" / "dataset_rmse.png").stat().st_size > 0
     results = json.loads((tmp_path / "b" / "dataset_results.json").read_text())
     assert results["folds"] == "group" and len(results["axis_rmse"][0]) == 6
@@ -197,7 +185,7 @@ def test_gp_model_file_round_trip(tmp_path):
 def test_gp_bad_parameters():
     raw, w = smooth_data(100, seed=1)
     with pytest.raises(CalibrationInputError, match=r"'max_samples' parameter of GaussianProcessCalibrator must be an "
-                                                     r"int in the range \[10, inf\)\. Got 0 instead"):
+                                                     r"int in the range \[10, 20000\]\. Got 0 instead"):
         GaussianProcessCalibrator(max_samples=0).fit(raw, w)
 
 

@@ -154,7 +154,7 @@ CALIBRATORS = {
     "comparative": lambda: ComparativeCalibrator(**TINY),
     "ensemble": lambda: EnsembleCalibrator(DirectionalCalibrator(**TINY), n_members=2, random_state=0),
     "auto": lambda: AutoCalibrator(candidates=[("linear", LinearCalibrator()),
-                                              ("poly", PolynomialCalibrator(degree=2))]),
+                                              ("poly", PolynomialCalibrator(degree=2))], baselines=False),
 }
 
 

@@ -87,7 +87,7 @@ def _small_grid(estimator) -> dict:
         return {"hidden_layer_sizes": [(4,), (8,)]}
     if "max_samples" in params:  # the Gaussian process
         return {"max_samples": [20, 40]}
-    if "time_budget" in params:  # auto
+    if "network_samples" in params:  # auto
         return {"cv": [2, 3]}
     return {"estimator__hidden_layer_sizes": [(4,), (8,)]}  # an ensemble of networks
 

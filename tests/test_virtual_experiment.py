@@ -90,6 +90,7 @@ def test_tiny_directional_fit_runs_on_the_dataset(experiment):
 
 def test_benchmark_library_side_scores_both_splits_and_plots(tmp_path):
     from ftcal import run_real_world_benchmark
+    from ftcal.models import STOCK_BASELINE_NAMES
 
     res = run_real_world_benchmark(models=("linear",), subdivisions=0, log_dir=tmp_path / "logs",
                                    plot_path=tmp_path / "fig6.png")
@@ -97,5 +98,9 @@ def test_benchmark_library_side_scores_both_splits_and_plots(tmp_path):
     lin = res["splits"]["leave-one-config-out"]["linear"]
     assert lin["n_test"] == res["dataset"]["n_samples"] == 77  # every pose predicted once
     assert len(lin["per_sample_rmse"]) == 77 and lin["rmse_mean"] > 0
+    # the stock baselines on the same splits, eq. 18's RMSE beside; sk_linear is the LTM
+    assert set(STOCK_BASELINE_NAMES) <= set(res["splits"]["random20"])
+    assert res["splits"]["random20"]["sk_linear"]["rmse"] == pytest.approx(res["splits"]["random20"]["linear"]["rmse"],
+                                                                           rel=1e-6)
     assert (tmp_path / "fig6.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert len(list((tmp_path / "logs").glob("config*_load.csv"))) == 7

@@ -45,11 +45,9 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
     """Index of the simplest candidate whose error is within one standard error of the best one's.
 
     ``errors[k, i]`` is candidate ``k``'s held-out error on sample ``i``;
-    candidates are ordered from the most flexible to the simplest. The best
-    candidate has the lowest mean error; a simpler one is preferred when its
-    mean error exceeds the best's by at most one standard error of the
-    paired per-sample difference (the one-standard-error rule of Breiman et
-    al., with a paired standard error).
+    candidates are ordered from the most flexible to the simplest. This is
+    :func:`ftcal.core._model_selection.simplest_within_one_se` (the one rule)
+    with that order as the complexity.
 
     Examples
     --------
@@ -58,12 +56,7 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
     1
     """
     errors = np.asarray(errors, dtype=float)
-    best = int(np.argmin(errors.mean(axis=1)))
-    for k in range(errors.shape[0] - 1, best, -1):
-        diff = errors[k] - errors[best]
-        if diff.mean() <= diff.std(ddof=1) / np.sqrt(diff.size):
-            return k
-    return best
+    return simplest_within_one_se(errors, complexity=np.arange(errors.shape[0])[::-1])
 
 
 class AxisNonlinearCalibrator(BaseCalibrator):
@@ -290,9 +283,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
                 for c, b in zip(coefs, intercepts):
                     previous = self._apply(block[valid], previous, c, b)
                 errors[k, valid] = np.sum((previous - ys[valid]) ** 2, axis=1)
-        if groups is not None:  # rows of a group are not independent: the standard error is over groups
-            return RIDGE_GRID[len(RIDGE_GRID) - 1 - simplest_within_one_se(errors[::-1], groups)]
-        return RIDGE_GRID[one_standard_error_choice(errors)]
+        # the one 1-SE rule (over groups when given); a larger penalty is simpler, inf (the LTM) simplest
+        return RIDGE_GRID[simplest_within_one_se(errors, groups, complexity=np.arange(len(RIDGE_GRID))[::-1])]
 
     def _apply(self, block, previous, coefs, intercepts) -> NDArray[np.float64]:
         """One pass: each output from its gated features (gate = sign of the previous pass' output)."""

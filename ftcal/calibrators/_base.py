@@ -42,6 +42,11 @@ from ._zero_load import estimate_zero_reading, reading_noise
 __all__ = ["BaseCalibrator"]
 
 
+def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Min and max of each channel of the training readings, shape (2, N)."""
+    return np.vstack([X.min(axis=0), X.max(axis=0)])
+
+
 def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
     if alpha is None:
         # only a 6-component wrench has torques to scale; other targets keep their units (alpha_ = 1)
@@ -82,7 +87,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     #: Fitted attributes a model file stores (:func:`ftcal.save_model`); each subclass declares its own
     #: next to its class, and ``_emit_onnx(graph, x)`` for its ONNX graph (:func:`ftcal.export_onnx`).
     _fitted_state: tuple[str, ...] = ("alpha_", "n_features_in_", "feature_names_in_", "n_outputs_", "y_1d_",
-                                      "zero_reading_", "reading_noise_", "tare_reading_", "reading_range_")
+                                      "zero_reading_", "reading_noise_", "tare_reading_", "calibrated_range_")
 
     _parameter_constraints: dict = {
         "alpha": [Interval(Real, 0, None, closed="neither"), None],
@@ -137,9 +142,37 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         else:
             self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
         self.reading_noise_ = reading_noise(X, y)
-        self.reading_range_ = np.vstack([X.min(axis=0), X.max(axis=0)])
+        self.calibrated_range_ = calibrated_range(X)
         self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
         return X, y
+
+    def out_of_range(self, X: ArrayLike, *, margin: float = 0.0) -> NDArray[np.bool_]:
+        """Which rows of raw readings ``X`` (n, N) lie beyond the calibrated range: one bool per row.
+
+        The calibrated range is each channel's span in the training readings
+        (``calibrated_range_``, shape (2, N): min and max, re-tare shift
+        applied); a row is out of range when any channel is more than
+        ``margin`` times that channel's span outside it. Predictions there are
+        extrapolations: a flexible model may be far off where the LTM stays
+        linear. ``ftcal predict`` reports such rows.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from ftcal import LinearCalibrator
+        >>> raw = np.random.default_rng(0).normal(size=(50, 6)); w = raw @ np.eye(6)
+        >>> LinearCalibrator().fit(raw, w).out_of_range(np.vstack([raw[:1], 10 * raw[:1]])).tolist()
+        [False, True]
+        """
+        check_is_fitted(self)
+        if not hasattr(self, "calibrated_range_"):
+            raise CalibrationInputError(
+                f"this {type(self).__name__} was saved before ftcal recorded the calibrated range; refit it to "
+                "check readings against the range.")
+        X = self._retared(validate_readings(self, X))
+        low, high = self.calibrated_range_
+        slack = margin * (high - low)
+        return np.any((X < low - slack) | (X > high + slack), axis=1)
 
     def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
         """Re-zero the fitted calibration: readings taken now with no load define the new zero-load reading.
@@ -168,7 +201,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
             channel's training span); more means something touched or moved
             the sensor while they were taken. Each reading must also lie within
             the channel's training readings widened by half their span on each
-            side (``reading_range_``): a zero-load reading far outside them is
+            side (``calibrated_range_``): a zero-load reading far outside them is
             a wrong unit, channel order or sensor.
 
         Returns
@@ -192,7 +225,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         X = validate_readings(self, X_no_load)
         if len(X) == 0:
             raise CalibrationInputError("X_no_load holds no readings; pass at least one zero-load reading.")
-        reading_range = getattr(self, "reading_range_", None)
+        reading_range = getattr(self, "calibrated_range_", None)
         span = None
         if reading_range is not None:
             low, high = np.asarray(reading_range, dtype=float)

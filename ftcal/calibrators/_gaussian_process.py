@@ -1,4 +1,4 @@
-"""A Gaussian-process calibrator that reports its own uncertainty (issue 12)."""
+"""A Gaussian-process calibrator that chooses its own mean and kernel and reports a calibrated uncertainty."""
 
 from __future__ import annotations
 
@@ -7,93 +7,169 @@ import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.utils._param_validation import Interval
-from scipy.linalg import solve_triangular
 from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, Matern, WhiteKernel
+from sklearn.linear_model import LinearRegression
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator
+from ..core._memory import check_allocation
 from ..core._validation import check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
-__all__ = ["GaussianProcessCalibrator"]
+__all__ = ["GaussianProcessCalibrator", "GP_MEANS", "GP_KERNELS"]
+
+#: Mean functions the GP may use: none (a constant) or the LTM fitted on every row.
+GP_MEANS: tuple[str, ...] = ("none", "linear")
+#: Kernel families: ARD squared exponential or Matérn 5/2, each alone or plus a linear (dot-product) term.
+GP_KERNELS: tuple[str, ...] = ("rbf", "matern52", "rbf+linear", "matern52+linear")
+#: (mean, kernel) pairs tried by ``mean="auto"`` / ``kernel="auto"``: with a constant mean the kernel carries a
+#: linear term (so that the GP extrapolates like the LTM; its amplitude may fit to ~0, the stock GP), with the
+#: LTM mean a stationary kernel models what the LTM leaves.
+_AUTO_COMBINATIONS: tuple[tuple[str, str], ...] = (
+    ("none", "rbf+linear"), ("none", "matern52+linear"), ("linear", "rbf"), ("linear", "matern52"))
+#: Rows on which ``per_output="auto"`` compares shared and per-output hyperparameters.
+_PER_OUTPUT_ROWS = 150
+#: Rows of each prediction chunk are chosen so that one chunk's cross-kernel stays under this size [bytes].
+_CHUNK_BYTES = 2**26
 
 
-def _squared_distances(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    d = (a * a).sum(axis=1)[:, None] + (b * b).sum(axis=1)[None, :] - 2.0 * a @ b.T
-    return np.maximum(d, 0.0)
+def make_kernel(family: str, n_channels: int):
+    """The kernel ``C · k(ℓ_1..ℓ_N) [+ C_lin · (x·x + σ₀²)] + White`` of a family in :data:`GP_KERNELS`.
+
+    Bounds are for standardised inputs and outputs: length scales 1e-2..1e3 (a
+    channel without nonlinearity reaches the upper bound), amplitudes
+    1e-4..1e3, noise 1e-8..1.
+
+    Examples
+    --------
+    >>> make_kernel("matern52+linear", 2)
+    1**2 * Matern(length_scale=[1, 1], nu=2.5) + 0.1**2 * DotProduct(sigma_0=1) + WhiteKernel(noise_level=0.01)
+    """
+    base, _, linear = family.partition("+")
+    stationary = (RBF(np.ones(n_channels), (1e-2, 1e3)) if base == "rbf"
+                  else Matern(np.ones(n_channels), (1e-2, 1e3), nu=2.5))
+    kernel = ConstantKernel(1.0, (1e-4, 1e3)) * stationary
+    if linear:
+        kernel = kernel + ConstantKernel(1e-2, (1e-6, 1e3)) * DotProduct(1.0, (1e-3, 1e3))
+    return kernel + WhiteKernel(1e-2, (1e-8, 1.0))
+
+
+def _regressor(kernel, random_state, n_restarts: int, optimizer="fmin_l_bfgs_b") -> GaussianProcessRegressor:
+    return GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=n_restarts, copy_X_train=False,
+                                    random_state=random_state, optimizer=optimizer)
+
+
+def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegressor:
+    with warnings.catch_warnings():
+        # a length scale at its upper bound is the expected answer for a channel without nonlinearity
+        warnings.simplefilter("ignore", ConvergenceWarning)
+        return gp.fit(u, target)
+
+
+def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> float:
+    """Log marginal likelihood of ``target`` in its own units (sklearn's is of the standardised target)."""
+    scale = target.std(axis=0)
+    return float(gp.log_marginal_likelihood_value_ - len(target) * np.log(np.where(scale > 0, scale, 1.0)).sum())
 
 
 class GaussianProcessCalibrator(BaseCalibrator):
-    """Linear calibration plus a Gaussian process on its residuals, with a per-component standard deviation.
+    """A Gaussian process over the readings, with its mean and kernel chosen by marginal likelihood.
 
     Strain-gauge sensors are linear to first order and smoothly nonlinear
-    beyond (creep, hysteresis, the compliance of soft sensors), so the model is
+    beyond (creep, hysteresis, the compliance of soft sensors). The model is a
+    :class:`~sklearn.gaussian_process.GaussianProcessRegressor` (``normalize_y``)
+    on the torque-scaled wrench ``y_s = [F, alpha_ T]`` over the tare-corrected
+    channels standardised by their spread, ``u = (X - zero_reading_ - input_mean_) / input_scale_``:
 
-    1. a **linear part**: the LTM (eq. 1-2) fitted on *all* rows, in the
-       torque-scaled space ``y_s = [F, alpha_ T]``;
-    2. a **Gaussian process** on what the LTM leaves, over the tare-corrected
-       channels scaled by their spread, ``u = (X - zero_reading_) / input_scale_``,
-       with the kernel ``C · RBF(ℓ_1..ℓ_N) + White``: an ARD squared
-       exponential (one length scale per channel, so a channel that carries no
-       nonlinearity gets a long one) and a noise term. The hyperparameters are
-       fitted by maximum marginal likelihood (:class:`sklearn.gaussian_process.GaussianProcessRegressor`),
-       shared by the six outputs (each standardised); each output then gets its
-       own maximum-likelihood amplitude, so a component whose residual is pure
-       noise reports its own noise level.
+    * **mean**: ``"none"`` (a constant) or ``"linear"`` (the LTM, eq. 1-2,
+      fitted on *all* rows; the GP then models what it leaves);
+    * **kernel**: ARD squared exponential (``"rbf"``) or Matérn 5/2
+      (``"matern52"``), one length scale per channel, optionally plus a linear
+      term (``"+linear"``: the GP then extrapolates linearly, like the LTM,
+      beyond the calibrated range instead of reverting to a constant), plus a
+      noise term (see :func:`make_kernel`);
+    * with ``"auto"`` the combinations constant mean + (RBF or Matérn) + linear
+      term, and LTM mean + (RBF or Matérn) are each fitted on at most
+      ``selection_samples`` rows, and the one of highest **log marginal
+      likelihood** in the target's own units wins, the LTM mean paying the
+      BIC price ``½ · 6(N+1) · log m`` of its coefficients; the final fit on
+      ``max_samples`` rows starts from the winner's hyperparameters;
+    * **per output**: with ``per_output="auto"`` each of the six components
+      then gets its own hyperparameters when, on the selection rows, the sum of
+      their log marginal likelihoods beats the shared fit by more than the BIC
+      price of the extra hyperparameters (``True``/``False`` force it).
+
+    The hyperparameters are fitted by L-BFGS from the kernel's start plus
+    ``n_restarts_optimizer`` random starts within the bounds.
 
     ``predict(X, return_std=True)`` also returns the predictive standard
-    deviation of each component in [N] and [N·m]: the GP's posterior variance
-    plus its noise term, i.e. the spread of the error against a reference
-    measured like the training references. On held-out data about 95 % of the
-    errors fall within two standard deviations (tested on simulated data;
-    ``benchmarks/RESULTS.md``).
+    deviation of each component in [N] and [N·m], from
+    :meth:`GaussianProcessRegressor.predict(return_std=True) <sklearn.gaussian_process.GaussianProcessRegressor.predict>`:
+    the posterior variance plus the noise term, i.e. the spread of the error
+    against a reference measured like the training references. The coverage
+    (share of held-out errors within two std on grouped folds) is measured by
+    ``benchmarks/gp_coverage.py`` and recorded in ``benchmarks/RESULTS.md``.
 
-    **Large data sets.** An exact GP costs ``O(m³)`` time and ``O(m²)`` memory.
-    The GP is therefore fitted on a random subset of ``max_samples`` rows
-    (the *subset of data* approximation, Rasmussen & Williams §8.3.1), while
-    the linear part uses every row. With the default 1000 rows a fit takes
-    seconds on 2 cores whatever the data set's size (the 90 000-row robot
-    data set included); raise ``max_samples`` for smoother residual maps at
-    cubic cost. Prediction is ``O(m)`` per row.
+    **Large data sets.** An exact GP costs ``O(m³)`` time and ``O(m² N)``
+    memory (the kernel gradient). The GP is fitted on a random subset of
+    ``max_samples`` rows (the *subset of data* approximation, Rasmussen &
+    Williams §8.3.1) while the linear mean uses every row; the memory a fit
+    and a prediction need is checked before allocating
+    (:func:`ftcal.core.check_allocation`), and ``predict`` works in chunks, so
+    it never holds more than a few tens of MB of kernel at once.
 
     Parameters
     ----------
+    mean : {"auto", "none", "linear"}, default="auto"
+        Mean function (see above).
+    kernel : {"auto", "rbf", "matern52", "rbf+linear", "matern52+linear"}, default="auto"
+        Kernel family (see above).
+    per_output : {"auto"} or bool, default="auto"
+        Separate hyperparameters per output component.
     max_samples : int, default=1000
-        Rows the GP is fitted on (a random subset when the data has more).
+        Rows the GP is fitted on (a random subset when the data has more; 10 to 20 000).
+    selection_samples : int, default=250
+        Rows the ``"auto"`` choices are made on (a subset of the ``max_samples``).
     n_restarts_optimizer : int, default=0
-        Extra random starts of the marginal-likelihood optimiser.
+        Extra random starts of the marginal-likelihood optimiser for the final fit.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
         Raw reading at zero load; ``None`` estimates it (see :mod:`ftcal.calibrators._zero_load`).
     random_state : int, RandomState or None, default=None
-        Seed of the subset and of the optimiser's restarts.
+        Seed of the subsets and of the optimiser's restarts.
 
     Attributes
     ----------
+    mean_ : str
+        The mean function used.
+    kernel_ : str
+        The kernel family used.
+    per_output_ : bool
+        Whether each component has its own hyperparameters.
+    log_marginal_likelihood_ : dict
+        ``"mean/kernel"`` -> log marginal likelihood (target units) of each combination tried.
     linear_matrix_ : ndarray of shape (6, N)
-        LTM in the torque-scaled space, per raw unit (on tare-corrected readings).
+        LTM mean in the torque-scaled space, per raw unit (zeros with ``mean_ == "none"``).
     linear_offset_ : ndarray of shape (6,)
         Its offset [N].
-    input_scale_ : ndarray of shape (N,)
-        Standard deviation of each tare-corrected channel.
+    input_mean_, input_scale_ : ndarray of shape (N,)
+        Standardisation of the tare-corrected channels.
     train_inputs_ : ndarray of shape (m, N)
-        The scaled readings the GP was fitted on.
+        The standardised readings the GP was fitted on.
+    theta_ : ndarray of shape (k, n_hyperparameters)
+        Log-hyperparameters of the fitted kernel(s) (``k = 6`` per output, else 1).
     dual_coef_ : ndarray of shape (m, 6)
-        ``K⁻¹ y`` of the standardised residuals.
-    cholesky_ : ndarray of shape (m, m)
-        Lower Cholesky factor of ``K`` (noise included).
-    residual_mean_, residual_scale_ : ndarray of shape (6,)
-        Standardisation of the residuals [N].
-    output_variance_ : ndarray of shape (6,)
-        Maximum-likelihood amplitude of each output (standardised units).
-    constant_, length_scale_, noise_level_
-        Fitted kernel hyperparameters (``length_scale_`` of shape (N,)).
+        ``K⁻¹ y`` of the standardised targets.
+    cholesky_ : ndarray of shape (k, m, m)
+        Lower Cholesky factor(s) of ``K`` (noise included).
+    target_mean_, target_scale_ : ndarray of shape (6,)
+        Standardisation of the GP's targets [N].
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -102,82 +178,174 @@ class GaussianProcessCalibrator(BaseCalibrator):
     >>> import numpy as np
     >>> from ftcal import GaussianProcessCalibrator
     >>> rng = np.random.default_rng(0)
-    >>> w = rng.uniform(-1, 1, size=(300, 6))
-    >>> raw = (w + 0.1 * w**3) @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(300, 6))
+    >>> w = rng.uniform(-1, 1, size=(200, 6))
+    >>> raw = (w + 0.1 * w**3) @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(200, 6))
     >>> gp = GaussianProcessCalibrator(alpha=1.0, random_state=0).fit(raw, w)
     >>> wrench, std = gp.predict(raw[:2], return_std=True)
     >>> wrench.shape, std.shape, bool((std > 0).all())
     ((2, 6), (2, 6), True)
     """
 
-    _fitted_state = ("constant_", "noise_level_", "linear_matrix_", "linear_offset_", "input_scale_",
-                     "train_inputs_", "dual_coef_", "cholesky_", "residual_mean_", "residual_scale_",
-                     "output_variance_", "length_scale_")
+    _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
+                     "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
+                     "target_scale_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
-        "max_samples": [Interval(Integral, 10, None, closed="left")],
-        "n_restarts_optimizer": [Interval(Integral, 0, None, closed="left")],
+        "mean": [StrOptions({"auto", *GP_MEANS})],
+        "kernel": [StrOptions({"auto", *GP_KERNELS})],
+        "per_output": [StrOptions({"auto"}), "boolean"],
+        "max_samples": [Interval(Integral, 10, 20000, closed="both")],
+        "selection_samples": [Interval(Integral, 10, 20000, closed="both")],
+        "n_restarts_optimizer": [Interval(Integral, 0, 20, closed="both")],
     }
 
-    def __init__(self, *, max_samples=1000, n_restarts_optimizer=0, alpha=None, zero_reading=None,
-                 random_state=None):
+    def __init__(self, *, mean="auto", kernel="auto", per_output="auto", max_samples=1000, selection_samples=250,
+                 n_restarts_optimizer=0, alpha=None, zero_reading=None, random_state=None):
+        self.mean = mean
+        self.kernel = kernel
+        self.per_output = per_output
         self.max_samples = max_samples
+        self.selection_samples = selection_samples
         self.n_restarts_optimizer = n_restarts_optimizer
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+        n, n_channels = X.shape
+        m = min(n, int(self.max_samples))
+        n_theta = n_channels + 4
+        # the optimiser holds K, its Cholesky factor and the gradient dK/dθ (m x m x n_theta) at once
+        check_allocation(8.0 * m * m * (n_theta + 3), f"the GP's kernel and its gradient ({m} rows, {n_channels} "
+                         "channels)", "lower max_samples, or use fewer channels (a GP over more than a few dozen "
+                         "channels needs few rows)")
         xc = X - self.zero_reading_
         ys = scale_torques(y, self.alpha_)
-        coef, *_ = np.linalg.lstsq(np.hstack([xc, np.ones((len(xc), 1))]), ys, rcond=None)
-        self.linear_matrix_, self.linear_offset_ = coef[:-1].T, coef[-1]
-        residual = ys - (xc @ self.linear_matrix_.T + self.linear_offset_)
+        self.input_mean_ = xc.mean(axis=0)
         scale = xc.std(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
-        u = xc / self.input_scale_
+        u_all = (xc - self.input_mean_) / self.input_scale_
+        ltm = LinearRegression().fit(xc, ys)
         rng = check_random_state(self.random_state)
-        if len(u) > self.max_samples:
-            keep = np.sort(rng.choice(len(u), size=int(self.max_samples), replace=False))
-            u, residual = u[keep], residual[keep]
-        self.residual_mean_ = residual.mean(axis=0)
-        r_scale = residual.std(axis=0)
-        self.residual_scale_ = np.where(r_scale > 0, r_scale, 1.0)
-        target = (residual - self.residual_mean_) / self.residual_scale_
-        n_channels = u.shape[1]
-        kernel = (ConstantKernel(1.0, (1e-3, 1e3)) * RBF(np.ones(n_channels), (1e-2, 1e3))
-                  + WhiteKernel(1e-1, (1e-6, 1e1)))
-        gp = GaussianProcessRegressor(kernel, n_restarts_optimizer=int(self.n_restarts_optimizer),
-                                      random_state=rng.randint(np.iinfo(np.int32).max), copy_X_train=False)
-        with threadpool_limits(2, user_api="blas"), warnings.catch_warnings():
-            # a length scale at its upper bound is the expected answer for a channel without nonlinearity
-            warnings.simplefilter("ignore", ConvergenceWarning)
-            gp.fit(u, target)
-        k = gp.kernel_
-        self.constant_ = float(k.k1.k1.constant_value)
-        self.length_scale_ = np.atleast_1d(np.asarray(k.k1.k2.length_scale, dtype=float)) * np.ones(n_channels)
-        self.noise_level_ = float(k.k2.noise_level)
+        rows = np.sort(rng.choice(n, size=m, replace=False)) if n > m else np.arange(n)
+        u, ys_sub, xc_sub = u_all[rows], ys[rows], xc[rows]
+        residual = ys_sub - ltm.predict(xc_sub)
+        targets = {"none": ys_sub, "linear": residual}
+        seed = rng.randint(np.iinfo(np.int32).max)
+        sel = np.arange(m)
+        if m > self.selection_samples:
+            sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
+        # one BLAS thread: the matrices are small and threads only contend on a busy machine
+        with threadpool_limits(1, user_api="blas"):
+            mean, family, per_output, theta = self._choose(u[sel], {k: v[sel] for k, v in targets.items()}, seed)
+            target = targets[mean]
+            if per_output:  # each component from its selection optimum (a warm start)
+                regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
+                                                      seed, 0), u, target[:, [j]]) for j in range(6)]
+            else:
+                start = make_kernel(family, n_channels).clone_with_theta(theta[0])
+                regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]
+        self.mean_, self.kernel_, self.per_output_ = mean, family, len(regressors) > 1
+        if mean == "linear":
+            self.linear_matrix_, self.linear_offset_ = np.asarray(ltm.coef_), np.asarray(ltm.intercept_)
+        else:
+            self.linear_matrix_, self.linear_offset_ = np.zeros((6, n_channels)), np.zeros(6)
         self.train_inputs_ = u
-        self.cholesky_ = np.asarray(gp.L_)
-        self.dual_coef_ = np.asarray(gp.alpha_).reshape(len(u), -1)
-        # Maximum-likelihood amplitude per output for the shared kernel shape: y_jᵀ K⁻¹ y_j / m.
-        self.output_variance_ = np.maximum((target * self.dual_coef_).sum(axis=0) / len(u), 1e-12)
+        self.theta_ = np.stack([g.kernel_.theta for g in regressors])
+        self.dual_coef_ = np.column_stack([np.asarray(g.alpha_).reshape(m, -1) for g in regressors])
+        self.cholesky_ = np.stack([np.asarray(g.L_) for g in regressors])
+        self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
+        self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
 
-    def _cross_kernel(self, u: NDArray[np.float64]) -> NDArray[np.float64]:
-        ls = self.length_scale_
-        return self.constant_ * np.exp(-0.5 * _squared_distances(u / ls, self.train_inputs_ / ls))
+    def _choose(self, u, targets, seed):
+        """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
+        n, n_channels = u.shape
+        combos = [(mean, family) for mean, family in _AUTO_COMBINATIONS
+                  if self.mean in ("auto", mean) and self.kernel in ("auto", family)]
+        if not combos:  # a combination outside the automatic list, asked for explicitly
+            combos = [(self.mean, self.kernel)]
+        self.log_marginal_likelihood_ = {}
+        if len(combos) == 1 and self.per_output is False:  # nothing to choose: the final fit starts from the default
+            return (*combos[0], False, make_kernel(combos[0][1], n_channels).theta[None, :])
+        scores, fitted = {}, {}
+        for mean, family in combos:
+            gp = _fit_quietly(_regressor(make_kernel(family, n_channels), seed, 0), u, targets[mean])
+            value = _log_evidence(gp, targets[mean])
+            self.log_marginal_likelihood_[f"{mean}/{family}"] = value
+            # the LTM mean pays the BIC price of its 6 (N + 1) coefficients
+            scores[(mean, family)] = value - (0.5 * 6 * (n_channels + 1) * np.log(n) if mean == "linear" else 0.0)
+            fitted[(mean, family)] = gp
+        mean, family = max(scores, key=scores.get)
+        shared = fitted[(mean, family)]
+        if self.per_output is False:
+            return mean, family, False, shared.kernel_.theta[None, :]
+        # per-output fits from the shared optimum on at most _PER_OUTPUT_ROWS rows (six fits: kept cheap)
+        few = slice(None) if n <= _PER_OUTPUT_ROWS else np.sort(
+            check_random_state(seed).choice(n, size=_PER_OUTPUT_ROWS, replace=False))
+        u, target = u[few], targets[mean][few]
+        n = len(u)
+        shared_few = _fit_quietly(_regressor(shared.kernel_, seed, 0, optimizer=None), u, target)
+        separate = [_fit_quietly(_regressor(shared.kernel_, seed, 0), u, target[:, [j]]) for j in range(6)]
+        gain = sum(_log_evidence(g, target[:, [j]]) for j, g in enumerate(separate)) \
+            - _log_evidence(shared_few, target)
+        self.log_marginal_likelihood_["per_output_gain"] = float(gain)
+        if self.per_output is True or gain > 0.5 * 5 * shared.kernel_.theta.size * np.log(n):
+            return mean, family, True, np.stack([g.kernel_.theta for g in separate])
+        return mean, family, False, shared.kernel_.theta[None, :]
+
+    def structure_params(self) -> dict:
+        """The choices ``fit`` made (mean, kernel family, per output) as parameters.
+
+        :class:`~ftcal.AutoCalibrator` fits the GP on all rows once, then
+        cross-validates clones with these fixed (their hyperparameters are
+        still fitted on each training fold alone), at a fifth of the cost.
+        """
+        check_is_fitted(self)
+        return {"mean": self.mean_, "kernel": self.kernel_, "per_output": bool(self.per_output_)}
+
+    def regressors(self) -> list[GaussianProcessRegressor]:
+        """The fitted :class:`~sklearn.gaussian_process.GaussianProcessRegressor` (one, or one per component).
+
+        Rebuilt from the fitted arrays on each call (cheap: no computation), so a loaded model has them too
+        and ``predict`` changes nothing in the calibrator.
+        """
+        check_is_fitted(self)
+        n_channels = self.train_inputs_.shape[1]
+        k = self.theta_.shape[0]
+        regressors = []
+        for i in range(k):
+            gp = _regressor(make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]), None, 0)
+            cols = slice(None) if k == 1 else slice(i, i + 1)
+            gp.kernel_ = gp.kernel
+            gp.X_train_ = self.train_inputs_
+            gp.alpha_ = self.dual_coef_[:, cols]
+            gp.L_ = self.cholesky_[i]
+            gp._y_train_mean = self.target_mean_[cols]
+            gp._y_train_std = self.target_scale_[cols]
+            gp.n_features_in_ = n_channels
+            regressors.append(gp)
+        return regressors
 
     def _predict_scaled(self, X: NDArray[np.float64], return_std: bool):
         xc = X - self.zero_reading_
-        u = xc / self.input_scale_
-        k_star = self._cross_kernel(u)
+        u = (xc - self.input_mean_) / self.input_scale_
+        m = self.train_inputs_.shape[0]
+        chunk = max(1, _CHUNK_BYTES // (8 * m))
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
-        mean += (k_star @ self.dual_coef_) * self.residual_scale_ + self.residual_mean_
-        if not return_std:
-            return mean, None
-        v = solve_triangular(self.cholesky_, k_star.T, lower=True, check_finite=False)
-        var = np.maximum(self.constant_ + self.noise_level_ - (v * v).sum(axis=0), 0.0)
-        std = np.sqrt(var[:, None] * self.output_variance_[None, :]) * self.residual_scale_
+        std = np.empty_like(mean) if return_std else None
+        regressors = self.regressors()
+        for start in range(0, len(u), chunk):
+            rows = slice(start, start + chunk)
+            for i, gp in enumerate(regressors):
+                cols = slice(None) if len(regressors) == 1 else slice(i, i + 1)
+                if return_std:
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore", UserWarning)  # "negative variance set to 0"
+                        mu, sd = gp.predict(u[rows], return_std=True)
+                    std[rows, cols] = sd.reshape(mu.shape[0], -1)
+                else:
+                    mu = gp.predict(u[rows])
+                mean[rows, cols] += mu.reshape(mu.shape[0], -1)
         return mean, std
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -140,9 +140,12 @@ examples:
   ftcal benchmark dataset robot.csv --folds kfold --cv 10 --out b
 
 which calibration should I use for my sensor? every chosen calibrator, cross-validated on the
-same folds: whole groups held out when the dataset has a 'group' column (a pose or load
+same folds, beside the stock scikit-learn baselines (sk_linear, sk_poly2, sk_poly3,
+sk_kernel_ridge, sk_gp: never chosen, the margin over what is free); whole groups held out
+when the dataset has a 'group' column (a pose or load
 configuration per row: the score of a calibration on poses it has not seen), else shuffled
-k-fold. writes dataset_results.json / .md (held-out RMSE ± standard error, per-axis RMSE, fit
+k-fold. writes dataset_results.json / .md (held-out RMSE, eq. 18 over all 6n torque-scaled
+values, ± standard error, per-axis RMSE, fit
 time, the one-standard-error choice) and dataset_rmse.png.
 """
 
@@ -173,6 +176,7 @@ def run_dataset(args: argparse.Namespace) -> int:
 
     import ftcal
     from ..models._auto import score_candidates
+    from ..models._baselines import stock_baselines
     from ..core._model_selection import simplest_within_one_se
     from ..evaluation._plots import plot_axis_errors
     from ._models import check_fold_count, dataset_alpha, load_dataset
@@ -199,8 +203,9 @@ def run_dataset(args: argparse.Namespace) -> int:
                  f"over {split}")
     results, errors, predictions = score_candidates(
         candidates, data.raw, data.wrench, groups=groups, cv=args.cv, alpha=alpha, random_state=args.seed,
+        baselines=stock_baselines(data.n_channels, random_state=args.seed or 0),
     )
-    chosen = simplest_within_one_se(errors, groups)
+    chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
     results["chosen"] = results["name"][chosen]
     results.update(dataset=str(args.dataset), alpha=alpha, folds="group" if groups is not None else "kfold",
                    cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels)
@@ -220,18 +225,14 @@ def run_dataset(args: argparse.Namespace) -> int:
 
 def _dataset_table(results: dict) -> str:
     from ..core._wrench import WRENCH_LABELS
+    from ..models._auto import comparison_table
 
-    head = "| calibrator | held-out RMSE [N] | ± SE | " + " | ".join(f"{a}" for a in WRENCH_LABELS) + " | fit [s/fold] |"
-    lines = [head, "|" + "---|" * (4 + len(WRENCH_LABELS))]
-    for i, name in enumerate(results["name"]):
-        if results["rmse"][i] is None:
-            lines.append(f"| {name} | {results['status'][i]} |" + " |" * (2 + len(WRENCH_LABELS)))
-            continue
-        mark = " (chosen)" if name == results["chosen"] else ""
-        axes = " | ".join(f"{v:.3g}" for v in results["axis_rmse"][i])
-        lines.append(f"| {name}{mark} | {results['rmse'][i]:.4g} | {results['rmse_se'][i]:.2g} | {axes} | "
-                     f"{results['fit_seconds'][i]:.2f} |")
-    return "\n".join(lines)
+    head = "| model | " + " | ".join(f"{a}" for a in WRENCH_LABELS) + " |"
+    lines = [head, "|" + "---|" * (1 + len(WRENCH_LABELS))]
+    for name, axes in zip(results["name"], results["axis_rmse"]):
+        if axes is not None:
+            lines.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in axes) + " |")
+    return (comparison_table(results) + "\n\nHeld-out RMSE per axis [N] and [N·m]:\n\n" + "\n".join(lines))
 
 
 def _models(args: argparse.Namespace) -> tuple[str, ...]:

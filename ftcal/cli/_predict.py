@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import inspect
 import sys
 from pathlib import Path
 
@@ -26,6 +27,7 @@ examples:
 --range FILE (a calibration report .json, or the calibration dataset) adds a column out_of_range:
 1 when a reading lies beyond the calibrated range (a channel below its smallest or above its
 largest calibration reading), else 0; a count of such readings goes to stderr at the end.
+  ftcal predict models/gaussian_process.model.npz readings.csv --std     # + std_Fx..std_Tz columns
 """
 
 
@@ -55,7 +57,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--range", metavar="FILE", dest="range_file",
         help="the calibrated range: a calibration report .json ('ftcal report') or the calibration dataset; adds "
-        "an out_of_range column (1 = a reading beyond it)",
+        "an out_of_range column (1 = a reading beyond it); without it, readings beyond the model's own training "
+        "readings are counted in a warning",
+    )
+    p.add_argument(
+        "--std", action="store_true",
+        help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
+             "models, also when auto chose one)",
     )
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
@@ -101,25 +109,40 @@ def run(args: argparse.Namespace) -> int:
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
+    if args.std and "return_std" not in inspect.signature(getattr(model, "best_estimator_", model).predict).parameters:
+        chosen = getattr(model, "best_name_", type(model).__name__)
+        raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
+                       "models do (ftcal fit --model gaussian_process). Drop --std")
+    # the column needs --range; without it the model's own calibrated range still gives the warning at the end
     limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels)
+    model_range = getattr(model, "calibrated_range_", None)
+    warn_limits = limits if limits is not None else (None if model_range is None else tuple(model_range))
+    range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"
     beyond = [0]
 
     def emit(out) -> int:
         total = 0
         if not args.no_header:  # at once: a reader waiting for the header must not wait for the first reading
-            out.write(",".join(WRENCH_LABELS) + (",out_of_range" if limits is not None else "") + "\n")
+            labels = [*WRENCH_LABELS, *([f"std_{a}" for a in WRENCH_LABELS] if args.std else [])]
+            out.write(",".join(labels) + (",out_of_range" if limits is not None else "") + "\n")
             out.flush()
         for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature):
             try:
-                wrench = np.asarray(model.predict(raw), dtype=float)
+                if args.std:
+                    wrench, std = model.predict(raw, return_std=True)
+                    values = np.hstack([np.asarray(wrench, dtype=float), np.asarray(std, dtype=float)])
+                else:
+                    values = np.asarray(model.predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
-            if limits is None:
-                write_wrench_rows(out, wrench, False)
-            else:
-                flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
+            flags = None if warn_limits is None else np.any((raw < warn_limits[0]) | (raw > warn_limits[1]), axis=1)
+            if flags is not None:
                 beyond[0] += int(flags.sum())
-                out.write("".join(",".join(f"{v:.9g}" for v in row) + f",{int(f)}\n" for row, f in zip(wrench, flags)))
+            if limits is None:
+                write_wrench_rows(out, values, False)
+            else:
+                out.write("".join(",".join(f"{v:.9g}" for v in row) + f",{int(f)}\n" for row, f in zip(values, flags)))
+            wrench = values
             total += len(wrench)
             if chunk == 1 or out is sys.stdout:
                 out.flush()
@@ -133,8 +156,9 @@ def run(args: argparse.Namespace) -> int:
             total = emit(fh)
         console.info(f"wrote {total} wrenches to {args.output}")
     if beyond[0]:
-        print(f"ftcal: warning: {beyond[0]} of {total} readings lie beyond the calibrated range of {args.range_file} "
-              "(out_of_range = 1); their wrenches are extrapolations", file=sys.stderr)
+        column = " (out_of_range = 1)" if limits is not None else ""
+        print(f"ftcal: warning: {beyond[0]} of {total} readings lie beyond the calibrated range of {range_source}"
+              f"{column}; their wrenches are extrapolations", file=sys.stderr)
     return 0
 
 

@@ -21,7 +21,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 from ._exceptions import CalibrationInputError
 
-__all__ = ["check_groups", "calibration_folds", "paired_standard_error", "simplest_within_one_se"]
+__all__ = ["check_groups", "calibration_folds", "rmse_and_se", "simplest_within_one_se"]
 
 
 def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
@@ -79,43 +79,82 @@ def calibration_folds(
     return list(splitter.split(index, groups=g))
 
 
-def paired_standard_error(errors_a: NDArray, errors_b: NDArray, units: NDArray | None = None) -> tuple[float, float]:
-    """Mean and standard error of ``errors_a - errors_b``, paired per unit (a group, or a row without groups).
+def _per_unit(values: NDArray, units: NDArray | None) -> NDArray:
+    """``values`` averaged per unit (a group; each row its own unit without groups)."""
+    values = np.asarray(values, dtype=float)
+    if units is None:
+        return values
+    _, inverse = np.unique(units, return_inverse=True)
+    return np.bincount(inverse, weights=values) / np.bincount(inverse)
 
-    Rows of one group are not independent, so with ``units`` the difference
-    is averaged per group first and the standard error is over groups.
+
+def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[float, float]:
+    """RMSE and its standard error from per-row mean squared errors (delta method over groups, or rows).
+
+    ``row_errors[i]`` is the mean over the six torque-scaled components of row
+    ``i``'s squared error, so ``sqrt(mean(row_errors))`` is eq. 18.
+
+    Examples
+    --------
+    >>> rmse, se = rmse_and_se([1.0, 1.0, 4.0, 4.0], units=[0, 0, 1, 1])
+    >>> round(rmse, 4), round(se, 4)
+    (1.5811, 0.4743)
     """
-    diff = np.asarray(errors_a, float) - np.asarray(errors_b, float)
-    if units is not None:
-        _, inverse = np.unique(units, return_inverse=True)
-        diff = np.bincount(inverse, weights=diff) / np.bincount(inverse)
-    if diff.size < 2:
-        return float(diff.mean()), float("inf")
-    return float(diff.mean()), float(diff.std(ddof=1) / np.sqrt(diff.size))
+    row_errors = np.asarray(row_errors, dtype=float)
+    per_unit = _per_unit(row_errors, None if units is None else np.asarray(units))
+    mse = float(row_errors.mean())
+    se_mse = float(per_unit.std(ddof=1) / np.sqrt(per_unit.size)) if per_unit.size > 1 else float("inf")
+    rmse = float(np.sqrt(mse))
+    return rmse, se_mse / (2.0 * rmse) if rmse > 0 else 0.0
 
 
-def simplest_within_one_se(errors: NDArray, units: NDArray | None = None) -> int:
-    """Index of the first (simplest) candidate whose mean error is within one paired standard error of the best.
+def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, complexity: ArrayLike | None = None,
+                           eligible: ArrayLike | None = None) -> int:
+    """The one-standard-error rule of ftcal: the simplest candidate whose error is within one SE of the best.
 
-    ``errors[k, i]`` is candidate ``k``'s held-out squared error on row ``i``;
-    candidates are ordered from the simplest to the most flexible; rows of
-    a candidate that was not scored are NaN (never chosen).
+    ``errors[k, i]`` is candidate ``k``'s held-out squared error on row ``i``
+    (NaN when ``k`` was not scored: never chosen). The best is the eligible
+    candidate of lowest mean error; a candidate qualifies when its mean error
+    exceeds the best's by at most one **paired** standard error of the
+    difference (per group with ``units``: rows of one group are not
+    independent; per row without). Among those that qualify the one of lowest
+    ``complexity`` wins (default: the row order, simplest first); equal
+    complexity goes to the earlier row. Every model choice in ftcal uses this
+    one rule (``auto``, ``ftcal benchmark dataset``, the hybrid's ridge).
+
+    Parameters
+    ----------
+    errors : ndarray of shape (n_candidates, n_samples)
+    units : ndarray of shape (n_samples,) or None
+        Group of each row.
+    complexity : array-like of shape (n_candidates,) or None
+        Complexity rank of each candidate (lower = simpler); ``None``: ``0, 1, 2, ...``.
+    eligible : array-like of bool, shape (n_candidates,) or None
+        Candidates that may be chosen (``None``: every scored one).
 
     Examples
     --------
     >>> errors = np.array([[1.1, 0.9, 1.2, 0.9], [1.0, 1.0, 1.0, 1.0], [2.0, 2.0, 2.1, 1.9]])
     >>> simplest_within_one_se(errors)  # 0 is within noise of the best (1)
     0
+    >>> simplest_within_one_se(errors, complexity=[2, 1, 0])  # now 1 is the simplest within noise
+    1
     """
     errors = np.asarray(errors, dtype=float)
-    scored = ~np.isnan(errors).any(axis=1)
-    if not scored.any():
+    n = errors.shape[0]
+    ok = ~np.isnan(errors).any(axis=1)
+    if eligible is not None:
+        ok &= np.asarray(eligible, dtype=bool)
+    if not ok.any():
         raise CalibrationInputError("no candidate could be scored; see cv_results_ for why each one failed.")
-    means = np.where(scored, np.nanmean(np.where(scored[:, None], errors, 0.0), axis=1), np.inf)
+    rank = np.arange(n, dtype=float) if complexity is None else np.asarray(complexity, dtype=float)
+    means = np.where(ok, np.nanmean(np.where(ok[:, None], errors, 0.0), axis=1), np.inf)
     best = int(np.argmin(means))
-    for k in range(best):
-        if scored[k]:
-            mean, se = paired_standard_error(errors[k], errors[best], units)
-            if mean <= se:
-                return k
-    return best
+    units = None if units is None else np.asarray(units)
+    qualified = []
+    for k in np.flatnonzero(ok):
+        diff = _per_unit(errors[k] - errors[best], units)
+        se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
+        if k == best or float(diff.mean()) <= se:
+            qualified.append(int(k))
+    return min(qualified, key=lambda k: (rank[k], k))

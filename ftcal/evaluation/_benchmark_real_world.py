@@ -16,7 +16,8 @@ practitioner would use:
     by a model that never saw its load position: the honest test for a sensor
     later used with other tools.
 
-Metrics (thesis IV-C) on the held-out predictions: per-sample RMSE of the
+Metrics (thesis IV-C) on the held-out predictions: the RMSE of eq. 18 (``rmse``, over all 6n
+torque-scaled values: the figure every ftcal table prints), the per-sample RMSE of the
 torque-scaled wrench (eq. 18 per row, ``alpha`` from the whole dataset so
 that every model is scored alike), its mean and std over the samples (Table
 IV's "within the dataset"), and relative force and torque errors (eq. 19,
@@ -37,8 +38,9 @@ from sklearn.model_selection import LeaveOneGroupOut, ShuffleSplit
 
 from ..io._dataset import CalibrationDataset
 from ..experiment._experiment import prepare_dataset
-from ..core._metrics import mean_std, per_sample_rmse, relative_errors
-from ..models._registry import make_calibrator
+from ..core._metrics import mean_std, per_sample_rmse, relative_errors, wrench_rmse
+from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
+from ..models._registry import make_calibrator, training_schedule
 from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
 from ..core._wrench import alpha_from_wrenches
@@ -65,10 +67,14 @@ def _folds(dataset: CalibrationDataset, split: str, random_state: int):
 
 
 def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
+    """Held-out predictions of one model (a registry name or a stock baseline's name) on one split."""
     y_true, y_pred = [], []
     fit_s = 0.0
     for train, test in _folds(dataset, split, random_state):
-        est = make_calibrator(model_name, schedule=schedule, random_state=random_state)
+        if model_name in STOCK_BASELINE_NAMES:
+            est = stock_baselines(dataset.n_channels, random_state=random_state)[model_name]
+        else:
+            est = make_calibrator(model_name, schedule=schedule, random_state=random_state)
         t0 = time.perf_counter()
         est.fit(dataset.raw[train], dataset.wrench[train])
         fit_s += time.perf_counter() - t0
@@ -78,13 +84,19 @@ def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     rmse = per_sample_rmse(yt, yp, alpha)
     rf, rt = relative_errors(yt, yp)
     return {
-        "schedule": schedule if model_name != "linear" else "-",
+        "schedule": schedule if ftcal_training_schedule(model_name) else "-",
         "n_test": int(yt.shape[0]),
+        "rmse": wrench_rmse(yt, yp, alpha),
         **{f"{name}_{k}": stat[k] for name, values in (("rmse", rmse), ("rel_force", rf), ("rel_torque", rt))
            for stat in [mean_std(values, ddof=0)] for k in ("mean", "std")},
         "fit_seconds": fit_s,
         "per_sample_rmse": rmse.tolist(),
     }
+
+
+def ftcal_training_schedule(model_name: str) -> bool:
+    """Whether a model has a training schedule (the networks); stock baselines and closed forms do not."""
+    return model_name not in STOCK_BASELINE_NAMES and bool(training_schedule("short", model_name))
 
 
 def _plot(results: dict, path: Path) -> Path:
@@ -121,6 +133,7 @@ def _plot(results: dict, path: Path) -> Path:
 def run_real_world_benchmark(
     *,
     models: Sequence[str] = ("linear", "comparative", "directional"),
+    baselines: bool = True,
     splits: Sequence[str] = SPLIT_NAMES,
     schedule: str = "thesis",
     grouped_schedule: str = "short",
@@ -137,6 +150,9 @@ def run_real_world_benchmark(
     ----------
     models : sequence of str
         Registry names (:data:`ftcal.CALIBRATOR_NAMES`).
+    baselines : bool, default=True
+        Also score the stock scikit-learn baselines (:data:`ftcal.models.STOCK_BASELINE_NAMES`) on the same
+        splits: what every table compares ftcal with.
     splits : sequence of str
         Any of :data:`SPLIT_NAMES`.
     schedule : str, default="thesis"
@@ -167,7 +183,7 @@ def run_real_world_benchmark(
     --------
     Icosahedron (12 directions, the tool-face-up one excluded) x 7 configurations:
 
-    >>> res = run_real_world_benchmark(models=("linear",), splits=("random20",), subdivisions=0)
+    >>> res = run_real_world_benchmark(models=("linear",), splits=("random20",), subdivisions=0, baselines=False)
     >>> res["dataset"]["n_samples"], sorted(res["splits"]["random20"])
     (77, ['linear'])
     """
@@ -194,7 +210,7 @@ def run_real_world_benchmark(
     for split in splits:
         sched = schedule if split == "random20" else grouped_schedule
         results["splits"][split] = {}
-        for name in models:
+        for name in (*models, *(STOCK_BASELINE_NAMES if baselines else ())):
             t0 = time.perf_counter()
             results["splits"][split][name] = _evaluate(dataset, name, split, sched, random_state, alpha)
             timing[f"{split}/{name}_s"] = time.perf_counter() - t0

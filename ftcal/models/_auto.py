@@ -1,29 +1,38 @@
-"""Let the data choose the calibrator: grouped cross-validation over ftcal's models (issue 12)."""
+"""Let the data choose the calibrator: grouped cross-validation over ftcal's models, stock baselines beside."""
 
 from __future__ import annotations
 
-import inspect
-from numbers import Integral, Real
+from math import comb
+from numbers import Integral
 import time
 import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.optimize import nnls
+from sklearn import config_context
 from sklearn.base import clone
+from sklearn.model_selection import cross_val_predict
 from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils.validation import check_is_fitted
+from threadpoolctl import threadpool_limits
 
-from ..calibrators._base import BaseCalibrator, resolve_alpha
+from ..calibrators._base import BaseCalibrator, calibrated_range, resolve_alpha
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
+from ..core._model_selection import calibration_folds, check_groups, rmse_and_se, simplest_within_one_se
 from ..core._validation import check_zero_reading, validate_training_data
-from ..core._wrench import scale_torques
+from ..core._wrench import scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["AutoCalibrator", "default_candidates", "score_candidates", "with_alpha_and_tare"]
+__all__ = ["AutoCalibrator", "StackedCalibrator", "comparison_table", "default_candidates", "score_candidates",
+           "with_alpha_and_tare", "minimum_training_rows"]
+
+#: Most candidates a stack combines (the best-scoring eligible ones).
+STACK_SIZE = 3
 
 
 def default_candidates(schedule: str = "short") -> list[tuple[str, BaseCalibrator]]:
-    """The candidates of :class:`AutoCalibrator`, simplest and cheapest first.
+    """The candidates of :class:`AutoCalibrator`, in the documented complexity order (simplest first).
 
     Examples
     --------
@@ -38,9 +47,9 @@ def default_candidates(schedule: str = "short") -> list[tuple[str, BaseCalibrato
             candidates.append((f"polynomial(degree={degree}, ridge={ridge:g})",
                                make_calibrator("polynomial", degree=degree, ridge=ridge)))
     candidates.append(("axis_nonlinear", make_calibrator("axis_nonlinear")))
-    candidates.append(("gaussian_process", make_calibrator("gaussian_process")))
-    for name in ("directional", "comparative", "directional_ensemble", "comparative_ensemble"):
-        candidates.append((name, make_calibrator(name, schedule=schedule)))
+    candidates.append(("gaussian_process", make_calibrator("gaussian_process", random_state=0)))
+    for name in ("directional", "comparative"):
+        candidates.append((name, make_calibrator(name, schedule=schedule, random_state=0)))
     return candidates
 
 
@@ -54,96 +63,282 @@ def with_alpha_and_tare(estimator, alpha: float, zero_reading):
     return estimator
 
 
-def _fit_accepts_groups(estimator) -> bool:
-    return "groups" in inspect.signature(estimator.fit).parameters
+def minimum_training_rows(estimator, n_channels: int) -> int:
+    """Fewest training rows on which a held-out score says something about ``estimator`` (N channels).
+
+    A candidate cross-validated on folds with fewer training rows is reported
+    but never chosen: its score on a handful of rows is noise, and a flexible
+    model chosen on it is what extrapolates worst. The rule, by family:
+    linear ``N + 2`` (its coefficients plus one); polynomial its
+    feature count; the hybrid ``3 (N + 1)``; the GP ``10 N`` (one length
+    scale per channel to learn); networks and anything else ``25 N``.
+
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator, PolynomialCalibrator
+    >>> minimum_training_rows(LinearCalibrator(), 8), minimum_training_rows(PolynomialCalibrator(degree=2), 8)
+    (10, 45)
+    """
+    from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
+    from ..calibrators._gaussian_process import GaussianProcessCalibrator
+    from ..calibrators._linear import LinearCalibrator
+    from ..calibrators._polynomial import PolynomialCalibrator
+
+    if isinstance(estimator, LinearCalibrator):
+        return n_channels + 2
+    if isinstance(estimator, PolynomialCalibrator):
+        return comb(n_channels + int(estimator.degree), int(estimator.degree))
+    if isinstance(estimator, AxisNonlinearCalibrator):
+        return 3 * (n_channels + 1)
+    if isinstance(estimator, GaussianProcessCalibrator):
+        return 10 * n_channels
+    return 25 * n_channels
+
+
+def _grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
+    """At most ``size`` of ``rows``, the same share from every group (all rows when they fit)."""
+    if size is None or rows.size <= size:
+        return rows
+    rng = np.random.default_rng(seed)
+    if groups is None:
+        return np.sort(rng.choice(rows, size=size, replace=False))
+    g = groups[rows]
+    share = size / rows.size
+    keep = [rng.choice(rows[g == label], size=max(1, int(round(share * np.sum(g == label)))), replace=False)
+            for label in np.unique(g)]
+    return np.sort(np.concatenate(keep))
+
+
+def _is_network(estimator) -> bool:
+    from ..neural_network._base import NetworkCalibrator
+
+    return isinstance(estimator, NetworkCalibrator) and not estimator.callbacks
 
 
 def _fit(estimator, X, y, groups):
-    if groups is not None and _fit_accepts_groups(estimator):
-        return estimator.fit(X, y, groups=groups)
-    return estimator.fit(X, y)
+    """Fit, passing ``groups`` to estimators whose ``fit`` takes them (routing off: they are ours, not a user's)."""
+    import inspect
+
+    with config_context(enable_metadata_routing=False):
+        if groups is not None and "groups" in inspect.signature(estimator.fit).parameters:
+            return estimator.fit(X, y, groups=groups)
+        return estimator.fit(X, y)
+
+
+def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed):
+    """Out-of-fold predictions of ``estimator`` on ``folds``.
+
+    Networks: the K fold models are trained as one stacked fit
+    (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
+    training fold (the same share of every group); everything else through
+    :func:`sklearn.model_selection.cross_val_predict` (with ``groups`` when its
+    ``fit`` takes them, for its own inner model choice).
+    """
+    import inspect
+
+    if _is_network(estimator):
+        from ..neural_network._stacked import fit_stacked
+
+        models = [clone(estimator) for _ in folds]
+        train = [_grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
+        fit_stacked(models, [X[t] for t in train], [y[t] for t in train])
+        pred = np.empty_like(y)
+        for model, (_, test) in zip(models, folds):
+            pred[test] = model.predict(X[test])
+        return pred
+    params = {"groups": groups} if groups is not None and "groups" in inspect.signature(estimator.fit).parameters \
+        else None
+    with config_context(enable_metadata_routing=False):
+        return cross_val_predict(estimator, X, y, cv=folds, params=params)
+
+
+def _row_errors(pred: NDArray, y: NDArray, alpha: float) -> NDArray:
+    """Per-row mean of the six squared torque-scaled errors: their mean is eq. 18's MSE."""
+    return np.mean((scale_torques(pred, alpha) - scale_torques(y, alpha)) ** 2, axis=1)
+
+
+def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
+    """Non-negative weights of the (torque-scaled) predictions that best fit ``target`` in least squares."""
+    design = np.column_stack([p.ravel() for p in predictions])
+    weights, _ = nnls(design, target.ravel())
+    return weights
 
 
 def score_candidates(
     candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
-    zero_reading=None, time_budget: float | None = None, random_state: int | None = 0,
+    zero_reading=None, random_state: int | None = 0, network_samples: int | None = 5000,
+    baselines: dict | None = None, stack: bool = False, prefitted: dict | None = None,
 ) -> tuple[dict, NDArray[np.float64], list]:
     """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
+
+    Every figure is eq. 18's RMSE (over the 6 n torque-scaled values, [N]).
+    Candidates whose training folds hold fewer rows than
+    :func:`minimum_training_rows` are skipped (recorded, never chosen). With
+    ``stack``, a non-negative combination of the best (up to
+    :data:`STACK_SIZE`) eligible candidates is scored too, its weights
+    cross-fitted on the out-of-fold predictions (each fold's weights from the
+    other folds' rows). ``baselines`` (name -> scikit-learn regressor, e.g.
+    :func:`ftcal.models.stock_baselines`) are scored on the same folds and
+    never eligible.
 
     Returns
     -------
     results : dict of lists
-        Per candidate: ``name``, ``status`` (``"scored"``, ``"skipped: ..."``,
-        ``"failed: ..."``), ``rmse`` (held-out, torque-scaled [N]),
-        ``rmse_se`` (its standard error over groups or rows), ``axis_rmse``
-        (6 values, [N] and [N·m]), ``fit_seconds`` (mean per fold).
-    errors : ndarray of shape (n_candidates, n_samples)
-        Held-out squared torque-scaled error of each row (NaN when not scored).
+        Per row: ``name``, ``kind`` (``"candidate"``, ``"stack"``,
+        ``"baseline"``), ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``),
+        ``eligible``, ``rmse`` (held-out, eq. 18 [N]), ``rmse_se`` (its
+        standard error over groups or rows), ``axis_rmse`` (6 values, [N] and
+        [N·m]), ``fit_seconds`` (all folds); plus ``n_splits``,
+        ``min_training_rows`` and, with a stack, ``stack_members`` and
+        ``stack_weights``.
+    errors : ndarray of shape (n_rows, n_samples)
+        Held-out per-row errors (NaN when not scored).
     predictions : list of ndarray of shape (n_samples, 6) or None
         Out-of-fold predictions.
     """
-    folds = calibration_folds(len(X), groups, cv, random_state)
-    start = time.perf_counter()
-    n = len(candidates)
-    errors = np.full((n, len(X)), np.nan)
-    results: dict = {k: [] for k in ("name", "status", "rmse", "rmse_se", "axis_rmse", "fit_seconds")}
-    results["n_splits"] = len(folds)
+    n, n_channels = X.shape
+    seed = 0 if random_state is None else int(random_state)
+    folds = calibration_folds(n, groups, cv, seed)
+    smallest_train = min(len(tr) for tr, _ in folds)
+    results: dict = {k: [] for k in ("name", "kind", "status", "eligible", "rmse", "rmse_se", "axis_rmse",
+                                     "fit_seconds")}
+    results.update(n_splits=len(folds), min_training_rows=smallest_train)
+    errors: list[NDArray] = []
     predictions: list = []
-    previous_fold_seconds = 0.0
-    for k, (name, template) in enumerate(candidates):
-        status, seconds, pred = "scored", [], np.full(y.shape, np.nan)
-        for i, (train, test) in enumerate(folds):
-            # Projected time of the remaining folds: this candidate's own fold time once known, before that the
-            # previous candidate's (candidates come cheapest first, so that is a lower bound).
-            per_fold = np.mean(seconds) if seconds else previous_fold_seconds
-            remaining = None if time_budget is None else time_budget - (time.perf_counter() - start)
-            # the first candidate (the LTM by default) always runs, so there is always an answer
-            if k > 0 and remaining is not None and (remaining <= 0 or per_fold * (len(folds) - i) > remaining):
-                status = f"skipped: time budget ({time_budget:g} s) would be exceeded"
-                break
-            estimator = with_alpha_and_tare(template, alpha, zero_reading)
-            t0 = time.perf_counter()
-            try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", UserWarning)
-                    _fit(estimator, X[train], y[train], None if groups is None else np.asarray(groups)[train])
-                pred[test] = estimator.predict(X[test])
-            except Exception as exc:  # a candidate that cannot fit these data is recorded, not fatal
-                status = f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}"
-                break
-            seconds.append(time.perf_counter() - t0)
-        if seconds:
-            previous_fold_seconds = max(previous_fold_seconds, float(np.mean(seconds)))
+
+    def record(name, kind, status, eligible, pred, seconds):
         results["name"].append(name)
+        results["kind"].append(kind)
         results["status"].append(status)
-        results["fit_seconds"].append(float(np.mean(seconds)) if seconds else None)
-        if status == "scored":
-            sq = np.sum((scale_torques(pred, alpha) - scale_torques(y, alpha)) ** 2, axis=1)
-            errors[k] = sq
-            units = None if groups is None else np.asarray(groups)
-            rmse, se = _rmse_and_se(sq, units)
-            results["rmse"].append(rmse)
-            results["rmse_se"].append(se)
-            results["axis_rmse"].append(np.sqrt(np.mean((pred - y) ** 2, axis=0)).tolist())
-            predictions.append(pred)
-        else:
-            for key in ("rmse", "rmse_se", "axis_rmse"):
-                results[key].append(None)
-            predictions.append(None)
-    return results, errors, predictions
+        results["fit_seconds"].append(seconds)
+        ok = pred is not None
+        results["eligible"].append(bool(eligible and ok))
+        row = _row_errors(pred, y, alpha) if ok else np.full(n, np.nan)
+        rmse, se = rmse_and_se(row, groups) if ok else (None, None)
+        results["rmse"].append(rmse)
+        results["rmse_se"].append(se)
+        results["axis_rmse"].append(np.sqrt(np.mean((pred - y) ** 2, axis=0)).tolist() if ok else None)
+        errors.append(row)
+        predictions.append(pred)
+
+    def attempt(estimator, **kwargs):
+        t0 = time.perf_counter()
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)
+                pred = _out_of_fold(estimator, X, y, folds, groups, **kwargs)
+            return pred, "scored", time.perf_counter() - t0
+        except Exception as exc:  # a candidate that cannot fit these data is recorded, not fatal
+            return None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
+
+    with threadpool_limits(1, user_api="blas"):  # small matrices: threads only contend on a shared machine
+        _score_all(candidates, baselines, stack, prefitted, alpha, zero_reading, network_samples, seed, folds,
+                   smallest_train, n_channels, attempt, record, results, errors, predictions, y)
+    return results, np.vstack(errors), predictions
 
 
-def _rmse_and_se(squared_errors: NDArray, units: NDArray | None) -> tuple[float, float]:
-    """RMSE and its standard error (delta method over groups, or over rows)."""
-    if units is not None:
-        _, inverse = np.unique(units, return_inverse=True)
-        per_unit = np.bincount(inverse, weights=squared_errors) / np.bincount(inverse)
-    else:
-        per_unit = squared_errors
-    mse = float(np.mean(squared_errors))
-    se_mse = float(per_unit.std(ddof=1) / np.sqrt(per_unit.size)) if per_unit.size > 1 else float("inf")
-    rmse = float(np.sqrt(mse))
-    return rmse, se_mse / (2.0 * rmse) if rmse > 0 else 0.0
+def _score_all(candidates, baselines, stack, prefitted, alpha, zero_reading, network_samples, seed, folds,
+               smallest_train, n_channels, attempt, record, results, errors, predictions, y) -> None:
+    for name, template in candidates:
+        estimator = with_alpha_and_tare(template, alpha, zero_reading)
+        if prefitted and name in prefitted:  # fitted on all rows already: CV its structure, refit per fold
+            estimator.set_params(**prefitted[name].structure_params())
+        needed = minimum_training_rows(estimator, n_channels)
+        if smallest_train < needed:  # too few rows to judge it: not fitted, never chosen
+            record(name, "candidate", f"skipped: training folds of {smallest_train} rows < the {needed} it needs",
+                   False, None, None)
+            continue
+        pred, status, seconds = attempt(estimator, network_samples=network_samples, seed=seed)
+        record(name, "candidate", status, True, pred, seconds)
+    if stack:
+        _score_stack(results, errors, predictions, record, y, alpha, folds)
+    for name, regressor in (baselines or {}).items():
+        pred, status, seconds = attempt(regressor, network_samples=None, seed=seed)
+        record(name, "baseline", status, False, pred, seconds)
+
+
+def _score_stack(results, errors, predictions, record, y, alpha, folds) -> None:
+    """Score the non-negative combination of the best eligible candidates (weights cross-fitted over folds)."""
+    ranked = sorted((r, k) for k, r in enumerate(results["rmse"]) if results["eligible"][k])
+    members = [k for _, k in ranked[:STACK_SIZE]]
+    if len(members) < 2:
+        return
+    scaled = [scale_torques(predictions[k], alpha) for k in members]
+    target = scale_torques(y, alpha)
+    oof = np.empty_like(target)
+    for train, test in folds:
+        w = _nnls_weights([p[train] for p in scaled], target[train])
+        oof[test] = sum(wk * p[test] for wk, p in zip(w, scaled))
+    weights = _nnls_weights(scaled, target)
+    names = [results["name"][k] for k in members]
+    results["stack_members"] = names
+    results["stack_weights"] = weights.tolist()
+    record("stack(" + " + ".join(names) + ")", "stack", "scored", True, unscale_torques(oof, alpha), None)
+
+
+class StackedCalibrator(BaseCalibrator):
+    """A non-negative weighted sum of fitted calibrators' predictions (what ``auto`` builds when it pays).
+
+    Parameters
+    ----------
+    estimators : list of calibrator
+        The members (cloned and fitted on all rows by ``fit``).
+    weights : array-like of shape (n_members,)
+        Non-negative weight of each member (on the torque-scaled wrench; the sum need not be 1).
+    alpha, zero_reading : as for every calibrator
+
+    Attributes
+    ----------
+    estimators_ : list of calibrator
+        The fitted members.
+    weights_ : ndarray of shape (n_members,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import LinearCalibrator, PolynomialCalibrator
+    >>> from ftcal.models._auto import StackedCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(80, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> s = StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)],
+    ...                       weights=[0.5, 0.5]).fit(raw, w)
+    >>> bool(np.allclose(s.predict(raw[:3]), w[:3], atol=1e-6))
+    True
+    """
+
+    _transient_params = ("estimators",)
+    _fitted_state = ("weights_", "estimators_")
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "estimators": [list, None],
+        "weights": ["array-like"],
+    }
+
+    def __init__(self, *, estimators=None, weights=(), alpha=None, zero_reading=None, random_state=None):
+        self.estimators = estimators
+        self.weights = weights
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+
+    def _fit(self, X, y) -> None:
+        members = list(self.estimators or [])
+        self.weights_ = np.asarray(self.weights, dtype=float)
+        if not members or self.weights_.shape != (len(members),) or (self.weights_ < 0).any():
+            raise CalibrationInputError(
+                f"StackedCalibrator needs a non-empty list of estimators and one non-negative weight each; got "
+                f"{len(members)} estimators and weights {self.weights_.tolist()}.")
+        self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None)
+                            for e in members]
+
+    def _predict_wrench(self, X):
+        scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
+        return unscale_torques(scaled, self.alpha_)
+
+    def _emit_onnx(self, g, x: str) -> str:
+        # torque scaling is linear per component, so the weighted sum commutes with it
+        terms = [g.op("Mul", g.calibration(e, x), g.const(float(w))) for w, e in zip(self.weights_, self.estimators_)]
+        return terms[0] if len(terms) == 1 else g.op("Sum", *terms)
 
 
 class AutoCalibrator(BaseCalibrator):
@@ -157,32 +352,33 @@ class AutoCalibrator(BaseCalibrator):
        with ``groups`` (a pose or load configuration per row, the dataset's
        ``group`` column) whole groups are held out, so the score says how the
        calibration does on poses it has not seen; without, shuffled k-fold;
-    2. scores the candidates **in this order** (simplest and cheapest first):
-       ``linear`` (the LTM); ``polynomial`` of degree 2 and 3, each with ridge
-       1e-2 and 1e-4 (a cross-validated degree and ridge); ``axis_nonlinear``
-       (the hybrid, its own ridge chosen on the same groups);
-       ``gaussian_process``; ``directional`` and ``comparative`` (the
-       ``schedule``'s epochs); their 5-member ensembles. Each candidate
-       sees the same folds, the same torque scale and the given tare;
-    3. keeps to the **time budget**: a fold is started only when the budget
-       left covers the candidate's remaining folds at its own fold time, or,
-       before its first fold, at the slowest fold time seen so far (the list
-       runs from cheap to expensive, so that is a lower bound). The budget is
-       therefore exceeded by at most one fold of the first candidate that
-       turns out too slow (plus the final refit). The first candidate always
-       runs, so there is always an answer. Candidates that do not fit
-       are recorded as skipped, never silently dropped. With the default 150 s
-       on 2 cores the closed-form models and the GP run on any data set the
-       GP's subset keeps small; the networks run when the data are small
-       enough, or with a larger budget;
-    4. picks, by the **one-standard-error rule**, the simplest candidate whose
-       held-out error is within one paired standard error (over groups, or
-       rows) of the best: a flexible model must show that it pays;
+    2. scores every candidate on those folds, **in this complexity order**
+       (simplest first): ``linear`` (the LTM); ``polynomial`` of degree 2 and 3,
+       each with ridge 1e-2 and 1e-4; ``axis_nonlinear`` (the hybrid);
+       ``gaussian_process`` (its mean and kernel chosen once on all rows by
+       marginal likelihood, its hyperparameters refitted on every training
+       fold); ``directional`` and ``comparative`` (the ``schedule``'s epochs;
+       the K fold models trained as one stacked fit, each on at most
+       ``network_samples`` rows, the same share of every group); then, with
+       ``stack``, a non-negative combination of the best three (weights
+       fitted on out-of-fold predictions, cross-fitted over the folds so its
+       score is held out too). There is no time budget: the same data and
+       seed give the same choice on any machine;
+    3. reports the stock scikit-learn baselines (``baselines``,
+       :func:`ftcal.models.stock_baselines`) on the same folds, never chosen:
+       the margin over what is free;
+    4. picks by the **one-standard-error rule**
+       (:func:`~ftcal.core._model_selection.simplest_within_one_se`): the
+       best-scoring candidate and every one within one paired standard error
+       of it (over groups, or rows) qualify, and the simplest in the order
+       above wins. A candidate whose training folds are smaller than
+       :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
+       dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``).
 
-    ``cv_results_`` keeps the whole comparison (RMSE, its standard error,
-    per-axis RMSE, fit time and status per candidate); it is stored in the
-    model file and printed by ``ftcal fit --model auto``.
+    Every RMSE is eq. 18: over all 6 n torque-scaled values, in [N].
+    ``cv_results_`` keeps the whole comparison; it is stored in the model file
+    and printed by ``ftcal fit --model auto``.
 
     Parameters
     ----------
@@ -191,25 +387,30 @@ class AutoCalibrator(BaseCalibrator):
         from the simplest to the most flexible (the 1-SE rule prefers earlier ones).
     cv : int, default=5
         Number of folds (capped by the number of groups).
-    time_budget : float or None, default=150
-        Seconds for the cross-validation; ``None`` = no limit.
     schedule : {"short", "thesis"}, default="short"
         Training schedule of the network candidates.
+    stack : bool, default=True
+        Also score a non-negative combination of the best candidates.
+    baselines : bool, default=True
+        Report the stock scikit-learn baselines beside (never chosen).
+    network_samples : int or None, default=5000
+        Most training rows a network candidate sees, in each fold and in the
+        final refit (a grouped subsample; ``None``: all).
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹], shared by every candidate; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
         Measured tare, given to every candidate; ``None``: each estimates its own.
     random_state : int or None, default=None
-        Seed of the folds (``None`` = 0, so a fit is reproducible).
+        Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
     Attributes
     ----------
     best_estimator_ : calibrator
-        The chosen candidate, refitted on all data.
+        The chosen candidate (or :class:`StackedCalibrator`), refitted on all data.
     best_name_ : str
         Its name.
     cv_results_ : dict
-        The comparison (see :func:`score_candidates`), plus ``chosen``.
+        The comparison (see :func:`score_candidates`), plus ``chosen`` and ``folds``.
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -220,7 +421,8 @@ class AutoCalibrator(BaseCalibrator):
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(200, 6)); raw = w @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(200, 6))
     >>> auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()),
-    ...                                   ("polynomial", PolynomialCalibrator(degree=2))]).fit(raw, w)
+    ...                                   ("polynomial", PolynomialCalibrator(degree=2))],
+    ...                       baselines=False).fit(raw, w)
     >>> auto.best_name_
     'linear'
     """
@@ -232,16 +434,20 @@ class AutoCalibrator(BaseCalibrator):
         **BaseCalibrator._parameter_constraints,
         "candidates": [list, tuple, None],
         "cv": [Interval(Integral, 2, None, closed="left")],
-        "time_budget": [Interval(Real, 0, None, closed="neither"), None],
         "schedule": [StrOptions({"short", "thesis"})],
+        "stack": ["boolean"],
+        "baselines": ["boolean"],
+        "network_samples": [Interval(Integral, 10, None, closed="left"), None],
     }
 
-    def __init__(self, *, candidates=None, cv=5, time_budget=150.0, schedule="short", alpha=None,
-                 zero_reading=None, random_state=None):
+    def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
+                 network_samples=5000, alpha=None, zero_reading=None, random_state=None):
         self.candidates = candidates
         self.cv = cv
-        self.time_budget = time_budget
         self.schedule = schedule
+        self.stack = stack
+        self.baselines = baselines
+        self.network_samples = network_samples
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
@@ -265,37 +471,61 @@ class AutoCalibrator(BaseCalibrator):
         Parameters
         ----------
         groups : array-like of shape (n,) or None
-            Group of each row (pose, load configuration); folds keep groups whole.
+            Group of each row (pose, load configuration); folds keep groups
+            whole. In a ``Pipeline`` or ``GridSearchCV`` request it with
+            ``set_fit_request(groups=True)`` (scikit-learn metadata routing).
 
         Returns
         -------
         self
         """
+        from ._baselines import stock_baselines
+
         self._check_parameters()
         candidates = self._candidates()
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
+        if groups is None and len(X) < self.cv:
+            raise CalibrationInputError(
+                f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
+                f"(at least 2 and at most {len(X)}).")
         self.alpha_ = resolve_alpha(self.alpha, y)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
-        seed = 0 if self.random_state is None else self.random_state
+        seed = 0 if self.random_state is None else int(self.random_state)
+        # models that choose their own structure (the GP) do it once on all rows; the folds refit the rest
+        prefitted = {name: _fit(with_alpha_and_tare(est, self.alpha_, given), X, y, groups)
+                     for name, est in candidates if hasattr(est, "structure_params")
+                     and len(X) >= minimum_training_rows(est, X.shape[1])}
         results, errors, _ = score_candidates(
             candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
-            time_budget=self.time_budget, random_state=seed,
+            random_state=seed, network_samples=self.network_samples, stack=self.stack, prefitted=prefitted,
+            baselines=stock_baselines(X.shape[1], random_state=seed) if self.baselines else None,
         )
-        if np.isnan(errors).any(axis=1).all():
+        if not any(results["eligible"]):
             why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
-            raise CalibrationInputError(f"no candidate could be fitted on these data ({why[:400]}).")
-        chosen = simplest_within_one_se(errors, groups)
+            raise CalibrationInputError(f"no candidate could be fitted and judged on these data ({why[:400]}); "
+                                        "record more rows or lower cv.")
+        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
         results["chosen"] = results["name"][chosen]
         results["folds"] = "group" if groups is not None else "kfold"
         self.cv_results_ = results
         self.best_name_ = results["name"][chosen]
-        best = with_alpha_and_tare(candidates[chosen][1], self.alpha_, given)
-        self.best_estimator_ = _fit(best, X, y, groups)
+        templates = dict(candidates)
+        if results["kind"][chosen] == "stack":
+            best = StackedCalibrator(estimators=[templates[n] for n in results["stack_members"]],
+                                     weights=results["stack_weights"], alpha=self.alpha_, zero_reading=given)
+            self.best_estimator_ = best.fit(X, y)
+        elif self.best_name_ in prefitted:
+            self.best_estimator_ = prefitted[self.best_name_]
+        else:
+            best = with_alpha_and_tare(templates[self.best_name_], self.alpha_, given)
+            rows = _grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) if _is_network(best) \
+                else np.arange(len(X))
+            self.best_estimator_ = _fit(best, X[rows], y[rows], None if groups is None else groups[rows])
         best_zero = getattr(self.best_estimator_, "zero_reading_", None)
         self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
         self.reading_noise_ = reading_noise(X, y)
-        self.reading_range_ = np.vstack([X.min(axis=0), X.max(axis=0)])
+        self.calibrated_range_ = calibrated_range(X)
         self.__dict__.pop("tare_reading_", None)
         return self
 
@@ -304,15 +534,47 @@ class AutoCalibrator(BaseCalibrator):
 
     def _emit_onnx(self, g, x: str) -> str:
         return g.calibration(self.best_estimator_, x)
+    def predict(self, X: ArrayLike, return_std: bool = False):
+        """Wrench [N, N·m] for raw readings ``X``; with ``return_std`` also the chosen model's standard deviation.
+
+        ``return_std=True`` needs a chosen model that gives one (the Gaussian
+        process); otherwise a :class:`~ftcal.CalibrationInputError` says which was chosen.
+        """
+        if not return_std:
+            return super().predict(X)
+        check_is_fitted(self)
+        import inspect
+
+        if "return_std" not in inspect.signature(self.best_estimator_.predict).parameters:
+            raise CalibrationInputError(
+                f"return_std=True: the chosen model {self.best_name_!r} gives no standard deviation; only the "
+                "Gaussian process does (use AutoCalibrator(candidates=[('gaussian_process', "
+                "GaussianProcessCalibrator())]) or a GaussianProcessCalibrator for uncertainties).")
+        from ..core._validation import validate_readings
+
+        return self.best_estimator_.predict(self._retared(validate_readings(self, X)), return_std=True)
 
     def summary(self) -> str:
         """The comparison as a markdown table (held-out RMSE ± standard error, fit time, status)."""
-        r = self.cv_results_
-        lines = ["| candidate | held-out RMSE [N] | ± SE | fit [s/fold] | status |", "|---|---|---|---|---|"]
-        for i, name in enumerate(r["name"]):
-            rmse = "" if r["rmse"][i] is None else f"{r['rmse'][i]:.4g}"
-            se = "" if r["rmse_se"][i] is None else f"{r['rmse_se'][i]:.2g}"
-            sec = "" if r["fit_seconds"][i] is None else f"{r['fit_seconds'][i]:.2f}"
-            mark = " **(chosen)**" if name == r["chosen"] else ""
-            lines.append(f"| {name}{mark} | {rmse} | {se} | {sec} | {r['status'][i]} |")
-        return "\n".join(lines)
+        return comparison_table(self.cv_results_)
+
+
+def comparison_table(results: dict) -> str:
+    """``cv_results_`` (or ``ftcal benchmark dataset``'s results) as a markdown table, baselines marked.
+
+    The RMSE is eq. 18 over all 6 n torque-scaled values [N]; the ratio column
+    is each row's RMSE over the best stock baseline's.
+    """
+    base = [r for r, k in zip(results["rmse"], results["kind"]) if k == "baseline" and r is not None]
+    best_base = min(base) if base else None
+    lines = ["| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock baseline | fit [s, all folds] | "
+             "status |", "|---|---|---|---|---|---|---|"]
+    for i, name in enumerate(results["name"]):
+        rmse = results["rmse"][i]
+        cells = ["" if rmse is None else f"{rmse:.4g}",
+                 "" if results["rmse_se"][i] is None else f"{results['rmse_se'][i]:.2g}",
+                 "" if rmse is None or not best_base else f"{rmse / best_base:.3f}",
+                 "" if results["fit_seconds"][i] is None else f"{results['fit_seconds'][i]:.1f}"]
+        mark = " **(chosen)**" if name == results.get("chosen") else ""
+        lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {results['status'][i]} |")
+    return "\n".join(lines)

@@ -150,7 +150,7 @@ class EnsembleCalibrator(BaseCalibrator):
         self.alpha_ = self.estimators_[0].alpha_
         self.zero_reading_ = self.estimators_[0].zero_reading_
         self.reading_noise_ = self.estimators_[0].reading_noise_
-        self.reading_range_ = self.estimators_[0].reading_range_
+        self.calibrated_range_ = self.estimators_[0].calibrated_range_
         self.__dict__.pop("tare_reading_", None)
         return self
 

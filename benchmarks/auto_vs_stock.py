@@ -1,0 +1,171 @@
+"""Issue 19 figures: ``auto`` and ftcal's GP against the stock scikit-learn baselines, on data where those are strong.
+
+Usage::
+
+    nice -n 19 python benchmarks/auto_vs_stock.py [--out benchmarks/results/auto_vs_stock] [--case NAME ...]
+
+Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file exists, so a run resumes):
+
+``soft``
+    :func:`ftcal.make_soft_sensor_dataset` (418 rows, 8 channels), outer 5-fold
+    shuffled CV: ``auto`` (default candidates, networks included) fitted on each outer training fold, the
+    stock baselines and the LTM on the same folds; held-out RMSE (eq. 18), the GP's 2-std coverage, fit time.
+``robot_held``
+    :func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses), one outer
+    pose-grouped hold-out (a fifth of the poses): ``auto`` with the groups, baselines, LTM.
+``thesis``, ``asymmetric``
+    :func:`ftcal.make_artificial_dataset` (5000 training rows, 1250 test rows), noise floor from the dataset.
+``dead_weight_15``, ``dead_weight_30``, ``dead_weight_50``
+    :func:`ftcal.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
+    with loads up to 2x the calibrated range (target: auto <= 1.1x the LTM).
+
+Every RMSE is eq. 18 (all 6 n torque-scaled values, [N]). ``summary.md`` is rewritten from the parts found.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+from sklearn.model_selection import GroupKFold, KFold
+
+import ftcal
+from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
+from ftcal.models import stock_baselines
+
+CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "thesis", "asymmetric", "robot_held")
+
+
+def rmse(y, pred, alpha):
+    """Eq. 18: over all 6 n torque-scaled values [N]."""
+    return ftcal.wrench_rmse(y, pred, alpha)
+
+
+def outer(raw, wrench, groups, splits, alpha, seed=0):
+    """Fit auto, the LTM, ftcal's GP and the stock baselines on each outer split; held-out predictions."""
+    names = ["auto", "linear", "gaussian_process", *stock_baselines(raw.shape[1])]
+    pred = {n: np.full(wrench.shape, np.nan) for n in names}
+    seconds = {n: 0.0 for n in names}
+    inside = []
+    covered, counted = 0, 0
+    for train, test in splits:
+        g = None if groups is None else groups[train]
+        models = {"auto": ftcal.AutoCalibrator(alpha=alpha, random_state=seed),
+                  "linear": ftcal.LinearCalibrator(alpha=alpha),
+                  "gaussian_process": ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed),
+                  **stock_baselines(raw.shape[1], random_state=seed)}
+        for name, model in models.items():
+            t0 = time.perf_counter()
+            if name == "auto":
+                model.fit(raw[train], wrench[train], groups=g)
+                inside.append({"chosen": model.best_name_, "table": model.summary()})
+            else:
+                model.fit(raw[train], wrench[train])
+            seconds[name] += time.perf_counter() - t0
+            if name == "gaussian_process":
+                pred[name][test], std = model.predict(raw[test], return_std=True)
+                covered += int((np.abs(pred[name][test] - wrench[test]) <= 2 * std).sum())
+                counted += std.size
+            else:
+                pred[name][test] = model.predict(raw[test])
+            print(f"  {name}: {seconds[name]:.1f} s so far", flush=True)
+    done = ~np.isnan(pred["auto"]).any(axis=1)
+    scores = {n: rmse(wrench[done], p[done], alpha) for n, p in pred.items()}
+    best_stock = min(v for n, v in scores.items() if n.startswith("sk_"))
+    return {"rmse": scores, "fit_seconds_total": seconds, "n_outer_splits": len(inside),
+            "auto_over_best_stock": scores["auto"] / best_stock, "auto_over_linear": scores["auto"] / scores["linear"],
+            "gp_over_sk_gp": scores["gaussian_process"] / scores["sk_gp"],
+            "gp_coverage_2std": covered / max(counted, 1), "auto_choices": [i["chosen"] for i in inside],
+            "auto_table_first_split": inside[0]["table"], "n_train": int(len(splits[0][0]))}
+
+
+def run_case(case: str) -> dict:
+    if case.startswith("dead_weight_"):
+        n = int(case.rsplit("_", 1)[1])
+        out = []
+        for seed in range(3):
+            cal, val = make_dead_weight_dataset(n, random_state=seed)
+            alpha = alpha_from_wrenches(cal.wrench)
+            t0 = time.perf_counter()
+            auto = ftcal.AutoCalibrator(alpha=alpha, random_state=seed).fit(cal.raw, cal.wrench)
+            fit_s = time.perf_counter() - t0
+            ltm = ftcal.LinearCalibrator(alpha=alpha).fit(cal.raw, cal.wrench)
+            r_auto, r_ltm = rmse(val.wrench, auto.predict(val.raw), alpha), rmse(val.wrench, ltm.predict(val.raw), alpha)
+            out.append({"seed": seed, "chosen": auto.best_name_, "auto_rmse_2x": r_auto, "linear_rmse_2x": r_ltm,
+                        "auto_over_linear": r_auto / r_ltm, "fit_seconds": fit_s,
+                        "out_of_range_flagged": float(np.mean(auto.out_of_range(val.raw)))
+                        if hasattr(auto, "out_of_range") else None})
+        return {"seeds": out, "worst_auto_over_linear": max(o["auto_over_linear"] for o in out)}
+    if case == "soft":
+        d = make_soft_sensor_dataset()
+        splits = list(KFold(5, shuffle=True, random_state=0).split(d.raw))
+        return {**outer(d.raw, d.wrench, None, splits, d.meta["alpha"]), "noise_floor": d.meta["noise_floor_rmse"],
+                "n_samples": d.n_samples}
+    if case == "robot_held":
+        d = make_robot_held_dataset()
+        splits = list(GroupKFold(5).split(d.raw, groups=d.group))[:1]
+        return {**outer(d.raw, d.wrench, d.group, splits, d.meta["alpha"]), "noise_floor": d.meta["noise_floor_rmse"],
+                "n_samples": d.n_samples, "n_poses": int(np.unique(d.group).size)}
+    train, test, info = ftcal.make_artificial_dataset(case, random_state=0)
+    raw = np.vstack([train.raw, test.raw])
+    wrench = np.vstack([train.wrench, test.wrench])
+    n = train.n_samples
+    alpha = alpha_from_wrenches(train.wrench)
+    res = outer(raw, wrench, None, [(np.arange(n), np.arange(n, n + test.n_samples))], alpha)
+    return {**res, "info": {k: v for k, v in info.items() if isinstance(v, (int, float, str))}}
+
+
+def summary(out: Path) -> str:
+    lines = ["| case | rows | auto | LTM | ftcal GP | sk_gp | best stock | auto / best stock | ftcal GP / sk_gp | "
+             "GP 2-std coverage | auto choices | auto fit [s] |", "|" + "---|" * 12]
+    for case in CASES:
+        path = out / f"{case}.json"
+        if not path.exists() or case.startswith("dead_weight"):
+            continue
+        r = json.loads(path.read_text())
+        s = r["rmse"]
+        best = min(v for n, v in s.items() if n.startswith("sk_"))
+        lines.append(f"| {case} | {r['n_train']} | {s['auto']:.4g} | {s['linear']:.4g} | {s['gaussian_process']:.4g} | "
+                     f"{s['sk_gp']:.4g} | {best:.4g} | {r['auto_over_best_stock']:.3f} | {r['gp_over_sk_gp']:.3f} | "
+                     f"{r['gp_coverage_2std']:.3f} | {', '.join(sorted(set(r['auto_choices'])))} | "
+                     f"{r['fit_seconds_total']['auto'] / r['n_outer_splits']:.0f} |")
+    lines += ["", "| dead-weight rows | seed | auto chose | auto RMSE at 2x range | LTM | auto / LTM | fit [s] |",
+              "|" + "---|" * 7]
+    for case in CASES:
+        path = out / f"{case}.json"
+        if path.exists() and case.startswith("dead_weight"):
+            for o in json.loads(path.read_text())["seeds"]:
+                lines.append(f"| {case.rsplit('_', 1)[1]} | {o['seed']} | {o['chosen']} | {o['auto_rmse_2x']:.4g} | "
+                             f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | {o['fit_seconds']:.1f} |")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", default="benchmarks/results/auto_vs_stock")
+    parser.add_argument("--case", action="append", choices=CASES)
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for case in args.case or CASES:
+        path = out / f"{case}.json"
+        if path.exists():
+            continue
+        print(f"{case} ...", flush=True)
+        t0 = time.perf_counter()
+        result = run_case(case)
+        result.update(case=case, wall_seconds=time.perf_counter() - t0, load_average=os.getloadavg(),
+                      machine={"platform": platform.platform(), "cpus": os.cpu_count(),
+                               "python": platform.python_version()})
+        path.write_text(json.dumps(result, indent=1, default=float))
+        (out / "summary.md").write_text(summary(out) + "\n")
+        print(summary(out), flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,233 @@
+"""Issue 19: auto against the stock baselines, one RMSE, one 1-SE rule, stacking, the small-data guard, the GP."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.model_selection import cross_val_predict
+
+import ftcal
+from ftcal import (AutoCalibrator, CalibrationInputError, GaussianProcessCalibrator, LinearCalibrator,
+                   PolynomialCalibrator)
+from ftcal.core._memory import MemoryLimitError
+from ftcal.core._model_selection import calibration_folds, simplest_within_one_se
+from ftcal.models import STOCK_BASELINE_NAMES
+from ftcal.models._auto import StackedCalibrator, minimum_training_rows
+from ftcal.simulation._field_sensors import make_dead_weight_dataset, make_robot_held_dataset, \
+    make_soft_sensor_dataset
+
+
+def affine(n=120, seed=0, n_groups=6):
+    rng = np.random.default_rng(seed)
+    w = rng.uniform(-1, 1, size=(n, 6))
+    raw = w @ rng.normal(size=(6, 6)) + 0.3 + 0.01 * rng.normal(size=(n, 6))
+    return raw, w, np.repeat(np.arange(n_groups), n // n_groups)
+
+
+def cubic(n=240, seed=0):
+    rng = np.random.default_rng(seed)
+    w = rng.uniform(-1, 1, size=(n, 6))
+    raw = (w + 0.3 * w**3) @ rng.normal(size=(6, 6)) + 0.005 * rng.normal(size=(n, 6))
+    return raw, w
+
+
+FAST = [("linear", LinearCalibrator()), ("polynomial2", PolynomialCalibrator(degree=2)),
+        ("polynomial3", PolynomialCalibrator(degree=3))]
+
+
+# ------------------------------------------------------------------ one RMSE (eq. 18)
+def test_cv_rmse_is_eq_18_over_all_torque_scaled_values():
+    raw, w, groups = affine()
+    auto = AutoCalibrator(candidates=FAST[:1], alpha=3.0, baselines=False, stack=False).fit(raw, w, groups=groups)
+    folds = calibration_folds(len(raw), groups, 5, 0)
+    pred = cross_val_predict(LinearCalibrator(alpha=3.0), raw, w, cv=folds)
+    assert auto.cv_results_["rmse"][0] == pytest.approx(ftcal.wrench_rmse(w, pred, alpha=3.0), rel=1e-9)
+
+
+# ------------------------------------------------------------------ the one 1-SE rule
+def test_one_se_rule_goes_to_the_simplest_by_complexity_not_by_position():
+    tied = np.array([[1.0, 1.2, 0.8, 1.0], [1.0, 1.2, 0.8, 1.0], [1.0, 1.2, 0.8, 1.0]])
+    assert simplest_within_one_se(tied) == 0
+    assert simplest_within_one_se(tied, complexity=[2, 0, 1]) == 1
+    assert simplest_within_one_se(tied, complexity=[1, 1, 0]) == 2
+    # a clearly better flexible model wins; a not-eligible one never does
+    clear = np.array([[2.0, 2.1, 1.9, 2.0], [1.0, 1.1, 0.9, 1.0]])
+    assert simplest_within_one_se(clear) == 1
+    assert simplest_within_one_se(clear, eligible=[True, False]) == 0
+
+
+# ------------------------------------------------------------------ baselines, stacking, determinism
+def test_cv_results_report_the_stock_baselines_on_the_same_folds_never_chosen():
+    raw, w = cubic(160)
+    auto = AutoCalibrator(candidates=FAST[:2], alpha=1.0, stack=False).fit(raw, w)
+    r = auto.cv_results_
+    base = [n for n, k in zip(r["name"], r["kind"]) if k == "baseline"]
+    assert base == list(STOCK_BASELINE_NAMES)
+    assert all(r["rmse"][r["name"].index(n)] is not None for n in base)
+    assert auto.best_name_ in ("linear", "polynomial2") and not any(
+        e for e, k in zip(r["eligible"], r["kind"]) if k == "baseline")
+    # sk_linear is the LTM: same folds, same eq. 18 figure
+    assert r["rmse"][r["name"].index("sk_linear")] == pytest.approx(r["rmse"][0], rel=1e-6)
+    assert "sk_gp" in auto.summary() and "/ best stock baseline" in auto.summary()
+
+
+def test_stack_is_scored_held_out_with_non_negative_weights_and_saved(tmp_path):
+    raw, w = cubic(240)
+    auto = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w)
+    r = auto.cv_results_
+    assert r["kind"][-1] == "stack" and r["rmse"][-1] is not None
+    assert len(r["stack_members"]) == 3 and min(r["stack_weights"]) >= 0
+    stack = StackedCalibrator(estimators=[e for _, e in FAST], weights=r["stack_weights"], alpha=1.0).fit(raw, w)
+    back = ftcal.load_model(ftcal.save_model(stack, tmp_path / "stack.model.npz"))
+    np.testing.assert_allclose(back.predict(raw[:5]), stack.predict(raw[:5]))
+    with pytest.raises(CalibrationInputError, match="one non-negative weight each"):
+        StackedCalibrator(estimators=[LinearCalibrator()], weights=[-1.0]).fit(raw, w)
+
+
+def test_auto_is_deterministic_and_has_no_time_budget():
+    raw, w, groups = affine()
+    params = AutoCalibrator().get_params()
+    assert "time_budget" not in params
+    a = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
+    b = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
+    assert a.cv_results_["rmse"] == b.cv_results_["rmse"] and a.best_name_ == b.best_name_
+
+
+def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsample():
+    raw, w, groups = affine(n=240, n_groups=8)
+    net = ftcal.make_calibrator("directional", max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
+    kw = dict(candidates=[FAST[0], ("directional", net)], alpha=1.0, baselines=False, stack=False,
+              network_samples=100)
+    a = AutoCalibrator(**kw).fit(raw, w, groups=groups)
+    b = AutoCalibrator(**kw).fit(raw, w, groups=groups)
+    assert a.cv_results_["status"][1].startswith("scored")
+    assert a.cv_results_["rmse"] == b.cv_results_["rmse"]  # the same seed and data: the same scores
+
+
+# ------------------------------------------------------------------ small data, extrapolation, bad input
+@pytest.mark.parametrize("n_rows", [15, 30, 50])
+def test_few_dead_weight_rows_auto_is_never_worse_than_1_1x_the_ltm_at_2x_the_range(n_rows):
+    cal, val = make_dead_weight_dataset(n_rows, random_state=0)
+    alpha = ftcal.alpha_from_wrenches(cal.wrench)
+    auto = AutoCalibrator(alpha=alpha, baselines=False,
+                          candidates=[c for c in ftcal.models._auto.default_candidates()
+                                      if c[0] not in ("directional", "comparative")]).fit(cal.raw, cal.wrench)
+    r = auto.cv_results_
+    chosen = r["name"].index(auto.best_name_)
+    assert r["eligible"][chosen]
+    for k, name in enumerate(r["name"]):
+        if r["kind"][k] == "candidate" and name != "linear":
+            est = dict(ftcal.models._auto.default_candidates())[name]
+            assert r["eligible"][k] == (r["min_training_rows"] >= minimum_training_rows(est, cal.n_channels))
+    ltm = LinearCalibrator(alpha=alpha).fit(cal.raw, cal.wrench)
+    rmse_auto = ftcal.wrench_rmse(val.wrench, auto.predict(val.raw), alpha)
+    assert rmse_auto <= 1.1 * ftcal.wrench_rmse(val.wrench, ltm.predict(val.raw), alpha)
+    # readings beyond the calibrated range are flagged, those inside are not
+    assert not auto.out_of_range(cal.raw).any()
+    assert auto.out_of_range(val.raw).mean() > 0.5
+
+
+@pytest.mark.parametrize(
+    "kwargs, n, groups, message",
+    [
+        ({}, 120, np.zeros(7), r"groups must have shape \(120,\)"),
+        ({}, 120, np.zeros(120), "one group only"),
+        ({"cv": 10}, 8, None, "X has 8 rows, fewer than the cv=10 folds"),
+        ({"cv": 5}, 4, None, r"X has 4 sample\(s\), but AutoCalibrator needs at least 7"),
+    ],
+)
+def test_auto_bad_input_is_a_clear_error(kwargs, n, groups, message):
+    raw, w, _ = affine()
+    with pytest.raises(CalibrationInputError, match=message):
+        AutoCalibrator(candidates=FAST[:1], baselines=False, **kwargs).fit(raw[:n], w[:n], groups=groups)
+
+
+# ------------------------------------------------------------------ the GP
+def test_gp_return_std_through_auto_and_a_saved_auto(tmp_path):
+    raw, w = cubic(120)
+    auto = AutoCalibrator(candidates=[("gaussian_process", GaussianProcessCalibrator(random_state=0))],
+                          alpha=1.0, baselines=False, stack=False).fit(raw, w)
+    mean, std = auto.predict(raw[:4], return_std=True)
+    back = ftcal.load_model(ftcal.save_model(auto, tmp_path / "auto.model.npz"))
+    mean2, std2 = back.predict(raw[:4], return_std=True)
+    np.testing.assert_allclose(mean, mean2)
+    np.testing.assert_allclose(std, std2)
+    assert (std > 0).all()
+    linear = AutoCalibrator(candidates=FAST[:1], alpha=1.0, baselines=False).fit(raw, w)
+    with pytest.raises(CalibrationInputError, match="gives no standard deviation"):
+        linear.predict(raw[:2], return_std=True)
+
+
+def test_gp_predict_is_chunked_and_equal_to_one_block(monkeypatch):
+    import ftcal.calibrators._gaussian_process as gpm
+
+    raw, w = cubic(120)
+    gp = GaussianProcessCalibrator(mean="linear", kernel="rbf", per_output=False, alpha=1.0, random_state=0)
+    gp.fit(raw, w)
+    whole = gp.predict(raw, return_std=True)
+    monkeypatch.setattr(gpm, "_CHUNK_BYTES", 8 * gp.train_inputs_.shape[0] * 7)  # 7 rows per chunk
+    for a, b in zip(whole, gp.predict(raw, return_std=True)):
+        np.testing.assert_allclose(a, b, rtol=1e-10, atol=1e-12)
+
+
+def test_gp_with_1000_channels_is_refused_before_allocating():
+    rng = np.random.default_rng(0)
+    raw = rng.normal(size=(1200, 1000))
+    w = rng.normal(size=(1200, 6))
+    with pytest.raises(MemoryLimitError, match="lower max_samples"):
+        GaussianProcessCalibrator(alpha=1.0).fit(raw, w)
+
+
+def test_gp_chooses_a_linear_trend_where_the_data_are_affine_and_extrapolates_like_the_ltm():
+    raw, w, _ = affine(n=150)
+    gp = GaussianProcessCalibrator(alpha=1.0, random_state=0).fit(raw, w)
+    assert gp.mean_ == "linear" or gp.kernel_.endswith("+linear")
+    far = 2.0 * raw[:20]  # loads twice the calibrated range
+    ltm = LinearCalibrator(alpha=1.0).fit(raw, w)
+    assert np.abs(gp.predict(far) - ltm.predict(far)).max() < 0.1 * np.abs(ltm.predict(far)).max()
+
+
+# ------------------------------------------------------------------ simulated sensors
+def test_simulated_presets_have_the_documented_shape_and_a_noise_floor():
+    soft = make_soft_sensor_dataset(random_state=3)
+    assert soft.raw.shape == (418, 8) and soft.meta["noise_floor_rmse"] > 0
+    robot = make_robot_held_dataset(20_000, n_poses=45, random_state=1)
+    assert robot.raw.shape == (20_000, 8) and np.unique(robot.group).size == 45
+    # the soft sensor is strongly nonlinear: the LTM is far above the floor even on its own training rows
+    ltm = LinearCalibrator(alpha=soft.meta["alpha"]).fit(soft.raw, soft.wrench)
+    assert ftcal.wrench_rmse(soft.wrench, ltm.predict(soft.raw), soft.meta["alpha"]) > 4 * soft.meta["noise_floor_rmse"]
+
+
+# ------------------------------------------------------------------ CLI: predict --std
+def test_cli_predict_std_writes_std_columns_and_refuses_models_without_one(tmp_path, capsys):
+    from ftcal.cli import main
+
+    raw, w = cubic(100)
+    data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
+    np.savetxt(tmp_path / "r.csv", raw[:5], delimiter=",")
+    for model in ("gaussian_process", "linear"):
+        assert main(["fit", str(data), "--model", model, "--out", str(tmp_path / "m"), "-q"]) == 0
+    out = tmp_path / "w.csv"
+    assert main(["predict", str(tmp_path / "m" / "gaussian_process.model.npz"), str(tmp_path / "r.csv"), "--std",
+                 "--output", str(out)]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0].split(",")[6:] == ["std_Fx", "std_Fy", "std_Fz", "std_Tx", "std_Ty", "std_Tz"]
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert table.shape == (5, 12) and (table[:, 6:] > 0).all()
+    capsys.readouterr()
+    assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "r.csv"), "--std"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ftcal: error: --std:") and "no standard deviation" in err[0]
+
+
+def test_cross_validate_routes_groups_to_auto_through_metadata_routing():
+    import sklearn
+    from sklearn.model_selection import GroupKFold, cross_validate
+
+    raw, w, groups = affine(n=120, n_groups=6)
+    with sklearn.config_context(enable_metadata_routing=True):
+        auto = AutoCalibrator(candidates=FAST[:2], alpha=1.0, baselines=False, stack=False).set_fit_request(
+            groups=True)
+        out = cross_validate(auto, raw, w, cv=GroupKFold(2), params={"groups": groups},
+                             scoring=ftcal.neg_scaled_rmse, return_estimator=True)
+    assert [e.cv_results_["folds"] for e in out["estimator"]] == ["group", "group"]
