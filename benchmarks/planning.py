@@ -68,7 +68,7 @@ def make_sensor(name: str, seed: int) -> "ftcal.VirtualSensor":
 
 def auto_calibrator(seed: int):
     candidates = [(n, c) for n, c in default_candidates() if n not in NETWORKS]
-    return ftcal.AutoCalibrator(candidates=candidates, time_budget=None, random_state=seed)
+    return ftcal.AutoCalibrator(candidates=candidates, random_state=seed)
 
 
 def run_plan(robot, plan, sensor, seed: int):

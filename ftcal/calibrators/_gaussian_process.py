@@ -352,16 +352,38 @@ class GaussianProcessCalibrator(BaseCalibrator):
         return unscale_torques(self._predict_scaled(X, False)[0], self.alpha_)
 
     def _emit_onnx(self, g, x: str) -> str:
+        """The predictive mean as ONNX: the linear mean plus each regressor's ``k(u, X_train) @ alpha`` (the white
+        noise term is zero between distinct points), de-normalised as ``normalize_y`` does."""
         xc = g.op("Sub", x, g.const(self.zero_reading_))
-        scaled = g.op("Div", xc, g.const(self.input_scale_ * self.length_scale_))
-        train = self.train_inputs_ / self.length_scale_
-        cross = g.op("MatMul", scaled, g.const(train.T))
-        squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1),
-                       g.const((train * train).sum(axis=1)))
-        distances = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), cross)), g.const(0.0))
-        kernel = g.op("Mul", g.const(self.constant_), g.op("Exp", g.op("Mul", g.const(-0.5), distances)))
-        residual = g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_)),
-                                    g.const(self.residual_scale_)), g.const(self.residual_mean_))
+        u = g.op("Div", g.op("Sub", xc, g.const(self.input_mean_)), g.const(self.input_scale_))
+        n_channels, k = self.train_inputs_.shape[1], self.theta_.shape[0]
+        columns = []
+        for i in range(k):
+            body = make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]).k1  # less the noise
+            stationary, linear = (body.k1, body.k2) if self.kernel_.endswith("+linear") else (body, None)
+            ell = np.asarray(stationary.k2.length_scale, dtype=float) * np.ones(n_channels)
+            train = self.train_inputs_ / ell
+            scaled = g.op("Div", u, g.const(ell))
+            squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1),
+                           g.const((train * train).sum(axis=1)))
+            d2 = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), g.op("MatMul", scaled, g.const(train.T)))),
+                      g.const(0.0))
+            if self.kernel_.startswith("rbf"):
+                shape = g.op("Exp", g.op("Mul", g.const(-0.5), d2))
+            else:  # Matern 5/2: (1 + sqrt(5) d + 5/3 d^2) exp(-sqrt(5) d)
+                d = g.op("Sqrt", d2)
+                poly = g.op("Add", g.op("Add", g.const(1.0), g.op("Mul", g.const(np.sqrt(5.0)), d)),
+                            g.op("Mul", g.const(5.0 / 3.0), d2))
+                shape = g.op("Mul", poly, g.op("Exp", g.op("Mul", g.const(-np.sqrt(5.0)), d)))
+            kernel = g.op("Mul", g.const(float(stationary.k1.constant_value)), shape)
+            if linear is not None:
+                dot = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)),
+                           g.const(float(linear.k2.sigma_0) ** 2))
+                kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear.k1.constant_value)), dot))
+            cols = slice(None) if k == 1 else slice(i, i + 1)
+            columns.append(g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_[:, cols])),
+                                             g.const(self.target_scale_[cols])), g.const(self.target_mean_[cols])))
+        residual = columns[0] if k == 1 else g.op("Concat", *columns, axis=1)
         mean = g.op("Add", g.affine(xc, self.linear_matrix_.T, self.linear_offset_), residual)
         return g.unscale_torques(mean, self.alpha_, int(getattr(self, "n_outputs_", 6)))
 

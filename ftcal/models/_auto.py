@@ -428,6 +428,9 @@ class AutoCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("best_name_", "cv_results_", "best_estimator_")
+    #: Parameters of earlier versions that model files may still carry (ignored when loading): the wall-clock
+    #: budget, removed because a choice must not depend on the machine's speed.
+    _removed_params = ("time_budget",)
     #: The folds hold out whole groups: requested by default (metadata routing, like a group splitter).
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {

@@ -126,6 +126,15 @@ def _stored_params(estimator) -> dict:
     return {k: None if k in transient else _encode(v) for k, v in estimator.get_params(deep=False).items()}
 
 
+def _known_params(cls: type, params: dict) -> dict:
+    """``params`` less those the class has removed since the file was written (its ``_removed_params``).
+
+    A parameter that is neither accepted nor listed as removed is kept, so that ``cls(**params)`` reports it.
+    """
+    removed = getattr(cls, "_removed_params", ())
+    return {k: v for k, v in params.items() if k not in removed}
+
+
 def _decode(value):
     if isinstance(value, dict) and set(value) == {"tuple"}:
         return tuple(_decode(v) for v in value["tuple"])
@@ -136,7 +145,7 @@ def _decode(value):
         cls = _known_types().get(name)
         if cls is None:
             raise ModelFileError(f"a parameter names an unknown model type {name!r}.")
-        return cls(**{k: _decode(v) for k, v in value["estimator"]["params"].items()})
+        return cls(**_known_params(cls, {k: _decode(v) for k, v in value["estimator"]["params"].items()}))
     if isinstance(value, list):
         return [_decode(v) for v in value]
     return value
@@ -461,7 +470,7 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
                 "it runs on the CPU instead.", UserWarning, stacklevel=4,
             )
             params["device"] = "cpu"
-    estimator = cls(**params)
+    estimator = cls(**_known_params(cls, params))
     declared = fitted_state_names(cls)
     fitted = meta.get("fitted", {})
     for key in declared:
