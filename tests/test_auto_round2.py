@@ -231,3 +231,16 @@ def test_cross_validate_routes_groups_to_auto_through_metadata_routing():
         out = cross_validate(auto, raw, w, cv=GroupKFold(2), params={"groups": groups},
                              scoring=ftcal.neg_scaled_rmse, return_estimator=True)
     assert [e.cv_results_["folds"] for e in out["estimator"]] == ["group", "group"]
+
+
+@pytest.mark.parametrize("mean, kernel, per_output", [("none", "matern52", True), ("linear", "rbf+linear", False)])
+def test_gp_onnx_export_equals_predict_for_each_kernel_family(mean, kernel, per_output, tmp_path):
+    import onnxruntime
+
+    raw, w = cubic(80)
+    gp = GaussianProcessCalibrator(mean=mean, kernel=kernel, per_output=per_output, alpha=1.0, random_state=0)
+    gp.fit(raw, w)
+    path = ftcal.export_onnx(gp, tmp_path / "gp.onnx")
+    session = onnxruntime.InferenceSession(str(path))
+    out = session.run(None, {session.get_inputs()[0].name: raw[:10]})[0]
+    np.testing.assert_allclose(out, gp.predict(raw[:10]), rtol=1e-9, atol=1e-9)
