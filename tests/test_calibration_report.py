@@ -126,7 +126,7 @@ def test_report_for_a_dataset_of_another_sensor_is_one_line(fitted, tmp_path, ca
                  "--out", str(tmp_path / "r"), "--no-baselines"])
     err = capsys.readouterr().err.strip()
     assert code == 2 and len(err.splitlines()) == 1
-    assert err.startswith("ftcal: error:") and "6 inputs" in err and "8 raw channels" in err
+    assert err.startswith("ftcal: error:") and "6 raw channels" in err and "8 raw channels" in err
     assert not (tmp_path / "r").exists() or not any((tmp_path / "r").iterdir())
 
 
@@ -140,3 +140,26 @@ def test_temperature_fit_honours_alpha_and_reports_coefficients(tmp_path):
     assert len(facts["temperature_coefficients"]["gain_per_deg"]) == 6
     assert facts["data"]["temperature_range"][0] >= 15 and facts["data"]["temperature_range"][1] <= 35
     assert "Temperature coefficients" in (tmp_path / "m" / "linear.report.html").read_text()
+
+
+@pytest.mark.parametrize("candidates, gives_std", [("linear,polynomial", False), ("gaussian_process", True)])
+def test_report_of_auto_and_of_a_gp_states_the_std_coverage_only_where_a_std_exists(tmp_path, candidates, gives_std):
+    """An ``auto`` model that chose a model without a std is reported (its std coverage empty); a GP's is given."""
+    import ftcal
+
+    data = sensor_dataset()
+    data.save(tmp_path / "data.csv")
+    names = candidates.split(",")
+    kinds = {"linear": ftcal.LinearCalibrator(), "polynomial": ftcal.PolynomialCalibrator(degree=2),
+             "gaussian_process": ftcal.GaussianProcessCalibrator(max_samples=100, kernel="rbf", mean="linear",
+                                                                 per_output=False, random_state=0)}
+    model = ftcal.AutoCalibrator(candidates=[(n, kinds[n]) for n in names], cv=3, baselines=False, stack=False)
+    ftcal.save_model(model.fit(data.raw, data.wrench, groups=data.group), tmp_path / "auto.model.npz")
+    assert main(["report", str(tmp_path / "auto.model.npz"), str(tmp_path / "data.csv"), "--out",
+                 str(tmp_path / "rep"), "-q"]) == 0
+    accuracy = json.loads((tmp_path / "rep" / "auto.report.json").read_text())["accuracy"]
+    coverage = [axis["coverage_std"] for axis in accuracy]
+    if gives_std:
+        assert all(0.5 <= c <= 1.0 for c in coverage)
+    else:
+        assert coverage == [None] * 6

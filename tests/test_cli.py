@@ -184,7 +184,9 @@ def test_predict_stdin_to_stdout_is_a_clean_csv(affine_dir, capsys, monkeypatch)
     monkeypatch.setattr("sys.stdin", io.StringIO(text))
     assert main(["predict", str(affine_dir / "models" / "linear.model.npz")]) == 0
     captured = capsys.readouterr()
-    assert captured.err == ""
+    # at most the one warning that some readings lie beyond the training readings (random loads here)
+    assert all(line.startswith("ftcal: warning:") and "beyond the calibrated range" in line
+               for line in captured.err.splitlines())
     header, values = read_csv(captured.out)
     assert header == ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
     np.testing.assert_allclose(values, w, atol=1e-5)

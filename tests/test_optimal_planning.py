@@ -207,9 +207,7 @@ def test_next_poses_gp_uncertainty_agrees_with_predict_return_std(robot, candida
     """The covariance used for ranking is the GP's own: at a measured pose it matches predict(return_std=True)."""
     ds = half_sphere_dataset
     gp = GaussianProcessCalibrator(random_state=0).fit(ds.raw, ds.wrench)
-    from ftcal.experiment._next_poses import _covariance_gp
-
-    _, diag, noise = _covariance_gp(gp, ds.raw[:5])
+    _, diag, noise = gp.latent_covariance(ds.raw[:5])
     _, std = gp.predict(ds.raw[:5], return_std=True)
     scaled = np.hstack([std[:, :3], gp.alpha_ * std[:, 3:]])
     np.testing.assert_allclose(diag + noise, np.sum(scaled**2, axis=1), rtol=1e-6)

@@ -113,7 +113,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
     the posterior variance plus the noise term, i.e. the spread of the error
     against a reference measured like the training references. The coverage
     (share of held-out errors within two std on grouped folds) is measured by
-    ``benchmarks/gp_coverage.py`` and recorded in ``benchmarks/RESULTS.md``.
+    ``benchmarks/auto_vs_stock.py`` (``gp_coverage_2std``) and recorded in ``benchmarks/RESULTS.md``.
 
     **Large data sets.** An exact GP costs ``O(m³)`` time and ``O(m² N)``
     memory (the kernel gradient). The GP is fitted on a random subset of
@@ -302,6 +302,43 @@ class GaussianProcessCalibrator(BaseCalibrator):
         """
         check_is_fitted(self)
         return {"mean": self.mean_, "kernel": self.kernel_, "per_output": bool(self.per_output_)}
+
+    def latent_covariance(self, X: ArrayLike):
+        """Posterior covariance of the GP part at raw readings ``X`` (n, N), summed over the outputs.
+
+        In the torque-scaled units of the fit [N²]: per regressor, ``s² (K_xx - K_xt K_tt⁻¹ K_tx)`` with its
+        kernel less the white noise and ``s`` its output scale (``normalize_y``). The diagonal plus ``noise``
+        is the sum over the outputs of ``predict(X, return_std=True)``'s variance (torque-scaled). It leaves
+        out the uncertainty of the linear mean. Used to choose where to measure next.
+
+        Returns
+        -------
+        columns : callable
+            ``columns(idx)`` -> the (n, len(idx)) block of the covariance with the rows ``idx``.
+        diagonal : ndarray of shape (n,)
+        noise : float
+            The fitted noise variance, summed over the outputs [N²].
+        """
+        from scipy.linalg import solve_triangular
+
+        check_is_fitted(self)
+        X = np.asarray(X, dtype=float)
+        u = (X - self.zero_reading_ - self.input_mean_) / self.input_scale_
+        regressors = self.regressors()
+        parts, noise = [], 0.0
+        for i, gp in enumerate(regressors):
+            cols = slice(None) if len(regressors) == 1 else slice(i, i + 1)
+            s2 = float(np.sum(self.target_scale_[cols] ** 2))
+            kernel = gp.kernel_.k1  # the white noise is the last term of every kernel family
+            noise += float(gp.kernel_.k2.noise_level) * s2
+            V = solve_triangular(gp.L_, kernel(self.train_inputs_, u), lower=True, check_finite=False)
+            parts.append((kernel, V, s2, np.maximum(kernel.diag(u) - np.sum(V * V, axis=0), 0.0) * s2))
+        diagonal = sum(p[3] for p in parts)
+
+        def columns(idx):
+            return sum((kernel(u, u[idx]) - V.T @ V[:, idx]) * s2 for kernel, V, s2, _ in parts)
+
+        return columns, diagonal, noise
 
     def regressors(self) -> list[GaussianProcessRegressor]:
         """The fitted :class:`~sklearn.gaussian_process.GaussianProcessRegressor` (one, or one per component).

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import inspect
 import sys
 from pathlib import Path
 
@@ -72,7 +71,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def calibrated_raw_range(path: str, n_channels: int) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
 
-    Until model files carry their own fitted range, this is where ``predict`` takes it from.
+    The readings are compared as recorded (no re-tare shift); without ``--range`` the model's own range is used.
     """
     import json
 
@@ -100,6 +99,8 @@ def calibrated_raw_range(path: str, n_channels: int) -> tuple[np.ndarray, np.nda
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..models._auto import provides_std
+
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     problem = None if args.input == "-" else path_problem(args.input, streams=True)
@@ -109,14 +110,14 @@ def run(args: argparse.Namespace) -> int:
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
-    if args.std and "return_std" not in inspect.signature(getattr(model, "best_estimator_", model).predict).parameters:
+    if args.std and not provides_std(model):
         chosen = getattr(model, "best_name_", type(model).__name__)
         raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
     limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels)
-    model_range = getattr(model, "calibrated_range_", None)
-    warn_limits = limits if limits is not None else (None if model_range is None else tuple(model_range))
+    # the model's own range (its training readings, re-tare shift applied); files of older versions have none
+    own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"
     beyond = [0]
 
@@ -135,7 +136,10 @@ def run(args: argparse.Namespace) -> int:
                     values = np.asarray(model.predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
-            flags = None if warn_limits is None else np.any((raw < warn_limits[0]) | (raw > warn_limits[1]), axis=1)
+            if limits is not None:
+                flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
+            else:
+                flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
             if flags is not None:
                 beyond[0] += int(flags.sum())
             if limits is None:

@@ -243,26 +243,20 @@ def _run_group(tasks: list[dict]) -> list[dict]:
     module (:func:`~ftcal.fit_stacked`); each record's ``fit_seconds`` is
     its share of that fit's wall time, ``stacked`` the number of nets.
     """
-    import torch
+    # the networks limit their own threads during fit (n_threads, a threadpoolctl context): nothing process-wide
+    prepared = [_data_and_model(task) for task in tasks]
+    start = time.perf_counter()
+    if len(tasks) == 1:
+        (data, model, _), = prepared
+        model.fit(data[0].raw, data[0].wrench)
+    else:
+        from ..neural_network._stacked import fit_stacked
 
-    threads = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
-        prepared = [_data_and_model(task) for task in tasks]
-        start = time.perf_counter()
-        if len(tasks) == 1:
-            (data, model, _), = prepared
-            model.fit(data[0].raw, data[0].wrench)
-        else:
-            from ..neural_network._stacked import fit_stacked
-
-            fit_stacked([m for _, m, _ in prepared], [d[0].raw for d, _, _ in prepared],
-                        [d[0].wrench for d, _, _ in prepared])
-        share = (time.perf_counter() - start) / len(tasks)
-        return [_record(task, data, model, profile, share, len(tasks))
-                for task, (data, model, profile) in zip(tasks, prepared)]
-    finally:
-        torch.set_num_threads(threads)
+        fit_stacked([m for _, m, _ in prepared], [d[0].raw for d, _, _ in prepared],
+                    [d[0].wrench for d, _, _ in prepared])
+    share = (time.perf_counter() - start) / len(tasks)
+    return [_record(task, data, model, profile, share, len(tasks))
+            for task, (data, model, profile) in zip(tasks, prepared)]
 
 
 def _groups(pending: list[dict], stack: int) -> list[list[dict]]:

@@ -40,9 +40,10 @@ from numpy.typing import NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
-from ..core._model_selection import calibration_folds
+from ..core._model_selection import calibration_folds, rmse_and_se
 from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS, alpha_from_wrenches, scale_torques
 from ..io._dataset import CalibrationDataset
+from ..models._auto import provides_std
 
 __all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json", "file_sha256",
            "COVERAGE_FACTOR"]
@@ -77,10 +78,10 @@ def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
 
 
 def _fit(estimator: Any, X: NDArray, y: NDArray, groups: NDArray | None) -> Any:
-    import inspect
+    from ..calibrators._routing import requests_groups
 
     kwargs = {}
-    if groups is not None and "groups" in inspect.signature(estimator.fit).parameters:
+    if groups is not None and requests_groups(estimator):
         kwargs["groups"] = groups
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
@@ -96,27 +97,13 @@ def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, fol
     has_std = True
     for train, test in folds:
         est = _fit(clone(template), X[train], y[train], None if groups is None else groups[train])
-        out = None
+        has_std = has_std and provides_std(est)  # auto may choose a GP in one fold and not in another
         if has_std:
-            try:
-                out = est.predict(X[test], return_std=True)
-            except TypeError:
-                has_std = False
-        if out is not None:
+            out = est.predict(X[test], return_std=True)
             pred[test], std[test] = np.asarray(out[0]), np.asarray(out[1])
         else:
             pred[test] = np.asarray(est.predict(X[test]))
     return {"pred": pred, "std": std if has_std else None}
-
-
-def _rmse_se(sq: NDArray, groups: NDArray | None) -> tuple[float, float]:
-    """Torque-scaled RMSE (eq. 18: mean over the 6 n values) and its standard error over groups (or rows)."""
-    rmse = float(np.sqrt(np.mean(sq) / 6.0))
-    units = groups if groups is not None else np.arange(len(sq))
-    _, inverse = np.unique(units, return_inverse=True)
-    per = np.bincount(inverse, weights=sq) / np.bincount(inverse) / 6.0
-    se_mse = per.std(ddof=1) / np.sqrt(per.size) if per.size > 1 else float("inf")
-    return rmse, float(se_mse / (2 * rmse)) if rmse > 0 else 0.0
 
 
 def _png(fig) -> str:
@@ -244,7 +231,7 @@ def calibration_certificate(
             choice.append({"model": label, "status": f"failed: {type(exc).__name__}: {str(exc)[:120]}"})
             continue
         sq = np.sum((scale_torques(out["pred"], alpha) - scale_torques(y, alpha)) ** 2, axis=1)
-        rmse, se = _rmse_se(sq, groups)
+        rmse, se = rmse_and_se(sq / 6.0, groups)
         choice.append({"model": label, "status": "scored", "rmse": rmse, "rmse_se": se,
                        "axis_rmse": np.sqrt(np.mean((out["pred"] - y) ** 2, axis=0)).tolist()})
         if main is None:

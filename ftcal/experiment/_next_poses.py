@@ -25,9 +25,9 @@ The uncertainty
   ``s^2`` the LTM's residual variance on the dataset: proposing by it alone is
   sequential D-optimal design for the LTM (``uncertainty="linear"``).
 * A Gaussian-process model (:class:`ftcal.GaussianProcessCalibrator`, or a
-  wrapper whose ``chosen_`` / ``best_estimator_`` / ``estimator_`` is one)
-  adds the posterior covariance of its residual GP, from its own kernel and
-  fitted hyperparameters, ``K_cc - K_ct K_tt^-1 K_tc`` (its
+  wrapper whose ``best_estimator_`` / ``estimator_`` is one)
+  adds the posterior covariance of its GP part (its ``latent_covariance``),
+  ``K_cc - K_ct K_tt^-1 K_tc`` (its
   ``predict(X, return_std=True)`` is the diagonal of this plus the noise; it
   leaves out the uncertainty of the GP's linear part, which the first term
   carries). ``uncertainty="gaussian_process"``; the noise is the GP's.
@@ -64,10 +64,6 @@ from ..robot._robot import RobotModel
 
 __all__ = ["PoseProposal", "propose_next_poses"]
 
-_GP_ATTRIBUTES = ("cholesky_", "train_inputs_", "length_scale_", "constant_", "noise_level_", "input_scale_",
-                  "zero_reading_", "output_variance_", "residual_scale_")
-
-
 @dataclass
 class PoseProposal(CalibrationPlan):
     """The poses proposed next, most informative first: a :class:`ftcal.CalibrationPlan` plus the gains.
@@ -98,8 +94,8 @@ class PoseProposal(CalibrationPlan):
 
 def _gaussian_process_of(model):
     """The fitted GP calibrator inside ``model`` (itself, or what a wrapper chose), or None."""
-    for candidate in (model, *(getattr(model, a, None) for a in ("chosen_", "best_estimator_", "estimator_"))):
-        if candidate is not None and all(hasattr(candidate, a) for a in _GP_ATTRIBUTES):
+    for candidate in (model, *(getattr(model, a, None) for a in ("best_estimator_", "estimator_"))):
+        if candidate is not None and callable(getattr(candidate, "latent_covariance", None)):
             return candidate
     return None
 
@@ -110,27 +106,6 @@ def _torque_scale(model, wrench: NDArray[np.float64]) -> float:
         return float(alpha)
     f, t = np.abs(wrench[:, :3]).max(), np.abs(wrench[:, 3:]).max()
     return float(f / t) if t > 0 and f > 0 else 1.0
-
-
-def _covariance_gp(gp, raw: NDArray[np.float64]) -> tuple[Callable, NDArray[np.float64], float]:
-    """Columns, diagonal and noise of the GP's posterior latent covariance at raw readings, in [N²] (scaled)."""
-    scale = float(np.sum(gp.output_variance_ * gp.residual_scale_ ** 2))
-    z = (raw - gp.zero_reading_) / gp.input_scale_ / gp.length_scale_
-    t = gp.train_inputs_ / gp.length_scale_
-
-    def kernel(a, b):
-        d = (a * a).sum(1)[:, None] + (b * b).sum(1)[None, :] - 2 * a @ b.T
-        return gp.constant_ * np.exp(-0.5 * np.maximum(d, 0.0))
-
-    from scipy.linalg import solve_triangular
-
-    V = solve_triangular(gp.cholesky_, kernel(t, z), lower=True, check_finite=False)
-    diag = np.maximum(gp.constant_ - np.sum(V * V, axis=0), 0.0) * scale
-
-    def columns(idx):
-        return (kernel(z, z[idx]) - V.T @ V[:, idx]) * scale
-
-    return columns, diag, float(gp.noise_level_) * scale
 
 
 def _covariance_linear(dataset: CalibrationDataset, y_scaled: NDArray[np.float64], raw: NDArray[np.float64]
@@ -256,7 +231,7 @@ def propose_next_poses(
     columns, diag, noise = _covariance_linear(dataset, y_scaled, raw)
     kind = "linear"
     if gp is not None:  # the GP's residual covariance on top of its linear part's parameter uncertainty
-        lin_columns, (gp_columns, gp_diag, noise) = columns, _covariance_gp(gp, raw)
+        lin_columns, (gp_columns, gp_diag, noise) = columns, gp.latent_covariance(raw)
         columns = lambda idx: lin_columns(idx) + gp_columns(idx)  # noqa: E731
         diag = diag + gp_diag
         kind = "gaussian_process"

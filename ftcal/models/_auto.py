@@ -24,7 +24,7 @@ from ..core._validation import check_zero_reading, validate_training_data
 from ..core._wrench import scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["AutoCalibrator", "StackedCalibrator", "comparison_table", "default_candidates", "score_candidates",
+__all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates", "score_candidates",
            "with_alpha_and_tare", "minimum_training_rows"]
 
 #: Most candidates a stack combines (the best-scoring eligible ones).
@@ -274,6 +274,22 @@ def _score_stack(results, errors, predictions, record, y, alpha, folds) -> None:
     results["stack_members"] = names
     results["stack_weights"] = weights.tolist()
     record("stack(" + " + ".join(names) + ")", "stack", "scored", True, unscale_torques(oof, alpha), None)
+
+
+def provides_std(model) -> bool:
+    """Whether ``model.predict(X, return_std=True)`` gives a standard deviation: a Gaussian process, or an
+    :class:`AutoCalibrator` that chose one.
+
+    Examples
+    --------
+    >>> from ftcal import GaussianProcessCalibrator, LinearCalibrator
+    >>> provides_std(GaussianProcessCalibrator()), provides_std(LinearCalibrator())
+    (True, False)
+    """
+    import inspect
+
+    inner = getattr(model, "best_estimator_", model)
+    return "return_std" in inspect.signature(inner.predict).parameters
 
 
 class StackedCalibrator(BaseCalibrator):
@@ -537,6 +553,7 @@ class AutoCalibrator(BaseCalibrator):
 
     def _emit_onnx(self, g, x: str) -> str:
         return g.calibration(self.best_estimator_, x)
+
     def predict(self, X: ArrayLike, return_std: bool = False):
         """Wrench [N, N·m] for raw readings ``X``; with ``return_std`` also the chosen model's standard deviation.
 
@@ -546,9 +563,7 @@ class AutoCalibrator(BaseCalibrator):
         if not return_std:
             return super().predict(X)
         check_is_fitted(self)
-        import inspect
-
-        if "return_std" not in inspect.signature(self.best_estimator_.predict).parameters:
+        if not provides_std(self.best_estimator_):
             raise CalibrationInputError(
                 f"return_std=True: the chosen model {self.best_name_!r} gives no standard deviation; only the "
                 "Gaussian process does (use AutoCalibrator(candidates=[('gaussian_process', "
