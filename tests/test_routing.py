@@ -6,7 +6,6 @@ as usual and keeps the groups its ``fit`` was given (and is registered, so it is
 
 from __future__ import annotations
 
-import warnings
 
 import numpy as np
 import pytest

@@ -13,9 +13,7 @@ from ._common import (
     OutputPlan,
     add_output_options,
     add_run_options,
-    nonnegative_int,
     positive_float,
-    positive_int,
     write_json,
 )
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, positive_float, write_json
 from ._data_options import add_dataset_options, load_dataset_from_args
-from ._models import evaluation_alpha, load_dataset, load_model_file, model_label, model_inputs
+from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
 from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\

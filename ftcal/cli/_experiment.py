@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 from ._common import Console, OutputPlan
 from ._plan import write_plan_coverage

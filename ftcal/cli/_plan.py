@@ -14,7 +14,6 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
-    nonnegative_int,
     positive_int,
     write_json,
 )

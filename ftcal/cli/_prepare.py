@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ._common import (
@@ -16,7 +15,6 @@ from ._common import (
     add_run_options,
     positive_float,
     path_problem,
-    positive_int,
     write_json,
 )
 

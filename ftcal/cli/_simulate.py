@@ -14,9 +14,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
-    nonnegative_int,
     positive_float,
-    positive_int,
     write_json,
 )
 

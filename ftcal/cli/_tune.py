@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, positive_int, write_json, int_in_range
+from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
 from ._fit import calibrator_names
 from ._models import check_fold_count, dataset_alpha, load_dataset, model_file_name, parse_param
 

@@ -50,7 +50,7 @@ measuring it removes, given the proposals before it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Sequence
+from typing import Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray

@@ -21,7 +21,6 @@ With eq. 12 and the default radial test set (torque-scaled norm uniform in
 
 from __future__ import annotations
 
-from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
