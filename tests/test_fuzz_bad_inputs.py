@@ -1030,3 +1030,37 @@ def test_values_no_fit_can_square_are_named_by_file_line(workdir, tmp_path, caps
             else ["evaluate", path, workdir / "models" / "linear.model.npz"]) + ["--out", tmp_path / "o"]
     msg = cli_error(argv, capsys)
     assert f"{path}: line {len(comments) + 8}: a raw reading of 1e+308 (column 2)" in msg
+
+
+# --- review of the merged round: a huge network, labels with no order, a range file of another sensor ---------
+
+def test_a_network_too_large_for_memory_is_refused_before_any_allocation():
+    from ftcal.core._memory import MemoryLimitError
+
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(40, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = w @ rng.normal(size=(6, 6))
+    with pytest.raises(MemoryLimitError, match=r"hidden_layer_sizes=\(100000000,\).*narrower or fewer hidden layers"):
+        ftcal.DirectionalCalibrator(hidden_layer_sizes=(100_000_000,), max_epochs=1).fit(raw, w)
+
+
+@pytest.mark.parametrize("groups", [[None] * 40, [0, "a"] * 20, [0.5, 1.5] * 20], ids=["none", "mixed", "fractional"])
+def test_group_labels_without_an_order_are_a_clear_error(groups):
+    from ftcal.core._model_selection import check_groups
+
+    with pytest.raises(ftcal.CalibrationInputError, match="integer or string labels"):
+        check_groups(np.array(groups, dtype=object if groups[0] is None or "a" in groups else float), 40)
+
+
+def test_predict_range_file_of_another_channel_count_is_refused(tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(60, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = w @ rng.normal(size=(6, 6))
+    ftcal.save_model(ftcal.LinearCalibrator().fit(raw, w), tmp_path / "m.model.npz")
+    five = CalibrationDataset(raw=raw[:, :5], wrench=w)
+    five.save(tmp_path / "five.csv")
+    np.savetxt(tmp_path / "readings.csv", raw[:3], delimiter=",")
+    code = main(["predict", str(tmp_path / "m.model.npz"), str(tmp_path / "readings.csv"), "--range",
+                 str(tmp_path / "five.csv")])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith("ftcal: error: --range") and "5 raw channels" in err

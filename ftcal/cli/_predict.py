@@ -68,7 +68,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def calibrated_raw_range(path: str, n_channels: int) -> tuple[np.ndarray, np.ndarray]:
+def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
 
     The readings are compared as recorded (no re-tare shift); without ``--range`` the model's own range is used.
@@ -91,8 +91,10 @@ def calibrated_raw_range(path: str, n_channels: int) -> tuple[np.ndarray, np.nda
         data = CalibrationDataset.load(file)
         lo, hi = data.raw.min(axis=0), data.raw.max(axis=0)
     n = n_channels
-    if lo.shape != hi.shape or lo.size not in (n, n - 1):
-        raise CliError(f"--range {path} covers {lo.size} raw channels but the model takes {n} inputs")
+    allowed = (n, n - 1) if temperature else (n,)
+    if lo.shape != hi.shape or lo.size not in allowed:
+        raise CliError(f"--range {path} covers {lo.size} raw channels but the model takes {n - 1 if temperature else n}"
+                       f"{' and the temperature' if temperature else ''}; give the report or dataset of this model")
     if lo.size == n - 1:  # a temperature-compensated model: the temperature column is not range-checked
         lo, hi = np.append(lo, -np.inf), np.append(hi, np.inf)
     return lo, hi
@@ -115,7 +117,7 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
-    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels)
+    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature)
     # the model's own range (its training readings, re-tare shift applied); files of older versions have none
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"

@@ -45,6 +45,19 @@ def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
         )
     if g.dtype.kind == "f" and not np.isfinite(g).all():
         raise CalibrationInputError("groups holds NaN or inf; give every row a group label.")
+    if g.dtype.kind not in "biuUS":  # objects (None, mixed types), floats, complex, dates: no label order
+        values = g.tolist()
+        if g.dtype.kind == "f" and np.array_equal(g, np.round(g)):
+            g = g.astype(np.int64)
+        elif g.dtype.kind == "O" and all(isinstance(v, str) for v in values):
+            g = g.astype(str)
+        elif g.dtype.kind == "O" and all(isinstance(v, int) and not isinstance(v, bool) for v in values):
+            g = np.asarray(values)
+        else:
+            first = g[0] if g.size else None
+            raise CalibrationInputError(
+                f"groups must hold integer or string labels (one per row); got dtype {g.dtype} "
+                f"(first label {first!r}). Fix: number the groups 0, 1, 2, ...")
     labels = np.unique(g)
     if labels.size < 2:
         raise CalibrationInputError(

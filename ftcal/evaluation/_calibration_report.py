@@ -78,10 +78,11 @@ def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
 
 
 def _fit(estimator: Any, X: NDArray, y: NDArray, groups: NDArray | None) -> Any:
+    from ..calibrators._base import BaseCalibrator
     from ..calibrators._routing import requests_groups
 
-    kwargs = {}
-    if groups is not None and requests_groups(estimator):
+    kwargs = {}  # the stock baselines take no groups; an ftcal calibrator gets them when its routing asks
+    if groups is not None and isinstance(estimator, BaseCalibrator) and requests_groups(estimator):
         kwargs["groups"] = groups
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)

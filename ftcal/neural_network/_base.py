@@ -28,6 +28,7 @@ from threadpoolctl import threadpool_limits
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
+from ..core._memory import check_allocation
 from ..core._validation import validate_readings
 from ._engine import MemberSquaredError, NetworkRegressor
 from ._modules import mlp_layers
@@ -194,7 +195,18 @@ class NetworkCalibrator(BaseCalibrator):
                 f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
                 "beyond what float32 training handles; check the units of X and y."
             )
+        self._check_network_memory(inputs.shape[1], len(inputs))
         return inputs, targets, self._seed()
+
+    def _check_network_memory(self, n_inputs: int, n_rows: int) -> None:
+        """Refuse, before any allocation, a network whose training would exceed ftcal's memory limit."""
+        widths = [n_inputs, *(int(w) for w in self.hidden_layer_sizes), self._network_outputs()]
+        n_params = float(sum((a + 1) * b for a, b in zip(widths[:-1], widths[1:])))
+        # float32 weights, gradients, Adam's two moments and the best-weights copy; float64 numpy layers for predict;
+        # one batch's activations and their gradients
+        n_bytes = n_params * (5 * 4 + 8) + 2 * 4 * float(min(self.batch_size, n_rows)) * sum(widths)
+        check_allocation(n_bytes, f"{type(self).__name__} with hidden_layer_sizes={tuple(self.hidden_layer_sizes)} "
+                         f"({n_params:.3g} weights)", "use narrower or fewer hidden layers")
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])
