@@ -71,3 +71,15 @@ def test_reference_wrench_is_linear_in_the_mass():
     """prepare scales a unit-mass wrench per row: the physics it relies on."""
     R = np.eye(3)
     np.testing.assert_allclose(reference_wrench(R, 2.5, [0.1, 0.2, 0.3]), 2.5 * reference_wrench(R, 1.0, [0.1, 0.2, 0.3]))
+
+
+def test_a_fixture_mass_that_contradicts_the_logs_is_refused(tmp_path, capsys):
+    """Logs recorded with 2 kg, prepared with a fixture stating 1.5 / 3 / 2 kg: which is right? Never silent."""
+    (tmp_path / "fixture.csv").write_text(FIXTURE_CSV)
+    assert main(["simulate", "experiment", "--subdivisions", "0", "--preset", "none", "--mass", "2.0",
+                 "--out", str(tmp_path / "logs"), "-q"]) == 0
+    code = main(["prepare", str(tmp_path / "logs"), "--fixture", str(tmp_path / "fixture.csv"), "--out",
+                 str(tmp_path / "data"), "-q"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "load_mass_kg 2" in err and "configuration 0 a mass of 1.5 kg" in err

@@ -36,7 +36,16 @@ def test_prepare_with_mounting_gives_wrenches_in_the_mounted_sensor_frame(tmp_pa
                  "--out", str(tmp_path / "logs"), "-q"]) == 0
     assert main(["prepare", str(tmp_path / "logs"), "--sensor-mounting", mounting, "--out", str(tmp_path / "m"),
                  "-q"]) == 0
-    assert main(["prepare", str(tmp_path / "logs"), "--out", str(tmp_path / "p"), "-q"]) == 0
+    # the logs name the frame they were recorded with: prepared without the mounting, they are refused ...
+    assert main(["prepare", str(tmp_path / "logs"), "--out", str(tmp_path / "p"), "-q"]) == 2
+    refused = capsys.readouterr().err.strip()
+    assert len(refused.splitlines()) == 1 and "'ftcal_mounted_sensor'" in refused and "'ft_sensor'" in refused
+    # ... and, the frame comment removed, read as if recorded at the URDF's frame: the wrenches turn by R
+    (tmp_path / "bare").mkdir()
+    for log in (tmp_path / "logs").glob("*.csv"):
+        lines = log.read_text().splitlines(keepends=True)
+        (tmp_path / "bare" / log.name).write_text("".join(ln for ln in lines if not ln.startswith("# sensor_frame:")))
+    assert main(["prepare", str(tmp_path / "bare"), "--out", str(tmp_path / "p"), "-q"]) == 0
     mounted = CalibrationDataset.load(tmp_path / "m" / "dataset.csv")
     plain = CalibrationDataset.load(tmp_path / "p" / "dataset.csv")
     R = pin.exp3(np.deg2rad([0.0, 0.0, 90.0]))

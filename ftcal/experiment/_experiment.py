@@ -342,11 +342,27 @@ def prepare_dataset(
     if not paths:
         raise LogFormatError("no run logs given; pass the load and no-load log files (or their folder).")
     logs = [read_run_log(p, n_channels=n_channels, n_joints=robot.n_joints) for p in paths]
+    for lg in logs:  # the frame the wrenches are computed in must be the one the log was recorded with
+        if lg.sensor_frame is not None and lg.sensor_frame != robot.sensor_frame:
+            raise LogFormatError(
+                f"{lg.path}: the log was recorded with sensor frame {lg.sensor_frame!r} but the robot model's is "
+                f"{robot.sensor_frame!r}; give the same sensor frame (or the same sensor mounting) as the recording.")
     masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
     fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
                     if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
     if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
-        # the fixture states every configuration's mass (the logs' per-file masses then need not agree)
+        # the fixture states every configuration's mass (the logs' per-file masses then need not agree with each
+        # other, but each must agree with the configurations it records)
+        for lg in logs:
+            if lg.load_mass is None:
+                continue
+            for cid in sorted(set(int(c) for c in lg.config)):
+                stated = fixture_mass.get(cid)
+                if stated is not None and abs(stated - lg.load_mass) > 1e-6 * max(stated, 1.0):
+                    raise LogFormatError(
+                        f"{lg.path}: the log declares load_mass_kg {lg.load_mass:g} but the fixture gives "
+                        f"configuration {cid} a mass of {stated:g} kg; which one is right? Fix the fixture file "
+                        "or the '# load_mass_kg' comment.")
         load_mass = float(np.median(list(fixture_mass.values())))
         masses = set()
     if load_mass is None:
