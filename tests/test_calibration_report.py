@@ -162,3 +162,15 @@ def test_report_of_auto_and_of_a_gp_states_the_std_coverage_only_where_a_std_exi
         assert all(0.5 <= c <= 1.0 for c in coverage)
     else:
         assert coverage == [None] * 6
+
+
+def test_report_on_data_the_model_was_not_fitted_on_says_so(tmp_path, capsys):
+    import ftcal
+
+    fitted_on, other = sensor_dataset(seed=0), sensor_dataset(seed=5)
+    other.save(tmp_path / "other.csv")
+    ftcal.save_model(ftcal.LinearCalibrator().fit(fitted_on.raw, fitted_on.wrench), tmp_path / "m.model.npz")
+    assert main(["report", str(tmp_path / "m.model.npz"), str(tmp_path / "other.csv"), "--cv", "3", "--out",
+                 str(tmp_path / "rep"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "ftcal: warning:" in err and "is not the data" in err and "refitted on this dataset" in err

@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import sys
+
+import numpy as np
 
 from ._common import Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
 from ._data_options import add_dataset_options, load_dataset_from_args
@@ -25,7 +28,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "report",
         help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per axis",
         description="Write the calibration report of a model: held-out accuracy per axis in units and % of full "
-        "scale, 95 %% expanded uncertainty, model choice beside the stock scikit-learn baselines, calibrated range.",
+        "scale, 95 % expanded uncertainty, model choice beside the stock scikit-learn baselines, calibrated range.",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
@@ -82,6 +85,12 @@ def run(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, report_file_names(label), args.force)
     model = load_model_file(args.model)
     data = load_dataset_from_args(args, args.dataset, "calibration dataset")
-    model_inputs(model, data)  # a dataset of another sensor is refused before the cross-validation starts
+    inputs = model_inputs(model, data)  # a dataset of another sensor is refused before the cross-validation starts
+    fitted_range = getattr(model, "calibrated_range_", None)
+    if fitted_range is not None and inputs.shape[1] == fitted_range.shape[1] and not np.allclose(
+            [inputs.min(axis=0), inputs.max(axis=0)], fitted_range, rtol=1e-9, atol=0.0):
+        print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
+              "another range); the report's held-out figures are of the model refitted on this dataset by "
+              "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
     write_report(plan, label, model, data, args, args.model, args.dataset, console)
     return 0
