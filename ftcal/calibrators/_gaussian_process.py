@@ -188,7 +188,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
 
     _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
-                     "target_scale_")
+                     "target_scale_", "log_marginal_likelihood_")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "mean": [StrOptions({"auto", *GP_MEANS})],
@@ -241,7 +241,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
             target = targets[mean]
             if per_output:  # each component from its selection optimum (a warm start)
                 regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
-                                                      seed, 0), u, target[:, [j]]) for j in range(6)]
+                                                      seed, int(self.n_restarts_optimizer)), u, target[:, [j]])
+                              for j in range(6)]
             else:
                 start = make_kernel(family, n_channels).clone_with_theta(theta[0])
                 regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]

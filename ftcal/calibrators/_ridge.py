@@ -1,19 +1,22 @@
 """Ridge least squares that leaves the linear terms unpenalised (shared by the polynomial and hybrid models).
 
 scikit-learn's :class:`~sklearn.linear_model.Ridge` penalises every
-coefficient alike; these models penalise only their corrections. The
-Frisch-Waugh-Lovell theorem reduces that to scikit-learn's estimators: the
-penalised features and the targets are residualised on the unpenalised ones
-(:class:`~sklearn.linear_model.LinearRegression` with intercept), ``Ridge``
-(no intercept) fits the residuals, and a last ``LinearRegression`` gives the
-unpenalised coefficients and the intercept. The result is the exact minimiser.
+coefficient alike; these models penalise only their corrections. With the
+intercept unpenalised, centring the features and the targets removes it
+exactly; the penalty on the remaining columns is then the augmented least-squares
+system ``[F; 0 √λ I] c = [y; 0]``, solved by one :func:`numpy.linalg.lstsq`
+(its minimum-norm solution for rank-deficient features, as
+:class:`~sklearn.linear_model.LinearRegression` gives). It is the exact
+minimiser, and about ten times faster than composing scikit-learn estimators
+(the hybrid's cross-validated penalty solves a few thousand small systems);
+``tests/test_ridge.py`` checks it against scikit-learn's ``Ridge`` and
+``LinearRegression``.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import NDArray
-from sklearn.linear_model import LinearRegression, Ridge
 
 __all__ = ["ridge_least_squares"]
 
@@ -35,16 +38,18 @@ def ridge_least_squares(
     >>> np.round(coef.ravel(), 6).tolist(), np.round(b, 6).tolist()
     ([2.0, 0.5], [1.0])
     """
-    k = y.shape[1]
-    free, penalised = features[:, :n_unpenalised], features[:, n_unpenalised:]
-    if penalty == 0 or penalised.shape[1] == 0:  # no penalty: one ordinary least-squares fit
-        free, penalised = features, features[:, :0]
-    if np.isinf(penalty) or penalised.shape[1] == 0:
-        coef_penalised = np.zeros((penalised.shape[1], k))
+    n_features, k = features.shape[1], y.shape[1]
+    feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
+    centred, target = features - feature_mean, y - target_mean
+    n_penalised = n_features - n_unpenalised
+    coef = np.zeros((n_features, k))
+    if np.isinf(penalty):  # the limit: penalised coefficients zero, the free ones by least squares
+        coef[:n_unpenalised] = np.linalg.lstsq(centred[:, :n_unpenalised], target, rcond=None)[0]
+    elif penalty == 0 or n_penalised == 0:
+        coef = np.linalg.lstsq(centred, target, rcond=None)[0]
     else:
-        both = np.hstack([y, penalised])
-        residual = both - LinearRegression().fit(free, both).predict(free)
-        coef_penalised = Ridge(penalty, fit_intercept=False).fit(residual[:, k:], residual[:, :k]).coef_
-        coef_penalised = coef_penalised.reshape(k, -1).T
-    final = LinearRegression().fit(free, y - penalised @ coef_penalised)
-    return np.vstack([final.coef_.reshape(k, -1).T, coef_penalised]), np.asarray(final.intercept_).reshape(k)
+        prior = np.zeros((n_penalised, n_features))
+        prior[:, n_unpenalised:] = np.sqrt(penalty) * np.eye(n_penalised)
+        coef = np.linalg.lstsq(np.vstack([centred, prior]), np.vstack([target, np.zeros((n_penalised, k))]),
+                               rcond=None)[0]
+    return coef, target_mean - feature_mean @ coef

@@ -199,7 +199,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     split = f"{len(np.unique(groups))} groups" if groups is not None else "shuffled rows"
     console.info(f"cross-validating {len(candidates)} calibrators on {data.n_samples} samples, {args.cv} folds "
                  f"over {split}")
-    results, errors, predictions = score_candidates(
+    results, errors, predictions, _ = score_candidates(
         candidates, data.raw, data.wrench, groups=groups, cv=args.cv, alpha=alpha, random_state=args.seed,
         baselines=stock_baselines(data.n_channels, random_state=args.seed or 0),
     )

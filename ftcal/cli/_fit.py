@@ -7,7 +7,8 @@ import time
 
 import numpy as np
 
-from ._common import Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json
+from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range, positive_float,
+                      write_json)
 from ._data_options import add_dataset_options, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
 from ._training import fit_with_progress
@@ -62,6 +63,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="compensate thermal drift: learn per-channel offset and gain coefficients from the dataset's "
         "temperature column [deg C] in front of the calibrator",
     )
+    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
+                   help="processes that score --model auto's candidates at once (default: every core; the "
+                   "choice is the same for any value)")
     p.add_argument("--name", help="file name stem of the model (default: the --model name)")
     p.add_argument("--report", action="store_true",
                    help="also write the calibration report (NAME.report.html): held-out accuracy per axis by grouped "
@@ -111,6 +115,8 @@ def run(args: argparse.Namespace) -> int:
     if tare is not None:
         params["zero_reading"] = tare
     known = ftcal.calibrator_parameters(args.model)
+    if "n_jobs" in known and "n_jobs" not in params:
+        params["n_jobs"] = args.jobs or -1
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")

@@ -167,19 +167,25 @@ def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
 def score_candidates(
     candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
     zero_reading=None, random_state: int | None = 0, network_samples: int | None = 5000,
-    baselines: dict | None = None, stack: bool = False, prefitted: dict | None = None,
-) -> tuple[dict, NDArray[np.float64], list]:
+    baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None,
+) -> tuple[dict, NDArray[np.float64], list, dict]:
     """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
 
     Every figure is eq. 18's RMSE (over the 6 n torque-scaled values, [N]).
     Candidates whose training folds hold fewer rows than
-    :func:`minimum_training_rows` are skipped (recorded, never chosen). With
-    ``stack``, a non-negative combination of the best (up to
-    :data:`STACK_SIZE`) eligible candidates is scored too, its weights
-    cross-fitted on the out-of-fold predictions (each fold's weights from the
-    other folds' rows). ``baselines`` (name -> scikit-learn regressor, e.g.
+    :func:`minimum_training_rows` are skipped (recorded, never chosen). A
+    candidate that chooses its own structure (the GP's mean and kernel,
+    ``structure_params``) chooses it once, fitted on all rows; its clones with
+    that structure are then cross-validated (their hyperparameters fitted on
+    each training fold alone), at a fifth of the cost. With ``stack``, a
+    non-negative combination of the best (up to :data:`STACK_SIZE`) eligible
+    candidates is scored too, its weights cross-fitted on the out-of-fold
+    predictions (each fold's weights from the other folds' rows).
+    ``baselines`` (name -> scikit-learn regressor, e.g.
     :func:`ftcal.models.stock_baselines`) are scored on the same folds and
-    never eligible.
+    never eligible. ``n_jobs`` candidates are scored at once
+    (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
+    :func:`joblib.parallel_config` context); the figures do not depend on it.
 
     Returns
     -------
@@ -188,14 +194,18 @@ def score_candidates(
         ``"baseline"``), ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``),
         ``eligible``, ``rmse`` (held-out, eq. 18 [N]), ``rmse_se`` (its
         standard error over groups or rows), ``axis_rmse`` (6 values, [N] and
-        [N·m]), ``fit_seconds`` (all folds); plus ``n_splits``,
+        [N·m]), ``fit_seconds`` (all folds, and the all-rows structure fit); plus ``n_splits``,
         ``min_training_rows`` and, with a stack, ``stack_members`` and
         ``stack_weights``.
     errors : ndarray of shape (n_rows, n_samples)
         Held-out per-row errors (NaN when not scored).
     predictions : list of ndarray of shape (n_samples, 6) or None
         Out-of-fold predictions.
+    fitted : dict
+        Name -> the candidate fitted on all rows, for those that chose their structure there.
     """
+    from sklearn.utils.parallel import Parallel, delayed
+
     n, n_channels = X.shape
     seed = 0 if random_state is None else int(random_state)
     folds = calibration_folds(n, groups, cv, seed)
@@ -221,40 +231,52 @@ def score_candidates(
         errors.append(row)
         predictions.append(pred)
 
-    def attempt(estimator, **kwargs):
-        t0 = time.perf_counter()
-        try:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", UserWarning)
-                pred = _out_of_fold(estimator, X, y, folds, groups, **kwargs)
-            return pred, "scored", time.perf_counter() - t0
-        except Exception as exc:  # a candidate that cannot fit these data is recorded, not fatal
-            return None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
-
-    with threadpool_limits(1, user_api="blas"):  # small matrices: threads only contend on a shared machine
-        _score_all(candidates, baselines, stack, prefitted, alpha, zero_reading, network_samples, seed, folds,
-                   smallest_train, n_channels, attempt, record, results, errors, predictions, y)
-    return results, np.vstack(errors), predictions
-
-
-def _score_all(candidates, baselines, stack, prefitted, alpha, zero_reading, network_samples, seed, folds,
-               smallest_train, n_channels, attempt, record, results, errors, predictions, y) -> None:
+    rows, tasks = [], []  # (name, kind, skipped status or None); the work of the rows that are fitted
     for name, template in candidates:
         estimator = with_alpha_and_tare(template, alpha, zero_reading)
-        if prefitted and name in prefitted:  # fitted on all rows already: CV its structure, refit per fold
-            estimator.set_params(**prefitted[name].structure_params())
         needed = minimum_training_rows(estimator, n_channels)
         if smallest_train < needed:  # too few rows to judge it: not fitted, never chosen
-            record(name, "candidate", f"skipped: training folds of {smallest_train} rows < the {needed} it needs",
-                   False, None, None)
+            rows.append((name, "candidate", f"skipped: training folds of {smallest_train} rows < the {needed} it "
+                                            "needs"))
             continue
-        pred, status, seconds = attempt(estimator, network_samples=network_samples, seed=seed)
-        record(name, "candidate", status, True, pred, seconds)
-    if stack:
-        _score_stack(results, errors, predictions, record, y, alpha, folds)
+        rows.append((name, "candidate", None))
+        tasks.append(delayed(_score_one)(estimator, X, y, folds, groups, network_samples, seed))
     for name, regressor in (baselines or {}).items():
-        pred, status, seconds = attempt(regressor, network_samples=None, seed=seed)
-        record(name, "baseline", status, False, pred, seconds)
+        rows.append((name, "baseline", None))
+        tasks.append(delayed(_score_one)(regressor, X, y, folds, groups, None, seed))
+    outcomes = iter(Parallel(n_jobs=n_jobs)(tasks))
+    fitted = {}
+    for i, (name, kind, skipped) in enumerate(rows):
+        if stack and kind == "baseline" and rows[i - 1][1] == "candidate":  # the stack after the candidates
+            _score_stack(results, errors, predictions, record, y, alpha, folds)
+        outcome = (None, None, skipped, None) if skipped else next(outcomes)
+        if outcome[0] is not None:
+            fitted[name] = outcome[0]
+        record(name, kind, outcome[2], kind == "candidate" and not skipped, outcome[1], outcome[3])
+    if stack and rows and rows[-1][1] == "candidate":
+        _score_stack(results, errors, predictions, record, y, alpha, folds)
+    return results, np.vstack(errors), predictions, fitted
+
+
+def _score_one(estimator, X, y, folds, groups, network_samples, seed):
+    """One candidate's (or baseline's) all-rows structure fit, if it has one, and out-of-fold predictions.
+
+    Returns ``(fitted on all rows or None, predictions or None, status, seconds)``; a candidate that
+    cannot fit these data is recorded as failed, not fatal.
+    """
+    t0 = time.perf_counter()
+    try:
+        # small matrices: BLAS threads only contend on a shared machine (and with the other jobs)
+        with threadpool_limits(1, user_api="blas"), warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)
+            fitted = None
+            if hasattr(estimator, "structure_params"):  # choose the structure once, on all rows
+                fitted = _fit(clone(estimator), X, y, groups)
+                estimator = clone(estimator).set_params(**fitted.structure_params())
+            pred = _out_of_fold(estimator, X, y, folds, groups, network_samples, seed)
+        return fitted, pred, "scored", time.perf_counter() - t0
+    except Exception as exc:
+        return None, None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
 
 
 def _score_stack(results, errors, predictions, record, y, alpha, folds) -> None:
@@ -301,6 +323,10 @@ class StackedCalibrator(BaseCalibrator):
         The members (cloned and fitted on all rows by ``fit``).
     weights : array-like of shape (n_members,)
         Non-negative weight of each member (on the torque-scaled wrench; the sum need not be 1).
+    prefit : bool, default=False
+        The members are fitted already (``auto`` fitted them on the same rows, networks on their
+        subsample, with the groups): ``fit`` keeps them as they are (like scikit-learn's
+        ``StackingRegressor(cv="prefit")``); they must use this calibrator's ``alpha``.
     alpha, zero_reading : as for every calibrator
 
     Attributes
@@ -328,11 +354,14 @@ class StackedCalibrator(BaseCalibrator):
         **BaseCalibrator._parameter_constraints,
         "estimators": [list, None],
         "weights": ["array-like"],
+        "prefit": ["boolean"],
     }
 
-    def __init__(self, *, estimators=None, weights=(), alpha=None, zero_reading=None, random_state=None):
+    def __init__(self, *, estimators=None, weights=(), prefit=False, alpha=None, zero_reading=None,
+                 random_state=None):
         self.estimators = estimators
         self.weights = weights
+        self.prefit = prefit
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
@@ -344,8 +373,19 @@ class StackedCalibrator(BaseCalibrator):
             raise CalibrationInputError(
                 f"StackedCalibrator needs a non-empty list of estimators and one non-negative weight each; got "
                 f"{len(members)} estimators and weights {self.weights_.tolist()}.")
-        self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None)
-                            for e in members]
+        if not self.prefit:
+            self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None)
+                                for e in members]
+            return
+        for e in members:
+            check_is_fitted(e)
+            if not np.isclose(getattr(e, "alpha_", self.alpha_), self.alpha_) or e.n_features_in_ != X.shape[1]:
+                raise CalibrationInputError(
+                    f"StackedCalibrator(prefit=True): member {type(e).__name__} was fitted with alpha "
+                    f"{getattr(e, 'alpha_', None)} on {e.n_features_in_} channels, this stack has alpha "
+                    f"{self.alpha_} and {X.shape[1]} channels; fit the members with the stack's alpha on the "
+                    "same channels, or use prefit=False.")
+        self.estimators_ = list(members)
 
     def _predict_wrench(self, X):
         scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
@@ -412,6 +452,10 @@ class AutoCalibrator(BaseCalibrator):
     network_samples : int or None, default=5000
         Most training rows a network candidate sees, in each fold and in the
         final refit (a grouped subsample; ``None``: all).
+    n_jobs : int or None, default=None
+        Candidates scored at once, in separate processes (:class:`joblib.Parallel`);
+        ``None`` is 1 unless in a :func:`joblib.parallel_config` context, ``-1``
+        all cores. The choice and every figure are the same for any value.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹], shared by every candidate; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
@@ -457,16 +501,18 @@ class AutoCalibrator(BaseCalibrator):
         "stack": ["boolean"],
         "baselines": ["boolean"],
         "network_samples": [Interval(Integral, 10, None, closed="left"), None],
+        "n_jobs": [Integral, None],
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
-                 network_samples=5000, alpha=None, zero_reading=None, random_state=None):
+                 network_samples=5000, n_jobs=None, alpha=None, zero_reading=None, random_state=None):
         self.candidates = candidates
         self.cv = cv
         self.schedule = schedule
         self.stack = stack
         self.baselines = baselines
         self.network_samples = network_samples
+        self.n_jobs = n_jobs
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
@@ -511,13 +557,9 @@ class AutoCalibrator(BaseCalibrator):
         self.alpha_ = resolve_alpha(self.alpha, y)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
-        # models that choose their own structure (the GP) do it once on all rows; the folds refit the rest
-        prefitted = {name: _fit(with_alpha_and_tare(est, self.alpha_, given), X, y, groups)
-                     for name, est in candidates if hasattr(est, "structure_params")
-                     and len(X) >= minimum_training_rows(est, X.shape[1])}
-        results, errors, _ = score_candidates(
+        results, errors, _, fitted = score_candidates(
             candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
-            random_state=seed, network_samples=self.network_samples, stack=self.stack, prefitted=prefitted,
+            random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
             baselines=stock_baselines(X.shape[1], random_state=seed) if self.baselines else None,
         )
         if not any(results["eligible"]):
@@ -530,17 +572,23 @@ class AutoCalibrator(BaseCalibrator):
         self.cv_results_ = results
         self.best_name_ = results["name"][chosen]
         templates = dict(candidates)
+
+        def refit(name):
+            """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""
+            if name in fitted:  # fitted on all rows already, when it chose its structure
+                return fitted[name]
+            model = with_alpha_and_tare(templates[name], self.alpha_, given)
+            rows = _grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
+                if _is_network(model) else np.arange(len(X))
+            return _fit(model, X[rows], y[rows], None if groups is None else groups[rows])
+
         if results["kind"][chosen] == "stack":
-            best = StackedCalibrator(estimators=[templates[n] for n in results["stack_members"]],
-                                     weights=results["stack_weights"], alpha=self.alpha_, zero_reading=given)
+            best = StackedCalibrator(estimators=[refit(n) for n in results["stack_members"]],
+                                     weights=results["stack_weights"], prefit=True, alpha=self.alpha_,
+                                     zero_reading=given)
             self.best_estimator_ = best.fit(X, y)
-        elif self.best_name_ in prefitted:
-            self.best_estimator_ = prefitted[self.best_name_]
         else:
-            best = with_alpha_and_tare(templates[self.best_name_], self.alpha_, given)
-            rows = _grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) if _is_network(best) \
-                else np.arange(len(X))
-            self.best_estimator_ = _fit(best, X[rows], y[rows], None if groups is None else groups[rows])
+            self.best_estimator_ = refit(self.best_name_)
         best_zero = getattr(self.best_estimator_, "zero_reading_", None)
         self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
         self.reading_noise_ = reading_noise(X, y)
