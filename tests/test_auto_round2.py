@@ -56,6 +56,14 @@ def test_one_se_rule_goes_to_the_simplest_by_complexity_not_by_position():
     assert simplest_within_one_se(clear, eligible=[True, False]) == 0
 
 
+def test_a_consistent_but_negligible_gain_is_a_tie():
+    # noise-free data: the flexible model is better on every row, so the paired SE is ~0; a 0.4 % lower mean
+    # squared error (0.2 % in RMSE) is below the tie tolerance and the simpler model wins; 3 % lower is not
+    base = np.linspace(1.0, 2.0, 40)
+    assert simplest_within_one_se(np.vstack([base, base * (1 - 0.004)])) == 0
+    assert simplest_within_one_se(np.vstack([base, base * (1 - 0.03)])) == 1
+
+
 # ------------------------------------------------------------------ baselines, stacking, determinism
 def test_cv_results_report_the_stock_baselines_on_the_same_folds_never_chosen():
     raw, w = cubic(160)
@@ -91,6 +99,32 @@ def test_auto_is_deterministic_and_has_no_time_budget():
     a = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     b = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     assert a.cv_results_["rmse"] == b.cv_results_["rmse"] and a.best_name_ == b.best_name_
+
+
+def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential():
+    # real joblib worker processes; the GP (structure chosen inside its task) and a stock baseline among them
+    raw, w, groups = affine(n=120, n_groups=6)
+    cands = FAST[:2] + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
+    kw = dict(candidates=cands, alpha=1.0, random_state=0)
+    one = AutoCalibrator(n_jobs=1, **kw).fit(raw, w, groups=groups)
+    two = AutoCalibrator(n_jobs=2, **kw).fit(raw, w, groups=groups)
+    assert one.cv_results_["name"] == two.cv_results_["name"]
+    assert one.cv_results_["kind"][-1] == "baseline" and "stack" in one.cv_results_["kind"]
+    np.testing.assert_allclose([r for r in one.cv_results_["rmse"] if r is not None],
+                               [r for r in two.cv_results_["rmse"] if r is not None], rtol=1e-9)
+    assert one.best_name_ == two.best_name_
+    np.testing.assert_allclose(one.predict(raw[:5]), two.predict(raw[:5]), rtol=1e-9)
+
+
+def test_a_prefit_stack_keeps_its_members_and_refuses_another_alpha():
+    raw, w = cubic(120)
+    members = [LinearCalibrator(alpha=1.0).fit(raw, w), PolynomialCalibrator(degree=2, alpha=1.0).fit(raw, w)]
+    stack = StackedCalibrator(estimators=members, weights=[0.25, 0.75], prefit=True, alpha=1.0).fit(raw, w)
+    assert stack.estimators_[0] is members[0] and stack.estimators_[1] is members[1]
+    expected = 0.25 * members[0].predict(raw[:4]) + 0.75 * members[1].predict(raw[:4])
+    np.testing.assert_allclose(stack.predict(raw[:4]), expected, rtol=1e-12)
+    with pytest.raises(CalibrationInputError, match="prefit=True.*alpha"):
+        StackedCalibrator(estimators=members, weights=[0.5, 0.5], prefit=True, alpha=2.0).fit(raw, w)
 
 
 def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsample():

@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, Options, StrOptions
 
 from ._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
+from ..core._model_selection import calibration_folds, check_groups, grouped_subsample, simplest_within_one_se
 from ._linear import affine_fit
 from ._ridge import ridge_least_squares
 from ..core._wrench import scale_torques, unscale_torques
@@ -20,6 +20,8 @@ __all__ = ["AxisNonlinearCalibrator", "signed_power_features", "one_standard_err
 
 #: Penalties tried by ``ridge="auto"`` (5-fold cross-validation inside ``fit``); ``inf`` is the LTM itself.
 RIDGE_GRID: tuple[float, ...] = (1e-6, 1e-4, 1e-2, 1e-1, 1.0, math.inf)
+#: Most rows ``ridge="auto"`` cross-validates on (the same share of every group); the final fit uses all rows.
+RIDGE_SELECTION_ROWS = 10_000
 
 
 def signed_power_features(u: NDArray[np.float64], power: float) -> NDArray[np.float64]:
@@ -132,7 +134,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         ``fit`` gets ``groups``, else shuffled folds seeded by
         ``random_state``, 0 when ``None``) with the one-standard-error rule
         (:func:`one_standard_error_choice`): the largest penalty whose
-        held-out error is within one standard error of the best. Small
+        held-out error is within one standard error of the best; on at most
+        :data:`RIDGE_SELECTION_ROWS` rows (the same share of every group). Small
         penalties where the nonlinear terms pay (artificial presets), the LTM
         itself where the data do not show that they do (the virtual robot
         experiment: few, small loads).
@@ -274,6 +277,9 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         """
         seed = 0 if self.random_state is None else self.random_state
         groups = check_groups(getattr(self, "_fit_groups", None), len(ys))
+        rows = grouped_subsample(np.arange(len(ys)), groups, RIDGE_SELECTION_ROWS, seed)  # large data: a subsample
+        block, z, ys = block[rows], z[rows], ys[rows]
+        groups = None if groups is None else groups[rows]
         folds = calibration_folds(len(ys), groups, 5, seed)
         errors = np.zeros((len(RIDGE_GRID), len(ys)))
         for k, ridge in enumerate(RIDGE_GRID):

@@ -21,7 +21,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 from ._exceptions import CalibrationInputError
 
-__all__ = ["check_groups", "calibration_folds", "rmse_and_se", "simplest_within_one_se"]
+__all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se"]
 
 
 def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
@@ -92,6 +92,27 @@ def calibration_folds(
     return list(splitter.split(index, groups=g))
 
 
+def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
+    """At most ``size`` of ``rows``, the same share from every group (all rows when they fit).
+
+    Examples
+    --------
+    >>> rows = grouped_subsample(np.arange(100), np.repeat([0, 1], [80, 20]), 10, seed=0)
+    >>> len(rows), int((rows >= 80).sum())
+    (10, 2)
+    """
+    if size is None or rows.size <= size:
+        return rows
+    rng = np.random.default_rng(seed)
+    if groups is None:
+        return np.sort(rng.choice(rows, size=size, replace=False))
+    g = groups[rows]
+    share = size / rows.size
+    keep = [rng.choice(rows[g == label], size=max(1, int(round(share * np.sum(g == label)))), replace=False)
+            for label in np.unique(g)]
+    return np.sort(np.concatenate(keep))
+
+
 def _per_unit(values: NDArray, units: NDArray | None) -> NDArray:
     """``values`` averaged per unit (a group; each row its own unit without groups)."""
     values = np.asarray(values, dtype=float)
@@ -121,6 +142,10 @@ def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[
     return rmse, se_mse / (2.0 * rmse) if rmse > 0 else 0.0
 
 
+#: Relative excess of mean squared error below which two candidates tie (1 %, i.e. 0.5 % in RMSE).
+TIE_TOLERANCE = 0.01
+
+
 def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, complexity: ArrayLike | None = None,
                            eligible: ArrayLike | None = None) -> int:
     """The one-standard-error rule of ftcal: the simplest candidate whose error is within one SE of the best.
@@ -130,7 +155,9 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     candidate of lowest mean error; a candidate qualifies when its mean error
     exceeds the best's by at most one **paired** standard error of the
     difference (per group with ``units``: rows of one group are not
-    independent; per row without). Among those that qualify the one of lowest
+    independent; per row without), or by at most :data:`TIE_TOLERANCE` of the
+    best's mean squared error (0.5 % in RMSE: a gain that small is a tie even
+    when it is consistent, as on noise-free data). Among those that qualify the one of lowest
     ``complexity`` wins (default: the row order, simplest first); equal
     complexity goes to the earlier row. Every model choice in ftcal uses this
     one rule (``auto``, ``ftcal benchmark dataset``, the hybrid's ridge).
@@ -168,6 +195,6 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     for k in np.flatnonzero(ok):
         diff = _per_unit(errors[k] - errors[best], units)
         se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
-        if k == best or float(diff.mean()) <= se:
+        if k == best or float(diff.mean()) <= max(se, TIE_TOLERANCE * means[best]):
             qualified.append(int(k))
     return min(qualified, key=lambda k: (rank[k], k))

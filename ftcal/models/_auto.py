@@ -12,14 +12,14 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import nnls
 from sklearn import config_context
 from sklearn.base import clone
-from sklearn.model_selection import cross_val_predict
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ..calibrators._base import BaseCalibrator, calibrated_range, resolve_alpha
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import calibration_folds, check_groups, rmse_and_se, simplest_within_one_se
+from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
+                                     simplest_within_one_se)
 from ..core._validation import check_zero_reading, validate_training_data
 from ..core._wrench import scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
@@ -95,20 +95,6 @@ def minimum_training_rows(estimator, n_channels: int) -> int:
     return 25 * n_channels
 
 
-def _grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
-    """At most ``size`` of ``rows``, the same share from every group (all rows when they fit)."""
-    if size is None or rows.size <= size:
-        return rows
-    rng = np.random.default_rng(seed)
-    if groups is None:
-        return np.sort(rng.choice(rows, size=size, replace=False))
-    g = groups[rows]
-    share = size / rows.size
-    keep = [rng.choice(rows[g == label], size=max(1, int(round(share * np.sum(g == label)))), replace=False)
-            for label in np.unique(g)]
-    return np.sort(np.concatenate(keep))
-
-
 def _is_network(estimator) -> bool:
     from ..neural_network._base import NetworkCalibrator
 
@@ -130,26 +116,27 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed):
 
     Networks: the K fold models are trained as one stacked fit
     (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
-    training fold (the same share of every group); everything else through
-    :func:`sklearn.model_selection.cross_val_predict` (with ``groups`` when its
-    ``fit`` takes them, for its own inner model choice).
+    training fold (the same share of every group); everything else fold by
+    fold, as :func:`sklearn.model_selection.cross_val_predict` does (with
+    ``groups`` when its ``fit`` takes them, for its own inner model choice),
+    but for any subset of the folds, so that the folds of one model can run
+    in different jobs. Rows of folds not in ``folds`` are NaN.
     """
-    import inspect
-
     if _is_network(estimator):
         from ..neural_network._stacked import fit_stacked
 
         models = [clone(estimator) for _ in folds]
-        train = [_grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
+        train = [grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
         fit_stacked(models, [X[t] for t in train], [y[t] for t in train])
-        pred = np.empty_like(y)
+        pred = np.full_like(y, np.nan)
         for model, (_, test) in zip(models, folds):
             pred[test] = model.predict(X[test])
         return pred
-    params = {"groups": groups} if groups is not None and "groups" in inspect.signature(estimator.fit).parameters \
-        else None
-    with config_context(enable_metadata_routing=False):
-        return cross_val_predict(estimator, X, y, cv=folds, params=params)
+    pred = np.full_like(y, np.nan)
+    for train, test in folds:
+        model = _fit(clone(estimator), X[train], y[train], None if groups is None else groups[train])
+        pred[test] = model.predict(X[test])
+    return pred
 
 
 def _row_errors(pred: NDArray, y: NDArray, alpha: float) -> NDArray:
@@ -166,7 +153,7 @@ def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
 
 def score_candidates(
     candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
-    zero_reading=None, random_state: int | None = 0, network_samples: int | None = 5000,
+    zero_reading=None, random_state: int | None = 0, network_samples: int | None = 2000,
     baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None,
 ) -> tuple[dict, NDArray[np.float64], list, dict]:
     """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
@@ -240,22 +227,57 @@ def score_candidates(
                                             "needs"))
             continue
         rows.append((name, "candidate", None))
-        tasks.append(delayed(_score_one)(estimator, X, y, folds, groups, network_samples, seed))
+        tasks.append((len(rows) - 1, estimator, network_samples))
     for name, regressor in (baselines or {}).items():
         rows.append((name, "baseline", None))
-        tasks.append(delayed(_score_one)(regressor, X, y, folds, groups, None, seed))
-    outcomes = iter(Parallel(n_jobs=n_jobs)(tasks))
+        tasks.append((len(rows) - 1, regressor, None))
+    # a job per fold (a stacked network fit and a structure search take all folds in one), the costliest first
+    # (kernel models, then networks), so that the last job to finish is a short one
+    jobs = [(row, est, samples, [fold] if _per_fold(est) else folds)
+            for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
+    jobs.sort(key=lambda job: _cost_rank(job[1]))
+    done = Parallel(n_jobs=n_jobs)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
+                                   for _, est, samples, part in jobs)
+    outcomes: dict = {}
+    for (row, *_), outcome in zip(jobs, done):
+        outcomes.setdefault(row, []).append(outcome)
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] == "candidate":  # the stack after the candidates
             _score_stack(results, errors, predictions, record, y, alpha, folds)
-        outcome = (None, None, skipped, None) if skipped else next(outcomes)
-        if outcome[0] is not None:
-            fitted[name] = outcome[0]
-        record(name, kind, outcome[2], kind == "candidate" and not skipped, outcome[1], outcome[3])
+        model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i])
+        if model is not None:
+            fitted[name] = model
+        record(name, kind, status, kind == "candidate" and not skipped, pred, seconds)
     if stack and rows and rows[-1][1] == "candidate":
         _score_stack(results, errors, predictions, record, y, alpha, folds)
     return results, np.vstack(errors), predictions, fitted
+
+
+def _per_fold(estimator) -> bool:
+    """Whether ``estimator``'s folds may run as separate jobs (not a stacked network, not a structure search)."""
+    return not _is_network(estimator) and not hasattr(estimator, "structure_params")
+
+
+def _merge(parts: list) -> tuple:
+    """One model's ``(fitted, predictions, status, seconds)`` from its jobs' (one per fold, or one)."""
+    failed = [status for _, _, status, _ in parts if status != "scored"]
+    if failed:
+        return None, None, failed[0], None
+    pred = parts[0][1].copy()
+    for _, more, _, _ in parts[1:]:
+        pred = np.where(np.isnan(pred), more, pred)
+    return parts[0][0], pred, "scored", sum(seconds for *_, seconds in parts)
+
+
+def _cost_rank(estimator) -> int:
+    """0 for kernel models (the GP, the stock kernel baselines: cubic in the rows), 1 for networks, 2 the rest."""
+    from ..calibrators._gaussian_process import GaussianProcessCalibrator
+    from ._baselines import SubsampledRegressor
+
+    if isinstance(estimator, (GaussianProcessCalibrator, SubsampledRegressor)):
+        return 0
+    return 1 if _is_network(estimator) else 2
 
 
 def _score_one(estimator, X, y, folds, groups, network_samples, seed):
@@ -448,8 +470,9 @@ class AutoCalibrator(BaseCalibrator):
     stack : bool, default=True
         Also score a non-negative combination of the best candidates.
     baselines : bool, default=True
-        Report the stock scikit-learn baselines beside (never chosen).
-    network_samples : int or None, default=5000
+        Report the stock scikit-learn baselines beside (never chosen); the kernel ones
+        (``sk_kernel_ridge``, ``sk_gp``) fitted on at most 1000 rows, the GP candidate's ``max_samples``.
+    network_samples : int or None, default=2000
         Most training rows a network candidate sees, in each fold and in the
         final refit (a grouped subsample; ``None``: all).
     n_jobs : int or None, default=None
@@ -505,7 +528,7 @@ class AutoCalibrator(BaseCalibrator):
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
-                 network_samples=5000, n_jobs=None, alpha=None, zero_reading=None, random_state=None):
+                 network_samples=2000, n_jobs=None, alpha=None, zero_reading=None, random_state=None):
         self.candidates = candidates
         self.cv = cv
         self.schedule = schedule
@@ -560,7 +583,9 @@ class AutoCalibrator(BaseCalibrator):
         results, errors, _, fitted = score_candidates(
             candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
             random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
-            baselines=stock_baselines(X.shape[1], random_state=seed) if self.baselines else None,
+            # the stock kernel models on as many rows as ftcal's GP (its default max_samples): the same budget
+            baselines=stock_baselines(X.shape[1], max_kernel_samples=1000, random_state=seed)
+            if self.baselines else None,
         )
         if not any(results["eligible"]):
             why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
@@ -578,7 +603,7 @@ class AutoCalibrator(BaseCalibrator):
             if name in fitted:  # fitted on all rows already, when it chose its structure
                 return fitted[name]
             model = with_alpha_and_tare(templates[name], self.alpha_, given)
-            rows = _grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
+            rows = grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
                 if _is_network(model) else np.arange(len(X))
             return _fit(model, X[rows], y[rows], None if groups is None else groups[rows])
 
