@@ -16,7 +16,7 @@ Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file e
 ``robot_held``
     :func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses), one outer
     pose-grouped hold-out (a fifth of the poses): ``auto`` with the groups, baselines, LTM.
-``thesis``, ``asymmetric``
+``thesis``, ``asymmetric``, ``reconstructed``
     :func:`ftcal.make_artificial_dataset` (5000 training rows, 1250 test rows), noise floor from the dataset.
 ``dead_weight_15``, ``dead_weight_30``, ``dead_weight_50``
     :func:`ftcal.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
@@ -42,7 +42,8 @@ from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held
 from ftcal.models import stock_baselines
 
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
-CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "thesis", "asymmetric", "robot_held")
+CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "thesis", "asymmetric", "reconstructed",
+         "robot_held")
 
 
 def rmse(y, pred, alpha):

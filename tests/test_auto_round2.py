@@ -254,6 +254,22 @@ def test_cli_predict_std_writes_std_columns_and_refuses_models_without_one(tmp_p
     assert len(err) == 1 and err[0].startswith("ftcal: error: --std:") and "no standard deviation" in err[0]
 
 
+def test_cli_fit_auto_uses_the_short_schedule_and_jobs(tmp_path):
+    import json
+
+    from ftcal.cli import main
+
+    raw, w = cubic(100)  # 80-row training folds: the networks (they need 25 N rows) are skipped, the GP is scored
+    data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
+    assert main(["fit", str(data), "--model", "auto", "--jobs", "1", "--out", str(tmp_path / "m"), "-q"]) == 0
+    summary = json.loads((tmp_path / "m" / "auto.fit.json").read_text())
+    assert summary["schedule"] == "short"
+    auto = ftcal.load_model(tmp_path / "m" / "auto.model.npz")
+    assert auto.n_jobs == 1 and auto.schedule == "short"
+    status = dict(zip(auto.cv_results_["name"], auto.cv_results_["status"]))
+    assert status["gaussian_process"] == "scored" and status["directional"].startswith("skipped")
+
+
 def test_cross_validate_routes_groups_to_auto_through_metadata_routing():
     import sklearn
     from sklearn.model_selection import GroupKFold, cross_validate

@@ -43,8 +43,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("dataset", help="training dataset (.csv or .npz, as written by 'ftcal simulate' / 'prepare')")
     p.add_argument("-m", "--model", default="directional", choices=calibrator_names(), help="calibrator")
     p.add_argument(
-        "--schedule", default="thesis", choices=("thesis", "short"),
-        help="training schedule of the networks: the thesis' (1700+ epochs) or a short one (minutes)",
+        "--schedule", choices=("thesis", "short"),
+        help="training schedule of the networks: the thesis' (1700+ epochs; the default for a network model) or "
+        "a short one (minutes; the default for --model auto, whose networks are candidates trained once per fold)",
     )
     p.add_argument(
         "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
@@ -120,6 +121,8 @@ def run(args: argparse.Namespace) -> int:
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
+    if args.schedule is None:
+        args.schedule = "short" if args.model == "auto" else "thesis"
     estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed, **params)
     X = data.raw
     if args.temperature:
