@@ -1,0 +1,86 @@
+"""Issue 19's time targets: ``auto`` fits 400 rows in <= 30 s and 90 000 rows (networks considered) in <= 5 min.
+
+Usage::
+
+    python benchmarks/auto_speed.py [--repeats 3] [--jobs 2] [--skip-large] [--out benchmarks/results/auto_speed.json]
+
+``AutoCalibrator`` with its defaults (every candidate, networks on the short schedule, the stack, the five
+stock baselines) and ``n_jobs=--jobs``:
+
+* **400 rows**: the first 400 rows of :func:`ftcal.make_soft_sensor_dataset` (8 channels), shuffled
+  5-fold; the median of ``--repeats`` fits after one warm-up fit (the first fit also starts the worker
+  processes and imports torch in them, reported apart);
+* **90 000 rows**: :func:`ftcal.make_robot_held_dataset` (47 poses, pose-grouped 5-fold), one fit.
+
+Beside each, in the same process, the stock scikit-learn GP of issue 19 fitted once on the same rows (on
+1000 of them for the large set, as ``auto`` does): the ratio says how the time compares with what a user
+would run instead, whatever the machine's speed. The load average before and after is recorded.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import statistics
+import time
+import warnings
+from pathlib import Path
+
+import ftcal
+from ftcal.models import stock_baselines
+
+
+def timed(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--skip-large", action="store_true")
+    parser.add_argument("--out", default="benchmarks/results/auto_speed.json")
+    args = parser.parse_args()
+    warnings.simplefilter("ignore")
+    result: dict = {"load_average_before": os.getloadavg(), "jobs": args.jobs,
+                    "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
+                                "python": platform.python_version()}}
+    soft = ftcal.make_soft_sensor_dataset()
+    X, y = soft.raw[:400], soft.wrench[:400]
+
+    def fit_small():
+        auto = ftcal.AutoCalibrator(random_state=0, n_jobs=args.jobs).fit(X, y)
+        result["small_choice"] = auto.best_name_
+
+    result["small_first_fit_s"] = timed(fit_small)
+    runs = [timed(fit_small) for _ in range(args.repeats)]
+    result["small_fit_s"] = runs
+    result["small_fit_median_s"] = statistics.median(runs)
+    gp = stock_baselines(8)["sk_gp"]
+    result["small_sk_gp_fit_s"] = timed(lambda: gp.fit(X, y))
+    result["small_ratio_to_sk_gp"] = result["small_fit_median_s"] / result["small_sk_gp_fit_s"]
+    print(json.dumps(result, indent=1), flush=True)
+    if not args.skip_large:
+        robot = ftcal.make_robot_held_dataset()
+
+        def fit_large():
+            auto = ftcal.AutoCalibrator(random_state=0, n_jobs=args.jobs).fit(robot.raw, robot.wrench,
+                                                                               groups=robot.group)
+            result["large_choice"] = auto.best_name_
+            result["large_table"] = auto.summary()
+
+        result["large_fit_s"] = timed(fit_large)
+        gp = stock_baselines(8, max_kernel_samples=1000)["sk_gp"]
+        result["large_sk_gp_fit_s"] = timed(lambda: gp.fit(robot.raw, robot.wrench))
+        result["large_ratio_to_sk_gp"] = result["large_fit_s"] / result["large_sk_gp_fit_s"]
+    result["load_average_after"] = os.getloadavg()
+    Path(args.out).write_text(json.dumps(result, indent=1))
+    print(json.dumps({k: v for k, v in result.items() if k != "large_table"}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
