@@ -1,21 +1,19 @@
 """The network calibrators' base: training through the one engine, numpy inference.
 
-One calibrator's ``fit`` and :func:`~ftcal.fit_stacked` run the same code, :func:`train_networks`: the
-engine (:class:`~ftcal.neural_network._engine.NetworkRegressor`, kept as ``net_``), the schedule
+One calibrator's ``fit`` and :func:`~ftcal.fit_stacked` run the same code, :func:`train_networks`: the engine
+(:class:`~ftcal.neural_network._engine.NetworkRegressor`, kept as ``net_``), the schedule
 (:mod:`~ftcal.neural_network._schedule`), one optimiser path. float32 inside the network, float64 out of
-``predict``. ``random_state`` seeds the initial weights, batch order and ``ValidSplit``
-(``validation_fraction``; ``None`` monitors the training loss) in a forked torch RNG: the caller's random
-state is untouched and a seed gives the same predictions. ``n_threads`` limits torch's and BLAS's threads
-in ``fit`` through a ``threadpoolctl`` context; nothing process-wide is changed.
+``predict``. ``random_state`` seeds the initial weights, batch order and ``ValidSplit`` in a forked torch RNG:
+the caller's random state is untouched and a seed gives the same predictions. ``n_threads`` limits torch's and
+BLAS's threads in ``fit`` through a ``threadpoolctl`` context; nothing process-wide is changed.
 """
 
 from __future__ import annotations
 
 import contextlib
 import inspect
-import numbers
-from numbers import Integral, Real
 from collections.abc import Sequence
+from numbers import Integral, Real
 
 import numpy as np
 import torch
@@ -65,8 +63,7 @@ NETWORK_DEFAULTS = dict(hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32,
 def keyword_init(defaults: dict):
     """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else.
 
-    Its signature is the explicit list scikit-learn reads (``get_params``, ``clone``), one definition shared
-    by the network calibrators instead of two copied twenty-line ``__init__`` bodies.
+    Its signature is the explicit list scikit-learn reads (``get_params``, ``clone``).
     """
 
     def __init__(self, **params):
@@ -90,9 +87,7 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
     quietly, as its early stopping does) is raised again as ``KeyboardInterrupt``: a finished schedule always
     leaves a stop reason for every member, an interrupted one does not.
     """
-    setups = []
-    for est, (X, y) in zip(estimators, datasets):
-        setups.append(est._training_setup(X, y))
+    setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
     template = estimators[0]
     net = template._build_net(setups[0][0].shape[1], [seed for _, _, seed in setups],
                               [est._loss_weights() for est in estimators])
@@ -109,9 +104,8 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
 
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
-    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
-    ``_decode(outputs, X) -> wrench`` (or override ``_predict_wrench``), ``_network_outputs()`` and
-    ``_loss_weights()``.
+    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``, ``_decode(outputs, X) -> wrench``
+    (or override ``_predict_wrench``), ``_network_outputs()`` and ``_loss_weights()``.
     """
 
     _module_class: type[torch.nn.Module]
@@ -148,7 +142,7 @@ class NetworkCalibrator(BaseCalibrator):
             raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); "
                                         f"got {sizes!r}.")
         for width in sizes:
-            if isinstance(width, bool) or not isinstance(width, numbers.Integral) or width < 1:
+            if isinstance(width, bool) or not isinstance(width, Integral) or width < 1:
                 raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
 
     def _thread_limit(self):
@@ -166,10 +160,9 @@ class NetworkCalibrator(BaseCalibrator):
                    ) -> NetworkRegressor:
         """The (unfitted) engine with this estimator's module, loss, optimiser and schedule.
 
-        ``seed``: one seed, or one per member of a stack; ``loss_weights``: one row per member (default: this
-        estimator's own).
+        ``seed``: one, or one per member of a stack; ``loss_weights``: one row per member (default: this one's).
         """
-        seeds = [int(seed)] if isinstance(seed, numbers.Integral) else [int(s) for s in seed]
+        seeds = [int(seed)] if isinstance(seed, Integral) else [int(s) for s in seed]
         return self._net_class(
             module=self._module_class, module__n_inputs=n_inputs, module__n_outputs=self._network_outputs(),
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
@@ -189,8 +182,7 @@ class NetworkCalibrator(BaseCalibrator):
                 f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."
             )
         inputs, targets = self._training_pairs(X, y)
-        too_large = np.abs(inputs).max(initial=0.0) > _FLOAT32_SAFE or np.abs(targets).max(initial=0.0) > _FLOAT32_SAFE
-        if too_large:
+        if max(np.abs(inputs).max(initial=0.0), np.abs(targets).max(initial=0.0)) > _FLOAT32_SAFE:
             raise CalibrationInputError(
                 f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
                 "beyond what float32 training handles; check the units of X and y."
@@ -213,10 +205,8 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _member_net(self, stack: NetworkRegressor, k: int, estimator: "NetworkCalibrator", seed: int
                     ) -> NetworkRegressor:
-        """Member ``k`` of a trained stack as a net of its own: its module with its weights, its history rows.
-
-        Its history is its slice of the stack's (``member_*`` values, up to the epoch it stopped at).
-        """
+        """Member ``k`` of a trained stack as a net of its own: its weights, its slice of the history (its
+        ``member_*`` values, up to the epoch it stopped at)."""
         net = estimator._build_net(stack.module_.layout[0][0], seed)
         with torch.random.fork_rng(devices=[]):
             net.initialize()
@@ -232,24 +222,13 @@ class NetworkCalibrator(BaseCalibrator):
         net.history = History(rows)
         return net
 
-    def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best_loss: float,
+    def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float,
                          best_epoch: int, stop_reason: str) -> None:
-        """Refuse a diverged run; keep the trained net and its schedule's outcome."""
-        self._check_converged(net, targets, best_loss)
-        self.net_ = net
-        self.n_epochs_ = len(net.history)
-        self.stop_reason_ = stop_reason
-        self.best_epoch_ = int(best_epoch)
-        self._cache_numpy_layers()
+        """Keep the trained net and its schedule's outcome, or refuse a diverged run with an error naming the epoch.
 
-    def _check_converged(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float) -> None:
-        """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
-
-        Diverged means a NaN or inf loss, or a best loss more than
-        :data:`_DIVERGENCE_FACTOR` times the loss of predicting zero (the
-        mean squared target): such a net is worse than no net at all. (The
-        loss of predicting the mean would be too strict a yardstick: the
-        directional model's targets can be nearly constant, e.g. a single
+        Diverged means a NaN or inf loss, or a best loss more than :data:`_DIVERGENCE_FACTOR` times the loss of
+        predicting zero (the mean squared target): such a net is worse than no net at all. (Predicting the mean
+        would be too strict a yardstick: the directional model's targets can be nearly constant, e.g. a single
         positive output, and a short schedule does not beat it 100-fold.)
         """
         fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
@@ -267,6 +246,11 @@ class NetworkCalibrator(BaseCalibrator):
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
                 f"times that of predicting zero ({nothing:.3g}) {fix}"
             )
+        self.net_ = net
+        self.n_epochs_ = len(net.history)
+        self.stop_reason_ = stop_reason
+        self.best_epoch_ = int(best_epoch)
+        self._cache_numpy_layers()
 
     def _cache_numpy_layers(self) -> None:
         """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
@@ -288,9 +272,9 @@ class NetworkCalibrator(BaseCalibrator):
         """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks.
 
         No torch dispatch (a one-sample predict costs a few numpy calls). float64 keeps each row's result
-        independent of the other rows (float32 BLAS kernels round a row differently depending on where it
-        sits in the batch). A row whose inputs or outputs leave float32's range gives inf, as the float32
-        net (and the exported ONNX graph) would, so that ``predict`` refuses it.
+        independent of the other rows (float32 BLAS kernels round a row differently depending on where it sits
+        in the batch). A row whose inputs or outputs leave float32's range gives inf, as the float32 net (and
+        the exported ONNX graph) would, so that ``predict`` refuses it.
         """
         layers = self._numpy_layers()
         out = np.empty((len(inputs), layers[-1][1].shape[0]))
@@ -312,8 +296,8 @@ class NetworkCalibrator(BaseCalibrator):
     def network_inputs(self, X) -> NDArray[np.float64]:
         """What the fitted network sees for raw readings ``X`` (n, N): the pre-processing of ``predict``.
 
-        For a deployment that runs the network elsewhere (with
-        :meth:`fitted_layers`); the re-tare is applied as in ``predict``.
+        For a deployment that runs the network elsewhere (with :meth:`fitted_layers`); the re-tare is applied as
+        in ``predict``.
 
         Returns
         -------
@@ -325,9 +309,8 @@ class NetworkCalibrator(BaseCalibrator):
     def fitted_layers(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], str]]:
         """The fitted network as ``(weight (n_in, n_out), bias (n_out,), activation)`` per layer, float64 copies.
 
-        ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"``;
-        ``h = activation(h @ weight + bias)`` layer after layer maps
-        :meth:`network_inputs` to the network's outputs.
+        ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"``; ``h = activation(h @ weight + bias)`` layer
+        after layer maps :meth:`network_inputs` to the network's outputs.
         """
         check_is_fitted(self)
         return [(w.copy(), b.copy(), a) for w, b, a in self._numpy_layers()]

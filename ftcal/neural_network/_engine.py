@@ -1,29 +1,15 @@
-"""The one training engine of ftcal's networks: skorch's loop over ``K >= 1`` nets of one architecture.
+"""The one training engine of ftcal's networks: skorch's own loop over ``K >= 1`` nets of one architecture.
 
-:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor`` (one ``fit``:
-``K = 1``; :func:`ftcal.fit_stacked` and seed ensembles: ``K > 1``). skorch's
-loop runs as it is — ``fit_loop``, ``run_single_epoch``, ``train_step``,
-``get_loss``, the history and every callback hook, per batch and per epoch.
-What it changes:
-
-* **data**: member ``k`` has its own dataset, ``ValidSplit`` and batch order
-  (seeded with its seed). Batches are slices of tensors loaded once (no
-  ``DataLoader``), batch first: ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``
-  whose last column marks real rows (1) and padding (0: a member with fewer
-  rows runs out of batches first).
-* **module**: ``K = 1`` trains the calibrator's own module (its forward sees
-  ``(B, n_in)``); ``K > 1`` a :class:`~ftcal.neural_network._modules.StackedMLP`.
-  Gradients are autograd's.
-* **loss**: :class:`MemberSquaredError`, the sum of the members' own losses
-  (member ``k``'s gradient is its own loss's); each member's epoch losses
-  are recorded as ``member_train_loss`` / ``member_valid_loss``.
-* **optimiser**: one ``torch.optim.Adam`` (``optimizer_``) steps every member
-  (its groups: the members grouped by rate); ``optimizers_[k]`` holds member
-  ``k``'s rate for its scheduler. Adam's state is per parameter: each member
-  keeps its own moments and step count. ``train_step``'s closure runs once;
-  a member out of rows or stopped gets no gradient, so Adam skips it.
-
-The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
+:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor`` (one ``fit``: ``K = 1``; :func:`ftcal.fit_stacked`
+and seed ensembles: ``K > 1``) whose ``fit_loop``, ``train_step``, ``get_loss``, history and callback hooks (per
+batch and per epoch) run as they are. It changes the data (member ``k``'s own dataset, ``ValidSplit`` and batch
+order, seeded with its seed; :class:`MemberBatches`), the module (``K > 1``: a
+:class:`~ftcal.neural_network._modules.StackedMLP`; gradients are autograd's), the loss
+(:class:`MemberSquaredError`; each member's epoch losses recorded as ``member_train_loss`` /
+``member_valid_loss``) and the optimiser: one ``torch.optim.Adam`` (``optimizer_``) steps every member, its groups
+the members grouped by rate; ``optimizers_[k]`` holds member ``k``'s rate for its scheduler. Adam's state is per
+parameter, so each member keeps its own moments and step count; a member out of rows or stopped gets no gradient,
+so Adam skips it. The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
 """
 
 from __future__ import annotations
@@ -41,7 +27,7 @@ __all__ = ["NetworkRegressor", "MemberSquaredError", "MemberBatches"]
 class MemberSquaredError(torch.nn.Module):
     """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows.
 
-    ``y_true`` carries the row mask as its last column when the batch has padding rows (see the module doc).
+    ``y_true`` carries the row mask as its last column when the batch has padding rows (:class:`MemberBatches`).
     """
 
     def __init__(self, weights):
@@ -64,8 +50,10 @@ class MemberSquaredError(torch.nn.Module):
 
 
 class MemberBatches:
-    """Mini-batches of ``K`` members' padded rows; each iteration reshuffles every member with its generator.
+    """Mini-batches of ``K`` members' rows, ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``, slices of tensors loaded once.
 
+    ``y``'s last column marks real rows (1) and padding (0: a member with fewer rows runs out of batches first);
+    it is left out of a batch without padding. Each iteration reshuffles every member with its generator;
     ``generators=None``: one batch of every row, in order (validation).
     """
 
@@ -90,24 +78,14 @@ class MemberBatches:
             yield X[start:stop], y[start:stop] if padded else y[start:stop, :, :-1]
 
 
-def _side_by_side(blocks: list[np.ndarray]) -> torch.Tensor:
-    """Row blocks of unequal length as one ``(n_max, K, width + 1)`` float32 tensor, a row mask last."""
-    n_max, width = max(len(b) for b in blocks), blocks[0].shape[1]
-    out = np.zeros((n_max, len(blocks), width + 1), dtype=np.float32)
-    for k, block in enumerate(blocks):
-        out[: len(block), k, :width] = block
-        out[: len(block), k, width] = 1.0
-    return torch.from_numpy(out)
-
-
 class NetworkRegressor(NeuralNetRegressor):
     """skorch's ``NeuralNetRegressor`` training ``len(seeds)`` nets of one architecture at once (module doc).
 
     Parameters beyond skorch's
     --------------------------
     seeds : sequence of int
-        One per member: its initial weights (``torch.manual_seed(seed)`` before
-        building its module), validation split and batch order.
+        One per member: its initial weights (``torch.manual_seed(seed)`` before building its module), validation
+        split and batch order.
     validation_fraction : float or None
         Each member's share of rows held out (``ValidSplit``); None: no split.
 
@@ -139,10 +117,7 @@ class NetworkRegressor(NeuralNetRegressor):
         _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
         self.trained_parameters_ = list(self.module_.parameters())
         self.optimizers_ = [self.optimizer(self.member_parameters(k), **kwargs) for k in range(len(self.seeds))]
-        # K = 1: the member's optimiser steps. K > 1: one Adam over every member's parameters steps (one fused
-        # kernel); its param groups are the members' grouped by learning rate, regrouped when a member's
-        # scheduler changes its rate in optimizers_[k]. Adam's state is per parameter, so each member keeps
-        # its own moments and step count.
+        # K > 1: one Adam (one fused kernel) over every member's parameters, regrouped by rate every epoch
         self.optimizer_ = self.optimizers_[0] if len(self.optimizers_) == 1 else self.optimizer(
             [p for optimizer in self.optimizers_ for p in optimizer.param_groups[0]["params"]], **kwargs)
         return self
@@ -192,7 +167,7 @@ class NetworkRegressor(NeuralNetRegressor):
         pass  # the calibrators validated every member's data
 
     def get_split_datasets(self, X, y=None, **fit_params):
-        train, valid = [], []
+        train, valid, n_in = [], [], np.shape(X[0])[1]
         for seed, X_k, y_k in zip(self.seeds, X, y):
             data = np.hstack([X_k, y_k])
             if self.validation_fraction is None:
@@ -201,10 +176,12 @@ class NetworkRegressor(NeuralNetRegressor):
             train_ds, valid_ds = ValidSplit(self.validation_fraction, random_state=int(seed))(self.get_dataset(X_k, y_k))
             train.append(data[train_ds.indices])
             valid.append(data[valid_ds.indices])
-        n_in = np.shape(X[0])[1]
 
-        def split(blocks):
-            both = _side_by_side(blocks)
+        def split(blocks):  # side by side, (n_max, K, n_in + n_out + 1), a row mask last
+            both = np.zeros((max(map(len, blocks)), len(blocks), blocks[0].shape[1] + 1), dtype=np.float32)
+            for k, block in enumerate(blocks):
+                both[:len(block), k] = np.hstack([block, np.ones((len(block), 1))])
+            both = torch.from_numpy(both)
             return both[..., :n_in], both[..., n_in:], [len(b) for b in blocks]
 
         self.generators_ = [torch.Generator().manual_seed(int(seed)) for seed in self.seeds]
@@ -224,8 +201,8 @@ class NetworkRegressor(NeuralNetRegressor):
         super().on_epoch_begin(net, **kwargs)
         if len(self.optimizers_) > 1:
             self._group_by_rate()
-        self._loss_sums = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
-        self._row_counts = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+        self._loss_sums, self._row_counts = ({True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+                                             for _ in range(2))
 
     def on_batch_end(self, net, batch=None, training=False, y_pred=None, **kwargs):
         rows = self._rows(batch)
