@@ -1,11 +1,6 @@
-"""The network calibrators' base: training through the one engine, numpy inference.
-
-One calibrator's ``fit`` and :func:`~ftcal.fit_stacked` run the same code, :func:`train_networks`: the engine
-(:class:`~ftcal.neural_network._engine.NetworkRegressor`, kept as ``net_``), the schedule
-(:mod:`~ftcal.neural_network._schedule`), one optimiser path. float32 inside the network, float64 out of
-``predict``. ``random_state`` seeds the initial weights, batch order and ``ValidSplit`` in a forked torch RNG:
-the caller's random state is untouched and a seed gives the same predictions. ``n_threads`` limits torch's and
-BLAS's threads in ``fit`` through a ``threadpoolctl`` context; nothing process-wide is changed.
+"""The network calibrators' base: one calibrator's ``fit`` and :func:`~ftcal.fit_stacked` both run
+:func:`train_networks` (the one engine, :mod:`~ftcal.neural_network._engine`, in a forked torch RNG and a
+``threadpoolctl`` context: nothing process-wide changes); float32 inside the network, float64 numpy inference.
 """
 
 from __future__ import annotations
@@ -105,7 +100,8 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
     ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``, ``_decode(outputs, X) -> wrench``
-    (or override ``_predict_wrench``), ``_network_outputs()`` and ``_loss_weights()``.
+    (or override ``_predict_wrench``), ``_network_outputs()`` (the output layer's width for ``n_outputs_``
+    targets) and ``_loss_weights()``.
     """
 
     _module_class: type[torch.nn.Module]
@@ -149,13 +145,6 @@ class NetworkCalibrator(BaseCalibrator):
         """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
         return contextlib.nullcontext() if self.n_threads is None else threadpool_limits(self.n_threads)
 
-    def _network_outputs(self) -> int:
-        """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""
-        raise NotImplementedError
-
-    def _seed(self) -> int:
-        return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
-
     def _build_net(self, n_inputs: int, seed: int | Sequence[int], loss_weights: Sequence | None = None
                    ) -> NetworkRegressor:
         """The (unfitted) engine with this estimator's module, loss, optimiser and schedule.
@@ -179,16 +168,14 @@ class NetworkCalibrator(BaseCalibrator):
         if not device_available(self.device):
             raise CalibrationInputError(
                 f"device={self.device!r} is not available on this machine (this torch build has "
-                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."
-            )
+                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'.")
         inputs, targets = self._training_pairs(X, y)
         if max(np.abs(inputs).max(initial=0.0), np.abs(targets).max(initial=0.0)) > _FLOAT32_SAFE:
             raise CalibrationInputError(
                 f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
-                "beyond what float32 training handles; check the units of X and y."
-            )
+                "beyond what float32 training handles; check the units of X and y.")
         self._check_network_memory(inputs.shape[1], len(inputs))
-        return inputs, targets, self._seed()
+        return inputs, targets, int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
 
     def _check_network_memory(self, n_inputs: int, n_rows: int) -> None:
         """Refuse, before any allocation, a network whose training would exceed ftcal's memory limit."""
@@ -237,31 +224,26 @@ class NetworkCalibrator(BaseCalibrator):
             bad = np.flatnonzero(~np.isfinite(losses))
             if bad.size:
                 raise CalibrationInputError(
-                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}"
-                )
+                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}")
         weights = np.asarray(self._loss_weights(), dtype=float)
         nothing = float(np.mean((targets**2) @ weights))
         if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:
             raise CalibrationInputError(
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
-                f"times that of predicting zero ({nothing:.3g}) {fix}"
-            )
+                f"times that of predicting zero ({nothing:.3g}) {fix}")
         self.net_ = net
         self.n_epochs_ = len(net.history)
         self.stop_reason_ = stop_reason
         self.best_epoch_ = int(best_epoch)
         self._cache_numpy_layers()
 
-    def _cache_numpy_layers(self) -> None:
-        """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
-        self.__dict__.pop("_numpy_layers_cache", None)
-        self._numpy_layers()
-
     def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
         """The fitted layers as float64 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
         cached = self.__dict__.get("_numpy_layers_cache")
-        if cached is not None and cached[0] is self.net_.module_:
-            return cached[1]
+        return cached[1] if cached is not None and cached[0] is self.net_.module_ else self._cache_numpy_layers()
+
+    def _cache_numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
+        """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
         layers = [(layer.weight.detach().cpu().double().numpy().T.copy(),
                    layer.bias.detach().cpu().double().numpy().copy(), activation)
                   for layer, activation in mlp_layers(self.net_.module_)]

@@ -53,18 +53,15 @@ class MemberBatches:
     """Mini-batches of ``K`` members' rows, ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``, slices of tensors loaded once.
 
     ``y``'s last column marks real rows (1) and padding (0: a member with fewer rows runs out of batches first);
-    it is left out of a batch without padding. Each iteration reshuffles every member with its generator;
-    ``generators=None``: one batch of every row, in order (validation).
+    it is left out of a batch without padding. Each iteration reshuffles every member with its generator (skorch
+    iterates one iterator every epoch).
     """
 
-    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int | None = None,
-                 generators: list[torch.Generator] | None = None):
+    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int,
+                 generators: list[torch.Generator]):
         self.X, self.y, self.counts, self.batch_size, self.generators = X, y, counts, batch_size, generators
 
     def __iter__(self):
-        if self.generators is None:
-            yield self.X, self.y
-            return
         n_max, K = self.y.shape[:2]
         order = torch.arange(n_max).repeat(K, 1)
         for k, (n, generator) in enumerate(zip(self.counts, self.generators)):
@@ -109,9 +106,7 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def member_parameters(self, k: int) -> list[torch.Tensor]:
         """Member ``k``'s parameters (views into the stack when ``K > 1``): what its optimiser moves."""
-        if len(self.seeds) == 1:
-            return list(self.module_.parameters())
-        return self.module_.member_parameters(k)
+        return list(self.module_.parameters()) if len(self.seeds) == 1 else self.module_.member_parameters(k)
 
     def initialize_optimizer(self, triggered_directly=None):
         _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
@@ -188,10 +183,8 @@ class NetworkRegressor(NeuralNetRegressor):
         return split(train), (split(valid) if valid else None)
 
     def get_iterator(self, dataset, training=False):
-        X, y, counts = dataset
-        if training:
-            return MemberBatches(X, y, counts, int(self.batch_size), self.generators_)
-        return MemberBatches(X, y, counts)
+        X, y, counts = dataset  # validation: one batch of every row, in order
+        return MemberBatches(X, y, counts, int(self.batch_size), self.generators_) if training else [(X, y)]
 
     # -- each member's epoch losses -------------------------------------------------------------------------
     def on_train_begin(self, net, X=None, y=None, **kwargs):
