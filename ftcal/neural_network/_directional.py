@@ -47,9 +47,8 @@ class DirectionalCalibrator(NetworkCalibrator):
     exactly the zero wrench and a near-zero reading a wrench of the same small magnitude order (``s_hat * v_in``),
     never NaN.
 
-    Architecture (III-C): ReLU hidden layers of widths ``hidden_layer_sizes[:-1]``, a tanh layer of width
-    ``hidden_layer_sizes[-1]`` (the second-to-last layer), a linear output layer of 7. The thesis gives no widths;
-    (64, 64, 64) is our default. ``lr`` and the epochs are the thesis' (III-A-d); a randomized search (issue 6,
+    Architecture (III-C): :class:`~ftcal.neural_network.DirectionalNet`; the thesis gives no widths, (64, 64, 64)
+    is ours. ``lr`` and the epochs are the thesis' (III-A-d); a randomized search (issue 6,
     ``benchmarks/RESULTS.md``) found no setting better on every preset, so the defaults stay.
 
     Parameters
@@ -147,15 +146,12 @@ class DirectionalCalibrator(NetworkCalibrator):
             raise CalibrationInputError(
                 f"only {np.count_nonzero(keep)} of {len(keep)} training rows have a non-zero load and a "
                 f"non-zero reading (|X - zero_reading_| and |y| above {threshold} of their largest); the "
-                f"directional model needs loaded samples. Fix: record load cases, or check zero_reading."
-            )
+                f"directional model needs loaded samples. Fix: record load cases, or check zero_reading.")
         if self.n_dropped_zero_load_:
             warnings.warn(
                 f"DirectionalCalibrator: dropped {self.n_dropped_zero_load_} of {len(keep)} training rows with "
                 f"(near-)zero reading or load (below {threshold} of the largest): their direction is undefined.",
-                UserWarning,
-                stacklevel=6,  # the caller of fit (_training_setup, train_networks, _fit, fit)
-            )
+                UserWarning, stacklevel=6)  # the caller of fit (_training_setup, train_networks, _fit, fit)
         scale = v_out[keep] / v_in[keep]
         self.scale_reference_ = float(np.median(scale))
         targets = np.hstack([unit_out[keep], (scale / self.scale_reference_)[:, None]])

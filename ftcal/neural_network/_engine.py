@@ -1,15 +1,8 @@
 """The one training engine of ftcal's networks: skorch's own loop over ``K >= 1`` nets of one architecture.
 
-:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor`` (one ``fit``: ``K = 1``; :func:`ftcal.fit_stacked`
-and seed ensembles: ``K > 1``) whose ``fit_loop``, ``train_step``, ``get_loss``, history and callback hooks (per
-batch and per epoch) run as they are. It changes the data (member ``k``'s own dataset, ``ValidSplit`` and batch
-order, seeded with its seed; :class:`MemberBatches`), the module (``K > 1``: a
-:class:`~ftcal.neural_network._modules.StackedMLP`; gradients are autograd's), the loss
-(:class:`MemberSquaredError`; each member's epoch losses recorded as ``member_train_loss`` /
-``member_valid_loss``) and the optimiser: one ``torch.optim.Adam`` (``optimizer_``) steps every member, its groups
-the members grouped by rate; ``optimizers_[k]`` holds member ``k``'s rate for its scheduler. Adam's state is per
-parameter, so each member keeps its own moments and step count; a member out of rows or stopped gets no gradient,
-so Adam skips it. The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
+skorch's ``fit_loop``, ``train_step``, ``get_loss``, history and callback hooks run as they are; what changes
+(each member's data, the stacked module, the summed loss, one Adam for all members) is described in
+``docs/architecture.md``, "The network engine". A member out of rows or stopped gets no gradient, so Adam skips it.
 """
 
 from __future__ import annotations
@@ -91,8 +84,7 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def __init__(self, module, *args, seeds=(0,), validation_fraction=None, **kwargs):
         super().__init__(module, *args, **kwargs)
-        self.seeds = seeds
-        self.validation_fraction = validation_fraction
+        self.seeds, self.validation_fraction = seeds, validation_fraction
 
     # -- parameters: a member's own module (K = 1) or the stack, and one Adam per member --------------------
     def initialize_module(self):

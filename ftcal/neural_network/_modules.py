@@ -1,11 +1,6 @@
-"""Torch modules and the loss of the two network calibrators.
-
-* :class:`DirectionalNet` (thesis III-C): ReLU hidden layers, a tanh last hidden layer and a linear output
-  layer of 7 units (6-D direction + scale factor).
-* :class:`ComparativeNet` (Oh et al., III-D-a): ReLU hidden layers and a linear output layer of 6 units.
-* :class:`WeightedSquaredError`: ``mean_i sum_j w_j (y_ij - ŷ_ij)²``; with unit weights it is eq. 9, with
-  ``[1, 1, 1, a, a, a]`` eq. 10.
-* :class:`StackedMLP`: ``K`` such nets of one architecture as one module.
+"""Torch modules and the loss of the two network calibrators: :class:`DirectionalNet` (thesis III-C),
+:class:`ComparativeNet` (Oh et al., III-D-a), :class:`WeightedSquaredError` (eq. 9 with unit weights, eq. 10 with
+``[1, 1, 1, a, a, a]``) and :class:`StackedMLP`, ``K`` nets of one architecture as one module.
 """
 
 from __future__ import annotations
@@ -67,7 +62,10 @@ class _MLPNet(nn.Module):
 
 
 class DirectionalNet(_MLPNet):
-    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)] (k + 1 for k targets)."""
+    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)] (k + 1 for k targets).
+
+    ReLU hidden layers, a tanh last hidden layer, a linear output layer.
+    """
 
     last_hidden = nn.Tanh
 
@@ -76,7 +74,8 @@ class DirectionalNet(_MLPNet):
 
 
 class ComparativeNet(_MLPNet):
-    """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6, or k targets)."""
+    """Direct-mapping DNN of Oh et al.: standardised reading (N) -> standardised wrench (6, or k targets), ReLU
+    hidden layers and a linear output layer."""
 
     last_hidden = nn.ReLU
 

@@ -10,11 +10,9 @@ Epochs are numbered from 1 (as in ``net.history``). With ``max_epochs = P1`` and
   phase-3 epochs have run (the hard cap; 0 skips phase 3).
 
 The weights of the epoch with the lowest monitored loss are restored at the end (:class:`RestoreBestWeights`,
-skorch's ``EarlyStopping(load_best=True)`` rule with the phase-3 stop instead of a patience). These callbacks
-are the only definition of the schedule; in the one engine (:mod:`~ftcal.neural_network._engine`) each member
-``k`` of a stack has its own monitored loss (``member_valid_loss[k]``, or ``member_train_loss[k]`` without a
-split), rate, best weights and stop (``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``); a
-stopped member is frozen.
+skorch's ``EarlyStopping(load_best=True)`` rule with the phase-3 stop instead of a patience). These callbacks are
+the only definition of the schedule; each member ``k`` of a stack has its own monitored loss
+(``member_valid_loss[k]``, or ``member_train_loss[k]`` without a split), rate, best weights and stop.
 """
 
 from __future__ import annotations
@@ -29,13 +27,7 @@ __all__ = ["phase_of_epoch", "TrainingPhase", "PlateauLR", "RecoverStop", "Resto
 
 
 def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
-    """Phase (1, 2 or 3) of the 1-based ``epoch``.
-
-    Examples
-    --------
-    >>> [phase_of_epoch(e, 2, 1) for e in range(1, 6)]
-    [1, 1, 2, 3, 3]
-    """
+    """Phase (1, 2 or 3) of the 1-based ``epoch`` (``tests/test_schedule.py`` checks the boundaries)."""
     return 1 if epoch <= max_epochs else 2 if epoch <= max_epochs + plateau_epochs else 3
 
 
@@ -48,8 +40,7 @@ class TrainingPhase(Callback):
     """Record each epoch's ``phase`` and learning rates (``member_lr``; ``lr``: member 0's) in ``net.history``."""
 
     def __init__(self, max_epochs: int, plateau_epochs: int):
-        self.max_epochs = max_epochs
-        self.plateau_epochs = plateau_epochs
+        self.max_epochs, self.plateau_epochs = max_epochs, plateau_epochs
 
     def on_epoch_begin(self, net, **kwargs):
         net.history.record("phase", phase_of_epoch(len(net.history), self.max_epochs, self.plateau_epochs))
@@ -62,10 +53,7 @@ class PlateauLR(Callback):
     """torch's ``ReduceLROnPlateau`` on each member's optimiser, stepped on its monitored loss, in phase 2 only."""
 
     def __init__(self, factor: float, patience: int, min_lr: float, monitor: str = "member_valid_loss"):
-        self.factor = factor
-        self.patience = patience
-        self.min_lr = min_lr
-        self.monitor = monitor
+        self.factor, self.patience, self.min_lr, self.monitor = factor, patience, min_lr, monitor
 
     def on_train_begin(self, net, **kwargs):
         self.schedulers_ = None
@@ -85,15 +73,13 @@ class RecoverStop(Callback):
     """Stop each member in phase 3 (from epoch ``phase_3_start``) by the rule of the module doc.
 
     Its stop reason: ``"within_tolerance"``, ``"recover_cap"``, or ``"schedule_end"`` after phase 2 when
-    ``max_recover_epochs`` is 0. A stopped member is frozen (``net.stop_reasons_[k]`` set); when every member
-    has stopped, training ends the skorch way (``KeyboardInterrupt``, as ``EarlyStopping`` does).
+    ``max_recover_epochs`` is 0. A stopped member is frozen (``net.stop_reasons_[k]`` set, so it gets no gradient);
+    when every member has stopped, training ends the skorch way (``KeyboardInterrupt``, as ``EarlyStopping`` does).
     """
 
     def __init__(self, tolerance: float, max_recover_epochs: int, phase_3_start: int,
                  monitor: str = "member_valid_loss"):
-        self.tolerance = tolerance
-        self.max_recover_epochs = max_recover_epochs
-        self.phase_3_start = phase_3_start
+        self.tolerance, self.max_recover_epochs, self.phase_3_start = tolerance, max_recover_epochs, phase_3_start
         self.monitor = monitor
 
     def on_train_begin(self, net, **kwargs):

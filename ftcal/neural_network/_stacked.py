@@ -1,7 +1,5 @@
-"""Several network calibrators trained at once (issue 13) in the one engine (:mod:`~ftcal.neural_network._engine`).
-
-Each member keeps its own seed, data, loss, Adam state and schedule, so the nets equal separate fits up to
-float32 rounding (``tests/test_stacked.py``); a layer of all ``K`` nets is one ``torch.baddbmm``.
+"""Several network calibrators trained at once in the one engine: each member keeps its own seed, data, loss, Adam
+state and schedule, so the nets equal separate fits up to float32 rounding (``tests/test_stacked.py``).
 """
 
 from __future__ import annotations
