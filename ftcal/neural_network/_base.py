@@ -35,8 +35,6 @@ _PREDICT_CHUNK = 16384
 _DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
-#: History keys of a member of a stack (``K > 1``): its own values, read from the engine's ``member_*`` lists.
-_MEMBER_KEYS = {"lr": "member_lr", "train_loss": "member_train_loss", "valid_loss": "member_valid_loss"}
 
 
 def device_available(device: str) -> bool:
@@ -93,7 +91,7 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
         raise KeyboardInterrupt(f"{type(template).__name__}.fit interrupted at epoch {len(net.history)}")
     best = dict(net.callbacks_)["restore_best_weights"]
     for k, (est, (_, targets, seed)) in enumerate(zip(estimators, setups)):
-        member = net if len(estimators) == 1 else template._member_net(net, k, est, seed)
+        member = net if len(estimators) == 1 else est._member_net(net, k, seed)
         est._finish_training(member, targets, best.best_loss_[k], best.best_epoch_[k], net.stop_reasons_[k])
 
 
@@ -190,21 +188,18 @@ class NetworkCalibrator(BaseCalibrator):
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])
 
-    def _member_net(self, stack: NetworkRegressor, k: int, estimator: "NetworkCalibrator", seed: int
-                    ) -> NetworkRegressor:
-        """Member ``k`` of a trained stack as a net of its own: its weights, its slice of the history (its
-        ``member_*`` values, up to the epoch it stopped at)."""
-        net = estimator._build_net(stack.module_.layout[0][0], seed)
+    def _member_net(self, stack: NetworkRegressor, k: int, seed: int) -> NetworkRegressor:
+        """This estimator's net as member ``k`` of a trained stack: its weights, its slice of the history (its own
+        values of the ``member_*`` lists, as ``lr``, ``train_loss``, ..., up to the epoch it stopped at)."""
+        net = self._build_net(stack.module_.layout[0][0], seed)
         with torch.random.fork_rng(devices=[]):
             net.initialize()
         stack.module_.load_member(stack.module_.member_row(k), net.module_)
         rows = []
         for row in stack.history:
-            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"],
-                         **{key: row[member][k] for key, member in _MEMBER_KEYS.items() if member in row}})
-            reason = (row.get("member_stop_reason") or [None] * (k + 1))[k]
-            if reason is not None:
-                rows[-1]["stop_reason"] = reason
+            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"], **{
+                key[len("member_"):]: v[k] for key, v in row.items() if key.startswith("member_") and v[k] is not None}})
+            if "stop_reason" in rows[-1]:
                 break
         net.history = History(rows)
         return net

@@ -22,8 +22,7 @@ import math
 import torch
 from skorch.callbacks import Callback
 
-__all__ = ["phase_of_epoch", "TrainingPhase", "PlateauLR", "RecoverStop", "RestoreBestWeights",
-           "schedule_callbacks"]
+__all__ = ["phase_of_epoch", "TrainingPhase", "RecoverStop", "RestoreBestWeights", "schedule_callbacks"]
 
 
 def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
@@ -37,26 +36,22 @@ def _running_losses(net, monitor: str) -> list[tuple[int, float]]:
 
 
 class TrainingPhase(Callback):
-    """Record each epoch's ``phase`` and learning rates (``member_lr``; ``lr``: member 0's) in ``net.history``."""
+    """The learning rate by phase: each epoch's ``phase`` and rates (``member_lr``; ``lr``: member 0's) are recorded
+    in ``net.history``; in phase 2, torch's ``ReduceLROnPlateau`` steps each member's optimiser on its loss."""
 
-    def __init__(self, max_epochs: int, plateau_epochs: int):
+    def __init__(self, max_epochs: int, plateau_epochs: int, factor: float, patience: int, min_lr: float,
+                 monitor: str = "member_valid_loss"):
         self.max_epochs, self.plateau_epochs = max_epochs, plateau_epochs
+        self.factor, self.patience, self.min_lr, self.monitor = factor, patience, min_lr, monitor
+
+    def on_train_begin(self, net, **kwargs):
+        self.schedulers_ = None
 
     def on_epoch_begin(self, net, **kwargs):
         net.history.record("phase", phase_of_epoch(len(net.history), self.max_epochs, self.plateau_epochs))
         rates = [float(opt.param_groups[0]["lr"]) for opt in net.optimizers_]
         net.history.record("member_lr", rates)
         net.history.record("lr", rates[0])
-
-
-class PlateauLR(Callback):
-    """torch's ``ReduceLROnPlateau`` on each member's optimiser, stepped on its monitored loss, in phase 2 only."""
-
-    def __init__(self, factor: float, patience: int, min_lr: float, monitor: str = "member_valid_loss"):
-        self.factor, self.patience, self.min_lr, self.monitor = factor, patience, min_lr, monitor
-
-    def on_train_begin(self, net, **kwargs):
-        self.schedulers_ = None
 
     def on_epoch_end(self, net, **kwargs):
         if net.history[-1, "phase"] != 2:
@@ -137,8 +132,8 @@ def schedule_callbacks(estimator) -> list:
     e = estimator
     monitor = "member_train_loss" if e.validation_fraction is None else "member_valid_loss"
     return [
-        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs)),
-        ("plateau_lr", PlateauLR(e.plateau_factor, e.plateau_patience, e.min_lr, monitor)),
+        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs, e.plateau_factor, e.plateau_patience, e.min_lr,
+                                         monitor)),
         ("restore_best_weights", RestoreBestWeights(monitor)),
         *list(e.callbacks or []),
         ("recover_stop", RecoverStop(e.recover_tolerance, e.max_recover_epochs, e.max_epochs + e.plateau_epochs + 1,
