@@ -158,8 +158,7 @@ class NetworkCalibrator(BaseCalibrator):
             optimizer=torch.optim.Adam, optimizer__fused=self.device == "cpu", lr=self.lr, batch_size=self.batch_size,
             max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs, seeds=seeds,
             validation_fraction=self.validation_fraction, train_split=None, callbacks=schedule_callbacks(self),
-            verbose=self.verbose, device=self.device,
-        )
+            verbose=self.verbose, device=self.device)
 
     def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
         """Checks, network inputs and targets, and the seed of one fit: ``(inputs, targets, seed)``, float64."""

@@ -156,7 +156,7 @@ class NetworkRegressor(NeuralNetRegressor):
     def get_split_datasets(self, X, y=None, **fit_params):
         train, valid, n_in = [], [], np.shape(X[0])[1]
         for seed, X_k, y_k in zip(self.seeds, X, y):
-            data = np.hstack([X_k, y_k])
+            data = np.hstack([X_k, y_k, np.ones((len(X_k), 1), dtype=np.float32)])  # a row mask last
             if self.validation_fraction is None:
                 train.append(data)
                 continue
@@ -164,10 +164,10 @@ class NetworkRegressor(NeuralNetRegressor):
             train.append(data[train_ds.indices])
             valid.append(data[valid_ds.indices])
 
-        def split(blocks):  # side by side, (n_max, K, n_in + n_out + 1), a row mask last
-            both = np.zeros((max(map(len, blocks)), len(blocks), blocks[0].shape[1] + 1), dtype=np.float32)
+        def split(blocks):  # side by side, (n_max, K, n_in + n_out + 1), zeros (mask 0) after a member's rows
+            both = np.zeros((max(map(len, blocks)), len(blocks), blocks[0].shape[1]), dtype=np.float32)
             for k, block in enumerate(blocks):
-                both[:len(block), k] = np.hstack([block, np.ones((len(block), 1))])
+                both[:len(block), k] = block
             both = torch.from_numpy(both)
             return both[..., :n_in], both[..., n_in:], [len(b) for b in blocks]
 

@@ -1,6 +1,4 @@
-"""Several network calibrators trained at once in the one engine: each member keeps its own seed, data, loss, Adam
-state and schedule, so the nets equal separate fits up to float32 rounding (``tests/test_stacked.py``).
-"""
+"""Several network calibrators trained at once in the one engine (:func:`fit_stacked`)."""
 
 from __future__ import annotations
 
@@ -35,15 +33,13 @@ def _datasets(X, y, K: int) -> list[tuple]:
     return list(zip(X, y))
 
 
-def fit_stacked(
-    estimators: Sequence[NetworkCalibrator],
-    X: ArrayLike | Sequence[ArrayLike],
-    y: ArrayLike | Sequence[ArrayLike],
-) -> list[NetworkCalibrator]:
+def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence[ArrayLike],
+                y: ArrayLike | Sequence[ArrayLike]) -> list[NetworkCalibrator]:
     """Fit ``K`` network calibrators of one kind together, as one stacked module (see the module doc).
 
-    Each estimator ends fitted as its own ``fit`` would leave it (``net_`` with its weights and its slice of the
-    history, the schedule's outcome, scales and tare), up to float32 rounding, for far less than ``K`` fits
+    Each member keeps its own seed, data, loss, Adam state and schedule, so each estimator ends fitted as its own
+    ``fit`` would leave it (``net_`` with its weights and its slice of the history, the schedule's outcome, scales
+    and tare), up to float32 rounding (``tests/test_stacked.py``), for far less than ``K`` fits
     (``benchmarks/network_speed.py``).
 
     Parameters
