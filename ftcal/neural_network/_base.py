@@ -196,8 +196,8 @@ class NetworkCalibrator(BaseCalibrator):
         stack.module_.load_member(stack.module_.member_row(k), net.module_)
         rows = []
         for row in stack.history:
-            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"], **{
-                key[len("member_"):]: v[k] for key, v in row.items() if key.startswith("member_") and v[k] is not None}})
+            own = {key[7:]: v[k] for key, v in row.items() if key.startswith("member_") and v[k] is not None}
+            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"], **own})
             if "stop_reason" in rows[-1]:
                 break
         net.history = History(rows)
@@ -217,8 +217,8 @@ class NetworkCalibrator(BaseCalibrator):
             losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
             bad = np.flatnonzero(~np.isfinite(losses))
             if bad.size:
-                raise CalibrationInputError(
-                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}")
+                raise CalibrationInputError(f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} "
+                                            f"at epoch {bad[0] + 1} {fix}")
         weights = np.asarray(self._loss_weights(), dtype=float)
         nothing = float(np.mean((targets**2) @ weights))
         if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:

@@ -31,7 +31,7 @@ def mlp_layers(module: nn.Module, what: str = "the module") -> list[tuple[nn.Lin
     sequential = getattr(module, "layers", None)
     modules = list(sequential) if isinstance(sequential, nn.Sequential) else None
     linears, following = (modules or [])[::2], [type(m) for m in (modules or [])[1::2]]
-    if modules is None or any(type(m) is not nn.Linear for m in linears) or any(a not in _ACTIVATIONS for a in following):
+    if modules is None or any(type(m) is not nn.Linear for m in linears) or not set(following) <= set(_ACTIVATIONS):
         raise CalibrationInputError(f"{what} ({type(module).__name__}) is not an MLP of Linear / ReLU / Tanh layers "
                                     "in a `layers` Sequential.")
     return [(linear, _ACTIVATIONS.get(a, "identity")) for linear, a in zip(linears, [*following, None])]
