@@ -1,7 +1,5 @@
-"""The network calibrators' base: one calibrator's ``fit`` and :func:`~ftcal.fit_stacked` both run
-:func:`train_networks` (the one engine, :mod:`~ftcal.neural_network._engine`, in a forked torch RNG and a
-``threadpoolctl`` context: nothing process-wide changes); float32 inside the network, float64 numpy inference.
-"""
+"""The network calibrators' base: ``fit`` and :func:`~ftcal.fit_stacked` both run :func:`train_networks` (the
+one engine, in a forked torch RNG and a ``threadpoolctl`` context); float32 training, float64 numpy inference."""
 
 from __future__ import annotations
 
@@ -54,10 +52,8 @@ NETWORK_DEFAULTS = dict(hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32,
 
 
 def keyword_init(defaults: dict):
-    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else.
-
-    Its signature is the explicit list scikit-learn reads (``get_params``, ``clone``).
-    """
+    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else, with
+    the explicit signature scikit-learn reads (``get_params``, ``clone``)."""
 
     def __init__(self, **params):
         unknown = set(params) - set(defaults)
@@ -75,10 +71,8 @@ def keyword_init(defaults: dict):
 def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence[tuple]) -> None:
     """Train ``K >= 1`` network calibrators of one kind as one engine run; each ends fitted as by its own ``fit``.
 
-    ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``). The estimators share the
-    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C (which skorch's loop ends
-    quietly, as its early stopping does) is raised again as ``KeyboardInterrupt``: a finished schedule always
-    leaves a stop reason for every member, an interrupted one does not.
+    ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``); the estimators share the
+    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``.
     """
     setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
     template = estimators[0]
@@ -205,13 +199,8 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float,
                          best_epoch: int, stop_reason: str) -> None:
-        """Keep the trained net and its schedule's outcome, or refuse a diverged run with an error naming the epoch.
-
-        Diverged means a NaN or inf loss, or a best loss more than :data:`_DIVERGENCE_FACTOR` times the loss of
-        predicting zero (the mean squared target): such a net is worse than no net at all. (Predicting the mean
-        would be too strict a yardstick: the directional model's targets can be nearly constant, e.g. a single
-        positive output, and a short schedule does not beat it 100-fold.)
-        """
+        """Keep the trained net and its schedule's outcome, or refuse a diverged run (a NaN or inf loss, or a best
+        loss over :data:`_DIVERGENCE_FACTOR` times that of predicting zero; why: ``docs/architecture.md``)."""
         fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
         for key in ("train_loss", "valid_loss"):
             losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
@@ -219,16 +208,13 @@ class NetworkCalibrator(BaseCalibrator):
             if bad.size:
                 raise CalibrationInputError(f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} "
                                             f"at epoch {bad[0] + 1} {fix}")
-        weights = np.asarray(self._loss_weights(), dtype=float)
-        nothing = float(np.mean((targets**2) @ weights))
+        nothing = float(np.mean((targets**2) @ np.asarray(self._loss_weights(), dtype=float)))
         if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:
             raise CalibrationInputError(
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
                 f"times that of predicting zero ({nothing:.3g}) {fix}")
-        self.net_ = net
-        self.n_epochs_ = len(net.history)
-        self.stop_reason_ = stop_reason
-        self.best_epoch_ = int(best_epoch)
+        self.net_, self.n_epochs_ = net, len(net.history)
+        self.best_epoch_, self.stop_reason_ = int(best_epoch), stop_reason
         self._cache_numpy_layers()
 
     def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
@@ -245,13 +231,8 @@ class NetworkCalibrator(BaseCalibrator):
         return layers
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks.
-
-        No torch dispatch (a one-sample predict costs a few numpy calls). float64 keeps each row's result
-        independent of the other rows (float32 BLAS kernels round a row differently depending on where it sits
-        in the batch). A row whose inputs or outputs leave float32's range gives inf, as the float32 net (and
-        the exported ONNX graph) would, so that ``predict`` refuses it.
-        """
+        """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks (a row out of
+        float32's range gives inf, as the float32 net would; why: ``docs/architecture.md``)."""
         layers = self._numpy_layers()
         out = np.empty((len(inputs), layers[-1][1].shape[0]))
         with np.errstate(over="ignore"):

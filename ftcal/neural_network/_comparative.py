@@ -14,22 +14,11 @@ __all__ = ["ComparativeCalibrator"]
 class ComparativeCalibrator(NetworkCalibrator):
     """Direct-mapping DNN (Oh et al.): raw reading -> wrench, loss eq. 10.
 
-    The loss is eq. 10: ``mean_i (sum of squared force errors + (Fmax/Tmax) * sum of squared torque errors)`` in
-    [N²] with ``Fmax/Tmax = alpha_``.
-
-    **Internal scaling (conditioning).** The network sees standardised inputs ``(X - input_mean_) / input_scale_``
-    (per-channel mean and std of the training readings; the mean absorbs the zero-load reading, so
-    ``zero_reading_`` is reported but not needed) and predicts standardised targets
-    ``(y - target_mean_) / target_scale_`` (per-component std). To keep the loss exactly eq. 10, component ``j``'s
-    squared error on the standardised scale is weighted by ``w_j * target_scale_[j]²`` (``w`` = 1 for forces,
-    ``alpha_`` for torques), divided by the mean of those weights — a positive constant factor, which changes no
-    minimiser.
-
-    Same architecture family as the directional model but with ReLU on every hidden layer and 6 linear outputs.
-    Phase 1 is 3000 epochs by default (III-E-a); the rest of the schedule is the directional one (III-A-d); the
-    defaults stay the thesis' for the reason given there. Parameters and attributes are those of
-    :class:`~ftcal.DirectionalCalibrator` except ``min_relative_magnitude`` (no zero-load rows to drop: the direct
-    mapping handles them), plus ``input_mean_``, ``input_scale_``, ``target_mean_``, ``target_scale_``.
+    The loss (squared force errors plus ``alpha_`` times squared torque errors, [N²]) is computed on standardised
+    inputs and targets, weighted to stay eq. 10 up to a constant factor (``docs/architecture.md``, "The network
+    calibrators"). ReLU on every hidden layer, linear outputs; phase 1 is 3000 epochs by default (III-E-a), the rest
+    of the schedule the directional one. Parameters and attributes are those of :class:`~ftcal.DirectionalCalibrator`
+    except ``min_relative_magnitude``, plus ``input_mean_``, ``input_scale_``, ``target_mean_``, ``target_scale_``.
 
     Examples
     --------

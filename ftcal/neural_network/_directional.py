@@ -27,29 +27,12 @@ def _unit_rows(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.
 class DirectionalCalibrator(NetworkCalibrator):
     """Directional DNN: learns the wrench direction and a scale factor (Kolff 2024, III).
 
-    Training (III-A): with the centred reading ``x_c = X - zero_reading_``, the input magnitude ``v_in = ||x_c||``
-    (eq. 3) and the unit input ``x_c / v_in`` (eq. 4) are formed; the target wrench is torque-scaled,
-    ``y_s = [F, alpha_ T]`` (eq. 5-6), split into ``v_out = ||y_s||`` (eq. 7) and the unit direction
-    ``y_s / v_out`` (eq. 8), and the scale factor is ``s = v_out / v_in``. The network maps the unit input to 7
-    outputs (direction, scale) with loss eq. 9, the sum of the squared direction error and the squared scale error.
-
-    **Scale normalisation.** ``s`` has the units of wrench per raw unit and may be ~1e-3 or ~1e3, which would make
-    one term of eq. 9 dominate. The network is therefore trained on ``s / scale_reference_``, where
-    ``scale_reference_`` is the median of ``s`` over the training rows: ~1, the order of the unit direction's
-    components, so both terms of eq. 9 weigh alike.
-
-    Prediction (III-B): ``y_s_hat = s_hat * v_in * direction_hat`` (the predicted direction is used as output, not
-    re-normalised, as in the thesis), then the torques are divided by ``alpha_``.
-
-    **Zero-load rows.** A row whose ``v_in`` or ``v_out`` is at most ``min_relative_magnitude`` times the largest
-    in the training set has no meaningful direction (its reading is only noise); such rows are dropped from
-    ``fit`` with a ``UserWarning`` saying how many. At ``predict`` a zero reading (``X == zero_reading_``) gives
-    exactly the zero wrench and a near-zero reading a wrench of the same small magnitude order (``s_hat * v_in``),
-    never NaN.
-
-    Architecture (III-C): :class:`~ftcal.neural_network.DirectionalNet`; the thesis gives no widths, (64, 64, 64)
-    is ours. ``lr`` and the epochs are the thesis' (III-A-d); a randomized search (issue 6,
-    ``benchmarks/RESULTS.md``) found no setting better on every preset, so the defaults stay.
+    The unit reading ``x_c / v_in`` (``x_c = X - zero_reading_``, ``v_in = ||x_c||``, eq. 3-4) is mapped to the unit
+    direction of the torque-scaled wrench ``y_s = [F, alpha_ T]`` and the scale ``s = ||y_s|| / v_in`` (eq. 5-8),
+    trained on ``s / scale_reference_`` with loss eq. 9; ``predict`` gives ``s_hat * v_in * direction_hat``, torques
+    divided by ``alpha_`` (III-B). Zero-load rows are dropped from ``fit`` with a ``UserWarning``; a zero reading
+    predicts the zero wrench, never NaN. Equations and design (scale normalisation, zero-load rows, defaults):
+    ``docs/architecture.md``, "The network calibrators".
 
     Parameters
     ----------
@@ -102,7 +85,7 @@ class DirectionalCalibrator(NetworkCalibrator):
     net_ : NetworkRegressor (a skorch ``NeuralNetRegressor``)
         The trained net; ``net_.history`` has ``phase``, ``lr`` per epoch.
     scale_reference_ : float
-        Median training scale factor (see above).
+        Median training scale factor ``s`` (normalises the scale target to ~1).
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
     n_epochs_, best_epoch_, stop_reason_

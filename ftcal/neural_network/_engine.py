@@ -1,8 +1,5 @@
-"""The one training engine of ftcal's networks: skorch's own loop over ``K >= 1`` nets of one architecture.
-
-skorch's ``fit_loop``, ``train_step``, ``get_loss``, history and callback hooks run as they are; what changes
-(each member's data, the stacked module, the summed loss, one Adam for all members) is described in
-``docs/architecture.md``, "The network engine". A member out of rows or stopped gets no gradient, so Adam skips it.
+"""The one training engine of ftcal's networks: skorch's own loop (``fit_loop``, ``train_step``, ``get_loss``,
+history, callback hooks) over ``K >= 1`` nets of one architecture; the design: ``docs/architecture.md``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,4 @@
-"""Torch modules and the loss of the two network calibrators: :class:`DirectionalNet` (thesis III-C),
-:class:`ComparativeNet` (Oh et al., III-D-a), :class:`WeightedSquaredError` (eq. 9 with unit weights, eq. 10 with
-``[1, 1, 1, a, a, a]``) and :class:`StackedMLP`, ``K`` nets of one architecture as one module.
-"""
+"""Torch modules and loss of the network calibrators (thesis III-C, III-D-a; eq. 9 and 10) and :class:`StackedMLP`."""
 
 from __future__ import annotations
 
@@ -62,10 +59,8 @@ class _MLPNet(nn.Module):
 
 
 class DirectionalNet(_MLPNet):
-    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)] (k + 1 for k targets).
-
-    ReLU hidden layers, a tanh last hidden layer, a linear output layer.
-    """
+    """Directional DNN: unit reading (N) -> [unit wrench direction (6), scale factor (1)] (k + 1 for k targets);
+    ReLU hidden layers, a tanh last hidden layer, a linear output layer."""
 
     last_hidden = nn.Tanh
 
@@ -89,7 +84,8 @@ def weighted_squared_error(y_pred: torch.Tensor, y_true: torch.Tensor, weights: 
 
 
 class WeightedSquaredError(nn.Module):
-    """``mean over samples of sum_j weights[j] * (y_pred[:, j] - y_true[:, j])²``.
+    """``mean over samples of sum_j weights[j] * (y_pred[:, j] - y_true[:, j])²`` (eq. 9: unit weights; eq. 10:
+    ``[1, 1, 1, a, a, a]``).
 
     Examples
     --------

@@ -1,18 +1,5 @@
-"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks, for ``K >= 1`` members.
-
-Epochs are numbered from 1 (as in ``net.history``). With ``max_epochs = P1`` and ``plateau_epochs = P2``:
-
-* **phase 1**, epochs ``1 .. P1``: Adam at the constant initial ``lr``;
-* **phase 2**, epochs ``P1+1 .. P1+P2``: torch's ``ReduceLROnPlateau`` on the monitored loss (factor
-  ``plateau_factor``, patience ``plateau_patience``, floor ``min_lr``); the rate it reaches is kept afterwards;
-* **phase 3**, from epoch ``P1+P2+1``: training continues until an epoch's monitored loss is within
-  ``recover_tolerance`` of the lowest seen so far (``loss <= (1 + tol) * best``), or ``max_recover_epochs``
-  phase-3 epochs have run (the hard cap; 0 skips phase 3).
-
-The weights of the epoch with the lowest monitored loss are restored at the end (:class:`RestoreBestWeights`,
-skorch's ``EarlyStopping(load_best=True)`` rule with the phase-3 stop instead of a patience). These callbacks are
-the only definition of the schedule; each member ``k`` of a stack has its own monitored loss
-(``member_valid_loss[k]``, or ``member_train_loss[k]`` without a split), rate, best weights and stop.
+"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks, for ``K >= 1`` members: the only
+definition of the schedule (the phases and the stop rule: ``docs/architecture.md``, "The three-phase schedule").
 """
 
 from __future__ import annotations
@@ -65,7 +52,7 @@ class TrainingPhase(Callback):
 
 
 class RecoverStop(Callback):
-    """Stop each member in phase 3 (from epoch ``phase_3_start``) by the rule of the module doc.
+    """Stop each member in phase 3 (from epoch ``phase_3_start``) by the rule of ``docs/architecture.md``.
 
     Its stop reason: ``"within_tolerance"``, ``"recover_cap"``, or ``"schedule_end"`` after phase 2 when
     ``max_recover_epochs`` is 0. A stopped member is frozen (``net.stop_reasons_[k]`` set, so it gets no gradient);
@@ -124,11 +111,8 @@ class RestoreBestWeights(Callback):
 
 
 def schedule_callbacks(estimator) -> list:
-    """The named callbacks of ``estimator``'s whole schedule, in the order they must run.
-
-    Its ``callbacks`` (a user's progress bar or logger) run after the schedule has recorded the epoch's phase
-    and learning rate and before the phase-3 stop rule, so they also see the last epoch.
-    """
+    """The named callbacks of ``estimator``'s whole schedule, in the order they must run (its own ``callbacks``
+    after the epoch's phase and rate are recorded, before the phase-3 stop rule: they also see the last epoch)."""
     e = estimator
     monitor = "member_train_loss" if e.validation_fraction is None else "member_valid_loss"
     return [

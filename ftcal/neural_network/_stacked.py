@@ -35,12 +35,11 @@ def _datasets(X, y, K: int) -> list[tuple]:
 
 def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence[ArrayLike],
                 y: ArrayLike | Sequence[ArrayLike]) -> list[NetworkCalibrator]:
-    """Fit ``K`` network calibrators of one kind together, as one stacked module (see the module doc).
+    """Fit ``K`` network calibrators of one kind together, as one stacked module.
 
     Each member keeps its own seed, data, loss, Adam state and schedule, so each estimator ends fitted as its own
-    ``fit`` would leave it (``net_`` with its weights and its slice of the history, the schedule's outcome, scales
-    and tare), up to float32 rounding (``tests/test_stacked.py``), for far less than ``K`` fits
-    (``benchmarks/network_speed.py``).
+    ``fit`` would leave it (``net_``, its history, scales and tare), up to float32 rounding, for far less than ``K``
+    fits (``benchmarks/network_speed.py``).
 
     Parameters
     ----------
