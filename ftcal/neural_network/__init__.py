@@ -1,7 +1,4 @@
-"""The network calibrators (torch, trained through skorch): the torch modules and loss, the thesis'
-three-phase schedule (skorch callbacks), the one training engine for K >= 1 nets (a skorch
-NeuralNetRegressor), the shared network base (numpy inference), the directional and comparative
-calibrators, and stacked training of several nets as one module.
+"""The network calibrators (torch, trained through skorch's loop in one engine for K >= 1 nets; numpy inference).
 
 Imports :mod:`ftcal.core` and :mod:`ftcal.calibrators` (the base class); nothing above.
 """

@@ -1,21 +1,12 @@
-"""The network calibrators' base: training through the one engine, numpy inference.
-
-One calibrator's ``fit`` and :func:`~ftcal.fit_stacked` run the same code, :func:`train_networks`: the
-engine (:class:`~ftcal.neural_network._engine.NetworkRegressor`, kept as ``net_``), the schedule
-(:mod:`~ftcal.neural_network._schedule`), one optimiser path. float32 inside the network, float64 out of
-``predict``. ``random_state`` seeds the initial weights, batch order and ``ValidSplit``
-(``validation_fraction``; ``None`` monitors the training loss) in a forked torch RNG: the caller's random
-state is untouched and a seed gives the same predictions. ``n_threads`` limits torch's and BLAS's threads
-in ``fit`` through a ``threadpoolctl`` context; nothing process-wide is changed.
-"""
+"""The network calibrators' base: ``fit`` and :func:`~ftcal.fit_stacked` both run :func:`train_networks` (the
+one engine, in a forked torch RNG and a ``threadpoolctl`` context); float32 training, float64 numpy inference."""
 
 from __future__ import annotations
 
 import contextlib
 import inspect
-import numbers
-from numbers import Integral, Real
 from collections.abc import Sequence
+from numbers import Integral, Real
 
 import numpy as np
 import torch
@@ -42,8 +33,6 @@ _PREDICT_CHUNK = 16384
 _DIVERGENCE_FACTOR = 100.0
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
-#: History keys of a member of a stack (``K > 1``): its own values, read from the engine's ``member_*`` lists.
-_MEMBER_KEYS = {"lr": "member_lr", "train_loss": "member_train_loss", "valid_loss": "member_valid_loss"}
 
 
 def device_available(device: str) -> bool:
@@ -63,11 +52,8 @@ NETWORK_DEFAULTS = dict(hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32,
 
 
 def keyword_init(defaults: dict):
-    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else.
-
-    Its signature is the explicit list scikit-learn reads (``get_params``, ``clone``), one definition shared
-    by the network calibrators instead of two copied twenty-line ``__init__`` bodies.
-    """
+    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else, with
+    the explicit signature scikit-learn reads (``get_params``, ``clone``)."""
 
     def __init__(self, **params):
         unknown = set(params) - set(defaults)
@@ -85,14 +71,10 @@ def keyword_init(defaults: dict):
 def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence[tuple]) -> None:
     """Train ``K >= 1`` network calibrators of one kind as one engine run; each ends fitted as by its own ``fit``.
 
-    ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``). The estimators share the
-    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C (which skorch's loop ends
-    quietly, as its early stopping does) is raised again as ``KeyboardInterrupt``: a finished schedule always
-    leaves a stop reason for every member, an interrupted one does not.
+    ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``); the estimators share the
+    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``.
     """
-    setups = []
-    for est, (X, y) in zip(estimators, datasets):
-        setups.append(est._training_setup(X, y))
+    setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
     template = estimators[0]
     net = template._build_net(setups[0][0].shape[1], [seed for _, _, seed in setups],
                               [est._loss_weights() for est in estimators])
@@ -103,15 +85,15 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
         raise KeyboardInterrupt(f"{type(template).__name__}.fit interrupted at epoch {len(net.history)}")
     best = dict(net.callbacks_)["restore_best_weights"]
     for k, (est, (_, targets, seed)) in enumerate(zip(estimators, setups)):
-        member = net if len(estimators) == 1 else template._member_net(net, k, est, seed)
+        member = net if len(estimators) == 1 else est._member_net(net, k, seed)
         est._finish_training(member, targets, best.best_loss_[k], best.best_epoch_[k], net.stop_reasons_[k])
 
 
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
-    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``,
-    ``_decode(outputs, X) -> wrench`` (or override ``_predict_wrench``), ``_network_outputs()`` and
-    ``_loss_weights()``.
+    ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``, ``_decode(outputs, X) -> wrench``
+    (or override ``_predict_wrench``), ``_network_outputs()`` (the output layer's width for ``n_outputs_``
+    targets) and ``_loss_weights()``.
     """
 
     _module_class: type[torch.nn.Module]
@@ -148,28 +130,20 @@ class NetworkCalibrator(BaseCalibrator):
             raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); "
                                         f"got {sizes!r}.")
         for width in sizes:
-            if isinstance(width, bool) or not isinstance(width, numbers.Integral) or width < 1:
+            if isinstance(width, bool) or not isinstance(width, Integral) or width < 1:
                 raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
 
     def _thread_limit(self):
         """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
         return contextlib.nullcontext() if self.n_threads is None else threadpool_limits(self.n_threads)
 
-    def _network_outputs(self) -> int:
-        """Width of the network's output layer for this estimator's ``n_outputs_`` targets (6: the wrench)."""
-        raise NotImplementedError
-
-    def _seed(self) -> int:
-        return int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
-
     def _build_net(self, n_inputs: int, seed: int | Sequence[int], loss_weights: Sequence | None = None
                    ) -> NetworkRegressor:
         """The (unfitted) engine with this estimator's module, loss, optimiser and schedule.
 
-        ``seed``: one seed, or one per member of a stack; ``loss_weights``: one row per member (default: this
-        estimator's own).
+        ``seed``: one, or one per member of a stack; ``loss_weights``: one row per member (default: this one's).
         """
-        seeds = [int(seed)] if isinstance(seed, numbers.Integral) else [int(s) for s in seed]
+        seeds = [int(seed)] if isinstance(seed, Integral) else [int(s) for s in seed]
         return self._net_class(
             module=self._module_class, module__n_inputs=n_inputs, module__n_outputs=self._network_outputs(),
             module__hidden_layer_sizes=tuple(int(w) for w in self.hidden_layer_sizes),
@@ -178,25 +152,21 @@ class NetworkCalibrator(BaseCalibrator):
             optimizer=torch.optim.Adam, optimizer__fused=self.device == "cpu", lr=self.lr, batch_size=self.batch_size,
             max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs, seeds=seeds,
             validation_fraction=self.validation_fraction, train_split=None, callbacks=schedule_callbacks(self),
-            verbose=self.verbose, device=self.device,
-        )
+            verbose=self.verbose, device=self.device)
 
     def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
         """Checks, network inputs and targets, and the seed of one fit: ``(inputs, targets, seed)``, float64."""
         if not device_available(self.device):
             raise CalibrationInputError(
                 f"device={self.device!r} is not available on this machine (this torch build has "
-                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'."
-            )
+                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'.")
         inputs, targets = self._training_pairs(X, y)
-        too_large = np.abs(inputs).max(initial=0.0) > _FLOAT32_SAFE or np.abs(targets).max(initial=0.0) > _FLOAT32_SAFE
-        if too_large:
+        if max(np.abs(inputs).max(initial=0.0), np.abs(targets).max(initial=0.0)) > _FLOAT32_SAFE:
             raise CalibrationInputError(
                 f"the network inputs or targets of {type(self).__name__} exceed {_FLOAT32_SAFE:g} after scaling, "
-                "beyond what float32 training handles; check the units of X and y."
-            )
+                "beyond what float32 training handles; check the units of X and y.")
         self._check_network_memory(inputs.shape[1], len(inputs))
-        return inputs, targets, self._seed()
+        return inputs, targets, int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
 
     def _check_network_memory(self, n_inputs: int, n_rows: int) -> None:
         """Refuse, before any allocation, a network whose training would exceed ftcal's memory limit."""
@@ -211,73 +181,49 @@ class NetworkCalibrator(BaseCalibrator):
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])
 
-    def _member_net(self, stack: NetworkRegressor, k: int, estimator: "NetworkCalibrator", seed: int
-                    ) -> NetworkRegressor:
-        """Member ``k`` of a trained stack as a net of its own: its module with its weights, its history rows.
-
-        Its history is its slice of the stack's (``member_*`` values, up to the epoch it stopped at).
-        """
-        net = estimator._build_net(stack.module_.layout[0][0], seed)
+    def _member_net(self, stack: NetworkRegressor, k: int, seed: int) -> NetworkRegressor:
+        """This estimator's net as member ``k`` of a trained stack: its weights, its slice of the history (its own
+        values of the ``member_*`` lists, as ``lr``, ``train_loss``, ..., up to the epoch it stopped at)."""
+        net = self._build_net(stack.module_.layout[0][0], seed)
         with torch.random.fork_rng(devices=[]):
             net.initialize()
         stack.module_.load_member(stack.module_.member_row(k), net.module_)
         rows = []
         for row in stack.history:
-            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"],
-                         **{key: row[member][k] for key, member in _MEMBER_KEYS.items() if member in row}})
-            reason = (row.get("member_stop_reason") or [None] * (k + 1))[k]
-            if reason is not None:
-                rows[-1]["stop_reason"] = reason
+            own = {key[7:]: v[k] for key, v in row.items() if key.startswith("member_") and v[k] is not None}
+            rows.append({"epoch": row["epoch"], "phase": row["phase"], "dur": row["dur"], **own})
+            if "stop_reason" in rows[-1]:
                 break
         net.history = History(rows)
         return net
 
-    def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best_loss: float,
+    def _finish_training(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float,
                          best_epoch: int, stop_reason: str) -> None:
-        """Refuse a diverged run; keep the trained net and its schedule's outcome."""
-        self._check_converged(net, targets, best_loss)
-        self.net_ = net
-        self.n_epochs_ = len(net.history)
-        self.stop_reason_ = stop_reason
-        self.best_epoch_ = int(best_epoch)
-        self._cache_numpy_layers()
-
-    def _check_converged(self, net: NetworkRegressor, targets: NDArray[np.float64], best: float) -> None:
-        """A diverged run is an error that names the epoch, not a model predicting NaN or nonsense.
-
-        Diverged means a NaN or inf loss, or a best loss more than
-        :data:`_DIVERGENCE_FACTOR` times the loss of predicting zero (the
-        mean squared target): such a net is worse than no net at all. (The
-        loss of predicting the mean would be too strict a yardstick: the
-        directional model's targets can be nearly constant, e.g. a single
-        positive output, and a short schedule does not beat it 100-fold.)
-        """
+        """Keep the trained net and its schedule's outcome, or refuse a diverged run (a NaN or inf loss, or a best
+        loss over :data:`_DIVERGENCE_FACTOR` times that of predicting zero; why: ``docs/architecture.md``)."""
         fix = f"with lr={self.lr}. Fix: lower lr (the thesis uses 1e-3), or check the data's units."
         for key in ("train_loss", "valid_loss"):
             losses = np.asarray([row.get(key, 0.0) for row in net.history], dtype=float)
             bad = np.flatnonzero(~np.isfinite(losses))
             if bad.size:
-                raise CalibrationInputError(
-                    f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} at epoch {bad[0] + 1} {fix}"
-                )
-        weights = np.asarray(self._loss_weights(), dtype=float)
-        nothing = float(np.mean((targets**2) @ weights))
+                raise CalibrationInputError(f"{type(self).__name__} training diverged: {key} became {losses[bad[0]]} "
+                                            f"at epoch {bad[0] + 1} {fix}")
+        nothing = float(np.mean((targets**2) @ np.asarray(self._loss_weights(), dtype=float)))
         if nothing > 0 and best > _DIVERGENCE_FACTOR * nothing:
             raise CalibrationInputError(
                 f"{type(self).__name__} training diverged: the best loss {best:.3g} is over {_DIVERGENCE_FACTOR:g} "
-                f"times that of predicting zero ({nothing:.3g}) {fix}"
-            )
-
-    def _cache_numpy_layers(self) -> None:
-        """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
-        self.__dict__.pop("_numpy_layers_cache", None)
-        self._numpy_layers()
+                f"times that of predicting zero ({nothing:.3g}) {fix}")
+        self.net_, self.n_epochs_ = net, len(net.history)
+        self.best_epoch_, self.stop_reason_ = int(best_epoch), stop_reason
+        self._cache_numpy_layers()
 
     def _numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
         """The fitted layers as float64 numpy arrays ``(W.T, b, activation)``, built once per fitted net."""
         cached = self.__dict__.get("_numpy_layers_cache")
-        if cached is not None and cached[0] is self.net_.module_:
-            return cached[1]
+        return cached[1] if cached is not None and cached[0] is self.net_.module_ else self._cache_numpy_layers()
+
+    def _cache_numpy_layers(self) -> list[tuple[NDArray, NDArray, str]]:
+        """Build the numpy copy of the fitted layers now (after fit or load), so that ``predict`` changes nothing."""
         layers = [(layer.weight.detach().cpu().double().numpy().T.copy(),
                    layer.bias.detach().cpu().double().numpy().copy(), activation)
                   for layer, activation in mlp_layers(self.net_.module_)]
@@ -285,13 +231,8 @@ class NetworkCalibrator(BaseCalibrator):
         return layers
 
     def _forward(self, inputs: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks.
-
-        No torch dispatch (a one-sample predict costs a few numpy calls). float64 keeps each row's result
-        independent of the other rows (float32 BLAS kernels round a row differently depending on where it
-        sits in the batch). A row whose inputs or outputs leave float32's range gives inf, as the float32
-        net (and the exported ONNX graph) would, so that ``predict`` refuses it.
-        """
+        """The forward pass in numpy with the fitted (float32) weights, computed in float64, in chunks (a row out of
+        float32's range gives inf, as the float32 net would; why: ``docs/architecture.md``)."""
         layers = self._numpy_layers()
         out = np.empty((len(inputs), layers[-1][1].shape[0]))
         with np.errstate(over="ignore"):
@@ -312,8 +253,8 @@ class NetworkCalibrator(BaseCalibrator):
     def network_inputs(self, X) -> NDArray[np.float64]:
         """What the fitted network sees for raw readings ``X`` (n, N): the pre-processing of ``predict``.
 
-        For a deployment that runs the network elsewhere (with
-        :meth:`fitted_layers`); the re-tare is applied as in ``predict``.
+        For a deployment that runs the network elsewhere (with :meth:`fitted_layers`); the re-tare is applied as
+        in ``predict``.
 
         Returns
         -------
@@ -325,9 +266,8 @@ class NetworkCalibrator(BaseCalibrator):
     def fitted_layers(self) -> list[tuple[NDArray[np.float64], NDArray[np.float64], str]]:
         """The fitted network as ``(weight (n_in, n_out), bias (n_out,), activation)`` per layer, float64 copies.
 
-        ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"``;
-        ``h = activation(h @ weight + bias)`` layer after layer maps
-        :meth:`network_inputs` to the network's outputs.
+        ``activation`` is ``"relu"``, ``"tanh"`` or ``"identity"``; ``h = activation(h @ weight + bias)`` layer
+        after layer maps :meth:`network_inputs` to the network's outputs.
         """
         check_is_fitted(self)
         return [(w.copy(), b.copy(), a) for w, b, a in self._numpy_layers()]

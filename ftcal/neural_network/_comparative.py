@@ -11,36 +11,14 @@ from ..core._wrench import TORQUE
 __all__ = ["ComparativeCalibrator"]
 
 
-def _std_or_one(a):
-    std = a.std(axis=0)
-    return np.where(std > 0, std, 1.0)
-
-
 class ComparativeCalibrator(NetworkCalibrator):
     """Direct-mapping DNN (Oh et al.): raw reading -> wrench, loss eq. 10.
 
-    The loss is eq. 10: ``mean_i (sum of squared force errors + (Fmax/Tmax) *
-    sum of squared torque errors)`` in [N²] with ``Fmax/Tmax = alpha_``.
-
-    **Internal scaling (conditioning).** The network sees standardised inputs
-    ``(X - input_mean_) / input_scale_`` (per-channel mean and std of the
-    training readings; the mean absorbs the zero-load reading, so
-    ``zero_reading_`` is reported but not needed) and predicts standardised
-    targets ``(y - target_mean_) / target_scale_`` (per-component std). To
-    keep the loss exactly eq. 10, component ``j``'s squared error on the
-    standardised scale is weighted by ``w_j * target_scale_[j]²`` (``w`` =
-    1 for forces, ``alpha_`` for torques), divided by the mean of those
-    weights — a positive constant factor, which changes no minimiser.
-
-    Same architecture family as the directional model but with ReLU on every
-    hidden layer and 6 linear outputs. Phase 1 is 3000 epochs by default
-    (III-E-a); the rest of the schedule is the directional one (III-A-d).
-    A randomized search (issue 6, ``benchmarks/RESULTS.md``) found no setting
-    better on every preset, so the defaults stay the thesis'.
-    Parameters and attributes are those of
-    :class:`~ftcal.DirectionalCalibrator` except ``min_relative_magnitude``
-    (no zero-load rows to drop: the direct mapping handles them), plus
-    ``input_mean_``, ``input_scale_``, ``target_mean_``, ``target_scale_``.
+    The loss (squared force errors plus ``alpha_`` times squared torque errors, [N²]) is computed on standardised
+    inputs and targets, weighted to stay eq. 10 up to a constant factor (``docs/architecture.md``, "The network
+    calibrators"). ReLU on every hidden layer, linear outputs; phase 1 is 3000 epochs by default (III-E-a), the rest
+    of the schedule the directional one. Parameters and attributes are those of :class:`~ftcal.DirectionalCalibrator`
+    except ``min_relative_magnitude``, plus ``input_mean_``, ``input_scale_``, ``target_mean_``, ``target_scale_``.
 
     Examples
     --------
@@ -69,10 +47,9 @@ class ComparativeCalibrator(NetworkCalibrator):
         return list(weights / weights.mean())
 
     def _training_pairs(self, X, y):
-        self.input_mean_ = X.mean(axis=0)
-        self.input_scale_ = _std_or_one(X)
-        self.target_mean_ = y.mean(axis=0)
-        self.target_scale_ = _std_or_one(y)
+        self.input_mean_, self.target_mean_ = X.mean(axis=0), y.mean(axis=0)
+        std_X, std_y = X.std(axis=0), y.std(axis=0)  # a constant column keeps scale 1
+        self.input_scale_, self.target_scale_ = np.where(std_X > 0, std_X, 1.0), np.where(std_y > 0, std_y, 1.0)
         return self._network_inputs(X), (y - self.target_mean_) / self.target_scale_
 
     def _network_inputs(self, X):

@@ -27,42 +27,12 @@ def _unit_rows(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.
 class DirectionalCalibrator(NetworkCalibrator):
     """Directional DNN: learns the wrench direction and a scale factor (Kolff 2024, III).
 
-    Training (III-A): with the centred reading ``x_c = X - zero_reading_``,
-    the input magnitude ``v_in = ||x_c||`` (eq. 3) and the unit input
-    ``x_c / v_in`` (eq. 4) are formed; the target wrench is torque-scaled,
-    ``y_s = [F, alpha_ T]`` (eq. 5-6), split into ``v_out = ||y_s||`` (eq. 7)
-    and the unit direction ``y_s / v_out`` (eq. 8), and the scale factor is
-    ``s = v_out / v_in``. The network maps the unit input to 7 outputs
-    (direction, scale) with loss eq. 9, the sum of the squared direction error
-    and the squared scale error.
-
-    **Scale normalisation.** ``s`` has the units of wrench per raw unit and
-    may be ~1e-3 or ~1e3, which would make one term of eq. 9 dominate. The
-    network is therefore trained on ``s / scale_reference_``, where
-    ``scale_reference_`` is the median of ``s`` over the training rows; the
-    normalised target is ~1, the same order as the unit direction's
-    components, so both terms of eq. 9 weigh alike.
-
-    Prediction (III-B): ``y_s_hat = s_hat * v_in * direction_hat`` (the
-    predicted direction is used as output, not re-normalised, as in the
-    thesis), then the torques are divided by ``alpha_``.
-
-    **Zero-load rows.** A row whose ``v_in`` or ``v_out`` is at most
-    ``min_relative_magnitude`` times the largest in the training set has no
-    meaningful direction (its reading is only noise); such rows are dropped
-    from ``fit`` with a ``UserWarning`` saying how many. At ``predict`` a zero
-    reading (``X == zero_reading_``) gives exactly the zero wrench and a
-    near-zero reading a wrench of the same small magnitude order
-    (``s_hat * v_in``), never NaN.
-
-    Architecture (III-C): ReLU hidden layers of widths
-    ``hidden_layer_sizes[:-1]``, a tanh layer of width
-    ``hidden_layer_sizes[-1]`` (the second-to-last layer), a linear output
-    layer of 7. The thesis gives no widths; (64, 64, 64) is our default.
-
-    Hyperparameters: ``lr`` and the epochs are the thesis' (III-A-d); a
-    randomized search (issue 6, ``benchmarks/RESULTS.md``) found no setting
-    better on every preset, so the defaults stay.
+    The unit reading ``x_c / v_in`` (``x_c = X - zero_reading_``, ``v_in = ||x_c||``, eq. 3-4) is mapped to the unit
+    direction of the torque-scaled wrench ``y_s = [F, alpha_ T]`` and the scale ``s = ||y_s|| / v_in`` (eq. 5-8),
+    trained on ``s / scale_reference_`` with loss eq. 9; ``predict`` gives ``s_hat * v_in * direction_hat``, torques
+    divided by ``alpha_`` (III-B). Zero-load rows are dropped from ``fit`` with a ``UserWarning``; a zero reading
+    predicts the zero wrench, never NaN. Equations and design (scale normalisation, zero-load rows, defaults):
+    ``docs/architecture.md``, "The network calibrators".
 
     Parameters
     ----------
@@ -83,44 +53,39 @@ class DirectionalCalibrator(NetworkCalibrator):
     min_lr : float, default=1e-5
         Floor of the learning rate.
     recover_tolerance : float, default=0.05
-        Phase 3 stops at the first epoch whose monitored loss is within this
-        fraction of the best one.
+        Phase 3 stops at the first epoch whose monitored loss is within this fraction of the best one.
     max_recover_epochs : int, default=500
         Hard cap on phase 3 epochs (0 = no phase 3).
     validation_fraction : float or None, default=0.2
-        Share of samples held out (``ValidSplit``) for the monitored loss;
-        ``None`` monitors the training loss.
+        Share of samples held out (``ValidSplit``) for the monitored loss; ``None`` monitors the training loss.
     min_relative_magnitude : float, default=1e-3
         Relative threshold of the zero-load rows dropped in ``fit``.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
-        Raw reading at zero load; ``None`` estimates it (see
-        :mod:`ftcal.calibrators._zero_load`). Give it for sensors with asymmetric gains.
+        Raw reading at zero load; ``None`` estimates it (see :mod:`ftcal.calibrators._zero_load`). Give it for
+        sensors with asymmetric gains.
     random_state : int, RandomState or None, default=None
         Seed of initialisation, shuffling and validation split.
     verbose : int, default=0
         skorch's per-epoch log when > 0.
     callbacks : list or None, default=None
-        Extra skorch callbacks (instances or ``(name, callback)`` pairs), e.g.
-        a progress bar or a logger, called at skorch's documented points
-        (``on_batch_*`` every batch, ``on_grad_computed`` every step,
-        ``on_epoch_*`` after the schedule has recorded the epoch's phase and
-        ``lr``). Not stored in model files; ``fit_stacked`` and ensembles fit
-        an estimator with callbacks by itself.
+        Extra skorch callbacks (instances or ``(name, callback)`` pairs), e.g. a progress bar or a logger, called
+        at skorch's documented points (``on_batch_*`` every batch, ``on_grad_computed`` every step, ``on_epoch_*``
+        after the schedule has recorded the epoch's phase and ``lr``). Not stored in model files;
+        ``fit_stacked`` and ensembles fit an estimator with callbacks by itself.
     device : str, default='cpu'
         Torch device.
     n_threads : int or None, default=1
-        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl``
-        context, restored afterwards): one is fastest for these small nets (on
-        a busy machine two made a fit over 10x slower). ``None``: the caller's.
+        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl`` context, restored afterwards): one is
+        fastest for these small nets (on a busy machine two made a fit over 10x slower). ``None``: the caller's.
 
     Attributes
     ----------
     net_ : NetworkRegressor (a skorch ``NeuralNetRegressor``)
         The trained net; ``net_.history`` has ``phase``, ``lr`` per epoch.
     scale_reference_ : float
-        Median training scale factor (see above).
+        Median training scale factor ``s`` (normalises the scale target to ~1).
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
     n_epochs_, best_epoch_, stop_reason_
@@ -164,15 +129,12 @@ class DirectionalCalibrator(NetworkCalibrator):
             raise CalibrationInputError(
                 f"only {np.count_nonzero(keep)} of {len(keep)} training rows have a non-zero load and a "
                 f"non-zero reading (|X - zero_reading_| and |y| above {threshold} of their largest); the "
-                f"directional model needs loaded samples. Fix: record load cases, or check zero_reading."
-            )
+                f"directional model needs loaded samples. Fix: record load cases, or check zero_reading.")
         if self.n_dropped_zero_load_:
             warnings.warn(
                 f"DirectionalCalibrator: dropped {self.n_dropped_zero_load_} of {len(keep)} training rows with "
                 f"(near-)zero reading or load (below {threshold} of the largest): their direction is undefined.",
-                UserWarning,
-                stacklevel=6,  # the caller of fit (_training_setup, train_networks, _fit, fit)
-            )
+                UserWarning, stacklevel=6)  # the caller of fit (_training_setup, train_networks, _fit, fit)
         scale = v_out[keep] / v_in[keep]
         self.scale_reference_ = float(np.median(scale))
         targets = np.hstack([unit_out[keep], (scale / self.scale_reference_)[:, None]])

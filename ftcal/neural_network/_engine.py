@@ -1,29 +1,5 @@
-"""The one training engine of ftcal's networks: skorch's loop over ``K >= 1`` nets of one architecture.
-
-:class:`NetworkRegressor` is a ``skorch.NeuralNetRegressor`` (one ``fit``:
-``K = 1``; :func:`ftcal.fit_stacked` and seed ensembles: ``K > 1``). skorch's
-loop runs as it is — ``fit_loop``, ``run_single_epoch``, ``train_step``,
-``get_loss``, the history and every callback hook, per batch and per epoch.
-What it changes:
-
-* **data**: member ``k`` has its own dataset, ``ValidSplit`` and batch order
-  (seeded with its seed). Batches are slices of tensors loaded once (no
-  ``DataLoader``), batch first: ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``
-  whose last column marks real rows (1) and padding (0: a member with fewer
-  rows runs out of batches first).
-* **module**: ``K = 1`` trains the calibrator's own module (its forward sees
-  ``(B, n_in)``); ``K > 1`` a :class:`~ftcal.neural_network._modules.StackedMLP`.
-  Gradients are autograd's.
-* **loss**: :class:`MemberSquaredError`, the sum of the members' own losses
-  (member ``k``'s gradient is its own loss's); each member's epoch losses
-  are recorded as ``member_train_loss`` / ``member_valid_loss``.
-* **optimiser**: one ``torch.optim.Adam`` (``optimizer_``) steps every member
-  (its groups: the members grouped by rate); ``optimizers_[k]`` holds member
-  ``k``'s rate for its scheduler. Adam's state is per parameter: each member
-  keeps its own moments and step count. ``train_step``'s closure runs once;
-  a member out of rows or stopped gets no gradient, so Adam skips it.
-
-The three-phase schedule is :mod:`ftcal.neural_network._schedule`.
+"""The one training engine of ftcal's networks: skorch's own loop (``fit_loop``, ``train_step``, ``get_loss``,
+history, callback hooks) over ``K >= 1`` nets of one architecture; the design: ``docs/architecture.md``.
 """
 
 from __future__ import annotations
@@ -41,7 +17,7 @@ __all__ = ["NetworkRegressor", "MemberSquaredError", "MemberBatches"]
 class MemberSquaredError(torch.nn.Module):
     """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows.
 
-    ``y_true`` carries the row mask as its last column when the batch has padding rows (see the module doc).
+    ``y_true`` carries the row mask as its last column when the batch has padding rows (:class:`MemberBatches`).
     """
 
     def __init__(self, weights):
@@ -64,19 +40,18 @@ class MemberSquaredError(torch.nn.Module):
 
 
 class MemberBatches:
-    """Mini-batches of ``K`` members' padded rows; each iteration reshuffles every member with its generator.
+    """Mini-batches of ``K`` members' rows, ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``, slices of tensors loaded once.
 
-    ``generators=None``: one batch of every row, in order (validation).
+    ``y``'s last column marks real rows (1) and padding (0: a member with fewer rows runs out of batches first);
+    it is left out of a batch without padding. Each iteration reshuffles every member with its generator (skorch
+    iterates one iterator every epoch).
     """
 
-    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int | None = None,
-                 generators: list[torch.Generator] | None = None):
+    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int,
+                 generators: list[torch.Generator]):
         self.X, self.y, self.counts, self.batch_size, self.generators = X, y, counts, batch_size, generators
 
     def __iter__(self):
-        if self.generators is None:
-            yield self.X, self.y
-            return
         n_max, K = self.y.shape[:2]
         order = torch.arange(n_max).repeat(K, 1)
         for k, (n, generator) in enumerate(zip(self.counts, self.generators)):
@@ -90,24 +65,14 @@ class MemberBatches:
             yield X[start:stop], y[start:stop] if padded else y[start:stop, :, :-1]
 
 
-def _side_by_side(blocks: list[np.ndarray]) -> torch.Tensor:
-    """Row blocks of unequal length as one ``(n_max, K, width + 1)`` float32 tensor, a row mask last."""
-    n_max, width = max(len(b) for b in blocks), blocks[0].shape[1]
-    out = np.zeros((n_max, len(blocks), width + 1), dtype=np.float32)
-    for k, block in enumerate(blocks):
-        out[: len(block), k, :width] = block
-        out[: len(block), k, width] = 1.0
-    return torch.from_numpy(out)
-
-
 class NetworkRegressor(NeuralNetRegressor):
     """skorch's ``NeuralNetRegressor`` training ``len(seeds)`` nets of one architecture at once (module doc).
 
     Parameters beyond skorch's
     --------------------------
     seeds : sequence of int
-        One per member: its initial weights (``torch.manual_seed(seed)`` before
-        building its module), validation split and batch order.
+        One per member: its initial weights (``torch.manual_seed(seed)`` before building its module), validation
+        split and batch order.
     validation_fraction : float or None
         Each member's share of rows held out (``ValidSplit``); None: no split.
 
@@ -116,8 +81,7 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def __init__(self, module, *args, seeds=(0,), validation_fraction=None, **kwargs):
         super().__init__(module, *args, **kwargs)
-        self.seeds = seeds
-        self.validation_fraction = validation_fraction
+        self.seeds, self.validation_fraction = seeds, validation_fraction
 
     # -- parameters: a member's own module (K = 1) or the stack, and one Adam per member --------------------
     def initialize_module(self):
@@ -131,18 +95,13 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def member_parameters(self, k: int) -> list[torch.Tensor]:
         """Member ``k``'s parameters (views into the stack when ``K > 1``): what its optimiser moves."""
-        if len(self.seeds) == 1:
-            return list(self.module_.parameters())
-        return self.module_.member_parameters(k)
+        return list(self.module_.parameters()) if len(self.seeds) == 1 else self.module_.member_parameters(k)
 
     def initialize_optimizer(self, triggered_directly=None):
         _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
         self.trained_parameters_ = list(self.module_.parameters())
         self.optimizers_ = [self.optimizer(self.member_parameters(k), **kwargs) for k in range(len(self.seeds))]
-        # K = 1: the member's optimiser steps. K > 1: one Adam over every member's parameters steps (one fused
-        # kernel); its param groups are the members' grouped by learning rate, regrouped when a member's
-        # scheduler changes its rate in optimizers_[k]. Adam's state is per parameter, so each member keeps
-        # its own moments and step count.
+        # K > 1: one Adam (one fused kernel) over every member's parameters, regrouped by rate every epoch
         self.optimizer_ = self.optimizers_[0] if len(self.optimizers_) == 1 else self.optimizer(
             [p for optimizer in self.optimizers_ for p in optimizer.param_groups[0]["params"]], **kwargs)
         return self
@@ -192,29 +151,29 @@ class NetworkRegressor(NeuralNetRegressor):
         pass  # the calibrators validated every member's data
 
     def get_split_datasets(self, X, y=None, **fit_params):
-        train, valid = [], []
+        train, valid, n_in = [], [], np.shape(X[0])[1]
         for seed, X_k, y_k in zip(self.seeds, X, y):
-            data = np.hstack([X_k, y_k])
+            data = np.hstack([X_k, y_k, np.ones((len(X_k), 1), dtype=np.float32)])  # a row mask last
             if self.validation_fraction is None:
                 train.append(data)
                 continue
             train_ds, valid_ds = ValidSplit(self.validation_fraction, random_state=int(seed))(self.get_dataset(X_k, y_k))
             train.append(data[train_ds.indices])
             valid.append(data[valid_ds.indices])
-        n_in = np.shape(X[0])[1]
 
-        def split(blocks):
-            both = _side_by_side(blocks)
+        def split(blocks):  # side by side, (n_max, K, n_in + n_out + 1), zeros (mask 0) after a member's rows
+            both = np.zeros((max(map(len, blocks)), len(blocks), blocks[0].shape[1]), dtype=np.float32)
+            for k, block in enumerate(blocks):
+                both[:len(block), k] = block
+            both = torch.from_numpy(both)
             return both[..., :n_in], both[..., n_in:], [len(b) for b in blocks]
 
         self.generators_ = [torch.Generator().manual_seed(int(seed)) for seed in self.seeds]
         return split(train), (split(valid) if valid else None)
 
     def get_iterator(self, dataset, training=False):
-        X, y, counts = dataset
-        if training:
-            return MemberBatches(X, y, counts, int(self.batch_size), self.generators_)
-        return MemberBatches(X, y, counts)
+        X, y, counts = dataset  # validation: one batch of every row, in order
+        return MemberBatches(X, y, counts, int(self.batch_size), self.generators_) if training else [(X, y)]
 
     # -- each member's epoch losses -------------------------------------------------------------------------
     def on_train_begin(self, net, X=None, y=None, **kwargs):
@@ -224,8 +183,8 @@ class NetworkRegressor(NeuralNetRegressor):
         super().on_epoch_begin(net, **kwargs)
         if len(self.optimizers_) > 1:
             self._group_by_rate()
-        self._loss_sums = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
-        self._row_counts = {True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+        self._loss_sums, self._row_counts = ({True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
+                                             for _ in range(2))
 
     def on_batch_end(self, net, batch=None, training=False, y_pred=None, **kwargs):
         rows = self._rows(batch)

@@ -1,25 +1,5 @@
-"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks, for ``K >= 1`` members.
-
-Epochs are numbered from 1 (as in ``net.history``). With ``max_epochs = P1``
-and ``plateau_epochs = P2``:
-
-* **phase 1**, epochs ``1 .. P1``: Adam at the constant initial ``lr``;
-* **phase 2**, epochs ``P1+1 .. P1+P2``: torch's ``ReduceLROnPlateau`` on the
-  monitored loss (factor ``plateau_factor``, patience ``plateau_patience``,
-  floor ``min_lr``); the rate it reaches is kept afterwards;
-* **phase 3**, from epoch ``P1+P2+1``: training continues until an epoch's
-  monitored loss is within ``recover_tolerance`` of the lowest seen so far
-  (``loss <= (1 + tol) * best``), or ``max_recover_epochs`` phase-3 epochs
-  have run (the hard cap; 0 skips phase 3).
-
-The weights of the epoch with the lowest monitored loss are restored at the
-end (:class:`RestoreBestWeights`, skorch's ``EarlyStopping(load_best=True)``
-rule with the phase-3 stop instead of a patience).
-
-These callbacks are the only definition of the schedule; they run in the one engine
-(:mod:`~ftcal.neural_network._engine`), each member ``k`` of a stack on its own monitored loss
-(``member_valid_loss[k]``, or ``member_train_loss[k]`` without a split), rate, best weights and stop
-(``"within_tolerance"``, ``"recover_cap"`` or ``"schedule_end"``); a stopped member is frozen.
+"""The three-phase training schedule of the thesis (III-A-d) as skorch callbacks, for ``K >= 1`` members: the only
+definition of the schedule (the phases and the stop rule: ``docs/architecture.md``, "The three-phase schedule").
 """
 
 from __future__ import annotations
@@ -29,46 +9,36 @@ import math
 import torch
 from skorch.callbacks import Callback
 
-__all__ = ["phase_of_epoch", "TrainingPhase", "PlateauLR", "RecoverStop", "RestoreBestWeights",
-           "schedule_callbacks", "recover_stop_reason"]
+__all__ = ["phase_of_epoch", "TrainingPhase", "RecoverStop", "RestoreBestWeights", "schedule_callbacks"]
 
 
 def phase_of_epoch(epoch: int, max_epochs: int, plateau_epochs: int) -> int:
-    """Phase (1, 2 or 3) of the 1-based ``epoch``.
-
-    Examples
-    --------
-    >>> [phase_of_epoch(e, 2, 1) for e in range(1, 6)]
-    [1, 1, 2, 3, 3]
-    """
+    """Phase (1, 2 or 3) of the 1-based ``epoch`` (``tests/test_schedule.py`` checks the boundaries)."""
     return 1 if epoch <= max_epochs else 2 if epoch <= max_epochs + plateau_epochs else 3
 
 
-class TrainingPhase(Callback):
-    """Record each epoch's ``phase`` and learning rates (``member_lr``; ``lr``: member 0's) in ``net.history``."""
+def _running_losses(net, monitor: str) -> list[tuple[int, float]]:
+    """``(k, loss)``: the last epoch's monitored loss of each member ``k`` not stopped yet."""
+    return [(k, loss) for k, loss in enumerate(net.history[-1, monitor]) if net.stop_reasons_[k] is None]
 
-    def __init__(self, max_epochs: int, plateau_epochs: int):
-        self.max_epochs = max_epochs
-        self.plateau_epochs = plateau_epochs
+
+class TrainingPhase(Callback):
+    """The learning rate by phase: each epoch's ``phase`` and rates (``member_lr``; ``lr``: member 0's) are recorded
+    in ``net.history``; in phase 2, torch's ``ReduceLROnPlateau`` steps each member's optimiser on its loss."""
+
+    def __init__(self, max_epochs: int, plateau_epochs: int, factor: float, patience: int, min_lr: float,
+                 monitor: str = "member_valid_loss"):
+        self.max_epochs, self.plateau_epochs = max_epochs, plateau_epochs
+        self.factor, self.patience, self.min_lr, self.monitor = factor, patience, min_lr, monitor
+
+    def on_train_begin(self, net, **kwargs):
+        self.schedulers_ = None
 
     def on_epoch_begin(self, net, **kwargs):
         net.history.record("phase", phase_of_epoch(len(net.history), self.max_epochs, self.plateau_epochs))
         rates = [float(opt.param_groups[0]["lr"]) for opt in net.optimizers_]
         net.history.record("member_lr", rates)
         net.history.record("lr", rates[0])
-
-
-class PlateauLR(Callback):
-    """torch's ``ReduceLROnPlateau`` on each member's optimiser, stepped on its monitored loss, in phase 2 only."""
-
-    def __init__(self, factor: float, patience: int, min_lr: float, monitor: str = "member_valid_loss"):
-        self.factor = factor
-        self.patience = patience
-        self.min_lr = min_lr
-        self.monitor = monitor
-
-    def on_train_begin(self, net, **kwargs):
-        self.schedulers_ = None
 
     def on_epoch_end(self, net, **kwargs):
         if net.history[-1, "phase"] != 2:
@@ -77,61 +47,38 @@ class PlateauLR(Callback):
             self.schedulers_ = [torch.optim.lr_scheduler.ReduceLROnPlateau(
                 opt, mode="min", factor=self.factor, patience=self.patience, min_lr=self.min_lr)
                 for opt in net.optimizers_]
-        for k, loss in enumerate(net.history[-1, self.monitor]):
-            if net.stop_reasons_[k] is None:
-                self.schedulers_[k].step(loss)
-
-
-def recover_stop_reason(loss: float, best: float, epoch: int, phase_3_start: int, tolerance: float,
-                        max_recover_epochs: int) -> str | None:
-    """Why training stops after ``epoch`` with monitored ``loss`` (``best``: the lowest so far, this one included).
-
-    Examples
-    --------
-    >>> recover_stop_reason(0.6, 0.5, epoch=3, phase_3_start=3, tolerance=0.05, max_recover_epochs=10) is None
-    True
-    >>> recover_stop_reason(0.51, 0.5, epoch=3, phase_3_start=3, tolerance=0.05, max_recover_epochs=10)
-    'within_tolerance'
-    >>> recover_stop_reason(0.5, 0.5, epoch=2, phase_3_start=3, tolerance=0.05, max_recover_epochs=0)
-    'schedule_end'
-    """
-    recover_epochs = epoch - phase_3_start + 1
-    if recover_epochs <= 0:
-        return "schedule_end" if epoch == phase_3_start - 1 and max_recover_epochs == 0 else None
-    if loss <= (1.0 + tolerance) * best:
-        return "within_tolerance"
-    if recover_epochs >= max_recover_epochs:
-        return "recover_cap"
-    return None
+        for k, loss in _running_losses(net, self.monitor):
+            self.schedulers_[k].step(loss)
 
 
 class RecoverStop(Callback):
-    """Stop each member in phase 3 once its loss is within ``tolerance`` of its best, or at the cap.
+    """Stop each member in phase 3 (from epoch ``phase_3_start``) by the rule of ``docs/architecture.md``.
 
-    A stopped member is frozen (``net.stop_reasons_[k]`` set); when every
-    member has stopped, training ends the skorch way (``KeyboardInterrupt``,
-    as ``EarlyStopping`` does).
+    Its stop reason: ``"within_tolerance"``, ``"recover_cap"``, or ``"schedule_end"`` after phase 2 when
+    ``max_recover_epochs`` is 0. A stopped member is frozen (``net.stop_reasons_[k]`` set, so it gets no gradient);
+    when every member has stopped, training ends the skorch way (``KeyboardInterrupt``, as ``EarlyStopping`` does).
     """
 
     def __init__(self, tolerance: float, max_recover_epochs: int, phase_3_start: int,
                  monitor: str = "member_valid_loss"):
-        self.tolerance = tolerance
-        self.max_recover_epochs = max_recover_epochs
-        self.phase_3_start = phase_3_start
+        self.tolerance, self.max_recover_epochs, self.phase_3_start = tolerance, max_recover_epochs, phase_3_start
         self.monitor = monitor
 
     def on_train_begin(self, net, **kwargs):
         self.best_ = [math.inf] * len(net.optimizers_)
 
     def on_epoch_end(self, net, **kwargs):
-        epoch, reasons = len(net.history), net.stop_reasons_
+        reasons, recover_epochs = net.stop_reasons_, len(net.history) - self.phase_3_start + 1
         stopped = [None] * len(reasons)
-        for k, loss in enumerate(net.history[-1, self.monitor]):
-            if reasons[k] is not None:
-                continue
+        for k, loss in _running_losses(net, self.monitor):
             self.best_[k] = min(self.best_[k], loss)
-            stopped[k] = reasons[k] = recover_stop_reason(loss, self.best_[k], epoch, self.phase_3_start,
-                                                          self.tolerance, self.max_recover_epochs)
+            if recover_epochs <= 0:
+                reason = "schedule_end" if recover_epochs == 0 and self.max_recover_epochs == 0 else None
+            elif loss <= (1.0 + self.tolerance) * self.best_[k]:
+                reason = "within_tolerance"
+            else:
+                reason = "recover_cap" if recover_epochs >= self.max_recover_epochs else None
+            stopped[k] = reasons[k] = reason
         if any(stopped):
             net.history.record("member_stop_reason", stopped)
             if len(reasons) == 1:
@@ -151,8 +98,8 @@ class RestoreBestWeights(Callback):
         self.best_loss_, self.best_epoch_, self.best_state_ = [math.inf] * K, [0] * K, [None] * K
 
     def on_epoch_end(self, net, **kwargs):
-        for k, loss in enumerate(net.history[-1, self.monitor]):
-            if net.stop_reasons_[k] is None and loss < self.best_loss_[k]:
+        for k, loss in _running_losses(net, self.monitor):
+            if loss < self.best_loss_[k]:
                 self.best_loss_[k], self.best_epoch_[k] = float(loss), len(net.history)
                 self.best_state_[k] = [p.detach().clone() for p in net.member_parameters(k)]
 
@@ -164,17 +111,13 @@ class RestoreBestWeights(Callback):
 
 
 def schedule_callbacks(estimator) -> list:
-    """The named callbacks of ``estimator``'s whole schedule, in the order they must run.
-
-    Its ``callbacks`` (a user's progress bar or logger) run after the schedule
-    has recorded the epoch's phase and learning rate and before the phase-3
-    stop rule, so they also see the last epoch.
-    """
+    """The named callbacks of ``estimator``'s whole schedule, in the order they must run (its own ``callbacks``
+    after the epoch's phase and rate are recorded, before the phase-3 stop rule: they also see the last epoch)."""
     e = estimator
     monitor = "member_train_loss" if e.validation_fraction is None else "member_valid_loss"
     return [
-        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs)),
-        ("plateau_lr", PlateauLR(e.plateau_factor, e.plateau_patience, e.min_lr, monitor)),
+        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs, e.plateau_factor, e.plateau_patience, e.min_lr,
+                                         monitor)),
         ("restore_best_weights", RestoreBestWeights(monitor)),
         *list(e.callbacks or []),
         ("recover_stop", RecoverStop(e.recover_tolerance, e.max_recover_epochs, e.max_epochs + e.plateau_epochs + 1,

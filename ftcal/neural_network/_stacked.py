@@ -1,8 +1,4 @@
-"""Several network calibrators trained at once (issue 13) in the one engine (:mod:`~ftcal.neural_network._engine`).
-
-Each member keeps its own seed, data, loss, Adam state and schedule, so the nets equal separate fits up to
-float32 rounding (``tests/test_stacked.py``); a layer of all ``K`` nets is one ``torch.baddbmm``.
-"""
+"""Several network calibrators trained at once in the one engine (:func:`fit_stacked`)."""
 
 from __future__ import annotations
 
@@ -29,39 +25,30 @@ def _datasets(X, y, K: int) -> list[tuple]:
     if isinstance(X, (list, tuple)) != isinstance(y, (list, tuple)):
         raise CalibrationInputError(
             "fit_stacked: pass X and y both as arrays (one dataset for every estimator) or both as lists "
-            f"(one dataset per estimator); got X as {type(X).__name__} and y as {type(y).__name__}."
-        )
+            f"(one dataset per estimator); got X as {type(X).__name__} and y as {type(y).__name__}.")
     if not isinstance(X, (list, tuple)):
         return [(X, y)] * K
     if len(X) != K or len(y) != K:
-        raise CalibrationInputError(
-            f"fit_stacked: {K} estimators need {K} datasets; got {len(X)} X and {len(y)} y."
-        )
+        raise CalibrationInputError(f"fit_stacked: {K} estimators need {K} datasets; got {len(X)} X and {len(y)} y.")
     return list(zip(X, y))
 
 
-def fit_stacked(
-    estimators: Sequence[NetworkCalibrator],
-    X: ArrayLike | Sequence[ArrayLike],
-    y: ArrayLike | Sequence[ArrayLike],
-) -> list[NetworkCalibrator]:
-    """Fit ``K`` network calibrators of one kind together, as one stacked module (see the module doc).
+def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence[ArrayLike],
+                y: ArrayLike | Sequence[ArrayLike]) -> list[NetworkCalibrator]:
+    """Fit ``K`` network calibrators of one kind together, as one stacked module.
 
-    Each estimator ends fitted as its own ``fit`` would leave it (``net_``
-    with its weights and its slice of the history, the schedule's outcome,
-    scales and tare), up to float32 rounding, for far less than ``K`` fits
-    (``benchmarks/network_speed.py``).
+    Each member keeps its own seed, data, loss, Adam state and schedule, so each estimator ends fitted as its own
+    ``fit`` would leave it (``net_``, its history, scales and tare), up to float32 rounding, for far less than ``K``
+    fits (``benchmarks/network_speed.py``).
 
     Parameters
     ----------
     estimators : sequence of DirectionalCalibrator or ComparativeCalibrator
-        ``K >= 1`` calibrators of one class with the same parameters except
-        ``random_state``, ``alpha``, ``zero_reading`` and ``verbose`` (they
-        share the architecture and the schedule); for ``K > 1`` without
+        ``K >= 1`` calibrators of one class with the same parameters except ``random_state``, ``alpha``,
+        ``zero_reading`` and ``verbose`` (they share the architecture and the schedule); for ``K > 1`` without
         ``callbacks`` (a skorch callback sees one net: fit such an estimator by itself).
     X : array-like of shape (n, N), or a list of K of them
-        Raw readings: one dataset for every estimator (seed ensembles), or
-        one per estimator (K datasets at once).
+        Raw readings: one dataset for every estimator (seed ensembles), or one per estimator (K datasets at once).
     y : array-like of shape (n, 6), or a list of K of them
         Reference wrenches, like ``X``.
 
@@ -87,22 +74,19 @@ def fit_stacked(
         raise CalibrationInputError("fit_stacked needs at least one estimator (K >= 1); got an empty list.")
     for k, est in enumerate(estimators):
         if not isinstance(est, NetworkCalibrator):
-            raise CalibrationInputError(
-                f"fit_stacked trains network calibrators (DirectionalCalibrator, ComparativeCalibrator); "
-                f"estimator {k} is {type(est).__name__}. Fit it with its own fit()."
-            )
-        if est.callbacks and len(estimators) > 1:
-            raise CalibrationInputError(
-                f"fit_stacked: estimator {k} has callbacks={est.callbacks!r}; skorch callbacks run per net, "
-                "so fit that estimator by itself."
-            )
-        if _stacking_key(est) != _stacking_key(estimators[0]):
-            raise CalibrationInputError(
-                f"fit_stacked: estimator {k} differs from estimator 0 in a training parameter; stacked nets "
-                "share the architecture and the schedule (only random_state, alpha and zero_reading may differ)."
-            )
-        if est.device != "cpu":
-            raise CalibrationInputError(f"fit_stacked trains on the CPU; estimator {k} has device={est.device!r}.")
+            problem = (f" trains network calibrators (DirectionalCalibrator, ComparativeCalibrator); estimator {k} is "
+                       f"{type(est).__name__}. Fit it with its own fit().")
+        elif est.callbacks and len(estimators) > 1:
+            problem = (f": estimator {k} has callbacks={est.callbacks!r}; skorch callbacks run per net, so fit that "
+                       "estimator by itself.")
+        elif _stacking_key(est) != _stacking_key(estimators[0]):
+            problem = (f": estimator {k} differs from estimator 0 in a training parameter; stacked nets share the "
+                       "architecture and the schedule (only random_state, alpha and zero_reading may differ).")
+        elif est.device != "cpu":
+            problem = f" trains on the CPU; estimator {k} has device={est.device!r}."
+        else:
+            continue
+        raise CalibrationInputError(f"fit_stacked{problem}")
     with estimators[0]._thread_limit():  # as BaseCalibrator.fit does around _prepare_fit
         datasets = [est._prepare_fit(X_k, y_k) for est, (X_k, y_k) in zip(estimators, _datasets(X, y, len(estimators)))]
     train_networks(estimators, datasets)
