@@ -12,7 +12,11 @@ Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file e
     stock baselines and the LTM on the same folds; held-out RMSE (eq. 18), the GP's 2-std coverage, fit time.
     Its floor is not the reference noise: the readings depend on the load history, which no static map can
     undo. ``static_floor`` estimates what a static map can reach: flexible models fitted on 20 000 rows of
-    the *same* sensor (same seed, more presses), scored on the 418 rows; the best of them.
+    the *same* sensor (same seed, more presses), scored on the 418 rows; the best of them. Shuffled folds
+    put rows of one press (the same load history) on both sides of a split, so they can score below it.
+``soft_grouped``
+    The same with press-grouped 5-fold CV (``GroupKFold`` on the dataset's press column, given to ``auto``
+    too): every press is scored by models that never saw it, as on a new recording.
 ``robot_held``
     :func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses), one outer
     pose-grouped hold-out (a fifth of the poses): ``auto`` with the groups, baselines, LTM.
@@ -43,7 +47,8 @@ from ftcal.models import stock_baselines
 
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
 OUT = Path("benchmarks/results/auto_vs_stock")  # --out
-CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "thesis", "asymmetric", "reconstructed",
+CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "soft_grouped", "thesis", "asymmetric",
+         "reconstructed",
          "robot_held")
 
 
@@ -132,6 +137,11 @@ def run_case(case: str) -> dict:
         d = make_soft_sensor_dataset()
         splits = list(KFold(5, shuffle=True, random_state=0).split(d.raw))
         return {**outer(d.raw, d.wrench, None, splits, d.meta["alpha"]), "noise_floor": d.meta["noise_floor_rmse"],
+                "static_floor": static_floor(d, OUT / "soft_static_floor.json"), "n_samples": d.n_samples}
+    if case == "soft_grouped":
+        d = make_soft_sensor_dataset()
+        splits = list(GroupKFold(5).split(d.raw, groups=d.group))
+        return {**outer(d.raw, d.wrench, d.group, splits, d.meta["alpha"]), "noise_floor": d.meta["noise_floor_rmse"],
                 "static_floor": static_floor(d, OUT / "soft_static_floor.json"), "n_samples": d.n_samples}
     if case == "robot_held":
         d = make_robot_held_dataset()
