@@ -14,7 +14,9 @@ from ftcal import (
     GaussianProcessCalibrator,
     LinearCalibrator,
     PolynomialCalibrator,
+    TemperatureCompensatedCalibrator,
 )
+from ftcal.models._auto import StackedCalibrator
 
 #: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
 TINY_SCHEDULE = dict(
@@ -27,13 +29,20 @@ TINY_SCHEDULE = dict(
 )
 
 
-#: Names of :func:`tiny_calibrators`' instances, in order: every public calibrator of ftcal.
+#: Names of the first instances of :func:`tiny_calibrators`, in order: every public calibrator of ftcal (each run
+#: by the ``tiny_calibrator`` fixture through the shared tests on affine data).
 CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
                     "gaussian_process", "auto")
+#: Names of its last instances: the wrappers, in the common checks too, but whose data are not the shared affine
+#: data (a temperature column; fitted members), tested in test_sklearn_compat.py::test_wrappers_*.
+WRAPPER_KINDS = ("stacked", "temperature_compensated")
 
 
 def tiny_calibrators(random_state: int = 0) -> list:
-    """One instance of every public calibrator, the networks with :data:`TINY_SCHEDULE`."""
+    """One instance of every public calibrator, the networks with :data:`TINY_SCHEDULE`, then the wrappers.
+
+    Names in :data:`CALIBRATOR_KINDS` then :data:`WRAPPER_KINDS`.
+    """
     return [
         LinearCalibrator(),
         ComparativeCalibrator(**TINY_SCHEDULE, random_state=random_state),
@@ -45,6 +54,8 @@ def tiny_calibrators(random_state: int = 0) -> list:
                                   random_state=random_state),
         AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator(degree=2))],
                        cv=3, baselines=False),
+        StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)], weights=[0.5, 0.5]),
+        TemperatureCompensatedCalibrator(LinearCalibrator()),
     ]
 
 

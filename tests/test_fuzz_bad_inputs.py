@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -1064,3 +1065,218 @@ def test_predict_range_file_of_another_channel_count_is_refused(tmp_path, capsys
                  str(tmp_path / "five.csv")])
     err = capsys.readouterr().err
     assert code == 2 and err.startswith("ftcal: error: --range") and "5 raw channels" in err
+
+
+# ------------------------------------------------------------------ flags, generator arguments, overflow, exact CSV
+@pytest.fixture(scope="module")
+def small_gp():
+    rng = np.random.default_rng(5)
+    w = rng.normal(size=(40, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = w @ rng.normal(size=(6, 6))
+    gp = ftcal.GaussianProcessCalibrator(max_samples=40, mean="linear", kernel="rbf", per_output=False,
+                                         random_state=0).fit(raw, w)
+    return gp, raw
+
+
+@pytest.mark.parametrize("flag", ["no", "True", 1, 0, 1.0, None, [True]])
+def test_return_std_that_is_not_a_bool_is_refused(small_gp, flag):
+    gp, raw = small_gp
+    with pytest.raises(CalibrationInputError, match=rf"return_std must be True or False; got {re.escape(repr(flag))}"):
+        gp.predict(raw[:2], return_std=flag)
+
+
+def test_return_std_takes_python_and_numpy_bools(small_gp):
+    gp, raw = small_gp
+    for yes in (True, np.True_):
+        mean, std = gp.predict(raw[:3], return_std=yes)
+        assert mean.shape == std.shape == (3, 6) and np.all(std > 0)
+    for no in (False, np.False_):
+        assert gp.predict(raw[:3], return_std=no).shape == (3, 6)
+
+
+def test_return_std_of_a_one_dimensional_target_is_one_dimensional(small_gp):
+    _, raw = small_gp
+    y = raw @ np.arange(1.0, 7.0)
+    gp = ftcal.GaussianProcessCalibrator(max_samples=40, mean="linear", kernel="rbf", per_output=False,
+                                         random_state=0).fit(raw, y)
+    mean, std = gp.predict(raw[:4], return_std=True)
+    assert mean.shape == std.shape == (4,)
+    np.testing.assert_array_equal(mean, gp.predict(raw[:4]))
+
+
+@pytest.mark.parametrize(("make", "kwargs", "message"), [
+    ("make_soft_sensor_dataset", {"n_samples": -5}, r"'n_samples' parameter .* int in the range \[1, inf\)\. Got -5"),
+    ("make_soft_sensor_dataset", {"n_samples": 0}, r"'n_samples' .* Got 0 instead"),
+    ("make_soft_sensor_dataset", {"n_samples": 100.0}, r"'n_samples' parameter .* must be an int .* Got 100\.0"),
+    ("make_soft_sensor_dataset", {"n_samples": True}, r"'n_samples' .* not a bool\. Got True"),
+    ("make_soft_sensor_dataset", {"n_samples": 100, "n_zero": 200}, r"n_zero=200 .* n_samples=100 .* at most 95"),
+    ("make_soft_sensor_dataset", {"n_zero": -1}, r"'n_zero' .* Got -1"),
+    ("make_soft_sensor_dataset", {"n_presses": 0}, r"'n_presses' .* Got 0"),
+    ("make_soft_sensor_dataset", {"n_samples": 20, "n_zero": 0, "n_presses": 21}, r"n_presses=21 .* n_samples is 20"),
+    ("make_soft_sensor_dataset", {"hysteresis": float("nan")}, r"'hysteresis' .* \[0\.0, 10\.0\]\. Got nan"),
+    ("make_soft_sensor_dataset", {"hysteresis": 1e300}, r"'hysteresis' .* Got 1e\+300"),
+    ("make_soft_sensor_dataset", {"random_state": -1}, r"'random_state' .* Got -1"),
+    ("make_robot_held_dataset", {"n_samples": 10, "n_poses": 47}, r"n_poses=47 .* n_samples is 10"),
+    ("make_robot_held_dataset", {"n_samples": 1, "n_poses": 1}, r"'n_samples' .* \[2, inf\)\. Got 1"),
+    ("make_robot_held_dataset", {"n_poses": 0}, r"'n_poses' .* Got 0"),
+    ("make_robot_held_dataset", {"tool_mass_kg": -1.0}, r"'tool_mass_kg' .* \[0\.0, 1000\.0\]\. Got -1\.0"),
+    ("make_robot_held_dataset", {"tool_mass_kg": float("inf")}, r"'tool_mass_kg' .* Got inf"),
+    ("make_robot_held_dataset", {"pose_offset": float("nan")}, r"'pose_offset' .* Got nan"),
+    ("make_dead_weight_dataset", {"n_samples": 0}, r"'n_samples' .* Got 0"),
+    ("make_dead_weight_dataset", {"n_validation": -1}, r"'n_validation' .* Got -1"),
+    ("make_dead_weight_dataset", {"range_factor": 0.5}, r"'range_factor' .* \[1\.0, 1000\.0\]\. Got 0\.5"),
+    ("make_dead_weight_dataset", {"range_factor": float("inf")}, r"'range_factor' .* Got inf"),
+    ("make_dead_weight_dataset", {"n_channels": 0}, r"'n_channels' .* \[3, inf\)\. Got 0"),
+    ("make_dead_weight_dataset", {"n_channels": 2}, r"'n_channels' .* Got 2"),
+    ("make_dead_weight_dataset", {"nonlinearity": float("nan")}, r"'nonlinearity' .* Got nan"),
+])
+def test_dataset_generators_name_a_bad_argument_and_its_value(make, kwargs, message):
+    with pytest.raises(CalibrationInputError, match=message):
+        getattr(ftcal, make)(**kwargs)
+
+
+@pytest.mark.parametrize("make", ["make_soft_sensor_dataset", "make_robot_held_dataset", "make_dead_weight_dataset"])
+def test_dataset_generators_refuse_huge_row_counts_before_allocating(make):
+    from ftcal.core._memory import MemoryLimitError
+
+    with pytest.raises(MemoryLimitError, match=r"n_samples=1000000000000 rows would need .*; lower n_samples"):
+        getattr(ftcal, make)(n_samples=10**12)
+
+
+def test_dataset_generators_at_the_edges_of_their_ranges_give_finite_data():
+    datasets = [ftcal.make_soft_sensor_dataset(1, n_zero=0, n_presses=1),
+                ftcal.make_soft_sensor_dataset(10, n_zero=5, n_presses=10, hysteresis=10.0),
+                ftcal.make_robot_held_dataset(np.int64(2), n_poses=2, tool_mass_kg=0.0, pose_offset=1.0),
+                *ftcal.make_dead_weight_dataset(1, n_validation=1, n_channels=3, range_factor=1000, nonlinearity=-1)]
+    assert [d.n_samples for d in datasets] == [1, 10, 2, 1, 1]
+    for d in datasets:
+        assert np.isfinite(d.raw).all() and np.isfinite(d.wrench).all() and np.isfinite(d.meta["noise_floor_rmse"])
+
+
+@pytest.mark.parametrize(("kwargs", "message"), [
+    ({"n_channels": 0}, r"'n_channels' parameter of stock_baselines .* \[1, inf\)\. Got 0"),
+    ({"n_channels": 6.0}, r"'n_channels' .* Got 6\.0"),
+    ({"n_channels": "6"}, r"'n_channels' .* Got '6'"),
+    ({"n_channels": True}, r"'n_channels' .* not a bool"),
+    ({"n_channels": 6, "max_kernel_samples": 0}, r"'max_kernel_samples' .* \[1, inf\) or None\. Got 0"),
+    ({"n_channels": 6, "max_kernel_samples": 2.5}, r"'max_kernel_samples' .* Got 2\.5"),
+    ({"n_channels": 6, "random_state": -2}, r"'random_state' .* Got -2"),
+])
+def test_stock_baselines_name_a_bad_argument(kwargs, message):
+    from ftcal.models import stock_baselines
+
+    with pytest.raises(CalibrationInputError, match=message):
+        stock_baselines(**kwargs)
+    assert list(stock_baselines(np.int64(6), max_kernel_samples=None)) == list(ftcal.models.STOCK_BASELINE_NAMES)
+
+
+@pytest.mark.parametrize("value", ["1e300", "-1e300", "1e7", "inf", "nan"])
+def test_simulate_refuses_an_absurd_zero_offset_in_one_line(tmp_path, capsys, value):
+    out = tmp_path / "data"
+    msg = cli_error(["simulate", "dataset", "--n-per-sphere", "5", "--n-test", "5", f"--zero-offset={value}",
+                     "--out", out, "-q"], capsys)
+    # the default sensor reads at most ~9.7 V at its rated loads (pinv(C) over the rated box): 10^6 x that
+    expected = "is not a finite number" if value in ("inf", "nan") else \
+        r"accepted range is -9\.67e\+06 to 9\.67e\+06 V \(1e\+06 x the sensor's raw full scale, 9\.67 V\)"
+    assert re.search(expected, msg), msg
+    assert not (out / "train.csv").exists()
+
+
+def test_zero_offset_within_range_is_in_the_readings_and_in_the_file_exactly(tmp_path):
+    assert run(["simulate", "dataset", "--n-per-sphere", "5", "--n-test", "5", "--zero-offset", "9e6", "--seed", "3",
+                "--out", tmp_path / "a", "-q"]) == 0
+    assert run(["simulate", "dataset", "--n-per-sphere", "5", "--n-test", "5", "--seed", "3", "--out", tmp_path / "b",
+                "-q"]) == 0
+    offset = CalibrationDataset.load(tmp_path / "a" / "train.csv")
+    tared = CalibrationDataset.load(tmp_path / "b" / "train.csv")
+    # the signal (|raw| < 10 V) survives an offset of 9e6 to float64's resolution there (~2e-9 V), file included
+    np.testing.assert_allclose(offset.raw - 9e6, tared.raw, rtol=0, atol=4e-9)
+    np.testing.assert_array_equal(offset.wrench, tared.wrench)
+    with pytest.raises(CalibrationInputError, match=r"zero_offset holds 1e\+12 \(channel 0\); the accepted range"):
+        ftcal.VirtualSensor(zero_offset=np.full(6, 1e12))
+
+
+def test_dataset_csv_round_trip_is_exact(tmp_path):
+    rng = np.random.default_rng(8)
+    n = 200
+    raw = 2**20 + rng.normal(size=(n, 7)) * 10.0 ** rng.integers(-12, 4, size=(n, 7))  # counts far above the signal
+    raw[0, :4] = [5e-324, -0.0, 1.7976931348623157e308, 0.1]
+    wrench = rng.normal(size=(n, 6)) * 10.0 ** rng.integers(-20, 20, size=(n, 6))
+    data = CalibrationDataset(raw=raw, wrench=wrench, group=rng.integers(-2**62, 2**62, size=n),
+                              temperature=rng.uniform(15, 35, n), meta={"note": "exact"})
+    back = CalibrationDataset.load(data.save(tmp_path / "d.csv"))
+    for name in ("raw", "wrench", "group", "temperature"):
+        np.testing.assert_array_equal(getattr(back, name), getattr(data, name), err_msg=name)
+    assert np.signbit(back.raw[0, 1]) and back.meta == {"note": "exact"}
+    assert back.raw.tobytes() == raw.tobytes() and back.wrench.tobytes() == wrench.tobytes()
+
+
+def test_run_log_round_trip_is_exact(tmp_path):
+    from ftcal.io._logs import read_run_log, write_run_log
+
+    rng = np.random.default_rng(9)
+    n = 30
+    q = rng.uniform(-np.pi, np.pi, size=(n, 7))
+    raw = 8_388_608 + rng.normal(size=(n, 6)) * 1e-3  # a 24-bit ADC's mid-scale with sub-count detail
+    write_run_log(tmp_path / "run.csv", timestamp=np.arange(n) * 0.01, run_kind=["load"] * n, config=[1] * n,
+                  pose=np.arange(n), q=q, raw=raw)
+    log = read_run_log(tmp_path / "run.csv")
+    assert log.q.tobytes() == q.tobytes() and log.raw.tobytes() == raw.tobytes()
+
+
+def _overflow_models():
+    rng = np.random.default_rng(6)
+    w = rng.normal(size=(40, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = w @ rng.normal(size=(6, 6))
+    gp = dict(max_samples=40, per_output=False, random_state=0)
+    return raw, {
+        "linear": (LinearCalibrator().fit(raw, w), 1e308, "its float64 computation exceeds float64's largest"),
+        "polynomial": (PolynomialCalibrator(degree=3).fit(raw, w), 1e120, "float64"),
+        "gp_matern": (ftcal.GaussianProcessCalibrator(mean="linear", kernel="matern52", **gp).fit(raw, w), 1e200,
+                      "its kernel squares the distance from the reading to the training readings"),
+        "gp_matern_linear": (ftcal.GaussianProcessCalibrator(mean="none", kernel="matern52+linear", **gp).fit(raw, w),
+                             1e200, "its kernel squares the distance"),
+    }
+
+
+@pytest.mark.parametrize("kind", ["linear", "polynomial", "gp_matern", "gp_matern_linear"])
+def test_overflowing_readings_are_named_for_what_overflowed_without_runtime_warnings(kind):
+    import warnings
+
+    raw, models = _overflow_models()
+    model, value, note = models[kind]
+    bad = np.vstack([raw[:1], np.full((1, 6), value)])
+    calls = [lambda: model.predict(bad)]
+    if kind.startswith("gp"):
+        calls.append(lambda: model.predict(bad, return_std=True))
+    for call in calls:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # no RuntimeWarning (overflow, invalid value) may leak
+            with pytest.raises(CalibrationInputError, match="X row 1 ") as info:
+                call()
+        msg = str(info.value)
+        assert "non-finite" in msg and note in msg and "float32" not in msg and "network" not in msg, msg
+
+
+def test_gp_far_outside_its_data_gives_the_linear_mean_or_an_error_never_a_warning():
+    """An RBF kernel between a reading at 1e200 and the training readings is exp(-inf) = 0 (the limit): the GP gives
+    its linear mean there, with the prior's standard deviation; with a linear kernel term the variance is
+    inf - inf, an error naming the standard deviation."""
+    import warnings
+
+    rng = np.random.default_rng(7)
+    w = rng.normal(size=(40, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = w @ rng.normal(size=(6, 6))
+    far = np.vstack([raw[:1], raw[1:2] * 1e198])
+    rbf = ftcal.GaussianProcessCalibrator(mean="linear", kernel="rbf", max_samples=40, per_output=False,
+                                          random_state=0).fit(raw, w)
+    with_linear = ftcal.GaussianProcessCalibrator(mean="none", kernel="rbf+linear", max_samples=40,
+                                                  per_output=False, random_state=0).fit(raw, w)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        mean, std = rbf.predict(far, return_std=True)
+        ltm = (far - rbf.zero_reading_) @ rbf.linear_matrix_.T  # the linear mean, in torque-scaled units
+        np.testing.assert_allclose(ftcal.scale_torques(mean[1:], rbf.alpha_), ltm[1:], rtol=1e-9)
+        assert np.all(np.isfinite(std)) and np.all(std[1] >= std[0])
+        with pytest.raises(CalibrationInputError, match="X row 1 .*non-finite standard deviation"):
+            with_linear.predict(far, return_std=True)

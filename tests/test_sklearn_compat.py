@@ -14,7 +14,7 @@ from sklearn.utils.estimator_checks import estimator_checks_generator
 
 from ftcal import CalibrationInputError, neg_scaled_rmse
 
-from conftest import TINY_SCHEDULE, affine_sensor_data, tiny_calibrators
+from conftest import TINY_SCHEDULE, WRAPPER_KINDS, affine_sensor_data, tiny_calibrators
 
 # The calibrators are regressors of any targets (the wrench rule, y of shape (n, 6) from >= 3 channels, is
 # enforced where calibration data enter: CalibrationDataset and the CLI), so scikit-learn's generic checks
@@ -28,6 +28,10 @@ _TOO_FEW_FOR_CV = (
     "rows than any candidate needs (n_channels + 1 and 7 for the zero-load estimate), so it refuses with "
     "'no candidate could be fitted' (tested in test_auto_gp_tare.py)"
 )
+_TEMPERATURE_SPAN = (
+    "the checks' data are uniform in [0, 1), so the temperature column (the last) spans < 1 deg C: too little to "
+    "learn a thermal drift from, which is refused (tested in test_temperature.py)"
+)
 _EXPECTED_FAILURES = {
     "ComparativeCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
     "DirectionalCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
@@ -36,6 +40,10 @@ _EXPECTED_FAILURES = {
         name: (CalibrationInputError if name != "check_fit2d_1feature" else AssertionError, _TOO_FEW_FOR_CV)
         for name in ("check_estimators_nan_inf", "check_regressor_multioutput",
                      "check_regressors_no_decision_function", "check_fit2d_1feature")
+    },
+    "TemperatureCompensatedCalibrator": {
+        name: (CalibrationInputError, _TEMPERATURE_SPAN)
+        for name in ("check_fit_score_takes_y", "check_dtype_object", "check_estimators_nan_inf")
     },
 }
 
@@ -152,3 +160,26 @@ def test_score_is_r2(data):
 
     assert LinearCalibrator().fit(raw, wrench).score(raw, wrench) == pytest.approx(1.0)
     assert TINY_SCHEDULE["max_epochs"] < 10  # the networks in these tests really are tiny
+
+
+@pytest.mark.parametrize("kind", WRAPPER_KINDS)
+def test_wrappers_in_a_pipeline_a_grid_search_and_a_pickle(kind):
+    """The stack and the temperature compensation, on their own data (a real temperature column), do what the
+    shared tests check of every calibrator: Pipeline, GridSearchCV, clone, pickle, batch independence."""
+    raw, wrench, _, _ = affine_sensor_data(n_samples=60, n_channels=5, seed=43)
+    temperature = np.random.default_rng(43).uniform(15.0, 35.0, size=60)  # uncorrelated with the loads
+    X = np.column_stack([raw, temperature])
+    model = dict(zip(WRAPPER_KINDS, tiny_calibrators()[-len(WRAPPER_KINDS):]))[kind]
+    # noise-free affine data, temperature without effect: every member / the inner LTM is exact
+    tolerance = 1e-6 * np.abs(wrench).max()
+    pipe = make_pipeline(StandardScaler(), clone(model)).fit(X, wrench)
+    np.testing.assert_allclose(pipe.predict(X), wrench, atol=tolerance)
+    grid = {"weights": [[1.0, 0.0], [0.5, 0.5]]} if kind == "stacked" else {"n_iterations": [1, 3]}
+    search = GridSearchCV(clone(model), grid, cv=KFold(2), scoring=neg_scaled_rmse).fit(X, wrench)
+    assert search.best_params_.keys() == grid.keys()
+    np.testing.assert_allclose(search.best_estimator_.predict(X), wrench, atol=tolerance)
+    fitted = clone(model).fit(X, wrench)
+    restored = pickle.loads(pickle.dumps(fitted))
+    np.testing.assert_array_equal(restored.predict(X), fitted.predict(X))
+    order = np.random.default_rng(0).permutation(60)
+    np.testing.assert_allclose(fitted.predict(X[order]), fitted.predict(X)[order], rtol=1e-12, atol=1e-9)

@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator
 from ..core._memory import check_allocation
-from ..core._validation import check_finite_output, validate_readings
+from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
 __all__ = ["GaussianProcessCalibrator", "GP_MEANS", "GP_KERNELS"]
@@ -189,6 +189,10 @@ class GaussianProcessCalibrator(BaseCalibrator):
     _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
                      "target_scale_", "log_marginal_likelihood_")
+    #: What overflows for a reading far outside the training range (see ``check_finite_output``).
+    _overflow_note = ("its kernel squares the distance from the reading to the training readings, in units of its "
+                      "length scales, which exceeds float64's ~1.8e308 from a distance of ~1.3e154")
+
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "mean": [StrOptions({"auto", *GP_MEANS})],
@@ -428,17 +432,27 @@ class GaussianProcessCalibrator(BaseCalibrator):
     def predict(self, X: ArrayLike, return_std: bool = False):
         """Wrench in [N] and [N·m] for raw readings ``X`` (n, N); with ``return_std`` also its standard deviation.
 
+        Parameters
+        ----------
+        X : array-like of shape (n_samples, n_channels)
+        return_std : bool, default=False
+            ``True`` or ``False`` (numpy booleans too); anything else raises
+            :class:`~ftcal.CalibrationInputError`.
+
         Returns
         -------
         wrench : ndarray of shape (n_samples, 6)
         std : ndarray of shape (n_samples, 6), only with ``return_std=True``
             Predictive standard deviation of each component, [N] and [N·m].
+            (Both ``(n_samples,)`` for a calibrator fitted on a 1-D ``y``.)
         """
-        if not return_std:
+        if not check_bool(return_std, "return_std"):
             return super().predict(X)
         check_is_fitted(self)
         X = self._retared(validate_readings(self, X))
-        mean, std = self._predict_scaled(X, True)
-        wrench = unscale_torques(mean, self.alpha_)
+        with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming the reading
+            mean, std = self._predict_scaled(X, True)
+            wrench, std = unscale_torques(mean, self.alpha_), unscale_torques(std, self.alpha_)
         check_finite_output(X, wrench, self)
-        return wrench, unscale_torques(std, self.alpha_)
+        check_finite_output(X, std, self, what="standard deviation")
+        return (wrench[:, 0], std[:, 0]) if self.__dict__.get("y_1d_") else (wrench, std)

@@ -95,10 +95,10 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         self.random_state = random_state
 
     def _split(self, X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        if X.shape[1] < 4:
+        if X.shape[1] < 2:  # like every calibrator, a regressor of any channel count (the wrench rule is the data's)
             raise CalibrationInputError(
-                f"X has {X.shape[1]} columns; TemperatureCompensatedCalibrator needs the raw channels and, last, "
-                "the temperature [deg C] (at least 3 + 1 columns)."
+                f"X has {X.shape[1]} feature(s) (columns); TemperatureCompensatedCalibrator needs the raw channels and, last, "
+                "the temperature [deg C] (at least 1 + 1 columns)."
             )
         raw, temperature = X[:, :-1], X[:, -1]
         return raw, check_temperature(temperature, len(X), "temperature (the last column of X)")

@@ -189,6 +189,14 @@ def int_in_range(low: int, high: int, what: str):
     return parse
 
 
+def finite_float(text: str) -> float:
+    """argparse type: a finite number (``inf`` and ``nan`` are refused)."""
+    value = _number(float, text, float("-inf"), False, "a finite number")
+    if abs(value) == float("inf"):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
+
+
 def positive_float(text: str) -> float:
     """argparse type: a finite number > 0."""
     value = _number(float, text, 0.0, True, "a positive number")

@@ -14,6 +14,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
+    finite_float,
     positive_float,
     write_json,
 )
@@ -78,8 +79,9 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
         "and span drifting by data-sheet magnitudes (ftcal.ThermalDrift.typical); adds a temperature column",
     )
     d.add_argument(
-        "--zero-offset", type=float, default=0.0, metavar="RAW",
-        help="raw zero-load offset added to every channel (a sensor that is not tared)",
+        "--zero-offset", type=finite_float, default=0.0, metavar="RAW",
+        help="raw zero-load offset added to every channel (a sensor that is not tared); at most 10^6 times the "
+        "sensor's raw full scale in magnitude",
     )
     d.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_output_options(d, "ftcal-data")
@@ -104,7 +106,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     files = _dataset_files(args.n_datasets, args.format)
     plan = OutputPlan(args.out, files + ["info.json", "coverage.png"], args.force)
     profile = _profile(args.sensor)
-    offset = None if args.zero_offset == 0 else np.full(profile.n_channels, args.zero_offset)
+    offset = None if args.zero_offset == 0 else np.full(profile.n_channels, _zero_offset(args.zero_offset, profile))
     rng = np.random.default_rng(args.seed)
     thermal = temperature_range(args.temperature_range)
     infos = []
@@ -138,6 +140,18 @@ def run_dataset(args: argparse.Namespace) -> int:
         f"samples each, {profile.n_channels} channels); noise floor {np.mean(floors):.3g} N"
     )
     return 0
+
+
+def _zero_offset(value: float, profile) -> float:
+    """``--zero-offset`` if the virtual sensor accepts it, else a one-line error saying the accepted range."""
+    from ..simulation._artificial import ZERO_OFFSET_LIMIT, zero_offset_bound
+
+    bound, full_scale = zero_offset_bound(profile)
+    if abs(value) > bound:
+        raise CliError(f"--zero-offset {value:g}: the accepted range is -{bound:.3g} to {bound:.3g} "
+                       f"{profile.raw_unit} ({ZERO_OFFSET_LIMIT:g} x the sensor's raw full scale, {full_scale:.3g} "
+                       f"{profile.raw_unit}); beyond it the readings keep too few digits of the load")
+    return value
 
 
 def temperature_range(text: str | None):

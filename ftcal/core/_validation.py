@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from sklearn.utils._param_validation import InvalidParameterError, Interval, validate_parameter_constraints
 from sklearn.utils.validation import check_array, check_consistent_length, validate_data
 
 from ._exceptions import CalibrationInputError
@@ -24,6 +25,9 @@ __all__ = [
     "check_identifiable",
     "check_finite_output",
     "check_magnitude",
+    "check_bool",
+    "check_arguments",
+    "FLOAT64_OVERFLOW",
 ]
 
 
@@ -247,8 +251,16 @@ def check_zero_reading(zero_reading: ArrayLike, n_channels: int) -> NDArray[np.f
     return z
 
 
-def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], estimator) -> None:
+#: What overflows in a model computing in float64 (what :func:`check_finite_output` says unless the model's class
+#: names its own computation in ``_overflow_note``).
+FLOAT64_OVERFLOW = "a value of its float64 computation exceeds float64's largest number, ~1.8e308"
+
+
+def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], estimator, what: str = "wrench") -> None:
     """Raise when a prediction is NaN or inf, naming the reading that caused it (never print NaN rows).
+
+    The message says what overflowed for that model: the estimator's class attribute ``_overflow_note``
+    (e.g. the GP's kernel distances, a network's float32), else :data:`FLOAT64_OVERFLOW`.
 
     Examples
     --------
@@ -259,10 +271,57 @@ def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], est
     """
     bad = ~np.isfinite(wrench)
     if bad.any():
-        row = int(np.argmax(bad.any(axis=1)))
+        row = int(np.argmax(bad.reshape(len(wrench), -1).any(axis=1)))
         big = float(np.abs(X[row]).max()) if X.size else float("nan")
+        note = getattr(estimator, "_overflow_note", None) or FLOAT64_OVERFLOW
         raise CalibrationInputError(
-            f"X row {row} (largest |value| {big:.3g}) gives a non-finite wrench with {type(estimator).__name__}: the "
-            "reading is outside the range the model can compute (the networks compute in float32, at most "
-            "~3.4e38, and squared norms overflow from ~1e154). Fix: check the reading's units, or remove that row."
+            f"X row {row} (largest |value| {big:.3g}) gives a non-finite {what} with {type(estimator).__name__}: "
+            f"the reading is outside the range the model can compute ({note}). Fix: check the reading's units, or "
+            "remove that row."
         )
+
+
+def check_bool(value, name: str) -> bool:
+    """``value`` as a ``bool`` if it is one (Python or numpy), else a :class:`CalibrationInputError` naming ``name``.
+
+    A flag given as a string or a number (``return_std="no"``, ``1``) is a mistake, not a truth value.
+
+    Examples
+    --------
+    >>> check_bool(np.True_, "return_std")
+    True
+    >>> check_bool("no", "return_std")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: return_std must be True or False; got 'no' (str).
+    """
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise CalibrationInputError(f"{name} must be True or False; got {value!r} ({type(value).__name__}).")
+
+
+def check_arguments(caller: str, constraints: dict, **values) -> None:
+    """Check a function's arguments against scikit-learn constraints (``Interval``, ``StrOptions``, ``None``, ...).
+
+    The one way ftcal's functions check their arguments: a bad one raises
+    :class:`CalibrationInputError` naming the argument, what is allowed and
+    the value given. A bool where only numbers are allowed is refused too
+    (scikit-learn's intervals take ``True`` for 1).
+
+    Examples
+    --------
+    >>> from numbers import Integral
+    >>> check_arguments("make_data", {"n_samples": [Interval(Integral, 1, None, closed="left")]}, n_samples=0)
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: The 'n_samples' parameter of make_data must be an int in the range [1, inf). Got 0 instead.
+    """
+    try:
+        validate_parameter_constraints(constraints, values, caller_name=caller)
+    except InvalidParameterError as exc:
+        raise CalibrationInputError(str(exc)) from None
+    for name, value in values.items():
+        allowed = [c for c in constraints.get(name, []) if c is not None]
+        if isinstance(value, (bool, np.bool_)) and allowed and all(isinstance(c, Interval) for c in allowed):
+            raise CalibrationInputError(f"The {name!r} parameter of {caller} must be a number, not a bool. Got "
+                                        f"{value!r} instead.")

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import check_plain_numbers, is_number, read_header
+from ..core._columns import check_plain_numbers, csv_rows, is_number, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
 from ..core._temperature import check_temperature
@@ -246,18 +246,16 @@ class CalibrationDataset:
                     np.savez(fh, **arrays)
             else:
                 cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
-                data = np.hstack([self.raw, self.wrench])
-                fmt = ["%.10g"] * data.shape[1]
-                if self.group is not None:  # exact integer labels: object columns, never through float64
+                columns = [self.raw, self.wrench]
+                if self.group is not None:  # exact integer labels (Python ints, never through float64)
                     cols.append("group")
-                    data = np.hstack([data.astype(object), self.group[:, None].astype(object)])
-                    fmt.append("%d")
+                    columns.append(self.group[:, None].astype(object))
                 if self.temperature is not None:
                     cols.append("temperature")
-                    data = np.hstack([data, self.temperature[:, None]])
-                    fmt.append("%.10g")
-                header = f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols)
-                np.savetxt(tmp, data, delimiter=",", header=header, comments="", fmt=fmt)
+                    columns.append(self.temperature[:, None])
+                with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
+                    fh.write(f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols) + "\n")
+                    fh.writelines(csv_rows(*columns))
         return path
 
     @classmethod

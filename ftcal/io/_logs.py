@@ -382,7 +382,7 @@ def write_run_log(
     out = header + [",".join(names)]
     for i in range(n):
         vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
-        vals += [f"{v:.10g}" for v in q_arr[i]] + [f"{v:.10g}" for v in raw_arr[i]]
+        vals += [repr(v) for v in q_arr[i].tolist() + raw_arr[i].tolist()]  # exact: reads back bit for bit
         if temp is not None:
             vals.append(f"{temp[i]:.6g}")
         out.append(",".join(vals))

@@ -22,11 +22,15 @@ subset is part of the baseline and is reported with it.
 
 from __future__ import annotations
 
+from numbers import Integral
 from typing import Any
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
+
+from ..core._validation import check_arguments
 
 __all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor"]
 
@@ -84,11 +88,16 @@ def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = 2000,
     Parameters
     ----------
     n_channels : int
-        Number of raw channels (the stock GP's RBF has one length scale per channel).
+        Number of raw channels, >= 1 (the stock GP's RBF has one length scale per channel).
     max_kernel_samples : int or None, default=2000
-        Rows the kernel models (``sk_kernel_ridge``, ``sk_gp``) are fitted on at most.
+        Rows the kernel models (``sk_kernel_ridge``, ``sk_gp``) are fitted on at most (>= 1; ``None``: all).
     random_state : int, default=0
-        Seed of the kernel models' subsets and of the GP optimizer's restarts.
+        Seed (>= 0) of the kernel models' subsets and of the GP optimizer's restarts.
+
+    Raises
+    ------
+    CalibrationInputError
+        An argument of another type or out of its range, named with its value.
 
     Returns
     -------
@@ -106,6 +115,11 @@ def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = 2000,
     >>> float(np.abs(models["sk_poly2"].fit(X, y).predict(X) - y).max()) < 1e-2
     True
     """
+    check_arguments("stock_baselines", {
+        "n_channels": [Interval(Integral, 1, None, closed="left")],
+        "max_kernel_samples": [Interval(Integral, 1, None, closed="left"), None],
+        "random_state": [Interval(Integral, 0, None, closed="left")],
+    }, n_channels=n_channels, max_kernel_samples=max_kernel_samples, random_state=random_state)
     from sklearn.gaussian_process import GaussianProcessRegressor
     from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
     from sklearn.kernel_ridge import KernelRidge

@@ -35,6 +35,28 @@ from ._sensor import SensorProfile
 
 __all__ = ["VirtualSensor", "make_artificial_dataset", "noise_floor"]
 
+#: Largest zero-load offset as a multiple of the sensor's raw full scale: float64 (16 digits) then still resolves
+#: the load signal to ~1e-10 of its span; a larger offset leaves too few digits for the load (a unit error).
+ZERO_OFFSET_LIMIT = 1e6
+
+
+def zero_offset_bound(profile: SensorProfile) -> tuple[float, float]:
+    """The largest ``|zero_offset|`` a virtual sensor accepts [raw unit], and the raw full scale it derives from.
+
+    The raw full scale is the largest raw value over the rated wrench box
+    (``max_i sum_j |pinv(C)_ij| full_scale_j``); the bound is
+    :data:`ZERO_OFFSET_LIMIT` times it.
+
+    Examples
+    --------
+    >>> bound, full_scale = zero_offset_bound(SensorProfile.default())
+    >>> bool(bound == 1e6 * full_scale), bool(1 < full_scale < 100)
+    (True, True)
+    """
+    full_scale = float((np.abs(np.linalg.pinv(profile.calibration_matrix)) @ profile.full_scale).max())
+    return ZERO_OFFSET_LIMIT * full_scale, full_scale
+
+
 #: Training-sphere radii as fractions of Fmax: 400, 800, 1200, 1600 N for 2000 N (IV-A-a).
 SPHERE_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
 
@@ -116,6 +138,15 @@ class VirtualSensor:
                 raise CalibrationInputError(
                     f"zero_offset must be a finite array of shape ({n},), one raw value per channel; "
                     f"got shape {self.zero_offset.shape}."
+                )
+            bound, full_scale = zero_offset_bound(self.profile)
+            if np.abs(self.zero_offset).max(initial=0.0) > bound:
+                channel = int(np.argmax(np.abs(self.zero_offset)))
+                raise CalibrationInputError(
+                    f"zero_offset holds {self.zero_offset[channel]:.6g} (channel {channel}); the accepted range is "
+                    f"|zero_offset| <= {bound:.3g} {self.profile.raw_unit} ({ZERO_OFFSET_LIMIT:g} x the sensor's raw "
+                    f"full scale, {full_scale:.3g} {self.profile.raw_unit}): beyond it float64 keeps too few digits "
+                    "of the load signal."
                 )
         self._pinv = np.linalg.pinv(self.profile.calibration_matrix)
 

@@ -26,12 +26,27 @@ perfect model would score.
 
 from __future__ import annotations
 
-import numpy as np
+from numbers import Integral, Real
 
-from ..core._wrench import alpha_from_wrenches, scale_torques
+import numpy as np
+from sklearn.utils._param_validation import Interval
+
+from ..core._exceptions import CalibrationInputError
+from ..core._memory import check_allocation
+from ..core._validation import check_arguments
+from ..core._wrench import MIN_CHANNELS, alpha_from_wrenches, scale_torques
 from ..io._dataset import CalibrationDataset
 
 __all__ = ["make_soft_sensor_dataset", "make_robot_held_dataset", "make_dead_weight_dataset"]
+
+
+#: A seed of numpy's generators: an int >= 0.
+_SEED = [Interval(Integral, 0, None, closed="left")]
+
+
+def _check_rows(caller: str, name: str, n_rows: int, floats_per_row: int) -> None:
+    """Refuse, before allocating, a row count ``name`` whose arrays would exceed ftcal's memory limit."""
+    check_allocation(8.0 * floats_per_row * n_rows, f"{caller}'s arrays for {name}={n_rows} rows", f"lower {name}")
 
 
 def _with_floor(raw, wrench, noise, group, meta) -> CalibrationDataset:
@@ -67,7 +82,7 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
         Rows at zero load (after presses; they still show the lag).
     n_presses : int, default=37
     hysteresis : float, default=0.25
-        Weight of the lagged load in the readings.
+        Weight of the lagged load in the readings, 0 to 10 (1: as strong as the saturating response).
     random_state : int, default=0
 
     Returns
@@ -81,6 +96,22 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
     >>> d.raw.shape, d.wrench.shape, int((abs(d.wrench[:, 2]) < 0.2).sum()) >= 48
     ((418, 8), (418, 6), True)
     """
+    check_arguments("make_soft_sensor_dataset", {
+        "n_samples": [Interval(Integral, 1, None, closed="left")],
+        "n_zero": [Interval(Integral, 0, None, closed="left")],
+        "n_presses": [Interval(Integral, 1, None, closed="left")],
+        "hysteresis": [Interval(Real, 0, 10, closed="both")],
+        "random_state": _SEED,
+    }, n_samples=n_samples, n_zero=n_zero, n_presses=n_presses, hysteresis=hysteresis, random_state=random_state)
+    if n_zero > max(n_samples - 5, 0):
+        raise CalibrationInputError(
+            f"make_soft_sensor_dataset: n_zero={n_zero} rows at zero load do not fit in n_samples={n_samples} (the "
+            f"first 5 rows are loaded): n_zero must be at most {max(n_samples - 5, 0)}.")
+    if n_presses > n_samples:
+        raise CalibrationInputError(
+            f"make_soft_sensor_dataset: n_presses={n_presses} presses need at least as many rows; n_samples is "
+            f"{n_samples}. Fix: n_presses <= n_samples.")
+    _check_rows("make_soft_sensor_dataset", "n_samples", n_samples, 80)
     rng = np.random.default_rng(random_state)
     # the sensor from its own stream: more rows (n_samples, n_presses) of the same random_state are the same sensor
     sensor = np.random.default_rng([random_state, 1])
@@ -132,9 +163,12 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
     Parameters
     ----------
     n_samples : int, default=90000
+        Rows, at least 2 and at least ``n_poses``.
     n_poses : int, default=47
     tool_mass_kg : float, default=1.5
+        Tool mass [kg], 0 to 1000.
     pose_offset : float, default=0.002
+        Per-pose offset as a fraction of each channel's span, 0 to 1.
     random_state : int, default=0
 
     Returns
@@ -148,6 +182,19 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
     >>> d.raw.shape, len(set(d.group.tolist()))
     ((2000, 8), 40)
     """
+    check_arguments("make_robot_held_dataset", {
+        "n_samples": [Interval(Integral, 2, None, closed="left")],
+        "n_poses": [Interval(Integral, 1, None, closed="left")],
+        "tool_mass_kg": [Interval(Real, 0, 1000, closed="both")],
+        "pose_offset": [Interval(Real, 0, 1, closed="both")],
+        "random_state": _SEED,
+    }, n_samples=n_samples, n_poses=n_poses, tool_mass_kg=tool_mass_kg, pose_offset=pose_offset,
+        random_state=random_state)
+    if n_poses > n_samples:
+        raise CalibrationInputError(
+            f"make_robot_held_dataset: n_poses={n_poses} poses need at least one row each; n_samples is {n_samples}. "
+            "Fix: n_poses <= n_samples.")
+    _check_rows("make_robot_held_dataset", "n_samples", n_samples, 120)
     rng = np.random.default_rng(random_state)
     pose = np.sort(np.concatenate([np.arange(n_poses), rng.integers(0, n_poses, size=n_samples - n_poses)]))
     rotations = _rotations(n_poses, rng)
@@ -185,6 +232,20 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
     calibrated range's edge) and noise of 0.1 % of span; the references carry
     0.02 N / 0.001 N·m noise.
 
+    Parameters
+    ----------
+    n_samples : int, default=15
+        Calibration rows (>= 1).
+    n_validation : int, default=200
+        Validation rows (>= 1).
+    range_factor : float, default=2.0
+        Validation loads' range over the calibrated one, 1 to 1000.
+    n_channels : int, default=6
+        Raw channels, at least 3.
+    nonlinearity : float, default=0.01
+        Cubic term at the calibrated range's edge, as a fraction of span, -1 to 1.
+    random_state : int, default=0
+
     Returns
     -------
     calibration, validation : CalibrationDataset
@@ -195,6 +256,17 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
     >>> cal.raw.shape, val.raw.shape, bool(abs(val.wrench[:, 0]).max() > abs(cal.wrench[:, 0]).max())
     ((15, 6), (200, 6), True)
     """
+    check_arguments("make_dead_weight_dataset", {
+        "n_samples": [Interval(Integral, 1, None, closed="left")],
+        "n_validation": [Interval(Integral, 1, None, closed="left")],
+        "range_factor": [Interval(Real, 1, 1000, closed="both")],
+        "n_channels": [Interval(Integral, MIN_CHANNELS, None, closed="left")],
+        "nonlinearity": [Interval(Real, -1, 1, closed="both")],
+        "random_state": _SEED,
+    }, n_samples=n_samples, n_validation=n_validation, range_factor=range_factor, n_channels=n_channels,
+        nonlinearity=nonlinearity, random_state=random_state)
+    for name, rows in (("n_samples", n_samples), ("n_validation", n_validation)):
+        _check_rows("make_dead_weight_dataset", name, rows, 8 * n_channels + 40)
     rng = np.random.default_rng(random_state)
     span = np.array([10.0, 10.0, 10.0, 0.5, 0.5, 0.5])
     a = np.eye(6)[:n_channels] if n_channels <= 6 else np.vstack([np.eye(6), rng.normal(size=(n_channels - 6, 6))])
