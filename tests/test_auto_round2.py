@@ -294,3 +294,13 @@ def test_gp_onnx_export_equals_predict_for_each_kernel_family(mean, kernel, per_
     session = onnxruntime.InferenceSession(str(path))
     out = session.run(None, {session.get_inputs()[0].name: raw[:10]})[0]
     np.testing.assert_allclose(out, gp.predict(raw[:10]), rtol=1e-9, atol=1e-9)
+
+
+@pytest.mark.parametrize("width", [1, 3])
+def test_gp_with_automatic_choices_fits_targets_of_any_width(width):
+    # per_output="auto" compared six components and priced six LTM means whatever the width: IndexError before
+    raw, w = cubic(120)
+    gp = GaussianProcessCalibrator(alpha=1.0, random_state=0).fit(raw, w[:, :width])
+    mean, std = gp.predict(raw[:4], return_std=True)
+    assert mean.shape == std.shape == (4, width) and np.all(std > 0)
+    assert np.sqrt(np.mean((gp.predict(raw) - w[:, :width]) ** 2)) < 0.1 * w[:, :width].std()

@@ -1085,6 +1085,22 @@ def test_return_std_that_is_not_a_bool_is_refused(small_gp, flag):
         gp.predict(raw[:2], return_std=flag)
 
 
+@pytest.mark.parametrize("flag", ["no", 1, None])
+def test_return_std_of_auto_that_is_not_a_bool_is_refused(small_gp, flag):
+    gp, raw = small_gp
+    rows = np.vstack([raw, raw * 1.01])  # 80 rows: 64-row training folds, enough to judge a GP on 6 channels
+    auto = ftcal.AutoCalibrator(candidates=[("gaussian_process", gp)], baselines=False, stack=False,
+                                random_state=0).fit(rows, gp.predict(rows))
+    with pytest.raises(CalibrationInputError, match=rf"return_std must be True or False; got {re.escape(repr(flag))}"):
+        auto.predict(raw[:2], return_std=flag)
+
+
+def test_network_overflow_is_named_float32():
+    from ftcal.neural_network._base import NetworkCalibrator
+
+    assert "float32" in NetworkCalibrator._overflow_note
+
+
 def test_return_std_takes_python_and_numpy_bools(small_gp):
     gp, raw = small_gp
     for yes in (True, np.True_):

@@ -246,7 +246,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
             if per_output:  # each component from its selection optimum (a warm start)
                 regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
                                                       seed, int(self.n_restarts_optimizer)), u, target[:, [j]])
-                              for j in range(6)]
+                              for j in range(target.shape[1])]
             else:
                 start = make_kernel(family, n_channels).clone_with_theta(theta[0])
                 regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]
@@ -254,7 +254,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
         if mean == "linear":
             self.linear_matrix_, self.linear_offset_ = np.asarray(ltm.coef_), np.asarray(ltm.intercept_)
         else:
-            self.linear_matrix_, self.linear_offset_ = np.zeros((6, n_channels)), np.zeros(6)
+            self.linear_matrix_, self.linear_offset_ = np.zeros((ys.shape[1], n_channels)), np.zeros(ys.shape[1])
         self.train_inputs_ = u
         self.theta_ = np.stack([g.kernel_.theta for g in regressors])
         self.dual_coef_ = np.column_stack([np.asarray(g.alpha_).reshape(m, -1) for g in regressors])
@@ -265,6 +265,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
     def _choose(self, u, targets, seed):
         """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
         n, n_channels = u.shape
+        k = targets["none"].shape[1]  # outputs (6 for a wrench)
         combos = [(mean, family) for mean, family in _AUTO_COMBINATIONS
                   if self.mean in ("auto", mean) and self.kernel in ("auto", family)]
         if not combos:  # a combination outside the automatic list, asked for explicitly
@@ -277,12 +278,12 @@ class GaussianProcessCalibrator(BaseCalibrator):
             gp = _fit_quietly(_regressor(make_kernel(family, n_channels), seed, 0), u, targets[mean])
             value = _log_evidence(gp, targets[mean])
             self.log_marginal_likelihood_[f"{mean}/{family}"] = value
-            # the LTM mean pays the BIC price of its 6 (N + 1) coefficients
-            scores[(mean, family)] = value - (0.5 * 6 * (n_channels + 1) * np.log(n) if mean == "linear" else 0.0)
+            # the LTM mean pays the BIC price of its k (N + 1) coefficients
+            scores[(mean, family)] = value - (0.5 * k * (n_channels + 1) * np.log(n) if mean == "linear" else 0.0)
             fitted[(mean, family)] = gp
         mean, family = max(scores, key=scores.get)
         shared = fitted[(mean, family)]
-        if self.per_output is False:
+        if self.per_output is False or k == 1:
             return mean, family, False, shared.kernel_.theta[None, :]
         # per-output fits from the shared optimum on at most _PER_OUTPUT_ROWS rows (six fits: kept cheap)
         few = slice(None) if n <= _PER_OUTPUT_ROWS else np.sort(
@@ -290,11 +291,11 @@ class GaussianProcessCalibrator(BaseCalibrator):
         u, target = u[few], targets[mean][few]
         n = len(u)
         shared_few = _fit_quietly(_regressor(shared.kernel_, seed, 0, optimizer=None), u, target)
-        separate = [_fit_quietly(_regressor(shared.kernel_, seed, 0), u, target[:, [j]]) for j in range(6)]
+        separate = [_fit_quietly(_regressor(shared.kernel_, seed, 0), u, target[:, [j]]) for j in range(k)]
         gain = sum(_log_evidence(g, target[:, [j]]) for j, g in enumerate(separate)) \
             - _log_evidence(shared_few, target)
         self.log_marginal_likelihood_["per_output_gain"] = float(gain)
-        if self.per_output is True or gain > 0.5 * 5 * shared.kernel_.theta.size * np.log(n):
+        if self.per_output is True or gain > 0.5 * (k - 1) * shared.kernel_.theta.size * np.log(n):
             return mean, family, True, np.stack([g.kernel_.theta for g in separate])
         return mean, family, False, shared.kernel_.theta[None, :]
 

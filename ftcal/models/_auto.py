@@ -633,7 +633,9 @@ class AutoCalibrator(BaseCalibrator):
         ``return_std=True`` needs a chosen model that gives one (the Gaussian
         process); otherwise a :class:`~ftcal.CalibrationInputError` says which was chosen.
         """
-        if not return_std:
+        from ..core._validation import check_bool
+
+        if not check_bool(return_std, "return_std"):
             return super().predict(X)
         check_is_fitted(self)
         if not provides_std(self.best_estimator_):

@@ -97,6 +97,7 @@ class NetworkCalibrator(BaseCalibrator):
     """
 
     _module_class: type[torch.nn.Module]
+    _overflow_note = "the network computes in float32, at most ~3.4e38"
     #: The training engine (a subclass may override skorch's ``get_loss``, ``train_step``, ...: they are honoured).
     _net_class: type[NetworkRegressor] = NetworkRegressor
     #: Parameters that only affect one training run and are not stored in model files.
