@@ -66,9 +66,16 @@ def make_sensor(name: str, seed: int) -> "ftcal.VirtualSensor":
     return sensor
 
 
+#: Recorded in every ``auto`` result: the AutoCalibrator settings of this script since issue 19's rewrite of auto
+#: (stacking on by default, candidates scored by ``n_jobs``). Rows without it were measured with the earlier auto.
+AUTO_SETTINGS = "closed-form candidates, stack=True, baselines=False, n_jobs=1"
+
+
 def auto_calibrator(seed: int):
+    """``auto`` over the closed-form candidates; one process (the figures are the same for any ``n_jobs``), and
+    no stock baselines (they are never chosen, so they change no figure here, only the fit time)."""
     candidates = [(n, c) for n, c in default_candidates() if n not in NETWORKS]
-    return ftcal.AutoCalibrator(candidates=candidates, random_state=seed)
+    return ftcal.AutoCalibrator(candidates=candidates, stack=True, baselines=False, n_jobs=1, random_state=seed)
 
 
 def run_plan(robot, plan, sensor, seed: int):
@@ -112,6 +119,7 @@ def score(model_name: str, train, test, alpha: float, seed: int) -> dict:
     out = {"rmse": ftcal.wrench_rmse(test.wrench, model.predict(test.raw), alpha=alpha), "fit_seconds": seconds}
     if model_name == "auto":
         out["chosen"] = str(model.best_name_)
+        out["auto_settings"] = AUTO_SETTINGS
     return out
 
 
@@ -203,8 +211,8 @@ def report(out: Path) -> None:
     for r in rows:
         by.setdefault((r["sensor"], r["model"], r["strategy"], r["n_poses"]), {})[r["seed"]] = r
     summary = []
-    lines = ["| sensor | model | plan | poses | seeds | held-out RMSE [N], mean | ratio to geodesic 155 (same seeds), mean [min, max] | log det M |",
-             "|---|---|---|---|---|---|---|---|"]
+    lines = ["| sensor | model | plan | poses | seeds | held-out RMSE [N], mean | ratio to geodesic 155 (same seeds), mean [min, max] | log det M | auto chose |",
+             "|---|---|---|---|---|---|---|---|---|"]
     order = {"geodesic": 0, "d-optimal": 1, "random": 2, "next": 3}
     for (sensor, model, strategy, n), rs in sorted(by.items(), key=lambda kv: (kv[0][0], kv[0][1], order[kv[0][2]], kv[0][3])):
         ref = by.get((sensor, model, "geodesic", 155), {})
@@ -215,13 +223,17 @@ def report(out: Path) -> None:
                  "ratio_min": float(np.min(ratios)) if ratios else None,
                  "ratio_max": float(np.max(ratios)) if ratios else None,
                  "d_criterion_mean": float(np.mean([r["d_criterion"] for r in rs.values()])),
-                 "auto_chosen": sorted({r.get("chosen", "") for r in rs.values()} - {""})}
+                 "auto_chosen": sorted({r.get("chosen", "") for r in rs.values()} - {""}),
+                 # auto rows measured before this script recorded its settings came from the earlier auto
+                 "earlier_auto": sorted(s for s, r in rs.items() if model == "auto" and "auto_settings" not in r)}
         summary.append(entry)
         ratio = "-" if not ratios else f"{entry['ratio_mean']:.3f} [{entry['ratio_min']:.3f}, {entry['ratio_max']:.3f}]"
+        chose = ", ".join(entry["auto_chosen"]) + (" (earlier auto)" if entry["earlier_auto"] else "")
         lines.append(f"| {sensor} | {model} | {strategy} | {n} | {len(rs)} | {entry['rmse_mean']:.4f} | {ratio} "
-                     f"| {entry['d_criterion_mean']:.2f} |")
+                     f"| {entry['d_criterion_mean']:.2f} | {chose} |")
     (out / "summary.json").write_text(json.dumps({"rows": summary, "machine": platform.platform(),
-                                                  "note": "machine NOT idle (7 helpers on 2 cores)"}, indent=1))
+                                                  "note": "machine NOT idle (helpers and the lead's benchmarks share 2 cores); "
+                                                          "no figure depends on speed"}, indent=1))
     (out / "summary.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     import matplotlib
@@ -234,8 +246,13 @@ def report(out: Path) -> None:
                      and e["strategy"] != "geodesic" for e in summary)]
     if not panels:
         return
-    fig, axes = plt.subplots(1, len(panels), figsize=(4.6 * len(panels), 3.8), squeeze=False)
-    for ax, (sensor, model) in zip(axes[0], panels):
+    sensors = sorted({sensor for sensor, _ in panels})
+    fig, axes = plt.subplots(len(sensors), 2, figsize=(9.2, 3.6 * len(sensors)), squeeze=False)
+    for ax in axes.ravel():
+        ax.set_visible(False)
+    for sensor, model in panels:
+        ax = axes[sensors.index(sensor), ("linear", "auto").index(model)]
+        ax.set_visible(True)
         for k, (strategy, style) in enumerate((("geodesic", "o-"), ("random", "s--"), ("d-optimal", "^-"),
                                                ("next", "d-."))):
             pts = sorted((e["n_poses"], e["ratio_mean"], e["ratio_min"], e["ratio_max"], len(e["seeds"]))
