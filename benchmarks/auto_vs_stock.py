@@ -47,6 +47,9 @@ from ftcal.models import stock_baselines
 
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
 OUT = Path("benchmarks/results/auto_vs_stock")  # --out
+#: Rows the stock kernel baselines are fitted on (a random subset): ftcal's GP's default max_samples, as in auto.
+#: (Cases run before this line was added used 2000; each case's JSON records its value.)
+KERNEL_ROWS = 1000
 CASES = ("dead_weight_15", "dead_weight_30", "dead_weight_50", "soft", "soft_grouped", "thesis", "asymmetric",
          "reconstructed",
          "robot_held")
@@ -70,7 +73,7 @@ def outer(raw, wrench, groups, splits, alpha, seed=0):
         models = {"auto": ftcal.AutoCalibrator(alpha=alpha, random_state=seed, n_jobs=jobs),
                   "linear": ftcal.LinearCalibrator(alpha=alpha),
                   "gaussian_process": ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed),
-                  **stock_baselines(raw.shape[1], random_state=seed)}
+                  **stock_baselines(raw.shape[1], max_kernel_samples=KERNEL_ROWS, random_state=seed)}
         for name, model in models.items():
             t0 = time.perf_counter()
             if name == "auto":
@@ -206,6 +209,7 @@ def main() -> None:
         t0 = time.perf_counter()
         result = run_case(case)
         result.update(case=case, wall_seconds=time.perf_counter() - t0, load_average=os.getloadavg(),
+                      kernel_baseline_rows=KERNEL_ROWS, auto_jobs=JOBS,
                       machine={"platform": platform.platform(), "cpus": os.cpu_count(),
                                "python": platform.python_version()})
         path.write_text(json.dumps(result, indent=1, default=float))

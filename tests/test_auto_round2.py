@@ -116,15 +116,30 @@ def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential():
     np.testing.assert_allclose(one.predict(raw[:5]), two.predict(raw[:5]), rtol=1e-9)
 
 
-def test_a_prefit_stack_keeps_its_members_and_refuses_another_alpha():
-    raw, w = cubic(120)
-    members = [LinearCalibrator(alpha=1.0).fit(raw, w), PolynomialCalibrator(degree=2, alpha=1.0).fit(raw, w)]
-    stack = StackedCalibrator(estimators=members, weights=[0.25, 0.75], prefit=True, alpha=1.0).fit(raw, w)
-    assert stack.estimators_[0] is members[0] and stack.estimators_[1] is members[1]
-    expected = 0.25 * members[0].predict(raw[:4]) + 0.75 * members[1].predict(raw[:4])
-    np.testing.assert_allclose(stack.predict(raw[:4]), expected, rtol=1e-12)
-    with pytest.raises(CalibrationInputError, match="prefit=True.*alpha"):
-        StackedCalibrator(estimators=members, weights=[0.5, 0.5], prefit=True, alpha=2.0).fit(raw, w)
+def test_the_stack_auto_chose_holds_the_cross_validated_members_and_a_clone_refits():
+    from sklearn.base import clone
+    from sklearn.model_selection import cross_val_score
+
+    raw, w = cubic(240)
+    cands = FAST + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
+    auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, random_state=0).fit(raw, w)
+    r = auto.cv_results_
+    assert r["kind"] == ["candidate"] * 4 + ["stack"]  # the stack row right after the candidates
+    if r["chosen"].startswith("stack"):  # its members are fitted on all rows with the cross-validated weights
+        best = auto.best_estimator_
+        assert len(best.estimators_) == len(r["stack_members"]) and best.weights_.tolist() == r["stack_weights"]
+        assert all(e.n_features_in_ == raw.shape[1] for e in best.estimators_)
+    stack = StackedCalibrator(estimators=[e for _, e in FAST], weights=[0.2, 0.3, 0.5], alpha=1.0).fit(raw, w)
+    again = clone(stack).fit(raw, w)  # a clone refits its templates
+    np.testing.assert_allclose(again.predict(raw[:4]), stack.predict(raw[:4]), rtol=1e-10)
+    assert np.all(np.isfinite(cross_val_score(clone(auto.best_estimator_), raw, w, cv=3)))
+
+
+@pytest.mark.parametrize("n_jobs", [0, True, 1.5, "2"])
+def test_auto_n_jobs_is_checked(n_jobs):
+    raw, w, groups = affine()
+    with pytest.raises(ValueError, match="n_jobs"):
+        AutoCalibrator(candidates=FAST[:1], baselines=False, n_jobs=n_jobs).fit(raw, w)
 
 
 def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsample():
@@ -304,3 +319,17 @@ def test_gp_with_automatic_choices_fits_targets_of_any_width(width):
     mean, std = gp.predict(raw[:4], return_std=True)
     assert mean.shape == std.shape == (4, width) and np.all(std > 0)
     assert np.sqrt(np.mean((gp.predict(raw) - w[:, :width]) ** 2)) < 0.1 * w[:, :width].std()
+
+
+def test_grouped_subsample_is_exactly_the_size_with_each_groups_share():
+    from ftcal.core._model_selection import grouped_subsample
+
+    rows = np.arange(9000)
+    many_small = rows // 3  # 3000 groups of 3 rows: a share of 1/9 cannot give each group a row
+    picked = grouped_subsample(rows, many_small, 1000, seed=0)
+    assert len(picked) == 1000 and len(np.unique(picked)) == 1000 and np.all(np.diff(picked) > 0)
+    uneven = np.repeat(np.arange(4), [6000, 2000, 900, 100])
+    counts = np.bincount(uneven[grouped_subsample(rows, uneven, 900, seed=1)], minlength=4)
+    assert counts.sum() == 900
+    np.testing.assert_allclose(counts, [600, 200, 90, 10], atol=3)  # floor of the share, the rest at random
+    assert np.array_equal(grouped_subsample(rows[:50], uneven, 100, seed=0), rows[:50])  # all fit: all rows

@@ -95,6 +95,10 @@ def calibration_folds(
 def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
     """At most ``size`` of ``rows``, the same share from every group (all rows when they fit).
 
+    Each group gets ``floor(share · its rows)``; the rows this leaves short of
+    ``size`` are drawn at random from the rest, so exactly ``size`` rows come
+    back (a group smaller than ``1 / share`` rows may get none).
+
     Examples
     --------
     >>> rows = grouped_subsample(np.arange(100), np.repeat([0, 1], [80, 20]), 10, seed=0)
@@ -106,11 +110,18 @@ def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, s
     rng = np.random.default_rng(seed)
     if groups is None:
         return np.sort(rng.choice(rows, size=size, replace=False))
-    g = groups[rows]
-    share = size / rows.size
-    keep = [rng.choice(rows[g == label], size=max(1, int(round(share * np.sum(g == label)))), replace=False)
-            for label in np.unique(g)]
-    return np.sort(np.concatenate(keep))
+    _, label = np.unique(groups[rows], return_inverse=True)
+    order = np.argsort(label, kind="stable")
+    starts = np.searchsorted(label[order], np.arange(label.max() + 1))
+    counts = np.diff(np.append(starts, rows.size))
+    quota = np.floor(counts * (size / rows.size)).astype(int)
+    chosen = np.zeros(rows.size, dtype=bool)
+    for start, count, take in zip(starts, counts, quota):  # one pass over the groups, each sliced once
+        if take:
+            chosen[order[start + rng.choice(count, size=take, replace=False)]] = True
+    rest = np.flatnonzero(~chosen)
+    chosen[rng.choice(rest, size=size - int(quota.sum()), replace=False)] = True
+    return np.sort(rows[chosen])
 
 
 def _per_unit(values: NDArray, units: NDArray | None) -> NDArray:

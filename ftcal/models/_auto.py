@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from math import comb
+import os
 from numbers import Integral
 import time
 import warnings
@@ -236,7 +237,10 @@ def score_candidates(
     jobs = [(row, est, samples, [fold] if _per_fold(est) else folds)
             for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
     jobs.sort(key=lambda job: _cost_rank(job[1]))
-    done = Parallel(n_jobs=n_jobs)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
+    # never more worker processes than cores or jobs (each costs a Python with torch imported)
+    workers = 1 if n_jobs is None else min(os.cpu_count() or 1, len(jobs), n_jobs if n_jobs > 0 else
+                                             max(1, (os.cpu_count() or 1) + 1 + n_jobs))
+    done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
                                    for _, est, samples, part in jobs)
     outcomes: dict = {}
     for (row, *_), outcome in zip(jobs, done):
@@ -345,10 +349,6 @@ class StackedCalibrator(BaseCalibrator):
         The members (cloned and fitted on all rows by ``fit``).
     weights : array-like of shape (n_members,)
         Non-negative weight of each member (on the torque-scaled wrench; the sum need not be 1).
-    prefit : bool, default=False
-        The members are fitted already (``auto`` fitted them on the same rows, networks on their
-        subsample, with the groups): ``fit`` keeps them as they are (like scikit-learn's
-        ``StackingRegressor(cv="prefit")``); they must use this calibrator's ``alpha``.
     alpha, zero_reading : as for every calibrator
 
     Attributes
@@ -376,14 +376,11 @@ class StackedCalibrator(BaseCalibrator):
         **BaseCalibrator._parameter_constraints,
         "estimators": [list, None],
         "weights": ["array-like"],
-        "prefit": ["boolean"],
     }
 
-    def __init__(self, *, estimators=None, weights=(), prefit=False, alpha=None, zero_reading=None,
-                 random_state=None):
+    def __init__(self, *, estimators=None, weights=(), alpha=None, zero_reading=None, random_state=None):
         self.estimators = estimators
         self.weights = weights
-        self.prefit = prefit
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
@@ -395,19 +392,10 @@ class StackedCalibrator(BaseCalibrator):
             raise CalibrationInputError(
                 f"StackedCalibrator needs a non-empty list of estimators and one non-negative weight each; got "
                 f"{len(members)} estimators and weights {self.weights_.tolist()}.")
-        if not self.prefit:
-            self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None)
-                                for e in members]
-            return
-        for e in members:
-            check_is_fitted(e)
-            if not np.isclose(getattr(e, "alpha_", self.alpha_), self.alpha_) or e.n_features_in_ != X.shape[1]:
-                raise CalibrationInputError(
-                    f"StackedCalibrator(prefit=True): member {type(e).__name__} was fitted with alpha "
-                    f"{getattr(e, 'alpha_', None)} on {e.n_features_in_} channels, this stack has alpha "
-                    f"{self.alpha_} and {X.shape[1]} channels; fit the members with the stack's alpha on the "
-                    "same channels, or use prefit=False.")
-        self.estimators_ = list(members)
+        # AutoCalibrator hands over the members exactly as it cross-validated them (the GP with its structure,
+        # networks on their subsample, with the groups); a clone has none and fits its templates
+        self.estimators_ = self.__dict__.pop("_fitted_members", None) or [
+            _fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None) for e in members]
 
     def _predict_wrench(self, X):
         scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
@@ -524,7 +512,7 @@ class AutoCalibrator(BaseCalibrator):
         "stack": ["boolean"],
         "baselines": ["boolean"],
         "network_samples": [Interval(Integral, 10, None, closed="left"), None],
-        "n_jobs": [Integral, None],
+        "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
@@ -608,9 +596,9 @@ class AutoCalibrator(BaseCalibrator):
             return _fit(model, X[rows], y[rows], None if groups is None else groups[rows])
 
         if results["kind"][chosen] == "stack":
-            best = StackedCalibrator(estimators=[refit(n) for n in results["stack_members"]],
-                                     weights=results["stack_weights"], prefit=True, alpha=self.alpha_,
-                                     zero_reading=given)
+            best = StackedCalibrator(estimators=[templates[n] for n in results["stack_members"]],
+                                     weights=results["stack_weights"], alpha=self.alpha_, zero_reading=given)
+            best._fitted_members = [refit(n) for n in results["stack_members"]]
             self.best_estimator_ = best.fit(X, y)
         else:
             self.best_estimator_ = refit(self.best_name_)
