@@ -192,6 +192,7 @@ def score_candidates(
     fitted : dict
         Name -> the candidate fitted on all rows, for those that chose their structure there.
     """
+    from joblib import effective_n_jobs
     from sklearn.utils.parallel import Parallel, delayed
 
     n, n_channels = X.shape
@@ -238,8 +239,7 @@ def score_candidates(
             for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
     jobs.sort(key=lambda job: _cost_rank(job[1]))
     # never more worker processes than cores or jobs (each costs a Python with torch imported)
-    workers = 1 if n_jobs is None else min(os.cpu_count() or 1, len(jobs), n_jobs if n_jobs > 0 else
-                                             max(1, (os.cpu_count() or 1) + 1 + n_jobs))
+    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1))
     done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
                                    for _, est, samples, part in jobs)
     outcomes: dict = {}
