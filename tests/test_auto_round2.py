@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import os
+from pathlib import Path
+
 import numpy as np
 import pytest
+from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import cross_val_predict
 
 import ftcal
@@ -101,8 +105,58 @@ def test_auto_is_deterministic_and_has_no_time_budget():
     assert a.cv_results_["rmse"] == b.cv_results_["rmse"] and a.best_name_ == b.best_name_
 
 
-def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential():
+class PidRecorder(LinearRegression):
+    """A stock linear regression that appends the id of the process fitting it to ``path`` (a real file)."""
+
+    def __init__(self, *, path=None):
+        super().__init__()
+        self.path = path
+
+    def fit(self, X, y):
+        with open(self.path, "a") as f:
+            f.write(f"{os.getpid()}\n")
+        return super().fit(X, y)
+
+
+def fitting_processes(path) -> set[int]:
+    return {int(line) for line in Path(path).read_text().split()}
+
+
+def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
+    # no network, kernel models on <= LIGHT_KERNEL_ROWS training rows: starting workers would cost more than the fits
+    from ftcal.models._auto import LIGHT_KERNEL_ROWS, score_candidates
+    from ftcal.models._baselines import stock_baselines
+
+    raw, w, groups = affine(n=120, n_groups=6)  # 100-row training folds
+    assert 100 <= LIGHT_KERNEL_ROWS
+    baselines = {"pid": PidRecorder(path=str(tmp_path / "pids")), "sk_gp": stock_baselines(6)["sk_gp"]}
+    score_candidates(FAST, raw, w, groups=groups, alpha=1.0, baselines=baselines, n_jobs=2)
+    assert fitting_processes(tmp_path / "pids") == {os.getpid()}
+
+
+def test_heavy_work_is_scored_in_worker_processes(tmp_path, monkeypatch):
+    from ftcal.models import _auto
+    from ftcal.models._baselines import stock_baselines
+
+    monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds of the stock GP now count as heavy
+    raw, w, groups = affine(n=120, n_groups=6)
+    baselines = {"pid": PidRecorder(path=str(tmp_path / "pids")), "sk_gp": stock_baselines(6)["sk_gp"]}
+    _auto.score_candidates(FAST[:1], raw, w, groups=groups, alpha=1.0, baselines=baselines, n_jobs=2)
+    assert fitting_processes(tmp_path / "pids") - {os.getpid()}, "no worker process fitted anything"
+
+
+def test_stock_kernel_baselines_have_the_gp_candidates_budget():
+    from ftcal.models._baselines import KERNEL_SAMPLES, stock_baselines
+
+    assert KERNEL_SAMPLES == GaussianProcessCalibrator().max_samples
+    assert {stock_baselines(6)[n].max_samples for n in ("sk_kernel_ridge", "sk_gp")} == {KERNEL_SAMPLES}
+
+
+def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential(monkeypatch):
     # real joblib worker processes; the GP (structure chosen inside its task) and a stock baseline among them
+    from ftcal.models import _auto
+
+    monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds count as heavy: workers are used
     raw, w, groups = affine(n=120, n_groups=6)
     cands = FAST[:2] + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
     kw = dict(candidates=cands, alpha=1.0, random_state=0)
@@ -283,6 +337,17 @@ def test_cli_fit_auto_uses_the_short_schedule_and_jobs(tmp_path):
     assert auto.n_jobs == 1 and auto.schedule == "short"
     status = dict(zip(auto.cv_results_["name"], auto.cv_results_["status"]))
     assert status["gaussian_process"] == "scored" and status["directional"].startswith("skipped")
+
+
+def test_cli_jobs_is_refused_for_a_model_that_scores_no_candidates(tmp_path, capsys):
+    from ftcal.cli import main
+
+    raw, w = cubic(60)
+    data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
+    assert main(["fit", str(data), "--model", "linear", "--jobs", "2", "--out", str(tmp_path / "m"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith("ftcal: error: --jobs: linear") and "drop --jobs" in err[-1]
+    assert not (tmp_path / "m").exists() or not any((tmp_path / "m").iterdir())
 
 
 def test_cross_validate_routes_groups_to_auto_through_metadata_routing():

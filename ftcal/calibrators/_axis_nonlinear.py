@@ -44,8 +44,10 @@ def signed_power_features(u: NDArray[np.float64], power: float) -> NDArray[np.fl
 
 
 def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
-    """Index of the simplest candidate whose error is within one standard error of the best one's.
+    """Index of the simplest candidate whose error is within one standard error of the best one's (or ties with it).
 
+    A candidate ties when its mean error exceeds the best's by at most ``TIE_TOLERANCE`` (1 % of the mean
+    squared error, 0.5 % in RMSE) even if that excess is consistent.
     ``errors[k, i]`` is candidate ``k``'s held-out error on sample ``i``;
     candidates are ordered from the most flexible to the simplest. This is
     :func:`ftcal.core._model_selection.simplest_within_one_se` (the one rule)
@@ -134,7 +136,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         ``fit`` gets ``groups``, else shuffled folds seeded by
         ``random_state``, 0 when ``None``) with the one-standard-error rule
         (:func:`one_standard_error_choice`): the largest penalty whose
-        held-out error is within one standard error of the best; on at most
+        held-out error is within one standard error of the best, or within
+        0.5 % of its RMSE (a tie); on at most
         :data:`RIDGE_SELECTION_ROWS` rows (the same share of every group). Small
         penalties where the nonlinear terms pay (artificial presets), the LTM
         itself where the data do not show that they do (the virtual robot
@@ -272,8 +275,8 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         model on held-out folds. The chosen penalty is the largest one (the
         simplest model, ``inf`` being the LTM) whose mean error exceeds the
         best penalty's by at most one standard error of the paired per-sample
-        difference (:func:`one_standard_error_choice`): a correction is kept
-        only when the data show that it pays.
+        difference, or by at most 1 % of its mean squared error (a tie; :func:`one_standard_error_choice`):
+        a correction is kept only when the data show that it pays.
         """
         seed = 0 if self.random_state is None else self.random_state
         groups = check_groups(getattr(self, "_fit_groups", None), len(ys))

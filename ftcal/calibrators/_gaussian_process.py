@@ -36,6 +36,10 @@ _AUTO_COMBINATIONS: tuple[tuple[str, str], ...] = (
 _PER_OUTPUT_ROWS = 150
 #: Rows of each prediction chunk are chosen so that one chunk's cross-kernel stays under this size [bytes].
 _CHUNK_BYTES = 2**26
+#: Held-out rows (outside the GP's subset) on which the predictive std is calibrated, at most.
+_STD_ROWS = 1000
+#: The std is calibrated so that this share of the calibration rows' errors lies within ``_STD_Z`` std.
+_STD_COVERAGE, _STD_Z = 0.95, 1.96
 
 
 def make_kernel(family: str, n_channels: int):
@@ -69,6 +73,14 @@ def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegr
         # a length scale at its upper bound is the expected answer for a channel without nonlinearity
         warnings.simplefilter("ignore", ConvergenceWarning)
         return gp.fit(u, target)
+
+
+def _inverse_diagonal(cholesky: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``diag(K⁻¹)`` from the lower Cholesky factor ``L`` of ``K``: the squared column norms of ``L⁻¹``."""
+    from scipy.linalg import solve_triangular
+
+    inverse = solve_triangular(cholesky, np.eye(len(cholesky)), lower=True, check_finite=False)
+    return np.sum(inverse * inverse, axis=0)
 
 
 def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> float:
@@ -111,8 +123,18 @@ class GaussianProcessCalibrator(BaseCalibrator):
     deviation of each component in [N] and [N·m], from
     :meth:`GaussianProcessRegressor.predict(return_std=True) <sklearn.gaussian_process.GaussianProcessRegressor.predict>`:
     the posterior variance plus the noise term, i.e. the spread of the error
-    against a reference measured like the training references. The coverage
-    (share of held-out errors within two std on grouped folds) is measured by
+    against a reference measured like the training references, **calibrated**
+    on rows the GP did not see: each component's std is multiplied by
+    ``std_scale_``, the smallest factor (at least 1) with which 95 % of those
+    rows' errors fall within 1.96 std. The rows are the training rows left out
+    of the ``max_samples`` subset (at most 1000 of them), or, when every row is
+    in it, each row left out in turn (the GP's closed-form leave-one-out
+    residuals, Rasmussen & Williams §5.4.2). A marginal-likelihood fit tends to
+    make the std too narrow where the errors have heavier tails than a
+    Gaussian (e.g. a sign-dependent gain); the factor is never below 1, because
+    rows held out at random are closer to the training rows than a new
+    recording (a held-out group) is. The coverage (share of held-out errors
+    within two std on grouped folds) is measured by
     ``benchmarks/auto_vs_stock.py`` (``gp_coverage_2std``) and recorded in ``benchmarks/RESULTS.md``.
 
     **Large data sets.** An exact GP costs ``O(m³)`` time and ``O(m² N)``
@@ -170,6 +192,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
         Lower Cholesky factor(s) of ``K`` (noise included).
     target_mean_, target_scale_ : ndarray of shape (6,)
         Standardisation of the GP's targets [N].
+    std_scale_ : ndarray of shape (6,)
+        Factor (>= 1) of each component's predictive std, from rows the GP did not see (see above).
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -188,7 +212,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
 
     _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
-                     "target_scale_", "log_marginal_likelihood_")
+                     "target_scale_", "log_marginal_likelihood_", "std_scale_")
     #: What overflows for a reading far outside the training range (see ``check_finite_output``).
     _overflow_note = ("its kernel squares the distance from the reading to the training readings, in units of its "
                       "length scales, which exceeds float64's ~1.8e308 from a distance of ~1.3e154")
@@ -261,6 +285,18 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.cholesky_ = np.stack([np.asarray(g.L_) for g in regressors])
         self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
         self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
+        self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
+        unseen = np.setdiff1d(np.arange(n), rows)
+        with threadpool_limits(1, user_api="blas"):
+            if unseen.size:  # rows outside the subset: held out for real
+                unseen = np.sort(check_random_state(seed).choice(unseen, size=min(unseen.size, _STD_ROWS),
+                                                                 replace=False))
+                mean, std = self._predict_scaled(X[unseen], True)
+                z = np.abs(mean - ys[unseen]) / np.maximum(std, np.finfo(float).tiny)
+            else:  # every row in the subset: closed-form leave-one-out, z = [K⁻¹y]_i / sqrt([K⁻¹]_ii)
+                z = np.column_stack([np.abs(np.asarray(g.alpha_).reshape(m, -1)) / np.sqrt(
+                    _inverse_diagonal(g.L_))[:, None] for g in regressors])
+        self.std_scale_ = np.maximum(1.0, np.quantile(z, _STD_COVERAGE, axis=0) / _STD_Z)
 
     def _choose(self, u, targets, seed):
         """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
@@ -376,6 +412,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
         chunk = max(1, _CHUNK_BYTES // (8 * m))
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
         std = np.empty_like(mean) if return_std else None
+        scale = self.__dict__.get("std_scale_")  # absent from files saved before the std was calibrated
         regressors = self.regressors()
         for start in range(0, len(u), chunk):
             rows = slice(start, start + chunk)
@@ -385,7 +422,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", UserWarning)  # "negative variance set to 0"
                         mu, sd = gp.predict(u[rows], return_std=True)
-                    std[rows, cols] = sd.reshape(mu.shape[0], -1)
+                    std[rows, cols] = sd.reshape(mu.shape[0], -1) * (1.0 if scale is None else scale[cols])
                 else:
                     mu = gp.predict(u[rows])
                 mean[rows, cols] += mu.reshape(mu.shape[0], -1)

@@ -216,7 +216,8 @@ def run_dataset(args: argparse.Namespace) -> int:
     with plan.writing("dataset_rmse.png") as tmp:
         plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({results['folds']} folds)")
     print(table)
-    console.info(f"choose {results['chosen']} (the simplest within one standard error of the best); "
+    console.info(f"choose {results['chosen']} (the simplest within one standard error of the best, or within 0.5 % "
+                 "of its RMSE); "
                  f"files in {args.out}")
     return 0
 

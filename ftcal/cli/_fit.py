@@ -116,6 +116,8 @@ def run(args: argparse.Namespace) -> int:
     if tare is not None:
         params["zero_reading"] = tare
     known = ftcal.calibrator_parameters(args.model)
+    if args.jobs is not None and "n_jobs" not in known:
+        raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does); drop --jobs")
     if "n_jobs" in known and "n_jobs" not in params:
         params["n_jobs"] = args.jobs or -1
     unknown = sorted(set(params) - set(known))

@@ -167,7 +167,8 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     exceeds the best's by at most one **paired** standard error of the
     difference (per group with ``units``: rows of one group are not
     independent; per row without), or by at most :data:`TIE_TOLERANCE` of the
-    best's mean squared error (0.5 % in RMSE: a gain that small is a tie even
+    best's mean squared error (averaged per unit like the differences; 0.5 %
+    in RMSE: a gain that small is a tie even
     when it is consistent, as on noise-free data). Among those that qualify the one of lowest
     ``complexity`` wins (default: the row order, simplest first); equal
     complexity goes to the earlier row. Every model choice in ftcal uses this
@@ -203,9 +204,10 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     best = int(np.argmin(means))
     units = None if units is None else np.asarray(units)
     qualified = []
+    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
     for k in np.flatnonzero(ok):
         diff = _per_unit(errors[k] - errors[best], units)
         se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
-        if k == best or float(diff.mean()) <= max(se, TIE_TOLERANCE * means[best]):
+        if k == best or float(diff.mean()) <= max(se, tie):
             qualified.append(int(k))
     return min(qualified, key=lambda k: (rank[k], k))

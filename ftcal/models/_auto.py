@@ -30,6 +30,9 @@ __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_ta
 
 #: Most candidates a stack combines (the best-scoring eligible ones).
 STACK_SIZE = 3
+#: Training rows up to which a kernel model's fit is light work: with no network to train either, the candidates
+#: are scored in this process (worker processes would take longer to start than the fits).
+LIGHT_KERNEL_ROWS = 200
 
 
 def default_candidates(schedule: str = "short") -> list[tuple[str, BaseCalibrator]]:
@@ -174,6 +177,9 @@ def score_candidates(
     never eligible. ``n_jobs`` candidates are scored at once
     (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
     :func:`joblib.parallel_config` context); the figures do not depend on it.
+    Light work stays in this process whatever ``n_jobs`` says: when no job
+    trains a network and the kernel models see at most
+    :data:`LIGHT_KERNEL_ROWS` training rows (a count of work, not a time).
 
     Returns
     -------
@@ -238,8 +244,11 @@ def score_candidates(
     jobs = [(row, est, samples, [fold] if _per_fold(est) else folds)
             for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
     jobs.sort(key=lambda job: _cost_rank(job[1]))
-    # never more worker processes than cores or jobs (each costs a Python with torch imported)
-    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1))
+    # never more worker processes than cores or jobs (each costs a Python with torch imported), and none when
+    # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
+    heavy = any(_is_network(est) or (_cost_rank(est) == 0 and smallest_train > LIGHT_KERNEL_ROWS)
+                for _, est, _ in tasks)
+    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
     done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
                                    for _, est, samples, part in jobs)
     outcomes: dict = {}
@@ -436,8 +445,9 @@ class AutoCalibrator(BaseCalibrator):
     4. picks by the **one-standard-error rule**
        (:func:`~ftcal.core._model_selection.simplest_within_one_se`): the
        best-scoring candidate and every one within one paired standard error
-       of it (over groups, or rows) qualify, and the simplest in the order
-       above wins. A candidate whose training folds are smaller than
+       of it (over groups, or rows), or within 0.5 % of its RMSE (a tie:
+       ``TIE_TOLERANCE``, 1 % of the mean squared error), qualify, and the
+       simplest in the order above wins. A candidate whose training folds are smaller than
        :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``).
@@ -572,7 +582,7 @@ class AutoCalibrator(BaseCalibrator):
             candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
             random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
             # the stock kernel models on as many rows as ftcal's GP (its default max_samples): the same budget
-            baselines=stock_baselines(X.shape[1], max_kernel_samples=1000, random_state=seed)
+            baselines=stock_baselines(X.shape[1], random_state=seed)
             if self.baselines else None,
         )
         if not any(results["eligible"]):

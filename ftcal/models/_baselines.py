@@ -32,7 +32,12 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ..core._validation import check_arguments
 
-__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor"]
+__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES"]
+
+#: Rows the stock kernel baselines are fitted on at most by default: ``GaussianProcessCalibrator``'s
+#: ``max_samples`` (a test checks they agree), the one budget of every comparison (auto, ``ftcal benchmark``,
+#: the report, the artificial benchmark).
+KERNEL_SAMPLES = 1000
 
 #: Names of :func:`stock_baselines`' models, in order of complexity.
 STOCK_BASELINE_NAMES: tuple[str, ...] = ("sk_linear", "sk_poly2", "sk_poly3", "sk_kernel_ridge", "sk_gp")
@@ -45,7 +50,7 @@ class SubsampledRegressor(RegressorMixin, BaseEstimator):
     ----------
     estimator : regressor
         Cloned at fit.
-    max_samples : int or None, default=2000
+    max_samples : int or None, default=1000
         Rows used for the fit; ``None`` uses every row.
     random_state : int, default=0
         Seed of the subset.
@@ -59,7 +64,7 @@ class SubsampledRegressor(RegressorMixin, BaseEstimator):
     array([2.])
     """
 
-    def __init__(self, estimator: Any, *, max_samples: int | None = 2000, random_state: int = 0):
+    def __init__(self, estimator: Any, *, max_samples: int | None = KERNEL_SAMPLES, random_state: int = 0):
         self.estimator = estimator
         self.max_samples = max_samples
         self.random_state = random_state
@@ -81,7 +86,7 @@ class SubsampledRegressor(RegressorMixin, BaseEstimator):
         return self.estimator_.predict(X)
 
 
-def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = 2000,
+def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = KERNEL_SAMPLES,
                     random_state: int = 0) -> dict[str, Any]:
     """The stock scikit-learn baselines for readings with ``n_channels`` columns, by name.
 
@@ -89,8 +94,10 @@ def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = 2000,
     ----------
     n_channels : int
         Number of raw channels, >= 1 (the stock GP's RBF has one length scale per channel).
-    max_kernel_samples : int or None, default=2000
-        Rows the kernel models (``sk_kernel_ridge``, ``sk_gp``) are fitted on at most (>= 1; ``None``: all).
+    max_kernel_samples : int or None, default=1000
+        Rows the kernel models (``sk_kernel_ridge``, ``sk_gp``) are fitted on at most (>= 1; ``None``: all);
+        the default is :data:`KERNEL_SAMPLES`, the rows ftcal's own GP is fitted on, so every table compares
+        kernel models on the same budget.
     random_state : int, default=0
         Seed (>= 0) of the kernel models' subsets and of the GP optimizer's restarts.
 
