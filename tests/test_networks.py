@@ -242,8 +242,12 @@ def test_a_users_skorch_callback_sees_every_batch_epoch_and_gradient(cls):
 
     raw, wrench, _, _ = affine_sensor_data(n_samples=90, seed=3)
     count = Count()
+    # a hook set on an instance (not in its class) is a hook too
+    patched, patched_calls = Callback(), []
+    patched.on_batch_end = lambda net, **kwargs: patched_calls.append(kwargs.get("training"))
     model = cls(max_epochs=3, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2, batch_size=8,
-                callbacks=[count], random_state=0).fit(raw, wrench)
+                callbacks=[count, ("patched", patched)], random_state=0).fit(raw, wrench)
+    assert len(patched_calls) == count.calls["batch_end"]
     n_train = len(raw) - int(np.ceil(0.2 * len(raw)))  # ValidSplit(0.2) holds out ceil(20 %)
     per_epoch = -(-n_train // 8)
     calls, epochs = count.calls, model.n_epochs_
@@ -276,3 +280,17 @@ def test_skorch_overrides_of_the_engine_are_honoured():
     batches = sum(row["train_batch_count"] for row in model.net_.history)
     assert calls["train_step"] == batches
     assert calls["get_loss"] == batches + model.n_epochs_  # and once per validation batch
+
+
+def test_a_network_calibrator_missing_a_hook_says_which():
+    from ftcal.neural_network._base import NETWORK_DEFAULTS, NetworkCalibrator, keyword_init
+    from ftcal.neural_network._modules import ComparativeNet
+
+    class Unfinished(NetworkCalibrator):
+        _module_class = ComparativeNet
+        __init__ = keyword_init(NETWORK_DEFAULTS)
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=1)
+    with pytest.raises(NotImplementedError, match=r"Unfinished must implement _training_pairs\(\)"):
+        Unfinished(max_epochs=1).fit(raw, wrench)
+    assert not hasattr(Unfinished(), "no_such_attribute")  # any other name is a plain AttributeError

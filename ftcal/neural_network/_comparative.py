@@ -26,14 +26,12 @@ class ComparativeCalibrator(NetworkCalibrator):
     >>> from ftcal import ComparativeCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> model = ComparativeCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1,
-    ...                               random_state=0).fit(raw, w)
+    >>> model = ComparativeCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
     >>> model.predict(raw[:2]).shape
     (2, 6)
     """
 
     _module_class = ComparativeNet
-
     __init__ = keyword_init({**NETWORK_DEFAULTS, "max_epochs": 3000})
 
     def _network_outputs(self) -> int:

@@ -70,15 +70,13 @@ class DirectionalCalibrator(NetworkCalibrator):
     verbose : int, default=0
         skorch's per-epoch log when > 0.
     callbacks : list or None, default=None
-        Extra skorch callbacks (instances or ``(name, callback)`` pairs), e.g. a progress bar or a logger, called
-        at skorch's documented points (``on_batch_*`` every batch, ``on_grad_computed`` every step, ``on_epoch_*``
-        after the schedule has recorded the epoch's phase and ``lr``). Not stored in model files;
-        ``fit_stacked`` and ensembles fit an estimator with callbacks by itself.
+        Extra skorch callbacks (instances or ``(name, callback)`` pairs), e.g. a progress bar, called at skorch's
+        documented points (``on_batch_*`` every batch, ``on_grad_computed`` every step, ``on_epoch_*`` after the
+        epoch's phase and ``lr`` are recorded). Not stored in model files; ensembles fit such an estimator alone.
     device : str, default='cpu'
         Torch device.
     n_threads : int or None, default=1
-        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl`` context, restored afterwards): one is
-        fastest for these small nets (on a busy machine two made a fit over 10x slower). ``None``: the caller's.
+        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl`` context): one is fastest for these nets.
 
     Attributes
     ----------
@@ -99,17 +97,14 @@ class DirectionalCalibrator(NetworkCalibrator):
     >>> from ftcal import DirectionalCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> model = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1,
-    ...                               random_state=0).fit(raw, w)
+    >>> model = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
     >>> model.predict(raw[:2]).shape
     (2, 6)
     """
 
     _module_class = DirectionalNet
-    _parameter_constraints: dict = {
-        **NetworkCalibrator._parameter_constraints,
-        "min_relative_magnitude": [Interval(Real, 0, 1, closed="both")],
-    }
+    _parameter_constraints: dict = {**NetworkCalibrator._parameter_constraints,
+                                    "min_relative_magnitude": [Interval(Real, 0, 1, closed="both")]}
 
     __init__ = keyword_init({**NETWORK_DEFAULTS, "min_relative_magnitude": 1e-3})
 

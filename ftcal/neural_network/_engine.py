@@ -15,10 +15,8 @@ __all__ = ["NetworkRegressor", "MemberSquaredError", "MemberBatches"]
 
 
 class MemberSquaredError(torch.nn.Module):
-    """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows.
-
-    ``y_true`` carries the row mask as its last column when the batch has padding rows (:class:`MemberBatches`).
-    """
+    """Sum over members ``k`` of ``mean_i sum_j weights[k, j] (y_pred[i, k, j] - y_true[i, k, j])²`` over k's rows
+    (``y_true``'s last column is the row mask when the batch has padding rows, :class:`MemberBatches`)."""
 
     def __init__(self, weights):
         super().__init__()
@@ -40,12 +38,9 @@ class MemberSquaredError(torch.nn.Module):
 
 
 class MemberBatches:
-    """Mini-batches of ``K`` members' rows, ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``, slices of tensors loaded once.
-
-    ``y``'s last column marks real rows (1) and padding (0: a member with fewer rows runs out of batches first);
-    it is left out of a batch without padding. Each iteration reshuffles every member with its generator (skorch
-    iterates one iterator every epoch).
-    """
+    """Mini-batches of ``K`` members' rows, ``X (B, K, n_in)``, ``y (B, K, n_out + 1)``, slices of tensors loaded once;
+    ``y``'s last column marks real rows (1) and padding (0; left out of a batch without padding). Each iteration
+    reshuffles every member with its generator (skorch iterates one iterator every epoch)."""
 
     def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int,
                  generators: list[torch.Generator]):
@@ -66,18 +61,10 @@ class MemberBatches:
 
 
 class NetworkRegressor(NeuralNetRegressor):
-    """skorch's ``NeuralNetRegressor`` training ``len(seeds)`` nets of one architecture at once (module doc).
-
-    Parameters beyond skorch's
-    --------------------------
-    seeds : sequence of int
-        One per member: its initial weights (``torch.manual_seed(seed)`` before building its module), validation
-        split and batch order.
-    validation_fraction : float or None
-        Each member's share of rows held out (``ValidSplit``); None: no split.
-
-    ``fit(X, y)`` takes lists of ``K`` arrays (one dataset per member), float32.
-    """
+    """skorch's ``NeuralNetRegressor`` training ``len(seeds)`` nets of one architecture at once; ``fit(X, y)`` takes
+    lists of ``K`` float32 arrays (one dataset per member). Beyond skorch's parameters: ``seeds``, one per member (its
+    initial weights, ``torch.manual_seed(seed)`` before building its module, validation split and batch order), and
+    ``validation_fraction``, each member's share of rows held out (``ValidSplit``; None: no split)."""
 
     def __init__(self, module, *args, seeds=(0,), validation_fraction=None, **kwargs):
         super().__init__(module, *args, **kwargs)
@@ -101,17 +88,27 @@ class NetworkRegressor(NeuralNetRegressor):
         _, kwargs = self.get_params_for_optimizer("optimizer", self.get_all_learnable_params())
         self.trained_parameters_ = list(self.module_.parameters())
         self.optimizers_ = [self.optimizer(self.member_parameters(k), **kwargs) for k in range(len(self.seeds))]
-        # K > 1: one Adam (one fused kernel) over every member's parameters, regrouped by rate every epoch
-        self.optimizer_ = self.optimizers_[0] if len(self.optimizers_) == 1 else self.optimizer(
+        # K > 1: one optimiser over the member slices (regrouped by rate), or over the stacked tensors while all step
+        self.member_optimizer_ = self.optimizers_[0] if len(self.seeds) == 1 else self.optimizer(
             [p for optimizer in self.optimizers_ for p in optimizer.param_groups[0]["params"]], **kwargs)
+        self.stacked_path_ = len(self.seeds) > 1
+        self.optimizer_ = self.optimizer(self.trained_parameters_, **kwargs) if self.stacked_path_ \
+            else self.member_optimizer_
         return self
+
+    def _leave_stacked_path(self) -> None:
+        """Step each member's slices from now on (one stalls, stops or gets its own rate); Adam's state handed over."""
+        for i, parameter in enumerate(self.trained_parameters_):
+            for key, value in self.optimizer_.state.get(parameter, {}).items():  # moments: k's slice; step: a copy
+                for k, optimizer in enumerate(self.optimizers_):
+                    self.member_optimizer_.state[optimizer.param_groups[0]["params"][i]][key] = value.clone() if (
+                        not torch.is_tensor(value) or value.shape != parameter.shape) else value[k].clone()
+        self.optimizer_, self.stacked_path_ = self.member_optimizer_, False
 
     def _group_by_rate(self) -> None:
         groups: dict[float, dict] = {}
-        for optimizer in self.optimizers_:
-            member = optimizer.param_groups[0]
-            group = groups.setdefault(member["lr"], {**member, "params": []})
-            group["params"] += member["params"]
+        for member in (optimizer.param_groups[0] for optimizer in self.optimizers_):
+            groups.setdefault(member["lr"], {**member, "params": []})["params"] += member["params"]
         self.optimizer_.param_groups = list(groups.values())
 
     def infer(self, x, **fit_params):
@@ -127,19 +124,21 @@ class NetworkRegressor(NeuralNetRegressor):
         for p in self.trained_parameters_:
             p.grad = None
 
-    def _rows(self, batch) -> torch.Tensor:
-        """Each member's number of real rows in ``batch``."""
+    def _rows(self, batch) -> torch.Tensor:  # each member's number of real rows in the batch
         y, width = batch[1], self.criterion_.weights.shape[-1]
         return y[..., -1].sum(dim=0) if y.shape[-1] > width else torch.full((y.shape[1],), float(len(y)))
 
     def train_step(self, batch, **fit_params):
         if len(self.seeds) > 1:
-            self.moving_ = [n > 0 and reason is None for n, reason in zip(self._rows(batch).tolist(), self.stop_reasons_)]
+            rows = self._rows(batch).tolist()
+            self.moving_ = [n > 0 and reason is None for n, reason in zip(rows, self.stop_reasons_)]
         return super().train_step(batch, **fit_params)
 
     def _step_optimizer(self, step_fn):
         step_fn()  # forward, loss, backward and on_grad_computed, once for all members
-        if len(self.optimizers_) > 1:  # each member's gradient slice; none (no step) for a member out of rows or stopped
+        if self.stacked_path_ and not all(self.moving_):
+            self._leave_stacked_path()
+        if len(self.optimizers_) > 1 and not self.stacked_path_:  # member slices; none if out of rows or stopped
             grads = [p.grad for p in self.trained_parameters_]
             for k, optimizer in enumerate(self.optimizers_):
                 for view, grad in zip(optimizer.param_groups[0]["params"], grads):
@@ -147,8 +146,8 @@ class NetworkRegressor(NeuralNetRegressor):
         self.optimizer_.step()
 
     # -- data: each member's split and batch order ----------------------------------------------------------
-    def check_data(self, X, y):
-        pass  # the calibrators validated every member's data
+    def check_data(self, X, y):  # the calibrators validated every member's data
+        pass
 
     def get_split_datasets(self, X, y=None, **fit_params):
         train, valid, n_in = [], [], np.shape(X[0])[1]
@@ -181,7 +180,12 @@ class NetworkRegressor(NeuralNetRegressor):
 
     def on_epoch_begin(self, net, **kwargs):
         super().on_epoch_begin(net, **kwargs)
-        if len(self.optimizers_) > 1:
+        rates = {float(optimizer.param_groups[0]["lr"]) for optimizer in self.optimizers_}
+        if self.stacked_path_ and len(rates) > 1:
+            self._leave_stacked_path()
+        if self.stacked_path_:
+            self.optimizer_.param_groups[0]["lr"] = rates.pop()
+        elif len(self.optimizers_) > 1:
             self._group_by_rate()
         self._loss_sums, self._row_counts = ({True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
                                              for _ in range(2))
