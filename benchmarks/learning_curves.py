@@ -5,9 +5,9 @@ claim (accuracy from limited calibration data), tested where it can hold.
 Datasets come from the table :data:`FACTORIES` (name -> :class:`Factory`): each makes one full dataset per
 seed (a train pool and a fixed test set) and a grid of training *sizes*, each a subset of the pool, so every
 size of one seed is scored on the same test set. Adding a dataset is one line in that table, e.g. the
-soft-sensor preset::
+soft-sensor preset (its last 8 presses are the test set, :func:`soft_split`)::
 
-    "soft": rows_factory(lambda seed: make_soft_dataset(random_state=seed), sizes=(25, 50, 100, 200)),
+    "soft": rows_factory(soft_split, sizes=(25, 50, 100, 200, 300)),
 
 Artificial presets (``reconstructed``, ``asymmetric``): the size is (spheres, points per sphere); spheres
 are the outermost of the thesis' four (``n_spheres`` of :func:`ftcal.make_artificial_dataset`), points the
@@ -161,13 +161,23 @@ def robot_factory(kind: str, errors: str = "reconstructed") -> Factory:
     return Factory(make, tuple((k, 1000) for k in (1, 2, 3, 4, 5)), "(configurations, poses per configuration)")
 
 
-#: The datasets of the learning curves. The soft-sensor preset (issue 19) goes here as one more line, e.g.
-#: ``"soft": rows_factory(lambda seed: make_soft_dataset(random_state=seed), sizes=(25, 50, 100, 200, 300)),``
+def soft_split(seed: int, test_presses: int = 8):
+    """The soft-sensor preset (issue 19) of ``seed``: its last ``test_presses`` presses are the test set (a new
+    recording), the other presses' rows the training pool."""
+    from ftcal import make_soft_sensor_dataset
+
+    d = make_soft_sensor_dataset(random_state=seed)
+    test = np.isin(d.group, np.unique(d.group)[-test_presses:])
+    return d.subset(np.flatnonzero(~test)), d.subset(np.flatnonzero(test)), {"noise_floor": d.meta["noise_floor_rmse"]}
+
+
+#: The datasets of the learning curves: adding one is one line.
 FACTORIES: dict[str, Factory] = {
     "reconstructed": artificial_factory("reconstructed"),
     "asymmetric": artificial_factory("asymmetric"),
     "robot_poses": robot_factory("poses"),
     "robot_configs": robot_factory("configs"),
+    "soft": rows_factory(soft_split, sizes=(25, 50, 100, 200, 300)),
 }
 
 

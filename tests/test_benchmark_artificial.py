@@ -206,3 +206,13 @@ def test_learning_curve_sizes_are_the_outermost_spheres_and_the_first_points():
     np.testing.assert_allclose(sorted(radius), [1200.0] * 3 + [1600.0] * 3)
     assert set(pool.select((1, 3))) <= set(pool.select((1, 7)))  # nested: more data adds, never swaps
     assert pool.X_test.shape == (1250, 6)
+
+
+def test_learning_curves_of_the_soft_sensor_hold_out_whole_presses():
+    lc = _script("learning_curves")
+    train, test, info = lc.soft_split(0)
+    assert not set(train.group.tolist()) & set(test.group.tolist()) and len(set(test.group.tolist())) == 8
+    pool = lc.FACTORIES["soft"].make(0)
+    assert pool.X.shape[1] == 8 and len(pool.X_test) == test.n_samples and info["noise_floor"] > 0
+    small, large = pool.select((25,)), pool.select((300,))
+    assert len(small) == 25 and len(large) == 300 and set(small) <= set(large)

@@ -263,3 +263,20 @@ def test_the_command_line_starts_without_torch_or_pinocchio():
             "print(sorted(m for m in ('torch', 'pinocchio', 'skorch', 'sklearn') if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "[]"
+
+
+@pytest.mark.parametrize("argv", [["fit", "--model=--", "d.csv"], ["fit", "d.csv", "--out=--"],
+                                  ["predict", "--output=--", "m.npz"]])
+def test_an_option_given_exactly_two_dashes_is_a_usage_error(argv, capsys):
+    # argparse hands `--name=--` to the option as an empty list; that used to crash with an AttributeError
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ftcal: error: argument ") and "expected a value, got '--'" in err[0]
+
+
+@pytest.mark.parametrize("option, value", [("--excluded-cap-deg", "nan"), ("--space-filling", "inf"),
+                                           ("--load-mass", "nan")])
+def test_plan_refuses_non_finite_numbers_at_the_command_line(option, value, capsys, tmp_path):
+    assert main(["plan", option, value, "--out", str(tmp_path / "p")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"ftcal: error: argument {option}: '{value}' is not a") and not (tmp_path / "p").exists()

@@ -92,6 +92,12 @@ class Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # type: ignore[override]
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
+    def _get_values(self, action, arg_strings):
+        # argparse drops a value of exactly "--" (`--name=--`) and hands the option an empty list
+        if arg_strings == ["--"] and action.nargs is None and action.option_strings:
+            self.error(f"argument {'/'.join(action.option_strings)}: expected a value, got '--'")
+        return super()._get_values(action, arg_strings)
+
 
 # ------------------------------------------------------------------ signals
 class Interrupted(BaseException):

@@ -8,6 +8,8 @@ import numpy as np
 
 from ._common import (
     int_in_range,
+    finite_float,
+    positive_float,
     Console,
     OutputPlan,
     add_output_options,
@@ -52,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_robot_options(p)
     p.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2, help="icosphere subdivisions (2: 162 vertices)")
     p.add_argument(
-        "--excluded-cap-deg", type=float, default=20.0,
+        "--excluded-cap-deg", type=finite_float, default=20.0,
         help="leave out directions within this angle of 'tool face up' [deg] (20: 162 -> 155 poses)",
     )
     p.add_argument("--strategy", choices=("geodesic", "random", "d-optimal"), default="geodesic",
@@ -62,7 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="number of poses of a random or d-optimal plan (at least 7, the linear model's parameters)")
     p.add_argument("--candidate-subdivisions", type=int_in_range(0, 5, "candidate icosphere subdivisions"),
                    default=3, help="icosphere level of the candidates of random, d-optimal and --next (3: 642)")
-    p.add_argument("--space-filling", type=float, default=0.25,
+    p.add_argument("--space-filling", type=finite_float, default=0.25,
                    help="weight of the space-filling term of the d-optimal criterion (0: pure D-optimality)")
     p.add_argument("--load-configurations", type=positive_int, default=None, metavar="K",
                    help="with --strategy d-optimal: also choose which K of the thesis' 7 load configurations to run "
@@ -72,7 +74,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(needs --dataset and --model)")
     p.add_argument("--dataset", type=existing_file, default=None, help="with --next: the dataset measured so far")
     p.add_argument("--model", type=existing_file, default=None, help="with --next: a model file fitted on it")
-    p.add_argument("--load-mass", type=float, default=None,
+    p.add_argument("--load-mass", type=positive_float, default=None,
                    help="with --next: load mass [kg] if the dataset's metadata lacks it")
     p.add_argument("--degrees", action="store_true", help="write joint angles, pitch and yaw in degrees")
     add_output_options(p, "ftcal-plan")
