@@ -115,8 +115,8 @@ def _fit(estimator, X, y, groups):
         return estimator.fit(X, y)
 
 
-def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed):
-    """Out-of-fold predictions of ``estimator`` on ``folds``.
+def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[tuple[NDArray, NDArray]]:
+    """Out-of-fold predictions of ``estimator`` on ``folds``: ``(test rows, their predictions)`` per fold.
 
     Networks: the K fold models are trained as one stacked fit
     (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
@@ -124,7 +124,7 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed):
     fold, as :func:`sklearn.model_selection.cross_val_predict` does (with
     ``groups`` when its ``fit`` takes them, for its own inner model choice),
     but for any subset of the folds, so that the folds of one model can run
-    in different jobs. Rows of folds not in ``folds`` are NaN.
+    in different jobs (each returns only its folds' rows).
     """
     if _is_network(estimator):
         from ..neural_network._stacked import fit_stacked
@@ -132,15 +132,9 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed):
         models = [clone(estimator) for _ in folds]
         train = [grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
         fit_stacked(models, [X[t] for t in train], [y[t] for t in train])
-        pred = np.full_like(y, np.nan)
-        for model, (_, test) in zip(models, folds):
-            pred[test] = model.predict(X[test])
-        return pred
-    pred = np.full_like(y, np.nan)
-    for train, test in folds:
-        model = _fit(clone(estimator), X[train], y[train], None if groups is None else groups[train])
-        pred[test] = model.predict(X[test])
-    return pred
+        return [(test, model.predict(X[test])) for model, (_, test) in zip(models, folds)]
+    return [(test, _fit(clone(estimator), X[train], y[train], None if groups is None else groups[train]).predict(
+        X[test])) for train, test in folds]
 
 
 def _row_errors(pred: NDArray, y: NDArray, alpha: float) -> NDArray:
@@ -258,7 +252,7 @@ def score_candidates(
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] == "candidate":  # the stack after the candidates
             _score_stack(results, errors, predictions, record, y, alpha, folds)
-        model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i])
+        model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i], y.shape)
         if model is not None:
             fitted[name] = model
         record(name, kind, status, kind == "candidate" and not skipped, pred, seconds)
@@ -272,14 +266,15 @@ def _per_fold(estimator) -> bool:
     return not _is_network(estimator) and not hasattr(estimator, "structure_params")
 
 
-def _merge(parts: list) -> tuple:
-    """One model's ``(fitted, predictions, status, seconds)`` from its jobs' (one per fold, or one)."""
+def _merge(parts: list, shape: tuple) -> tuple:
+    """One model's ``(fitted, predictions of shape `shape`, status, seconds)`` from its jobs' (one per fold, or one)."""
     failed = [status for _, _, status, _ in parts if status != "scored"]
     if failed:
         return None, None, failed[0], None
-    pred = parts[0][1].copy()
-    for _, more, _, _ in parts[1:]:
-        pred = np.where(np.isnan(pred), more, pred)
+    pred = np.full(shape, np.nan)
+    for _, folds, _, _ in parts:
+        for test, values in folds:
+            pred[test] = values
     return parts[0][0], pred, "scored", sum(seconds for *_, seconds in parts)
 
 
@@ -296,8 +291,8 @@ def _cost_rank(estimator) -> int:
 def _score_one(estimator, X, y, folds, groups, network_samples, seed):
     """One candidate's (or baseline's) all-rows structure fit, if it has one, and out-of-fold predictions.
 
-    Returns ``(fitted on all rows or None, predictions or None, status, seconds)``; a candidate that
-    cannot fit these data is recorded as failed, not fatal.
+    Returns ``(fitted on all rows or None, [(test rows, predictions)] per fold or None, status, seconds)``; a
+    candidate that cannot fit these data is recorded as failed, not fatal.
     """
     t0 = time.perf_counter()
     try:
