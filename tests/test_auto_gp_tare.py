@@ -200,6 +200,17 @@ def test_gp_leave_one_out_z_matches_refits():
     assert gp.std_scale_.shape == (6,) and (gp.std_scale_ >= 1.0).all()
 
 
+def test_gp_std_with_a_few_rows_outside_the_subset_is_calibrated_leave_one_out():
+    # 3 rows outside a 40-row subset say nothing about a 95 % quantile: the subset's own leave-one-out residuals do
+    raw, w = smooth_data(43, seed=2)
+    few = GaussianProcessCalibrator(alpha=1.0, random_state=0, max_samples=40, per_output=False).fit(raw, w)
+    (fitted,) = few.regressors()
+    from ftcal.calibrators._gaussian_process import _inverse_diagonal
+
+    z = np.abs(np.asarray(fitted.alpha_)) / np.sqrt(_inverse_diagonal(fitted.L_))[:, None]
+    np.testing.assert_allclose(few.std_scale_, np.maximum(1.0, np.quantile(z, 0.95, axis=0) / 1.96))
+
+
 def test_gp_subset_approximation_for_large_data():
     raw, w = smooth_data(5000, seed=3)
     gp = GaussianProcessCalibrator(max_samples=200, alpha=1.0, random_state=0).fit(raw, w)

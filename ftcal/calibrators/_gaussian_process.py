@@ -38,6 +38,8 @@ _PER_OUTPUT_ROWS = 150
 _CHUNK_BYTES = 2**26
 #: Held-out rows (outside the GP's subset) on which the predictive std is calibrated, at most.
 _STD_ROWS = 1000
+#: Fewer rows outside the subset than this: the std is calibrated on the leave-one-out residuals instead.
+_STD_MIN_ROWS = 50
 #: The std is calibrated so that this share of the calibration rows' errors lies within ``_STD_Z`` std.
 _STD_COVERAGE, _STD_Z = 0.95, 1.96
 
@@ -127,8 +129,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
     on rows the GP did not see: each component's std is multiplied by
     ``std_scale_``, the smallest factor (at least 1) with which 95 % of those
     rows' errors fall within 1.96 std. The rows are the training rows left out
-    of the ``max_samples`` subset (at most 1000 of them), or, when every row is
-    in it, each row left out in turn (the GP's closed-form leave-one-out
+    of the ``max_samples`` subset (at most 1000 of them), or, when fewer than 50
+    rows are left out, each row of the subset left out in turn (the GP's closed-form leave-one-out
     residuals, Rasmussen & Williams §5.4.2). A marginal-likelihood fit tends to
     make the std too narrow where the errors have heavier tails than a
     Gaussian (e.g. a sign-dependent gain); the factor is never below 1, because
@@ -288,7 +290,7 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
         unseen = np.setdiff1d(np.arange(n), rows)
         with threadpool_limits(1, user_api="blas"):
-            if unseen.size:  # rows outside the subset: held out for real
+            if unseen.size >= _STD_MIN_ROWS:  # rows outside the subset: held out for real
                 unseen = np.sort(check_random_state(seed).choice(unseen, size=min(unseen.size, _STD_ROWS),
                                                                  replace=False))
                 mean, std = self._predict_scaled(X[unseen], True)
