@@ -40,8 +40,9 @@ def timed(fn) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--repeats", type=int, default=3, choices=range(1, 101), metavar="1..100")
+    parser.add_argument("--jobs", type=int, default=2, choices=[*range(-64, 0), *range(1, 65)],
+                        metavar="N (1..64, or -1..-64 as in joblib)")
     parser.add_argument("--skip-large", action="store_true")
     parser.add_argument("--out", default="benchmarks/results/auto_speed.json")
     args = parser.parse_args()

@@ -26,6 +26,12 @@ def test_round_trip(tmp_path):
     assert log.line.tolist() == [10, 11, 12]  # 8 comment lines, header on line 9
 
 
+def test_temperature_reads_back_bit_for_bit(tmp_path):
+    temperature = np.array([21.123456789012345, -3.0000001234567, 1e-9 + 40.0])  # more digits than %.6g keeps
+    log = read_run_log(_write(tmp_path, temperature=temperature), n_channels=6, n_joints=7)
+    np.testing.assert_array_equal(log.temperature, temperature)
+
+
 def test_writer_never_overwrites(tmp_path):
     p = _write(tmp_path)
     before = p.read_text()

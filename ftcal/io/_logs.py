@@ -384,7 +384,7 @@ def write_run_log(
         vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
         vals += [repr(v) for v in q_arr[i].tolist() + raw_arr[i].tolist()]  # exact: reads back bit for bit
         if temp is not None:
-            vals.append(f"{temp[i]:.6g}")
+            vals.append(repr(float(temp[i])))  # exact, like the joints and channels
         out.append(",".join(vals))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(out) + "\n", encoding="utf-8")
