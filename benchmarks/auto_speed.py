@@ -40,9 +40,16 @@ def timed(fn) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3, choices=range(1, 101), metavar="1..100")
-    parser.add_argument("--jobs", type=int, default=2, choices=[*range(-64, 0), *range(1, 65)],
-                        metavar="N (1..64, or -1..-64 as in joblib)")
+    def count(low: int, high: int, negative: bool = False):
+        def parse(text: str) -> int:
+            value = int(text)
+            if not (low <= value <= high or (negative and -high <= value <= -1)):
+                raise argparse.ArgumentTypeError(f"{text} is not in {low}..{high}" + (" or -1..-64" if negative else ""))
+            return value
+        return parse
+
+    parser.add_argument("--repeats", type=count(1, 100), default=3)
+    parser.add_argument("--jobs", type=count(1, 64, negative=True), default=2, help="auto's n_jobs (-1: all cores)")
     parser.add_argument("--skip-large", action="store_true")
     parser.add_argument("--out", default="benchmarks/results/auto_speed.json")
     args = parser.parse_args()
