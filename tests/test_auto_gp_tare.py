@@ -176,7 +176,8 @@ def test_gp_std_is_calibrated_on_rows_it_did_not_see():
     pred, std = gp.predict(test.raw, return_std=True)
     within = np.abs(pred - test.wrench) <= 2 * std
     uncalibrated = np.abs(pred - test.wrench) <= 2 * std / gp.std_scale_
-    assert within.mean() >= 0.90 and within.mean() - uncalibrated.mean() > 0.02, (within.mean(), uncalibrated.mean())
+    assert 0.90 <= within.mean() <= 0.985 and within.mean() - uncalibrated.mean() > 0.02, (within.mean(),
+                                                                                          uncalibrated.mean())
 
 
 def test_gp_leave_one_out_z_matches_refits():
@@ -207,8 +208,12 @@ def test_gp_std_with_a_few_rows_outside_the_subset_is_calibrated_leave_one_out()
     (fitted,) = few.regressors()
     from ftcal.calibrators._gaussian_process import _inverse_diagonal
 
-    z = np.abs(np.asarray(fitted.alpha_)) / np.sqrt(_inverse_diagonal(fitted.L_))[:, None]
-    np.testing.assert_allclose(few.std_scale_, np.maximum(1.0, np.quantile(z, 0.95, axis=0) / 1.96))
+    z = np.abs(np.asarray(fitted.alpha_)) / np.sqrt(_inverse_diagonal(fitted.L_))[:, None]  # leave-one-out
+    # the defining property on the subset's leave-one-out z-scores: with the factor, at least 95 % lie within
+    # 1.96 std; a factor 1 % smaller (where it is above 1) leaves fewer than 95 % there
+    assert ((z <= 1.96 * few.std_scale_).mean(axis=0) >= 0.95).all()
+    widened = few.std_scale_ > 1.0
+    assert widened.any() and ((z <= 1.96 * 0.99 * few.std_scale_).mean(axis=0)[widened] < 0.95).all()
 
 
 def test_gp_subset_approximation_for_large_data():

@@ -60,6 +60,18 @@ def test_one_se_rule_goes_to_the_simplest_by_complexity_not_by_position():
     assert simplest_within_one_se(clear, eligible=[True, False]) == 0
 
 
+def test_the_tie_tolerance_is_per_group_like_the_differences():
+    # one big group (90 rows, error 1.0 for both) and two small ones where candidate 1 gains 0.012 per row.
+    # Per group, candidate 0's mean excess (0.008) exceeds its paired SE (0.004) and 1 % of the best's per-group
+    # mean error (0.0033): a real gain. Compared with 1 % of the best's per-ROW mean (0.009), as before, it tied.
+    units = np.repeat([0, 1, 2], [90, 5, 5])
+    best = np.concatenate([np.full(90, 1.0), np.full(10, 0.0)])
+    other = best + np.concatenate([np.zeros(90), np.full(10, 0.012)])
+    errors = np.vstack([other, best])
+    assert simplest_within_one_se(errors, units) == 1  # the per-group gain (0.008) is no tie
+    assert simplest_within_one_se(errors) == 0  # per row: 0.0012 < 1 % of the per-row mean (0.009): a tie
+
+
 def test_a_consistent_but_negligible_gain_is_a_tie():
     # noise-free data: the flexible model is better on every row, so the paired SE is ~0; a 0.4 % lower mean
     # squared error (0.2 % in RMSE) is below the tie tolerance and the simpler model wins; 3 % lower is not
@@ -134,6 +146,23 @@ def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
     assert fitting_processes(tmp_path / "pids") == {os.getpid()}
 
 
+def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fits():
+    from skorch.callbacks import Callback
+
+    from ftcal.models._auto import LIGHT_KERNEL_ROWS, _is_light
+    from ftcal.models._baselines import stock_baselines
+
+    stock = stock_baselines(6)
+    assert all(_is_light(stock[n], 10**6) for n in ("sk_linear", "sk_poly2", "sk_poly3"))
+    assert all(_is_light(m, LIGHT_KERNEL_ROWS) and not _is_light(m, LIGHT_KERNEL_ROWS + 1)
+               for m in (stock["sk_gp"], stock["sk_kernel_ridge"], GaussianProcessCalibrator()))
+    # networks however wrapped or configured, ensembles and unknown regressors are heavy
+    for heavy in (ftcal.DirectionalCalibrator(callbacks=[Callback()]), ftcal.EnsembleCalibrator(LinearCalibrator()),
+                  ftcal.ComparativeCalibrator()):
+        assert not _is_light(heavy, 10)
+
+
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="worker processes are capped at the cores: needs 2")
 def test_heavy_work_is_scored_in_worker_processes(tmp_path, monkeypatch):
     from ftcal.models import _auto
     from ftcal.models._baselines import stock_baselines

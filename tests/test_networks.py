@@ -293,4 +293,4 @@ def test_a_network_calibrator_missing_a_hook_says_which():
     raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=1)
     with pytest.raises(NotImplementedError, match=r"Unfinished must implement _training_pairs\(\)"):
         Unfinished(max_epochs=1).fit(raw, wrench)
-    assert not hasattr(Unfinished(), "no_such_attribute")  # any other name is a plain AttributeError
+    assert not hasattr(Unfinished(), "no_such_attribute") and hasattr(Unfinished(), "_decode")

@@ -75,6 +75,24 @@ def test_stacked_members_equal_separate_fits_on_one_dataset(cls):
     assert any(row["lr"] < template.lr for m in stacked for row in m.net_.history)
 
 
+def test_members_whose_rates_drop_together_then_stop_apart_train_as_separate_fits():
+    # phase 2 drops every member's rate at once (the optimiser stays over the stacked tensors), then in phase 3
+    # one member stops first: from that batch on each member steps at its own, dropped, rate (a stale initial
+    # rate there once made the stacked member's losses drift 20 % from its separate fit's)
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(96, 6))
+    raw = (w + 0.05 * w**3) @ rng.normal(size=(6, 6))
+    template = DirectionalCalibrator(hidden_layer_sizes=(16, 16), max_epochs=6, plateau_epochs=2, plateau_patience=0,
+                                     min_lr=1e-2, lr=0.1, max_recover_epochs=4, recover_tolerance=0.0, batch_size=16)
+    members = [clone(template).set_params(random_state=s) for s in (4000, 4001)]
+    separate = [clone(m).fit(raw, w) for m in members]
+    stacked = fit_stacked([clone(m) for m in members], raw, w)
+    assert separate[0].n_epochs_ != separate[1].n_epochs_  # they stop apart
+    assert all(min(row["lr"] for row in m.net_.history) < template.lr for m in separate)  # after a drop
+    for a, b in zip(separate, stacked):
+        _assert_same_training(a, b, raw)
+
+
 def test_stacked_fits_datasets_of_different_sizes():
     datasets = [_data(n, seed) for n, seed in ((150, 1), (233, 2), (181, 3))]
     template = DirectionalCalibrator(**SCHEDULE, random_state=0)

@@ -135,7 +135,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
     make the std too narrow where the errors have heavier tails than a
     Gaussian (e.g. a sign-dependent gain); the factor is never below 1, because
     rows held out at random are closer to the training rows than a new
-    recording (a held-out group) is. The coverage (share of held-out errors
+    recording (a held-out group) is. (With the LTM mean, those rows did take
+    part in its fit, over all rows: a small, O(N / n) optimism.) The coverage (share of held-out errors
     within two std on grouped folds) is measured by
     ``benchmarks/auto_vs_stock.py`` (``gp_coverage_2std``) and recorded in ``benchmarks/RESULTS.md``.
 
@@ -351,9 +352,10 @@ class GaussianProcessCalibrator(BaseCalibrator):
         """Posterior covariance of the GP part at raw readings ``X`` (n, N), summed over the outputs.
 
         In the torque-scaled units of the fit [N²]: per regressor, ``s² (K_xx - K_xt K_tt⁻¹ K_tx)`` with its
-        kernel less the white noise and ``s`` its output scale (``normalize_y``). The diagonal plus ``noise``
-        is the sum over the outputs of ``predict(X, return_std=True)``'s variance (torque-scaled). It leaves
-        out the uncertainty of the linear mean. Used to choose where to measure next.
+        kernel less the white noise and ``s`` its output scale (``normalize_y``) times the calibration factor
+        ``std_scale_``. The diagonal plus ``noise`` is the sum over the outputs of ``predict(X,
+        return_std=True)``'s variance (torque-scaled). It leaves out the uncertainty of the linear mean. Used to
+        choose where to measure next.
 
         Returns
         -------
@@ -370,9 +372,10 @@ class GaussianProcessCalibrator(BaseCalibrator):
         u = (X - self.zero_reading_ - self.input_mean_) / self.input_scale_
         regressors = self.regressors()
         parts, noise = [], 0.0
+        calibration = self.__dict__.get("std_scale_", np.ones_like(self.target_scale_))  # absent from older files
         for i, gp in enumerate(regressors):
             cols = slice(None) if len(regressors) == 1 else slice(i, i + 1)
-            s2 = float(np.sum(self.target_scale_[cols] ** 2))
+            s2 = float(np.sum((self.target_scale_[cols] * calibration[cols]) ** 2))
             kernel = gp.kernel_.k1  # the white noise is the last term of every kernel family
             noise += float(gp.kernel_.k2.noise_level) * s2
             V = solve_triangular(gp.L_, kernel(self.train_inputs_, u), lower=True, check_finite=False)

@@ -171,8 +171,9 @@ def score_candidates(
     never eligible. ``n_jobs`` candidates are scored at once
     (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
     :func:`joblib.parallel_config` context); the figures do not depend on it.
-    Light work stays in this process whatever ``n_jobs`` says: when no job
-    trains a network and the kernel models see at most
+    Light work stays in this process whatever ``n_jobs`` says: when every
+    job is a closed form (the LTM, polynomials, the hybrid, the stock linear
+    and polynomial pipelines) or a kernel model on at most
     :data:`LIGHT_KERNEL_ROWS` training rows (a count of work, not a time).
 
     Returns
@@ -240,8 +241,7 @@ def score_candidates(
     jobs.sort(key=lambda job: _cost_rank(job[1]))
     # never more worker processes than cores or jobs (each costs a Python with torch imported), and none when
     # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
-    heavy = any(_is_network(est) or (_cost_rank(est) == 0 and smallest_train > LIGHT_KERNEL_ROWS)
-                for _, est, _ in tasks)
+    heavy = not all(_is_light(est, smallest_train) for _, est, _ in tasks)
     workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
     done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
                                    for _, est, samples, part in jobs)
@@ -276,6 +276,25 @@ def _merge(parts: list, shape: tuple) -> tuple:
         for test, values in folds:
             pred[test] = values
     return parts[0][0], pred, "scored", sum(seconds for *_, seconds in parts)
+
+
+def _is_light(estimator, training_rows: int) -> bool:
+    """Whether ``estimator`` fits in a moment: a closed form (ftcal's or a stock linear / polynomial pipeline) or a
+    kernel model on at most :data:`LIGHT_KERNEL_ROWS` rows; anything else (networks, ensembles, wrappers) is not."""
+    from sklearn.linear_model import LinearRegression, Ridge, RidgeCV
+    from sklearn.pipeline import Pipeline
+    from sklearn.preprocessing import PolynomialFeatures, StandardScaler
+
+    from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
+    from ..calibrators._linear import LinearCalibrator
+    from ..calibrators._polynomial import PolynomialCalibrator
+
+    if _cost_rank(estimator) == 0:
+        return training_rows <= LIGHT_KERNEL_ROWS
+    closed = (LinearCalibrator, PolynomialCalibrator, AxisNonlinearCalibrator, LinearRegression, Ridge, RidgeCV)
+    steps = [step for _, step in estimator.steps] if isinstance(estimator, Pipeline) else [estimator]
+    return all(isinstance(step, (*closed, StandardScaler, PolynomialFeatures)) for step in steps) and \
+        isinstance(steps[-1], closed)
 
 
 def _cost_rank(estimator) -> int:

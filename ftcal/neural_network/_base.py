@@ -90,6 +90,12 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
         est._finish_training(member, targets, best.best_loss_[k], best.best_epoch_[k], net.stop_reasons_[k])
 
 
+def _hook(name: str):  # a method a NetworkCalibrator subclass must implement: calling it says so
+    def missing(self, *args, **kwargs):
+        raise NotImplementedError(f"{type(self).__name__} must implement {name}() (see NetworkCalibrator).")
+    return missing
+
+
 class NetworkCalibrator(BaseCalibrator):
     """Base of the skorch-trained calibrators. Subclasses set ``_module_class`` and implement
     ``_training_pairs(X, y) -> (inputs, targets)``, ``_network_inputs(X)``, ``_decode(outputs, X) -> wrench``
@@ -97,10 +103,8 @@ class NetworkCalibrator(BaseCalibrator):
     targets) and ``_loss_weights()``; a missing one is a ``NotImplementedError`` naming it.
     """
 
-    def __getattr__(self, name: str):
-        if name in ("_training_pairs", "_network_inputs", "_decode", "_network_outputs", "_loss_weights"):
-            raise NotImplementedError(f"{type(self).__name__} must implement {name}() (see NetworkCalibrator).")
-        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+    _training_pairs, _network_inputs, _decode, _network_outputs, _loss_weights = map(_hook, (
+        "_training_pairs", "_network_inputs", "_decode", "_network_outputs", "_loss_weights"))
 
     _module_class: type[torch.nn.Module]
     _overflow_note = "the network computes in float32, at most ~3.4e38"
@@ -146,10 +150,8 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _build_net(self, n_inputs: int, seed: int | Sequence[int], loss_weights: Sequence | None = None
                    ) -> NetworkRegressor:
-        """The (unfitted) engine with this estimator's module, loss, optimiser and schedule.
-
-        ``seed``: one, or one per member of a stack; ``loss_weights``: one row per member (default: this one's).
-        """
+        """The (unfitted) engine with this estimator's module, loss, optimiser and schedule; ``seed``: one, or one
+        per member of a stack; ``loss_weights``: one row per member (default: this one's)."""
         seeds = [int(seed)] if isinstance(seed, Integral) else [int(s) for s in seed]
         return self._net_class(
             module=self._module_class, module__n_inputs=n_inputs, module__n_outputs=self._network_outputs(),
@@ -164,9 +166,8 @@ class NetworkCalibrator(BaseCalibrator):
     def _training_setup(self, X: NDArray[np.float64], y: NDArray[np.float64]):
         """Checks, network inputs and targets, and the seed of one fit: ``(inputs, targets, seed)``, float64."""
         if not device_available(self.device):
-            raise CalibrationInputError(
-                f"device={self.device!r} is not available on this machine (this torch build has "
-                f"{'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'.")
+            raise CalibrationInputError(f"device={self.device!r} is not available on this machine (this torch build "
+                                        f"has {'CUDA' if torch.cuda.is_available() else 'no CUDA'}); use device='cpu'.")
         inputs, targets = self._training_pairs(X, y)
         if max(np.abs(inputs).max(initial=0.0), np.abs(targets).max(initial=0.0)) > _FLOAT32_SAFE:
             raise CalibrationInputError(
@@ -179,8 +180,7 @@ class NetworkCalibrator(BaseCalibrator):
         """Refuse, before any allocation, a network whose training would exceed ftcal's memory limit."""
         widths = [n_inputs, *(int(w) for w in self.hidden_layer_sizes), self._network_outputs()]
         n_params = float(sum((a + 1) * b for a, b in zip(widths[:-1], widths[1:])))
-        # float32 weights, gradients, Adam's two moments and the best-weights copy; float64 numpy layers for predict;
-        # one batch's activations and their gradients
+        # float32 weights, gradients, Adam's moments, best copy; float64 layers of predict; a batch's activations
         n_bytes = n_params * (5 * 4 + 8) + 2 * 4 * float(min(self.batch_size, n_rows)) * sum(widths)
         check_allocation(n_bytes, f"{type(self).__name__} with hidden_layer_sizes={tuple(self.hidden_layer_sizes)} "
                          f"({n_params:.3g} weights)", "use narrower or fewer hidden layers")

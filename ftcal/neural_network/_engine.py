@@ -42,8 +42,7 @@ class MemberBatches:
     ``y``'s last column marks real rows (1) and padding (0; left out of a batch without padding). Each iteration
     reshuffles every member with its generator (skorch iterates one iterator every epoch)."""
 
-    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int,
-                 generators: list[torch.Generator]):
+    def __init__(self, X: torch.Tensor, y: torch.Tensor, counts: list[int], batch_size: int, generators: list):
         self.X, self.y, self.counts, self.batch_size, self.generators = X, y, counts, batch_size, generators
 
     def __iter__(self):
@@ -104,6 +103,7 @@ class NetworkRegressor(NeuralNetRegressor):
                     self.member_optimizer_.state[optimizer.param_groups[0]["params"][i]][key] = value.clone() if (
                         not torch.is_tensor(value) or value.shape != parameter.shape) else value[k].clone()
         self.optimizer_, self.stacked_path_ = self.member_optimizer_, False
+        self._group_by_rate()  # the members' current rates (they may have dropped together on the stacked path)
 
     def _group_by_rate(self) -> None:
         groups: dict[float, dict] = {}
@@ -187,8 +187,8 @@ class NetworkRegressor(NeuralNetRegressor):
             self.optimizer_.param_groups[0]["lr"] = rates.pop()
         elif len(self.optimizers_) > 1:
             self._group_by_rate()
-        self._loss_sums, self._row_counts = ({True: torch.zeros(len(self.seeds)), False: torch.zeros(len(self.seeds))}
-                                             for _ in range(2))
+        K = len(self.seeds)
+        self._loss_sums, self._row_counts = ({True: torch.zeros(K), False: torch.zeros(K)} for _ in range(2))
 
     def on_batch_end(self, net, batch=None, training=False, y_pred=None, **kwargs):
         rows = self._rows(batch)
