@@ -168,7 +168,9 @@ def soft_split(seed: int, test_presses: int = 8):
 
     d = make_soft_sensor_dataset(random_state=seed)
     test = np.isin(d.group, np.unique(d.group)[-test_presses:])
-    return d.subset(np.flatnonzero(~test)), d.subset(np.flatnonzero(test)), {"noise_floor": d.meta["noise_floor_rmse"]}
+    # no floor: the reference noise is not this sensor's floor (its readings depend on the load history; what a
+    # static map reaches is estimated by benchmarks/auto_vs_stock.py on the whole recording)
+    return d.subset(np.flatnonzero(~test)), d.subset(np.flatnonzero(test)), {"noise_floor": None}
 
 
 #: The datasets of the learning curves: adding one is one line.

@@ -10,8 +10,8 @@ Usage::
 * stacked training: a 5-member ``EnsembleCalibrator`` of that directional model (members trained together
   as one stacked module) against one member's fit, and ``ftcal.fit_stacked`` of ``--stack`` nets (one per
   seed) against one fit, per net;
-* the floor of the fit: the same net, split, batches, epochs and fused Adam in a bare torch loop (autograd, no
-  skorch): what an engine that calls a user's skorch callbacks per batch cannot beat;
+* the floor of the fit: the same net, split, batches, epochs, fused Adam and per-epoch validation loss in a
+  bare torch loop (autograd, no skorch): what an engine that calls a user's skorch callbacks per batch cannot beat;
 * predict: one-sample ``predict`` latency against the numpy forward pass of the same fitted net (median of
   ``--latency-calls`` calls), and 100 000-row ``predict`` throughput against the numpy forward's.
 
@@ -95,6 +95,8 @@ def main(argv=None) -> int:
         n_train = len(inputs) - int(np.ceil(0.2 * len(inputs)))
         X_t = torch.from_numpy(inputs[:n_train].astype(np.float32))
         y_t = torch.from_numpy(targets[:n_train].astype(np.float32))
+        X_v = torch.from_numpy(inputs[n_train:].astype(np.float32))
+        y_v = torch.from_numpy(targets[n_train:].astype(np.float32))
         for _ in range(args.epochs):
             order = torch.randperm(n_train)
             X_e, y_e = X_t[order], y_t[order]
@@ -104,6 +106,8 @@ def main(argv=None) -> int:
                 loss = ((net(X_e[start:start + 32]) - y_e[start:start + 32]) ** 2).sum(dim=-1).mean()
                 loss.backward()
                 optimizer.step()
+            with torch.no_grad():  # the epoch's validation loss, as every fit computes it
+                float(((net(X_v) - y_v) ** 2).sum(dim=-1).mean())
         return net
 
     with threadpool_limits(1):

@@ -48,6 +48,7 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
 
     A candidate ties when its mean error exceeds the best's by at most ``TIE_TOLERANCE`` (1 % of the mean
     squared error, 0.5 % in RMSE) even if that excess is consistent.
+
     ``errors[k, i]`` is candidate ``k``'s held-out error on sample ``i``;
     candidates are ordered from the most flexible to the simplest. This is
     :func:`ftcal.core._model_selection.simplest_within_one_se` (the one rule)
