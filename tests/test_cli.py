@@ -265,13 +265,16 @@ def test_the_command_line_starts_without_torch_or_pinocchio():
     assert out.strip() == "[]"
 
 
-@pytest.mark.parametrize("argv", [["fit", "--model=--", "d.csv"], ["fit", "d.csv", "--out=--"],
-                                  ["predict", "--output=--", "m.npz"]])
-def test_an_option_given_exactly_two_dashes_is_a_usage_error(argv, capsys):
-    # argparse hands `--name=--` to the option as an empty list; that used to crash with an AttributeError
+@pytest.mark.parametrize("argv, got", [(["fit", "--model=--", "d.csv"], "'--'"), (["fit", "d.csv", "--out=--"], "'--'"),
+                                       (["predict", "--output=--", "m.npz"], "'--'"),
+                                       (["fit", "d.csv", "--torque-unit="], "an empty value"),
+                                       (["fit", "d.csv", "--name="], "an empty value")])
+def test_an_option_given_two_dashes_or_nothing_is_a_usage_error(argv, got, capsys):
+    # argparse hands `--name=--` to the option as an empty list (that crashed), and `--torque-unit=` (an unset
+    # shell variable) meant the default unit, silently confirming N·mm torques as N·m
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and err[0].startswith("ftcal: error: argument ") and "expected a value, got '--'" in err[0]
+    assert len(err) == 1 and err[0].startswith("ftcal: error: argument ") and f"expected a value, got {got}" in err[0]
 
 
 @pytest.mark.parametrize("option, value", [("--excluded-cap-deg", "nan"), ("--space-filling", "inf"),

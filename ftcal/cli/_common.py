@@ -93,9 +93,11 @@ class Parser(argparse.ArgumentParser):
         raise UsageError(f"{message} (see '{self.prog} --help')")
 
     def _get_values(self, action, arg_strings):
-        # argparse drops a value of exactly "--" (`--name=--`) and hands the option an empty list
-        if arg_strings == ["--"] and action.nargs is None and action.option_strings:
-            self.error(f"argument {'/'.join(action.option_strings)}: expected a value, got '--'")
+        # argparse drops a value of exactly "--" (`--name=--`) and hands the option an empty list; an empty value
+        # (`--torque-unit=` with an unset shell variable) would silently mean the default
+        if arg_strings in (["--"], [""]) and action.nargs is None and action.option_strings:
+            got = "'--'" if arg_strings == ["--"] else "an empty value"
+            self.error(f"argument {'/'.join(action.option_strings)}: expected a value, got {got}")
         return super()._get_values(action, arg_strings)
 
 
