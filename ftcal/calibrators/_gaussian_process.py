@@ -18,6 +18,7 @@ from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator
 from ..core._memory import check_allocation
+from ..core._model_selection import check_groups
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -38,8 +39,6 @@ _PER_OUTPUT_ROWS = 150
 _CHUNK_BYTES = 2**26
 #: Held-out rows (outside the GP's subset) on which the predictive std is calibrated, at most.
 _STD_ROWS = 1000
-#: Fewer rows outside the subset than this: the std is calibrated on the leave-one-out residuals instead.
-_STD_MIN_ROWS = 50
 #: The std is calibrated so that this share of the calibration rows' errors lies within ``_STD_Z`` std.
 _STD_COVERAGE, _STD_Z = 0.95, 1.96
 
@@ -77,12 +76,31 @@ def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegr
         return gp.fit(u, target)
 
 
-def _inverse_diagonal(cholesky: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``diag(K⁻¹)`` from the lower Cholesky factor ``L`` of ``K``: the squared column norms of ``L⁻¹``."""
-    from scipy.linalg import solve_triangular
+def _left_out_z(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None) -> NDArray:
+    """Each training row's error over its predictive std when left out of the fit, rows of one group together.
 
-    inverse = solve_triangular(cholesky, np.eye(len(cholesky)), lower=True, check_finite=False)
-    return np.sum(inverse * inverse, axis=0)
+    Closed form for a GP with a mean fitted on the basis ``H`` (the constant ``normalize_y`` removes, plus the
+    LTM's channels with the linear mean), with the hyperparameters fixed (Rasmussen & Williams §2.7, §5.4.2):
+    ``P = K⁻¹ - K⁻¹H (HᵀK⁻¹H)⁻¹ HᵀK⁻¹``; leaving out the rows ``G``, their errors are ``(P_GG)⁻¹ (P y)_G``
+    with covariance ``(P_GG)⁻¹``. Returns ``(n, k)`` z-scores (no row when ``H`` leaves no degree of freedom).
+    """
+    from scipy.linalg import cho_solve
+
+    m = len(basis)
+    if m <= basis.shape[1] + 1:
+        return np.empty((0, np.asarray(gp.alpha_).reshape(m, -1).shape[1]))
+    K_inv = cho_solve((gp.L_, True), np.eye(m), check_finite=False)
+    KH = K_inv @ basis
+    P = K_inv - KH @ np.linalg.lstsq(basis.T @ KH, KH.T, rcond=None)[0]
+    Py = P @ (gp.L_ @ (gp.L_.T @ np.asarray(gp.alpha_).reshape(m, -1)))  # y = K alpha
+    z = np.full_like(Py, np.nan)
+    for rows in ([[i] for i in range(m)] if groups is None else [np.flatnonzero(groups == g) for g in np.unique(groups)]):
+        try:
+            cov = np.linalg.inv(P[np.ix_(rows, rows)])
+        except np.linalg.LinAlgError:  # a group the basis cannot do without: it says nothing
+            continue
+        z[rows] = np.abs(cov @ Py[rows]) / np.sqrt(np.maximum(np.diag(cov), np.finfo(float).tiny))[:, None]
+    return z[np.isfinite(z).all(axis=1)]
 
 
 def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> float:
@@ -128,10 +146,11 @@ class GaussianProcessCalibrator(BaseCalibrator):
     against a reference measured like the training references, **calibrated**
     on rows the GP did not see: each component's std is multiplied by
     ``std_scale_``, the smallest factor (at least 1) with which 95 % of those
-    rows' errors fall within 1.96 std. The rows are the training rows left out
-    of the ``max_samples`` subset (at most 1000 of them), or, when fewer than 50
-    rows are left out, each row of the subset left out in turn (the GP's closed-form leave-one-out
-    residuals, Rasmussen & Williams §5.4.2). A marginal-likelihood fit tends to
+    rows' errors fall within 1.96 std. The rows are every row of the subset
+    left out in turn (closed form, its mean refitted without it: Rasmussen &
+    Williams §2.7, §5.4.2), with ``fit(..., groups=...)`` every group left out
+    together, plus up to 1000 training rows outside the subset (of groups the
+    subset does not hold). A marginal-likelihood fit tends to
     make the std too narrow where the errors have heavier tails than a
     Gaussian (e.g. a sign-dependent gain); the factor is never below 1, because
     rows held out at random are closer to the training rows than a new
@@ -216,6 +235,8 @@ class GaussianProcessCalibrator(BaseCalibrator):
     _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
                      "target_scale_", "log_marginal_likelihood_", "std_scale_")
+    #: The std's calibration holds out whole groups: requested by default (metadata routing, like a group splitter).
+    __metadata_request__fit = {"groups": True}
     #: What overflows for a reading far outside the training range (see ``check_finite_output``).
     _overflow_note = ("its kernel squares the distance from the reading to the training readings, in units of its "
                       "length scales, which exceeds float64's ~1.8e308 from a distance of ~1.3e154")
@@ -241,6 +262,25 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
+
+    def fit(self, X, y, groups=None):
+        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, load configuration, recording): the std is then calibrated leaving
+            whole groups out (the rows of one pose are not new to each other).
+
+        Returns
+        -------
+        self
+        """
+        self._fit_groups = groups
+        try:
+            return super().fit(X, y)
+        finally:
+            del self._fit_groups
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         n, n_channels = X.shape
@@ -289,17 +329,25 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
         self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
         self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
-        unseen = np.setdiff1d(np.arange(n), rows)
+        groups = check_groups(getattr(self, "_fit_groups", None), n)
+        basis = np.hstack([np.ones((m, 1)), xc_sub]) if mean == "linear" else np.ones((m, 1))
         with threadpool_limits(1, user_api="blas"):
-            if unseen.size >= _STD_MIN_ROWS:  # rows outside the subset: held out for real
+            z = [_left_out_z(g, basis, None if groups is None else groups[rows]) for g in regressors]
+            z = [np.column_stack(z)] if all(len(part) for part in z) else []
+            unseen = np.setdiff1d(np.arange(n), rows)
+            if groups is not None:  # a row of a group the subset holds is not new: only unseen groups count
+                unseen = unseen[~np.isin(groups[unseen], groups[rows])]
+            if unseen.size:  # rows outside the subset: held out for real
                 unseen = np.sort(check_random_state(seed).choice(unseen, size=min(unseen.size, _STD_ROWS),
                                                                  replace=False))
-                mean, std = self._predict_scaled(X[unseen], True)
-                z = np.abs(mean - ys[unseen]) / np.maximum(std, np.finfo(float).tiny)
-            else:  # every row in the subset: closed-form leave-one-out, z = [K⁻¹y]_i / sqrt([K⁻¹]_ii)
-                z = np.column_stack([np.abs(np.asarray(g.alpha_).reshape(m, -1)) / np.sqrt(
-                    _inverse_diagonal(g.L_))[:, None] for g in regressors])
-        self.std_scale_ = np.maximum(1.0, np.quantile(z, _STD_COVERAGE, axis=0) / _STD_Z)
+                mean_u, std_u = self._predict_scaled(X[unseen], True)
+                z.append(np.abs(mean_u - ys[unseen]) / np.maximum(std_u, np.finfo(float).tiny))
+        if z:
+            self.std_scale_ = np.maximum(1.0, np.quantile(np.vstack(z), _STD_COVERAGE, axis=0) / _STD_Z)
+        else:
+            warnings.warn(f"GaussianProcessCalibrator: {n} rows leave no degree of freedom beyond the {mean} mean's "
+                          f"{basis.shape[1]} coefficients, so the predictive std could not be calibrated: it is "
+                          "likely too narrow. Record more rows.", UserWarning, stacklevel=4)
 
     def _choose(self, u, targets, seed):
         """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
