@@ -294,3 +294,14 @@ def test_a_network_calibrator_missing_a_hook_says_which():
     with pytest.raises(NotImplementedError, match=r"Unfinished must implement _training_pairs\(\)"):
         Unfinished(max_epochs=1).fit(raw, wrench)
     assert not hasattr(Unfinished(), "no_such_attribute") and hasattr(Unfinished(), "_decode")
+
+
+def test_skorch_early_stopping_ends_the_fit_cleanly_with_the_best_weights():
+    # skorch's EarlyStopping ends training with a KeyboardInterrupt at an epoch's end: a finished fit, not a Ctrl-C
+    from skorch.callbacks import EarlyStopping
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=150, seed=0)
+    model = DirectionalCalibrator(max_epochs=40, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2,
+                                  callbacks=[EarlyStopping(patience=1)], random_state=0).fit(raw, wrench)
+    assert model.stop_reason_ == "callback" and model.n_epochs_ < 40 and model.best_epoch_ <= model.n_epochs_
+    assert np.isfinite(model.predict(raw[:3])).all()

@@ -73,8 +73,8 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
     """Train ``K >= 1`` network calibrators of one kind as one engine run; each ends fitted as by its own ``fit``.
 
     ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``); the estimators share the
-    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``.
-    """
+    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``; a
+    callback ending training at an epoch's end (``EarlyStopping``) leaves ``stop_reason_ == "callback"``."""
     setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
     template = estimators[0]
     net = template._build_net(setups[0][0].shape[1], [seed for _, _, seed in setups],
@@ -82,9 +82,10 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
     with torch.random.fork_rng(devices=[]), template._thread_limit():
         net.fit([inputs.astype(np.float32) for inputs, _, _ in setups],
                 [targets.astype(np.float32) for _, targets, _ in setups])
-    if any(reason is None for reason in net.stop_reasons_):
-        raise KeyboardInterrupt(f"{type(template).__name__}.fit interrupted at epoch {len(net.history)}")
     best = dict(net.callbacks_)["restore_best_weights"]
+    if not all(net.stop_reasons_) and not (len(net.history) and best.monitor in net.history[-1]):  # mid-epoch
+        raise KeyboardInterrupt(f"{type(template).__name__}.fit interrupted at epoch {len(net.history)}")
+    net.stop_reasons_ = [reason or "callback" for reason in net.stop_reasons_]  # the epoch ended: a callback stopped
     for k, (est, (_, targets, seed)) in enumerate(zip(estimators, setups)):
         member = net if len(estimators) == 1 else est._member_net(net, k, seed)
         est._finish_training(member, targets, best.best_loss_[k], best.best_epoch_[k], net.stop_reasons_[k])

@@ -79,8 +79,7 @@ class NetworkRegressor(NeuralNetRegressor):
         self.module_ = members[0] if len(members) == 1 else StackedMLP(members)
         return self
 
-    def member_parameters(self, k: int) -> list[torch.Tensor]:
-        """Member ``k``'s parameters (views into the stack when ``K > 1``): what its optimiser moves."""
+    def member_parameters(self, k: int) -> list[torch.Tensor]:  # member k's (views into the stack when K > 1)
         return list(self.module_.parameters()) if len(self.seeds) == 1 else self.module_.member_parameters(k)
 
     def initialize_optimizer(self, triggered_directly=None):
