@@ -71,3 +71,14 @@ def test_bad_parameters_raise_clear_errors(data, kwargs, match):
 def test_ensemble_of_deterministic_models_equals_the_model(data):
     ens = EnsembleCalibrator(LinearCalibrator(), n_members=2, random_state=0).fit(*data)
     np.testing.assert_allclose(ens.predict(data[0]), LinearCalibrator().fit(*data).predict(data[0]), rtol=1e-12)
+
+
+def test_an_ensemble_too_large_for_memory_is_refused_before_any_member_is_built():
+    from ftcal.core._memory import MemoryLimitError
+
+    raw, w = np.random.default_rng(0).normal(size=(40, 6)), np.random.default_rng(1).normal(size=(40, 6))
+    member = DirectionalCalibrator(max_epochs=1, plateau_epochs=0, max_recover_epochs=0, hidden_layer_sizes=(512, 512))
+    with pytest.raises(MemoryLimitError, match=r"1000000 x DirectionalCalibrator.*use fewer members"):
+        EnsembleCalibrator(member, n_members=10**6).fit(raw, w)
+    with pytest.raises(ValueError, match="n_jobs"):
+        EnsembleCalibrator(member, n_members=2, n_jobs=0).fit(raw, w)

@@ -99,7 +99,7 @@ class EnsembleCalibrator(BaseCalibrator):
     _parameter_constraints: dict = {
         "estimator": [BaseCalibrator, None],
         "n_members": [Interval(Integral, 1, None, closed="left")],
-        "n_jobs": [Integral, None],
+        "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
         "random_state": ["random_state"],
     }
 
@@ -139,6 +139,8 @@ class EnsembleCalibrator(BaseCalibrator):
         template = self._template()
         X, y = validate_training_data(self, X, y)
         routed = routed_fit_params(self, groups)
+        if isinstance(template, NetworkCalibrator):  # every member's training memory, before building any
+            template._check_network_memory(X.shape[1], len(X), members=int(n))
         rng = check_random_state(self.random_state)
         self.member_seeds_ = rng.randint(np.iinfo(np.int32).max, size=int(n))
         members = [clone(template).set_params(random_state=int(s)) for s in self.member_seeds_]

@@ -177,14 +177,14 @@ class NetworkCalibrator(BaseCalibrator):
         self._check_network_memory(inputs.shape[1], len(inputs))
         return inputs, targets, int(check_random_state(self.random_state).randint(np.iinfo(np.int32).max))
 
-    def _check_network_memory(self, n_inputs: int, n_rows: int) -> None:
-        """Refuse, before any allocation, a network whose training would exceed ftcal's memory limit."""
+    def _check_network_memory(self, n_inputs: int, n_rows: int, members: int = 1) -> None:
+        """Refuse, before any allocation, ``members`` such networks whose training would exceed ftcal's memory limit."""
         widths = [n_inputs, *(int(w) for w in self.hidden_layer_sizes), self._network_outputs()]
         n_params = float(sum((a + 1) * b for a, b in zip(widths[:-1], widths[1:])))
         # float32 weights, gradients, Adam's moments, best copy; float64 layers of predict; a batch's activations
-        n_bytes = n_params * (5 * 4 + 8) + 2 * 4 * float(min(self.batch_size, n_rows)) * sum(widths)
-        check_allocation(n_bytes, f"{type(self).__name__} with hidden_layer_sizes={tuple(self.hidden_layer_sizes)} "
-                         f"({n_params:.3g} weights)", "use narrower or fewer hidden layers")
+        n_bytes = members * (n_params * (5 * 4 + 8) + 2 * 4 * float(min(self.batch_size, n_rows)) * sum(widths))
+        check_allocation(n_bytes, f"{members} x {type(self).__name__}, hidden_layer_sizes={self.hidden_layer_sizes!r}"
+                         f" ({n_params:.3g} weights each)", "use fewer members, or narrower or fewer hidden layers")
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])
