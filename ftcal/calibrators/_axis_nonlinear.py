@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval, Options, StrOptions
 
-from ._base import BaseCalibrator
+from ._base import BaseCalibrator, GroupsFit
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, check_groups, grouped_subsample, simplest_within_one_se
 from ._linear import affine_fit
@@ -64,7 +64,7 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
     return simplest_within_one_se(errors, complexity=np.arange(errors.shape[0])[::-1])
 
 
-class AxisNonlinearCalibrator(BaseCalibrator):
+class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
     """Linear calibration refined by per-axis sign-dependent gains and power-law corrections.
 
     This is ftcal's hybrid of the linear model (LTM) and the directional DNN.
@@ -187,8 +187,6 @@ class AxisNonlinearCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("ridge_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_")
-    #: ``ridge="auto"`` holds out whole groups: requested by default (metadata routing, like a group splitter).
-    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "powers": [tuple, list],
@@ -204,26 +202,6 @@ class AxisNonlinearCalibrator(BaseCalibrator):
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
-
-    def fit(self, X, y, groups=None):
-        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
-
-        Parameters
-        ----------
-        groups : array-like of shape (n,) or None
-            Group of each row (pose, load configuration): ``ridge="auto"``
-            then holds out whole groups, so the corrections it keeps are the
-            ones that transfer to poses the fit has not seen.
-
-        Returns
-        -------
-        self
-        """
-        self._fit_groups = groups
-        try:
-            return super().fit(X, y)
-        finally:
-            del self._fit_groups
 
     def _check_params(self) -> None:
         for p in self.powers:  # the table checks that powers is array-like; its entries here

@@ -39,7 +39,7 @@ from ..core._validation import check_finite_output, check_zero_reading, validate
 from ..core._wrench import alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["BaseCalibrator"]
+__all__ = ["BaseCalibrator", "GroupsFit"]
 
 
 def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -293,3 +293,29 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         tags.target_tags.single_output = False
         tags.input_tags.allow_nan = False
         return tags
+
+
+class GroupsFit:
+    """Mixin of a calibrator that uses the rows' groups inside its ``fit`` (its ``_fit`` reads ``_fit_groups``):
+    ``fit(X, y, groups=None)``, the groups requested through metadata routing by default, like a group splitter."""
+
+    __metadata_request__fit = {"groups": True}
+
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
+        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, load configuration, recording): held out together wherever the calibrator
+            judges itself on rows it did not see (see the class).
+
+        Returns
+        -------
+        self
+        """
+        self._fit_groups = groups
+        try:
+            return super().fit(X, y)
+        finally:
+            del self._fit_groups

@@ -16,7 +16,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
-from ._base import BaseCalibrator
+from ._base import BaseCalibrator, GroupsFit
 from ..core._memory import check_allocation
 from ..core._model_selection import check_groups
 from ..core._validation import check_bool, check_finite_output, validate_readings
@@ -109,7 +109,7 @@ def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> 
     return float(gp.log_marginal_likelihood_value_ - len(target) * np.log(np.where(scale > 0, scale, 1.0)).sum())
 
 
-class GaussianProcessCalibrator(BaseCalibrator):
+class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
     """A Gaussian process over the readings, with its mean and kernel chosen by marginal likelihood.
 
     Strain-gauge sensors are linear to first order and smoothly nonlinear
@@ -235,8 +235,6 @@ class GaussianProcessCalibrator(BaseCalibrator):
     _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
                      "target_scale_", "log_marginal_likelihood_", "std_scale_")
-    #: The std's calibration holds out whole groups: requested by default (metadata routing, like a group splitter).
-    __metadata_request__fit = {"groups": True}
     #: What overflows for a reading far outside the training range (see ``check_finite_output``).
     _overflow_note = ("its kernel squares the distance from the reading to the training readings, in units of its "
                       "length scales, which exceeds float64's ~1.8e308 from a distance of ~1.3e154")
@@ -262,25 +260,6 @@ class GaussianProcessCalibrator(BaseCalibrator):
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
-
-    def fit(self, X, y, groups=None):
-        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
-
-        Parameters
-        ----------
-        groups : array-like of shape (n,) or None
-            Group of each row (pose, load configuration, recording): the std is then calibrated leaving
-            whole groups out (the rows of one pose are not new to each other).
-
-        Returns
-        -------
-        self
-        """
-        self._fit_groups = groups
-        try:
-            return super().fit(X, y)
-        finally:
-            del self._fit_groups
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         n, n_channels = X.shape
