@@ -283,3 +283,9 @@ def test_plan_refuses_non_finite_numbers_at_the_command_line(option, value, caps
     assert main(["plan", option, value, "--out", str(tmp_path / "p")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1].startswith(f"ftcal: error: argument {option}: '{value}' is not a") and not (tmp_path / "p").exists()
+
+
+def test_plan_warns_when_too_few_poses_remain_for_the_linear_model(tmp_path, capsys):
+    assert main(["plan", "--excluded-cap-deg", "179.9", "--out", str(tmp_path / "p"), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert "ftcal: warning: 1 poses cannot calibrate even the linear model (it needs 7" in err

@@ -118,6 +118,18 @@ def test_run_logs_carry_temperature_into_the_prepared_dataset(tmp_path):
         ftcal.read_run_log(paths[0])
 
 
+def test_predict_std_of_a_temperature_compensated_model_says_why_not(tmp_path, capsys):
+    data, models = tmp_path / "data", tmp_path / "models"
+    assert main(["simulate", "dataset", "--temperature-range", "15,35", "--n-per-sphere", "30", "--n-test", "20",
+                 "--out", str(data), "-q"]) == 0
+    assert main(["fit", str(data / "train.csv"), "--model", "gaussian_process", "--temperature", "--out", str(models),
+                 "-q"]) == 0
+    capsys.readouterr()
+    assert main(["predict", str(models / "gaussian_process.model.npz"), str(data / "test.csv"), "--std"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "temperature-compensated" in err[0] and "fit without --temperature" in err[0]
+
+
 def test_temperature_workflow_through_the_cli(tmp_path, capsys):
     data, models = tmp_path / "data", tmp_path / "models"
     assert main(["simulate", "dataset", "--temperature-range", "15,35",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -168,6 +169,12 @@ def run(args: argparse.Namespace) -> int:
     else:
         console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
                      f"{plan_files.path('poses.csv')}")
+    from ..robot._pose_planning import LINEAR_MODEL_PARAMETERS
+
+    if args.next_poses is None and plan.n_poses < LINEAR_MODEL_PARAMETERS:
+        print(f"ftcal: warning: {plan.n_poses} poses cannot calibrate even the linear model (it needs "
+              f"{LINEAR_MODEL_PARAMETERS} per load configuration); widen the sphere (a smaller --excluded-cap-deg, "
+              "more --subdivisions)", file=sys.stderr)
     return 0
 
 

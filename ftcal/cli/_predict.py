@@ -114,6 +114,10 @@ def run(args: argparse.Namespace) -> int:
     chunk = 1 if args.line_buffered else args.chunk_size
     if args.std and not provides_std(model):
         chosen = getattr(model, "best_name_", type(model).__name__)
+        if hasattr(model, "offset_per_deg_"):  # a temperature wrapper: it passes no standard deviation through
+            raise CliError(f"--std: {args.model} is temperature-compensated (fitted with --temperature), and the "
+                           "compensation passes no standard deviation through, whatever model it wraps. Drop --std, "
+                           "or fit without --temperature")
         raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
