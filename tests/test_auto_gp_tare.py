@@ -282,3 +282,15 @@ def test_tare_estimate_is_unbiased_under_sign_dependent_gains():
     design = np.hstack([w, np.ones((len(w), 1))])
     affine = np.linalg.lstsq(design, raw, rcond=None)[0][-1]
     assert np.max(np.abs(affine - zero) / span) > 10 * np.max(np.abs(gated - zero) / span)
+
+
+@pytest.mark.parametrize("scale", [-1.0, 0.0, np.inf, np.nan, "short"])
+def test_a_gp_whose_std_factors_were_edited_is_refused(scale):
+    from ftcal import ModelFileError
+
+    raw, w = smooth_data(60, seed=1)
+    gp = GaussianProcessCalibrator(alpha=1.0, random_state=0, per_output=False).fit(raw, w)
+    gp.std_scale_ = np.ones(5) if scale == "short" else np.full(6, scale)  # as a tampered file would load it
+    gp.predict(raw[:2])  # the mean does not use it
+    with pytest.raises(ModelFileError, match="std_scale_ must hold 6 finite factors >= 1"):
+        gp.predict(raw[:2], return_std=True)

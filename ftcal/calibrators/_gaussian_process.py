@@ -17,6 +17,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator, GroupsFit
+from ..core._exceptions import ModelFileError
 from ..core._memory import check_allocation
 from ..core._model_selection import check_groups
 from ..core._validation import check_bool, check_finite_output, validate_readings
@@ -445,6 +446,11 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
         std = np.empty_like(mean) if return_std else None
         scale = self.__dict__.get("std_scale_")  # absent from files saved before the std was calibrated
+        if return_std and scale is not None and (np.shape(scale) != self.target_scale_.shape or not np.all(np.asarray(scale) >= 1.0)
+                                  or not np.all(np.isfinite(scale))):
+            raise ModelFileError(f"std_scale_ must hold {self.target_scale_.size} finite factors >= 1, one per "
+                                 f"output; it is {np.asarray(scale)!r}. The model file is damaged or was edited: fit "
+                                 "and save the model again.")
         regressors = self.regressors()
         for start in range(0, len(u), chunk):
             rows = slice(start, start + chunk)
