@@ -446,8 +446,9 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
         std = np.empty_like(mean) if return_std else None
         scale = self.__dict__.get("std_scale_")  # absent from files saved before the std was calibrated
-        if return_std and scale is not None and (np.shape(scale) != self.target_scale_.shape or not np.all(np.asarray(scale) >= 1.0)
-                                  or not np.all(np.isfinite(scale))):
+        bad = scale is not None and (np.shape(scale) != self.target_scale_.shape or not np.all(np.isfinite(scale))
+                                     or not np.all(np.asarray(scale) >= 1.0))
+        if return_std and bad:
             raise ModelFileError(f"std_scale_ must hold {self.target_scale_.size} finite factors >= 1, one per "
                                  f"output; it is {np.asarray(scale)!r}. The model file is damaged or was edited: fit "
                                  "and save the model again.")
