@@ -104,24 +104,32 @@ def outer(raw, wrench, groups, splits, alpha, seed=0):
             "auto_table_first_split": inside[0]["table"], "n_train": int(len(splits[0][0]))}
 
 
-def static_floor(small, cache: Path | None = None) -> dict:
-    """What a static map reaches on ``small`` when fitted on 20 000 rows of the same soft sensor (best of three).
-
-    Kept in ``cache`` (a JSON file) once computed, so that a resumed run does not fit it again.
-    """
+def best_static_map(cache: Path | None, setup) -> dict:
+    """The best held-out RMSE of the models ``setup()`` gives, ``(models, known, test_raw, test_wrench, alpha,
+    info)``, fitted on ``known`` (a large recording of the same sensor); kept in ``cache`` (a JSON file) once
+    computed, so that a resumed run neither builds the data nor fits the models again."""
     if cache is not None and cache.exists():
         return json.loads(cache.read_text())
-    big = make_soft_sensor_dataset(20000, n_zero=2300, n_presses=1770, random_state=small.meta["random_state"])
-    alpha = small.meta["alpha"]
-    models = {"sk_poly3": stock_baselines(8)["sk_poly3"],
-              "gaussian_process(max_samples=2000)": ftcal.GaussianProcessCalibrator(
-                  alpha=alpha, max_samples=2000, selection_samples=500, per_output=False, random_state=0),
-              "axis_nonlinear": ftcal.AxisNonlinearCalibrator(alpha=alpha)}
-    scores = {n: rmse(small.wrench, m.fit(big.raw, big.wrench).predict(small.raw), alpha) for n, m in models.items()}
-    result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": big.n_samples}
+    models, known, test_raw, test_wrench, alpha, info = setup()
+    scores = {n: rmse(test_wrench, m.fit(known.raw, known.wrench).predict(test_raw), alpha) for n, m in models.items()}
+    result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": known.n_samples, **info}
     if cache is not None:
         cache.write_text(json.dumps(result, indent=1))
     return result
+
+
+def static_floor(small, cache: Path | None = None) -> dict:
+    """What a static map reaches on ``small`` when fitted on 20 000 rows of the same soft sensor (best of three)."""
+    def setup():
+        big = make_soft_sensor_dataset(20000, n_zero=2300, n_presses=1770, random_state=small.meta["random_state"])
+        alpha = small.meta["alpha"]
+        models = {"sk_poly3": stock_baselines(8)["sk_poly3"],
+                  "gaussian_process(max_samples=2000)": ftcal.GaussianProcessCalibrator(
+                      alpha=alpha, max_samples=2000, selection_samples=500, per_output=False, random_state=0),
+                  "axis_nonlinear": ftcal.AxisNonlinearCalibrator(alpha=alpha)}
+        return models, big, small.raw, small.wrench, alpha, {}
+
+    return best_static_map(cache, setup)
 
 
 def robot_static_floor(d, splits, cache: Path | None = None) -> dict:
@@ -131,20 +139,16 @@ def robot_static_floor(d, splits, cache: Path | None = None) -> dict:
     the same seed: the same loads, sensor and noise), so they know the sensor's map as well as 90 000 rows tell;
     what is left on the held-out rows is the reference noise plus the held-out poses' own offsets.
     """
-    if cache is not None and cache.exists():
-        return json.loads(cache.read_text())
-    clean = make_robot_held_dataset(d.n_samples, random_state=d.meta["random_state"], pose_offset=0.0)
-    alpha = d.meta["alpha"]
-    test = np.concatenate([t for _, t in splits])
-    models = {"sk_poly2": stock_baselines(8)["sk_poly2"], "sk_poly3": stock_baselines(8)["sk_poly3"],
-              "axis_nonlinear": ftcal.AxisNonlinearCalibrator(alpha=alpha)}
-    scores = {n: rmse(d.wrench[test], m.fit(clean.raw, clean.wrench).predict(d.raw[test]), alpha)
-              for n, m in models.items()}
-    result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": clean.n_samples,
-              "n_test_rows": int(test.size)}
-    if cache is not None:
-        cache.write_text(json.dumps(result, indent=1))
-    return result
+    def setup():
+        clean = make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(d.group).size),
+                                        random_state=d.meta["random_state"], pose_offset=0.0)
+        alpha = d.meta["alpha"]
+        test = np.concatenate([t for _, t in splits])
+        models = {"sk_poly2": stock_baselines(8)["sk_poly2"], "sk_poly3": stock_baselines(8)["sk_poly3"],
+                  "axis_nonlinear": ftcal.AxisNonlinearCalibrator(alpha=alpha)}
+        return models, clean, d.raw[test], d.wrench[test], alpha, {"n_test_rows": int(test.size)}
+
+    return best_static_map(cache, setup)
 
 
 def run_case(case: str) -> dict:

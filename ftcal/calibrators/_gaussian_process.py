@@ -94,8 +94,12 @@ def _left_out_z(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups
     KH = K_inv @ basis
     P = K_inv - KH @ np.linalg.lstsq(basis.T @ KH, KH.T, rcond=None)[0]
     Py = P @ (gp.L_ @ (gp.L_.T @ np.asarray(gp.alpha_).reshape(m, -1)))  # y = K alpha
+    if groups is None:  # one row at a time: (P_ii)⁻¹ is a scalar
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.abs(Py) / np.sqrt(np.diag(P))[:, None]
+        return z[np.isfinite(z).all(axis=1)]
     z = np.full_like(Py, np.nan)
-    for rows in ([[i] for i in range(m)] if groups is None else [np.flatnonzero(groups == g) for g in np.unique(groups)]):
+    for rows in (np.flatnonzero(groups == g) for g in np.unique(groups)):
         try:
             cov = np.linalg.inv(P[np.ix_(rows, rows)])
         except np.linalg.LinAlgError:  # a group the basis cannot do without: it says nothing
@@ -400,7 +404,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         u = (X - self.zero_reading_ - self.input_mean_) / self.input_scale_
         regressors = self.regressors()
         parts, noise = [], 0.0
-        calibration = self.__dict__.get("std_scale_", np.ones_like(self.target_scale_))  # absent from older files
+        calibration = self._std_factors()
         for i, gp in enumerate(regressors):
             cols = slice(None) if len(regressors) == 1 else slice(i, i + 1)
             s2 = float(np.sum((self.target_scale_[cols] * calibration[cols]) ** 2))
@@ -438,6 +442,18 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
             regressors.append(gp)
         return regressors
 
+    def _std_factors(self) -> NDArray[np.float64]:
+        """``std_scale_``, checked (a model file may have been edited); ones for files saved before it existed."""
+        scale = self.__dict__.get("std_scale_")
+        if scale is None:
+            return np.ones_like(self.target_scale_)
+        if np.shape(scale) != self.target_scale_.shape or not np.all(np.isfinite(scale)) or not np.all(
+                np.asarray(scale) >= 1.0):
+            raise ModelFileError(f"std_scale_ must hold {self.target_scale_.size} finite factors >= 1, one per "
+                                 f"output; it is {np.asarray(scale)!r}. The model file is damaged or was edited: fit "
+                                 "and save the model again.")
+        return np.asarray(scale, dtype=float)
+
     def _predict_scaled(self, X: NDArray[np.float64], return_std: bool):
         xc = X - self.zero_reading_
         u = (xc - self.input_mean_) / self.input_scale_
@@ -445,13 +461,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         chunk = max(1, _CHUNK_BYTES // (8 * m))
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
         std = np.empty_like(mean) if return_std else None
-        scale = self.__dict__.get("std_scale_")  # absent from files saved before the std was calibrated
-        bad = scale is not None and (np.shape(scale) != self.target_scale_.shape or not np.all(np.isfinite(scale))
-                                     or not np.all(np.asarray(scale) >= 1.0))
-        if return_std and bad:
-            raise ModelFileError(f"std_scale_ must hold {self.target_scale_.size} finite factors >= 1, one per "
-                                 f"output; it is {np.asarray(scale)!r}. The model file is damaged or was edited: fit "
-                                 "and save the model again.")
+        scale = self._std_factors() if return_std else None
         regressors = self.regressors()
         for start in range(0, len(u), chunk):
             rows = slice(start, start + chunk)
@@ -461,7 +471,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore", UserWarning)  # "negative variance set to 0"
                         mu, sd = gp.predict(u[rows], return_std=True)
-                    std[rows, cols] = sd.reshape(mu.shape[0], -1) * (1.0 if scale is None else scale[cols])
+                    std[rows, cols] = sd.reshape(mu.shape[0], -1) * scale[cols]
                 else:
                     mu = gp.predict(u[rows])
                 mean[rows, cols] += mu.reshape(mu.shape[0], -1)
