@@ -294,3 +294,22 @@ def test_a_gp_whose_std_factors_were_edited_is_refused(scale):
     gp.predict(raw[:2])  # the mean does not use it
     with pytest.raises(ModelFileError, match="std_scale_ must hold 6 finite factors >= 1"):
         gp.predict(raw[:2], return_std=True)
+
+
+def test_auto_tries_one_offset_per_group_only_with_groups_and_picks_it_where_poses_shift():
+    """Given groups, the default candidates gain the LTM and the quadratic with one offset per group. On 10 poses
+    that each carry a load of their own and shift all readings by a random offset (mounting, thermal state: the
+    robot-held case), the few poses' offsets line up with their loads by chance and bias the plain LTM; the
+    grouped CV sees it and picks the twin fitted within the poses."""
+    names = [n for n, _ in AutoCalibrator()._candidates(grouped=True)]
+    assert names[:4] == ["linear", "linear(group offsets)", "polynomial(degree=2, ridge=0.01)",
+                         "polynomial(degree=2, ridge=0.01, group offsets)"]
+    assert not any("group offsets" in n for n, _ in AutoCalibrator()._candidates())
+    rng = np.random.default_rng(0)
+    groups = np.repeat(np.arange(10), 30)
+    w = (rng.normal(size=(10, 6)) * 3.0)[groups] + rng.normal(size=(300, 6))
+    raw = w @ rng.normal(size=(6, 8)) + rng.normal(size=(10, 8))[groups] + NOISE * rng.normal(size=(300, 8))
+    auto = AutoCalibrator(candidates=AutoCalibrator()._candidates(grouped=True)[:2], alpha=1.0,
+                          baselines=False, stack=False).fit(raw, w, groups=groups)
+    assert auto.best_name_ == "linear(group offsets)"
+    assert auto.best_estimator_.group_offsets is True

@@ -63,3 +63,54 @@ def test_model_file_round_trip_and_registry(tmp_path):
     loaded = load_model(save_model(model, tmp_path / "poly.npz"))
     assert isinstance(loaded, PolynomialCalibrator) and loaded.degree == 4
     np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
+
+
+def offset_sensor(n_groups=8, rows=40, seed=0):
+    """An affine 6-channel sensor in ``n_groups`` poses: each pose carries its own load (a tool's weight) plus
+    loads varying within it, and shifts all its readings by an offset of its own (the offsets sum to zero over the
+    poses, so the mean of the poses' intercepts is the sensor's own); noise-free."""
+    rng = np.random.default_rng(seed)
+    groups = np.repeat(np.arange(n_groups), rows)
+    pose_load = rng.normal(size=(n_groups, 6)) * 3.0
+    wrench = pose_load[groups] + rng.normal(size=(len(groups), 6))
+    mixing = rng.normal(size=(6, 6)) + 3.0 * np.eye(6)
+    offsets = rng.normal(size=(n_groups, 6)) + 0.5 * pose_load  # lined up with the poses' loads: a bias for the LTM
+    offsets -= offsets.mean(axis=0)
+    raw = wrench @ mixing.T + 2.0 + offsets[groups]
+    return raw, wrench, groups, mixing
+
+
+def test_group_offsets_recover_the_map_that_offsets_bias():
+    """Offsets that move with each pose's load bias the plain LTM's slopes; with one intercept per group the map is
+    learnt from the variation within poses and is exact (noise-free data, offsets summing to zero)."""
+    raw, wrench, groups, mixing = offset_sensor()
+    test_wrench = np.random.default_rng(9).normal(size=(50, 6)) * 3.0
+    test_raw = test_wrench @ mixing.T + 2.0  # a new pose without offset
+    model = PolynomialCalibrator(degree=1, group_offsets=True, alpha=1.0).fit(raw, wrench, groups=groups)
+    np.testing.assert_allclose(model.predict(test_raw), test_wrench, atol=1e-8)
+    plain = PolynomialCalibrator(degree=1, alpha=1.0).fit(raw, wrench)
+    assert np.abs(plain.predict(test_raw) - test_wrench).max() > 0.1  # the bias the offsets cause (O(1) here)
+
+
+def test_group_offsets_without_groups_change_nothing_and_model_files_keep_them(tmp_path):
+    raw, wrench, groups, _ = offset_sensor()
+    a = PolynomialCalibrator(degree=2, ridge=0.01, group_offsets=True).fit(raw, wrench)
+    b = PolynomialCalibrator(degree=2, ridge=0.01).fit(raw, wrench)
+    np.testing.assert_array_equal(a.predict(raw), b.predict(raw))
+    fitted = PolynomialCalibrator(degree=2, ridge=0.01, group_offsets=True).fit(raw, wrench, groups=groups)
+    save_model(fitted, tmp_path / "m.npz")
+    loaded = load_model(tmp_path / "m.npz")
+    assert loaded.group_offsets is True
+    np.testing.assert_array_equal(loaded.predict(raw), fitted.predict(raw))
+
+
+@pytest.mark.parametrize("make_groups", [lambda g: np.arange(len(g)), lambda g: g],
+                         ids=["one_row_per_group", "loads_constant_within_groups"])
+def test_group_offsets_refuse_groups_within_which_loads_do_not_vary(make_groups):
+    raw, wrench, groups, _ = offset_sensor()
+    if make_groups(groups) is groups:  # every pose holds one load only: nothing varies within a pose
+        wrench = wrench.copy()
+        for g in np.unique(groups):
+            wrench[groups == g] = wrench[groups == g][0]
+    with pytest.raises(CalibrationInputError, match="loads vary within the .* groups by 0.00%"):
+        PolynomialCalibrator(degree=1, group_offsets=True).fit(raw, wrench, groups=make_groups(groups))

@@ -53,3 +53,22 @@ def test_rank_deficient_free_columns_give_the_minimum_norm_solution():
     coef, intercept = ridge_least_squares(features, y, 1.0, 2)
     np.testing.assert_allclose(coef[:2, 0], [1.0, 1.0], atol=1e-6)  # split evenly: the minimum norm
     np.testing.assert_allclose(features @ coef + intercept, y, atol=1e-6)
+
+
+@pytest.mark.parametrize("penalty", [0.0, 0.3, np.inf])
+def test_groups_give_each_group_its_own_unpenalised_intercept(penalty):
+    """With groups, the solver is least squares with one free intercept column per group (dummy variables, the
+    oracle: the same solver with the one-hot columns placed first, unpenalised); the intercept returned is the mean
+    of the groups' intercepts."""
+    rng = np.random.default_rng(2)
+    groups = np.repeat(np.array(["a", "b", "c", "d"]), [9, 14, 11, 16])
+    onehot = (groups[:, None] == np.unique(groups)[None]).astype(float)
+    features = rng.normal(size=(50, 5)) + onehot @ rng.normal(size=(4, 5))  # the groups' means differ
+    y = features @ rng.normal(size=(5, 2)) + onehot @ rng.normal(size=(4, 2)) + 0.1 * rng.normal(size=(50, 2))
+    coef, intercept = ridge_least_squares(features, y, penalty, n_unpenalised=2, groups=groups)
+    # the oracle: dummy columns (unpenalised) + the features; a group's intercept: its dummy's coefficient + the common one
+    dummy = np.hstack([onehot, features])
+    ref, ref_intercept = ridge_least_squares(dummy, y, penalty, n_unpenalised=4 + 2)
+    group_intercepts = ref[:4] + ref_intercept  # each group's own intercept
+    np.testing.assert_allclose(coef, ref[4:], rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(intercept, group_intercepts.mean(axis=0), rtol=1e-8, atol=1e-10)

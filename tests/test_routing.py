@@ -10,12 +10,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from sklearn import config_context
+from sklearn.base import clone
 from sklearn.model_selection import GridSearchCV, GroupKFold, cross_validate
 from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import FunctionTransformer
 
 from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, CalibrationDataset, EnsembleCalibrator,
-                   LinearCalibrator, TemperatureCompensatedCalibrator, load_model, search_calibrator)
+                   GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator, TemperatureCompensatedCalibrator,
+                   load_model, search_calibrator)
 from ftcal.calibrators._routing import requests_groups
 from ftcal.models import _registry
 
@@ -154,3 +156,28 @@ def test_hybrid_inner_cv_gets_the_groups_inside_the_temperature_wrapper():
     shuffled = AxisNonlinearCalibrator(alpha=1.0).fit(compensated, wrench).ridge_
     assert grouped != shuffled  # the data tell grouped from shuffled folds apart ...
     assert wrapped.estimator_.ridge_ == grouped  # ... and the wrapped hybrid used the groups
+
+
+@pytest.mark.parametrize("calibrator", [GaussianProcessCalibrator(max_samples=50, n_restarts_optimizer=0),
+                                        AxisNonlinearCalibrator(ridge=0.01), PolynomialCalibrator(degree=2),
+                                        PolynomialCalibrator(degree=1, group_offsets=True)],
+                         ids=["gaussian_process", "axis_fixed_ridge", "polynomial", "polynomial_group_offsets"])
+@pytest.mark.parametrize("groups, message", [
+    (np.arange(10), r"groups must have shape \(60,\), one label per row of X; got shape \(10,\)"),
+    (np.zeros(60), r"groups holds one group only"),
+    (np.full(60, np.nan), r"groups holds NaN"),
+])
+def test_calibrators_that_take_groups_refuse_bad_groups_before_fitting(calibrator, groups, message):
+    """Groups of the wrong length are a caller's bug: refused by every calibrator that takes groups, before any fit.
+    Labels that cannot split (one group, NaN) are refused by those that use them with their parameters (the GP's
+    std, the hybrid's ridge="auto", group offsets) and ignored by those that do not (a fixed ridge, no offsets)."""
+    raw, w, *_ = affine_sensor_data(n_samples=60)
+    uses = not (isinstance(calibrator, PolynomialCalibrator) and not calibrator.group_offsets
+                or isinstance(calibrator, AxisNonlinearCalibrator) and calibrator.ridge != "auto")
+    if uses or len(groups) != 60:
+        with pytest.raises(ValueError, match=message):
+            calibrator.fit(raw, w, groups=groups)
+        assert not hasattr(calibrator, "n_features_in_")  # nothing was fitted
+    else:
+        fitted = clone(calibrator).fit(raw, w, groups=groups)
+        np.testing.assert_array_equal(fitted.predict(raw), clone(calibrator).fit(raw, w).predict(raw))

@@ -194,6 +194,9 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         "n_refinements": [Interval(Integral, 0, None, closed="left")],
     }
 
+    def _uses_groups(self) -> bool:
+        return isinstance(self.ridge, str)  # "auto": the ridge chosen by a grouped CV
+
     def __init__(self, *, powers=(1.5,), ridge="auto", n_refinements=1, alpha=None, zero_reading=None,
                  random_state=None):
         self.powers = powers

@@ -35,6 +35,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ..core._exceptions import CalibrationInputError
+from ..core._model_selection import check_groups
 from ..core._validation import check_finite_output, check_zero_reading, validate_readings, validate_training_data
 from ..core._wrench import alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
@@ -301,6 +302,10 @@ class GroupsFit:
 
     __metadata_request__fit = {"groups": True}
 
+    def _uses_groups(self) -> bool:
+        """Whether this fit uses the groups with these parameters (else they are only checked for their length)."""
+        return True
+
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
 
@@ -314,7 +319,11 @@ class GroupsFit:
         -------
         self
         """
-        self._fit_groups = groups
+        # checked before the fit's work (a bad X is refused by fit itself): always their length, and the rest
+        # (at least two groups, labels) when this calibrator uses them with its parameters
+        if groups is not None and hasattr(X, "__len__") and (self._uses_groups() or np.shape(groups) != (len(X),)):
+            check_groups(groups, len(X))
+        self._fit_groups = groups if self._uses_groups() else None
         try:
             return super().fit(X, y)
         finally:

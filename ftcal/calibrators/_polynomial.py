@@ -11,7 +11,9 @@ from sklearn.utils._param_validation import Interval
 from sklearn.preprocessing import PolynomialFeatures
 
 from ..core._memory import check_allocation
-from ._base import BaseCalibrator
+from ._base import BaseCalibrator, GroupsFit
+from ..core._exceptions import CalibrationInputError
+from ..core._model_selection import check_groups
 from ._ridge import ridge_least_squares
 
 __all__ = ["PolynomialCalibrator"]
@@ -22,7 +24,7 @@ _PREDICT_CHUNK = 8192
 _PREDICT_BYTES = 256 * 2**20
 
 
-class PolynomialCalibrator(BaseCalibrator):
+class PolynomialCalibrator(GroupsFit, BaseCalibrator):
     """Wrench as a polynomial of the zero-corrected raw channels, fitted by ridge least squares.
 
     The model published for in-situ calibration of humanoid-robot sensors
@@ -58,6 +60,18 @@ class PolynomialCalibrator(BaseCalibrator):
         ``thesis`` / ``asymmetric`` by ~1 % but 28 % worse on ``stress``;
         1e-6 overfits (see ``benchmarks/RESULTS.md``, issue 6). Use
         ``ftcal tune --model polynomial`` for your data.
+    group_offsets : bool, default=False
+        With ``fit(X, y, groups=...)``: every group (a pose, a session, a
+        mounting) may shift all its readings by an offset of its own, as a
+        re-mounted, re-tared or warmed-up sensor does. The map is then fitted
+        on the variation *within* the groups only (one free intercept per
+        group, the fixed-effects estimator: an offset can no longer be
+        mistaken for the load a pose carries, e.g. its tool's weight), and
+        ``predict`` uses the mean of the groups' intercepts. It needs readings
+        that vary within groups in every channel direction (else an error says
+        so); without groups it changes nothing. ``degree=1`` with it is the LTM
+        with group offsets. :class:`~ftcal.AutoCalibrator` tries it when given
+        groups.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
@@ -93,14 +107,20 @@ class PolynomialCalibrator(BaseCalibrator):
         **BaseCalibrator._parameter_constraints,
         "degree": [Interval(Integral, 1, 5, closed="both")],
         "ridge": [Interval(Real, 0, None, closed="left")],
+        "group_offsets": ["boolean"],
     }
 
-    def __init__(self, *, degree=3, ridge=1e-4, alpha=None, zero_reading=None, random_state=None):
+    def __init__(self, *, degree=3, ridge=1e-4, group_offsets=False, alpha=None, zero_reading=None,
+                 random_state=None):
         self.degree = degree
         self.ridge = ridge
+        self.group_offsets = group_offsets
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
+
+    def _uses_groups(self) -> bool:
+        return bool(self.group_offsets)
 
     def _monomials(self) -> PolynomialFeatures:
         # Fitted on one row only to learn the channel count: the monomials depend on nothing else.
@@ -126,7 +146,29 @@ class PolynomialCalibrator(BaseCalibrator):
         scale = np.abs(xc).max(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
         features = self._monomials().transform(xc / self.input_scale_)
-        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * len(y), n_unpenalised=X.shape[1])
+        groups = check_groups(getattr(self, "_fit_groups", None), n)
+        if groups is not None:
+            self._check_within_group_loads(y, groups)
+        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * len(y), n_unpenalised=X.shape[1],
+                                                          groups=groups)
+
+    @staticmethod
+    def _check_within_group_loads(y: NDArray[np.float64], groups: NDArray) -> None:
+        """Refuse groups within which some direction of the wrench barely varies (under 1 % of its spread across
+        all rows, in standard deviation): the map along it would be learnt from offsets, i.e. not at all."""
+        std = y.std(axis=0)
+        z = (y - y.mean(axis=0))[:, std > 0] / std[std > 0]
+        index = np.unique(groups, return_inverse=True)[1].ravel()
+        means = np.stack([z[index == k].mean(axis=0) for k in range(index.max() + 1)])
+        total, within = z.T @ z, (z - means[index]).T @ (z - means[index])
+        whiten = np.linalg.inv(np.linalg.cholesky(total + 1e-12 * np.trace(total) * np.eye(len(total))))
+        fraction = np.linalg.eigvalsh(whiten @ within @ whiten.T).min(initial=1.0)
+        if fraction < 1e-4:
+            raise CalibrationInputError(
+                f"group_offsets=True: along some direction of the wrench, the loads vary within the "
+                f"{index.max() + 1} groups by {np.sqrt(max(fraction, 0.0)):.2%} of their spread across all rows (at "
+                "least 1 % is needed), so a group's offset cannot be told from its load. Fix: fit without "
+                "group_offsets, or record loads that vary within each group (pose).")
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         monomials = self._monomials()

@@ -11,6 +11,11 @@ minimiser, and about ten times faster than composing scikit-learn estimators
 (the hybrid's cross-validated penalty solves a few thousand small systems);
 ``tests/test_ridge.py`` checks it against scikit-learn's ``Ridge`` and
 ``LinearRegression``.
+
+With ``groups``, each group has an intercept of its own (unpenalised: a pose's
+or a session's offset) and centring *within each group* removes them exactly
+(the fixed-effects or "within" estimator); the intercept returned is their mean
+over the groups, each group weighing the same (the expected offset of a new one).
 """
 
 from __future__ import annotations
@@ -22,7 +27,8 @@ __all__ = ["ridge_least_squares"]
 
 
 def ridge_least_squares(
-    features: NDArray[np.float64], y: NDArray[np.float64], penalty: float, n_unpenalised: int
+    features: NDArray[np.float64], y: NDArray[np.float64], penalty: float, n_unpenalised: int,
+    groups: NDArray | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``coef, intercept`` minimising ``||y - features @ coef - intercept||² + penalty ||coef[n_unpenalised:]||²``.
 
@@ -30,6 +36,8 @@ def ridge_least_squares(
     not penalised; ``penalty = inf`` is the limit (penalised coefficients
     exactly zero, the rest ordinary least squares), ``penalty = 0`` ordinary
     least squares (the minimum-norm solution for rank-deficient features).
+    ``groups`` (one label per row): one intercept per group instead of one in
+    all, and the mean of the groups' intercepts returned (see the module).
 
     Examples
     --------
@@ -39,8 +47,18 @@ def ridge_least_squares(
     ([2.0, 0.5], [1.0])
     """
     n_features, k = features.shape[1], y.shape[1]
-    feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
-    centred, target = features - feature_mean, y - target_mean
+    if groups is None:
+        feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
+        centred, target = features - feature_mean, y - target_mean
+    else:  # each group centred on its own means; the intercept: the mean over the groups of theirs
+        from scipy.sparse import csr_matrix
+
+        index = np.unique(groups, return_inverse=True)[1].ravel()
+        members = csr_matrix((np.ones(len(index)), (index, np.arange(len(index)))))  # groups x rows
+        counts = np.asarray(members.sum(axis=1))
+        feature_means, target_means = (members @ features) / counts, (members @ y) / counts
+        centred, target = features - feature_means[index], y - target_means[index]
+        feature_mean, target_mean = feature_means.mean(axis=0), target_means.mean(axis=0)
     n_penalised = n_features - n_unpenalised
     coef = np.zeros((n_features, k))
     if np.isinf(penalty):  # the limit: penalised coefficients zero, the free ones by least squares

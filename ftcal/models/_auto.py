@@ -35,21 +35,32 @@ STACK_SIZE = 3
 LIGHT_KERNEL_ROWS = 200
 
 
-def default_candidates(schedule: str = "short") -> list[tuple[str, BaseCalibrator]]:
+def default_candidates(schedule: str = "short", grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
     """The candidates of :class:`AutoCalibrator`, in the documented complexity order (simplest first).
+
+    ``grouped`` (the rows come with groups): each of ``linear`` and ``polynomial(degree=2, ridge=0.01)`` is
+    followed by its twin with one offset per group (``group_offsets=True``, see
+    :class:`~ftcal.PolynomialCalibrator`).
 
     Examples
     --------
     >>> [name for name, _ in default_candidates()][:3]
     ['linear', 'polynomial(degree=2, ridge=0.01)', 'polynomial(degree=2, ridge=0.0001)']
+    >>> [name for name, _ in default_candidates(grouped=True)][:3]
+    ['linear', 'linear(group offsets)', 'polynomial(degree=2, ridge=0.01)']
     """
     from ._registry import make_calibrator
 
     candidates: list[tuple[str, BaseCalibrator]] = [("linear", make_calibrator("linear"))]
+    if grouped:
+        candidates.append(("linear(group offsets)", make_calibrator("polynomial", degree=1, group_offsets=True)))
     for degree in (2, 3):
         for ridge in (1e-2, 1e-4):
             candidates.append((f"polynomial(degree={degree}, ridge={ridge:g})",
                                make_calibrator("polynomial", degree=degree, ridge=ridge)))
+            if grouped and degree == 2 and ridge == 1e-2:
+                candidates.append((f"polynomial(degree={degree}, ridge={ridge:g}, group offsets)", make_calibrator(
+                    "polynomial", degree=degree, ridge=ridge, group_offsets=True)))
     candidates.append(("axis_nonlinear", make_calibrator("axis_nonlinear")))
     candidates.append(("gaussian_process", make_calibrator("gaussian_process", random_state=0)))
     for name in ("directional", "comparative"):
@@ -443,7 +454,10 @@ class AutoCalibrator(BaseCalibrator):
        calibration does on poses it has not seen; without, shuffled k-fold;
     2. scores every candidate on those folds, **in this complexity order**
        (simplest first): ``linear`` (the LTM); ``polynomial`` of degree 2 and 3,
-       each with ridge 1e-2 and 1e-4; ``axis_nonlinear`` (the hybrid);
+       each with ridge 1e-2 and 1e-4 (with ``groups``, the LTM and the degree-2
+       polynomial with ridge 1e-2 are each followed by a twin with one offset
+       per group, ``group_offsets=True``: for poses or sessions whose readings
+       shift as a whole); ``axis_nonlinear`` (the hybrid);
        ``gaussian_process`` (its mean and kernel chosen once on all rows by
        marginal likelihood, its hyperparameters refitted on every training
        fold); ``directional`` and ``comparative`` (the ``schedule``'s epochs;
@@ -552,9 +566,9 @@ class AutoCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
-    def _candidates(self) -> list[tuple[str, BaseCalibrator]]:
+    def _candidates(self, grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
         if self.candidates is None:
-            return default_candidates(self.schedule)
+            return default_candidates(self.schedule, grouped)
         pairs = list(self.candidates)
         if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[1], BaseCalibrator)
                                 for p in pairs):
@@ -582,9 +596,10 @@ class AutoCalibrator(BaseCalibrator):
         from ._baselines import stock_baselines
 
         self._check_parameters()
-        candidates = self._candidates()
+        self._candidates()  # checked before the data
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
+        candidates = self._candidates(grouped=groups is not None)
         if groups is None and len(X) < self.cv:
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
