@@ -28,7 +28,8 @@ Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file e
     :func:`ftcal.make_artificial_dataset` (5000 training rows, 1250 test rows), noise floor from the dataset.
 ``dead_weight_15``, ``dead_weight_30``, ``dead_weight_50``
     :func:`ftcal.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
-    with loads up to 2x the calibrated range (target: auto <= 1.1x the LTM).
+    with loads up to 2x the calibrated range (target: auto <= 1.1x the LTM), and the stock baselines fitted on
+    the same rows (added to an earlier run's JSON without refitting auto).
 
 Every RMSE is eq. 18 (all 6 n torque-scaled values, [N]). ``summary.md`` is rewritten from the parts found.
 """
@@ -47,7 +48,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
-from ftcal.models import stock_baselines
+from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
 
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
 OUT = Path("benchmarks/results/auto_vs_stock")  # --out
@@ -151,13 +152,30 @@ def robot_static_floor(d, splits, cache: Path | None = None) -> dict:
     return best_static_map(cache, setup)
 
 
+def dead_weight_data(case: str, seed: int):
+    """Calibration rows, validation rows (loads up to 2x the calibrated range) and alpha of a dead-weight case."""
+    cal, val = make_dead_weight_dataset(int(case.rsplit("_", 1)[1]), random_state=seed)
+    return cal, val, alpha_from_wrenches(cal.wrench)
+
+
+def dead_weight_stock(case: str, result: dict) -> dict:
+    """``result`` (a dead-weight case) with the stock baselines' RMSE at 2x the range, fitted on the same rows, per
+    seed (added to an earlier run's JSON without refitting auto)."""
+    for o in result["seeds"]:
+        if "stock_rmse_2x" in o:
+            continue
+        cal, val, alpha = dead_weight_data(case, o["seed"])
+        o["stock_rmse_2x"] = {name: rmse(val.wrench, model.fit(cal.raw, cal.wrench).predict(val.raw), alpha)
+                              for name, model in stock_baselines(cal.raw.shape[1], random_state=o["seed"]).items()}
+        o["auto_over_best_stock"] = o["auto_rmse_2x"] / min(o["stock_rmse_2x"].values())
+    return result
+
+
 def run_case(case: str) -> dict:
     if case.startswith("dead_weight_"):
-        n = int(case.rsplit("_", 1)[1])
         out = []
         for seed in range(3):
-            cal, val = make_dead_weight_dataset(n, random_state=seed)
-            alpha = alpha_from_wrenches(cal.wrench)
+            cal, val, alpha = dead_weight_data(case, seed)
             t0 = time.perf_counter()
             auto = ftcal.AutoCalibrator(alpha=alpha, random_state=seed, n_jobs=JOBS).fit(cal.raw, cal.wrench)
             fit_s = time.perf_counter() - t0
@@ -167,7 +185,7 @@ def run_case(case: str) -> dict:
                         "auto_over_linear": r_auto / r_ltm, "fit_seconds": fit_s,
                         "out_of_range_flagged": float(np.mean(auto.out_of_range(val.raw)))
                         if hasattr(auto, "out_of_range") else None})
-        return {"seeds": out, "worst_auto_over_linear": max(o["auto_over_linear"] for o in out)}
+        return dead_weight_stock(case, {"seeds": out, "worst_auto_over_linear": max(o["auto_over_linear"] for o in out)})
     if case == "soft":
         d = make_soft_sensor_dataset()
         splits = list(KFold(5, shuffle=True, random_state=0).split(d.raw))
@@ -213,14 +231,17 @@ def summary(out: Path) -> str:
                      f"{floor_cells[1]} | {r['gp_over_sk_gp']:.3f} | "
                      f"{r['gp_coverage_2std']:.3f} | {', '.join(sorted(set(r['auto_choices'])))} | "
                      f"{r['fit_seconds_total']['auto'] / r['n_outer_splits']:.0f} |")
-    lines += ["", "| dead-weight rows | seed | auto chose | auto RMSE at 2x range | LTM | auto / LTM | fit [s] |",
-              "|" + "---|" * 7]
+    lines += ["", "| dead-weight rows | seed | auto chose | auto RMSE at 2x range | LTM | auto / LTM | "
+              + " | ".join(STOCK_BASELINE_NAMES) + " | auto / best stock | fit [s] |", "|" + "---|" * 13]
     for case in CASES:
         path = out / f"{case}.json"
         if path.exists() and case.startswith("dead_weight"):
             for o in json.loads(path.read_text())["seeds"]:
+                stock = o.get("stock_rmse_2x", {})
                 lines.append(f"| {case.rsplit('_', 1)[1]} | {o['seed']} | {o['chosen']} | {o['auto_rmse_2x']:.4g} | "
-                             f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | {o['fit_seconds']:.1f} |")
+                             f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | "
+                             + " | ".join(f"{stock[n]:.4g}" if n in stock else "" for n in STOCK_BASELINE_NAMES)
+                             + f" | {o.get('auto_over_best_stock', float('nan')):.3f} | {o['fit_seconds']:.1f} |")
     return "\n".join(lines)
 
 
@@ -239,6 +260,9 @@ def main() -> None:
     out.mkdir(parents=True, exist_ok=True)
     for case in args.case or CASES:
         path = out / f"{case}.json"
+        if path.exists() and case.startswith("dead_weight"):  # an earlier run's JSON: add the stock baselines
+            path.write_text(json.dumps(dead_weight_stock(case, json.loads(path.read_text())), indent=1, default=float))
+            (out / "summary.md").write_text(summary(out) + "\n")
         if path.exists():
             continue
         print(f"{case} ...", flush=True)

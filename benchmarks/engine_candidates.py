@@ -11,7 +11,9 @@ steps (200 for vmap and compile), all in one process:
 * ``B stacked 1grp``: per-layer ``(K, n_in, n_out)`` parameters, ``torch.baddbmm``, autograd, one Adam group;
 * ``A member leaves Kgrp``: each member's own leaf parameters stacked per step, one Adam group per member;
 * ``D vmap``: ``torch.func.stack_module_state`` + ``functional_call`` + ``vmap``, autograd;
-* ``F compile``: ``torch.compile`` of B's forward and loss (CPU inductor).
+* ``F compile``: ``torch.compile`` of B's forward and loss (CPU inductor);
+* ``G hand no graph``: B's parameters, the forward under ``torch.no_grad`` keeping the activations and the
+  backward written by hand (no autograd graph at all), gradients assigned, the same Adam step.
 
 Printed in microseconds per step. (A hand-written backward as a custom ``autograd.Function`` was measured
 the same way and was no faster than autograd's: see ``benchmarks/RESULTS.md``.)
@@ -50,6 +52,19 @@ def run(K):
     def s():
         opt.zero_grad(); l=(((fwd(Ws,Bs)-y)**2)*w).sum(2).mean(1).sum(); l.backward(); opt.step()
     res['B stacked 1grp']=bench(s)
+    # G the same step with the backward by hand and no graph
+    def s():
+        with torch.no_grad():
+            hs=[X]
+            for W,B,a in zip(Ws,Bs,acts): hs.append(act(torch.baddbmm(B,hs[-1],W),a))
+            g=2*(hs[-1]-y)*w/32
+            for i in range(3,-1,-1):
+                if acts[i]=='relu': g=g*(hs[i+1]>0)
+                elif acts[i]=='tanh': g=g*(1-hs[i+1]**2)
+                Ws[i].grad=torch.bmm(hs[i].transpose(1,2),g); Bs[i].grad=g.sum(1,keepdim=True)
+                if i: g=torch.bmm(g,Ws[i].transpose(1,2))
+        opt.step()
+    res['G hand no graph']=bench(s)
     # A per-member leaves, K groups
     Wm=[[torch.randn(a,b,requires_grad=True) for a,b in zip(sizes,sizes[1:])] for k in range(K)]
     Bm=[[torch.randn(1,b,requires_grad=True) for b in sizes[1:]] for k in range(K)]
