@@ -2,7 +2,7 @@
 
 Usage::
 
-    python benchmarks/soft_history.py [--out benchmarks/results/auto_vs_stock/soft_history.json]
+    python benchmarks/soft_history.py [--out benchmarks/results/auto_vs_stock/soft_history.json] [--force]
 
 The press-grouped 5-fold of ``benchmarks/auto_vs_stock.py``'s ``soft_grouped`` case
 (:func:`ftcal.make_soft_sensor_dataset`, 418 rows in recording order, whole presses held out). Every model
@@ -24,13 +24,14 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
 
 import numpy as np
 from sklearn.model_selection import GroupKFold
 
 import ftcal
 from ftcal.models import stock_baselines
+
+from _output import add_output_arguments, new_output
 
 TAUS = (1.0, 2.0, 4.0, 8.0, 16.0)
 
@@ -62,12 +63,13 @@ class WithHistory:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="benchmarks/results/auto_vs_stock/soft_history.json")
+    add_output_arguments(parser, "benchmarks/results/auto_vs_stock/soft_history.json")
     args = parser.parse_args()
+    out = new_output(args, parser)
     d = ftcal.make_soft_sensor_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
     lagged = {tau: history(raw, tau) for tau in TAUS}  # over the whole recording, as a deployed sensor would see it
-    names = ["polynomial(degree=3, ridge=0.01)", *stock_baselines(8), "polynomial + history"]
+    names = ["polynomial(degree=3, ridge=0.01)", *stock_baselines(raw.shape[1]), "polynomial + history"]
     pred, chosen = {n: np.empty_like(wrench) for n in names}, []
     for train, test in GroupKFold(5).split(raw, groups=groups):
         inner = list(GroupKFold(5).split(raw[train], groups=groups[train]))
@@ -85,14 +87,14 @@ def main() -> None:
             raw[train], wrench[train], lagged[tau][train]).predict(raw[test], lagged[tau][test])
         static = ftcal.PolynomialCalibrator(degree=3, ridge=0.01, alpha=alpha).fit(raw[train], wrench[train])
         pred[names[0]][test] = static.predict(raw[test])
-        for name, model in stock_baselines(8, random_state=0).items():
+        for name, model in stock_baselines(raw.shape[1], random_state=0).items():
             pred[name][test] = model.fit(raw[train], wrench[train]).predict(raw[test])
     rmse = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
     best_stock = min(v for n, v in rmse.items() if n.startswith("sk_"))
     result = {"rmse": rmse, "best_stock": best_stock, "tau_chosen_per_fold": chosen,
               "history_over_best_stock": rmse["polynomial + history"] / best_stock,
               "static_over_best_stock": rmse[names[0]] / best_stock}
-    Path(args.out).write_text(json.dumps(result, indent=1))
+    out.write_text(json.dumps(result, indent=1))
     print("| model | RMSE (eq. 18) [N] | / best stock |\n|---|---|---|")
     for name, value in rmse.items():
         print(f"| {name} | {value:.4f} | {value / best_stock:.3f} |")

@@ -18,6 +18,7 @@ from ftcal import (
     PolynomialCalibrator,
 )
 from ftcal.core._model_selection import calibration_folds
+from ftcal.models._auto import _offsets_identifiable
 from ftcal.calibrators._zero_load import estimate_zero_reading
 from ftcal.cli import main
 
@@ -313,3 +314,10 @@ def test_auto_tries_one_offset_per_group_only_with_groups_and_picks_it_where_pos
                           baselines=False, stack=False).fit(raw, w, groups=groups)
     assert auto.best_name_ == "linear(group offsets)"
     assert auto.best_estimator_.group_offsets is True
+    # without 3 groups within which the loads vary, the default candidates have no twins (they could not be judged)
+    assert _offsets_identifiable(w, groups)
+    assert not _offsets_identifiable(w, groups % 2)  # two groups: a grouped CV trains on one
+    constant = w.copy()
+    for g in range(10):
+        constant[groups == g] = constant[groups == g][0]
+    assert not _offsets_identifiable(constant, groups)

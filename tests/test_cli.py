@@ -172,6 +172,14 @@ def test_fit_unknown_param_names_the_known_ones(tmp_path, affine_dir, capsys):
     assert "max_epochs" in line and "ridge" in line
 
 
+def test_fit_group_offsets_need_a_group_column(tmp_path, affine_dir, capsys):
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "polynomial", "--param", "group_offsets=true",
+            "--out", str(tmp_path / "out")]
+    assert main(argv) == 2
+    assert "group_offsets=true needs one group" in one_error_line(capsys)
+    assert not (tmp_path / "out").exists()  # nothing written
+
+
 def test_fit_tare_of_wrong_length_is_refused(tmp_path, affine_dir, capsys):
     argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--tare", "1,2,3", "--out", str(tmp_path)]
     assert main(argv) == 2

@@ -92,9 +92,10 @@ def test_group_offsets_recover_the_map_that_offsets_bias():
     assert np.abs(plain.predict(test_raw) - test_wrench).max() > 0.1  # the bias the offsets cause (O(1) here)
 
 
-def test_group_offsets_without_groups_change_nothing_and_model_files_keep_them(tmp_path):
+def test_group_offsets_without_groups_warn_and_change_nothing_and_model_files_keep_them(tmp_path):
     raw, wrench, groups, _ = offset_sensor()
-    a = PolynomialCalibrator(degree=2, ridge=0.01, group_offsets=True).fit(raw, wrench)
+    with pytest.warns(UserWarning, match="group_offsets=True but fit.. got no groups"):
+        a = PolynomialCalibrator(degree=2, ridge=0.01, group_offsets=True).fit(raw, wrench)
     b = PolynomialCalibrator(degree=2, ridge=0.01).fit(raw, wrench)
     np.testing.assert_array_equal(a.predict(raw), b.predict(raw))
     fitted = PolynomialCalibrator(degree=2, ridge=0.01, group_offsets=True).fit(raw, wrench, groups=groups)
@@ -114,3 +115,26 @@ def test_group_offsets_refuse_groups_within_which_loads_do_not_vary(make_groups)
             wrench[groups == g] = wrench[groups == g][0]
     with pytest.raises(CalibrationInputError, match="loads vary within the .* groups by 0.00%"):
         PolynomialCalibrator(degree=1, group_offsets=True).fit(raw, wrench, groups=make_groups(groups))
+
+
+def test_group_offsets_tare_is_the_mean_groups_so_a_retare_stays_exact():
+    """The estimated tare is the mean group's reading at zero load (the offsets sum to zero here: the sensor's own
+    tare, 2.0 on every channel), so the model outputs zero there and a re-tare to readings at zero load is exact."""
+    raw, wrench, groups, mixing = offset_sensor()
+    model = PolynomialCalibrator(degree=1, group_offsets=True, alpha=1.0).fit(raw, wrench, groups=groups)
+    np.testing.assert_allclose(model.zero_reading_, 2.0, atol=1e-8)
+    np.testing.assert_allclose(model.predict(model.zero_reading_[None]), 0.0, atol=1e-8)
+    shifted = np.full((5, 6), 2.5)  # the sensor later reads 2.5 at zero load
+    model.retare(shifted)
+    np.testing.assert_allclose(model.predict(shifted), 0.0, atol=1e-8)
+
+
+def test_group_offsets_take_a_wrench_of_rank_three():
+    """One tool at a fixed lever arm gives torques c x F: a wrench of rank 3, loads still varying within every pose."""
+    rng = np.random.default_rng(4)
+    groups = np.repeat(np.arange(6), 40)
+    force = rng.normal(size=(6, 3))[groups] * 5.0 + rng.normal(size=(240, 3))
+    wrench = np.hstack([force, np.cross([0.0, 0.0, 0.1], force)])
+    raw = wrench @ rng.normal(size=(6, 6)).T + rng.normal(size=(6, 6))[groups] + 0.001 * rng.normal(size=(240, 6))
+    model = PolynomialCalibrator(degree=1, group_offsets=True, alpha=1.0).fit(raw, wrench, groups=groups)
+    assert np.isfinite(model.predict(raw)).all()

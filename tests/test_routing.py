@@ -168,7 +168,8 @@ def test_hybrid_inner_cv_gets_the_groups_inside_the_temperature_wrapper():
     (np.full(60, np.nan), r"groups holds NaN"),
 ])
 def test_calibrators_that_take_groups_refuse_bad_groups_before_fitting(calibrator, groups, message):
-    """Groups of the wrong length are a caller's bug: refused by every calibrator that takes groups, before any fit.
+    """Groups of the wrong length are a caller's bug: refused by every calibrator that takes groups, once X and y are
+    checked and before the model is fitted.
     Labels that cannot split (one group, NaN) are refused by those that use them with their parameters (the GP's
     std, the hybrid's ridge="auto", group offsets) and ignored by those that do not (a fixed ridge, no offsets)."""
     raw, w, *_ = affine_sensor_data(n_samples=60)
@@ -177,7 +178,7 @@ def test_calibrators_that_take_groups_refuse_bad_groups_before_fitting(calibrato
     if uses or len(groups) != 60:
         with pytest.raises(ValueError, match=message):
             calibrator.fit(raw, w, groups=groups)
-        assert not hasattr(calibrator, "n_features_in_")  # nothing was fitted
+        assert not {"coef_", "dual_coef_"} & set(vars(calibrator))  # the model itself was not fitted
     else:
         fitted = clone(calibrator).fit(raw, w, groups=groups)
         np.testing.assert_array_equal(fitted.predict(raw), clone(calibrator).fit(raw, w).predict(raw))

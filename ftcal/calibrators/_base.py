@@ -297,10 +297,13 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
 
 
 class GroupsFit:
-    """Mixin of a calibrator that uses the rows' groups inside its ``fit`` (its ``_fit`` reads ``_fit_groups``):
-    ``fit(X, y, groups=None)``, the groups requested through metadata routing by default, like a group splitter."""
+    """Mixin of a calibrator that uses the rows' groups inside its ``fit`` (its ``_fit`` reads ``_fit_groups``,
+    checked labels, or None when its parameters do not use them): ``fit(X, y, groups=None)``, the groups requested
+    through metadata routing by default, like a group splitter."""
 
     __metadata_request__fit = {"groups": True}
+    #: What the groups are for, and the fix, in the one-group error (see :func:`check_groups`).
+    _groups_purpose = ("grouped cross-validation", "pass groups=None for random folds")
 
     def _uses_groups(self) -> bool:
         """Whether this fit uses the groups with these parameters (else they are only checked for their length)."""
@@ -312,19 +315,23 @@ class GroupsFit:
         Parameters
         ----------
         groups : array-like of shape (n,) or None
-            Group of each row (pose, load configuration, recording): held out together wherever the calibrator
-            judges itself on rows it did not see (see the class).
+            Group of each row (pose, load configuration, recording), used as the class describes; checked after
+            ``X`` and ``y`` and before any fitting (their length always, their labels when they are used).
 
         Returns
         -------
         self
         """
-        # checked before the fit's work (a bad X is refused by fit itself): always their length, and the rest
-        # (at least two groups, labels) when this calibrator uses them with its parameters
-        if groups is not None and hasattr(X, "__len__") and (self._uses_groups() or np.shape(groups) != (len(X),)):
-            check_groups(groups, len(X))
-        self._fit_groups = groups if self._uses_groups() else None
+        self._fit_groups = groups
         try:
             return super().fit(X, y)
         finally:
             del self._fit_groups
+
+    def _prepare_fit(self, X: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        X, y = super()._prepare_fit(X, y)
+        purpose, fix = self._groups_purpose
+        groups = check_groups(self.__dict__.get("_fit_groups"), len(X), labels=self._uses_groups(), purpose=purpose,
+                              fix=fix)
+        self._fit_groups = groups if self._uses_groups() else None
+        return X, y

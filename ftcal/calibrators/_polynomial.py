@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import warnings
 from numbers import Integral, Real
 
 import numpy as np
@@ -13,8 +14,7 @@ from sklearn.preprocessing import PolynomialFeatures
 from ..core._memory import check_allocation
 from ._base import BaseCalibrator, GroupsFit
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import check_groups
-from ._ridge import ridge_least_squares
+from ._ridge import group_means, ridge_least_squares
 
 __all__ = ["PolynomialCalibrator"]
 
@@ -22,6 +22,33 @@ __all__ = ["PolynomialCalibrator"]
 _PREDICT_CHUNK = 8192
 #: Largest batch of monomials ``predict`` builds at once [bytes].
 _PREDICT_BYTES = 256 * 2**20
+
+
+#: Least share (in standard deviation) of the wrench's spread, along every direction in which it varies, that must
+#: vary *within* the groups for ``group_offsets``: below it an offset and a load are told apart by less than the
+#: ~1 % accuracy of a good reference load, i.e. not at all.
+MIN_WITHIN_FRACTION = 0.01
+
+
+def within_group_load_fraction(y: NDArray[np.float64], groups: NDArray) -> float:
+    """The smallest share of the wrench's spread (standard deviation) that varies within the groups, over the
+    directions in which the wrench varies at all (a wrench of rank < 6, e.g. one tool's torques ``c x F``, is fine).
+
+    Examples
+    --------
+    >>> y = np.array([[0.0], [1.0], [10.0], [11.0]])
+    >>> round(within_group_load_fraction(y, np.array([0, 0, 1, 1])), 4)  # squares: 1 within, 101 in all
+    0.0995
+    """
+    z = y - y.mean(axis=0)
+    values, vectors = np.linalg.eigh(z.T @ z)
+    keep = values > 1e-9 * max(values.max(initial=0.0), np.finfo(float).tiny)
+    if not keep.any():
+        return 0.0
+    whitened = z @ vectors[:, keep] / np.sqrt(values[keep])  # unit spread along each varying direction
+    means, index = group_means(whitened, groups)
+    within = whitened - means[index]
+    return float(np.sqrt(max(np.linalg.eigvalsh(within.T @ within).min(), 0.0)))
 
 
 class PolynomialCalibrator(GroupsFit, BaseCalibrator):
@@ -69,9 +96,11 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         mistaken for the load a pose carries, e.g. its tool's weight), and
         ``predict`` uses the mean of the groups' intercepts. It needs readings
         that vary within groups in every channel direction (else an error says
-        so); without groups it changes nothing. ``degree=1`` with it is the LTM
-        with group offsets. :class:`~ftcal.AutoCalibrator` tries it when given
-        groups.
+        so); without groups it changes nothing (with a warning). Every group
+        weighs the same in the mean offset, whatever its number of rows; the
+        estimated tare (``zero_reading=None``) is the mean group's too, so a
+        re-tare stays exact. ``degree=1`` with it is the LTM with group
+        offsets. :class:`~ftcal.AutoCalibrator` tries it when given groups.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
@@ -119,6 +148,8 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    _groups_purpose = ("one offset per group", "fit without group_offsets")
+
     def _uses_groups(self) -> bool:
         return bool(self.group_offsets)
 
@@ -142,33 +173,27 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
             "lower degree (degree=1 is the LTM), use fewer channels, or try AxisNonlinearCalibrator",
         )
         ridge = float(self.ridge)
+        groups = getattr(self, "_fit_groups", None)
+        if self.group_offsets and groups is None:
+            warnings.warn("PolynomialCalibrator: group_offsets=True but fit() got no groups, so the fit has one "
+                          "offset for all rows. Pass fit(X, y, groups=...) (a pose or session per row).",
+                          UserWarning, stacklevel=4)
+        if groups is not None:
+            fraction = within_group_load_fraction(y, groups)
+            if fraction < MIN_WITHIN_FRACTION:
+                raise CalibrationInputError(
+                    f"group_offsets=True: along some direction of the wrench, the loads vary within the "
+                    f"{np.unique(groups).size} groups by {fraction:.2%} of their spread across all rows (at least "
+                    f"{MIN_WITHIN_FRACTION:.0%} is needed), so a group's offset cannot be told from its load. Fix: fit "
+                    "without group_offsets, or record loads that vary within each group (pose).")
+            if self.zero_reading is None:  # the tare of the mean group, as the intercept is (re-tare stays exact)
+                self.zero_reading_ = ridge_least_squares(y, X, 0.0, n_unpenalised=y.shape[1], groups=groups)[1]
         xc = X - self.zero_reading_
         scale = np.abs(xc).max(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
         features = self._monomials().transform(xc / self.input_scale_)
-        groups = check_groups(getattr(self, "_fit_groups", None), n)
-        if groups is not None:
-            self._check_within_group_loads(y, groups)
         self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * len(y), n_unpenalised=X.shape[1],
                                                           groups=groups)
-
-    @staticmethod
-    def _check_within_group_loads(y: NDArray[np.float64], groups: NDArray) -> None:
-        """Refuse groups within which some direction of the wrench barely varies (under 1 % of its spread across
-        all rows, in standard deviation): the map along it would be learnt from offsets, i.e. not at all."""
-        std = y.std(axis=0)
-        z = (y - y.mean(axis=0))[:, std > 0] / std[std > 0]
-        index = np.unique(groups, return_inverse=True)[1].ravel()
-        means = np.stack([z[index == k].mean(axis=0) for k in range(index.max() + 1)])
-        total, within = z.T @ z, (z - means[index]).T @ (z - means[index])
-        whiten = np.linalg.inv(np.linalg.cholesky(total + 1e-12 * np.trace(total) * np.eye(len(total))))
-        fraction = np.linalg.eigvalsh(whiten @ within @ whiten.T).min(initial=1.0)
-        if fraction < 1e-4:
-            raise CalibrationInputError(
-                f"group_offsets=True: along some direction of the wrench, the loads vary within the "
-                f"{index.max() + 1} groups by {np.sqrt(max(fraction, 0.0)):.2%} of their spread across all rows (at "
-                "least 1 % is needed), so a group's offset cannot be told from its load. Fix: fit without "
-                "group_offsets, or record loads that vary within each group (pose).")
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         monomials = self._monomials()

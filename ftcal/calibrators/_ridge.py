@@ -23,7 +23,23 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ridge_least_squares"]
+__all__ = ["ridge_least_squares", "group_means"]
+
+
+def group_means(values: NDArray[np.float64], groups: NDArray) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Each group's mean row of ``values`` (groups in sorted label order) and each row's group index.
+
+    Examples
+    --------
+    >>> means, index = group_means(np.array([[1.0], [3.0], [10.0]]), np.array(["b", "b", "a"]))
+    >>> means.ravel().tolist(), index.tolist()
+    ([10.0, 2.0], [1, 1, 0])
+    """
+    from scipy.sparse import csr_matrix
+
+    index = np.unique(groups, return_inverse=True)[1].ravel()
+    members = csr_matrix((np.ones(len(index)), (index, np.arange(len(index)))))  # groups x rows
+    return np.asarray(members @ values) / np.asarray(members.sum(axis=1)), index
 
 
 def ridge_least_squares(
@@ -51,12 +67,8 @@ def ridge_least_squares(
         feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
         centred, target = features - feature_mean, y - target_mean
     else:  # each group centred on its own means; the intercept: the mean over the groups of theirs
-        from scipy.sparse import csr_matrix
-
-        index = np.unique(groups, return_inverse=True)[1].ravel()
-        members = csr_matrix((np.ones(len(index)), (index, np.arange(len(index)))))  # groups x rows
-        counts = np.asarray(members.sum(axis=1))
-        feature_means, target_means = (members @ features) / counts, (members @ y) / counts
+        feature_means, index = group_means(features, groups)
+        target_means = group_means(y, groups)[0]
         centred, target = features - feature_means[index], y - target_means[index]
         feature_mean, target_mean = feature_means.mean(axis=0), target_means.mean(axis=0)
     n_penalised = n_features - n_unpenalised

@@ -123,6 +123,9 @@ def run(args: argparse.Namespace) -> int:
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
+    if params.get("group_offsets") and data.group is None:
+        raise CliError(f"--param group_offsets=true needs one group (pose, session) per row, and {args.dataset} has "
+                       "no group column; add one, or drop the parameter")
     if args.schedule is None:
         args.schedule = "short" if args.model == "auto" else "thesis"
     estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed, **params)

@@ -24,8 +24,13 @@ from ._exceptions import CalibrationInputError
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se"]
 
 
-def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
+def check_groups(groups: ArrayLike | None, n_samples: int, *, labels: bool = True,
+                 purpose: str = "grouped cross-validation", fix: str = "pass groups=None for random folds"
+                 ) -> NDArray | None:
     """Validate ``groups`` (one label per row, at least two distinct labels); ``None`` passes through.
+
+    ``labels=False`` checks the shape only (groups a calibrator does not use); ``purpose`` and ``fix`` word the
+    one-group error for what the groups are for.
 
     Examples
     --------
@@ -38,11 +43,17 @@ def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
     """
     if groups is None:
         return None
-    g = np.asarray(groups)
+    try:
+        g = np.asarray(groups)
+    except ValueError:  # ragged nested sequences
+        raise CalibrationInputError(f"groups must be one label per row of X, shape ({n_samples},); got a ragged "
+                                    "nested sequence.") from None
     if g.ndim != 1 or g.shape[0] != n_samples:
         raise CalibrationInputError(
             f"groups must have shape ({n_samples},), one label per row of X; got shape {g.shape}."
         )
+    if not labels:
+        return g
     if g.dtype.kind == "f" and not np.isfinite(g).all():
         raise CalibrationInputError("groups holds NaN or inf; give every row a group label.")
     if g.dtype.kind not in "biuUS":  # objects (None, mixed types), floats, complex, dates: no label order
@@ -58,11 +69,12 @@ def check_groups(groups: ArrayLike | None, n_samples: int) -> NDArray | None:
             raise CalibrationInputError(
                 f"groups must hold integer or string labels (one per row); got dtype {g.dtype} "
                 f"(first label {first!r}). Fix: number the groups 0, 1, 2, ...")
-    labels = np.unique(g)
-    if labels.size < 2:
+    names = np.unique(g)
+    if names.size < 2:
         raise CalibrationInputError(
-            f"groups holds one group only (label {labels[0]}) for the {n_samples} rows; grouped cross-validation "
-            "needs at least 2 groups (e.g. poses or load configurations). Fix: pass groups=None for random folds."
+            f"groups holds {'one group only (label ' + str(names[0]) + ')' if names.size else 'no label'} for the "
+            f"{n_samples} rows; {purpose} needs at least "
+            f"2 groups (e.g. poses or load configurations). Fix: {fix}."
         )
     return g
 

@@ -38,9 +38,9 @@ LIGHT_KERNEL_ROWS = 200
 def default_candidates(schedule: str = "short", grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
     """The candidates of :class:`AutoCalibrator`, in the documented complexity order (simplest first).
 
-    ``grouped`` (the rows come with groups): each of ``linear`` and ``polynomial(degree=2, ridge=0.01)`` is
-    followed by its twin with one offset per group (``group_offsets=True``, see
-    :class:`~ftcal.PolynomialCalibrator`).
+    ``grouped`` (the rows come in groups, at least 3, within which the loads vary): each of ``linear`` and
+    ``polynomial(degree=2, ridge=0.01)`` is followed by its twin with one offset per group
+    (``group_offsets=True``, see :class:`~ftcal.PolynomialCalibrator`).
 
     Examples
     --------
@@ -66,6 +66,15 @@ def default_candidates(schedule: str = "short", grouped: bool = False) -> list[t
     for name in ("directional", "comparative"):
         candidates.append((name, make_calibrator(name, schedule=schedule, random_state=0)))
     return candidates
+
+
+def _offsets_identifiable(y: NDArray[np.float64], groups: NDArray | None) -> bool:
+    """Whether one offset per group can be told from the loads: at least 3 groups (a grouped CV's training folds
+    then hold two) within which the loads vary (:func:`~ftcal.calibrators._polynomial.within_group_load_fraction`)."""
+    from ..calibrators._polynomial import MIN_WITHIN_FRACTION, within_group_load_fraction
+
+    return groups is not None and np.unique(groups).size >= 3 and \
+        within_group_load_fraction(y, groups) >= MIN_WITHIN_FRACTION
 
 
 def with_alpha_and_tare(estimator, alpha: float, zero_reading):
@@ -454,10 +463,10 @@ class AutoCalibrator(BaseCalibrator):
        calibration does on poses it has not seen; without, shuffled k-fold;
     2. scores every candidate on those folds, **in this complexity order**
        (simplest first): ``linear`` (the LTM); ``polynomial`` of degree 2 and 3,
-       each with ridge 1e-2 and 1e-4 (with ``groups``, the LTM and the degree-2
-       polynomial with ridge 1e-2 are each followed by a twin with one offset
-       per group, ``group_offsets=True``: for poses or sessions whose readings
-       shift as a whole); ``axis_nonlinear`` (the hybrid);
+       each with ridge 1e-2 and 1e-4 (with ``groups``, at least 3 within which
+       the loads vary, the LTM and the degree-2 polynomial with ridge 1e-2 are
+       each followed by a twin with one offset per group, ``group_offsets=True``:
+       for poses or sessions whose readings shift as a whole); ``axis_nonlinear`` (the hybrid);
        ``gaussian_process`` (its mean and kernel chosen once on all rows by
        marginal likelihood, its hyperparameters refitted on every training
        fold); ``directional`` and ``comparative`` (the ``schedule``'s epochs;
@@ -599,7 +608,7 @@ class AutoCalibrator(BaseCalibrator):
         self._candidates()  # checked before the data
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
-        candidates = self._candidates(grouped=groups is not None)
+        candidates = self._candidates(grouped=_offsets_identifiable(y, groups))
         if groups is None and len(X) < self.cv:
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
