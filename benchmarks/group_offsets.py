@@ -13,7 +13,6 @@ beside the stock baselines a user would try first (the kernel ones on 1000 rows)
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
@@ -22,14 +21,11 @@ from sklearn.model_selection import GroupKFold
 import ftcal
 from ftcal.models import stock_baselines
 
-from _output import add_output_arguments, new_output
+from _output import parse_output
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_output_arguments(parser, "benchmarks/results/auto_vs_stock/group_offsets.json")
-    args = parser.parse_args()
-    out = new_output(args, parser)
+    out = parse_output(__doc__, "benchmarks/results/auto_vs_stock/group_offsets.json")
     d = ftcal.make_robot_held_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
     models = {f"polynomial(degree={k}{', ridge=0.01' if k > 1 else ''}{', group offsets' if offsets else ''})":

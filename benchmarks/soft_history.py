@@ -22,7 +22,6 @@ This is an experiment, not an ftcal model: a history-aware calibrator needs read
 
 from __future__ import annotations
 
-import argparse
 import json
 
 import numpy as np
@@ -31,7 +30,7 @@ from sklearn.model_selection import GroupKFold
 import ftcal
 from ftcal.models import stock_baselines
 
-from _output import add_output_arguments, new_output
+from _output import parse_output
 
 TAUS = (1.0, 2.0, 4.0, 8.0, 16.0)
 
@@ -62,10 +61,7 @@ class WithHistory:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    add_output_arguments(parser, "benchmarks/results/auto_vs_stock/soft_history.json")
-    args = parser.parse_args()
-    out = new_output(args, parser)
+    out = parse_output(__doc__, "benchmarks/results/auto_vs_stock/soft_history.json")
     d = ftcal.make_soft_sensor_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
     lagged = {tau: history(raw, tau) for tau in TAUS}  # over the whole recording, as a deployed sensor would see it
