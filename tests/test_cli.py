@@ -180,6 +180,15 @@ def test_fit_group_offsets_need_a_group_column(tmp_path, affine_dir, capsys):
     assert not (tmp_path / "out").exists()  # nothing written
 
 
+def test_an_existing_output_file_names_the_option_of_its_command(tmp_path, affine_dir, capsys):
+    target = tmp_path / "m.onnx"
+    target.write_text("mine")
+    model = affine_dir / "models" / "linear.model.npz"
+    assert main(["export", str(model), "--output", str(target)]) == 2
+    assert "choose another --output" in one_error_line(capsys)
+    assert target.read_text() == "mine"
+
+
 def test_fit_tare_of_wrong_length_is_refused(tmp_path, affine_dir, capsys):
     argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--tare", "1,2,3", "--out", str(tmp_path)]
     assert main(argv) == 2

@@ -414,7 +414,7 @@ class OutputPlan:
         When ``out_dir`` is a file, or when a planned file exists and ``force`` is false.
     """
 
-    def __init__(self, out_dir: Path, names: Iterable[str], force: bool) -> None:
+    def __init__(self, out_dir: Path, names: Iterable[str], force: bool, option: str = "--out") -> None:
         self.out_dir = Path(out_dir)
         self.names = list(names)
         self.force = force
@@ -431,7 +431,7 @@ class OutputPlan:
                 more = f" (and {len(taken) - 3} more)" if len(taken) > 3 else ""
                 raise CliError(
                     f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; "
-                    "pass --force to overwrite or choose another --out"
+                    f"pass --force to overwrite or choose another {option}"
                 )
 
     @classmethod
@@ -440,7 +440,7 @@ class OutputPlan:
         if str(output) == "-":
             return None
         out = Path(output)
-        return cls(out.parent if str(out.parent) else Path("."), [out.name], force)
+        return cls(out.parent if str(out.parent) else Path("."), [out.name], force, option="--output")
 
     def path(self, name: str) -> Path:
         """The path of planned file ``name``; creates ``out_dir`` on first use."""
