@@ -94,9 +94,10 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         on the variation *within* the groups only (one free intercept per
         group, the fixed-effects estimator: an offset can no longer be
         mistaken for the load a pose carries, e.g. its tool's weight), and
-        ``predict`` uses the mean of the groups' intercepts. It needs readings
-        that vary within groups in every channel direction (else an error says
-        so); without groups it changes nothing (with a warning). Every group
+        ``predict`` uses the mean of the groups' intercepts. It needs loads
+        that vary within the groups along every direction the wrench takes
+        (:data:`MIN_WITHIN_FRACTION`; else an error says so); without groups it
+        changes nothing (with a warning). Every group
         weighs the same in the mean offset, whatever its number of rows; the
         estimated tare (``zero_reading=None``) is the mean group's too, so a
         re-tare stays exact. ``degree=1`` with it is the LTM with group
