@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, Options, StrOptions
 
 from ._base import BaseCalibrator, GroupsFit
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import calibration_folds, check_groups, grouped_subsample, simplest_within_one_se
+from ..core._model_selection import calibration_folds, grouped_subsample, simplest_within_one_se
 from ._linear import affine_fit
 from ._ridge import ridge_least_squares
 from ..core._wrench import scale_torques, unscale_torques
@@ -261,7 +261,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         a correction is kept only when the data show that it pays.
         """
         seed = 0 if self.random_state is None else self.random_state
-        groups = check_groups(getattr(self, "_fit_groups", None), len(ys))
+        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
         rows = grouped_subsample(np.arange(len(ys)), groups, RIDGE_SELECTION_ROWS, seed)  # large data: a subsample
         block, z, ys = block[rows], z[rows], ys[rows]
         groups = None if groups is None else groups[rows]

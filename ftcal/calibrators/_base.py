@@ -330,8 +330,7 @@ class GroupsFit:
 
     def _prepare_fit(self, X: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         X, y = super()._prepare_fit(X, y)
-        purpose, fix = self._groups_purpose
-        groups = check_groups(self.__dict__.get("_fit_groups"), len(X), labels=self._uses_groups(), purpose=purpose,
-                              fix=fix)
-        self._fit_groups = groups if self._uses_groups() else None
+        uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
+        groups = check_groups(self.__dict__.get("_fit_groups"), len(X), labels=uses, purpose=purpose, fix=fix)
+        self._fit_groups = groups if uses else None
         return X, y

@@ -19,7 +19,6 @@ from threadpoolctl import threadpool_limits
 from ._base import BaseCalibrator, GroupsFit
 from ..core._exceptions import ModelFileError
 from ..core._memory import check_allocation
-from ..core._model_selection import check_groups
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -313,7 +312,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
         self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
         self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
-        groups = check_groups(getattr(self, "_fit_groups", None), n)
+        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
         basis = np.hstack([np.ones((m, 1)), xc_sub]) if mean == "linear" else np.ones((m, 1))
         with threadpool_limits(1, user_api="blas"):
             z = [_left_out_z(g, basis, None if groups is None else groups[rows]) for g in regressors]

@@ -67,8 +67,8 @@ def ridge_least_squares(
         feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
         centred, target = features - feature_mean, y - target_mean
     else:  # each group centred on its own means; the intercept: the mean over the groups of theirs
-        feature_means, index = group_means(features, groups)
-        target_means = group_means(y, groups)[0]
+        means, index = group_means(np.hstack([features, y]), groups)  # one pass over the rows
+        feature_means, target_means = means[:, :n_features], means[:, n_features:]
         centred, target = features - feature_means[index], y - target_means[index]
         feature_mean, target_mean = feature_means.mean(axis=0), target_means.mean(axis=0)
     n_penalised = n_features - n_unpenalised
