@@ -1,4 +1,4 @@
-"""Issue 19: how much of the soft sensor's remaining error is its load history, i.e. out of reach of any static map.
+"""Issue 19: the soft sensor's load history, and ftcal's ``HistoryCalibrator`` against the stock baselines.
 
 Usage::
 
@@ -6,23 +6,27 @@ Usage::
 
 The press-grouped 5-fold of ``benchmarks/auto_vs_stock.py``'s ``soft_grouped`` case
 (:func:`ftcal.make_soft_sensor_dataset`, 418 rows in recording order, whole presses held out). Every model
-is fitted on the training presses and scored (eq. 18) on the held-out ones:
+is fitted on the training presses (in recording order) and predicts the held-out presses as one recording
+(in recording order, starting at rest: what ``cross_val_predict`` gives; no reading of a training press
+feeds the history of a held-out one). Scored with eq. 18:
 
-* the static models: ftcal's ``polynomial(degree=3, ridge=0.01)`` (what ``auto`` chooses here) and the five
-  stock scikit-learn baselines;
-* **a first-order history term** on top of that polynomial: the readings' exponential moving average over the
-  rows *before* each row (time constant ``tau`` rows, in recording order; readings only, no reference
-  wrench, so nothing a deployed sensor would not have), minus the current reading, mapped linearly onto
-  the polynomial's residual. ``tau`` is chosen from ``(1, 2, 4, 8, 16)`` rows by an inner press-grouped
-  5-fold on the training presses alone, so the simulator's own time constant (3 rows) is not given.
-
-This is an experiment, not an ftcal model: a history-aware calibrator needs readings in time order at
-``predict`` (a stream with state, no ONNX graph), an API decision left to the owner (``benchmarks/RESULTS.md``).
+* the static models: ftcal's ``polynomial(degree=3, ridge=0.01)`` (what ``auto`` chooses here), ``auto``
+  itself and the five stock scikit-learn baselines;
+* **ftcal's history term** (:class:`ftcal.HistoryCalibrator`, ``ftcal fit --history``): the static model
+  plus a linear map of :func:`ftcal.reading_history` of the readings (their moving average over the rows
+  before each row, minus the row: readings only, nothing a deployed sensor lacks), fitted jointly by
+  backfitting, its time constant chosen from ``(1, 2, 4, 8, 16)`` rows by an inner press-grouped CV on the
+  training presses alone (the simulator's own, 3 rows, is not given), or no term when it does not pay;
+  on the polynomial, and on ``auto`` (``HistoryCalibrator(AutoCalibrator())``: ``auto`` chooses the static
+  model once, then the history term is fitted with it);
+* **the stock baselines given the same history columns** (``[X, reading_history(X, tau)]`` with the ``tau``
+  ftcal chose in that fold): what a user who thought of the feature would get for free.
 """
 
 from __future__ import annotations
 
 import json
+import time
 
 import numpy as np
 from sklearn.model_selection import GroupKFold
@@ -32,69 +36,60 @@ from ftcal.models import stock_baselines
 
 from _output import parse_output
 
-TAUS = (1.0, 2.0, 4.0, 8.0, 16.0)
-
-
-def history(raw: np.ndarray, tau: float) -> np.ndarray:
-    """Each row's exponential moving average of the readings before it (the first row: itself), minus the row."""
-    mean, out = raw[0].copy(), np.empty_like(raw)
-    for i, row in enumerate(raw):
-        out[i] = mean - row
-        mean += (row - mean) / tau
-    return out
-
-
-class WithHistory:
-    """``PolynomialCalibrator(3, 0.01)`` plus a linear map of ``history(raw, tau)`` onto its residual."""
-
-    def __init__(self, tau: float, alpha: float):
-        self.tau, self.alpha = tau, alpha
-
-    def fit(self, raw, wrench, lagged):
-        self.static_ = ftcal.PolynomialCalibrator(degree=3, ridge=0.01, alpha=self.alpha).fit(raw, wrench)
-        design = np.c_[lagged, np.ones(len(raw))]
-        self.coef_ = np.linalg.lstsq(design, wrench - self.static_.predict(raw), rcond=None)[0]
-        return self
-
-    def predict(self, raw, lagged):
-        return self.static_.predict(raw) + np.c_[lagged, np.ones(len(raw))] @ self.coef_
-
 
 def main() -> None:
     out = parse_output(__doc__, "benchmarks/results/auto_vs_stock/soft_history.json")
     d = ftcal.make_soft_sensor_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
-    lagged = {tau: history(raw, tau) for tau in TAUS}  # over the whole recording, as a deployed sensor would see it
-    names = ["polynomial(degree=3, ridge=0.01)", *stock_baselines(raw.shape[1]), "polynomial + history"]
-    pred, chosen = {n: np.empty_like(wrench) for n in names}, []
+    stock = list(stock_baselines(raw.shape[1]))
+    names = ["polynomial(degree=3, ridge=0.01)", "auto", *stock, "history(polynomial(degree=3, ridge=0.01))",
+             "history(auto)", *[f"{s} + history columns" for s in stock]]
+    pred = {n: np.empty_like(wrench) for n in names}
+    chosen: dict[str, list] = {"history(polynomial)": [], "history(auto)": [], "auto": [], "history(auto) static": []}
+    seconds: dict[str, list] = {n: [] for n in ("auto", "history(auto)", "history(polynomial)")}
     for train, test in GroupKFold(5).split(raw, groups=groups):
-        inner = list(GroupKFold(5).split(raw[train], groups=groups[train]))
+        X, y, g = raw[train], wrench[train], groups[train]
 
-        def inner_rmse(tau):
-            p = np.empty_like(wrench[train])
-            for a, b in inner:
-                model = WithHistory(tau, alpha).fit(raw[train][a], wrench[train][a], lagged[tau][train][a])
-                p[b] = model.predict(raw[train][b], lagged[tau][train][b])
-            return ftcal.wrench_rmse(wrench[train], p, alpha=alpha)
+        def poly():
+            return ftcal.PolynomialCalibrator(degree=3, ridge=0.01, alpha=alpha)
 
-        tau = min(TAUS, key=inner_rmse)
-        chosen.append(tau)
-        pred["polynomial + history"][test] = WithHistory(tau, alpha).fit(
-            raw[train], wrench[train], lagged[tau][train]).predict(raw[test], lagged[tau][test])
-        static = ftcal.PolynomialCalibrator(degree=3, ridge=0.01, alpha=alpha).fit(raw[train], wrench[train])
-        pred[names[0]][test] = static.predict(raw[test])
+        pred[names[0]][test] = poly().fit(X, y).predict(raw[test])
+        start = time.perf_counter()
+        auto = ftcal.AutoCalibrator(alpha=alpha, n_jobs=2, random_state=0).fit(X, y, groups=g)
+        seconds["auto"].append(time.perf_counter() - start)
+        pred["auto"][test] = auto.predict(raw[test])
+        chosen["auto"].append(auto.best_name_)
+        start = time.perf_counter()
+        hp = ftcal.HistoryCalibrator(poly(), alpha=alpha).fit(X, y, groups=g)
+        seconds["history(polynomial)"].append(time.perf_counter() - start)
+        pred[names[len(stock) + 2]][test] = hp.predict(raw[test])
+        chosen["history(polynomial)"].append(hp.tau_rows_)
+        start = time.perf_counter()
+        ha = ftcal.HistoryCalibrator(ftcal.AutoCalibrator(n_jobs=2, random_state=0), alpha=alpha).fit(X, y, groups=g)
+        seconds["history(auto)"].append(time.perf_counter() - start)
+        pred["history(auto)"][test] = ha.predict(raw[test])
+        chosen["history(auto)"].append(ha.tau_rows_)
+        chosen["history(auto) static"].append(ha.static_choice_)
+        tau = hp.tau_rows_ or 2.0  # the stock models get the time constant ftcal chose (2 rows if it chose none)
+        with_history = (np.c_[X, ftcal.reading_history(X, tau)],
+                        np.c_[raw[test], ftcal.reading_history(raw[test], tau)])
         for name, model in stock_baselines(raw.shape[1], random_state=0).items():
-            pred[name][test] = model.fit(raw[train], wrench[train]).predict(raw[test])
+            pred[name][test] = model.fit(X, y).predict(raw[test])
+        for name, model in stock_baselines(2 * raw.shape[1], random_state=0).items():
+            pred[f"{name} + history columns"][test] = model.fit(with_history[0], y).predict(with_history[1])
     rmse = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
-    best_stock = min(v for n, v in rmse.items() if n.startswith("sk_"))
-    result = {"rmse": rmse, "best_stock": best_stock, "tau_chosen_per_fold": chosen,
-              "history_over_best_stock": rmse["polynomial + history"] / best_stock,
-              "static_over_best_stock": rmse[names[0]] / best_stock}
+    best_stock = min(rmse[s] for s in stock)
+    best_stock_history = min(rmse[f"{s} + history columns"] for s in stock)
+    result = {"rmse": rmse, "best_stock": best_stock, "best_stock_with_history_columns": best_stock_history,
+              "chosen_per_fold": chosen, "fit_seconds_per_fold": seconds,
+              "history_auto_over_best_stock": rmse["history(auto)"] / best_stock,
+              "auto_over_best_stock": rmse["auto"] / best_stock,
+              "load_average": list(__import__("os").getloadavg())}
     out.write_text(json.dumps(result, indent=1))
-    print("| model | RMSE (eq. 18) [N] | / best stock |\n|---|---|---|")
+    print("| model | RMSE (eq. 18) [N] | / best stock (static) | / best stock with history columns |\n|---|---|---|---|")
     for name, value in rmse.items():
-        print(f"| {name} | {value:.4f} | {value / best_stock:.3f} |")
-    print(f"\ntau chosen per outer fold: {chosen}")
+        print(f"| {name} | {value:.4f} | {value / best_stock:.3f} | {value / best_stock_history:.3f} |")
+    print(f"\nchosen per outer fold: {chosen}\nfit seconds per fold: {seconds}")
 
 
 if __name__ == "__main__":

@@ -119,6 +119,8 @@ _PUBLIC: dict[str, str] = {
     "ToolLoad": "experiment._tool_load",
     "identify_tool_load": "experiment._tool_load",
     "TemperatureCompensatedCalibrator": "calibrators._temperature_compensation",
+    "HistoryCalibrator": "calibrators._history",
+    "reading_history": "calibrators._history",
     "ThermalDrift": "core._temperature",
     "write_run_log": "io._logs",
 }

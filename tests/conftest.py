@@ -14,6 +14,7 @@ from ftcal import (
     GaussianProcessCalibrator,
     LinearCalibrator,
     PolynomialCalibrator,
+    HistoryCalibrator,
     TemperatureCompensatedCalibrator,
 )
 from ftcal.models._auto import StackedCalibrator
@@ -34,8 +35,8 @@ TINY_SCHEDULE = dict(
 CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
                     "gaussian_process", "auto")
 #: Names of its last instances: the wrappers, in the common checks too, but whose data are not the shared affine
-#: data (a temperature column; fitted members), tested in test_sklearn_compat.py::test_wrappers_*.
-WRAPPER_KINDS = ("stacked", "temperature_compensated")
+#: data (a temperature column; fitted members; rows in time order), tested in test_sklearn_compat.py::test_wrappers_*.
+WRAPPER_KINDS = ("stacked", "temperature_compensated", "history")
 
 
 def tiny_calibrators(random_state: int = 0) -> list:
@@ -56,6 +57,7 @@ def tiny_calibrators(random_state: int = 0) -> list:
                        cv=3, baselines=False),
         StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)], weights=[0.5, 0.5]),
         TemperatureCompensatedCalibrator(LinearCalibrator()),
+        HistoryCalibrator(LinearCalibrator(), taus=(1.0, 4.0), cv=3),
     ]
 
 

@@ -64,6 +64,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="compensate thermal drift: learn per-channel offset and gain coefficients from the dataset's "
         "temperature column [deg C] in front of the calibrator",
     )
+    p.add_argument(
+        "--history", action="store_true",
+        help="add a load-history term (soft or viscoelastic sensors that creep or show hysteresis): the rows must be "
+        "in time order; its time constant is chosen by cross-validation, or no term when it does not pay "
+        "(see HistoryCalibrator); 'ftcal predict' then reads its input as one stream in time order",
+    )
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
                    help="processes that score --model auto's candidates at once (default: every core; the "
                    "choice is the same for any value)")
@@ -138,6 +144,12 @@ def run(args: argparse.Namespace) -> int:
         estimator = ftcal.TemperatureCompensatedCalibrator(
             estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
         X = data.features(temperature=True)
+    if args.history:
+        if args.temperature:
+            raise CliError("--history and --temperature cannot be combined (the history term would see the "
+                           "temperature column as a channel); drop one of them")
+        estimator = ftcal.HistoryCalibrator(
+            estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
@@ -153,6 +165,7 @@ def run(args: argparse.Namespace) -> int:
         "model": args.model,
         "schedule": args.schedule,
         "temperature_compensation": bool(args.temperature),
+        "history": bool(args.history),
         "seed": args.seed,
         "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
         "dataset": str(args.dataset),
@@ -164,6 +177,16 @@ def run(args: argparse.Namespace) -> int:
         "training_rmse": report.rmse,
         "training_report": report.to_dict(),
     }
+    if args.history:
+        summary["history_tau_rows"] = estimator.tau_rows_
+        summary["history_cv_rmse"] = {"none": estimator.cv_rmse_[0],
+                                      **{f"tau={t:g}": v for t, v in zip(estimator.taus, estimator.cv_rmse_[1:])}}
+        if estimator.static_choice_ is not None:
+            summary["chosen"] = estimator.static_choice_
+            console.info(f"auto chose {estimator.static_choice_} (the static model, before the history term)")
+        kept = "no history term" if estimator.tau_rows_ is None else f"a history term, tau = {estimator.tau_rows_:g} rows"
+        console.info(f"history: {kept} (held-out RMSE without: {estimator.cv_rmse_[0]:.4g}, best with: "
+                     f"{estimator.cv_rmse_[1:].min():.4g})")
     if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.cv_results_

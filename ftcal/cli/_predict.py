@@ -126,6 +126,8 @@ def run(args: argparse.Namespace) -> int:
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"
     beyond = [0]
+    # a load-history model reads its input as one stream in time order: the history carries across chunks
+    predict = model.stream() if hasattr(model, "stream") else model.predict
 
     def emit(out) -> int:
         total = 0
@@ -139,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
                     wrench, std = model.predict(raw, return_std=True)
                     values = np.hstack([np.asarray(wrench, dtype=float), np.asarray(std, dtype=float)])
                 else:
-                    values = np.asarray(model.predict(raw), dtype=float)
+                    values = np.asarray(predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
             if limits is not None:

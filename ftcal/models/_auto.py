@@ -546,6 +546,9 @@ class AutoCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("best_name_", "cv_results_", "best_estimator_")
+    #: Chooses a model by cross-validation: a wrapper that refits its estimator many times (the history term)
+    #: fits it once and refits the model it chose (:class:`~ftcal.HistoryCalibrator`).
+    _chooses_a_model = True
     #: Parameters of earlier versions that model files may still carry (ignored when loading): the wall-clock
     #: budget, removed because a choice must not depend on the machine's speed.
     _removed_params = ("time_budget",)

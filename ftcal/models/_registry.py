@@ -220,6 +220,7 @@ register_calibrator("auto", _Lazy("models._auto", "AutoCalibrator"), schedules={
 _WRAPPERS: tuple[tuple[str, str], ...] = (
     ("models._ensemble", "EnsembleCalibrator"),
     ("calibrators._temperature_compensation", "TemperatureCompensatedCalibrator"),
+    ("calibrators._history", "HistoryCalibrator"),
     ("models._auto", "StackedCalibrator"),
 )
 

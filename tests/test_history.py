@@ -1,0 +1,163 @@
+"""The load-history term (issue 19): ``reading_history`` and ``HistoryCalibrator``, on sensors whose physics is known.
+
+The sensor of these tests creeps: each reading sees the load plus ``k`` times the lag of the load behind its
+exponential moving average (time constant 3 rows), ``raw = A (w + k (m - w))`` with ``m - w`` =
+``reading_history(w, 3)``. To first order in ``k`` the wrench is then ``A^-1 raw - k A^-1 reading_history(raw, 3)``:
+a linear map plus a linear history term, which ``HistoryCalibrator(LinearCalibrator())`` can represent up to
+``O(k^2)``, while the LTM alone keeps the whole ``k (m - w)``.
+"""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from sklearn.model_selection import GroupKFold
+
+import ftcal
+from ftcal import CalibrationInputError, HistoryCalibrator, LinearCalibrator, reading_history
+from ftcal.cli import main
+
+TAU_TRUE = 3.0
+CREEP = 0.2  # k: 20 % of the lag shows in the readings
+
+
+def creeping_sensor(n_presses=30, rows_per_press=20, noise=0.01, seed=0, creep=CREEP):
+    """Readings, wrenches, press labels and the LTM error the creep causes, of a linear sensor with creep."""
+    rng = np.random.default_rng(seed)
+    t = np.linspace(0.0, np.pi, rows_per_press)
+    loads = [np.outer(np.sin(t) ** 2, rng.normal(size=6) * [10, 10, 10, 0.5, 0.5, 0.5]) for _ in range(n_presses)]
+    wrench = np.vstack(loads)
+    groups = np.repeat(np.arange(n_presses), rows_per_press)
+    A = rng.normal(size=(8, 6)) / np.array([10, 10, 10, 0.5, 0.5, 0.5])
+    raw = (wrench + creep * reading_history(wrench, TAU_TRUE)) @ A.T + noise * rng.normal(size=(len(wrench), 8))
+    return raw, wrench, groups
+
+
+def held_out_rmse(make, raw, wrench, groups, alpha):
+    pred = np.empty_like(wrench)
+    for train, test in GroupKFold(5).split(raw, groups=groups):
+        model = make()
+        model.fit(raw[train], wrench[train], **({"groups": groups[train]} if isinstance(model, HistoryCalibrator)
+                                                else {}))
+        pred[test] = model.predict(raw[test])
+    return ftcal.wrench_rmse(wrench, pred, alpha=alpha)
+
+
+def test_reading_history_is_the_moving_average_of_the_rows_before_minus_the_row():
+    X = np.random.default_rng(1).normal(size=(50, 4))
+    for tau in (1.0, 2.5, 10.0):
+        expected, mean = np.empty_like(X), X[0].copy()
+        for i, row in enumerate(X):  # the definition, one row at a time
+            expected[i] = mean - row
+            mean = mean + (row - mean) / tau
+        np.testing.assert_allclose(reading_history(X, tau), expected, atol=1e-12)
+        first, state = reading_history(X[:17], tau, return_state=True)
+        np.testing.assert_allclose(np.vstack([first, reading_history(X[17:], tau, state=state)]), expected, atol=1e-12)
+    # a constant offset (a tare) cancels; a reading held still has no history
+    np.testing.assert_allclose(reading_history(X + 5.0, 2.0), reading_history(X, 2.0), atol=1e-12)
+    np.testing.assert_array_equal(reading_history(np.ones((5, 3)), 4.0), np.zeros((5, 3)))
+    for bad in (0.5, 0, -1, float("nan"), True, "2"):
+        with pytest.raises(CalibrationInputError, match="tau_rows"):
+            reading_history(X, bad)
+
+
+def test_the_history_term_removes_most_of_the_creep_error_and_finds_its_time_constant():
+    raw, wrench, groups = creeping_sensor()
+    alpha = ftcal.alpha_from_wrenches(wrench)
+    static = held_out_rmse(lambda: LinearCalibrator(alpha=alpha), raw, wrench, groups, alpha)
+    history = held_out_rmse(lambda: HistoryCalibrator(alpha=alpha), raw, wrench, groups, alpha)
+    # the floor: the same sensor and noise without creep, calibrated by the LTM
+    floor = held_out_rmse(lambda: LinearCalibrator(alpha=alpha), *creeping_sensor(creep=0.0), alpha)
+    # what the history term leaves of the creep error is O(k^2), i.e. about k = 20 % of it: demand less than half
+    assert history - floor < 0.5 * (static - floor), (static, history, floor)
+    model = HistoryCalibrator(alpha=alpha).fit(raw, wrench, groups=groups)
+    assert model.tau_rows_ in (2.0, 4.0)  # the grid's neighbours of the true 3 rows
+    assert model.cv_rmse_[0] > model.cv_rmse_.min()
+
+
+def test_rows_without_a_time_order_get_no_history_term():
+    raw, wrench, _ = creeping_sensor(noise=0.05)
+    order = np.random.default_rng(2).permutation(len(raw))  # shuffled rows: their "history" is noise
+    shuffled = raw[order]  # the creep stays in the readings, but no row follows its predecessor in time
+    model = HistoryCalibrator().fit(shuffled, wrench[order])
+    assert model.tau_rows_ is None and model.history_coef_ is None
+    plain = LinearCalibrator().fit(shuffled, wrench[order])
+    np.testing.assert_allclose(model.predict(shuffled), plain.predict(shuffled), atol=1e-9)
+
+
+def test_stream_carries_the_history_across_chunks_and_the_model_file_keeps_everything(tmp_path):
+    raw, wrench, groups = creeping_sensor()
+    model = HistoryCalibrator(taus=(2.0, 4.0)).fit(raw, wrench, groups=groups)
+    predict = model.stream()
+    parts = [predict(raw[:1]), predict(raw[1:77]), predict(raw[77:])]
+    np.testing.assert_allclose(np.vstack(parts), model.predict(raw), atol=1e-12)
+    loaded = ftcal.load_model(ftcal.save_model(model, tmp_path / "h.model.npz"))
+    assert loaded.tau_rows_ == model.tau_rows_
+    np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
+    np.testing.assert_array_equal(loaded.cv_rmse_, model.cv_rmse_)
+
+
+@pytest.mark.parametrize("width", [1, 3])
+def test_other_target_widths_fit_save_and_load(tmp_path, width):
+    raw, wrench, groups = creeping_sensor(n_presses=10)
+    y = wrench[:, 0] if width == 1 else wrench[:, :width]
+    model = HistoryCalibrator(taus=(4.0,)).fit(raw, y, groups=groups)
+    assert model.predict(raw).shape == y.shape
+    loaded = ftcal.load_model(ftcal.save_model(model, tmp_path / "h.model.npz"))
+    np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
+
+
+def test_an_auto_inside_chooses_the_static_model_once():
+    raw, wrench, groups = creeping_sensor(n_presses=12)
+    auto = ftcal.AutoCalibrator(candidates=[("linear", LinearCalibrator()),
+                                            ("polynomial", ftcal.PolynomialCalibrator(degree=2, ridge=1.0))],
+                                cv=3, baselines=False)
+    model = HistoryCalibrator(auto, taus=(4.0,)).fit(raw, wrench, groups=groups)
+    assert model.static_choice_ in ("linear", "polynomial")
+    assert not isinstance(model.estimator_, ftcal.AutoCalibrator)
+
+
+def test_groups_reach_the_inner_calibrator_and_bad_input_is_named():
+    raw, wrench, groups = creeping_sensor(n_presses=10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # group offsets without groups warn: every fit inside must receive them
+        HistoryCalibrator(ftcal.PolynomialCalibrator(degree=1, group_offsets=True), taus=(4.0,)).fit(
+            raw, wrench, groups=groups)
+    with pytest.warns(UserWarning):
+        HistoryCalibrator(ftcal.PolynomialCalibrator(degree=1, group_offsets=True), taus=(4.0,)).fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="groups"):
+        HistoryCalibrator().fit(raw, wrench, groups=groups[:-1])
+    with pytest.raises(CalibrationInputError, match="taus"):
+        HistoryCalibrator(taus=()).fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="taus"):
+        HistoryCalibrator(taus=(0.5, 2.0)).fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="cv"):
+        HistoryCalibrator(cv=1).fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="training fold holds"):
+        HistoryCalibrator(cv=5).fit(raw[:10], wrench[:10])
+    with pytest.raises(ftcal.ExportError, match="HistoryCalibrator"):
+        ftcal.export_onnx(HistoryCalibrator().fit(raw, wrench), "never-written.onnx")
+
+
+def test_cli_fit_history_then_predict_in_chunks_is_the_library_predict(tmp_path, capsys):
+    raw, wrench, groups = creeping_sensor(n_presses=12)
+    ftcal.CalibrationDataset(raw=raw, wrench=wrench, group=groups).save(tmp_path / "creep.csv")
+    assert main(["fit", str(tmp_path / "creep.csv"), "--model", "linear", "--history", "--out", str(tmp_path / "m"),
+                 "--quiet"]) == 0
+    summary = json.loads((tmp_path / "m" / "linear.fit.json").read_text())
+    assert summary["history"] is True and summary["history_tau_rows"] in (2.0, 4.0)
+    capsys.readouterr()
+    assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "creep.csv"),
+                 "--chunk-size", "7", "--output", str(tmp_path / "w.csv")]) == 0
+    predicted = np.loadtxt(tmp_path / "w.csv", delimiter=",", skiprows=1)
+    model = ftcal.load_model(tmp_path / "m" / "linear.model.npz")
+    np.testing.assert_allclose(predicted, model.predict(raw), rtol=1e-8, atol=1e-8)
+    temperature = np.random.default_rng(0).uniform(15, 35, len(raw))
+    ftcal.CalibrationDataset(raw=raw, wrench=wrench, temperature=temperature).save(tmp_path / "warm.csv")
+    assert main(["fit", str(tmp_path / "warm.csv"), "--model", "linear", "--history", "--temperature",
+                 "--out", str(tmp_path / "m2")]) == 2
+    assert "--history and --temperature cannot be combined" in capsys.readouterr().err
+    assert not (tmp_path / "m2").exists()
