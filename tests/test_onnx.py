@@ -118,7 +118,7 @@ def test_export_refuses_unknown_types_unfitted_models_and_existing_files(fitted_
         export_onnx(DirectionalCalibrator(), tmp_path / "y.onnx")
     target = tmp_path / "kept.onnx"
     target.write_text("mine")
-    with pytest.raises(FileExistsError, match="overwrite=True"):
+    with pytest.raises(ExportError, match="overwrite=True"):
         export_onnx(fitted_models["linear"], target)
     assert target.read_text() == "mine"
     assert not (tmp_path / "x.onnx").exists() and not (tmp_path / "y.onnx").exists()

@@ -163,7 +163,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [BaseCalibrator, None],
-        "taus": [tuple, list],
+        "taus": ["array-like"],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "n_iterations": [Interval(Integral, 1, None, closed="left")],
     }
@@ -179,7 +179,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         self.random_state = random_state
 
     def _check_params(self) -> None:
-        taus = list(self.taus)
+        taus = list(np.ravel(np.asarray(self.taus, dtype=object)))
         bad = [t for t in taus if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(t) or t < 1]
         if not taus or bad:
             raise CalibrationInputError(
@@ -210,7 +210,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         groups = self._fit_groups
-        n, taus = len(X), [float(t) for t in self.taus]
+        n, taus = len(X), [float(t) for t in np.ravel(np.asarray(self.taus, dtype=object))]
         folds = self._folds(n, groups)
         self._template = self.static_choice_ = None
         try:

@@ -155,9 +155,8 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     Raises
     ------
     ExportError
-        The model's type cannot be exported, or the ``onnx`` package is missing.
-    FileExistsError
-        ``path`` exists and ``overwrite`` is False.
+        The model's type cannot be exported, the ``onnx`` package is missing, or ``path`` exists and
+        ``overwrite`` is False (as :func:`~ftcal.save_model` refuses it).
 
     Examples
     --------
@@ -181,7 +180,7 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
         ) from None
     path = Path(path)
     if path.exists() and not overwrite:
-        raise FileExistsError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it.")
+        raise ExportError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it, or choose another path.")
     g = _Graph(onnx)
     wrench = g.calibration(model, "readings")
     g.nodes.append(onnx.helper.make_node("Identity", [wrench], ["wrench"]))
@@ -207,6 +206,6 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     onnx.helper.set_model_props(onnx_model, {"ftcal_model": type(model).__name__,
                                              "wrench_units": "N, N, N, N m, N m, N m"})
     onnx.checker.check_model(onnx_model, full_check=True)
-    with atomic_output(path, overwrite=overwrite, error=FileExistsError) as tmp:
+    with atomic_output(path, overwrite=overwrite, error=ExportError) as tmp:
         tmp.write_bytes(onnx_model.SerializeToString())
     return path
