@@ -93,23 +93,34 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
     return (history, averages[-1].copy()) if return_state else history
 
 
+def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
+    return None if groups is None else groups[index]
+
+
+def _predicted(model: BaseCalibrator, X: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``model.predict(X)`` as (n, k), whatever the target's width."""
+    return np.asarray(model.predict(X), dtype=float).reshape(len(X), -1)
+
+
 class HistoryCalibrator(GroupsFit, BaseCalibrator):
     """``estimator`` plus a linear map of the readings' history, its time constant chosen by cross-validation.
 
     ``fit`` takes readings **in time order**. The model is additive: the
     wrench is ``estimator(X)`` plus a linear map of :func:`reading_history`
     ``(X, tau)``, the two fitted jointly by backfitting (``n_iterations``
-    alternating fits, each on the other's residual). The time constant is
-    chosen from ``taus`` by cross-validation of that whole fit (contiguous
-    blocks of rows, or whole ``groups`` held out), and the history term is
-    kept only when it beats the estimator alone by more than one standard
-    error (ftcal's one-SE rule,
-    :func:`~ftcal.core._model_selection.simplest_within_one_se`): on a rigid
-    sensor the result is the estimator itself. ``estimator`` is fitted
-    ``cv + len(taus) * cv * n_iterations + n_iterations`` times (83 with the
-    defaults), so a model-choosing estimator (:class:`~ftcal.AutoCalibrator`)
-    is fitted once on all rows first and the model it chooses is the
-    estimator from then on (the static choice is made without the history).
+    alternating fits, each on the other's residual). Cross-validation
+    (contiguous blocks of rows, or whole ``groups`` held out) decides in two
+    steps: the time constant of ``taus`` whose map, fitted on the estimator's
+    residual, predicts the held-out rows best (one estimator fit per fold
+    for all of them), then whether that time constant's whole backfitted
+    model beats the estimator alone by more than one standard error (ftcal's
+    one-SE rule, :func:`~ftcal.core._model_selection.simplest_within_one_se`);
+    if not, there is no history term: on a rigid sensor, or on shuffled rows,
+    the result is the estimator itself. ``estimator`` is fitted
+    ``cv * n_iterations + n_iterations`` times (18 with the defaults); a
+    model-choosing estimator (:class:`~ftcal.AutoCalibrator`) is fitted
+    once on all rows first, and the model it chooses is the estimator from
+    then on (the static choice is made without the history).
 
     ``predict`` also takes rows in time order, as one recording starting at
     rest; :meth:`stream` carries the history from one chunk to the
@@ -143,7 +154,11 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     static_choice_ : str or None
         The model a model-choosing ``estimator`` chose (its ``best_name_``).
     cv_rmse_ : ndarray of shape (1 + len(taus),)
-        Held-out RMSE (eq. 18) without a history term, then with each ``tau``.
+        Held-out RMSE (eq. 18) without a history term, then with each
+        ``tau`` after one backfitting pass (the time constant's choice).
+    history_cv_rmse_ : float
+        Held-out RMSE of the best time constant's whole backfitted model
+        (the keep-or-not decision, against ``cv_rmse_[0]``).
 
     Examples
     --------
@@ -155,7 +170,8 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     (True, (5, 6))
     """
 
-    _fitted_state = ("estimator_", "tau_rows_", "history_coef_", "history_intercept_", "cv_rmse_", "static_choice_")
+    _fitted_state = ("estimator_", "tau_rows_", "history_coef_", "history_intercept_", "cv_rmse_", "history_cv_rmse_",
+                     "static_choice_")
     # a model file stores no None: these are the values a fit without a history term (or a chooser) leaves
     tau_rows_ = history_coef_ = history_intercept_ = static_choice_ = None
     _groups_purpose = ("cross-validating the history term over whole groups",
@@ -225,44 +241,55 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     def _fit_with_history(self, X, y, groups, taus, folds) -> None:
         n = len(X)
         histories = [reading_history(X, tau) for tau in taus]  # over the whole recording: readings only
-        errors = np.empty((1 + len(taus), n))  # per-row mean squared (torque-scaled) error: eq. 18 over rows
-        for k, history in enumerate([None, *histories]):
-            held_out = np.empty_like(y)
-            for train, test in folds:
-                try:
-                    model, coef, intercept = self._backfit(
-                        X[train], y[train], None if history is None else history[train],
-                        None if groups is None else groups[train])
-                except CalibrationInputError as exc:
-                    raise CalibrationInputError(
-                        f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds "
-                        f"{len(train)} of the {n} rows, and there: {exc}") from None
-                held_out[test] = model.predict(X[test]).reshape(len(test), -1)
-                if history is not None:
-                    held_out[test] += history[test] @ coef + intercept
-            errors[k] = self._row_errors(y - held_out)
+        # 1. one backfitting pass per fold, shared by every candidate: the estimator alone (no history term), then
+        #    each time constant's map fitted on its residual; the best time constant by held-out error
+        static, first_pass = [], np.empty((1 + len(taus),) + y.shape)
+        for train, test in folds:
+            model = self._fold(lambda: self._backfit(X[train], y[train], None, _rows(groups, train)), train, n, folds)[0]
+            static.append(model)
+            first_pass[0][test] = _predicted(model, X[test])
+            residual = y[train] - _predicted(model, X[train])
+            for k, history in enumerate(histories, start=1):
+                coef, intercept = ridge_least_squares(history[train], residual, 0.0, n_unpenalised=0)
+                first_pass[k][test] = first_pass[0][test] + history[test] @ coef + intercept
+        pass_errors = np.array([self._row_errors(y - p) for p in first_pass])  # per row: eq. 18 over rows
+        best = int(np.argmin(pass_errors[1:].mean(axis=1)))
+        # 2. that time constant's whole backfitted model, held out the same way, against the estimator alone
+        joint = np.empty_like(y)
+        for (train, test), model in zip(folds, static):
+            model, coef, intercept = self._fold(lambda: self._backfit(
+                X[train], y[train], histories[best][train], _rows(groups, train), first=model), train, n, folds)
+            joint[test] = _predicted(model, X[test]) + histories[best][test] @ coef + intercept
+        errors = np.vstack([pass_errors[0], self._row_errors(y - joint)])
         units = groups if groups is not None else np.arange(n) * _TIME_BLOCKS // n
-        chosen = simplest_within_one_se(errors, units)
-        self.cv_rmse_ = np.sqrt(errors.mean(axis=1))
-        self.tau_rows_ = None if chosen == 0 else taus[chosen - 1]
+        keep = simplest_within_one_se(errors, units) == 1  # the simpler (no history term) wins ties
+        self.cv_rmse_ = np.sqrt(pass_errors.mean(axis=1))
+        self.history_cv_rmse_ = float(np.sqrt(errors[1].mean()))
+        self.tau_rows_ = taus[best] if keep else None
         self.estimator_, self.history_coef_, self.history_intercept_ = self._backfit(
-            X, y, None if chosen == 0 else histories[chosen - 1], groups)
+            X, y, histories[best] if keep else None, groups)
         self.zero_reading_ = self.estimator_.zero_reading_
 
-    def _backfit(self, X, y, history, groups):
+    @staticmethod
+    def _fold(fit, train, n, folds):
+        """``fit()`` of one training fold, its refusal (too few rows, ...) said to be a fold's."""
+        try:
+            return fit()
+        except CalibrationInputError as exc:
+            raise CalibrationInputError(f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold "
+                                        f"holds {len(train)} of the {n} rows, and there: {exc}") from None
+
+    def _backfit(self, X, y, history, groups, first=None):
         """``estimator`` and the history map fitted jointly by backfitting (alternating fits on each other's residual,
         the standard algorithm of additive models): ``(estimator, coef, intercept)``; without a history, the estimator
-        alone and ``None, None``."""
-        model = self._new_inner()
-        routed = {"groups": groups} if groups is not None and requests_groups(model) else {}
+        alone and ``None, None``. ``first``: the estimator already fitted on ``y`` (the first pass)."""
+        routed = {"groups": groups} if groups is not None and requests_groups(self._new_inner()) else {}
+        model = first if first is not None else self._new_inner().fit(X, y, **routed)
         coef = intercept = None
-        correction = 0.0
-        for _ in range(1 if history is None else int(self.n_iterations)):
-            model = self._new_inner().fit(X, y - correction, **routed)
-            if history is not None:
-                residual = y - np.asarray(model.predict(X), dtype=float).reshape(y.shape)
-                coef, intercept = ridge_least_squares(history, residual, 0.0, n_unpenalised=0)
-                correction = history @ coef + intercept
+        for iteration in range(0 if history is None else int(self.n_iterations)):
+            if iteration:
+                model = self._new_inner().fit(X, y - (history @ coef + intercept), **routed)
+            coef, intercept = ridge_least_squares(history, y - _predicted(model, X), 0.0, n_unpenalised=0)
         return model, coef, intercept
 
     def _row_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -282,8 +309,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         return self
 
     def _predict_wrench(self, X: NDArray[np.float64], state: NDArray | None = None) -> NDArray[np.float64]:
-        wrench = np.asarray(self.estimator_.predict(X), dtype=float)
-        wrench = wrench.reshape(len(X), -1)
+        wrench = _predicted(self.estimator_, X)
         if self.tau_rows_ is None:
             return wrench
         return wrench + reading_history(X, self.tau_rows_, state=state) @ self.history_coef_ + self.history_intercept_

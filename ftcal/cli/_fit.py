@@ -179,14 +179,16 @@ def run(args: argparse.Namespace) -> int:
     }
     if args.history:
         summary["history_tau_rows"] = estimator.tau_rows_
-        summary["history_cv_rmse"] = {"none": estimator.cv_rmse_[0],
-                                      **{f"tau={t:g}": v for t, v in zip(estimator.taus, estimator.cv_rmse_[1:])}}
+        summary["history_cv_rmse"] = {  # held-out RMSE (eq. 18): the time constants after one pass, then the kept fit
+            "none": estimator.cv_rmse_[0], **{f"tau={float(t):g}, one pass": v for t, v in
+                                             zip(np.ravel(estimator.taus), estimator.cv_rmse_[1:])},
+            "best tau, backfitted": estimator.history_cv_rmse_}
         if estimator.static_choice_ is not None:
             summary["chosen"] = estimator.static_choice_
             console.info(f"auto chose {estimator.static_choice_} (the static model, before the history term)")
         kept = "no history term" if estimator.tau_rows_ is None else f"a history term, tau = {estimator.tau_rows_:g} rows"
-        console.info(f"history: {kept} (held-out RMSE without: {estimator.cv_rmse_[0]:.4g}, best with: "
-                     f"{estimator.cv_rmse_[1:].min():.4g})")
+        console.info(f"history: {kept} (held-out RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the best "
+                     f"time constant: {estimator.history_cv_rmse_:.4g} N)")
     if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.cv_results_
