@@ -32,6 +32,7 @@ _PUBLIC: dict[str, str] = {
     "LogFormatError": "core._exceptions",
     "ModelFileError": "core._exceptions",
     "ExportError": "core._exceptions",
+    "ExportExistsError": "core._exceptions",
     "PlanningError": "core._exceptions",
     "export_onnx": "models._onnx",
     "WRENCH_LABELS": "core._wrench",

@@ -36,6 +36,12 @@ _HISTORY_FOLDS = (
     "HistoryCalibrator cross-validates its history term over 3 folds: on the check's 10-20 samples a training "
     "fold holds fewer rows than the inner LTM needs, which is refused naming the fold (tested in test_history.py)"
 )
+_HISTORY_ORDER = (
+    "a load-history model reads its rows as a time series: once it keeps a history term, its predictions depend "
+    "on the rows' order, by design. On the check's 20 rows (a step-function target of the first column) "
+    "cross-validation keeps one (tau = 4 rows: held-out RMSE 0.383 against 0.429 without); on shuffled rows of "
+    "real size it keeps none (test_history.py)"
+)
 _EXPECTED_FAILURES = {
     "ComparativeCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
     "DirectionalCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
@@ -49,7 +55,8 @@ _EXPECTED_FAILURES = {
         name: (CalibrationInputError if name != "check_fit2d_1feature" else AssertionError, _HISTORY_FOLDS)
         for name in ("check_estimators_nan_inf", "check_regressor_multioutput",
                      "check_regressors_no_decision_function", "check_fit2d_1feature")
-    },
+    } | {name: (AssertionError, _HISTORY_ORDER)
+         for name in ("check_methods_sample_order_invariance", "check_methods_subset_invariance")},
     "TemperatureCompensatedCalibrator": {
         name: (CalibrationInputError, _TEMPERATURE_SPAN)
         for name in ("check_fit_score_takes_y", "check_dtype_object", "check_estimators_nan_inf")
@@ -183,7 +190,8 @@ def test_wrappers_in_a_pipeline_a_grid_search_and_a_pickle(kind):
     tolerance = 1e-6 * np.abs(wrench).max()
     pipe = make_pipeline(StandardScaler(), clone(model)).fit(X, wrench)
     np.testing.assert_allclose(pipe.predict(X), wrench, atol=tolerance)
-    grid = {"weights": [[1.0, 0.0], [0.5, 0.5]]} if kind == "stacked" else {"n_iterations": [1, 3]}  # both have it
+    grid = {"stacked": {"weights": [[1.0, 0.0], [0.5, 0.5]]}, "temperature_compensated": {"n_iterations": [1, 3]},
+            "history": {"cv": [2, 3]}}[kind]
     search = GridSearchCV(clone(model), grid, cv=KFold(2), scoring=neg_scaled_rmse).fit(X, wrench)
     assert search.best_params_.keys() == grid.keys()
     np.testing.assert_allclose(search.best_estimator_.predict(X), wrench, atol=tolerance)

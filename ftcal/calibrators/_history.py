@@ -9,7 +9,8 @@ and :class:`HistoryCalibrator` adds a linear map of those features to what its
 calibrator predicts. Readings only: nothing a deployed sensor does not have.
 
 Its rows are **time-ordered samples** (one recording, or recordings one
-after another), at ``fit`` and at ``predict``; shuffled rows have no history.
+after another, at one sampling rate: the time constant is counted in rows),
+at ``fit`` and at ``predict``; shuffled rows have no history.
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ..core._exceptions import CalibrationInputError
+from ..core._memory import check_allocation
 from ..core._model_selection import simplest_within_one_se
 from ..core._validation import check_finite_output, validate_readings
 from ..core._wrench import scale_torques
@@ -34,7 +36,7 @@ from ._linear import LinearCalibrator
 from ._ridge import ridge_least_squares
 from ._routing import requests_groups, routed_fit_params, wrapper_routing
 
-__all__ = ["HistoryCalibrator", "reading_history"]
+__all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_history_inside"]
 
 #: Contiguous blocks the rows are cut into for the one-SE rule when no groups are given (neighbouring rows of a
 #: time series are not independent errors).
@@ -78,19 +80,45 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
     [-1.0, -0.5]
     """
     X = np.asarray(X, dtype=float)
-    if isinstance(tau_rows, bool) or not isinstance(tau_rows, Real) or not tau_rows >= 1:
-        raise CalibrationInputError(f"tau_rows must be a number >= 1 (a time constant in rows); got {tau_rows!r}.")
-    if X.ndim != 2:
-        raise CalibrationInputError(f"X must be 2-D (rows in time order x channels); got shape {X.shape}.")
-    if len(X) == 0:
-        return (X.copy(), np.asarray(state, dtype=float)) if return_state else X.copy()
-    start = X[0] if state is None else np.asarray(state, dtype=float).reshape(X.shape[1])
+    if isinstance(tau_rows, bool) or not isinstance(tau_rows, Real) or not (np.isfinite(float(tau_rows))
+                                                                             and tau_rows >= 1):
+        raise CalibrationInputError(f"tau_rows must be a finite number >= 1 (a time constant in rows); got "
+                                    f"{tau_rows!r}.")
+    if X.ndim != 2 or len(X) == 0:
+        raise CalibrationInputError(f"X must hold at least one row of readings, 2-D (rows in time order x channels); "
+                                    f"got shape {X.shape}.")
+    if not np.isfinite(X).all():
+        r, c = (int(v) for v in np.argwhere(~np.isfinite(X))[0])
+        raise CalibrationInputError(f"X[{r}, {c}] = {X[r, c]}: readings must be finite (a NaN would poison every "
+                                    "later row's history); drop or repair that row.")
+    if state is None:
+        start = X[0]
+    else:
+        start = np.asarray(state, dtype=float)
+        if start.shape != (X.shape[1],) or not np.isfinite(start).all():
+            raise CalibrationInputError(f"state must be the finite moving average of the previous chunk, shape "
+                                        f"({X.shape[1]},); got shape {start.shape}.")
     a = 1.0 / float(tau_rows)
     # e_i = (1 - a) e_{i-1} + a X_i with e_{-1} = start: the average *including* row i; the one before row i is e_{i-1}
     averages = lfilter([a], [1.0, a - 1.0], X, axis=0, zi=((1.0 - a) * start)[None, :])[0]
     before = np.vstack([start[None, :], averages[:-1]])
     history = before - X
     return (history, averages[-1].copy()) if return_state else history
+
+
+def reads_history(model) -> bool:
+    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`HistoryCalibrator`)."""
+    return callable(getattr(model, "stream", None))
+
+
+def refuse_history_inside(estimator, owner: str) -> None:
+    """Refuse a load-history model as the inner calibrator of wrapper ``owner``: its history would restart at every
+    chunk of a stream and its rows be shuffled by the wrapper's resampling; it must be the outermost model."""
+    if reads_history(estimator):
+        raise CalibrationInputError(
+            f"{owner} cannot wrap {type(estimator).__name__}, a load-history model: it reads its rows as a time "
+            f"series, which {owner} does not keep. Put the history term outermost, e.g. "
+            f"HistoryCalibrator({owner}(...)).")
 
 
 def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
@@ -105,60 +133,69 @@ def _predicted(model: BaseCalibrator, X: NDArray[np.float64]) -> NDArray[np.floa
 class HistoryCalibrator(GroupsFit, BaseCalibrator):
     """``estimator`` plus a linear map of the readings' history, its time constant chosen by cross-validation.
 
-    ``fit`` takes readings **in time order**. The model is additive: the
-    wrench is ``estimator(X)`` plus a linear map of :func:`reading_history`
-    ``(X, tau)``, the two fitted jointly by backfitting (``n_iterations``
-    alternating fits, each on the other's residual). Cross-validation
-    (contiguous blocks of rows, or whole ``groups`` held out) decides in two
-    steps: the time constant of ``taus`` whose map, fitted on the estimator's
-    residual, predicts the held-out rows best (one estimator fit per fold
-    for all of them), then whether that time constant's whole backfitted
-    model beats the estimator alone by more than one standard error (ftcal's
-    one-SE rule, :func:`~ftcal.core._model_selection.simplest_within_one_se`);
-    if not, there is no history term: on a rigid sensor, or on shuffled rows,
-    the result is the estimator itself. ``estimator`` is fitted
-    ``cv * n_iterations + n_iterations`` times (18 with the defaults); a
-    model-choosing estimator (:class:`~ftcal.AutoCalibrator`) is fitted
-    once on all rows first, and the model it chooses is the estimator from
-    then on (the static choice is made without the history).
+    ``fit`` takes readings **in time order**. The model is partially linear:
+    the wrench is ``f(X) + H c`` with ``H`` = :func:`reading_history` ``(X,
+    tau)``, ``f`` of the form of ``estimator`` and ``c`` a linear map. It is
+    fitted by Robinson's partialling out: ``estimator`` is fitted to the
+    wrench (``estimator_``) and, with the same tare, to the history columns
+    (``history_estimator_``: what of the history the current reading
+    already tells), and ``c`` maps what is left of the history onto what is
+    left of the wrench. The prediction is ``estimator_(X) + (H -
+    history_estimator_(X)) c``. For an estimator linear in its features (the
+    LTM, a polynomial) that is exactly the joint least-squares fit, however
+    strongly the history correlates with the readings.
+
+    Cross-validation (contiguous blocks of rows, or whole ``groups`` held
+    out) scores the estimator alone and each time constant of ``taus``;
+    ftcal's one-SE rule (:func:`~ftcal.core._model_selection.simplest_within_one_se`)
+    keeps a history term only when it beats the estimator alone by more than
+    one standard error (among the time constants within it, the shortest):
+    on a rigid sensor, or on shuffled rows, the result is the estimator
+    itself. ``estimator`` is fitted ``cv * (1 + len(taus)) + 2`` times (32
+    with the defaults); a model-choosing estimator (:class:`~ftcal.AutoCalibrator`)
+    is fitted once on all rows first, and the model it chooses is the
+    estimator from then on (the static choice is made without the history).
+    A flexible estimator that nearly interpolates its training rows (a
+    Gaussian process) leaves little of either to map, so its history term
+    gains less.
 
     ``predict`` also takes rows in time order, as one recording starting at
-    rest; :meth:`stream` carries the history from one chunk to the
-    next (a live sensor). Not exportable to ONNX (the graph has no state).
+    rest; :meth:`stream` carries the history from one chunk to the next (a
+    live sensor). The time constant is counted in rows: deploy at the
+    sampling rate of the calibration data. Not exportable to ONNX (the
+    graph has no state).
 
     Parameters
     ----------
     estimator : calibrator or None, default=None
         The static calibrator; ``None``: :class:`~ftcal.LinearCalibrator`.
-    taus : tuple of float >= 1, default=(1, 2, 4, 8, 16)
+    taus : array-like of float >= 1, default=(1, 2, 4, 8, 16)
         Time constants tried [rows].
     cv : int >= 2, default=5
         Folds: contiguous blocks of rows, or :class:`~sklearn.model_selection.GroupKFold`
         over ``groups`` (sessions, presses: the rows of one group must be
         consecutive in time).
-    n_iterations : int >= 1, default=3
-        Backfitting passes (1: the history map fitted once on the estimator's
-        residual).
     alpha, zero_reading, random_state
-        Given to ``estimator`` when it has them.
+        Given to ``estimator`` when it has them and they are not None (else
+        ``estimator``'s own are kept).
 
     Attributes
     ----------
     estimator_ : calibrator
         ``estimator`` (or the model ``AutoCalibrator`` chose) fitted on all
-        rows, jointly with the history map.
+        rows.
     tau_rows_ : float or None
         The chosen time constant [rows]; ``None``: no history term.
-    history_coef_ : ndarray of shape (N, 6) or None
-    history_intercept_ : ndarray of shape (6,) or None
+    history_estimator_ : calibrator or None
+        ``estimator`` fitted to the history columns.
+    history_coef_ : ndarray of shape (N, k) or None
+    history_intercept_ : ndarray of shape (k,) or None
+    cv_rmse_ : ndarray of shape (1 + len(taus),)
+        Held-out RMSE (eq. 18) without a history term, then with each ``tau``.
     static_choice_ : str or None
         The model a model-choosing ``estimator`` chose (its ``best_name_``).
-    cv_rmse_ : ndarray of shape (1 + len(taus),)
-        Held-out RMSE (eq. 18) without a history term, then with each
-        ``tau`` after one backfitting pass (the time constant's choice).
-    history_cv_rmse_ : float
-        Held-out RMSE of the best time constant's whole backfitted model
-        (the keep-or-not decision, against ``cv_rmse_[0]``).
+    static_cv_results_ : dict or None
+        Its ``cv_results_``.
 
     Examples
     --------
@@ -170,33 +207,34 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     (True, (5, 6))
     """
 
-    _fitted_state = ("estimator_", "tau_rows_", "history_coef_", "history_intercept_", "cv_rmse_", "history_cv_rmse_",
-                     "static_choice_")
+    _fitted_state = ("estimator_", "tau_rows_", "history_estimator_", "history_coef_", "history_intercept_",
+                     "cv_rmse_", "static_choice_", "static_cv_results_")
     # a model file stores no None: these are the values a fit without a history term (or a chooser) leaves
-    tau_rows_ = history_coef_ = history_intercept_ = static_choice_ = None
+    tau_rows_ = history_estimator_ = history_coef_ = history_intercept_ = static_choice_ = static_cv_results_ = None
     _groups_purpose = ("cross-validating the history term over whole groups",
-                       "pass groups=None for contiguous blocks of rows")
+                       "give no groups (no group column) for contiguous blocks of rows, or more groups")
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [BaseCalibrator, None],
         "taus": ["array-like"],
         "cv": [Interval(Integral, 2, None, closed="left")],
-        "n_iterations": [Interval(Integral, 1, None, closed="left")],
     }
 
-    def __init__(self, estimator=None, *, taus=(1.0, 2.0, 4.0, 8.0, 16.0), cv=5, n_iterations=3, alpha=None, zero_reading=None,
+    def __init__(self, estimator=None, *, taus=(1.0, 2.0, 4.0, 8.0, 16.0), cv=5, alpha=None, zero_reading=None,
                  random_state=None):
         self.estimator = estimator
         self.taus = taus
         self.cv = cv
-        self.n_iterations = n_iterations
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    def _taus(self) -> list:
+        return list(np.ravel(np.asarray(self.taus, dtype=object)))
+
     def _check_params(self) -> None:
-        taus = list(np.ravel(np.asarray(self.taus, dtype=object)))
-        bad = [t for t in taus if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(t) or t < 1]
+        taus = self._taus()
+        bad = [t for t in taus if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(float(t)) or t < 1]
         if not taus or bad:
             raise CalibrationInputError(
                 f"taus must be a non-empty list of time constants >= 1 [rows]; got {self.taus!r}"
@@ -209,14 +247,6 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
         return wrapper_routing(self, self._inner())
 
-    def _new_inner(self) -> BaseCalibrator:
-        template = self.__dict__.get("_template")
-        inner = clone(self._inner() if template is None else template)
-        params = inner.get_params()
-        given = {"alpha": self.alpha_, "zero_reading": self.zero_reading, "random_state": self.random_state}
-        inner.set_params(**{k: v for k, v in given.items() if k in params})  # one torque scale for every fit
-        return inner
-
     def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:
         if groups is None:
             if n < self.cv:
@@ -226,93 +256,80 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         groups = self._fit_groups
-        n, taus = len(X), [float(t) for t in np.ravel(np.asarray(self.taus, dtype=object))]
+        n, taus = len(X), [float(t) for t in self._taus()]
         folds = self._folds(n, groups)
-        self._template = self.static_choice_ = None
-        try:
-            if getattr(self._inner(), "_chooses_a_model", False):  # AutoCalibrator: choose the static model once
-                chooser = self._new_inner().fit(X, y, **routed_fit_params(self, groups))
-                self._template = clone(chooser.best_estimator_)
-                self.static_choice_ = chooser.best_name_
-            self._fit_with_history(X, y, groups, taus, folds)
-        finally:
-            del self._template
-
-    def _fit_with_history(self, X, y, groups, taus, folds) -> None:
-        n = len(X)
+        template = self._inner()
+        refuse_history_inside(template, type(self).__name__)
+        check_allocation(8.0 * X.size * (len(taus) + 1), f"the history columns of {len(taus)} time constants",
+                         "try fewer taus")
+        if self.alpha is None and getattr(template, "alpha", None) is not None:
+            self.alpha_ = float(template.alpha)  # the inner calibrator's own torque scale, for every fit
+        self.static_choice_ = self.static_cv_results_ = None
+        if getattr(template, "_chooses_a_model", False):  # AutoCalibrator: choose the static model once, on all rows
+            chooser = self._new(template).fit(X, y, **routed_fit_params(self, groups))
+            template, self.static_choice_ = clone(chooser.best_estimator_), chooser.best_name_
+            self.static_cv_results_ = chooser.cv_results_
         histories = [reading_history(X, tau) for tau in taus]  # over the whole recording: readings only
-        # 1. one backfitting pass per fold, shared by every candidate: the estimator alone (no history term), then
-        #    each time constant's map fitted on its residual; the best time constant by held-out error
-        static, first_pass = [], np.empty((1 + len(taus),) + y.shape)
+        held_out = np.empty((1 + len(taus),) + y.shape)
         for train, test in folds:
-            model = self._fold(lambda: self._backfit(X[train], y[train], None, _rows(groups, train)), train, n, folds)[0]
-            static.append(model)
-            first_pass[0][test] = _predicted(model, X[test])
-            residual = y[train] - _predicted(model, X[train])
-            for k, history in enumerate(histories, start=1):
-                coef, intercept = ridge_least_squares(history[train], residual, 0.0, n_unpenalised=0)
-                first_pass[k][test] = first_pass[0][test] + history[test] @ coef + intercept
-        pass_errors = np.array([self._row_errors(y - p) for p in first_pass])  # per row: eq. 18 over rows
-        best = int(np.argmin(pass_errors[1:].mean(axis=1)))
-        # 2. that time constant's whole backfitted model, held out the same way, against the estimator alone
-        joint = np.empty_like(y)
-        for (train, test), model in zip(folds, static):
-            model, coef, intercept = self._fold(lambda: self._backfit(
-                X[train], y[train], histories[best][train], _rows(groups, train), first=model), train, n, folds)
-            joint[test] = _predicted(model, X[test]) + histories[best][test] @ coef + intercept
-        errors = np.vstack([pass_errors[0], self._row_errors(y - joint)])
+            try:
+                static, maps = self._partial_fit(template, X[train], y[train], [h[train] for h in histories],
+                                                 _rows(groups, train))
+            except CalibrationInputError as exc:
+                raise CalibrationInputError(
+                    f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds {len(train)} "
+                    f"of the {n} rows (lower cv, or record more), and there: {exc}") from None
+            held_out[0][test] = _predicted(static, X[test])
+            for k, (history, fitted) in enumerate(zip(histories, maps), start=1):
+                held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])
+        errors = np.array([self._row_errors(y - p) for p in held_out])  # per row: eq. 18 over rows
         units = groups if groups is not None else np.arange(n) * _TIME_BLOCKS // n
-        keep = simplest_within_one_se(errors, units) == 1  # the simpler (no history term) wins ties
-        self.cv_rmse_ = np.sqrt(pass_errors.mean(axis=1))
-        self.history_cv_rmse_ = float(np.sqrt(errors[1].mean()))
-        self.tau_rows_ = taus[best] if keep else None
-        self.estimator_, self.history_coef_, self.history_intercept_ = self._backfit(
-            X, y, histories[best] if keep else None, groups)
+        chosen = simplest_within_one_se(errors, units, complexity=[0] + [1] * len(taus))
+        self.cv_rmse_ = np.sqrt(errors.mean(axis=1))
+        self.tau_rows_ = None if chosen == 0 else taus[chosen - 1]
+        kept = [] if chosen == 0 else [histories[chosen - 1]]
+        self.estimator_, maps = self._partial_fit(template, X, y, kept, groups)
+        self.history_estimator_, self.history_coef_, self.history_intercept_ = maps[0] if maps else (None,) * 3
         self.zero_reading_ = self.estimator_.zero_reading_
 
-    @staticmethod
-    def _fold(fit, train, n, folds):
-        """``fit()`` of one training fold, its refusal (too few rows, ...) said to be a fold's."""
-        try:
-            return fit()
-        except CalibrationInputError as exc:
-            raise CalibrationInputError(f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold "
-                                        f"holds {len(train)} of the {n} rows, and there: {exc}") from None
+    def _new(self, template: BaseCalibrator, **given) -> BaseCalibrator:
+        inner = clone(template)
+        params = inner.get_params()
+        own = {"alpha": self.alpha_, "zero_reading": self.zero_reading, "random_state": self.random_state}
+        own = {k: v for k, v in own.items() if v is not None}  # the inner calibrator's own settings stay otherwise
+        inner.set_params(**{k: v for k, v in {**own, **given}.items() if k in params})
+        return inner
 
-    def _backfit(self, X, y, history, groups, first=None):
-        """``estimator`` and the history map fitted jointly by backfitting (alternating fits on each other's residual,
-        the standard algorithm of additive models): ``(estimator, coef, intercept)``; without a history, the estimator
-        alone and ``None, None``. ``first``: the estimator already fitted on ``y`` (the first pass)."""
-        routed = {"groups": groups} if groups is not None and requests_groups(self._new_inner()) else {}
-        model = first if first is not None else self._new_inner().fit(X, y, **routed)
-        coef = intercept = None
-        for iteration in range(0 if history is None else int(self.n_iterations)):
-            if iteration:
-                model = self._new_inner().fit(X, y - (history @ coef + intercept), **routed)
-            coef, intercept = ridge_least_squares(history, y - _predicted(model, X), 0.0, n_unpenalised=0)
-        return model, coef, intercept
+    def _partial_fit(self, template, X, y, histories, groups):
+        """Robinson's partialling out: the estimator fitted to ``y``, and for each history ``H``: ``(g, c, b)``, ``g``
+        the estimator fitted to ``H`` (same tare, unscaled columns), ``c, b`` the least-squares map of ``H - g(X)``
+        onto ``y - f(X)``."""
+        routed = {"groups": groups} if groups is not None and requests_groups(template) else {}
+        static = self._new(template).fit(X, y, **routed)
+        left = y - _predicted(static, X)
+        maps = []
+        for history in histories:
+            g = self._new(template, alpha=1.0, zero_reading=static.zero_reading_).fit(X, history, **routed)
+            coef, intercept = ridge_least_squares(history - _predicted(g, X), left, 0.0, n_unpenalised=0)
+            maps.append((g, coef, intercept))
+        return static, maps
+
+    @staticmethod
+    def _history_term(fitted, X, history):
+        g, coef, intercept = fitted
+        return (history - _predicted(g, X)) @ coef + intercept
 
     def _row_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
         scaled = scale_torques(error, self.alpha_) if error.shape[1] == 6 else error
         return np.mean(scaled ** 2, axis=1)
 
-    def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
-        """Re-zero the inner calibrator from zero-load readings taken now (the history term needs none: an offset
-        cancels in it). See :meth:`~ftcal.calibrators._base.BaseCalibrator.retare`.
-
-        Returns
-        -------
-        self
-        """
-        check_is_fitted(self)
-        self.estimator_.retare(validate_readings(self, X_no_load), max_spread=max_spread)
-        return self
-
-    def _predict_wrench(self, X: NDArray[np.float64], state: NDArray | None = None) -> NDArray[np.float64]:
+    def _predict_wrench(self, X: NDArray[np.float64], history: NDArray | None = None) -> NDArray[np.float64]:
         wrench = _predicted(self.estimator_, X)
         if self.tau_rows_ is None:
             return wrench
-        return wrench + reading_history(X, self.tau_rows_, state=state) @ self.history_coef_ + self.history_intercept_
+        history = reading_history(X, self.tau_rows_) if history is None else history
+        fitted = (self.history_estimator_, self.history_coef_, self.history_intercept_)
+        return wrench + self._history_term(fitted, X, history)
 
     def stream(self) -> Callable[[ArrayLike], NDArray[np.float64]]:
         """A ``predict`` for a live stream: each call takes the next chunk of readings (n_i, N), in time order, and
@@ -336,11 +353,12 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         state = [None]
 
         def predict(chunk: ArrayLike) -> NDArray[np.float64]:
-            X = validate_readings(self, chunk)
-            wrench = self._predict_wrench(X, state[0])
+            X = self._retared(validate_readings(self, chunk))
+            history = None
+            if self.tau_rows_ is not None:
+                history, state[0] = reading_history(X, self.tau_rows_, state=state[0], return_state=True)
+            wrench = self._predict_wrench(X, history)
             check_finite_output(X, wrench, self)
-            if self.tau_rows_ is not None and len(X):
-                state[0] = reading_history(X, self.tau_rows_, state=state[0], return_state=True)[1]
             return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
 
         return predict

@@ -13,6 +13,7 @@ from sklearn.utils.validation import check_is_fitted
 from ._base import BaseCalibrator
 from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
+from ._history import refuse_history_inside
 from ._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
 from ..core._validation import validate_readings, validate_training_data
@@ -132,6 +133,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         self._check_parameters()
         t0 = float(self.reference_temperature)
         X, y = validate_training_data(self, X, y)
+        refuse_history_inside(self._inner(), type(self).__name__)
         raw, temperature = self._split(X)
         dt = temperature - t0
         if np.ptp(temperature) < 1.0:
@@ -154,7 +156,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         routed = routed_fit_params(self, groups)
         inner = clone(self._inner())
         params = inner.get_params()
-        inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state") if k in params})
+        inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state")
+                            if k in params and getattr(self, k) is not None})  # else the inner one's own stay
         self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
         self.alpha_ = self.estimator_.alpha_
         self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)

@@ -67,8 +67,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--history", action="store_true",
         help="add a load-history term (soft or viscoelastic sensors that creep or show hysteresis): the rows must be "
-        "in time order; its time constant is chosen by cross-validation, or no term when it does not pay "
-        "(see HistoryCalibrator); 'ftcal predict' then reads its input as one stream in time order",
+        "in time order, at the sampling rate of use (the time constant is counted in rows); it is chosen by "
+        "cross-validation, or no term when it does not pay (see HistoryCalibrator); 'ftcal predict' then reads its "
+        "input as one stream in time order",
     )
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
                    help="processes that score --model auto's candidates at once (default: every core; the "
@@ -136,6 +137,9 @@ def run(args: argparse.Namespace) -> int:
         args.schedule = "short" if args.model == "auto" else "thesis"
     estimator = ftcal.make_calibrator(args.model, schedule=args.schedule, random_state=args.seed, **params)
     X = data.raw
+    if args.history and args.temperature:
+        raise CliError("--history and --temperature cannot be combined (the history term would see the temperature "
+                       "column as a channel); drop one of them")
     if args.temperature:
         if data.temperature is None:
             raise CliError(f"--temperature: {args.dataset} has no temperature column; record the sensor "
@@ -145,9 +149,6 @@ def run(args: argparse.Namespace) -> int:
             estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
         X = data.features(temperature=True)
     if args.history:
-        if args.temperature:
-            raise CliError("--history and --temperature cannot be combined (the history term would see the "
-                           "temperature column as a channel); drop one of them")
         estimator = ftcal.HistoryCalibrator(
             estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
     schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
@@ -178,17 +179,16 @@ def run(args: argparse.Namespace) -> int:
         "training_report": report.to_dict(),
     }
     if args.history:
+        taus = [float(t) for t in np.ravel(estimator.taus)]
         summary["history_tau_rows"] = estimator.tau_rows_
-        summary["history_cv_rmse"] = {  # held-out RMSE (eq. 18): the time constants after one pass, then the kept fit
-            "none": estimator.cv_rmse_[0], **{f"tau={float(t):g}, one pass": v for t, v in
-                                             zip(np.ravel(estimator.taus), estimator.cv_rmse_[1:])},
-            "best tau, backfitted": estimator.history_cv_rmse_}
+        summary["history_cv_rmse"] = {"none": estimator.cv_rmse_[0],  # held-out RMSE (eq. 18) of each candidate
+                                      **{f"tau={t:g}": v for t, v in zip(taus, estimator.cv_rmse_[1:])}}
         if estimator.static_choice_ is not None:
-            summary["chosen"] = estimator.static_choice_
+            summary["chosen"], summary["cv_results"] = estimator.static_choice_, estimator.static_cv_results_
             console.info(f"auto chose {estimator.static_choice_} (the static model, before the history term)")
         kept = "no history term" if estimator.tau_rows_ is None else f"a history term, tau = {estimator.tau_rows_:g} rows"
         console.info(f"history: {kept} (held-out RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the best "
-                     f"time constant: {estimator.history_cv_rmse_:.4g} N)")
+                     f"time constant: {estimator.cv_rmse_[1:].min():.4g} N)")
     if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.cv_results_

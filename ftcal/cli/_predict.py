@@ -101,6 +101,7 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..calibrators._history import reads_history
     from ..models._auto import provides_std
 
     console = Console(args.quiet)
@@ -114,6 +115,9 @@ def run(args: argparse.Namespace) -> int:
     chunk = 1 if args.line_buffered else args.chunk_size
     if args.std and not provides_std(model):
         chosen = getattr(model, "best_name_", type(model).__name__)
+        if reads_history(model):  # a load-history wrapper: its history term has no standard deviation
+            raise CliError(f"--std: {args.model} has a load-history term (fitted with --history), which gives no "
+                           "standard deviation, whatever model it wraps. Drop --std, or fit without --history")
         if hasattr(model, "offset_per_deg_"):  # a temperature wrapper: it passes no standard deviation through
             raise CliError(f"--std: {args.model} is temperature-compensated (fitted with --temperature), and the "
                            "compensation passes no standard deviation through, whatever model it wraps. Drop --std, "
@@ -127,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"
     beyond = [0]
     # a load-history model reads its input as one stream in time order: the history carries across chunks
-    predict = model.stream() if hasattr(model, "stream") else model.predict
+    predict = model.stream() if reads_history(model) else model.predict
 
     def emit(out) -> int:
         total = 0

@@ -54,7 +54,11 @@ class BenchmarkOutputExistsError(FtcalError, FileExistsError):
 
 
 class ExportError(FtcalError, ValueError):
-    """A calibrator that cannot be exported (to ONNX): its type, or a missing optional package."""
+    """A calibrator that cannot be exported (to ONNX): its type, a missing optional package, or an existing file."""
+
+
+class ExportExistsError(ExportError, FileExistsError):
+    """The export's target file exists and ``overwrite`` is False: an :class:`ExportError` and a ``FileExistsError``."""
 
 
 class PlanningError(FtcalError, ValueError):

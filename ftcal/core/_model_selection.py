@@ -80,9 +80,11 @@ def check_groups(groups: ArrayLike | None, n_samples: int, *, labels: bool = Tru
 
 
 def calibration_folds(
-    n_samples: int, groups: ArrayLike | None, n_splits: int = 5, random_state: int | None = 0
+    n_samples: int, groups: ArrayLike | None, n_splits: int = 5, random_state: int | None = 0, *,
+    shuffle: bool = True,
 ) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
-    """Train/test index pairs: :class:`~sklearn.model_selection.GroupKFold` on ``groups``, else shuffled k-fold.
+    """Train/test index pairs: :class:`~sklearn.model_selection.GroupKFold` on ``groups``, else shuffled k-fold
+    (contiguous blocks with ``shuffle=False``: rows that are a time series, for a model that reads their history).
 
     With groups, ``min(n_splits, number of groups)`` folds and no group is
     ever split between a training and a test set.
@@ -98,7 +100,8 @@ def calibration_folds(
     g = check_groups(groups, n_samples)
     index = np.arange(n_samples)
     if g is None:
-        splitter = KFold(n_splits=min(int(n_splits), n_samples), shuffle=True, random_state=random_state)
+        splitter = KFold(n_splits=min(int(n_splits), n_samples), shuffle=shuffle,
+                         random_state=random_state if shuffle else None)
         return list(splitter.split(index))
     splitter = GroupKFold(n_splits=min(int(n_splits), np.unique(g).size))
     return list(splitter.split(index, groups=g))

@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
+from ..calibrators._history import reads_history
 from ..core._model_selection import calibration_folds, rmse_and_se
 from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS, alpha_from_wrenches, scale_torques
 from ..io._dataset import CalibrationDataset
@@ -185,7 +186,8 @@ def calibration_certificate(
     sensor : str, optional
         Sensor name / serial number; default the dataset's ``meta['sensor']``.
     cv : int
-        Folds: whole groups held out when the dataset has groups, else shuffled rows.
+        Folds: whole groups held out when the dataset has groups, else shuffled rows (contiguous blocks for a
+        load-history model, which reads its rows in time order).
     baselines : bool
         Also cross-validate :func:`ftcal.models.stock_baselines` on the same folds.
     full_scale : array-like of shape (6,), optional
@@ -212,7 +214,8 @@ def calibration_certificate(
     groups = dataset.group
     if groups is not None and np.unique(groups).size < 2:
         groups = None
-    folds = calibration_folds(len(y), groups, cv, random_state)
+    ordered = reads_history(model)  # a load-history model reads its rows as a time series: never shuffle them
+    folds = calibration_folds(len(y), groups, cv, random_state, shuffle=not ordered)
     alpha = float(alpha or getattr(model, "alpha_", None) or alpha_from_wrenches(y))
     fs = np.max(np.abs(y), axis=0) if full_scale is None else np.asarray(full_scale, dtype=float)
     if fs.shape != (6,) or not np.all(np.isfinite(fs)):
@@ -276,6 +279,7 @@ def calibration_certificate(
                  "temperature_range": temperature,
                  "units": {k: dataset.meta[k] for k in ("source_force_unit", "source_torque_unit") if k in dataset.meta}},
         "validation": {"folds": len(folds), "split": "whole groups held out (GroupKFold)" if groups is not None
+                       else "contiguous blocks of rows (KFold, time order kept: a load-history model)" if ordered
                        else "shuffled rows (KFold; no group column)", "coverage_factor": COVERAGE_FACTOR},
         "accuracy": accuracy,
         "model_choice": choice,

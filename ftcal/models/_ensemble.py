@@ -13,6 +13,7 @@ from sklearn.base import clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 
+from ..calibrators._history import refuse_history_inside
 from ..calibrators._base import BaseCalibrator
 from ..calibrators._routing import routed_fit_params, wrapper_routing
 from ..neural_network._directional import DirectionalCalibrator
@@ -138,6 +139,7 @@ class EnsembleCalibrator(BaseCalibrator):
         n = self.n_members
         template = self._template()
         X, y = validate_training_data(self, X, y)
+        refuse_history_inside(template, type(self).__name__)
         routed = routed_fit_params(self, groups)
         if isinstance(template, NetworkCalibrator):  # every member's training memory, before building any
             template._check_network_memory(X.shape[1], len(X), members=int(n))

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..calibrators._history import reads_history
 from ..core._exceptions import ExportError
 from ..core._wrench import WRENCH_LABELS
 
@@ -42,6 +43,10 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
     n = int(getattr(model, "n_features_in_", 0))
     if n < 1:
         raise ExportError(f"{type(model).__name__} is not a fitted calibrator (no n_features_in_); fit it first.")
+    if reads_history(model) and getattr(model, "tau_rows_", None) is not None:
+        raise ExportError(f"{type(model).__name__} has a load-history term (tau = {model.tau_rows_:g} rows): its "
+                          "wrench depends on the readings before each one, which no matrix can hold. Export a model "
+                          "fitted without --history for a matrix.")
     center = np.asarray(getattr(model, "zero_reading_", np.zeros(n)), dtype=float).ravel()
     if center.shape != (n,):
         center = np.zeros(n)

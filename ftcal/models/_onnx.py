@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from ..core._exceptions import ExportError
+from ..calibrators._history import reads_history
+from ..core._exceptions import ExportError, ExportExistsError
 from ..core._files import atomic_output
 
 __all__ = ["export_onnx", "exportable_types", "OPSET"]
@@ -98,6 +99,10 @@ class _Graph:
         calls this again for its inner calibrators.
         """
         emit = _emitter(type(model))
+        if reads_history(model):
+            raise ExportError(f"{type(model).__name__} cannot be exported to ONNX: its load-history term depends on "
+                              "the readings before each one, a state an ONNX graph does not keep. Call predict (or "
+                              "stream()) from Python, or export a model fitted without --history.")
         if emit is None:
             names = ", ".join(t.__name__ for t in exportable_types())
             raise ExportError(
@@ -155,8 +160,8 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     Raises
     ------
     ExportError
-        The model's type cannot be exported, the ``onnx`` package is missing, or ``path`` exists and
-        ``overwrite`` is False (as :func:`~ftcal.save_model` refuses it).
+        The model's type cannot be exported, or the ``onnx`` package is missing; ``ExportExistsError`` (an
+        ``ExportError`` and a ``FileExistsError``): ``path`` exists and ``overwrite`` is False.
 
     Examples
     --------
@@ -180,7 +185,8 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
         ) from None
     path = Path(path)
     if path.exists() and not overwrite:
-        raise ExportError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it, or choose another path.")
+        raise ExportExistsError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it, or choose another "
+                                "path.")
     g = _Graph(onnx)
     wrench = g.calibration(model, "readings")
     g.nodes.append(onnx.helper.make_node("Identity", [wrench], ["wrench"]))
@@ -206,6 +212,6 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     onnx.helper.set_model_props(onnx_model, {"ftcal_model": type(model).__name__,
                                              "wrench_units": "N, N, N, N m, N m, N m"})
     onnx.checker.check_model(onnx_model, full_check=True)
-    with atomic_output(path, overwrite=overwrite, error=ExportError) as tmp:
+    with atomic_output(path, overwrite=overwrite, error=ExportExistsError) as tmp:
         tmp.write_bytes(onnx_model.SerializeToString())
     return path
