@@ -19,6 +19,7 @@ from sklearn.model_selection import GroupKFold
 import ftcal
 from ftcal import CalibrationInputError, HistoryCalibrator, LinearCalibrator, reading_history
 from ftcal.cli import main
+from ftcal.models._auto import StackedCalibrator
 
 TAU_TRUE = 3.0
 CREEP = 0.2  # k: 20 % of the lag shows in the readings
@@ -90,6 +91,29 @@ def test_a_long_time_constant_is_found_with_a_linear_or_a_flexible_estimator(inn
     assert model.cv_rmse_[1:].min() < 0.5 * model.cv_rmse_[0]
 
 
+def test_with_the_ltm_inside_it_is_the_joint_least_squares_fit():
+    """Partialling out (Frisch-Waugh-Lovell) gives the joint least-squares fit of [X, H, 1] exactly."""
+    raw, wrench, groups = creeping_sensor()
+    model = HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups)
+    assert model.tau_rows_ == 4.0
+    design = np.column_stack([raw, reading_history(raw, 4.0), np.ones(len(raw))])
+    joint = design @ np.linalg.lstsq(design, wrench, rcond=None)[0]
+    np.testing.assert_allclose(model.predict(raw), joint, atol=1e-9 * np.abs(wrench).max())
+    assert model.history_estimator_.alpha == 1.0  # the history columns are readings: no torque scale
+    np.testing.assert_array_equal(model.history_estimator_.zero_reading_, model.estimator_.zero_reading_)
+
+
+def test_a_sensor_without_memory_rarely_gets_a_history_term():
+    """Rows in time order, a rigid linear sensor, reference noise only: the history has nothing to explain. Over
+    8 sensors at most one may keep a term by chance (the one-SE rule compares the best of 5 time constants)."""
+    kept = 0
+    for seed in range(8):
+        raw, wrench, groups = creeping_sensor(creep=0.0, noise=0.0, seed=seed)
+        noisy = wrench + np.random.default_rng(seed).normal(size=wrench.shape) * np.array([0.1] * 3 + [0.005] * 3)
+        kept += HistoryCalibrator().fit(raw, noisy, groups=groups).tau_rows_ is not None
+    assert kept <= 1
+
+
 def test_rows_without_a_time_order_get_no_history_term():
     raw, wrench, _ = creeping_sensor(noise=0.05)
     order = np.random.default_rng(2).permutation(len(raw))  # shuffled rows: their "history" is noise
@@ -134,6 +158,9 @@ def test_retare_shifts_both_the_estimator_and_the_range_check(tmp_path, capsys):
                comments="")
     assert main(["retare", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "zero.csv"), "--quiet"]) == 0
     capsys.readouterr()
+    fitted = ftcal.load_model(tmp_path / "m" / "linear.model.npz")
+    retared = ftcal.load_model(tmp_path / "m" / "linear-retared.model.npz")
+    np.testing.assert_allclose(retared.predict(raw + shift), fitted.retare(zero).predict(raw + shift), atol=1e-12)
 
 
 @pytest.mark.parametrize("width", [1, 3])
@@ -179,10 +206,16 @@ def test_groups_reach_the_inner_calibrator_and_bad_input_is_named():
     with pytest.raises(ftcal.ExportError, match="load-history term"):
         ftcal.linear_calibration_matrix(HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups))
     # a history model must be the outermost one: a wrapper would restart its history or shuffle its rows
+    warm = np.column_stack([raw, np.linspace(15, 35, len(raw))])
     for wrapper in (HistoryCalibrator(HistoryCalibrator()), ftcal.EnsembleCalibrator(HistoryCalibrator()),
-                    ftcal.TemperatureCompensatedCalibrator(HistoryCalibrator())):
+                    ftcal.TemperatureCompensatedCalibrator(HistoryCalibrator()),
+                    ftcal.AutoCalibrator(candidates=[("h", HistoryCalibrator())], baselines=False)):
         with pytest.raises(CalibrationInputError, match="Put the history term outermost"):
-            wrapper.fit(np.column_stack([raw, np.linspace(15, 35, len(raw))]), wrench)
+            wrapper.fit(warm, wrench)
+    with pytest.raises(CalibrationInputError, match="Put the history term outermost"):
+        StackedCalibrator(estimators=[HistoryCalibrator()], weights=[1.0]).fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="last column is the temperature"):
+        HistoryCalibrator(ftcal.TemperatureCompensatedCalibrator()).fit(warm, wrench)
     # the inner calibrator's own settings are kept where the wrapper's are None
     inner = ftcal.PolynomialCalibrator(degree=2, ridge=0.01, alpha=3.0, random_state=7)
     model = HistoryCalibrator(inner, taus=(4.0,)).fit(raw, wrench, groups=groups)

@@ -141,17 +141,20 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     (``history_estimator_``: what of the history the current reading
     already tells), and ``c`` maps what is left of the history onto what is
     left of the wrench. The prediction is ``estimator_(X) + (H -
-    history_estimator_(X)) c``. For an estimator linear in its features (the
-    LTM, a polynomial) that is exactly the joint least-squares fit, however
-    strongly the history correlates with the readings.
+    history_estimator_(X)) c``. For an unpenalised estimator linear in its
+    features (the LTM) that is exactly the joint least-squares fit, however
+    strongly the history correlates with the readings; for a lightly
+    penalised polynomial it is close to it.
 
     Cross-validation (contiguous blocks of rows, or whole ``groups`` held
     out) scores the estimator alone and each time constant of ``taus``;
     ftcal's one-SE rule (:func:`~ftcal.core._model_selection.simplest_within_one_se`)
     keeps a history term only when it beats the estimator alone by more than
     one standard error (among the time constants within it, the shortest):
-    on a rigid sensor, or on shuffled rows, the result is the estimator
-    itself. ``estimator`` is fitted ``cv * (1 + len(taus)) + 2`` times (32
+    on shuffled rows, and usually on a sensor without memory, the result is
+    the estimator itself (with noisy readings the moving average can pay as
+    a denoiser, and with a misfitting estimator as a patch: ``cv_rmse_``
+    tells by how much; with few groups a small gain may be chance). ``estimator`` is fitted ``cv * (1 + len(taus)) + 2`` times (32
     with the defaults); a model-choosing estimator (:class:`~ftcal.AutoCalibrator`)
     is fitted once on all rows first, and the model it chooses is the
     estimator from then on (the static choice is made without the history).
@@ -260,6 +263,11 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         folds = self._folds(n, groups)
         template = self._inner()
         refuse_history_inside(template, type(self).__name__)
+        if getattr(template, "_temperature_column", False):
+            raise CalibrationInputError(
+                f"HistoryCalibrator cannot wrap {type(template).__name__}: its last column is the temperature, whose "
+                "history is not a load's, and the history columns cannot be temperature-compensated. Calibrate "
+                "with one of the two (ftcal fit --history or --temperature).")
         check_allocation(8.0 * X.size * (len(taus) + 1), f"the history columns of {len(taus)} time constants",
                          "try fewer taus")
         if self.alpha is None and getattr(template, "alpha", None) is not None:
@@ -276,9 +284,10 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
                 static, maps = self._partial_fit(template, X[train], y[train], [h[train] for h in histories],
                                                  _rows(groups, train))
             except CalibrationInputError as exc:
+                hint = " (fewer folds, cv, make it larger)" if "needs at least" in str(exc) else ""
                 raise CalibrationInputError(
                     f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds {len(train)} "
-                    f"of the {n} rows (lower cv, or record more), and there: {exc}") from None
+                    f"of the {n} rows{hint}, and there: {exc}") from None
             held_out[0][test] = _predicted(static, X[test])
             for k, (history, fitted) in enumerate(zip(histories, maps), start=1):
                 held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])

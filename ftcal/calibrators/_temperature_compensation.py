@@ -45,11 +45,12 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     n_iterations : int, default=5
         Alternating least-squares passes.
     alpha : float or None, default=None
-        Torque scale; given to ``estimator`` when it has this parameter.
+        Torque scale; given to ``estimator`` when it has this parameter (``None``: ``estimator``'s own is kept).
     zero_reading : array-like of shape (N,) or None, default=None
-        Raw zero-load reading at ``T0``; given to ``estimator``.
+        Raw zero-load reading at ``T0``; given to ``estimator`` (``None``: its own is kept; one set on
+        ``estimator`` must then be taken at ``reference_temperature``).
     random_state : int or None, default=None
-        Given to ``estimator``.
+        Given to ``estimator`` (``None``: its own is kept).
 
     Attributes
     ----------
@@ -77,6 +78,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
+    #: Its last input column is the temperature, not a channel (a load-history term must not wrap it).
+    _temperature_column = True
     #: Accepts the groups of the rows and passes them on when the inner calibrator requests them.
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {

@@ -187,8 +187,9 @@ def run(args: argparse.Namespace) -> int:
             summary["chosen"], summary["cv_results"] = estimator.static_choice_, estimator.static_cv_results_
             console.info(f"auto chose {estimator.static_choice_} (the static model, before the history term)")
         kept = "no history term" if estimator.tau_rows_ is None else f"a history term, tau = {estimator.tau_rows_:g} rows"
-        console.info(f"history: {kept} (held-out RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the best "
-                     f"time constant: {estimator.cv_rmse_[1:].min():.4g} N)")
+        console.info(f"history: {kept} (cross-validated RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the "
+                     f"best time constant: {estimator.cv_rmse_[1:].min():.4g} N, the best of {len(taus)} tried, so "
+                     "slightly optimistic; --report gives a held-out figure)")
     if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.cv_results_

@@ -17,6 +17,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
+from ..calibrators._history import refuse_history_inside
 from ..calibrators._base import BaseCalibrator, calibrated_range, resolve_alpha
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
@@ -430,6 +431,8 @@ class StackedCalibrator(BaseCalibrator):
 
     def _fit(self, X, y) -> None:
         members = list(self.estimators or [])
+        for member in members:
+            refuse_history_inside(member, type(self).__name__)
         self.weights_ = np.asarray(self.weights, dtype=float)
         if not members or self.weights_.shape != (len(members),) or (self.weights_ < 0).any():
             raise CalibrationInputError(
@@ -589,6 +592,8 @@ class AutoCalibrator(BaseCalibrator):
                 "[('linear', LinearCalibrator()), ('gp', GaussianProcessCalibrator())]; got "
                 f"{self.candidates!r:.120}."
             )
+        for _, candidate in pairs:  # its shuffled or grouped folds and chunked predict would break a history model
+            refuse_history_inside(candidate, type(self).__name__)
         return pairs
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
