@@ -107,7 +107,9 @@ def test_bad_alpha(data, alpha):
     "params, message",
     [
         (dict(hidden_layer_sizes=()), "hidden_layer_sizes must be a non-empty tuple"),
-        (dict(hidden_layer_sizes=(8, 0)), "each entry of hidden_layer_sizes must be an integer >= 1"),
+        (dict(hidden_layer_sizes=(8, 0)), "each entry of it an integer >= 1"),
+        (dict(callbacks=[42]), "callbacks must hold skorch callbacks"),
+        (dict(callbacks=[("p", "progress")]), "callbacks must hold skorch callbacks"),
         (dict(max_epochs=0), r"'max_epochs' parameter of DirectionalCalibrator must be an int in the range \[1, inf\)\. "
                              "Got 0 instead"),
         (dict(lr=-0.1), r"'lr' parameter of DirectionalCalibrator must be a float in the range \(0(\.0)?, inf\)\. "

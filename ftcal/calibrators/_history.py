@@ -154,8 +154,9 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     on shuffled rows, and usually on a sensor without memory, the result is
     the estimator itself (with noisy readings the moving average can pay as
     a denoiser, and with a misfitting estimator as a patch: ``cv_rmse_``
-    tells by how much; with few groups a small gain may be chance). ``estimator`` is fitted ``cv * (1 + len(taus)) + 2`` times (32
-    with the defaults); a model-choosing estimator (:class:`~ftcal.AutoCalibrator`)
+    tells by how much; with few groups a small gain may be chance).
+    ``estimator`` is fitted ``cv * (1 + len(taus)) + 2`` times (32 with the
+    defaults); a model-choosing estimator (:class:`~ftcal.AutoCalibrator`)
     is fitted once on all rows first, and the model it chooses is the
     estimator from then on (the static choice is made without the history).
     A flexible estimator that nearly interpolates its training rows (a

@@ -23,7 +23,7 @@ from ..core._memory import check_allocation
 from ..core._validation import validate_readings
 from ._engine import MemberSquaredError, NetworkRegressor
 from ._modules import mlp_layers
-from ._schedule import schedule_callbacks
+from ._schedule import Callback, schedule_callbacks
 
 __all__ = ["NetworkCalibrator", "train_networks", "device_available"]
 
@@ -136,14 +136,14 @@ class NetworkCalibrator(BaseCalibrator):
     }
 
     def _check_params(self) -> None:
-        """What the table cannot say: the layer widths are positive integers, and there is at least one."""
-        sizes = self.hidden_layer_sizes
-        if len(sizes) == 0:
-            raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple of layer widths, e.g. (64, 64); "
-                                        f"got {sizes!r}.")
-        for width in sizes:
-            if isinstance(width, bool) or not isinstance(width, Integral) or width < 1:
-                raise CalibrationInputError(f"each entry of hidden_layer_sizes must be an integer >= 1; got {width!r}.")
+        """What the table cannot say: at least one layer, widths integers >= 1; callbacks skorch's."""
+        bad = [w for w in self.hidden_layer_sizes if isinstance(w, bool) or not isinstance(w, Integral) or w < 1]
+        if len(self.hidden_layer_sizes) == 0 or bad:
+            raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple, each entry of it an integer >= 1, "
+                                        f"e.g. (64, 64); got {self.hidden_layer_sizes!r}.")
+        odd = [c for c in self.callbacks or () if not isinstance(c[-1] if isinstance(c, tuple) else c, Callback)]
+        if odd:
+            raise CalibrationInputError(f"callbacks must hold skorch callbacks or (name, callback) pairs; got {odd[0]!r}.")
 
     def _thread_limit(self):
         """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
