@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from skorch.callbacks import EpochTimer
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
@@ -110,6 +111,9 @@ def test_bad_alpha(data, alpha):
         (dict(hidden_layer_sizes=(8, 0)), "each entry of it an integer >= 1"),
         (dict(callbacks=[42]), "callbacks must hold skorch callbacks"),
         (dict(callbacks=[("p", "progress")]), "callbacks must hold skorch callbacks"),
+        (dict(callbacks=[()]), "callbacks must hold skorch callbacks"),
+        (dict(callbacks=[(1, EpochTimer())]), "callbacks must hold skorch callbacks"),
+        (dict(callbacks=[(EpochTimer(),)]), "callbacks must hold skorch callbacks"),
         (dict(max_epochs=0), r"'max_epochs' parameter of DirectionalCalibrator must be an int in the range \[1, inf\)\. "
                              "Got 0 instead"),
         (dict(lr=-0.1), r"'lr' parameter of DirectionalCalibrator must be a float in the range \(0(\.0)?, inf\)\. "

@@ -17,6 +17,7 @@ import pytest
 from sklearn.model_selection import GroupKFold
 
 import ftcal
+import ftcal.calibrators._base
 from ftcal import CalibrationInputError, HistoryCalibrator, LinearCalibrator, reading_history
 from ftcal.cli import main
 from ftcal.models._auto import StackedCalibrator
@@ -60,9 +61,17 @@ def test_reading_history_is_the_moving_average_of_the_rows_before_minus_the_row(
     # a constant offset (a tare) cancels; a reading held still has no history
     np.testing.assert_allclose(reading_history(X + 5.0, 2.0), reading_history(X, 2.0), atol=1e-12)
     np.testing.assert_array_equal(reading_history(np.ones((5, 3)), 4.0), np.zeros((5, 3)))
-    for bad in (0.5, 0, -1, float("nan"), True, "2"):
+    for bad in (0.5, 0, -1, float("nan"), float("inf"), True, "2"):
         with pytest.raises(CalibrationInputError, match="tau_rows"):
             reading_history(X, bad)
+    for bad_x, name in (([["a"]], "X"), (X + 1j, "X"), (np.array([[1e308], [-1e308]]), "overflows"),
+                        (np.empty((0, 4)), "at least one row")):
+        with pytest.raises(CalibrationInputError, match=name):
+            reading_history(bad_x, 2.0)
+    for bad_state, message in (("abc", "state must hold real numbers"), ([0.0] * 3, r"shape \(4,\)"),
+                               ([np.nan] * 4, "non-finite")):
+        with pytest.raises(CalibrationInputError, match=message):
+            reading_history(X, 2.0, state=bad_state)
 
 
 def test_the_history_term_removes_most_of_the_creep_error_and_finds_its_time_constant():
@@ -136,6 +145,25 @@ def test_stream_carries_the_history_across_chunks_and_the_model_file_keeps_every
     np.testing.assert_array_equal(loaded.cv_rmse_, model.cv_rmse_)
 
 
+def test_a_refused_chunk_leaves_the_stream_as_it_was_and_range_flags_follow_the_history():
+    raw, wrench, groups = creeping_sensor()
+    model = HistoryCalibrator(ftcal.PolynomialCalibrator(degree=2, ridge=0.01), taus=(4.0,)).fit(
+        raw, wrench, groups=groups)
+    predict = model.stream()
+    predict(raw[:100])
+    with pytest.raises(ValueError):
+        predict(np.full((1, raw.shape[1]), 1e200))  # a glitch the polynomial refuses (non-finite wrench)
+    clean = model.stream()
+    clean(raw[:100])
+    np.testing.assert_array_equal(predict(raw[100:110]), clean(raw[100:110]))
+    # a reading far beyond the range is flagged, and so are the rows whose history still holds it (weight >= 1e-3)
+    glitch = raw.copy()
+    glitch[50] = 1e3
+    flags = model.out_of_range(glitch)
+    reach = 1 + int(np.floor(np.log(1e-3 / 0.25) / np.log(0.75)))  # a (1 - a)^k >= 1e-3, a = 1 / tau
+    assert flags[50:51 + reach].all() and not flags[51 + reach:].any() and not flags[:50].any()
+
+
 def test_retare_shifts_both_the_estimator_and_the_range_check(tmp_path, capsys):
     raw, wrench, groups = creeping_sensor()
     model = HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups)
@@ -146,7 +174,8 @@ def test_retare_shifts_both_the_estimator_and_the_range_check(tmp_path, capsys):
     model.retare(zero)
     np.testing.assert_allclose(model.predict(raw + shift), before, atol=1e-3 * np.abs(before).max())
     # the range moves with the tare: only rows at a channel's extreme (2 a channel) may flip by the tare's noise
-    assert model.out_of_range(raw + shift).sum() <= 2 * raw.shape[1]
+    # (before the flags are spread to the rows whose history holds them)
+    assert ftcal.calibrators._base.BaseCalibrator.out_of_range(model, raw + shift).sum() <= 2 * raw.shape[1]
     predict = model.stream()
     np.testing.assert_allclose(np.vstack([predict(raw[:50] + shift), predict(raw[50:] + shift)]),
                                model.predict(raw + shift), atol=1e-12)
@@ -207,7 +236,9 @@ def test_groups_reach_the_inner_calibrator_and_bad_input_is_named():
         ftcal.linear_calibration_matrix(HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups))
     # a history model must be the outermost one: a wrapper would restart its history or shuffle its rows
     warm = np.column_stack([raw, np.linspace(15, 35, len(raw))])
-    for wrapper in (HistoryCalibrator(HistoryCalibrator()), ftcal.EnsembleCalibrator(HistoryCalibrator()),
+    with pytest.raises(CalibrationInputError, match="use one HistoryCalibrator"):
+        HistoryCalibrator(HistoryCalibrator()).fit(raw, wrench)
+    for wrapper in (ftcal.EnsembleCalibrator(HistoryCalibrator()),
                     ftcal.TemperatureCompensatedCalibrator(HistoryCalibrator()),
                     ftcal.AutoCalibrator(candidates=[("h", HistoryCalibrator())], baselines=False)):
         with pytest.raises(CalibrationInputError, match="Put the history term outermost"):
@@ -243,6 +274,17 @@ def test_cli_fit_history_then_predict_in_chunks_is_the_library_predict(tmp_path,
     assert not (tmp_path / "m2").exists()
     assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "creep.csv"), "--std"]) == 2
     assert "--std" in capsys.readouterr().err
+    # a glitch beyond the range: its row and those whose history holds it are counted, whatever the chunk size
+    glitch = raw.copy()
+    glitch[40] = 1e3
+    np.savetxt(tmp_path / "glitch.csv", glitch, delimiter=",", comments="",
+               header=",".join(f"s{i}" for i in range(raw.shape[1])))
+    expected = int(model.out_of_range(glitch).sum())
+    assert expected > 1
+    for size in ("1", "7", "4096"):
+        assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "glitch.csv"),
+                     "--chunk-size", size, "--output", str(tmp_path / f"g{size}.csv")]) == 0
+        assert f"{expected} of {len(raw)} readings lie beyond" in capsys.readouterr().err
 
 
 def test_the_report_of_a_history_model_keeps_the_rows_in_time_order(tmp_path):

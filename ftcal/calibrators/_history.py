@@ -36,7 +36,7 @@ from ._linear import LinearCalibrator
 from ._ridge import ridge_least_squares
 from ._routing import requests_groups, routed_fit_params, wrapper_routing
 
-__all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_history_inside"]
+__all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_history_inside", "spread_flags"]
 
 #: Contiguous blocks the rows are cut into for the one-SE rule when no groups are given (neighbouring rows of a
 #: time series are not independent errors).
@@ -79,7 +79,7 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
     >>> reading_history(x[3:], 2.0, state=state).ravel().tolist()   # the same stream in two chunks
     [-1.0, -0.5]
     """
-    X = np.asarray(X, dtype=float)
+    X = _real_array(X, "X")
     if isinstance(tau_rows, bool) or not isinstance(tau_rows, Real) or not (np.isfinite(float(tau_rows))
                                                                              and tau_rows >= 1):
         raise CalibrationInputError(f"tau_rows must be a finite number >= 1 (a time constant in rows); got "
@@ -94,16 +94,68 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
     if state is None:
         start = X[0]
     else:
-        start = np.asarray(state, dtype=float)
-        if start.shape != (X.shape[1],) or not np.isfinite(start).all():
-            raise CalibrationInputError(f"state must be the finite moving average of the previous chunk, shape "
+        start = _real_array(state, "state")
+        if start.shape != (X.shape[1],):
+            raise CalibrationInputError(f"state must be the moving average of the previous chunk, shape "
                                         f"({X.shape[1]},); got shape {start.shape}.")
+        if not np.isfinite(start).all():
+            raise CalibrationInputError(f"state holds a non-finite value ({start[~np.isfinite(start)][0]}); pass the "
+                                        "state returned by the previous chunk, or None to start at rest.")
     a = 1.0 / float(tau_rows)
     # e_i = (1 - a) e_{i-1} + a X_i with e_{-1} = start: the average *including* row i; the one before row i is e_{i-1}
     averages = lfilter([a], [1.0, a - 1.0], X, axis=0, zi=((1.0 - a) * start)[None, :])[0]
-    before = np.vstack([start[None, :], averages[:-1]])
-    history = before - X
+    with np.errstate(over="ignore", invalid="ignore"):
+        before = np.vstack([start[None, :], averages[:-1]])
+        history = before - X
+    if not np.isfinite(history).all():
+        raise CalibrationInputError(f"the readings' history overflows (readings up to {np.abs(X).max():.3g}); "
+                                    "readings this large are not a sensor's: check the units and the file.")
     return (history, averages[-1].copy()) if return_state else history
+
+
+def _real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
+    array = np.asarray(values)
+    if array.dtype.kind not in "biuf":
+        raise CalibrationInputError(f"{name} must hold real numbers; got an array of dtype {array.dtype} "
+                                    f"(shape {array.shape}).")
+    return array.astype(float)
+
+
+#: Weight below which a reading no longer counts in a later row's history (for the range flags).
+HISTORY_WEIGHT_FLOOR = 1e-3
+
+
+def history_reach(tau_rows: float) -> int:
+    """How many rows after a reading its weight in their history stays >= :data:`HISTORY_WEIGHT_FLOOR`.
+
+    Examples
+    --------
+    >>> history_reach(1.0), history_reach(2.0), history_reach(16.0)
+    (1, 9, 65)
+    """
+    a = 1.0 / float(tau_rows)
+    return 1 if a >= 1.0 else 1 + int(np.floor(np.log(HISTORY_WEIGHT_FLOOR / a) / np.log(1.0 - a)))
+
+
+def spread_flags(flags: ArrayLike, reach: int, since: int | None = None) -> tuple[NDArray[np.bool_], int | None]:
+    """Flags of readings beyond the calibrated range, spread to the ``reach`` rows after each (whose history holds
+    them): ``(flags, since)``, ``since`` the rows from the last flagged one to the end (``None``: none), to pass
+    with the next chunk of a stream.
+
+    Examples
+    --------
+    >>> flags, since = spread_flags([0, 1, 0, 0, 0], 2)
+    >>> flags.astype(int).tolist(), since
+    ([0, 1, 1, 1, 0], 4)
+    >>> spread_flags([0, 0], 5, since=4)[0].astype(int).tolist()   # the next chunk: 4 and 5 rows after the flag
+    [1, 1]
+    """
+    flags = np.asarray(flags, dtype=bool)
+    index = np.arange(flags.size, dtype=float)
+    last = np.maximum.accumulate(np.where(flags, index, -np.inf)) if flags.size else index
+    last = np.maximum(last, -np.inf if since is None else -float(since))
+    spread = (index - last) <= reach
+    return spread, (None if not flags.size or not np.isfinite(last[-1]) else int(flags.size - last[-1]))
 
 
 def reads_history(model) -> bool:
@@ -115,10 +167,11 @@ def refuse_history_inside(estimator, owner: str) -> None:
     """Refuse a load-history model as the inner calibrator of wrapper ``owner``: its history would restart at every
     chunk of a stream and its rows be shuffled by the wrapper's resampling; it must be the outermost model."""
     if reads_history(estimator):
+        fix = ("use one HistoryCalibrator: it chooses the time constant itself" if owner == "HistoryCalibrator" else
+               f"Put the history term outermost, e.g. HistoryCalibrator({owner}(...))")
         raise CalibrationInputError(
             f"{owner} cannot wrap {type(estimator).__name__}, a load-history model: it reads its rows as a time "
-            f"series, which {owner} does not keep. Put the history term outermost, e.g. "
-            f"HistoryCalibrator({owner}(...)).")
+            f"series, which {owner} does not keep. {fix}.")
 
 
 def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
@@ -341,6 +394,18 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         fitted = (self.history_estimator_, self.history_coef_, self.history_intercept_)
         return wrench + self._history_term(fitted, X, history)
 
+    def out_of_range(self, X: ArrayLike, *, margin: float = 0.0) -> NDArray[np.bool_]:
+        """Rows beyond the calibrated range (see :meth:`~ftcal.calibrators._base.BaseCalibrator.out_of_range`), and
+        the rows after each whose history still holds it (weight >= :data:`HISTORY_WEIGHT_FLOOR`): their wrench
+        depends on that reading too.
+
+        Returns
+        -------
+        ndarray of shape (n,), bool
+        """
+        flags = super().out_of_range(X, margin=margin)
+        return flags if self.tau_rows_ is None else spread_flags(flags, history_reach(self.tau_rows_))[0]
+
     def stream(self) -> Callable[[ArrayLike], NDArray[np.float64]]:
         """A ``predict`` for a live stream: each call takes the next chunk of readings (n_i, N), in time order, and
         the history carries from one call to the next.
@@ -364,11 +429,12 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
 
         def predict(chunk: ArrayLike) -> NDArray[np.float64]:
             X = self._retared(validate_readings(self, chunk))
-            history = None
+            history = after = None
             if self.tau_rows_ is not None:
-                history, state[0] = reading_history(X, self.tau_rows_, state=state[0], return_state=True)
+                history, after = reading_history(X, self.tau_rows_, state=state[0], return_state=True)
             wrench = self._predict_wrench(X, history)
             check_finite_output(X, wrench, self)
+            state[0] = after  # only a chunk that gave wrenches enters the history: a refused one leaves no trace
             return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
 
         return predict

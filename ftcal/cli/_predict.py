@@ -101,7 +101,10 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..calibrators._history import reads_history
+    from functools import partial
+
+    from ..calibrators._base import BaseCalibrator
+    from ..calibrators._history import history_reach, reads_history, spread_flags
     from ..models._auto import provides_std
 
     console = Console(args.quiet)
@@ -130,8 +133,13 @@ def run(args: argparse.Namespace) -> int:
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"
     beyond = [0]
-    # a load-history model reads its input as one stream in time order: the history carries across chunks
+    # a load-history model reads its input as one stream in time order: the history carries across chunks, and so
+    # does a reading beyond the range, into the flags of the rows whose history holds it
     predict = model.stream() if reads_history(model) else model.predict
+    reach = history_reach(model.tau_rows_) if reads_history(model) and model.tau_rows_ is not None else None
+    if reach is not None and own_range is not None:
+        own_range = partial(BaseCalibrator.out_of_range, model)  # unspread here: spread below across the chunks
+    since = [None]
 
     def emit(out) -> int:
         total = 0
@@ -152,6 +160,8 @@ def run(args: argparse.Namespace) -> int:
                 flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
+            if flags is not None and reach is not None:
+                flags, since[0] = spread_flags(flags, reach, since[0])
             if flags is not None:
                 beyond[0] += int(flags.sum())
             if limits is None:
@@ -173,8 +183,10 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"wrote {total} wrenches to {args.output}")
     if beyond[0]:
         column = " (out_of_range = 1)" if limits is not None else ""
-        print(f"ftcal: warning: {beyond[0]} of {total} readings lie beyond the calibrated range of {range_source}"
-              f"{column}; their wrenches are extrapolations", file=sys.stderr)
+        what = ("readings lie beyond the calibrated range, or follow one closely enough that their load history holds "
+                "it," if reach is not None else "readings lie beyond the calibrated range")
+        print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}; their wrenches are "
+              "extrapolations", file=sys.stderr)
     return 0
 
 
