@@ -29,7 +29,7 @@ from numbers import Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import InvalidParameterError, Interval
 from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
@@ -40,7 +40,7 @@ from ..core._validation import check_finite_output, check_zero_reading, validate
 from ..core._wrench import alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["BaseCalibrator", "GroupsFit"]
+__all__ = ["BaseCalibrator", "GroupsFit", "with_settings"]
 
 
 def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -58,6 +58,16 @@ def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
             f"it from y; got {alpha!r}."
         )
     return float(alpha)
+
+
+def with_settings(template: BaseCalibrator, **settings) -> BaseCalibrator:
+    """A clone of ``template`` given those of ``settings`` it has as parameters and that are not None (a wrapper's
+    ``alpha``, ``zero_reading``, ``random_state``: where the wrapper leaves one None, the inner calibrator's own
+    stays)."""
+    inner = clone(template)
+    params = inner.get_params()
+    inner.set_params(**{k: v for k, v in settings.items() if k in params and v is not None})
+    return inner
 
 
 #: A re-tare reading may lie outside the training readings of its channel by at most this fraction of their span.

@@ -31,7 +31,7 @@ from ..core._memory import check_allocation
 from ..core._model_selection import simplest_within_one_se
 from ..core._validation import check_finite_output, validate_readings
 from ..core._wrench import scale_torques
-from ._base import BaseCalibrator, GroupsFit
+from ._base import BaseCalibrator, GroupsFit, with_settings
 from ._linear import LinearCalibrator
 from ._ridge import ridge_least_squares
 from ._routing import requests_groups, routed_fit_params, wrapper_routing
@@ -91,9 +91,8 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
         r, c = (int(v) for v in np.argwhere(~np.isfinite(X))[0])
         raise CalibrationInputError(f"X[{r}, {c}] = {X[r, c]}: readings must be finite (a NaN would poison every "
                                     "later row's history); drop or repair that row.")
-    if state is None:
-        start = X[0]
-    else:
+    start = None
+    if state is not None:
         start = _real_array(state, "state")
         if start.shape != (X.shape[1],):
             raise CalibrationInputError(f"state must be the moving average of the previous chunk, shape "
@@ -101,7 +100,16 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
         if not np.isfinite(start).all():
             raise CalibrationInputError(f"state holds a non-finite value ({start[~np.isfinite(start)][0]}); pass the "
                                         "state returned by the previous chunk, or None to start at rest.")
-    a = 1.0 / float(tau_rows)
+    history, end = _history(X, float(tau_rows), start)
+    return (history, end) if return_state else history
+
+
+def _history(X: NDArray[np.float64], tau_rows: float, start: NDArray[np.float64] | None = None
+             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`reading_history` of readings already validated (the calibrator's own calls: ``fit``, ``predict``,
+    ``stream``): ``(history, state after the last row)``; ``start`` None: the first row."""
+    start = X[0] if start is None else start
+    a = 1.0 / tau_rows
     # e_i = (1 - a) e_{i-1} + a X_i with e_{-1} = start: the average *including* row i; the one before row i is e_{i-1}
     averages = lfilter([a], [1.0, a - 1.0], X, axis=0, zi=((1.0 - a) * start)[None, :])[0]
     with np.errstate(over="ignore", invalid="ignore"):
@@ -110,7 +118,7 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
     if not np.isfinite(history).all():
         raise CalibrationInputError(f"the readings' history overflows (readings up to {np.abs(X).max():.3g}); "
                                     "readings this large are not a sensor's: check the units and the file.")
-    return (history, averages[-1].copy()) if return_state else history
+    return history, averages[-1].copy()
 
 
 def _real_array(values: ArrayLike, name: str) -> NDArray[np.float64]:
@@ -331,7 +339,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
             chooser = self._new(template).fit(X, y, **routed_fit_params(self, groups))
             template, self.static_choice_ = clone(chooser.best_estimator_), chooser.best_name_
             self.static_cv_results_ = chooser.cv_results_
-        histories = [reading_history(X, tau) for tau in taus]  # over the whole recording: readings only
+        histories = [_history(X, tau)[0] for tau in taus]  # over the whole recording: readings only
         held_out = np.empty((1 + len(taus),) + y.shape)
         for train, test in folds:
             try:
@@ -356,12 +364,8 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         self.zero_reading_ = self.estimator_.zero_reading_
 
     def _new(self, template: BaseCalibrator, **given) -> BaseCalibrator:
-        inner = clone(template)
-        params = inner.get_params()
         own = {"alpha": self.alpha_, "zero_reading": self.zero_reading, "random_state": self.random_state}
-        own = {k: v for k, v in own.items() if v is not None}  # the inner calibrator's own settings stay otherwise
-        inner.set_params(**{k: v for k, v in {**own, **given}.items() if k in params})
-        return inner
+        return with_settings(template, **{**own, **given})
 
     def _partial_fit(self, template, X, y, histories, groups):
         """Robinson's partialling out: the estimator fitted to ``y``, and for each history ``H``: ``(g, c, b)``, ``g``
@@ -390,7 +394,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         wrench = _predicted(self.estimator_, X)
         if self.tau_rows_ is None:
             return wrench
-        history = reading_history(X, self.tau_rows_) if history is None else history
+        history = _history(X, self.tau_rows_)[0] if history is None else history
         fitted = (self.history_estimator_, self.history_coef_, self.history_intercept_)
         return wrench + self._history_term(fitted, X, history)
 
@@ -431,7 +435,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
             X = self._retared(validate_readings(self, chunk))
             history = after = None
             if self.tau_rows_ is not None:
-                history, after = reading_history(X, self.tau_rows_, state=state[0], return_state=True)
+                history, after = _history(X, self.tau_rows_, state[0])
             wrench = self._predict_wrench(X, history)
             check_finite_output(X, wrench, self)
             state[0] = after  # only a chunk that gave wrenches enters the history: a refused one leaves no trace

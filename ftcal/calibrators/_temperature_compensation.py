@@ -6,11 +6,10 @@ from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.base import clone
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import BaseCalibrator
+from ._base import BaseCalibrator, with_settings
 from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._history import refuse_history_inside
@@ -157,10 +156,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
         self.gain_per_deg_, self.offset_per_deg_ = gain, offset
         routed = routed_fit_params(self, groups)
-        inner = clone(self._inner())
-        params = inner.get_params()
-        inner.set_params(**{k: getattr(self, k) for k in ("alpha", "zero_reading", "random_state")
-                            if k in params and getattr(self, k) is not None})  # else the inner one's own stay
+        inner = with_settings(self._inner(), alpha=self.alpha, zero_reading=self.zero_reading,
+                              random_state=self.random_state)
         self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
         self.alpha_ = self.estimator_.alpha_
         self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)
