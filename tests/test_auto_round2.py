@@ -16,7 +16,7 @@ from ftcal import (AutoCalibrator, CalibrationInputError, GaussianProcessCalibra
 from ftcal.core._memory import MemoryLimitError
 from ftcal.core._model_selection import calibration_folds, simplest_within_one_se
 from ftcal.models import STOCK_BASELINE_NAMES
-from ftcal.models._auto import StackedCalibrator, minimum_training_rows
+from ftcal.models._auto import StackedCalibrator, complexity_ranks, minimum_training_rows
 from ftcal.simulation._field_sensors import make_dead_weight_dataset, make_robot_held_dataset, \
     make_soft_sensor_dataset
 
@@ -58,6 +58,41 @@ def test_one_se_rule_goes_to_the_simplest_by_complexity_not_by_position():
     clear = np.array([[2.0, 2.1, 1.9, 2.0], [1.0, 1.1, 0.9, 1.0]])
     assert simplest_within_one_se(clear) == 1
     assert simplest_within_one_se(clear, eligible=[True, False]) == 0
+
+
+def test_between_equally_simple_candidates_the_lower_error_wins():
+    # three rows, all within noise of each other; 0 and 1 share the lowest complexity: the better of them (1)
+    errors = np.array([[1.1, 0.9, 1.2, 0.9], [1.0, 1.0, 1.0, 1.0], [1.0, 1.0, 1.0, 0.9]])
+    assert simplest_within_one_se(errors) == 0  # distinct ranks: the first qualified
+    assert simplest_within_one_se(errors, complexity=[0, 0, 1]) == 1
+    assert simplest_within_one_se(errors, complexity=[1, 0, 0]) == 2  # lower mean (0.975) than 1's (1.0)
+
+
+def test_a_twin_with_group_offsets_ranks_with_its_model_without_them():
+    """The twin predicts with the same map and one intercept: as flexible as its model without offsets, so the
+    one-SE rule lets the CV score decide between the two (the LTM's twin is the degree-1 polynomial)."""
+    cands = [("linear", LinearCalibrator()), ("ridge linear", LinearCalibrator(ridge=1.0)),
+             ("linear twin", PolynomialCalibrator(degree=1, ridge=0.3, group_offsets=True)),
+             ("cubic", PolynomialCalibrator(degree=3, ridge=1e-2)),
+             ("cubic twin", PolynomialCalibrator(degree=3, ridge=1e-2, group_offsets=True)),
+             ("other cubic twin", PolynomialCalibrator(degree=3, ridge=1e-4, group_offsets=True))]
+    assert complexity_ranks(cands, 8).tolist() == [0, 1, 0, 3, 3, 5, 6, 7]
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("pose_offset", [0.0, 0.3])
+def test_auto_keeps_the_better_of_the_ltm_and_its_twin(pose_offset, seed):
+    """Equally simple, so whichever scores lower is chosen: the twin where 8 poses shift the readings (the pooled
+    LTM is biased by offsets that line up with the poses' loads), the LTM where they do not (loads vary mostly
+    between the poses, and the twin, fitted within them, throws that variation away)."""
+    rng = np.random.default_rng(seed)
+    groups = np.repeat(np.arange(8), 25)
+    w = (rng.normal(size=(8, 6)) * 2.0)[groups] + rng.normal(size=(200, 6))
+    raw = w @ rng.normal(size=(6, 7)) + pose_offset * rng.normal(size=(8, 7))[groups] + 0.05 * rng.normal(size=(200, 7))
+    cands = AutoCalibrator()._candidates(grouped=True)[:2]
+    auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, stack=False).fit(raw, w, groups=groups)
+    assert auto.best_name_ == cands[int(np.argmin(auto.cv_results_["rmse"][:2]))][0]
+    assert auto.best_name_ == ("linear(group offsets)" if pose_offset else "linear")
 
 
 def test_the_tie_tolerance_is_per_group_like_the_differences():

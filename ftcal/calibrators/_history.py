@@ -355,7 +355,8 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
                 held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])
         errors = np.array([self._row_errors(y - p) for p in held_out])  # per row: eq. 18 over rows
         units = groups if groups is not None else np.arange(n) * _TIME_BLOCKS // n
-        chosen = simplest_within_one_se(errors, units, complexity=[0] + [1] * len(taus))
+        shortest_first = np.argsort(np.argsort(taus, kind="stable"), kind="stable")  # among the qualified: the shortest
+        chosen = simplest_within_one_se(errors, units, complexity=[0, *(1 + shortest_first)])
         self.cv_rmse_ = np.sqrt(errors.mean(axis=1))
         self.tau_rows_ = None if chosen == 0 else taus[chosen - 1]
         kept = [] if chosen == 0 else [histories[chosen - 1]]

@@ -185,9 +185,11 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     best's mean squared error (averaged per unit like the differences; 0.5 %
     in RMSE: a gain that small is a tie even
     when it is consistent, as on noise-free data). Among those that qualify the one of lowest
-    ``complexity`` wins (default: the row order, simplest first); equal
-    complexity goes to the earlier row. Every model choice in ftcal uses this
-    one rule (``auto``, ``ftcal benchmark dataset``, the hybrid's ridge).
+    ``complexity`` wins (default: the row order, simplest first); between
+    candidates of equal complexity (two estimates of equally flexible models)
+    the lower mean error decides, then the earlier row. Every model choice in
+    ftcal uses this one rule (``auto``, ``ftcal benchmark dataset``, the
+    hybrid's ridge, the history term's time constant).
 
     Parameters
     ----------
@@ -205,6 +207,8 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     >>> simplest_within_one_se(errors)  # 0 is within noise of the best (1)
     0
     >>> simplest_within_one_se(errors, complexity=[2, 1, 0])  # now 1 is the simplest within noise
+    1
+    >>> simplest_within_one_se(errors, complexity=[0, 0, 1])  # 0 and 1 equally simple: the lower error
     1
     """
     errors = np.asarray(errors, dtype=float)
@@ -225,4 +229,4 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
         se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
         if k == best or float(diff.mean()) <= max(se, tie):
             qualified.append(int(k))
-    return min(qualified, key=lambda k: (rank[k], k))
+    return min(qualified, key=lambda k: (rank[k], means[k], k))

@@ -69,6 +69,45 @@ def default_candidates(schedule: str = "short", grouped: bool = False) -> list[t
     return candidates
 
 
+def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) -> np.ndarray:
+    """The complexity of each row of the comparison for the one-SE rule: its position, except that a candidate with
+    one offset per group (``group_offsets=True``) ranks with an earlier candidate that is the same model without them
+    (the LTM for ``degree=1``). Both predict with the same map and one intercept, so they are equally flexible: the
+    offsets change how the map is estimated (within the groups, free of their shifts), not what it can fit, and
+    between the two the lower score decides (:func:`~ftcal.core._model_selection.simplest_within_one_se`). Rows after
+    the candidates (the stack, the baselines) keep their positions.
+
+    Examples
+    --------
+    >>> complexity_ranks(default_candidates(grouped=True)[:4], 5).tolist()
+    [0, 0, 2, 2, 4]
+    """
+    ranks = np.arange(n_rows)
+    keys = [_model_without_offsets(est) for _, est in candidates]
+    for k, (_, est) in enumerate(candidates):
+        if est.get_params(deep=False).get("group_offsets") is True:
+            ranks[k] = next((ranks[j] for j in range(k) if _same_model(keys[j], keys[k])), ranks[k])
+    return ranks
+
+
+def _model_without_offsets(estimator) -> tuple[type, dict]:
+    """``estimator``'s class and the parameters that shape its predictions, ``group_offsets`` and the seed left out;
+    a degree-1 polynomial is the LTM (its ridge penalises no linear term)."""
+    from ..calibrators._linear import LinearCalibrator
+    from ..calibrators._polynomial import PolynomialCalibrator
+
+    params = {k: v for k, v in estimator.get_params(deep=False).items() if k not in ("group_offsets", "random_state")}
+    if type(estimator) is PolynomialCalibrator and params.get("degree") == 1:
+        return LinearCalibrator, {"alpha": params["alpha"], "ridge": 0.0, "zero_reading": params["zero_reading"]}
+    return type(estimator), params
+
+
+def _same_model(a: tuple[type, dict], b: tuple[type, dict]) -> bool:
+    """Whether two :func:`_model_without_offsets` descriptions are equal (arrays compared by value)."""
+    return a[0] is b[0] and a[1].keys() == b[1].keys() and all(
+        np.array_equal(np.asarray(a[1][key], dtype=object), np.asarray(b[1][key], dtype=object)) for key in a[1])
+
+
 def _offsets_identifiable(y: NDArray[np.float64], groups: NDArray | None) -> bool:
     """Whether one offset per group can be told from the loads: at least 3 groups (a grouped CV's training folds
     then hold two) within which the loads vary (:func:`~ftcal.calibrators._polynomial.within_group_load_fraction`)."""
@@ -487,7 +526,9 @@ class AutoCalibrator(BaseCalibrator):
        best-scoring candidate and every one within one paired standard error
        of it (over groups, or rows), or within 0.5 % of its RMSE (a tie:
        ``TIE_TOLERANCE``, 1 % of the mean squared error), qualify, and the
-       simplest in the order above wins. A candidate whose training folds are smaller than
+       simplest in the order above wins (a twin with group offsets counts as
+       simple as its model without: the same map and one intercept, estimated
+       within the groups; between the two the lower score wins). A candidate whose training folds are smaller than
        :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``).
@@ -635,7 +676,8 @@ class AutoCalibrator(BaseCalibrator):
             why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
             raise CalibrationInputError(f"no candidate could be fitted and judged on these data ({why[:400]}); "
                                         "record more rows or lower cv.")
-        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
+        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"],
+                                        complexity=complexity_ranks(candidates, len(errors)))
         results["chosen"] = results["name"][chosen]
         results["folds"] = "group" if groups is not None else "kfold"
         self.cv_results_ = results
