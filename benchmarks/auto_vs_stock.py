@@ -66,11 +66,14 @@ def rmse(y, pred, alpha):
     return ftcal.wrench_rmse(y, pred, alpha)
 
 
-def outer(raw, wrench, groups, splits, alpha, seed=0):
-    """Fit auto, the LTM, ftcal's GP and the stock baselines on each outer split; held-out predictions."""
+def outer(raw, wrench, groups, splits, alpha, seed=0, predictions: dict | None = None):
+    """Fit auto, the LTM, ftcal's GP and the stock baselines on each outer split; held-out predictions (also put in
+    ``predictions``, by model name, when given)."""
     names = ["auto", "linear", "gaussian_process", *stock_baselines(raw.shape[1])]
     jobs = JOBS
     pred = {n: np.full(wrench.shape, np.nan) for n in names}
+    if predictions is not None:
+        predictions.update(pred)
     seconds = {n: 0.0 for n in names}
     inside = []
     covered, counted = 0, 0
@@ -152,6 +155,31 @@ def robot_static_floor(d, splits, cache: Path | None = None) -> dict:
     return best_static_map(cache, setup)
 
 
+def ratio_interval(wrench, pred_a, pred_b, groups, alpha, n_boot=2000, seed=0) -> list[float]:
+    """95 % interval of RMSE(a) / RMSE(b) (eq. 18) over the rows of ``groups`` resampled whole (a pose-level
+    bootstrap: rows of one pose share its offset and are not independent)."""
+    scale = np.r_[np.ones(3), np.full(3, alpha)]
+    _, inverse = np.unique(groups, return_inverse=True)
+    count = np.bincount(inverse)
+    sums = [np.bincount(inverse, weights=(((p - wrench) * scale) ** 2).mean(axis=1)) for p in (pred_a, pred_b)]
+    draws = np.random.default_rng(seed).integers(0, count.size, size=(n_boot, count.size))
+    ratio = np.sqrt(sums[0][draws].sum(axis=1) / sums[1][draws].sum(axis=1))
+    return [float(v) for v in np.percentile(ratio, [2.5, 97.5])]
+
+
+def robot_floor_predictions(d, splits, floor: dict):
+    """The held-out predictions of the static floor's best map (fitted again on the offset-free recording)."""
+    clean = make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(d.group).size),
+                                    random_state=d.meta["random_state"], pose_offset=0.0)
+    best = min(floor["by_model"], key=floor["by_model"].get)
+    model = stock_baselines(8)[best] if best.startswith("sk_") else ftcal.AxisNonlinearCalibrator(alpha=d.meta["alpha"])
+    model.fit(clean.raw, clean.wrench)
+    pred = np.full(d.wrench.shape, np.nan)
+    for _, test in splits:
+        pred[test] = model.predict(d.raw[test])
+    return pred
+
+
 def dead_weight_data(case: str, seed: int):
     """Calibration rows, validation rows (loads up to 2x the calibrated range) and alpha of a dead-weight case."""
     cal, val = make_dead_weight_dataset(int(case.rsplit("_", 1)[1]), random_state=seed)
@@ -199,8 +227,17 @@ def run_case(case: str) -> dict:
     if case == "robot_held":
         d = make_robot_held_dataset()
         splits = list(GroupKFold(5).split(d.raw, groups=d.group))[:ROBOT_FOLDS]
-        return {**outer(d.raw, d.wrench, d.group, splits, d.meta["alpha"]), "noise_floor": d.meta["noise_floor_rmse"],
-                "static_floor": robot_static_floor(d, splits, OUT / f"robot_static_floor_{len(splits)}.json"),
+        pred = {}
+        res = outer(d.raw, d.wrench, d.group, splits, d.meta["alpha"], predictions=pred)
+        floor = robot_static_floor(d, splits, OUT / f"robot_static_floor_{len(splits)}.json")
+        rows = np.concatenate([t for _, t in splits])
+        best_stock = min((n for n in res["rmse"] if n.startswith("sk_")), key=res["rmse"].get)
+        interval = {"auto / static floor": (pred["auto"], robot_floor_predictions(d, splits, floor)),
+                    f"auto / best stock ({best_stock})": (pred["auto"], pred[best_stock])}
+        return {**res, "noise_floor": d.meta["noise_floor_rmse"], "static_floor": floor,
+                "ratio_95_interval_pose_bootstrap": {
+                    name: ratio_interval(d.wrench[rows], a[rows], b[rows], d.group[rows], d.meta["alpha"])
+                    for name, (a, b) in interval.items()},
                 "n_samples": d.n_samples, "n_poses": int(np.unique(d.group).size)}
     train, test, info = ftcal.make_artificial_dataset(case, random_state=0)
     raw = np.vstack([train.raw, test.raw])

@@ -13,6 +13,7 @@
 Examples::
 
     python benchmarks/departures.py --out benchmarks/results/departures
+    python benchmarks/departures.py --out benchmarks/results/departures --restore-schedule thesis
 """
 
 from __future__ import annotations
@@ -69,27 +70,40 @@ def spread_explained(cache: Path) -> dict | None:
     return {"n": len(recs), "r2": float(r**2), "ltm_std": float(rmse.std(ddof=1)), "floor_std": float(floor.std(ddof=1))}
 
 
-def restore_effect(models, presets) -> dict:
+def restore_effect(models, presets, schedule: str = "short") -> dict:
+    """Test RMSE with the best epoch's weights (ftcal) and with the last epoch's, from one fit: the last weights are
+    copied aside just before :class:`~ftcal.neural_network.RestoreBestWeights` loads the best ones."""
+    import torch
+
     from ftcal.neural_network import RestoreBestWeights
 
     out = {}
     original = RestoreBestWeights.on_train_end
+    last = {}
+
+    def keep_last_then_restore(self, net, **kwargs):
+        last["state"] = [p.detach().clone() for p in net.module_.parameters()]
+        original(self, net, **kwargs)
+
     profile = SensorProfile.default()
     for preset in presets:
         data_seed, model_seed = dataset_seeds(0, 0)
         train, test, _ = make_artificial_dataset(preset, random_state=data_seed)
         for name in models:
-            row = {}
-            for restore in (True, False):
-                RestoreBestWeights.on_train_end = original if restore else (lambda self, net, **kw: None)
-                try:
-                    est = make_model(name, n_channels=6, alpha=profile.alpha, schedule="short", random_state=model_seed)
-                    est.fit(train.raw, train.wrench)
-                finally:
-                    RestoreBestWeights.on_train_end = original
-                row["with_restore" if restore else "last_epoch"] = wrench_rmse(test.wrench, est.predict(test.raw), 50.0)
-                row["epochs"], row["best_epoch"] = int(est.n_epochs_), int(est.best_epoch_)
-            out[f"{preset}/{name}"] = row
+            RestoreBestWeights.on_train_end = keep_last_then_restore
+            try:
+                est = make_model(name, n_channels=6, alpha=profile.alpha, schedule=schedule, random_state=model_seed)
+                est.fit(train.raw, train.wrench)
+            finally:
+                RestoreBestWeights.on_train_end = original
+            row = {"schedule": schedule, "with_restore": wrench_rmse(test.wrench, est.predict(test.raw), 50.0)}
+            with torch.no_grad():
+                for p, value in zip(est.net_.module_.parameters(), last["state"]):
+                    p.copy_(value)
+            est.__dict__.pop("_numpy_layers_cache", None)  # predict's numpy copy of the weights
+            row["last_epoch"] = wrench_rmse(test.wrench, est.predict(test.raw), 50.0)
+            row["epochs"], row["best_epoch"] = int(est.n_epochs_), int(est.best_epoch_)
+            out[f"{preset}/{name}" + ("" if schedule == "short" else f"/{schedule}")] = row
             print(preset, name, row, flush=True)
     return out
 
@@ -98,9 +112,18 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--datasets", type=int, default=5)
     p.add_argument("--out", default=str(ROOT / "out" / "departures"))
+    p.add_argument("--restore-schedule", choices=["short", "thesis"],
+                   help="only measure the best-weights restore, with this schedule, and add it to departures.json")
     args = p.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
+    if args.restore_schedule:
+        path = out / "departures.json"
+        result = json.loads(path.read_text()) if path.exists() else {}
+        result.setdefault("restore", {}).update(
+            restore_effect(("directional", "comparative"), ("reconstructed", "thesis"), args.restore_schedule))
+        path.write_text(json.dumps(result, indent=1))
+        return 0
     result = {"gamma": gamma_effect(args.datasets), "eq18": eq18_effect(args.datasets),
               "spread_thesis": spread_explained(ROOT / "results" / "artificial_thesis" / "cache" / "thesis"),
               "spread_reconstructed": spread_explained(ROOT / "results" / "artificial_reconstructed" / "cache" / "reconstructed")}
