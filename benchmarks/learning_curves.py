@@ -20,7 +20,7 @@ Every fit is cached as one JSON file under ``OUT/cache`` as soon as it ends (key
 configuration), so the same command resumes; ``--aggregate-only`` writes the tables and plots from
 whatever is cached. Work is ordered so that the most informative results come first: the first seed of
 every dataset and size with the closed-form models, then the networks, then further seeds, the kernel
-models, ``auto`` and the ensembles. Network fits of one dataset, seed and model (all sizes) train
+models, the ensembles, and last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset, seed and model (all sizes) train
 together as one stacked module (:func:`ftcal.fit_stacked`).
 
 Outputs in ``OUT``: ``learning_curves.md``, ``learning_curves.json``, ``learning_curves_<dataset>.png``.
@@ -54,12 +54,13 @@ from ftcal.models import STOCK_BASELINE_NAMES
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "learning_curves"
 _FORMAT = 1
 
-#: Models in the order they run (cheapest first): tiers 0-3 (see the module notes).
+#: Models in the order they run (cheapest first): tiers 0-4 (see the module notes).
 TIERS = (
     ("linear", "polynomial", "axis_nonlinear", "sk_linear", "sk_poly2", "sk_poly3"),
     ("directional", "comparative"),
     ("gaussian_process", "sk_kernel_ridge", "sk_gp"),
-    ("auto", "directional_ensemble", "comparative_ensemble"),
+    ("directional_ensemble", "comparative_ensemble"),
+    ("auto",),
 )
 
 
