@@ -112,6 +112,16 @@ def test_with_the_ltm_inside_it_is_the_joint_least_squares_fit():
     np.testing.assert_array_equal(model.history_estimator_.zero_reading_, model.estimator_.zero_reading_)
 
 
+def test_of_time_constants_within_noise_of_the_best_the_shortest_is_kept_in_any_order():
+    """3.0 and 3.1 rows fit the creep (true 3) equally well, within the one-SE rule's tie: the shorter one is kept
+    whichever comes first in ``taus`` (by length, not by position), even where 3.1 scores a hair better."""
+    raw, wrench, groups = creeping_sensor(noise=0.05)
+    for taus in [(3.0, 3.1), (3.1, 3.0)]:
+        model = HistoryCalibrator(taus=taus).fit(raw, wrench, groups=groups)
+        assert model.tau_rows_ == 3.0
+        assert abs(model.cv_rmse_[1] - model.cv_rmse_[2]) < 0.005 * model.cv_rmse_[1:].min()  # a tie indeed
+
+
 def test_a_sensor_without_memory_rarely_gets_a_history_term():
     """Rows in time order, a rigid linear sensor, reference noise only: the history has nothing to explain. Over
     8 sensors at most one may keep a term by chance (the one-SE rule compares the best of 5 time constants)."""

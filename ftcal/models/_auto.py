@@ -69,13 +69,26 @@ def default_candidates(schedule: str = "short", grouped: bool = False) -> list[t
     return candidates
 
 
-def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) -> np.ndarray:
-    """The complexity of each row of the comparison for the one-SE rule: its position, except that a candidate with
-    one offset per group (``group_offsets=True``) ranks with an earlier candidate that is the same model without them
-    (the LTM for ``degree=1``). Both predict with the same map and one intercept, so they are equally flexible: the
-    offsets change how the map is estimated (within the groups, free of their shifts), not what it can fit, and
-    between the two the lower score decides (:func:`~ftcal.core._model_selection.simplest_within_one_se`). Rows after
-    the candidates (the stack, the baselines) keep their positions.
+def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) -> NDArray[np.int64]:
+    """The complexity of each row of the comparison for the one-SE rule, when the rows come in groups.
+
+    Each row's rank is its position, except that a candidate with one offset per group (``group_offsets=True``)
+    ranks with an *earlier* candidate that is the same model without them (the LTM for ``degree=1``). Both predict
+    with the same map and one intercept, so they are equally flexible: the offsets change how the map is estimated
+    (within the groups, free of their shifts), not what it can fit, and between the two the lower score decides
+    (:func:`~ftcal.core._model_selection.simplest_within_one_se`). ``alpha`` and ``zero_reading`` are not compared:
+    ``auto`` sets both on every candidate. Rows after the candidates (the stack, the baselines) keep their positions.
+
+    Parameters
+    ----------
+    candidates : list of (name, calibrator)
+        ``auto``'s candidates, in their order.
+    n_rows : int
+        Rows of the comparison (the candidates, then the stack and the baselines).
+
+    Returns
+    -------
+    ndarray of int, shape (n_rows,)
 
     Examples
     --------
@@ -85,20 +98,23 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
     ranks = np.arange(n_rows)
     keys = [_model_without_offsets(est) for _, est in candidates]
     for k, (_, est) in enumerate(candidates):
-        if est.get_params(deep=False).get("group_offsets") is True:
+        offsets = est.get_params(deep=False).get("group_offsets")
+        if isinstance(offsets, (bool, np.bool_)) and offsets:
             ranks[k] = next((ranks[j] for j in range(k) if _same_model(keys[j], keys[k])), ranks[k])
     return ranks
 
 
-def _model_without_offsets(estimator) -> tuple[type, dict]:
-    """``estimator``'s class and the parameters that shape its predictions, ``group_offsets`` and the seed left out;
-    a degree-1 polynomial is the LTM (its ridge penalises no linear term)."""
+def _model_without_offsets(estimator: BaseCalibrator) -> tuple[type, dict]:
+    """``estimator``'s class and the parameters that shape its predictions in ``auto`` (``group_offsets``, the seed,
+    and ``alpha`` / ``zero_reading``, which ``auto`` sets on every candidate, left out); a degree-1 polynomial is the
+    LTM (its ridge penalises no linear term)."""
     from ..calibrators._linear import LinearCalibrator
     from ..calibrators._polynomial import PolynomialCalibrator
 
-    params = {k: v for k, v in estimator.get_params(deep=False).items() if k not in ("group_offsets", "random_state")}
+    ignored = ("group_offsets", "random_state", "alpha", "zero_reading")
+    params = {k: v for k, v in estimator.get_params(deep=False).items() if k not in ignored}
     if type(estimator) is PolynomialCalibrator and params.get("degree") == 1:
-        return LinearCalibrator, {"alpha": params["alpha"], "ridge": 0.0, "zero_reading": params["zero_reading"]}
+        return LinearCalibrator, {"ridge": 0.0}
     return type(estimator), params
 
 
@@ -541,7 +557,9 @@ class AutoCalibrator(BaseCalibrator):
     ----------
     candidates : list of (name, estimator) or None, default=None
         ``None``: :func:`default_candidates` with ``schedule``. Order them
-        from the simplest to the most flexible (the 1-SE rule prefers earlier ones).
+        from the simplest to the most flexible (the 1-SE rule prefers earlier ones);
+        with ``groups``, a twin with ``group_offsets=True`` listed after its model
+        without offsets counts as simple as it (:func:`complexity_ranks`).
     cv : int, default=5
         Number of folds (capped by the number of groups).
     schedule : {"short", "thesis"}, default="short"
@@ -676,8 +694,8 @@ class AutoCalibrator(BaseCalibrator):
             why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
             raise CalibrationInputError(f"no candidate could be fitted and judged on these data ({why[:400]}); "
                                         "record more rows or lower cv.")
-        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"],
-                                        complexity=complexity_ranks(candidates, len(errors)))
+        ranks = None if groups is None else complexity_ranks(candidates, len(errors))  # twins: only with groups
+        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"], complexity=ranks)
         results["chosen"] = results["name"][chosen]
         results["folds"] = "group" if groups is not None else "kfold"
         self.cv_results_ = results
