@@ -77,8 +77,9 @@ def test_a_twin_with_group_offsets_ranks_with_its_model_without_them():
              ("cubic twin", PolynomialCalibrator(degree=3, ridge=1e-2, group_offsets=True)),
              ("other cubic twin", PolynomialCalibrator(degree=3, ridge=1e-4, group_offsets=True))]
     assert complexity_ranks(cands, 8).tolist() == [0, 1, 0, 3, 3, 5, 6, 7]
-    # a twin listed before its model is not tied; numpy's True counts; alpha and tare are auto's to set
-    assert complexity_ranks(cands[3:5][::-1], 2).tolist() == [0, 1]
+    # listed before its model, the twin shares its own (earlier) position; numpy's True counts; alpha and tare are
+    # auto's to set
+    assert complexity_ranks(cands[3:5][::-1], 2).tolist() == [0, 0]
     assert complexity_ranks([cands[0], ("t", PolynomialCalibrator(degree=1, group_offsets=np.True_))], 2).tolist() == [0, 0]
     assert complexity_ranks([("q", PolynomialCalibrator(degree=2, alpha=2.0)),
                              ("t", PolynomialCalibrator(degree=2, group_offsets=True, zero_reading=np.zeros(7)))],
@@ -100,6 +101,32 @@ def test_auto_keeps_the_better_of_the_ltm_and_its_twin(pose_offset, seed):
     auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, stack=False).fit(raw, w, groups=groups)
     assert auto.best_name_ == cands[int(np.argmin(auto.cv_results_["rmse"][:2]))][0]
     assert auto.best_name_ == ("linear(group offsets)" if pose_offset else "linear")
+
+
+@pytest.mark.parametrize("names", [["q", "q"], ["q", ""], ["q", 3]])
+def test_candidate_names_must_differ(names):
+    cands = list(zip(names, [PolynomialCalibrator(degree=2, group_offsets=True), PolynomialCalibrator(degree=2)]))
+    raw, w, groups = affine()
+    with pytest.raises(CalibrationInputError, match="one distinct, non-empty text name each"):
+        AutoCalibrator(candidates=cands, baselines=False).fit(raw, w, groups=groups)
+
+
+def test_a_stack_hands_the_groups_to_its_members_also_when_refitted_from_a_clone():
+    """auto's stack of the LTM and its twin, cloned (as HistoryCalibrator(auto) and GridSearchCV do) and fitted with
+    the groups, is auto's own stack: the twin member gets them, nothing warns about offsets without groups."""
+    import warnings
+    rng = np.random.default_rng(2)
+    groups = np.repeat(np.arange(8), 25)
+    w = (rng.normal(size=(8, 6)) * 2.0)[groups] + rng.normal(size=(200, 6))
+    raw = w @ rng.normal(size=(6, 7)) + 0.3 * rng.normal(size=(8, 7))[groups] + 0.05 * rng.normal(size=(200, 7))
+    members = [LinearCalibrator(), PolynomialCalibrator(degree=1, group_offsets=True)]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        stack = StackedCalibrator(estimators=members, weights=[0.5, 0.5], alpha=1.0).fit(raw, w, groups=groups)
+    twin = PolynomialCalibrator(degree=1, group_offsets=True, alpha=1.0).fit(raw, w, groups=groups)
+    np.testing.assert_allclose(stack.estimators_[1].predict(raw), twin.predict(raw), atol=1e-9)
+    with pytest.raises(CalibrationInputError, match="groups"):
+        StackedCalibrator(estimators=members, weights=[0.5, 0.5]).fit(raw, w, groups=groups[:-1])
 
 
 def test_without_groups_a_twin_is_ranked_by_its_position():

@@ -18,7 +18,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ..calibrators._history import refuse_history_inside
-from ..calibrators._base import BaseCalibrator, calibrated_range, resolve_alpha
+from ..calibrators._base import BaseCalibrator, GroupsFit, calibrated_range, resolve_alpha
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
                                      simplest_within_one_se)
@@ -73,7 +73,8 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
     """The complexity of each row of the comparison for the one-SE rule, when the rows come in groups.
 
     Each row's rank is its position, except that a candidate with one offset per group (``group_offsets=True``)
-    ranks with an *earlier* candidate that is the same model without them (the LTM for ``degree=1``). Both predict
+    and the same model without them (the LTM for ``degree=1``), listed before or after it, share the earlier of
+    their two positions. Both predict
     with the same map and one intercept, so they are equally flexible: the offsets change how the map is estimated
     (within the groups, free of their shifts), not what it can fit, and between the two the lower score decides
     (:func:`~ftcal.core._model_selection.simplest_within_one_se`). ``alpha`` and ``zero_reading`` are not compared:
@@ -97,11 +98,17 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
     """
     ranks = np.arange(n_rows)
     keys = [_model_without_offsets(est) for _, est in candidates]
-    for k, (_, est) in enumerate(candidates):
-        offsets = est.get_params(deep=False).get("group_offsets")
-        if isinstance(offsets, (bool, np.bool_)) and offsets:
-            ranks[k] = next((ranks[j] for j in range(k) if _same_model(keys[j], keys[k])), ranks[k])
+    twins = [_has_offsets(est) for _, est in candidates]
+    for k in np.flatnonzero(twins):
+        plain = next((j for j in range(len(candidates)) if not twins[j] and _same_model(keys[j], keys[k])), None)
+        if plain is not None:
+            ranks[k] = ranks[plain] = min(ranks[k], ranks[plain])
     return ranks
+
+
+def _has_offsets(estimator: BaseCalibrator) -> bool:
+    offsets = estimator.get_params(deep=False).get("group_offsets")
+    return isinstance(offsets, (bool, np.bool_)) and bool(offsets)
 
 
 def _model_without_offsets(estimator: BaseCalibrator) -> tuple[type, dict]:
@@ -439,7 +446,7 @@ def provides_std(model) -> bool:
     return "return_std" in inspect.signature(inner.predict).parameters
 
 
-class StackedCalibrator(BaseCalibrator):
+class StackedCalibrator(GroupsFit, BaseCalibrator):
     """A non-negative weighted sum of fitted calibrators' predictions (what ``auto`` builds when it pays).
 
     Parameters
@@ -449,6 +456,9 @@ class StackedCalibrator(BaseCalibrator):
     weights : array-like of shape (n_members,)
         Non-negative weight of each member (on the torque-scaled wrench; the sum need not be 1).
     alpha, zero_reading : as for every calibrator
+
+    ``fit(X, y, groups=None)`` hands ``groups`` to the members that use them
+    (one offset per group, grouped choices inside).
 
     Attributes
     ----------
@@ -496,7 +506,10 @@ class StackedCalibrator(BaseCalibrator):
         # AutoCalibrator hands over the members exactly as it cross-validated them (the GP with its structure,
         # networks on their subsample, with the groups); a clone has none and fits its templates
         self.estimators_ = self.__dict__.pop("_fitted_members", None) or [
-            _fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, None) for e in members]
+            _fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, self._fit_groups) for e in members]
+
+    def _uses_groups(self) -> bool:
+        return any(isinstance(e, GroupsFit) and e._uses_groups() for e in self.estimators or [])
 
     def _predict_wrench(self, X):
         scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
@@ -558,8 +571,8 @@ class AutoCalibrator(BaseCalibrator):
     candidates : list of (name, estimator) or None, default=None
         ``None``: :func:`default_candidates` with ``schedule``. Order them
         from the simplest to the most flexible (the 1-SE rule prefers earlier ones);
-        with ``groups``, a twin with ``group_offsets=True`` listed after its model
-        without offsets counts as simple as it (:func:`complexity_ranks`).
+        with ``groups``, a twin with ``group_offsets=True`` counts as simple as
+        its model without offsets (:func:`complexity_ranks`). Names must differ.
     cv : int, default=5
         Number of folds (capped by the number of groups).
     schedule : {"short", "thesis"}, default="short"
@@ -651,6 +664,14 @@ class AutoCalibrator(BaseCalibrator):
                 "[('linear', LinearCalibrator()), ('gp', GaussianProcessCalibrator())]; got "
                 f"{self.candidates!r:.120}."
             )
+        names = [name for name, _ in pairs]
+        repeated = sorted({repr(n) for n in names if names.count(n) > 1})
+        if repeated or not all(isinstance(n, str) and n for n in names):
+            what = f"{', '.join(repeated)} more than once" if repeated else "a name that is not a non-empty text"
+            raise CalibrationInputError(
+                f"candidates need one distinct, non-empty text name each (the comparison, the stack and the refit "
+                f"find them by name); got {what} in {names!r:.120}: rename them, e.g. 'quadratic' and "
+                "'quadratic (group offsets)'.")
         for _, candidate in pairs:  # its shuffled or grouped folds and chunked predict would break a history model
             refuse_history_inside(candidate, type(self).__name__)
         return pairs
