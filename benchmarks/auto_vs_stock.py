@@ -155,7 +155,8 @@ def robot_static_floor(d, splits, cache: Path | None = None) -> dict:
     return best_static_map(cache, setup)
 
 
-def ratio_interval(wrench, pred_a, pred_b, groups, alpha, n_boot=2000, seed=0) -> list[float]:
+def ratio_interval(wrench: np.ndarray, pred_a: np.ndarray, pred_b: np.ndarray, groups: np.ndarray, alpha: float,
+                   n_boot: int = 2000, seed: int = 0) -> list[float]:
     """95 % interval of RMSE(a) / RMSE(b) (eq. 18) over the rows of ``groups`` resampled whole (a pose-level
     bootstrap: rows of one pose share its offset and are not independent)."""
     scale = np.r_[np.ones(3), np.full(3, alpha)]
@@ -167,7 +168,7 @@ def ratio_interval(wrench, pred_a, pred_b, groups, alpha, n_boot=2000, seed=0) -
     return [float(v) for v in np.percentile(ratio, [2.5, 97.5])]
 
 
-def robot_floor_predictions(d, splits, floor: dict):
+def robot_floor_predictions(d, splits: list, floor: dict) -> np.ndarray:
     """The held-out predictions of the static floor's best map (fitted again on the offset-free recording)."""
     clean = make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(d.group).size),
                                     random_state=d.meta["random_state"], pose_offset=0.0)
