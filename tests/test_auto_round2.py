@@ -129,6 +129,18 @@ def test_a_stack_hands_the_groups_to_its_members_also_when_refitted_from_a_clone
         StackedCalibrator(estimators=members, weights=[0.5, 0.5]).fit(raw, w, groups=groups[:-1])
 
 
+def test_a_candidates_own_measured_tare_is_kept_unless_auto_is_given_one():
+    raw, w, _ = affine()
+    own = raw[0] - w[0] @ np.linalg.lstsq(w, raw - raw.mean(0), rcond=None)[0] + 0.01  # any reading: it is used as is
+    cands = [("linear", LinearCalibrator(zero_reading=own))]
+    auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, stack=False).fit(raw, w)
+    np.testing.assert_array_equal(auto.best_estimator_.zero_reading_, own)
+    np.testing.assert_array_equal(auto.zero_reading_, own)
+    shared = own + 1.0
+    auto = AutoCalibrator(candidates=cands, alpha=1.0, zero_reading=shared, baselines=False, stack=False).fit(raw, w)
+    np.testing.assert_array_equal(auto.best_estimator_.zero_reading_, shared)
+
+
 def test_without_groups_a_twin_is_ranked_by_its_position():
     """Without groups a twin fits the same model as its plain twin (same figures up to rounding): the earlier one
     stays, whatever the last bit says."""

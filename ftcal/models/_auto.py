@@ -141,12 +141,14 @@ def _offsets_identifiable(y: NDArray[np.float64], groups: NDArray | None) -> boo
 
 
 def with_alpha_and_tare(estimator, alpha: float, zero_reading):
-    """A clone of ``estimator`` with the shared torque scale and tare (an ensemble passes them to its members)."""
+    """A clone of ``estimator`` with the shared torque scale and, unless it is None, the shared tare (a candidate's
+    own measured ``zero_reading`` stays when none is shared)."""
     estimator = clone(estimator)
     params = estimator.get_params()
     prefix = "" if "alpha" in params else "estimator__" if "estimator__alpha" in params else None
     if prefix is not None:
-        estimator.set_params(**{f"{prefix}alpha": alpha, f"{prefix}zero_reading": zero_reading})
+        shared = {"alpha": alpha} if zero_reading is None else {"alpha": alpha, "zero_reading": zero_reading}
+        estimator.set_params(**{f"{prefix}{k}": v for k, v in shared.items()})
     return estimator
 
 
@@ -592,7 +594,8 @@ class AutoCalibrator(BaseCalibrator):
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹], shared by every candidate; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
-        Measured tare, given to every candidate; ``None``: each estimates its own.
+        Measured tare, given to every candidate; ``None``: each uses its own
+        ``zero_reading`` if it has one, else estimates its own.
     random_state : int or None, default=None
         Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
