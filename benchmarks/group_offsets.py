@@ -25,7 +25,7 @@ from sklearn.model_selection import GroupKFold
 
 import ftcal
 from ftcal.models import stock_baselines
-from ftcal.models._auto import default_candidates
+from ftcal.models import default_candidates
 
 from _output import parse_output
 
