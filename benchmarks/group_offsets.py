@@ -24,8 +24,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold
 
 import ftcal
-from ftcal.models import stock_baselines
-from ftcal.models import default_candidates
+from ftcal.models import default_candidates, stock_baselines
 
 from _output import parse_output
 
