@@ -74,11 +74,11 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
 
     Each row's rank is its position, except that a candidate with one offset per group (``group_offsets=True``)
     and the same model without them (the LTM for ``degree=1``), listed before or after it, share the earlier of
-    their two positions. Both predict
-    with the same map and one intercept, so they are equally flexible: the offsets change how the map is estimated
-    (within the groups, free of their shifts), not what it can fit, and between the two the lower score decides
-    (:func:`~ftcal.core._model_selection.simplest_within_one_se`). ``alpha`` and ``zero_reading`` are not compared:
-    ``auto`` sets both on every candidate. Rows after the candidates (the stack, the baselines) keep their positions.
+    their two positions. Both predict with the same map and one intercept, so they are equally flexible: the offsets
+    change how the map is estimated (within the groups, free of their shifts), not what it can fit, and between the
+    two the lower score decides (:func:`~ftcal.core._model_selection.simplest_within_one_se`). ``alpha`` and
+    ``zero_reading`` are not compared (``auto`` shares its torque scale with every candidate, and a tare makes no
+    model more flexible). Rows after the candidates (the stack, the baselines) keep their positions.
 
     Parameters
     ----------
@@ -112,9 +112,8 @@ def _has_offsets(estimator: BaseCalibrator) -> bool:
 
 
 def _model_without_offsets(estimator: BaseCalibrator) -> tuple[type, dict]:
-    """``estimator``'s class and the parameters that shape its predictions in ``auto`` (``group_offsets``, the seed,
-    and ``alpha`` / ``zero_reading``, which ``auto`` sets on every candidate, left out); a degree-1 polynomial is the
-    LTM (its ridge penalises no linear term)."""
+    """``estimator``'s class and the parameters that make its flexibility (``group_offsets``, the seed, ``alpha`` and
+    ``zero_reading`` left out); a degree-1 polynomial is the LTM (its ridge penalises no linear term)."""
     from ..calibrators._linear import LinearCalibrator
     from ..calibrators._polynomial import PolynomialCalibrator
 
