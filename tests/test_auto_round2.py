@@ -111,6 +111,15 @@ def test_candidate_names_must_differ(names):
         AutoCalibrator(candidates=cands, baselines=False).fit(raw, w, groups=groups)
 
 
+@pytest.mark.parametrize("bad, match", [(PolynomialCalibrator(degree=2, zero_reading="abc"), "'zero_reading'"),
+                                        (PolynomialCalibrator(degree=2.5), "'degree'"),
+                                        (PolynomialCalibrator(degree=2, ridge=-1), "'ridge'")])
+def test_a_candidate_with_a_bad_parameter_is_refused_before_fitting_by_name(bad, match):
+    raw, w, _ = affine()
+    with pytest.raises(CalibrationInputError, match=f"candidate 'q': .*{match}"):
+        AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("q", bad)], baselines=False).fit(raw, w)
+
+
 def test_a_stack_hands_the_groups_to_its_members_also_when_refitted_from_a_clone():
     """auto's stack of the LTM and its twin, cloned (as HistoryCalibrator(auto) and GridSearchCV do) and fitted with
     the groups, is auto's own stack: the twin member gets them, nothing warns about offsets without groups."""

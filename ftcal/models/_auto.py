@@ -674,8 +674,12 @@ class AutoCalibrator(BaseCalibrator):
                 f"candidates need one distinct, non-empty text name each (the comparison, the stack and the refit "
                 f"find them by name); got {what} in {names!r:.120}: rename them, e.g. 'quadratic' and "
                 "'quadratic (group offsets)'.")
-        for _, candidate in pairs:  # its shuffled or grouped folds and chunked predict would break a history model
+        for name, candidate in pairs:  # its shuffled or grouped folds and chunked predict would break a history model
             refuse_history_inside(candidate, type(self).__name__)
+            try:  # a user's mistake, said before any fitting rather than as a "failed" row of the table
+                candidate._check_parameters()
+            except CalibrationInputError as exc:
+                raise CalibrationInputError(f"candidate {name!r}: {exc}") from None
         return pairs
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
