@@ -18,7 +18,7 @@ from sklearn.utils.validation import check_is_fitted
 from threadpoolctl import threadpool_limits
 
 from ..calibrators._history import refuse_history_inside
-from ..calibrators._base import BaseCalibrator, GroupsFit, calibrated_range, resolve_alpha
+from ..calibrators._base import BaseCalibrator, GroupsFit, calibrated_range, resolve_alpha, with_settings
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
                                      simplest_within_one_se)
@@ -142,13 +142,9 @@ def _offsets_identifiable(y: NDArray[np.float64], groups: NDArray | None) -> boo
 def with_alpha_and_tare(estimator, alpha: float, zero_reading):
     """A clone of ``estimator`` with the shared torque scale and, unless it is None, the shared tare (a candidate's
     own measured ``zero_reading`` stays when none is shared)."""
-    estimator = clone(estimator)
     params = estimator.get_params()
-    prefix = "" if "alpha" in params else "estimator__" if "estimator__alpha" in params else None
-    if prefix is not None:
-        shared = {"alpha": alpha} if zero_reading is None else {"alpha": alpha, "zero_reading": zero_reading}
-        estimator.set_params(**{f"{prefix}{k}": v for k, v in shared.items()})
-    return estimator
+    prefix = "estimator__" if "alpha" not in params and "estimator__alpha" in params else ""
+    return with_settings(estimator, **{f"{prefix}alpha": alpha, f"{prefix}zero_reading": zero_reading})
 
 
 def minimum_training_rows(estimator, n_channels: int) -> int:

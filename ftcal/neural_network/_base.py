@@ -139,9 +139,9 @@ class NetworkCalibrator(BaseCalibrator):
         """What the table cannot say: at least one layer, widths integers >= 1; callbacks skorch's."""
         bad = [w for w in self.hidden_layer_sizes if isinstance(w, bool) or not isinstance(w, Integral) or w < 1]
         if len(self.hidden_layer_sizes) == 0 or bad:
-            raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple, each entry of it an integer >= 1; got {self.hidden_layer_sizes!r}.")
-        odd = [c for c in self.callbacks or () if not isinstance(c, Callback) and not (isinstance(c, tuple) and len(
-            c) == 2 and isinstance(c[0], str) and isinstance(c[1], Callback))]
+            raise CalibrationInputError(f"hidden_layer_sizes must be a non-empty tuple, each entry of it an integer >= 1, e.g. (64, 64); got {self.hidden_layer_sizes!r}.")
+        pair = lambda c: isinstance(c, tuple) and len(c) == 2 and isinstance(c[0], str)  # noqa: E731  (name, callback)
+        odd = [c for c in self.callbacks or () if not isinstance(c[1] if pair(c) else c, Callback)]
         if odd:
             raise CalibrationInputError(f"callbacks must hold skorch callbacks or (name, callback) pairs; got {odd[0]!r}.")
 
