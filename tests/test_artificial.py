@@ -114,8 +114,31 @@ def test_virtual_sensor_reads_fresh_noise_with_fixed_errors():
         VirtualSensor(errors="thesys")
     with pytest.raises(CalibrationInputError, match="wrench must have shape"):
         s.read(np.ones((2, 3)))
-    with pytest.raises(CalibrationInputError, match="unknown test distribution"):
+    with pytest.raises(CalibrationInputError, match="'test_distribution' parameter of make_artificial_dataset .* Got "
+                                                    "'cube'"):
         make_artificial_dataset(random_state=0, n_per_sphere=2, n_test=2, test_distribution="cube")
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(n_test=0), r"'n_test' parameter of make_artificial_dataset must be an int in the range \[1, 1000000\]\. "
+                     "Got 0"),
+    (dict(n_test=2.5), "'n_test' .* Got 2.5"),  # not silently 2 points
+    (dict(n_per_sphere=10**11), "'n_per_sphere' .* Got 100000000000"),  # refused, not a numpy MemoryError
+    (dict(n_test=True), "'n_test' .* must be a number, not a bool"),
+    (dict(n_spheres=2.0), r"'n_spheres' .* \[1, 4\]\. Got 2.0"),
+    (dict(random_state=-1), "'random_state' .* Got -1"),
+    (dict(random_state="a"), "'random_state' .* Got 'a'"),
+    (dict(profile="x"), "'profile' .*SensorProfile.* Got 'x'"),
+])
+def test_make_artificial_dataset_refuses_bad_arguments_before_sampling(kwargs, words):
+    with pytest.raises(CalibrationInputError, match=words):
+        make_artificial_dataset(**{"n_per_sphere": 2, "n_test": 2, **kwargs})
+
+
+def test_make_artificial_dataset_takes_numpy_integers_and_a_generator():
+    a = make_artificial_dataset(random_state=np.int64(3), n_per_sphere=np.int64(2), n_test=np.int64(2))
+    b = make_artificial_dataset(random_state=np.random.default_rng(3), n_per_sphere=2, n_test=2)
+    np.testing.assert_array_equal(a[0].raw, b[0].raw)  # default_rng(3) either way
 
 
 def test_ball_test_distribution_fills_the_force_and_torque_balls_independently():

@@ -108,7 +108,16 @@ def test_user_files_are_never_overwritten_without_force(tmp_path):
         (dict(models=("linear", "svm")), "unknown models"),
         (dict(presets=("thesis", "bogus")), "unknown error preset"),
         (dict(schedule="long"), "unknown schedule"),
-        (dict(n_datasets=0), "n_datasets must be >= 1"),
+        (dict(n_datasets=0), r"'n_datasets' parameter of run_artificial_benchmark must be an int in the range \[1, "
+                             r"1000\]\. Got 0"),
+        (dict(n_datasets=True), "'n_datasets' .* must be a number, not a bool"),
+        (dict(n_datasets=2.5), "'n_datasets' .* Got 2.5"),
+        (dict(seed=-1), "'seed' .* Got -1"),
+        (dict(n_jobs=0), "'n_jobs' .* Got 0"),
+        (dict(n_per_sphere=2.5), "'n_per_sphere' .* Got 2.5"),
+        (dict(n_test=10**9), r"'n_test' .* \[1, 1000000\] or None\. Got 1000000000"),
+        (dict(test_distribution="cube"), "'test_distribution' .* Got 'cube'"),
+        (dict(n_spheres=5), r"'n_spheres' .* \[1, 4\]\. Got 5"),
     ],
 )
 def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):

@@ -201,5 +201,5 @@ def test_cli_stack_must_be_a_positive_integer(value, capsys, tmp_path):
 
 
 def test_benchmark_refuses_a_bad_stack_before_any_work(tmp_path):
-    with pytest.raises(CalibrationInputError, match=r"stack must be an integer >= 1 \(nets trained together\); got 0"):
+    with pytest.raises(CalibrationInputError, match=r"'stack' parameter of run_artificial_benchmark must be an int in the range \[1, inf\)\. Got 0"):
         run_artificial_benchmark(n_datasets=1, quick=True, stack=0, out_dir=tmp_path / "b", plot=False)

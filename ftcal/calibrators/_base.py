@@ -36,7 +36,8 @@ from threadpoolctl import threadpool_limits
 
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import check_groups
-from ..core._validation import check_finite_output, check_zero_reading, validate_readings, validate_training_data
+from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
+                                validate_training_data)
 from ..core._wrench import alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
 
@@ -112,14 +113,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
             self._validate_params()
         except InvalidParameterError as exc:
             raise CalibrationInputError(str(exc)) from None
-        for name, value in self.get_params(deep=False).items():
-            # scikit-learn's intervals take True for 1: a flag where a number belongs is a mistake
-            allowed = [c for c in self._parameter_constraints.get(name, ["boolean"]) if c is not None]
-            if isinstance(value, bool) and allowed and all(isinstance(c, Interval) for c in allowed):
-                raise CalibrationInputError(
-                    f"The {name!r} parameter of {type(self).__name__} must be a number, not a bool. Got {value!r} "
-                    "instead."
-                )
+        refuse_bool_numbers(type(self).__name__, self._parameter_constraints, self.get_params(deep=False))
         self._check_params()
 
     def _check_params(self) -> None:

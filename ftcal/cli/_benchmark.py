@@ -79,7 +79,8 @@ def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True,
 
 
 def _register_artificial(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS, MAX_DATASETS
+    from ..simulation._sampling import TEST_DISTRIBUTIONS
 
     a = kinds.add_parser(
         "artificial",
@@ -91,9 +92,9 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
         "--preset", dest="presets", action="append", choices=sorted(ERROR_PRESETS),
         help="error preset (repeatable; default: thesis)",
     )
-    a.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=30, help="datasets per preset")
+    a.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=30, help="datasets per preset")
     a.add_argument(
-        "--test-distribution", choices=("radial", "box", "ball"), default=None,
+        "--test-distribution", choices=TEST_DISTRIBUTIONS, default=None,
         help="test-load sampling (default: the preset's own, 'ball' for reconstructed, else 'radial')",
     )
     a.add_argument(

@@ -54,7 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS
+    from ..simulation._presets import ERROR_PRESETS, MAX_DATASETS
+    from ..simulation._sampling import MAX_POINTS, TEST_DISTRIBUTIONS
 
     d = kinds.add_parser(
         "dataset",
@@ -64,11 +65,11 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
         epilog=DATASET_EXAMPLE,
     )
     d.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset")
-    d.add_argument("--n-datasets", type=int_in_range(1, 1000, "datasets"), default=1, help="independent datasets (each its own errors)")
-    d.add_argument("--n-per-sphere", type=int_in_range(1, 1_000_000, "points per sphere"), default=1250, help="training points per sphere (4 spheres)")
-    d.add_argument("--n-test", type=int_in_range(1, 1_000_000, "test points"), default=1250, help="test points")
+    d.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=1, help="independent datasets (each its own errors)")
+    d.add_argument("--n-per-sphere", type=int_in_range(1, MAX_POINTS, "points per sphere"), default=1250, help="training points per sphere (4 spheres)")
+    d.add_argument("--n-test", type=int_in_range(1, MAX_POINTS, "test points"), default=1250, help="test points")
     d.add_argument(
-        "--test-distribution", default=None, choices=("radial", "box", "ball"),
+        "--test-distribution", default=None, choices=TEST_DISTRIBUTIONS,
         help="how test wrenches fill the operating range (default: the preset's own, 'ball' for "
              "reconstructed, else 'radial')",
     )

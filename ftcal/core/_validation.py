@@ -27,6 +27,7 @@ __all__ = [
     "check_magnitude",
     "check_bool",
     "check_arguments",
+    "refuse_bool_numbers",
     "FLOAT64_OVERFLOW",
 ]
 
@@ -305,8 +306,8 @@ def check_arguments(caller: str, constraints: dict, **values) -> None:
 
     The one way ftcal's functions check their arguments: a bad one raises
     :class:`CalibrationInputError` naming the argument, what is allowed and
-    the value given. A bool where only numbers are allowed is refused too
-    (scikit-learn's intervals take ``True`` for 1).
+    the value given. A bool where a number is allowed and a bool is not is
+    refused too (scikit-learn's intervals take ``True`` for 1).
 
     Examples
     --------
@@ -320,8 +321,15 @@ def check_arguments(caller: str, constraints: dict, **values) -> None:
         validate_parameter_constraints(constraints, values, caller_name=caller)
     except InvalidParameterError as exc:
         raise CalibrationInputError(str(exc)) from None
+    refuse_bool_numbers(caller, constraints, values)
+
+
+def refuse_bool_numbers(owner: str, constraints: dict, values: dict) -> None:
+    """Refuse a bool given where a number is allowed and a bool is not: scikit-learn's intervals take ``True`` for 1,
+    but a flag where a count or a size belongs is a mistake. ``owner`` names the function or estimator."""
     for name, value in values.items():
         allowed = [c for c in constraints.get(name, []) if c is not None]
-        if isinstance(value, (bool, np.bool_)) and allowed and all(isinstance(c, Interval) for c in allowed):
-            raise CalibrationInputError(f"The {name!r} parameter of {caller} must be a number, not a bool. Got "
+        takes_bools = any((isinstance(c, str) and c == "boolean") or c is bool or c is np.bool_ for c in allowed)
+        if isinstance(value, (bool, np.bool_)) and not takes_bools and any(isinstance(c, Interval) for c in allowed):
+            raise CalibrationInputError(f"The {name!r} parameter of {owner} must be a number, not a bool. Got "
                                         f"{value!r} instead.")

@@ -45,18 +45,21 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Mapping, Sequence
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from joblib import Parallel, delayed
+from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..simulation._artificial import make_artificial_dataset
+from ..simulation._artificial import SPHERE_FRACTIONS, make_artificial_dataset
 from ..core._files import plain_json
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
+from ..core._validation import check_arguments
 from ..simulation._error_models import ErrorModel
-from ..simulation._presets import default_test_distribution, error_preset
-from ..simulation._sampling import TEST_DISTRIBUTIONS
+from ..simulation._presets import MAX_DATASETS, default_test_distribution, error_preset
+from ..simulation._sampling import MAX_POINTS, TEST_DISTRIBUTIONS
 from ..simulation._sensor import SensorProfile
 
 __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "format_mean_std", "dataset_seeds",
@@ -370,12 +373,23 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 
 
 # ----------------------------------------------------------------- driver
-def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
+def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **arguments) -> None:
+    """Check the benchmark's arguments (``arguments``: ``seed``, ``n_per_sphere``, ``n_test``,
+    ``test_distribution``, ``n_spheres``) before any work; the counts within the CLI's bounds."""
     from ..models._baselines import STOCK_BASELINE_NAMES
     from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
 
-    if int(n_datasets) < 1:
-        raise CalibrationInputError(f"n_datasets must be >= 1; got {n_datasets}.")
+    points = [Interval(Integral, 1, MAX_POINTS, closed="both"), None]
+    check_arguments("run_artificial_benchmark", {
+        "n_datasets": [Interval(Integral, 1, MAX_DATASETS, closed="both")],
+        "n_jobs": [Interval(Integral, None, -1, closed="right"), Interval(Integral, 1, None, closed="left")],
+        "stack": [Interval(Integral, 1, None, closed="left")],
+        "seed": [Interval(Integral, 0, None, closed="left")],
+        "n_per_sphere": points,
+        "n_test": points,
+        "test_distribution": [StrOptions(set(TEST_DISTRIBUTIONS)), None],
+        "n_spheres": [Interval(Integral, 1, len(SPHERE_FRACTIONS), closed="both")],
+    }, n_datasets=n_datasets, n_jobs=n_jobs, stack=stack, **arguments)
     for p in presets:
         if not isinstance(p, str):
             raise CalibrationInputError(f"preset names must be strings; got {p!r}.")
@@ -385,10 +399,6 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1) -> None:
         raise CalibrationInputError(f"unknown models {unknown or models}; choose from {known}.")
     if schedule not in SCHEDULE_NAMES:
         raise CalibrationInputError(f"unknown schedule {schedule!r}; choose one of {SCHEDULE_NAMES}.")
-    if n_jobs == 0:
-        raise CalibrationInputError("n_jobs must not be 0 (use 1 for serial, -1 for every core).")
-    if isinstance(stack, bool) or not isinstance(stack, int) or stack < 1:
-        raise CalibrationInputError(f"stack must be an integer >= 1 (nets trained together); got {stack!r}.")
 
 
 def _preset_models(presets: Sequence[str] | Mapping[str, ErrorModel]) -> dict[str, ErrorModel]:
@@ -510,9 +520,8 @@ def run_artificial_benchmark(
     t0 = time.perf_counter()
     preset_models = _preset_models(presets)
     presets, models = tuple(preset_models), tuple(models)
-    _check_args(n_datasets, presets, models, schedule, n_jobs, stack)
-    if test_distribution is not None and test_distribution not in TEST_DISTRIBUTIONS:
-        raise CalibrationInputError(f"unknown test distribution {test_distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
+    _check_args(n_datasets, presets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
+                n_test=n_test, test_distribution=test_distribution, n_spheres=n_spheres)
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])
     n_per_sphere = int(n_per_sphere or (QUICK["n_per_sphere"] if quick else 1250))

@@ -22,15 +22,19 @@ With eq. 12 and the default radial test set (torque-scaled norm uniform in
 from __future__ import annotations
 
 
+from numbers import Integral
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..io._dataset import CalibrationDataset
 from ._error_models import ErrorModel, SampledErrors
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import wrench_rmse
+from ..core._validation import check_arguments
 from ._presets import default_test_distribution, error_preset
-from ._sampling import continuous_wrenches, sphere_wrenches
+from ._sampling import TEST_DISTRIBUTIONS, check_points, continuous_wrenches, sphere_wrenches
 from ._sensor import SensorProfile
 
 __all__ = ["VirtualSensor", "make_artificial_dataset", "noise_floor"]
@@ -227,14 +231,19 @@ def make_artificial_dataset(
     >>> train.raw.shape, test.raw.shape, sorted(set(train.group.tolist()))
     ((20, 6), (4, 6), [0, 1, 2, 3])
     """
+    check_points("make_artificial_dataset", n_per_sphere=n_per_sphere, n_test=n_test)
+    check_arguments("make_artificial_dataset", {
+        "random_state": [Interval(Integral, 0, None, closed="left"), np.random.Generator, None],
+        "profile": [SensorProfile, None],
+        "test_distribution": [StrOptions(set(TEST_DISTRIBUTIONS)), None],
+        "n_spheres": [Interval(Integral, 1, len(SPHERE_FRACTIONS), closed="both")],
+    }, random_state=random_state, profile=profile, test_distribution=test_distribution, n_spheres=n_spheres)
+    model = error_preset(preset)
     rng = np.random.default_rng(random_state)
     if test_distribution is None:
         test_distribution = default_test_distribution(preset)
     profile = SensorProfile.default() if profile is None else profile
-    model = error_preset(preset)
     sensor = VirtualSensor(profile, errors=model, zero_offset=zero_offset, random_state=rng)
-    if isinstance(n_spheres, bool) or int(n_spheres) != n_spheres or not 1 <= n_spheres <= len(SPHERE_FRACTIONS):
-        raise CalibrationInputError(f"n_spheres must be an integer from 1 to {len(SPHERE_FRACTIONS)}; got {n_spheres!r}.")
     radii = np.array(SPHERE_FRACTIONS[len(SPHERE_FRACTIONS) - int(n_spheres):]) * profile.fmax
     train_wrench, sphere = sphere_wrenches(radii, n_per_sphere, profile.alpha, rng)
     test_wrench = continuous_wrenches(n_test, profile.fmax, profile.tmax, rng, test_distribution)

@@ -50,7 +50,7 @@ from dataclasses import replace
 from ._error_models import ErrorModel
 from ..core._exceptions import CalibrationInputError
 
-__all__ = ["ERROR_PRESETS", "PRESET_TEST_DISTRIBUTIONS", "error_preset", "default_test_distribution"]
+__all__ = ["ERROR_PRESETS", "PRESET_TEST_DISTRIBUTIONS", "MAX_DATASETS", "error_preset", "default_test_distribution"]
 
 _THESIS = ErrorModel(
     creep=0.003,
@@ -64,6 +64,8 @@ _THESIS = ErrorModel(
     spread=0.10,
 )
 
+#: Most datasets of one preset a benchmark run or ``ftcal simulate dataset`` makes (the thesis has 30).
+MAX_DATASETS = 1000
 #: The named presets (see the module notes for every number's origin).
 ERROR_PRESETS: dict[str, ErrorModel] = {
     "thesis": _THESIS,

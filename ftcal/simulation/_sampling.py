@@ -35,16 +35,20 @@ Test set (IV-A-b)
 
 from __future__ import annotations
 
+from numbers import Integral
+
 import numpy as np
 from numpy.typing import NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import unscale_torques
 
-__all__ = ["sphere_wrenches", "continuous_wrenches", "TEST_DISTRIBUTIONS"]
+__all__ = ["sphere_wrenches", "continuous_wrenches", "check_points", "TEST_DISTRIBUTIONS", "MAX_POINTS"]
 
 #: Names accepted by :func:`continuous_wrenches`.
 TEST_DISTRIBUTIONS = ("radial", "box", "ball")
+#: Most points one sampler call draws (per sphere, or test points): the artificial datasets' size limit.
+MAX_POINTS = 1_000_000
 
 
 def _unit_directions(n: int, rng: np.random.Generator) -> NDArray[np.float64]:
@@ -58,6 +62,23 @@ def _uniform_ball_3d(n: int, radius: float, rng: np.random.Generator) -> NDArray
     v = rng.standard_normal((n, 3))
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     return v * (radius * np.cbrt(rng.uniform(0.0, 1.0, size=(n, 1))))
+
+
+def check_points(caller: str, **counts) -> None:
+    """Refuse a point count that is not an integer from 1 to :data:`MAX_POINTS` (a bool or ``2.5`` included).
+
+    Examples
+    --------
+    >>> check_points("make_artificial_dataset", n_test=2.5)
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: The 'n_test' parameter of make_artificial_dataset must be an int in the range [1, 1000000]. Got 2.5 instead.
+    """
+    from sklearn.utils._param_validation import Interval  # scikit-learn only when a dataset is made (not for --help)
+
+    from ..core._validation import check_arguments
+
+    check_arguments(caller, {name: [Interval(Integral, 1, MAX_POINTS, closed="both")] for name in counts}, **counts)
 
 
 def sphere_wrenches(
@@ -96,8 +117,7 @@ def sphere_wrenches(
     radii = np.asarray(radii, dtype=float)
     if radii.ndim != 1 or radii.size == 0 or not np.all(radii > 0):
         raise CalibrationInputError(f"radii must be a non-empty list of positive radii; got {radii!r}.")
-    if int(n_per_sphere) < 1:
-        raise CalibrationInputError(f"n_per_sphere must be >= 1; got {n_per_sphere}.")
+    check_points("sphere_wrenches", n_per_sphere=n_per_sphere)
     n = int(n_per_sphere)
     scaled = np.vstack([r * _unit_directions(n, rng) for r in radii])
     sphere = np.repeat(np.arange(radii.size, dtype=np.int64), n)
@@ -141,8 +161,7 @@ def continuous_wrenches(
     >>> bool(np.all(np.linalg.norm(b[:, :3], axis=1) <= 2000) and np.all(np.linalg.norm(b[:, 3:], axis=1) <= 40))
     True
     """
-    if int(n) < 1:
-        raise CalibrationInputError(f"n must be >= 1; got {n}.")
+    check_points("continuous_wrenches", n=n)
     alpha = fmax / tmax
     if distribution == "radial":
         scaled = _unit_directions(int(n), rng) * rng.uniform(0.0, fmax, size=(int(n), 1))
