@@ -41,6 +41,8 @@ __all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_hist
 #: Contiguous blocks the rows are cut into for the one-SE rule when no groups are given (neighbouring rows of a
 #: time series are not independent errors).
 _TIME_BLOCKS = 20
+#: Most time constants one fit tries (each costs ``cv`` fits of the estimator).
+MAX_TAUS = 20
 
 
 def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = None,
@@ -235,7 +237,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     estimator : calibrator or None, default=None
         The static calibrator; ``None``: :class:`~ftcal.LinearCalibrator`.
     taus : array-like of float >= 1, default=(1, 2, 4, 8, 16)
-        Time constants tried [rows].
+        Time constants tried [rows]: a flat list of at most :data:`MAX_TAUS` (20).
     cv : int >= 2, default=5
         Folds: contiguous blocks of rows, or :class:`~sklearn.model_selection.GroupKFold`
         over ``groups`` (sessions, presses: the rows of one group must be
@@ -295,15 +297,19 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         self.random_state = random_state
 
     def _taus(self) -> list:
-        return list(np.ravel(np.asarray(self.taus, dtype=object)))
+        """The time constants as a flat list (one number counts as a list of one; a table is checked and refused)."""
+        return list(np.atleast_1d(np.asarray(self.taus, dtype=object)))
 
     def _check_params(self) -> None:
+        shape = np.shape(np.asarray(self.taus, dtype=object))
         taus = self._taus()
         bad = [t for t in taus if isinstance(t, bool) or not isinstance(t, Real) or not np.isfinite(float(t)) or t < 1]
-        if not taus or bad:
+        if len(shape) > 1 or not taus or bad or len(taus) > MAX_TAUS:
+            why = (f"an array of shape {shape}" if len(shape) > 1 else f"{bad[0]!r} among them" if bad
+                   else f"{len(taus)} of them (each costs cv fits)" if taus else "none")
             raise CalibrationInputError(
-                f"taus must be a non-empty list of time constants >= 1 [rows]; got {self.taus!r}"
-                + (f" (bad: {bad[0]!r})" if bad else "") + ".")
+                f"taus must be a non-empty flat list of at most {MAX_TAUS} time constants >= 1 [rows], e.g. (1, 2, 4, "
+                f"8, 16); got {why}: {self.taus!r:.120}.")
 
     def _inner(self) -> BaseCalibrator:
         return LinearCalibrator() if self.estimator is None else self.estimator
