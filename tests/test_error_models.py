@@ -117,9 +117,26 @@ def test_presets_and_bad_values():
     assert error_preset("stress").nonlinearity_axes == 6
     with pytest.raises(CalibrationInputError, match="unknown error preset 'nope'.*asymmetric"):
         error_preset("nope")
-    with pytest.raises(CalibrationInputError, match="noise must be a finite number >= 0"):
+    with pytest.raises(CalibrationInputError,
+                       match=r"ErrorModel.noise must be a number from 0 to 1 \(a relative magnitude, 1 = 100 %\); got "
+                             r"-0.1 \(float\)"):
         ErrorModel(noise=-0.1)
-    with pytest.raises(CalibrationInputError, match="creep_axes must be between 0 and 6"):
+    with pytest.raises(CalibrationInputError, match=r"ErrorModel.creep_axes must be an integer from 0 to 6; got 7 \(int\)"):
         ErrorModel(creep_axes=7)
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(asymmetry=5), "asymmetry must be a number from 0 to 1 .* got 5 "),  # a gain of 1 - 5/2 < 0: a sign flip
+    (dict(nonlinearity=1e308), "nonlinearity must be a number from 0 to 1"),  # overflowed into an inf reading
+    (dict(noise="0.1"), r"noise must be a number .* got '0.1' \(str\)"),  # was numpy's TypeError
+    (dict(spread=float("nan")), "spread must be a number from 0 to 1"),
+    (dict(asymmetry_axes=2.5), r"asymmetry_axes must be an integer from 0 to 6; got 2.5 \(float\)"),
+    (dict(asymmetry_axes=True), r"asymmetry_axes must be an integer from 0 to 6; got True \(bool\)"),
+    (dict(crosstalk_pairs=31), "crosstalk_pairs must be an integer from 0 to 30"),
+    (dict(nonlinearity_exponent=0.5), "nonlinearity_exponent must be a number from 1 to 10"),
+])
+def test_error_model_refuses_values_outside_its_physical_range(kwargs, words):
+    with pytest.raises(CalibrationInputError, match=words):
+        ErrorModel(**kwargs)
     with pytest.raises(CalibrationInputError, match=r"wrench must have shape \(n_samples, 6\)"):
         ErrorModel().sample(FULL_SCALE, ALPHA, np.random.default_rng(0)).apply_deterministic(np.ones((2, 5)))

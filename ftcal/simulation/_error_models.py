@@ -41,6 +41,7 @@ The errors, in the order they are applied
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
+from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -110,17 +111,26 @@ class ErrorModel:
     spread: float = 0.10
 
     def __post_init__(self) -> None:
-        for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread"):
+        # plain checks, not scikit-learn's: the presets are built when the CLI starts
+        def refuse(name: str, allowed: str) -> None:
             value = getattr(self, name)
-            if not (np.isfinite(value) and value >= 0):
-                raise CalibrationInputError(f"ErrorModel.{name} must be a finite number >= 0; got {value}.")
-        for name in ("creep_axes", "nonlinearity_axes", "asymmetry_axes"):
-            if not 0 <= getattr(self, name) <= 6:
-                raise CalibrationInputError(f"ErrorModel.{name} must be between 0 and 6; got {getattr(self, name)}.")
-        if not 0 <= self.crosstalk_pairs <= 30:
-            raise CalibrationInputError(f"ErrorModel.crosstalk_pairs must be between 0 and 30; got {self.crosstalk_pairs}.")
-        if not self.nonlinearity_exponent >= 1:
-            raise CalibrationInputError(f"ErrorModel.nonlinearity_exponent must be >= 1; got {self.nonlinearity_exponent}.")
+            raise CalibrationInputError(f"ErrorModel.{name} must be {allowed}; got {value!r} "
+                                        f"({type(value).__name__}).")
+
+        def number(name: str) -> bool:
+            value = getattr(self, name)
+            return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
+
+        for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread"):
+            # relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5
+            # (beyond 2 a gain changes sign): a larger value is a unit mistake
+            if not (number(name) and 0 <= getattr(self, name) <= 1):
+                refuse(name, "a number from 0 to 1 (a relative magnitude, 1 = 100 %)")
+        for name, top in (("creep_axes", 6), ("nonlinearity_axes", 6), ("asymmetry_axes", 6), ("crosstalk_pairs", 30)):
+            if not (number(name) and isinstance(getattr(self, name), Integral) and 0 <= getattr(self, name) <= top):
+                refuse(name, f"an integer from 0 to {top}")
+        if not (number("nonlinearity_exponent") and 1 <= self.nonlinearity_exponent <= 10):
+            refuse("nonlinearity_exponent", "a number from 1 to 10 (thesis: 2.5)")
 
     def to_dict(self) -> dict:
         """Plain-JSON form."""
