@@ -1,9 +1,14 @@
-"""The output file of a benchmark script: refused if it exists (unless ``--force``), its folder made, up front."""
+"""What the benchmark scripts share: their output files (refused if they exist and are not the script's own,
+unless ``--force``; checked up front), their count arguments, and reading a per-fit cache file."""
 
 from __future__ import annotations
 
 import argparse
+import json
 from pathlib import Path
+
+from ftcal import FtcalError
+from ftcal.evaluation import OutputFiles
 
 
 def parse_output(doc: str, default: str, argv: list[str] | None = None) -> Path:
@@ -18,3 +23,38 @@ def parse_output(doc: str, default: str, argv: list[str] | None = None) -> Path:
         parser.error(f"{out} exists; pass --force to replace it (a file), or choose another --out")
     out.parent.mkdir(parents=True, exist_ok=True)
     return out
+
+
+def int_at_least(low: int, high: int | None = None):
+    """An argparse ``type``: an integer from ``low`` (to ``high``), else a one-line usage error."""
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            value = None
+        if value is None or value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer from {low}" + (f" to {high}" if high else " up"))
+        return value
+    return parse
+
+
+def output_files(parser: argparse.ArgumentParser, out: str, force: bool, names: list[str]) -> OutputFiles:
+    """The script's output folder, its files ``names`` checked before any work (exit 2 with one message)."""
+    try:
+        files = OutputFiles(out, force=force)
+        files.check(names)
+    except (FtcalError, OSError) as exc:
+        parser.error(str(exc))
+    return files
+
+
+def read_record(path: Path, **expected) -> dict | None:
+    """A cached fit's record, or None when the file is missing, unreadable, not a JSON object, or its ``expected``
+    keys differ (another configuration): the fit is then run again."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    if not isinstance(record, dict) or any(record.get(k) != v for k, v in expected.items()):
+        return None
+    return record

@@ -32,6 +32,8 @@ import numpy as np
 
 from ftcal import ERROR_PRESETS, FtcalError, run_artificial_benchmark
 
+from _output import int_at_least, output_files
+
 #: Sign-dependent gain levels (fractions): 0 ... 20 %, denser where the LTM's error starts to exceed the noise.
 LEVELS = (0.0, 0.02, 0.04, 0.07, 0.10, 0.15, 0.20)
 MODELS = ("linear", "directional", "comparative", "axis_nonlinear", "sk_poly2")
@@ -146,24 +148,29 @@ def plot(table: dict, models, path: Path) -> None:
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--levels", nargs="+", type=float, default=list(LEVELS), help="sign-dependent gains (fractions)")
-    p.add_argument("--datasets", type=int, default=5, help="datasets per level (default 5)")
+    p.add_argument("--datasets", type=int_at_least(1, 1000), default=5, help="datasets per level (default 5)")
     p.add_argument("--models", nargs="+", default=list(MODELS), help="calibrators and stock baselines")
     p.add_argument("--schedule", default="short", choices=["thesis", "short"], help="network training schedule")
-    p.add_argument("--n-per-sphere", type=int, default=1250)
-    p.add_argument("--n-test", type=int, default=1250)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--jobs", type=int, default=1)
-    p.add_argument("--stack", type=int, default=5, help="network fits of one level trained together")
+    p.add_argument("--n-per-sphere", type=int_at_least(1, 1_000_000), help="training points per sphere (default 1250)")
+    p.add_argument("--n-test", type=int_at_least(1, 1_000_000), help="test points (default 1250)")
+    p.add_argument("--seed", type=int_at_least(0), default=0)
+    p.add_argument("--jobs", type=int_at_least(1, 256), default=1)
+    p.add_argument("--stack", type=int_at_least(1), default=5, help="network fits of one level trained together")
     p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs, 3 levels")
     p.add_argument("--out", default=str(DEFAULT_OUT))
     p.add_argument("--aggregate-only", action="store_true", help="only summarise the cached results")
+    p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.quick and (args.n_per_sphere or args.n_test):
+        parser.error("--quick sets its own small sizes: drop --n-per-sphere / --n-test, or --quick")
     levels = sorted(set(args.levels))[:: max(1, len(args.levels) // 3)] if args.quick else sorted(set(args.levels))
-    out = Path(args.out)
+    files = output_files(parser, args.out, args.force, ["crossover.md", "crossover.json", "crossover.png"])
+    out = files.out_dir
     start = time.perf_counter()
 
     def progress(done: int, total: int, rec: dict) -> None:
@@ -175,7 +182,8 @@ def main(argv: list[str] | None = None) -> int:
             n_datasets=args.datasets, presets=level_presets(levels), models=args.models, schedule=args.schedule,
             seed=args.seed, n_jobs=args.jobs, out_dir=out, quick=args.quick, progress=progress,
             compute=not args.aggregate_only, test_distribution="ball", plot=False, stack=args.stack,
-            n_per_sphere=None if args.quick else args.n_per_sphere, n_test=None if args.quick else args.n_test,
+            n_per_sphere=None if args.quick else args.n_per_sphere or 1250,
+            n_test=None if args.quick else args.n_test or 1250, force=args.force,
         )
     except FtcalError as exc:
         print(f"error: {exc}", file=sys.stderr)
@@ -183,9 +191,10 @@ def main(argv: list[str] | None = None) -> int:
     table = summarise(result, levels, args.models)
     meta = result["meta"]
     text = markdown(table, meta, args.models)
-    (out / "crossover.md").write_text(text)
-    (out / "crossover.json").write_text(json.dumps({"meta": meta, **table}, indent=1))
-    plot(table, args.models, out / "crossover.png")
+    files.write_text("crossover.md", text)
+    files.write_text("crossover.json", json.dumps({"meta": meta, **table}, indent=1))
+    with files.write("crossover.png") as tmp:
+        plot(table, args.models, tmp)
     print(text)
     return 0
 

@@ -29,6 +29,8 @@ import numpy as np
 from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
 from ftcal.evaluation import dataset_seeds, make_model
 
+from _output import int_at_least, output_files, read_record
+
 ROOT = Path(__file__).resolve().parent
 
 
@@ -61,7 +63,8 @@ def eq18_effect(n: int) -> dict:
 
 
 def spread_explained(cache: Path) -> dict | None:
-    recs = [r for r in (json.loads(p.read_text()) for p in cache.glob("ds*_linear_*.json")) if r["model"] == "linear"]
+    recs = [r for r in (read_record(p, model="linear") for p in cache.glob("ds*_linear_*.json"))
+            if r is not None and all(isinstance(r.get(k), float) for k in ("rmse", "noise_floor"))]
     if len(recs) < 3:
         return None
     rmse = np.array([r["rmse"] for r in recs])
@@ -110,27 +113,27 @@ def restore_effect(models, presets, schedule: str = "short") -> dict:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--datasets", type=int, default=5)
+    p.add_argument("--datasets", type=int_at_least(1, 1000), default=5, help="datasets of the closed-form measurements")
     p.add_argument("--out", default=str(ROOT / "out" / "departures"))
     p.add_argument("--restore-schedule", choices=["short", "thesis"],
                    help="only measure the best-weights restore, with this schedule, and add it to departures.json")
+    p.add_argument("--force", action="store_true", help="replace a departures.json this script did not write")
     args = p.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    files = output_files(p, args.out, args.force, ["departures.json"])
+    path = files.out_dir / "departures.json"
     if args.restore_schedule:
-        path = out / "departures.json"
-        result = json.loads(path.read_text()) if path.exists() else {}
+        result = read_record(path) or {}
         result.setdefault("restore", {}).update(
             restore_effect(("directional", "comparative"), ("reconstructed", "thesis"), args.restore_schedule))
-        path.write_text(json.dumps(result, indent=1))
+        files.write_text("departures.json", json.dumps(result, indent=1))
         return 0
     result = {"gamma": gamma_effect(args.datasets), "eq18": eq18_effect(args.datasets),
               "spread_thesis": spread_explained(ROOT / "results" / "artificial_thesis" / "cache" / "thesis"),
               "spread_reconstructed": spread_explained(ROOT / "results" / "artificial_reconstructed" / "cache" / "reconstructed")}
-    (out / "departures.json").write_text(json.dumps(result, indent=1))
+    files.write_text("departures.json", json.dumps(result, indent=1))
     print(json.dumps(result, indent=1), flush=True)
     result["restore"] = restore_effect(("directional", "comparative"), ("reconstructed", "thesis"))
-    (out / "departures.json").write_text(json.dumps(result, indent=1))
+    files.write_text("departures.json", json.dumps(result, indent=1))
     print(json.dumps(result["restore"], indent=1))
     return 0
 

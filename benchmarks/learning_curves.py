@@ -51,6 +51,8 @@ from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
 from ftcal.models import STOCK_BASELINE_NAMES
 
+from _output import int_at_least, output_files, read_record
+
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "learning_curves"
 _FORMAT = 1
 
@@ -226,6 +228,16 @@ def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = N
     return rec
 
 
+def _complete(rec: dict) -> bool:
+    """Whether a cached record is one this script wrote: a finite RMSE, or a failure with its message."""
+    def number(v) -> bool:
+        return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
+
+    scored = rec.get("error") is None and number(rec.get("rmse"))
+    failed = isinstance(rec.get("error"), str)
+    return (scored or failed) and number(rec.get("n_train")) and isinstance(rec.get("size"), list)
+
+
 def run_unit(unit: list[dict]) -> list[dict]:
     """Fit and score a unit of tasks (one fit, or several nets of one kind stacked). Runs in a worker."""
     import torch
@@ -369,38 +381,39 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--datasets", nargs="+", default=list(FACTORIES), choices=list(FACTORIES))
     p.add_argument("--models", nargs="+", default=[m for t in TIERS for m in t],
                    help=f"calibrators ({', '.join(CALIBRATOR_NAMES)}) and stock baselines ({', '.join(STOCK_BASELINE_NAMES)})")
-    p.add_argument("--seeds", type=int, default=3, help="seeds (datasets and model initialisations) per size")
+    p.add_argument("--seeds", type=int_at_least(1, 100), default=3, help="seeds (datasets and model initialisations) per size")
     p.add_argument("--schedule", default="short", choices=["thesis", "short"])
-    p.add_argument("--jobs", type=int, default=1)
-    p.add_argument("--stack", type=int, default=10, help="network fits of one dataset, seed and model trained together")
+    p.add_argument("--jobs", type=int_at_least(1, 256), default=1)
+    p.add_argument("--stack", type=int_at_least(1), default=10, help="network fits of one dataset, seed and model trained together")
     p.add_argument("--quick", action="store_true", help="smoke mode: 1 seed, the smallest sizes, closed forms only")
     p.add_argument("--out", default=str(DEFAULT_OUT))
     p.add_argument("--aggregate-only", action="store_true")
+    p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
 
 def main(argv: list[str] | None = None) -> int:
     from joblib import Parallel, delayed
 
-    args = build_parser().parse_args(argv)
-    out, cache = Path(args.out), Path(args.out) / "cache"
+    parser = build_parser()
+    args = parser.parse_args(argv)
     seeds = list(range(1 if args.quick else args.seeds))
-    models = [m for m in args.models if m in TIERS[0]] if args.quick else list(args.models)
-    unknown = [m for m in models if m not in tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES]
+    unknown = [m for m in args.models if m not in tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES]
     if unknown:
-        print(f"error: unknown models {unknown}", file=sys.stderr)
-        return 2
+        parser.error(f"unknown models {unknown}; choose from {', '.join((*CALIBRATOR_NAMES, *STOCK_BASELINE_NAMES))}")
+    models = [m for m in args.models if m in TIERS[0]] if args.quick else list(args.models)
+    if not models:
+        parser.error(f"--quick runs the closed-form models only ({', '.join(TIERS[0])}): name at least one of them")
+    files = output_files(parser, args.out, args.force, ["learning_curves.md", "learning_curves.json"]
+                         + [f"learning_curves_{name}.png" for name in args.datasets])
+    out, cache = files.out_dir, files.out_dir / "cache"
     tasks = make_tasks(args.datasets, models, seeds, args.schedule)
     if args.quick:
         tasks = [t for t in tasks if t["size"][-1] <= 25 or t["size"] == [5, 5]]
     records, pending = [], []
     for t in tasks:
-        path = _cache_path(cache, t)
-        try:
-            rec = json.loads(path.read_text())
-            records.append(rec) if rec.get("hash") == t["hash"] else pending.append(t)
-        except (OSError, json.JSONDecodeError):
-            pending.append(t)
+        rec = read_record(_cache_path(cache, t), hash=t["hash"])
+        records.append(rec) if rec is not None and _complete(rec) else pending.append(t)
     start = time.perf_counter()
     if pending and not args.aggregate_only:
         gen = Parallel(n_jobs=args.jobs, return_as="generator")(delayed(run_unit)(u) for u in _units(pending, args.stack))
@@ -418,13 +431,13 @@ def main(argv: list[str] | None = None) -> int:
     summary = summarise(records, args.datasets, models)
     meta = {"schedule": args.schedule, "seeds": seeds, "models": models, "datasets": args.datasets,
             "n_expected": len(tasks), "n_complete": len(records), "quick": args.quick}
-    out.mkdir(parents=True, exist_ok=True)
     text = markdown(summary, meta, models)
-    (out / "learning_curves.md").write_text(text)
-    (out / "learning_curves.json").write_text(json.dumps({"meta": meta, "summary": summary, "records": records}))
+    files.write_text("learning_curves.md", text)
+    files.write_text("learning_curves.json", json.dumps({"meta": meta, "summary": summary, "records": records}))
     for name, rows in summary.items():
         if any(r["models"][m]["n"] for r in rows for m in models):
-            plot(name, rows, models, out / f"learning_curves_{name}.png")
+            with files.write(f"learning_curves_{name}.png") as tmp:
+                plot(name, rows, models, tmp)
     print(text)
     return 0
 

@@ -27,8 +27,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import SensorProfile, make_artificial_dataset, scale_torques
+from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, SensorProfile, make_artificial_dataset, scale_torques
 from ftcal.evaluation import dataset_seeds, make_model
+from ftcal.models import STOCK_BASELINE_NAMES
+
+from _output import int_at_least, output_files
 
 MODELS = ("linear", "sk_poly2", "axis_nonlinear", "directional", "comparative", "gaussian_process", "sk_gp")
 AXES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
@@ -46,17 +49,28 @@ def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path
     train, test, info = make_artificial_dataset(preset, random_state=data_seed, test_distribution="ball")
     _, radial, _ = make_artificial_dataset(preset, random_state=data_seed, test_distribution="radial")
     test_raw, test_wrench = np.vstack([test.raw, radial.raw]), np.vstack([test.wrench, radial.wrench])
-    if not path.is_file():
+    pred = _cached_prediction(path, test_wrench.shape)
+    if pred is None:  # not cached, or a file that is not this script's prediction: fit again
         est = make_model(model, n_channels=profile.n_channels, alpha=profile.alpha, schedule=schedule,
                          random_state=model_seed)
         est.fit(train.raw, train.wrench)
+        pred = est.predict(test_raw)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.stem + ".tmp.npz")
-        np.savez(tmp, pred=est.predict(test_raw))
+        np.savez(tmp, pred=pred)
         tmp.replace(path)
         print(f"{preset} dataset {index} {model}: fitted", flush=True)
-    return {"true": test_wrench, "pred": np.load(path)["pred"], "noise_floor": info["noise_floor"],
-            "radii": info["sphere_radii"]}
+    return {"true": test_wrench, "pred": pred, "noise_floor": info["noise_floor"], "radii": info["sphere_radii"]}
+
+
+def _cached_prediction(path: Path, shape: tuple) -> np.ndarray | None:
+    """The cached test predictions, or None when missing, unreadable or not of the test set's shape."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            pred = np.asarray(data["pred"], dtype=float)
+    except (OSError, ValueError, KeyError, EOFError):
+        return None
+    return pred if pred.shape == shape and np.isfinite(pred).all() else None
 
 
 def axis_table(runs: list[dict], fmax: float, tmax: float) -> dict:
@@ -78,19 +92,22 @@ def magnitude_curve(runs: list[dict], alpha: float) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("--presets", nargs="+", default=["reconstructed", "thesis"])
-    p.add_argument("--datasets", type=int, default=3)
-    p.add_argument("--models", nargs="+", default=list(MODELS))
+    p.add_argument("--presets", nargs="+", default=["reconstructed", "thesis"], choices=sorted(ERROR_PRESETS))
+    p.add_argument("--datasets", type=int_at_least(1, 1000), default=3)
+    p.add_argument("--models", nargs="+", default=list(MODELS), choices=[*CALIBRATOR_NAMES, *STOCK_BASELINE_NAMES])
     p.add_argument("--schedule", default="short", choices=["thesis", "short"])
     p.add_argument("--out", default=str(DEFAULT_OUT))
     p.add_argument("--aggregate-only", action="store_true")
+    p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     args = p.parse_args(argv)
+    files = output_files(p, args.out, args.force, ["sensor_maker.md", "sensor_maker.json", "sensor_maker_axes.png",
+                                                    "sensor_maker_magnitude.png"])
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    out = Path(args.out)
+    out = files.out_dir
     cache = out / "cache"
     profile = SensorProfile.default()
     results: dict = {}
@@ -107,7 +124,8 @@ def main(argv: list[str] | None = None) -> int:
                     "n_datasets": len(runs), **axis_table(runs, profile.fmax, profile.tmax),
                     "magnitude": magnitude_curve(runs, profile.alpha),
                     "noise_floor": float(np.mean([r["noise_floor"] for r in runs])), "radii": runs[0]["radii"]}
-    out.mkdir(parents=True, exist_ok=True)
+    if not results:
+        p.error(f"nothing to aggregate: no cached fit in {cache} (run without --aggregate-only first)")
     lines = [f"Sensor-maker figures: schedule `{args.schedule}`, ball + radial test loads (2 x 1250 per dataset), "
              f"full scale {profile.fmax:g} N / {profile.tmax:g} N·m. Errors pooled over the datasets' test points.", ""]
     for preset, per_model in results.items():
@@ -124,8 +142,8 @@ def main(argv: list[str] | None = None) -> int:
             lines.append(f"| {m} | " + " | ".join("—" if v is None else f"{v:.1f}" for v in r["magnitude"]["rmse"]) + " |")
         first = next(iter(per_model.values()))["magnitude"]["count"]
         lines += [f"| (test points) | " + " | ".join(str(c) for c in first) + " |", ""]
-    (out / "sensor_maker.md").write_text("\n".join(lines))
-    (out / "sensor_maker.json").write_text(json.dumps(results))
+    files.write_text("sensor_maker.md", "\n".join(lines))
+    files.write_text("sensor_maker.json", json.dumps(results))
 
     fig, axes = plt.subplots(len(results), 2, figsize=(11, 3.8 * len(results)), squeeze=False)
     for row, (preset, per_model) in enumerate(results.items()):
@@ -141,7 +159,7 @@ def main(argv: list[str] | None = None) -> int:
             ax.set_title(f"{title} per axis, preset '{preset}'", fontsize=9)
         axes[row][1].legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "sensor_maker_axes.png", dpi=110)
+    files.save_figure("sensor_maker_axes.png", fig, dpi=110)
     plt.close(fig)
 
     fig, axes = plt.subplots(1, len(results), figsize=(5.5 * len(results), 4.2), squeeze=False)
@@ -160,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         ax.set_title(f"Error vs load magnitude, preset '{preset}'", fontsize=9)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(out / "sensor_maker_magnitude.png", dpi=110)
+    files.save_figure("sensor_maker_magnitude.png", fig, dpi=110)
     plt.close(fig)
     print("\n".join(lines))
     return 0

@@ -129,6 +129,7 @@ def test_virtual_sensor_reads_fresh_noise_with_fixed_errors():
     (dict(random_state=-1), "'random_state' .* Got -1"),
     (dict(random_state="a"), "'random_state' .* Got 'a'"),
     (dict(profile="x"), "'profile' .*SensorProfile.* Got 'x'"),
+    (dict(zero_offset="a"), "zero_offset must be 6 numbers, one raw value per channel; got 'a'"),
 ])
 def test_make_artificial_dataset_refuses_bad_arguments_before_sampling(kwargs, words):
     with pytest.raises(CalibrationInputError, match=words):

@@ -11,8 +11,9 @@ import joblib
 import numpy as np
 import pytest
 
-from ftcal import CalibrationInputError, run_artificial_benchmark
-from ftcal.evaluation._benchmark_artificial import BenchmarkOutputExistsError, summarize_results, wilcoxon_pvalue
+from ftcal import BenchmarkOutputExistsError, CalibrationInputError, ErrorModel, run_artificial_benchmark
+from ftcal.evaluation import OutputFiles
+from ftcal.evaluation._benchmark_artificial import summarize_results, wilcoxon_pvalue
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -118,12 +119,80 @@ def test_user_files_are_never_overwritten_without_force(tmp_path):
         (dict(n_test=10**9), r"'n_test' .* \[1, 1000000\] or None\. Got 1000000000"),
         (dict(test_distribution="cube"), "'test_distribution' .* Got 'cube'"),
         (dict(n_spheres=5), r"'n_spheres' .* \[1, 4\]\. Got 5"),
+        (dict(force="no"), r"force must be True or False; got 'no' \(str\)"),  # "no" is truthy: it overwrote
+        (dict(compute="no"), "compute must be True or False"),
+        (dict(progress=3), "progress must be a function"),
+        (dict(presets=[]), "presets is empty"),
+        (dict(presets=None), r"presets must be a list of names, e.g. \('thesis',\); got None"),
+        (dict(models=None), "models must be a list of names"),
+        (dict(presets={"../escape": ErrorModel()}), r"a preset name must be a plain name.*got '\.\./escape'"),
+        (dict(presets={"/tmp/abs": ErrorModel()}), "a preset name must be a plain name"),
     ],
 )
 def test_bad_arguments_are_rejected_before_any_work(tmp_path, kwargs, words):
     with pytest.raises(CalibrationInputError, match=words):
         run_artificial_benchmark(out_dir=tmp_path, **kwargs)
     assert not (tmp_path / "cache").exists()
+
+
+@pytest.mark.parametrize("out_dir", ["", None, 3])
+def test_an_empty_or_non_path_out_dir_is_refused_not_the_working_directory(out_dir, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(CalibrationInputError, match="out_dir must be a folder path"):
+        run_artificial_benchmark(out_dir=out_dir, quick=True, models="linear", plot=False)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_one_name_is_a_list_of_one_not_its_letters(tmp_path):
+    result = run_artificial_benchmark(n_datasets=1, presets="thesis", models="linear", quick=True, plot=False,
+                                      out_dir=tmp_path)
+    assert result["meta"]["presets"] == ["thesis"] and result["meta"]["models"] == ["linear"]
+    assert result["meta"]["n_complete"] == 1
+
+
+@pytest.mark.parametrize("content", [b"[1, 2]", b"42", b"null", b"NaN", b"\xff\xfe", b"[" * 100_000, b"{}",
+                                     b'{"rmse": 1'])
+def test_a_cache_file_that_is_not_a_record_is_recomputed(tmp_path, content):
+    first = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    cached = next((tmp_path / "cache").rglob("*.json"))
+    cached.write_bytes(content)
+    again = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    assert again["meta"]["n_computed"] == 1 and again["results"][0]["rmse"] == first["results"][0]["rmse"]
+    assert json.loads(cached.read_text())["rmse"] == first["results"][0]["rmse"]  # rewritten whole
+
+
+@pytest.mark.parametrize("change", [dict(rmse=float("nan")), dict(rmse="abc"), dict(rmse=None), dict(model="x")])
+def test_a_tampered_record_is_recomputed_not_hidden_from_the_table(tmp_path, change):
+    first = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    cached = next((tmp_path / "cache").rglob("*.json"))
+    cached.write_text(json.dumps({**json.loads(cached.read_text()), **change}))
+    again = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    assert again["meta"]["n_computed"] == 1 and again["results"][0]["rmse"] == first["results"][0]["rmse"]
+
+
+def test_an_unreadable_manifest_is_named_and_a_folder_in_the_way_is_refused(tmp_path):
+    run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    (tmp_path / ".ftcal-benchmark-manifest.json").write_text("[1, 2]")
+    with pytest.raises(BenchmarkOutputExistsError, match="was not written by this benchmark.*manifest.*unreadable"):
+        run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    other = tmp_path / "other"
+    (other / "artificial_results.json").mkdir(parents=True)
+    with pytest.raises(BenchmarkOutputExistsError, match="is a folder, where this benchmark writes a file"):
+        run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=other, force=True)
+    assert not (other / "cache").exists() and not (other / "artificial_results.md").exists()  # before any work
+
+
+def test_output_files_keep_a_file_that_appeared_during_the_run(tmp_path):
+    files = OutputFiles(tmp_path)
+    files.check(["table.md"])
+    (tmp_path / "table.md").write_text("written by someone else meanwhile")
+    with pytest.raises(BenchmarkOutputExistsError, match="appeared while this run was working"):
+        files.write_text("table.md", "ours")
+    assert (tmp_path / "table.md").read_text() == "written by someone else meanwhile"
+    assert [p.read_text() for p in tmp_path.glob("table.*.md")] == ["ours"]  # kept beside it, not lost
+    files.write_text("plot.md", "v1")
+    assert OutputFiles(tmp_path).write_text("plot.md", "v2").read_text() == "v2"  # its own: rewritten
+    assert not list(tmp_path.glob("*.partial*"))
 
 
 def _load_script():
@@ -187,6 +256,8 @@ def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_aske
 def _script(name):
     import sys
 
+    if str(ROOT / "benchmarks") not in sys.path:  # as when run: the scripts import their shared _output module
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up there
@@ -225,3 +296,37 @@ def test_learning_curves_of_the_soft_sensor_hold_out_whole_presses():
     assert pool.X.shape[1] == 8 and len(pool.X_test) == test.n_samples and info["noise_floor"] is None
     small, large = pool.select((25,)), pool.select((300,))
     assert len(small) == 25 and len(large) == 300 and set(small) <= set(large)
+
+
+@pytest.mark.parametrize("script, name, argv", [
+    ("crossover", "crossover.md", ["--quick", "--models", "linear"]),
+    ("learning_curves", "learning_curves.json", ["--quick", "--models", "linear"]),
+    ("sensor_maker", "sensor_maker_axes.png", ["--presets", "thesis", "--datasets", "1", "--models", "linear"]),
+    ("departures", "departures.json", ["--datasets", "1"]),
+])
+def test_benchmark_scripts_never_replace_a_users_file_and_refuse_before_any_work(tmp_path, capsys, script, name, argv):
+    mine = tmp_path / name
+    mine.write_text("my notes")
+    with pytest.raises(SystemExit) as stop:
+        _script(script).main([*argv, "--out", str(tmp_path)])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.endswith(f"{mine} exists and was not written by this benchmark (or was edited since); choose another "
+                        "output folder or pass --force (force=True) to overwrite it.")
+    assert mine.read_text() == "my notes" and sorted(p.name for p in tmp_path.iterdir()) == [name]  # no work done
+
+
+@pytest.mark.parametrize("script, argv, words", [
+    ("crossover", ["--datasets", "0"], "argument --datasets: '0' is not an integer from 1 to 1000"),
+    ("crossover", ["--quick", "--n-test", "5"], "--quick sets its own small sizes"),
+    ("learning_curves", ["--seeds", "0"], "argument --seeds: '0' is not an integer from 1 to 100"),
+    ("learning_curves", ["--quick", "--models", "nope"], "unknown models ['nope']"),
+    ("learning_curves", ["--jobs", "0"], "argument --jobs: '0' is not an integer from 1 to 256"),
+    ("sensor_maker", ["--datasets", "0"], "argument --datasets: '0' is not an integer from 1 to 1000"),
+    ("sensor_maker", ["--aggregate-only"], "nothing to aggregate"),
+    ("departures", ["--datasets", "-1"], "argument --datasets: '-1' is not an integer from 1 to 1000"),
+])
+def test_benchmark_scripts_refuse_bad_arguments_in_one_line(tmp_path, capsys, script, argv, words):
+    with pytest.raises(SystemExit) as stop:
+        _script(script).main([*argv, "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2 and words in capsys.readouterr().err.strip().splitlines()[-1]

@@ -10,7 +10,7 @@ from ..core._lazy import lazy_namespace
 _PUBLIC = dict(
     wilcoxon_pvalue="_benchmark_artificial", format_mean_std="_benchmark_artificial",
     dataset_seeds="_benchmark_artificial", summarize_results="_benchmark_artificial",
-    THESIS_TABLES="_benchmark_artificial", make_model="_benchmark_artificial", SPLIT_NAMES="_benchmark_real_world", run_demo="_demo",
+    THESIS_TABLES="_benchmark_artificial", make_model="_benchmark_artificial", SPLIT_NAMES="_benchmark_real_world", run_demo="_demo", OutputFiles="_outputs",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

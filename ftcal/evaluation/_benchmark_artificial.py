@@ -49,14 +49,15 @@ from numbers import Integral
 from pathlib import Path
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..simulation._artificial import SPHERE_FRACTIONS, make_artificial_dataset
 from ..core._files import plain_json
-from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
+from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
-from ..core._validation import check_arguments
+from ..core._validation import check_arguments, check_bool
+from ._outputs import OutputFiles, check_file_name
 from ..simulation._error_models import ErrorModel
 from ..simulation._presets import MAX_DATASETS, default_test_distribution, error_preset
 from ..simulation._sampling import MAX_POINTS, TEST_DISTRIBUTIONS
@@ -66,7 +67,6 @@ __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "
            "THESIS_TABLES", "make_model"]
 
 _FORMAT = 1
-_MANIFEST = ".ftcal-benchmark-manifest.json"
 #: Sizes and epoch caps of ``quick=True`` (the smoke mode): 3 datasets, 100 points per sphere, 200 test points,
 #: networks capped at 60 + 10 + 10 epochs.
 QUICK = {"n_datasets": 3, "n_per_sphere": 100, "n_test": 200, "max_epochs": 60, "plateau_epochs": 10, "max_recover_epochs": 10}
@@ -283,39 +283,6 @@ def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
     return units
 
 
-# ----------------------------------------------------------------- outputs
-def _sha(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-class _Outputs:
-    """Writes summary files, refusing to replace files the benchmark did not write itself."""
-
-    def __init__(self, out_dir: Path, force: bool) -> None:
-        self.out_dir = out_dir
-        self.force = force
-        self.manifest_path = out_dir / _MANIFEST
-        try:
-            self.manifest = json.loads(self.manifest_path.read_text()) if self.manifest_path.is_file() else {}
-        except (OSError, json.JSONDecodeError):
-            self.manifest = {}
-
-    def check(self, names: Sequence[str]) -> None:
-        for name in names:
-            path = self.out_dir / name
-            if path.exists() and not self.force and self.manifest.get(name) != _sha(path):
-                raise BenchmarkOutputExistsError(
-                    f"{path} exists and was not written by this benchmark (or was edited since); "
-                    "choose another out_dir or pass force=True (--force) to overwrite it."
-                )
-
-    def written(self, name: str) -> Path:
-        path = self.out_dir / name
-        self.manifest[name] = _sha(path)
-        self.manifest_path.write_text(json.dumps(self.manifest, indent=1))
-        return path
-
-
 def format_mean_std(stat: dict, digits: int = 2) -> str:
     """``"mean ± std"`` of a :func:`~ftcal.core.mean_std` result, ``"—"`` when it counted nothing.
 
@@ -323,9 +290,13 @@ def format_mean_std(stat: dict, digits: int = 2) -> str:
     --------
     >>> format_mean_std({"mean": 36.91, "std": 3.444, "n": 30}, 1)
     '36.9 ± 3.4'
+    >>> format_mean_std({"mean": 4.17, "std": 0.0, "n": 1}, 2)  # one value has no spread to show
+    '4.17'
     """
     if stat["n"] == 0:
         return "—"
+    if stat["n"] == 1:
+        return f"{stat['mean']:.{digits}f}"
     return f"{stat['mean']:.{digits}f} ± {stat['std']:.{digits}f}"
 
 
@@ -390,9 +361,6 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **argume
         "test_distribution": [StrOptions(set(TEST_DISTRIBUTIONS)), None],
         "n_spheres": [Interval(Integral, 1, len(SPHERE_FRACTIONS), closed="both")],
     }, n_datasets=n_datasets, n_jobs=n_jobs, stack=stack, **arguments)
-    for p in presets:
-        if not isinstance(p, str):
-            raise CalibrationInputError(f"preset names must be strings; got {p!r}.")
     known = tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES
     unknown = [m for m in models if m not in known]
     if unknown or not models:
@@ -407,8 +375,23 @@ def _preset_models(presets: Sequence[str] | Mapping[str, ErrorModel]) -> dict[st
         bad = {k: v for k, v in presets.items() if not isinstance(v, ErrorModel)}
         if bad:
             raise CalibrationInputError(f"presets maps names to ErrorModel instances; got {bad!r:.120}.")
-        return dict(presets)
-    return {p: error_preset(p) for p in presets}
+        chosen = dict(presets)
+    else:
+        chosen = {p: error_preset(p) for p in _names(presets, "presets", "('thesis',)")}
+    if not chosen:
+        raise CalibrationInputError("presets is empty: name at least one, e.g. ('thesis',).")
+    for name in chosen:  # the name is a folder of the cache and part of the plot's file name
+        check_file_name(name, "a preset name")
+    return chosen
+
+
+def _names(values, what: str, example: str) -> tuple:
+    """``values`` as a tuple of names: one name alone counts as a list of one (not as its letters)."""
+    if isinstance(values, str):
+        return (values,)
+    if not isinstance(values, (list, tuple)) or not all(isinstance(v, str) for v in values):
+        raise CalibrationInputError(f"{what} must be a list of names, e.g. {example}; got {values!r:.120}.")
+    return tuple(values)
 
 
 def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution,
@@ -438,10 +421,15 @@ def _cache_path(cache_dir: Path, task: dict) -> Path:
 
 def _load_cached(path: Path, task: dict) -> dict | None:
     try:
-        rec = json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError):
-        return None  # missing or half-written: recompute
-    return rec if rec.get("config") == task["config"] and rec.get("dataset") == task["dataset"] else None
+        rec = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None  # missing, half-written, not UTF-8 or not JSON: recompute
+    if not isinstance(rec, dict) or rec.get("config") != task["config"] or rec.get("dataset") != task["dataset"]:
+        return None
+    figures = [rec.get(key) for key in ("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor")]
+    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in figures):
+        return None  # not a record this benchmark wrote (every figure it writes is a finite number): recompute
+    return rec if rec.get("preset") == task["preset"] and rec.get("model") == task["model"] else None
 
 
 def run_artificial_benchmark(
@@ -518,17 +506,20 @@ def run_artificial_benchmark(
         ``wilcoxon``; ``noise_floor``), ``results`` (every record) and ``files``.
     """
     t0 = time.perf_counter()
+    for name, flag in (("quick", quick), ("force", force), ("compute", compute), ("plot", plot)):
+        check_bool(flag, name)  # force="no" must not mean yes
+    if progress is not None and not callable(progress):
+        raise CalibrationInputError(f"progress must be a function (done, total, record) or None; got {progress!r:.80}.")
     preset_models = _preset_models(presets)
-    presets, models = tuple(preset_models), tuple(models)
+    presets, models = tuple(preset_models), _names(models, "models", "('linear', 'directional')")
     _check_args(n_datasets, presets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
                 n_test=n_test, test_distribution=test_distribution, n_spheres=n_spheres)
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])
     n_per_sphere = int(n_per_sphere or (QUICK["n_per_sphere"] if quick else 1250))
     n_test = int(n_test or (QUICK["n_test"] if quick else 1250))
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    outputs = _Outputs(out_dir, force)
+    outputs = OutputFiles(out_dir, force=force)
+    out_dir = outputs.out_dir
     names = ["artificial_results.json", "artificial_results.md"] + (
         [f"artificial_rmse_{p}.png" for p in presets] if plot else [])
     outputs.check(names)  # fail before hours of work, not after
@@ -543,7 +534,8 @@ def run_artificial_benchmark(
     n_cached = len(results)
     if compute and pending:
         units = _groups(pending, int(stack))
-        gen = Parallel(n_jobs=n_jobs, return_as="generator_unordered")(delayed(_run_group)(u) for u in units)
+        workers = min(effective_n_jobs(n_jobs), len(units))  # never a worker process without a fit to do
+        gen = Parallel(n_jobs=workers, return_as="generator_unordered")(delayed(_run_group)(u) for u in units)
         for rec in itertools.chain.from_iterable(gen):
             path = cache_dir / rec["preset"] / f"ds{rec['dataset']:03d}_{rec['model']}_{rec['config_hash']}.json"
             path.parent.mkdir(parents=True, exist_ok=True)
@@ -574,17 +566,17 @@ def run_artificial_benchmark(
             per_model = {m: v for m, v in per_model.items() if v}
             if per_model:
                 name = f"artificial_rmse_{preset}.png"
-                plot_error_distributions(
-                    per_model, out_dir / name, noise_floor=summary[preset]["noise_floor"]["mean"],
-                    title=f"RMSE across artificial datasets, preset '{preset}' (thesis Fig. 5)",
-                )
-                files[f"png_{preset}"] = str(outputs.written(name))
+                with outputs.write(name) as tmp:
+                    plot_error_distributions(
+                        per_model, tmp, noise_floor=summary[preset]["noise_floor"]["mean"],
+                        title=f"RMSE across artificial datasets, preset '{preset}' (thesis Fig. 5)",
+                    )
+                files[f"png_{preset}"] = str(out_dir / name)
     meta["wall_seconds"] = time.perf_counter() - t0
-    (out_dir / "artificial_results.md").write_text(markdown_tables(summary, meta))
-    files["markdown"] = str(outputs.written("artificial_results.md"))
+    files["markdown"] = str(outputs.write_text("artificial_results.md", markdown_tables(summary, meta)))
+    files["json"] = str(out_dir / "artificial_results.json")
     payload = {"meta": meta, "summary": summary, "results": results, "files": files}
-    (out_dir / "artificial_results.json").write_text(json.dumps(plain_json(payload), indent=1))
-    files["json"] = str(outputs.written("artificial_results.json"))
+    outputs.write_text("artificial_results.json", json.dumps(plain_json(payload), indent=1))
     return payload
 
 

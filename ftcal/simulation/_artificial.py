@@ -137,7 +137,11 @@ class VirtualSensor:
         if zero_offset is None:
             self.zero_offset = np.zeros(n)
         else:
-            self.zero_offset = np.asarray(zero_offset, dtype=float)
+            try:
+                self.zero_offset = np.asarray(zero_offset, dtype=float)
+            except (TypeError, ValueError):
+                raise CalibrationInputError(f"zero_offset must be {n} numbers, one raw value per channel; got "
+                                            f"{zero_offset!r:.80}.") from None
             if self.zero_offset.shape != (n,) or not np.all(np.isfinite(self.zero_offset)):
                 raise CalibrationInputError(
                     f"zero_offset must be a finite array of shape ({n},), one raw value per channel; "
