@@ -65,6 +65,18 @@ def test_simulate_several_datasets_go_to_subfolders(tmp_path):
     assert not np.allclose(a, b)
 
 
+def test_a_file_where_a_dataset_folder_goes_is_named_before_any_work(tmp_path, capsys):
+    (tmp_path / "dataset_01").write_text("my notes")
+    argv = ["simulate", "dataset", "--n-datasets", "2", "--n-per-sphere", "3", "--n-test", "4", "--out",
+            str(tmp_path), "-q"]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err == (f"ftcal: error: {tmp_path / 'dataset_01'} is a file, where this run makes a folder (for "
+                   f"{tmp_path / 'dataset_01' / 'train.csv'}); move it or choose another --out\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dataset_01"]  # nothing written, the file kept
+    assert (tmp_path / "dataset_01").read_text() == "my notes"
+
+
 def test_end_to_end_artificial(tmp_path, capsys):
     data, models, ev = tmp_path / "data", tmp_path / "models", tmp_path / "eval"
     assert main(["simulate", "dataset", "--n-per-sphere", "30", "--n-test", "40", "--out", str(data), "-q"]) == 0

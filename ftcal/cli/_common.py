@@ -422,6 +422,10 @@ class OutputPlan:
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
         check_writable_dir(self.out_dir, CliError)
         for n in self.names:
+            for folder in list((self.out_dir / n).parents)[:len(Path(n).parts) - 1]:  # its folders inside out_dir
+                if folder.exists() and not folder.is_dir():
+                    raise CliError(f"{folder} is a file, where this run makes a folder (for {self.out_dir / n}); "
+                                   f"move it or choose another {option}")
             check_not_an_input(self.out_dir / n)
             _check_regular_target(self.out_dir / n)
         if not force:
