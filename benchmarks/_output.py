@@ -1,10 +1,9 @@
 """What the benchmark scripts share: their output files (refused if they exist and are not the script's own,
-unless ``--force``; checked up front), their count arguments, and reading a per-fit cache file."""
+unless ``--force``; checked up front) and their count arguments."""
 
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from ftcal import FtcalError
@@ -38,6 +37,16 @@ def int_at_least(low: int, high: int | None = None):
     return parse
 
 
+def jobs(text: str) -> int:
+    """An argparse ``type`` for ``--jobs``: 1 to 256 worker processes, or -1 for one per core."""
+    if text.strip() == "-1":
+        return -1
+    try:
+        return int_at_least(1, 256)(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number of jobs from 1 to 256, or -1 (every core)") from None
+
+
 def output_files(parser: argparse.ArgumentParser, out: str, force: bool, names: list[str]) -> OutputFiles:
     """The script's output folder, its files ``names`` checked before any work (exit 2 with one message)."""
     try:
@@ -46,15 +55,3 @@ def output_files(parser: argparse.ArgumentParser, out: str, force: bool, names: 
     except (FtcalError, OSError) as exc:
         parser.error(str(exc))
     return files
-
-
-def read_record(path: Path, **expected) -> dict | None:
-    """A cached fit's record, or None when the file is missing, unreadable, not a JSON object, or its ``expected``
-    keys differ (another configuration): the fit is then run again."""
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None
-    if not isinstance(record, dict) or any(record.get(k) != v for k, v in expected.items()):
-        return None
-    return record

@@ -32,7 +32,7 @@ import numpy as np
 
 from ftcal import ERROR_PRESETS, FtcalError, run_artificial_benchmark
 
-from _output import int_at_least, output_files
+from _output import int_at_least, jobs, output_files
 
 #: Sign-dependent gain levels (fractions): 0 ... 20 %, denser where the LTM's error starts to exceed the noise.
 LEVELS = (0.0, 0.02, 0.04, 0.07, 0.10, 0.15, 0.20)
@@ -154,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--n-per-sphere", type=int_at_least(1, 1_000_000), help="training points per sphere (default 1250)")
     p.add_argument("--n-test", type=int_at_least(1, 1_000_000), help="test points (default 1250)")
     p.add_argument("--seed", type=int_at_least(0), default=0)
-    p.add_argument("--jobs", type=int_at_least(1, 256), default=1)
+    p.add_argument("--jobs", type=jobs, default=1, help="worker processes (-1: one per core)")
     p.add_argument("--stack", type=int_at_least(1), default=5, help="network fits of one level trained together")
     p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs, 3 levels")
     p.add_argument("--out", default=str(DEFAULT_OUT))

@@ -27,9 +27,10 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
+from ftcal.core import read_json_record
 from ftcal.evaluation import dataset_seeds, make_model
 
-from _output import int_at_least, output_files, read_record
+from _output import int_at_least, output_files
 
 ROOT = Path(__file__).resolve().parent
 
@@ -63,8 +64,8 @@ def eq18_effect(n: int) -> dict:
 
 
 def spread_explained(cache: Path) -> dict | None:
-    recs = [r for r in (read_record(p, model="linear") for p in cache.glob("ds*_linear_*.json"))
-            if r is not None and all(isinstance(r.get(k), float) for k in ("rmse", "noise_floor"))]
+    recs = [r for r in (read_json_record(p, numbers=("rmse", "noise_floor"), model="linear")
+                        for p in cache.glob("ds*_linear_*.json")) if r is not None]
     if len(recs) < 3:
         return None
     rmse = np.array([r["rmse"] for r in recs])
@@ -122,7 +123,7 @@ def main(argv=None) -> int:
     files = output_files(p, args.out, args.force, ["departures.json"])
     path = files.out_dir / "departures.json"
     if args.restore_schedule:
-        result = read_record(path) or {}
+        result = read_json_record(path) or {}
         result.setdefault("restore", {}).update(
             restore_effect(("directional", "comparative"), ("reconstructed", "thesis"), args.restore_schedule))
         files.write_text("departures.json", json.dumps(result, indent=1))

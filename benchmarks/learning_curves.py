@@ -49,9 +49,10 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
+from ftcal.core import is_finite_number, read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES
 
-from _output import int_at_least, output_files, read_record
+from _output import int_at_least, jobs, output_files
 
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "learning_curves"
 _FORMAT = 1
@@ -230,12 +231,8 @@ def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = N
 
 def _complete(rec: dict) -> bool:
     """Whether a cached record is one this script wrote: a finite RMSE, or a failure with its message."""
-    def number(v) -> bool:
-        return isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v)
-
-    scored = rec.get("error") is None and number(rec.get("rmse"))
-    failed = isinstance(rec.get("error"), str)
-    return (scored or failed) and number(rec.get("n_train")) and isinstance(rec.get("size"), list)
+    scored = rec.get("error") is None and is_finite_number(rec.get("rmse"))
+    return (scored or isinstance(rec.get("error"), str)) and isinstance(rec.get("size"), list)
 
 
 def run_unit(unit: list[dict]) -> list[dict]:
@@ -383,7 +380,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help=f"calibrators ({', '.join(CALIBRATOR_NAMES)}) and stock baselines ({', '.join(STOCK_BASELINE_NAMES)})")
     p.add_argument("--seeds", type=int_at_least(1, 100), default=3, help="seeds (datasets and model initialisations) per size")
     p.add_argument("--schedule", default="short", choices=["thesis", "short"])
-    p.add_argument("--jobs", type=int_at_least(1, 256), default=1)
+    p.add_argument("--jobs", type=jobs, default=1, help="worker processes (-1: one per core)")
     p.add_argument("--stack", type=int_at_least(1), default=10, help="network fits of one dataset, seed and model trained together")
     p.add_argument("--quick", action="store_true", help="smoke mode: 1 seed, the smallest sizes, closed forms only")
     p.add_argument("--out", default=str(DEFAULT_OUT))
@@ -412,7 +409,7 @@ def main(argv: list[str] | None = None) -> int:
         tasks = [t for t in tasks if t["size"][-1] <= 25 or t["size"] == [5, 5]]
     records, pending = [], []
     for t in tasks:
-        rec = read_record(_cache_path(cache, t), hash=t["hash"])
+        rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"])
         records.append(rec) if rec is not None and _complete(rec) else pending.append(t)
     start = time.perf_counter()
     if pending and not args.aggregate_only:

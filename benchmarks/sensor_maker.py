@@ -23,6 +23,8 @@ import argparse
 import hashlib
 import json
 import sys
+import zipfile
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -68,7 +70,7 @@ def _cached_prediction(path: Path, shape: tuple) -> np.ndarray | None:
     try:
         with np.load(path, allow_pickle=False) as data:
             pred = np.asarray(data["pred"], dtype=float)
-    except (OSError, ValueError, KeyError, EOFError):
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile, zlib.error):  # missing, truncated, foreign
         return None
     return pred if pred.shape == shape and np.isfinite(pred).all() else None
 

@@ -321,7 +321,7 @@ def test_benchmark_scripts_never_replace_a_users_file_and_refuse_before_any_work
     ("crossover", ["--quick", "--n-test", "5"], "--quick sets its own small sizes"),
     ("learning_curves", ["--seeds", "0"], "argument --seeds: '0' is not an integer from 1 to 100"),
     ("learning_curves", ["--quick", "--models", "nope"], "unknown models ['nope']"),
-    ("learning_curves", ["--jobs", "0"], "argument --jobs: '0' is not an integer from 1 to 256"),
+    ("learning_curves", ["--jobs", "0"], "argument --jobs: '0' is not a number of jobs from 1 to 256, or -1"),
     ("sensor_maker", ["--datasets", "0"], "argument --datasets: '0' is not an integer from 1 to 1000"),
     ("sensor_maker", ["--aggregate-only"], "nothing to aggregate"),
     ("departures", ["--datasets", "-1"], "argument --datasets: '-1' is not an integer from 1 to 1000"),

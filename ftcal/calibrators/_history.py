@@ -41,8 +41,9 @@ __all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_hist
 #: Contiguous blocks the rows are cut into for the one-SE rule when no groups are given (neighbouring rows of a
 #: time series are not independent errors).
 _TIME_BLOCKS = 20
-#: Most time constants one fit tries (each costs ``cv`` fits of the estimator).
-MAX_TAUS = 20
+#: Most time constants one fit tries: each costs ``cv`` fits of the estimator, so a longer list is a mistake (a
+#: grid over rows, not over time constants) that would run for hours; a log-spaced grid needs a dozen.
+MAX_TAUS = 64
 
 
 def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = None,
@@ -237,7 +238,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     estimator : calibrator or None, default=None
         The static calibrator; ``None``: :class:`~ftcal.LinearCalibrator`.
     taus : array-like of float >= 1, default=(1, 2, 4, 8, 16)
-        Time constants tried [rows]: a flat list of at most :data:`MAX_TAUS` (20).
+        Time constants tried [rows]: a flat list of at most 64.
     cv : int >= 2, default=5
         Folds: contiguous blocks of rows, or :class:`~sklearn.model_selection.GroupKFold`
         over ``groups`` (sessions, presses: the rows of one group must be

@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import contextlib
 import json
+import math
+import numbers
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
 __all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
-           "model_file_name"]
+           "model_file_name", "is_finite_number", "read_json_record"]
 
 
 #: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
@@ -133,8 +135,6 @@ def plain_json(obj):
     >>> plain_json({"a": np.arange(2), "b": (np.float64(1.5), float("nan")), "c": Path("x")})
     {'a': [0, 1], 'b': [1.5, None], 'c': 'x'}
     """
-    import math
-
     import numpy as np
 
     if isinstance(obj, dict):
@@ -155,3 +155,40 @@ def plain_json(obj):
 def write_json(path: str | os.PathLike, obj) -> None:
     """Write ``obj`` as indented JSON (NaN and inf written as ``null``, see :func:`plain_json`)."""
     Path(path).write_text(json.dumps(plain_json(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
+
+
+def is_finite_number(value) -> bool:
+    """Whether ``value`` is a finite real number (a bool, NaN, inf, a string or None is not).
+
+    Examples
+    --------
+    >>> [is_finite_number(v) for v in (1, 2.5, float("nan"), True, "3", None)]
+    [True, True, False, False, False, False]
+    """
+    return isinstance(value, numbers.Real) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def read_json_record(path: str | os.PathLike, *, numbers: tuple[str, ...] = (), **expected) -> dict | None:
+    """A JSON object read from ``path``, or None when it is not one a program wrote for this purpose.
+
+    None when the file is missing or unreadable (not UTF-8, not JSON, nested beyond the parser's limit), is
+    not a JSON object, has a key of ``expected`` with another value, or has a key of ``numbers`` that is not
+    a finite number. The per-fit caches of the benchmarks read their files this way: None means "fit again".
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "fit.json"
+    >>> _ = path.write_text('{"model": "linear", "rmse": 4.6}')
+    >>> read_json_record(path, numbers=("rmse",), model="linear")
+    {'model': 'linear', 'rmse': 4.6}
+    >>> read_json_record(path, model="directional") is None
+    True
+    """
+    try:
+        record = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    if not isinstance(record, dict) or any(record.get(k) != v for k, v in expected.items()):
+        return None
+    return record if all(is_finite_number(record.get(k)) for k in numbers) else None

@@ -325,8 +325,30 @@ def check_arguments(caller: str, constraints: dict, **values) -> None:
 
 
 def refuse_bool_numbers(owner: str, constraints: dict, values: dict) -> None:
-    """Refuse a bool given where a number is allowed and a bool is not: scikit-learn's intervals take ``True`` for 1,
-    but a flag where a count or a size belongs is a mistake. ``owner`` names the function or estimator."""
+    """Refuse a bool given where a number is allowed and a bool is not.
+
+    scikit-learn's intervals take ``True`` for 1, but a flag where a count or a size belongs is a mistake.
+    The one rule of :func:`check_arguments` and of every calibrator's parameter check.
+
+    Parameters
+    ----------
+    owner : str
+        The function or estimator named in the error.
+    constraints : dict
+        Parameter name -> scikit-learn constraints (a name without constraints is not checked).
+    values : dict
+        Parameter name -> value.
+
+    Examples
+    --------
+    >>> from numbers import Integral
+    >>> refuse_bool_numbers("fit", {"cv": [Interval(Integral, 2, None, closed="left")]}, {"cv": True})
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: The 'cv' parameter of fit must be a number, not a bool. Got True instead.
+    >>> refuse_bool_numbers("fit", {"verbose": [Interval(Integral, 0, None, closed="left"), "boolean"]},
+    ...                     {"verbose": True})  # a bool is one of its values
+    """
     for name, value in values.items():
         allowed = [c for c in constraints.get(name, []) if c is not None]
         takes_bools = any((isinstance(c, str) and c == "boolean") or c is bool or c is np.bool_ for c in allowed)

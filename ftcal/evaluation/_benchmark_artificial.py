@@ -50,17 +50,17 @@ from pathlib import Path
 
 import numpy as np
 from joblib import Parallel, delayed, effective_n_jobs
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval
 
-from ..simulation._artificial import SPHERE_FRACTIONS, make_artificial_dataset
-from ..core._files import plain_json
+from ..simulation._artificial import make_artificial_dataset
+from ..core._files import plain_json, read_json_record
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
 from ._outputs import OutputFiles, check_file_name
 from ..simulation._error_models import ErrorModel
 from ..simulation._presets import MAX_DATASETS, default_test_distribution, error_preset
-from ..simulation._sampling import MAX_POINTS, TEST_DISTRIBUTIONS
+from ..simulation._sampling import check_dataset_arguments
 from ..simulation._sensor import SensorProfile
 
 __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "format_mean_std", "dataset_seeds",
@@ -350,17 +350,15 @@ def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **argume
     from ..models._baselines import STOCK_BASELINE_NAMES
     from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
 
-    points = [Interval(Integral, 1, MAX_POINTS, closed="both"), None]
+    seed = arguments.pop("seed")
+    check_dataset_arguments("run_artificial_benchmark", **arguments)
     check_arguments("run_artificial_benchmark", {
         "n_datasets": [Interval(Integral, 1, MAX_DATASETS, closed="both")],
-        "n_jobs": [Interval(Integral, None, -1, closed="right"), Interval(Integral, 1, None, closed="left")],
+        # joblib's: None is 1, -1 every core, -2 all but one
+        "n_jobs": [Interval(Integral, None, -1, closed="right"), Interval(Integral, 1, None, closed="left"), None],
         "stack": [Interval(Integral, 1, None, closed="left")],
         "seed": [Interval(Integral, 0, None, closed="left")],
-        "n_per_sphere": points,
-        "n_test": points,
-        "test_distribution": [StrOptions(set(TEST_DISTRIBUTIONS)), None],
-        "n_spheres": [Interval(Integral, 1, len(SPHERE_FRACTIONS), closed="both")],
-    }, n_datasets=n_datasets, n_jobs=n_jobs, stack=stack, **arguments)
+    }, n_datasets=n_datasets, n_jobs=n_jobs, stack=stack, seed=seed)
     known = tuple(CALIBRATOR_NAMES) + STOCK_BASELINE_NAMES
     unknown = [m for m in models if m not in known]
     if unknown or not models:
@@ -420,16 +418,10 @@ def _cache_path(cache_dir: Path, task: dict) -> Path:
 
 
 def _load_cached(path: Path, task: dict) -> dict | None:
-    try:
-        rec = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError, RecursionError):
-        return None  # missing, half-written, not UTF-8 or not JSON: recompute
-    if not isinstance(rec, dict) or rec.get("config") != task["config"] or rec.get("dataset") != task["dataset"]:
-        return None
-    figures = [rec.get(key) for key in ("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor")]
-    if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in figures):
-        return None  # not a record this benchmark wrote (every figure it writes is a finite number): recompute
-    return rec if rec.get("preset") == task["preset"] and rec.get("model") == task["model"] else None
+    """The cached record of ``task``, or None (missing, half-written, another configuration, or not a record this
+    benchmark wrote: every figure it writes is a finite number): then the fit runs again."""
+    return read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
+                            config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
 
 
 def run_artificial_benchmark(

@@ -1,6 +1,6 @@
 """A benchmark's summary files: never replacing a file the benchmark did not write, never left half-written.
 
-Every benchmark (``ftcal benchmark artificial``, the scripts in ``benchmarks/``) writes its tables, JSON and
+A benchmark (``ftcal benchmark artificial``, the study scripts in ``benchmarks/``) writes its tables, JSON and
 plots into one folder through :class:`OutputFiles`:
 
 * before any work, :meth:`OutputFiles.check` refuses a name that exists and was not written by a benchmark
@@ -119,12 +119,29 @@ class OutputFiles:
         (unless ``force``): the new output is kept beside it and the error says where.
         """
         path = self.out_dir / check_file_name(name, "an output name")
-        overwrite = self.force or not path.exists() or self._is_own(path)
+        # a missing file goes in by a link that fails if one appeared meanwhile (kept, ours put beside it)
+        overwrite = self.force or (path.exists() and self._is_own(path))
         with atomic_output(path, overwrite=overwrite, error=BenchmarkOutputExistsError) as tmp:
             yield tmp
-        manifest = {**self.manifest, name: _sha(path)}
-        with atomic_output(self.manifest_path, overwrite=True, error=BenchmarkOutputExistsError) as tmp:
-            tmp.write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+        with self._manifest_lock():  # two runs in one folder: neither loses the other's entry
+            manifest = {**self.manifest, name: _sha(path)}
+            with atomic_output(self.manifest_path, overwrite=True, error=BenchmarkOutputExistsError) as tmp:
+                tmp.write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+
+    @contextlib.contextmanager
+    def _manifest_lock(self) -> Iterator[None]:
+        """An exclusive lock on the manifest's lock file for a read-modify-write (POSIX; elsewhere none)."""
+        try:
+            import fcntl
+        except ImportError:  # not POSIX: the write stays atomic, only a concurrent run's entry may be lost
+            yield
+            return
+        with open(self.out_dir / (MANIFEST_NAME + ".lock"), "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                yield
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
 
     def write_text(self, name: str, text: str) -> Path:
         """Write ``text`` (UTF-8) as ``name``; the final path."""

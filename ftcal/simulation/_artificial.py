@@ -26,7 +26,7 @@ from numbers import Integral
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval
 
 from ..io._dataset import CalibrationDataset
 from ._error_models import ErrorModel, SampledErrors
@@ -34,7 +34,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._metrics import wrench_rmse
 from ..core._validation import check_arguments
 from ._presets import default_test_distribution, error_preset
-from ._sampling import TEST_DISTRIBUTIONS, check_points, continuous_wrenches, sphere_wrenches
+from ._sampling import SPHERE_FRACTIONS, check_dataset_arguments, check_points, continuous_wrenches, sphere_wrenches
 from ._sensor import SensorProfile
 
 __all__ = ["VirtualSensor", "make_artificial_dataset", "noise_floor"]
@@ -61,8 +61,6 @@ def zero_offset_bound(profile: SensorProfile) -> tuple[float, float]:
     return ZERO_OFFSET_LIMIT * full_scale, full_scale
 
 
-#: Training-sphere radii as fractions of Fmax: 400, 800, 1200, 1600 N for 2000 N (IV-A-a).
-SPHERE_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
 
 
 def noise_floor(wrench_noise_free: ArrayLike, wrench_noisy: ArrayLike, alpha: float) -> float:
@@ -235,13 +233,12 @@ def make_artificial_dataset(
     >>> train.raw.shape, test.raw.shape, sorted(set(train.group.tolist()))
     ((20, 6), (4, 6), [0, 1, 2, 3])
     """
-    check_points("make_artificial_dataset", n_per_sphere=n_per_sphere, n_test=n_test)
+    check_points("make_artificial_dataset", n_per_sphere=n_per_sphere, n_test=n_test)  # here None is no count
+    check_dataset_arguments("make_artificial_dataset", test_distribution=test_distribution, n_spheres=n_spheres)
     check_arguments("make_artificial_dataset", {
         "random_state": [Interval(Integral, 0, None, closed="left"), np.random.Generator, None],
         "profile": [SensorProfile, None],
-        "test_distribution": [StrOptions(set(TEST_DISTRIBUTIONS)), None],
-        "n_spheres": [Interval(Integral, 1, len(SPHERE_FRACTIONS), closed="both")],
-    }, random_state=random_state, profile=profile, test_distribution=test_distribution, n_spheres=n_spheres)
+    }, random_state=random_state, profile=profile)
     model = error_preset(preset)
     rng = np.random.default_rng(random_state)
     if test_distribution is None:

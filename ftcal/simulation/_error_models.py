@@ -41,12 +41,13 @@ The errors, in the order they are applied
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, field
-from numbers import Integral, Real
+from numbers import Integral
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
+from ..core._files import is_finite_number
 from ..core._wrench import WRENCH_LABELS, scale_torques, unscale_torques
 
 __all__ = ["ErrorModel", "SampledErrors"]
@@ -118,8 +119,7 @@ class ErrorModel:
                                         f"({type(value).__name__}).")
 
         def number(name: str) -> bool:
-            value = getattr(self, name)
-            return isinstance(value, Real) and not isinstance(value, (bool, np.bool_))
+            return is_finite_number(getattr(self, name))
 
         for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread"):
             # relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5

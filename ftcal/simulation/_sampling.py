@@ -43,12 +43,17 @@ from numpy.typing import NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import unscale_torques
 
-__all__ = ["sphere_wrenches", "continuous_wrenches", "check_points", "TEST_DISTRIBUTIONS", "MAX_POINTS"]
+__all__ = ["sphere_wrenches", "continuous_wrenches", "check_points", "check_dataset_arguments",
+           "check_test_distribution", "TEST_DISTRIBUTIONS", "MAX_POINTS", "SPHERE_FRACTIONS", "N_SPHERES"]
 
 #: Names accepted by :func:`continuous_wrenches`.
 TEST_DISTRIBUTIONS = ("radial", "box", "ball")
 #: Most points one sampler call draws (per sphere, or test points): the artificial datasets' size limit.
 MAX_POINTS = 1_000_000
+#: Training-sphere radii as fractions of Fmax: 400, 800, 1200, 1600 N for 2000 N (IV-A-a).
+SPHERE_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
+#: Training spheres of the thesis' artificial datasets (IV-A-a).
+N_SPHERES = len(SPHERE_FRACTIONS)
 
 
 def _unit_directions(n: int, rng: np.random.Generator) -> NDArray[np.float64]:
@@ -62,6 +67,15 @@ def _uniform_ball_3d(n: int, radius: float, rng: np.random.Generator) -> NDArray
     v = rng.standard_normal((n, 3))
     v /= np.linalg.norm(v, axis=1, keepdims=True)
     return v * (radius * np.cbrt(rng.uniform(0.0, 1.0, size=(n, 1))))
+
+
+def check_test_distribution(caller: str, test_distribution) -> None:
+    """Refuse a ``test_distribution`` that is neither one of :data:`TEST_DISTRIBUTIONS` nor None (the default)."""
+    if test_distribution is not None and not (isinstance(test_distribution, str)
+                                              and test_distribution in TEST_DISTRIBUTIONS):
+        raise CalibrationInputError(f"The 'test_distribution' parameter of {caller} must be one of "
+                                    f"{', '.join(map(repr, TEST_DISTRIBUTIONS))} or None. Got {test_distribution!r:.80} "
+                                    "instead.")
 
 
 def check_points(caller: str, **counts) -> None:
@@ -79,6 +93,20 @@ def check_points(caller: str, **counts) -> None:
     from ..core._validation import check_arguments
 
     check_arguments(caller, {name: [Interval(Integral, 1, MAX_POINTS, closed="both")] for name in counts}, **counts)
+
+
+def check_dataset_arguments(caller: str, *, n_per_sphere=None, n_test=None, test_distribution=None,
+                            n_spheres=4) -> None:
+    """The arguments of an artificial dataset, checked alike by every caller (a count of None: the default)."""
+    from sklearn.utils._param_validation import Interval
+
+    from ..core._validation import check_arguments
+
+    check_test_distribution(caller, test_distribution)
+    points = [Interval(Integral, 1, MAX_POINTS, closed="both"), None]
+    check_arguments(caller, {"n_per_sphere": points, "n_test": points,
+                             "n_spheres": [Interval(Integral, 1, N_SPHERES, closed="both")]},
+                    n_per_sphere=n_per_sphere, n_test=n_test, n_spheres=n_spheres)
 
 
 def sphere_wrenches(
@@ -171,4 +199,6 @@ def continuous_wrenches(
         return rng.uniform(-1.0, 1.0, size=(int(n), 6)) * ranges
     if distribution == "ball":
         return np.hstack([_uniform_ball_3d(int(n), fmax, rng), _uniform_ball_3d(int(n), tmax, rng)])
-    raise CalibrationInputError(f"unknown test distribution {distribution!r}; choose one of {TEST_DISTRIBUTIONS}.")
+    check_test_distribution("continuous_wrenches", distribution)
+    raise CalibrationInputError(f"The 'distribution' parameter of continuous_wrenches must be one of "
+                                f"{TEST_DISTRIBUTIONS}; got {distribution!r:.80}.")
