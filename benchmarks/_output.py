@@ -10,18 +10,43 @@ from ftcal import FtcalError
 from ftcal.evaluation import OutputFiles
 
 
-def parse_output(doc: str, default: str, argv: list[str] | None = None) -> Path:
-    """Parse ``--out FILE`` (default ``default``) and ``--force``, and check ``FILE`` before any work: an existing
-    file is an error (exit 2) unless ``--force`` replaces it; its folder is made."""
+class OutputFile:
+    """One output file of a script, checked before any work (see :func:`single_output`)."""
+
+    def __init__(self, files: OutputFiles, name: str) -> None:
+        self.files, self.name = files, name
+
+    @property
+    def path(self) -> Path:
+        return self.files.out_dir / self.name
+
+    def write_text(self, text: str) -> Path:
+        return self.files.write_text(self.name, text)
+
+    def write(self):
+        """A temporary path to write to, moved into place when the block succeeds (see ``OutputFiles.write``)."""
+        return self.files.write(self.name)
+
+    def __str__(self) -> str:
+        return str(self.path)
+
+
+def single_output(parser: argparse.ArgumentParser, out: str | Path, force: bool) -> OutputFile:
+    """The script's one output file ``out``: an existing file the script did not write is an error (exit 2)
+    unless ``force``; its folder is made."""
+    out = Path(out)
+    if not out.name:
+        parser.error(f"--out {str(out)!r} names no file")
+    return OutputFile(output_files(parser, out.parent if str(out.parent) else ".", force, [out.name]), out.name)
+
+
+def parse_output(doc: str, default: str, argv: list[str] | None = None) -> OutputFile:
+    """Parse ``--out FILE`` (default ``default``) and ``--force``, and check ``FILE`` before any work."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--out", default=default, help=f"result JSON (default: {default})")
-    parser.add_argument("--force", action="store_true", help="replace an existing --out file")
+    parser.add_argument("--force", action="store_true", help="replace an --out file this script did not write")
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    if out.exists() and not (args.force and out.is_file()):
-        parser.error(f"{out} exists; pass --force to replace it (a file), or choose another --out")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    return out
+    return single_output(parser, args.out, args.force)
 
 
 def int_at_least(low: int, high: int | None = None):

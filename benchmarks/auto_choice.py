@@ -23,6 +23,8 @@ import numpy as np
 
 import ftcal
 
+from _output import output_files
+
 PARTS = ("tare", "artificial", "robot")
 
 
@@ -126,8 +128,9 @@ def main(argv=None) -> int:
     parser.add_argument("--part", action="append", choices=PARTS)
     parser.add_argument("--schedule", default="short", choices=("short", "thesis"),
                         help="training schedule of the directional model in the tare part")
+    parser.add_argument("--force", action="store_true", help="replace a summary.md this script did not write")
     args = parser.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
+    files = output_files(parser, args.out, args.force, ["summary.md"])  # a part's JSON is never replaced
     for name in args.part or PARTS:
         path = args.out / (f"tare_{args.schedule}.json" if name == "tare" else f"{name}.json")
         if path.exists():
@@ -136,7 +139,7 @@ def main(argv=None) -> int:
         result = part_tare(args.schedule) if name == "tare" else {"artificial": part_artificial,
                                                                     "robot": part_robot}[name]()
         path.write_text(json.dumps(result, indent=2, default=float) + "\n")
-    (args.out / "summary.md").write_text(summary(args.out) + "\n")
+    files.write_text("summary.md", summary(args.out) + "\n")
     print(summary(args.out))
     return 0
 

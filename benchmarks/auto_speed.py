@@ -31,6 +31,8 @@ from pathlib import Path
 import ftcal
 from ftcal.models import stock_baselines
 
+from _output import single_output
+
 
 def timed(fn) -> float:
     start = time.perf_counter()
@@ -52,7 +54,9 @@ def main() -> None:
     parser.add_argument("--jobs", type=count(1, 64, negative=True), default=2, help="auto's n_jobs (-1: all cores)")
     parser.add_argument("--skip-large", action="store_true")
     parser.add_argument("--out", default="benchmarks/results/auto_speed.json")
+    parser.add_argument("--force", action="store_true", help="replace an --out file this script did not write")
     args = parser.parse_args()
+    out = single_output(parser, args.out, args.force)
     warnings.simplefilter("ignore")
     result: dict = {"load_average_before": os.getloadavg(), "jobs": args.jobs,
                     "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
@@ -86,7 +90,7 @@ def main() -> None:
         result["large_sk_gp_fit_s"] = timed(lambda: gp.fit(robot.raw, robot.wrench))
         result["large_ratio_to_sk_gp"] = result["large_fit_s"] / result["large_sk_gp_fit_s"]
     result["load_average_after"] = os.getloadavg()
-    Path(args.out).write_text(json.dumps(result, indent=1))
+    out.write_text(json.dumps(result, indent=1))
     print(json.dumps({k: v for k, v in result.items() if k != "large_table"}, indent=1))
 
 

@@ -50,6 +50,8 @@ import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
 from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
 
+from _output import output_files
+
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
 OUT = Path("benchmarks/results/auto_vs_stock")  # --out
 #: Rows the stock kernel baselines are fitted on (a random subset): ftcal's GP's default max_samples, as in auto.
@@ -290,17 +292,18 @@ def main() -> None:
     parser.add_argument("--jobs", type=int, default=2, help="auto's n_jobs (default: 2, the machine's cores)")
     parser.add_argument("--robot-folds", type=int, default=5, choices=range(1, 6),
                         help="outer pose-grouped folds of robot_held to run (1-5, default 5)")
+    parser.add_argument("--force", action="store_true", help="replace a summary.md this script did not write")
     args = parser.parse_args()
+    files = output_files(parser, args.out, args.force, ["summary.md"])  # a case's JSON is written once
     global JOBS, OUT, ROBOT_FOLDS
     JOBS, ROBOT_FOLDS = args.jobs, args.robot_folds
     OUT = Path(args.out)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = files.out_dir
     for case in args.case or CASES:
         path = out / f"{case}.json"
         if path.exists() and case.startswith("dead_weight"):  # an earlier run's JSON: add the stock baselines
             path.write_text(json.dumps(dead_weight_stock(case, json.loads(path.read_text())), indent=1, default=float))
-            (out / "summary.md").write_text(summary(out) + "\n")
+            files.write_text("summary.md", summary(out) + "\n")
         if path.exists():
             continue
         print(f"{case} ...", flush=True)
@@ -311,7 +314,7 @@ def main() -> None:
                       machine={"platform": platform.platform(), "cpus": os.cpu_count(),
                                "python": platform.python_version()})
         path.write_text(json.dumps(result, indent=1, default=float))
-        (out / "summary.md").write_text(summary(out) + "\n")
+        files.write_text("summary.md", summary(out) + "\n")
         print(summary(out), flush=True)
 
 

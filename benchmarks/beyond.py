@@ -42,6 +42,8 @@ from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
 from ftcal.core import plain_json
 from ftcal.evaluation import wilcoxon_pvalue
 
+from _output import output_files
+
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "beyond"
 HYBRID = "axis_nonlinear"
 CLOSED_FORM = ("linear", "polynomial", HYBRID)
@@ -62,6 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output and cache folder (default {DEFAULT_OUT})")
     p.add_argument("--real-world", action="store_true", help="also run the virtual robot experiment")
     p.add_argument("--aggregate-only", action="store_true", help="no new fits: summarise what the cache holds")
+    p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
 
@@ -155,11 +158,13 @@ def markdown(meta: dict, tgt: dict, real_world: dict | None) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     t0 = time.perf_counter()
-    out = args.out
+    files = output_files(parser, args.out, args.force, ["beyond_summary.json", "beyond_summary.md"])
+    out = files.out_dir
     common = dict(presets=args.presets, schedule=args.schedule, seed=args.seed, n_jobs=args.jobs, out_dir=out,
-                  plot=False, compute=not args.aggregate_only)
+                  plot=False, compute=not args.aggregate_only, force=args.force)
 
     def progress(done, total, rec):
         print(f"[{done}/{total}] {rec['preset']} ds{rec['dataset']} {rec['model']}: RMSE {rec['rmse']:.3f} N "
@@ -187,10 +192,10 @@ def main(argv: list[str] | None = None) -> int:
     rw = None if real_world is None else {"splits": {
         s: {m: {k: r.get(k) for k in ("rmse_mean", "rel_force_mean", "rel_torque_mean")} for m, r in by.items()}
         for s, by in real_world["splits"].items()}}
-    (out / "beyond_summary.json").write_text(json.dumps(plain_json({"meta": meta, "targets": tgt,
-                                                                      "real_world": rw}), indent=1))
+    files.write_text("beyond_summary.json", json.dumps(plain_json({"meta": meta, "targets": tgt, "real_world": rw}),
+                                                       indent=1))
     text = markdown(meta, tgt, rw)
-    (out / "beyond_summary.md").write_text(text)
+    files.write_text("beyond_summary.md", text)
     print(text)
     return 0
 

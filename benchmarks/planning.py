@@ -48,7 +48,10 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
+from ftcal.core import read_json_record
 from ftcal.models import default_candidates
+
+from _output import output_files
 
 HERE = Path(__file__).resolve().parent
 GEODESIC = {12: 0, 42: 1, 155: 2}
@@ -202,9 +205,9 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
                           flush=True)
 
 
-def report(out: Path) -> None:
-    rows = [json.loads(p.read_text()) for p in sorted((out / "cache").glob("*_s*_*_*.json"))]
-    rows = [r for r in rows if "model" in r]
+def report(out: Path, files, figures) -> None:
+    rows = [read_json_record(p) for p in sorted((out / "cache").glob("*_s*_*_*.json"))]
+    rows = [r for r in rows if r is not None and "model" in r]
     if not rows:
         return
     by: dict = {}
@@ -231,10 +234,10 @@ def report(out: Path) -> None:
         chose = ", ".join(entry["auto_chosen"]) + (" (earlier auto)" if entry["earlier_auto"] else "")
         lines.append(f"| {sensor} | {model} | {strategy} | {n} | {len(rs)} | {entry['rmse_mean']:.4f} | {ratio} "
                      f"| {entry['d_criterion_mean']:.2f} | {chose} |")
-    (out / "summary.json").write_text(json.dumps({"rows": summary, "machine": platform.platform(),
+    files.write_text("summary.json", json.dumps({"rows": summary, "machine": platform.platform(),
                                                   "note": "machine NOT idle (helpers and the lead's benchmarks share 2 cores); "
                                                           "no figure depends on speed"}, indent=1))
-    (out / "summary.md").write_text("\n".join(lines) + "\n")
+    files.write_text("summary.md", "\n".join(lines) + "\n")
     print("\n".join(lines))
     import matplotlib
 
@@ -275,9 +278,7 @@ def report(out: Path) -> None:
         ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form)'}", fontsize=10)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    fig_path = HERE / "figures" / "planning_rmse.png"
-    fig.savefig(fig_path, dpi=110)
-    print(f"plot -> {fig_path}")
+    print(f"plot -> {figures.save_figure('planning_rmse.png', fig, dpi=110)}")
 
 
 def main(argv=None) -> None:
@@ -289,11 +290,14 @@ def main(argv=None) -> None:
     ap.add_argument("--models", default="linear,auto", help="one pass per model, in this order")
     ap.add_argument("--out", type=Path, default=HERE / "results" / "planning")
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--force", action="store_true", help="replace summaries and the figure this script did not write")
     a = ap.parse_args(argv)
+    files = output_files(ap, a.out, a.force, ["summary.json", "summary.md"])
+    figures = output_files(ap, HERE / "figures", a.force, ["planning_rmse.png"])
     if not a.report_only:
         run(a.sensors.split(","), [int(s) for s in a.seeds.split(",")], [int(s) for s in a.sizes.split(",")],
             a.next_step, a.models.split(","), a.out)
-    report(a.out)
+    report(a.out, files, figures)
 
 
 if __name__ == "__main__":

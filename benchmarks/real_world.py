@@ -20,6 +20,8 @@ import torch
 from ftcal import CALIBRATOR_NAMES, run_real_world_benchmark
 from ftcal.evaluation import SPLIT_NAMES
 
+from _output import single_output
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -60,22 +62,25 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--log-dir", type=Path, default=None, help="keep the simulated run logs here")
     p.add_argument("--out", type=Path, default=HERE / "out" / "real_world.json")
     p.add_argument("--plot", type=Path, default=HERE / "real_world_fig6.png")
+    p.add_argument("--force", action="store_true", help="replace --out / --plot files this script did not write")
     args = p.parse_args(argv)
+    out, figure = single_output(p, args.out, args.force), single_output(p, args.plot, args.force)
     torch.set_num_threads(args.threads)
     t0 = time.perf_counter()
-    res = run_real_world_benchmark(models=args.models, splits=args.splits, schedule=args.schedule,
-                                   grouped_schedule=args.grouped_schedule, load_mass=args.load_mass,
-                                   subdivisions=args.subdivisions, random_state=args.random_state,
-                                   log_dir=args.log_dir, plot_path=args.plot)
+    with figure.write() as tmp:
+        res = run_real_world_benchmark(models=args.models, splits=args.splits, schedule=args.schedule,
+                                       grouped_schedule=args.grouped_schedule, load_mass=args.load_mass,
+                                       subdivisions=args.subdivisions, random_state=args.random_state,
+                                       log_dir=args.log_dir, plot_path=tmp)
     wall = time.perf_counter() - t0
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(res, indent=1))
+    res["plot"] = str(figure.path)  # not the temporary file it was drawn to
+    out.write_text(json.dumps(res, indent=1))
     d = res["dataset"]
     print(f"dataset: {d['n_samples']} samples x {d['n_channels']} channels, {d['n_configurations']} load "
           f"configurations, alpha = {d['alpha']:.3f} 1/m, |F| <= {d['force_norm_max_N']:.2f} N, "
           f"|T| <= {d['torque_norm_max_Nm']:.2f} N·m, max pair rotation {d['pair_rotation_deg_max']:.2f} deg")
     print(markdown_tables(res))
-    print(f"wall time {wall:.0f} s; results {args.out}; plot {res['plot']}")
+    print(f"wall time {wall:.0f} s; results {out}; plot {figure}")
     return res
 
 

@@ -22,6 +22,8 @@ import numpy as np
 
 import ftcal
 
+from _output import int_at_least, output_files
+
 MAGNITUDES = {"typical": (0.03, 0.02), "upper": (0.05, 0.03)}
 
 
@@ -74,13 +76,14 @@ def summary(results: dict) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--datasets", type=int, default=5)
+    parser.add_argument("--datasets", type=int_at_least(1, 1000), default=5)
     parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "thermal_drift")
+    parser.add_argument("--force", action="store_true", help="replace output files this script did not write")
     args = parser.parse_args(argv)
-    args.out.mkdir(parents=True, exist_ok=True)
+    files = output_files(parser, args.out, args.force, ["thermal_drift.json", "summary.md"])
     results = run(args.datasets)
-    (args.out / "thermal_drift.json").write_text(json.dumps(results, indent=2) + "\n")
-    (args.out / "summary.md").write_text(summary(results) + "\n")
+    files.write_text("thermal_drift.json", json.dumps(results, indent=2) + "\n")
+    files.write_text("summary.md", summary(results) + "\n")
     print(summary(results))
     return 0
 

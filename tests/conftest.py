@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -18,6 +21,11 @@ from ftcal import (
     TemperatureCompensatedCalibrator,
 )
 from ftcal.models._auto import StackedCalibrator
+
+# the benchmark scripts import their shared helpers (benchmarks/_output.py) as when run from their folder
+BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
+if str(BENCHMARKS) not in sys.path:
+    sys.path.append(str(BENCHMARKS))
 
 #: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
 TINY_SCHEDULE = dict(

@@ -256,8 +256,6 @@ def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_aske
 def _script(name):
     import sys
 
-    if str(ROOT / "benchmarks") not in sys.path:  # as when run: the scripts import their shared _output module
-        sys.path.insert(0, str(ROOT / "benchmarks"))
     spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "benchmarks" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     sys.modules[spec.name] = module  # dataclasses look their module up there
