@@ -34,9 +34,9 @@ class OutputFile:
 def single_output(parser: argparse.ArgumentParser, out: str | Path, force: bool) -> OutputFile:
     """The script's one output file ``out``: an existing file the script did not write is an error (exit 2)
     unless ``force``; its folder is made."""
-    out = Path(out)
-    if not out.name:
+    if not str(out).strip() or not Path(out).name:
         parser.error(f"--out {str(out)!r} names no file")
+    out = Path(out)
     return OutputFile(output_files(parser, out.parent if str(out.parent) else ".", force, [out.name]), out.name)
 
 
@@ -80,3 +80,13 @@ def output_files(parser: argparse.ArgumentParser, out: str, force: bool, names: 
     except (FtcalError, OSError) as exc:
         parser.error(str(exc))
     return files
+
+
+def table_or_stop(script: str, out: Path, build) -> str:
+    """``build(out)``, the summary of the result files in ``out``; one that is not the script's stops the script
+    with one line (exit 1) instead of a traceback."""
+    try:
+        return build(out)
+    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+        raise SystemExit(f"{script}: error: a result file in {out} is not this script's ({exc!r}); move it away "
+                         "and run that part again") from None

@@ -22,8 +22,9 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
+from ftcal.core import read_json_record
 
-from _output import output_files
+from _output import output_files, table_or_stop
 
 PARTS = ("tare", "artificial", "robot")
 
@@ -96,6 +97,11 @@ def part_robot() -> dict:
 
 
 def summary(out: Path) -> str:
+    """The summary of the part results in ``out`` (see :func:`table_or_stop`)."""
+    return table_or_stop("auto_choice.py", out, _summary)
+
+
+def _summary(out: Path) -> str:
     lines = [f"machine: {platform.machine()}, {platform.python_version()}, ftcal {ftcal.__version__}", ""]
     for tare in sorted(out.glob("tare_*.json")):
         t = json.loads(tare.read_text())
@@ -124,7 +130,7 @@ def summary(out: Path) -> str:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "auto_choice")
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "auto_choice"))
     parser.add_argument("--part", action="append", choices=PARTS)
     parser.add_argument("--schedule", default="short", choices=("short", "thesis"),
                         help="training schedule of the directional model in the tare part")
@@ -132,15 +138,15 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     files = output_files(parser, args.out, args.force, ["summary.md"])  # a part's JSON is never replaced
     for name in args.part or PARTS:
-        path = args.out / (f"tare_{args.schedule}.json" if name == "tare" else f"{name}.json")
-        if path.exists():
+        path = files.out_dir / (f"tare_{args.schedule}.json" if name == "tare" else f"{name}.json")
+        if read_json_record(path) is not None:
             print(f"{name}: done before ({path}); delete it to re-run", flush=True)
             continue
         result = part_tare(args.schedule) if name == "tare" else {"artificial": part_artificial,
                                                                     "robot": part_robot}[name]()
-        path.write_text(json.dumps(result, indent=2, default=float) + "\n")
-    files.write_text("summary.md", summary(args.out) + "\n")
-    print(summary(args.out))
+        files.write_text(path.name, json.dumps(result, indent=2, default=float) + "\n")
+    files.write_text("summary.md", summary(files.out_dir) + "\n")
+    print(summary(files.out_dir))
     return 0
 
 

@@ -48,9 +48,10 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
+from ftcal.core import read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
 
-from _output import output_files
+from _output import output_files, table_or_stop
 
 JOBS = 2  # processes of auto's candidate scoring (--jobs)
 OUT = Path("benchmarks/results/auto_vs_stock")  # --out
@@ -252,14 +253,19 @@ def run_case(case: str) -> dict:
 
 
 def summary(out: Path) -> str:
+    """The table of every case result in ``out`` (see :func:`table_or_stop`)."""
+    return table_or_stop("auto_vs_stock.py", out, _summary)
+
+
+def _summary(out: Path) -> str:
     lines = ["| case | training rows | auto | LTM | ftcal GP | sk_gp | best stock | auto / best stock | floor | "
              "auto / floor | ftcal GP / sk_gp | GP 2-std coverage | auto choices | auto fit [s] a fold |",
              "|" + "---|" * 14]
     for case in CASES:
         path = out / f"{case}.json"
-        if not path.exists() or case.startswith("dead_weight"):
+        r = read_json_record(path)
+        if r is None or case.startswith("dead_weight"):
             continue
-        r = json.loads(path.read_text())
         s = r["rmse"]
         best = min(v for n, v in s.items() if n.startswith("sk_"))
         # the soft and robot-held sensors' floor is what a static map reaches (history, per-pose offsets);
@@ -275,8 +281,9 @@ def summary(out: Path) -> str:
               + " | ".join(STOCK_BASELINE_NAMES) + " | auto / best stock | fit [s] |", "|" + "---|" * 13]
     for case in CASES:
         path = out / f"{case}.json"
-        if path.exists() and case.startswith("dead_weight"):
-            for o in json.loads(path.read_text())["seeds"]:
+        r = read_json_record(path)
+        if r is not None and case.startswith("dead_weight"):
+            for o in r["seeds"]:
                 stock = o.get("stock_rmse_2x", {})
                 lines.append(f"| {case.rsplit('_', 1)[1]} | {o['seed']} | {o['chosen']} | {o['auto_rmse_2x']:.4g} | "
                              f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | "
@@ -301,10 +308,11 @@ def main() -> None:
     out = files.out_dir
     for case in args.case or CASES:
         path = out / f"{case}.json"
-        if path.exists() and case.startswith("dead_weight"):  # an earlier run's JSON: add the stock baselines
-            path.write_text(json.dumps(dead_weight_stock(case, json.loads(path.read_text())), indent=1, default=float))
+        earlier = read_json_record(path)  # an unreadable or foreign file is not a result: the case runs again
+        if earlier is not None and case.startswith("dead_weight"):  # an earlier run's JSON: add the stock baselines
+            files.write_text(path.name, json.dumps(dead_weight_stock(case, earlier), indent=1, default=float))
             files.write_text("summary.md", summary(out) + "\n")
-        if path.exists():
+        if earlier is not None:
             continue
         print(f"{case} ...", flush=True)
         t0 = time.perf_counter()
@@ -313,7 +321,7 @@ def main() -> None:
                       kernel_baseline_rows=KERNEL_ROWS, auto_jobs=JOBS,
                       machine={"platform": platform.platform(), "cpus": os.cpu_count(),
                                "python": platform.python_version()})
-        path.write_text(json.dumps(result, indent=1, default=float))
+        files.write_text(path.name, json.dumps(result, indent=1, default=float))
         files.write_text("summary.md", summary(out) + "\n")
         print(summary(out), flush=True)
 

@@ -61,7 +61,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--schedule", default="short", choices=["thesis", "short"], help="network training schedule")
     p.add_argument("--seed", type=int, default=0, help="master seed of data and models")
     p.add_argument("--jobs", type=int, default=1, help="joblib workers")
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help=f"output and cache folder (default {DEFAULT_OUT})")
+    p.add_argument("--out", default=str(DEFAULT_OUT), help=f"output and cache folder (default {DEFAULT_OUT})")
     p.add_argument("--real-world", action="store_true", help="also run the virtual robot experiment")
     p.add_argument("--aggregate-only", action="store_true", help="no new fits: summarise what the cache holds")
     p.add_argument("--force", action="store_true", help="replace output files this script did not write")

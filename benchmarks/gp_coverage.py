@@ -24,6 +24,9 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal.models import stock_baselines
+from ftcal.core import read_json_record
+
+from _output import output_files
 
 CASES = ("soft", "soft_grouped", "thesis", "asymmetric", "reconstructed", "robot_held")
 
@@ -75,17 +78,18 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", default="benchmarks/results/gp_coverage")
     parser.add_argument("--case", action="append", choices=CASES)
+    parser.add_argument("--force", action="store_true", help="replace a case file this script did not write")
     args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    files = output_files(parser, args.out, args.force, [])
     for case in args.case or CASES:
-        path = out / f"{case}.json"
-        if not path.exists():
-            path.write_text(json.dumps(run(case), indent=1))
-        r = json.loads(path.read_text())
+        name = f"{case}.json"
+        r = read_json_record(files.out_dir / name, numbers=("uncalibrated_coverage_2std", "coverage_2std"))
+        if r is None:  # not run yet, or a file that is not this script's result
+            r = run(case)
+            files.write_text(name, json.dumps(r, indent=1))
         if "stock_gp_coverage_2std" not in r:
             r["stock_gp_coverage_2std"] = stock_coverage(case)
-            path.write_text(json.dumps(r, indent=1))
+            files.write_text(name, json.dumps(r, indent=1))
         print(f"| {case} | {r['uncalibrated_coverage_2std']:.3f} | {r['coverage_2std']:.3f} | "
               f"{' '.join(f'{c:.2f}' for c in r['per_component'])} | {r['stock_gp_coverage_2std']:.3f} |", flush=True)
 

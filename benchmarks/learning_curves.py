@@ -49,7 +49,7 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
-from ftcal.core import is_finite_number, read_json_record
+from ftcal.core import atomic_output, is_finite_number, read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
@@ -409,7 +409,8 @@ def main(argv: list[str] | None = None) -> int:
         tasks = [t for t in tasks if t["size"][-1] <= 25 or t["size"] == [5, 5]]
     records, pending = [], []
     for t in tasks:
-        rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"])
+        rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"],
+                               dataset=t["dataset"], size=t["size"], seed=t["seed"], model=t["model"])
         records.append(rec) if rec is not None and _complete(rec) else pending.append(t)
     start = time.perf_counter()
     if pending and not args.aggregate_only:
@@ -417,9 +418,8 @@ def main(argv: list[str] | None = None) -> int:
         for rec in itertools.chain.from_iterable(gen):
             path = _cache_path(cache, rec)
             path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp")
-            tmp.write_text(json.dumps(rec))
-            tmp.replace(path)
+            with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+                tmp.write_text(json.dumps(rec), encoding="utf-8")
             records.append(rec)
             print(f"[{len(records)}/{len(tasks)}] {rec['dataset']} {tuple(rec['size'])} seed {rec['seed']} "
                   f"{rec['model']}: RMSE {rec['rmse']:.2f} ({rec['n_train']} rows, {rec['fit_seconds']:.1f} s, "

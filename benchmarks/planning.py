@@ -48,10 +48,10 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
-from ftcal.core import read_json_record
+from ftcal.core import atomic_output, read_json_record
 from ftcal.models import default_candidates
 
-from _output import output_files
+from _output import output_files, single_output
 
 HERE = Path(__file__).resolve().parent
 GEODESIC = {12: 0, 42: 1, 155: 2}
@@ -127,12 +127,12 @@ def score(model_name: str, train, test, alpha: float, seed: int) -> dict:
 
 
 def cached(path: Path, compute) -> dict:
-    if path.exists():
-        return json.loads(path.read_text())
+    result = read_json_record(path)
+    if result is not None:
+        return result
     result = compute()
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(result, indent=1))
-    tmp.replace(path)
+    with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+        tmp.write_text(json.dumps(result, indent=1), encoding="utf-8")
     return result
 
 
@@ -205,9 +205,10 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
                           flush=True)
 
 
-def report(out: Path, files, figures) -> None:
-    rows = [read_json_record(p) for p in sorted((out / "cache").glob("*_s*_*_*.json"))]
-    rows = [r for r in rows if r is not None and "model" in r]
+def report(out: Path, files, figure) -> None:
+    rows = [read_json_record(p, numbers=("rmse", "d_criterion", "n_poses", "seed"))
+            for p in sorted((out / "cache").glob("*_s*_*_*.json"))]  # a record of another kind is left out
+    rows = [r for r in rows if r is not None and all(isinstance(r.get(k), str) for k in ("model", "sensor", "strategy"))]
     if not rows:
         return
     by: dict = {}
@@ -278,7 +279,9 @@ def report(out: Path, files, figures) -> None:
         ax.set_title(f"{sensor}: {'LTM' if model == 'linear' else 'auto (closed-form)'}", fontsize=10)
         ax.legend(fontsize=7)
     fig.tight_layout()
-    print(f"plot -> {figures.save_figure('planning_rmse.png', fig, dpi=110)}")
+    with figure.write() as tmp:
+        fig.savefig(tmp, format="png", dpi=110)
+    print(f"plot -> {figure}")
 
 
 def main(argv=None) -> None:
@@ -288,16 +291,18 @@ def main(argv=None) -> None:
     ap.add_argument("--sizes", default="12,24,52", help="poses of the random and d-optimal plans")
     ap.add_argument("--next-step", type=int, default=20, help="poses added per 'next' round")
     ap.add_argument("--models", default="linear,auto", help="one pass per model, in this order")
-    ap.add_argument("--out", type=Path, default=HERE / "results" / "planning")
+    ap.add_argument("--out", default=str(HERE / "results" / "planning"))
     ap.add_argument("--report-only", action="store_true")
+    ap.add_argument("--figure", default=str(HERE / "figures" / "planning_rmse.png"),
+                    help="the plot's file (default: benchmarks/figures/planning_rmse.png, where RESULTS.md shows it)")
     ap.add_argument("--force", action="store_true", help="replace summaries and the figure this script did not write")
     a = ap.parse_args(argv)
     files = output_files(ap, a.out, a.force, ["summary.json", "summary.md"])
-    figures = output_files(ap, HERE / "figures", a.force, ["planning_rmse.png"])
+    figure = single_output(ap, a.figure, a.force)
     if not a.report_only:
         run(a.sensors.split(","), [int(s) for s in a.seeds.split(",")], [int(s) for s in a.sizes.split(",")],
-            a.next_step, a.models.split(","), a.out)
-    report(a.out, files, figures)
+            a.next_step, a.models.split(","), files.out_dir)
+    report(files.out_dir, files, figure)
 
 
 if __name__ == "__main__":

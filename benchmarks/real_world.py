@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--random-state", type=int, default=0)
     p.add_argument("--threads", type=int, default=1, help="torch CPU threads")
     p.add_argument("--log-dir", type=Path, default=None, help="keep the simulated run logs here")
-    p.add_argument("--out", type=Path, default=HERE / "out" / "real_world.json")
+    p.add_argument("--out", default=str(HERE / "out" / "real_world.json"))
     p.add_argument("--plot", type=Path, default=HERE / "real_world_fig6.png")
     p.add_argument("--force", action="store_true", help="replace --out / --plot files this script did not write")
     args = p.parse_args(argv)

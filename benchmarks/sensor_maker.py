@@ -31,6 +31,7 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, SensorProfile, make_artificial_dataset, scale_torques
 from ftcal.evaluation import dataset_seeds, make_model
+from ftcal.core import atomic_output
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, output_files
@@ -58,9 +59,8 @@ def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path
         est.fit(train.raw, train.wrench)
         pred = est.predict(test_raw)
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.stem + ".tmp.npz")
-        np.savez(tmp, pred=pred)
-        tmp.replace(path)
+        with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+            np.savez(tmp, pred=pred)
         print(f"{preset} dataset {index} {model}: fitted", flush=True)
     return {"true": test_wrench, "pred": pred, "noise_floor": info["noise_floor"], "radii": info["sphere_radii"]}
 

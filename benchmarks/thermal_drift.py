@@ -77,7 +77,7 @@ def summary(results: dict) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--datasets", type=int_at_least(1, 1000), default=5)
-    parser.add_argument("--out", type=Path, default=Path(__file__).parent / "results" / "thermal_drift")
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "thermal_drift"))
     parser.add_argument("--force", action="store_true", help="replace output files this script did not write")
     args = parser.parse_args(argv)
     files = output_files(parser, args.out, args.force, ["thermal_drift.json", "summary.md"])

@@ -5,6 +5,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+import os
 from pathlib import Path
 
 import joblib
@@ -328,3 +329,56 @@ def test_benchmark_scripts_refuse_bad_arguments_in_one_line(tmp_path, capsys, sc
     with pytest.raises(SystemExit) as stop:
         _script(script).main([*argv, "--out", str(tmp_path / "out")])
     assert stop.value.code == 2 and words in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+def test_output_files_two_runs_in_one_folder_and_links_planted_at_output_names(tmp_path):
+    first, second = OutputFiles(tmp_path), OutputFiles(tmp_path)
+    first.check(["table.md"])
+    second.check(["table.md"])
+    first.write_text("table.md", "run 1")
+    assert second.write_text("table.md", "run 2").read_text() == "run 2"  # the other run's file is a benchmark's
+    user = tmp_path.parent / f"{tmp_path.name}-user.txt"
+    user.write_text("my notes")
+    (tmp_path / "plot.md").symlink_to(tmp_path / "nowhere")  # dangling: refused before any work, not after it
+    with pytest.raises(BenchmarkOutputExistsError, match="plot.md exists and was not written by this benchmark"):
+        OutputFiles(tmp_path).check(["plot.md"])
+    (tmp_path / "notes.md").symlink_to(user)
+    OutputFiles(tmp_path, force=True).write_text("notes.md", "ours")  # force replaces the link, not its target
+    assert user.read_text() == "my notes" and not (tmp_path / "notes.md").is_symlink()
+
+
+def test_output_files_keep_beside_never_replaces_a_file_and_a_crash_keeps_the_file_its_own(tmp_path, monkeypatch):
+    files = OutputFiles(tmp_path)
+    (tmp_path / "table.1.md").write_text("my other notes")
+    (tmp_path / "table.md").write_text("my notes")
+    with pytest.raises(BenchmarkOutputExistsError, match=r"kept as .*table\.2\.md"):
+        files.write_text("table.md", "ours")
+    assert (tmp_path / "table.1.md").read_text() == "my other notes" and (tmp_path / "table.md").read_text() == \
+        "my notes" and (tmp_path / "table.2.md").read_text() == "ours"
+    # interrupted between the rename and the final manifest update: the file is still known as the benchmark's
+    real_replace = os.replace
+
+    def replace_then_stop(src, dst):
+        real_replace(src, dst)
+        if Path(dst).name == "result.md":
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(os, "replace", replace_then_stop)
+    with pytest.raises(KeyboardInterrupt):
+        files.write_text("result.md", "ours")
+    monkeypatch.setattr(os, "replace", real_replace)
+    OutputFiles(tmp_path).check(["result.md"])  # no --force needed to resume
+    (tmp_path / ".ftcal-benchmark-manifest.json").unlink()
+    (tmp_path / ".ftcal-benchmark-manifest.json").mkdir()
+    with pytest.raises(BenchmarkOutputExistsError, match="is a folder, where this benchmark keeps its record"):
+        OutputFiles(tmp_path).check([])
+
+
+def test_output_files_lock_refuses_a_planted_link(tmp_path):
+    outside = tmp_path / "outside"
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / ".ftcal-benchmark-manifest.json.lock").symlink_to(outside)
+    with pytest.raises(OSError):
+        OutputFiles(run).write_text("table.md", "ours")
+    assert not outside.exists() and not (run / "table.md").exists()

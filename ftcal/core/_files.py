@@ -173,7 +173,8 @@ def read_json_record(path: str | os.PathLike, *, numbers: tuple[str, ...] = (), 
 
     None when the file is missing or unreadable (not UTF-8, not JSON, nested beyond the parser's limit), is
     not a JSON object, has a key of ``expected`` with another value, or has a key of ``numbers`` that is not
-    a finite number. The per-fit caches of the benchmarks read their files this way: None means "fit again".
+    a finite number >= 0 (they are errors, floors and counts). The per-fit caches of the benchmarks read their
+    files this way: None means "fit again".
 
     Examples
     --------
@@ -191,4 +192,4 @@ def read_json_record(path: str | os.PathLike, *, numbers: tuple[str, ...] = (), 
         return None
     if not isinstance(record, dict) or any(record.get(k) != v for k, v in expected.items()):
         return None
-    return record if all(is_finite_number(record.get(k)) for k in numbers) else None
+    return record if all(is_finite_number(record.get(k)) and record[k] >= 0 for k in numbers) else None

@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
+import itertools
 import json
 import os
+import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
-from ..core._files import atomic_output, check_writable_dir
+from ..core._files import _umask, atomic_output, check_writable_dir
 from ..core._validation import check_bool
 
 __all__ = ["OutputFiles", "MANIFEST_NAME"]
@@ -32,6 +34,26 @@ MANIFEST_NAME = ".ftcal-benchmark-manifest.json"
 
 def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _link_beside(tmp: Path, path: Path) -> Path:
+    """Hard-link ``tmp`` to a fresh name beside ``path`` (``stem.1.suffix``, ``stem.2.suffix``, ...): never a file
+    that exists (a link fails where a name is taken)."""
+    for k in itertools.count(1):
+        kept = path.with_name(f"{path.stem}.{k}{path.suffix}")
+        try:
+            os.link(tmp, kept)
+            return kept
+        except FileExistsError:
+            continue
+        except OSError:  # a file system without hard links: create the name exclusively, then copy
+            try:
+                with open(kept, "xb") as f:
+                    f.write(tmp.read_bytes())
+                return kept
+            except FileExistsError:
+                continue
+    raise AssertionError("unreachable")
 
 
 def check_file_name(name, what: str) -> str:
@@ -85,7 +107,7 @@ class OutputFiles:
     def _read_manifest(self) -> dict:
         """The manifest's entries; missing or unreadable: none (nothing here is known to be the benchmark's)."""
         self.manifest_note = ""
-        if not self.manifest_path.exists():
+        if not os.path.lexists(self.manifest_path):
             return {}
         try:
             manifest = json.loads(self.manifest_path.read_text(encoding="utf-8"))
@@ -94,19 +116,29 @@ class OutputFiles:
         if not isinstance(manifest, dict):
             self.manifest_note = f" (its record of what the benchmark wrote, {self.manifest_path}, is unreadable)"
             return {}
-        return {k: v for k, v in manifest.items() if isinstance(k, str) and isinstance(v, str)}
+        # a name maps to the SHA-256 of its file, or to a list of them while a write is under way
+        return {k: v for k, v in manifest.items()
+                if isinstance(k, str) and (isinstance(v, str) or isinstance(v, list) and all(isinstance(h, str) for h in v))}
 
-    def _is_own(self, path: Path) -> bool:
-        return path.is_file() and self.manifest.get(path.name) == _sha(path)
+    def _is_own(self, path: Path, manifest: dict | None = None) -> bool:
+        """Whether ``path`` is a regular file (not a link) whose SHA-256 the manifest records under its name."""
+        if path.is_symlink() or not path.is_file():
+            return False
+        recorded = (self.manifest if manifest is None else manifest).get(path.name)
+        return _sha(path) in ([recorded] if isinstance(recorded, str) else recorded or [])
 
     def check(self, names: Sequence[str]) -> None:
-        """Refuse, before any work, a name that is a folder, or a file the benchmark did not write (unless ``force``)."""
+        """Refuse, before any work, a name that is a folder, or a file or link the benchmark did not write (unless
+        ``force``); and a folder where the manifest goes."""
+        if self.manifest_path.is_dir() and not self.manifest_path.is_symlink():
+            raise BenchmarkOutputExistsError(f"{self.manifest_path} is a folder, where this benchmark keeps its record "
+                                             "of what it wrote; move it or choose another output folder.")
         for name in names:
             path = self.out_dir / check_file_name(name, "an output name")
-            if path.is_dir():
+            if path.is_dir() and not path.is_symlink():
                 raise BenchmarkOutputExistsError(f"{path} is a folder, where this benchmark writes a file; move it "
                                                  "or choose another output folder.")
-            if path.exists() and not self.force and not self._is_own(path):
+            if os.path.lexists(path) and not self.force and not self._is_own(path):
                 raise BenchmarkOutputExistsError(
                     f"{path} exists and was not written by this benchmark (or was edited since){self.manifest_note}; "
                     "choose another output folder or pass --force (force=True) to overwrite it.")
@@ -115,33 +147,54 @@ class OutputFiles:
     def write(self, name: str) -> Iterator[Path]:
         """Yield a temporary path to write ``name`` to; it replaces ``out_dir / name`` when the block succeeds.
 
-        A file of that name that is not the benchmark's own and appeared after :meth:`check` is not replaced
-        (unless ``force``): the new output is kept beside it and the error says where.
+        Under the manifest's lock: the file is replaced if it is missing, the benchmark's own (another run in the
+        same folder may have just written it) or ``force``; otherwise (a user's file appeared after
+        :meth:`check`) it is left as it is, the new output is kept beside it under a fresh name and the error
+        says where. The new file's SHA-256 is recorded before the rename, so that an interrupted run still
+        knows its file as its own.
         """
         path = self.out_dir / check_file_name(name, "an output name")
-        # a missing file goes in by a link that fails if one appeared meanwhile (kept, ours put beside it)
-        overwrite = self.force or (path.exists() and self._is_own(path))
-        with atomic_output(path, overwrite=overwrite, error=BenchmarkOutputExistsError) as tmp:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=self.out_dir)
+        os.close(fd)
+        tmp = Path(tmp_name)
+        os.chmod(tmp, 0o666 & ~_umask())
+        try:
             yield tmp
-        with self._manifest_lock():  # two runs in one folder: neither loses the other's entry
-            manifest = {**self.manifest, name: _sha(path)}
-            with atomic_output(self.manifest_path, overwrite=True, error=BenchmarkOutputExistsError) as tmp:
-                tmp.write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+            digest = _sha(tmp)
+            with self._manifest_lock():  # two runs in one folder: one decision and one manifest update at a time
+                manifest = self.manifest
+                if os.path.lexists(path) and not self.force and not self._is_own(path, manifest):
+                    kept = _link_beside(tmp, path)
+                    raise BenchmarkOutputExistsError(
+                        f"{path} appeared while this run was working and was not written by a benchmark; it was left "
+                        f"as it is and this run's output was kept as {kept}.")
+                old = manifest.get(name)
+                self._write_manifest({**manifest, name: [*([old] if isinstance(old, str) else old or []), digest]})
+                os.replace(tmp, path)
+                self._write_manifest({**self.manifest, name: digest})
+        finally:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+
+    def _write_manifest(self, manifest: dict) -> None:
+        with atomic_output(self.manifest_path, overwrite=True, error=BenchmarkOutputExistsError) as tmp:
+            tmp.write_text(json.dumps(manifest, indent=1), encoding="utf-8")
 
     @contextlib.contextmanager
     def _manifest_lock(self) -> Iterator[None]:
         """An exclusive lock on the manifest's lock file for a read-modify-write (POSIX; elsewhere none)."""
         try:
             import fcntl
-        except ImportError:  # not POSIX: the write stays atomic, only a concurrent run's entry may be lost
+        except ImportError:  # not POSIX: the writes stay atomic, only a concurrent run's entry may be lost
             yield
             return
-        with open(self.out_dir / (MANIFEST_NAME + ".lock"), "a") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)
-            try:
-                yield
-            finally:
-                fcntl.flock(lock, fcntl.LOCK_UN)
+        # O_NOFOLLOW: a link planted at the lock file's name is an error, never a file made elsewhere
+        fd = os.open(self.out_dir / (MANIFEST_NAME + ".lock"), os.O_CREAT | os.O_WRONLY | os.O_NOFOLLOW, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX)
+            yield
+        finally:
+            os.close(fd)  # releases the lock
 
     def write_text(self, name: str, text: str) -> Path:
         """Write ``text`` (UTF-8) as ``name``; the final path."""
