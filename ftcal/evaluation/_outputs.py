@@ -5,10 +5,11 @@ plots into one folder through :class:`OutputFiles`:
 
 * before any work, :meth:`OutputFiles.check` refuses a name that exists and was not written by a benchmark
   (or was changed since): a user's notes called ``results.md`` are never replaced, unless ``force``;
-* each file is written to a temporary file and renamed into place (:func:`ftcal.core.atomic_output`), so an
-  interrupted run leaves the previous file or the new one, never half of either;
-* the SHA-256 of every file written is kept in the folder's manifest (``.ftcal-benchmark-manifest.json``),
-  which is how a re-run knows the file is its own to rewrite.
+* each file is written to a fresh temporary file and renamed into place, so an interrupted run leaves the
+  previous file or the new one, never half of either; a link at an output's name is never followed;
+* the SHA-256 of every file written is kept in the folder's manifest (``.ftcal-benchmark-manifest.json``,
+  updated under a lock, so that two runs may share a folder), which is how a re-run knows the file is its
+  own to rewrite; a user's file that appears during a run is left alone and the output kept beside it.
 """
 
 from __future__ import annotations
