@@ -87,6 +87,6 @@ def table_or_stop(script: str, out: Path, build) -> str:
     with one line (exit 1) instead of a traceback."""
     try:
         return build(out)
-    except (KeyError, TypeError, ValueError, AttributeError) as exc:
+    except (KeyError, TypeError, ValueError, AttributeError, RecursionError, OSError) as exc:
         raise SystemExit(f"{script}: error: a result file in {out} is not this script's ({exc!r}); move it away "
                          "and run that part again") from None

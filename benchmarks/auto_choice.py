@@ -136,9 +136,10 @@ def main(argv=None) -> int:
                         help="training schedule of the directional model in the tare part")
     parser.add_argument("--force", action="store_true", help="replace a summary.md this script did not write")
     args = parser.parse_args(argv)
-    files = output_files(parser, args.out, args.force, ["summary.md"])  # a part's JSON is never replaced
+    parts = {name: f"tare_{args.schedule}.json" if name == "tare" else f"{name}.json" for name in args.part or PARTS}
+    files = output_files(parser, args.out, args.force, ["summary.md", *parts.values()])  # checked before any work
     for name in args.part or PARTS:
-        path = files.out_dir / (f"tare_{args.schedule}.json" if name == "tare" else f"{name}.json")
+        path = files.out_dir / parts[name]
         if read_json_record(path) is not None:
             print(f"{name}: done before ({path}); delete it to re-run", flush=True)
             continue

@@ -48,7 +48,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
-from ftcal.core import read_json_record
+from ftcal.core import atomic_output, read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
 
 from _output import output_files, table_or_stop
@@ -115,13 +115,15 @@ def best_static_map(cache: Path | None, setup) -> dict:
     """The best held-out RMSE of the models ``setup()`` gives, ``(models, known, test_raw, test_wrench, alpha,
     info)``, fitted on ``known`` (a large recording of the same sensor); kept in ``cache`` (a JSON file) once
     computed, so that a resumed run neither builds the data nor fits the models again."""
-    if cache is not None and cache.exists():
-        return json.loads(cache.read_text())
+    earlier = None if cache is None else read_json_record(cache, numbers=("rmse",))
+    if earlier is not None:
+        return earlier
     models, known, test_raw, test_wrench, alpha, info = setup()
     scores = {n: rmse(test_wrench, m.fit(known.raw, known.wrench).predict(test_raw), alpha) for n, m in models.items()}
     result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": known.n_samples, **info}
     if cache is not None:
-        cache.write_text(json.dumps(result, indent=1))
+        with atomic_output(cache, overwrite=True, error=FileExistsError) as tmp:
+            tmp.write_text(json.dumps(result, indent=1), encoding="utf-8")
     return result
 
 
@@ -301,7 +303,10 @@ def main() -> None:
                         help="outer pose-grouped folds of robot_held to run (1-5, default 5)")
     parser.add_argument("--force", action="store_true", help="replace a summary.md this script did not write")
     args = parser.parse_args()
-    files = output_files(parser, args.out, args.force, ["summary.md"])  # a case's JSON is written once
+    # a case's JSON (written once, then skipped) and the summary: a user's file of those names stops the run now
+    files = output_files(parser, args.out, args.force, ["summary.md", *(f"{c}.json" for c in args.case or CASES),
+                                                        "soft_static_floor.json",  # the static floors' caches
+                                                        f"robot_static_floor_{args.robot_folds}.json"])
     global JOBS, OUT, ROBOT_FOLDS
     JOBS, ROBOT_FOLDS = args.jobs, args.robot_folds
     OUT = Path(args.out)

@@ -80,7 +80,7 @@ def main() -> None:
     parser.add_argument("--case", action="append", choices=CASES)
     parser.add_argument("--force", action="store_true", help="replace a case file this script did not write")
     args = parser.parse_args()
-    files = output_files(parser, args.out, args.force, [])
+    files = output_files(parser, args.out, args.force, [f"{case}.json" for case in args.case or CASES])
     for case in args.case or CASES:
         name = f"{case}.json"
         r = read_json_record(files.out_dir / name, numbers=("uncalibrated_coverage_2std", "coverage_2std"))

@@ -24,6 +24,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold
 
 import ftcal
+from ftcal.core import read_json_record
 from ftcal.models import default_candidates, stock_baselines
 
 from _output import parse_output
@@ -58,8 +59,8 @@ def main() -> None:
         inner.append({"chosen": auto.best_name_, "table": auto.summary()})
         print(f"fold checked: auto (closed forms) chose {auto.best_name_}", flush=True)
     floor_per_fold = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in per_fold.items()}
-    floor_file = out.parent / "robot_static_floor_5.json"
-    floor = json.loads(floor_file.read_text())["rmse"] if floor_file.exists() else None
+    floor_record = read_json_record(out.path.parent / "robot_static_floor_5.json", numbers=("rmse",))
+    floor = None if floor_record is None else floor_record["rmse"]
     best_stock = min(v for n, v in rmse.items() if n.startswith("sk_"))
     out.write_text(json.dumps({"rmse": rmse, "best_stock": best_stock, "static_floor": floor,
                                "static_floor_fitted_per_fold": floor_per_fold, "auto_closed_forms_per_fold": inner},

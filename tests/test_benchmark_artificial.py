@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import importlib.util
 import json
 import math
@@ -340,7 +341,7 @@ def test_output_files_two_runs_in_one_folder_and_links_planted_at_output_names(t
     user = tmp_path.parent / f"{tmp_path.name}-user.txt"
     user.write_text("my notes")
     (tmp_path / "plot.md").symlink_to(tmp_path / "nowhere")  # dangling: refused before any work, not after it
-    with pytest.raises(BenchmarkOutputExistsError, match="plot.md exists and was not written by this benchmark"):
+    with pytest.raises(BenchmarkOutputExistsError, match=r"plot.md is a link \(a benchmark writes regular files\)"):
         OutputFiles(tmp_path).check(["plot.md"])
     (tmp_path / "notes.md").symlink_to(user)
     OutputFiles(tmp_path, force=True).write_text("notes.md", "ours")  # force replaces the link, not its target
@@ -356,17 +357,17 @@ def test_output_files_keep_beside_never_replaces_a_file_and_a_crash_keeps_the_fi
     assert (tmp_path / "table.1.md").read_text() == "my other notes" and (tmp_path / "table.md").read_text() == \
         "my notes" and (tmp_path / "table.2.md").read_text() == "ours"
     # interrupted between the rename and the final manifest update: the file is still known as the benchmark's
-    real_replace = os.replace
+    real_link = os.link
 
-    def replace_then_stop(src, dst):
-        real_replace(src, dst)
+    def link_then_stop(src, dst, *args, **kwargs):  # a new file goes in by a link (never over a user's file)
+        real_link(src, dst, *args, **kwargs)
         if Path(dst).name == "result.md":
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(os, "replace", replace_then_stop)
+    monkeypatch.setattr(os, "link", link_then_stop)
     with pytest.raises(KeyboardInterrupt):
         files.write_text("result.md", "ours")
-    monkeypatch.setattr(os, "replace", real_replace)
+    monkeypatch.setattr(os, "link", real_link)
     OutputFiles(tmp_path).check(["result.md"])  # no --force needed to resume
     (tmp_path / ".ftcal-benchmark-manifest.json").unlink()
     (tmp_path / ".ftcal-benchmark-manifest.json").mkdir()
@@ -379,6 +380,18 @@ def test_output_files_lock_refuses_a_planted_link(tmp_path):
     run = tmp_path / "run"
     run.mkdir()
     (run / ".ftcal-benchmark-manifest.json.lock").symlink_to(outside)
-    with pytest.raises(OSError):
+    with pytest.raises(OSError, match="Too many levels of symbolic links"):  # ELOOP: O_NOFOLLOW refused it
         OutputFiles(run).write_text("table.md", "ours")
     assert not outside.exists() and not (run / "table.md").exists()
+
+
+def test_committed_result_manifests_match_their_files():
+    """The documented commands resume without --force only if each committed manifest records the files as they
+    are (a results commit that forgot the manifest shows here)."""
+    manifests = sorted((ROOT / "benchmarks").rglob(".ftcal-benchmark-manifest.json"))
+    assert manifests
+    for manifest in manifests:
+        for name, digest in json.loads(manifest.read_text()).items():
+            path = manifest.parent / name
+            if path.is_file():  # a plot not committed is not checked
+                assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, f"{path} differs from {manifest}"

@@ -14,6 +14,7 @@ Every file ftcal writes (datasets, model files, CLI outputs) goes through
 from __future__ import annotations
 
 import contextlib
+import itertools
 import json
 import math
 import numbers
@@ -77,8 +78,7 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
         try:
             os.link(tmp, path)
         except FileExistsError:
-            kept = path.with_name(f"{path.stem}.{os.getpid()}{path.suffix}")
-            os.replace(tmp, kept)
+            kept = link_beside(tmp, path)
             raise error(
                 f"{path} appeared while this run was working (another run wrote it?); it was left as it is and "
                 f"this run's output was kept as {kept}."
@@ -90,6 +90,26 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
+
+
+def link_beside(tmp: Path, path: Path) -> Path:
+    """Give ``tmp``'s content a fresh name beside ``path`` (``stem.1.suffix``, ``stem.2.suffix``, ...), never one
+    that exists: a hard link, which fails where the name is taken (or, without hard links, an exclusive create)."""
+    for k in itertools.count(1):
+        kept = path.with_name(f"{path.stem}.{k}{path.suffix}")
+        try:
+            os.link(tmp, kept)
+            return kept
+        except FileExistsError:
+            continue
+        except OSError:  # a file system without hard links
+            try:
+                with open(kept, "xb") as f:
+                    f.write(Path(tmp).read_bytes())
+                return kept
+            except FileExistsError:
+                continue
+    raise AssertionError("unreachable")
 
 
 def _umask() -> int:

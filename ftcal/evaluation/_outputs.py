@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import contextlib
 import hashlib
-import itertools
 import json
 import os
 import tempfile
@@ -24,7 +23,7 @@ from collections.abc import Iterator, Sequence
 from pathlib import Path
 
 from ..core._exceptions import BenchmarkOutputExistsError, CalibrationInputError
-from ..core._files import _umask, atomic_output, check_writable_dir
+from ..core._files import _umask, atomic_output, check_writable_dir, link_beside
 from ..core._validation import check_bool
 
 __all__ = ["OutputFiles", "MANIFEST_NAME"]
@@ -35,26 +34,6 @@ MANIFEST_NAME = ".ftcal-benchmark-manifest.json"
 
 def _sha(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _link_beside(tmp: Path, path: Path) -> Path:
-    """Hard-link ``tmp`` to a fresh name beside ``path`` (``stem.1.suffix``, ``stem.2.suffix``, ...): never a file
-    that exists (a link fails where a name is taken)."""
-    for k in itertools.count(1):
-        kept = path.with_name(f"{path.stem}.{k}{path.suffix}")
-        try:
-            os.link(tmp, kept)
-            return kept
-        except FileExistsError:
-            continue
-        except OSError:  # a file system without hard links: create the name exclusively, then copy
-            try:
-                with open(kept, "xb") as f:
-                    f.write(tmp.read_bytes())
-                return kept
-            except FileExistsError:
-                continue
-    raise AssertionError("unreachable")
 
 
 def check_file_name(name, what: str) -> str:
@@ -140,9 +119,10 @@ class OutputFiles:
                 raise BenchmarkOutputExistsError(f"{path} is a folder, where this benchmark writes a file; move it "
                                                  "or choose another output folder.")
             if os.path.lexists(path) and not self.force and not self._is_own(path):
-                raise BenchmarkOutputExistsError(
-                    f"{path} exists and was not written by this benchmark (or was edited since){self.manifest_note}; "
-                    "choose another output folder or pass --force (force=True) to overwrite it.")
+                what = ("is a link (a benchmark writes regular files)" if path.is_symlink() else
+                        f"exists and was not written by this benchmark (or was edited since){self.manifest_note}")
+                raise BenchmarkOutputExistsError(f"{path} {what}; choose another output folder or pass --force "
+                                                 "(force=True) to overwrite it.")
 
     @contextlib.contextmanager
     def write(self, name: str) -> Iterator[Path]:
@@ -164,18 +144,29 @@ class OutputFiles:
             digest = _sha(tmp)
             with self._manifest_lock():  # two runs in one folder: one decision and one manifest update at a time
                 manifest = self.manifest
-                if os.path.lexists(path) and not self.force and not self._is_own(path, manifest):
-                    kept = _link_beside(tmp, path)
-                    raise BenchmarkOutputExistsError(
-                        f"{path} appeared while this run was working and was not written by a benchmark; it was left "
-                        f"as it is and this run's output was kept as {kept}.")
+                exists = os.path.lexists(path)
+                if exists and not self.force and not self._is_own(path, manifest):
+                    self._keep_beside(tmp, path)
                 old = manifest.get(name)
                 self._write_manifest({**manifest, name: [*([old] if isinstance(old, str) else old or []), digest]})
-                os.replace(tmp, path)
+                if exists:
+                    os.replace(tmp, path)  # the benchmark's own file, or force
+                else:
+                    try:  # a link: a user's file made meanwhile (users take no lock) is never replaced
+                        os.link(tmp, path)
+                    except FileExistsError:
+                        self._keep_beside(tmp, path)
+                    except OSError:  # a file system without hard links
+                        os.replace(tmp, path)
                 self._write_manifest({**self.manifest, name: digest})
         finally:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
+
+    def _keep_beside(self, tmp: Path, path: Path) -> None:
+        kept = link_beside(tmp, path)
+        raise BenchmarkOutputExistsError(f"{path} appeared while this run was working and was not written by a "
+                                         f"benchmark; it was left as it is and this run's output was kept as {kept}.")
 
     def _write_manifest(self, manifest: dict) -> None:
         with atomic_output(self.manifest_path, overwrite=True, error=BenchmarkOutputExistsError) as tmp:
@@ -187,10 +178,12 @@ class OutputFiles:
         try:
             import fcntl
         except ImportError:  # not POSIX: the writes stay atomic, only a concurrent run's entry may be lost
+            fcntl = None
+        if fcntl is None:
             yield
             return
         # O_NOFOLLOW: a link planted at the lock file's name is an error, never a file made elsewhere
-        fd = os.open(self.out_dir / (MANIFEST_NAME + ".lock"), os.O_CREAT | os.O_WRONLY | os.O_NOFOLLOW, 0o666)
+        fd = os.open(self.out_dir / (MANIFEST_NAME + ".lock"), os.O_CREAT | os.O_RDONLY | os.O_NOFOLLOW, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX)
             yield
