@@ -41,6 +41,8 @@ from ftcal.core import mean_std, plain_json
 from ftcal.evaluation import dataset_seeds, format_mean_std, wilcoxon_pvalue
 from ftcal.models import search_summary
 
+from _output import output_files
+
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "tune_networks"
 OUTPUTS = ("tune_networks.json", "tune_networks.md")
 
@@ -60,8 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--jobs", type=int, default=2, help="joblib workers")
     p.add_argument("--setting", type=_setting, metavar="JSON",
                    help="skip the search and validate this setting, e.g. '{\"lr\": 0.003}' (isolates one factor)")
-    p.add_argument("--out", type=Path, default=DEFAULT_OUT, help="output directory")
-    p.add_argument("--force", action="store_true", help="overwrite earlier outputs of this script")
+    p.add_argument("--out", default=str(DEFAULT_OUT), help="output directory")
+    p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
 
@@ -153,18 +155,14 @@ def markdown(rows: list[dict], command: str, seconds: float) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
     for name, value, low in (("--n-iter", args.n_iter, 1), ("--cv", args.cv, 2), ("--validate", args.validate, 1),
                              ("--n-per-sphere", args.n_per_sphere, 10), ("--jobs", args.jobs, 1)):
         if value < low:
             print(f"error: {name} must be >= {low}; got {value}", file=sys.stderr)
             return 2
-    args.out.mkdir(parents=True, exist_ok=True)
-    existing = [args.out / f for f in OUTPUTS if (args.out / f).exists()]
-    if existing and not args.force:
-        print(f"error: {', '.join(map(str, existing))} exist; pass --force to overwrite or choose --out",
-              file=sys.stderr)
-        return 2
+    files = output_files(parser, args.out, args.force, list(OUTPUTS))  # before any work
     command = shlex.join(["python", "benchmarks/tune_networks.py", *(argv if argv is not None else sys.argv[1:])])
     start = time.perf_counter()
     rows = []
@@ -176,9 +174,9 @@ def main(argv: list[str] | None = None) -> int:
                   f"{r['tuned_over_default']:.3f} (p={r['wilcoxon_p']:.3g})", file=sys.stderr, flush=True)
     seconds = time.perf_counter() - start
     text = markdown(rows, command.strip(), seconds)
-    (args.out / "tune_networks.json").write_text(json.dumps(plain_json(
+    files.write_text("tune_networks.json", json.dumps(plain_json(
         {"command": command.strip(), "wall_seconds": seconds, "rows": rows}), indent=2) + "\n")
-    (args.out / "tune_networks.md").write_text(text + "\n")
+    files.write_text("tune_networks.md", text + "\n")
     print(text)
     return 0
 

@@ -42,8 +42,12 @@ def test_setting_must_be_a_json_object(tune, capsys, text):
 def test_existing_outputs_are_not_overwritten(tune, tmp_path, capsys):
     mine = tmp_path / "tune_networks.md"
     mine.write_text("my notes\n")
-    assert tune.main(["--out", str(tmp_path)]) == 2
-    assert "pass --force" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:
+        tune.main(["--out", str(tmp_path)])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1].endswith(
+        f"{mine} exists and was not written by this benchmark (or was edited since); choose another output folder "
+        "or pass --force (force=True) to overwrite it.")
     assert mine.read_text() == "my notes\n"
 
 
