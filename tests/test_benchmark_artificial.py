@@ -395,3 +395,26 @@ def test_committed_result_manifests_match_their_files():
             path = manifest.parent / name
             if path.is_file():  # a plot not committed is not checked
                 assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, f"{path} differs from {manifest}"
+
+
+def _write_many(folder: str, prefix: str, count: int) -> None:
+    files = OutputFiles(folder)
+    for i in range(count):
+        files.write_text(f"{prefix}{i}.md", f"{prefix} {i}")
+
+
+def test_two_processes_writing_into_one_folder_keep_every_manifest_entry(tmp_path):
+    """The manifest's read-modify-write runs under a lock: without it, the two writers' updates overwrite each
+    other and entries are lost (a later run then refuses its own files)."""
+    import multiprocessing
+
+    context = multiprocessing.get_context("fork")
+    writers = [context.Process(target=_write_many, args=(str(tmp_path), prefix, 40)) for prefix in "ab"]
+    for w in writers:
+        w.start()
+    for w in writers:
+        w.join(60)
+    assert [w.exitcode for w in writers] == [0, 0]
+    manifest = json.loads((tmp_path / ".ftcal-benchmark-manifest.json").read_text())
+    assert sorted(manifest) == sorted(f"{p}{i}.md" for p in "ab" for i in range(40))
+    OutputFiles(tmp_path).check(list(manifest))  # every file is known as the benchmark's own
