@@ -61,8 +61,6 @@ def zero_offset_bound(profile: SensorProfile) -> tuple[float, float]:
     return ZERO_OFFSET_LIMIT * full_scale, full_scale
 
 
-
-
 def noise_floor(wrench_noise_free: ArrayLike, wrench_noisy: ArrayLike, alpha: float) -> float:
     """RMSE [N] between noise-free and noisy erroneous wrenches, torque-scaled (see the module notes).
 

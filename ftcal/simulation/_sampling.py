@@ -96,7 +96,7 @@ def check_points(caller: str, **counts) -> None:
 
 
 def check_dataset_arguments(caller: str, *, n_per_sphere=None, n_test=None, test_distribution=None,
-                            n_spheres=4) -> None:
+                            n_spheres=N_SPHERES) -> None:
     """The arguments of an artificial dataset, checked alike by every caller (a count of None: the default)."""
     from sklearn.utils._param_validation import Interval
 
@@ -199,6 +199,5 @@ def continuous_wrenches(
         return rng.uniform(-1.0, 1.0, size=(int(n), 6)) * ranges
     if distribution == "ball":
         return np.hstack([_uniform_ball_3d(int(n), fmax, rng), _uniform_ball_3d(int(n), tmax, rng)])
-    check_test_distribution("continuous_wrenches", distribution)
     raise CalibrationInputError(f"The 'distribution' parameter of continuous_wrenches must be one of "
-                                f"{TEST_DISTRIBUTIONS}; got {distribution!r:.80}.")
+                                f"{', '.join(map(repr, TEST_DISTRIBUTIONS))}. Got {distribution!r:.80} instead.")
