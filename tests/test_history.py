@@ -172,6 +172,9 @@ def test_a_refused_chunk_leaves_the_stream_as_it_was_and_range_flags_follow_the_
     flags = model.out_of_range(glitch)
     reach = 1 + int(np.floor(np.log(1e-3 / 0.25) / np.log(0.75)))  # a (1 - a)^k >= 1e-3, a = 1 / tau
     assert flags[50:51 + reach].all() and not flags[51 + reach:].any() and not flags[:50].any()
+    assert np.flatnonzero(model.out_of_range(glitch, spread=False)).tolist() == [50]  # the row itself only
+    with pytest.raises(CalibrationInputError, match="spread must be True or False"):
+        model.out_of_range(glitch, spread="no")
 
 
 def test_retare_shifts_both_the_estimator_and_the_range_check(tmp_path, capsys):
@@ -185,7 +188,7 @@ def test_retare_shifts_both_the_estimator_and_the_range_check(tmp_path, capsys):
     np.testing.assert_allclose(model.predict(raw + shift), before, atol=1e-3 * np.abs(before).max())
     # the range moves with the tare: only rows at a channel's extreme (2 a channel) may flip by the tare's noise
     # (before the flags are spread to the rows whose history holds them)
-    assert ftcal.calibrators._base.BaseCalibrator.out_of_range(model, raw + shift).sum() <= 2 * raw.shape[1]
+    assert model.out_of_range(raw + shift, spread=False).sum() <= 2 * raw.shape[1]
     predict = model.stream()
     np.testing.assert_allclose(np.vstack([predict(raw[:50] + shift), predict(raw[50:] + shift)]),
                                model.predict(raw + shift), atol=1e-12)

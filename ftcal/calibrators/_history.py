@@ -29,7 +29,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..core._exceptions import CalibrationInputError
 from ..core._memory import check_allocation
 from ..core._model_selection import simplest_within_one_se
-from ..core._validation import check_finite_output, validate_readings
+from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques
 from ._base import BaseCalibrator, GroupsFit, with_settings
 from ._linear import LinearCalibrator
@@ -406,17 +406,21 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         fitted = (self.history_estimator_, self.history_coef_, self.history_intercept_)
         return wrench + self._history_term(fitted, X, history)
 
-    def out_of_range(self, X: ArrayLike, *, margin: float = 0.0) -> NDArray[np.bool_]:
+    def out_of_range(self, X: ArrayLike, *, margin: float = 0.0, spread: bool = True) -> NDArray[np.bool_]:
         """Rows beyond the calibrated range (see :meth:`~ftcal.calibrators._base.BaseCalibrator.out_of_range`), and
-        the rows after each whose history still holds it (weight >= :data:`HISTORY_WEIGHT_FLOOR`): their wrench
-        depends on that reading too.
+        with ``spread`` the rows after each whose history still holds it (weight >= :data:`HISTORY_WEIGHT_FLOOR`):
+        their wrench depends on that reading too. ``spread=False`` flags the rows themselves only, for a caller
+        that spreads the flags across the chunks of a stream itself (``ftcal predict``, with
+        :func:`spread_flags`).
 
         Returns
         -------
         ndarray of shape (n,), bool
         """
         flags = super().out_of_range(X, margin=margin)
-        return flags if self.tau_rows_ is None else spread_flags(flags, history_reach(self.tau_rows_))[0]
+        if self.tau_rows_ is None or not check_bool(spread, "spread"):
+            return flags
+        return spread_flags(flags, history_reach(self.tau_rows_))[0]
 
     def stream(self) -> Callable[[ArrayLike], NDArray[np.float64]]:
         """A ``predict`` for a live stream: each call takes the next chunk of readings (n_i, N), in time order, and

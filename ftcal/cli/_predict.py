@@ -103,7 +103,6 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
 def run(args: argparse.Namespace) -> int:
     from functools import partial
 
-    from ..calibrators._base import BaseCalibrator
     from ..calibrators._history import history_reach, reads_history, spread_flags
     from ..models._auto import provides_std
 
@@ -138,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     predict = model.stream() if reads_history(model) else model.predict
     reach = history_reach(model.tau_rows_) if reads_history(model) and model.tau_rows_ is not None else None
     if reach is not None and own_range is not None:
-        own_range = partial(BaseCalibrator.out_of_range, model)  # unspread here: spread below across the chunks
+        own_range = partial(model.out_of_range, spread=False)  # spread below, across the chunks
     since = [None]
 
     def emit(out) -> int:
