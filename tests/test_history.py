@@ -316,3 +316,24 @@ def test_the_report_of_a_history_model_keeps_the_rows_in_time_order(tmp_path):
     plain = ftcal.calibration_certificate(LinearCalibrator().fit(raw, wrench), dataset, baselines=False,
                                           figures=False)
     assert "shuffled" in plain["validation"]["split"]
+
+
+def test_benchmark_dataset_scores_the_closed_forms_with_a_history_term(tmp_path, capsys):
+    """``ftcal benchmark dataset --history``: on a creeping sensor the history term is chosen and removes most of
+    the LTM's error (the creep is 20 % of the lag; what stays is the reading noise); bad uses are one line."""
+    raw, wrench, groups = creeping_sensor()
+    path = tmp_path / "creep.csv"
+    ftcal.CalibrationDataset(raw=raw, wrench=wrench, group=groups).save(path)
+    out = tmp_path / "bench"
+    assert main(["benchmark", "dataset", str(path), "--model", "linear", "--history", "--out", str(out), "-q"]) == 0
+    result = json.loads((out / "dataset_results.json").read_text())
+    rmse = dict(zip(result["name"], result["rmse"]))
+    assert result["chosen"] == "history(linear)"
+    assert rmse["history(linear)"] < 0.5 * rmse["linear"]
+    capsys.readouterr()
+    for argv, words in [(["--folds", "kfold"], "--history: a load history runs along consecutive rows"),
+                        (["--model", "gaussian_process"], "--history scores the closed-form models")]:
+        assert main(["benchmark", "dataset", str(path), "--history", *argv, "--out", str(tmp_path / "x")]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("ftcal: error: --history") and words in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "x").exists()

@@ -150,6 +150,9 @@ time, the one-standard-error choice) and dataset_rmse.png.
 
 #: Default models of ``ftcal benchmark dataset``: the ones that fit in seconds to a minute on 2 cores.
 DATASET_DEFAULT_MODELS = ("linear", "polynomial", "axis_nonlinear", "gaussian_process")
+#: The models ``--history`` also scores with a load-history term: closed forms, since the term's own
+#: cross-validation fits the model 32 times in every fold (a network or a GP would take hours).
+HISTORY_MODELS = ("linear", "polynomial", "axis_nonlinear")
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
@@ -166,6 +169,12 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     )
     d.add_argument("--cv", type=int_in_range(2, 100, "folds"), default=5, help="number of folds")
     d.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
+    d.add_argument(
+        "--history", action="store_true",
+        help="also score each closed-form model (" + ", ".join(HISTORY_MODELS) + ") with a load-history term "
+             "(soft or viscoelastic sensors, as 'ftcal fit --history'): needs whole groups held out (--folds group), "
+             "each group one recording in time order",
+    )
     _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
     d.set_defaults(handler=run_dataset)
 
@@ -190,6 +199,13 @@ def run_dataset(args: argparse.Namespace) -> int:
         raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
     check_fold_count(data, args.cv, args.dataset)
     groups = data.group if args.folds in ("auto", "group") else None
+    if args.history and groups is None:
+        raise CliError(f"--history: a load history runs along consecutive rows, so whole recordings must be held out; "
+                       f"{args.dataset} needs a group column (one recording per group, rows in time order) and "
+                       "--folds group or auto")
+    if args.history and not set(names) & set(HISTORY_MODELS):
+        raise CliError(f"--history scores the closed-form models with a history term ({', '.join(HISTORY_MODELS)}); "
+                       "list at least one of them with --model")
     alpha = ftcal.alpha_from_wrenches(data.wrench) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
     candidates = []
@@ -197,6 +213,9 @@ def run_dataset(args: argparse.Namespace) -> int:
         extra = {"max_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
             ftcal.training_schedule(schedule, name) else {}
         candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
+    if args.history:  # after the static models: a history term is the more complex model
+        candidates += [(f"history({name})", ftcal.HistoryCalibrator(ftcal.make_calibrator(name), random_state=args.seed))
+                       for name in names if name in HISTORY_MODELS]
     split = f"{len(np.unique(groups))} groups" if groups is not None else "shuffled rows"
     console.info(f"cross-validating {len(candidates)} calibrators on {data.n_samples} samples, {args.cv} folds "
                  f"over {split}")
