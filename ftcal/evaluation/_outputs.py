@@ -113,12 +113,13 @@ class OutputFiles:
         if self.manifest_path.is_dir() and not self.manifest_path.is_symlink():
             raise BenchmarkOutputExistsError(f"{self.manifest_path} is a folder, where this benchmark keeps its record "
                                              "of what it wrote; move it or choose another output folder.")
+        manifest = self.manifest  # read once for every name (it also sets the note on an unreadable one)
         for name in names:
             path = self.out_dir / check_file_name(name, "an output name")
             if path.is_dir() and not path.is_symlink():
                 raise BenchmarkOutputExistsError(f"{path} is a folder, where this benchmark writes a file; move it "
                                                  "or choose another output folder.")
-            if os.path.lexists(path) and not self.force and not self._is_own(path):
+            if os.path.lexists(path) and not self.force and not self._is_own(path, manifest):
                 what = ("is a link (a benchmark writes regular files)" if path.is_symlink() else
                         f"exists and was not written by this benchmark (or was edited since){self.manifest_note}")
                 raise BenchmarkOutputExistsError(f"{path} {what}; choose another output folder or pass --force "
