@@ -413,7 +413,7 @@ def test_two_processes_writing_into_one_folder_keep_every_manifest_entry(tmp_pat
     for w in writers:
         w.start()
     for w in writers:
-        w.join(60)
+        w.join(600)  # a guard against a hang only: the 80 writes take well under a second
     assert [w.exitcode for w in writers] == [0, 0]
     manifest = json.loads((tmp_path / ".ftcal-benchmark-manifest.json").read_text())
     assert sorted(manifest) == sorted(f"{p}{i}.md" for p in "ab" for i in range(40))
