@@ -17,8 +17,11 @@ configurations x 155 poses, Pinocchio FK, 2 kg load, sensor errors of the ``reco
 (configurations, poses per configuration) out of configurations 0-4.
 
 Every fit is cached as one JSON file under ``OUT/cache`` as soon as it ends (keyed by a hash of its
-configuration), so the same command resumes; ``--aggregate-only`` writes the tables and plots from
-whatever is cached. Work is ordered so that the most informative results come first: the first seed of
+configuration, and holding a fingerprint of its training and test data, :func:`ftcal.core.data_fingerprint`:
+a record whose data the current code no longer makes is fitted again), so the same command resumes;
+``--aggregate-only`` writes the tables and plots from whatever is cached. ``--verify K`` fits again, with the
+current code, the K cached records of each model with the fewest training rows and reports whether they
+reproduce (a record that does not is replaced by the new fit): the cache spans sessions and code versions. Work is ordered so that the most informative results come first: the first seed of
 every dataset and size with the closed-form models, then the networks, then further seeds, the kernel
 models, the ensembles, and last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset, seed and model (all sizes) train
 together as one stacked module (:func:`ftcal.fit_stacked`).
@@ -49,7 +52,7 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
-from ftcal.core import atomic_output, is_finite_number, read_json_record
+from ftcal.core import atomic_output, data_fingerprint, is_finite_number, read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
@@ -215,9 +218,15 @@ def _cache_path(cache: Path, task: dict) -> Path:
     return cache / task["dataset"] / f"{size}_s{task['seed']}_{task['model']}_{task['hash']}.json"
 
 
+def data_key(pool: Pool, rows) -> str:
+    """Fingerprint of what a fit of ``rows`` sees and is scored on (training rows, test set, torque scale)."""
+    return data_fingerprint(pool.X[rows], pool.y[rows], pool.X_test, pool.y_test, [pool.alpha])
+
+
 def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = None) -> dict:
     rec = {k: task[k] for k in ("dataset", "size", "seed", "model", "schedule", "hash")}
-    rec.update(n_train=int(len(rows)), fit_seconds=seconds, noise_floor=pool.noise_floor, error=error)
+    rec.update(n_train=int(len(rows)), fit_seconds=seconds, noise_floor=pool.noise_floor, error=error,
+               data=data_key(pool, rows))
     if error is None:
         pred = model.predict(pool.X_test)
         rec["rmse"] = wrench_rmse(pool.y_test, pred, pool.alpha)
@@ -227,6 +236,66 @@ def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = N
     else:
         rec["rmse"] = float("nan")
     return rec
+
+
+def load_cached(cache: Path, tasks: list[dict]) -> tuple[list[dict], list[dict]]:
+    """The cached records of ``tasks`` that hold their fit's current data, and the tasks still to fit.
+
+    A record is used only if it is complete (:func:`_complete`) and its data fingerprint (``data``) is that of
+    the rows the current code makes for its dataset, seed and size; a record from other data (an older
+    simulator or robot model, another package version) or without a fingerprint is fitted again.
+    """
+    pools: dict[tuple, Pool] = {}
+    records, pending = [], []
+    for t in tasks:
+        rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"],
+                               dataset=t["dataset"], size=t["size"], seed=t["seed"], model=t["model"])
+        if rec is not None and _complete(rec):
+            key = (t["dataset"], t["seed"])
+            if key not in pools:
+                pools[key] = FACTORIES[t["dataset"]].make(t["seed"])
+            if rec.get("data") == data_key(pools[key], pools[key].select(tuple(t["size"]))):
+                records.append(rec)
+                continue
+        pending.append(t)
+    return records, pending
+
+
+#: Relative RMSE difference up to which a refit reproduces a cached record (rounding, BLAS summation order).
+REPRODUCED = 1e-4
+
+
+def verify(records: list[dict], tasks: list[dict], per_model: int, n_jobs: int, save) -> tuple[list[dict], dict]:
+    """Fit again, with the current code, the ``per_model`` cached records of each model with the fewest training
+    rows (then dataset, size and seed order); a record whose RMSE the refit does not reproduce (within
+    :data:`REPRODUCED`, relative) is replaced by the refit. Returns the records and, per model, the counts and
+    the largest relative difference."""
+    from joblib import Parallel, delayed
+
+    order = {t["hash"]: i for i, t in enumerate(tasks)}
+    chosen = []
+    for model in dict.fromkeys(r["model"] for r in records):
+        mine = sorted((r for r in records if r["model"] == model and r["error"] is None),
+                      key=lambda r: (r["n_train"], order[r["hash"]]))
+        chosen += mine[:per_model]
+    by_hash = {t["hash"]: t for t in tasks}
+    refits = Parallel(n_jobs=n_jobs)(delayed(run_unit)([by_hash[r["hash"]]]) for r in chosen)
+    report: dict = {}
+    replaced = {}
+    for old, (new,) in zip(chosen, refits):
+        entry = report.setdefault(old["model"], {"verified": 0, "reproduced": 0, "replaced": 0, "largest": 0.0})
+        entry["verified"] += 1
+        diff = abs(new["rmse"] - old["rmse"]) / old["rmse"] if new["error"] is None else float("inf")
+        entry["largest"] = max(entry["largest"], diff)
+        if diff <= REPRODUCED:
+            entry["reproduced"] += 1
+        elif new["error"] is None:
+            entry["replaced"] += 1
+            save(new)
+            replaced[old["hash"]] = new
+        print(f"verify {old['dataset']} {tuple(old['size'])} seed {old['seed']} {old['model']}: cached "
+              f"{old['rmse']:.6g}, refit {new['rmse']:.6g} ({diff:.1e})", flush=True)
+    return [replaced.get(r["hash"], r) for r in records], report
 
 
 def _complete(rec: dict) -> bool:
@@ -335,6 +404,15 @@ def markdown(summary: dict, meta: dict, models) -> str:
         if any(choices.values()):
             lines += ["", "auto's choices: " + "; ".join(f"{k}: {', '.join(v)}" for k, v in choices.items() if v)]
         lines.append("")
+    check = meta.get("verification")
+    if check and isinstance(check.get("models"), dict):
+        lines += [f"Verification (`--verify {check.get('per_model')}`): cached records refitted with the current code; "
+                  f"reproduced = RMSE within {check.get('tolerance', REPRODUCED):g} (relative); the others were "
+                  "replaced by the refit.", "", "| model | refitted | reproduced | replaced | largest relative difference |",
+                  "|---|---|---|---|---|"]
+        for model, c in check["models"].items():
+            lines.append(f"| {model} | {c['verified']} | {c['reproduced']} | {c['replaced']} | {c['largest']:.1e} |")
+        lines.append("")
     return "\n".join(lines)
 
 
@@ -385,6 +463,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="smoke mode: 1 seed, the smallest sizes, closed forms only")
     p.add_argument("--out", default=str(DEFAULT_OUT))
     p.add_argument("--aggregate-only", action="store_true")
+    p.add_argument("--verify", type=int_at_least(0), default=0, metavar="K",
+                   help="fit again the K cached records of each model with the fewest rows; replace those that differ")
     p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
@@ -407,19 +487,27 @@ def main(argv: list[str] | None = None) -> int:
     tasks = make_tasks(args.datasets, models, seeds, args.schedule)
     if args.quick:
         tasks = [t for t in tasks if t["size"][-1] <= 25 or t["size"] == [5, 5]]
-    records, pending = [], []
-    for t in tasks:
-        rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"],
-                               dataset=t["dataset"], size=t["size"], seed=t["seed"], model=t["model"])
-        records.append(rec) if rec is not None and _complete(rec) else pending.append(t)
+    records, pending = load_cached(cache, tasks)
     start = time.perf_counter()
+
+    def save(rec: dict) -> None:
+        path = _cache_path(cache, rec)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+            tmp.write_text(json.dumps(rec), encoding="utf-8")
+
+    verification_file = cache / "verification.json"  # the last --verify's report, kept with the cache
+    verification = read_json_record(verification_file)
+    if args.verify:
+        records, checked = verify(records, tasks, args.verify, args.jobs, save)
+        verification = {"per_model": args.verify, "tolerance": REPRODUCED, "models": checked}
+        cache.mkdir(parents=True, exist_ok=True)
+        with atomic_output(verification_file, overwrite=True, error=FileExistsError) as tmp:
+            tmp.write_text(json.dumps(verification), encoding="utf-8")
     if pending and not args.aggregate_only:
         gen = Parallel(n_jobs=args.jobs, return_as="generator")(delayed(run_unit)(u) for u in _units(pending, args.stack))
         for rec in itertools.chain.from_iterable(gen):
-            path = _cache_path(cache, rec)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
-                tmp.write_text(json.dumps(rec), encoding="utf-8")
+            save(rec)
             records.append(rec)
             print(f"[{len(records)}/{len(tasks)}] {rec['dataset']} {tuple(rec['size'])} seed {rec['seed']} "
                   f"{rec['model']}: RMSE {rec['rmse']:.2f} ({rec['n_train']} rows, {rec['fit_seconds']:.1f} s, "
@@ -427,7 +515,7 @@ def main(argv: list[str] | None = None) -> int:
                   flush=True)
     summary = summarise(records, args.datasets, models)
     meta = {"schedule": args.schedule, "seeds": seeds, "models": models, "datasets": args.datasets,
-            "n_expected": len(tasks), "n_complete": len(records), "quick": args.quick}
+            "n_expected": len(tasks), "n_complete": len(records), "quick": args.quick, "verification": verification}
     text = markdown(summary, meta, models)
     files.write_text("learning_curves.md", text)
     files.write_text("learning_curves.json", json.dumps({"meta": meta, "summary": summary, "records": records}))

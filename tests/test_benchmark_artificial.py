@@ -298,6 +298,36 @@ def test_learning_curves_of_the_soft_sensor_hold_out_whole_presses():
     assert len(small) == 25 and len(large) == 300 and set(small) <= set(large)
 
 
+def test_learning_curve_records_of_other_data_or_code_are_fitted_again(tmp_path, capsys):
+    """A cached fit is used only for the data the current code makes (its fingerprint), and ``--verify`` refits
+    cached records and replaces one the current code does not reproduce."""
+    import json
+
+    lc = _script("learning_curves")
+    argv = ["--quick", "--datasets", "reconstructed", "--models", "linear", "--out", str(tmp_path)]
+    assert lc.main(argv) == 0
+    paths = sorted((tmp_path / "cache" / "reconstructed").glob("*.json"))
+    records = [json.loads(p.read_text()) for p in paths]
+    assert len(records) == 8 and all(len(r["data"]) == 16 for r in records)
+    # another simulator's data: the record's fingerprint differs, so it is a miss and fitted again
+    moved = dict(records[0], data="0" * 16, rmse=1.0)
+    paths[0].write_text(json.dumps(moved))
+    capsys.readouterr()
+    assert lc.main(argv) == 0
+    out = capsys.readouterr().out
+    assert out.count("] reconstructed (") == 1 and "[8/8]" in out  # one fit ran, the other seven came from the cache
+    refit = json.loads(paths[0].read_text())
+    assert refit["data"] == records[0]["data"] and refit["rmse"] == pytest.approx(records[0]["rmse"], rel=1e-9)
+    # same data, other code (a figure the current code does not reproduce): --verify refits and replaces it
+    stale = dict(records[1], rmse=records[1]["rmse"] * 1.01)
+    paths[1].write_text(json.dumps(stale))
+    assert lc.main([*argv, "--verify", "8"]) == 0
+    assert json.loads(paths[1].read_text())["rmse"] == pytest.approx(records[1]["rmse"], rel=1e-9)
+    table = (tmp_path / "learning_curves.md").read_text()
+    assert "| linear | 8 | 7 | 1 | 9.9e-03 |" in table
+    assert lc.main(argv) == 0  # a run without --verify keeps the last verification's report
+    assert "| linear | 8 | 7 | 1 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
+
 @pytest.mark.parametrize("script, name, argv", [
     ("crossover", "crossover.md", ["--quick", "--models", "linear"]),
     ("learning_curves", "learning_curves.json", ["--quick", "--models", "linear"]),
