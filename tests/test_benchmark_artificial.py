@@ -172,6 +172,20 @@ def test_a_tampered_record_is_recomputed_not_hidden_from_the_table(tmp_path, cha
     assert again["meta"]["n_computed"] == 1 and again["results"][0]["rmse"] == first["results"][0]["rmse"]
 
 
+def test_a_record_of_other_data_is_recomputed_and_one_from_before_fingerprints_is_checked_by_its_floor(tmp_path):
+    """The data a record was computed on is part of its key: a fingerprint, or (older records) the noise floor."""
+    first = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+    cached = next((tmp_path / "cache").rglob("*.json"))
+    record = json.loads(cached.read_text())
+    assert len(record["data"]) == 16
+    legacy = {k: v for k, v in record.items() if k != "data"}
+    for stale, computed in ((dict(record, data="f" * 16), 1), (legacy, 0),
+                            (dict(legacy, noise_floor=record["noise_floor"] * (1 + 1e-9)), 1)):
+        cached.write_text(json.dumps(stale))
+        again = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
+        assert again["meta"]["n_computed"] == computed and again["results"][0]["rmse"] == first["results"][0]["rmse"]
+
+
 def test_an_unreadable_manifest_is_named_and_a_folder_in_the_way_is_refused(tmp_path):
     run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
     (tmp_path / ".ftcal-benchmark-manifest.json").write_text("[1, 2]")

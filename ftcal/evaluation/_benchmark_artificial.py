@@ -12,7 +12,9 @@ Each (preset, dataset, model) result is one small JSON file
 soon as that fit ends. A later call with the same configuration skips every
 result already there, so a long run can be spread over many sessions (or
 killed and restarted); results of another configuration (schedule, seed,
-sizes, preset definition) have another hash and are never mixed in. The
+sizes, preset definition) have another hash and are never mixed in, and a
+result holds a fingerprint of its data (:func:`~ftcal.core.data_fingerprint`),
+so one computed on data the current code no longer makes is fitted again. The
 summary is built from whatever is complete and reports the counts.
 
 Outputs (in ``out_dir``)
@@ -53,7 +55,7 @@ from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.utils._param_validation import Interval
 
 from ..simulation._artificial import make_artificial_dataset
-from ..core._files import atomic_output, plain_json, read_json_record
+from ..core._files import atomic_output, data_fingerprint, plain_json, read_json_record
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
@@ -175,14 +177,27 @@ def dataset_seeds(seed: int, index: int) -> tuple[int, int]:
     return int(data_seed), int(model_seed % (2**31 - 1))
 
 
-def _data_and_model(task: dict):
-    """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
-    data_seed, model_seed = dataset_seeds(task["seed"], task["dataset"])
+def _dataset(task: dict):
+    """The task's dataset ``(train, test, info)`` and the sensor profile (the same for every model of the task's
+    preset and dataset index)."""
+    data_seed, _ = dataset_seeds(task["seed"], task["dataset"])
     profile = SensorProfile.default()
-    train, test, info = make_artificial_dataset(
+    return make_artificial_dataset(
         ErrorModel(**task["error_model"]), random_state=data_seed, profile=profile, n_per_sphere=task["n_per_sphere"],
         n_test=task["n_test"], test_distribution=task["test_distribution"], n_spheres=task.get("n_spheres", 4),
-    )
+    ), profile
+
+
+def _data_key(data, profile) -> str:
+    """Fingerprint of a dataset ``(train, test, info)`` as a fit sees it (:func:`~ftcal.core.data_fingerprint`)."""
+    train, test, _ = data
+    return data_fingerprint(train.raw, train.wrench, test.raw, test.wrench, [profile.alpha])
+
+
+def _data_and_model(task: dict):
+    """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
+    (train, test, info), profile = _dataset(task)
+    _, model_seed = dataset_seeds(task["seed"], task["dataset"])
     model = make_model(task["model"], n_channels=profile.n_channels, alpha=profile.alpha, schedule=task["schedule"],
                        random_state=model_seed, overrides=task["overrides"])
     return (train, test, info), model, profile
@@ -229,6 +244,7 @@ def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int =
         "rel_torque_mean": report.rel_torque_mean,
         "report": report.to_dict(),
         "noise_floor": info["noise_floor"],
+        "data": _data_key(data, profile),
         "errors": info["errors"],
         "fit_seconds": fit_seconds,
         "stacked": stacked,
@@ -417,11 +433,27 @@ def _cache_path(cache_dir: Path, task: dict) -> Path:
     return cache_dir / task["preset"] / f"ds{task['dataset']:03d}_{task['model']}_{task['hash']}.json"
 
 
-def _load_cached(path: Path, task: dict) -> dict | None:
-    """The cached record of ``task``, or None (missing, half-written, another configuration, or not a record this
-    benchmark wrote: every figure it writes is a finite number): then the fit runs again."""
-    return read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
-                            config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
+def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
+    """The cached record of ``task``, or None: then the fit runs again.
+
+    None when the file is missing, half-written, of another configuration, not a record this benchmark wrote
+    (every figure it writes is a finite number), or of other data than the current code makes for the task: its
+    fingerprint (``data``) differs, or, in a record written before fingerprints, its noise floor (a figure of
+    the data's noise) does. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
+    """
+    record = read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
+                              config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
+    if record is None:
+        return None
+    key = json.dumps({k: v for k, v in task["config"].items() if k not in ("model", "overrides", "schedule")},
+                     sort_keys=True) + f"#{task['dataset']}"
+    if key not in datasets:
+        data, profile = _dataset(task)
+        datasets[key] = (_data_key(data, profile), data[2]["noise_floor"])
+    fingerprint, floor = datasets[key]
+    same = record["data"] == fingerprint if "data" in record else \
+        abs(record["noise_floor"] - floor) <= 1e-12 * max(abs(floor), 1e-300)
+    return record if same else None
 
 
 def run_artificial_benchmark(
@@ -519,9 +551,9 @@ def run_artificial_benchmark(
     cache_dir = out_dir / "cache"
     tasks = _tasks(int(n_datasets), preset_models, models, schedule, int(seed), quick, n_per_sphere, n_test,
                    test_distribution, n_spheres)
-    results, pending = [], []
+    results, pending, datasets = [], [], {}
     for task in tasks:
-        rec = _load_cached(_cache_path(cache_dir, task), task)
+        rec = _load_cached(_cache_path(cache_dir, task), task, datasets)
         (results.append(rec) if rec is not None else pending.append(task))
     n_cached = len(results)
     if compute and pending:
