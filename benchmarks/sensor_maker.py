@@ -6,7 +6,7 @@ Each model is fitted on the four-sphere train set of an artificial dataset (oute
 torque-scaled) and scored on two test sets of the same sensor pooled: the ``ball`` set (force in the 2000 N
 ball, torque in the 40 N·m ball: torque-scaled norms up to 2828 N, most points beyond the outer sphere) and
 the ``radial`` set (norm uniform in 0-2000 N, so small loads are covered too), 1250 points each. Full scale: Fmax for the
-forces, Tmax for the torques. The test predictions of every fit are cached (``OUT/cache/*.npz``), so the same
+forces, Tmax for the torques. The test predictions of every fit are cached (``OUT/cache/*.npz``, keyed by the data's fingerprint too), so the same
 command resumes and ``--aggregate-only`` only redraws.
 
 Outputs in ``OUT``: ``sensor_maker.md`` (per-axis tables), ``sensor_maker_axes.png`` (per-axis RMSE and max
@@ -31,7 +31,7 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, SensorProfile, make_artificial_dataset, scale_torques
 from ftcal.evaluation import dataset_seeds, make_model
-from ftcal.core import atomic_output
+from ftcal.core import atomic_output, data_fingerprint
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, output_files
@@ -43,15 +43,17 @@ BINS = np.arange(0.0, 3000.0, 250.0)  # torque-scaled load norm [N]
 
 
 def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path) -> dict:
-    config = {"preset": preset, "index": index, "model": model, "schedule": schedule, "test": "ball+radial"}
-    key = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
-    path = cache / f"{preset}_ds{index:03d}_{model}_{key}.npz"
     data_seed, model_seed = dataset_seeds(0, index)
     profile = SensorProfile.default()
     # the same seed gives the same sensor errors and train set; only the test loads differ
     train, test, info = make_artificial_dataset(preset, random_state=data_seed, test_distribution="ball")
     _, radial, _ = make_artificial_dataset(preset, random_state=data_seed, test_distribution="radial")
     test_raw, test_wrench = np.vstack([test.raw, radial.raw]), np.vstack([test.wrench, radial.wrench])
+    # the key holds the data's fingerprint: predictions made on data the current code no longer makes are not reused
+    config = {"preset": preset, "index": index, "model": model, "schedule": schedule, "test": "ball+radial",
+              "data": data_fingerprint(train.raw, train.wrench, test_raw, test_wrench, [profile.alpha])}
+    key = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
+    path = cache / f"{preset}_ds{index:03d}_{model}_{key}.npz"
     pred = _cached_prediction(path, test_wrench.shape)
     if pred is None:  # not cached, or a file that is not this script's prediction: fit again
         est = make_model(model, n_channels=profile.n_channels, alpha=profile.alpha, schedule=schedule,
