@@ -268,8 +268,8 @@ REPRODUCED = 1e-4
 def verify(records: list[dict], tasks: list[dict], per_model: int, n_jobs: int, save) -> tuple[list[dict], dict]:
     """Fit again, with the current code, the ``per_model`` cached records of each model with the fewest training
     rows (then dataset, size and seed order); a record whose RMSE the refit does not reproduce (within
-    :data:`REPRODUCED`, relative) is replaced by the refit. Returns the records and, per model, the counts and
-    the largest relative difference."""
+    :data:`REPRODUCED`, relative) is replaced by the refit, and one whose refit fails is kept and counted.
+    Returns the records and, per model, the counts and the largest relative difference (None: none compared)."""
     from joblib import Parallel, delayed
 
     order = {t["hash"]: i for i, t in enumerate(tasks)}
@@ -283,24 +283,47 @@ def verify(records: list[dict], tasks: list[dict], per_model: int, n_jobs: int, 
     report: dict = {}
     replaced = {}
     for old, (new,) in zip(chosen, refits):
-        entry = report.setdefault(old["model"], {"verified": 0, "reproduced": 0, "replaced": 0, "largest": 0.0})
+        entry = report.setdefault(old["model"], {"verified": 0, "reproduced": 0, "replaced": 0, "failed": 0,
+                                                 "largest": None})
         entry["verified"] += 1
-        diff = abs(new["rmse"] - old["rmse"]) / old["rmse"] if new["error"] is None else float("inf")
-        entry["largest"] = max(entry["largest"], diff)
+        where = f"{old['dataset']} {tuple(old['size'])} seed {old['seed']} {old['model']}"
+        if new["error"] is not None:
+            entry["failed"] += 1
+            print(f"verify {where}: cached {old['rmse']:.6g}, refit failed ({new['error']}): kept", flush=True)
+            continue
+        diff = abs(new["rmse"] - old["rmse"]) / old["rmse"]  # a cached RMSE is > 0 (_complete)
+        entry["largest"] = max(entry["largest"] or 0.0, diff)
         if diff <= REPRODUCED:
             entry["reproduced"] += 1
-        elif new["error"] is None:
+        else:
             entry["replaced"] += 1
             save(new)
             replaced[old["hash"]] = new
-        print(f"verify {old['dataset']} {tuple(old['size'])} seed {old['seed']} {old['model']}: cached "
-              f"{old['rmse']:.6g}, refit {new['rmse']:.6g} ({diff:.1e})", flush=True)
+        print(f"verify {where}: cached {old['rmse']:.6g}, refit {new['rmse']:.6g} ({diff:.1e})", flush=True)
     return [replaced.get(r["hash"], r) for r in records], report
 
 
+def read_verification(path: Path, scope: dict) -> dict | None:
+    """The last ``--verify`` report kept in ``path``, if it is one this script wrote for the same datasets, models,
+    seeds and schedule (``scope``); None otherwise (missing, edited into something else, another run's)."""
+    report = read_json_record(path, scope=scope)
+    checked = None if report is None else report.get("models")
+    if not isinstance(checked, dict) or not checked or not set(checked) <= set(scope["models"]) or \
+            not is_finite_number(report.get("per_model")) or not is_finite_number(report.get("tolerance")):
+        return None
+    for entry in checked.values():
+        counts = [entry.get(k) if isinstance(entry, dict) else None
+                  for k in ("verified", "reproduced", "replaced", "failed")]
+        largest = entry.get("largest") if isinstance(entry, dict) else None
+        if not all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c <= 10**6 for c in counts) or \
+                not (largest is None or is_finite_number(largest) and largest >= 0):
+            return None
+    return report
+
+
 def _complete(rec: dict) -> bool:
-    """Whether a cached record is one this script wrote: a finite RMSE, or a failure with its message."""
-    scored = rec.get("error") is None and is_finite_number(rec.get("rmse"))
+    """Whether a cached record is one this script wrote: a finite positive RMSE, or a failure with its message."""
+    scored = rec.get("error") is None and is_finite_number(rec.get("rmse")) and rec["rmse"] > 0
     return (scored or isinstance(rec.get("error"), str)) and isinstance(rec.get("size"), list)
 
 
@@ -405,13 +428,15 @@ def markdown(summary: dict, meta: dict, models) -> str:
             lines += ["", "auto's choices: " + "; ".join(f"{k}: {', '.join(v)}" for k, v in choices.items() if v)]
         lines.append("")
     check = meta.get("verification")
-    if check and isinstance(check.get("models"), dict):
-        lines += [f"Verification (`--verify {check.get('per_model')}`): cached records refitted with the current code; "
-                  f"reproduced = RMSE within {check.get('tolerance', REPRODUCED):g} (relative); the others were "
-                  "replaced by the refit.", "", "| model | refitted | reproduced | replaced | largest relative difference |",
-                  "|---|---|---|---|---|"]
+    if check:  # read_verification's checks: counts are integers, the largest difference a finite number or None
+        lines += [f"Verification (`--verify {check['per_model']:g}`): the cached records of each model with the fewest "
+                  f"training rows refitted with the current code; reproduced = RMSE within {check['tolerance']:g} "
+                  "(relative); replaced = not reproduced, the refit kept instead; failed = the refit failed, the "
+                  "record kept.", "", "| model | refitted | reproduced | replaced | failed | largest relative difference |",
+                  "|---|---|---|---|---|---|"]
         for model, c in check["models"].items():
-            lines.append(f"| {model} | {c['verified']} | {c['reproduced']} | {c['replaced']} | {c['largest']:.1e} |")
+            largest = "—" if c["largest"] is None else f"{c['largest']:.1e}"
+            lines.append(f"| {model} | {c['verified']} | {c['reproduced']} | {c['replaced']} | {c['failed']} | {largest} |")
         lines.append("")
     return "\n".join(lines)
 
@@ -481,6 +506,8 @@ def main(argv: list[str] | None = None) -> int:
     models = [m for m in args.models if m in TIERS[0]] if args.quick else list(args.models)
     if not models:
         parser.error(f"--quick runs the closed-form models only ({', '.join(TIERS[0])}): name at least one of them")
+    if args.verify and args.aggregate_only:
+        parser.error("--verify fits again, --aggregate-only fits nothing: choose one")
     files = output_files(parser, args.out, args.force, ["learning_curves.md", "learning_curves.json"]
                          + [f"learning_curves_{name}.png" for name in args.datasets])
     out, cache = files.out_dir, files.out_dir / "cache"
@@ -490,20 +517,27 @@ def main(argv: list[str] | None = None) -> int:
     records, pending = load_cached(cache, tasks)
     start = time.perf_counter()
 
-    def save(rec: dict) -> None:
-        path = _cache_path(cache, rec)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
-            tmp.write_text(json.dumps(rec), encoding="utf-8")
+    def write(path: Path, obj) -> None:
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+                tmp.write_text(json.dumps(obj), encoding="utf-8")
+        except (OSError, FileExistsError) as exc:
+            parser.error(f"cannot write the cache file {path}: {getattr(exc, 'strerror', None) or exc}")
 
-    verification_file = cache / "verification.json"  # the last --verify's report, kept with the cache
-    verification = read_json_record(verification_file)
+    def save(rec: dict) -> None:
+        write(_cache_path(cache, rec), rec)
+
+    # the last --verify's report, kept with the cache and shown while the run's scope stays the same
+    verification_file = cache / "verification.json"
+    scope = {"datasets": list(args.datasets), "models": models, "seeds": seeds, "schedule": args.schedule,
+             "quick": args.quick}
+    verification = read_verification(verification_file, scope)
     if args.verify:
         records, checked = verify(records, tasks, args.verify, args.jobs, save)
-        verification = {"per_model": args.verify, "tolerance": REPRODUCED, "models": checked}
-        cache.mkdir(parents=True, exist_ok=True)
-        with atomic_output(verification_file, overwrite=True, error=FileExistsError) as tmp:
-            tmp.write_text(json.dumps(verification), encoding="utf-8")
+        if checked:  # nothing cached to verify: the last report stays
+            verification = {"per_model": args.verify, "tolerance": REPRODUCED, "scope": scope, "models": checked}
+            write(verification_file, verification)
     if pending and not args.aggregate_only:
         gen = Parallel(n_jobs=args.jobs, return_as="generator")(delayed(run_unit)(u) for u in _units(pending, args.stack))
         for rec in itertools.chain.from_iterable(gen):

@@ -42,7 +42,9 @@ DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "sensor_maker"
 BINS = np.arange(0.0, 3000.0, 250.0)  # torque-scaled load norm [N]
 
 
-def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path) -> dict:
+def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path, fit: bool = True) -> dict | None:
+    """Test predictions of one fit with what scores them; from the cache when it holds this fit's (same
+    configuration and data), else fitted and cached, or None with ``fit=False`` (aggregating only)."""
     data_seed, model_seed = dataset_seeds(0, index)
     profile = SensorProfile.default()
     # the same seed gives the same sensor errors and train set; only the test loads differ
@@ -55,6 +57,8 @@ def _fit_predict(preset: str, index: int, model: str, schedule: str, cache: Path
     key = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
     path = cache / f"{preset}_ds{index:03d}_{model}_{key}.npz"
     pred = _cached_prediction(path, test_wrench.shape)
+    if pred is None and not fit:
+        return None
     if pred is None:  # not cached, or a file that is not this script's prediction: fit again
         est = make_model(model, n_channels=profile.n_channels, alpha=profile.alpha, schedule=schedule,
                          random_state=model_seed)
@@ -118,11 +122,10 @@ def main(argv: list[str] | None = None) -> int:
     for preset in args.presets:
         for model in args.models:
             runs = []
-            for i in range(args.datasets):
-                key_done = any(cache.glob(f"{preset}_ds{i:03d}_{model}_*.npz"))
-                if args.aggregate_only and not key_done:
-                    continue
-                runs.append(_fit_predict(preset, i, model, args.schedule, cache))
+            for i in range(args.datasets):  # --aggregate-only: only the fits cached for this configuration and data
+                run = _fit_predict(preset, i, model, args.schedule, cache, fit=not args.aggregate_only)
+                if run is not None:
+                    runs.append(run)
             if runs:
                 results.setdefault(preset, {})[model] = {
                     "n_datasets": len(runs), **axis_table(runs, profile.fmax, profile.tmax),

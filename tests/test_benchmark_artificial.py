@@ -172,6 +172,19 @@ def test_a_tampered_record_is_recomputed_not_hidden_from_the_table(tmp_path, cha
     assert again["meta"]["n_computed"] == 1 and again["results"][0]["rmse"] == first["results"][0]["rmse"]
 
 
+def test_sensor_maker_aggregates_only_predictions_of_the_current_data_and_never_fits_then(tmp_path, capsys):
+    sm = _script("sensor_maker")
+    argv = ["--presets", "thesis", "--datasets", "1", "--models", "linear", "--out", str(tmp_path)]
+    assert sm.main(argv) == 0
+    cached, = (tmp_path / "cache").glob("*.npz")
+    cached.rename(cached.with_name("thesis_ds000_linear_0123456789ab.npz"))  # another key: other data, older code
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as stop:
+        sm.main([*argv, "--aggregate-only"])
+    assert stop.value.code == 2 and "nothing to aggregate" in capsys.readouterr().err
+    assert [p.name for p in (tmp_path / "cache").glob("*.npz")] == ["thesis_ds000_linear_0123456789ab.npz"]
+
+
 def test_a_record_of_other_data_is_recomputed_and_one_from_before_fingerprints_is_checked_by_its_floor(tmp_path):
     """The data a record was computed on is part of its key: a fingerprint, or (older records) the noise floor."""
     first = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
@@ -179,7 +192,7 @@ def test_a_record_of_other_data_is_recomputed_and_one_from_before_fingerprints_i
     record = json.loads(cached.read_text())
     assert len(record["data"]) == 16
     legacy = {k: v for k, v in record.items() if k != "data"}
-    for stale, computed in ((dict(record, data="f" * 16), 1), (legacy, 0),
+    for stale, computed in ((dict(record, data="f" * 16), 1), (legacy, 0), (dict(record, noise_floor=0.0), 1),
                             (dict(legacy, noise_floor=record["noise_floor"] * (1 + 1e-9)), 1)):
         cached.write_text(json.dumps(stale))
         again = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
@@ -338,9 +351,21 @@ def test_learning_curve_records_of_other_data_or_code_are_fitted_again(tmp_path,
     assert lc.main([*argv, "--verify", "8"]) == 0
     assert json.loads(paths[1].read_text())["rmse"] == pytest.approx(records[1]["rmse"], rel=1e-9)
     table = (tmp_path / "learning_curves.md").read_text()
-    assert "| linear | 8 | 7 | 1 | 9.9e-03 |" in table
+    assert "| linear | 8 | 7 | 1 | 0 | 9.9e-03 |" in table
     assert lc.main(argv) == 0  # a run without --verify keeps the last verification's report
-    assert "| linear | 8 | 7 | 1 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
+    assert "| linear | 8 | 7 | 1 | 0 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
+    report = tmp_path / "cache" / "verification.json"
+    kept = json.loads(report.read_text())
+    for edited in ({**kept, "models": {"linear": "x"}}, {**kept, "models": {"linear": {}}}, {**kept, "tolerance": "a"},
+                   {**kept, "models": {"linear": {**kept["models"]["linear"], "largest": 1e400}}},
+                   {**kept, "models": {"a | b": kept["models"]["linear"]}}, {**kept, "scope": {}}):
+        report.write_text(json.dumps(edited))  # an edited or another run's report is not shown, never a traceback
+        assert lc.main(argv) == 0 and "Verification" not in (tmp_path / "learning_curves.md").read_text()
+    paths[2].write_text(json.dumps(dict(records[2], rmse=0)))  # not a figure this script writes: fitted again
+    assert lc.main(argv) == 0 and json.loads(paths[2].read_text())["rmse"] == pytest.approx(records[2]["rmse"])
+    with pytest.raises(SystemExit) as stop:
+        lc.main([*argv, "--verify", "1", "--aggregate-only"])
+    assert stop.value.code == 2 and "choose one" in capsys.readouterr().err
 
 @pytest.mark.parametrize("script, name, argv", [
     ("crossover", "crossover.md", ["--quick", "--models", "linear"]),

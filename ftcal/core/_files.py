@@ -216,12 +216,17 @@ def read_json_record(path: str | os.PathLike, *, numbers: tuple[str, ...] = (), 
 
 
 def data_fingerprint(*arrays) -> str:
-    """A short SHA-256 of the values of ``arrays`` (each cast to float64; its shape counts): the data a cached
-    result was computed on.
+    """A short SHA-256 of the values of ``arrays``: the data a cached result was computed on.
 
-    A benchmark's per-fit cache keyed by its configuration alone keeps a result when the code that makes the
-    data changes (a simulator, a robot model, a package's version); a fingerprint of the arrays stored in the
-    result and compared on reading makes such a result a miss, so it is fitted again.
+    Each array counts by its shape and its values as float64 (real numbers: booleans, integers up to 2**53,
+    floats; NaN counts as a value). A benchmark's per-fit cache keyed by its configuration alone keeps a result
+    when the code that makes the data changes (a simulator, a robot model, a package's version); a fingerprint
+    of the arrays stored in the result and compared on reading makes such a result a miss, so it is fitted again.
+
+    Raises
+    ------
+    CalibrationInputError
+        An argument that is not an array of real numbers (complex, text, objects, a masked array).
 
     Examples
     --------
@@ -229,16 +234,22 @@ def data_fingerprint(*arrays) -> str:
     >>> a = np.arange(6.0).reshape(2, 3)
     >>> data_fingerprint(a) == data_fingerprint(a.copy()), data_fingerprint(a) == data_fingerprint(a.T)
     (True, False)
-    >>> data_fingerprint(a) == data_fingerprint(a + 1e-12)
-    False
+    >>> data_fingerprint(a) == data_fingerprint(a + 1e-12), data_fingerprint(1.0) == data_fingerprint([1.0])
+    (False, False)
     """
     import hashlib
 
     import numpy as np
 
+    from ._exceptions import CalibrationInputError
+
     digest = hashlib.sha256()
-    for array in arrays:
-        values = np.ascontiguousarray(np.asarray(array, dtype=np.float64))
+    for k, array in enumerate(arrays):
+        masked = isinstance(array, np.ma.MaskedArray)
+        values = np.asarray(array)
+        if masked or values.dtype.kind not in "biuf":
+            what = "a masked array (fill it first, e.g. a.filled(np.nan))" if masked else f"of dtype {values.dtype}"
+            raise CalibrationInputError(f"data_fingerprint: argument {k} is {what}; give arrays of real numbers.")
         digest.update(repr(values.shape).encode())
-        digest.update(values.tobytes())
+        digest.update(np.ascontiguousarray(values, dtype=np.float64).data)  # no copy of a C-ordered float64 array
     return digest.hexdigest()[:16]

@@ -438,8 +438,8 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
 
     None when the file is missing, half-written, of another configuration, not a record this benchmark wrote
     (every figure it writes is a finite number), or of other data than the current code makes for the task: its
-    fingerprint (``data``) differs, or, in a record written before fingerprints, its noise floor (a figure of
-    the data's noise) does. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
+    fingerprint (``data``; records written before fingerprints have none) or its noise floor (a figure of the
+    data's noise) differs. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
     """
     record = read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
                               config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
@@ -451,7 +451,7 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
         data, profile = _dataset(task)
         datasets[key] = (_data_key(data, profile), data[2]["noise_floor"])
     fingerprint, floor = datasets[key]
-    same = record["data"] == fingerprint if "data" in record else \
+    same = record.get("data", fingerprint) == fingerprint and \
         abs(record["noise_floor"] - floor) <= 1e-12 * max(abs(floor), 1e-300)
     return record if same else None
 
