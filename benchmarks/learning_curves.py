@@ -269,6 +269,8 @@ def verify(records: list[dict], tasks: list[dict], per_model: int, n_jobs: int, 
     """Fit again, with the current code, the ``per_model`` cached records of each model with the fewest training
     rows (then dataset, size and seed order); a record whose RMSE the refit does not reproduce (within
     :data:`REPRODUCED`, relative) is replaced by the refit, and one whose refit fails is kept and counted.
+    Networks are refitted alone, also those cached from a stacked fit (:func:`ftcal.fit_stacked`: the same fit
+    up to float32 rounding, which training can amplify).
     Returns the records and, per model, the counts and the largest relative difference (None: none compared)."""
     from joblib import Parallel, delayed
 
@@ -431,8 +433,9 @@ def markdown(summary: dict, meta: dict, models) -> str:
     if check:  # read_verification's checks: counts are integers, the largest difference a finite number or None
         lines += [f"Verification (`--verify {check['per_model']:g}`): the cached records of each model with the fewest "
                   f"training rows refitted with the current code; reproduced = RMSE within {check['tolerance']:g} "
-                  "(relative); replaced = not reproduced, the refit kept instead; failed = the refit failed, the "
-                  "record kept.", "", "| model | refitted | reproduced | replaced | failed | largest relative difference |",
+                  "(relative); replaced = not reproduced, the refit kept instead (a network cached from a stacked fit is "
+                  "refitted alone, whose float32 rounding training can amplify: `fit_stacked`); failed = the refit "
+                  "failed, the record kept.", "", "| model | refitted | reproduced | replaced | failed | largest relative difference |",
                   "|---|---|---|---|---|---|"]
         for model, c in check["models"].items():
             largest = "—" if c["largest"] is None else f"{c['largest']:.1e}"

@@ -39,7 +39,9 @@ def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence
 
     Each member keeps its own seed, data, loss, Adam state and schedule, so each estimator ends fitted as its own
     ``fit`` would leave it (``net_``, its history, scales and tare), up to float32 rounding, for far less than ``K``
-    fits (``benchmarks/network_speed.py``).
+    fits (``benchmarks/network_speed.py``). The rounding of a stacked step differs from a lone one's, and training
+    can amplify it (a plateau or a stop decided one epoch apart): usually the two fits agree to 1e-7, but a
+    comparative network on 100 rows of the soft-sensor preset ended 5 % apart (``benchmarks/RESULTS.md``).
 
     Parameters
     ----------
