@@ -13,18 +13,21 @@ Artificial presets (``reconstructed``, ``asymmetric``): the size is (spheres, po
 are the outermost of the thesis' four (``n_spheres`` of :func:`ftcal.make_artificial_dataset`), points the
 first ``p`` of each sphere (the points of a sphere are independent draws, so that is a random subset).
 The virtual robot (``robot_poses``, ``robot_configs``): the thesis' KUKA iiwa experiment (7 load
-configurations x 155 poses, Pinocchio FK, 2 kg load, sensor errors of the ``reconstructed`` preset); configurations 5 and 6 are the test set, the size is
-(configurations, poses per configuration) out of configurations 0-4.
+configurations x 155 poses, Pinocchio FK, 2 kg load, sensor errors of the ``reconstructed`` preset);
+configurations 5 and 6 are the test set, the size is (configurations, poses per configuration) out of
+configurations 0-4.
 
 Every fit is cached as one JSON file under ``OUT/cache`` as soon as it ends (keyed by a hash of its
-configuration, and holding a fingerprint of its training and test data, :func:`ftcal.core.data_fingerprint`:
-a record whose data the current code no longer makes is fitted again), so the same command resumes;
-``--aggregate-only`` writes the tables and plots from whatever is cached. ``--verify K`` fits again, with the
-current code, the K cached records of each model with the fewest training rows and reports whether they
-reproduce (a record that does not is replaced by the new fit): the cache spans sessions and code versions. Work is ordered so that the most informative results come first: the first seed of
-every dataset and size with the closed-form models, then the networks, then further seeds, the kernel
-models, the ensembles, and last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset, seed and model (all sizes) train
-together as one stacked module (:func:`ftcal.fit_stacked`).
+configuration, and holding a fingerprint of its training and test data,
+:func:`ftcal.core.data_fingerprint`: a record whose data the current code no longer makes is fitted again),
+so the same command resumes; ``--aggregate-only`` writes the tables and plots from whatever is cached.
+A fingerprint cannot tell older model code on the same data: ``--verify K`` fits again, with the current code,
+the K cached records of each model and dataset with the fewest training rows and reports whether they
+reproduce (a record that does not is replaced by the new fit), as the cache spans sessions and code versions.
+Work is ordered so that the most informative results come first: the first seed of every dataset and size
+with the closed-form models, then the networks, then further seeds, the kernel models, the ensembles, and
+last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset,
+seed and model (all sizes) train together as one stacked module (:func:`ftcal.fit_stacked`).
 
 Outputs in ``OUT``: ``learning_curves.md``, ``learning_curves.json``, ``learning_curves_<dataset>.png``.
 
@@ -238,15 +241,16 @@ def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = N
     return rec
 
 
-def load_cached(cache: Path, tasks: list[dict]) -> tuple[list[dict], list[dict]]:
-    """The cached records of ``tasks`` that hold their fit's current data, and the tasks still to fit.
+def load_cached(cache: Path, tasks: list[dict]) -> tuple[list[dict], list[dict], int]:
+    """The cached records of ``tasks`` that hold their fit's current data, the tasks still to fit, and how many of
+    those have a record of other data.
 
     A record is used only if it is complete (:func:`_complete`) and its data fingerprint (``data``) is that of
     the rows the current code makes for its dataset, seed and size; a record from other data (an older
     simulator or robot model, another package version) or without a fingerprint is fitted again.
     """
     pools: dict[tuple, Pool] = {}
-    records, pending = [], []
+    records, pending, stale = [], [], 0
     for t in tasks:
         rec = read_json_record(_cache_path(cache, t), numbers=("n_train",), hash=t["hash"],
                                dataset=t["dataset"], size=t["size"], seed=t["seed"], model=t["model"])
@@ -257,39 +261,55 @@ def load_cached(cache: Path, tasks: list[dict]) -> tuple[list[dict], list[dict]]
             if rec.get("data") == data_key(pools[key], pools[key].select(tuple(t["size"]))):
                 records.append(rec)
                 continue
+            stale += 1
         pending.append(t)
-    return records, pending
+    return records, pending, stale
 
 
 #: Relative RMSE difference up to which a refit reproduces a cached record (rounding, BLAS summation order).
 REPRODUCED = 1e-4
 
 
-def verify(records: list[dict], tasks: list[dict], per_model: int, n_jobs: int, save) -> tuple[list[dict], dict]:
-    """Fit again, with the current code, the ``per_model`` cached records of each model with the fewest training
-    rows (then dataset, size and seed order); a record whose RMSE the refit does not reproduce (within
-    :data:`REPRODUCED`, relative) is replaced by the refit, and one whose refit fails is kept and counted.
-    Networks are refitted alone, also those cached from a stacked fit (:func:`ftcal.fit_stacked`: the same fit
-    up to float32 rounding, which training can amplify).
-    Returns the records and, per model, the counts and the largest relative difference (None: none compared)."""
+def verify(records: list[dict], tasks: list[dict], per_group: int, n_jobs: int, stack: int,
+           save) -> tuple[list[dict], dict]:
+    """Fit again, with the current code, the ``per_group`` cached records of each model and dataset with the fewest
+    training rows (then size and seed order), failed fits included.
+
+    A record whose RMSE the refit does not reproduce (within :data:`REPRODUCED`, relative), or a failure whose
+    refit succeeds, is replaced by the refit; a success whose refit fails (or gives no finite RMSE) is kept and
+    counted as failed. A network is refitted in the unit the run fits it in (:func:`_units`: the sizes of its
+    dataset, seed and model stacked, ``stack`` at a time), as :func:`ftcal.fit_stacked` rounds a stacked step
+    otherwise than a lone one and training can amplify that. Returns the records and, per model, the counts
+    and the largest relative difference (None: none compared).
+    """
     from joblib import Parallel, delayed
 
     order = {t["hash"]: i for i, t in enumerate(tasks)}
     chosen = []
-    for model in dict.fromkeys(r["model"] for r in records):
-        mine = sorted((r for r in records if r["model"] == model and r["error"] is None),
+    for group in dict.fromkeys((r["model"], r["dataset"]) for r in records):
+        mine = sorted((r for r in records if (r["model"], r["dataset"]) == group),
                       key=lambda r: (r["n_train"], order[r["hash"]]))
-        chosen += mine[:per_model]
-    by_hash = {t["hash"]: t for t in tasks}
-    refits = Parallel(n_jobs=n_jobs)(delayed(run_unit)([by_hash[r["hash"]]]) for r in chosen)
+        chosen += mine[:per_group]
+    wanted = {r["hash"] for r in chosen}
+    units = [u for u in _units(tasks, stack) if any(t["hash"] in wanted for t in u)]
+    refit = {rec["hash"]: rec for recs in Parallel(n_jobs=n_jobs)(delayed(run_unit)(u) for u in units) for rec in recs}
     report: dict = {}
     replaced = {}
-    for old, (new,) in zip(chosen, refits):
+    for old in chosen:
+        new = refit[old["hash"]]
         entry = report.setdefault(old["model"], {"verified": 0, "reproduced": 0, "replaced": 0, "failed": 0,
                                                  "largest": None})
         entry["verified"] += 1
         where = f"{old['dataset']} {tuple(old['size'])} seed {old['seed']} {old['model']}"
-        if new["error"] is not None:
+        ok_new = new["error"] is None and is_finite_number(new["rmse"])
+        if old["error"] is not None:  # a failure: reproduced if it fails again, replaced if it now fits
+            entry["reproduced" if not ok_new else "replaced"] += 1
+            if ok_new:
+                save(new)
+                replaced[old["hash"]] = new
+            print(f"verify {where}: cached failure, refit {'fitted' if ok_new else 'failed again'}", flush=True)
+            continue
+        if not ok_new:
             entry["failed"] += 1
             print(f"verify {where}: cached {old['rmse']:.6g}, refit failed ({new['error']}): kept", flush=True)
             continue
@@ -431,11 +451,12 @@ def markdown(summary: dict, meta: dict, models) -> str:
         lines.append("")
     check = meta.get("verification")
     if check:  # read_verification's checks: counts are integers, the largest difference a finite number or None
-        lines += [f"Verification (`--verify {check['per_model']:g}`): the cached records of each model with the fewest "
-                  f"training rows refitted with the current code; reproduced = RMSE within {check['tolerance']:g} "
-                  "(relative); replaced = not reproduced, the refit kept instead (a network cached from a stacked fit is "
-                  "refitted alone, whose float32 rounding training can amplify: `fit_stacked`); failed = the refit "
-                  "failed, the record kept.", "", "| model | refitted | reproduced | replaced | failed | largest relative difference |",
+        lines += [f"Verification (`--verify {check['per_model']:g}`): the cached records of each model and dataset with "
+                  f"the fewest training rows refitted with the current code; reproduced = RMSE within "
+                  f"{check['tolerance']:g} (relative), or a failure that fails again; replaced = not reproduced (or a "
+                  "failure that now fits), the refit kept instead; failed = the refit failed, the record kept. "
+                  "Networks are refitted in the stacks the run fits them in.", "",
+                  "| model | refitted | reproduced | replaced | failed | largest relative difference |",
                   "|---|---|---|---|---|---|"]
         for model, c in check["models"].items():
             largest = "—" if c["largest"] is None else f"{c['largest']:.1e}"
@@ -492,7 +513,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default=str(DEFAULT_OUT))
     p.add_argument("--aggregate-only", action="store_true")
     p.add_argument("--verify", type=int_at_least(0), default=0, metavar="K",
-                   help="fit again the K cached records of each model with the fewest rows; replace those that differ")
+                   help="fit again the K cached records of each model and dataset with the fewest rows; replace "
+                        "those that differ")
     p.add_argument("--force", action="store_true", help="replace output files this script did not write")
     return p
 
@@ -517,7 +539,11 @@ def main(argv: list[str] | None = None) -> int:
     tasks = make_tasks(args.datasets, models, seeds, args.schedule)
     if args.quick:
         tasks = [t for t in tasks if t["size"][-1] <= 25 or t["size"] == [5, 5]]
-    records, pending = load_cached(cache, tasks)
+    records, pending, stale = load_cached(cache, tasks)
+    if stale:
+        print(f"{stale} cached records are of other data than the current code makes: not used"
+              + (" (run without --aggregate-only to fit them again)" if args.aggregate_only else ", fitted again"),
+              flush=True)
     start = time.perf_counter()
 
     def write(path: Path, obj) -> None:
@@ -537,7 +563,7 @@ def main(argv: list[str] | None = None) -> int:
              "quick": args.quick}
     verification = read_verification(verification_file, scope)
     if args.verify:
-        records, checked = verify(records, tasks, args.verify, args.jobs, save)
+        records, checked = verify(records, tasks, args.verify, args.jobs, args.stack, save)
         if checked:  # nothing cached to verify: the last report stays
             verification = {"per_model": args.verify, "tolerance": REPRODUCED, "scope": scope, "models": checked}
             write(verification_file, verification)

@@ -7,6 +7,7 @@ import importlib.util
 import json
 import math
 import os
+import re
 from pathlib import Path
 
 import joblib
@@ -172,10 +173,35 @@ def test_a_tampered_record_is_recomputed_not_hidden_from_the_table(tmp_path, cha
     assert again["meta"]["n_computed"] == 1 and again["results"][0]["rmse"] == first["results"][0]["rmse"]
 
 
+@pytest.mark.parametrize("bad, words", [
+    ([1 + 2j], "of dtype complex128"), (np.array(["1.5"]), "of dtype <U3"), ([None, 1.0], "of dtype object"),
+    (np.ma.array([1.0, 2.0], mask=[True, False]), "a masked array"), ([[1.0, 2.0], [3.0]], "not a rectangular array"),
+])
+def test_data_fingerprint_refuses_what_is_not_an_array_of_real_numbers(bad, words):
+    from ftcal.core import data_fingerprint
+
+    with pytest.raises(CalibrationInputError, match=f"data_fingerprint: argument 1 is {re.escape(words)}"):
+        data_fingerprint(np.zeros(3), bad)
+
+
+def test_data_fingerprint_tells_values_shapes_and_order_apart():
+    from ftcal.core import data_fingerprint
+
+    a = np.arange(12.0).reshape(3, 4)
+    same = [data_fingerprint(a), data_fingerprint(a.copy(order="F")), data_fingerprint(a.astype(np.float32)),
+            data_fingerprint(a.astype(int))]  # the values as float64: layout and dtype do not count
+    other = [data_fingerprint(a.reshape(4, 3)), data_fingerprint(a.T), data_fingerprint(np.nextafter(a, 99)),
+             data_fingerprint(a[:2], a[2:]), data_fingerprint(a[:1], a[1:]), data_fingerprint(a, [])]
+    assert len(set(same)) == 1 and len({same[0], *other}) == 1 + len(other)
+
+
 def test_sensor_maker_aggregates_only_predictions_of_the_current_data_and_never_fits_then(tmp_path, capsys):
     sm = _script("sensor_maker")
     argv = ["--presets", "thesis", "--datasets", "1", "--models", "linear", "--out", str(tmp_path)]
     assert sm.main(argv) == 0
+    assert "fitted" in capsys.readouterr().out
+    assert sm.main([*argv, "--aggregate-only", "--force"]) == 0  # its own cached prediction: used, nothing fitted
+    assert "fitted" not in capsys.readouterr().out
     cached, = (tmp_path / "cache").glob("*.npz")
     cached.rename(cached.with_name("thesis_ds000_linear_0123456789ab.npz"))  # another key: other data, older code
     capsys.readouterr()
@@ -325,35 +351,44 @@ def test_learning_curves_of_the_soft_sensor_hold_out_whole_presses():
     assert len(small) == 25 and len(large) == 300 and set(small) <= set(large)
 
 
-def test_learning_curve_records_of_other_data_or_code_are_fitted_again(tmp_path, capsys):
-    """A cached fit is used only for the data the current code makes (its fingerprint), and ``--verify`` refits
-    cached records and replaces one the current code does not reproduce."""
-    import json
-
+def _learning_curve_cache(tmp_path):
+    """A quick learning-curve run of the LTM on `reconstructed` (8 sizes): its module, argv, cache files, records."""
     lc = _script("learning_curves")
     argv = ["--quick", "--datasets", "reconstructed", "--models", "linear", "--out", str(tmp_path)]
     assert lc.main(argv) == 0
     paths = sorted((tmp_path / "cache" / "reconstructed").glob("*.json"))
-    records = [json.loads(p.read_text()) for p in paths]
+    return lc, argv, paths, [json.loads(p.read_text()) for p in paths]
+
+
+def test_learning_curve_records_of_other_data_are_fitted_again(tmp_path, capsys):
+    """A cached fit is used only for the data the current code makes (its fingerprint)."""
+    lc, argv, paths, records = _learning_curve_cache(tmp_path)
     assert len(records) == 8 and all(len(r["data"]) == 16 for r in records)
-    # another simulator's data: the record's fingerprint differs, so it is a miss and fitted again
-    moved = dict(records[0], data="0" * 16, rmse=1.0)
-    paths[0].write_text(json.dumps(moved))
+    paths[0].write_text(json.dumps(dict(records[0], data="0" * 16, rmse=1.0)))  # another simulator's data
     capsys.readouterr()
+    assert lc.main([*argv, "--aggregate-only"]) == 0  # not used, and said so
+    out = capsys.readouterr().out
+    assert "1 cached records are of other data" in out and "7/8 fits complete" in out
     assert lc.main(argv) == 0
     out = capsys.readouterr().out
     assert out.count("] reconstructed (") == 1 and "[8/8]" in out  # one fit ran, the other seven came from the cache
     refit = json.loads(paths[0].read_text())
     assert refit["data"] == records[0]["data"] and refit["rmse"] == pytest.approx(records[0]["rmse"], rel=1e-9)
-    # same data, other code (a figure the current code does not reproduce): --verify refits and replaces it
-    stale = dict(records[1], rmse=records[1]["rmse"] * 1.01)
-    paths[1].write_text(json.dumps(stale))
+    paths[2].write_text(json.dumps(dict(records[2], rmse=0)))  # not a figure this script writes: fitted again
+    assert lc.main(argv) == 0 and json.loads(paths[2].read_text())["rmse"] == pytest.approx(records[2]["rmse"])
+
+
+def test_learning_curves_verify_replaces_what_the_current_code_does_not_reproduce(tmp_path, capsys, monkeypatch):
+    lc, argv, paths, records = _learning_curve_cache(tmp_path)
+    # same data, other code (a figure the current code does not reproduce); a failure the current code fits
+    paths[1].write_text(json.dumps(dict(records[1], rmse=records[1]["rmse"] * 1.01)))
+    paths[3].write_text(json.dumps(dict(records[3], rmse=float("nan"), error="LinAlgError: simulated")))
     assert lc.main([*argv, "--verify", "8"]) == 0
-    assert json.loads(paths[1].read_text())["rmse"] == pytest.approx(records[1]["rmse"], rel=1e-9)
-    table = (tmp_path / "learning_curves.md").read_text()
-    assert "| linear | 8 | 7 | 1 | 0 | 9.9e-03 |" in table
+    for k in (1, 3):
+        assert json.loads(paths[k].read_text())["rmse"] == pytest.approx(records[k]["rmse"], rel=1e-9)
+    assert "| linear | 8 | 6 | 2 | 0 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
     assert lc.main(argv) == 0  # a run without --verify keeps the last verification's report
-    assert "| linear | 8 | 7 | 1 | 0 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
+    assert "| linear | 8 | 6 | 2 | 0 | 9.9e-03 |" in (tmp_path / "learning_curves.md").read_text()
     report = tmp_path / "cache" / "verification.json"
     kept = json.loads(report.read_text())
     for edited in ({**kept, "models": {"linear": "x"}}, {**kept, "models": {"linear": {}}}, {**kept, "tolerance": "a"},
@@ -361,11 +396,16 @@ def test_learning_curve_records_of_other_data_or_code_are_fitted_again(tmp_path,
                    {**kept, "models": {"a | b": kept["models"]["linear"]}}, {**kept, "scope": {}}):
         report.write_text(json.dumps(edited))  # an edited or another run's report is not shown, never a traceback
         assert lc.main(argv) == 0 and "Verification" not in (tmp_path / "learning_curves.md").read_text()
-    paths[2].write_text(json.dumps(dict(records[2], rmse=0)))  # not a figure this script writes: fitted again
-    assert lc.main(argv) == 0 and json.loads(paths[2].read_text())["rmse"] == pytest.approx(records[2]["rmse"])
+    # a refit that fails, or gives no finite RMSE: the cached record is kept and the refit counted as failed
+    real = lc.run_unit
+    monkeypatch.setattr(lc, "run_unit", lambda unit: [dict(r, rmse=float("nan")) for r in real(unit)])
+    assert lc.main([*argv, "--verify", "2"]) == 0
+    assert "| linear | 2 | 0 | 0 | 2 | — |" in (tmp_path / "learning_curves.md").read_text()
+    assert [json.loads(p.read_text())["rmse"] for p in paths[:2]] == pytest.approx([r["rmse"] for r in records[:2]])
     with pytest.raises(SystemExit) as stop:
         lc.main([*argv, "--verify", "1", "--aggregate-only"])
     assert stop.value.code == 2 and "choose one" in capsys.readouterr().err
+
 
 @pytest.mark.parametrize("script, name, argv", [
     ("crossover", "crossover.md", ["--quick", "--models", "linear"]),

@@ -246,7 +246,11 @@ def data_fingerprint(*arrays) -> str:
     digest = hashlib.sha256()
     for k, array in enumerate(arrays):
         masked = isinstance(array, np.ma.MaskedArray)
-        values = np.asarray(array)
+        try:
+            values = np.asarray(array)
+        except ValueError:  # a ragged nest of lists
+            raise CalibrationInputError(f"data_fingerprint: argument {k} is not a rectangular array (rows of "
+                                        "different lengths); give arrays of real numbers.") from None
         if masked or values.dtype.kind not in "biuf":
             what = "a masked array (fill it first, e.g. a.filled(np.nan))" if masked else f"of dtype {values.dtype}"
             raise CalibrationInputError(f"data_fingerprint: argument {k} is {what}; give arrays of real numbers.")

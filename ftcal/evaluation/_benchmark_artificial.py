@@ -14,7 +14,10 @@ result already there, so a long run can be spread over many sessions (or
 killed and restarted); results of another configuration (schedule, seed,
 sizes, preset definition) have another hash and are never mixed in, and a
 result holds a fingerprint of its data (:func:`~ftcal.core.data_fingerprint`),
-so one computed on data the current code no longer makes is fitted again. The
+so one computed on data the current code no longer makes is fitted again
+(results written before fingerprints: when their sampled sensor errors or
+noise floor differ; a change of the raw readings that leaves both alone goes
+unseen in those). The
 summary is built from whatever is complete and reports the counts.
 
 Outputs (in ``out_dir``)
@@ -438,8 +441,8 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
 
     None when the file is missing, half-written, of another configuration, not a record this benchmark wrote
     (every figure it writes is a finite number), or of other data than the current code makes for the task: its
-    fingerprint (``data``; records written before fingerprints have none) or its noise floor (a figure of the
-    data's noise) differs. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
+    fingerprint (``data``; records written before fingerprints have none), its sampled sensor errors
+    (``errors``) or its noise floor (a figure of the test set's noise) differs. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
     """
     record = read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
                               config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
@@ -449,9 +452,9 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
                      sort_keys=True) + f"#{task['dataset']}"
     if key not in datasets:
         data, profile = _dataset(task)
-        datasets[key] = (_data_key(data, profile), data[2]["noise_floor"])
-    fingerprint, floor = datasets[key]
-    same = record.get("data", fingerprint) == fingerprint and \
+        datasets[key] = (_data_key(data, profile), data[2]["noise_floor"], json.loads(json.dumps(data[2]["errors"])))
+    fingerprint, floor, errors = datasets[key]
+    same = record.get("data", fingerprint) == fingerprint and record.get("errors") == errors and \
         abs(record["noise_floor"] - floor) <= 1e-12 * max(abs(floor), 1e-300)
     return record if same else None
 
