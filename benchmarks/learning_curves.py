@@ -55,7 +55,7 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
-from ftcal.core import atomic_output, data_fingerprint, is_finite_number, read_json_record
+from ftcal.core import atomic_output, data_fingerprint, is_finite_number, package_versions, read_json_record
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
@@ -229,7 +229,7 @@ def data_key(pool: Pool, rows) -> str:
 def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = None) -> dict:
     rec = {k: task[k] for k in ("dataset", "size", "seed", "model", "schedule", "hash")}
     rec.update(n_train=int(len(rows)), fit_seconds=seconds, noise_floor=pool.noise_floor, error=error,
-               data=data_key(pool, rows))
+               data=data_key(pool, rows), versions=package_versions())
     if error is None:
         pred = model.predict(pool.X_test)
         rec["rmse"] = wrench_rmse(pool.y_test, pred, pool.alpha)
@@ -424,10 +424,19 @@ def summarise(records: list[dict], factories, models) -> dict:
     return out
 
 
+def environments(records: list[dict]) -> dict:
+    """How many records hold the package versions they were fitted with, and how many distinct sets of them."""
+    kept = [json.dumps(r["versions"], sort_keys=True) for r in records if isinstance(r.get("versions"), dict)]
+    return {"recorded": len(kept), "distinct": len(set(kept))}
+
+
 def markdown(summary: dict, meta: dict, models) -> str:
+    env = meta.get("environments") or {"recorded": 0, "distinct": 0}
     lines = [f"Learning curves: schedule `{meta['schedule']}`, seeds {meta['seeds']}; "
              f"{meta['n_complete']}/{meta['n_expected']} fits complete. RMSE eq. 18 [N] on the fixed test set, "
-             "mean ± std over seeds (n = seeds done); **bold** = best mean; `x` = fit failed.", ""]
+             "mean ± std over seeds (n = seeds done); **bold** = best mean; `x` = fit failed. Package versions "
+             f"recorded with {env['recorded']} of the {meta['n_complete']} records ({env['distinct']} distinct sets; "
+             "the other records predate the recording).", ""]
     for name, rows in summary.items():
         present = [m for m in models if any(r["models"][m]["n"] or r["models"][m]["failed"] for r in rows)]
         if not present:
@@ -578,7 +587,8 @@ def main(argv: list[str] | None = None) -> int:
                   flush=True)
     summary = summarise(records, args.datasets, models)
     meta = {"schedule": args.schedule, "seeds": seeds, "models": models, "datasets": args.datasets,
-            "n_expected": len(tasks), "n_complete": len(records), "quick": args.quick, "verification": verification}
+            "n_expected": len(tasks), "n_complete": len(records), "quick": args.quick, "verification": verification,
+            "environments": environments(records)}
     text = markdown(summary, meta, models)
     files.write_text("learning_curves.md", text)
     files.write_text("learning_curves.json", json.dumps({"meta": meta, "summary": summary, "records": records}))

@@ -13,6 +13,7 @@ from pathlib import Path
 import joblib
 import numpy as np
 import pytest
+import sklearn
 
 from ftcal import BenchmarkOutputExistsError, CalibrationInputError, ErrorModel, run_artificial_benchmark
 from ftcal.evaluation import OutputFiles
@@ -216,7 +217,7 @@ def test_a_record_of_other_data_is_recomputed_and_one_from_before_fingerprints_i
     first = run_artificial_benchmark(n_datasets=1, models="linear", quick=True, plot=False, out_dir=tmp_path)
     cached = next((tmp_path / "cache").rglob("*.json"))
     record = json.loads(cached.read_text())
-    assert len(record["data"]) == 16
+    assert len(record["data"]) == 16 and record["versions"]["scikit-learn"] == sklearn.__version__
     legacy = {k: v for k, v in record.items() if k != "data"}
     for stale, computed in ((dict(record, data="f" * 16), 1), (legacy, 0), (dict(record, noise_floor=0.0), 1),
                             (dict(legacy, noise_floor=record["noise_floor"] * (1 + 1e-9)), 1)):
@@ -364,6 +365,9 @@ def test_learning_curve_records_of_other_data_are_fitted_again(tmp_path, capsys)
     """A cached fit is used only for the data the current code makes (its fingerprint)."""
     lc, argv, paths, records = _learning_curve_cache(tmp_path)
     assert len(records) == 8 and all(len(r["data"]) == 16 for r in records)
+    assert all(r["versions"]["numpy"] == np.__version__ and r["versions"]["ftcal"] for r in records)
+    assert "Package versions recorded with 8 of the 8 records (1 distinct sets" in \
+        (tmp_path / "learning_curves.md").read_text()
     paths[0].write_text(json.dumps(dict(records[0], data="0" * 16, rmse=1.0)))  # another simulator's data
     capsys.readouterr()
     assert lc.main([*argv, "--aggregate-only"]) == 0  # not used, and said so

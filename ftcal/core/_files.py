@@ -257,3 +257,30 @@ def data_fingerprint(*arrays) -> str:
         digest.update(repr(values.shape).encode())
         digest.update(np.ascontiguousarray(values, dtype=np.float64).data)  # no copy of a C-ordered float64 array
     return digest.hexdigest()[:16]
+
+
+#: Distributions whose versions :func:`package_versions` records (what a benchmark's figures depend on).
+RECORDED_PACKAGES = ("ftcal", "numpy", "scipy", "scikit-learn", "torch", "skorch", "pin", "example-robot-data")
+
+
+def package_versions(names: tuple[str, ...] = RECORDED_PACKAGES) -> dict[str, str | None]:
+    """The installed version of each distribution in ``names`` (None when not installed), without importing it.
+
+    A benchmark stores them with each cached result, so a table built over sessions can say how many package
+    environments its results come from.
+
+    Examples
+    --------
+    >>> versions = package_versions(("numpy", "no-such-distribution"))
+    >>> isinstance(versions["numpy"], str), versions["no-such-distribution"]
+    (True, None)
+    """
+    from importlib.metadata import PackageNotFoundError, version
+
+    found: dict[str, str | None] = {}
+    for name in names:
+        try:
+            found[name] = version(name)
+        except PackageNotFoundError:
+            found[name] = None
+    return found

@@ -58,7 +58,7 @@ from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.utils._param_validation import Interval
 
 from ..simulation._artificial import make_artificial_dataset
-from ..core._files import atomic_output, data_fingerprint, plain_json, read_json_record
+from ..core._files import atomic_output, data_fingerprint, package_versions, plain_json, read_json_record
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
@@ -254,6 +254,7 @@ def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int =
         "epochs": None if history is None else len(history),
         "stop_reason": None if not history else history[-1].get("stop_reason"),
         "member_rmse": member_rmse,
+        "versions": package_versions(),
     }
 
 
