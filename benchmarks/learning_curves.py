@@ -22,8 +22,9 @@ configuration, and holding a fingerprint of its training and test data,
 :func:`ftcal.core.data_fingerprint`: a record whose data the current code no longer makes is fitted again),
 so the same command resumes; ``--aggregate-only`` writes the tables and plots from whatever is cached.
 A fingerprint cannot tell older model code on the same data: ``--verify K`` fits again, with the current code,
-the K cached records of each model and dataset with the fewest training rows and reports whether they
-reproduce (a record that does not is replaced by the new fit), as the cache spans sessions and code versions.
+the K cached records of each model and dataset with the fewest training rows (networks in the stack they
+were trained in) and reports whether they reproduce (a record that does not is replaced by the new fit), as
+the cache spans sessions and code versions.
 Work is ordered so that the most informative results come first: the first seed of every dataset and size
 with the closed-form models, then the networks, then further seeds, the kernel models, the ensembles, and
 last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset,
@@ -55,7 +56,8 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
-from ftcal.core import atomic_output, data_fingerprint, is_finite_number, package_versions, read_json_record
+from ftcal.core import (atomic_output, data_fingerprint, is_finite_number, package_versions, plain_json,
+                        read_json_record)
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
@@ -237,7 +239,7 @@ def _record(task, model, pool: Pool, rows, seconds: float, error: str | None = N
         choice = getattr(model, "best_name_", None) or getattr(model, "chosen_", None)
         rec["auto_choice"] = None if choice is None else str(choice)
     else:
-        rec["rmse"] = float("nan")
+        rec["rmse"] = None
     return rec
 
 
@@ -271,28 +273,41 @@ REPRODUCED = 1e-4
 
 
 def verify(records: list[dict], tasks: list[dict], per_group: int, n_jobs: int, stack: int,
-           save) -> tuple[list[dict], dict]:
+           save) -> tuple[list[dict], dict, list[dict]]:
     """Fit again, with the current code, the ``per_group`` cached records of each model and dataset with the fewest
     training rows (then size and seed order), failed fits included.
 
     A record whose RMSE the refit does not reproduce (within :data:`REPRODUCED`, relative), or a failure whose
     refit succeeds, is replaced by the refit; a success whose refit fails (or gives no finite RMSE) is kept and
-    counted as failed. A network is refitted in the unit the run fits it in (:func:`_units`: the sizes of its
-    dataset, seed and model stacked, ``stack`` at a time), as :func:`ftcal.fit_stacked` rounds a stacked step
-    otherwise than a lone one and training can amplify that. Returns the records and, per model, the counts
-    and the largest relative difference (None: none compared).
+    counted as failed. A network is refitted in the stack it was trained in (``stacked_with``; records written
+    before stacks were recorded: the stack :func:`_units` makes of the whole grid), as :func:`ftcal.fit_stacked`
+    rounds a stacked step otherwise than a lone one and training can amplify that. The other members of such a
+    stack are fitted too: those not cached yet are returned as new records (and saved), the others left alone.
+    Returns the records, per model the counts and the largest relative difference (None: none compared), and
+    the new records.
     """
     from joblib import Parallel, delayed
 
     order = {t["hash"]: i for i, t in enumerate(tasks)}
+    by_hash = {t["hash"]: t for t in tasks}
     chosen = []
     for group in dict.fromkeys((r["model"], r["dataset"]) for r in records):
         mine = sorted((r for r in records if (r["model"], r["dataset"]) == group),
                       key=lambda r: (r["n_train"], order[r["hash"]]))
         chosen += mine[:per_group]
-    wanted = {r["hash"] for r in chosen}
-    units = [u for u in _units(tasks, stack) if any(t["hash"] in wanted for t in u)]
-    refit = {rec["hash"]: rec for recs in Parallel(n_jobs=n_jobs)(delayed(run_unit)(u) for u in units) for rec in recs}
+    grid = {t["hash"]: tuple(u_t["hash"] for u_t in u) for u in _units(tasks, stack) for t in u}
+    units = {}
+    for r in chosen:
+        stored = r.get("stacked_with")
+        unit = tuple(stored) if isinstance(stored, list) and r["hash"] in stored and \
+            all(isinstance(h, str) and h in by_hash for h in stored) else grid[r["hash"]]
+        units[unit] = None
+    refit = {rec["hash"]: rec for recs in Parallel(n_jobs=n_jobs)(
+        delayed(run_unit)([by_hash[h] for h in unit]) for unit in units) for rec in recs}
+    cached = {r["hash"] for r in records}
+    new_records = [rec for h, rec in refit.items() if h not in cached and _complete(rec)]
+    for rec in new_records:
+        save(rec)
     report: dict = {}
     replaced = {}
     for old in chosen:
@@ -311,7 +326,8 @@ def verify(records: list[dict], tasks: list[dict], per_group: int, n_jobs: int, 
             continue
         if not ok_new:
             entry["failed"] += 1
-            print(f"verify {where}: cached {old['rmse']:.6g}, refit failed ({new['error']}): kept", flush=True)
+            why = new["error"] or f"RMSE {new['rmse']}"
+            print(f"verify {where}: cached {old['rmse']:.6g}, refit failed ({why}): kept", flush=True)
             continue
         diff = abs(new["rmse"] - old["rmse"]) / old["rmse"]  # a cached RMSE is > 0 (_complete)
         entry["largest"] = max(entry["largest"] or 0.0, diff)
@@ -322,7 +338,7 @@ def verify(records: list[dict], tasks: list[dict], per_group: int, n_jobs: int, 
             save(new)
             replaced[old["hash"]] = new
         print(f"verify {where}: cached {old['rmse']:.6g}, refit {new['rmse']:.6g} ({diff:.1e})", flush=True)
-    return [replaced.get(r["hash"], r) for r in records], report
+    return [replaced.get(r["hash"], r) for r in records], report, new_records
 
 
 def read_verification(path: Path, scope: dict) -> dict | None:
@@ -338,15 +354,22 @@ def read_verification(path: Path, scope: dict) -> dict | None:
                   for k in ("verified", "reproduced", "replaced", "failed")]
         largest = entry.get("largest") if isinstance(entry, dict) else None
         if not all(isinstance(c, int) and not isinstance(c, bool) and 0 <= c <= 10**6 for c in counts) or \
-                not (largest is None or is_finite_number(largest) and largest >= 0):
+                counts[0] != sum(counts[1:]) or not (largest is None or is_finite_number(largest) and largest >= 0):
             return None
+    if not (isinstance(report["per_model"], int) and report["per_model"] >= 1 and 0 < report["tolerance"] < 1):
+        return None
     return report
 
 
 def _complete(rec: dict) -> bool:
-    """Whether a cached record is one this script wrote: a finite positive RMSE, or a failure with its message."""
+    """Whether a cached record is one this script wrote: a finite positive RMSE, or a failure with its message and
+    no RMSE (None, or NaN in records written before failures had None); a noise floor that is a number or None."""
     scored = rec.get("error") is None and is_finite_number(rec.get("rmse")) and rec["rmse"] > 0
-    return (scored or isinstance(rec.get("error"), str)) and isinstance(rec.get("size"), list)
+    failed = isinstance(rec.get("error"), str) and not is_finite_number(rec.get("rmse")) and \
+        (rec.get("rmse") is None or isinstance(rec.get("rmse"), float))
+    floor = rec.get("noise_floor")
+    return (scored or failed) and isinstance(rec.get("size"), list) and \
+        (floor is None or is_finite_number(floor) and floor >= 0)
 
 
 def run_unit(unit: list[dict]) -> list[dict]:
@@ -380,7 +403,11 @@ def run_unit(unit: list[dict]) -> list[dict]:
         traceback.print_exc(limit=1)
         return [_record(prepared[0][0], None, pool, prepared[0][2], time.perf_counter() - start, error)]
     share = (time.perf_counter() - start) / len(unit)
-    return [_record(task, model, pool, rows, share) for task, model, rows in prepared]
+    records = [_record(task, model, pool, rows, share) for task, model, rows in prepared]
+    if len(unit) > 1:  # the stack it was trained in: --verify refits it in the same one (fit_stacked's rounding)
+        for rec in records:
+            rec["stacked_with"] = [task["hash"] for task in unit]
+    return records
 
 
 def _units(pending: list[dict], stack: int) -> list[list[dict]]:
@@ -411,7 +438,7 @@ def summarise(records: list[dict], factories, models) -> dict:
             cell["noise_floor"] = float(np.mean(floors)) if floors else None
             for m in models:
                 vals = [r["rmse"] for r in recs if r["model"] == m]
-                ok = [v for v in vals if np.isfinite(v)]
+                ok = [v for v in vals if is_finite_number(v)]
                 cell["models"][m] = {"mean": float(np.mean(ok)) if ok else None,
                                      "std": float(np.std(ok, ddof=1)) if len(ok) > 1 else 0.0 if ok else None,
                                      "n": len(ok), "failed": len(vals) - len(ok),
@@ -464,7 +491,8 @@ def markdown(summary: dict, meta: dict, models) -> str:
                   f"the fewest training rows refitted with the current code; reproduced = RMSE within "
                   f"{check['tolerance']:g} (relative), or a failure that fails again; replaced = not reproduced (or a "
                   "failure that now fits), the refit kept instead; failed = the refit failed, the record kept. "
-                  "Networks are refitted in the stacks the run fits them in.", "",
+                  "Networks are refitted in the stack they were trained in (recorded since session 8; older records: "
+                  "the stack a run of the whole grid makes).", "",
                   "| model | refitted | reproduced | replaced | failed | largest relative difference |",
                   "|---|---|---|---|---|---|"]
         for model, c in check["models"].items():
@@ -559,7 +587,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
             with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
-                tmp.write_text(json.dumps(obj), encoding="utf-8")
+                tmp.write_text(json.dumps(plain_json(obj)), encoding="utf-8")
         except (OSError, FileExistsError) as exc:
             parser.error(f"cannot write the cache file {path}: {getattr(exc, 'strerror', None) or exc}")
 
@@ -572,7 +600,10 @@ def main(argv: list[str] | None = None) -> int:
              "quick": args.quick}
     verification = read_verification(verification_file, scope)
     if args.verify:
-        records, checked = verify(records, tasks, args.verify, args.jobs, args.stack, save)
+        records, checked, fitted = verify(records, tasks, args.verify, args.jobs, args.stack, save)
+        records += fitted  # members of a verified stack that were not cached yet: fitted once, not again below
+        done = {r["hash"] for r in fitted}
+        pending = [t for t in pending if t["hash"] not in done]
         if checked:  # nothing cached to verify: the last report stays
             verification = {"per_model": args.verify, "tolerance": REPRODUCED, "scope": scope, "models": checked}
             write(verification_file, verification)
@@ -581,9 +612,10 @@ def main(argv: list[str] | None = None) -> int:
         for rec in itertools.chain.from_iterable(gen):
             save(rec)
             records.append(rec)
+            score = "FAILED" if rec["error"] else f"RMSE {rec['rmse']:.2f}"
             print(f"[{len(records)}/{len(tasks)}] {rec['dataset']} {tuple(rec['size'])} seed {rec['seed']} "
-                  f"{rec['model']}: RMSE {rec['rmse']:.2f} ({rec['n_train']} rows, {rec['fit_seconds']:.1f} s, "
-                  f"elapsed {time.perf_counter() - start:.0f} s)" + (f" FAILED {rec['error']}" if rec["error"] else ""),
+                  f"{rec['model']}: {score} ({rec['n_train']} rows, {rec['fit_seconds']:.1f} s, "
+                  f"elapsed {time.perf_counter() - start:.0f} s)" + (f" {rec['error']}" if rec["error"] else ""),
                   flush=True)
     summary = summarise(records, args.datasets, models)
     meta = {"schedule": args.schedule, "seeds": seeds, "models": models, "datasets": args.datasets,
@@ -591,7 +623,7 @@ def main(argv: list[str] | None = None) -> int:
             "environments": environments(records)}
     text = markdown(summary, meta, models)
     files.write_text("learning_curves.md", text)
-    files.write_text("learning_curves.json", json.dumps({"meta": meta, "summary": summary, "records": records}))
+    files.write_text("learning_curves.json", json.dumps(plain_json({"meta": meta, "summary": summary, "records": records})))
     for name, rows in summary.items():
         if any(r["models"][m]["n"] for r in rows for m in models):
             with files.write(f"learning_curves_{name}.png") as tmp:

@@ -411,6 +411,48 @@ def test_learning_curves_verify_replaces_what_the_current_code_does_not_reproduc
     assert stop.value.code == 2 and "choose one" in capsys.readouterr().err
 
 
+def test_learning_curves_verify_takes_records_per_dataset_and_failures_are_strict_json(tmp_path, capsys):
+    lc = _script("learning_curves")
+    argv = ["--quick", "--datasets", "reconstructed", "soft", "--models", "linear", "--out", str(tmp_path)]
+    assert lc.main([*argv, "--verify", "1"]) == 0  # nothing cached yet: nothing verified, no report
+    assert "Verification" not in (tmp_path / "learning_curves.md").read_text()
+    assert lc.main([*argv, "--verify", "1"]) == 0  # one record of each dataset
+    assert "| linear | 2 | 2 | 0 | 0 |" in (tmp_path / "learning_curves.md").read_text()
+    path = sorted((tmp_path / "cache" / "soft").glob("*.json"))[0]
+    path.write_text(json.dumps({**json.loads(path.read_text()), "rmse": None, "error": "LinAlgError: simulated"}))
+    capsys.readouterr()
+    assert lc.main([*argv, "--aggregate-only"]) == 0  # a failure is a result: shown as x, written as strict JSON
+    assert "1 cached records are of other data" not in capsys.readouterr().out
+    assert "| x |" in (tmp_path / "learning_curves.md").read_text()
+    strict = json.loads((tmp_path / "learning_curves.json").read_text(),
+                        parse_constant=lambda c: pytest.fail(f"{c} in learning_curves.json"))
+    assert any(r["error"] and r["rmse"] is None for r in strict["records"])
+
+
+def test_learning_curves_verify_refits_a_network_in_the_stack_it_was_trained_in(monkeypatch):
+    """Refits run in the stored stack (older records: the whole grid's stack); stack members not cached yet are
+    returned as new records, fitted once."""
+    lc = _script("learning_curves")
+    tasks = lc.make_tasks(["soft"], ["directional"], [0], "short")  # 5 sizes, one stack of 5 in a grid run
+    hashes = [t["hash"] for t in tasks]
+    calls = []
+
+    def fake_run_unit(unit):
+        calls.append([t["hash"] for t in unit])
+        return [{**t, "n_train": t["size"][0], "rmse": 1.0, "error": None, "noise_floor": None} for t in unit]
+
+    monkeypatch.setattr(lc, "run_unit", fake_run_unit)
+    cached = [{**t, "n_train": t["size"][0], "rmse": 1.0, "error": None, "noise_floor": None} for t in tasks[:3]]
+    cached[0]["stacked_with"] = hashes[:2]  # trained in a stack of the two smallest sizes
+    saved = []
+    _, report, new = lc.verify(cached, tasks, 1, 1, 10, saved.append)
+    assert calls == [hashes[:2]] and new == [] and report["directional"]["reproduced"] == 1
+    calls.clear()
+    del cached[0]["stacked_with"]  # written before stacks were recorded: the grid's stack, all 5 sizes
+    _, report, new = lc.verify(cached, tasks, 1, 1, 10, saved.append)
+    assert calls == [hashes] and sorted(r["hash"] for r in new) == sorted(hashes[3:]) and saved == new
+
+
 @pytest.mark.parametrize("script, name, argv", [
     ("crossover", "crossover.md", ["--quick", "--models", "linear"]),
     ("learning_curves", "learning_curves.json", ["--quick", "--models", "linear"]),

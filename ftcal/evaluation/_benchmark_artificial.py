@@ -443,7 +443,7 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
     None when the file is missing, half-written, of another configuration, not a record this benchmark wrote
     (every figure it writes is a finite number), or of other data than the current code makes for the task: its
     fingerprint (``data``; records written before fingerprints have none), its sampled sensor errors
-    (``errors``) or its noise floor (a figure of the test set's noise) differs. ``datasets`` keeps each ``(fingerprint, noise floor)`` computed, by dataset.
+    (``errors``) or its noise floor (a figure of the test set's noise) differs. ``datasets`` keeps each ``(fingerprint, noise floor, sensor errors)`` computed, by dataset.
     """
     record = read_json_record(path, numbers=("rmse", "rel_force_mean", "rel_torque_mean", "noise_floor"),
                               config=task["config"], dataset=task["dataset"], preset=task["preset"], model=task["model"])
