@@ -13,11 +13,11 @@ soon as that fit ends. A later call with the same configuration skips every
 result already there, so a long run can be spread over many sessions (or
 killed and restarted); results of another configuration (schedule, seed,
 sizes, preset definition) have another hash and are never mixed in, and a
-result holds a fingerprint of its data (:func:`~ftcal.core.data_fingerprint`),
-so one computed on data the current code no longer makes is fitted again
-(results written before fingerprints: when their sampled sensor errors or
-noise floor differ; a change of the raw readings that leaves both alone goes
-unseen in those). The
+result holds a fingerprint of its data (:func:`~ftcal.core.data_fingerprint`)
+and the package versions it was fitted with, so one computed on data the
+current code no longer makes is fitted again (results written before
+fingerprints: when their sampled sensor errors or noise floor differ; a
+change of the raw readings that leaves both alone goes unseen in those). The
 summary is built from whatever is complete and reports the counts.
 
 Outputs (in ``out_dir``)
