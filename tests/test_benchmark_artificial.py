@@ -552,6 +552,16 @@ def test_committed_result_manifests_match_their_files():
                 assert hashlib.sha256(path.read_bytes()).hexdigest() == digest, f"{path} differs from {manifest}"
 
 
+def test_committed_learning_curves_hold_only_records_with_their_data_fingerprint():
+    """The committed learning-curve table is built from records that carry the fingerprint of their data (a table
+    aggregated from records of older data, as session 7's was, shows here), with strict JSON."""
+    path = ROOT / "benchmarks" / "results" / "learning_curves" / "learning_curves.json"
+    results = json.loads(path.read_text(), parse_constant=lambda c: pytest.fail(f"{c} in {path}"))
+    records = results["records"]
+    assert len(records) == results["meta"]["n_complete"] > 2000
+    assert all(isinstance(r.get("data"), str) and re.fullmatch("[0-9a-f]{16}", r["data"]) for r in records)
+
+
 def _write_many(folder: str, prefix: str, count: int) -> None:
     files = OutputFiles(folder)
     for i in range(count):
