@@ -48,7 +48,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
-from ftcal.core import atomic_output, read_json_record
+from ftcal.core import read_json_record, write_json
 from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
 
 from _output import output_files, table_or_stop
@@ -122,8 +122,7 @@ def best_static_map(cache: Path | None, setup) -> dict:
     scores = {n: rmse(test_wrench, m.fit(known.raw, known.wrench).predict(test_raw), alpha) for n, m in models.items()}
     result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": known.n_samples, **info}
     if cache is not None:
-        with atomic_output(cache, overwrite=True, error=FileExistsError) as tmp:
-            tmp.write_text(json.dumps(result, indent=1), encoding="utf-8")
+        write_json(cache, result, indent=1)
     return result
 
 

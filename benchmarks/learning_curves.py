@@ -56,8 +56,8 @@ import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
 from ftcal.evaluation import make_model
-from ftcal.core import (atomic_output, data_fingerprint, is_finite_number, package_versions, plain_json,
-                        read_json_record)
+from ftcal.core import (data_fingerprint, is_finite_number, package_versions, plain_json, read_json_record,
+                        write_json)
 from ftcal.models import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
@@ -585,9 +585,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def write(path: Path, obj) -> None:
         try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
-                tmp.write_text(json.dumps(plain_json(obj)), encoding="utf-8")
+            write_json(path, obj, indent=None)
         except (OSError, FileExistsError) as exc:
             parser.error(f"cannot write the cache file {path}: {getattr(exc, 'strerror', None) or exc}")
 

@@ -48,7 +48,7 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
-from ftcal.core import atomic_output, read_json_record
+from ftcal.core import read_json_record, write_json
 from ftcal.models import default_candidates
 
 from _output import output_files, single_output
@@ -131,8 +131,7 @@ def cached(path: Path, compute) -> dict:
     if result is not None:
         return result
     result = compute()
-    with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
-        tmp.write_text(json.dumps(result, indent=1), encoding="utf-8")
+    write_json(path, result, indent=1)
     return result
 
 

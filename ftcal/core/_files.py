@@ -172,9 +172,27 @@ def plain_json(obj):
     return obj
 
 
-def write_json(path: str | os.PathLike, obj) -> None:
-    """Write ``obj`` as indented JSON (NaN and inf written as ``null``, see :func:`plain_json`)."""
-    Path(path).write_text(json.dumps(plain_json(obj), indent=2, sort_keys=False) + "\n", encoding="utf-8")
+def write_json(path: str | os.PathLike, obj, *, indent: int | None = 2) -> Path:
+    """Replace ``path`` with ``obj`` as strict JSON, atomically; create its folder. Return ``path``.
+
+    NaN and inf are written as ``null`` (see :func:`plain_json`). The text goes to a temporary file beside
+    ``path`` that is moved over it at the end (:func:`atomic_output`): a reader, or a run killed mid-write,
+    sees the old file or the new one, never half of one. The one JSON writer of ftcal's outputs and of the
+    benchmarks' per-fit caches.
+
+    Examples
+    --------
+    >>> import json, tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "new" / "fit.json"
+    >>> _ = write_json(path, {"rmse": float("nan"), "n": 3})
+    >>> json.loads(path.read_text())
+    {'rmse': None, 'n': 3}
+    """
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
+        tmp.write_text(json.dumps(plain_json(obj), indent=indent) + "\n", encoding="utf-8")
+    return path
 
 
 def is_finite_number(value) -> bool:

@@ -58,7 +58,7 @@ from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.utils._param_validation import Interval
 
 from ..simulation._artificial import make_artificial_dataset
-from ..core._files import atomic_output, data_fingerprint, package_versions, plain_json, read_json_record
+from ..core._files import data_fingerprint, package_versions, plain_json, read_json_record, write_json
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_report, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
@@ -566,9 +566,7 @@ def run_artificial_benchmark(
         gen = Parallel(n_jobs=workers, return_as="generator_unordered")(delayed(_run_group)(u) for u in units)
         for rec in itertools.chain.from_iterable(gen):
             path = cache_dir / rec["preset"] / f"ds{rec['dataset']:03d}_{rec['model']}_{rec['config_hash']}.json"
-            path.parent.mkdir(parents=True, exist_ok=True)
-            with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:  # a killed run: no half file
-                tmp.write_text(json.dumps(rec, indent=1), encoding="utf-8")
+            write_json(path, rec, indent=1)  # atomic: a killed run leaves no half file
             results.append(rec)
             if progress is not None:
                 progress(len(results), len(tasks), rec)
