@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 from skorch.callbacks import EpochTimer
 from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
+import ftcal
 from ftcal import CalibrationDataset, CalibrationInputError, DatasetFileError, DirectionalCalibrator, LinearCalibrator
 
 from conftest import affine_sensor_data
@@ -96,12 +99,70 @@ def test_zero_reading_of_wrong_shape(tiny_calibrator, data):
         model.fit(raw, wrench)
 
 
-@pytest.mark.parametrize("alpha", [-1.0, 0.0, np.nan, "50"])
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, np.nan, "50", 1e200, 5e-324, np.inf])
 def test_bad_alpha(data, alpha):
-    # the parameter table (_parameter_constraints): named parameter, allowed range, value given
+    # the parameter table (_parameter_constraints): named parameter, allowed range (lever arms 1 µm - 1 km),
+    # value given
     with pytest.raises(CalibrationInputError, match=r"The 'alpha' parameter of LinearCalibrator must be a float in the "
-                                                     r"range \(0(\.0)?, inf\) or None\. Got .* instead"):
+                                                     r"range \[0\.001, 1000000\.0\] or None\. Got .* instead"):
         LinearCalibrator(alpha=alpha).fit(*data)
+
+
+@pytest.mark.parametrize("alpha", [-1.0, 0.0, np.nan, np.inf, "50", True, None])
+def test_metrics_refuse_a_bad_alpha(alpha):
+    y = np.zeros((3, 6))
+    for call in (lambda: ftcal.wrench_rmse(y, y, alpha), lambda: ftcal.per_sample_rmse(y, y, alpha),
+                 lambda: ftcal.scale_torques(y, alpha), lambda: ftcal.unscale_torques(y, alpha)):
+        with pytest.raises(CalibrationInputError, match=r"alpha must be a finite torque scale > 0 \[1/m\].*got"):
+            call()
+
+
+def test_metrics_say_when_alpha_overflows_instead_of_returning_inf():
+    # 1e200 N·m·(1/m) of torque error squared exceeds float64's ~1.8e308: an error naming alpha, no inf, no warning
+    y = np.zeros((2, 6))
+    p = y + np.array([0, 0, 0, 1.0, 0, 0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(CalibrationInputError, match=r"the RMSE overflows float64.*alpha = 1e\+200"):
+            ftcal.wrench_rmse(y, p, 1e200)
+        with pytest.raises(CalibrationInputError, match=r"by alpha = 1e\+308 1/m overflows float64"):
+            ftcal.scale_torques(p * 10, 1e308)
+        with pytest.raises(CalibrationInputError, match=r"dividing the torques .* overflows"):
+            ftcal.unscale_torques(p, 5e-324)
+
+
+@pytest.mark.parametrize("make, kind", [
+    (lambda X: X > 0, "booleans"), (lambda X: X.astype("datetime64[us]"), "dates"),
+    (lambda X: X.astype("timedelta64[s]"), "time spans"), (lambda X: X.astype(str), "text"),
+])
+def test_non_measurement_dtypes_are_refused_not_converted(data, make, kind):
+    raw, wrench = data
+    with pytest.raises(CalibrationInputError, match=rf"X has dtype .* \({kind}\) and shape \({len(raw)}, 6\)"):
+        LinearCalibrator().fit(make(raw), wrench)
+    with pytest.raises(CalibrationInputError, match=rf"y has dtype .* \({kind}\)"):
+        LinearCalibrator().fit(raw, make(wrench))
+    model = LinearCalibrator().fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match=rf"X has dtype .* \({kind}\)"):
+        model.predict(make(raw))
+
+
+def test_masked_values_are_refused_an_unmasked_array_is_used(data):
+    raw, wrench = data
+    masked = np.ma.masked_array(raw, mask=np.zeros(raw.shape, bool))
+    masked.mask[3, 2] = True
+    with pytest.raises(CalibrationInputError, match=r"X is a masked array with 1 masked value\(s\).*drop the masked rows"):
+        LinearCalibrator().fit(masked, wrench)
+    plain = LinearCalibrator().fit(np.ma.masked_array(raw), wrench)  # nothing masked: the values are the data
+    np.testing.assert_array_equal(plain.predict(raw), LinearCalibrator().fit(raw, wrench).predict(raw))
+
+
+def test_a_given_tare_far_outside_the_training_readings_is_refused(data):
+    raw, wrench = data
+    tare = np.median(raw, axis=0)
+    LinearCalibrator(zero_reading=tare).fit(raw, wrench)  # a reading among the training ones: accepted
+    tare[2] = 1e6 * np.abs(raw).max()
+    with pytest.raises(CalibrationInputError, match=r"zero_reading\[2\] = .* lies far outside the readings channel s2"):
+        LinearCalibrator(zero_reading=tare).fit(raw, wrench)
 
 
 @pytest.mark.parametrize(

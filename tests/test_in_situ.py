@@ -111,6 +111,27 @@ def test_tool_file_round_trip_and_bad_file(tmp_path):
         ToolLoad.load(bad)
 
 
+@pytest.mark.parametrize("key, value, field", [
+    ("gravity_m_s2", [0, 0, 1e308], "gravity_m_s2 has magnitude 1e\\+308 m/s²"),
+    ("mass_kg", 1e300, "mass_kg has magnitude 1e\\+300 kg"),
+    ("center_of_mass_m", [1e300, 1e300, 0], "center_of_mass_m has magnitude 1.41e\\+300 m"),
+    ("bias", [1e300, 0, 0, 0, 0, 0], "bias has magnitude 1e\\+300 N, N·m"),
+])
+def test_a_tool_file_with_an_impossible_value_is_refused_not_compensated_to_inf(tmp_path, key, value, field):
+    # a tool file edited by hand (a unit or typing error): refused on loading, never an inf in the compensated
+    # wrenches, and the same bounds for identify_tool_load's gravity
+    rotations = Rotation.random(10, random_state=1).as_matrix()
+    tool = identify_tool_load(rotations, tool_wrenches(rotations, MASS, COM, BIAS), gravity=G)
+    record = json.loads(tool.save(tmp_path / "t.tool.json").read_text())
+    record[key] = value
+    (tmp_path / "bad.tool.json").write_text(json.dumps(record))
+    with pytest.raises(CalibrationInputError, match=f"bad.tool.json: {field}, beyond the .* a tool on a force/torque sensor can have"):
+        ToolLoad.load(tmp_path / "bad.tool.json")
+    if key == "gravity_m_s2":
+        with pytest.raises(CalibrationInputError, match="gravity has magnitude"):
+            identify_tool_load(rotations, tool_wrenches(rotations, MASS, COM, BIAS), gravity=value)
+
+
 def test_identify_load_and_compensate_through_the_cli(tmp_path, capsys):
     logs, data, models = tmp_path / "logs", tmp_path / "data", tmp_path / "models"
     mounting = ftcal.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))

@@ -330,3 +330,38 @@ def test_a_header_declaring_a_huge_shape_is_refused_before_allocating(tmp_path):
     with pytest.raises(ModelFileError, match=r"shape \(10000000000,\)") as info:
         load_model(path)
     assert "this is a bug" not in str(info.value) and "declares shape" in str(info.value)
+
+
+def test_a_model_with_nan_or_inf_fitted_values_is_not_saved(tmp_path):
+    # load_model refuses such a file as damaged: save_model refuses to write it, and nothing is left on disk
+    from ftcal import LinearCalibrator
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=3)
+    model = LinearCalibrator().fit(raw, wrench)
+    model.calibration_matrix_[0, 0] = np.nan
+    with pytest.raises(ModelFileError, match=r"cannot save the LinearCalibrator: its fitted calibration_matrix_ holds "
+                                             r"NaN or inf.*fit the model again"):
+        save_model(model, tmp_path / "m.model.npz")
+    model = LinearCalibrator().fit(raw, wrench)
+    model.alpha_ = float("inf")
+    with pytest.raises(ModelFileError, match=r"its fitted alpha_ holds NaN or inf"):
+        save_model(model, tmp_path / "m.model.npz")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_save_and_load_name_a_bad_path_not_an_internal_file(tmp_path):
+    from ftcal import LinearCalibrator
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=3)
+    model = LinearCalibrator().fit(raw, wrench)
+    with pytest.raises(ModelFileError, match=rf"cannot write {tmp_path / 'missing' / 'm.npz'}: the folder .* does not "
+                                             r"exist"):
+        save_model(model, tmp_path / "missing" / "m.npz")
+    with pytest.raises(ModelFileError, match=rf"{tmp_path} is a folder; name the model file"):
+        save_model(model, tmp_path, overwrite=True)
+    for bad in (None, b"m.npz", 3):
+        with pytest.raises(ModelFileError, match=r"path must be a str or a pathlib.Path"):
+            load_model(bad)
+        with pytest.raises(ModelFileError, match=r"path must be a str or a pathlib.Path"):
+            save_model(model, bad)
+    assert not any(p.name.startswith(".") for p in tmp_path.rglob("*"))

@@ -38,7 +38,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import check_groups
 from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
                                 validate_training_data)
-from ..core._wrench import alpha_from_wrenches
+from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["BaseCalibrator", "GroupsFit", "with_settings"]
@@ -47,6 +47,24 @@ __all__ = ["BaseCalibrator", "GroupsFit", "with_settings"]
 def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
     """Min and max of each channel of the training readings, shape (2, N)."""
     return np.vstack([X.min(axis=0), X.max(axis=0)])
+
+
+def _refuse_far_outside(X: NDArray[np.float64], reading_range: ArrayLike, name: str, fix: str) -> NDArray[np.float64]:
+    """Refuse a zero-load reading (a row of ``X``) far outside the training readings ``reading_range`` (2, N):
+    beyond each channel's span widened by ``RETARE_RANGE_MARGIN`` times it on each side. Returns the spans."""
+    low, high = np.asarray(reading_range, dtype=float)
+    span = high - low
+    margin = RETARE_RANGE_MARGIN * np.maximum(span, np.abs(high) + np.abs(low))
+    outside = (X < low - margin) | (X > high + margin)
+    if outside.any():
+        r, c = (int(v) for v in np.argwhere(outside)[0])
+        where = f"{name}[{r}, {c}]" if len(X) > 1 or name == "X_no_load" else f"{name}[{c}]"
+        raise CalibrationInputError(
+            f"{where} = {X[r, c]:.6g} lies far outside the readings channel s{c} gave in training "
+            f"([{low[c]:.6g}, {high[c]:.6g}]); a zero-load reading does not. Check the units, the channel "
+            f"order and the sensor, or {fix}."
+        )
+    return span
 
 
 def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
@@ -102,7 +120,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
                                       "zero_reading_", "reading_noise_", "tare_reading_", "calibrated_range_")
 
     _parameter_constraints: dict = {
-        "alpha": [Interval(Real, 0, None, closed="neither"), None],
+        "alpha": [Interval(Real, *ALPHA_RANGE_PER_M, closed="both"), None],  # lever arms 1 µm - 1 km
         "zero_reading": ["array-like", None],
         "random_state": ["random_state"],
     }
@@ -148,6 +166,9 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
             self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
         self.reading_noise_ = reading_noise(X, y)
         self.calibrated_range_ = calibrated_range(X)
+        if self.zero_reading is not None:
+            _refuse_far_outside(self.zero_reading_[None, :], self.calibrated_range_, "zero_reading",
+                                "pass the reading taken at zero load (or None to estimate it)")
         self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
         return X, y
 
@@ -233,17 +254,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         reading_range = getattr(self, "calibrated_range_", None)
         span = None
         if reading_range is not None:
-            low, high = np.asarray(reading_range, dtype=float)
-            span = high - low
-            margin = RETARE_RANGE_MARGIN * np.maximum(span, np.abs(high) + np.abs(low))
-            outside = (X < low - margin) | (X > high + margin)
-            if outside.any():
-                r, c = (int(v) for v in np.argwhere(outside)[0])
-                raise CalibrationInputError(
-                    f"X_no_load[{r}, {c}] = {X[r, c]:.6g} lies far outside the readings channel s{c} gave in training "
-                    f"([{low[c]:.6g}, {high[c]:.6g}]); a zero-load reading does not. Check the units, the channel "
-                    "order and the sensor, or fit the calibration again."
-                )
+            span = _refuse_far_outside(X, reading_range, "X_no_load", "fit the calibration again")
         noise = getattr(self, "reading_noise_", None)
         if noise is not None and len(X) > 1:
             noise = np.asarray(noise, dtype=float)

@@ -11,7 +11,7 @@ from ._lazy import lazy_namespace
 _PUBLIC = dict(
     plain_json="_files", write_json="_files", atomic_output="_files", is_finite_number="_files",
     read_json_record="_files", data_fingerprint="_files", package_versions="_files", mean_std="_metrics",
-    calibration_folds="_model_selection", MIN_CHANNELS="_wrench",
+    calibration_folds="_model_selection", MIN_CHANNELS="_wrench", ALPHA_RANGE_PER_M="_wrench", check_alpha="_wrench",
     check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
 __all__ = list(_PUBLIC)

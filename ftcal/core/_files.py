@@ -61,7 +61,10 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     """
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
+    except OSError as exc:  # no such folder, not writable, ...: name the user's file, not the temporary one
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from None
     os.close(fd)
     tmp = Path(tmp_name)
     os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
@@ -73,7 +76,10 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
                 raise type(exc)(exc.errno, exc.strerror, str(path)) from None
             raise
         if overwrite:
-            os.replace(tmp, path)
+            try:
+                os.replace(tmp, path)
+            except OSError as exc:  # e.g. path is a folder
+                raise type(exc)(exc.errno, exc.strerror, str(path)) from None
             return
         try:
             os.link(tmp, path)

@@ -67,7 +67,7 @@ def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> flo
     2.449...
     """
     t, p = _pair(y_true, y_pred)
-    return float(np.sqrt(np.mean((scale_torques(t - p, alpha)) ** 2)))
+    return float(_checked_rms(scale_torques(t - p, alpha), alpha))
 
 
 def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> NDArray[np.float64]:
@@ -80,7 +80,19 @@ def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) ->
     array([2.449..., 0. ])
     """
     t, p = _pair(y_true, y_pred)
-    return np.sqrt(np.mean(scale_torques(t - p, alpha) ** 2, axis=1))
+    return _checked_rms(scale_torques(t - p, alpha), alpha, axis=1)
+
+
+def _checked_rms(errors: NDArray[np.float64], alpha: float, axis: int | None = None):
+    """Root mean square of ``errors`` (along ``axis``); an error, not inf, when the squares overflow float64."""
+    with np.errstate(over="ignore"):
+        out = np.sqrt(np.mean(errors ** 2, axis=axis))
+    if not np.isfinite(out).all() and np.isfinite(errors).all():
+        raise CalibrationInputError(
+            f"the RMSE overflows float64: the torque-scaled errors reach {np.abs(errors).max():.3g} "
+            f"(alpha = {alpha:g} 1/m). Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) and the units."
+        )
+    return out
 
 
 def axis_rmse(y_true: ArrayLike, y_pred: ArrayLike) -> NDArray[np.float64]:

@@ -79,8 +79,13 @@ def check_magnitude(a: NDArray[np.float64], name: str) -> None:
         )
 
 
-def _check_real_2d(X, name: str, what: str) -> None:
-    """Complex, 1-D or 3-D input gets a short message (scikit-learn's would print the whole array)."""
+#: dtype kinds that are no measurement (scikit-learn would convert them to numbers silently).
+_NOT_MEASUREMENTS = {"b": "booleans", "M": "dates", "m": "time spans", "U": "text", "S": "bytes", "V": "raw records"}
+
+
+def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
+    """Complex, boolean, date, text, masked, 1-D or 3-D input gets a short message (scikit-learn's would print
+    the whole array, or convert it silently)."""
     if X is None or not hasattr(X, "__len__") and not hasattr(X, "shape"):
         return  # None and scalars: validate_data's own message
     if hasattr(X, "format") and hasattr(X, "tocsr"):  # sparse: validate_data says it is not supported
@@ -94,8 +99,21 @@ def _check_real_2d(X, name: str, what: str) -> None:
             f"Complex data not supported: {name} has complex dtype {a.dtype} and shape {a.shape}; {what} are real "
             f"numbers. Fix: pass the real part (e.g. {name}.real) if that is what you mean."
         )
-    if a.dtype.kind in "OUS":
-        return  # strings / objects: validate_data converts or reports them
+    if a.dtype.kind in _NOT_MEASUREMENTS:
+        raise CalibrationInputError(
+            f"{name} has dtype {a.dtype} ({_NOT_MEASUREMENTS[a.dtype.kind]}) and shape {a.shape}; {what} are real "
+            f"numbers. Fix: convert the measured values to floats first (e.g. {name}.astype(float) after parsing)."
+        )
+    if isinstance(X, np.ma.MaskedArray) and np.ma.getmaskarray(X).any():
+        raise CalibrationInputError(
+            f"{name} is a masked array with {int(np.ma.getmaskarray(X).sum())} masked value(s) (shape {a.shape}); "
+            f"ftcal would read the values under the mask. Fix: drop the masked rows "
+            f"({name}[~{name}.mask.any(axis=1)]) or pass {name}.data if the values are valid."
+        )
+    if a.dtype.kind in "O":
+        return  # objects: validate_data converts or reports them
+    if not two_d:
+        return
     if a.ndim != 2:
         hint = f" Reshape your data: for one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
         raise CalibrationInputError(
@@ -190,8 +208,7 @@ def validate_training_data(
             f"Fix: pass the reference wrenches (n_samples, 6)."
         )
     _check_real_2d(X, "X", "raw readings")
-    if y is not None and np.asarray(y).dtype.kind == "c":
-        _check_real_2d(y, "y", "reference wrenches")
+    _check_real_2d(y, "y", "reference wrenches", two_d=False)
     X = validate_data(estimator, X, reset=True, dtype=np.float64, ensure_all_finite=False)
     check_all_finite(X, "X (raw readings)", "remove or repair the rows with missing readings before fitting")
     # y is checked here, not by validate_data, so that NaN/inf get the row-naming message below.

@@ -8,6 +8,8 @@ and metrics (thesis section III-A-a).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -18,6 +20,8 @@ __all__ = [
     "FORCE",
     "TORQUE",
     "alpha_from_wrenches",
+    "check_alpha",
+    "ALPHA_RANGE_PER_M",
     "scale_torques",
     "unscale_torques",
 ]
@@ -33,6 +37,35 @@ TORQUE = slice(3, 6)
 #: Fewest raw channels of a 6-axis calibration (enforced where calibration data enter:
 #: :class:`~ftcal.CalibrationDataset` and the CLI).
 MIN_CHANNELS = 3
+
+
+#: The torque scales [1/m] a calibrator accepts as its ``alpha`` parameter: ``alpha = Fmax / Tmax`` is the
+#: inverse of the loads' largest lever arm, and lever arms from 1 µm to 1 km cover every sensor; a value outside
+#: is a unit or typing error (no computation needs it, and 1e200 would overflow the scaled squares).
+ALPHA_RANGE_PER_M = (1e-3, 1e6)
+
+
+def check_alpha(alpha, name: str = "alpha") -> float:
+    """``alpha`` as a float when it is a finite torque scale > 0 [1/m], else :class:`~ftcal.CalibrationInputError`.
+
+    Examples
+    --------
+    >>> check_alpha(50)
+    50.0
+    >>> check_alpha(float("nan"))
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: alpha must be a finite torque scale > 0 [1/m] (Fmax / Tmax, e.g. 2000 N / 40 N·m = 50); got nan.
+    """
+    try:
+        value = None if isinstance(alpha, (bool, str, bytes)) else float(alpha)
+    except (TypeError, ValueError):
+        value = None
+    if value is None or not (math.isfinite(value) and value > 0):
+        raise CalibrationInputError(
+            f"{name} must be a finite torque scale > 0 [1/m] (Fmax / Tmax, e.g. 2000 N / 40 N·m = 50); got {alpha!r}."
+        )
+    return value
 
 
 def alpha_from_wrenches(wrench: ArrayLike) -> float:
@@ -82,10 +115,7 @@ def scale_torques(wrench: ArrayLike, alpha: float) -> NDArray[np.float64]:
     >>> scale_torques([[1.0, 2, 3, 0.1, 0.2, 0.3]], 10.0)
     array([[1., 2., 3., 1., 2., 3.]])
     """
-    w = np.array(wrench, dtype=float, copy=True)
-    if w.shape[-1] == 6:
-        w[..., TORQUE] *= alpha
-    return w
+    return _scaled(wrench, check_alpha(alpha), multiply=True)
 
 
 def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
@@ -96,4 +126,23 @@ def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
     >>> unscale_torques([[1.0, 2, 3, 1, 2, 3]], 10.0)
     array([[1. , 2. , 3. , 0.1, 0.2, 0.3]])
     """
-    return scale_torques(scaled, 1.0 / alpha)
+    return _scaled(scaled, check_alpha(alpha), multiply=False)
+
+
+def _scaled(wrench: ArrayLike, alpha: float, *, multiply: bool) -> NDArray[np.float64]:
+    """A float copy of ``wrench`` with the torque columns (of a 6-column wrench) multiplied or divided by ``alpha``;
+    an overflow is an error naming alpha, not an inf in the result."""
+    w = np.array(wrench, dtype=float, copy=True)
+    if w.shape[-1] != 6:
+        return w
+    with np.errstate(over="ignore"):
+        torque = w[..., TORQUE] * alpha if multiply else w[..., TORQUE] / alpha
+    if not np.isfinite(torque).all() and np.isfinite(w[..., TORQUE]).all():
+        big = float(np.abs(w[..., TORQUE]).max())
+        raise CalibrationInputError(
+            f"{'multiplying' if multiply else 'dividing'} the torques (largest |value| {big:.3g}) by alpha = "
+            f"{alpha:.3g} 1/m overflows float64. Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) "
+            "and the torques' unit."
+        )
+    w[..., TORQUE] = torque
+    return w

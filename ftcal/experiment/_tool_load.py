@@ -104,10 +104,29 @@ def _nearest_rotations(R: NDArray[np.float64]) -> NDArray[np.float64]:
     return U @ Vt
 
 
+#: Bounds of a tool file's values: beyond them a value is a unit or typing error, not a tool (a 10 t tool, a
+#: centre of mass 100 m away, 100 g of gravity), and the compensation would overflow or be meaningless.
+TOOL_LIMITS = {"mass": 1e4, "center_of_mass": 100.0, "gravity": 1e3, "bias": 1e9}
+_LIMIT_UNITS = {"mass": "kg", "center_of_mass": "m", "gravity": "m/s²", "bias": "N, N·m"}
+
+
+def _check_limit(name: str, a: NDArray[np.float64], owner: str = "ToolLoad ") -> None:
+    """Raise when ``a`` (a number, or a vector by its norm) exceeds ``TOOL_LIMITS[name]``."""
+    size = float(np.abs(a).max(initial=0.0))
+    if size > 0 and name in ("center_of_mass", "gravity"):
+        size *= float(np.linalg.norm(a / size))  # the norm, without overflowing its squares
+    if size > TOOL_LIMITS[name]:
+        raise CalibrationInputError(
+            f"{owner}{name} has magnitude {size:.3g} {_LIMIT_UNITS[name]}, beyond the {TOOL_LIMITS[name]:g} "
+            f"{_LIMIT_UNITS[name]} a tool on a force/torque sensor can have. Fix: check the value and its unit."
+        )
+
+
 def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np.float64]:
     g = np.asarray(gravity, dtype=float)
-    if g.shape != (3,) or not np.isfinite(g).all() or np.linalg.norm(g) == 0:
+    if g.shape != (3,) or not np.isfinite(g).all() or not np.abs(g).max() > 0:
         raise CalibrationInputError(f"gravity must be a finite non-zero 3-vector in [m/s²]; got {gravity!r}.")
+    _check_limit("gravity", g, owner="")
     return np.einsum("nji,j->ni", R, g)  # Rᵀ g per pose
 
 
@@ -170,8 +189,10 @@ class ToolLoad:
         array("bias_std_error", (6,), nonnegative=True)
         array("gravity", (3,))
         array("residual_rms", (2,), nonnegative=True)
-        if not np.linalg.norm(self.gravity) > 0:
+        if not np.abs(self.gravity).max() > 0:
             raise CalibrationInputError(f"ToolLoad gravity must be a non-zero vector in [m/s²]; got {self.gravity!r}.")
+        for name in TOOL_LIMITS:
+            _check_limit(name, getattr(self, name))
 
     def gravity_wrench(self, sensor_rotations: ArrayLike) -> NDArray[np.float64]:
         """The wrench [N, N·m] the tool's weight plus the bias produce at each pose (n, 6), sensor frame."""

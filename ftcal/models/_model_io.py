@@ -182,14 +182,44 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
     True
     """
     meta, arrays = _state(estimator)
+    _refuse_non_finite(type(estimator).__name__, meta, arrays)
     meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": _ftcal_version()}
     arrays[_META_KEY] = np.array(json.dumps(meta))
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
     path = Path(path)
+    if path.is_dir():
+        raise ModelFileError(f"{path} is a folder; name the model file to write (e.g. {path / 'model.model.npz'}).")
+    if not path.parent.is_dir():
+        raise ModelFileError(f"cannot write {path}: the folder {path.parent} does not exist. Fix: create it first.")
     if path.exists() and not overwrite:
         raise ModelFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
     with atomic_output(path, overwrite=overwrite, error=ModelFileError) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
     return path
+
+
+def _refuse_non_finite(name: str, meta: dict, arrays: dict[str, np.ndarray]) -> None:
+    """A model whose fitted values hold NaN or inf is damaged (``load_model`` would refuse its file): refuse to
+    write it, naming the value."""
+    def scalars(m: dict, where: str):
+        for key, value in (m.get("fitted") or {}).items():
+            yield f"{where}{key}", value
+        for i, child in enumerate(m.get("children") or []):
+            yield from scalars(child, f"{where}{child.get('attribute', 'child')}[{i}].")
+
+    def refused(key: str, value) -> bool:  # what load_model's _check_scalar refuses (inf is a valid ridge_)
+        rule = _SCALAR_RULES.get(key.rsplit(".", 1)[-1])
+        return not rule(value) if rule is not None else isinstance(value, float) and np.isnan(value)
+
+    bad = next((k for k, v in scalars(meta, "") if refused(k, v)), None)
+    if bad is None:
+        bad = next((k.replace("fitted/", "") for k, a in arrays.items()
+                    if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
+    if bad is not None:
+        raise ModelFileError(
+            f"cannot save the {name}: its fitted {bad} holds NaN or inf (the model diverged or was changed after "
+            "fitting), and a model file must predict finite wrenches. Fix: fit the model again.")
 
 
 def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
@@ -375,6 +405,8 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
     estimator
         The fitted calibrator, predicting exactly like the saved one.
     """
+    if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
+        raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
     path = Path(path)
     with _Archive(path) as archive:
         try:
