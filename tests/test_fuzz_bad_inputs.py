@@ -1296,3 +1296,79 @@ def test_gp_far_outside_its_data_gives_the_linear_mean_or_an_error_never_a_warni
         assert np.all(np.isfinite(std)) and np.all(std[1] >= std[0])
         with pytest.raises(CalibrationInputError, match="X row 1 .*non-finite standard deviation"):
             with_linear.predict(far, return_std=True)
+
+
+# ------------------------------------------------------------------ fuzz session 9: standard streams and signals
+def _closing(fd: int):
+    def close() -> None:
+        _default_sigint()
+        os.close(fd)
+    return close
+
+
+@pytest.mark.parametrize("command, fd, message", [
+    ("predict", 1, "standard output is closed"),
+    ("predict-stdin", 0, "standard input is closed"),
+    ("evaluate", 1, "standard output is closed"),
+])
+def test_closed_standard_streams_are_one_clear_error(workdir, tmp_path, command, fd, message):
+    model = workdir / "models" / "linear.model.npz"
+    if command == "predict":
+        args = ["predict", model, workdir / "data" / "test.csv"]
+    elif command == "predict-stdin":
+        args = ["predict", model, "-"]
+    else:
+        args = ["evaluate", workdir / "data" / "test.csv", model, "--no-plots", "--out", tmp_path / "ev", "-q"]
+    proc = subprocess.run([sys.executable, "-m", "ftcal", *map(str, args)], cwd=tmp_path,
+                          stdout=subprocess.DEVNULL if fd == 0 else None,
+                          stderr=subprocess.PIPE, text=True, preexec_fn=_closing(fd), timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and err[0].startswith("ftcal: error: ") and message in err[0], err
+
+
+def test_a_full_standard_output_is_named(workdir, tmp_path):
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "ftcal", "predict", str(workdir / "models" / "linear.model.npz"),
+                               str(workdir / "data" / "test.csv")], cwd=tmp_path, stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and "could not write to standard output (No space left on device)" in err[0], err
+
+
+def test_a_reader_that_leaves_early_is_no_error(workdir, tmp_path):
+    big = tmp_path / "big.csv"
+    line = ",".join(["0.1"] * 6) + "\n"
+    big.write_text("s0,s1,s2,s3,s4,s5\n" + line * 200_000)
+    proc = subprocess.Popen([sys.executable, "-m", "ftcal", "predict", str(workdir / "models" / "linear.model.npz"),
+                             str(big)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.readline()
+    proc.stdout.close()  # `| head -1`
+    err = proc.communicate(timeout=300)[1].decode()
+    assert proc.returncode == 0 and err == "", err
+
+
+@pytest.mark.parametrize("command", ["predict", "fit"])
+def test_sighup_removes_the_partial_output(workdir, tmp_path, command):
+    if command == "predict":
+        out = tmp_path / "wrench.csv"
+        args = ["predict", workdir / "models" / "linear.model.npz", "-", "--output", out]
+        proc = subprocess.Popen([sys.executable, "-m", "ftcal", *map(str, args)], cwd=tmp_path, stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc.stdin.write("0.1,0.2,0.3,0.4,0.5,0.6\n" * 10)
+        proc.stdin.flush()  # mid-stream: the partial file exists
+        _wait_for(lambda: list(tmp_path.glob(".wrench.*.partial.csv")), "the partial output", proc)
+        proc.send_signal(signal.SIGHUP)
+        err = proc.communicate(timeout=120)[1]
+        code = proc.returncode
+    else:
+        out = tmp_path / "models"
+        out.mkdir()
+        args = ["fit", workdir / "data" / "train.csv", "--model", "directional", "--schedule", "short", "--param",
+                "max_epochs=20000", "--param", "hidden_layer_sizes=[8]", "--out", out, "--force"]
+        code, err = _interrupt_after_training_starts(_start_cli(args, tmp_path), "fitting", signal.SIGHUP)
+    assert code == 128 + signal.SIGHUP, err
+    assert "interrupted by SIGHUP (no half-written file is left)" in err and "Traceback" not in err
+    assert not list(tmp_path.rglob(".*partial*"))
+    assert not out.exists() if command == "predict" else not list(out.iterdir())

@@ -33,6 +33,7 @@ __all__ = [
     "UsageError",
     "Interrupted",
     "signals_interrupt",
+    "standard_streams",
     "Parser",
     "EXIT_USAGE",
     "EXIT_FAILURE",
@@ -103,7 +104,7 @@ class Parser(argparse.ArgumentParser):
 
 # ------------------------------------------------------------------ signals
 class Interrupted(BaseException):
-    """SIGINT (Ctrl-C) or SIGTERM received by the ``ftcal`` command.
+    """SIGINT (Ctrl-C), SIGTERM or SIGHUP received by the ``ftcal`` command.
 
     Raised by the handlers of :func:`signals_interrupt` in the main thread. It unwinds the run like
     ``KeyboardInterrupt`` (every ``finally`` runs, so outputs being written are removed, SIGTERM as SIGINT)
@@ -118,13 +119,21 @@ class Interrupted(BaseException):
 
     @property
     def exit_status(self) -> int:
-        """``128 + signal number`` (130 for SIGINT, 143 for SIGTERM), as a shell reports a signal."""
+        """``128 + signal number`` (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as a shell reports a signal."""
         return 128 + self.signum
+
+
+def _terminating_signals() -> tuple:
+    """The signals that end a run cleanly: Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session
+    (SIGHUP, whose default would kill the process mid-write and leave its ``.partial`` file behind)."""
+    import signal
+
+    return tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 @contextlib.contextmanager
 def signals_interrupt() -> Iterator[None]:
-    """Within the block, SIGINT and SIGTERM raise :class:`Interrupted` in the main thread (the CLI only: the
+    """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` in the main thread (the CLI only: the
     library installs no signal handler). Signals ignored by the caller (a background job's SIGINT) stay ignored.
     A second signal while the run unwinds is ignored so the clean-up finishes; a third ends the process."""
     import signal
@@ -144,7 +153,7 @@ def signals_interrupt() -> Iterator[None]:
             os.kill(os.getpid(), signum)
 
     previous = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in _terminating_signals():
         old = signal.getsignal(sig)
         if old is signal.SIG_IGN:
             continue
@@ -155,6 +164,73 @@ def signals_interrupt() -> Iterator[None]:
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old if old is not None else signal.SIG_DFL)
+
+
+# ------------------------------------------------------------------ standard streams
+class _ClosedStream:
+    """Stands in for a standard stream the shell closed (``>&-``, ``<&-``; Python then sets it to ``None``).
+
+    Without it ``print`` would drop the output silently (``sys.stdout is None``) and reading would fail with an
+    ``AttributeError``; any use raises :class:`CliError` naming the stream instead.
+    """
+
+    def __init__(self, name: str, fix: str) -> None:
+        self._name = name
+        self._fix = fix
+
+    def __getattr__(self, attr: str) -> Any:
+        raise CliError(f"standard {self._name} is closed (the command was run with {self._fix}); "
+                       f"{'redirect it to a file or a pipe' if self._name == 'output' else 'give the input as a file or pipe it in'}")
+
+
+class _CheckedStdout:
+    """``sys.stdout`` whose write errors name standard output (``> /dev/full`` gave a bare "No space left on
+    device"). A broken pipe stays a :class:`BrokenPipeError`: the reader left (``| head``), which is no error."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def _failed(self, exc: OSError) -> CliError:
+        return CliError(f"could not write to standard output ({exc.strerror or exc}); the output is incomplete")
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def __getattr__(self, attr: str) -> Any:
+        return getattr(self._stream, attr)
+
+
+@contextlib.contextmanager
+def standard_streams() -> Iterator[None]:
+    """Within the block a closed stdin / stdout raises :class:`CliError` when used, a failed write to stdout names
+    standard output, and stdout is flushed at the end (so that its errors are reported here, not at exit)."""
+    saved = sys.stdin, sys.stdout
+    if sys.stdin is None:
+        sys.stdin = _ClosedStream("input", "<&-")
+    sys.stdout = _ClosedStream("output", ">&-") if sys.stdout is None else _CheckedStdout(sys.stdout)
+    try:
+        yield
+        if isinstance(sys.stdout, _CheckedStdout):
+            sys.stdout.flush()
+    finally:
+        sys.stdin, sys.stdout = saved
 
 
 # ------------------------------------------------------------------ argument types
