@@ -245,7 +245,7 @@ def test_underscore_numbers_are_refused(workdir, tmp_path, capsys):
     fields[0] = "1_000"
     bad = tmp_path / "underscore.csv"
     bad.write_text("\n".join(body[:3] + [",".join(fields)] + body[4:]) + "\n")
-    with pytest.raises(DatasetFileError, match=r"line 4: '1_000' is not a number"):
+    with pytest.raises(DatasetFileError, match=r"line 4, column s0: '1_000' is not a number"):
         CalibrationDataset.load(bad)
     readings = tmp_path / "r.csv"
     readings.write_text("1_000,0.2,0.3,0.4,0.5,0.6\n")  # a first line of numbers is data, not a header
@@ -323,7 +323,7 @@ def test_diverging_training_is_an_error(hidden):
 
 # ------------------------------------------------------------------ 8. labels and dtypes
 def test_fractional_group_labels_are_refused():
-    with pytest.raises(DatasetFileError, match="row 1 holds 1.7"):
+    with pytest.raises(DatasetFileError, match=r"row 1 \(rows counted from 0\) holds 1.7"):
         CalibrationDataset(raw=np.ones((3, 6)), wrench=np.zeros((3, 6)), group=[0, 1.7, 2])
     ds = CalibrationDataset(raw=np.ones((3, 6)), wrench=np.zeros((3, 6)), group=np.array([0.0, 1.0, 2.0]))
     assert ds.group.dtype == np.int64
@@ -1372,3 +1372,76 @@ def test_sighup_removes_the_partial_output(workdir, tmp_path, command):
     assert "interrupted by SIGHUP (no half-written file is left)" in err and "Traceback" not in err
     assert not list(tmp_path.rglob(".*partial*"))
     assert not out.exists() if command == "predict" else not list(out.iterdir())
+
+
+# ------------------------------------------------------------------ fuzz session 9: dataset CSV lines and comments
+def _edit_cell(workdir, tmp_path, data_row: int, column: str, value: str) -> Path:
+    """train.csv with one cell of data row ``data_row`` (0-based) replaced; line numbers are those of the file."""
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    header_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    names = lines[header_at].split(",")
+    fields = lines[header_at + 1 + data_row].split(",")
+    fields[names.index(column)] = value
+    lines[header_at + 1 + data_row] = ",".join(fields)
+    path = tmp_path / f"edited_{column}.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("column, value, expected", [
+    ("Fz", "", "column Fz: empty value"),
+    ("Fz", "1.0.0", "column Fz: '1.0.0' is not a number"),
+    ("s2", "\u0661\u0662", "column s2: '\u0661\u0662' is not a number"),
+    ("s2", "nan", "column s2: 'nan' is NaN or inf"),
+    ("group", "1.5", "column group: 1.5 is not an integer label"),
+])
+def test_dataset_value_errors_name_the_file_line_and_column(workdir, tmp_path, capsys, column, value, expected):
+    path = _edit_cell(workdir, tmp_path, 3, column, value)  # data row 3 is line 6 (meta, header, rows 0-2)
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: line 6, {expected}" in msg, msg
+    assert "row 3" not in msg
+
+
+@pytest.mark.parametrize("value, expected", [("nan", "temperature is NaN or inf"), ("300", "is it in kelvin")])
+def test_dataset_temperature_errors_name_the_file_line(tmp_path, value, expected):
+    ds = CalibrationDataset(raw=np.eye(8, 6), wrench=np.eye(8, 6), temperature=np.linspace(20, 30, 8))
+    lines = ds.save(tmp_path / "d.csv").read_text().splitlines()
+    lines[7] = lines[7].rsplit(",", 1)[0] + "," + value  # data row 5, file line 8
+    (tmp_path / "d.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(DatasetFileError, match=rf"d\.csv: line 8, column temperature: .*{expected}"):
+        CalibrationDataset.load(tmp_path / "d.csv")
+
+
+def test_dataset_npz_errors_say_how_rows_are_counted(tmp_path):
+    raw = np.ones((4, 6))
+    raw[1, 2] = np.nan
+    np.savez(tmp_path / "d.npz", raw=raw, wrench=np.zeros((4, 6)))
+    with pytest.raises(DatasetFileError, match=r"d\.npz: array 'raw', row 1 \(rows counted from 0\): NaN or inf"):
+        CalibrationDataset.load(tmp_path / "d.npz")
+
+
+@pytest.mark.parametrize("where", ["top", "after_meta", "after_header", "between_rows", "end"])
+def test_blank_and_comment_lines_are_skipped_anywhere_in_a_dataset(workdir, tmp_path, where):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    at = {"top": 0, "after_meta": 1, "after_header": 2, "between_rows": 10, "end": len(lines)}[where]
+    edited = lines[:at] + ["", "# a comment", "   "] + lines[at:]
+    path = tmp_path / "d.csv"
+    path.write_text("\n".join(edited) + "\n")
+    original = CalibrationDataset.load(workdir / "data" / "train.csv")
+    back = CalibrationDataset.load(path)
+    np.testing.assert_array_equal(back.raw, original.raw)
+    np.testing.assert_array_equal(back.group, original.group)
+    assert back.meta == original.meta
+    last = len(edited) - 1 - (3 if where == "end" else 0)  # the last data line: its number is the file's
+    edited[last] = "1_000" + edited[last][edited[last].index(","):]
+    path.write_text("\n".join(edited) + "\n")
+    with pytest.raises(DatasetFileError, match=rf"line {last + 1}, column s0: '1_000'"):
+        CalibrationDataset.load(path)
+
+
+def test_a_second_meta_comment_is_refused_naming_both_lines(workdir, tmp_path, capsys):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    path = tmp_path / "d.csv"
+    path.write_text("\n".join(lines[:1] + ['# meta: {"alpha": 5.0}'] + lines[1:]) + "\n")
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: line 2: a second '# meta:' comment (the first is line 1)" in msg

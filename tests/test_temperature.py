@@ -94,7 +94,7 @@ def test_dataset_files_carry_temperature(tmp_path):
     fields = text[3].split(",")
     fields[-1] = "nan"
     bad.write_text("\n".join(text[:3] + [",".join(fields)] + text[4:]) + "\n")
-    with pytest.raises(DatasetFileError, match="temperature row 1 is NaN"):
+    with pytest.raises(DatasetFileError, match="line 4, column temperature: temperature is NaN"):
         CalibrationDataset.load(bad)
     with pytest.raises(DatasetFileError, match="has no temperature column"):
         CalibrationDataset(raw=np.eye(8, 6), wrench=np.eye(8, 6)).features(temperature=True)
