@@ -1445,3 +1445,39 @@ def test_a_second_meta_comment_is_refused_naming_both_lines(workdir, tmp_path, c
     path.write_text("\n".join(lines[:1] + ['# meta: {"alpha": 5.0}'] + lines[1:]) + "\n")
     msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
     assert f"{path}: line 2: a second '# meta:' comment (the first is line 1)" in msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: array types and foreign files
+@pytest.mark.parametrize("suffix, make, expected", [
+    (".npz", lambda raw: raw.astype(complex), "array 'raw' has dtype complex128 (complex numbers)"),
+    (".npz", lambda raw: raw > 0, "array 'raw' has dtype bool (booleans)"),
+    (".npz", lambda raw: raw.astype("datetime64[s]"), "array 'raw' has dtype datetime64[s] (dates)"),
+    (".npz", lambda raw: raw.astype(str), "array 'raw' has dtype <U"),
+    (".npz", lambda raw: raw.astype(object), "array 'raw' holds Python objects (a pickle), which ftcal never loads"),
+    (".mat", lambda raw: raw.astype(complex), "variable 'raw' has dtype complex128 (complex numbers)"),
+    (".mat", lambda raw: np.array([raw], dtype=object), "variable 'raw' has dtype object (objects (a MATLAB cell"),
+    (".mat", lambda raw: {"a": raw}, "variable 'raw' has dtype [('a', 'O')] (records (a MATLAB struct))"),
+    (".mat", lambda raw: __import__("scipy.sparse").sparse.csr_matrix(raw), "variable 'raw' is a sparse matrix"),
+    (".mat", lambda raw: "text", "variable 'raw' has dtype <U4 (text)"),
+])
+def test_arrays_that_are_not_real_numbers_are_refused_by_name_and_type(workdir, tmp_path, capsys, suffix, make,
+                                                                       expected):
+    import scipy.io
+
+    ds = CalibrationDataset.load(workdir / "data" / "train.csv")
+    path = tmp_path / f"d{suffix}"
+    if suffix == ".npz":
+        np.savez(path, raw=make(ds.raw), wrench=ds.wrench)
+    else:
+        scipy.io.savemat(path, {"raw": make(ds.raw), "wrench": ds.wrench})
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: {expected}" in msg, msg
+    assert not (tmp_path / "m").exists()
+
+
+def test_a_csv_named_npz_is_not_read_as_a_pickle(workdir, tmp_path, capsys):
+    path = tmp_path / "train.npz"
+    path.write_bytes((workdir / "data" / "train.csv").read_bytes())
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: not an .npz (zip) archive: it is a text file" in msg, msg
+    assert "pickle" not in msg

@@ -40,7 +40,7 @@ from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
-from ._readers import ColumnMap, canonical_wrench_name, read_mat_arrays, select_arrays
+from ._readers import ColumnMap, canonical_wrench_name, check_real_array, read_mat_arrays, select_arrays
 
 __all__ = ["CalibrationDataset"]
 
@@ -296,7 +296,8 @@ class CalibrationDataset:
         return ds
 
     @classmethod
-    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict) -> "CalibrationDataset":
+    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict,
+                     kind: str = "variable") -> "CalibrationDataset":
         """A dataset from named arrays (``.npz``, ``.mat``), selected by ``columns``."""
         where = str(path)
         vector_wrench = []
@@ -304,14 +305,14 @@ class CalibrationDataset:
             found = [n for n in arrays if canonical_wrench_name(n) == label]
             vector_wrench.append(found[0] if len(found) == 1 else label)
         channel_vectors = sorted((n for n in arrays if n[:1] == "s" and n[1:].isdigit()), key=lambda n: int(n[1:]))
-        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6)
-        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None)
+        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6, kind)
+        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None, kind)
         if raw.shape[0] != wrench.shape[0] and raw.shape[1] == wrench.shape[0]:
             raw = raw.T
         extra = {}
         for name in ("group", "temperature"):
             if name in arrays:
-                value = np.asarray(arrays[name])
+                value = check_real_array(arrays[name], name, where, kind)
                 extra[name] = value.ravel() if value.ndim == 2 and 1 in value.shape else value
         try:
             ds = cls(raw=raw, wrench=wrench, meta=meta, **extra)
@@ -326,9 +327,27 @@ class CalibrationDataset:
 
     @classmethod
     def _load_npz(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
+        import zipfile
+
+        if not zipfile.is_zipfile(path):  # np.load would try it as a pickle and advise allow_pickle=True
+            from ..models._model_io import _what_it_is
+
+            raise DatasetFileError(f"{path}: not an .npz (zip) archive: {_what_it_is(path)}. A dataset .npz holds "
+                                   "the arrays raw and wrench (numpy.savez); a .csv dataset must keep its .csv suffix.")
         try:
             with np.load(path, allow_pickle=False) as z:
-                arrays = {name: z[name] for name in z.files}
+                arrays = {}
+                for name in z.files:
+                    try:
+                        arrays[name] = z[name]
+                    except ValueError as exc:
+                        if "pickle" not in str(exc):
+                            raise
+                        raise DatasetFileError(f"{path}: array {name!r} holds Python objects (a pickle), which ftcal "
+                                               "never loads; save numeric arrays (numpy.savez(path, raw=..., "
+                                               "wrench=...)).") from None
+        except DatasetFileError:
+            raise
         except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
             raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
         meta_json = arrays.pop("meta_json", None)
@@ -338,7 +357,7 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
         if not isinstance(meta, dict):
             raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
-        return cls._from_arrays(path, arrays, columns, meta)
+        return cls._from_arrays(path, arrays, columns, meta, kind="array")
 
     @classmethod
     def _load_csv(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
