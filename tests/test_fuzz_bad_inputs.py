@@ -1481,3 +1481,33 @@ def test_a_csv_named_npz_is_not_read_as_a_pickle(workdir, tmp_path, capsys):
     msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
     assert f"{path}: not an .npz (zip) archive: it is a text file" in msg, msg
     assert "pickle" not in msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: predict --range
+def _range_report(tmp_path, raw_min, raw_max) -> Path:
+    path = tmp_path / "r.report.json"
+    path.write_text(json.dumps({"calibrated_range": {"raw_min": raw_min, "raw_max": raw_max}}))
+    return path
+
+
+@pytest.mark.parametrize("raw_min, raw_max, expected", [
+    ([float("nan")] * 6, [1.0] * 6, "calibrated_range.raw_min[0] is nan, not a finite number"),
+    ([1.0] * 6, [-1.0] * 6, "calibrated_range.raw_min[0] = 1 is above raw_max[0] = -1"),
+    ([0.0] * 5, [1.0] * 6, "calibrated_range.raw_min has 5 entries but raw_max has 6"),
+    ("low", [1.0] * 6, "calibrated_range.raw_min is not a list of numbers"),
+    ([0.0, "a", 0, 0, 0, 0], [1.0] * 6, "calibrated_range.raw_min is not a list of numbers"),
+])
+def test_predict_range_report_is_validated(workdir, tmp_path, capsys, raw_min, raw_max, expected):
+    report = _range_report(tmp_path, raw_min, raw_max)
+    msg = cli_error(["predict", workdir / "models" / "linear.model.npz", workdir / "data" / "test.csv", "--range",
+                     report], capsys)
+    assert msg.startswith(f"ftcal: error: --range {report}: ") and expected in msg, msg
+
+
+def test_predict_range_given_a_model_file_says_so_with_predicts_own_options(workdir, tmp_path, capsys):
+    model = workdir / "models" / "linear.model.npz"
+    msg = cli_error(["predict", model, workdir / "data" / "test.csv", "--range", model], capsys)
+    assert f"--range {model} is a model file" in msg and "--wrench" not in msg and "--channels" not in msg, msg
+    np.savez(tmp_path / "other.npz", readings=np.ones((3, 6)))
+    msg = cli_error(["predict", model, workdir / "data" / "test.csv", "--range", tmp_path / "other.npz"], capsys)
+    assert "no array 'wrench'" in msg and "--wrench" not in msg and "--channels" not in msg, msg

@@ -284,7 +284,7 @@ def select_arrays(arrays: dict[str, np.ndarray], names: Sequence[str] | None, de
         if v.ndim == 2 and 1 in v.shape:
             v = v.ravel()
         if v.ndim != 1:
-            raise DatasetFileError(f"{where}: variable {name!r} has shape {v.shape}; a {what} column must be a vector.")
+            raise DatasetFileError(f"{where}: {kind} {name!r} has shape {v.shape}; a {what} column must be a vector.")
         return v
 
     if names is None:
@@ -294,24 +294,24 @@ def select_arrays(arrays: dict[str, np.ndarray], names: Sequence[str] | None, de
             names = tuple(vector_names)
         else:
             raise DatasetFileError(
-                f"{where}: no variable {default!r} holding the {what}; the file has "
-                f"{', '.join(sorted(arrays)) or 'no numeric variables'}. Fix: name them with "
+                f"{where}: no {kind} {default!r} holding the {what}; the file has "
+                f"{', '.join(sorted(arrays)) or f'no {kind}s'}. Fix: name them with "
                 f"--{'channels' if what == 'raw channels' else 'wrench'} NAME[,NAME...]."
             )
     missing = [n for n in names if n not in arrays]
     if missing:
-        raise DatasetFileError(f"{where}: no variable {missing[0]!r}; the file has {', '.join(sorted(arrays))}.")
+        raise DatasetFileError(f"{where}: no {kind} {missing[0]!r}; the file has {', '.join(sorted(arrays))}.")
     if len(names) == 1:
         a = check_real_array(arrays[names[0]], names[0], where, kind).astype(float)
         if a.ndim == 1:
             a = a[:, None]
         if a.ndim != 2:
-            raise DatasetFileError(f"{where}: variable {names[0]!r} has shape {a.shape}; expected (n_samples, k).")
+            raise DatasetFileError(f"{where}: {kind} {names[0]!r} has shape {a.shape}; expected (n_samples, k).")
         if width is not None and a.shape[1] != width and a.shape[0] == width:
             a = a.T  # MATLAB users often store one row per component
         return a
     cols = [column(n) for n in names]
     if len({c.size for c in cols}) != 1:
-        raise DatasetFileError(f"{where}: the {what} variables have different lengths "
+        raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
                                f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
     return np.column_stack(cols).astype(float)
