@@ -1511,3 +1511,41 @@ def test_predict_range_given_a_model_file_says_so_with_predicts_own_options(work
     np.savez(tmp_path / "other.npz", readings=np.ones((3, 6)))
     msg = cli_error(["predict", model, workdir / "data" / "test.csv", "--range", tmp_path / "other.npz"], capsys)
     assert "no array 'wrench'" in msg and "--wrench" not in msg and "--channels" not in msg, msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: errors name the file
+def test_library_errors_about_the_data_name_the_dataset_file(workdir, tmp_path, capsys):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    header_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    for i in range(header_at + 1, len(lines)):  # channel s5 a copy of s4: the readings span 5 directions
+        fields = lines[i].split(",")
+        fields[5] = fields[4]
+        lines[i] = ",".join(fields)
+    path = tmp_path / "dup_channel.csv"
+    path.write_text("\n".join(lines) + "\n")
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m", "-q"], capsys)
+    assert msg.startswith(f"ftcal: error: {path}: X (raw readings") and "spans only 5" in msg, msg
+
+
+def test_report_on_too_few_rows_names_the_fold_and_the_rows_needed(workdir, tmp_path, capsys):
+    ds = CalibrationDataset.load(workdir / "data" / "train.csv")
+    small = ds.subset(np.arange(7))
+    small.group = None
+    small.save(tmp_path / "seven.csv")
+    code = main(["report", str(workdir / "models" / "linear.model.npz"), str(tmp_path / "seven.csv"), "--out",
+                 str(tmp_path / "rep"), "-q"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("ftcal: warning:")]
+    assert code == 2 and len(err) == 1, err
+    assert (f"{tmp_path / 'seven.csv'}: the report's 5-fold cross-validation of its 7 rows trains LinearCalibrator "
+            "on only 5 rows (one fold held out), but LinearCalibrator needs at least 7; 5 folds need a dataset of at "
+            "least 9 rows") in err[0], err
+    assert not (tmp_path / "rep").exists() or not list((tmp_path / "rep").iterdir())
+
+
+def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):
+    logs = tmp_path / "logs"
+    ftcal.simulate_experiment(logs, robot=ftcal.load_robot("kuka_iiwa14"), subdivisions=0, random_state=0)
+    before = sorted(p.name for p in logs.iterdir())
+    msg = cli_error(["prepare", logs, "--out", logs, "-q"], capsys)
+    assert f"--out {logs} is the logs folder {logs}, an input of this command" in msg, msg
+    assert sorted(p.name for p in logs.iterdir()) == before

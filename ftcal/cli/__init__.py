@@ -37,7 +37,8 @@ import sys
 from collections.abc import Sequence
 
 from ..core._exceptions import FtcalError
-from ._common import EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, note_inputs, signals_interrupt, standard_streams
+from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
+                      standard_streams)
 
 __all__ = ["main", "build_parser"]
 
@@ -113,7 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _silence_stdout()
         return 0
     except (FtcalError, OSError, ValueError) as exc:
-        print(f"ftcal: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"ftcal: error: {name_the_dataset(_one_line(exc), exc)}", file=sys.stderr)
         return EXIT_USAGE
     except MemoryError as exc:  # a step whose size no guard estimated: still the user's input that is too large
         detail = f" ({_one_line(exc)})" if str(exc) else ""

@@ -43,6 +43,8 @@ __all__ = [
     "add_robot_options",
     "OutputPlan",
     "note_inputs",
+    "note_dataset",
+    "name_the_dataset",
     "check_not_an_input",
     "Console",
     "write_json",
@@ -402,6 +404,27 @@ def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
 OUTPUT_ARGUMENTS = ("out", "output")
 #: The regular files the current command reads: (device, inode) -> which input it is, for the message.
 _input_files: dict[tuple[int, int], str] = {}
+#: The directories the current command reads files of (logs folders): (device, inode) -> which input.
+_input_dirs: dict[tuple[int, int], str] = {}
+#: The dataset files the current command loaded (:func:`note_dataset`), to name in the library's errors about X / y.
+_datasets: list[str] = []
+
+
+def note_dataset(path: str | os.PathLike) -> None:
+    """Record that the command loaded the dataset ``path``; :func:`name_the_dataset` puts it into the library's
+    errors about the data (``X (raw readings, shape (200, 6)) spans only 5 ...`` names no file)."""
+    if str(path) not in _datasets:
+        _datasets.append(str(path))
+
+
+def name_the_dataset(message: str, exc: BaseException) -> str:
+    """``message`` with the file of the one dataset the command loaded in front, when ``exc`` is the library's
+    error about the data (a :class:`~ftcal.CalibrationInputError`) and the message names no loaded file."""
+    from ..core._exceptions import CalibrationInputError
+
+    if isinstance(exc, CalibrationInputError) and len(_datasets) == 1 and _datasets[0] not in message:
+        return f"{_datasets[0]}: {message}"
+    return message
 
 
 def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
@@ -422,6 +445,8 @@ def note_inputs(args: argparse.Namespace) -> None:
     by device and inode, so another spelling of the path, a symbolic link or a hard link is the same file.
     """
     _input_files.clear()
+    _input_dirs.clear()
+    _datasets.clear()
     for dest, value in vars(args).items():
         if dest in OUTPUT_ARGUMENTS or callable(value):
             continue
@@ -434,6 +459,12 @@ def note_inputs(args: argparse.Namespace) -> None:
             except OSError:
                 continue
             role = dest.replace("_", " ")
+            if path.is_dir():
+                try:
+                    st = path.stat()
+                    _input_dirs.setdefault((st.st_dev, st.st_ino), f"the {role} folder {path}")
+                except OSError:
+                    pass
             for child in children[:100_000]:
                 file_id = _regular_file_id(child)
                 if file_id is not None:
@@ -496,6 +527,13 @@ class OutputPlan:
         self.force = force
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
+        try:
+            st = self.out_dir.stat()
+        except OSError:
+            st = None
+        if st is not None and (st.st_dev, st.st_ino) in _input_dirs:
+            raise CliError(f"{option} {self.out_dir} is {_input_dirs[(st.st_dev, st.st_ino)]}, an input of this "
+                           f"command: its outputs would mix with (and be read as) its inputs. Choose another {option}")
         check_writable_dir(self.out_dir, CliError)
         for n in self.names:
             for folder in list((self.out_dir / n).parents)[:len(Path(n).parts) - 1]:  # its folders inside out_dir
