@@ -1549,3 +1549,30 @@ def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):
     msg = cli_error(["prepare", logs, "--out", logs, "-q"], capsys)
     assert f"--out {logs} is the logs folder {logs}, an input of this command" in msg, msg
     assert sorted(p.name for p in logs.iterdir()) == before
+
+
+# ------------------------------------------------------------------ fuzz session 9: broken URDF files
+_NO_LIMITS_URDF = """<?xml version="1.0"?>
+<robot name="r">
+  <link name="a"/><link name="b"/>
+  <joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("content, expected", [
+    ("garbage\n", "line 1, column 1: not valid XML (syntax error)"),
+    ('<?xml version="1.0"?>\n<robot name="r">\n  <link name="a">\n</robot>\n', "line 4, column 3: not valid XML"),
+    ("", "the URDF file is empty"),
+    (_NO_LIMITS_URDF, "urdfdom: Joint [j] is of type REVOLUTE but it does not specify limits"),
+])
+def test_a_broken_urdf_is_one_line_saying_what_is_wrong(tmp_path, content, expected):
+    urdf = tmp_path / "g.urdf"
+    urdf.write_text(content)
+    proc = subprocess.run([sys.executable, "-m", "ftcal", "plan", "--robot", str(urdf), "--sensor-frame", "b",
+                           "--out", str(tmp_path / "plan"), "-q"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and err[0].startswith("ftcal: error: ") and expected in err[0], err
+    assert str(urdf) in err[0]

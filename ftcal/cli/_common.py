@@ -41,6 +41,7 @@ __all__ = [
     "add_run_options",
     "add_scheduler_option",
     "add_robot_options",
+    "load_robot_from_args",
     "OutputPlan",
     "note_inputs",
     "note_dataset",
@@ -354,6 +355,80 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
         help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation vector [deg] "
         "and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z on a 12 mm adapter)",
     )
+
+
+def load_robot_from_args(args: argparse.Namespace):
+    """The robot of ``--robot`` / ``--sensor-frame`` / ``--sensor-mounting``, every problem in one line.
+
+    A ``.urdf`` path is first checked as XML (a syntax error is named with its line and column), then parsed by
+    Pinocchio with the C++ stderr of urdfdom captured: its ``Error:`` lines would otherwise precede ftcal's own
+    message; the first of them says what is wrong and joins the message. After a successful parse its
+    warnings, if any, are shown as they would have been.
+    """
+    import ftcal
+
+    robot = str(args.robot)
+    if robot.lower().endswith(".urdf") and Path(robot).is_file():
+        _check_urdf_xml(Path(robot))
+    with _captured_stderr_fd() as captured:
+        try:
+            model = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+        except (FtcalError, ValueError) as exc:
+            failure, text = exc, captured()
+        else:
+            failure, text = None, captured()
+    if failure is not None:
+        errors = [line.split("Error:", 1)[1].strip() for line in text.splitlines() if line.strip().startswith("Error:")]
+        if not errors:
+            raise failure
+        raise CliError(f"{failure} urdfdom: {errors[0]}") from None
+    if text:
+        sys.stderr.write(text)
+    return model
+
+
+def _check_urdf_xml(path: Path) -> None:
+    """Raise :class:`CliError` naming the line and column of an XML syntax error of the URDF ``path``."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        ET.parse(path)
+    except ET.ParseError as exc:
+        line, column = getattr(exc, "position", (None, None))
+        reason = str(exc).split(":")[0]
+        if path.stat().st_size == 0:
+            raise CliError(f"--robot {path}: the URDF file is empty") from None
+        raise CliError(f"--robot {path}: line {line}, column {column + 1 if column is not None else '?'}: not "
+                       f"valid XML ({reason}); a URDF is an XML file") from None
+    except OSError as exc:
+        raise CliError(f"--robot {path}: {exc.strerror or exc}") from None
+
+
+@contextlib.contextmanager
+def _captured_stderr_fd() -> Iterator[Any]:
+    """Within the block, file descriptor 2 (C and C++ code's stderr) goes to a temporary file; yields a function
+    returning what was written so far."""
+    import tempfile
+
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):  # no usable fd 2: nothing to capture
+        yield lambda: ""
+        return
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        os.dup2(sink.fileno(), 2)
+
+        def captured() -> str:
+            sink.flush()
+            sink.seek(0)
+            return sink.read().decode("utf-8", "replace")
+
+        try:
+            yield captured
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
 
 
 def _mounting(text: str) -> tuple[float, ...]:
