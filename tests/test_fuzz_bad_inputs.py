@@ -1576,3 +1576,20 @@ def test_a_broken_urdf_is_one_line_saying_what_is_wrong(tmp_path, content, expec
     assert proc.returncode == 2, err
     assert len(err) == 1 and err[0].startswith("ftcal: error: ") and expected in err[0], err
     assert str(urdf) in err[0]
+
+
+# ------------------------------------------------------------------ fuzz session 9: tune distributions
+@pytest.mark.parametrize("grid, n_iter, expected", [
+    ("ridge=loguniform(1,0)", True, "loguniform(a, b) needs 0 < a < b; got a = 1, b = 0"),
+    ("ridge=loguniform(0, 1)", True, "loguniform(a, b) needs 0 < a < b; got a = 0, b = 1"),
+    ("ridge=uniform(2, 2)", True, "uniform(a, b) needs a < b"),
+    ("ridge=randint(1.5, 3)", True, "randint(a, b) needs integers a <= b"),
+    ("ridge=loguniform(nan, 1)", True, "loguniform(a, b) needs finite bounds"),
+    ("ridge=loguniform(1e-4, 1e-2)", False, "a distribution is sampled by a randomized search; pass --n-iter N"),
+])
+def test_tune_distribution_bounds_are_checked_before_any_work(workdir, tmp_path, capsys, grid, n_iter, expected):
+    argv = ["tune", workdir / "data" / "train.csv", "--grid", grid, "--out", tmp_path / "t", "-q",
+            *(["--n-iter", "2"] if n_iter else [])]
+    msg = cli_error(argv, capsys)
+    assert f"--grid '{grid}': {expected}" in msg and "Domain error" not in msg, msg
+    assert not (tmp_path / "t").exists()
