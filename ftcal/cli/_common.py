@@ -174,16 +174,29 @@ class _ClosedStream:
     """Stands in for a standard stream the shell closed (``>&-``, ``<&-``; Python then sets it to ``None``).
 
     Without it ``print`` would drop the output silently (``sys.stdout is None``) and reading would fail with an
-    ``AttributeError``; any use raises :class:`CliError` naming the stream instead.
+    ``AttributeError``. Writing or reading raises :class:`CliError` naming the stream; a command that never uses
+    the stream runs as before (``flush`` does nothing, ``isatty`` is false, other attributes are absent, as on
+    ``None``: pandas asks for ``sys.stdout.encoding`` at import).
     """
 
     def __init__(self, name: str, fix: str) -> None:
         self._name = name
         self._fix = fix
 
+    def _closed(self, *args: Any, **kwargs: Any) -> Any:
+        use = "redirect it to a file or a pipe" if self._name == "output" else "give the input as a file or pipe it in"
+        raise CliError(f"standard {self._name} is closed (the command was run with {self._fix}); {use}")
+
+    write = writelines = read = readline = readlines = __iter__ = __next__ = _closed
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
     def __getattr__(self, attr: str) -> Any:
-        raise CliError(f"standard {self._name} is closed (the command was run with {self._fix}); "
-                       f"{'redirect it to a file or a pipe' if self._name == 'output' else 'give the input as a file or pipe it in'}")
+        raise AttributeError(attr)
 
 
 class _CheckedStdout:

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..io._dataset import CalibrationDataset
-from ..core._wrench import alpha_from_wrenches
+from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
@@ -68,12 +68,13 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
 
     dataset = CalibrationDataset.load(path, columns=columns)
     note_dataset(path)
-    for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
+    for array, name, labels in ((dataset.raw, "raw reading", [f"s{k}" for k in range(dataset.n_channels)]),
+                                (dataset.wrench, "wrench", list(WRENCH_LABELS))):
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
         if big.any():
             row, col = (int(v) for v in np.argwhere(big)[0])
             raise CliError(f"{path}: {data_row_location(path, row)}: a {name} of {array[row, col]:.6g} (column "
-                           f"{col}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
+                           f"{labels[col]}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
                            "overflow; check the units and that line")
     return dataset
 
