@@ -1601,3 +1601,21 @@ def test_tune_distribution_bounds_are_checked_before_any_work(workdir, tmp_path,
     msg = cli_error(argv, capsys)
     assert f"--grid '{grid}': {expected}" in msg and "Domain error" not in msg, msg
     assert not (tmp_path / "t").exists()
+
+
+@pytest.mark.parametrize("reader", ["predict", "log"])
+def test_digits_of_other_scripts_are_refused_by_every_text_reader(workdir, tmp_path, capsys, reader):
+    arabic = "\u0661\u0662"  # float() reads it as 12
+    if reader == "predict":
+        path = tmp_path / "r.csv"
+        path.write_text(f"s0,s1,s2,s3,s4,s5\n0.1,0.2,{arabic},0.4,0.5,0.6\n")
+        msg = cli_error(["predict", workdir / "models" / "linear.model.npz", path], capsys)
+        assert f"{path}: line 2: '{arabic}' is not a number" in msg, msg
+    else:
+        path = ftcal.write_run_log(tmp_path / "run.csv", timestamp=[0.0, 1.0], run_kind=["load", "load"],
+                                   config=[0, 0], pose=[0, 1], q=np.zeros((2, 7)), raw=np.ones((2, 6)), load_mass=2.0)
+        lines = path.read_text().splitlines()
+        lines[-1] = lines[-1].rsplit(",", 1)[0] + "," + arabic
+        path.write_text("\n".join(lines) + "\n")
+        with pytest.raises(LogFormatError, match=rf"line {len(lines)}: column s5: '{arabic}' is not a number"):
+            ftcal.read_run_log(path)

@@ -40,7 +40,8 @@ from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
-from ._readers import ColumnMap, canonical_wrench_name, check_real_array, read_mat_arrays, select_arrays
+from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, parse_plain_number, read_mat_arrays,
+                       select_arrays)
 
 __all__ = ["CalibrationDataset"]
 
@@ -478,6 +479,4 @@ def _check_fields(line: str, no: int, names: list[str], path) -> None:
         column = names[k] if k < len(names) else f"{k + 1}"
         if not text:
             raise DatasetFileError(f"{path}: line {no}, column {column}: empty value; every cell needs a number.")
-        if not (text.isascii() and is_number(text)):
-            raise DatasetFileError(f"{path}: line {no}, column {column}: {text!r} is not a number (plain decimal or "
-                                   "scientific notation, e.g. 1000 or 1e3).")
+        parse_plain_number(text, f"{path}: line {no}, column {column}", DatasetFileError)

@@ -39,6 +39,7 @@ __all__ = [
     "lever_arm_problem",
     "read_mat_arrays",
     "check_real_array",
+    "parse_plain_number",
 ]
 
 #: Force units ftcal reads, as the factor to [N].
@@ -226,6 +227,29 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m") -> str | None
                 "--torque-unit N.m.")
     return (f"{head}: the torques look too small for the forces (forces in mN? torques in kN·m?). Fix: declare the "
             "units with --force-unit / --torque-unit; if the values are right, confirm with --torque-unit N.m.")
+
+
+def parse_plain_number(text: str, where: str, error: type[Exception]) -> float:
+    """``float(text)`` of a plain ASCII decimal / scientific number, else ``error`` naming ``where``: the one number
+    parser of ftcal's text readers (datasets, run logs, ``ftcal predict``'s readings). Unlike ``float`` (and
+    :func:`ftcal.core._columns.parse_number`, whose pattern's ``\\d`` matches any script's digits), it refuses
+    ``١٢`` (Arabic-Indic digits) and other non-ASCII look-alikes, which no sensor logger writes.
+
+    Examples
+    --------
+    >>> parse_plain_number(" -2.5e1", "x.csv: line 3", ValueError)
+    -25.0
+    >>> parse_plain_number("\u0661\u0662", "x.csv: line 3", ValueError)
+    Traceback (most recent call last):
+    ...
+    ValueError: x.csv: line 3: '١٢' is not a number (plain decimal or scientific notation, e.g. 1000 or 1e3).
+    """
+    from ..core._columns import parse_number
+
+    if not text.isascii():
+        raise error(f"{where}: {text.strip()!r} is not a number (plain decimal or scientific notation, e.g. 1000 or "
+                    "1e3).")
+    return parse_number(text, where, error)
 
 
 def read_mat_arrays(path) -> dict:
