@@ -114,7 +114,7 @@ def test_run_logs_carry_temperature_into_the_prepared_dataset(tmp_path):
     lines = paths[0].read_text().splitlines()
     lines[-1] = lines[-1].rsplit(",", 1)[0] + ",1e9"
     paths[0].write_text("\n".join(lines) + "\n")
-    with pytest.raises(LogFormatError, match=r"line \d+: temperature row \d+ is 1e\+09 deg C"):
+    with pytest.raises(LogFormatError, match=r"line \d+, column temperature: temperature is 1e\+09 deg C"):
         ftcal.read_run_log(paths[0])
 
 

@@ -41,7 +41,7 @@ from ..core._files import atomic_output
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
 from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, parse_plain_number, read_mat_arrays,
-                       select_arrays)
+                       select_arrays, temperature_message)
 
 __all__ = ["CalibrationDataset"]
 
@@ -421,8 +421,7 @@ class CalibrationDataset:
             except TemperatureValueError as exc:
                 if exc.row is None:
                     raise DatasetFileError(f"{path}: {exc}") from None
-                text = re.sub(r"^temperature row \d+ ", "temperature ", str(exc)).replace("that row", "that line")
-                raise DatasetFileError(f"{path}: line {line_nos[exc.row]}, column temperature: {text}") from None
+                raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
         try:
             ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
         except DatasetFileError as exc:

@@ -54,7 +54,7 @@ from ..core._columns import read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
-from ._readers import parse_plain_number
+from ._readers import parse_plain_number, temperature_message
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -325,8 +325,9 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         try:
             check_temperature(temp, n)
         except TemperatureValueError as exc:
-            where = "" if exc.row is None else f" line {line[exc.row]}:"
-            raise LogFormatError(f"{path}:{where} {exc}") from None
+            if exc.row is None:
+                raise LogFormatError(f"{path}: {exc}") from None
+            raise LogFormatError(temperature_message(exc, path, int(line[exc.row]))) from None
     return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
                   line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
                   sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)

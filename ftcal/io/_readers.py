@@ -252,6 +252,12 @@ def parse_plain_number(text: str, where: str, error: type[Exception]) -> float:
     return parse_number(text, where, error)
 
 
+def temperature_message(exc: Exception, path, line_no: int) -> str:
+    """The library's "temperature row 5 is NaN ..." (a row of the array) as the text file's line and column."""
+    text = re.sub(r"^temperature row \d+ ", "temperature ", str(exc)).replace("that row", "that line")
+    return f"{path}: line {line_no}, column temperature: {text}"
+
+
 def read_mat_arrays(path) -> dict:
     """The variables of a MATLAB ``.mat`` file (v4-v7; v7.3 is HDF5 and refused with the fix).
 
