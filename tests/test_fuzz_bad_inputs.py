@@ -1619,3 +1619,9 @@ def test_digits_of_other_scripts_are_refused_by_every_text_reader(workdir, tmp_p
         path.write_text("\n".join(lines) + "\n")
         with pytest.raises(LogFormatError, match=rf"line {len(lines)}: column s5: '{arabic}' is not a number"):
             ftcal.read_run_log(path)
+
+
+def test_parameter_errors_are_not_blamed_on_the_dataset(workdir, tmp_path, capsys):
+    msg = cli_error(["fit", workdir / "data" / "train.csv", "--model", "linear", "--param", "ridge=-1", "--out",
+                     tmp_path / "m", "-q"], capsys)
+    assert "'ridge' parameter" in msg and str(workdir / "data" / "train.csv") not in msg, msg

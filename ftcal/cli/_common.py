@@ -507,10 +507,22 @@ def note_dataset(path: str | os.PathLike) -> None:
 
 def name_the_dataset(message: str, exc: BaseException) -> str:
     """``message`` with the file of the one dataset the command loaded in front, when ``exc`` is the library's
-    error about the data (a :class:`~ftcal.CalibrationInputError`) and the message names no loaded file."""
+    error about the data (a :class:`~ftcal.CalibrationInputError` about ``X`` or ``y``) and names no loaded file.
+
+    Examples
+    --------
+    >>> from ftcal.core._exceptions import CalibrationInputError
+    >>> _datasets[:] = ["d.csv"]
+    >>> name_the_dataset("X (raw readings) spans only 5 directions", CalibrationInputError())
+    'd.csv: X (raw readings) spans only 5 directions'
+    >>> name_the_dataset("The 'ridge' parameter must be >= 0", CalibrationInputError())
+    "The 'ridge' parameter must be >= 0"
+    >>> _datasets.clear()
+    """
     from ..core._exceptions import CalibrationInputError
 
-    if isinstance(exc, CalibrationInputError) and len(_datasets) == 1 and _datasets[0] not in message:
+    about_data = isinstance(exc, CalibrationInputError) and re.match(r"(X|y)\b", message) is not None
+    if about_data and len(_datasets) == 1 and _datasets[0] not in message:  # not a --param value's error
         return f"{_datasets[0]}: {message}"
     return message
 
