@@ -245,7 +245,7 @@ def test_underscore_numbers_are_refused(workdir, tmp_path, capsys):
     fields[0] = "1_000"
     bad = tmp_path / "underscore.csv"
     bad.write_text("\n".join(body[:3] + [",".join(fields)] + body[4:]) + "\n")
-    with pytest.raises(DatasetFileError, match=r"line 4: '1_000' is not a number"):
+    with pytest.raises(DatasetFileError, match=r"line 4, column s0: '1_000' is not a number"):
         CalibrationDataset.load(bad)
     readings = tmp_path / "r.csv"
     readings.write_text("1_000,0.2,0.3,0.4,0.5,0.6\n")  # a first line of numbers is data, not a header
@@ -323,7 +323,7 @@ def test_diverging_training_is_an_error(hidden):
 
 # ------------------------------------------------------------------ 8. labels and dtypes
 def test_fractional_group_labels_are_refused():
-    with pytest.raises(DatasetFileError, match="row 1 holds 1.7"):
+    with pytest.raises(DatasetFileError, match=r"row 1 \(rows counted from 0\) holds 1.7"):
         CalibrationDataset(raw=np.ones((3, 6)), wrench=np.zeros((3, 6)), group=[0, 1.7, 2])
     ds = CalibrationDataset(raw=np.ones((3, 6)), wrench=np.zeros((3, 6)), group=np.array([0.0, 1.0, 2.0]))
     assert ds.group.dtype == np.int64
@@ -1030,7 +1030,7 @@ def test_values_no_fit_can_square_are_named_by_file_line(workdir, tmp_path, caps
     argv = (["fit", path, "--model", "linear"] if command == "fit"
             else ["evaluate", path, workdir / "models" / "linear.model.npz"]) + ["--out", tmp_path / "o"]
     msg = cli_error(argv, capsys)
-    assert f"{path}: line {len(comments) + 8}: a raw reading of 1e+308 (column 2)" in msg
+    assert f"{path}: line {len(comments) + 8}: a raw reading of 1e+308 (column s2)" in msg
 
 
 # --- review of the merged round: a huge network, labels with no order, a range file of another sensor ---------
@@ -1296,3 +1296,332 @@ def test_gp_far_outside_its_data_gives_the_linear_mean_or_an_error_never_a_warni
         assert np.all(np.isfinite(std)) and np.all(std[1] >= std[0])
         with pytest.raises(CalibrationInputError, match="X row 1 .*non-finite standard deviation"):
             with_linear.predict(far, return_std=True)
+
+
+# ------------------------------------------------------------------ fuzz session 9: standard streams and signals
+def _closing(fd: int):
+    def close() -> None:
+        _default_sigint()
+        os.close(fd)
+    return close
+
+
+@pytest.mark.parametrize("command, fd, message", [
+    ("predict", 1, "standard output is closed"),
+    ("predict-stdin", 0, "standard input is closed"),
+    ("evaluate", 1, "standard output is closed"),
+])
+def test_closed_standard_streams_are_one_clear_error(workdir, tmp_path, command, fd, message):
+    model = workdir / "models" / "linear.model.npz"
+    if command == "predict":
+        args = ["predict", model, workdir / "data" / "test.csv"]
+    elif command == "predict-stdin":
+        args = ["predict", model, "-"]
+    else:
+        args = ["evaluate", workdir / "data" / "test.csv", model, "--no-plots", "--out", tmp_path / "ev", "-q"]
+    proc = subprocess.run([sys.executable, "-m", "ftcal", *map(str, args)], cwd=tmp_path,
+                          stdout=subprocess.DEVNULL if fd == 0 else None,
+                          stderr=subprocess.PIPE, text=True, preexec_fn=_closing(fd), timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and err[0].startswith("ftcal: error: ") and message in err[0], err
+
+
+def test_a_command_that_does_not_use_the_closed_stream_still_runs(workdir, tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "ftcal", "fit", str(workdir / "data" / "train.csv"), "--model",
+                           "linear", "--out", str(tmp_path / "m"), "-q"], cwd=tmp_path, stderr=subprocess.PIPE,
+                          text=True, preexec_fn=_closing(1), timeout=300)  # imports pandas, which reads stdout's encoding
+    assert proc.returncode == 0 and proc.stderr == "", proc.stderr
+    assert (tmp_path / "m" / "linear.model.npz").is_file()
+
+
+def test_a_full_standard_output_is_named(workdir, tmp_path):
+    with open("/dev/full", "w") as full:
+        proc = subprocess.run([sys.executable, "-m", "ftcal", "predict", str(workdir / "models" / "linear.model.npz"),
+                               str(workdir / "data" / "test.csv")], cwd=tmp_path, stdout=full, stderr=subprocess.PIPE,
+                              text=True, timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and "could not write to standard output (No space left on device)" in err[0], err
+
+
+def test_a_reader_that_leaves_early_is_no_error(workdir, tmp_path):
+    big = tmp_path / "big.csv"
+    line = ",".join(["0.1"] * 6) + "\n"
+    big.write_text("s0,s1,s2,s3,s4,s5\n" + line * 200_000)
+    proc = subprocess.Popen([sys.executable, "-m", "ftcal", "predict", str(workdir / "models" / "linear.model.npz"),
+                             str(big)], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    proc.stdout.readline()
+    proc.stdout.close()  # `| head -1`
+    err = proc.communicate(timeout=300)[1].decode()
+    assert proc.returncode == 0 and err == "", err
+
+
+@pytest.mark.parametrize("command", ["predict", "fit"])
+def test_sighup_removes_the_partial_output(workdir, tmp_path, command):
+    if command == "predict":
+        out = tmp_path / "wrench.csv"
+        args = ["predict", workdir / "models" / "linear.model.npz", "-", "--output", out]
+        proc = subprocess.Popen([sys.executable, "-m", "ftcal", *map(str, args)], cwd=tmp_path, stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        proc.stdin.write("0.1,0.2,0.3,0.4,0.5,0.6\n" * 10)
+        proc.stdin.flush()  # mid-stream: the partial file exists
+        _wait_for(lambda: list(tmp_path.glob(".wrench.*.partial.csv")), "the partial output", proc)
+        proc.send_signal(signal.SIGHUP)
+        err = proc.communicate(timeout=120)[1]
+        code = proc.returncode
+    else:
+        out = tmp_path / "models"
+        out.mkdir()
+        args = ["fit", workdir / "data" / "train.csv", "--model", "directional", "--schedule", "short", "--param",
+                "max_epochs=20000", "--param", "hidden_layer_sizes=[8]", "--out", out, "--force"]
+        code, err = _interrupt_after_training_starts(_start_cli(args, tmp_path), "fitting", signal.SIGHUP)
+    assert code == 128 + signal.SIGHUP, err
+    assert "interrupted by SIGHUP (no half-written file is left)" in err and "Traceback" not in err
+    assert not list(tmp_path.rglob(".*partial*"))
+    assert not out.exists() if command == "predict" else not list(out.iterdir())
+
+
+# ------------------------------------------------------------------ fuzz session 9: dataset CSV lines and comments
+def _edit_cell(workdir, tmp_path, data_row: int, column: str, value: str) -> Path:
+    """train.csv with one cell of data row ``data_row`` (0-based) replaced; line numbers are those of the file."""
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    header_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    names = lines[header_at].split(",")
+    fields = lines[header_at + 1 + data_row].split(",")
+    fields[names.index(column)] = value
+    lines[header_at + 1 + data_row] = ",".join(fields)
+    path = tmp_path / f"edited_{column}.csv"
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("column, value, expected", [
+    ("Fz", "", "column Fz: empty value"),
+    ("Fz", "1.0.0", "column Fz: '1.0.0' is not a number"),
+    ("s2", "\u0661\u0662", "column s2: '\u0661\u0662' is not a number"),
+    ("s2", "nan", "column s2: 'nan' is NaN or inf"),
+    ("group", "1.5", "column group: 1.5 is not an integer label"),
+])
+def test_dataset_value_errors_name_the_file_line_and_column(workdir, tmp_path, capsys, column, value, expected):
+    path = _edit_cell(workdir, tmp_path, 3, column, value)  # data row 3 is line 6 (meta, header, rows 0-2)
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: line 6, {expected}" in msg, msg
+    assert "row 3" not in msg
+
+
+@pytest.mark.parametrize("value, expected", [("nan", "temperature is NaN or inf"), ("300", "is it in kelvin")])
+def test_dataset_temperature_errors_name_the_file_line(tmp_path, value, expected):
+    ds = CalibrationDataset(raw=np.eye(8, 6), wrench=np.eye(8, 6), temperature=np.linspace(20, 30, 8))
+    lines = ds.save(tmp_path / "d.csv").read_text().splitlines()
+    lines[7] = lines[7].rsplit(",", 1)[0] + "," + value  # data row 5, file line 8
+    (tmp_path / "d.csv").write_text("\n".join(lines) + "\n")
+    with pytest.raises(DatasetFileError, match=rf"d\.csv: line 8, column temperature: .*{expected}"):
+        CalibrationDataset.load(tmp_path / "d.csv")
+
+
+def test_dataset_npz_errors_say_how_rows_are_counted(tmp_path):
+    raw = np.ones((4, 6))
+    raw[1, 2] = np.nan
+    np.savez(tmp_path / "d.npz", raw=raw, wrench=np.zeros((4, 6)))
+    with pytest.raises(DatasetFileError, match=r"d\.npz: array 'raw', row 1 \(rows counted from 0\): NaN or inf"):
+        CalibrationDataset.load(tmp_path / "d.npz")
+
+
+@pytest.mark.parametrize("where", ["top", "after_meta", "after_header", "between_rows", "end"])
+def test_blank_and_comment_lines_are_skipped_anywhere_in_a_dataset(workdir, tmp_path, where):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    at = {"top": 0, "after_meta": 1, "after_header": 2, "between_rows": 10, "end": len(lines)}[where]
+    edited = lines[:at] + ["", "# a comment", "   "] + lines[at:]
+    path = tmp_path / "d.csv"
+    path.write_text("\n".join(edited) + "\n")
+    original = CalibrationDataset.load(workdir / "data" / "train.csv")
+    back = CalibrationDataset.load(path)
+    np.testing.assert_array_equal(back.raw, original.raw)
+    np.testing.assert_array_equal(back.group, original.group)
+    assert back.meta == original.meta
+    last = len(edited) - 1 - (3 if where == "end" else 0)  # the last data line: its number is the file's
+    edited[last] = "1_000" + edited[last][edited[last].index(","):]
+    path.write_text("\n".join(edited) + "\n")
+    with pytest.raises(DatasetFileError, match=rf"line {last + 1}, column s0: '1_000'"):
+        CalibrationDataset.load(path)
+
+
+def test_a_second_meta_comment_is_refused_naming_both_lines(workdir, tmp_path, capsys):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    path = tmp_path / "d.csv"
+    path.write_text("\n".join(lines[:1] + ['# meta: {"alpha": 5.0}'] + lines[1:]) + "\n")
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: line 2: a second '# meta:' comment (the first is line 1)" in msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: array types and foreign files
+@pytest.mark.parametrize("suffix, make, expected", [
+    (".npz", lambda raw: raw.astype(complex), "array 'raw' has dtype complex128 (complex numbers)"),
+    (".npz", lambda raw: raw > 0, "array 'raw' has dtype bool (booleans)"),
+    (".npz", lambda raw: raw.astype("datetime64[s]"), "array 'raw' has dtype datetime64[s] (dates)"),
+    (".npz", lambda raw: raw.astype(str), "array 'raw' has dtype <U"),
+    (".npz", lambda raw: raw.astype(object), "array 'raw' holds Python objects (a pickle), which ftcal never loads"),
+    (".mat", lambda raw: raw.astype(complex), "variable 'raw' has dtype complex128 (complex numbers)"),
+    (".mat", lambda raw: np.array([raw], dtype=object), "variable 'raw' has dtype object (objects (a MATLAB cell"),
+    (".mat", lambda raw: {"a": raw}, "variable 'raw' has dtype [('a', 'O')] (records (a MATLAB struct))"),
+    (".mat", lambda raw: __import__("scipy.sparse").sparse.csr_matrix(raw), "variable 'raw' is a sparse matrix"),
+    (".mat", lambda raw: "text", "variable 'raw' has dtype <U4 (text)"),
+])
+def test_arrays_that_are_not_real_numbers_are_refused_by_name_and_type(workdir, tmp_path, capsys, suffix, make,
+                                                                       expected):
+    import scipy.io
+
+    ds = CalibrationDataset.load(workdir / "data" / "train.csv")
+    path = tmp_path / f"d{suffix}"
+    if suffix == ".npz":
+        np.savez(path, raw=make(ds.raw), wrench=ds.wrench)
+    else:
+        scipy.io.savemat(path, {"raw": make(ds.raw), "wrench": ds.wrench})
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: {expected}" in msg, msg
+    assert not (tmp_path / "m").exists()
+
+
+def test_a_csv_named_npz_is_not_read_as_a_pickle(workdir, tmp_path, capsys):
+    path = tmp_path / "train.npz"
+    path.write_bytes((workdir / "data" / "train.csv").read_bytes())
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m"], capsys)
+    assert f"{path}: not an .npz (zip) archive: it is a text file" in msg, msg
+    assert "pickle" not in msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: predict --range
+def _range_report(tmp_path, raw_min, raw_max) -> Path:
+    path = tmp_path / "r.report.json"
+    path.write_text(json.dumps({"calibrated_range": {"raw_min": raw_min, "raw_max": raw_max}}))
+    return path
+
+
+@pytest.mark.parametrize("raw_min, raw_max, expected", [
+    ([float("nan")] * 6, [1.0] * 6, "calibrated_range.raw_min[0] is nan, not a finite number"),
+    ([1.0] * 6, [-1.0] * 6, "calibrated_range.raw_min[0] = 1 is above raw_max[0] = -1"),
+    ([0.0] * 5, [1.0] * 6, "calibrated_range.raw_min has 5 entries but raw_max has 6"),
+    ("low", [1.0] * 6, "calibrated_range.raw_min is not a list of numbers"),
+    ([0.0, "a", 0, 0, 0, 0], [1.0] * 6, "calibrated_range.raw_min is not a list of numbers"),
+])
+def test_predict_range_report_is_validated(workdir, tmp_path, capsys, raw_min, raw_max, expected):
+    report = _range_report(tmp_path, raw_min, raw_max)
+    msg = cli_error(["predict", workdir / "models" / "linear.model.npz", workdir / "data" / "test.csv", "--range",
+                     report], capsys)
+    assert msg.startswith(f"ftcal: error: --range {report}: ") and expected in msg, msg
+
+
+def test_predict_range_given_a_model_file_says_so_with_predicts_own_options(workdir, tmp_path, capsys):
+    model = workdir / "models" / "linear.model.npz"
+    msg = cli_error(["predict", model, workdir / "data" / "test.csv", "--range", model], capsys)
+    assert f"--range {model} is a model file" in msg and "--wrench" not in msg and "--channels" not in msg, msg
+    np.savez(tmp_path / "other.npz", readings=np.ones((3, 6)))
+    msg = cli_error(["predict", model, workdir / "data" / "test.csv", "--range", tmp_path / "other.npz"], capsys)
+    assert "no array 'wrench'" in msg and "--wrench" not in msg and "--channels" not in msg, msg
+
+
+# ------------------------------------------------------------------ fuzz session 9: errors name the file
+def test_library_errors_about_the_data_name_the_dataset_file(workdir, tmp_path, capsys):
+    lines = (workdir / "data" / "train.csv").read_text().splitlines()
+    header_at = next(i for i, ln in enumerate(lines) if not ln.startswith("#"))
+    for i in range(header_at + 1, len(lines)):  # channel s5 a copy of s4: the readings span 5 directions
+        fields = lines[i].split(",")
+        fields[5] = fields[4]
+        lines[i] = ",".join(fields)
+    path = tmp_path / "dup_channel.csv"
+    path.write_text("\n".join(lines) + "\n")
+    msg = cli_error(["fit", path, "--model", "linear", "--out", tmp_path / "m", "-q"], capsys)
+    assert msg.startswith(f"ftcal: error: {path}: X (raw readings") and "spans only 5" in msg, msg
+
+
+def test_report_on_too_few_rows_names_the_fold_and_the_rows_needed(workdir, tmp_path, capsys):
+    ds = CalibrationDataset.load(workdir / "data" / "train.csv")
+    small = ds.subset(np.arange(7))
+    small.group = None
+    small.save(tmp_path / "seven.csv")
+    code = main(["report", str(workdir / "models" / "linear.model.npz"), str(tmp_path / "seven.csv"), "--out",
+                 str(tmp_path / "rep"), "-q"])
+    err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("ftcal: warning:")]
+    assert code == 2 and len(err) == 1, err
+    assert (f"{tmp_path / 'seven.csv'}: the report's 5-fold cross-validation of its 7 rows trains LinearCalibrator "
+            "on only 5 rows (one fold held out), but LinearCalibrator needs at least 7; 5 folds need a dataset of at "
+            "least 9 rows") in err[0], err
+    assert not (tmp_path / "rep").exists() or not list((tmp_path / "rep").iterdir())
+
+
+def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):
+    logs = tmp_path / "logs"
+    ftcal.simulate_experiment(logs, robot=ftcal.load_robot("kuka_iiwa14"), subdivisions=0, random_state=0)
+    before = sorted(p.name for p in logs.iterdir())
+    msg = cli_error(["prepare", logs, "--out", logs, "-q"], capsys)
+    assert f"--out {logs} is the logs folder {logs}, an input of this command" in msg, msg
+    assert sorted(p.name for p in logs.iterdir()) == before
+
+
+# ------------------------------------------------------------------ fuzz session 9: broken URDF files
+_NO_LIMITS_URDF = """<?xml version="1.0"?>
+<robot name="r">
+  <link name="a"/><link name="b"/>
+  <joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/></joint>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("content, expected", [
+    ("garbage\n", "line 1, column 1: not valid XML (syntax error)"),
+    ('<?xml version="1.0"?>\n<robot name="r">\n  <link name="a">\n</robot>\n', "line 4, column 3: not valid XML"),
+    ("", "the URDF file is empty"),
+    (_NO_LIMITS_URDF, "urdfdom: Joint [j] is of type REVOLUTE but it does not specify limits"),
+])
+def test_a_broken_urdf_is_one_line_saying_what_is_wrong(tmp_path, content, expected):
+    urdf = tmp_path / "g.urdf"
+    urdf.write_text(content)
+    proc = subprocess.run([sys.executable, "-m", "ftcal", "plan", "--robot", str(urdf), "--sensor-frame", "b",
+                           "--out", str(tmp_path / "plan"), "-q"], cwd=tmp_path, capture_output=True, text=True,
+                          timeout=300)
+    err = proc.stderr.strip().splitlines()
+    assert proc.returncode == 2, err
+    assert len(err) == 1 and err[0].startswith("ftcal: error: ") and expected in err[0], err
+    assert str(urdf) in err[0]
+
+
+# ------------------------------------------------------------------ fuzz session 9: tune distributions
+@pytest.mark.parametrize("grid, n_iter, expected", [
+    ("ridge=loguniform(1,0)", True, "loguniform(a, b) needs 0 < a < b; got a = 1, b = 0"),
+    ("ridge=loguniform(0, 1)", True, "loguniform(a, b) needs 0 < a < b; got a = 0, b = 1"),
+    ("ridge=uniform(2, 2)", True, "uniform(a, b) needs a < b"),
+    ("ridge=randint(1.5, 3)", True, "randint(a, b) needs integers a <= b"),
+    ("ridge=loguniform(nan, 1)", True, "loguniform(a, b) needs finite bounds"),
+    ("ridge=loguniform(1e-4, 1e-2)", False, "a distribution is sampled by a randomized search; pass --n-iter N"),
+])
+def test_tune_distribution_bounds_are_checked_before_any_work(workdir, tmp_path, capsys, grid, n_iter, expected):
+    argv = ["tune", workdir / "data" / "train.csv", "--grid", grid, "--out", tmp_path / "t", "-q",
+            *(["--n-iter", "2"] if n_iter else [])]
+    msg = cli_error(argv, capsys)
+    assert f"--grid '{grid}': {expected}" in msg and "Domain error" not in msg, msg
+    assert not (tmp_path / "t").exists()
+
+
+@pytest.mark.parametrize("reader", ["predict", "log"])
+def test_digits_of_other_scripts_are_refused_by_every_text_reader(workdir, tmp_path, capsys, reader):
+    arabic = "\u0661\u0662"  # float() reads it as 12
+    if reader == "predict":
+        path = tmp_path / "r.csv"
+        path.write_text(f"s0,s1,s2,s3,s4,s5\n0.1,0.2,{arabic},0.4,0.5,0.6\n")
+        msg = cli_error(["predict", workdir / "models" / "linear.model.npz", path], capsys)
+        assert f"{path}: line 2: '{arabic}' is not a number" in msg, msg
+    else:
+        path = ftcal.write_run_log(tmp_path / "run.csv", timestamp=[0.0, 1.0], run_kind=["load", "load"],
+                                   config=[0, 0], pose=[0, 1], q=np.zeros((2, 7)), raw=np.ones((2, 6)), load_mass=2.0)
+        lines = path.read_text().splitlines()
+        lines[-1] = lines[-1].rsplit(",", 1)[0] + "," + arabic
+        path.write_text("\n".join(lines) + "\n")
+        with pytest.raises(LogFormatError, match=rf"line {len(lines)}: column s5: '{arabic}' is not a number"):
+            ftcal.read_run_log(path)
+
+
+def test_parameter_errors_are_not_blamed_on_the_dataset(workdir, tmp_path, capsys):
+    msg = cli_error(["fit", workdir / "data" / "train.csv", "--model", "linear", "--param", "ridge=-1", "--out",
+                     tmp_path / "m", "-q"], capsys)
+    assert "'ridge' parameter" in msg and str(workdir / "data" / "train.csv") not in msg, msg

@@ -124,3 +124,29 @@ def test_field_count_channel_count_and_empty(tmp_path):
     two.write_text("# time_unit: s\n# joint_unit: rad\ntimestamp,run,config,pose,q1,s0,s1\n0,load,0,0,0,1,2\n")
     with pytest.raises(LogFormatError, match="2 raw channels; a sensor needs at least 3"):
         read_run_log(two)
+
+
+def test_a_log_of_another_format_version_is_refused_with_its_line(tmp_path):
+    p = _write(tmp_path)
+    p.write_text(p.read_text().replace("# ftcal-run-log: 1", "# ftcal-run-log: 99"))
+    with pytest.raises(LogFormatError, match=r"run\.csv: line 1: run-log format version '99'; this ftcal reads "
+                                             r"version 1"):
+        read_run_log(p)
+
+
+@pytest.mark.parametrize("mass", ["0", "0.0", "-2"])
+def test_a_load_mass_that_is_not_positive_is_refused_with_its_line(tmp_path, mass):
+    p = _write(tmp_path)
+    p.write_text(p.read_text().replace("# load_mass_kg: 1.25", f"# load_mass_kg: {mass}"))
+    line = p.read_text().splitlines().index(f"# load_mass_kg: {mass}") + 1
+    with pytest.raises(LogFormatError, match=rf"run\.csv: line {line}: load_mass_kg is '{mass}'; it must be the "
+                                             "positive mass"):
+        read_run_log(p)
+    with pytest.raises(LogFormatError, match="give the positive mass of the load in kg"):
+        _write(tmp_path, name="zero.csv", load_mass=0.0)
+
+
+def test_raw_values_no_calibration_can_square_are_refused_with_their_line(tmp_path):
+    p = _break_row(_write(tmp_path), 11, "s1", "1e300")
+    with pytest.raises(LogFormatError, match=r"run\.csv: line 11: column s1 is 1e\+300, beyond the 1e\+100"):
+        read_run_log(p)

@@ -94,7 +94,7 @@ def test_dataset_files_carry_temperature(tmp_path):
     fields = text[3].split(",")
     fields[-1] = "nan"
     bad.write_text("\n".join(text[:3] + [",".join(fields)] + text[4:]) + "\n")
-    with pytest.raises(DatasetFileError, match="temperature row 1 is NaN"):
+    with pytest.raises(DatasetFileError, match="line 4, column temperature: temperature is NaN"):
         CalibrationDataset.load(bad)
     with pytest.raises(DatasetFileError, match="has no temperature column"):
         CalibrationDataset(raw=np.eye(8, 6), wrench=np.eye(8, 6)).features(temperature=True)
@@ -114,7 +114,7 @@ def test_run_logs_carry_temperature_into_the_prepared_dataset(tmp_path):
     lines = paths[0].read_text().splitlines()
     lines[-1] = lines[-1].rsplit(",", 1)[0] + ",1e9"
     paths[0].write_text("\n".join(lines) + "\n")
-    with pytest.raises(LogFormatError, match=r"line \d+: temperature row \d+ is 1e\+09 deg C"):
+    with pytest.raises(LogFormatError, match=r"line \d+, column temperature: temperature is 1e\+09 deg C"):
         ftcal.read_run_log(paths[0])
 
 

@@ -37,7 +37,8 @@ import sys
 from collections.abc import Sequence
 
 from ..core._exceptions import FtcalError
-from ._common import EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, note_inputs, signals_interrupt
+from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
+                      standard_streams)
 
 __all__ = ["main", "build_parser"]
 
@@ -88,19 +89,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     int
         0 on success, 2 when the arguments or input files are unusable
         (after one ``ftcal: error: ...`` line on stderr), 130 after SIGINT
-        (Ctrl-C) and 143 after SIGTERM (the output being written is removed),
+        (Ctrl-C), 143 after SIGTERM and 129 after SIGHUP (the output being written is removed),
         1 on an unexpected failure.
     """
     args_list = list(sys.argv[1:] if argv is None else argv)
     try:
-        with signals_interrupt():
+        with signals_interrupt(), standard_streams():
             parser = build_parser()
             args = parser.parse_args(args_list)
             note_inputs(args)  # no output may replace one of these (OutputPlan checks)
             return int(args.handler(args) or 0)
     except SystemExit as exc:  # --help and --version exit through argparse
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
-    except Interrupted as exc:  # SIGINT / SIGTERM: outputs in progress were removed while unwinding
+    except Interrupted as exc:  # SIGINT / SIGTERM / SIGHUP: outputs in progress were removed while unwinding
         import signal
 
         print(f"ftcal: interrupted by {signal.Signals(exc.signum).name} (no half-written file is left)",
@@ -113,7 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _silence_stdout()
         return 0
     except (FtcalError, OSError, ValueError) as exc:
-        print(f"ftcal: error: {_one_line(exc)}", file=sys.stderr)
+        print(f"ftcal: error: {name_the_dataset(_one_line(exc), exc)}", file=sys.stderr)
         return EXIT_USAGE
     except MemoryError as exc:  # a step whose size no guard estimated: still the user's input that is too large
         detail = f" ({_one_line(exc)})" if str(exc) else ""

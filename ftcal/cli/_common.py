@@ -33,6 +33,7 @@ __all__ = [
     "UsageError",
     "Interrupted",
     "signals_interrupt",
+    "standard_streams",
     "Parser",
     "EXIT_USAGE",
     "EXIT_FAILURE",
@@ -40,8 +41,11 @@ __all__ = [
     "add_run_options",
     "add_scheduler_option",
     "add_robot_options",
+    "load_robot_from_args",
     "OutputPlan",
     "note_inputs",
+    "note_dataset",
+    "name_the_dataset",
     "check_not_an_input",
     "Console",
     "write_json",
@@ -103,7 +107,7 @@ class Parser(argparse.ArgumentParser):
 
 # ------------------------------------------------------------------ signals
 class Interrupted(BaseException):
-    """SIGINT (Ctrl-C) or SIGTERM received by the ``ftcal`` command.
+    """SIGINT (Ctrl-C), SIGTERM or SIGHUP received by the ``ftcal`` command.
 
     Raised by the handlers of :func:`signals_interrupt` in the main thread. It unwinds the run like
     ``KeyboardInterrupt`` (every ``finally`` runs, so outputs being written are removed, SIGTERM as SIGINT)
@@ -118,13 +122,21 @@ class Interrupted(BaseException):
 
     @property
     def exit_status(self) -> int:
-        """``128 + signal number`` (130 for SIGINT, 143 for SIGTERM), as a shell reports a signal."""
+        """``128 + signal number`` (130 for SIGINT, 143 for SIGTERM, 129 for SIGHUP), as a shell reports a signal."""
         return 128 + self.signum
+
+
+def _terminating_signals() -> tuple:
+    """The signals that end a run cleanly: Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session
+    (SIGHUP, whose default would kill the process mid-write and leave its ``.partial`` file behind)."""
+    import signal
+
+    return tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
 
 
 @contextlib.contextmanager
 def signals_interrupt() -> Iterator[None]:
-    """Within the block, SIGINT and SIGTERM raise :class:`Interrupted` in the main thread (the CLI only: the
+    """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` in the main thread (the CLI only: the
     library installs no signal handler). Signals ignored by the caller (a background job's SIGINT) stay ignored.
     A second signal while the run unwinds is ignored so the clean-up finishes; a third ends the process."""
     import signal
@@ -144,7 +156,7 @@ def signals_interrupt() -> Iterator[None]:
             os.kill(os.getpid(), signum)
 
     previous = {}
-    for sig in (signal.SIGINT, signal.SIGTERM):
+    for sig in _terminating_signals():
         old = signal.getsignal(sig)
         if old is signal.SIG_IGN:
             continue
@@ -155,6 +167,86 @@ def signals_interrupt() -> Iterator[None]:
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old if old is not None else signal.SIG_DFL)
+
+
+# ------------------------------------------------------------------ standard streams
+class _ClosedStream:
+    """Stands in for a standard stream the shell closed (``>&-``, ``<&-``; Python then sets it to ``None``).
+
+    Without it ``print`` would drop the output silently (``sys.stdout is None``) and reading would fail with an
+    ``AttributeError``. Writing or reading raises :class:`CliError` naming the stream; a command that never uses
+    the stream runs as before (``flush`` does nothing, ``isatty`` is false, other attributes are absent, as on
+    ``None``: pandas asks for ``sys.stdout.encoding`` at import).
+    """
+
+    def __init__(self, name: str, fix: str) -> None:
+        self._name = name
+        self._fix = fix
+
+    def _closed(self, *args: Any, **kwargs: Any) -> Any:
+        use = "redirect it to a file or a pipe" if self._name == "output" else "give the input as a file or pipe it in"
+        raise CliError(f"standard {self._name} is closed (the command was run with {self._fix}); {use}")
+
+    write = writelines = read = readline = readlines = __iter__ = __next__ = _closed
+
+    def flush(self) -> None:
+        pass
+
+    def isatty(self) -> bool:
+        return False
+
+    def __getattr__(self, attr: str) -> Any:
+        raise AttributeError(attr)
+
+
+class _CheckedStdout:
+    """``sys.stdout`` whose write errors name standard output (``> /dev/full`` gave a bare "No space left on
+    device"). A broken pipe stays a :class:`BrokenPipeError`: the reader left (``| head``), which is no error."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def _failed(self, exc: OSError) -> CliError:
+        return CliError(f"could not write to standard output ({exc.strerror or exc}); the output is incomplete")
+
+    def write(self, text: str) -> int:
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def writelines(self, lines: Iterable[str]) -> None:
+        for line in lines:
+            self.write(line)
+
+    def flush(self) -> None:
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            raise
+        except OSError as exc:
+            raise self._failed(exc) from None
+
+    def __getattr__(self, attr: str) -> Any:
+        return getattr(self._stream, attr)
+
+
+@contextlib.contextmanager
+def standard_streams() -> Iterator[None]:
+    """Within the block a closed stdin / stdout raises :class:`CliError` when used, a failed write to stdout names
+    standard output, and stdout is flushed at the end (so that its errors are reported here, not at exit)."""
+    saved = sys.stdin, sys.stdout
+    if sys.stdin is None:
+        sys.stdin = _ClosedStream("input", "<&-")
+    sys.stdout = _ClosedStream("output", ">&-") if sys.stdout is None else _CheckedStdout(sys.stdout)
+    try:
+        yield
+        if isinstance(sys.stdout, _CheckedStdout):
+            sys.stdout.flush()
+    finally:
+        sys.stdin, sys.stdout = saved
 
 
 # ------------------------------------------------------------------ argument types
@@ -278,6 +370,80 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def load_robot_from_args(args: argparse.Namespace):
+    """The robot of ``--robot`` / ``--sensor-frame`` / ``--sensor-mounting``, every problem in one line.
+
+    A ``.urdf`` path is first checked as XML (a syntax error is named with its line and column), then parsed by
+    Pinocchio with the C++ stderr of urdfdom captured: its ``Error:`` lines would otherwise precede ftcal's own
+    message; the first of them says what is wrong and joins the message. After a successful parse its
+    warnings, if any, are shown as they would have been.
+    """
+    import ftcal
+
+    robot = str(args.robot)
+    if robot.lower().endswith(".urdf") and Path(robot).is_file():
+        _check_urdf_xml(Path(robot))
+    with _captured_stderr_fd() as captured:
+        try:
+            model = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+        except (FtcalError, ValueError) as exc:
+            failure, text = exc, captured()
+        else:
+            failure, text = None, captured()
+    if failure is not None:
+        errors = [line.split("Error:", 1)[1].strip() for line in text.splitlines() if line.strip().startswith("Error:")]
+        if not errors:
+            raise failure
+        raise CliError(f"{failure} urdfdom: {errors[0]}") from None
+    if text:
+        sys.stderr.write(text)
+    return model
+
+
+def _check_urdf_xml(path: Path) -> None:
+    """Raise :class:`CliError` naming the line and column of an XML syntax error of the URDF ``path``."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        ET.parse(path)
+    except ET.ParseError as exc:
+        line, column = getattr(exc, "position", (None, None))
+        reason = str(exc).split(":")[0]
+        if path.stat().st_size == 0:
+            raise CliError(f"--robot {path}: the URDF file is empty") from None
+        raise CliError(f"--robot {path}: line {line}, column {column + 1 if column is not None else '?'}: not "
+                       f"valid XML ({reason}); a URDF is an XML file") from None
+    except OSError as exc:
+        raise CliError(f"--robot {path}: {exc.strerror or exc}") from None
+
+
+@contextlib.contextmanager
+def _captured_stderr_fd() -> Iterator[Any]:
+    """Within the block, file descriptor 2 (C and C++ code's stderr) goes to a temporary file; yields a function
+    returning what was written so far."""
+    import tempfile
+
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError, AttributeError):  # no usable fd 2: nothing to capture
+        yield lambda: ""
+        return
+    with tempfile.TemporaryFile(mode="w+b") as sink:
+        os.dup2(sink.fileno(), 2)
+
+        def captured() -> str:
+            sink.flush()
+            sink.seek(0)
+            return sink.read().decode("utf-8", "replace")
+
+        try:
+            yield captured
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
 def _mounting(text: str) -> tuple[float, ...]:
     """argparse type of ``--sensor-mounting``: six numbers."""
     try:
@@ -326,6 +492,39 @@ def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
 OUTPUT_ARGUMENTS = ("out", "output")
 #: The regular files the current command reads: (device, inode) -> which input it is, for the message.
 _input_files: dict[tuple[int, int], str] = {}
+#: The directories the current command reads files of (logs folders): (device, inode) -> which input.
+_input_dirs: dict[tuple[int, int], str] = {}
+#: The dataset files the current command loaded (:func:`note_dataset`), to name in the library's errors about X / y.
+_datasets: list[str] = []
+
+
+def note_dataset(path: str | os.PathLike) -> None:
+    """Record that the command loaded the dataset ``path``; :func:`name_the_dataset` puts it into the library's
+    errors about the data (``X (raw readings, shape (200, 6)) spans only 5 ...`` names no file)."""
+    if str(path) not in _datasets:
+        _datasets.append(str(path))
+
+
+def name_the_dataset(message: str, exc: BaseException) -> str:
+    """``message`` with the file of the one dataset the command loaded in front, when ``exc`` is the library's
+    error about the data (a :class:`~ftcal.CalibrationInputError` about ``X`` or ``y``) and names no loaded file.
+
+    Examples
+    --------
+    >>> from ftcal.core._exceptions import CalibrationInputError
+    >>> _datasets[:] = ["d.csv"]
+    >>> name_the_dataset("X (raw readings) spans only 5 directions", CalibrationInputError())
+    'd.csv: X (raw readings) spans only 5 directions'
+    >>> name_the_dataset("The 'ridge' parameter must be >= 0", CalibrationInputError())
+    "The 'ridge' parameter must be >= 0"
+    >>> _datasets.clear()
+    """
+    from ..core._exceptions import CalibrationInputError
+
+    about_data = isinstance(exc, CalibrationInputError) and re.match(r"(X|y)\b", message) is not None
+    if about_data and len(_datasets) == 1 and _datasets[0] not in message:  # not a --param value's error
+        return f"{_datasets[0]}: {message}"
+    return message
 
 
 def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
@@ -346,6 +545,8 @@ def note_inputs(args: argparse.Namespace) -> None:
     by device and inode, so another spelling of the path, a symbolic link or a hard link is the same file.
     """
     _input_files.clear()
+    _input_dirs.clear()
+    _datasets.clear()
     for dest, value in vars(args).items():
         if dest in OUTPUT_ARGUMENTS or callable(value):
             continue
@@ -358,6 +559,12 @@ def note_inputs(args: argparse.Namespace) -> None:
             except OSError:
                 continue
             role = dest.replace("_", " ")
+            if path.is_dir():
+                try:
+                    st = path.stat()
+                    _input_dirs.setdefault((st.st_dev, st.st_ino), f"the {role} folder {path}")
+                except OSError:
+                    pass
             for child in children[:100_000]:
                 file_id = _regular_file_id(child)
                 if file_id is not None:
@@ -420,6 +627,13 @@ class OutputPlan:
         self.force = force
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
+        try:
+            st = self.out_dir.stat()
+        except OSError:
+            st = None
+        if st is not None and (st.st_dev, st.st_ino) in _input_dirs:
+            raise CliError(f"{option} {self.out_dir} is {_input_dirs[(st.st_dev, st.st_ino)]}, an input of this "
+                           f"command: its outputs would mix with (and be read as) its inputs. Choose another {option}")
         check_writable_dir(self.out_dir, CliError)
         for n in self.names:
             for folder in list((self.out_dir / n).parents)[:len(Path(n).parts) - 1]:  # its folders inside out_dir

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import Console, OutputPlan
+from ._common import Console, OutputPlan, load_robot_from_args
 from ._plan import write_plan_coverage
 
 
@@ -20,7 +20,7 @@ def simulate_logs(args: argparse.Namespace) -> int:
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+    robot = load_robot_from_args(args)
     kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
     console.info(f"planning the pose sphere of {robot.name} ...")
     plan = ftcal.plan_calibration_poses(robot, **kwargs)

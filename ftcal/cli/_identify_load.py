@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (
+    load_robot_from_args,
     CliError,
     Console,
     OutputPlan,
@@ -89,7 +90,7 @@ def _poses_and_wrenches(args):
 
     import ftcal
 
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+    robot = load_robot_from_args(args)
     model = ftcal.load_model(args.model)
     logs = [ftcal.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
             for p in log_files(args.logs)]

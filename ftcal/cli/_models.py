@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 
 from ..io._dataset import CalibrationDataset
-from ..core._wrench import alpha_from_wrenches
+from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
-from ._common import CliError, path_problem
+from ._common import CliError, note_dataset, path_problem
 
 __all__ = [
     "MODEL_SUFFIX",
@@ -67,12 +67,14 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
     from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
 
     dataset = CalibrationDataset.load(path, columns=columns)
-    for array, name in ((dataset.raw, "raw reading"), (dataset.wrench, "wrench")):
+    note_dataset(path)
+    for array, name, labels in ((dataset.raw, "raw reading", [f"s{k}" for k in range(dataset.n_channels)]),
+                                (dataset.wrench, "wrench", list(WRENCH_LABELS))):
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
         if big.any():
             row, col = (int(v) for v in np.argwhere(big)[0])
             raise CliError(f"{path}: {data_row_location(path, row)}: a {name} of {array[row, col]:.6g} (column "
-                           f"{col}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
+                           f"{labels[col]}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
                            "overflow; check the units and that line")
     return dataset
 
@@ -82,7 +84,7 @@ def data_row_location(path: str | Path, row: int) -> str:
     ``"row N"`` of an ``.npz``."""
     path = Path(path)
     if path.suffix != ".csv":
-        return f"row {row}"
+        return f"row {row} (rows counted from 0)"
     seen = -2  # the header line comes first
     with open(path, encoding="utf-8-sig") as fh:
         for line_no, line in enumerate(fh, start=1):
@@ -90,7 +92,7 @@ def data_row_location(path: str | Path, row: int) -> str:
                 seen += 1
                 if seen == row:
                     return f"line {line_no}"
-    return f"row {row}"
+    return f"row {row} (rows counted from 0)"
 
 
 def parse_param(text: str) -> tuple[str, Any]:

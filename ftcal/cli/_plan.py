@@ -8,6 +8,7 @@ import sys
 import numpy as np
 
 from ._common import (
+    load_robot_from_args,
     int_in_range,
     finite_float,
     positive_float,
@@ -112,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
     _check_arguments(args)
     console = Console(args.quiet)
     plan_files = OutputPlan(args.out, ["poses.csv", "plan.json", "coverage.png"], args.force)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+    robot = load_robot_from_args(args)
     extra: dict = {}
     if args.next_poses is not None:
         from ._models import load_dataset, load_model_file

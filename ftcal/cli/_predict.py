@@ -74,21 +74,39 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     The readings are compared as recorded (no re-tare shift); without ``--range`` the model's own range is used.
     """
     import json
+    import re
 
+    from ..core._exceptions import DatasetFileError
     from ..io._dataset import CalibrationDataset
 
     file = Path(path)
     if not file.is_file():
         raise CliError(f"--range {path}: no such file (give the report .json of 'ftcal report' or the dataset)")
+    takes = "--range takes the calibration report .json of 'ftcal report' or the calibration dataset"
     if file.suffix.lower() == ".json":
         try:
             facts = json.loads(file.read_text(encoding="utf-8"))
-            lo = np.asarray(facts["calibrated_range"]["raw_min"], dtype=float)
-            hi = np.asarray(facts["calibrated_range"]["raw_max"], dtype=float)
+            found = facts["calibrated_range"]
+            lo, hi = _range_bound(found, "raw_min", path), _range_bound(found, "raw_max", path)
         except (ValueError, KeyError, TypeError, UnicodeDecodeError):
             raise CliError(f"--range {path}: not a calibration report .json (written by 'ftcal report')") from None
+        if lo.shape != hi.shape:
+            raise CliError(f"--range {path}: calibrated_range.raw_min has {lo.size} entries but raw_max has {hi.size}; "
+                           "the report is damaged. Write it again with 'ftcal report'")
+        swapped = np.flatnonzero(lo > hi)
+        if swapped.size:
+            k = int(swapped[0])
+            raise CliError(f"--range {path}: calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = "
+                           f"{hi[k]:g}; the report is damaged. Write it again with 'ftcal report'")
     else:
-        data = CalibrationDataset.load(file)
+        if _is_model_file(file):
+            raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
+                           "the report)")
+        try:
+            data = CalibrationDataset.load(file)
+        except DatasetFileError as exc:  # its advice is the data options of fit/evaluate, which predict has not
+            text = re.sub(r"\s*Fix: name them with --(channels|wrench)\b.*$", "", str(exc))
+            raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
         lo, hi = data.raw.min(axis=0), data.raw.max(axis=0)
     n = n_channels
     allowed = (n, n - 1) if temperature else (n,)
@@ -98,6 +116,37 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     if lo.size == n - 1:  # a temperature-compensated model: the temperature column is not range-checked
         lo, hi = np.append(lo, -np.inf), np.append(hi, np.inf)
     return lo, hi
+
+
+def _range_bound(found, key: str, path: str) -> np.ndarray:
+    """``calibrated_range[key]`` of a report: a list of finite numbers (KeyError/TypeError: not a report)."""
+    values = found[key]
+    if not isinstance(values, list) or not values:
+        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
+                       "the report is damaged. Write it again with 'ftcal report'")
+    try:
+        array = np.array(values, dtype=float)
+    except (TypeError, ValueError):
+        array = None
+    if array is None or array.ndim != 1 or any(isinstance(v, bool) for v in values):
+        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
+                       "the report is damaged. Write it again with 'ftcal report'")
+    bad = np.flatnonzero(~np.isfinite(array))
+    if bad.size:
+        raise CliError(f"--range {path}: calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite "
+                       "number; the report is damaged. Write it again with 'ftcal report'")
+    return array
+
+
+def _is_model_file(path: Path) -> bool:
+    """Whether ``path`` is an ftcal model file (a zip holding the model's ``__metadata__``)."""
+    import zipfile
+
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return "__metadata__.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
 
 
 def run(args: argparse.Namespace) -> int:

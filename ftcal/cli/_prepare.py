@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (
+    load_robot_from_args,
     int_in_range,
     CliError,
     Console,
@@ -83,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
     logs = log_files(args.logs)
-    robot = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+    robot = load_robot_from_args(args)
     console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
     from ..robot._loads import load_fixture
 

@@ -7,7 +7,8 @@ import sys
 
 import numpy as np
 
-from ._common import Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
+from ..core._exceptions import CalibrationInputError
+from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
 from ._data_options import add_dataset_options, load_dataset_from_args
 
 EXAMPLE = """\
@@ -66,15 +67,41 @@ def write_report(plan: OutputPlan, label: str, model, data, args: argparse.Names
         tool = ToolLoad.load(args.tool)
     console.info(f"report: cross-validating {type(model).__name__}"
                  f"{'' if args.no_baselines else ' and the stock baselines'} ({args.cv} folds) ...")
-    report = calibration_certificate(model, data, model_path=model_path, dataset_path=dataset_path,
-                                     sensor=args.sensor, cv=args.cv, baselines=not args.no_baselines, tool=tool,
-                                     random_state=getattr(args, "seed", 0))
+    try:
+        report = calibration_certificate(model, data, model_path=model_path, dataset_path=dataset_path,
+                                         sensor=args.sensor, cv=args.cv, baselines=not args.no_baselines, tool=tool,
+                                         random_state=getattr(args, "seed", 0))
+    except CalibrationInputError as exc:
+        raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
+
     html_name, json_name = report_file_names(label)
     with plan.writing(html_name) as tmp:
         tmp.write_text(render_report_html(report), encoding="utf-8")
     with plan.writing(json_name) as tmp:
         tmp.write_text(report_json(report), encoding="utf-8")
     console.info(f"report -> {plan.path(html_name)}")
+
+
+def _fold_too_small(exc: Exception, n_rows: int, cv: int, dataset_path) -> CliError | None:
+    """The library's "X has 5 sample(s), but LinearCalibrator needs at least 7" said of a cross-validation fold:
+    which file, how many folds, and how many rows the report needs (None for any other error)."""
+    import math
+    import re
+
+    found = re.match(r"X has (\d+) sample\(s\), but (\w+) needs at least (\d+)", str(exc))
+    if found is None or int(found.group(1)) >= n_rows:
+        return None
+    got, name, need = int(found.group(1)), found.group(2), int(found.group(3))
+
+    def train_rows(n: int, k: int) -> int:  # the smallest training part of k folds of n rows (equal folds)
+        return n - math.ceil(n / k)
+
+    rows = next(n for n in range(need + 1, 100 * need + 100) if train_rows(n, cv) >= need)
+    fewer = next((k for k in range(2, cv) if train_rows(n_rows, k) >= need), None)
+    fix = f"pass --cv {fewer}" if fewer is not None else "record more rows"
+    return CliError(f"{dataset_path}: the report's {cv}-fold cross-validation of its {n_rows} rows trains {name} on "
+                    f"only {got} rows (one fold held out), but {name} needs at least {need}; {cv} folds need a dataset of at least "
+                    f"{rows} rows (more when whole groups are held out). Fix: {fix}")
 
 
 def run(args: argparse.Namespace) -> int:

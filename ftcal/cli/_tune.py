@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import math
+import re
 import time
 
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
@@ -66,6 +68,45 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
+_DISTRIBUTION = re.compile(r"^\s*([A-Za-z_]\w*)\s*\((.*)\)\s*$")
+
+
+def check_distribution(entry: str, randomized: bool) -> None:
+    """Refuse a ``--grid KEY=dist(a, b)`` whose bounds the distribution cannot take, before any work (scipy would
+    only fail when sampling, with "Domain error in arguments").
+
+    Examples
+    --------
+    >>> check_distribution("lr=loguniform(1e-4, 1e-2)", randomized=True)
+    >>> check_distribution("ridge=loguniform(1, 0)", randomized=True)
+    Traceback (most recent call last):
+    ...
+    ftcal.cli._common.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
+    """
+    _, _, values = entry.partition("=")
+    match = _DISTRIBUTION.match(values)
+    if match is None or values.lstrip().startswith("["):
+        return
+    name, inner = match.group(1), match.group(2)
+    if name not in ("loguniform", "uniform", "randint"):
+        return  # the search space parser names the known ones
+    where = f"--grid {entry!r}"
+    bounds = [b.strip() for b in inner.split(",")]
+    try:
+        low, high = (float(b) for b in bounds)
+    except ValueError:
+        raise CliError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)") from None
+    if not all(math.isfinite(v) for v in (low, high)):
+        raise CliError(f"{where}: {name}(a, b) needs finite bounds; got a = {bounds[0]}, b = {bounds[1]}")
+    rule = {"loguniform": (0 < low < high, "0 < a < b"), "uniform": (low < high, "a < b"),
+            "randint": (low == int(low) and high == int(high) and low <= high, "integers a <= b")}[name]
+    if not rule[0]:
+        raise CliError(f"{where}: {name}(a, b) needs {rule[1]}; got a = {bounds[0]}, b = {bounds[1]}")
+    if not randomized:
+        raise CliError(f"{where}: a distribution is sampled by a randomized search; pass --n-iter N (the number of "
+                       f"candidates), or give a JSON list of values")
+
+
 def run(args: argparse.Namespace) -> int:
     from ..models._search import parse_search_space, search_calibrator, search_summary
     import ftcal
@@ -77,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
     if args.cv < 2:
         raise CliError(f"--cv {args.cv}: cross-validation needs at least 2 folds")
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
+    for entry in args.grid:
+        check_distribution(entry, randomized=args.n_iter is not None)
     space = parse_search_space(args.grid) if args.grid else None
     data = load_dataset(args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)

@@ -7,8 +7,9 @@ CSV (``.csv``)
     the raw channels (any unit the sensor gives: counts, mV, ...), then
     ``Fx, Fy, Fz`` in [N] and ``Tx, Ty, Tz`` in [N·m]; an optional ``group``
     column holds an integer label per row (a load configuration, a sphere,
-    ...), an optional ``temperature`` column the sensor temperature [deg C]. Lines starting with ``#`` before the header are comments; a comment
-    ``# meta: {...}`` carries JSON metadata.
+    ...), an optional ``temperature`` column the sensor temperature [deg C]. Blank lines and lines starting with ``#`` are skipped
+    anywhere; one comment ``# meta: {...}`` carries JSON metadata. Errors name
+    the file's 1-based line and the column.
 NumPy archive (``.npz``)
     Arrays ``raw`` (n, N), ``wrench`` (n, 6), optional ``group`` (n,), and
     ``meta_json`` (a JSON string). Read with ``allow_pickle=False``.
@@ -34,12 +35,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import check_plain_numbers, csv_rows, is_number, read_header
+from ..core._columns import csv_rows, is_number, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output
-from ..core._temperature import check_temperature
+from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
-from ._readers import ColumnMap, canonical_wrench_name, read_mat_arrays, select_arrays
+from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, parse_plain_number, read_mat_arrays,
+                       select_arrays, temperature_message)
 
 __all__ = ["CalibrationDataset"]
 
@@ -68,7 +70,7 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
     if g.dtype.kind in "iu":
         if g.dtype.kind == "u" and g.size and g.max() > np.iinfo(np.int64).max:  # would wrap to negative labels
             i = int(np.argmax(g > np.iinfo(np.int64).max))
-            raise DatasetFileError(f"group row {i} holds {int(g[i])}, beyond the 64-bit integer labels ftcal stores. "
+            raise DatasetFileError(f"group row {i} (rows counted from 0) holds {int(g[i])}, beyond the 64-bit integer labels ftcal stores. "
                                    "Fix: number the groups 0, 1, 2, ...")
         return g.astype(np.int64)
     if g.dtype.kind == "b" or g.dtype.kind not in "f":
@@ -79,26 +81,35 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
     if bad.any():
         i = int(np.argmax(bad))
         raise DatasetFileError(
-            f"group must hold integer labels; row {i} holds {float(g[i])!r}. Fix: number the groups 0, 1, 2, ..."
+            f"group must hold integer labels; row {i} (rows counted from 0) holds {float(g[i])!r}. Fix: number the groups 0, 1, 2, ..."
         )
     return g.astype(np.int64)
 
 
-def _exact_group_column(body_lines: list[str], column: int, first_line: int, path) -> NDArray:
+def _exact_group_column(body_lines: list[str], column: int, line_nos: list[int], path) -> NDArray:
     """The ``group`` column of CSV data lines as exact int64 labels (float64 merges labels above 2^53 and turns
-    those above 2^63 into -2^63); a label that is no integer is left to :func:`_integer_labels`."""
-    texts = [(first_line + k, line.split(",")[column].strip()) for k, line in enumerate(body_lines)
-             if line.strip() and not line.lstrip().startswith("#")]
-    if not all(_INTEGER.fullmatch(t) for _, t in texts):
-        return np.array([float(t) for _, t in texts])
-    for line_no, text in texts:
-        if not -(2**63) <= int(text) < 2**63:
-            raise DatasetFileError(f"{path}: line {line_no}: group {text} is beyond the 64-bit integer labels ftcal "
+    those above 2^63 into -2^63); a label that is no integer is refused with its line."""
+    labels = []
+    for no, line in zip(line_nos, body_lines):
+        text = line.split(",")[column].strip()
+        if _INTEGER.fullmatch(text):
+            value = int(text)
+        else:
+            number = float(text)
+            if not (np.isfinite(number) and number == round(number)):
+                raise DatasetFileError(f"{path}: line {no}, column group: {text} is not an integer label. Fix: "
+                                       "number the groups 0, 1, 2, ...")
+            value = int(number)
+        if not -(2**63) <= value < 2**63:
+            raise DatasetFileError(f"{path}: line {no}: group {text} is beyond the 64-bit integer labels ftcal "
                                    "stores. Fix: number the groups 0, 1, 2, ...")
-    return np.array([int(t) for _, t in texts], dtype=np.int64)
+        labels.append(value)
+    return np.array(labels, dtype=np.int64)
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
 def _mapped_names(fields: list[str], columns: ColumnMap, where: str) -> list[str]:
     """Header names with the mapped columns renamed to ftcal's (``s0..``, ``Fx..Tz``) and aliases resolved.
 
@@ -188,7 +199,8 @@ class CalibrationDataset:
             try:
                 self.temperature = check_temperature(self.temperature, self.raw.shape[0])
             except CalibrationInputError as exc:
-                raise DatasetFileError(str(exc)) from None
+                counted = " (rows counted from 0)" if getattr(exc, "row", None) is not None else ""
+                raise DatasetFileError(f"{exc}{counted}") from None
         if not isinstance(self.meta, dict):
             raise DatasetFileError(f"meta must be a dict (JSON object); got {type(self.meta).__name__}.")
 
@@ -285,7 +297,8 @@ class CalibrationDataset:
         return ds
 
     @classmethod
-    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict) -> "CalibrationDataset":
+    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict,
+                     kind: str = "variable") -> "CalibrationDataset":
         """A dataset from named arrays (``.npz``, ``.mat``), selected by ``columns``."""
         where = str(path)
         vector_wrench = []
@@ -293,14 +306,14 @@ class CalibrationDataset:
             found = [n for n in arrays if canonical_wrench_name(n) == label]
             vector_wrench.append(found[0] if len(found) == 1 else label)
         channel_vectors = sorted((n for n in arrays if n[:1] == "s" and n[1:].isdigit()), key=lambda n: int(n[1:]))
-        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6)
-        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None)
+        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6, kind)
+        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None, kind)
         if raw.shape[0] != wrench.shape[0] and raw.shape[1] == wrench.shape[0]:
             raw = raw.T
         extra = {}
         for name in ("group", "temperature"):
             if name in arrays:
-                value = np.asarray(arrays[name])
+                value = check_real_array(arrays[name], name, where, kind)
                 extra[name] = value.ravel() if value.ndim == 2 and 1 in value.shape else value
         try:
             ds = cls(raw=raw, wrench=wrench, meta=meta, **extra)
@@ -315,9 +328,27 @@ class CalibrationDataset:
 
     @classmethod
     def _load_npz(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
+        import zipfile
+
+        if not zipfile.is_zipfile(path):  # np.load would try it as a pickle and advise allow_pickle=True
+            from ..models._model_io import _what_it_is
+
+            raise DatasetFileError(f"{path}: not an .npz (zip) archive: {_what_it_is(path)}. A dataset .npz holds "
+                                   "the arrays raw and wrench (numpy.savez); a .csv dataset must keep its .csv suffix.")
         try:
             with np.load(path, allow_pickle=False) as z:
-                arrays = {name: z[name] for name in z.files}
+                arrays = {}
+                for name in z.files:
+                    try:
+                        arrays[name] = z[name]
+                    except ValueError as exc:
+                        if "pickle" not in str(exc):
+                            raise
+                        raise DatasetFileError(f"{path}: array {name!r} holds Python objects (a pickle), which ftcal "
+                                               "never loads; save numeric arrays (numpy.savez(path, raw=..., "
+                                               "wrench=...)).") from None
+        except DatasetFileError:
+            raise
         except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
             raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
         meta_json = arrays.pop("meta_json", None)
@@ -327,75 +358,124 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
         if not isinstance(meta, dict):
             raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
-        return cls._from_arrays(path, arrays, columns, meta)
+        return cls._from_arrays(path, arrays, columns, meta, kind="array")
 
     @classmethod
     def _load_csv(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
-        meta: dict = {}
         try:
             # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
             lines = path.read_text(encoding="utf-8-sig").splitlines()
         except UnicodeDecodeError as exc:
             raise DatasetFileError(f"{path}: not a UTF-8 text file ({exc}).") from None
-        n_comment = 0
-        for line in lines:
-            if not line.startswith("#"):
-                break
-            n_comment += 1
-            body = line[1:].strip()
-            if body.startswith("meta:"):
-                meta = _parse_meta(body[len("meta:"):], f"{path}: line {n_comment}")
-        if n_comment >= len(lines) or not lines[n_comment].strip():
+        meta, header_no, line_nos = _csv_layout(lines, path)
+        if header_no is None:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
-        where = f"{path}: line {n_comment + 1}"
-        fields = [f.strip() for f in lines[n_comment].split(",")]
+        where = f"{path}: line {header_no}"
+        fields = [f.strip() for f in lines[header_no - 1].split(",")]
         if all(f and is_number(f) for f in fields):
             raise DatasetFileError(
                 f"{where}: the file has no header: its first line holds numbers, not column names. Fix: add a "
                 f"header line naming the columns ({_CSV_LAYOUT}), or name them with --channels/--wrench after adding "
                 "one."
             )
-        fields = _mapped_names(fields, columns, where)
+        mapped = _mapped_names(fields, columns, where)
         header = read_header(
-            fields, where=where, error=DatasetFileError,
+            mapped, where=where, error=DatasetFileError,
             required=WRENCH_LABELS, optional=("group", "temperature"), expected=_CSV_LAYOUT,
             allow_other=not columns.is_default and (columns.channels is not None or columns.wrench is not None),
         )
-        body_lines = lines[n_comment + 1:]
-        check_plain_numbers(body_lines, n_comment + 2, str(path), DatasetFileError)
+        names = [f.lstrip("\ufeff").strip() for f in fields]
+        body_lines = [lines[no - 1] for no in line_nos]
         width = len(header.names)
-        for offset, line in enumerate(body_lines):  # numpy's own message counts data rows, not the file's lines
-            if line.strip() and not line.lstrip().startswith("#") and line.count(",") + 1 != width:
-                raise DatasetFileError(f"{path}: line {n_comment + 2 + offset}: {line.count(',') + 1} values but the "
-                                       f"header names {width} columns; repair or remove that line.")
+        for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
+            if line.count(",") + 1 != width:
+                raise DatasetFileError(f"{path}: line {no}: {line.count(',') + 1} values but the header names "
+                                       f"{width} columns; repair or remove that line.")
+            if _NOT_PLAIN.search(line):  # `1_000`, `nan`: float() and numpy take forms no logger writes
+                _check_fields(line, no, names, path)
+        if not body_lines:
+            raise DatasetFileError(f"{path}: no data rows after the header.")
         try:
             with warnings.catch_warnings():
-                warnings.simplefilter("ignore")  # "input contained no data": reported below, in one line
-                data = np.loadtxt(body_lines, delimiter=",", ndmin=2, comments="#")
+                warnings.simplefilter("ignore")
+                data = np.loadtxt(body_lines, delimiter=",", ndmin=2, comments=None)
         except ValueError as exc:
+            for no, line in zip(line_nos, body_lines):  # name the file's line and the column, not numpy's row
+                _check_fields(line, no, names, path)
             raise DatasetFileError(f"{path}: unreadable number ({' '.join(str(exc).split())[:100]}).") from None
-        if data.shape[0] == 0:
-            raise DatasetFileError(f"{path}: no data rows after the header.")
-        if data.shape[1] != len(header.names):
-            raise DatasetFileError(
-                f"{path}: rows have {data.shape[1]} values but the header names {len(header.names)} columns."
-            )
+        used = header.numbered("s") + [header.index[c] for c in WRENCH_LABELS]
+        bad = np.argwhere(~np.isfinite(data[:, used]))
+        if bad.size:
+            row, col = int(bad[0, 0]), used[int(bad[0, 1])]
+            raise DatasetFileError(f"{path}: line {line_nos[row]}, column {names[col]}: "
+                                   f"{body_lines[row].split(',')[col].strip()!r} is NaN or inf (or beyond float64); "
+                                   "remove or repair that line.")
         raw = data[:, header.numbered("s")]
         wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
-        group = _exact_group_column(body_lines, header.index["group"], n_comment + 2, path) if "group" in header \
+        group = _exact_group_column(body_lines, header.index["group"], line_nos, path) if "group" in header \
             else None
-        temperature = data[:, header.index["temperature"]] if "temperature" in header else None
+        temperature = None
+        if "temperature" in header:
+            try:
+                temperature = check_temperature(data[:, header.index["temperature"]], len(line_nos))
+            except TemperatureValueError as exc:
+                if exc.row is None:
+                    raise DatasetFileError(f"{path}: {exc}") from None
+                raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
         try:
             ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
         except DatasetFileError as exc:
             raise DatasetFileError(f"{path}: {exc}") from None
-        ds._check_finite(path, first_data_line=n_comment + 2)
         return ds
 
-    def _check_finite(self, path: Path, first_data_line: int | None = None) -> None:
+    def _check_finite(self, path: Path) -> None:
+        """NaN or inf in the arrays of a ``.npz`` / ``.mat`` file, named by array and row (counted from 0)."""
         for name, arr in (("raw", self.raw), ("wrench", self.wrench)):
             bad = np.argwhere(~np.isfinite(arr))
             if bad.size:
                 row = int(bad[0, 0])
-                where = f"line {row + first_data_line}" if first_data_line else f"row {row}"
-                raise DatasetFileError(f"{path}: {where}: {name} holds NaN or inf; remove or repair that row.")
+                raise DatasetFileError(f"{path}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
+                                       "remove or repair that row.")
+
+
+#: A character no plain number or separator has: lines holding one are checked field by field.
+_NOT_PLAIN = re.compile(r"[^0-9eE+\-.,\s]")
+
+
+def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:
+    """The ``# meta:`` object, the header's line number and the data lines' numbers (all 1-based) of a dataset CSV.
+
+    Blank lines and ``#`` comment lines may stand anywhere (as in ``ftcal predict``'s input); one ``# meta:``
+    comment at most, since a second would silently override the first.
+    """
+    meta: dict = {}
+    meta_no = header_no = None
+    data: list[int] = []
+    for no, line in enumerate(lines, 1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            body = stripped[1:].strip()
+            if body.startswith("meta:"):
+                if meta_no is not None:
+                    raise DatasetFileError(f"{path}: line {no}: a second '# meta:' comment (the first is line "
+                                           f"{meta_no}); the second would override the first. Merge them into one "
+                                           "JSON object on one line.")
+                meta, meta_no = _parse_meta(body[len("meta:"):], f"{path}: line {no}"), no
+            continue
+        if header_no is None:
+            header_no = no
+        else:
+            data.append(no)
+    return meta, header_no, data
+
+
+def _check_fields(line: str, no: int, names: list[str], path) -> None:
+    """Raise naming the line and column of the first field of ``line`` that is no plain ASCII number."""
+    for k, field in enumerate(line.split(",")):
+        text = field.strip()
+        column = names[k] if k < len(names) else f"{k + 1}"
+        if not text:
+            raise DatasetFileError(f"{path}: line {no}, column {column}: empty value; every cell needs a number.")
+        parse_plain_number(text, f"{path}: line {no}, column {column}", DatasetFileError)

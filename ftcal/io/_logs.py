@@ -50,10 +50,11 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._columns import parse_number, read_header
+from ..core._columns import read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
+from ._readers import parse_plain_number, temperature_message
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -61,6 +62,8 @@ __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LO
 RUN_KINDS: tuple[str, str] = ("load", "no-load")
 #: ``config`` value of a no-load run shared by every load configuration.
 SHARED_NO_LOAD_CONFIG: int = -1
+#: The run-log format version this ftcal writes and reads (``# ftcal-run-log: 1``).
+LOG_FORMAT_VERSION = 1
 
 _TIME_UNITS = {"s": 1.0, "ms": 1e-3}
 _JOINT_UNITS = {"rad": 1.0, "deg": np.pi / 180.0}
@@ -129,8 +132,10 @@ class RunLog:
         return int(self.raw.shape[1])
 
 
-def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int]:
+def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int, dict[str, int]]:
+    """The ``# key: value`` comments before the header, their count, and the (1-based) line of each key."""
     info: dict[str, str] = {}
+    where: dict[str, int] = {}
     n = 0
     for text in lines:
         if not text.startswith("#"):
@@ -140,7 +145,8 @@ def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int]:
         if ":" in body:
             key, _, value = body.partition(":")
             info[key.strip()] = value.strip()
-    return info, n
+            where[key.strip()] = n
+    return info, n, where
 
 
 def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:
@@ -190,7 +196,12 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         line = path.read_bytes()[:exc.start].count(b"\n") + 1
         raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a run log is a CSV text file.") \
             from None
-    info, n_comment = _parse_comments(path, text_lines)
+    info, n_comment, info_line = _parse_comments(path, text_lines)
+    version = info.get("ftcal-run-log")
+    if version is not None and version != str(LOG_FORMAT_VERSION):
+        raise LogFormatError(f"{path}: line {info_line['ftcal-run-log']}: run-log format version {version!r}; this "
+                             f"ftcal reads version {LOG_FORMAT_VERSION} (was the log written by a newer ftcal? "
+                             "update ftcal).")
     head_line = n_comment + 1
     if n_comment >= len(text_lines) or not text_lines[n_comment].strip():
         raise LogFormatError(f"{path}: line {head_line}: no header line; expected "
@@ -233,7 +244,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
 
     def number(lineno: int, fields: list[str], name: str) -> float:
         text = fields[col[name]]
-        value = parse_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
+        value = parse_plain_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
         if not np.isfinite(value):
             raise LogFormatError(f"{path}: line {lineno}: column {name} is {text!r} (NaN or inf); "
                                  "repair or remove that row.")
@@ -283,6 +294,14 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             raise LogFormatError(f"{path}: line {line[r]}: {q_cols[c]} = {q[r, c]:g} exceeds 2*pi although the file "
                                  "declares '# joint_unit: rad'; were the angles logged in degrees? "
                                  "Then declare '# joint_unit: deg'.")
+    from ..core._validation import MAX_TRAINING_MAGNITUDE  # the bound `ftcal fit` refuses the dataset by
+
+    big = np.argwhere(np.abs(raw) > MAX_TRAINING_MAGNITUDE)
+    if big.size:
+        r, c = (int(v) for v in big[0])
+        raise LogFormatError(f"{path}: line {line[r]}: column {s_cols[c]} is {raw[r, c]:g}, beyond the "
+                             f"{MAX_TRAINING_MAGNITUDE:g} a calibration can square without overflow; check the units "
+                             "and that line.")
     q *= units["joint_unit"]
     mass = None
     if "load_mass_kg" in info:
@@ -290,8 +309,12 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             mass = float(info["load_mass_kg"])
         except ValueError:
             mass = float("nan")
-        if not np.isfinite(mass) or mass < 0:
-            raise LogFormatError(f"{path}: load_mass_kg is {info['load_mass_kg']!r}; it must be a mass >= 0 in kg.")
+        if not np.isfinite(mass) or mass <= 0:
+            # the mass of the load rows' external load: zero would be no load (prepare_dataset refuses it), and a
+            # log without load rows leaves the comment out
+            raise LogFormatError(f"{path}: line {info_line['load_mass_kg']}: load_mass_kg is "
+                                 f"{info['load_mass_kg']!r}; it must be the positive mass of the load in kg (leave the "
+                                 "comment out of a log without load).")
     meta: dict = {}
     if "meta" in info:
         try:
@@ -302,8 +325,9 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         try:
             check_temperature(temp, n)
         except TemperatureValueError as exc:
-            where = "" if exc.row is None else f" line {line[exc.row]}:"
-            raise LogFormatError(f"{path}:{where} {exc}") from None
+            if exc.row is None:
+                raise LogFormatError(f"{path}: {exc}") from None
+            raise LogFormatError(temperature_message(exc, path, int(line[exc.row]))) from None
     return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
                   line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
                   sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)
@@ -362,8 +386,11 @@ def write_run_log(
     bad_kind = sorted(set(cols["run"]) - set(RUN_KINDS))
     if bad_kind:
         raise LogFormatError(f"{path}: run_kind holds {bad_kind}; use 'load' or 'no-load'.")
-    header = ["# ftcal-run-log: 1", "# time_unit: s", "# joint_unit: rad", f"# raw_unit: {raw_unit}"]
+    header = [f"# ftcal-run-log: {LOG_FORMAT_VERSION}", "# time_unit: s", "# joint_unit: rad", f"# raw_unit: {raw_unit}"]
     if load_mass is not None:
+        if not (np.isfinite(float(load_mass)) and float(load_mass) > 0):  # what read_run_log would refuse
+            raise LogFormatError(f"{path}: load_mass {load_mass!r}: give the positive mass of the load in kg, or None "
+                                 "for a log without load.")
         header.append(f"# load_mass_kg: {float(load_mass)!r}")
     if robot is not None:
         header.append(f"# robot: {robot}")

@@ -38,6 +38,8 @@ __all__ = [
     "lever_arm_m",
     "lever_arm_problem",
     "read_mat_arrays",
+    "check_real_array",
+    "parse_plain_number",
 ]
 
 #: Force units ftcal reads, as the factor to [N].
@@ -227,8 +229,41 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m") -> str | None
             "units with --force-unit / --torque-unit; if the values are right, confirm with --torque-unit N.m.")
 
 
-def read_mat_arrays(path) -> dict[str, np.ndarray]:
-    """The numeric variables of a MATLAB ``.mat`` file (v4-v7; v7.3 is HDF5 and refused with the fix)."""
+def parse_plain_number(text: str, where: str, error: type[Exception]) -> float:
+    """``float(text)`` of a plain ASCII decimal / scientific number, else ``error`` naming ``where``: the one number
+    parser of ftcal's text readers (datasets, run logs, ``ftcal predict``'s readings). Unlike ``float`` (and
+    :func:`ftcal.core._columns.parse_number`, whose pattern's ``\\d`` matches any script's digits), it refuses
+    ``١٢`` (Arabic-Indic digits) and other non-ASCII look-alikes, which no sensor logger writes.
+
+    Examples
+    --------
+    >>> parse_plain_number(" -2.5e1", "x.csv: line 3", ValueError)
+    -25.0
+    >>> parse_plain_number("\u0661\u0662", "x.csv: line 3", ValueError)
+    Traceback (most recent call last):
+    ...
+    ValueError: x.csv: line 3: '١٢' is not a number (plain decimal or scientific notation, e.g. 1000 or 1e3).
+    """
+    from ..core._columns import parse_number
+
+    if not text.isascii():
+        raise error(f"{where}: {text.strip()!r} is not a number (plain decimal or scientific notation, e.g. 1000 or "
+                    "1e3).")
+    return parse_number(text, where, error)
+
+
+def temperature_message(exc: Exception, path, line_no: int) -> str:
+    """The library's "temperature row 5 is NaN ..." (a row of the array) as the text file's line and column."""
+    text = re.sub(r"^temperature row \d+ ", "temperature ", str(exc)).replace("that row", "that line")
+    return f"{path}: line {line_no}, column temperature: {text}"
+
+
+def read_mat_arrays(path) -> dict:
+    """The variables of a MATLAB ``.mat`` file (v4-v7; v7.3 is HDF5 and refused with the fix).
+
+    Every variable is returned, whatever its type (a cell, struct, char, sparse or complex variable is refused
+    by :func:`check_real_array` when it is used, naming it, instead of looking absent).
+    """
     from scipy.io import loadmat
 
     try:
@@ -237,23 +272,49 @@ def read_mat_arrays(path) -> dict[str, np.ndarray]:
         raise DatasetFileError(f"{path}: a MATLAB v7.3 (HDF5) file; save it with save(..., '-v7') and retry.") from None
     except Exception as exc:  # scipy raises ValueError/TypeError/OSError on foreign files
         raise DatasetFileError(f"{path}: not a readable .mat file ({str(exc)[:100]}).") from None
-    out = {}
-    for key, value in data.items():
-        if key.startswith("__") or not isinstance(value, np.ndarray) or value.dtype.kind not in "biuf":
-            continue
-        out[key] = value
-    return out
+    return {key: value for key, value in data.items() if not key.startswith("__")}
+
+
+#: What each unusable dtype kind is, for the message.
+_KIND_NAMES = {"c": "complex numbers", "b": "booleans", "M": "dates", "m": "time spans", "U": "text", "S": "text",
+               "O": "objects (a MATLAB cell array)", "V": "records (a MATLAB struct)"}
+
+
+def check_real_array(value, name: str, where: str, kind: str = "variable") -> np.ndarray:
+    """``value`` as an array of real numbers (float or integer), else :class:`DatasetFileError` naming the file,
+    the array and its type: complex, boolean, date, text, object (MATLAB cell), struct and sparse arrays are refused
+    rather than silently converted (a complex array would lose its imaginary part, a boolean become 0/1).
+
+    Examples
+    --------
+    >>> check_real_array(np.array([1, 2]), "raw", "d.npz", "array").dtype.kind
+    'i'
+    >>> check_real_array(np.array([1j]), "raw", "d.npz", "array")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: d.npz: array 'raw' has dtype complex128 (complex numbers); it must hold real numbers (float or integer).
+    """
+    if not isinstance(value, np.ndarray):
+        what = "a sparse matrix; save it full (full(...) in MATLAB)" if hasattr(value, "toarray") else \
+            f"a {type(value).__name__}"
+        raise DatasetFileError(f"{where}: {kind} {name!r} is {what}; it must be an array of real numbers.")
+    if value.dtype.kind not in "iuf":
+        shown = _KIND_NAMES.get(value.dtype.kind, "not real numbers")
+        raise DatasetFileError(f"{where}: {kind} {name!r} has dtype {value.dtype} ({shown}); it must hold real "
+                               "numbers (float or integer).")
+    return value
 
 
 def select_arrays(arrays: dict[str, np.ndarray], names: Sequence[str] | None, default: str,
-                  vector_names: Sequence[str], what: str, where: str, width: int | None) -> np.ndarray:
-    """One (n, k) array from a file's named arrays: one 2-D variable, or a list of 1-D ones."""
+                  vector_names: Sequence[str], what: str, where: str, width: int | None,
+                  kind: str = "variable") -> np.ndarray:
+    """One (n, k) array from a file's named arrays: one 2-D variable, or a list of 1-D ones (real numbers only)."""
     def column(name: str) -> np.ndarray:
-        v = np.asarray(arrays[name])
+        v = check_real_array(arrays[name], name, where, kind)
         if v.ndim == 2 and 1 in v.shape:
             v = v.ravel()
         if v.ndim != 1:
-            raise DatasetFileError(f"{where}: variable {name!r} has shape {v.shape}; a {what} column must be a vector.")
+            raise DatasetFileError(f"{where}: {kind} {name!r} has shape {v.shape}; a {what} column must be a vector.")
         return v
 
     if names is None:
@@ -263,24 +324,24 @@ def select_arrays(arrays: dict[str, np.ndarray], names: Sequence[str] | None, de
             names = tuple(vector_names)
         else:
             raise DatasetFileError(
-                f"{where}: no variable {default!r} holding the {what}; the file has "
-                f"{', '.join(sorted(arrays)) or 'no numeric variables'}. Fix: name them with "
+                f"{where}: no {kind} {default!r} holding the {what}; the file has "
+                f"{', '.join(sorted(arrays)) or f'no {kind}s'}. Fix: name them with "
                 f"--{'channels' if what == 'raw channels' else 'wrench'} NAME[,NAME...]."
             )
     missing = [n for n in names if n not in arrays]
     if missing:
-        raise DatasetFileError(f"{where}: no variable {missing[0]!r}; the file has {', '.join(sorted(arrays))}.")
+        raise DatasetFileError(f"{where}: no {kind} {missing[0]!r}; the file has {', '.join(sorted(arrays))}.")
     if len(names) == 1:
-        a = np.asarray(arrays[names[0]], dtype=float)
+        a = check_real_array(arrays[names[0]], names[0], where, kind).astype(float)
         if a.ndim == 1:
             a = a[:, None]
         if a.ndim != 2:
-            raise DatasetFileError(f"{where}: variable {names[0]!r} has shape {a.shape}; expected (n_samples, k).")
+            raise DatasetFileError(f"{where}: {kind} {names[0]!r} has shape {a.shape}; expected (n_samples, k).")
         if width is not None and a.shape[1] != width and a.shape[0] == width:
             a = a.T  # MATLAB users often store one row per component
         return a
     cols = [column(n) for n in names]
     if len({c.size for c in cols}) != 1:
-        raise DatasetFileError(f"{where}: the {what} variables have different lengths "
+        raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
                                f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
     return np.column_stack(cols).astype(float)
