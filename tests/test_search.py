@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -96,3 +97,19 @@ def test_cli_tune_reports_bad_parameters(tmp_path, capsys):
     assert main(["tune", str(data), "--grid", "bogus=[1]", "--out", str(tmp_path / "o"), "-q"]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ftcal: error:") and "bogus" in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize("entry, expected", [
+    ("ridge=loguniform(1, 0)", "loguniform(a, b) needs 0 < a < b; got a = 1, b = 0"),
+    ("ridge=loguniform(0, 1)", "loguniform(a, b) needs 0 < a < b"),
+    ("ridge=uniform(2, 2)", "uniform(a, b) needs a < b"),
+    ("degree=randint(1.5, 3)", "randint(a, b) needs integers a <= b"),
+    ("ridge=uniform(0, inf)", "uniform(a, b) needs finite bounds; got a = 0, b = inf"),
+    ("ridge=uniform(x, 1)", "uniform(a, b) takes two numbers"),
+])
+def test_search_space_bounds_are_checked_when_parsed_not_when_sampled(entry, expected):
+    # scipy would accept these and fail only when the search samples, with "Domain error in arguments"
+    from ftcal.models._search import parse_search_space
+
+    with pytest.raises(CalibrationInputError, match=re.escape(f"search entry {entry!r}: {expected}")):
+        parse_search_space([entry])

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import math
 import re
 import time
 
+from ..core._exceptions import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
 from ._fit import calibrator_names
 from ._models import check_fold_count, dataset_alpha, load_dataset, model_file_name, parse_param
@@ -83,25 +83,23 @@ def check_distribution(entry: str, randomized: bool) -> None:
     ...
     ftcal.cli._common.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
     """
+    from ..models._search import _DISTRIBUTIONS, _bounds
+
     _, _, values = entry.partition("=")
     match = _DISTRIBUTION.match(values)
     if match is None or values.lstrip().startswith("["):
         return
     name, inner = match.group(1), match.group(2)
-    if name not in ("loguniform", "uniform", "randint"):
+    if name not in _DISTRIBUTIONS:
         return  # the search space parser names the known ones
     where = f"--grid {entry!r}"
     bounds = [b.strip() for b in inner.split(",")]
+    if len(bounds) != 2:
+        raise CliError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)")
     try:
-        low, high = (float(b) for b in bounds)
-    except ValueError:
-        raise CliError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)") from None
-    if not all(math.isfinite(v) for v in (low, high)):
-        raise CliError(f"{where}: {name}(a, b) needs finite bounds; got a = {bounds[0]}, b = {bounds[1]}")
-    rule = {"loguniform": (0 < low < high, "0 < a < b"), "uniform": (low < high, "a < b"),
-            "randint": (low == int(low) and high == int(high) and low <= high, "integers a <= b")}[name]
-    if not rule[0]:
-        raise CliError(f"{where}: {name}(a, b) needs {rule[1]}; got a = {bounds[0]}, b = {bounds[1]}")
+        _bounds(name, *bounds, where)
+    except CalibrationInputError as exc:
+        raise CliError(str(exc)) from None
     if not randomized:
         raise CliError(f"{where}: a distribution is sampled by a randomized search; pass --n-iter N (the number of "
                        f"candidates), or give a JSON list of values")

@@ -30,7 +30,7 @@ from itertools import chain
 __all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_numbers", "csv_rows"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
-_NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE)
+_NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE | re.ASCII)
 _BOM = "\ufeff"
 #: A character no plain number or separator has: lines holding one are parsed field by field.
 _NOT_PLAIN = re.compile(r"[^0-9eE+\-.,\s]")

@@ -23,6 +23,7 @@ search); inner lists become tuples (``hidden_layer_sizes``, ``powers``).
 from __future__ import annotations
 
 import json
+import math
 import re
 from collections.abc import Iterable, Mapping
 from typing import Any
@@ -65,6 +66,33 @@ _DISTRIBUTIONS = {
 _DISTRIBUTION = re.compile(r"^\s*(\w+)\s*\(\s*([^,]+?)\s*,\s*([^,]+?)\s*\)\s*$")
 
 
+#: What each distribution's bounds (a, b) must satisfy (scipy only fails when sampling, with "Domain error").
+_BOUND_RULES = {"loguniform": (lambda a, b: 0 < a < b, "0 < a < b"), "uniform": (lambda a, b: a < b, "a < b"),
+                "randint": (lambda a, b: a == int(a) and b == int(b) and a <= b, "integers a <= b")}
+
+
+def _bounds(name: str, low: str, high: str, where: str) -> tuple[float, float]:
+    """The bounds ``low``, ``high`` of distribution ``name`` as floats, checked before any search starts.
+
+    Examples
+    --------
+    >>> _bounds("loguniform", "1", "0", "lr")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: lr: loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
+    """
+    try:
+        a, b = float(low), float(high)
+    except ValueError:
+        raise CalibrationInputError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)") from None
+    if not (math.isfinite(a) and math.isfinite(b)):
+        raise CalibrationInputError(f"{where}: {name}(a, b) needs finite bounds; got a = {low}, b = {high}")
+    rule, text = _BOUND_RULES[name]
+    if not rule(a, b):
+        raise CalibrationInputError(f"{where}: {name}(a, b) needs {text}; got a = {low}, b = {high}")
+    return a, b
+
+
 def _tuples(value):
     return tuple(_tuples(v) for v in value) if isinstance(value, list) else value
 
@@ -93,10 +121,7 @@ def parse_search_space(entries: Iterable[str]) -> dict[str, Any]:
                 raise CalibrationInputError(
                     f"search entry {text!r}: unknown distribution {name!r}; use one of {sorted(_DISTRIBUTIONS)}."
                 )
-            try:
-                space[key] = _DISTRIBUTIONS[name](float(low), float(high))
-            except ValueError as exc:
-                raise CalibrationInputError(f"search entry {text!r}: bad bounds ({exc}).") from None
+            space[key] = _DISTRIBUTIONS[name](*_bounds(name, low, high, f"search entry {text!r}"))
             continue
         try:
             parsed = json.loads(values)
