@@ -203,3 +203,24 @@ def test_only_zero_load_rows(data):
     one_load[0] = wrench[0]  # the readings vary, but only one row carries a load
     with pytest.raises(CalibrationInputError, match="directional model needs loaded samples"):
         DirectionalCalibrator(zero_reading=np.zeros(6)).fit(raw, one_load)
+
+
+def test_containers_scikit_learn_refuses_with_a_typeerror_get_an_input_error(data):
+    # a ValueError subclass naming X and the fix, not numpy's or scikit-learn's TypeError
+    import pandas as pd
+    import scipy.sparse as sp
+
+    raw, wrench = data
+    cases = {
+        "is None; pass the raw readings": None,
+        "is not a rectangular table": [list(r) for r in raw[:-1]] + [list(raw[-1, :3])],
+        "is an np.matrix": np.asmatrix(raw),
+        "Sparse data was passed for X \\(csr_matrix": sp.csr_matrix(raw),
+        "X's column names mix text and other types": pd.DataFrame(raw, columns=[0, 1, 2, "a", "b", "c"]),
+    }
+    for message, X in cases.items():
+        with pytest.raises(CalibrationInputError, match=f"^X {message}|^{message}"):
+            LinearCalibrator().fit(X, wrench)
+    model = LinearCalibrator().fit(raw, wrench)
+    with pytest.raises(CalibrationInputError, match="^X is None"):
+        model.predict(None)

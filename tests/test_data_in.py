@@ -232,3 +232,21 @@ def test_an_implausibly_short_lever_arm_is_only_pointed_out(tmp_path, capsys):
     assert main(["fit", str(tmp_path / "cell.csv"), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
     err = capsys.readouterr().err
     assert "ftcal: warning:" in err and "lever arm" in err
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".npz"])
+def test_a_dataset_that_would_not_read_back_is_not_saved(tmp_path, suffix):
+    # the readers refuse NaN/inf and non-JSON metadata: save refuses to write such a file, and writes nothing
+    rng = np.random.default_rng(0)
+    raw, wrench = rng.normal(size=(10, 6)), rng.normal(size=(10, 6))
+    bad_raw = raw.copy()
+    bad_raw[4, 2] = np.inf
+    cases = {r"raw holds inf at row 4 \(rows counted from 0\), column 2": dict(raw=bad_raw, wrench=wrench),
+             r"meta must hold plain JSON values.*Out of range float": dict(raw=raw, wrench=wrench,
+                                                                         meta={"alpha": float("nan")}),
+             r"meta must hold plain JSON values.*not JSON serializable": dict(raw=raw, wrench=wrench,
+                                                                             meta={"x": object()})}
+    for message, fields in cases.items():
+        with pytest.raises(DatasetFileError, match=f"cannot save .*ds{suffix}: {message}"):
+            CalibrationDataset(**fields).save(tmp_path / f"ds{suffix}")
+    assert list(tmp_path.iterdir()) == []

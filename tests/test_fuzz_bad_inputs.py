@@ -446,6 +446,7 @@ def test_ati_file_without_calibration_names_the_problem(tmp_path):
     (["simulate", "dataset", "--n-per-sphere", "100000000000"], "at most 1000000"),
     (["plan", "--subdivisions", "12"], "at most 6"),
     (["simulate", "dataset", "--n-test", "0"], "integer >= 1"),
+    (["plan", "--strategy", "d-optimal", "--poses", "20", "--space-filling", "1e308"], "weight from 0 to 1e6"),
 ])
 def test_sizes_that_would_exhaust_memory_are_refused(argv, message, capsys):
     assert message in cli_error(argv, capsys)

@@ -134,7 +134,7 @@ def test_a_log_of_another_format_version_is_refused_with_its_line(tmp_path):
         read_run_log(p)
 
 
-@pytest.mark.parametrize("mass", ["0", "0.0", "-2"])
+@pytest.mark.parametrize("mass", ["0", "0.0", "-2", "1e300", "20000"])
 def test_a_load_mass_that_is_not_positive_is_refused_with_its_line(tmp_path, mass):
     p = _write(tmp_path)
     p.write_text(p.read_text().replace("# load_mass_kg: 1.25", f"# load_mass_kg: {mass}"))
@@ -144,6 +144,8 @@ def test_a_load_mass_that_is_not_positive_is_refused_with_its_line(tmp_path, mas
         read_run_log(p)
     with pytest.raises(LogFormatError, match="give the positive mass of the load in kg"):
         _write(tmp_path, name="zero.csv", load_mass=0.0)
+    with pytest.raises(LogFormatError, match=r"give the positive mass of the load in kg \(at most 10000\)"):
+        _write(tmp_path, name="huge.csv", load_mass=1e300)
 
 
 def test_raw_values_no_calibration_can_square_are_refused_with_their_line(tmp_path):

@@ -103,8 +103,8 @@ def _check_arguments(args: argparse.Namespace) -> None:
         raise CliError(f"--strategy {args.strategy} needs --poses N (how many poses to choose)")
     if args.load_configurations is not None and args.strategy != "d-optimal":
         raise CliError("--load-configurations needs --strategy d-optimal")
-    if not (args.space_filling >= 0 and np.isfinite(args.space_filling)):
-        raise CliError(f"--space-filling must be a finite weight >= 0; got {args.space_filling}")
+    if not (0 <= args.space_filling <= 1e6):  # beyond, the criterion's terms overflow (the default is 0.25)
+        raise CliError(f"--space-filling must be a weight from 0 to 1e6; got {args.space_filling}")
 
 
 def run(args: argparse.Namespace) -> int:

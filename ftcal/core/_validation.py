@@ -86,14 +86,30 @@ _NOT_MEASUREMENTS = {"b": "booleans", "M": "dates", "m": "time spans", "U": "tex
 def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
     """Complex, boolean, date, text, masked, 1-D or 3-D input gets a short message (scikit-learn's would print
     the whole array, or convert it silently)."""
-    if X is None or not hasattr(X, "__len__") and not hasattr(X, "shape"):
-        return  # None and scalars: validate_data's own message
-    if hasattr(X, "format") and hasattr(X, "tocsr"):  # sparse: validate_data says it is not supported
-        return
+    if X is None:
+        raise CalibrationInputError(f"{name} is None; pass the {what} as an array of shape (n_samples, n_columns).")
+    if not hasattr(X, "__len__") and not hasattr(X, "shape"):
+        return  # scalars: validate_data's own message
+    if hasattr(X, "format") and hasattr(X, "tocsr"):
+        raise CalibrationInputError(
+            f"Sparse data was passed for {name} ({type(X).__name__}, shape {X.shape}), but ftcal's calibrators take "
+            f"dense {what}. Fix: pass {name}.toarray()."
+        )
+    if isinstance(X, np.matrix):
+        raise CalibrationInputError(f"{name} is an np.matrix (shape {X.shape}); pass np.asarray({name}).")
+    columns = getattr(X, "columns", None)
+    if columns is not None and len({type(c) is str for c in columns}) > 1:
+        raise CalibrationInputError(
+            f"{name}'s column names mix text and other types ({list(columns)[:8]}); name every column with text "
+            f"(e.g. s0, s1, ...) or none (pass {name}.to_numpy())."
+        )
     try:
         a = np.asarray(X)
-    except (ValueError, TypeError):  # ragged lists: validate_data reports them
-        return
+    except (ValueError, TypeError):
+        raise CalibrationInputError(
+            f"{name} is not a rectangular table: its rows have different lengths (ragged lists?). Fix: give every "
+            f"row the same number of {what}."
+        ) from None
     if np.iscomplexobj(a):
         raise CalibrationInputError(
             f"Complex data not supported: {name} has complex dtype {a.dtype} and shape {a.shape}; {what} are real "

@@ -22,6 +22,7 @@ __all__ = [
     "alpha_from_wrenches",
     "check_alpha",
     "ALPHA_RANGE_PER_M",
+    "MAX_LOAD_MASS_KG",
     "scale_torques",
     "unscale_torques",
 ]
@@ -43,6 +44,10 @@ MIN_CHANNELS = 3
 #: inverse of the loads' largest lever arm, and lever arms from 1 µm to 1 km cover every sensor; a value outside
 #: is a unit or typing error (no computation needs it, and 1e200 would overflow the scaled squares).
 ALPHA_RANGE_PER_M = (1e-3, 1e6)
+
+#: The largest mass [kg] of a load or tool on a force/torque sensor (the heaviest robots carry ~2 t); a larger
+#: value in a log or a tool file is a unit or typing error.
+MAX_LOAD_MASS_KG = 1e4
 
 
 def check_alpha(alpha, name: str = "alpha") -> float:

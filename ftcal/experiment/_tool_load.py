@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
+from ..core._wrench import MAX_LOAD_MASS_KG
 
 __all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml"]
@@ -106,7 +107,7 @@ def _nearest_rotations(R: NDArray[np.float64]) -> NDArray[np.float64]:
 
 #: Bounds of a tool file's values: beyond them a value is a unit or typing error, not a tool (a 10 t tool, a
 #: centre of mass 100 m away, 100 g of gravity), and the compensation would overflow or be meaningless.
-TOOL_LIMITS = {"mass": 1e4, "center_of_mass": 100.0, "gravity": 1e3, "bias": 1e9}
+TOOL_LIMITS = {"mass": MAX_LOAD_MASS_KG, "center_of_mass": 100.0, "gravity": 1e3, "bias": 1e9}
 _LIMIT_UNITS = {"mass": "kg", "center_of_mass": "m", "gravity": "m/s²", "bias": "N, N·m"}
 
 

@@ -234,6 +234,24 @@ class CalibrationDataset:
         return np.column_stack([self.raw, self.temperature])
 
     # ------------------------------------------------------------------ files
+    def _checked_for_saving(self, path: Path) -> str:
+        """The meta as strict JSON, after checking that the file would read back: finite values (the readers
+        refuse NaN and inf) and a meta of plain JSON values."""
+        for name in ("raw", "wrench", "temperature"):
+            values = getattr(self, name)
+            if values is not None and not np.isfinite(values).all():
+                where = np.argwhere(~np.isfinite(values))[0]
+                raise DatasetFileError(
+                    f"cannot save {path}: {name} holds {values[tuple(where)]} at row {int(where[0])} (rows counted from "
+                    f"0){f', column {int(where[1])}' if where.size > 1 else ''}; a dataset file holds finite values "
+                    "(ftcal's readers refuse NaN and inf). Fix: drop or repair those rows first.")
+        try:
+            return json.dumps(self.meta, allow_nan=False)
+        except (TypeError, ValueError) as exc:
+            raise DatasetFileError(
+                f"cannot save {path}: meta must hold plain JSON values (text, finite numbers, lists, dicts); "
+                f"{exc}.") from None
+
     def save(self, path: str | Path, *, overwrite: bool = False) -> Path:
         """Write the dataset to ``path`` (``.csv`` or ``.npz``, chosen by suffix) and return it.
 
@@ -247,9 +265,10 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv or .npz.")
         if path.exists() and not overwrite:
             raise DatasetFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
+        meta_json = self._checked_for_saving(path)
         with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
             if path.suffix == ".npz":
-                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(json.dumps(self.meta))}
+                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json)}
                 if self.group is not None:
                     arrays["group"] = self.group
                 if self.temperature is not None:
@@ -266,7 +285,7 @@ class CalibrationDataset:
                     cols.append("temperature")
                     columns.append(self.temperature[:, None])
                 with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
-                    fh.write(f"# meta: {json.dumps(self.meta)}\n" + ",".join(cols) + "\n")
+                    fh.write(f"# meta: {meta_json}\n" + ",".join(cols) + "\n")
                     fh.writelines(csv_rows(*columns))
         return path
 

@@ -54,6 +54,7 @@ from ..core._columns import read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
+from ..core._wrench import MAX_LOAD_MASS_KG
 from ._readers import parse_plain_number, temperature_message
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
@@ -309,12 +310,12 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             mass = float(info["load_mass_kg"])
         except ValueError:
             mass = float("nan")
-        if not np.isfinite(mass) or mass <= 0:
+        if not np.isfinite(mass) or mass <= 0 or mass > MAX_LOAD_MASS_KG:
             # the mass of the load rows' external load: zero would be no load (prepare_dataset refuses it), and a
             # log without load rows leaves the comment out
             raise LogFormatError(f"{path}: line {info_line['load_mass_kg']}: load_mass_kg is "
-                                 f"{info['load_mass_kg']!r}; it must be the positive mass of the load in kg (leave the "
-                                 "comment out of a log without load).")
+                                 f"{info['load_mass_kg']!r}; it must be the positive mass of the load in kg, at most "
+                                 f"{MAX_LOAD_MASS_KG:g} (leave the comment out of a log without load).")
     meta: dict = {}
     if "meta" in info:
         try:
@@ -388,9 +389,9 @@ def write_run_log(
         raise LogFormatError(f"{path}: run_kind holds {bad_kind}; use 'load' or 'no-load'.")
     header = [f"# ftcal-run-log: {LOG_FORMAT_VERSION}", "# time_unit: s", "# joint_unit: rad", f"# raw_unit: {raw_unit}"]
     if load_mass is not None:
-        if not (np.isfinite(float(load_mass)) and float(load_mass) > 0):  # what read_run_log would refuse
-            raise LogFormatError(f"{path}: load_mass {load_mass!r}: give the positive mass of the load in kg, or None "
-                                 "for a log without load.")
+        if not (np.isfinite(float(load_mass)) and 0 < float(load_mass) <= MAX_LOAD_MASS_KG):  # read_run_log's rule
+            raise LogFormatError(f"{path}: load_mass {load_mass!r}: give the positive mass of the load in kg (at most "
+                                 f"{MAX_LOAD_MASS_KG:g}), or None for a log without load.")
         header.append(f"# load_mass_kg: {float(load_mass)!r}")
     if robot is not None:
         header.append(f"# robot: {robot}")

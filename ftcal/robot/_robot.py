@@ -238,9 +238,13 @@ def sensor_mounting_transform(mounting) -> pin.SE3:
     if a.shape != (6,) or not np.all(np.isfinite(a)):
         raise KinematicsError(f"sensor_mounting must be rx,ry,rz [deg],x,y,z [m] (6 finite numbers), a 4x4 transform "
                               f"or a pin.SE3; got {np.asarray(mounting).tolist()!r}.")
-    if np.linalg.norm(a[3:]) > 2.0:
-        raise KinematicsError(f"sensor_mounting offset {a[3:].tolist()} is {np.linalg.norm(a[3:]):.3g} m long; give "
+    if np.abs(a[3:]).max() > 2.0 or np.linalg.norm(a[3:]) > 2.0:  # the max first: no overflowing norm
+        length = np.abs(a[3:]).max() if np.abs(a[3:]).max() > 1e150 else np.linalg.norm(a[3:])
+        raise KinematicsError(f"sensor_mounting offset {a[3:].tolist()} is {length:.3g} m long; give "
                               "it in metres.")
+    if np.abs(a[:3]).max() > 360.0:
+        raise KinematicsError(f"sensor_mounting rotation {a[:3].tolist()} [deg] turns more than 360 deg about an "
+                              "axis; give the rotation vector (axis times angle) in degrees, at most 360.")
     return pin.SE3(pin.exp3(np.deg2rad(a[:3])), a[3:])
 
 
