@@ -224,3 +224,19 @@ def test_containers_scikit_learn_refuses_with_a_typeerror_get_an_input_error(dat
     model = LinearCalibrator().fit(raw, wrench)
     with pytest.raises(CalibrationInputError, match="^X is None"):
         model.predict(None)
+
+
+def test_a_derived_alpha_stays_in_the_range_a_given_one_must_meet(data):
+    # loads through the sensor's origin: torques that are noise next to the forces; auto passes the derived alpha to
+    # its candidates as their parameter, so it must meet the parameter's range
+    from ftcal import AutoCalibrator
+
+    raw, wrench = data
+    wrench = wrench.copy()
+    wrench[:, 3:] *= 1e-9
+    assert LinearCalibrator().fit(raw, wrench).alpha_ == 1e6
+    wrench[:, 3:] *= 1e18
+    wrench[:, :3] *= 1e-9
+    assert LinearCalibrator().fit(raw, wrench).alpha_ == 1e-3
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], baselines=False, stack=False, cv=3)
+    assert auto.fit(raw, wrench).alpha_ == 1e-3

@@ -80,9 +80,12 @@ def data_lines(workdir) -> tuple[list[str], list[str]]:
 
 # ------------------------------------------------------------------ 1. interrupts propagate, nothing is saved
 def _default_sigint() -> None:
-    # A test run started in the background (CI, `cmd &`) ignores SIGINT and its children inherit that; give the
-    # child the default disposition, as a terminal gives a program the user may Ctrl-C.
+    # A test run started in the background (CI, `cmd &`) ignores SIGINT, one started by nohup SIGHUP, and the
+    # children inherit that (ftcal keeps an ignored signal ignored, as it should); give the child the default
+    # dispositions, as a terminal gives a program the user may Ctrl-C or close.
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+    if hasattr(signal, "SIGHUP"):
+        signal.signal(signal.SIGHUP, signal.SIG_DFL)
 
 
 def _start_cli(args, cwd) -> subprocess.Popen:
@@ -1358,13 +1361,14 @@ def test_a_reader_that_leaves_early_is_no_error(workdir, tmp_path):
     assert proc.returncode == 0 and err == "", err
 
 
+@pytest.mark.skipif(not hasattr(signal, "SIGHUP"), reason="this OS has no SIGHUP")
 @pytest.mark.parametrize("command", ["predict", "fit"])
 def test_sighup_removes_the_partial_output(workdir, tmp_path, command):
     if command == "predict":
         out = tmp_path / "wrench.csv"
         args = ["predict", workdir / "models" / "linear.model.npz", "-", "--output", out]
         proc = subprocess.Popen([sys.executable, "-m", "ftcal", *map(str, args)], cwd=tmp_path, stdin=subprocess.PIPE,
-                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
         proc.stdin.write("0.1,0.2,0.3,0.4,0.5,0.6\n" * 10)
         proc.stdin.flush()  # mid-stream: the partial file exists
         _wait_for(lambda: list(tmp_path.glob(".wrench.*.partial.csv")), "the partial output", proc)
@@ -1549,6 +1553,21 @@ def test_report_on_too_few_rows_names_the_fold_and_the_rows_needed(workdir, tmp_
             "on only 5 rows (one fold held out), but LinearCalibrator needs at least 7; 5 folds need a dataset of at "
             "least 9 rows") in err[0], err
     assert not (tmp_path / "rep").exists() or not list((tmp_path / "rep").iterdir())
+    assert err[0].endswith("Fix: record more rows"), err  # 7 rows: no number of folds trains on 7
+
+
+def test_report_on_few_rows_suggests_the_folds_that_work_and_they_do(workdir, tmp_path, capsys):
+    # 8 rows: 5 folds train on 6, 8 folds (leave one out) on 7 = LinearCalibrator's minimum
+    ds = CalibrationDataset.load(workdir / "data" / "train.csv")
+    small = ds.subset(np.arange(8))
+    small.group = None
+    small.save(tmp_path / "eight.csv")
+    argv = ["report", str(workdir / "models" / "linear.model.npz"), str(tmp_path / "eight.csv"), "--no-baselines",
+            "--out", str(tmp_path / "rep"), "-q"]
+    assert main(argv) == 2
+    err = [ln for ln in capsys.readouterr().err.splitlines() if not ln.startswith("ftcal: warning:")]
+    assert "Fix: pass --cv 8 (more folds hold out fewer rows each), or record more rows" in err[0], err
+    assert main([*argv, "--cv", "8"]) == 0
 
 
 def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):

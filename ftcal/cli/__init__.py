@@ -32,6 +32,7 @@ ftcal ...
 
 from __future__ import annotations
 
+import contextlib
 import re
 import sys
 from collections.abc import Sequence
@@ -97,18 +98,20 @@ def main(argv: Sequence[str] | None = None) -> int:
         with signals_interrupt(), standard_streams():
             parser = build_parser()
             args = parser.parse_args(args_list)
-            note_inputs(args)  # no output may replace one of these (OutputPlan checks)
+            note_inputs(args, parser)  # no output may replace one of these (OutputPlan checks)
             return int(args.handler(args) or 0)
     except SystemExit as exc:  # --help and --version exit through argparse
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
     except Interrupted as exc:  # SIGINT / SIGTERM / SIGHUP: outputs in progress were removed while unwinding
         import signal
 
-        print(f"ftcal: interrupted by {signal.Signals(exc.signum).name} (no half-written file is left)",
-              file=sys.stderr)
+        with contextlib.suppress(OSError, ValueError):  # a closed terminal (SIGHUP) may take stderr with it
+            print(f"ftcal: interrupted by {signal.Signals(exc.signum).name} (no half-written file is left)",
+                  file=sys.stderr)
         return exc.exit_status
     except KeyboardInterrupt:  # a Ctrl-C from a library (or before the handlers were installed)
-        print("ftcal: interrupted (no half-written file is left)", file=sys.stderr)
+        with contextlib.suppress(OSError, ValueError):
+            print("ftcal: interrupted (no half-written file is left)", file=sys.stderr)
         return 130
     except BrokenPipeError:  # `ftcal predict ... | head`: the reader left, not an error
         _silence_stdout()

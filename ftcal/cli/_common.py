@@ -537,18 +537,34 @@ def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
     return (st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
 
 
-def note_inputs(args: argparse.Namespace) -> None:
+def _choice_arguments(parser: argparse.ArgumentParser, handler) -> set[str]:
+    """The destinations of the options with fixed choices (``--model linear``) of the (sub)command run by
+    ``handler``: their values are names, not paths, even where a folder of that name exists."""
+    found: set[str] = set()
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                found |= _choice_arguments(sub, handler)
+    if not found and parser.get_default("handler") is handler:
+        found = {a.dest for a in parser._actions if a.choices is not None
+                 and not isinstance(a, argparse._SubParsersAction)}
+    return found
+
+
+def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None = None) -> None:
     """Record every file the parsed command may read, so that no output replaces one (``--force`` or not).
 
-    Every argument but the outputs (:data:`OUTPUT_ARGUMENTS`) is looked at: a value naming an existing regular
-    file is an input, a directory contributes the files directly in it (logs directories). Files are compared
-    by device and inode, so another spelling of the path, a symbolic link or a hard link is the same file.
+    Every argument but the outputs (:data:`OUTPUT_ARGUMENTS`) and the options with fixed choices of ``parser``
+    (a model name is no path) is looked at: a value naming an existing regular file is an input, a directory
+    contributes the files directly in it (logs directories). Files are compared by device and inode, so another
+    spelling of the path, a symbolic link or a hard link is the same file.
     """
     _input_files.clear()
     _input_dirs.clear()
     _datasets.clear()
+    names = set() if parser is None else _choice_arguments(parser, getattr(args, "handler", None))
     for dest, value in vars(args).items():
-        if dest in OUTPUT_ARGUMENTS or callable(value):
+        if dest in OUTPUT_ARGUMENTS or dest in names or callable(value):
             continue
         for item in value if isinstance(value, (list, tuple)) else [value]:
             if not isinstance(item, (str, Path)) or str(item) in ("", "-"):

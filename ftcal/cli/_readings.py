@@ -26,8 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core._wrench import WRENCH_LABELS
-from ..core._columns import is_number, read_header
-from ..io._readers import parse_plain_number
+from ..core._columns import is_number, parse_number, read_header
 from ._common import CliError
 
 __all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows", "takes_temperature", "located_error"]
@@ -100,7 +99,7 @@ def iter_reading_chunks(
         if width is not None and len(fields) != width:
             raise CliError(f"{source}: line {line_no}: {len(fields)} values but the header names {width} columns")
         where = f"{source}: line {line_no}"
-        values = [parse_plain_number(f, where, CliError) for f in fields]
+        values = [parse_number(f, where, CliError) for f in fields]
         if columns is not None:
             values = [values[i] for i in columns]
         if len(values) != n_channels:

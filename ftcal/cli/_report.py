@@ -97,8 +97,10 @@ def _fold_too_small(exc: Exception, n_rows: int, cv: int, dataset_path) -> CliEr
         return n - math.ceil(n / k)
 
     rows = next(n for n in range(need + 1, 100 * need + 100) if train_rows(n, cv) >= need)
-    fewer = next((k for k in range(2, cv) if train_rows(n_rows, k) >= need), None)
-    fix = f"pass --cv {fewer}" if fewer is not None else "record more rows"
+    # more folds leave more rows to train on (each holds out n / k); at most n_rows folds (leave one out)
+    more = next((k for k in range(cv + 1, min(n_rows, 50) + 1) if train_rows(n_rows, k) >= need), None)  # --cv <= 50
+    fix = f"pass --cv {more} (more folds hold out fewer rows each), or record more rows" if more is not None \
+        else "record more rows"
     return CliError(f"{dataset_path}: the report's {cv}-fold cross-validation of its {n_rows} rows trains {name} on "
                     f"only {got} rows (one fold held out), but {name} needs at least {need}; {cv} folds need a dataset of at least "
                     f"{rows} rows (more when whole groups are held out). Fix: {fix}")

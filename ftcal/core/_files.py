@@ -24,7 +24,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 __all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
-           "model_file_name", "is_finite_number", "read_json_record"]
+           "model_file_name", "is_finite_number", "describe_file_start", "read_json_record"]
 
 
 #: Suffix of the model files ``ftcal fit`` writes (one ``.npz``: JSON metadata + weights, see :func:`ftcal.save_model`).
@@ -199,6 +199,40 @@ def write_json(path: str | os.PathLike, obj, *, indent: int | None = 2) -> Path:
     with atomic_output(path, overwrite=True, error=FileExistsError) as tmp:
         tmp.write_text(json.dumps(plain_json(obj), indent=indent) + "\n", encoding="utf-8")
     return path
+
+
+def describe_file_start(path: str | os.PathLike) -> str:
+    """What a file that is not the zip archive (``.npz``) it should be looks like, from its first bytes: the end of
+    an error message (the model and dataset readers).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "x.npz"
+    >>> _ = path.write_text("s0,s1\\n1,2\\n")
+    >>> describe_file_start(path)
+    "it is a text file (first line 's0,s1'), e.g. a CSV or JSON file"
+    """
+    with open(path, "rb") as f:
+        head = f.read(512)
+    if not head:
+        return "the file is empty"
+    if head.startswith(b"\x93NUMPY"):
+        return "it is a single .npy array, not an .npz archive"
+    if head[:1] == b"\x80" or head.startswith((b"(dp", b"(lp", b"cnumpy", b"ccopy_reg")):
+        return "it looks like a Python pickle, which ftcal never loads"
+    if head.startswith(b"PK"):
+        return "a damaged zip archive"
+    if head.startswith(b"\x89HDF"):
+        return "it is an HDF5 file"
+    if head.startswith(b"\x08") and b"onnx" in head.lower():
+        return "it looks like an ONNX file (an export of a model)"
+    try:
+        text = head.decode("utf-8")
+    except UnicodeDecodeError:
+        return f"binary data starting with {head[:8]!r}"
+    first = text.splitlines()[0][:60] if text.splitlines() else ""
+    return f"it is a text file (first line {first!r}), e.g. a CSV or JSON file"
 
 
 def is_finite_number(value) -> bool:

@@ -89,7 +89,8 @@ def alpha_from_wrenches(wrench: ArrayLike) -> float:
     Returns
     -------
     float
-        ``alpha``; ``1.0`` when the data hold no force or no torque at all.
+        ``alpha``; ``1.0`` when the data hold no force or no torque at all, and clipped to
+        :data:`ALPHA_RANGE_PER_M` (a lever arm below 1 µm or above 1 km means torques or forces that are noise).
 
     Examples
     --------
@@ -105,7 +106,8 @@ def alpha_from_wrenches(wrench: ArrayLike) -> float:
     tmax = float(np.max(np.abs(w[:, TORQUE]), initial=0.0))
     if fmax == 0.0 or tmax == 0.0 or not np.isfinite(fmax / tmax):
         return 1.0
-    return fmax / tmax
+    low, high = ALPHA_RANGE_PER_M  # beyond, the data hold (almost) no torque or no force: the scale would weigh noise
+    return float(min(max(fmax / tmax, low), high))
 
 
 def scale_torques(wrench: ArrayLike, alpha: float) -> NDArray[np.float64]:

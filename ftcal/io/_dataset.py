@@ -35,12 +35,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import csv_rows, is_number, read_header
+from ..core._columns import _NOT_PLAIN, csv_rows, is_number, parse_number, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
-from ..core._files import atomic_output
+from ..core._files import atomic_output, describe_file_start
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
-from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, parse_plain_number, read_mat_arrays,
+from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, read_mat_arrays,
                        select_arrays, temperature_message)
 
 __all__ = ["CalibrationDataset"]
@@ -350,9 +350,7 @@ class CalibrationDataset:
         import zipfile
 
         if not zipfile.is_zipfile(path):  # np.load would try it as a pickle and advise allow_pickle=True
-            from ..models._model_io import _what_it_is
-
-            raise DatasetFileError(f"{path}: not an .npz (zip) archive: {_what_it_is(path)}. A dataset .npz holds "
+            raise DatasetFileError(f"{path}: not an .npz (zip) archive: {describe_file_start(path)}. A dataset .npz holds "
                                    "the arrays raw and wrench (numpy.savez); a .csv dataset must keep its .csv suffix.")
         try:
             with np.load(path, allow_pickle=False) as z:
@@ -457,9 +455,6 @@ class CalibrationDataset:
                                        "remove or repair that row.")
 
 
-#: A character no plain number or separator has: lines holding one are checked field by field.
-_NOT_PLAIN = re.compile(r"[^0-9eE+\-.,\s]")
-
 
 def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:
     """The ``# meta:`` object, the header's line number and the data lines' numbers (all 1-based) of a dataset CSV.
@@ -497,4 +492,4 @@ def _check_fields(line: str, no: int, names: list[str], path) -> None:
         column = names[k] if k < len(names) else f"{k + 1}"
         if not text:
             raise DatasetFileError(f"{path}: line {no}, column {column}: empty value; every cell needs a number.")
-        parse_plain_number(text, f"{path}: line {no}, column {column}", DatasetFileError)
+        parse_number(text, f"{path}: line {no}, column {column}", DatasetFileError)

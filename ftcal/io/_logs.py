@@ -50,12 +50,12 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._columns import read_header
+from ..core._columns import parse_number, read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import parse_plain_number, temperature_message
+from ._readers import temperature_message
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -245,7 +245,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
 
     def number(lineno: int, fields: list[str], name: str) -> float:
         text = fields[col[name]]
-        value = parse_plain_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
+        value = parse_number(text, f"{path}: line {lineno}: column {name}", LogFormatError)
         if not np.isfinite(value):
             raise LogFormatError(f"{path}: line {lineno}: column {name} is {text!r} (NaN or inf); "
                                  "repair or remove that row.")

@@ -229,29 +229,6 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m") -> str | None
             "units with --force-unit / --torque-unit; if the values are right, confirm with --torque-unit N.m.")
 
 
-def parse_plain_number(text: str, where: str, error: type[Exception]) -> float:
-    """``float(text)`` of a plain ASCII decimal / scientific number, else ``error`` naming ``where``: the one number
-    parser of ftcal's text readers (datasets, run logs, ``ftcal predict``'s readings). Unlike ``float`` (and
-    :func:`ftcal.core._columns.parse_number`, whose pattern's ``\\d`` matches any script's digits), it refuses
-    ``١٢`` (Arabic-Indic digits) and other non-ASCII look-alikes, which no sensor logger writes.
-
-    Examples
-    --------
-    >>> parse_plain_number(" -2.5e1", "x.csv: line 3", ValueError)
-    -25.0
-    >>> parse_plain_number("\u0661\u0662", "x.csv: line 3", ValueError)
-    Traceback (most recent call last):
-    ...
-    ValueError: x.csv: line 3: '١٢' is not a number (plain decimal or scientific notation, e.g. 1000 or 1e3).
-    """
-    from ..core._columns import parse_number
-
-    if not text.isascii():
-        raise error(f"{where}: {text.strip()!r} is not a number (plain decimal or scientific notation, e.g. 1000 or "
-                    "1e3).")
-    return parse_number(text, where, error)
-
-
 def temperature_message(exc: Exception, path, line_no: int) -> str:
     """The library's "temperature row 5 is NaN ..." (a row of the array) as the text file's line and column."""
     text = re.sub(r"^temperature row \d+ ", "temperature ", str(exc)).replace("that row", "that line")

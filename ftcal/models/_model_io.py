@@ -55,7 +55,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import ModelFileError
-from ..core._files import atomic_output
+from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes
 
 __all__ = ["save_model", "load_model", "fitted_state_names", "FORMAT_VERSION"]
@@ -277,7 +277,7 @@ class _Archive:
             self.zip = zipfile.ZipFile(path)
         except zipfile.BadZipFile:
             raise ModelFileError(f"{path} is not a readable ftcal model file (truncated or not an .npz archive: "
-                                 f"{_what_it_is(path)}). Save the model again with ftcal.save_model.") from None
+                                 f"{describe_file_start(path)}). Save the model again with ftcal.save_model.") from None
         except OSError as exc:
             raise ModelFileError(f"{path} cannot be read ({exc.strerror or exc}).") from None
         self.members = {info.filename[:-4]: info for info in self.zip.infolist() if info.filename.endswith(".npy")}
@@ -346,30 +346,6 @@ def _check_is_regular_file(path: Path) -> None:
         raise ModelFileError(f"{path} is a directory, not a model file; give the .model.npz file inside it.")
     if not stat.S_ISREG(mode):
         raise ModelFileError(f"{path} is not a regular file (a device, pipe or socket); give a .model.npz file.")
-
-
-def _what_it_is(path: Path) -> str:
-    """What a file that is not a zip archive looks like, from its first bytes (for the error message)."""
-    with open(path, "rb") as f:
-        head = f.read(512)
-    if not head:
-        return "the file is empty"
-    if head.startswith(b"\x93NUMPY"):
-        return "it is a single .npy array, not an .npz model file"
-    if head[:1] == b"\x80" or head.startswith((b"(dp", b"(lp", b"cnumpy", b"ccopy_reg")):
-        return "it looks like a Python pickle, which ftcal never loads"
-    if head.startswith(b"PK"):
-        return "a damaged zip archive"
-    if head.startswith(b"\x89HDF"):
-        return "it is an HDF5 file"
-    if head.startswith(b"\x08") and b"onnx" in head.lower():
-        return "it looks like an ONNX file (export, not a model file)"
-    try:
-        text = head.decode("utf-8")
-    except UnicodeDecodeError:
-        return f"binary data starting with {head[:8]!r}"
-    first = text.splitlines()[0][:60] if text.splitlines() else ""
-    return f"it is a text file (first line {first!r}), e.g. a CSV or JSON file"
 
 
 def _read_metadata(archive: _Archive) -> dict:
