@@ -1570,6 +1570,17 @@ def test_report_on_few_rows_suggests_the_folds_that_work_and_they_do(workdir, tm
     assert main([*argv, "--cv", "8"]) == 0
 
 
+def test_an_output_folder_named_like_a_choice_is_no_input(workdir, tmp_path, monkeypatch):
+    # `--model linear --out linear`: the model name is no path, even with a folder `linear` (holding the previous
+    # fit) in the working directory; refitting into it with --force works
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "linear").mkdir()
+    argv = ["fit", str(workdir / "data" / "train.csv"), "--model", "linear", "--out", "linear", "-q"]
+    assert main(argv) == 0
+    assert main([*argv, "--force"]) == 0
+    assert (tmp_path / "linear" / "linear.model.npz").is_file()
+
+
 def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):
     logs = tmp_path / "logs"
     ftcal.simulate_experiment(logs, robot=ftcal.load_robot("kuka_iiwa14"), subdivisions=0, random_state=0)
