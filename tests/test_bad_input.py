@@ -240,3 +240,13 @@ def test_a_derived_alpha_stays_in_the_range_a_given_one_must_meet(data):
     assert LinearCalibrator().fit(raw, wrench).alpha_ == 1e-3
     auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], baselines=False, stack=False, cv=3)
     assert auto.fit(raw, wrench).alpha_ == 1e-3
+
+
+def test_unscaling_multiplies_by_the_reciprocal_bit_for_bit():
+    # every simulated dataset and cached benchmark record (their data fingerprints) was made with torques times
+    # 1 / alpha; dividing by alpha differs in the last bit and made every cached record "of other data"
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(1000, 6)) * 37.0
+    for alpha in (50.0, 3.0, 7.1, 1e-3, 1e6):
+        np.testing.assert_array_equal(ftcal.unscale_torques(w, alpha)[:, 3:], w[:, 3:] * (1.0 / alpha))
+        np.testing.assert_array_equal(ftcal.scale_torques(w, alpha)[:, 3:], w[:, 3:] * alpha)

@@ -142,8 +142,9 @@ def _scaled(wrench: ArrayLike, alpha: float, *, multiply: bool) -> NDArray[np.fl
     w = np.array(wrench, dtype=float, copy=True)
     if w.shape[-1] != 6:
         return w
-    with np.errstate(over="ignore"):
-        torque = w[..., TORQUE] * alpha if multiply else w[..., TORQUE] / alpha
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # 0 * (1 / 5e-324) is NaN: refused below
+        # times 1 / alpha, not divided by alpha: the bits every dataset and cached result were made with
+        torque = w[..., TORQUE] * (alpha if multiply else 1.0 / alpha)
     if not np.isfinite(torque).all() and np.isfinite(w[..., TORQUE]).all():
         big = float(np.abs(w[..., TORQUE]).max())
         raise CalibrationInputError(
