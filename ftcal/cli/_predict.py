@@ -142,9 +142,11 @@ def _is_model_file(path: Path) -> bool:
     """Whether ``path`` is an ftcal model file (a zip holding the model's ``__metadata__``)."""
     import zipfile
 
+    from ..models._model_io import _META_KEY
+
     try:
         with zipfile.ZipFile(path) as archive:
-            return "__metadata__.npy" in archive.namelist()
+            return f"{_META_KEY}.npy" in archive.namelist()
     except (OSError, zipfile.BadZipFile):
         return False
 

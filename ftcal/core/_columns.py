@@ -27,7 +27,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from itertools import chain
 
-__all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_numbers", "csv_rows"]
+__all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_fields", "DTYPE_KIND_NAMES", "csv_rows"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
 _NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE | re.ASCII)
@@ -80,17 +80,35 @@ def parse_number(text: str, where: str, error: type[Exception]) -> float:
     return float(text)
 
 
-def check_plain_numbers(lines: Iterable[str], first_line_no: int, source: str, error: type[Exception]) -> None:
-    """Raise ``error`` at the first line holding a character no plain number has (``_``, letters other than e/nan/inf).
+#: What an array of each dtype kind that holds no real numbers is (the calibrators' and the dataset readers'
+#: messages; scikit-learn and numpy would convert most of them to numbers silently).
+DTYPE_KIND_NAMES = {"c": "complex numbers", "b": "booleans", "M": "dates", "m": "time spans", "U": "text",
+                    "S": "text", "O": "objects (a MATLAB cell array)", "V": "records (a MATLAB struct)"}
 
-    A fast guard in front of ``numpy.loadtxt`` (which, like ``float``, reads
-    ``1_000`` as 1000).
+
+def check_plain_fields(line: str, where: str, names: Sequence[str], error: type[Exception], *,
+                       quick: bool = False) -> None:
+    """Raise ``error`` at the first field of the CSV ``line`` that is empty or no plain number, naming ``where``
+    (file and line) and the field's column in ``names``.
+
+    With ``quick``, a line holding only characters of plain numbers and separators is passed without looking at
+    its fields: the guard in front of ``numpy.loadtxt``, which (like ``float``) reads ``1_000`` as 1000.
+
+    Examples
+    --------
+    >>> check_plain_fields("1.5,1_000", "d.csv: line 4", ["s0", "s1"], ValueError)
+    Traceback (most recent call last):
+    ...
+    ValueError: d.csv: line 4, column s1: '1_000' is not a number (plain decimal or scientific notation, e.g. 1000 or 1e3).
     """
-    for offset, line in enumerate(lines):
-        if _NOT_PLAIN.search(line):
-            for field in line.split(","):
-                if field.strip() and not is_number(field):
-                    parse_number(field, f"{source}: line {first_line_no + offset}", error)
+    if quick and not _NOT_PLAIN.search(line):
+        return
+    for k, field in enumerate(line.split(",")):
+        text = field.strip()
+        column = names[k] if k < len(names) else f"{k + 1}"
+        if not text:
+            raise error(f"{where}, column {column}: empty value; every cell needs a number.")
+        parse_number(text, f"{where}, column {column}", error)
 
 
 @dataclass(frozen=True)

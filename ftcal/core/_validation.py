@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.utils._param_validation import InvalidParameterError, Interval, validate_parameter_constraints
 from sklearn.utils.validation import check_array, check_consistent_length, validate_data
 
+from ._columns import DTYPE_KIND_NAMES
 from ._exceptions import CalibrationInputError
 
 __all__ = [
@@ -79,8 +80,8 @@ def check_magnitude(a: NDArray[np.float64], name: str) -> None:
         )
 
 
-#: dtype kinds that are no measurement (scikit-learn would convert them to numbers silently).
-_NOT_MEASUREMENTS = {"b": "booleans", "M": "dates", "m": "time spans", "U": "text", "S": "bytes", "V": "raw records"}
+#: The kinds the calibrators refuse by that name (complex has its own message, objects go to validate_data).
+_NOT_MEASUREMENTS = "bMmUSV"
 
 
 def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
@@ -117,7 +118,7 @@ def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
         )
     if a.dtype.kind in _NOT_MEASUREMENTS:
         raise CalibrationInputError(
-            f"{name} has dtype {a.dtype} ({_NOT_MEASUREMENTS[a.dtype.kind]}) and shape {a.shape}; {what} are real "
+            f"{name} has dtype {a.dtype} ({DTYPE_KIND_NAMES[a.dtype.kind]}) and shape {a.shape}; {what} are real "
             f"numbers. Fix: convert the measured values to floats first (e.g. {name}.astype(float) after parsing)."
         )
     if isinstance(X, np.ma.MaskedArray) and np.ma.getmaskarray(X).any():

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import _NOT_PLAIN, csv_rows, is_number, parse_number, read_header
+from ..core._columns import check_plain_fields, csv_rows, is_number, read_header
 from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._temperature import TemperatureValueError, check_temperature
@@ -408,8 +408,8 @@ class CalibrationDataset:
             if line.count(",") + 1 != width:
                 raise DatasetFileError(f"{path}: line {no}: {line.count(',') + 1} values but the header names "
                                        f"{width} columns; repair or remove that line.")
-            if _NOT_PLAIN.search(line):  # `1_000`, `nan`: float() and numpy take forms no logger writes
-                _check_fields(line, no, names, path)
+            # `1_000`, `nan`: float() and numpy take forms no logger writes
+            check_plain_fields(line, f"{path}: line {no}", names, DatasetFileError, quick=True)
         if not body_lines:
             raise DatasetFileError(f"{path}: no data rows after the header.")
         try:
@@ -418,7 +418,7 @@ class CalibrationDataset:
                 data = np.loadtxt(body_lines, delimiter=",", ndmin=2, comments=None)
         except ValueError as exc:
             for no, line in zip(line_nos, body_lines):  # name the file's line and the column, not numpy's row
-                _check_fields(line, no, names, path)
+                check_plain_fields(line, f"{path}: line {no}", names, DatasetFileError)
             raise DatasetFileError(f"{path}: unreadable number ({' '.join(str(exc).split())[:100]}).") from None
         used = header.numbered("s") + [header.index[c] for c in WRENCH_LABELS]
         bad = np.argwhere(~np.isfinite(data[:, used]))
@@ -485,11 +485,3 @@ def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:
     return meta, header_no, data
 
 
-def _check_fields(line: str, no: int, names: list[str], path) -> None:
-    """Raise naming the line and column of the first field of ``line`` that is no plain ASCII number."""
-    for k, field in enumerate(line.split(",")):
-        text = field.strip()
-        column = names[k] if k < len(names) else f"{k + 1}"
-        if not text:
-            raise DatasetFileError(f"{path}: line {no}, column {column}: empty value; every cell needs a number.")
-        parse_number(text, f"{path}: line {no}, column {column}", DatasetFileError)

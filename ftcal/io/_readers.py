@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core._exceptions import DatasetFileError
+from ..core._columns import DTYPE_KIND_NAMES
 from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS
 
 __all__ = [
@@ -39,7 +40,6 @@ __all__ = [
     "lever_arm_problem",
     "read_mat_arrays",
     "check_real_array",
-    "parse_plain_number",
 ]
 
 #: Force units ftcal reads, as the factor to [N].
@@ -252,11 +252,6 @@ def read_mat_arrays(path) -> dict:
     return {key: value for key, value in data.items() if not key.startswith("__")}
 
 
-#: What each unusable dtype kind is, for the message.
-_KIND_NAMES = {"c": "complex numbers", "b": "booleans", "M": "dates", "m": "time spans", "U": "text", "S": "text",
-               "O": "objects (a MATLAB cell array)", "V": "records (a MATLAB struct)"}
-
-
 def check_real_array(value, name: str, where: str, kind: str = "variable") -> np.ndarray:
     """``value`` as an array of real numbers (float or integer), else :class:`DatasetFileError` naming the file,
     the array and its type: complex, boolean, date, text, object (MATLAB cell), struct and sparse arrays are refused
@@ -276,7 +271,7 @@ def check_real_array(value, name: str, where: str, kind: str = "variable") -> np
             f"a {type(value).__name__}"
         raise DatasetFileError(f"{where}: {kind} {name!r} is {what}; it must be an array of real numbers.")
     if value.dtype.kind not in "iuf":
-        shown = _KIND_NAMES.get(value.dtype.kind, "not real numbers")
+        shown = DTYPE_KIND_NAMES.get(value.dtype.kind, "not real numbers")
         raise DatasetFileError(f"{where}: {kind} {name!r} has dtype {value.dtype} ({shown}); it must hold real "
                                "numbers (float or integer).")
     return value
