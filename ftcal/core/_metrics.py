@@ -236,12 +236,56 @@ def calibration_report(
     )
 
 
-def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
-    """scikit-learn scorer: minus the torque-scaled RMSE, with the estimator's own ``alpha_``.
+def _torque_scale_of(estimator) -> float:
+    """The ``alpha_`` of ``estimator``, or of the fitted calibrator it wraps: the final step of a ``Pipeline``
+    (nested ones too), the ``best_estimator_`` of a search (``GridSearchCV``, ...), a ``FrozenEstimator``'s
+    estimator. Refuses (``CalibrationInputError``) when there is none, rather than scoring with alpha = 1."""
+    path, current = [], estimator
+    for _ in range(100):  # a chain of wrappers, never a cycle
+        path.append(type(current).__name__)
+        alpha = current.__dict__.get("alpha_") if hasattr(current, "__dict__") else None
+        if alpha is not None:
+            alpha = float(alpha)
+            if not 0 < alpha < np.inf:
+                raise CalibrationInputError(f"neg_scaled_rmse: the {path[-1]}'s alpha_ is {alpha!r}; a torque scale "
+                                            "is a finite number > 0 [1/m]. Fix: fit the calibrator again.")
+            return alpha
+        steps = getattr(current, "steps", None)
+        if isinstance(steps, list) and steps and isinstance(steps[-1], tuple) and len(steps[-1]) == 2:
+            current = steps[-1][1]  # a Pipeline: its final estimator
+        elif "best_estimator_" in getattr(current, "__dict__", {}):
+            current = current.best_estimator_  # a fitted search (GridSearchCV, RandomizedSearchCV, ...)
+        elif type(current).__name__ == "FrozenEstimator":
+            current = current.estimator
+        else:
+            break
+    raise CalibrationInputError(
+        f"neg_scaled_rmse needs the torque scale alpha_ [1/m] of a fitted ftcal calibrator (eq. 18), but "
+        f"{' -> '.join(path)} has none (it looks through Pipeline final steps, a search's best_estimator_ and "
+        "FrozenEstimator). Fix: end the pipeline with an ftcal calibrator, or score with a fixed torque scale: "
+        "sklearn.metrics.make_scorer(ftcal.wrench_rmse, greater_is_better=False, alpha=<Fmax / Tmax in 1/m>).")
 
-    Use it as ``scoring=neg_scaled_rmse`` in ``cross_validate`` or
-    ``GridSearchCV`` (greater is better, as scikit-learn expects). Estimators
-    without an ``alpha_`` attribute are scored with ``alpha = 1``.
+
+def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
+    """scikit-learn scorer: minus the torque-scaled RMSE (eq. 18), with the fitted calibrator's own ``alpha_``.
+
+    Use it as ``scoring=neg_scaled_rmse`` in ``cross_validate`` or ``GridSearchCV`` (greater is better, as
+    scikit-learn expects), on a calibrator or on a ``Pipeline`` ending with one (nested pipelines, a fitted
+    search's ``best_estimator_`` and a ``FrozenEstimator`` are looked through). An estimator without such a
+    calibrator is refused with a :class:`~ftcal.CalibrationInputError`: torques scored with ``alpha = 1`` would
+    count a torque error in N·m as a force error in N. For a fixed torque scale use
+    ``make_scorer(wrench_rmse, greater_is_better=False, alpha=...)``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn.pipeline import make_pipeline
+    >>> from sklearn.preprocessing import StandardScaler
+    >>> from ftcal import LinearCalibrator
+    >>> raw = np.random.default_rng(0).normal(size=(30, 6)); wrench = raw @ np.diag([1, 1, 1, .1, .1, .1])
+    >>> pipe = make_pipeline(StandardScaler(), LinearCalibrator(alpha=10.0)).fit(raw, wrench)
+    >>> round(neg_scaled_rmse(pipe, raw, wrench + [0, 0, 0, 0, 0, 0.6]), 6)  # 0.6 N·m x 10 / m, one of six
+    -2.44949
     """
-    alpha = float(getattr(estimator, "alpha_", 1.0))
+    alpha = _torque_scale_of(estimator)
     return -wrench_rmse(y, estimator.predict(X), alpha)
