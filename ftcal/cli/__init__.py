@@ -33,6 +33,7 @@ ftcal ...
 from __future__ import annotations
 
 import contextlib
+import errno
 import re
 import sys
 from collections.abc import Sequence
@@ -143,11 +144,17 @@ _CLI_ADVICE = (
 )
 
 
+#: A full disk or an exhausted quota: the file is named and the user told what to do.
+_FULL = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT") if hasattr(errno, name))
+
+
 def _one_line(exc: BaseException) -> str:
     """The message of ``exc`` folded onto one line (OSError gets its file name), its API advice (``pass
     groups=None``) put in command-line terms."""
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         text = f"{exc.filename}: {exc.strerror}"
+        if exc.errno in _FULL:
+            text += " (the file was not written); free some space on that disk or write to another folder"
     else:
         text = str(exc) or type(exc).__name__
     for pattern, advice in _CLI_ADVICE:

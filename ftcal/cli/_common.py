@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..core._exceptions import FtcalError
-from ..core._files import atomic_output, check_writable_dir, write_json
+from ..core._files import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
 
 __all__ = [
     "CliError",
@@ -641,6 +641,7 @@ class OutputPlan:
         self.out_dir = Path(out_dir)
         self.names = list(names)
         self.force = force
+        self._set: OutputSet | None = None  # the set being written (as_one_set)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
         try:
@@ -691,10 +692,30 @@ class OutputPlan:
         A failure inside the block removes the temporary file and leaves any
         existing ``name`` untouched; each run gets its own temporary file, and
         without ``--force`` a file that another run wrote meanwhile is not
-        replaced (:func:`ftcal.core._files.atomic_output`).
+        replaced (:func:`ftcal.core._files.atomic_output`). Within
+        :meth:`as_one_set` the file is put in place with the others of the set, at its end.
         """
-        with atomic_output(self.path(name), overwrite=self.force, error=CliError) as tmp:
+        target = self.path(name)
+        if self._set is not None:
+            with self._set.writing(target) as tmp:
+                yield tmp
+            return
+        with atomic_output(target, overwrite=self.force, error=CliError) as tmp:
             yield tmp
+
+    @contextlib.contextmanager
+    def as_one_set(self) -> Iterator[OutputSet]:
+        """Within the block, the files written with :meth:`writing` are put in place together when it ends, and
+        none of them when it fails (an error, a full disk, a signal): a run leaves all its outputs or none, and a
+        replaced set is never half old, half new (:func:`ftcal.core._files.atomic_output_set`)."""
+        if self._set is not None:
+            raise AssertionError("as_one_set() is already active on this OutputPlan")
+        with atomic_output_set(overwrite=self.force, error=CliError) as files:
+            self._set = files
+            try:
+                yield files
+            finally:
+                self._set = None
 
 
 

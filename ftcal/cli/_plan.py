@@ -144,25 +144,26 @@ def run(args: argparse.Namespace) -> int:
         np.arange(plan.n_poses), to_unit(plan.q), plan.gravity_in_sensor, to_unit(plan.pitch), to_unit(plan.yaw),
     ])
     table = np.round(table, 8) + 0.0  # no "-0.00000000" cells
-    with plan_files.writing("poses.csv") as tmp:
-        np.savetxt(tmp, table, delimiter=",", header=",".join(columns), comments="",
-                   fmt=["%d"] + ["%.8f"] * (table.shape[1] - 1))
-    with plan_files.writing("plan.json") as tmp:
-        write_json(tmp, {
-            "robot": robot.name,
-            "urdf": str(robot.urdf_path),
-            "sensor_frame": plan.sensor_frame,
-            "anchor_frame": plan.anchor_frame,
-            "anchor_position_in_base_m": plan.anchor_position_in_base,
-            "joint_names": list(robot.joint_names),
-            "angle_unit": unit,
-            "n_candidates": plan.n_candidates,
-            "n_poses": plan.n_poses,
-            "unreachable_gravity_in_sensor": plan.unreachable,
-            "settings": plan.settings,
-            **extra,
-        })
-    write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
+    with plan_files.as_one_set():  # poses, summary and figure: all or none
+        with plan_files.writing("poses.csv") as tmp:
+            np.savetxt(tmp, table, delimiter=",", header=",".join(columns), comments="",
+                       fmt=["%d"] + ["%.8f"] * (table.shape[1] - 1))
+        with plan_files.writing("plan.json") as tmp:
+            write_json(tmp, {
+                "robot": robot.name,
+                "urdf": str(robot.urdf_path),
+                "sensor_frame": plan.sensor_frame,
+                "anchor_frame": plan.anchor_frame,
+                "anchor_position_in_base_m": plan.anchor_position_in_base,
+                "joint_names": list(robot.joint_names),
+                "angle_unit": unit,
+                "n_candidates": plan.n_candidates,
+                "n_poses": plan.n_poses,
+                "unreachable_gravity_in_sensor": plan.unreachable,
+                "settings": plan.settings,
+                **extra,
+            })
+        write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
     if args.next_poses is not None:
         console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
                      f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance; poses -> "

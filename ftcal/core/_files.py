@@ -8,12 +8,22 @@ Every file ftcal writes (datasets, model files, CLI outputs) goes through
   (each gets its own from :func:`tempfile.mkstemp`);
 * without ``overwrite`` a file that appeared while the run worked (another
   run finished first) is not replaced: the new output is kept beside it
-  under a unique name and the error says where.
+  under a unique name and the error says where;
+* a failed write (a full disk, a quota) names the file it was writing, not
+  only ``[Errno 28] No space left on device``.
+
+The outputs of one run that belong together (a plan's poses, its summary and
+its figure; a model and its fit summary) go through :func:`atomic_output_set`:
+every file is written to its temporary name first and only when all are
+written are they renamed into place, so a failure (a full disk, a signal, an
+error in a later step) leaves none of them, and a replaced set is never half
+old and half new.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
 import itertools
 import json
 import math
@@ -23,7 +33,7 @@ import tempfile
 from collections.abc import Iterator
 from pathlib import Path
 
-__all__ = ["atomic_output", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
+__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
            "model_file_name", "is_finite_number", "describe_file_start", "read_json_record"]
 
 
@@ -34,6 +44,46 @@ MODEL_SUFFIX = ".model.npz"
 def model_file_name(name: str) -> str:
     """File name of a fitted model called ``name`` (``directional`` -> ``directional.model.npz``)."""
     return f"{name}{MODEL_SUFFIX}"
+
+#: Errors of a write that name no file (``OSError.filename`` is None): the device is full, a quota is reached, the
+#: file would be too large, the disk failed or became read-only. The file being written is named in their place.
+_WRITE_FAILURES = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT", "EFBIG", "EIO", "EROFS")
+                            if hasattr(errno, name))
+
+
+def _naming(exc: OSError, tmp: Path, path: Path) -> OSError | None:
+    """``exc`` of a write to the temporary ``tmp`` of ``path`` as the same error naming ``path`` (the user's file),
+    or None when it is about another file."""
+    named = exc.filename is not None and Path(exc.filename) == tmp
+    if named or (exc.filename is None and exc.errno in _WRITE_FAILURES):
+        return type(exc)(exc.errno, exc.strerror or os.strerror(exc.errno or 0), str(path))
+    return None
+
+
+def _temporary_beside(path: Path) -> Path:
+    """A fresh, empty temporary file beside ``path`` (unique per call), readable as the umask allows."""
+    directory = path.parent if str(path.parent) else Path(".")
+    try:
+        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
+    except OSError as exc:  # no such folder, not writable, a full disk: name the user's file, not the temporary one
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+    os.close(fd)
+    tmp = Path(tmp_name)
+    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
+    return tmp
+
+
+@contextlib.contextmanager
+def _writing_named(tmp: Path, path: Path) -> Iterator[Path]:
+    """Yield ``tmp``; an ``OSError`` of writing it is raised again naming ``path``."""
+    try:
+        yield tmp
+    except OSError as exc:
+        named = _naming(exc, tmp, path)
+        if named is None:
+            raise
+        raise named from None
+
 
 @contextlib.contextmanager
 def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Exception]) -> Iterator[Path]:
@@ -50,6 +100,11 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     error : exception class
         Raised (with both paths named) when ``path`` appeared meanwhile.
 
+    Raises
+    ------
+    OSError
+        A failed write, naming ``path`` (a full disk: ``path: No space left on device``); nothing is left.
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -60,42 +115,195 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     'hello'
     """
     path = Path(path)
-    directory = path.parent if str(path.parent) else Path(".")
+    tmp = _temporary_beside(path)
     try:
-        fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
-    except OSError as exc:  # no such folder, not writable, ...: name the user's file, not the temporary one
-        raise type(exc)(exc.errno, exc.strerror, str(path)) from None
-    os.close(fd)
-    tmp = Path(tmp_name)
-    os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
-    try:
-        try:
+        with _writing_named(tmp, path):
             yield tmp
-        except OSError as exc:
-            if exc.filename is not None and Path(exc.filename) == tmp:  # name the user's file, not ours
-                raise type(exc)(exc.errno, exc.strerror, str(path)) from None
-            raise
-        if overwrite:
-            try:
-                os.replace(tmp, path)
-            except OSError as exc:  # e.g. path is a folder
-                raise type(exc)(exc.errno, exc.strerror, str(path)) from None
-            return
-        try:
-            os.link(tmp, path)
-        except FileExistsError:
-            kept = link_beside(tmp, path)
-            raise error(
-                f"{path} appeared while this run was working (another run wrote it?); it was left as it is and "
-                f"this run's output was kept as {kept}."
-            ) from None
-        except OSError:  # a file system without hard links: check, then rename
-            if path.exists():
-                raise error(f"{path} appeared while this run was working; it was left as it is.") from None
-            os.replace(tmp, path)
+        _move_into_place(tmp, path, overwrite, error)
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp.unlink()
+
+
+def _move_into_place(tmp: Path, path: Path, overwrite: bool, error: type[Exception]) -> None:
+    """Rename ``tmp`` to ``path``; without ``overwrite`` never over a file that exists (it is kept beside)."""
+    if overwrite:
+        try:
+            os.replace(tmp, path)
+        except OSError as exc:  # e.g. path is a folder
+            raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+        return
+    try:
+        os.link(tmp, path)
+    except FileExistsError:
+        kept = link_beside(tmp, path)
+        raise error(
+            f"{path} appeared while this run was working (another run wrote it?); it was left as it is and "
+            f"this run's output was kept as {kept}."
+        ) from None
+    except OSError:  # a file system without hard links: check, then rename
+        if path.exists():
+            raise error(f"{path} appeared while this run was working; it was left as it is.") from None
+        os.replace(tmp, path)
+
+
+class OutputSet:
+    """Files written together: each to its own temporary file, all renamed into place by :meth:`commit`.
+
+    Made by :func:`atomic_output_set`, which commits when its block succeeds and otherwise removes every
+    temporary file (so no file of the set is written).
+    """
+
+    def __init__(self, *, overwrite: bool, error: type[Exception]) -> None:
+        self.overwrite = overwrite
+        self.error = error
+        self._pending: dict[Path, Path] = {}  # final path -> its temporary file
+
+    @contextlib.contextmanager
+    def writing(self, path: str | os.PathLike) -> Iterator[Path]:
+        """Yield the temporary path of ``path`` (a new one each time: the last written wins); an ``OSError`` of
+        the write names ``path``. The file is renamed into place when the whole set is committed."""
+        path = Path(path)
+        tmp = _temporary_beside(path)
+        try:
+            with _writing_named(tmp, path):
+                yield tmp
+        except BaseException:
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+            raise
+        previous = self._pending.pop(path, None)
+        if previous is not None:
+            with contextlib.suppress(FileNotFoundError):
+                previous.unlink()
+        self._pending[path] = tmp
+
+    @property
+    def paths(self) -> list[Path]:
+        """The final paths written so far (committed or not)."""
+        return list(self._pending)
+
+    def commit(self) -> None:
+        """Rename every written file into place, all or none.
+
+        Without ``overwrite`` a final path that exists (another run wrote it meanwhile) stops the commit before
+        any rename: nothing is replaced, this run's files are kept beside under unique names and ``error`` says
+        where. With ``overwrite``, the files that are replaced are first given a second name, so that a rename
+        that fails halfway puts every old file back.
+        """
+        pending = list(self._pending.items())
+        if not self.overwrite:
+            placed: list[tuple[Path, Path]] = []
+            for path, tmp in pending:
+                try:
+                    os.link(tmp, path)
+                except FileExistsError:
+                    self._undo_links(placed)
+                    kept = [str(link_beside(t, p)) for p, t in pending]
+                    raise self.error(
+                        f"{path} appeared while this run was working (another run wrote it?); none of this run's "
+                        f"files was put in place (they are kept as {', '.join(kept)})."
+                    ) from None
+                except OSError:  # a file system without hard links: check, then rename
+                    if path.exists():
+                        self._undo_links(placed)
+                        raise self.error(f"{path} appeared while this run was working; none of this run's files "
+                                         "was put in place.") from None
+                    os.replace(tmp, path)
+                placed.append((path, tmp))
+            self._discard()
+            return
+        backups: dict[Path, Path | None] = {}
+        try:
+            for path, tmp in pending:
+                backups[path] = _second_name(path)
+                try:
+                    os.replace(tmp, path)
+                except OSError as exc:
+                    raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+        except BaseException:
+            for path, backup in backups.items():  # put the old set back
+                with contextlib.suppress(OSError):
+                    if backup is not None:
+                        os.replace(backup, path)
+                    elif not self._pending[path].exists():  # the new file was put in place: remove it
+                        path.unlink()
+            raise
+        finally:
+            for backup in backups.values():
+                if backup is not None:
+                    with contextlib.suppress(FileNotFoundError):
+                        backup.unlink()
+        self._discard()
+
+    @staticmethod
+    def _undo_links(placed: list[tuple[Path, Path]]) -> None:
+        for path, tmp in placed:  # only the files this run linked (still the same file as its temporary one)
+            with contextlib.suppress(OSError):
+                if os.path.samefile(path, tmp):
+                    path.unlink()
+
+    def _discard(self) -> None:
+        for tmp in self._pending.values():
+            with contextlib.suppress(FileNotFoundError):
+                tmp.unlink()
+        self._pending.clear()
+
+
+def _second_name(path: Path) -> Path | None:
+    """A hard link to the existing ``path`` under a fresh hidden name beside it (None when ``path`` does not exist
+    or is not a regular file; a file system without hard links gets a copy)."""
+    if not path.is_file():
+        return None
+    for k in itertools.count(1):
+        backup = path.with_name(f".{path.name}.{os.getpid()}.{k}.previous")
+        try:
+            os.link(path, backup)
+            return backup
+        except FileExistsError:
+            continue
+        except OSError:  # a file system without hard links
+            try:
+                with open(backup, "xb") as f:
+                    f.write(path.read_bytes())
+                return backup
+            except FileExistsError:
+                continue
+    raise AssertionError("unreachable")
+
+
+@contextlib.contextmanager
+def atomic_output_set(*, overwrite: bool, error: type[Exception]) -> Iterator[OutputSet]:
+    """Yield an :class:`OutputSet`; the files written through it are put in place together when the block
+    succeeds, and none of them when it fails (an error, a full disk, a signal).
+
+    Parameters
+    ----------
+    overwrite : bool
+        Whether existing files may be replaced (without it, none is: see :meth:`OutputSet.commit`).
+    error : exception class
+        Raised when a file of the set appeared while the run worked.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> with atomic_output_set(overwrite=False, error=FileExistsError) as files:
+    ...     with files.writing(folder / "a.txt") as tmp:
+    ...         _ = tmp.write_text("a")
+    ...     print(sorted(p.name for p in folder.iterdir() if not p.name.startswith(".")))
+    ...     with files.writing(folder / "b.txt") as tmp:
+    ...         _ = tmp.write_text("b")
+    []
+    >>> sorted(p.name for p in folder.iterdir())
+    ['a.txt', 'b.txt']
+    """
+    files = OutputSet(overwrite=overwrite, error=error)
+    try:
+        yield files
+        files.commit()
+    finally:
+        files._discard()
 
 
 def link_beside(tmp: Path, path: Path) -> Path:
