@@ -118,6 +118,8 @@ _PUBLIC: dict[str, str] = {
     "solve_orientation_ik": "robot._ik",
     "thesis_load_configurations": "robot._loads",
     "ToolLoad": "experiment._tool_load",
+    "BiasDrift": "experiment._drift",
+    "DriftExtrapolationWarning": "experiment._drift",
     "identify_tool_load": "experiment._tool_load",
     "TemperatureCompensatedCalibrator": "calibrators._temperature_compensation",
     "HistoryCalibrator": "calibrators._history",

@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -40,9 +40,15 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 from ..core._wrench import MAX_LOAD_MASS_KG
+from ._drift import (BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks, functional_se,
+                     select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
-           "tool_gravity_compensation_yaml"]
+           "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION"]
+
+#: Version of the tool file: 1 without a bias drift (readable by older ftcal), 2 with one (older ftcal refuses it
+#: rather than ignore the drift).
+TOOL_FORMAT_VERSION = 2
 
 #: Gravity in the base frame [m/s²] (z up).
 DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
@@ -51,13 +57,6 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 ROTATION_TOLERANCE = 5e-3
 #: The gravity directions (sensor frame) must vary by at least this much in two independent directions [deg].
 MIN_TILT_DEG = 10.0
-
-
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``[v]×`` for each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    z = np.zeros(len(v))
-    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
-                     np.stack([-v[:, 1], v[:, 0], z], -1)], axis=1)
 
 
 def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None):
@@ -156,6 +155,10 @@ class ToolLoad:
         Gravity in the base frame [m/s²] used for the identification.
     residual_rms : ndarray of shape (2,)
         RMS of the force [N] and torque [N·m] residuals of the identification poses.
+    drift : BiasDrift or None
+        How the bias moves with time or temperature (``None``: a constant bias). With a drift, ``bias`` is
+        the bias at ``drift.reference`` (the end of the identification, or the last re-tare) and every
+        compensation needs the time (or temperature) of each wrench.
     """
 
     mass: float
@@ -166,6 +169,7 @@ class ToolLoad:
     bias_std_error: NDArray[np.float64] = field(default_factory=lambda: np.zeros(6))
     gravity: NDArray[np.float64] = field(default_factory=lambda: np.asarray(DEFAULT_GRAVITY))
     residual_rms: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
+    drift: BiasDrift | None = None
 
     def __post_init__(self) -> None:
         """Check every field: finite values of the right shapes, a mass and standard errors >= 0, a gravity."""
@@ -194,16 +198,46 @@ class ToolLoad:
             raise CalibrationInputError(f"ToolLoad gravity must be a non-zero vector in [m/s²]; got {self.gravity!r}.")
         for name in TOOL_LIMITS:
             _check_limit(name, getattr(self, name))
+        if self.drift is not None and not isinstance(self.drift, BiasDrift):
+            raise CalibrationInputError(f"ToolLoad drift must be a BiasDrift or None; got {type(self.drift).__name__}.")
 
-    def gravity_wrench(self, sensor_rotations: ArrayLike) -> NDArray[np.float64]:
-        """The wrench [N, N·m] the tool's weight plus the bias produce at each pose (n, 6), sensor frame."""
+    def bias_at(self, n: int, times: ArrayLike | None = None, temperatures: ArrayLike | None = None
+                ) -> NDArray[np.float64]:
+        """The bias [N, N·m] at each of ``n`` readings (n, 6): constant, or moved by the drift to each reading's
+        time (``times``, in the drift's unit) or temperature (``temperatures`` [deg C]); warns
+        (:class:`DriftExtrapolationWarning`) for values outside the span the drift covers."""
+        bias = np.broadcast_to(np.asarray(self.bias), (n, 6))
+        if self.drift is None:
+            return bias.copy()
+        given = times if self.drift.variable == "time" else temperatures
+        if given is None:
+            what = (f"the time of each wrench (times, in {'seconds' if self.drift.unit == 's' else 'pose order'})"
+                    if self.drift.variable == "time" else "the temperature of each wrench (temperatures [deg C])")
+            raise CalibrationInputError(
+                f"this tool's bias drifts ({self.drift.description}): compensating needs {what}. Fix: pass it, "
+                "or identify the tool with drift='none'.")
+        v = np.asarray(given, dtype=float)
+        if v.shape != (n,):
+            raise CalibrationInputError(f"{'times' if self.drift.variable == 'time' else 'temperatures'} must have "
+                                        f"shape ({n},), one value per wrench; got shape {v.shape}.")
+        return bias + self.drift.offset(v)
+
+    def gravity_wrench(self, sensor_rotations: ArrayLike, *, times: ArrayLike | None = None,
+                       temperatures: ArrayLike | None = None) -> NDArray[np.float64]:
+        """The wrench [N, N·m] the tool's weight plus the bias produce at each pose (n, 6), sensor frame
+        (``times`` / ``temperatures``: see :meth:`bias_at`)."""
         R, _ = _check_inputs(sensor_rotations)
-        force = self.mass * _gravity_in_sensor(R, self.gravity)
-        torque = np.cross(np.asarray(self.center_of_mass), force)
-        return np.hstack([force, torque]) + np.asarray(self.bias)
+        return self._weight_wrench(R) + self.bias_at(len(R), times, temperatures)
 
-    def compensate(self, sensor_rotations: ArrayLike, wrenches: ArrayLike) -> NDArray[np.float64]:
-        """The external wrench: measured ``wrenches`` (n, 6) minus the tool's gravity wrench and the bias.
+    def _weight_wrench(self, R: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The tool's weight alone as a wrench in the sensor frame (n, 6) [N, N·m]."""
+        force = self.mass * _gravity_in_sensor(R, self.gravity)
+        return np.hstack([force, np.cross(np.asarray(self.center_of_mass), force)])
+
+    def compensate(self, sensor_rotations: ArrayLike, wrenches: ArrayLike, *, times: ArrayLike | None = None,
+                   temperatures: ArrayLike | None = None) -> NDArray[np.float64]:
+        """The external wrench: measured ``wrenches`` (n, 6) minus the tool's gravity wrench and the bias (at each
+        wrench's time or temperature when the bias drifts, :meth:`bias_at`).
 
         Examples
         --------
@@ -214,17 +248,67 @@ class ToolLoad:
         array([[0., 0., 0., 0., 0., 0.]])
         """
         R, W = _check_inputs(sensor_rotations, wrenches)
-        return W - self.gravity_wrench(R)
+        return W - self.gravity_wrench(R, times=times, temperatures=temperatures)
+
+    def retare(self, wrenches: ArrayLike, *, sensor_rotations: ArrayLike | None = None,
+               time: float | None = None, temperature: float | None = None) -> "ToolLoad":
+        """A copy whose bias is reset from a few no-load readings; the drift's shape (its rate) is kept.
+
+        Parameters
+        ----------
+        wrenches : array-like of shape (n, 6)
+            Calibrated readings [N, N·m] with nothing touching the tool (or no tool at all).
+        sensor_rotations : array-like of shape (n, 3, 3) or (3, 3), optional
+            The sensor's orientation (sensor to base) at each reading, when the tool is mounted: its weight is
+            removed first. ``None``: the tool is off the sensor (the readings are the bias itself).
+        time, temperature : float, optional
+            When the readings were taken (the drift's unit) / the sensor's temperature [deg C]; required when
+            the bias drifts in that variable. The drift is re-anchored there: ``bias(v) = new bias +
+            offset(v) - offset(time)``.
+
+        Examples
+        --------
+        >>> tool = ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6))
+        >>> tool.retare(np.full((5, 6), 0.2)).bias.tolist()  # the tool taken off: the readings are the bias
+        [0.2, 0.2, 0.2, 0.2, 0.2, 0.2]
+        """
+        W = np.asarray(wrenches, dtype=float)
+        if W.ndim != 2 or W.shape[1] != 6 or len(W) == 0:
+            raise CalibrationInputError(f"wrenches must have shape (n, 6) with n >= 1, Fx..Tz [N, N·m] of no-load "
+                                        f"readings; got shape {W.shape}.")
+        if not np.isfinite(W).all():
+            raise CalibrationInputError("wrenches holds NaN or inf; drop those readings.")
+        if sensor_rotations is not None:
+            R = np.asarray(sensor_rotations, dtype=float)
+            R = np.broadcast_to(R, (len(W), 3, 3)) if R.shape == (3, 3) else R
+            R, W = _check_inputs(R, W)
+            W = W - self._weight_wrench(R)
+        new_bias = W.mean(axis=0)
+        new_se = W.std(axis=0, ddof=1) / np.sqrt(len(W)) if len(W) > 1 else np.zeros(6)
+        if self.drift is None:
+            return replace(self, bias=new_bias, bias_std_error=new_se)
+        at = time if self.drift.variable == "time" else temperature
+        if at is None:
+            raise CalibrationInputError(
+                f"this tool's bias drifts ({self.drift.description}): the re-tare needs the "
+                f"{'time' if self.drift.variable == 'time' else 'temperature'} of the readings to anchor the drift.")
+        at = float(at)
+        if not np.isfinite(at):
+            raise CalibrationInputError(f"the re-tare's {self.drift.variable} must be finite; got {at!r}.")
+        return replace(self, bias=new_bias, bias_std_error=new_se,
+                       drift=replace(self.drift, reference=at, retared_at=at))
 
     def to_dict(self) -> dict:
         """JSON-able form (what :meth:`save` writes)."""
+        extra = {} if self.drift is None else {"drift": self.drift.to_dict()}
         return {
-            "format": "ftcal-tool-load", "format_version": 1,
+            "format": "ftcal-tool-load", "format_version": 1 if self.drift is None else TOOL_FORMAT_VERSION,
             "mass_kg": self.mass, "center_of_mass_m": np.asarray(self.center_of_mass).tolist(),
             "bias": np.asarray(self.bias).tolist(), "mass_std_error_kg": self.mass_std_error,
             "center_of_mass_std_error_m": np.asarray(self.center_of_mass_std_error).tolist(),
             "bias_std_error": np.asarray(self.bias_std_error).tolist(),
             "gravity_m_s2": np.asarray(self.gravity).tolist(), "residual_rms": np.asarray(self.residual_rms).tolist(),
+            **extra,
         }
 
     def save(self, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
@@ -248,6 +332,10 @@ class ToolLoad:
             raise CalibrationInputError(f"{path}: not a tool file (not JSON: {str(exc)[:80]}).") from None
         if not isinstance(d, dict) or d.get("format") != "ftcal-tool-load":
             raise CalibrationInputError(f"{path}: not an ftcal tool file (written by 'ftcal identify-load').")
+        version = d.get("format_version", 1)
+        if version not in (1, TOOL_FORMAT_VERSION):
+            raise CalibrationInputError(f"{path}: tool file format_version {str(version)[:20]} is not one this ftcal "
+                                        f"reads (1, {TOOL_FORMAT_VERSION}); upgrade ftcal.")
         try:
             tool = cls(
                 mass=float(d["mass_kg"]), center_of_mass=np.asarray(d["center_of_mass_m"], dtype=float),
@@ -256,6 +344,7 @@ class ToolLoad:
                 bias_std_error=np.asarray(d.get("bias_std_error", [0.0] * 6), dtype=float),
                 gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
                 residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
+                drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]),
             )
         except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
             text = str(exc)
@@ -269,19 +358,17 @@ class ToolLoad:
         return tool
 
 
-def _least_squares(A: NDArray, b: NDArray) -> tuple[NDArray, NDArray, float]:
-    coef, *_ = np.linalg.lstsq(A, b, rcond=None)
-    residual = b - A @ coef
-    dof = max(len(b) - A.shape[1], 1)
-    sigma2 = float(residual @ residual) / dof
-    cov = sigma2 * np.linalg.pinv(A.T @ A)
-    return coef, np.sqrt(np.maximum(np.diag(cov), 0.0)), float(np.sqrt(np.mean(residual**2)))
-
-
 def identify_tool_load(
-    sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY
+    sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
+    times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
+    time_unit: str = "s", cv: int = 20, random_state: int | None = 0,
 ) -> ToolLoad:
-    """Identify a tool's mass, centre of mass and the sensor bias from static poses (closed form).
+    """Identify a tool's mass, centre of mass and the sensor bias (and its drift) from static poses.
+
+    Closed form (linear least squares). With the time of each pose (``times``) or the sensor's temperature
+    (``temperatures``), a bias that moves with it (linear, or a natural cubic spline) is fitted jointly with
+    the tool when it pays under held-out error: leave-poses-out cross-validation and the one-SE rule choose
+    among the constant bias and the drift models (:mod:`ftcal.experiment._drift`).
 
     Parameters
     ----------
@@ -292,10 +379,24 @@ def identify_tool_load(
         Calibrated readings at those poses [N, N·m] (the tool mounted, nothing else touching it).
     gravity : array-like of shape (3,), default=(0, 0, -9.81)
         Gravity in the base frame [m/s²].
+    times : array-like of shape (n,), optional
+        When each pose was recorded, in ``time_unit`` (seconds, e.g. the log's timestamps or bag stamps; or
+        ``0, 1, 2, ...`` for the recording order with ``time_unit="pose"``).
+    temperatures : array-like of shape (n,), optional
+        The sensor's temperature at each pose [deg C].
+    drift : {"auto", "none", "linear", "spline", "temperature"}, default="auto"
+        ``auto``: the held-out choice among the constant bias and every drift the inputs allow; ``none``: a
+        constant bias (the classic tools' model); the others force that family of drift.
+    time_unit : {"s", "pose"}
+    cv : int, default=20
+        Folds of the leave-poses-out cross-validation (at most one per pose).
+    random_state : int or None
+        Seed of the folds.
 
     Returns
     -------
     ToolLoad
+        With ``drift`` set when a drift was chosen; its ``selection`` holds every candidate's held-out error.
 
     Raises
     ------
@@ -316,6 +417,10 @@ def identify_tool_load(
     R, W = _check_inputs(sensor_rotations, wrenches)
     g_s = _gravity_in_sensor(R, gravity)
     n = len(R)
+    times = _check_drift_values("times", times, n)
+    temperatures = _check_drift_values("temperatures", temperatures, n)
+    if time_unit not in ("s", "pose"):
+        raise CalibrationInputError(f"time_unit must be 's' (seconds) or 'pose' (recording order); got {time_unit!r}.")
     directions = g_s / np.linalg.norm(g_s, axis=1, keepdims=True)
     spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False) / np.sqrt(max(n, 1))
     tilt_deg = np.degrees(np.arcsin(np.clip(spread, 0.0, 1.0)))
@@ -327,12 +432,13 @@ def identify_tool_load(
             f"{MIN_TILT_DEG:g} deg in two independent directions (and 4 poses). Fix: add poses tilted about two "
             "axes, e.g. the 11 of 'ftcal plan --subdivisions 0'."
         )
-    eye = np.tile(np.eye(3), (n, 1))
-    force_design = np.hstack([g_s.reshape(-1, 1), eye])                      # [m, b_F]
-    torque_design = np.hstack([(-_skew(g_s)).reshape(-1, 3), eye])          # [p = m c, b_τ]
-    f_coef, f_se, f_rms = _least_squares(force_design, W[:, :3].reshape(-1))
-    t_coef, t_se, t_rms = _least_squares(torque_design, W[:, 3:].reshape(-1))
-    mass, p = float(f_coef[0]), t_coef[:3]
+    candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state)
+    values = {"time": times, "temperature": temperatures}.get(candidate.variable)
+    fit = fit_gravity_blocks(g_s, W, candidate.basis({"time": np.zeros(n)} if values is None
+                                                     else {candidate.variable: values}))
+    f_se = np.sqrt(np.maximum(np.diag(fit["force_cov"]), 0.0))
+    t_se = np.sqrt(np.maximum(np.diag(fit["torque_cov"]), 0.0))
+    mass, p = fit["mass"], fit["p"]
     if not mass > 0:
         raise CalibrationInputError(
             f"the identified mass is {mass:.4g} kg (not positive): the wrenches do not show a tool's weight. "
@@ -340,12 +446,36 @@ def identify_tool_load(
         )
     com = p / mass
     com_se = np.sqrt((t_se[:3] / mass) ** 2 + (p * f_se[0] / mass**2) ** 2)
+    bias, bias_se, bias_drift = fit["bias"], np.concatenate([f_se[1:4], t_se[3:6]]), None
+    if values is not None:
+        unit = time_unit if candidate.variable == "time" else "degC"
+        bias_drift = build_drift(candidate, fit, values, unit, table)
+        bias = bias + (candidate.basis({candidate.variable: np.array([bias_drift.reference])}) @ fit["drift"])[0]
+        bias_se = functional_se(fit, candidate.basis({candidate.variable: np.array([bias_drift.reference])})[0], 1.0)
     return ToolLoad(
-        mass=mass, center_of_mass=com, bias=np.concatenate([f_coef[1:], t_coef[3:]]),
-        mass_std_error=float(f_se[0]), center_of_mass_std_error=com_se,
-        bias_std_error=np.concatenate([f_se[1:], t_se[3:]]), gravity=np.asarray(gravity, dtype=float),
-        residual_rms=np.array([f_rms, t_rms]),
+        mass=mass, center_of_mass=com, bias=bias, mass_std_error=float(f_se[0]), center_of_mass_std_error=com_se,
+        bias_std_error=bias_se, gravity=np.asarray(gravity, dtype=float), residual_rms=fit["residual_rms"],
+        drift=bias_drift,
     )
+
+
+def _check_drift_values(name: str, values: ArrayLike | None, n: int) -> NDArray[np.float64] | None:
+    """``times`` / ``temperatures``: one finite number per pose, or None."""
+    if values is None:
+        return None
+    try:
+        v = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise CalibrationInputError(f"{name} must be numbers, one per pose; got {str(values)[:80]}.") from None
+    if v.shape != (n,):
+        raise CalibrationInputError(f"{name} must have shape ({n},), one value per pose; got shape {v.shape}.")
+    if not np.isfinite(v).all():
+        row = int(np.argmin(np.isfinite(v)))
+        raise CalibrationInputError(f"{name} holds NaN or inf (first at pose {row}); repair or drop that pose.")
+    if np.abs(v).max(initial=0.0) > 1e12:
+        raise CalibrationInputError(f"{name} holds {float(v[np.argmax(np.abs(v))]):.3g}, beyond 1e12: not a time in "
+                                    "seconds or a temperature in deg C. Fix: check the column and its unit.")
+    return v
 
 
 def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",

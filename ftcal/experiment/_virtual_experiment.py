@@ -32,7 +32,7 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -102,6 +102,8 @@ def simulate_experiment(
     overwrite: bool = False,
     thermal_drift: ThermalDrift | str | None = None,
     temperature_range_deg: tuple[float, float] = (20.0, 30.0),
+    temperature_profile: Callable[[NDArray[np.float64]], ArrayLike] | None = None,
+    bias_drift: Callable[[NDArray[np.float64]], ArrayLike] | None = None,
 ) -> list[Path]:
     """Simulate the load / no-load runs and write one log per run into ``out_dir``.
 
@@ -142,6 +144,12 @@ def simulate_experiment(
         readings drift accordingly and the logs carry a ``temperature`` column.
     temperature_range_deg : (float, float), default=(20, 30)
         Range of the simulated temperatures [deg C].
+    temperature_profile : callable, optional
+        ``temperature_profile(time_s) -> (n,)`` [deg C] at each sample's log time [s], instead of the
+        per-run ramp (with ``thermal_drift``): e.g. a room warming and cooling over the whole experiment.
+    bias_drift : callable, optional
+        ``bias_drift(time_s) -> (n, 6)`` [N, N·m]: a wrench added to every sample at its log time [s] (the
+        sensor's zero moving while it warms up or creeps), read through the sensor like any load.
     random_state : int, optional
     overwrite : bool, default=False
         Replace existing logs; otherwise an existing file is an error and
@@ -210,6 +218,9 @@ def simulate_experiment(
             if kind == "load":
                 wrench += reference_wrench(R_true, load_mass if c.mass_kg is None else c.mass_kg, c.position_in_sensor, g)
             rows_w = np.repeat(wrench, reps, axis=0)
+            t = clock + np.repeat(np.arange(n) * _POSE_PERIOD_S, reps) + np.tile(np.arange(reps) * _SAMPLE_PERIOD_S, n)
+            if bias_drift is not None:
+                rows_w = rows_w + _drift_values("bias_drift", bias_drift, t, (len(t), 6))
             raw = sensor.read(rows_w)
             temperature = None
             if isinstance(thermal_drift, str):
@@ -219,9 +230,9 @@ def simulate_experiment(
                 thermal_drift = ThermalDrift.typical(full_scale, random_state=rng)
             if thermal_drift is not None:
                 start, end = rng.uniform(*temperature_range_deg, size=2)
-                temperature = np.linspace(start, end, len(raw))
+                temperature = (np.linspace(start, end, len(raw)) if temperature_profile is None
+                               else _drift_values("temperature_profile", temperature_profile, t, (len(t),)))
                 raw = thermal_drift.apply(raw, temperature)
-            t = clock + np.repeat(np.arange(n) * _POSE_PERIOD_S, reps) + np.tile(np.arange(reps) * _SAMPLE_PERIOD_S, n)
             clock = float(t[-1]) + _POSE_PERIOD_S
             write_run_log(path, timestamp=t, run_kind=[kind] * (n * reps), config=[c.config_id] * (n * reps),
                           pose=np.repeat(np.arange(n), reps), q=np.repeat(q_logged, reps, axis=0), raw=raw,
@@ -244,3 +255,11 @@ def simulate_experiment(
     }
     (out / "virtual_experiment.json").write_text(json.dumps(truth, indent=2, default=str), encoding="utf-8")
     return paths
+
+
+def _drift_values(name: str, function: Callable, t: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray:
+    """``function(t)`` checked: finite, of ``shape``."""
+    values = np.asarray(function(t), dtype=float)
+    if values.shape != shape or not np.isfinite(values).all():
+        raise LogFormatError(f"{name}(time_s) must return finite values of shape {shape}; got shape {values.shape}.")
+    return values

@@ -1,0 +1,250 @@
+"""Tool identification with a drifting sensor bias: the held-out choice of the drift, re-taring, files, ONNX."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+from scipy.spatial.transform import Rotation
+
+import ftcal
+from ftcal import BiasDrift, CalibrationInputError, DriftExtrapolationWarning, ToolLoad, identify_tool_load
+from ftcal.core._temperature import ThermalDrift
+from ftcal.simulation._error_models import ErrorModel
+
+G = np.array([0.0, 0.0, -9.81])
+MOUNTING = ftcal.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))
+NOISE = 0.004  # relative sensor noise (eq. 12): ~0.04 N on the mounting device's 9 N
+
+
+@pytest.fixture(scope="module")
+def robot():
+    return ftcal.load_robot("kuka_iiwa14")
+
+
+@pytest.fixture(scope="module")
+def plan(robot):
+    return ftcal.plan_calibration_poses(robot, subdivisions=1, excluded_cap_deg=0)
+
+
+def recording(tmp_path, robot, plan, seed, **drift):
+    """The no-load run of the virtual experiment (the mounting device is its tool), read back from its log:
+    rotations, calibrated wrenches (the simulated sensor's own matrix), times [s] and temperatures."""
+    config = ftcal.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
+    rng = np.random.default_rng(seed)
+    sensor = ftcal.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
+    sensor.zero_offset = sensor.profile.reading_from_wrench(rng.normal(0, [2, 2, 2, 0.1, 0.1, 0.1])[None])[0]
+    out = tmp_path / f"run{seed}"
+    ftcal.simulate_experiment(out, robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING, random_state=seed,
+                              load_configurations=[config], gravity_in_base=G, **drift)
+    log = ftcal.read_run_log(out / "config0_no-load.csv")
+    R = ftcal.sensor_pose_in_base(robot, log.q)[:, :3, :3]
+    return R, sensor.profile.wrench_from_reading(log.raw), log.timestamp, log.temperature
+
+
+def wrench_drift(rate_per_s=None, warm_up=None):
+    """A bias drift wrench (n, 6) of time [s]: linear, or a warm-up exponential (amplitude, time constant)."""
+    direction = np.array([0.6, -0.5, 0.62, 0.02, -0.015, 0.01])
+
+    def drift(t):
+        t = np.asarray(t, dtype=float)
+        if rate_per_s is not None:
+            return rate_per_s * t[:, None] * direction
+        amplitude, tau = warm_up
+        return amplitude * (1 - np.exp(-t / tau))[:, None] * direction
+    return drift
+
+
+def assert_tool_unbiased(tool):
+    # mass and centre of mass within 4 of their standard errors (plus the robot's joint error on the com)
+    assert abs(tool.mass - MOUNTING.mass) <= 4 * tool.mass_std_error + 1e-3
+    com_error = np.abs(tool.center_of_mass - MOUNTING.center_of_mass_in_sensor)
+    assert np.all(com_error <= 4 * tool.center_of_mass_std_error + 5e-4)
+
+
+def test_a_linear_drift_is_found_its_rate_measured_and_the_tool_unbiased(tmp_path, robot, plan):
+    rate = 1.0 / 100.0  # 1 N per 100 s along the direction (the recording lasts ~170 s)
+    for seed in range(2):
+        R, W, t, _ = recording(tmp_path, robot, plan, seed, bias_drift=wrench_drift(rate_per_s=rate))
+        tool = identify_tool_load(R, W, gravity=G, times=t)
+        assert tool.drift is not None and tool.drift.variable == "time" and tool.drift.unit == "s"
+        assert tool.drift.description == "linear in time"
+        true_rate = rate * np.array([0.6, -0.5, 0.62, 0.02, -0.015, 0.01])
+        np.testing.assert_array_less(np.abs(tool.drift.mean_rate - true_rate), 4 * tool.drift.mean_rate_std_error)
+        per_hour, se_per_hour = tool.drift.rate_per_hour()
+        np.testing.assert_allclose(per_hour, tool.drift.mean_rate * 3600)
+        assert_tool_unbiased(tool)
+        # the constant bias leaves the drift in the residual: several times the drift model's
+        constant = identify_tool_load(R, W, gravity=G, times=t, drift="none")
+        assert constant.drift is None and constant.residual_rms[0] > 3 * tool.residual_rms[0]
+
+
+def test_a_warm_up_exponential_is_followed_by_a_spline(tmp_path, robot, plan):
+    R, W, t, _ = recording(tmp_path, robot, plan, 3, bias_drift=wrench_drift(warm_up=(1.5, 30.0)))
+    tool = identify_tool_load(R, W, gravity=G, times=t)
+    assert tool.drift is not None and tool.drift.n_parameters >= 2  # a curve, not a line
+    line = identify_tool_load(R, W, gravity=G, times=t, drift="linear")
+    assert tool.residual_rms[0] < 0.5 * line.residual_rms[0]
+    # the bias it reports is the bias at the end of the recording: the warmed-up sensor
+    assert tool.drift.reference == t.max()
+    assert_tool_unbiased(tool)
+    # the spline's drift over the recording matches the simulated one within noise
+    rows = ftcal.WRENCH_LABELS
+    span = tool.drift.offset(np.array([t.min()])) - tool.drift.offset(np.array([t.max()]))
+    truth = wrench_drift(warm_up=(1.5, 30.0))(np.array([t.min()])) - wrench_drift(warm_up=(1.5, 30.0))(np.array([t.max()]))
+    np.testing.assert_allclose(span[0, :3], truth[0, :3], atol=0.1, err_msg=str(rows))
+
+
+def test_a_temperature_driven_drift_is_attributed_to_the_temperature(tmp_path, robot, plan):
+    # the room warms and cools twice over the recording: the temperature is not monotonic in time
+    def temperature(t):
+        return 25.0 + 3.0 * np.sin(2 * np.pi * np.asarray(t) / 80.0)
+
+    probe = ftcal.VirtualSensor(errors="none")
+    per_deg = np.array([0.25, -0.2, 0.3, 0.01, 0.008, -0.006])  # [N, N·m] per deg C
+    thermal = ThermalDrift(offset_per_deg=probe.profile.reading_from_wrench(per_deg[None])[0],
+                           gain_per_deg=np.zeros(6), reference_temperature=25.0)
+    R, W, t, temp = recording(tmp_path, robot, plan, 4, thermal_drift=thermal, temperature_profile=temperature)
+    assert temp is not None
+    tool = identify_tool_load(R, W, gravity=G, times=t, temperatures=temp)
+    assert tool.drift is not None and tool.drift.variable == "temperature" and tool.drift.unit == "degC"
+    lo, hi = tool.drift.span
+    slope = (tool.drift.offset([hi]) - tool.drift.offset([lo]))[0] / (hi - lo)
+    np.testing.assert_allclose(slope[:3], per_deg[:3], atol=0.03)
+    assert_tool_unbiased(tool)
+    with pytest.raises(CalibrationInputError, match="needs the temperature of each wrench"):
+        tool.compensate(R, W, times=t)
+    external = tool.compensate(R, W, temperatures=temp)
+    assert np.sqrt(np.mean(external[:, :3] ** 2)) <= 1.2 * tool.residual_rms[0]
+
+
+def test_without_drift_the_constant_bias_is_kept_in_nine_of_ten_seeds_and_the_tool_is_unbiased(tmp_path, robot, plan):
+    kept, z = 0, []
+    for seed in range(10):
+        R, W, t, _ = recording(tmp_path, robot, plan, 10 + seed)
+        tool = identify_tool_load(R, W, gravity=G, times=t)
+        kept += tool.drift is not None
+        z.append((tool.mass - MOUNTING.mass) / tool.mass_std_error)
+        assert_tool_unbiased(tool)
+        constant = identify_tool_load(R, W, gravity=G)
+        if tool.drift is None:  # the same answer as without times
+            np.testing.assert_allclose(tool.mass, constant.mass, rtol=1e-12)
+    assert kept <= 1
+    assert abs(np.mean(z)) <= 3 / np.sqrt(10) + 0.5  # no systematic mass error (mean z-score near 0)
+
+
+# ------------------------------------------------------------------ the drift at run time
+def drifting_tool(knots=(0.0, 3600.0)):
+    coefficients = np.zeros((len(knots) - 1, 6))
+    coefficients[0] = [0.5, -0.3, 0.2, 0.01, 0.0, -0.02]  # per span of the knots
+    if len(knots) > 2:
+        coefficients[1:] = 0.1
+    drift = BiasDrift(variable="time", unit="s", knots=np.array(knots), coefficients=coefficients,
+                      coefficient_std_error=np.full_like(coefficients, 0.01), reference=knots[-1],
+                      span=np.array([knots[0], knots[-1]]))
+    return ToolLoad(mass=1.2, center_of_mass=np.array([0.01, 0.0, 0.07]), bias=np.arange(6) * 0.1, drift=drift)
+
+
+def test_compensation_uses_the_bias_at_each_time_and_warns_outside_the_span():
+    tool = drifting_tool()
+    R = Rotation.random(3, random_state=0).as_matrix()
+    times = np.array([0.0, 1800.0, 3600.0])
+    W = tool.gravity_wrench(R, times=times)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(tool.compensate(R, W, times=times), 0, atol=1e-12)
+    # linear drift: the bias an hour earlier is 0.5 N lower in Fx
+    np.testing.assert_allclose(W[2, 0] - W[0, 0] - (tool._weight_wrench(R)[2, 0] - tool._weight_wrench(R)[0, 0]), 0.5)
+    with pytest.warns(DriftExtrapolationWarning, match="1 of 3 times lie outside the span"):
+        tool.compensate(R, W, times=np.array([0.0, 1800.0, 7200.0]))
+    with pytest.raises(CalibrationInputError, match="compensating needs the time of each wrench"):
+        tool.compensate(R, W)
+
+
+def test_retare_resets_the_bias_at_that_time_and_keeps_the_rate():
+    tool = drifting_tool()
+    R = Rotation.random(5, random_state=1).as_matrix()
+    # the next day the sensor restarts 2 N off; five quiet readings with the tool on at one pose
+    t_retare = 86400.0
+    jump = np.array([2.0, 0, 0, 0, 0, 0])
+    with pytest.warns(DriftExtrapolationWarning):
+        readings = tool.gravity_wrench(np.repeat(R[:1], 5, axis=0), times=np.full(5, t_retare)) + jump
+    new = tool.retare(readings, sensor_rotations=R[0], time=t_retare)
+    assert new.drift.retared_at == t_retare and new.drift.reference == t_retare
+    later = t_retare + np.array([0.0, 600.0, 1200.0, 1800.0, 3600.0])
+    with pytest.warns(DriftExtrapolationWarning):
+        truth = tool.gravity_wrench(R, times=later) + jump
+    # after the re-tare the drift continues at its rate from the new bias (beyond the covered span: it warns)
+    with pytest.warns(DriftExtrapolationWarning, match="re-tare included"):
+        np.testing.assert_allclose(new.compensate(R, truth, times=later), 0, atol=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # at the re-tare itself the drift is covered
+        np.testing.assert_allclose(new.compensate(R[:1], truth[:1], times=later[:1]), 0, atol=1e-12)
+    with pytest.raises(CalibrationInputError, match="needs the time of the readings"):
+        tool.retare(readings, sensor_rotations=R[0])
+    # the tool off the sensor: the readings are the bias
+    off = tool.retare(np.tile(np.arange(6.0), (4, 1)), time=0.0)
+    np.testing.assert_allclose(off.bias_at(1, times=[0.0])[0], np.arange(6.0))
+
+
+def test_a_drifting_tool_file_round_trips_and_bad_drift_blocks_are_refused(tmp_path):
+    rotations = Rotation.random(30, random_state=2).as_matrix()
+    tool = drifting_tool(knots=(0.0, 600.0, 1800.0, 3600.0))
+    times = np.linspace(0, 3600, 30)
+    path = tool.save(tmp_path / "t.tool.json")
+    record = json.loads(path.read_text())
+    assert record["format_version"] == 2 and record["drift"]["model"] == "spline in time (4 knots)"
+    back = ToolLoad.load(path)
+    W = np.zeros((30, 6))
+    np.testing.assert_array_equal(back.compensate(rotations, W, times=times), tool.compensate(rotations, W, times=times))
+    for key, value, message in [
+        ("knots", list(range(9)), "knots must be 2 to 6 numbers"),
+        ("knots", [0.0, 3600.0, 1800.0, 4000.0], "knots must increase strictly"),
+        ("coefficients", [[1e300] * 6] * 3, "coefficients must be 3x6 finite number"),
+        ("unit", "h", "drift unit of time must be one of"),
+        ("span", [10.0, 0.0], "span must be"),
+    ]:
+        bad = json.loads(path.read_text())
+        bad["drift"][key] = value
+        (tmp_path / "bad.tool.json").write_text(json.dumps(bad))
+        with pytest.raises(CalibrationInputError, match=f"bad.tool.json: .*{message}"):
+            ToolLoad.load(tmp_path / "bad.tool.json")
+    newer = {**record, "format_version": 3}
+    (tmp_path / "new.tool.json").write_text(json.dumps(newer))
+    with pytest.raises(CalibrationInputError, match="format_version 3 is not one this ftcal reads"):
+        ToolLoad.load(tmp_path / "new.tool.json")
+    # a tool without drift keeps writing version 1 (readable by earlier ftcal)
+    assert json.loads(ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).save(
+        tmp_path / "plain.tool.json").read_text())["format_version"] == 1
+
+
+def test_bad_times_are_refused_with_the_pose():
+    R = Rotation.random(12, random_state=3).as_matrix()
+    W = ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).gravity_wrench(R)
+    times = np.arange(12.0)
+    times[4] = np.nan
+    with pytest.raises(CalibrationInputError, match="times holds NaN or inf \\(first at pose 4\\)"):
+        identify_tool_load(R, W, times=times)
+    with pytest.raises(CalibrationInputError, match="times must have shape \\(12,\\)"):
+        identify_tool_load(R, W, times=np.arange(5.0))
+    with pytest.raises(CalibrationInputError, match="drift must be one of auto, none"):
+        identify_tool_load(R, W, times=np.arange(12.0), drift="cubic")
+    with pytest.raises(CalibrationInputError, match="needs temperatures that vary"):
+        identify_tool_load(R, W, times=np.arange(12.0), drift="temperature")
+
+
+@pytest.mark.parametrize("knots", [(0.0, 3600.0), (0.0, 600.0, 1800.0, 3600.0)])
+def test_the_onnx_graph_compensates_like_the_library(knots):
+    ort = pytest.importorskip("onnxruntime")
+    from ftcal.experiment._drift import tool_onnx_model
+
+    tool = drifting_tool(knots)
+    R = Rotation.random(20, random_state=4).as_matrix()
+    times = np.linspace(-600, 4200, 20)  # beyond the span too: the spline continues linearly
+    W = np.random.default_rng(0).normal(size=(20, 6))
+    session = ort.InferenceSession(tool_onnx_model(tool).SerializeToString(), providers=["CPUExecutionProvider"])
+    (external,) = session.run(None, {"rotation": R, "wrench": W, "time": times})
+    with pytest.warns(DriftExtrapolationWarning):
+        np.testing.assert_allclose(external, tool.compensate(R, W, times=times), atol=1e-12)
