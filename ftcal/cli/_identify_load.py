@@ -15,6 +15,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
+    positive_float,
     write_json,
 )
 from ._prepare import log_files
@@ -24,9 +25,22 @@ examples:
   ftcal plan --subdivisions 0 --out tool_plan        # 11 well-spread poses for the robot program
   # record the sensor at each pose with the tool mounted, nothing touching it -> tool_logs/*.csv (run logs)
   ftcal identify-load tool_logs --model models/linear.model.npz --robot kuka_iiwa14 --out tool
+  ftcal identify-load poses.csv --wrench-frame base --out tool     # a factory-calibrated sensor: no --model
+  ftcal identify-load recording.csv --settle 2 --out tool          # continuous (a 'time' column): still poses found
+
+inputs: run logs (joints and raw channels; need --model), or pose files (CSV): the sensor's orientation in
+the base frame as qx,qy,qz,qw (scalar last, as ROS writes it), R00..R22 (Rij = row i, column j) or
+roll,pitch,yaw [rad] (fixed axes x, y, z: R = Rz(yaw) Ry(pitch) Rx(roll), the URDF rpy convention), and
+the wrench Fx,Fy,Fz,Tx,Ty,Tz (or Mx,My,Mz) [N, N·m] in the frame --wrench-frame names (or raw channels
+s0..s{N-1} with --model). A pose file with a 'time' column [s] that holds a continuous recording (most rows
+share their neighbour's orientation) has its still poses found: segments that stay within --still-tolerance
+for --min-still seconds, minus the first --settle seconds (default from the data: until the drift has
+decayed into the noise), averaged; how many were found, kept and rejected (and why) is reported.
 
 writes DIR/NAME.tool.json: mass [kg], centre of mass [m] (sensor frame), bias [N, N·m], their standard
-errors, and the residual RMS. Every row of the logs is one static pose (the 'run' column is ignored).
+errors, the residual RMS and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
+the wrench in the sensor frame and its spread). Every row of run logs is one static pose (the 'run' column
+is ignored). 'ftcal export NAME.tool.json --format ros' writes the ROS gravity-compensation YAML.
 """
 
 COMPENSATE_EXAMPLE = """\
@@ -47,7 +61,12 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of static poses.",
         epilog=IDENTIFY_EXAMPLE,
     )
-    _add_log_inputs(p)
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="run log files or directories of *.csv logs, or pose files (CSV, see below)")
+    p.add_argument("--model", type=existing_file,
+                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
+    add_robot_options(p)
+    _add_recording_options(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
     p.add_argument("--name", default="tool", help="file name stem of the tool file")
     add_output_options(p, "ftcal-tool")
@@ -66,6 +85,28 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
     add_run_options(c, seed=False)
     c.set_defaults(handler=run_compensate)
+
+
+def _add_recording_options(p: argparse.ArgumentParser) -> None:
+    """How a pose file or a recording is read: the wrench's frame and units, and the still-pose thresholds."""
+    from ..experiment._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
+
+    g = p.add_argument_group("pose files and continuous recordings")
+    g.add_argument("--wrench-frame", choices=("sensor", "base"), default="sensor",
+                   help="the frame the input's wrench is written in (base: the robot's base frame, torques about "
+                   "the sensor origin)")
+    g.add_argument("--force-unit", default="N", metavar="UNIT", help="unit of the input's forces")
+    g.add_argument("--torque-unit", default="N.m", metavar="UNIT", help="unit of the input's torques")
+    g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
+                   help="static: every row is a pose; continuous: find the still poses (needs times); auto: "
+                   "continuous when the rows carry times and most rows share their neighbour's orientation")
+    g.add_argument("--still-tolerance", type=positive_float, default=DEFAULT_STILL_TOLERANCE_DEG, metavar="DEG",
+                   help="a pose is still while it stays within this [deg]")
+    g.add_argument("--min-still", type=positive_float, default=DEFAULT_MIN_STILL_S, metavar="S",
+                   help="shortest still segment that is a pose [s]")
+    g.add_argument("--settle", type=nonnegative_float, metavar="S",
+                   help="seconds dropped at the start of each still pose (default: from the data, until the "
+                   "drift has decayed into the noise)")
 
 
 def _add_log_inputs(p: argparse.ArgumentParser) -> None:
@@ -93,29 +134,188 @@ def _poses_and_wrenches(args):
     robot = load_robot_from_args(args)
     model = ftcal.load_model(args.model)
     logs = [ftcal.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
-            for p in log_files(args.logs)]
+            for p in log_files(getattr(args, "inputs", None) or args.logs)]
     q = np.vstack([lg.q for lg in logs])
     raw = np.vstack([lg.raw for lg in logs])
     rotations = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
     return logs, rotations, model.predict(raw)
 
 
+def nonnegative_float(text: str) -> float:
+    """argparse type: a finite number >= 0."""
+    from ._common import finite_float
+
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: give a number >= 0")
+    return value
+
+
+class _Poses:
+    """The static poses an identification uses: where they came from, orientation, wrench, time, still-pose info."""
+
+    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None):
+        self.sources, self.rotations, self.wrenches, self.time = sources, rotations, wrenches, time
+        self.still, self.model = still, model
+
+
+def _input_kind(item: str) -> str:
+    from ..io._poses import is_pose_file
+
+    path = Path(item)
+    if path.is_file() and path.suffix.lower() == ".csv" and is_pose_file(path):
+        return "pose file"
+    return "run log"
+
+
+def _load_model(args, what: str):
+    import ftcal
+
+    if args.model is None:
+        raise CliError(f"{what} holds raw channels: give the calibration model that turns them into a wrench, "
+                       "--model MODEL.model.npz (ftcal fit)")
+    return ftcal.load_model(args.model)
+
+
+def _is_continuous(args, time, rotations) -> bool:
+    """Whether the rows are a continuous recording (most rows share a neighbour's orientation) or static poses."""
+    import numpy as np
+
+    if args.poses != "auto":
+        return args.poses == "continuous"
+    if time is None or len(rotations) < 3:
+        return False
+    cos = (np.einsum("nij,nij->n", rotations[1:], rotations[:-1]) - 1.0) / 2.0
+    still = np.arccos(np.clip(cos, -1.0, 1.0)) <= np.radians(args.still_tolerance)
+    return bool(np.mean(still) > 0.5)
+
+
+def still_poses(args, source: str, time, reading, *, rotations=None, joints=None):
+    """The still poses of a continuous recording, with the options' thresholds; errors name ``source``."""
+    from ..core._exceptions import CalibrationInputError
+    from ..experiment._still_poses import find_still_poses
+
+    try:
+        return find_still_poses(time, reading, rotations=rotations, joints=joints, tolerance_deg=args.still_tolerance,
+                                settle_s=args.settle, min_duration_s=args.min_still)
+    except CalibrationInputError as exc:
+        raise CliError(f"{source}: {exc}") from None
+
+
+def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
+    import numpy as np
+
+    from ..experiment._tool_load import wrench_in_sensor_frame
+    from ..io._poses import read_pose_file
+
+    rotations, wrenches, times, still_list, model = [], [], [], [], None
+    for path in paths:
+        rec = read_pose_file(path, force_unit=args.force_unit, torque_unit=args.torque_unit)
+        if rec.wrench is not None:
+            if args.model is not None:
+                console.info(f"{path}: the file holds a wrench; --model is not used for it")
+            wrench = rec.wrench
+        else:
+            model = model or _load_model(args, str(path))
+            if rec.raw.shape[1] != model.n_features_in_:
+                raise CliError(f"{path}: {rec.raw.shape[1]} raw channels but the model {args.model} takes "
+                               f"{model.n_features_in_}")
+            wrench = model.predict(rec.raw)
+        if args.wrench_frame == "base":
+            wrench = wrench_in_sensor_frame(rec.rotation, wrench)
+        if args.poses == "continuous" and rec.time is None:
+            raise CliError(f"{path}: --poses continuous needs a 'time' column [s] to find the still poses in")
+        if _is_continuous(args, rec.time, rec.rotation):
+            still = still_poses(args, str(path), rec.time, wrench, rotations=rec.rotation)
+            console.info(f"{path}: {still.summary()}")
+            still_list.append(still)
+            rotations.append(still.rotation)
+            wrenches.append(still.reading)
+            times.append(still.time)
+        else:
+            rotations.append(rec.rotation)
+            wrenches.append(wrench)
+            times.append(rec.time)
+    time = None if any(t is None for t in times) else np.concatenate(times)
+    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches), time, still_list, model)
+
+
+def _log_poses(args) -> _Poses:
+    if args.model is None:
+        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
+                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
+                       "file (see 'ftcal identify-load --help')")
+    logs, rotations, wrenches = _poses_and_wrenches(args)
+    import numpy as np
+
+    return _Poses([str(lg.path) for lg in logs], rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]))
+
+
+def identification_poses(args, console: Console) -> _Poses:
+    """The poses of the command's inputs (run logs, pose files), each kind read as it must be."""
+    kinds = {item: _input_kind(item) for item in args.inputs}
+    if len(set(kinds.values())) > 1:
+        shown = ", ".join(f"{k} ({v})" for k, v in list(kinds.items())[:4])
+        raise CliError(f"the inputs mix kinds: {shown}; give run logs, or pose files, not both")
+    kind = next(iter(kinds.values()))
+    if kind == "pose file":
+        return _pose_file_poses(args, console, [Path(p) for p in args.inputs])
+    return _log_poses(args)
+
+
+def _poses_csv(poses: _Poses) -> str:
+    from scipy.spatial.transform import Rotation
+
+    from ..core._columns import csv_rows
+    from ..core._wrench import WRENCH_LABELS
+
+    import numpy as np
+
+    quat = Rotation.from_matrix(poses.rotations).as_quat()  # x, y, z, w
+    names = ["qx", "qy", "qz", "qw", *WRENCH_LABELS]
+    blocks = [quat, poses.wrenches]
+    if poses.time is not None:
+        names.insert(0, "time")
+        blocks.insert(0, poses.time[:, None])
+    if poses.still and len(poses.still) == 1:  # the spread of each averaged pose
+        names += ["n_samples"] + [f"{c}_std" for c in WRENCH_LABELS]
+        blocks += [poses.still[0].n_samples[:, None].astype(object), poses.still[0].spread]
+    head = "# the static poses ftcal identify-load used: orientation sensor -> base (x, y, z, w), wrench in the " \
+           "sensor frame [N, N·m]\n"
+    return head + ",".join(names) + "\n" + "".join(csv_rows(*[np.asarray(b) for b in blocks]))
+
+
 def run_identify(args: argparse.Namespace) -> int:
     import ftcal
+    from ..core._exceptions import CalibrationInputError
 
     console = Console(args.quiet)
     gravity = _gravity(args.gravity)
-    name = f"{args.name}.tool.json"
-    plan = OutputPlan(args.out, [name], args.force)
-    logs, rotations, wrenches = _poses_and_wrenches(args)
-    tool = ftcal.identify_tool_load(rotations, wrenches, gravity=gravity)
+    name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
+    plan = OutputPlan(args.out, [name, poses_name], args.force)
+    poses = identification_poses(args, console)
+    try:
+        tool = ftcal.identify_tool_load(poses.rotations, poses.wrenches, gravity=gravity)
+    except CalibrationInputError as exc:
+        raise CliError(f"{', '.join(poses.sources[:3])}: {exc}") from None
+    info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
+            str(args.model), "wrench_frame_in_input": args.wrench_frame}
+    if _input_kind(args.inputs[0]) == "run log":
+        info.update(logs=poses.sources, robot=args.robot)
+    if poses.time is not None:
+        info["pose_time_s"] = poses.time.tolist()
+    if poses.still:
+        info["still_poses"] = [{"found": s.n_found, "kept": s.n_kept, "rejected": [
+            {"start_time_s": t, "reason": why} for t, why in s.rejected], "settle_s": s.settle_s,
+            "settle_from_data": s.settle_from_data} for s in poses.still]
+    with plan.writing(poses_name) as tmp:
+        tmp.write_text(_poses_csv(poses), encoding="utf-8")
     with plan.writing(name) as tmp:
-        write_json(tmp, {**tool.to_dict(), "logs": [str(lg.path) for lg in logs], "n_poses": len(rotations),
-                         "model": str(args.model), "robot": args.robot})
+        write_json(tmp, {**tool.to_dict(), **info})
     c = tool.center_of_mass * 1000
     console.info(
         f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
-        f"(sensor frame), from {len(rotations)} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
+        f"(sensor frame), from {len(poses.rotations)} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
         f"{tool.residual_rms[1]:.3g} N·m -> {plan.path(name)}"
     )
     return 0

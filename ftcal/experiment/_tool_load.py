@@ -44,7 +44,8 @@ from ._drift import (BiasDrift, DriftExtrapolationWarning, build_drift, fit_grav
                      select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
-           "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION"]
+           "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
+           "wrench_in_sensor_frame"]
 
 #: Version of the tool file: 1 without a bias drift (readable by older ftcal), 2 with one (older ftcal refuses it
 #: rather than ignore the drift).
@@ -358,6 +359,44 @@ class ToolLoad:
         return tool
 
 
+def _axis_text(v: NDArray[np.float64]) -> str:
+    """A unit vector as ``x``, ``-z`` when it lies along an axis (within 10 deg), else as rounded components."""
+    k = int(np.argmax(np.abs(v)))
+    if abs(v[k]) >= np.cos(np.radians(10.0)):
+        return ("-" if v[k] < 0 else "") + "xyz"[k]
+    return "[" + ", ".join(f"{c:.2f}" for c in v) + "]"
+
+
+def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]) -> str:
+    """`` (tilted about the sensor's x axis only; none about z)`` for gravity directions that vary in one
+    direction only (empty when they do not vary at all, or in two directions)."""
+    if len(directions) < 2 or tilt_deg.size < 2 or tilt_deg[0] < MIN_TILT_DEG:
+        return ""
+    mean = directions.mean(axis=0)
+    mean /= np.linalg.norm(mean)
+    varied = np.linalg.svd(directions - directions.mean(axis=0))[2][0]  # gravity moves along this direction
+    tilted_about = np.cross(mean, varied)  # a tilt about this axis moves gravity along `varied`
+    return (f" (they tilt the tool about the sensor's {_axis_text(tilted_about / np.linalg.norm(tilted_about))} axis "
+            f"only, by {tilt_deg[0]:.3g} deg; none about {_axis_text(varied)})")
+
+
+def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayLike) -> NDArray[np.float64]:
+    """Wrenches written in the base frame (about the sensor origin) turned into the sensor frame: ``Rᵀ F``, ``Rᵀ τ``.
+
+    Some robot software (and public gravity-compensation tools) log the sensor's wrench rotated into the base
+    frame; :func:`identify_tool_load` takes it in the sensor frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> R = np.array([[[1.0, 0, 0], [0, -1, 0], [0, 0, -1]]])   # sensor upside down
+    >>> wrench_in_sensor_frame(R, [[0, 0, -9.81, 1, 0, 0]]).tolist()
+    [[0.0, 0.0, 9.81, 1.0, 0.0, 0.0]]
+    """
+    R, W = _check_inputs(sensor_rotations, wrenches_in_base)
+    return np.hstack([np.einsum("nji,nj->ni", R, W[:, :3]), np.einsum("nji,nj->ni", R, W[:, 3:])])
+
+
 def identify_tool_load(
     sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
     times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
@@ -427,10 +466,10 @@ def identify_tool_load(
     if n < 4 or tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
         second = float(tilt_deg[1]) if tilt_deg.size > 1 else 0.0
         raise CalibrationInputError(
-            f"the {n} poses do not excite the tool load: gravity (in the sensor frame) varies by about "
-            f"{second:.1f} deg in its second direction, but mass, centre of mass and bias need at least "
-            f"{MIN_TILT_DEG:g} deg in two independent directions (and 4 poses). Fix: add poses tilted about two "
-            "axes, e.g. the 11 of 'ftcal plan --subdivisions 0'."
+            f"the {n} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
+            f"frame) varies by about {second:.1f} deg in its second direction, but mass, centre of mass and bias "
+            f"need at least {MIN_TILT_DEG:g} deg in two independent directions (and 4 poses). Fix: add poses tilted "
+            "about two axes, e.g. the 11 of 'ftcal plan --subdivisions 0'."
         )
     candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state)
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)

@@ -150,6 +150,22 @@ def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int, 
     return info, n, where
 
 
+def read_text_lines(path: Path, what: str, fix: str) -> list[str]:
+    """The lines of the CSV text file ``path`` (a ``what``: "run log", "pose file"), its size checked first
+    (``fix`` says how to make it smaller); a missing file or one that is not UTF-8 is a :class:`LogFormatError`
+    naming the line."""
+    if not path.is_file():
+        raise LogFormatError(f"{path}: no such {what}.")
+    # the text, its lines and each row's fields as Python strings take several times the file's size
+    check_allocation(_TEXT_MEMORY_FACTOR * path.stat().st_size, f"reading the {what} {path}", fix)
+    try:
+        return path.read_text(encoding="utf-8-sig").splitlines()
+    except UnicodeDecodeError as exc:
+        line = path.read_bytes()[:exc.start].count(b"\n") + 1
+        raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a {what} is a CSV text file.") \
+            from None
+
+
 def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:
     """Read and validate one run log (layout in the module docstring).
 
@@ -186,17 +202,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     (2, 7, 2.0, ['no-load', 'load'])
     """
     path = Path(path)
-    if not path.is_file():
-        raise LogFormatError(f"{path}: no such log file.")
-    # the text, its lines and each row's fields as Python strings take several times the file's size
-    check_allocation(_TEXT_MEMORY_FACTOR * path.stat().st_size, f"reading the run log {path}",
-                     "split the log into several files (one per run or configuration)")
-    try:
-        text_lines = path.read_text(encoding="utf-8-sig").splitlines()
-    except UnicodeDecodeError as exc:
-        line = path.read_bytes()[:exc.start].count(b"\n") + 1
-        raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a run log is a CSV text file.") \
-            from None
+    text_lines = read_text_lines(path, "log file", "split the log into several files (one per run or configuration)")
     info, n_comment, info_line = _parse_comments(path, text_lines)
     version = info.get("ftcal-run-log")
     if version is not None and version != str(LOG_FORMAT_VERSION):
