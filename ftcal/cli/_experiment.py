@@ -3,8 +3,9 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
-from ._common import Console, OutputPlan, load_robot_from_args
+from ._common import CliError, Console, OutputPlan, load_robot_from_args
 from ._plan import write_plan_coverage
 
 
@@ -20,6 +21,15 @@ def simulate_logs(args: argparse.Namespace) -> int:
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
+    bag_storage = getattr(args, "bag", None)
+    if bag_storage is not None:
+        bag_names = [n[:-4] + (".bag" if bag_storage == "ros1" else "") for n in names]
+        taken = [Path(args.out) / "bags" / n for n in bag_names if (Path(args.out) / "bags" / n).exists()]
+        if taken:  # a bag is never replaced, --force or not
+            raise CliError(f"{taken[0]} exists; a bag is never overwritten: remove it or choose another --out")
+        from ..io._bags import check_rosbags
+
+        check_rosbags()
     robot = load_robot_from_args(args)
     kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
     console.info(f"planning the pose sphere of {robot.name} ...")
@@ -38,4 +48,11 @@ def simulate_logs(args: argparse.Namespace) -> int:
     )
     write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
     console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")
+    if bag_storage is not None:
+        from ..experiment._virtual_recording import write_run_bags
+
+        bags = write_run_bags(paths, Path(args.out) / "bags", bag_storage, joint_names=robot.joint_names,
+                              random_state=args.seed)
+        console.info(f"wrote {len(bags)} ROS bags ({bag_storage}) of the same runs to {Path(args.out) / 'bags'}/ "
+                     f"(next: ftcal prepare {Path(args.out) / 'bags'} --raw-topic /ft_sensor/raw --out DIR)")
     return 0

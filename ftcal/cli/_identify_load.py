@@ -15,10 +15,11 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
-    positive_float,
     write_json,
 )
 from ._prepare import log_files
+from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
+                          still_poses)
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -62,7 +63,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         epilog=IDENTIFY_EXAMPLE,
     )
     p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="run log files or directories of *.csv logs, or pose files (CSV, see below)")
+                   help="run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
     p.add_argument("--model", type=existing_file,
                    help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
     add_robot_options(p)
@@ -88,9 +89,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _add_recording_options(p: argparse.ArgumentParser) -> None:
-    """How a pose file or a recording is read: the wrench's frame and units, and the still-pose thresholds."""
-    from ..experiment._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
-
+    """How a pose file or a recording is read: the wrench's frame and units, the bag's topics, the still poses."""
     g = p.add_argument_group("pose files and continuous recordings")
     g.add_argument("--wrench-frame", choices=("sensor", "base"), default="sensor",
                    help="the frame the input's wrench is written in (base: the robot's base frame, torques about "
@@ -99,14 +98,10 @@ def _add_recording_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--torque-unit", default="N.m", metavar="UNIT", help="unit of the input's torques")
     g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
                    help="static: every row is a pose; continuous: find the still poses (needs times); auto: "
-                   "continuous when the rows carry times and most rows share their neighbour's orientation")
-    g.add_argument("--still-tolerance", type=positive_float, default=DEFAULT_STILL_TOLERANCE_DEG, metavar="DEG",
-                   help="a pose is still while it stays within this [deg]")
-    g.add_argument("--min-still", type=positive_float, default=DEFAULT_MIN_STILL_S, metavar="S",
-                   help="shortest still segment that is a pose [s]")
-    g.add_argument("--settle", type=nonnegative_float, metavar="S",
-                   help="seconds dropped at the start of each still pose (default: from the data, until the "
-                   "drift has decayed into the noise)")
+                   "continuous when the rows carry times and most rows share their neighbour's orientation (a bag "
+                   "is always continuous)")
+    add_recording_options(g)
+    add_bag_options(p)
 
 
 def _add_log_inputs(p: argparse.ArgumentParser) -> None:
@@ -141,16 +136,6 @@ def _poses_and_wrenches(args):
     return logs, rotations, model.predict(raw)
 
 
-def nonnegative_float(text: str) -> float:
-    """argparse type: a finite number >= 0."""
-    from ._common import finite_float
-
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"{text!r}: give a number >= 0")
-    return value
-
-
 class _Poses:
     """The static poses an identification uses: where they came from, orientation, wrench, time, still-pose info."""
 
@@ -160,9 +145,12 @@ class _Poses:
 
 
 def _input_kind(item: str) -> str:
+    from ..io._bags import is_bag
     from ..io._poses import is_pose_file
 
     path = Path(item)
+    if is_bag(path):
+        return "ROS bag"
     if path.is_file() and path.suffix.lower() == ".csv" and is_pose_file(path):
         return "pose file"
     return "run log"
@@ -188,18 +176,6 @@ def _is_continuous(args, time, rotations) -> bool:
     cos = (np.einsum("nij,nij->n", rotations[1:], rotations[:-1]) - 1.0) / 2.0
     still = np.arccos(np.clip(cos, -1.0, 1.0)) <= np.radians(args.still_tolerance)
     return bool(np.mean(still) > 0.5)
-
-
-def still_poses(args, source: str, time, reading, *, rotations=None, joints=None):
-    """The still poses of a continuous recording, with the options' thresholds; errors name ``source``."""
-    from ..core._exceptions import CalibrationInputError
-    from ..experiment._still_poses import find_still_poses
-
-    try:
-        return find_still_poses(time, reading, rotations=rotations, joints=joints, tolerance_deg=args.still_tolerance,
-                                settle_s=args.settle, min_duration_s=args.min_still)
-    except CalibrationInputError as exc:
-        raise CliError(f"{source}: {exc}") from None
 
 
 def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
@@ -240,6 +216,43 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
     return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches), time, still_list, model)
 
 
+def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
+    """The still poses of each bag: the wrench (or the raw gauges through --model) and the pose (tf, or joints
+    through the robot's forward kinematics)."""
+    import numpy as np
+
+    import ftcal
+    from ..experiment._tool_load import wrench_in_sensor_frame
+
+    robot = None if args.tf is not None else load_robot_from_args(args)
+    rotations, wrenches, times, still_list, model = [], [], [], [], None
+    for path in paths:
+        rec = read_bag_from_args(args, path, console)
+        reading = rec.reading
+        if rec.kind == "raw":
+            model = model or _load_model(args, f"{path} (topic {rec.sensor_topic})")
+            if reading.shape[1] != model.n_features_in_:
+                raise CliError(f"{path}: topic {rec.sensor_topic} holds {reading.shape[1]} raw values but the model "
+                               f"{args.model} takes {model.n_features_in_} channels")
+            reading = model.predict(reading)
+        if robot is None:
+            still = still_poses(args, str(path), rec.time, reading, rotations=rec.rotation)
+            R = still.rotation
+        else:
+            still = still_poses(args, str(path), rec.time, reading, joints=bag_joints(rec, robot))
+            R = ftcal.sensor_pose_in_base(robot, still.joints)[:, :3, :3]
+        console.info(f"{path}: {still.summary()}")
+        wrench = still.reading
+        if args.wrench_frame == "base":
+            wrench = wrench_in_sensor_frame(R, wrench)
+        rotations.append(R)
+        wrenches.append(wrench)
+        times.append(still.time)
+        still_list.append(still)
+    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches),
+                  np.concatenate(times), still_list, model)
+
+
 def _log_poses(args) -> _Poses:
     if args.model is None:
         raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
@@ -256,8 +269,10 @@ def identification_poses(args, console: Console) -> _Poses:
     kinds = {item: _input_kind(item) for item in args.inputs}
     if len(set(kinds.values())) > 1:
         shown = ", ".join(f"{k} ({v})" for k, v in list(kinds.items())[:4])
-        raise CliError(f"the inputs mix kinds: {shown}; give run logs, or pose files, not both")
+        raise CliError(f"the inputs mix kinds: {shown}; give run logs, pose files or ROS bags, one kind")
     kind = next(iter(kinds.values()))
+    if kind == "ROS bag":
+        return _bag_poses(args, console, bag_files(args.inputs))
     if kind == "pose file":
         return _pose_file_poses(args, console, [Path(p) for p in args.inputs])
     return _log_poses(args)

@@ -18,6 +18,7 @@ from ._common import (
     path_problem,
     write_json,
 )
+from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log
 
 EXAMPLE = """\
 examples:
@@ -31,6 +32,13 @@ examples:
 default, 'thesis', is the thesis' seven configurations (centre and Table I); the fixture used is
 always named on stderr and in prepare.json.
   ftcal prepare logs/ --robot my_arm.urdf --sensor-frame ft_frame --format npz --out data
+
+  ftcal prepare bags/ --raw-topic /ft_sensor/raw --mass 2.0 --out data    # ROS bags of the runs
+
+ROS bags (rosbag2 sqlite3 / MCAP folders, ROS 1 .bag files), one per run, named config<C>_load and
+config<C>_no-load: the raw gauges (--raw-topic, --raw-field) and the joint states (--joint-topic) are
+aligned (joints interpolated at the gauges' stamps), the still poses found in each run (the settling after
+each move dropped) and averaged; the k-th still pose of a load run pairs with the k-th of its no-load run.
 
 pairs every load run with its no-load run (same configuration, same pose index), aligns
 them with R_delta = P_no-load^T P_load (thesis eq. 17), subtracts the no-load reading and
@@ -46,7 +54,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Turn the run logs of a robot-held calibration experiment into a calibration dataset.",
         epilog=EXAMPLE,
     )
-    p.add_argument("logs", nargs="+", metavar="LOG", help="run log files, or directories holding *.csv logs")
+    p.add_argument("logs", nargs="+", metavar="LOG",
+                   help="run log files, or directories holding *.csv logs; or ROS bags of the runs (or their folder)")
     add_robot_options(p)
     p.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the fixture's masses, else the logs' "
                    "load_mass_kg)")
@@ -55,6 +64,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "from a .json or .csv file; 'thesis' is the thesis' seven (see 'ftcal prepare --help')")
     p.add_argument("--channels", type=int_in_range(3, 1024, "channels"), help="expected raw channel count (checked in every log)")
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
+    add_bag_options(p, wrench=False)
+    add_recording_options(p.add_argument_group("still poses in ROS bags"))
     add_output_options(p, "ftcal-data")
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
@@ -83,15 +94,23 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
-    logs = log_files(args.logs)
+    bags = bag_files(args.logs)
+    logs = bags if bags is not None else log_files(args.logs)
     robot = load_robot_from_args(args)
-    console.info(f"preparing {len(logs)} run logs with {robot.name} (sensor frame {robot.sensor_frame}) ...")
+    what = "ROS bags" if bags is not None else "run logs"
+    console.info(f"preparing {len(logs)} {what} with {robot.name} (sensor frame {robot.sensor_frame}) ...")
+    if bags is not None:
+        inputs = [bag_run_log(args, path, robot, console) for path in bags]
+        if args.channels is not None and inputs[0].n_channels != args.channels:
+            raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --channels {args.channels}")
+    else:
+        inputs = logs
     from ..robot._loads import load_fixture
 
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
-        dataset = ftcal.prepare_dataset(logs, robot, args.mass, n_channels=args.channels,
+        dataset = ftcal.prepare_dataset(inputs, robot, args.mass, n_channels=args.channels,
                                         load_configurations=configurations)
     except ftcal.LogFormatError as exc:
         if "not among the known ones" not in str(exc):

@@ -34,6 +34,7 @@ EXPERIMENT_EXAMPLE = """\
 examples:
   ftcal simulate experiment --out logs                   # KUKA iiwa 14, default sphere, 7 load configurations
   ftcal simulate experiment --robot panda --mass 2.5 --subdivisions 1 --out logs_panda
+  ftcal simulate experiment --subdivisions 0 --bag mcap --out logs   # + logs/bags/config*_load, ..._no-load
 
 writes the load / no-load run logs in the format 'ftcal prepare' reads (the same as a real
 recording), so the whole real-world pipeline can be tried without hardware.
@@ -220,6 +221,10 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
         help="simulate thermal drift: each run's temperature ramps within LOW..HIGH deg C and the sensor's zero and "
         "span drift by data-sheet magnitudes; the logs get a temperature column",
     )
+    e.add_argument("--bag", choices=("sqlite3", "mcap", "ros1"),
+                   help="also write each run as the robot's continuous recording, a ROS bag in DIR/bags/ (raw gauges "
+                   "on /ft_sensor/raw, joints on /joint_states; moves, settling, noise): input for 'ftcal prepare "
+                   "DIR/bags --raw-topic /ft_sensor/raw' (needs: pip install \"ftcal[ros]\")")
     add_output_options(e, "ftcal-logs")
     add_run_options(e)
     e.set_defaults(handler=run_experiment)

@@ -299,9 +299,10 @@ def prepare_dataset(
 
     Parameters
     ----------
-    log_paths : sequence of paths, or one path
-        Every log file of the experiment (any split of runs into files); a
-        single path is one log file, or a folder whose ``*.csv`` are the logs.
+    log_paths : sequence of paths or RunLog, or one path
+        Every log file of the experiment (any split of runs into files), or the
+        run logs already read (:class:`ftcal.RunLog`); a single path is one log
+        file, or a folder whose ``*.csv`` are the logs.
     robot : RobotModel, built-in name or URDF path, default="kuka_iiwa14"
         The arm the joint angles belong to (its sensor frame gives the poses).
     load_mass : float, optional
@@ -338,10 +339,13 @@ def prepare_dataset(
         if not paths:
             raise LogFormatError(f"{one}: the folder holds no .csv run logs.")
     else:
-        paths = [Path(p) for p in log_paths]
+        paths = [p if isinstance(p, RunLog) else Path(p) for p in log_paths]
     if not paths:
         raise LogFormatError("no run logs given; pass the load and no-load log files (or their folder).")
-    logs = [read_run_log(p, n_channels=n_channels, n_joints=robot.n_joints) for p in paths]
+    # a RunLog already read (e.g. the still poses of a ROS bag) is used as it is
+    logs = [p if isinstance(p, RunLog) else read_run_log(p, n_channels=n_channels, n_joints=robot.n_joints)
+            for p in paths]
+    paths = [lg.path for lg in logs]
     for lg in logs:  # the frame the wrenches are computed in must be the one the log was recorded with
         if lg.sensor_frame is not None and lg.sensor_frame != robot.sensor_frame:
             raise LogFormatError(

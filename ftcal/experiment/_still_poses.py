@@ -5,7 +5,9 @@ A robot's own recording (a ROS bag, a CSV with a ``time`` column) runs on while 
 
 1. **Still segments.** From each sample on, the segment grows while the pose stays within ``tolerance_deg``
    of the segment's first sample (the largest joint change, or the angle between the two orientations).
-   Segments shorter than ``min_duration_s`` are passes through a pose during a move, not poses.
+   Each segment is then trimmed to the samples within a tenth of that of its middle sample: the arm creeping
+   into and out of the pose already changes the reading (0.5 deg of tilt moves ~1 % of the tool's weight
+   between the axes). Segments shorter than ``min_duration_s`` are passes through a pose during a move.
 2. **Settling.** A sensor reads a transient after each move (mechanical ringing, the gauges' creep, a
    cable settling): up to about 1 N over the first seconds on a real Axia80. The first ``settle_s`` seconds of
    each still segment are dropped. Without ``settle_s`` it comes from the data: in each segment, the
@@ -47,6 +49,8 @@ DEFAULT_STILL_TOLERANCE_DEG = 0.5
 DEFAULT_MIN_STILL_S = 1.0
 #: A pose whose spread exceeds this many times the median spread of the poses (in a component) is rejected.
 UNSTEADY_FACTOR = 5.0
+#: A still segment is trimmed to the samples within this fraction of the tolerance of its middle sample.
+_TRIM_FRACTION = 0.1
 #: Settled moving means stay within this many standard errors of the segment's final level.
 _SETTLED_Z = 4.0
 
@@ -81,6 +85,8 @@ class StillPoses:
         Still segments at least ``min_duration_s`` long.
     rejected : list of (float, str)
         Start time [s] and reason of each rejected segment.
+    recording_start : float
+        Time of the recording's first sample [s] (the summary gives times from it).
     """
 
     time: NDArray[np.float64]
@@ -96,6 +102,7 @@ class StillPoses:
     settle_from_data: bool
     n_found: int
     rejected: list[tuple[float, str]] = field(default_factory=list)
+    recording_start: float = 0.0
 
     @property
     def n_kept(self) -> int:
@@ -108,7 +115,8 @@ class StillPoses:
         text = (f"found {self.n_found} still poses, kept {self.n_kept}, rejected {len(self.rejected)}; "
                 f"settling {self.settle_s:.3g} s dropped from each ({how})")
         if self.rejected:
-            shown = "; ".join(f"at {t:.6g} s: {why}" for t, why in self.rejected[:5])
+            shown = "; ".join(f"{t - self.recording_start:.1f} s into the recording: {why}"
+                              for t, why in self.rejected[:5])
             more = f"; and {len(self.rejected) - 5} more" if len(self.rejected) > 5 else ""
             text += f" — rejected {shown}{more}"
         return text
@@ -143,6 +151,15 @@ def _segments(n: int, dev, tol_rad: float) -> list[tuple[int, int]]:
         out.append((a, max(end, a + 1)))
         a = max(end, a + 1)
     return out
+
+
+def _trim(dev, a: int, b: int, fine_rad: float) -> tuple[int, int]:
+    """The segment ``[a, b)`` without its approach and departure: the samples from the first to the last within
+    ``fine_rad`` of its middle sample (the arm creeping into and out of a pose changes the reading already)."""
+    if b - a < 3:
+        return a, b
+    close = np.flatnonzero(dev((a + b) // 2, slice(a, b)) <= fine_rad)
+    return a + int(close[0]), a + int(close[-1]) + 1
 
 
 def _settle_time(t: NDArray[np.float64], y: NDArray[np.float64]) -> float:
@@ -235,7 +252,9 @@ def find_still_poses(
     if settle_s is not None and not (np.isfinite(settle_s) and settle_s >= 0):
         raise CalibrationInputError(f"settle_s must be a number of seconds >= 0; got {settle_s!r}.")
     n = len(t)
-    segments = _segments(n, _deviation(R, q), np.radians(tolerance_deg))
+    dev = _deviation(R, q)
+    segments = _segments(n, dev, np.radians(tolerance_deg))
+    segments = [_trim(dev, a, b, np.radians(tolerance_deg) * _TRIM_FRACTION) for a, b in segments]
     found = [(a, b) for a, b in segments if t[b - 1] - t[a] >= min_duration_s]
     if not found:
         longest = max((t[b - 1] - t[a] for a, b in segments), default=0.0)
@@ -268,7 +287,8 @@ def find_still_poses(
     rejected.sort()
     if not kept:
         raise CalibrationInputError(
-            f"found {len(found)} still poses but kept none: {rejected[0][1]} (first at {rejected[0][0]:.6g} s). "
+            f"found {len(found)} still poses but kept none: {rejected[0][1]} (the first "
+            f"{rejected[0][0] - t[0]:.1f} s into the recording). "
             "Fix: hold each pose longer, or give a shorter --settle.")
     rotation = None
     if R is not None:
@@ -282,4 +302,5 @@ def find_still_poses(
         first_index=np.array([i[0] for i in kept], dtype=np.int64), rotation=rotation,
         joints=None if q is None else np.array([q[i].mean(axis=0) for i in kept]),
         settle_s=float(settle_s), settle_from_data=from_data, n_found=len(found), rejected=rejected,
+        recording_start=float(t[0]),
     )

@@ -360,11 +360,11 @@ class ToolLoad:
 
 
 def _axis_text(v: NDArray[np.float64]) -> str:
-    """A unit vector as ``x``, ``-z`` when it lies along an axis (within 10 deg), else as rounded components."""
+    """An axis (a unit vector, either sign) as ``x`` when it lies along one (within 10 deg), else as components."""
     k = int(np.argmax(np.abs(v)))
     if abs(v[k]) >= np.cos(np.radians(10.0)):
-        return ("-" if v[k] < 0 else "") + "xyz"[k]
-    return "[" + ", ".join(f"{c:.2f}" for c in v) + "]"
+        return "xyz"[k]
+    return "[" + ", ".join(f"{c:.2f}" for c in np.sign(v[k]) * v) + "]"
 
 
 def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]) -> str:

@@ -18,14 +18,16 @@ poses and the sensor's reading at each:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
 
-__all__ = ["ContinuousRecording", "continuous_recording"]
+__all__ = ["ContinuousRecording", "continuous_recording", "write_run_bags"]
 
 
 @dataclass
@@ -155,3 +157,64 @@ def continuous_recording(
             R[sel] = Slerp([0.0, 1.0], Rotation.from_matrix(poses[[i, min(i + 1, n_poses - 1)]]))(frac[sel]).as_matrix()
     return ContinuousRecording(sensor_time=sensor_t + start_time_s, reading=reading, pose_time=pose_t + start_time_s,
                                joints=q, rotations=R, still_from=arrive + start_time_s, still_to=leave + start_time_s)
+
+
+def write_run_bags(
+    log_paths: Sequence[str | Path],
+    out_dir: str | Path,
+    storage: str = "mcap",
+    *,
+    still_s: float = 3.0,
+    move_s: float = 1.5,
+    sensor_rate_hz: float = 100.0,
+    joint_rate_hz: float = 50.0,
+    settle_tau_s: float = 0.4,
+    joint_names: Sequence[str] | None = None,
+    random_state: int | None = None,
+) -> list[Path]:
+    """Write each run log (one row per pose) as the robot's continuous recording of that run: a ROS bag.
+
+    The arm stands still at each pose of the log for ``still_s`` seconds and moves to the next in ``move_s``;
+    the raw gauges (``/ft_sensor/raw``, ``std_msgs/Float64MultiArray``) at ``sensor_rate_hz`` carry the log's
+    reading of each pose plus a settling transient after each move (10 noise levels, time constant
+    ``settle_tau_s``) and noise (1e-4 of each channel's span over the run); the joint states
+    (``/joint_states``) run at ``joint_rate_hz``. The bag of ``config0_load.csv`` is ``config0_load`` (a rosbag2
+    folder) or ``config0_load.bag`` (ROS 1), so that ``ftcal prepare`` pairs the runs as it pairs the logs.
+
+    Parameters
+    ----------
+    log_paths : sequence of paths
+        Run logs (e.g. of :func:`ftcal.simulate_experiment`).
+    out_dir : str or path
+        Folder for the bags (created); an existing bag is an error.
+    storage : {"sqlite3", "mcap", "ros1"}
+    still_s, move_s, sensor_rate_hz, joint_rate_hz, settle_tau_s : float
+    joint_names : sequence of str, optional
+        The joints' names in the joint states (the robot's); default ``joint1, joint2, ...``.
+    random_state : int, optional
+
+    Returns
+    -------
+    list of pathlib.Path
+    """
+    from ..io._bags import write_bag
+    from ..io._logs import read_run_log
+
+    out = Path(out_dir)
+    rng = np.random.default_rng(random_state)
+    logs = [read_run_log(p) for p in log_paths]
+    targets = [out / (Path(lg.path).stem + (".bag" if storage == "ros1" else "")) for lg in logs]
+    existing = [str(t) for t in targets if t.exists()]
+    if existing:
+        raise CalibrationInputError(f"{existing[0]} exists; a bag is never overwritten. Choose an empty folder.")
+    out.mkdir(parents=True, exist_ok=True)
+    for lg, target in zip(logs, targets):
+        order = np.argsort(lg.pose, kind="stable")
+        raw, q = lg.raw[order], lg.q[order]
+        noise = 1e-4 * np.ptp(raw, axis=0) + 1e-12
+        rec = continuous_recording(raw, joints=q, still_s=still_s, move_s=move_s, sensor_rate_hz=sensor_rate_hz,
+                                   pose_rate_hz=joint_rate_hz, settle_amplitude=10 * noise, settle_tau_s=settle_tau_s,
+                                   noise=noise, start_time_s=float(lg.timestamp[0]) + 1.7e9, random_state=rng)
+        write_bag(target, storage, sensor_time=rec.sensor_time, reading=rec.reading, pose_time=rec.pose_time,
+                  joints=rec.joints, joint_names=list(joint_names or [f"joint{j + 1}" for j in range(q.shape[1])]), raw=True)
+    return targets

@@ -1,0 +1,704 @@
+"""ROS bags in (rosbag2 in sqlite3 or MCAP, ROS 1 ``.bag``): the sensor's stream and the arm's pose, aligned.
+
+Read through ``rosbags`` (pure Python, no ROS install; ``pip install "ftcal[ros]"``), imported only here and
+only when a bag is read or written.
+
+What is read
+------------
+* **the sensor**: a wrench topic (``geometry_msgs/WrenchStamped`` or ``Wrench``: a factory-calibrated
+  sensor) or a raw-gauge topic (any message with a numeric array field, e.g.
+  ``std_msgs/Float64MultiArray`` and its ``data``; ``raw_field`` names the field, dotted for a nested one);
+* **the pose**: joint states (``sensor_msgs/JointState``: names and positions [rad]), or the sensor's
+  orientation from ``/tf`` and ``/tf_static`` (``tf2_msgs/TFMessage``), the chain of transforms from a base
+  frame to the sensor frame composed at each sensor stamp.
+
+**Stamps.** Each message's header stamp (``stamps="header"``), or the time the recorder received it
+(``"receive"``; messages without a header always use it). The joints are interpolated linearly at the
+sensor's stamps (the tf rotations spherically); sensor samples outside the pose stream's span are dropped.
+**Clock offsets**: for every stamped topic the median of (receive time - header stamp) is its clock's offset
+from the recorder's; two topics whose offsets differ by more than :data:`CLOCK_OFFSET_TOLERANCE_S` are
+named (:attr:`BagRecording.notes`), and topics whose stamps do not even overlap are refused, with the fix
+(``stamps="receive"``).
+
+**Memory** stays bounded whatever the bag's size: the bag is streamed message by message, only the chosen
+topics are decoded, and a topic with more than ``max_samples`` messages is reduced on the fly (the sensor by
+averaging blocks of consecutive messages, which a still pose's average does anyway; the pose streams by
+keeping every k-th message, they are smooth). A several-GB bag is read in the memory of ``max_samples``
+samples.
+
+Every error is a :class:`~ftcal.LogFormatError` naming the bag and, for a missing topic or a wrong type,
+the topics the bag holds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ..core._exceptions import LogFormatError
+
+__all__ = ["BagRecording", "read_bag", "write_bag", "is_bag", "bag_topics", "WRENCH_TYPES", "JOINT_STATE_TYPE",
+           "TF_TYPE", "CLOCK_OFFSET_TOLERANCE_S", "DEFAULT_MAX_SAMPLES", "BAG_STORAGES"]
+
+WRENCH_TYPES = ("geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/Wrench")
+JOINT_STATE_TYPE = "sensor_msgs/msg/JointState"
+TF_TYPE = "tf2_msgs/msg/TFMessage"
+#: Two topics whose clocks differ by more than this [s] (judged against the recorder's receive times) are named.
+CLOCK_OFFSET_TOLERANCE_S = 0.05
+#: Most samples kept per topic; longer topics are reduced on the fly (see the module docstring).
+DEFAULT_MAX_SAMPLES = 200_000
+#: Numbers no recording holds, serialized once to find where a message's values and stamp sit in its bytes.
+_SENTINELS = np.array([1.2345678901234567e300 + k * 1e285 for k in range(4096)])
+_STAMP_SEC, _STAMP_NSEC = 0x1234567, 0x7654321
+_STAMP_SENTINEL = np.array([(_STAMP_SEC, _STAMP_NSEC)], dtype=[("s", "<i4"), ("n", "<u4")]).tobytes()
+#: The bag formats :func:`write_bag` writes (and :func:`read_bag` reads).
+BAG_STORAGES = ("sqlite3", "mcap", "ros1")
+
+
+def check_rosbags() -> None:
+    """Raise the fix (install the extra) when rosbags is missing."""
+    try:
+        import rosbags  # noqa: F401
+    except ImportError:
+        raise LogFormatError('reading ROS bags needs the rosbags package: pip install "ftcal[ros]"') from None
+
+
+def is_bag(path: str | Path) -> bool:
+    """Whether ``path`` is a ROS bag: a ROS 1 ``.bag`` file, or a rosbag2 folder (``metadata.yaml``), or the
+    ``.db3`` / ``.mcap`` file inside one.
+
+    Examples
+    --------
+    >>> is_bag("run.bag"), is_bag("poses.csv")
+    (True, False)
+    """
+    p = Path(path)
+    if p.suffix == ".bag":
+        return True
+    if p.is_dir():
+        return (p / "metadata.yaml").is_file()
+    return p.suffix in (".db3", ".mcap") and (p.parent / "metadata.yaml").is_file()
+
+
+def _bag_paths(path: Path) -> list[Path]:
+    if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
+        path = path.parent
+    if not path.exists():
+        raise LogFormatError(f"{path}: no such bag.")
+    if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
+        raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with metadata.yaml).")
+    return [path]
+
+
+class _Reader:
+    """An open bag, every failure of the reader (truncated, damaged, not a bag) turned into one LogFormatError."""
+
+    def __init__(self, path: Path) -> None:
+        check_rosbags()
+        from rosbags.highlevel import AnyReader
+        from rosbags.typesys import Stores, get_typestore
+
+        self.path = path
+        try:
+            self.reader = AnyReader(_bag_paths(path), default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            self.reader.open()
+        except LogFormatError:
+            raise
+        except Exception as exc:  # rosbags raises its own errors, sqlite3's, struct's, KeyError on damaged data
+            raise self.damaged(exc) from None
+
+    def damaged(self, exc: BaseException) -> LogFormatError:
+        text = " ".join(str(exc).split())[:160] or type(exc).__name__
+        return LogFormatError(f"{self.path}: cannot read the bag ({text}); is it truncated or damaged (a recording "
+                              "cut short)? Re-index or re-record it (ROS 1: rosbag reindex; ROS 2: ros2 bag reindex).")
+
+    def __enter__(self) -> "_Reader":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        try:
+            self.reader.close()
+        except Exception:  # noqa: BLE001 - closing a damaged bag may fail too; the first error is the one to show
+            pass
+
+    def topics(self) -> dict[str, tuple[str, int]]:
+        return {name: (info.msgtype or "?", int(info.msgcount)) for name, info in self.reader.topics.items()}
+
+
+def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
+    """The topics of a bag: name -> (message type, message count).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> bag = pathlib.Path(tempfile.mkdtemp()) / "rec"
+    >>> _ = write_bag(bag, "mcap", sensor_time=[0.0, 0.1], reading=np.zeros((2, 6)), pose_time=[0.0, 0.1],
+    ...               joints=np.zeros((2, 2)), joint_names=["a", "b"])
+    >>> bag_topics(bag)
+    {'/ft_sensor/wrench': ('geometry_msgs/msg/WrenchStamped', 2), '/joint_states': ('sensor_msgs/msg/JointState', 2)}
+    """
+    with _Reader(Path(path)) as r:
+        return r.topics()
+
+
+def _listing(topics: dict[str, tuple[str, int]]) -> str:
+    return ", ".join(f"{t} ({typ}, {n} messages)" for t, (typ, n) in sorted(topics.items())) or "no topics"
+
+
+def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str, ...], role: str, option: str) -> str:
+    """The topic of ``role``: the given one (checked), else the bag's only topic of one of ``types``."""
+    if given is not None:
+        if given not in topics:
+            raise LogFormatError(f"{path}: no topic {given} ({role}); the bag has {_listing(topics)}.")
+        if types and topics[given][0] not in types:
+            raise LogFormatError(f"{path}: topic {given} holds {topics[given][0]}, not {' or '.join(types)} ({role}); "
+                                 f"the bag has {_listing(topics)}. Fix: name the right topic with {option}.")
+        return given
+    candidates = sorted(t for t, (typ, _) in topics.items() if typ in types)
+    if len(candidates) != 1:
+        what = "no" if not candidates else f"{len(candidates)}"
+        raise LogFormatError(f"{path}: {what} topics of type {' or '.join(types)} ({role}); the bag has "
+                             f"{_listing(topics)}. Fix: name it with {option} TOPIC.")
+    return candidates[0]
+
+
+class _Stream:
+    """A topic's samples, reduced on the fly to at most ``max_samples`` (block means, or every k-th)."""
+
+    def __init__(self, count: int, max_samples: int, average: bool) -> None:
+        self.block = max(1, math.ceil(count / max_samples))
+        self.average = average
+        self.size = max(1, math.ceil(count / self.block))
+        self.times: list[float] = []
+        self.receive: list[float] = []
+        self.values: NDArray[np.float64] | None = None
+        self.n = 0
+        self._seen = 0
+        self._sum_t = self._sum_r = 0.0
+        self._sum_v: NDArray[np.float64] | None = None
+        self._in_block = 0
+
+    def add(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
+        if self.values is None:
+            self.values = np.empty((self.size + 1, len(value)))
+        self._seen += 1
+        if not self.average:
+            if (self._seen - 1) % self.block == 0:
+                self._store(t, receive, value)
+            return
+        if self._sum_v is None:
+            self._sum_v = np.zeros(len(value))
+        self._sum_t += t
+        self._sum_r += receive
+        self._sum_v += value
+        self._in_block += 1
+        if self._in_block == self.block:
+            self.flush()
+
+    def flush(self) -> None:
+        if self.average and self._in_block:
+            k = self._in_block
+            self._store(self._sum_t / k, self._sum_r / k, self._sum_v / k)
+            self._sum_t = self._sum_r = 0.0
+            self._sum_v[:] = 0.0
+            self._in_block = 0
+
+    def _store(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
+        if self.n >= len(self.values):  # more messages than the bag's index said: grow
+            self.values = np.vstack([self.values, np.empty_like(self.values)])
+        self.values[self.n] = value
+        self.times.append(t)
+        self.receive.append(receive)
+        self.n += 1
+
+    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        self.flush()
+        values = self.values[:self.n] if self.values is not None else np.empty((0, 0))
+        return np.asarray(self.times), np.asarray(self.receive), values
+
+
+@dataclass
+class BagRecording:
+    """A bag's sensor stream with the pose at each sensor stamp.
+
+    Attributes
+    ----------
+    path : pathlib.Path
+    sensor_topic : str
+    kind : str
+        ``"wrench"`` [N, N·m] or ``"raw"`` (the raw gauges' array).
+    time : ndarray of shape (n,)
+        Sensor stamps [s] (header stamps or receive times; see ``stamps``).
+    reading : ndarray of shape (n, m)
+    joints : ndarray of shape (n, n_joints) or None
+        Joint positions [rad] interpolated at ``time``.
+    joint_names : tuple of str
+    rotation : ndarray of shape (n, 3, 3) or None
+        The sensor's orientation (sensor to base) from tf at ``time``.
+    pose_topic : str
+    frame_id : str
+        The sensor messages' ``header.frame_id`` ('' without a header).
+    clock_offset_s : dict
+        Per stamped topic, the median of (receive time - header stamp) [s].
+    stamps : str
+    notes : list of str
+        What a user should know: clock offsets between topics, samples dropped outside the pose stream,
+        messages averaged per sample.
+    topics : dict
+        Every topic of the bag: name -> (type, count).
+    """
+
+    path: Path
+    sensor_topic: str
+    kind: str
+    time: NDArray[np.float64]
+    reading: NDArray[np.float64]
+    joints: NDArray[np.float64] | None
+    joint_names: tuple[str, ...]
+    rotation: NDArray[np.float64] | None
+    pose_topic: str
+    frame_id: str
+    clock_offset_s: dict[str, float]
+    stamps: str
+    notes: list[str] = field(default_factory=list)
+    topics: dict[str, tuple[str, int]] = field(default_factory=dict)
+
+
+def _stamp(msg) -> float | None:
+    header = getattr(msg, "header", None)
+    if header is None:
+        return None
+    return float(header.stamp.sec) + 1e-9 * float(header.stamp.nanosec)
+
+
+def _field(msg, dotted: str):
+    value = msg
+    for part in dotted.split("."):
+        value = getattr(value, part)
+    return value
+
+
+def _frame(name: str) -> str:
+    return name.strip().lstrip("/")
+
+
+def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str, t: NDArray[np.float64]):
+    """The rotation base <- sensor at the times ``t`` through the tf tree (dynamic edges slerped)."""
+    from scipy.spatial.transform import Rotation, Slerp
+
+    parent = {child: par for par, child in list(edges) + list(static)}
+    chain, frame = [], sensor
+    while frame != base:
+        if frame not in parent or len(chain) > 64:
+            known = sorted(set(parent) | set(parent.values()))
+            raise LogFormatError(f"{path}: /tf holds no chain of transforms from {base} to {sensor} (stuck at "
+                                 f"{frame}); the frames in /tf and /tf_static are {', '.join(known) or 'none'}. Fix: "
+                                 "--tf BASE,SENSOR with two of them.")
+        chain.append((parent[frame], frame))
+        frame = parent[frame]
+    R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
+    for edge in reversed(chain):  # base -> ... -> sensor
+        if edge in static:
+            Re = np.broadcast_to(Rotation.from_quat(static[edge]).as_matrix(), (len(t), 3, 3))
+        else:
+            times, quats = edges[edge]
+            order = np.argsort(times, kind="stable")
+            times, quats = times[order], quats[order]
+            keep = np.concatenate([[True], np.diff(times) > 0])
+            times, quats = times[keep], quats[keep]
+            if len(times) == 1:
+                Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
+            else:
+                Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
+        R = R @ Re
+    return R
+
+
+def read_bag(
+    path: str | Path,
+    *,
+    wrench_topic: str | None = None,
+    raw_topic: str | None = None,
+    raw_field: str = "data",
+    joint_topic: str | None = None,
+    tf: tuple[str, str] | None = None,
+    stamps: str = "header",
+    max_samples: int = DEFAULT_MAX_SAMPLES,
+) -> BagRecording:
+    """Read the sensor stream of a bag and the pose at each sensor stamp (see the module docstring).
+
+    Parameters
+    ----------
+    path : str or path
+        A ROS 1 ``.bag``, or a rosbag2 folder (sqlite3 or MCAP storage).
+    wrench_topic : str, optional
+        The sensor's wrench topic; default the bag's only ``WrenchStamped`` / ``Wrench`` topic (unless
+        ``raw_topic`` is given).
+    raw_topic : str, optional
+        A topic of raw gauge readings instead of a wrench.
+    raw_field : str, default="data"
+        The array field of the raw topic's messages (dotted for a nested field).
+    joint_topic : str, optional
+        The joint states; default the bag's only ``JointState`` topic (unless ``tf`` is given).
+    tf : (str, str), optional
+        ``(base_frame, sensor_frame)``: take the sensor's orientation from ``/tf`` and ``/tf_static`` instead
+        of joints.
+    stamps : {"header", "receive"}
+        Which time each message carries (see the module docstring).
+    max_samples : int
+        Most samples kept per topic (memory stays bounded; longer topics are reduced on the fly).
+
+    Returns
+    -------
+    BagRecording
+
+    Raises
+    ------
+    LogFormatError
+        Not a bag, truncated or damaged; a missing topic or one of the wrong type (the bag's topics are listed);
+        a raw field that is not a numeric array; clocks that do not overlap; no sensor sample within the pose
+        stream.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> bag = pathlib.Path(tempfile.mkdtemp()) / "rec"
+    >>> t = np.arange(0.0, 1.0, 0.01)
+    >>> _ = write_bag(bag, "sqlite3", sensor_time=t, reading=np.ones((100, 6)), pose_time=t[::2],
+    ...               joints=np.c_[t[::2], -t[::2]], joint_names=["j1", "j2"])
+    >>> rec = read_bag(bag)
+    >>> rec.kind, rec.reading.shape, rec.joint_names, round(float(rec.joints[51, 0]), 6)
+    ('wrench', (99, 6), ('j1', 'j2'), 0.51)
+    """
+    path = Path(path)
+    if stamps not in ("header", "receive"):
+        raise LogFormatError(f"stamps must be 'header' or 'receive'; got {stamps!r}.")
+    if int(max_samples) != max_samples or max_samples < 10:
+        raise LogFormatError(f"max_samples must be an integer >= 10; got {max_samples!r}.")
+    if wrench_topic is not None and raw_topic is not None:
+        raise LogFormatError("give the wrench topic or the raw-gauge topic, not both.")
+    with _Reader(path) as r:
+        topics = r.topics()
+        if raw_topic is not None:
+            sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "--raw-topic")
+            kind = "raw"
+        else:
+            sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "--wrench-topic")
+            kind = "wrench"
+        if tf is None:
+            pose_topics = [_choose_topic(path, topics, joint_topic, (JOINT_STATE_TYPE,), "joint states",
+                                         "--joint-topic")]
+        else:
+            pose_topics = [t for t in ("/tf", "/tf_static") if t in topics]
+            if "/tf" not in pose_topics and "/tf_static" not in pose_topics:
+                raise LogFormatError(f"{path}: no topic /tf or /tf_static (--tf {','.join(tf)}); the bag has "
+                                     f"{_listing(topics)}.")
+            for t in pose_topics:
+                if topics[t][0] != TF_TYPE:
+                    raise LogFormatError(f"{path}: topic {t} holds {topics[t][0]}, not {TF_TYPE}.")
+        streams = {sensor: _Stream(topics[sensor][1], max_samples, average=True)}
+        if tf is None:
+            streams[pose_topics[0]] = _Stream(topics[pose_topics[0]][1], max_samples, average=False)
+        tf_block = max(1, math.ceil(topics.get("/tf", ("", 0))[1] / max_samples))
+        edges: dict[tuple[str, str], tuple[list, list]] = {}
+        static: dict[tuple[str, str], NDArray] = {}
+        stamped: set[str] = set()
+        joint_names: tuple[str, ...] | None = None
+        frame_id, n_tf = "", 0
+        width = None
+        wanted = [c for c in r.reader.connections if c.topic in set(streams) | set(pose_topics)]
+        try:
+            for conn, receive_ns, data in r.reader.messages(connections=wanted):
+                topic = conn.topic
+                msg = r.reader.deserialize(data, conn.msgtype)
+                receive = receive_ns * 1e-9
+                if topic in ("/tf", "/tf_static") and tf is not None:
+                    n_tf += 1
+                    if topic == "/tf" and (n_tf - 1) % tf_block:
+                        continue
+                    for tr in msg.transforms:
+                        key = (_frame(tr.header.frame_id), _frame(tr.child_frame_id))
+                        q = tr.transform.rotation
+                        quat = np.array([q.x, q.y, q.z, q.w])
+                        if topic == "/tf_static":
+                            static[key] = quat
+                        else:
+                            t = _stamp(tr) if stamps == "header" else receive
+                            times, quats = edges.setdefault(key, ([], []))
+                            times.append(t)
+                            quats.append(quat)
+                    continue
+                header = _stamp(msg)
+                if header is not None:
+                    stamped.add(topic)
+                t = header if (stamps == "header" and header is not None) else receive
+                if topic == sensor:
+                    if kind == "wrench":
+                        w = getattr(msg, "wrench", msg)
+                        value = np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
+                        if not frame_id and header is not None:
+                            frame_id = str(msg.header.frame_id)
+                    else:
+                        try:
+                            value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
+                        except AttributeError:
+                            fields = [f for f in getattr(msg, "__dataclass_fields__", {})]
+                            raise LogFormatError(f"{path}: topic {sensor} ({conn.msgtype}) has no field {raw_field!r}; "
+                                                 f"its fields are {', '.join(fields)}. Fix: --raw-field NAME.") \
+                                from None
+                        except (TypeError, ValueError):
+                            raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} ({conn.msgtype}) "
+                                                 "is not an array of numbers (the raw gauges).") from None
+                        if width is None:
+                            width = len(value)
+                            if width < 3:
+                                raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} holds {width} "
+                                                     "values; raw gauges are at least 3 channels.")
+                        elif len(value) != width:
+                            raise LogFormatError(f"{path}: topic {sensor} changes from {width} to {len(value)} raw "
+                                                 f"values at {t:.9g} s; one sensor has a fixed channel count.")
+                    streams[sensor].add(t, receive, value)
+                else:  # joint states
+                    names = tuple(msg.name)
+                    position = np.asarray(msg.position, dtype=float)
+                    if joint_names is None:
+                        joint_names = names if names else tuple(f"joint{i + 1}" for i in range(len(position)))
+                    if len(position) != len(joint_names) or (names and names != joint_names):
+                        continue  # a message of another joint group (e.g. the gripper's) on the same topic
+                    streams[topic].add(t, receive, position)
+        except LogFormatError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
+            raise r.damaged(exc) from None
+    t_s, _, reading = streams[sensor].arrays()
+    notes = []
+    if streams[sensor].block > 1:
+        notes.append(f"{sensor}: {topics[sensor][1]} messages averaged in blocks of {streams[sensor].block} "
+                     f"(at most {max_samples} samples kept)")
+    if not len(t_s):
+        raise LogFormatError(f"{path}: topic {sensor} holds no messages; the bag has {_listing(topics)}.")
+    if not np.isfinite(reading).all():
+        i = int(np.flatnonzero(~np.isfinite(reading).all(axis=1))[0])
+        raise LogFormatError(f"{path}: topic {sensor} has a NaN or inf value at {t_s[i]:.9g} s.")
+    order = np.argsort(t_s, kind="stable")
+    t_s, reading = t_s[order], reading[order]
+    offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
+    for topic in stamped if stamps == "header" else ():
+        times, receive, _ = streams[topic].arrays() if topic in streams else ([], [], None)
+        if len(times):
+            offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
+    if tf is None:
+        pose_topic = pose_topics[0]
+        t_p, _, q = streams[pose_topic].arrays()
+        if not len(t_p):
+            raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
+        o = np.argsort(t_p, kind="stable")
+        t_p, q = t_p[o], q[o]
+        keep = np.concatenate([[True], np.diff(t_p) > 0])
+        t_p, q = t_p[keep], q[keep]
+    else:
+        pose_topic = "/tf"
+        if not edges and not static:
+            raise LogFormatError(f"{path}: /tf holds no transforms.")
+        t_p = np.concatenate([np.asarray(v[0]) for v in edges.values()]) if edges else t_s[[0, -1]]
+    if stamps == "header" and sensor in offsets and pose_topic in offsets:
+        apart = offsets[sensor] - offsets[pose_topic]
+        if abs(apart) > CLOCK_OFFSET_TOLERANCE_S:
+            notes.append(f"clock offset between {sensor} and {pose_topic}: their header stamps differ by "
+                         f"{apart:+.3g} s against the recorder's receive times ({sensor}'s clock "
+                         f"{'behind' if apart > 0 else 'ahead'}); if that is the clocks, not transport latency, use "
+                         "--stamps receive")
+    overlap = (t_s >= t_p.min()) & (t_s <= t_p.max())
+    if not overlap.any():
+        both = sensor in offsets and pose_topic in offsets
+        detail = (f"; against the recorder's receive times their clocks are {offsets[sensor] - offsets[pose_topic]:+.6g}"
+                  " s apart") if both else ""
+        raise LogFormatError(
+            f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {pose_topic} "
+            f"{t_p.min():.6f} to {t_p.max():.6f} s, no overlap{detail}. Fix: --stamps receive (the recorder's clock "
+            "for both), or set the sensor driver's clock.")
+    if not overlap.all():
+        notes.append(f"{int((~overlap).sum())} of {len(t_s)} {sensor} samples lie outside {pose_topic}'s span and "
+                     "were dropped")
+        t_s, reading = t_s[overlap], reading[overlap]
+    joints = rotation = None
+    names: tuple[str, ...] = ()
+    if tf is None:
+        joints = np.column_stack([np.interp(t_s, t_p, q[:, j]) for j in range(q.shape[1])])
+        names = joint_names or ()
+    else:
+        edge_arrays = {k: (np.asarray(v[0]), np.asarray(v[1])) for k, v in edges.items()}
+        rotation = _tf_rotations(path, edge_arrays, static, _frame(tf[0]), _frame(tf[1]), t_s)
+    return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
+                        joint_names=names, rotation=rotation, pose_topic=pose_topic, frame_id=frame_id,
+                        clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)
+
+
+def write_bag(
+    path: str | Path,
+    storage: str,
+    *,
+    sensor_time: ArrayLike,
+    reading: ArrayLike,
+    pose_time: ArrayLike,
+    joints: ArrayLike | None = None,
+    joint_names: tuple[str, ...] | list[str] = (),
+    rotations: ArrayLike | None = None,
+    tf_frames: tuple[str, str] = ("base_link", "ft_sensor"),
+    raw: bool = False,
+    sensor_topic: str | None = None,
+    joint_topic: str = "/joint_states",
+    frame_id: str = "ft_sensor",
+    sensor_clock_offset_s: float = 0.0,
+    latency_s: float = 0.001,
+) -> Path:
+    """Write a recording as a ROS bag, as a robot would record it (for tests, examples and the README).
+
+    Parameters
+    ----------
+    path : str or path
+        The bag to create (a rosbag2 folder, or a ``.bag`` file for ``storage="ros1"``); must not exist.
+    storage : {"sqlite3", "mcap", "ros1"}
+    sensor_time, reading : array-like of shape (n,), (n, m)
+        The sensor's stamps [s] and readings: a wrench (``geometry_msgs/WrenchStamped``) or, with ``raw``,
+        raw gauges (``std_msgs/Float64MultiArray``, field ``data``).
+    pose_time : array-like of shape (k,)
+    joints : array-like of shape (k, n_joints), optional
+        Joint states (``sensor_msgs/JointState`` on ``joint_topic``) with ``joint_names``.
+    rotations : array-like of shape (k, 3, 3), optional
+        The sensor's orientation, written to ``/tf`` as ``tf_frames`` = (base, sensor) through an intermediate
+        ``flange`` frame whose static transform is in ``/tf_static``.
+    sensor_topic : str, optional
+        Default ``/ft_sensor/wrench`` (``/ft_sensor/raw`` with ``raw``).
+    sensor_clock_offset_s : float
+        The sensor's header stamps run this far ahead of the recorder's clock (a driver stamping with its own
+        clock).
+    latency_s : float
+        Each message is received this long after its stamp.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    check_rosbags()
+    from scipy.spatial.transform import Rotation
+
+    if storage not in BAG_STORAGES:
+        raise LogFormatError(f"storage must be one of {', '.join(BAG_STORAGES)}; got {storage!r}.")
+    path = Path(path)
+    if path.exists():
+        raise LogFormatError(f"{path} exists; a bag is never overwritten. Choose another path.")
+    t_s = np.asarray(sensor_time, dtype=float)
+    values = np.asarray(reading, dtype=float)
+    t_p = np.asarray(pose_time, dtype=float)
+    sensor_topic = sensor_topic or ("/ft_sensor/raw" if raw else "/ft_sensor/wrench")
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = storage == "ros1"
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    if "tf2_msgs/msg/TFMessage" not in store.types:  # rosbags' ROS 1 store lacks it
+        from rosbags.typesys import get_types_from_msg
+
+        store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
+    T = store.types
+    Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
+    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+
+    def header(t: float, frame: str):
+        sec = math.floor(t)
+        kwargs = {"seq": 0} if ros1 else {}
+        return Header(stamp=Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000), frame_id=frame,
+                      **kwargs)
+
+    def stream(template, typ: str, times: NDArray, values: NDArray, stamped: bool, offset_s: float = 0.0):
+        """The serialized messages of a stream: ``template`` serialized once with sentinel numbers, then the
+        stamps and values written into copies of its bytes (the layout is fixed: same names, same counts)."""
+        data = np.frombuffer(bytes(serialize(template, typ)), dtype=np.uint8)
+        width = values.shape[1]
+        at = bytes(data).find(_SENTINELS[:width].astype("<f8").tobytes())
+        out = np.tile(data, (len(times), 1))
+        out[:, at:at + 8 * width] = np.ascontiguousarray(values, dtype="<f8").view(np.uint8).reshape(len(times), -1)
+        if stamped:
+            st = bytes(data).find(_STAMP_SENTINEL)
+            stamp = times + offset_s
+            sec = np.floor(stamp)
+            nsec = np.clip(np.round((stamp - sec) * 1e9), 0, 999_999_999)
+            both = np.empty(len(times), dtype=[("sec", "<i4"), ("nsec", "<u4")])
+            both["sec"], both["nsec"] = sec, nsec
+            out[:, st:st + 8] = both.view(np.uint8).reshape(len(times), 8)
+        return out
+
+    sentinel_header = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=frame_id,
+                             **({"seq": 0} if ros1 else {}))
+    streams = []  # (topic, type, receive times, serialized rows)
+    if raw:
+        Multi, Layout = T["std_msgs/msg/Float64MultiArray"], T["std_msgs/msg/MultiArrayLayout"]
+        m = values.shape[1]
+        template = Multi(layout=Layout(dim=[], data_offset=0), data=_SENTINELS[:m].copy())
+        streams.append((sensor_topic, "std_msgs/msg/Float64MultiArray", t_s + latency_s,
+                        stream(template, "std_msgs/msg/Float64MultiArray", t_s, values, False)))
+    else:
+        Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
+            T["geometry_msgs/msg/WrenchStamped"]
+        v = _SENTINELS
+        template = Stamped(header=sentinel_header, wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
+                                                                torque=Vector3(x=v[3], y=v[4], z=v[5])))
+        streams.append((sensor_topic, "geometry_msgs/msg/WrenchStamped", t_s + latency_s,
+                        stream(template, "geometry_msgs/msg/WrenchStamped", t_s, values, True, sensor_clock_offset_s)))
+    if joints is not None:
+        q = np.asarray(joints, dtype=float)
+        JointState = T["sensor_msgs/msg/JointState"]
+        empty = np.zeros(0)
+        template = JointState(header=Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id="",
+                                            **({"seq": 0} if ros1 else {})),
+                              name=list(joint_names), position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
+                              effort=empty)
+        streams.append((joint_topic, "sensor_msgs/msg/JointState", t_p + latency_s,
+                        stream(template, "sensor_msgs/msg/JointState", t_p, q, True)))
+    statics = []
+    if rotations is not None:
+        TF, TS, Tr = T["tf2_msgs/msg/TFMessage"], T["geometry_msgs/msg/TransformStamped"], T["geometry_msgs/msg/Transform"]
+        Q, V = T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Vector3"]
+        flange_to_sensor = Rotation.from_euler("z", 90, degrees=True)  # a fixed adapter in /tf_static
+        base, sensor_frame = tf_frames
+        to_flange = Rotation.from_matrix(np.asarray(rotations, dtype=float)) * flange_to_sensor.inv()
+
+        def transform(head, parent_child: tuple[str, str], quat) -> object:
+            x, y, z, w = (float(c) for c in quat)
+            return TS(header=head, child_frame_id=parent_child[1],
+                      transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
+        head = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=base, **({"seq": 0} if ros1 else {}))
+        template = TF(transforms=[transform(head, (base, "flange"), _SENTINELS[:4])])
+        streams.append(("/tf", "tf2_msgs/msg/TFMessage", t_p + latency_s,
+                        stream(template, "tf2_msgs/msg/TFMessage", t_p, to_flange.as_quat(), True)))
+        static = TF(transforms=[transform(header(float(t_p[0]), "flange"), ("flange", sensor_frame),
+                                          flange_to_sensor.as_quat())])
+        statics.append(("/tf_static", "tf2_msgs/msg/TFMessage", float(t_p[0]),
+                        np.frombuffer(bytes(serialize(static, "tf2_msgs/msg/TFMessage")), dtype=np.uint8)))
+    if ros1:
+        from rosbags.rosbag1 import Writer as Writer1
+
+        writer = Writer1(path)
+    else:
+        from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
+
+        writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap"
+                         else StoragePlugin.SQLITE3)
+    receive = np.concatenate([r for _, _, r, _ in streams])
+    which = np.concatenate([np.full(len(r), k) for k, (_, _, r, _) in enumerate(streams)])
+    row = np.concatenate([np.arange(len(r)) for _, _, r, _ in streams])
+    order = np.argsort(receive, kind="stable")
+    with writer:
+        connections = [writer.add_connection(topic, typ, typestore=store) for topic, typ, _, _ in statics + streams]
+        for k, (_, _, t, data) in enumerate(statics):
+            writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
+        base_k = len(statics)
+        ns = np.round(receive * 1e9).astype(np.int64)
+        for i in order:
+            k = int(which[i])
+            writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
+    return path

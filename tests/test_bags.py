@@ -1,0 +1,191 @@
+"""ROS bags in (rosbag2 sqlite3 and MCAP, ROS 1): bags written here with ``rosbags`` from the virtual experiment
+(a known tool, noise, settling transients, moves between poses, the sensor and the joints at different rates);
+``identify-load`` recovers the tool, ``prepare`` + ``fit`` reach the calibration of the run logs, and bad bags
+are one line each with nothing written."""
+
+from __future__ import annotations
+
+import json
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import ftcal
+from ftcal import LogFormatError, ToolLoad
+from ftcal.cli import main
+from ftcal.experiment._virtual_recording import continuous_recording
+from ftcal.io._bags import bag_topics, read_bag, write_bag
+
+TOOL = ToolLoad(mass=1.1, center_of_mass=np.array([0.01, 0.02, 0.07]),
+                bias=np.array([2.0, -1.0, 0.5, 0.04, 0.02, -0.03]))
+NOISE = np.array([0.2, 0.2, 0.2, 0.008, 0.008, 0.008])
+T0 = 1.7e9  # a ROS clock
+
+
+@pytest.fixture(scope="module")
+def robot_poses():
+    robot = ftcal.load_robot("kuka_iiwa14")
+    plan = ftcal.plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0)
+    return robot, plan.q
+
+
+def _tool_recording(robot, q, seed, **kwargs):
+    R = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
+    options = dict(still_s=4.0, move_s=2.0, sensor_rate_hz=100.0, pose_rate_hz=40.0, settle_amplitude=1.0,
+                   settle_tau_s=0.5, noise=NOISE, start_time_s=T0, random_state=seed)
+    options.update(kwargs)
+    return continuous_recording(TOOL.gravity_wrench(R), joints=q, **options)
+
+
+def _tool_bag(path, storage, robot, q, seed, **write):
+    rec = _tool_recording(robot, q, seed)
+    return write_bag(path, storage, sensor_time=rec.sensor_time, reading=rec.reading, pose_time=rec.pose_time,
+                     joints=rec.joints, joint_names=robot.joint_names, **write)
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap", "ros1"])
+def test_identify_load_from_a_bag_recovers_the_tool_within_its_standard_errors(tmp_path, capsys, robot_poses,
+                                                                               storage):
+    robot, q = robot_poses
+    bag = _tool_bag(tmp_path / ("rec.bag" if storage == "ros1" else "rec"), storage, robot, q, seed=1)
+    assert main(["identify-load", str(bag), "--robot", "kuka_iiwa14", "--out", str(tmp_path / "t")]) == 0
+    err = capsys.readouterr().err
+    assert f"found {len(q)} still poses, kept {len(q)}, rejected 0" in err
+    tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
+    assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
+    assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 4 * tool.center_of_mass_std_error)
+    assert np.all(np.abs(tool.bias - TOOL.bias) <= 4 * tool.bias_std_error)
+    d = json.loads((tmp_path / "t" / "tool.tool.json").read_text())
+    assert len(d["pose_time_s"]) == len(q) and min(d["pose_time_s"]) > T0  # each still pose's bag stamp
+
+
+def test_identify_load_takes_the_orientation_from_tf_and_raw_gauges_through_a_model(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=2)
+    R_at_pose_times = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    gain = np.diag([50.0, 50.0, 50.0, 2000.0, 2000.0, 2000.0])  # raw units per N and per N·m
+    raw = rec.reading @ gain.T
+    bag = write_bag(tmp_path / "raw.bag", "ros1", sensor_time=rec.sensor_time, reading=raw, raw=True,
+                    pose_time=rec.pose_time, rotations=R_at_pose_times, tf_frames=("base_link", "ft_sensor"))
+    data = ftcal.CalibrationDataset(raw=np.random.default_rng(0).normal(size=(60, 6)) @ gain.T, wrench=np.zeros((60, 6)))
+    data.wrench = data.raw @ np.linalg.inv(gain).T
+    model = ftcal.LinearCalibrator().fit(data.raw, data.wrench)
+    ftcal.save_model(model, tmp_path / "gain.model.npz")
+    assert main(["identify-load", str(bag), "--tf", "base_link,ft_sensor", "--raw-topic", "/ft_sensor/raw",
+                 "--model", str(tmp_path / "gain.model.npz"), "--out", str(tmp_path / "t"), "-q"]) == 0
+    tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
+    assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
+    assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 4 * tool.center_of_mass_std_error)
+
+
+def test_prepare_and_fit_from_bags_reach_the_calibration_of_the_run_logs(tmp_path, capsys):
+    logs = tmp_path / "sim"
+    assert main(["simulate", "experiment", "--subdivisions", "0", "--bag", "mcap", "--seed", "3", "--out", str(logs),
+                 "-q"]) == 0
+    assert main(["prepare", str(logs / "bags"), "--raw-topic", "/ft_sensor/raw", "--mass", "2.0",
+                 "--out", str(tmp_path / "data_bag")]) == 0
+    err = capsys.readouterr().err
+    assert err.count("found 11 still poses, kept 11") == 14
+    assert main(["prepare", str(logs), "--mass", "2.0", "--out", str(tmp_path / "data_log"), "-q"]) == 0
+    for d in ("bag", "log"):
+        assert main(["fit", str(tmp_path / f"data_{d}" / "dataset.csv"), "--model", "linear",
+                     "--out", str(tmp_path / f"m_{d}"), "-q"]) == 0
+    reference = ftcal.CalibrationDataset.load(tmp_path / "data_log" / "dataset.csv")
+    from_bag = ftcal.load_model(tmp_path / "m_bag" / "linear.model.npz").predict(reference.raw)
+    from_log = ftcal.load_model(tmp_path / "m_log" / "linear.model.npz").predict(reference.raw)
+    # the two calibrations differ by far less than either's error against the reference wrenches
+    fit_error = np.sqrt(np.mean((from_log - reference.wrench) ** 2, axis=0))
+    assert np.all(np.sqrt(np.mean((from_bag - from_log) ** 2, axis=0)) <= 0.1 * fit_error)
+
+
+def _one_line_error(argv, capsys, out):
+    capsys.readouterr()
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("ftcal: error: "), err
+    assert not out.exists()
+    return err
+
+
+def test_a_missing_topic_or_a_wrong_type_names_the_topics_present(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    bag = _tool_bag(tmp_path / "rec", "sqlite3", robot, q[:5], seed=4)
+    out = tmp_path / "t"
+    err = _one_line_error(["identify-load", str(bag), "--wrench-topic", "/wrench", "--out", str(out)], capsys, out)
+    assert "no topic /wrench" in err and "/ft_sensor/wrench (geometry_msgs/msg/WrenchStamped" in err
+    assert "/joint_states (sensor_msgs/msg/JointState" in err
+    err = _one_line_error(["identify-load", str(bag), "--wrench-topic", "/joint_states", "--out", str(out)], capsys,
+                          out)
+    assert "topic /joint_states holds sensor_msgs/msg/JointState, not geometry_msgs/msg/WrenchStamped" in err
+    err = _one_line_error(["identify-load", str(bag), "--tf", "base_link,ft_sensor", "--out", str(out)], capsys, out)
+    assert "no topic /tf or /tf_static" in err
+
+
+def test_a_bag_without_a_still_segment_is_refused(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    t = np.arange(0.0, 10.0, 0.02)
+    sweep = q[0] + np.outer(t / 10.0, q[1] - q[0])  # never still
+    bag = write_bag(tmp_path / "moving", "mcap", sensor_time=T0 + t, reading=np.zeros((len(t), 6)),
+                    pose_time=T0 + t, joints=sweep, joint_names=robot.joint_names)
+    out = tmp_path / "t"
+    err = _one_line_error(["identify-load", str(bag), "--out", str(out)], capsys, out)
+    assert "no still pose in the" in err and str(bag) in err
+
+
+def test_a_clock_offset_is_named_and_clocks_apart_are_refused_with_the_fix(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    shifted = _tool_bag(tmp_path / "shifted", "mcap", robot, q, seed=5, sensor_clock_offset_s=0.3)
+    assert main(["identify-load", str(shifted), "--out", str(tmp_path / "s")]) == 0
+    err = capsys.readouterr().err
+    assert "clock offset between /ft_sensor/wrench and /joint_states" in err and "-0.3 s" in err
+    apart = _tool_bag(tmp_path / "apart", "mcap", robot, q, seed=5, sensor_clock_offset_s=-T0 + 100.0)  # from boot
+    out = tmp_path / "t"
+    err = _one_line_error(["identify-load", str(apart), "--out", str(out)], capsys, out)
+    assert "clocks apart" in err and "Fix: --stamps receive" in err
+    assert main(["identify-load", str(apart), "--stamps", "receive", "--out", str(out), "-q"]) == 0
+    tool = ToolLoad.load(out / "tool.tool.json")
+    assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
+
+
+@pytest.mark.parametrize("storage", ["sqlite3", "mcap", "ros1"])
+def test_a_truncated_bag_is_one_line_and_nothing_is_written(tmp_path, capsys, robot_poses, storage):
+    robot, q = robot_poses
+    bag = _tool_bag(tmp_path / ("rec.bag" if storage == "ros1" else "rec"), storage, robot, q[:4], seed=6)
+    data = bag if storage == "ros1" else next(p for p in bag.iterdir() if p.suffix in (".db3", ".mcap"))
+    size = data.stat().st_size
+    with open(data, "r+b") as f:
+        f.truncate(size // 2)
+    out = tmp_path / "t"
+    err = _one_line_error(["identify-load", str(bag), "--out", str(out)], capsys, out)
+    assert str(bag) in err and "cannot read the bag" in err and "truncated or damaged" in err
+
+
+def _big_bag(path, n, storage):
+    t = T0 + np.arange(n) * 1e-3  # a 1 kHz sensor
+    return write_bag(path, storage, sensor_time=t, reading=np.zeros((n, 6)), pose_time=t[::10],
+                     joints=np.zeros((len(t[::10]), 7)), joint_names=[f"j{k}" for k in range(7)])
+
+
+def _peak_while_reading(bag):
+    tracemalloc.start()
+    try:
+        rec = read_bag(bag, max_samples=300)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    return rec, peak
+
+
+def test_memory_stays_bounded_whatever_the_bag_size(tmp_path):
+    small, large = _big_bag(tmp_path / "small", 2_000, "sqlite3"), _big_bag(tmp_path / "large", 20_000, "sqlite3")
+    rec_small, peak_small = _peak_while_reading(small)
+    rec_large, peak_large = _peak_while_reading(large)
+    assert bag_topics(large)["/ft_sensor/wrench"][1] == 20_000
+    assert len(rec_large.time) <= 300 + 1 and len(rec_small.time) <= 300 + 1  # block means, not every message
+    assert any("averaged in blocks of 67" in n for n in rec_large.notes)
+    # ten times the messages, not ten times the memory (a whole-bag reader holds every message: ~10 MB here)
+    assert peak_large <= 1.2 * peak_small + 200_000
+    # MCAP is read a chunk at a time: its peak is the chunk buffer's (~4 MB), not the bag's
+    _, peak_mcap = _peak_while_reading(_big_bag(tmp_path / "mcap", 20_000, "mcap"))
+    assert peak_mcap <= 6_000_000
