@@ -87,10 +87,11 @@ def test_report_page_is_self_contained(fitted):
     assert not re.search(r"(src|href)\s*=\s*[\"'](?!data:)", page)  # nothing to fetch
     assert "http://" not in page and "https://" not in page
     images = re.findall(r'src="data:image/png;base64,([^"]+)"', page)
-    assert len(images) == 2
+    assert len(images) == 3  # error against applied load, against load magnitude, against load direction
     assert all(base64.b64decode(i).startswith(b"\x89PNG\r\n\x1a\n") for i in images)
     for heading in ("Held-out accuracy per axis", "Model choice", "Calibrated range", "Frames and units",
-                    "Residuals against load magnitude", "Residuals against load direction"):
+                    "Held-out error against applied load", "Held-out error against load magnitude",
+                    "Held-out error against load direction", "Applied against indicated load"):
         assert heading in page
 
 

@@ -108,12 +108,20 @@ def run(args: argparse.Namespace) -> int:
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     from ..evaluation._calibration_report import file_sha256
-    from ._report import report_file_names, write_report
+    from ._output_set import OutputSet
+    from ._report import prepare_report, report_file_names, write_report
 
     names = [model_file_name(name), f"{name}.fit.json"] + (report_file_names(name) if args.report else [])
     plan = OutputPlan(args.out, names, args.force)
     tare = _parse_tare(args.tare)
+    report_given = [o for o, given in (("--tool", args.tool), ("--rated", args.rated), ("--spec", args.spec),
+                                       ("--conditions", args.conditions), ("--no-baselines", args.no_baselines))
+                    if given]
+    if report_given and not args.report:
+        raise CliError(f"{report_given[0]} is an option of the report; add --report (or drop {report_given[0]})")
     data = load_dataset_from_args(args, args.dataset, "training dataset")
+    dataset_sha256 = file_sha256(args.dataset)  # the identity of the data, taken once (fit.json and report agree)
+    settings = prepare_report(args, data, args.dataset) if args.report else None  # every check before any work
     if tare is not None and tare.size != data.n_channels:
         raise CliError(f"--tare has {tare.size} values but {args.dataset} has {data.n_channels} raw channels")
     params = dict(args.param)
@@ -123,8 +131,9 @@ def run(args: argparse.Namespace) -> int:
     if tare is not None:
         params["zero_reading"] = tare
     known = ftcal.calibrator_parameters(args.model)
-    if args.jobs is not None and "n_jobs" not in known:
-        raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does); drop --jobs")
+    if args.jobs is not None and "n_jobs" not in known and not args.report:
+        raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does, and the "
+                       "report's stock baselines with --report); drop --jobs")
     if "n_jobs" in known and "n_jobs" not in params:
         params["n_jobs"] = args.jobs or -1
     unknown = sorted(set(params) - set(known))
@@ -160,8 +169,6 @@ def run(args: argparse.Namespace) -> int:
     fit_with_progress(estimator, X, data.wrench, console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
     report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_)
-    with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
-        ftcal.save_model(estimator, tmp, overwrite=True)
     summary = {
         "model": args.model,
         "schedule": args.schedule,
@@ -170,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         "seed": args.seed,
         "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
         "dataset": str(args.dataset),
-        "dataset_sha256": file_sha256(args.dataset),  # lets 'ftcal evaluate' tell training data from held-out data
+        "dataset_sha256": dataset_sha256,  # lets 'ftcal evaluate' tell training data from held-out data
         "n_samples": data.n_samples,
         "n_channels": data.n_channels,
         "alpha": estimator.alpha_,
@@ -194,10 +201,17 @@ def run(args: argparse.Namespace) -> int:
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.cv_results_
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
-    with plan.writing(f"{name}.fit.json") as tmp:
-        write_json(tmp, summary)
-    if args.report:
-        write_report(plan, name, estimator, data, args, plan.path(model_file_name(name)), args.dataset, console)
+    # every output of this run is written into a private folder and moved into place as one set at the end: a
+    # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote
+    with OutputSet(plan) as out:
+        ftcal.save_model(estimator, out.path(model_file_name(name)), overwrite=True)
+        summary["model_sha256"] = out.sha256(model_file_name(name))
+        write_json(out.path(f"{name}.fit.json"), summary)
+        if args.report:
+            write_report(out, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
+                         model_sha256=summary["model_sha256"], dataset_path=args.dataset,
+                         dataset_sha256=dataset_sha256, console=console)
+        out.commit()
     console.info(
         f"done in {seconds:.1f} s: training RMSE {report.rmse:.4g} N (torque-scaled, alpha={estimator.alpha_:.4g}); "
         f"model -> {plan.path(model_file_name(name))}"

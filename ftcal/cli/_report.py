@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import json
+import re
+import shlex
 import sys
+from pathlib import Path
 
 import numpy as np
 
@@ -14,27 +18,44 @@ from ._data_options import add_dataset_options, load_dataset_from_args
 EXAMPLE = """\
 examples:
   ftcal report models/linear.model.npz data/dataset.csv --out report
+  ftcal report models/linear.model.npz data.csv --rated Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20 --spec 1%FS
   ftcal report models/auto.model.npz data.mat --torque-unit N.mm --sensor "FT-1234" --tool tool/tool.tool.json
-  chromium --headless --no-sandbox --print-to-pdf=report/linear.report.pdf report/linear.report.html
+  ftcal report m.model.npz data.csv --spec 1%FS,Fz=0.5%FS --operator "A. Tester" --recalibration-interval "12 months"
+  chromium --headless --no-sandbox --no-pdf-header-footer --print-to-pdf=report/linear.report.pdf report/linear.report.html
 
-writes DIR/NAME.report.html (open it in any browser; no network needed, pictures inline) and
-DIR/NAME.report.json (the same facts). Held-out accuracy per axis comes from grouped
-cross-validation of the model's settings (whole groups held out when the dataset has a group
-column), beside the stock scikit-learn baselines on the same folds: this refits the model K times.
+writes DIR/NAME.report.html (open it in any browser; no network needed, pictures inline; it prints to a
+multi-page PDF with page numbers), DIR/NAME.report.json (the same facts) and DIR/NAME.report.csv (every
+held-out load case, applied against indicated, worst first), as one set. The first page is the summary:
+U95 per axis in % of full scale (the rated capacity of --rated, else the largest load of the data), PASS or
+FAIL against --spec, the comparison with the best stock model, and warnings. Held-out accuracy comes from
+grouped cross-validation of the model's settings (whole groups held out when the dataset has a group column),
+beside the stock scikit-learn baselines on the same folds (each within ftcal's memory limit and a work
+budget, else listed as skipped). Conditions and traceability (reference standard, procedure, operator,
+ambient temperature, recalibration interval) come from DATA.conditions.yaml / .json beside the dataset,
+--conditions FILE, or the options below.
 """
+
+#: Condition options of the report: option -> field of the conditions file.
+CONDITION_OPTIONS = {"--reference-standard": "reference_standard", "--procedure": "procedure",
+                     "--operator": "operator", "--calibration-date": "calibration_date",
+                     "--ambient-temperature": "ambient_temperature",
+                     "--recalibration-interval": "recalibration_interval"}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "report",
         help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per axis",
-        description="Write the calibration report of a model: held-out accuracy per axis in units and % of full "
-        "scale, 95 % expanded uncertainty, model choice beside the stock scikit-learn baselines, calibrated range.",
+        description="Write the calibration report of a model: a first-page summary with U95 per axis in % of "
+        "full scale and PASS/FAIL against a specification, the calibration matrix or model identity, the held-out "
+        "applied-vs-indicated table, model choice beside the stock scikit-learn baselines, calibrated range.",
         epilog=EXAMPLE,
     )
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
     p.add_argument("dataset", help="the calibration dataset the model was fitted on (.csv, .npz or .mat)")
     add_report_options(p)
+    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
+                   help="processes that fit the stock baselines' folds at once (default: every core)")
     add_dataset_options(p)
     add_output_options(p, "ftcal-report")
     add_run_options(p)
@@ -49,37 +70,190 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
                    help="leave the stock scikit-learn baselines out of the report's model-choice table")
     g.add_argument("--sensor", help="sensor name / serial number shown in the report (default: dataset meta 'sensor')")
     g.add_argument("--tool", type=existing_file, help="tool file of 'ftcal identify-load' to show in the report")
+    g.add_argument("--rated", metavar="Fx=500,...|FILE",
+                   help="rated capacity per axis in N and N.m (e.g. Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20), or a "
+                   "sensor file (YAML/JSON) with a 'rated' mapping: every %%FS figure is against it (default: the "
+                   "largest load of the data)")
+    g.add_argument("--spec", metavar="1%FS|Fx=1%FS,...",
+                   help="largest U95 allowed, in %% of full scale, for every axis (1%%FS) or per axis "
+                   "(1%%FS,Fz=0.5%%FS): each axis PASSES or FAILS against it on the first page")
+    g.add_argument("--conditions", type=existing_file, metavar="FILE",
+                   help="YAML/JSON file of the calibration's conditions and traceability (reference_standard, "
+                   "procedure, operator, calibration_date, ambient_temperature, recalibration_interval, "
+                   "recalibration_due, location, notes; also sensor, rated, spec); default DATA.conditions.yaml or "
+                   ".json beside the dataset when present")
+    for option, field in CONDITION_OPTIONS.items():
+        g.add_argument(option, metavar="TEXT", help=f"{field.replace('_', ' ')} (overrides the conditions file)")
 
 
 def report_file_names(label: str) -> list[str]:
-    return [f"{label}.report.html", f"{label}.report.json"]
+    return [f"{label}.report.html", f"{label}.report.json", f"{label}.report.csv"]
 
 
-def write_report(plan: OutputPlan, label: str, model, data, args: argparse.Namespace, model_path, dataset_path,
-                 console: Console) -> None:
-    """Compute the report of ``model`` on ``data`` and write its two planned files."""
-    from ..evaluation._calibration_report import calibration_certificate, render_report_html, report_json
+def _read_mapping(path: Path, what: str) -> dict:
+    """A small YAML or JSON file holding one mapping."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CliError(f"{what} {path}: cannot be read ({getattr(exc, 'strerror', None) or exc})") from None
+    if len(text) > 1_000_000:
+        raise CliError(f"{what} {path}: {len(text)} characters; a conditions or sensor file is a few lines")
+    if path.suffix.lower() == ".json":
+        try:
+            value = json.loads(text)
+        except (json.JSONDecodeError, RecursionError) as exc:
+            raise CliError(f"{what} {path}: not valid JSON ({exc})") from None
+    else:
+        try:
+            import yaml
+        except ImportError:
+            raise CliError(f"{what} {path}: reading YAML needs PyYAML (pip install pyyaml); or write the file as "
+                           ".json") from None
+        try:
+            value = yaml.safe_load(text)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            where = f" line {mark.line + 1}" if mark is not None else ""
+            raise CliError(f"{what} {path}{where}: not valid YAML ({getattr(exc, 'problem', None) or exc})") from None
+        except RecursionError:
+            raise CliError(f"{what} {path}: nested too deeply") from None
+    if not isinstance(value, dict):
+        raise CliError(f"{what} {path}: must hold a mapping of fields (field: value); got {type(value).__name__}")
+    return value
 
+
+def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np.ndarray:
+    """Per-axis values from ``Fx=500,Fy=...`` (or a mapping); with ``percent``, ``1%FS`` and a bare default."""
+    from ..io._readers import canonical_wrench_name
+
+    def number(raw, where: str) -> float:
+        t = str(raw).strip()
+        if percent:
+            t = re.sub(r"\s*%\s*(FS)?$", "", t, flags=re.IGNORECASE)
+        try:
+            value = float(t)
+        except ValueError:
+            value = float("nan")
+        if not np.isfinite(value) or value <= 0:
+            raise CliError(f"{option} {where}: {raw!r} is not a positive number"
+                           + (" (write it as 1%FS or 1)" if percent else " (in N or N.m)"))
+        return value
+
+    if isinstance(text_or_map, dict):
+        pairs, default = list(text_or_map.items()), None
+    else:
+        pairs, default = [], None
+        for part in [p for p in str(text_or_map).split(",") if p.strip()]:
+            if "=" in part:
+                key, _, val = part.partition("=")
+                pairs.append((key.strip(), val))
+            elif percent and default is None:
+                default = number(part, part.strip())
+            else:
+                raise CliError(f"{option} {text_or_map!r}: {part.strip()!r} names no axis; write AXIS=VALUE, e.g. "
+                               + ("Fx=1%FS (or one value first for every axis: 1%FS,Fz=0.5%FS)" if percent
+                                  else "Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20"))
+    lookup = {a.lower(): a for a in axes}
+    values: dict[str, float] = {}
+    for key, val in pairs:
+        name = lookup.get(str(key).strip().lower()) or lookup.get((canonical_wrench_name(str(key)) or "").lower())
+        if name is None:
+            raise CliError(f"{option}: axis {key!r} is not an output of this dataset; its axes are {', '.join(axes)}")
+        if name in values:
+            raise CliError(f"{option}: axis {name} is given twice")
+        values[name] = number(val, f"{name}")
+    missing = [a for a in axes if a not in values and default is None]
+    if missing:
+        raise CliError(f"{option}: no value for {', '.join(missing)}; give every axis of the dataset ("
+                       + ", ".join(axes) + ")" + (", or one value first for all (1%FS)" if percent else ""))
+    return np.array([values.get(a, default) for a in axes], dtype=float)
+
+
+def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
+    """Every check of the report's options and files, before any work: the keyword arguments of
+    :func:`~ftcal.evaluation._calibration_report.calibration_certificate` (tool, rated, spec, conditions...)."""
+    from ..evaluation._calibration_report import CONDITION_FIELDS, _axis_names, check_conditions
+
+    axes = _axis_names(data, data.wrench.shape[1])
+    conditions_file = args.conditions
+    if conditions_file is None and dataset_path is not None:
+        base = Path(dataset_path)
+        for suffix in (".conditions.yaml", ".conditions.yml", ".conditions.json"):
+            candidate = base.with_name(base.stem + suffix)
+            if candidate.is_file():
+                conditions_file = candidate
+                break
+    fields = {} if conditions_file is None else _read_mapping(Path(conditions_file), "--conditions")
+    sensor = args.sensor or fields.pop("sensor", None)
+    rated_field, spec_field = fields.pop("rated", None), fields.pop("spec", None)
+    unknown = sorted(set(fields) - set(CONDITION_FIELDS))
+    if unknown:
+        raise CliError(f"--conditions {conditions_file}: field {unknown[0]!r} is not known; the fields are "
+                       f"{', '.join(CONDITION_FIELDS)}, sensor, rated, spec")
+    for option, field in CONDITION_OPTIONS.items():
+        value = getattr(args, field)
+        if value is not None:
+            fields[field] = value
+    try:
+        conditions = check_conditions(fields)
+    except CalibrationInputError as exc:
+        raise CliError(f"{'--conditions ' + str(conditions_file) + ': ' if conditions_file else ''}{exc}") from None
+    rated = None
+    if args.rated is not None:
+        if "=" not in args.rated and Path(args.rated).is_file():
+            sensor_file = _read_mapping(Path(args.rated), "--rated")
+            if "rated" not in sensor_file:
+                raise CliError(f"--rated {args.rated}: the sensor file holds no 'rated' mapping (rated: {{Fx: 500, "
+                               "...}})")
+            rated = _axis_values(sensor_file["rated"], axes, f"--rated {args.rated}", percent=False)
+            sensor = sensor or sensor_file.get("sensor")
+        else:
+            rated = _axis_values(args.rated, axes, "--rated", percent=False)
+    elif rated_field is not None:
+        rated = _axis_values(rated_field, axes, f"--conditions {conditions_file}: rated", percent=False)
+    spec = None
+    if args.spec is not None:
+        spec = _axis_values(args.spec, axes, "--spec", percent=True)
+    elif spec_field is not None:
+        spec = _axis_values(spec_field if isinstance(spec_field, dict) else str(spec_field), axes,
+                            f"--conditions {conditions_file}: spec", percent=True)
     tool = None
     if args.tool is not None:
         from ..experiment._tool_load import ToolLoad
 
-        tool = ToolLoad.load(args.tool)
+        try:
+            tool = ToolLoad.load(args.tool)
+        except CalibrationInputError as exc:
+            raise CliError(f"--tool {exc}") from None
+    return {"tool": tool, "rated": rated, "spec": spec, "conditions": conditions,
+            "sensor": None if sensor is None else str(sensor)}
+
+
+def write_report(out, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
+                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console) -> None:
+    """Compute the report of ``model`` on ``data`` and write its three planned files into ``out`` (an
+    :class:`~ftcal.cli._output_set.OutputSet`; nothing is in place before its commit)."""
+    from ..evaluation._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
+                                                  report_json)
+
     console.info(f"report: cross-validating {type(model).__name__}"
                  f"{'' if args.no_baselines else ' and the stock baselines'} ({args.cv} folds) ...")
+    jobs = getattr(args, "jobs", None)
     try:
-        report = calibration_certificate(model, data, model_path=model_path, dataset_path=dataset_path,
-                                         sensor=args.sensor, cv=args.cv, baselines=not args.no_baselines, tool=tool,
-                                         random_state=getattr(args, "seed", 0))
+        report = calibration_certificate(model, data, model_path=model_path, model_sha256=model_sha256,
+                                         dataset_path=dataset_path, dataset_sha256=dataset_sha256,
+                                         cv=args.cv, baselines=not args.no_baselines,
+                                         random_state=getattr(args, "seed", 0), n_jobs=jobs or -1,
+                                         command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
     except CalibrationInputError as exc:
         raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
 
-    html_name, json_name = report_file_names(label)
-    with plan.writing(html_name) as tmp:
-        tmp.write_text(render_report_html(report), encoding="utf-8")
-    with plan.writing(json_name) as tmp:
-        tmp.write_text(report_json(report), encoding="utf-8")
-    console.info(f"report -> {plan.path(html_name)}")
+    html_name, json_name, csv_name = report_file_names(label)
+    out.path(html_name).write_text(render_report_html(report), encoding="utf-8")
+    out.path(json_name).write_text(report_json(report), encoding="utf-8")
+    out.path(csv_name).write_text(report_cases_csv(report), encoding="utf-8")
+    verdict = report.get("verdict")
+    console.info(f"report -> {out.final_path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 
 
 def _fold_too_small(exc: Exception, n_rows: int, cv: int, dataset_path) -> CliError | None:
@@ -107,19 +281,30 @@ def _fold_too_small(exc: Exception, n_rows: int, cv: int, dataset_path) -> CliEr
 
 
 def run(args: argparse.Namespace) -> int:
+    from ..evaluation._calibration_report import bytes_sha256, file_sha256
     from ._models import load_model_file, model_inputs, model_label
+    from ._output_set import OutputSet
 
     console = Console(args.quiet)
     label = model_label(args.model)
     plan = OutputPlan(args.out, report_file_names(label), args.force)
+    model_bytes = Path(args.model).read_bytes()  # hashed as read, before it is loaded (not re-read later)
     model = load_model_file(args.model)
+    if bytes_sha256(Path(args.model).read_bytes()) != bytes_sha256(model_bytes):
+        raise CliError(f"{args.model} changed while it was being read; run the report again")
+    dataset_sha256 = file_sha256(args.dataset)
     data = load_dataset_from_args(args, args.dataset, "calibration dataset")
     inputs = model_inputs(model, data)  # a dataset of another sensor is refused before the cross-validation starts
+    settings = prepare_report(args, data, args.dataset)
     fitted_range = getattr(model, "calibrated_range_", None)
     if fitted_range is not None and inputs.shape[1] == fitted_range.shape[1] and not np.allclose(
             [inputs.min(axis=0), inputs.max(axis=0)], fitted_range, rtol=1e-9, atol=0.0):
         print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
               "another range); the report's held-out figures are of the model refitted on this dataset by "
               "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
-    write_report(plan, label, model, data, args, args.model, args.dataset, console)
+    with OutputSet(plan) as out:
+        write_report(out, label, model, data, args, settings, model_path=args.model,
+                     model_sha256=bytes_sha256(model_bytes), dataset_path=args.dataset, dataset_sha256=dataset_sha256,
+                     console=console)
+        out.commit()
     return 0

@@ -41,6 +41,9 @@ __all__ = [
     "plot_sphere_coverage",
     "wrench_coverage_figure",
     "plot_wrench_coverage",
+    "error_vs_load_figure",
+    "residual_magnitude_figure",
+    "residual_direction_figure",
 ]
 
 #: The one colour table: model name -> colour, pairwise distinct (a label containing a name, e.g.
@@ -429,3 +432,152 @@ def wrench_coverage_figure(
 def plot_wrench_coverage(wrench: ArrayLike, path: str | Path, **kwargs) -> Path:
     """Write :func:`wrench_coverage_figure` to ``path`` (PNG) and return the path."""
     return _save(wrench_coverage_figure(wrench, **kwargs), path)
+
+
+def _draw_order(magnitude: NDArray, limit: int, seed: int = 0) -> NDArray[np.int64]:
+    """Rows to draw, smallest first so that the largest are drawn on top: all rows up to ``limit``, else the
+    ``limit // 10`` largest and a random draw of the rest (a figure of a million points shows no more)."""
+    n = magnitude.shape[0]
+    order = np.argsort(magnitude, kind="stable")
+    if n <= limit:
+        return order
+    top = order[n - limit // 10:]
+    rest = np.random.default_rng(seed).choice(order[:n - limit // 10], size=limit - top.size, replace=False)
+    return np.concatenate([rest[np.argsort(magnitude[rest], kind="stable")], top])
+
+
+def error_vs_load_figure(
+    applied: ArrayLike, error_pct_fs: ArrayLike, *, axis_names, units, band_pct_fs: ArrayLike,
+    band_label: str = "spec", max_points: int = 20000,
+) -> Figure:
+    """Per-axis panels of held-out error [% FS] against the applied load, the largest errors drawn on top.
+
+    Parameters
+    ----------
+    applied : array-like of shape (n, k)
+        Applied (reference) load per axis, in its unit.
+    error_pct_fs : array-like of shape (n, k)
+        Indicated minus applied, in % of each axis' full scale.
+    axis_names, units : sequence of str, length k
+        Axis names (``"Fx"`` ...) and their units.
+    band_pct_fs : array-like of shape (k,)
+        Half-width of the shaded band per axis [% FS] (the specification, or U95); errors outside it are drawn
+        in red.
+    band_label : str
+        What the band is, for the legend.
+    max_points : int
+        Points drawn per panel at most (every large error is kept).
+
+    Returns
+    -------
+    Figure
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> fig = error_vs_load_figure(rng.normal(size=(50, 3)), rng.normal(size=(50, 3)), axis_names=["Fx", "Fy", "Fz"],
+    ...                            units=["N"] * 3, band_pct_fs=[1.0, 1.0, 1.0])
+    >>> len(fig.axes)
+    3
+    """
+    applied = np.asarray(applied, dtype=float)
+    err = np.asarray(error_pct_fs, dtype=float)
+    band = np.asarray(band_pct_fs, dtype=float)
+    k = applied.shape[1]
+    cols = 3 if k >= 3 else k
+    rows = int(np.ceil(k / cols))
+    fig = Figure(figsize=(10, 3.0 * rows + 0.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
+    for j in range(k):
+        ax = axes[j]
+        e = err[:, j]
+        order = _draw_order(np.abs(np.nan_to_num(e)), max_points, seed=j)
+        outside = np.abs(e[order]) > band[j] if np.isfinite(band[j]) else np.zeros(order.size, bool)
+        if np.isfinite(band[j]):
+            ax.axhspan(-band[j], band[j], color="#2ca02c", alpha=0.15, linewidth=0,
+                       label=f"±{band[j]:.3g} % FS ({band_label})")
+        ax.scatter(applied[order[~outside], j], e[order][~outside], s=7, color="#4d4d4d", linewidths=0, alpha=0.6)
+        if outside.any():
+            ax.scatter(applied[order[outside], j], e[order][outside], s=14, color="#d62728", linewidths=0,
+                       label=f"beyond the {band_label}", zorder=3)
+        ax.axhline(0.0, color="black", linewidth=0.6)
+        ax.set_title(axis_names[j], fontsize=11)
+        ax.set_xlabel(f"applied {axis_names[j]} [{units[j]}]", fontsize=10)
+        ax.set_ylabel("held-out error [% FS]", fontsize=10)
+        ax.tick_params(labelsize=9)
+        ax.grid(alpha=0.3)
+        if j == 0:
+            ax.legend(fontsize=8, loc="best")
+    for ax in axes[k:]:
+        ax.set_visible(False)
+    return fig
+
+
+def residual_magnitude_figure(applied: ArrayLike, error: ArrayLike, *, force_columns, torque_columns,
+                              color: str = "#4d4d4d", max_points: int = 20000) -> Figure:
+    """Held-out force (and torque) error magnitude against the load magnitude, the largest errors on top.
+
+    ``applied`` and ``error`` are ``(n, k)`` in [N] / [N·m]; ``force_columns`` / ``torque_columns`` index them
+    (a 3-axis load cell has no torque columns, and gets one panel).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> w = np.random.default_rng(0).normal(size=(20, 3))
+    >>> len(residual_magnitude_figure(w, 0.01 * w, force_columns=[0, 1, 2], torque_columns=[]).axes)
+    1
+    """
+    applied = np.asarray(applied, dtype=float)
+    error = np.asarray(error, dtype=float)
+    panels = [(list(c), q, u) for c, q, u in ((force_columns, "F", "N"), (torque_columns, "T", "N·m")) if len(c)]
+    fig = Figure(figsize=(10, 3.4), layout="constrained")
+    FigureCanvasAgg(fig)
+    for i, (cols, q, unit) in enumerate(panels):
+        ax = fig.add_subplot(1, len(panels), i + 1)
+        load = np.linalg.norm(applied[:, cols], axis=1)
+        mag = np.linalg.norm(error[:, cols], axis=1)
+        order = _draw_order(mag, max_points, seed=i)
+        ax.scatter(load[order], mag[order], c=mag[order], cmap="viridis", s=8, linewidths=0)
+        ax.set_xlabel(f"load |{q}| [{unit}]", fontsize=10)
+        ax.set_ylabel(f"held-out error |Δ{q}| [{unit}]", fontsize=10)
+        ax.tick_params(labelsize=9)
+        ax.grid(alpha=0.3)
+    fig.suptitle("Held-out error against load magnitude (largest errors drawn last, on top)", fontsize=11)
+    return fig
+
+
+def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_points: int = 20000) -> Figure:
+    """Held-out force error by load direction (sensor frame), the largest errors drawn on top.
+
+    ``force`` and ``force_error`` are ``(n, 3)`` [N].
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> f = np.random.default_rng(0).normal(size=(30, 3))
+    >>> len(residual_direction_figure(f, 0.1 * f).axes)
+    2
+    """
+    force = np.asarray(force, dtype=float)
+    err = np.linalg.norm(np.asarray(force_error, dtype=float), axis=1)
+    mag = np.linalg.norm(force, axis=1)
+    fig = Figure(figsize=(10, 3.8), layout="constrained")
+    FigureCanvasAgg(fig)
+    ax = fig.add_subplot()
+    loaded = np.flatnonzero(mag > 1e-9)
+    if loaded.size:
+        d = force[loaded] / mag[loaded, None]
+        order = _draw_order(err[loaded], max_points)
+        lon = np.degrees(np.arctan2(d[order, 1], d[order, 0]))
+        lat = np.degrees(np.arcsin(np.clip(d[order, 2], -1, 1)))
+        sc = ax.scatter(lon, lat, c=err[loaded][order], s=12, cmap="viridis", linewidths=0)
+        fig.colorbar(sc, ax=ax, label="held-out |ΔF| [N]")
+    ax.set_xlim(-180, 180)
+    ax.set_ylim(-90, 90)
+    ax.set_xlabel("load direction: azimuth atan2(Fy, Fx) [deg]")
+    ax.set_ylabel("elevation asin(Fz/|F|) [deg]")
+    ax.grid(alpha=0.3)
+    ax.set_title("Force error by load direction (sensor frame; largest errors on top)")
+    return fig

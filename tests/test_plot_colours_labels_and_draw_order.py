@@ -1,5 +1,6 @@
-"""The picture defects of issue 22: shared greys, overprinted bar labels, a legend over a value, one model
-in two colours. Each is checked on the rendered figure (artist geometry after a draw), not on the code."""
+"""What a reader must be able to see in ftcal's figures: a colour of its own per model (the same in every
+figure), bar labels that do not overprint, a legend over no value, and the largest errors drawn on top (not
+hidden under the crowd). Each is checked on the rendered figure (artist geometry after a draw), not on the code."""
 
 from __future__ import annotations
 
@@ -85,3 +86,25 @@ def test_the_legend_hides_no_bar_and_no_value():
     for ax in fig.axes:
         for artist in list(ax.patches) + list(ax.texts):
             assert not _overlaps(legend, artist.get_window_extent(renderer)), artist
+
+
+def test_the_largest_errors_are_drawn_on_top_and_marked_beyond_the_band():
+    """The report's error-vs-load panels: a few large errors among many small ones are drawn last, in their own
+    colour, and a band half-width of 1 % FS is shaded."""
+    rng = np.random.default_rng(0)
+    applied = rng.uniform(-100, 100, size=(3000, 3))
+    err = 0.2 * rng.normal(size=(3000, 3))
+    big = rng.choice(3000, size=5, replace=False)
+    err[big, 1] = [5.0, -7.0, 6.0, -4.0, 9.0]
+    fig = _plots.error_vs_load_figure(applied, err, axis_names=["Fx", "Fy", "Fz"], units=["N"] * 3,
+                                      band_pct_fs=[1.0, 1.0, 1.0], max_points=1000)
+    _draw(fig)
+    ax = fig.axes[1]
+    collections = [c for c in ax.collections if len(c.get_offsets())]
+    last = collections[-1]  # drawn last = on top
+    assert sorted(np.abs(last.get_offsets()[:, 1])) == sorted(np.abs(err[big, 1]))
+    assert to_hex(last.get_facecolor()[0]) != to_hex(collections[-2].get_facecolor()[0])
+    # the subsample of a crowd keeps every large error, and draws no more than asked
+    assert sum(len(c.get_offsets()) for c in collections) <= 1000
+    band = [p for p in ax.patches if p.get_label().startswith("±1 % FS")]
+    assert len(band) == 1

@@ -1,0 +1,295 @@
+"""The calibration report as a certificate: rated capacity and specification (PASS/FAIL on the first page), the
+calibration matrix, the held-out applied-vs-indicated table (worst first, all cases in the JSON and CSV), the
+warnings, the conditions, the printed PDF; and ``fit --report`` as one unit (checks before any work, nothing
+written when the report fails, hashes of the bytes written, concurrent runs never mixed).
+
+Pages are checked as Chromium renders them (its DOM after load, and its PDF read back with poppler's
+``pdftotext`` / ``pdftoppm``); figures are recomputed independently (scikit-learn's OLS on the same folds)."""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LinearRegression
+from sklearn.model_selection import GroupKFold
+
+import browser
+from ftcal import CalibrationDataset
+from ftcal.cli import main
+
+AXES = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
+RATED = (500.0, 500.0, 900.0, 20.0, 20.0, 20.0)
+
+
+def bent_sensor(n_groups: int = 10, per_group: int = 12, seed: int = 0, bend: float = 0.0) -> CalibrationDataset:
+    """An affine 6-channel sensor (loads of O(100 N), O(3 N·m)) with an optional quadratic bend of channel 0
+    (that a linear calibration cannot follow and a degree-2 polynomial can)."""
+    rng = np.random.default_rng(seed)
+    wrench = rng.uniform(-1, 1, size=(n_groups * per_group, 6)) * [200, 200, 400, 3, 3, 3]
+    gains = rng.normal(size=(6, 6)) / [200, 200, 400, 3, 3, 3]
+    raw = wrench @ gains.T + 0.3 + 0.002 * rng.normal(size=(len(wrench), 6))
+    raw[:, 0] += bend * (wrench[:, 0] / 200) ** 2
+    return CalibrationDataset(raw=raw, wrench=wrench, group=np.repeat(np.arange(n_groups), per_group),
+                              meta={"sensor": "FT-TEST-7"})
+
+
+def _held_out_ols(data: CalibrationDataset, folds: int) -> np.ndarray:
+    pred = np.empty_like(data.wrench)
+    for train, test in GroupKFold(folds).split(data.raw, groups=data.group):
+        pred[test] = LinearRegression().fit(data.raw[train], data.wrench[train]).predict(data.raw[test])
+    return pred
+
+
+@pytest.fixture(scope="module")
+def certified(tmp_path_factory):
+    """``ftcal fit --report`` with rated capacities, a per-axis specification that Fx meets and Fy does not, and
+    conditions from a YAML file beside the data; the page rendered by Chromium."""
+    work = tmp_path_factory.mktemp("certificate")
+    data = bent_sensor()
+    data.save(work / "data.csv")
+    u95_pct = 100 * 2 * np.sqrt(np.mean((_held_out_ols(data, 4) - data.wrench) ** 2, axis=0)) / RATED
+    spec = {a: (2.0 * u if a != "Fy" else 0.5 * u) for a, u in zip(AXES, u95_pct)}  # all pass but Fy
+    (work / "data.conditions.yaml").write_text(
+        "reference_standard: dead weights, class M1, certificate 2024-117\nprocedure: ftcal docs, 6 axes x 10 loads\n"
+        "recalibration_interval: 12 months\n", encoding="utf-8")
+    argv = ["fit", str(work / "data.csv"), "--model", "linear", "--report", "--cv", "4", "--out", str(work / "m"),
+            "--rated", ",".join(f"{a}={r:g}" for a, r in zip(AXES, RATED)),
+            "--spec", ",".join(f"{a}={s:.6g}%FS" for a, s in spec.items()), "--operator", "A. Tester", "-q"]
+    assert main(argv) == 0
+    shown = browser.render(work / "m" / "linear.report.html", work / "chromium")
+    facts = json.loads((work / "m" / "linear.report.json").read_text())
+    return work, data, facts, shown, u95_pct, spec
+
+
+def _summary(dom: str) -> str:
+    return dom[dom.index('id="summary"'):dom.index('id="calibration"')]
+
+
+def test_summary_states_u95_in_percent_of_rated_capacity_and_pass_fail_per_axis(certified):
+    work, data, facts, shown, u95_pct, spec = certified
+    assert shown.console == [] and shown.page_requests == []
+    acc = {a["axis"]: a for a in facts["accuracy"]}
+    for k, axis in enumerate(AXES):
+        assert acc[axis]["full_scale"] == RATED[k]
+        assert acc[axis]["u95_pct_fs"] == pytest.approx(u95_pct[k], rel=1e-6)
+        assert acc[axis]["verdict"] == ("FAIL" if axis == "Fy" else "PASS")
+    assert facts["verdict"] == "FAIL"
+    summary = _summary(shown.dom)
+    assert "FT-TEST-7" in summary and "LinearCalibrator" in summary and facts["date_utc"] in summary
+    assert re.search(r'class="verdict FAIL">FAIL: Fy beyond the specification', summary)
+    rows = re.findall(r"<tr><td>(F[xyz]|T[xyz])</td>(.*?)</tr>", summary)
+    verdicts = {axis: re.search(r'class="(PASS|FAIL)"', cells).group(1) for axis, cells in rows}
+    assert verdicts == {a: ("FAIL" if a == "Fy" else "PASS") for a in AXES}
+    assert f"{u95_pct[0]:.3g}" in dict(rows)["Fx"]  # U95 [% FS] printed as computed independently
+    assert "Against the stock models:" in summary
+
+
+def test_the_matrix_on_the_page_reproduces_the_models_predictions(certified):
+    work, data, facts, shown, *_ = certified
+    mx = facts["model"]["matrix"]
+    matrix, offset = np.array(mx["matrix"]), np.array(mx["offset"])
+    import ftcal
+
+    model = ftcal.load_model(work / "m" / "linear.model.npz")
+    np.testing.assert_allclose(data.raw @ matrix.T + offset, model.predict(data.raw), rtol=1e-8, atol=1e-8)
+    section = shown.dom[shown.dom.index('id="calibration"'):shown.dom.index('id="accuracy"')]
+    assert "Calibration matrix" in section and "Fx [N per raw unit]" in section and "Tz [N·m per raw unit]" in section
+    assert f"{matrix[0, 0]:.5g}" in section
+    digest = hashlib.sha256((work / "m" / "linear.model.npz").read_bytes()).hexdigest()
+    assert facts["model"]["sha256"] == digest and digest in section
+    assert "ftcal.load_model(&#x27;linear.model.npz&#x27;)" in section or "ftcal.load_model('linear.model.npz')" in section
+
+
+def test_applied_vs_indicated_table_lists_held_out_cases_worst_first_everywhere(certified):
+    work, data, facts, shown, *_ = certified
+    pred = _held_out_ols(data, 4)
+    worst = np.max(np.abs(100 * (pred - data.wrench) / RATED), axis=1)
+    cases = facts["cases"]
+    assert cases["count"] == len(data.wrench) and cases["by"] == "row"  # every row its own load here
+    assert cases["first_row"][0] == int(np.argmax(worst))
+    got = np.max(np.abs(np.array(cases["error_pct_fs"], dtype=float)), axis=1)
+    assert np.all(np.diff(got) <= 1e-9) and got[0] == pytest.approx(worst.max(), rel=1e-3)
+    np.testing.assert_allclose(np.array(cases["indicated"], dtype=float)[0], pred[np.argmax(worst)], rtol=1e-5)
+    with open(work / "m" / "linear.report.csv", newline="", encoding="utf-8") as fh:
+        table = list(csv.reader(fh))
+    assert len(table) == 1 + len(data.wrench) and table[0][4] == "Fx_applied [N]"
+    assert int(table[1][2]) == int(np.argmax(worst))
+    section = shown.dom[shown.dom.index('id="cases"'):shown.dom.index('id="choice"')]
+    first_row = re.search(r"<tbody>\s*<tr><td>1</td><td>(\d+)</td>", section)
+    assert first_row is not None and int(first_row.group(1)) == data.group[int(np.argmax(worst))]
+    assert f"30 of {len(data.wrench)} cases shown" in section
+
+
+def test_conditions_are_printed_when_given_and_not_stated_otherwise(certified):
+    work, data, facts, shown, *_ = certified
+    cond = facts["conditions"]
+    assert cond["reference_standard"].startswith("dead weights") and cond["operator"] == "A. Tester"
+    assert cond["recalibration_due"].endswith("(issue date + 12 months)")
+    assert cond["procedure"].startswith("ftcal docs")
+    assert "dead weights, class M1" in shown.dom and "A. Tester" in shown.dom
+    # the data have no temperature: not stated, and how to add it
+    row = re.search(r"<tr><td>ambient temperature</td><td>(.*?)</td></tr>", shown.dom).group(1)
+    assert "not stated" in row and "temperature" in row and "--ambient-temperature" in row
+
+
+def test_warnings_name_a_better_stock_model_errors_beyond_full_scale_and_few_rows(tmp_path):
+    """A bent sensor calibrated with the LTM: the stock degree-2 polynomial beats it beyond noise; a rated
+    capacity below the data's loads; too few rows for the channels."""
+    data = bent_sensor(n_groups=8, per_group=8, bend=0.6, seed=2)
+    data.save(tmp_path / "bent.csv")
+    assert main(["fit", str(tmp_path / "bent.csv"), "--model", "linear", "--report", "--cv", "3", "--out",
+                 str(tmp_path / "m"), "--rated", "Fx=100,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20", "--spec", "1%FS",
+                 "-q"]) == 0
+    facts = json.loads((tmp_path / "m" / "linear.report.json").read_text())
+    kinds = {w["kind"]: w["text"] for w in facts["warnings"]}
+    assert "stock better" in kinds and facts["comparison"]["best_stock"] in kinds["stock better"]
+    choice = {c["model"]: c for c in facts["model_choice"] if c["status"] == "scored"}
+    assert min(c["rmse"] for n, c in choice.items() if n.startswith("sk_")) < facts["comparison"]["rmse"]
+    assert "Fx" in kinds["beyond rated capacity"] and "100 N" in kinds["beyond rated capacity"]
+    assert "few rows" in kinds and "64 rows" in kinds["few rows"]
+    shown = browser.render(tmp_path / "m" / "linear.report.html", tmp_path / "chromium")
+    summary = _summary(shown.dom)
+    for kind in ("stock better", "beyond rated capacity", "few rows"):
+        assert f'<span class="warn-kind">{kind}:</span>' in summary
+
+
+def test_no_rated_capacity_and_no_spec_say_so(tmp_path):
+    bent_sensor(seed=3).save(tmp_path / "d.csv")
+    assert main(["fit", str(tmp_path / "d.csv"), "--model", "linear", "--report", "--no-baselines", "--cv", "3",
+                 "--out", str(tmp_path / "m"), "-q"]) == 0
+    facts = json.loads((tmp_path / "m" / "linear.report.json").read_text())
+    assert facts["verdict"] is None and "no rated capacity" in {w["kind"] for w in facts["warnings"]}
+    page = (tmp_path / "m" / "linear.report.html").read_text()
+    assert "No specification given" in page and "not stated" in page
+
+
+def test_the_readme_pdf_command_prints_a_numbered_multi_page_pdf_with_the_summary_first(certified, tmp_path):
+    work, *_ = certified
+    readme = (Path(__file__).parents[1] / "README.md").read_text(encoding="utf-8")
+    command = next(line for line in readme.splitlines() if line.startswith("chromium --headless"))
+    argv = shlex.split(command)
+    pdf = tmp_path / "linear.report.pdf"
+    argv = [browser.chromium()] + [a for a in argv[1:] if not a.startswith("--print-to-pdf") and
+                                   not a.endswith(".html")]
+    argv += ["--disable-gpu", f"--user-data-dir={tmp_path / 'profile'}", f"--print-to-pdf={pdf}",
+             str(work / "m" / "linear.report.html")]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert done.returncode == 0, done.stderr[-2000:]
+    info = subprocess.run(["pdfinfo", str(pdf)], capture_output=True, text=True, check=True).stdout
+    pages = int(re.search(r"Pages:\s+(\d+)", info).group(1))
+    assert pages >= 4  # summary, calibration, accuracy, cases, choice, range/conditions: each starts a page
+    first = subprocess.run(["pdftotext", "-f", "1", "-l", "1", "-layout", str(pdf), "-"], capture_output=True,
+                           text=True, check=True).stdout
+    assert "Calibration report: FT-TEST-7" in first and "FAIL: Fy beyond the specification" in first
+    assert f"page 1 of {pages}" in first and "Calibration matrix" not in first
+    last = subprocess.run(["pdftotext", "-f", str(pages), "-l", str(pages), str(pdf), "-"], capture_output=True,
+                          text=True, check=True).stdout
+    assert f"page {pages} of {pages}" in last
+    subprocess.run(["pdftoppm", "-f", "1", "-l", "1", "-r", "40", "-gray", "-png", str(pdf), str(tmp_path / "p")],
+                   check=True)
+    (png,) = tmp_path.glob("p*.png")
+    import matplotlib.image
+
+    pixels = matplotlib.image.imread(png)
+    assert pixels.shape[0] > pixels.shape[1]  # portrait A4
+    ink = float(np.mean(pixels.mean(axis=-1) < 0.9)) if pixels.ndim == 3 else float(np.mean(pixels < 0.9))
+    assert 0.01 < ink < 0.5  # text on the page, not blank, not black
+
+
+def _outputs(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir()) if folder.exists() else []
+
+
+def test_fit_report_that_fails_writes_nothing(tmp_path, capsys):
+    """Seven rows: the LTM fits on all of them, but 5-fold cross-validation trains it on five: the report fails,
+    after the fit, and the run leaves no file (not the model, not fit.json)."""
+    data = bent_sensor(n_groups=7, per_group=1, seed=4)
+    CalibrationDataset(raw=data.raw, wrench=data.wrench).save(tmp_path / "seven.csv")
+    code = main(["fit", str(tmp_path / "seven.csv"), "--model", "linear", "--report", "--no-baselines", "--out",
+                 str(tmp_path / "m")])
+    err = capsys.readouterr().err
+    assert code == 2 and "ftcal: error:" in err and "cross-validation" in err
+    assert _outputs(tmp_path / "m") == []
+
+
+def test_fit_report_with_a_bad_tool_file_checks_it_before_any_work(tmp_path, capsys):
+    bent_sensor(seed=5).save(tmp_path / "d.csv")
+    (tmp_path / "bad.tool.json").write_text('{"format": "something else"}', encoding="utf-8")
+    code = main(["fit", str(tmp_path / "d.csv"), "--model", "linear", "--report", "--tool",
+                 str(tmp_path / "bad.tool.json"), "--out", str(tmp_path / "m")])
+    err = capsys.readouterr().err
+    assert code == 2 and "bad.tool.json" in err and "tool file" in err
+    assert "fitting" not in err  # refused before the fit started
+    assert _outputs(tmp_path / "m") == []
+
+
+@pytest.mark.parametrize("option, value, expected", [
+    ("--rated", "Fx=500,Fy=500,Fz=900", "no value for Tx, Ty, Tz"),
+    ("--rated", "Fx=500,Fy=-5,Fz=900,Tx=1,Ty=1,Tz=1", "Fy: '-5' is not a positive number"),
+    ("--rated", "Fq=1", "axis 'Fq' is not an output of this dataset"),
+    ("--spec", "one percent", "'one percent' is not a positive number"),
+    ("--spec", "1%FS,2%FS", "'2%FS' names no axis"),
+    ("--spec", "1%FS,Fz=0%FS", "Fz: '0%FS' is not a positive number"),
+    ("--recalibration-interval", "soon", "'soon': give a number and a unit"),
+])
+def test_bad_report_options_are_refused_before_the_fit(tmp_path, capsys, option, value, expected):
+    bent_sensor(seed=6).save(tmp_path / "d.csv")
+    code = main(["fit", str(tmp_path / "d.csv"), "--model", "linear", "--report", option, value, "--out",
+                 str(tmp_path / "m")])
+    err = capsys.readouterr().err
+    assert code == 2 and expected in err and len(err.strip().splitlines()) == 1, err
+    assert "fitting" not in err and _outputs(tmp_path / "m") == []
+
+
+def test_concurrent_forced_runs_leave_one_whole_set_whose_hashes_are_its_own(tmp_path):
+    """Two ``fit --report --force`` runs into one folder at once, on different data (different models): the set
+    left behind is one run's whole set; the report and fit.json carry the SHA-256 of the model beside them."""
+    for k in range(2):
+        bent_sensor(seed=10 + k).save(tmp_path / f"d{k}.csv")
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    for _ in range(2):
+        runs = [subprocess.Popen([sys.executable, "-m", "ftcal", "fit", str(tmp_path / f"d{k}.csv"), "--model",
+                                  "linear", "--report", "--no-baselines", "--cv", "3", "--force", "-q", "--out",
+                                  str(tmp_path / "cc")], env=env, stderr=subprocess.PIPE, text=True)
+                for k in range(2)]
+        for run in runs:
+            assert run.wait(timeout=300) == 0, run.stderr.read()
+        assert _outputs(tmp_path / "cc") == ["linear.fit.json", "linear.model.npz", "linear.report.csv",
+                                             "linear.report.html", "linear.report.json"]
+        digest = hashlib.sha256((tmp_path / "cc" / "linear.model.npz").read_bytes()).hexdigest()
+        facts = json.loads((tmp_path / "cc" / "linear.report.json").read_text())
+        fit = json.loads((tmp_path / "cc" / "linear.fit.json").read_text())
+        assert facts["model"]["sha256"] == digest == fit["model_sha256"]
+        assert facts["data"]["sha256"] == fit["dataset_sha256"]
+
+
+def test_stock_baselines_over_the_memory_limit_or_work_budget_are_skipped_with_the_reason():
+    """1200 rows x 500 channels: the degree-3 polynomial would need C(503, 3) features per row (over 100 GiB);
+    it is skipped, named with its size, and the report is made."""
+    import math
+
+    from ftcal import LinearCalibrator, calibration_certificate
+
+    rng = np.random.default_rng(0)
+    wrench = rng.normal(size=(1200, 6)) * [50, 50, 50, 1, 1, 1]
+    raw = wrench @ rng.normal(size=(6, 500)) / 50 + 1e-3 * rng.normal(size=(1200, 500))
+    data = CalibrationDataset(raw=raw, wrench=wrench)
+    facts = calibration_certificate(LinearCalibrator().fit(raw, wrench), data, figures=False)
+    status = {c["model"]: c["status"] for c in facts["model_choice"]}
+    assert status["sk_linear"] == "scored"
+    features = math.comb(503, 3)
+    assert features * 960 * 8 > 100 * 2**30  # the size the skip reason must name (independently)
+    assert status["sk_poly3"].startswith("skipped:") and "memory limit" in status["sk_poly3"]
+    assert "GiB" in status["sk_poly3"]
+    for name in ("sk_poly2", "sk_kernel_ridge", "sk_gp"):
+        assert status[name] == "scored" or status[name].startswith("skipped:"), status[name]
