@@ -68,7 +68,7 @@ def main(argv=None) -> int:
     torch.set_num_threads(1)
 
     def ftcal_fit():
-        return ftcal.DirectionalCalibrator(max_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0,
+        return ftcal.DirectionalCalibrator(phase1_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0,
                                            alpha=50.0, random_state=0).fit(raw, w)
 
     model = ftcal_fit()  # warm-up; also provides the directional inputs/targets for the plain net
@@ -122,7 +122,7 @@ def main(argv=None) -> int:
                 times[name].append(time.perf_counter() - start)
                 model = out if name == "ftcal" else model
         t_plain, t_ftcal, t_bare = (statistics.median(times[k]) for k in ("plain", "ftcal", "bare"))
-    member = ftcal.DirectionalCalibrator(max_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0, alpha=50.0)
+    member = ftcal.DirectionalCalibrator(phase1_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0, alpha=50.0)
     with threadpool_limits(1):  # the ensemble interleaved with one member's fit, its baseline
         ensemble_times, single_times = [], []
         for _ in range(args.repeats):

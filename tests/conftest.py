@@ -30,7 +30,7 @@ if str(BENCHMARKS) not in sys.path:
 #: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
 TINY_SCHEDULE = dict(
     hidden_layer_sizes=(16, 16),
-    max_epochs=6,
+    phase1_epochs=6,
     plateau_epochs=3,
     plateau_patience=1,
     max_recover_epochs=3,

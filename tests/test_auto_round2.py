@@ -327,7 +327,7 @@ def test_auto_n_jobs_is_checked(n_jobs):
 
 def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsample():
     raw, w, groups = affine(n=240, n_groups=8)
-    net = ftcal.make_calibrator("directional", max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
+    net = ftcal.make_calibrator("directional", phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
     kw = dict(candidates=[FAST[0], ("directional", net)], alpha=1.0, baselines=False, stack=False,
               network_samples=100)
     a = AutoCalibrator(**kw).fit(raw, w, groups=groups)

@@ -175,13 +175,13 @@ def test_a_given_tare_far_outside_the_training_readings_is_refused(data):
         (dict(callbacks=[()]), "callbacks must hold skorch callbacks"),
         (dict(callbacks=[(1, EpochTimer())]), "callbacks must hold skorch callbacks"),
         (dict(callbacks=[(EpochTimer(),)]), "callbacks must hold skorch callbacks"),
-        (dict(max_epochs=0), r"'max_epochs' parameter of DirectionalCalibrator must be an int in the range \[1, inf\)\. "
+        (dict(phase1_epochs=0), r"'phase1_epochs' parameter of DirectionalCalibrator must be an int in the range \[1, inf\) or None\. "
                              "Got 0 instead"),
         (dict(lr=-0.1), r"'lr' parameter of DirectionalCalibrator must be a float in the range \(0(\.0)?, inf\)\. "
                         "Got -0.1 instead"),
         (dict(validation_fraction=0.9), r"'validation_fraction' parameter .* range \(0(\.0)?, 0\.5\] or None\. Got 0\.9"),
         (dict(min_relative_magnitude=2.0), r"'min_relative_magnitude' parameter .* range \[0(\.0)?, 1(\.0)?\]\. Got 2\.0"),
-        (dict(max_epochs=True), r"'max_epochs' parameter .* Got True instead"),
+        (dict(phase1_epochs=True), r"'phase1_epochs' parameter .* Got True instead"),
     ],
 )
 def test_bad_network_parameters(data, params, message):

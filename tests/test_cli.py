@@ -166,10 +166,10 @@ def test_fit_passes_params_and_tare(tmp_path, affine_dir):
 
 
 def test_fit_unknown_param_names_the_known_ones(tmp_path, affine_dir, capsys):
-    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--param", "max_epochs=3", "--out", str(tmp_path)]
+    argv = ["fit", str(affine_dir / "train.csv"), "--model", "linear", "--param", "phase1_epochs=3", "--out", str(tmp_path)]
     assert main(argv) == 2
     line = one_error_line(capsys)
-    assert "max_epochs" in line and "ridge" in line
+    assert "phase1_epochs" in line and "ridge" in line
 
 
 def test_fit_group_offsets_need_a_group_column(tmp_path, affine_dir, capsys):

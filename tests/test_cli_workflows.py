@@ -16,7 +16,7 @@ import ftcal
 from ftcal import CalibrationDataset
 from ftcal.cli import main
 
-TINY_NET = ["--schedule", "short", "--param", "max_epochs=3", "--param", "plateau_epochs=1",
+TINY_NET = ["--schedule", "short", "--param", "phase1_epochs=3", "--param", "plateau_epochs=1",
             "--param", "max_recover_epochs=1", "--param", "hidden_layer_sizes=[8]"]
 
 

@@ -48,7 +48,7 @@ def test_members_are_seeded_from_random_state(fitted, data):
 def test_registry_names_route_the_schedule_to_the_members():
     ens = make_calibrator("directional_ensemble", schedule="short", random_state=1, n_members=4, alpha=50.0)
     assert ens.n_members == 4 and ens.random_state == 1
-    assert ens.estimator.max_epochs == 150 and ens.estimator.alpha == 50.0  # the "short" directional schedule
+    assert ens.estimator.phase1_epochs == 150 and ens.estimator.alpha == 50.0  # the "short" directional schedule
     assert isinstance(make_calibrator("comparative_ensemble").estimator, ComparativeCalibrator)
 
 
@@ -77,7 +77,7 @@ def test_an_ensemble_too_large_for_memory_is_refused_before_any_member_is_built(
     from ftcal.core._memory import MemoryLimitError
 
     raw, w = np.random.default_rng(0).normal(size=(40, 6)), np.random.default_rng(1).normal(size=(40, 6))
-    member = DirectionalCalibrator(max_epochs=1, plateau_epochs=0, max_recover_epochs=0, hidden_layer_sizes=(512, 512))
+    member = DirectionalCalibrator(phase1_epochs=1, plateau_epochs=0, max_recover_epochs=0, hidden_layer_sizes=(512, 512))
     with pytest.raises(MemoryLimitError, match=r"1000000 x DirectionalCalibrator.*use fewer members"):
         EnsembleCalibrator(member, n_members=10**6).fit(raw, w)
     with pytest.raises(ValueError, match="n_jobs"):

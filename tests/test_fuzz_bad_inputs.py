@@ -37,8 +37,8 @@ from ftcal import (
 from ftcal.core._files import atomic_output
 from ftcal.cli import main
 
-TINY = dict(hidden_layer_sizes=(8,), max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
-TINY_CLI = ["--schedule", "short", "--param", "max_epochs=3", "--param", "plateau_epochs=1",
+TINY = dict(hidden_layer_sizes=(8,), phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
+TINY_CLI = ["--schedule", "short", "--param", "phase1_epochs=3", "--param", "plateau_epochs=1",
             "--param", "max_recover_epochs=1", "--param", "hidden_layer_sizes=[8]"]
 
 
@@ -109,7 +109,7 @@ def _interrupt_after_training_starts(proc: subprocess.Popen, marker: str, sig=si
 def test_ctrl_c_stops_training_and_saves_nothing(workdir, tmp_path, command, sig):
     out = tmp_path / "models"
     out.mkdir()
-    long_run = ["--param", "max_epochs=20000", "--param", "hidden_layer_sizes=[8]"]
+    long_run = ["--param", "phase1_epochs=20000", "--param", "hidden_layer_sizes=[8]"]
     if command == "fit":
         args = ["fit", workdir / "data" / "train.csv", "--model", "directional", "--schedule", "short", *long_run,
                 "--out", out, "--force"]
@@ -321,7 +321,7 @@ def test_diverging_training_is_an_error(hidden):
     w = rng.normal(size=(80, 6)) * 100
     raw = w @ rng.normal(size=(6, 6))
     with pytest.raises(CalibrationInputError, match="training diverged.*lower lr"):
-        ComparativeCalibrator(**{**TINY, "max_epochs": 20, "hidden_layer_sizes": hidden}, lr=1e6).fit(raw, w)
+        ComparativeCalibrator(**{**TINY, "phase1_epochs": 20, "hidden_layer_sizes": hidden}, lr=1e6).fit(raw, w)
 
 
 # ------------------------------------------------------------------ 8. labels and dtypes
@@ -636,13 +636,13 @@ def test_library_fit_installs_no_signal_handler_and_still_reports_a_ctrl_c():
     before = (signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
     signal.signal(signal.SIGINT, signal.default_int_handler)  # what a terminal gives a Python program
     try:
-        model = DirectionalCalibrator(**{**TINY, "max_epochs": 50}, callbacks=[("probe", Probe())])
+        model = DirectionalCalibrator(**{**TINY, "phase1_epochs": 50}, callbacks=[("probe", Probe())])
         with pytest.raises(KeyboardInterrupt, match="interrupted at epoch"):
             model.fit(raw, raw @ rng.normal(size=(6, 6)))
         assert not hasattr(model, "net_")  # no half-trained model left as if it had finished
         assert all(h == (signal.default_int_handler, before[1]) for h in seen)
         # the schedule's own early stop (a KeyboardInterrupt from a callback) is not mistaken for a Ctrl-C
-        model = DirectionalCalibrator(**{**TINY, "max_epochs": 30, "plateau_epochs": 1}).fit(raw, raw)
+        model = DirectionalCalibrator(**{**TINY, "phase1_epochs": 30, "plateau_epochs": 1}).fit(raw, raw)
         assert model.n_epochs_ >= 1
     finally:
         signal.signal(signal.SIGINT, before[0])
@@ -1046,7 +1046,7 @@ def test_a_network_too_large_for_memory_is_refused_before_any_allocation():
     w = rng.normal(size=(40, 6)) * [100, 100, 100, 2, 2, 2]
     raw = w @ rng.normal(size=(6, 6))
     with pytest.raises(MemoryLimitError, match=r"hidden_layer_sizes=\(100000000,\).*narrower or fewer hidden layers"):
-        ftcal.DirectionalCalibrator(hidden_layer_sizes=(100_000_000,), max_epochs=1).fit(raw, w)
+        ftcal.DirectionalCalibrator(hidden_layer_sizes=(100_000_000,), phase1_epochs=1).fit(raw, w)
 
 
 @pytest.mark.parametrize("groups", [[None] * 40, [0, "a"] * 20, [0.5, 1.5] * 20], ids=["none", "mixed", "fractional"])
@@ -1379,7 +1379,7 @@ def test_sighup_removes_the_partial_output(workdir, tmp_path, command):
         out = tmp_path / "models"
         out.mkdir()
         args = ["fit", workdir / "data" / "train.csv", "--model", "directional", "--schedule", "short", "--param",
-                "max_epochs=20000", "--param", "hidden_layer_sizes=[8]", "--out", out, "--force"]
+                "phase1_epochs=20000", "--param", "hidden_layer_sizes=[8]", "--out", out, "--force"]
         code, err = _interrupt_after_training_starts(_start_cli(args, tmp_path), "fitting", signal.SIGHUP)
     assert code == 128 + signal.SIGHUP, err
     assert "interrupted by SIGHUP (no half-written file is left)" in err and "Traceback" not in err

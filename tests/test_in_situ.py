@@ -165,7 +165,7 @@ def linear_sensor(n, rng, zero, noise=SENSOR_NOISE):
     return raw, w
 
 
-TINY = dict(hidden_layer_sizes=(16,), max_epochs=30, plateau_epochs=3, max_recover_epochs=3, random_state=0)
+TINY = dict(hidden_layer_sizes=(16,), phase1_epochs=30, plateau_epochs=3, max_recover_epochs=3, random_state=0)
 CALIBRATORS = {
     "linear": lambda: LinearCalibrator(),
     "polynomial": lambda: PolynomialCalibrator(degree=2),

@@ -45,7 +45,7 @@ def test_directional_beats_ltm_on_direction_dependent_gains():
     x_train, x_test = asymmetric_sensor(train), asymmetric_sensor(test)
     ltm = LinearCalibrator().fit(x_train, train)
     directional = DirectionalCalibrator(
-        hidden_layer_sizes=(64, 64), lr=1e-2, batch_size=128, max_epochs=150, plateau_epochs=30,
+        hidden_layer_sizes=(64, 64), lr=1e-2, batch_size=128, phase1_epochs=150, plateau_epochs=30,
         plateau_patience=5, max_recover_epochs=10, zero_reading=np.zeros(6), random_state=0,
     ).fit(x_train, train)
     ltm_rmse = wrench_rmse(test, ltm.predict(x_test), 50.0)
@@ -153,7 +153,7 @@ def test_extra_callbacks_run_every_epoch_and_are_not_saved(cls, tmp_path):
     counter = EpochCounter()
     raw, wrench, _, _ = affine_sensor_data(n_samples=60, seed=3)
     model = cls(**TINY_SCHEDULE, callbacks=[("counter", counter)], random_state=0).fit(raw, wrench)
-    assert counter.epochs == model.n_epochs_ >= TINY_SCHEDULE["max_epochs"]
+    assert counter.epochs == model.n_epochs_ >= TINY_SCHEDULE["phase1_epochs"]
     loaded = load_model(save_model(model, tmp_path / "m.npz"))
     assert loaded.callbacks is None
     np.testing.assert_array_equal(loaded.predict(raw), model.predict(raw))
@@ -172,7 +172,7 @@ def test_numpy_forward_matches_torch(cls):
     rng = np.random.default_rng(0)
     w = rng.normal(size=(300, 6))
     raw = w @ rng.normal(size=(6, 6))
-    model = cls(hidden_layer_sizes=(16, 8), max_epochs=3, plateau_epochs=1, max_recover_epochs=1,
+    model = cls(hidden_layer_sizes=(16, 8), phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1,
                 random_state=0).fit(raw, w)
     inputs = model._network_inputs(raw)
     with torch.no_grad():
@@ -245,7 +245,7 @@ def test_a_users_skorch_callback_sees_every_batch_epoch_and_gradient(cls):
     # a hook set on an instance (not in its class) is a hook too
     patched, patched_calls = Callback(), []
     patched.on_batch_end = lambda net, **kwargs: patched_calls.append(kwargs.get("training"))
-    model = cls(max_epochs=3, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2, batch_size=8,
+    model = cls(phase1_epochs=3, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2, batch_size=8,
                 callbacks=[count, ("patched", patched)], random_state=0).fit(raw, wrench)
     assert len(patched_calls) == count.calls["batch_end"]
     n_train = len(raw) - int(np.ceil(0.2 * len(raw)))  # ValidSplit(0.2) holds out ceil(20 %)
@@ -283,16 +283,15 @@ def test_skorch_overrides_of_the_engine_are_honoured():
 
 
 def test_a_network_calibrator_missing_a_hook_says_which():
-    from ftcal.neural_network._base import NETWORK_DEFAULTS, NetworkCalibrator, keyword_init
+    from ftcal.neural_network._base import NetworkCalibrator
     from ftcal.neural_network._modules import ComparativeNet
 
     class Unfinished(NetworkCalibrator):
         _module_class = ComparativeNet
-        __init__ = keyword_init(NETWORK_DEFAULTS)
 
     raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=1)
     with pytest.raises(NotImplementedError, match=r"Unfinished must implement _training_pairs\(\)"):
-        Unfinished(max_epochs=1).fit(raw, wrench)
+        Unfinished(phase1_epochs=1).fit(raw, wrench)
     assert not hasattr(Unfinished(), "no_such_attribute") and hasattr(Unfinished(), "_decode")
 
 
@@ -301,7 +300,7 @@ def test_skorch_early_stopping_ends_the_fit_cleanly_with_the_best_weights():
     from skorch.callbacks import EarlyStopping
 
     raw, wrench, _, _ = affine_sensor_data(n_samples=150, seed=0)
-    model = DirectionalCalibrator(max_epochs=40, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2,
+    model = DirectionalCalibrator(phase1_epochs=40, plateau_epochs=2, plateau_patience=0, max_recover_epochs=2,
                                   callbacks=[EarlyStopping(patience=1)], random_state=0).fit(raw, wrench)
     assert model.stop_reason_ == "callback" and model.n_epochs_ < 40 and model.best_epoch_ <= model.n_epochs_
     assert np.isfinite(model.predict(raw[:3])).all()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pytest
 import torch
@@ -20,7 +22,7 @@ def fit_with(cls=DirectionalCalibrator, **params):
 
 
 def test_phases_run_in_order_and_plateau_lowers_the_rate():
-    model = fit_with(lr=0.05, max_epochs=5, plateau_epochs=25, plateau_patience=0, min_lr=1e-4,
+    model = fit_with(lr=0.05, phase1_epochs=5, plateau_epochs=25, plateau_patience=0, min_lr=1e-4,
                      recover_tolerance=0.05, max_recover_epochs=5)
     history = model.net_.history
     phases = history[:, "phase"]
@@ -36,7 +38,7 @@ def test_phases_run_in_order_and_plateau_lowers_the_rate():
 
 
 def test_phase_three_stops_by_the_tolerance_rule():
-    model = fit_with(max_epochs=4, plateau_epochs=2, recover_tolerance=100.0, max_recover_epochs=50)
+    model = fit_with(phase1_epochs=4, plateau_epochs=2, recover_tolerance=100.0, max_recover_epochs=50)
     assert model.stop_reason_ == "within_tolerance"
     assert model.n_epochs_ == 4 + 2 + 1  # the first phase-3 epoch is within 10000 % of the best
     losses = model.net_.history[:, "valid_loss"]
@@ -44,10 +46,10 @@ def test_phase_three_stops_by_the_tolerance_rule():
 
 
 def test_phase_three_cap_and_no_phase_three():
-    capped = fit_with(max_epochs=3, plateau_epochs=0, recover_tolerance=0.0, max_recover_epochs=4)
+    capped = fit_with(phase1_epochs=3, plateau_epochs=0, recover_tolerance=0.0, max_recover_epochs=4)
     assert capped.stop_reason_ in {"within_tolerance", "recover_cap"}
     assert capped.n_epochs_ <= 3 + 4
-    none = fit_with(max_epochs=3, plateau_epochs=2, max_recover_epochs=0)
+    none = fit_with(phase1_epochs=3, plateau_epochs=2, max_recover_epochs=0)
     assert none.stop_reason_ == "schedule_end" and none.n_epochs_ == 5
 
 
@@ -81,7 +83,7 @@ def test_recover_stop_rule_and_cap_on_given_losses():
 
 
 def test_best_weights_are_restored():
-    model = fit_with(lr=0.05, max_epochs=12, plateau_epochs=0, max_recover_epochs=0)
+    model = fit_with(lr=0.05, phase1_epochs=12, plateau_epochs=0, max_recover_epochs=0)
     losses = np.array(model.net_.history[:, "valid_loss"])
     assert model.best_epoch_ == int(np.argmin(losses)) + 1
     best = dict(model.net_.callbacks_)["restore_best_weights"]
@@ -96,13 +98,45 @@ def test_phase_of_epoch_boundaries():
 
 def test_named_schedules_match_the_thesis():
     thesis = training_schedule("thesis", "directional")
-    assert (thesis["max_epochs"], thesis["plateau_epochs"], thesis["plateau_patience"]) == (1700, 100, 30)
+    assert (thesis["phase1_epochs"], thesis["plateau_epochs"], thesis["plateau_patience"]) == (1700, 100, 30)
     assert (thesis["lr"], thesis["batch_size"], thesis["plateau_factor"], thesis["min_lr"]) == (1e-3, 32, 0.1, 1e-5)
     assert thesis["recover_tolerance"] == 0.05
-    assert training_schedule("thesis", "comparative")["max_epochs"] == 3000  # III-E-a
+    assert training_schedule("thesis", "comparative")["phase1_epochs"] == 3000  # III-E-a
     short = training_schedule("short", "comparative")
-    assert short["max_epochs"] + short["plateau_epochs"] + short["max_recover_epochs"] <= 400
-    assert DirectionalCalibrator().get_params()["max_epochs"] == 1700
-    assert ComparativeCalibrator().get_params()["max_epochs"] == 3000
+    assert short["phase1_epochs"] + short["plateau_epochs"] + short["max_recover_epochs"] <= 400
+    assert DirectionalCalibrator()._schedule_epochs() == (1700, 1700 + 100 + 500)
+    assert ComparativeCalibrator()._schedule_epochs()[0] == 3000
     with pytest.raises(ValueError, match="unknown schedule 'long'"):
         training_schedule("long", "directional")
+
+
+def test_max_epochs_caps_the_whole_training_when_phase1_epochs_is_given():
+    model = fit_with(phase1_epochs=5, max_epochs=3, plateau_epochs=4, max_recover_epochs=4)
+    assert model.n_epochs_ == 3 and {row["phase"] for row in model.net_.history} == {1}
+    into_phase_two = fit_with(phase1_epochs=2, max_epochs=4, plateau_epochs=5, max_recover_epochs=9)
+    assert [row["phase"] for row in into_phase_two.net_.history] == [1, 1, 2, 2]
+
+
+def test_max_epochs_alone_keeps_its_former_meaning_with_a_future_warning():
+    with pytest.warns(FutureWarning, match=r"max_epochs=2\) sets phase 1's length, as before: training runs up to "
+                                           r"7 epochs.*phase1_epochs=2"):
+        model = fit_with(max_epochs=2, plateau_epochs=2, recover_tolerance=0.0, max_recover_epochs=3)
+    phases = [row["phase"] for row in model.net_.history]
+    assert phases[:5] == [1, 1, 2, 2, 3] and len(phases) <= 7  # phase 1 is 2 epochs; the cap is 2 + 2 + 3
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FutureWarning)  # the new parameters: no warning
+        fit_with(phase1_epochs=2, plateau_epochs=0, max_recover_epochs=0)
+
+
+@pytest.mark.parametrize("cls", [DirectionalCalibrator, ComparativeCalibrator])
+def test_network_calibrators_have_explicit_keyword_only_signatures(cls):
+    import inspect
+
+    assert "__init__" in cls.__dict__ or "__init__" in cls.__mro__[1].__dict__
+    parameters = list(inspect.signature(cls.__init__).parameters.values())[1:]
+    assert parameters and all(p.kind is p.KEYWORD_ONLY for p in parameters)
+    names = [p.name for p in parameters]
+    assert {"phase1_epochs", "max_epochs", "plateau_epochs", "max_recover_epochs", "n_threads"} <= set(names)
+    assert sorted(cls().get_params()) == sorted(names)
+    with pytest.raises(TypeError):
+        cls(no_such_parameter=1)

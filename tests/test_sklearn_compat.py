@@ -175,7 +175,7 @@ def test_score_is_r2(data):
     from ftcal import LinearCalibrator
 
     assert LinearCalibrator().fit(raw, wrench).score(raw, wrench) == pytest.approx(1.0)
-    assert TINY_SCHEDULE["max_epochs"] < 10  # the networks in these tests really are tiny
+    assert TINY_SCHEDULE["phase1_epochs"] < 10  # the networks in these tests really are tiny
 
 
 @pytest.mark.parametrize("kind", WRAPPER_KINDS)

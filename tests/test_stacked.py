@@ -34,7 +34,7 @@ EARLY_EPOCHS, EARLY_LOSS_RTOL = 5, 1e-4
 LOSS_RTOL = 3e-3
 PREDICTION_RTOL = 2e-2
 # short schedule with all three phases: phase 2's plateau patience is short enough that the rate drops
-SCHEDULE = dict(max_epochs=12, plateau_epochs=8, plateau_patience=0, max_recover_epochs=6, batch_size=16)
+SCHEDULE = dict(phase1_epochs=12, plateau_epochs=8, plateau_patience=0, max_recover_epochs=6, batch_size=16)
 
 
 def _data(n: int, seed: int):
@@ -82,7 +82,7 @@ def test_members_whose_rates_drop_together_then_stop_apart_train_as_separate_fit
     rng = np.random.default_rng(0)
     w = rng.normal(size=(96, 6))
     raw = (w + 0.05 * w**3) @ rng.normal(size=(6, 6))
-    template = DirectionalCalibrator(hidden_layer_sizes=(16, 16), max_epochs=6, plateau_epochs=2, plateau_patience=0,
+    template = DirectionalCalibrator(hidden_layer_sizes=(16, 16), phase1_epochs=6, plateau_epochs=2, plateau_patience=0,
                                      min_lr=1e-2, lr=0.1, max_recover_epochs=4, recover_tolerance=0.0, batch_size=16)
     members = [clone(template).set_params(random_state=s) for s in (4000, 4001)]
     separate = [clone(m).fit(raw, w) for m in members]

@@ -77,7 +77,7 @@ def test_linear_fit_reaches_the_simulated_noise_level(experiment):
 def test_tiny_directional_fit_runs_on_the_dataset(experiment):
     robot, plan, out, paths = experiment
     ds = prepare_dataset(paths, robot)
-    model = DirectionalCalibrator(hidden_layer_sizes=(32, 32), max_epochs=25, plateau_epochs=3, plateau_patience=1,
+    model = DirectionalCalibrator(hidden_layer_sizes=(32, 32), phase1_epochs=25, plateau_epochs=3, plateau_patience=1,
                                   max_recover_epochs=3, random_state=0).fit(ds.raw, ds.wrench)
     pred = model.predict(ds.raw)
     assert pred.shape == ds.wrench.shape and np.all(np.isfinite(pred))

@@ -32,10 +32,10 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import InvalidParameterError, Interval
 from sklearn.utils.validation import check_is_fitted
-from threadpoolctl import threadpool_limits
 
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import check_groups
+from ..core._threads import limit_threads_here
 from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
                                 validate_training_data)
 from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches
@@ -144,9 +144,9 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         -------
         self
         """
-        # One BLAS thread: the least-squares problems are tall and thin; on a busy 2-core machine
-        # threaded OpenBLAS made a 5000-sample fit ~300x slower (0.25 s instead of < 1 ms).
-        with threadpool_limits(1, user_api="blas"):
+        # one BLAS thread: the least-squares problems are small; threaded OpenBLAS made a 5000-row polynomial fit 20x
+        # slower on a busy machine (benchmarks/thread_limits.py). Never another thread's: see limit_threads_here.
+        with limit_threads_here(1):
             X, y = self._prepare_fit(X, y)
             self._fit(X, y)
         return self

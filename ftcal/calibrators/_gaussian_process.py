@@ -14,7 +14,6 @@ from sklearn.linear_model import LinearRegression
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
-from threadpoolctl import threadpool_limits
 
 from ._base import BaseCalibrator, GroupsFit
 from ..core._exceptions import ModelFileError
@@ -289,17 +288,15 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         sel = np.arange(m)
         if m > self.selection_samples:
             sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
-        # one BLAS thread: the matrices are small and threads only contend on a busy machine
-        with threadpool_limits(1, user_api="blas"):
-            mean, family, per_output, theta = self._choose(u[sel], {k: v[sel] for k, v in targets.items()}, seed)
-            target = targets[mean]
-            if per_output:  # each component from its selection optimum (a warm start)
-                regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
-                                                      seed, int(self.n_restarts_optimizer)), u, target[:, [j]])
-                              for j in range(target.shape[1])]
-            else:
-                start = make_kernel(family, n_channels).clone_with_theta(theta[0])
-                regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]
+        mean, family, per_output, theta = self._choose(u[sel], {k: v[sel] for k, v in targets.items()}, seed)
+        target = targets[mean]
+        if per_output:  # each component from its selection optimum (a warm start)
+            regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
+                                                  seed, int(self.n_restarts_optimizer)), u, target[:, [j]])
+                          for j in range(target.shape[1])]
+        else:
+            start = make_kernel(family, n_channels).clone_with_theta(theta[0])
+            regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]
         self.mean_, self.kernel_, self.per_output_ = mean, family, len(regressors) > 1
         if mean == "linear":
             self.linear_matrix_, self.linear_offset_ = np.asarray(ltm.coef_), np.asarray(ltm.intercept_)
@@ -314,17 +311,16 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
         groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
         basis = np.hstack([np.ones((m, 1)), xc_sub]) if mean == "linear" else np.ones((m, 1))
-        with threadpool_limits(1, user_api="blas"):
-            z = [_left_out_z(g, basis, None if groups is None else groups[rows]) for g in regressors]
-            z = [np.column_stack(z)] if all(len(part) for part in z) else []
-            unseen = np.setdiff1d(np.arange(n), rows)
-            if groups is not None:  # a row of a group the subset holds is not new: only unseen groups count
-                unseen = unseen[~np.isin(groups[unseen], groups[rows])]
-            if unseen.size:  # rows outside the subset: held out for real
-                unseen = np.sort(check_random_state(seed).choice(unseen, size=min(unseen.size, _STD_ROWS),
-                                                                 replace=False))
-                mean_u, std_u = self._predict_scaled(X[unseen], True)
-                z.append(np.abs(mean_u - ys[unseen]) / np.maximum(std_u, np.finfo(float).tiny))
+        z = [_left_out_z(g, basis, None if groups is None else groups[rows]) for g in regressors]
+        z = [np.column_stack(z)] if all(len(part) for part in z) else []
+        unseen = np.setdiff1d(np.arange(n), rows)
+        if groups is not None:  # a row of a group the subset holds is not new: only unseen groups count
+            unseen = unseen[~np.isin(groups[unseen], groups[rows])]
+        if unseen.size:  # rows outside the subset: held out for real
+            unseen = np.sort(check_random_state(seed).choice(unseen, size=min(unseen.size, _STD_ROWS),
+                                                             replace=False))
+            mean_u, std_u = self._predict_scaled(X[unseen], True)
+            z.append(np.abs(mean_u - ys[unseen]) / np.maximum(std_u, np.finfo(float).tiny))
         if z:
             self.std_scale_ = np.maximum(1.0, np.quantile(np.vstack(z), _STD_COVERAGE, axis=0) / _STD_Z)
         else:

@@ -210,7 +210,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     schedule = "short" if args.quick else args.schedule
     candidates = []
     for name in names:
-        extra = {"max_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
+        extra = {"phase1_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
             ftcal.training_schedule(schedule, name) else {}
         candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
     if args.history:  # after the static models: a history term is the more complex model

@@ -18,7 +18,7 @@ examples:
   ftcal fit data/train.csv --model directional --out models
   ftcal fit data/train.csv --model comparative --schedule short --seed 3 --out models
   ftcal fit real.csv --model linear --param ridge=1e-6 --tare 0.12,-0.3,0.05,0.2,0.01,-0.07 --out models
-  ftcal fit data/train.csv --model directional --param max_epochs=300 --param hidden_layer_sizes=[64,64]
+  ftcal fit data/train.csv --model directional --param phase1_epochs=300 --param hidden_layer_sizes=[64,64]
   ftcal fit recording.mat --torque-unit N.mm --model linear --report --out models
   ftcal fit log.csv --channels g1,g2,g3,g4,g5,g6 --wrench Fx,Fy,Fz,Mx,My,Mz --model linear --out models
 
@@ -49,7 +49,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
-        help="a calibrator parameter, value read as JSON (repeatable), e.g. max_epochs=200",
+        help="a calibrator parameter, value read as JSON (repeatable), e.g. phase1_epochs=200",
     )
     p.add_argument(
         "--alpha", type=positive_float,

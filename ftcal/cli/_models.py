@@ -100,13 +100,13 @@ def parse_param(text: str) -> tuple[str, Any]:
 
     Examples
     --------
-    >>> parse_param("max_epochs=20"), parse_param("hidden_layer_sizes=[64, 64]")
-    (('max_epochs', 20), ('hidden_layer_sizes', (64, 64)))
+    >>> parse_param("phase1_epochs=20"), parse_param("hidden_layer_sizes=[64, 64]")
+    (('phase1_epochs', 20), ('hidden_layer_sizes', (64, 64)))
     """
     key, sep, value = text.partition("=")
     key = key.strip()
     if not sep or not key.isidentifier():
-        raise argparse.ArgumentTypeError(f"{text!r} is not KEY=VALUE (e.g. max_epochs=50)")
+        raise argparse.ArgumentTypeError(f"{text!r} is not KEY=VALUE (e.g. phase1_epochs=50)")
     try:
         parsed = json.loads(value)
     except json.JSONDecodeError:

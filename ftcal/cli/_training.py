@@ -14,11 +14,10 @@ __all__ = ["fit_with_progress"]
 _PROGRESS = "cli_progress"
 
 
-def _epoch_budget(params: dict[str, Any]) -> int | None:
-    """Upper bound of the epochs of the three-phase schedule, from the estimator's parameters."""
-    phases = [params.get(k) for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")]
-    known = [int(p) for p in phases if isinstance(p, int) and p >= 0]
-    return sum(known) if known else None
+def _epoch_budget(estimator: Any) -> int | None:
+    """Upper bound of the epochs of a network's three-phase schedule (None when the estimator has no schedule)."""
+    schedule = getattr(estimator, "_schedule_epochs", None)
+    return int(schedule()[1]) if callable(schedule) else None
 
 
 def _callback_class():
@@ -53,7 +52,7 @@ def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: s
     if console.quiet:
         return estimator.fit(X, y, **fit_params)
     if "callbacks" in params:
-        bar = console.progress(total=_epoch_budget(params), desc=f"{label} epochs", unit="epoch")
+        bar = console.progress(total=_epoch_budget(estimator), desc=f"{label} epochs", unit="epoch")
         try:
             with _progress_callback_installed(estimator, params["callbacks"], _callback_class()(bar)):
                 return estimator.fit(X, y, **fit_params)

@@ -74,7 +74,7 @@ __all__ = ["run_artificial_benchmark", "summarize_results", "wilcoxon_pvalue", "
 _FORMAT = 1
 #: Sizes and epoch caps of ``quick=True`` (the smoke mode): 3 datasets, 100 points per sphere, 200 test points,
 #: networks capped at 60 + 10 + 10 epochs.
-QUICK = {"n_datasets": 3, "n_per_sphere": 100, "n_test": 200, "max_epochs": 60, "plateau_epochs": 10, "max_recover_epochs": 10}
+QUICK = {"n_datasets": 3, "n_per_sphere": 100, "n_test": 200, "phase1_epochs": 60, "plateau_epochs": 10, "max_recover_epochs": 10}
 
 #: The thesis' Tables II and III (mean, std), by our model names.
 THESIS_TABLES = {
@@ -266,7 +266,7 @@ def _run_group(tasks: list[dict]) -> list[dict]:
     module (:func:`~ftcal.fit_stacked`); each record's ``fit_seconds`` is
     its share of that fit's wall time, ``stacked`` the number of nets.
     """
-    # the networks limit their own threads during fit (n_threads, a threadpoolctl context): nothing process-wide
+    # the networks limit their own threads during fit (n_threads, in the fitting thread): nothing process-wide
     prepared = [_data_and_model(task) for task in tasks]
     start = time.perf_counter()
     if len(tasks) == 1:
@@ -422,7 +422,7 @@ def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_spher
         overrides = {}
         distribution = test_distribution or default_test_distribution(preset)
         if quick and model in CALIBRATOR_NAMES and training_schedule(schedule, model):
-            overrides = {k: QUICK[k] for k in ("max_epochs", "plateau_epochs", "max_recover_epochs")}
+            overrides = {k: QUICK[k] for k in ("phase1_epochs", "plateau_epochs", "max_recover_epochs")}
         config = {
             "format": _FORMAT, "preset": preset, "error_model": presets[preset].to_dict(), "model": model,
             "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,

@@ -36,7 +36,7 @@ DEMO_MODELS: tuple[str, ...] = ("linear", "comparative", "directional")
 _FULL_SIZES = (500, 1250)
 _QUICK_SIZES = (25, 60)
 #: Network parameters of the quick mode (on top of the short schedule).
-_QUICK_PARAMS = dict(max_epochs=4, plateau_epochs=1, max_recover_epochs=1, hidden_layer_sizes=(16, 16))
+_QUICK_PARAMS = dict(phase1_epochs=4, plateau_epochs=1, max_recover_epochs=1, hidden_layer_sizes=(16, 16))
 
 
 @dataclass
@@ -154,7 +154,7 @@ def run_demo(
     alpha = float(info["alpha"])
     for name in DEMO_MODELS:
         estimator = ftcal.make_calibrator(name, schedule="short", random_state=random_state)
-        if quick and "max_epochs" in estimator.get_params():
+        if quick and "phase1_epochs" in estimator.get_params():
             estimator.set_params(**_QUICK_PARAMS)
         start = time.perf_counter()
         result.models[name] = fit(estimator, train.raw, train.wrench, name)

@@ -2,8 +2,9 @@
 (``save_model`` / ``load_model``), ONNX export, seed ensembles, the automatic cross-validated choice
 (``AutoCalibrator``) and the hyperparameter search.
 
-Imports :mod:`ftcal.core`, :mod:`ftcal.calibrators` and :mod:`ftcal.neural_network`. Register a new
-calibrator in ``_registry.py`` (its name) and ``_model_io.py`` (its fitted arrays).
+Imports :mod:`ftcal.core`, :mod:`ftcal.calibrators` and :mod:`ftcal.neural_network`. A new calibrator is one
+module (its fitted state declared next to its class: ``_fitted_state``, with bounds, and for state it encodes
+itself ``_encoded_state`` and its hooks) and one line in ``_registry.py``; ``_model_io.py`` needs no edit.
 """
 
 from ..core._lazy import lazy_namespace

@@ -15,13 +15,13 @@ from sklearn import config_context
 from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
-from threadpoolctl import threadpool_limits
 
 from ..calibrators._history import refuse_history_inside
 from ..calibrators._base import BaseCalibrator, GroupsFit, calibrated_range, resolve_alpha, with_settings
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
                                      simplest_within_one_se)
+from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
 from ..core._wrench import scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
@@ -396,7 +396,7 @@ def _score_one(estimator, X, y, folds, groups, network_samples, seed):
     t0 = time.perf_counter()
     try:
         # small matrices: BLAS threads only contend on a shared machine (and with the other jobs)
-        with threadpool_limits(1, user_api="blas"), warnings.catch_warnings():
+        with limit_threads_here(1), warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             fitted = None
             if hasattr(estimator, "structure_params"):  # choose the structure once, on all rows

@@ -87,7 +87,7 @@ class EnsembleCalibrator(BaseCalibrator):
     >>> from ftcal import DirectionalCalibrator, EnsembleCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> member = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1)
+    >>> member = DirectionalCalibrator(phase1_epochs=2, plateau_epochs=1, max_recover_epochs=1)
     >>> ensemble = EnsembleCalibrator(member, n_members=3, random_state=0).fit(raw, w)
     >>> mean = np.mean([m.predict(raw) for m in ensemble.estimators_], axis=0)
     >>> bool(np.allclose(ensemble.predict(raw), mean))
@@ -173,8 +173,8 @@ def ensemble_factory(member_class: type) -> Callable[..., EnsembleCalibrator]:
     Examples
     --------
     >>> from ftcal import DirectionalCalibrator
-    >>> ens = ensemble_factory(DirectionalCalibrator)(random_state=0, n_members=3, max_epochs=5)
-    >>> ens.n_members, ens.estimator.max_epochs
+    >>> ens = ensemble_factory(DirectionalCalibrator)(random_state=0, n_members=3, phase1_epochs=5)
+    >>> ens.n_members, ens.estimator.phase1_epochs
     (3, 5)
     """
 

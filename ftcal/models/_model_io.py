@@ -11,7 +11,9 @@ member without pickle, so loading never executes code from the file):
   compact ``history`` (epoch, phase, lr, losses);
 * ``fitted/<name>``: fitted arrays (``zero_reading_``, ``calibration_matrix_``,
   ...);
-* ``module/<name>``: the torch ``state_dict`` of a network (float32);
+* ``module/<name>``: what a class encodes itself (its ``_encoded_state``): a network calibrator's
+  ``_state_to_arrays`` gives its torch ``state_dict`` (float32) and its history, ``_array_shapes`` the names and
+  shapes a file must hold (checked before reading), ``_state_from_arrays`` rebuilds the net;
 * ``children/<i>/...``: fitted sub-models (the members of an
   :class:`~ftcal.EnsembleCalibrator`, the inner calibrator of a wrapper), each
   in this same layout, their metadata in the JSON's ``children`` list with the
@@ -22,8 +24,9 @@ tuple of fitted attribute names (collected over the class' bases, so every
 calibrator stores :class:`~ftcal.calibrators._base.BaseCalibrator`'s
 ``alpha_``, ``zero_reading_``, ``feature_names_in_``, ...). Each value is
 stored by what it is: a numeric array as a member, a number, string, flag or
-plain dict as JSON, a fitted calibrator (or a list of them) as children, a
-skorch network as its weights and history. Which classes a file may name is
+plain dict as JSON, a fitted calibrator (or a list of them) as children, and
+what the class lists in ``_encoded_state`` by the class' own hooks (a network: its weights and history; this
+module knows no network internals). Which classes a file may name is
 the registry's list (:func:`ftcal.models._registry.model_classes`): adding a
 calibrator is one module and one registry line.
 
@@ -65,7 +68,6 @@ FORMAT = "ftcal-model"
 FORMAT_VERSION = 2
 _READABLE_VERSIONS = (1, 2)
 _META_KEY = "__metadata__"
-_HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reason")
 #: Largest metadata member read [bytes]: an ftcal model's JSON is a few kB (a long training history: ~1 MB).
 _MAX_METADATA_BYTES = 64 * 2**20
 #: Version-1 files name no attribute for their sub-models; these were the only meta-estimators then.
@@ -151,10 +153,6 @@ def _decode(value):
     return value
 
 
-def _is_net(value) -> bool:
-    return hasattr(value, "module_") and hasattr(value, "history")
-
-
 def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
     """Write a fitted calibrator to one ``.npz`` model file; returns the path.
 
@@ -234,24 +232,28 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
     arrays: dict[str, np.ndarray] = {}
     children: list[tuple[str, bool, object]] = []
     meta["state"] = []  # what is stored, so that a reader can tell a missing entry from an absent attribute
+    encoded = getattr(type(estimator), "_encoded_state", ())  # stored by the class' own _state_to_arrays
     for key in fitted_state_names(type(estimator)):
         value = estimator.__dict__.get(key)
         if value is None:
             continue
         meta["state"].append(key)
+        if key in encoded:
+            continue
         if isinstance(value, BaseCalibrator):
             children.append((key, True, value))
         elif isinstance(value, list) and value and all(isinstance(v, BaseCalibrator) for v in value):
             children.extend((key, False, v) for v in value)
-        elif _is_net(value):
-            meta["history"] = [{k: row[k] for k in _HISTORY_KEYS if k in row} for row in value.history]
-            arrays.update({f"module/{k}": v.detach().cpu().numpy() for k, v in value.module_.state_dict().items()})
         elif isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
             arrays[f"fitted/{key}"] = value
         elif isinstance(value, np.ndarray) and all(isinstance(v, str) for v in value.ravel()):
             meta["fitted"][key] = {"strings": [str(v) for v in value.ravel()]}
         else:
             meta["fitted"][key] = _encode(value)
+    if any(key in encoded for key in meta["state"]):
+        own_arrays, own_meta = estimator._state_to_arrays()
+        arrays.update({f"module/{k}": v for k, v in own_arrays.items()})
+        meta.update(own_meta)
     if children:
         meta["children"] = []
         for i, (key, single, child) in enumerate(children):
@@ -495,7 +497,7 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
                                      "damaged. Fit and save the model again.")
             setattr(estimator, key, array)
     if meta.get("history") is not None or archive.keys(f"{prefix}module/"):
-        _restore_net(estimator, meta, archive, prefix)
+        _restore_encoded(estimator, meta, archive, prefix)
     children = meta.get("children") or []
     if meta.get("format_version", FORMAT_VERSION) == 1 and children:  # version 1: one attribute, named nowhere
         attribute = _V1_CHILDREN[name]
@@ -521,53 +523,27 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
     return estimator
 
 
-def _restore_net(estimator, meta: dict, archive: _Archive, prefix: str) -> None:
-    """The skorch network of a network calibrator, from its ``module/`` weights (shapes checked first)."""
-    import torch
-    from skorch.history import History
-
-    keys = archive.keys(f"{prefix}module/")
-    n_inputs = meta["fitted"]["n_features_in_"]
-    _check_scalar(meta["model_type"], "n_features_in_", n_inputs)
-    expected = _expected_module_shapes(estimator, n_inputs)
-    got_names = {k[len(prefix) + len("module/"):]: k for k in keys}
-    shapes = {}
-    for short in expected:  # members are read only when the declared layers name them
-        if short in got_names:
-            shapes[short] = archive.read(got_names[short])
-    got = {k: tuple(v.shape) for k, v in shapes.items()}
+def _restore_encoded(estimator, meta: dict, archive: _Archive, prefix: str) -> None:
+    """The state a class encodes itself (a network's weights and history): its ``module/`` arrays, names and shapes
+    checked against the class' :meth:`_array_shapes` before any is read, then its ``_state_from_arrays``."""
+    name = meta["model_type"]
+    if not getattr(type(estimator), "_encoded_state", ()):
+        raise ModelFileError(f"the file holds network weights ('module/' arrays or a history), which a {name} "
+                             "does not have; the file is damaged or was edited.")
+    _check_scalar(name, "n_features_in_", meta["fitted"].get("n_features_in_"))
+    expected = estimator._array_shapes()
+    got_names = {k[len(prefix) + len("module/"):]: k for k in archive.keys(f"{prefix}module/")}
+    arrays = {short: archive.read(got_names[short]) for short in expected if short in got_names}
+    got = {k: tuple(v.shape) for k, v in arrays.items()}
     extra = sorted(set(got_names) - set(expected))
     if got != expected or extra:
         diff = extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
         k = diff[0]
         raise ModelFileError(
             f"the network weights do not match the declared layers (hidden_layer_sizes="
-            f"{estimator.hidden_layer_sizes}, {n_inputs} inputs): {k} is {got.get(k, 'missing')}, expected "
-            f"{expected.get(k, 'absent')}; the file is damaged or was edited."
-        )
-    bad = [k for k, v in shapes.items() if v.dtype.kind != "f" or not np.isfinite(v).all()]
+            f"{estimator.hidden_layer_sizes}, {meta['fitted']['n_features_in_']} inputs): {k} is "
+            f"{got.get(k, 'missing')}, expected {expected.get(k, 'absent')}; the file is damaged or was edited.")
+    bad = [k for k, v in arrays.items() if v.dtype.kind != "f" or not np.isfinite(v).all()]
     if bad:
         raise ModelFileError(f"array 'module/{bad[0]}' holds NaN, inf or non-numeric values; the file is damaged.")
-    state = {k: torch.from_numpy(v.astype(np.float32)) for k, v in shapes.items()}
-    net = estimator._build_net(n_inputs, seed=0)
-    net.initialize()
-    net.module_.load_state_dict(state)
-    net.history = History(meta.get("history", []))
-    estimator.net_ = net
-    estimator._cache_numpy_layers()
-
-
-def _expected_module_shapes(estimator, n_inputs: int) -> dict[str, tuple[int, ...]]:
-    """Shapes of the state_dict the declared ``hidden_layer_sizes`` would build (checked before building it)."""
-    sizes = estimator.hidden_layer_sizes
-    if not isinstance(sizes, (tuple, list)) or not all(_is_int(w) and 1 <= w <= 1_000_000 for w in sizes):
-        raise ModelFileError(f"hidden_layer_sizes {sizes!r:.80} is not a tuple of positive widths; the file is "
-                             "damaged.")
-    widths = [n_inputs, *sizes, estimator._network_outputs()]
-    check_allocation(4.0 * sum(float(a) * b for a, b in zip(widths[:-1], widths[1:])),
-                     f"the network of hidden_layer_sizes={tuple(sizes)}", "this is not a model ftcal wrote")
-    shapes = {}
-    for i in range(len(widths) - 1):
-        shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
-        shapes[f"layers.{2 * i}.bias"] = (widths[i + 1],)
-    return shapes
+    estimator._state_from_arrays(arrays, {"history": meta.get("history") or []})

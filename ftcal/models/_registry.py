@@ -10,7 +10,7 @@ import torch.
 Schedules (:func:`training_schedule`), counts in epochs:
 
 =============  =========  ==============  ================  ===================
-schedule        model      ``max_epochs``  ``plateau_epochs``  ``max_recover_epochs``
+schedule        model      ``phase1_epochs``  ``plateau_epochs``  ``max_recover_epochs``
 =============  =========  ==============  ================  ===================
 ``"thesis"``   directional  1700           100               500
 ``"thesis"``   comparative  3000           100               500
@@ -154,7 +154,7 @@ def training_schedule(name: str, model: str) -> dict[str, Any]:
 
     Examples
     --------
-    >>> training_schedule("thesis", "comparative")["max_epochs"]
+    >>> training_schedule("thesis", "comparative")["phase1_epochs"]
     3000
     >>> training_schedule("short", "linear")
     {}
@@ -170,7 +170,7 @@ def calibrator_parameters(name: str) -> tuple[str, ...]:
 
     Examples
     --------
-    >>> "max_epochs" in calibrator_parameters("directional_ensemble")
+    >>> "phase1_epochs" in calibrator_parameters("directional_ensemble")
     True
     """
     _check_name(name)
@@ -186,7 +186,7 @@ def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **pa
 
     Examples
     --------
-    >>> make_calibrator("directional", schedule="short", random_state=0).max_epochs
+    >>> make_calibrator("directional", schedule="short", random_state=0).phase1_epochs
     150
     >>> make_calibrator("linear", ridge=0.1)
     LinearCalibrator(ridge=0.1)
@@ -199,8 +199,8 @@ def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **pa
     return _factory(name)(random_state=random_state, **merged)
 
 
-_DIRECTIONAL = {"thesis": dict(_THESIS, max_epochs=1700), "short": dict(_SHORT, max_epochs=150)}
-_COMPARATIVE = {"thesis": dict(_THESIS, max_epochs=3000), "short": dict(_SHORT, max_epochs=250)}
+_DIRECTIONAL = {"thesis": dict(_THESIS, phase1_epochs=1700), "short": dict(_SHORT, phase1_epochs=150)}
+_COMPARATIVE = {"thesis": dict(_THESIS, phase1_epochs=3000), "short": dict(_SHORT, phase1_epochs=250)}
 register_calibrator("linear", _Lazy("calibrators._linear", "LinearCalibrator"))
 register_calibrator("comparative", _Lazy("neural_network._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE)
 register_calibrator("directional", _Lazy("neural_network._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL)

@@ -43,7 +43,7 @@ __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "
 _NETWORK_SPACE = {
     "hidden_layer_sizes": [(32, 32), (64, 64), (64, 64, 64), (128, 128, 128)],
     "lr": [3e-4, 1e-3, 3e-3],
-    "max_epochs": [150, 400, 1000],
+    "phase1_epochs": [150, 400, 1000],
 }
 _ENSEMBLE_SPACE = {f"estimator__{k}": v for k, v in _NETWORK_SPACE.items()}
 

@@ -1,10 +1,10 @@
 """The network calibrators' base: ``fit`` and :func:`~ftcal.fit_stacked` both run :func:`train_networks` (the
-one engine, in a forked torch RNG and a ``threadpoolctl`` context); float32 training, float64 numpy inference."""
+one engine, in a forked torch RNG, torch's threads limited in the fitting thread alone); float32 training, float64
+numpy inference."""
 
 from __future__ import annotations
 
-import contextlib
-import inspect
+import warnings
 from collections.abc import Sequence
 from numbers import Integral, Real
 
@@ -15,11 +15,11 @@ from skorch.history import History
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 from sklearn.utils._param_validation import Interval
-from threadpoolctl import threadpool_limits
 
 from ..calibrators._base import BaseCalibrator
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
+from ..core._threads import limit_threads_here
 from ..core._validation import validate_readings
 from ._engine import MemberSquaredError, NetworkRegressor
 from ._modules import mlp_layers
@@ -32,6 +32,8 @@ __all__ = ["NetworkCalibrator", "train_networks", "device_available"]
 _PREDICT_CHUNK = 1024
 #: A net whose best loss exceeds this multiple of the loss of predicting zero has diverged.
 _DIVERGENCE_FACTOR = 100.0
+#: The per-epoch entries of a network's history that model files keep.
+_HISTORY_KEYS = ("epoch", "phase", "lr", "train_loss", "valid_loss", "stop_reason")
 #: Largest magnitude of a network input or target that float32 training handles with room to spare.
 _FLOAT32_SAFE = 1e30
 
@@ -43,30 +45,6 @@ def device_available(device: str) -> bool:
     except (RuntimeError, AssertionError, ValueError, TypeError):
         return False
     return True
-
-
-#: The parameters both network calibrators take, with their defaults (the thesis' schedule, III-A-d).
-NETWORK_DEFAULTS = dict(hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32, max_epochs=1700, plateau_epochs=100,
-                        plateau_patience=30, plateau_factor=0.1, min_lr=1e-5, recover_tolerance=0.05,
-                        max_recover_epochs=500, validation_fraction=0.2, alpha=None, zero_reading=None,
-                        random_state=None, verbose=0, callbacks=None, device="cpu", n_threads=1)
-
-
-def keyword_init(defaults: dict):
-    """An ``__init__`` storing the keyword-only parameters ``defaults`` (name -> default) and nothing else, with
-    the explicit signature scikit-learn reads (``get_params``, ``clone``)."""
-
-    def __init__(self, **params):
-        unknown = set(params) - set(defaults)
-        if unknown:
-            raise TypeError(f"{type(self).__name__}() got unexpected keyword argument(s) {sorted(unknown)}")
-        for name, default in defaults.items():
-            setattr(self, name, params.get(name, default))
-
-    __init__.__signature__ = inspect.Signature(
-        [inspect.Parameter("self", inspect.Parameter.POSITIONAL_OR_KEYWORD)]
-        + [inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=d) for name, d in defaults.items()])
-    return __init__
 
 
 def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence[tuple]) -> None:
@@ -116,12 +94,53 @@ class NetworkCalibrator(BaseCalibrator):
     #: Stored by model files (``net_``: the weights and the history).
     _fitted_state = ("n_epochs_", "best_epoch_", "stop_reason_", "net_")
 
+    #: Phase 1's length when ``phase1_epochs`` is None [epochs] (the thesis' schedule, III-A-d).
+    _default_phase1_epochs = 1700
+
+    def __init__(self, *, hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32, phase1_epochs=None,
+                 max_epochs=None, plateau_epochs=100, plateau_patience=30, plateau_factor=0.1, min_lr=1e-5,
+                 recover_tolerance=0.05, max_recover_epochs=500, validation_fraction=0.2, alpha=None,
+                 zero_reading=None, random_state=None, verbose=0, callbacks=None, device="cpu", n_threads=1):
+        self.hidden_layer_sizes = hidden_layer_sizes
+        self.lr = lr
+        self.batch_size = batch_size
+        self.phase1_epochs = phase1_epochs
+        self.max_epochs = max_epochs
+        self.plateau_epochs = plateau_epochs
+        self.plateau_patience = plateau_patience
+        self.plateau_factor = plateau_factor
+        self.min_lr = min_lr
+        self.recover_tolerance = recover_tolerance
+        self.max_recover_epochs = max_recover_epochs
+        self.validation_fraction = validation_fraction
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+        self.verbose = verbose
+        self.callbacks = callbacks
+        self.device = device
+        self.n_threads = n_threads
+
+    def _schedule_epochs(self) -> tuple[int, int]:
+        """``(phase 1's length, the cap on all epochs)`` from ``phase1_epochs`` and ``max_epochs``.
+
+        ``max_epochs`` alone (``phase1_epochs=None``) keeps its former meaning, phase 1's length (the whole
+        schedule then runs up to ``max_epochs + plateau_epochs + max_recover_epochs`` epochs), with a
+        ``FutureWarning`` (see :meth:`_check_params`)."""
+        full = self.plateau_epochs + self.max_recover_epochs
+        if self.phase1_epochs is None and self.max_epochs is not None:  # the former meaning
+            return int(self.max_epochs), int(self.max_epochs) + full
+        phase1 = self._default_phase1_epochs if self.phase1_epochs is None else int(self.phase1_epochs)
+        cap = phase1 + full if self.max_epochs is None else int(self.max_epochs)
+        return phase1, cap
+
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "hidden_layer_sizes": [tuple, list],
         "lr": [Interval(Real, 0, None, closed="neither")],
         "batch_size": [Interval(Integral, 1, None, closed="left")],
-        "max_epochs": [Interval(Integral, 1, None, closed="left")],
+        "phase1_epochs": [Interval(Integral, 1, None, closed="left"), None],
+        "max_epochs": [Interval(Integral, 1, None, closed="left"), None],
         "plateau_epochs": [Interval(Integral, 0, None, closed="left")],
         "plateau_patience": [Interval(Integral, 0, None, closed="left")],
         "plateau_factor": [Interval(Real, 0, 1, closed="right")],
@@ -144,10 +163,19 @@ class NetworkCalibrator(BaseCalibrator):
         odd = [c for c in self.callbacks or () if not isinstance(c[1] if pair(c) else c, Callback)]
         if odd:
             raise CalibrationInputError(f"callbacks must hold skorch callbacks or (name, callback) pairs; got {odd[0]!r}.")
+        if self.phase1_epochs is None and self.max_epochs is not None:
+            phase1, cap = self._schedule_epochs()
+            warnings.warn(
+                f"{type(self).__name__}(max_epochs={self.max_epochs}) sets phase 1's length, as before: training runs "
+                f"up to {cap} epochs (phases 2 and 3: plateau_epochs={self.plateau_epochs}, max_recover_epochs="
+                f"{self.max_recover_epochs}). In a future ftcal max_epochs will cap the whole training. Pass "
+                f"phase1_epochs={phase1} for phase 1's length (this behaviour), and max_epochs with it only to cap "
+                "all epochs.", FutureWarning, stacklevel=4)
 
     def _thread_limit(self):
-        """A ``threadpoolctl`` context limiting torch and BLAS to ``n_threads`` (a no-op context for None)."""
-        return contextlib.nullcontext() if self.n_threads is None else threadpool_limits(self.n_threads)
+        """A context limiting torch's threads (OpenMP, per thread) to ``n_threads`` in the calling thread, and BLAS
+        when no other thread runs; never another thread's (:func:`~ftcal.core._threads.limit_threads_here`)."""
+        return limit_threads_here(self.n_threads, openmp=True)
 
     def _build_net(self, n_inputs: int, seed: int | Sequence[int], loss_weights: Sequence | None = None
                    ) -> NetworkRegressor:
@@ -160,7 +188,7 @@ class NetworkCalibrator(BaseCalibrator):
             criterion=MemberSquaredError, criterion__weights=[list(w) for w in loss_weights or [self._loss_weights()]],
             # the fused CPU kernel does Adam's update in one pass: 2.5x faster steps for these small nets
             optimizer=torch.optim.Adam, optimizer__fused=self.device == "cpu", lr=self.lr, batch_size=self.batch_size,
-            max_epochs=self.max_epochs + self.plateau_epochs + self.max_recover_epochs, seeds=seeds,
+            max_epochs=self._schedule_epochs()[1], seeds=seeds,
             validation_fraction=self.validation_fraction, train_split=None, callbacks=schedule_callbacks(self),
             verbose=self.verbose, device=self.device)
 
@@ -188,6 +216,40 @@ class NetworkCalibrator(BaseCalibrator):
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])
+
+    # -- model files: this class encodes and decodes its own network (ftcal.save_model / load_model) --------
+    #: Fitted attributes a model file holds through :meth:`_state_to_arrays` / :meth:`_state_from_arrays`.
+    _encoded_state = ("net_",)
+
+    def _state_to_arrays(self) -> tuple[dict[str, NDArray], dict]:
+        """The fitted network as model-file arrays (``state_dict`` name -> float32 array) and JSON (the history)."""
+        arrays = {k: v.detach().cpu().numpy() for k, v in self.net_.module_.state_dict().items()}
+        history = [{k: row[k] for k in _HISTORY_KEYS if k in row} for row in self.net_.history]
+        return arrays, {"history": history}
+
+    def _array_shapes(self) -> dict[str, tuple[int, ...]]:
+        """Names and shapes of the arrays :meth:`_state_from_arrays` takes, from the parameters and fitted sizes
+        (checked by the model loader before it reads or allocates anything)."""
+        sizes = self.hidden_layer_sizes
+        if not isinstance(sizes, (tuple, list)) or not all(
+                isinstance(w, Integral) and not isinstance(w, bool) and 1 <= w <= 1_000_000 for w in sizes):
+            raise ModelFileError(f"hidden_layer_sizes {sizes!r:.80} is not a tuple of positive widths; the file is "
+                                 "damaged.")
+        shapes = self._module_class.state_shapes(int(self.n_features_in_), sizes, self._network_outputs())
+        check_allocation(4.0 * sum(float(np.prod(shape)) for shape in shapes.values()),
+                         f"the network of hidden_layer_sizes={tuple(sizes)}", "this is not a model ftcal wrote")
+        return shapes
+
+    def _state_from_arrays(self, arrays: dict[str, NDArray], extra: dict) -> None:
+        """Rebuild ``net_`` from :meth:`_state_to_arrays`' output (shapes already checked), torch's global random
+        generator left as it was (building a net seeds torch)."""
+        with torch.random.fork_rng(devices=[]):
+            net = self._build_net(int(self.n_features_in_), seed=0)
+            net.initialize()
+        net.module_.load_state_dict({k: torch.from_numpy(np.asarray(v, dtype=np.float32)) for k, v in arrays.items()})
+        net.history = History(list(extra.get("history") or []))
+        self.net_ = net
+        self._cache_numpy_layers()
 
     def _member_net(self, stack: NetworkRegressor, k: int, seed: int) -> NetworkRegressor:
         """This estimator's net as member ``k`` of a trained stack: its weights, its slice of the history (its own

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._base import NetworkCalibrator, NETWORK_DEFAULTS, keyword_init
+from ._base import NetworkCalibrator
 from ._modules import ComparativeNet
 from ..core._wrench import TORQUE
 
@@ -26,13 +26,13 @@ class ComparativeCalibrator(NetworkCalibrator):
     >>> from ftcal import ComparativeCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> model = ComparativeCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
+    >>> model = ComparativeCalibrator(phase1_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
     >>> model.predict(raw[:2]).shape
     (2, 6)
     """
 
     _module_class = ComparativeNet
-    __init__ = keyword_init({**NETWORK_DEFAULTS, "max_epochs": 3000})
+    _default_phase1_epochs = 3000  # III-E-a
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6))

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval
 
 from ..core._exceptions import CalibrationInputError
-from ._base import NetworkCalibrator, NETWORK_DEFAULTS, keyword_init
+from ._base import NetworkCalibrator
 from ._modules import DirectionalNet
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -42,8 +42,13 @@ class DirectionalCalibrator(NetworkCalibrator):
         Adam learning rate of phase 1.
     batch_size : int, default=32
         Mini-batch size.
-    max_epochs : int, default=1700
-        Phase 1 length (constant ``lr``).
+    phase1_epochs : int or None, default=None
+        Phase 1's length (constant ``lr``) [epochs]; None: 1700 (the thesis; 3000 for the comparative DNN).
+    max_epochs : int or None, default=None
+        Cap on the epochs of the whole training (all three phases); None: no cap beyond the schedule's
+        ``phase1_epochs + plateau_epochs + max_recover_epochs``. **Deprecated meaning**: given without
+        ``phase1_epochs``, ``max_epochs`` is still phase 1's length, as in ftcal 0.1 (``max_epochs=2``
+        then trains up to 602 epochs), with a ``FutureWarning``; pass ``phase1_epochs`` for that.
     plateau_epochs : int, default=100
         Phase 2 length (``ReduceLROnPlateau``).
     plateau_patience : int, default=30
@@ -76,7 +81,8 @@ class DirectionalCalibrator(NetworkCalibrator):
     device : str, default='cpu'
         Torch device.
     n_threads : int or None, default=1
-        Threads torch and BLAS may use in ``fit`` (a ``threadpoolctl`` context): one is fastest for these nets.
+        Threads torch may use in ``fit``, limited in the fitting thread alone (OpenMP keeps a count per thread): one
+        is fastest for these nets. Other threads of the process and the BLAS keep theirs; None leaves torch as it is.
 
     Attributes
     ----------
@@ -97,7 +103,7 @@ class DirectionalCalibrator(NetworkCalibrator):
     >>> from ftcal import DirectionalCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(40, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> model = DirectionalCalibrator(max_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
+    >>> model = DirectionalCalibrator(phase1_epochs=2, plateau_epochs=1, max_recover_epochs=1, random_state=0).fit(raw, w)
     >>> model.predict(raw[:2]).shape
     (2, 6)
     """
@@ -106,7 +112,19 @@ class DirectionalCalibrator(NetworkCalibrator):
     _parameter_constraints: dict = {**NetworkCalibrator._parameter_constraints,
                                     "min_relative_magnitude": [Interval(Real, 0, 1, closed="both")]}
 
-    __init__ = keyword_init({**NETWORK_DEFAULTS, "min_relative_magnitude": 1e-3})
+    def __init__(self, *, hidden_layer_sizes=(64, 64, 64), lr=1e-3, batch_size=32, phase1_epochs=None,
+                 max_epochs=None, plateau_epochs=100, plateau_patience=30, plateau_factor=0.1, min_lr=1e-5,
+                 recover_tolerance=0.05, max_recover_epochs=500, validation_fraction=0.2,
+                 min_relative_magnitude=1e-3, alpha=None, zero_reading=None, random_state=None, verbose=0,
+                 callbacks=None, device="cpu", n_threads=1):
+        super().__init__(
+            hidden_layer_sizes=hidden_layer_sizes, lr=lr, batch_size=batch_size, phase1_epochs=phase1_epochs,
+            max_epochs=max_epochs, plateau_epochs=plateau_epochs, plateau_patience=plateau_patience,
+            plateau_factor=plateau_factor, min_lr=min_lr, recover_tolerance=recover_tolerance,
+            max_recover_epochs=max_recover_epochs, validation_fraction=validation_fraction, alpha=alpha,
+            zero_reading=zero_reading, random_state=random_state, verbose=verbose, callbacks=callbacks, device=device,
+            n_threads=n_threads)
+        self.min_relative_magnitude = min_relative_magnitude
 
     def _network_outputs(self) -> int:
         return int(getattr(self, "n_outputs_", 6)) + 1  # the direction and the scale

@@ -114,12 +114,13 @@ def schedule_callbacks(estimator) -> list:
     """The named callbacks of ``estimator``'s whole schedule, in the order they must run (its own ``callbacks``
     after the epoch's phase and rate are recorded, before the phase-3 stop rule: they also see the last epoch)."""
     e = estimator
+    phase1 = e._schedule_epochs()[0]
     monitor = "member_train_loss" if e.validation_fraction is None else "member_valid_loss"
     return [
-        ("training_phase", TrainingPhase(e.max_epochs, e.plateau_epochs, e.plateau_factor, e.plateau_patience, e.min_lr,
+        ("training_phase", TrainingPhase(phase1, e.plateau_epochs, e.plateau_factor, e.plateau_patience, e.min_lr,
                                          monitor)),
         ("restore_best_weights", RestoreBestWeights(monitor)),
         *list(e.callbacks or []),
-        ("recover_stop", RecoverStop(e.recover_tolerance, e.max_recover_epochs, e.max_epochs + e.plateau_epochs + 1,
+        ("recover_stop", RecoverStop(e.recover_tolerance, e.max_recover_epochs, phase1 + e.plateau_epochs + 1,
                                      monitor)),
     ]

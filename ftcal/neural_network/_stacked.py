@@ -65,7 +65,7 @@ def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence
     >>> from ftcal import DirectionalCalibrator, fit_stacked
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> nets = [DirectionalCalibrator(max_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=s)
+    >>> nets = [DirectionalCalibrator(phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=s)
     ...         for s in range(3)]
     >>> fitted = fit_stacked(nets, raw, w)
     >>> [m.predict(raw[:1]).shape for m in fitted]

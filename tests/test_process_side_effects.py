@@ -1,0 +1,122 @@
+"""A fit or a model load changes nothing of the process beyond the estimator: other threads keep their BLAS and
+OpenMP threads while a fit runs, and torch's global random generator is left as it was."""
+
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+from threadpoolctl import threadpool_info, threadpool_limits
+
+from ftcal import (ComparativeCalibrator, DirectionalCalibrator, GaussianProcessCalibrator, LinearCalibrator,
+                   PolynomialCalibrator, load_model, save_model)
+
+V2 = Path(__file__).parent / "data" / "model_files_v2"
+
+
+def _pools() -> dict:
+    return {pool["filepath"]: pool["num_threads"] for pool in threadpool_info()}
+
+
+class _PausingReadings:
+    """Readings that hold the fit at its first look at them (inside ``fit``, where the limits apply) until released."""
+
+    def __init__(self, values):
+        self.values, self.inside, self.release = values, threading.Event(), threading.Event()
+
+    def __array__(self, dtype=None, copy=None):
+        if not self.inside.is_set():
+            self.inside.set()
+            assert self.release.wait(60), "the test never released the fit"
+        return np.asarray(self.values, dtype=dtype)
+
+    def __len__(self):
+        return len(self.values)
+
+    @property
+    def shape(self):
+        return self.values.shape
+
+
+@pytest.mark.parametrize("make", [
+    lambda: LinearCalibrator(),
+    lambda: PolynomialCalibrator(degree=2),
+    lambda: GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0),
+    lambda: DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0, max_recover_epochs=0,
+                                  random_state=0),
+], ids=["linear", "polynomial", "gaussian_process", "directional"])
+def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs(make):
+    rng = np.random.default_rng(0)
+    wrench = rng.normal(size=(60, 6))
+    raw = wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6))
+    readings = _PausingReadings(raw)
+    # the process' own thread counts (a threadpool_limits around the test would hide a limit set in another thread)
+    before, torch_threads = _pools(), torch.get_num_threads()
+    if min(before.values()) < 2:
+        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
+    errors = []
+
+    def fit():
+        try:
+            make().fit(readings, wrench)
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+            readings.inside.set()
+
+    worker = threading.Thread(target=fit)
+    worker.start()
+    assert readings.inside.wait(60)
+    during, torch_during = _pools(), torch.get_num_threads()
+    readings.release.set()
+    worker.join(120)
+    assert not errors, errors
+    assert during == before
+    assert torch_during == torch_threads
+
+
+def test_the_networks_thread_limit_holds_in_the_fitting_thread():
+    """n_threads limits torch in the thread that fits (OpenMP keeps a count per thread)."""
+    seen = []
+
+    from skorch.callbacks import Callback
+
+    class Record(Callback):
+        def on_epoch_end(self, net, **kwargs):
+            seen.append(torch.get_num_threads())
+
+    rng = np.random.default_rng(1)
+    wrench = rng.normal(size=(40, 6))
+    raw = wrench @ rng.normal(size=(6, 6))
+    with threadpool_limits(2, user_api="openmp"):
+        DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0, max_recover_epochs=0,
+                              n_threads=1, callbacks=[Record()], random_state=0).fit(raw, wrench)
+        assert torch.get_num_threads() == 2
+    assert seen and set(seen) == {1}
+
+
+@pytest.mark.parametrize("name", ["directional", "comparative", "ensemble"])
+def test_load_model_leaves_torchs_global_generator_as_it_was(name):
+    torch.manual_seed(123)
+    torch.rand(2)  # the generator in some state past its seed
+    state = torch.random.get_rng_state()
+    expected_next = torch.rand(3)
+    torch.random.set_rng_state(state)
+    load_model(V2 / f"{name}.model.npz")
+    assert torch.initial_seed() == 123
+    assert torch.equal(torch.rand(3), expected_next)
+
+
+@pytest.mark.parametrize("name", ["directional", "comparative", "ensemble"])
+def test_network_files_written_before_the_networks_encoded_their_own_weights_still_load(name, tmp_path):
+    """Files of format version 2 written by tests/data/model_files_v2/make_files.py (before the weight hooks)
+    predict exactly as when they were saved, and save again to the same arrays."""
+    model = load_model(V2 / f"{name}.model.npz")
+    readings = np.load(V2 / "readings.npy")
+    np.testing.assert_array_equal(model.predict(readings), np.load(V2 / f"{name}.expected.npy"))
+    again = save_model(model, tmp_path / "again.model.npz")
+    with np.load(V2 / f"{name}.model.npz") as old, np.load(again) as new:
+        weights = sorted(k for k in old.files if "module/" in k)
+        assert weights and weights == sorted(k for k in new.files if "module/" in k)
+        for k in weights:
+            np.testing.assert_array_equal(old[k], new[k])
