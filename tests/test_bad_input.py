@@ -80,8 +80,10 @@ def test_fewer_than_three_channels_are_refused_where_calibration_data_enter(data
     raw, wrench = data
     with pytest.raises(DatasetFileError, match=r"raw has 2 channel\(s\).*at least 3 raw channels"):
         CalibrationDataset(raw=raw[:, :2], wrench=wrench)
-    with pytest.raises(DatasetFileError, match=r"wrench must have shape \(n_samples, 6\)"):
-        CalibrationDataset(raw=raw, wrench=wrench[:, :5])
+    with pytest.raises(DatasetFileError, match=r"wrench must have shape \(n_samples, n_axes\), 1 to 6 axes"):
+        CalibrationDataset(raw=raw, wrench=np.hstack([wrench, wrench[:, :1]]))  # a seventh axis
+    with pytest.raises(DatasetFileError, match=r"axes \('Fx', 'Fy', 'Tz', 'Fz'\) must name"):
+        CalibrationDataset(raw=raw, wrench=wrench[:, :4], axes=("Fx", "Fy", "Tz", "Fz"))
 
 
 def test_mismatched_lengths(tiny_calibrator, data):

@@ -98,10 +98,10 @@ def test_missing_dataset_file_names_it(tmp_path, capsys):
 
 def test_malformed_dataset_names_file_and_problem(tmp_path, capsys):
     bad = tmp_path / "bad.csv"
-    bad.write_text("s0,s1,s2,Fx,Fy,Fz\n1,2,3,4,5,6\n")
+    bad.write_text("s0,s1,s2,a,b,c\n1,2,3,4,5,6\n")  # no wrench column (any of Fx..Tz makes an n-axis dataset)
     assert main(["fit", str(bad), "--out", str(tmp_path / "m"), "-q"]) == 2
     line = one_error_line(capsys)
-    assert "bad.csv" in line and "Tx" in line
+    assert "bad.csv" in line and "no wrench columns" in line and "--wrench" in line
 
 
 def test_garbage_model_file_gives_one_line(tmp_path, affine_dir, capsys):

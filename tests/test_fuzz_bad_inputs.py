@@ -898,6 +898,8 @@ def test_inputs_that_are_not_files_are_named_for_what_they_are(workdir, tmp_path
             "log": ["prepare", path, "--out", tmp_path / "o"]}[role]
     if role == "log" and kind == "directory":
         expected = "holds no *.csv run logs"
+    if role == "dataset" and kind == "directory":  # a folder is a dataset of one file per pose: an empty one is named
+        expected = "the folder holds no dataset files"
     msg = cli_error(argv, capsys)
     assert expected in msg and "no such file" not in msg.replace("does not exist", "")
     assert model.exists()

@@ -159,10 +159,12 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     d = kinds.add_parser(
         "dataset",
         help="every calibrator on YOUR dataset, cross-validated: which one to use for your sensor",
-        description="Cross-validate calibrators on your own calibration dataset (.csv or .npz).",
+        description="Cross-validate calibrators on your own calibration dataset (.csv, .npz, .mat or a folder of "
+        "them).",
         epilog=DATASET_EXAMPLE,
     )
-    d.add_argument("dataset", help="calibration dataset (.csv or .npz, as written by 'ftcal prepare')")
+    d.add_argument("dataset", help="calibration dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
+                   "session), e.g. as written by 'ftcal prepare'")
     d.add_argument(
         "--folds", choices=("auto", "group", "kfold"), default="auto",
         help="group: hold out whole groups (needs a group column); kfold: shuffled folds; auto: group if present",
@@ -176,6 +178,9 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
              "each group one recording in time order",
     )
     _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
+    from ._data_options import add_dataset_options
+
+    add_dataset_options(d)
     d.set_defaults(handler=run_dataset)
 
 
@@ -187,14 +192,15 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..models._baselines import stock_baselines
     from ..core._model_selection import simplest_within_one_se
     from ..evaluation._plots import plot_axis_errors
-    from ._models import check_fold_count, dataset_alpha, load_dataset
+    from ._data_options import load_dataset_from_args
+    from ._models import check_fold_count, dataset_alpha
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
     if "auto" in names:
         raise CliError("--model auto: 'auto' is itself this comparison; list the calibrators to compare instead")
     plan = OutputPlan(args.out, ["dataset_results.json", "dataset_results.md", "dataset_rmse.png"], args.force)
-    data = load_dataset(args.dataset, "dataset")
+    data = load_dataset_from_args(args, args.dataset, "dataset")
     if args.folds == "group" and data.group is None:
         raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
     check_fold_count(data, args.cv, args.dataset)
@@ -206,7 +212,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     if args.history and not set(names) & set(HISTORY_MODELS):
         raise CliError(f"--history scores the closed-form models with a history term ({', '.join(HISTORY_MODELS)}); "
                        "list at least one of them with --model")
-    alpha = ftcal.alpha_from_wrenches(data.wrench) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
+    alpha = ftcal.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
     candidates = []
     for name in names:
@@ -226,10 +232,10 @@ def run_dataset(args: argparse.Namespace) -> int:
     chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
     results["chosen"] = results["name"][chosen]
     results.update(dataset=str(args.dataset), alpha=alpha, folds="group" if groups is not None else "kfold",
-                   cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels)
+                   cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels, axes=list(data.axes))
     with plan.writing("dataset_results.json") as tmp:
         write_json(tmp, results)
-    table = _dataset_table(results)
+    table = _dataset_table(results, data.axes)
     with plan.writing("dataset_results.md") as tmp:
         tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
     axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
@@ -242,16 +248,16 @@ def run_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
-def _dataset_table(results: dict) -> str:
-    from ..core._wrench import WRENCH_LABELS
+def _dataset_table(results: dict, axes) -> str:
+    from ..core._wrench import axis_unit
     from ..models._auto import comparison_table
 
-    head = "| model | " + " | ".join(f"{a}" for a in WRENCH_LABELS) + " |"
-    lines = [head, "|" + "---|" * (1 + len(WRENCH_LABELS))]
+    head = "| model | " + " | ".join(f"{a} [{axis_unit(a)}]" for a in axes) + " |"
+    lines = [head, "|" + "---|" * (1 + len(axes))]
     for name, axes in zip(results["name"], results["axis_rmse"]):
         if axes is not None:
             lines.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in axes) + " |")
-    return (comparison_table(results) + "\n\nHeld-out RMSE per axis [N] and [N·m]:\n\n" + "\n".join(lines))
+    return comparison_table(results) + "\n\nHeld-out RMSE per axis:\n\n" + "\n".join(lines)
 
 
 def _models(args: argparse.Namespace) -> tuple[str, ...]:

@@ -1,9 +1,15 @@
-"""The options that say how to read a user's calibration data: column mapping, units; and the lever-arm check.
+"""The options that say how to read a user's calibration data, defined once for every command that reads data.
 
-``ftcal fit``, ``evaluate`` and ``report`` take ``--channels``, ``--wrench``, ``--force-unit`` and
-``--torque-unit``; a dataset whose loads' lever arm is implausible (torques in N·mm read as N·m) is
-refused with the likely unit and the option that fixes it, unless the unit was declared (an implausibly short
-arm is only warned about: a 3-axis cell's torque columns may hold noise alone).
+``ftcal fit``, ``evaluate``, ``report``, ``tune`` and ``benchmark dataset`` take ``--channels``, ``--wrench``,
+``--axes``, ``--groups``, ``--force-unit``, ``--torque-unit`` and ``--exclude-saturated``; ``predict`` and
+``retare`` take ``--channels``. A model file keeps the mapping and units it was fitted with, and the commands that
+read data for a model (``evaluate``, ``report``, ``predict``, ``retare``) apply them unless the options say
+otherwise.
+
+The lever-arm check runs on every dataset whatever options are given: an implausibly long arm (torques in N·mm read
+as N·m, or forces in kN read as N) is refused with the likely unit of the forces or of the torques, unless both units
+are declared (``--force-unit N --torque-unit N.m`` confirms an unusual arm); an implausibly short one is pointed
+out (a 3-axis cell's torque columns may hold noise alone).
 """
 
 from __future__ import annotations
@@ -13,48 +19,156 @@ import sys
 
 from ._common import CliError
 
-__all__ = ["add_dataset_options", "load_dataset_from_args"]
+__all__ = ["add_dataset_options", "add_channel_option", "dataset_columns", "load_dataset_from_args",
+           "stored_columns"]
+
+_SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
+              "(data[:,0:8])")
 
 
 def _names(text: str) -> tuple[str, ...]:
+    if "[" in text:  # a column slice holds a comma: data[:,0:8]
+        return (text.strip(),)
     names = tuple(n.strip() for n in text.split(","))
     if not all(names):
-        raise argparse.ArgumentTypeError(f"{text!r}: give comma-separated column names, e.g. s1,s2,s3")
+        raise argparse.ArgumentTypeError(f"{text!r}: give comma-separated column names, e.g. s1,s2,s3, or a range "
+                                         "s0..s7")
     return names
 
 
+def _saturation(text: str):
+    if text.strip() == "auto":
+        return "auto"
+    parts = text.split(",")
+    try:
+        low, high = (float(v) for v in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give LOW,HIGH (the ADC's limits, e.g. 0,4095 or "
+                                         "-32768,32767), or auto") from None
+    if not (low < high) or low != low or high != high:
+        raise argparse.ArgumentTypeError(f"{text!r}: LOW must be below HIGH, e.g. 0,4095")
+    return low, high
+
+
+def add_channel_option(p: argparse.ArgumentParser) -> None:
+    """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench)."""
+    p.add_argument("--channels", type=_names, metavar="SPEC",
+                   help=f"the raw-channel columns of the input in channel order: {_SPEC_HELP} (default: the "
+                   "mapping the model was fitted with, else s0,s1,... or the array 'raw')")
+
+
 def add_dataset_options(p: argparse.ArgumentParser) -> None:
-    """``--channels``, ``--wrench``, ``--force-unit``, ``--torque-unit``."""
+    """``--channels``, ``--wrench``, ``--axes``, ``--groups``, ``--force-unit``, ``--torque-unit``,
+    ``--exclude-saturated``."""
     from ..io._readers import FORCE_UNITS, TORQUE_UNITS
 
-    g = p.add_argument_group("reading the dataset (.csv, .npz, .mat)")
-    g.add_argument("--channels", type=_names, metavar="NAME,...",
-                   help="the raw-channel columns (or .mat/.npz variables) in channel order, e.g. s1,s2,s3,s4,s5,s6 "
+    g = p.add_argument_group("reading the dataset (.csv, .npz, .mat, or a folder of them: one file per pose)")
+    g.add_argument("--channels", type=_names, metavar="SPEC",
+                   help=f"the raw-channel columns (or .mat/.npz variables) in channel order: {_SPEC_HELP} "
                    "(default: s0,s1,... or the variable 'raw')")
-    g.add_argument("--wrench", type=_names, metavar="NAME,...",
-                   help="the six wrench columns in the order Fx,Fy,Fz,Tx,Ty,Tz, e.g. Fx,Fy,Fz,Mx,My,Mz "
-                   "(default: Fx..Tz or Mx/My/Mz, or the variable 'wrench')")
+    g.add_argument("--wrench", type=_names, metavar="SPEC",
+                   help=f"the wrench columns, any number of axes: {_SPEC_HELP}; e.g. Fx,Fy,Fz for a 3-axis load cell, "
+                   "data[:,8:14] (default: every column named Fx..Tz, Mx.., force_x.., or the variable 'wrench')")
+    g.add_argument("--axes", type=_names, metavar="AXIS,...",
+                   help="the output axes of the wrench columns, in their order, when their names do not say: e.g. "
+                   "Fz for a 1-axis cell, Fx,Fy,Fz (six unnamed columns are Fx,Fy,Fz,Tx,Ty,Tz)")
+    g.add_argument("--groups", metavar="COLUMN",
+                   help="the column holding each row's pose or session (integers or text), for grouped "
+                   "cross-validation (default: 'group'); 'file' for a folder makes each file a group (the default "
+                   "for a folder)")
     g.add_argument("--force-unit", metavar="UNIT",
-                   help=f"unit of the file's forces, converted to N: {', '.join(FORCE_UNITS)} (default N)")
+                   help=f"unit of the file's forces, converted to N, exact and case-sensitive (MN is not mN): "
+                   f"{', '.join(FORCE_UNITS)}, any SI prefix of N or g (masses are read as their weight, g = 9.80665 "
+                   "m/s^2) (default N)")
     g.add_argument("--torque-unit", metavar="UNIT",
-                   help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)} (default N.m; "
-                   "declaring it also confirms an unusual lever arm)")
+                   help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)}, any force unit "
+                   "times m, mm, cm, in or ft (default N.m)")
+    g.add_argument("--exclude-saturated", type=_saturation, metavar="LOW,HIGH|auto",
+                   help="drop the rows where a raw channel reaches LOW or HIGH (the ADC's limits), or, with auto, "
+                   "where a channel sits at its extreme value in several rows (pinned: saturated); without it such "
+                   "rows are pointed out")
 
 
-def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"):
-    """The dataset at ``path`` read as the options say, its units checked by the loads' lever arm."""
-    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, ColumnMap, lever_arm_m, lever_arm_problem
+def stored_columns(facts: dict | None, where: str):
+    """The :class:`~ftcal.io.ColumnMap` a model file stored (``None`` for a file without one)."""
+    from ..core._exceptions import DatasetFileError
+    from ..io._readers import ColumnMap
+
+    if not facts or not isinstance(facts, dict) or "columns" not in facts:
+        return None
+    try:
+        return ColumnMap.from_dict(facts["columns"], where)
+    except DatasetFileError as exc:
+        raise CliError(str(exc)) from None
+
+
+def dataset_columns(args: argparse.Namespace, stored=None):
+    """The :class:`~ftcal.io.ColumnMap` of the options, each unset one taken from ``stored`` (a model's)."""
+    from ..io._readers import ColumnMap
+
+    def pick(option: str, default):
+        value = getattr(args, option, None)
+        if value is not None:
+            return value
+        return getattr(stored, option) if stored is not None else default
+
+    return ColumnMap(channels=pick("channels", None), wrench=pick("wrench", None), axes=pick("axes", None),
+                     groups=pick("groups", None), force_unit=pick("force_unit", "N"),
+                     torque_unit=pick("torque_unit", "N.m"))
+
+
+def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset", stored=None,
+                           confirmed: bool = False):
+    """The dataset at ``path`` read as the options (else ``stored``, a model's mapping) say, its units checked by the
+    loads' lever arm, its saturated rows dropped or pointed out.
+
+    ``confirmed``: the model's stored units were confirmed at fit time (both declared).
+    """
+    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
     from ._models import load_dataset
 
-    columns = ColumnMap(channels=args.channels, wrench=args.wrench, force_unit=args.force_unit or "N",
-                        torque_unit=args.torque_unit or "N.m")
+    columns = dataset_columns(args, stored)
     data = load_dataset(path, role, columns=columns)
-    problem = lever_arm_problem(data.wrench, columns.torque_unit)
+    problem = lever_arm_problem(data.wrench, columns.torque_unit, data.axes, columns.force_unit)
     if problem is not None:
-        # too long an arm (torques in N·mm read as N·m) is refused unless a unit was declared; too short a one
-        # (a 3-axis cell whose torque columns hold only noise) is only pointed out
-        too_long = lever_arm_m(data.wrench) > PLAUSIBLE_LEVER_ARM_M[1]
-        if too_long and args.torque_unit is None and args.force_unit is None:
+        # too long an arm (torques in N·mm read as N·m, forces in kN read as N) is refused unless both units were
+        # declared; too short a one (a 3-axis cell whose torque columns hold only noise) is only pointed out
+        too_long = lever_arm_m(data.wrench, data.axes) > PLAUSIBLE_LEVER_ARM_M[1]
+        declared = confirmed or (getattr(args, "torque_unit", None) is not None
+                                 and getattr(args, "force_unit", None) is not None)
+        if too_long and not declared:
             raise CliError(f"{path}: {problem}")
         print(f"ftcal: warning: {path}: {problem}", file=sys.stderr)
-    return data
+    return _saturated_rows_handled(args, data, path)
+
+
+def _saturated_rows_handled(args: argparse.Namespace, data, path):
+    """The dataset without its saturated rows (``--exclude-saturated``), or with them pointed out in one line."""
+    import numpy as np
+
+    option = getattr(args, "exclude_saturated", None)
+    quiet = getattr(args, "quiet", False)
+    if isinstance(option, tuple):
+        low, high = option
+        drop = np.any((data.raw <= low) | (data.raw >= high), axis=1)
+        said = f"a raw channel at or beyond {low:g} or {high:g}"
+    else:
+        drop, pinned = data.pinned_rows()
+        said = f"a channel pinned at its extreme ({'; '.join(pinned[:3])}{'; ...' if len(pinned) > 3 else ''})"
+        if option is None:
+            if drop.any():
+                print(f"ftcal: warning: {path}: {int(drop.sum())} of {data.n_samples} rows have {said}: saturated "
+                      "readings? Fix: drop them with --exclude-saturated auto (or LOW,HIGH, the ADC's limits)",
+                      file=sys.stderr)
+            return data
+    if not drop.any():
+        if not quiet:
+            print(f"ftcal: {path}: no rows with {said.split(' (')[0]}; none dropped", file=sys.stderr)
+        return data
+    if drop.all():
+        raise CliError(f"{path}: --exclude-saturated would drop every one of the {data.n_samples} rows ({said}); "
+                       "check the limits")
+    kept = data.subset(~drop)
+    if not quiet:
+        print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
+    return kept

@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis RMSE, plots.",
         epilog=EXAMPLE,
     )
-    p.add_argument("dataset", help="evaluation dataset (.csv or .npz)")
+    p.add_argument("dataset", help="evaluation dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("models", nargs="+", metavar="MODEL", type=existing_file, help="model files written by 'ftcal fit'")
     p.add_argument(
         "--alpha", type=positive_float,

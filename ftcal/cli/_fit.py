@@ -37,10 +37,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "fit",
         help="train a calibrator on a dataset and save the model file",
-        description="Train a calibrator on a calibration dataset (.csv or .npz) and save it as a model file.",
+        description="Train a calibrator on a calibration dataset (.csv, .npz, .mat, or a folder of them) and save it as a "
+        "model file.",
         epilog=EXAMPLE,
     )
-    p.add_argument("dataset", help="training dataset (.csv or .npz, as written by 'ftcal simulate' / 'prepare')")
+    p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
+                   "session), e.g. as written by 'ftcal simulate' / 'prepare'")
     p.add_argument("-m", "--model", default="directional", choices=calibrator_names(), help="calibrator")
     p.add_argument(
         "--schedule", choices=("thesis", "short"),

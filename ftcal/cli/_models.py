@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..io._dataset import CalibrationDataset
-from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
+from ..core._wrench import alpha_from_wrenches
 from ..core._files import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
@@ -61,7 +61,7 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
     """A :class:`~ftcal.CalibrationDataset` from ``.csv`` / ``.npz`` / ``.mat``; ``role`` names it in errors;
     ``columns`` (a :class:`~ftcal.io.ColumnMap`) maps other layouts and units."""
     path = Path(path)
-    problem = path_problem(path)
+    problem = None if path.is_dir() else path_problem(path)  # a folder of files (one per pose) is one dataset
     if problem is not None:
         raise CliError(f"{problem} (the {role})")
     from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
@@ -69,7 +69,7 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
     dataset = CalibrationDataset.load(path, columns=columns)
     note_dataset(path)
     for array, name, labels in ((dataset.raw, "raw reading", [f"s{k}" for k in range(dataset.n_channels)]),
-                                (dataset.wrench, "wrench", list(WRENCH_LABELS))):
+                                (dataset.wrench, "wrench", list(dataset.axes))):
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
         if big.any():
             row, col = (int(v) for v in np.argwhere(big)[0])
@@ -133,7 +133,7 @@ def dataset_alpha(dataset: CalibrationDataset, alpha: float | None) -> float | N
 def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:
     """Torque scale for metrics: ``--alpha``, else the dataset's ``meta['alpha']``, else from its wrenches."""
     value = dataset_alpha(dataset, alpha)
-    return alpha_from_wrenches(dataset.wrench) if value is None else value
+    return alpha_from_wrenches(dataset.wrench, dataset.axes) if value is None else value
 
 
 def check_fold_count(dataset: CalibrationDataset, cv: int, path) -> None:

@@ -9,7 +9,8 @@ import time
 from ..core._exceptions import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
 from ._fit import calibrator_names
-from ._models import check_fold_count, dataset_alpha, load_dataset, model_file_name, parse_param
+from ._data_options import add_dataset_options, load_dataset_from_args
+from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
 
 EXAMPLE = """\
 examples:
@@ -34,7 +35,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         "scored by the cross-validated torque-scaled RMSE.",
         epilog=EXAMPLE,
     )
-    p.add_argument("dataset", help="training dataset (.csv or .npz)")
+    p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("-m", "--model", default="axis_nonlinear", choices=calibrator_names(), help="calibrator")
     p.add_argument(
         "--grid", action="append", default=[], metavar="KEY=VALUES",
@@ -63,6 +64,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
     add_scheduler_option(p)
     p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
+    add_dataset_options(p)
     add_output_options(p, "ftcal-tuned")
     add_run_options(p)
     p.set_defaults(handler=run)
@@ -119,7 +121,7 @@ def run(args: argparse.Namespace) -> int:
     for entry in args.grid:
         check_distribution(entry, randomized=args.n_iter is not None)
     space = parse_search_space(args.grid) if args.grid else None
-    data = load_dataset(args.dataset, "training dataset")
+    data = load_dataset_from_args(args, args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)
     if args.group_folds and data.group is None:
         raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")

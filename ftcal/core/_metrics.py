@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
-from ._wrench import FORCE, TORQUE, WRENCH_LABELS, scale_torques
+from ._wrench import WRENCH_LABELS, default_axes, force_columns, torque_columns
 
 __all__ = [
     "wrench_rmse",
@@ -42,9 +42,10 @@ def _pair(y_true: ArrayLike, y_pred: ArrayLike) -> tuple[NDArray[np.float64], ND
     t = np.asarray(y_true, dtype=float)
     p = np.asarray(y_pred, dtype=float)
     for name, a in (("y_true", t), ("y_pred", p)):
-        if a.ndim != 2 or a.shape[1] != 6:
+        if a.ndim != 2 or a.shape[1] < 1:
             raise CalibrationInputError(
-                f"{name} must have shape (n_samples, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {a.shape}."
+                f"{name} must have shape (n_samples, n_axes), e.g. 6 axes [Fx, Fy, Fz, Tx, Ty, Tz]; got shape "
+                f"{a.shape}."
             )
         if not np.all(np.isfinite(a)):
             row = int(np.argwhere(~np.isfinite(a))[0, 0])
@@ -56,8 +57,41 @@ def _pair(y_true: ArrayLike, y_pred: ArrayLike) -> tuple[NDArray[np.float64], ND
     return t, p
 
 
-def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> float:
-    """RMSE over all components of the torque-scaled wrench (eq. 18) [N].
+def _axes(width: int, axes) -> tuple[str, ...]:
+    """The axes of a target of ``width`` columns: ``axes`` if given, else Fx..Tz for six, else forces only
+    (a target of another width is not torque-scaled, as in the calibrators)."""
+    if axes is None:
+        return WRENCH_LABELS if width == len(WRENCH_LABELS) else ("F",) * width
+    axes = tuple(axes)
+    if len(axes) != width:
+        raise CalibrationInputError(f"axes {axes} name {len(axes)} axes but the wrenches have {width} columns.")
+    return axes
+
+
+def _scaled_errors(errors: NDArray[np.float64], alpha: float, axes) -> NDArray[np.float64]:
+    """The errors with the torque columns of ``axes`` multiplied by ``alpha`` (eq. 6)."""
+    from ._wrench import check_alpha
+
+    alpha = check_alpha(alpha)
+    out = np.array(errors, dtype=float, copy=True)
+    columns = torque_columns(_axes(out.shape[1], axes))
+    if columns:
+        with np.errstate(over="ignore", invalid="ignore"):
+            scaled = out[:, columns] * alpha
+        if not np.isfinite(scaled).all() and np.isfinite(out[:, columns]).all():
+            raise CalibrationInputError(
+                f"multiplying the torques (largest |value| {float(np.abs(out[:, columns]).max()):.3g}) by alpha = "
+                f"{alpha:.3g} 1/m overflows float64. Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) "
+                "and the torques' unit.")
+        out[:, columns] = scaled
+    return out
+
+
+def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> float:
+    """RMSE over all components of the torque-scaled wrench (eq. 18) [N], over the axes that exist.
+
+    ``axes`` names the columns (``("Fx", "Fy", "Fz")`` for a 3-axis load cell: no torque to scale); default Fx..Tz
+    for six columns.
 
     Examples
     --------
@@ -67,11 +101,11 @@ def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> flo
     2.449...
     """
     t, p = _pair(y_true, y_pred)
-    return float(_checked_rms(scale_torques(t - p, alpha), alpha))
+    return float(_checked_rms(_scaled_errors(t - p, alpha, axes), alpha))
 
 
-def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) -> NDArray[np.float64]:
-    """RMSE of each row over its 6 torque-scaled components [N], shape (n_samples,).
+def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> NDArray[np.float64]:
+    """RMSE of each row over its torque-scaled components [N], shape (n_samples,).
 
     Examples
     --------
@@ -80,7 +114,7 @@ def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0) ->
     array([2.449..., 0. ])
     """
     t, p = _pair(y_true, y_pred)
-    return _checked_rms(scale_torques(t - p, alpha), alpha, axis=1)
+    return _checked_rms(_scaled_errors(t - p, alpha, axes), alpha, axis=1)
 
 
 def _checked_rms(errors: NDArray[np.float64], alpha: float, axis: int | None = None):
@@ -109,7 +143,7 @@ def axis_rmse(y_true: ArrayLike, y_pred: ArrayLike) -> NDArray[np.float64]:
 
 
 def relative_errors(
-    y_true: ArrayLike, y_pred: ArrayLike, min_norm: float = 1e-3
+    y_true: ArrayLike, y_pred: ArrayLike, min_norm: float = 1e-3, axes=None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per-sample relative force and torque errors (eq. 19).
 
@@ -121,6 +155,8 @@ def relative_errors(
         Rows whose true force (torque) norm is below ``min_norm`` times the
         largest true force (torque) norm are left out of the force (torque)
         ratios.
+    axes : sequence of str, optional
+        The axes of the columns; a sensor without torques has no torque ratios (empty).
 
     Returns
     -------
@@ -135,11 +171,15 @@ def relative_errors(
     (array([0.1]), array([0.]))
     """
     t, p = _pair(y_true, y_pred)
+    named = _axes(t.shape[1], axes)
     out = []
-    for part in (FORCE, TORQUE):
+    for part in (force_columns(named), torque_columns(named)):
+        if not part:
+            out.append(np.zeros(0))
+            continue
         norm = np.linalg.norm(t[:, part], axis=1)
         keep = norm > min_norm * max(float(norm.max()), np.finfo(float).tiny)
-        err = np.linalg.norm(t[keep, part] - p[keep, part], axis=1)
+        err = np.linalg.norm(t[keep][:, part] - p[keep][:, part], axis=1)
         out.append(err / norm[keep])
     return out[0], out[1]
 
@@ -157,7 +197,7 @@ class CalibrationReport:
     rel_force_mean, rel_force_std, rel_torque_mean, rel_torque_std : float
         Mean and std of the relative errors (eq. 19), dimensionless.
     axis_rmse : dict
-        RMSE per axis in [N] / [N·m], keyed ``Fx`` ... ``Tz``.
+        RMSE per axis in [N] / [N·m], keyed by the axes that exist (``Fx`` ... ``Tz``).
     alpha : float
         The torque scale used [m⁻¹].
     n_samples, n_force_ratios, n_torque_ratios : int
@@ -176,6 +216,7 @@ class CalibrationReport:
     n_samples: int
     n_force_ratios: int
     n_torque_ratios: int
+    axes: tuple = WRENCH_LABELS
 
     def to_dict(self) -> dict:
         """Plain-JSON form of the report."""
@@ -206,9 +247,10 @@ def mean_std(values: ArrayLike, *, ddof: int) -> dict:
 
 
 def calibration_report(
-    y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, min_norm: float = 1e-3
+    y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, min_norm: float = 1e-3, axes=None
 ) -> CalibrationReport:
-    """Every metric of section IV-C for one prediction, as a :class:`CalibrationReport`.
+    """Every metric of section IV-C for one prediction, as a :class:`CalibrationReport`, over the axes that exist
+    (``axes``, default Fx..Tz for six columns: a 3-axis load cell has no torque scaling and no torque ratios).
 
     Examples
     --------
@@ -217,22 +259,26 @@ def calibration_report(
     (0.4082, 0.1, 1.0)
     """
     t, p = _pair(y_true, y_pred)
-    ps = per_sample_rmse(t, p, alpha)
-    f, tq = relative_errors(t, p, min_norm)
+    named = _axes(t.shape[1], axes) if axes is not None else (
+        WRENCH_LABELS if t.shape[1] == len(WRENCH_LABELS) else default_axes(t.shape[1]))
+    scaled_axes = axes if axes is not None or t.shape[1] == len(WRENCH_LABELS) else None
+    ps = per_sample_rmse(t, p, alpha, scaled_axes)
+    f, tq = relative_errors(t, p, min_norm, scaled_axes)
     force, torque, per_sample = mean_std(f, ddof=0), mean_std(tq, ddof=0), mean_std(ps, ddof=0)
     return CalibrationReport(
-        rmse=wrench_rmse(t, p, alpha),
+        rmse=wrench_rmse(t, p, alpha, scaled_axes),
         rmse_per_sample_mean=per_sample["mean"],
         rmse_per_sample_std=per_sample["std"],
         rel_force_mean=force["mean"],
         rel_force_std=force["std"],
         rel_torque_mean=torque["mean"],
         rel_torque_std=torque["std"],
-        axis_rmse=dict(zip(WRENCH_LABELS, map(float, axis_rmse(t, p)))),
+        axis_rmse=dict(zip(named, map(float, axis_rmse(t, p)))),
         alpha=float(alpha),
         n_samples=int(t.shape[0]),
         n_force_ratios=int(f.size),
         n_torque_ratios=int(tq.size),
+        axes=tuple(named),
     )
 
 

@@ -25,6 +25,10 @@ __all__ = [
     "MAX_LOAD_MASS_KG",
     "scale_torques",
     "unscale_torques",
+    "force_columns",
+    "torque_columns",
+    "axis_unit",
+    "default_axes",
 ]
 
 #: Column names of a wrench, in order.
@@ -33,6 +37,51 @@ WRENCH_LABELS: tuple[str, ...] = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")
 FORCE = slice(0, 3)
 #: Column slice of the torques [N·m] in a wrench.
 TORQUE = slice(3, 6)
+
+
+def force_columns(axes) -> list[int]:
+    """Positions of the force axes (``Fx``, ``Fy``, ``Fz``) among ``axes`` (a wrench of any number of axes).
+
+    Examples
+    --------
+    >>> force_columns(("Fx", "Fy", "Fz")), force_columns(("Fz", "Tx", "Ty"))
+    ([0, 1, 2], [0])
+    """
+    return [k for k, a in enumerate(axes) if str(a).startswith("F")]
+
+
+def torque_columns(axes) -> list[int]:
+    """Positions of the torque axes (``Tx``, ``Ty``, ``Tz``) among ``axes``.
+
+    Examples
+    --------
+    >>> torque_columns(("Fx", "Fy", "Fz")), torque_columns(WRENCH_LABELS)
+    ([], [3, 4, 5])
+    """
+    return [k for k, a in enumerate(axes) if str(a).startswith("T")]
+
+
+def axis_unit(axis: str) -> str:
+    """The unit of an axis: ``N`` for a force, ``N·m`` for a torque.
+
+    Examples
+    --------
+    >>> axis_unit("Fz"), axis_unit("Tx")
+    ('N', 'N·m')
+    """
+    return "N·m" if str(axis).startswith("T") else "N"
+
+
+def default_axes(width: int) -> tuple[str, ...]:
+    """The axes of a wrench of ``width`` columns when nothing names them: Fx..Tz for six, else the first ``width``
+    of Fx, Fy, Fz, Tx, Ty, Tz (the calibrators and metrics of a target of another width).
+
+    Examples
+    --------
+    >>> default_axes(3)
+    ('Fx', 'Fy', 'Fz')
+    """
+    return WRENCH_LABELS[:width] if 0 < width <= len(WRENCH_LABELS) else tuple(f"y{k}" for k in range(width))
 
 
 #: Fewest raw channels of a 6-axis calibration (enforced where calibration data enter:
@@ -73,7 +122,7 @@ def check_alpha(alpha, name: str = "alpha") -> float:
     return value
 
 
-def alpha_from_wrenches(wrench: ArrayLike) -> float:
+def alpha_from_wrenches(wrench: ArrayLike, axes=None) -> float:
     """Torque scale ``alpha = Fmax / Tmax`` [m⁻¹] estimated from wrenches (eq. 5).
 
     ``Fmax`` is the largest absolute force component and ``Tmax`` the largest
@@ -83,8 +132,11 @@ def alpha_from_wrenches(wrench: ArrayLike) -> float:
 
     Parameters
     ----------
-    wrench : array-like of shape (n_samples, 6)
+    wrench : array-like of shape (n_samples, n_axes)
         Wrenches in [N] and [N·m].
+    axes : sequence of str, optional
+        The axes of the columns (``Fx``...``Tz``); default Fx..Tz (six columns). A wrench without forces or
+        without torques (a 3-axis load cell) has no torque scale: 1.
 
     Returns
     -------
@@ -98,12 +150,13 @@ def alpha_from_wrenches(wrench: ArrayLike) -> float:
     50.0
     """
     w = np.asarray(wrench, dtype=float)
-    if w.ndim != 2 or w.shape[1] != 6:
+    axes = WRENCH_LABELS if axes is None else tuple(axes)
+    if w.ndim != 2 or w.shape[1] != len(axes):
         raise CalibrationInputError(
-            f"wrench must have shape (n_samples, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {w.shape}."
+            f"wrench must have shape (n_samples, {len(axes)}) [{', '.join(axes)}]; got shape {w.shape}."
         )
-    fmax = float(np.max(np.abs(w[:, FORCE]), initial=0.0))
-    tmax = float(np.max(np.abs(w[:, TORQUE]), initial=0.0))
+    fmax = float(np.max(np.abs(w[:, force_columns(axes)]), initial=0.0))
+    tmax = float(np.max(np.abs(w[:, torque_columns(axes)]), initial=0.0))
     if fmax == 0.0 or tmax == 0.0 or not np.isfinite(fmax / tmax):
         return 1.0
     low, high = ALPHA_RANGE_PER_M  # beyond, the data hold (almost) no torque or no force: the scale would weigh noise

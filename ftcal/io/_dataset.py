@@ -4,28 +4,39 @@ File formats
 ------------
 CSV (``.csv``)
     One header line, then one row per sample. Columns ``s0 ... s{N-1}`` hold
-    the raw channels (any unit the sensor gives: counts, mV, ...), then
-    ``Fx, Fy, Fz`` in [N] and ``Tx, Ty, Tz`` in [N·m]; an optional ``group``
-    column holds an integer label per row (a load configuration, a sphere,
-    ...), an optional ``temperature`` column the sensor temperature [deg C]. Blank lines and lines starting with ``#`` are skipped
+    the raw channels (any unit the sensor gives: counts, mV, ...), then the
+    wrench axes the sensor measures, any of ``Fx, Fy, Fz`` in [N] and
+    ``Tx, Ty, Tz`` in [N·m] (a 3-axis load cell has ``Fx, Fy, Fz``); an optional
+    ``group`` column holds a label per row (a pose, a session: integers or
+    text), an optional ``temperature`` column the sensor temperature [deg C].
+    Every other column is ignored, whatever its name (an index, ``time [s]``,
+    an empty name). Blank lines and lines starting with ``#`` are skipped
     anywhere; one comment ``# meta: {...}`` carries JSON metadata. Errors name
     the file's 1-based line and the column.
 NumPy archive (``.npz``)
-    Arrays ``raw`` (n, N), ``wrench`` (n, 6), optional ``group`` (n,), and
-    ``meta_json`` (a JSON string). Read with ``allow_pickle=False``.
+    Arrays ``raw`` (n, N), ``wrench`` (n, k), optional ``axes`` (k,) naming the
+    wrench axes (default Fx..Tz), ``group`` (n,), ``temperature`` (n,) and
+    ``meta_json`` (a JSON string). Read with ``allow_pickle=False``; only the
+    arrays used are read.
 MATLAB (``.mat``, v4-v7, read only)
-    Variables ``raw`` (n, N) and ``wrench`` (n, 6) (or one row per component),
-    optional ``group`` and ``temperature``; or any variables named by a
-    :class:`~ftcal.io.ColumnMap`.
+    Variables ``raw`` (n, N) and ``wrench`` (n, k) (or one row per component),
+    optional ``group`` and ``temperature``; or any variables or column slices
+    (``data[:,0:8]``) named by a :class:`~ftcal.io.ColumnMap`. Only the
+    variables used are read. v7.3 (HDF5) is refused with the fix.
+A folder
+    Every ``.csv`` / ``.npz`` / ``.mat`` file in it (one per pose or session),
+    read alike and joined; each file is a group unless ``groups`` names a
+    column. Files of different columns are refused, naming the file.
 
 Other layouts and units are read through a :class:`~ftcal.io.ColumnMap`
 (``CalibrationDataset.load(path, columns=ColumnMap(...))``, the CLI's
-``--channels``, ``--wrench``, ``--force-unit``, ``--torque-unit``); torque
-columns may be named ``Mx, My, Mz`` as well as ``Tx, Ty, Tz``.
+``--channels``, ``--wrench``, ``--axes``, ``--groups``, ``--force-unit``,
+``--torque-unit``).
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import re
 import warnings
@@ -35,17 +46,21 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._columns import check_plain_fields, csv_rows, is_number, read_header
+from ..core._columns import check_plain_fields, csv_rows, is_number
 from ..core._exceptions import CalibrationInputError, DatasetFileError
-from ..core._files import atomic_output, describe_file_start
+from ..core._files import atomic_output
 from ..core._temperature import TemperatureValueError, check_temperature
-from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS
-from ._readers import (ColumnMap, canonical_wrench_name, check_real_array, read_mat_arrays,
-                       select_arrays, temperature_message)
+from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
+from ._readers import (ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
+                       temperature_message, _slice_columns)
 
-__all__ = ["CalibrationDataset"]
+__all__ = ["CalibrationDataset", "DATASET_SUFFIXES"]
 
-_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature]"
+_CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
+#: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
+DATASET_SUFFIXES = (".csv", ".npz", ".mat")
+#: Most files of a dataset folder.
+MAX_FOLDER_FILES = 100_000
 
 
 def _parse_meta(text: str, where: str) -> dict:
@@ -86,58 +101,162 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
     return g.astype(np.int64)
 
 
-def _exact_group_column(body_lines: list[str], column: int, line_nos: list[int], path) -> NDArray:
-    """The ``group`` column of CSV data lines as exact int64 labels (float64 merges labels above 2^53 and turns
-    those above 2^63 into -2^63); a label that is no integer is refused with its line."""
-    labels = []
-    for no, line in zip(line_nos, body_lines):
-        text = line.split(",")[column].strip()
+def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> tuple[NDArray, list[str] | None]:
+    """A CSV group column as int64 labels: integers exactly (float64 would merge labels above 2^53), or text labels
+    (``pose_a``) numbered in order of appearance (returned too, to name the groups)."""
+    labels: list[int] = []
+    textual = not all(is_number(t) for t in texts)
+    for no, text in zip(line_nos, texts):
+        if textual:
+            break
         if _INTEGER.fullmatch(text):
             value = int(text)
         else:
             number = float(text)
             if not (np.isfinite(number) and number == round(number)):
-                raise DatasetFileError(f"{path}: line {no}, column group: {text} is not an integer label. Fix: "
-                                       "number the groups 0, 1, 2, ...")
+                raise DatasetFileError(f"{path}: line {no}, column {column}: {text} is not an integer label. Fix: "
+                                       "number the groups 0, 1, 2, ... (or name them with text labels)")
             value = int(number)
         if not -(2**63) <= value < 2**63:
-            raise DatasetFileError(f"{path}: line {no}: group {text} is beyond the 64-bit integer labels ftcal "
+            raise DatasetFileError(f"{path}: line {no}: {column} {text} is beyond the 64-bit integer labels ftcal "
                                    "stores. Fix: number the groups 0, 1, 2, ...")
         labels.append(value)
-    return np.array(labels, dtype=np.int64)
+    else:
+        return np.array(labels, dtype=np.int64), None
+    names: dict[str, int] = {}
+    for no, text in zip(line_nos, texts):
+        if not text:
+            raise DatasetFileError(f"{path}: line {no}, column {column}: empty group label; every row needs one.")
+        names.setdefault(text, len(names))
+    return np.array([names[t] for t in texts], dtype=np.int64), list(names)
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
-def _mapped_names(fields: list[str], columns: ColumnMap, where: str) -> list[str]:
-    """Header names with the mapped columns renamed to ftcal's (``s0..``, ``Fx..Tz``) and aliases resolved.
+def _csv_fields(line: str) -> list[str]:
+    """A CSV line's fields (quoted names such as ``"time [s]"`` unquoted), spaces around each dropped."""
+    if '"' not in line:
+        return [f.strip() for f in line.split(",")]
+    return [f.strip() for f in next(csv.reader([line], skipinitialspace=True))]
 
-    Unmapped columns that would clash with a mapped name are renamed out of the way (they are ignored).
-    """
-    names = list(fields)
-    renamed: dict[int, str] = {}
-    for mapping, targets, what in ((columns.channels, None, "--channels"), (columns.wrench, WRENCH_LABELS, "--wrench")):
-        if mapping is None:
-            continue
-        if len(mapping) == 1 and targets is not None:
-            raise DatasetFileError(f"{where}: --wrench names one column; a CSV needs the six Fx,Fy,Fz,Tx,Ty,Tz columns.")
-        for k, name in enumerate(mapping):
-            if name not in names:
-                raise DatasetFileError(f"{where}: {what} names column {name!r}, which the header lacks; the header "
-                                       f"has {', '.join(names)}.")
-            renamed[names.index(name)] = f"s{k}" if targets is None else targets[k]
-    out = []
+
+@dataclass(frozen=True)
+class _CsvColumns:
+    """Where a CSV's used columns are: the channels, the wrench (and its axes), the group and the temperature."""
+
+    channels: list[int]
+    wrench: list[int]
+    axes: tuple[str, ...]
+    group: int | None
+    temperature: int | None
+
+
+def _find(names: list[str], name: str, option: str, where: str) -> int:
+    """The position of the column ``name`` (mapped by ``option``) in the header ``names``."""
+    if parse_column_slice(name) is not None:
+        raise DatasetFileError(f"{where}: {option} {name}: a column slice selects columns of one array of a .mat or "
+                               ".npz file; in a CSV name the columns, or a range such as s0..s7.")
+    hits = [i for i, n in enumerate(names) if n == name]
+    if not hits:
+        shown = ", ".join(n or "''" for n in names)
+        raise DatasetFileError(f"{where}: {option} names column {name!r}, which the header lacks; the header has "
+                               f"{shown}.")
+    if len(hits) > 1:
+        raise DatasetFileError(f"{where}: column {name!r} appears {len(hits)} times (columns "
+                               f"{', '.join(str(i + 1) for i in hits)}); rename one, so ftcal knows which to use.")
+    return hits[0]
+
+
+def _channel_positions(names: list[str], where: str) -> list[int]:
+    """The default raw channels: the columns ``s0, s1, ...`` in number order (from 0, no gaps, no leading zeros)."""
+    found: dict[int, int] = {}
     for i, name in enumerate(names):
-        if i in renamed:
-            out.append(renamed[i])
-        elif columns.wrench is None and canonical_wrench_name(name) is not None:
-            out.append(canonical_wrench_name(name))  # Mx -> Tx, fx -> Fx
-        elif renamed and (name in renamed.values() or (name[:1] == "s" and name[1:].isdigit())):
-            out.append(f"_unmapped_{i}")  # an unmapped column that would clash with a mapped one: ignored
-        else:
-            out.append(name)
-    return out
+        m = re.fullmatch(r"s([0-9]+)", name)
+        if m is None:
+            continue
+        if len(m.group(1)) > 1 and m.group(1).startswith("0"):
+            raise DatasetFileError(f"{where}: column {name!r}: write raw channel numbers without leading zeros "
+                                   f"(s{int(m.group(1))}), or name the channels with --channels.")
+        k = int(m.group(1))
+        if k in found:
+            raise DatasetFileError(f"{where}: column {name!r} appears 2 times; each column must be named once.")
+        found[k] = i
+    if not found:
+        raise DatasetFileError(f"{where}: the header names no raw channel columns s0, s1, ... Expected header: "
+                               f"{_CSV_LAYOUT}. Fix: name the channel columns with --channels (e.g. --channels "
+                               "g1..g6).")
+    missing = sorted(set(range(max(found) + 1)) - set(found))
+    if missing:
+        raise DatasetFileError(f"{where}: raw channel column s{missing[0]} is missing (the header has "
+                               f"s{min(found)}..s{max(found)}); raw channel columns must run from s0 without gaps, "
+                               "or be named with --channels.")
+    return [found[k] for k in sorted(found)]
+
+
+def _refuse_lookalikes(names: list[str], where: str) -> None:
+    """A column named with a look-alike of a name ftcal reads (a full-width ``ｓ0``, an Arabic-Indic digit in ``s٢``)
+    would be ignored silently, and a channel or axis lost: refused, naming it."""
+    import unicodedata
+
+    for pos, name in enumerate(names):
+        if name.isascii():
+            continue
+        folded = "".join(str(unicodedata.digit(c)) if c.isdigit() else c for c in unicodedata.normalize("NFKC", name))
+        if folded.isascii() and (re.fullmatch(r"s[0-9]+", folded) or canonical_wrench_name(folded)
+                                 or folded in ("group", "temperature")):
+            shown = name.encode("ascii", "backslashreplace").decode()
+            raise DatasetFileError(
+                f"{where}: column {pos + 1} is named {shown!r}; column names must be ASCII letters, digits, '_' or "
+                f"'-' (a look-alike character would silently drop a column). Fix: rename it {folded!r}.")
+
+
+def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumns:
+    """The used columns of a CSV header; every other column is ignored, whatever its name."""
+    _refuse_lookalikes(names, where)
+    if columns.channels is not None:
+        channels = [_find(names, n, "--channels", where) for n in columns.channels]
+    else:
+        channels = _channel_positions(names, where)
+    if columns.wrench is not None:
+        wrench = [_find(names, n, "--wrench", where) for n in columns.wrench]
+        axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
+    else:
+        seen: dict[str, int] = {}
+        for i, name in enumerate(names):
+            axis = canonical_wrench_name(name) if i not in channels else None
+            if axis is None:
+                continue
+            if axis in seen:
+                raise DatasetFileError(
+                    f"{where}: columns {names[seen[axis]]!r} and {name!r} both read as the wrench axis {axis}; "
+                    "keep one, or name the wrench columns with --wrench (e.g. --wrench Fx,Fy,Fz,Mx,My,Mz).")
+            seen[axis] = i
+        if not seen:
+            raise DatasetFileError(f"{where}: the header names no wrench columns (Fx, Fy, Fz, Tx, Ty, Tz, or Mx, "
+                                   f"force_x, ...). Expected header: {_CSV_LAYOUT}. Fix: name them with --wrench "
+                                   "(and --axes if their names do not say the axes).")
+        wrench = list(seen.values())
+        axes = columns.resolve_axes([names[i] for i in wrench], len(wrench), where) if columns.axes is not None \
+            else tuple(seen)
+    both = sorted(set(channels) & set(wrench))
+    if both:
+        raise DatasetFileError(f"{where}: column {names[both[0]]!r} is mapped both as a channel and as a wrench "
+                               "component; map it once.")
+    group_name = columns.groups if columns.groups not in (None, "file") else "group"
+    group = None
+    if columns.groups not in (None, "file"):
+        group = _find(names, columns.groups, "--groups", where)
+    elif "group" in names and names.count("group") == 1 and names.index("group") not in channels + wrench:
+        group = names.index("group")
+    if group is not None and group in channels + wrench:
+        raise DatasetFileError(f"{where}: --groups {group_name!r} is also mapped as a channel or wrench column.")
+    temperature = names.index("temperature") if names.count("temperature") == 1 else None
+    if temperature in channels + wrench:
+        temperature = None
+    order = np.argsort([WRENCH_LABELS.index(a) for a in axes], kind="stable")  # the wrench in Fx..Tz order
+    return _CsvColumns(channels=channels, wrench=[wrench[k] for k in order], axes=tuple(axes[k] for k in order),
+                       group=group, temperature=temperature)
 
 
 @dataclass
@@ -148,23 +267,29 @@ class CalibrationDataset:
     ----------
     raw : ndarray of shape (n_samples, n_channels)
         Raw sensor readings, one row per sample.
-    wrench : ndarray of shape (n_samples, 6)
-        Reference wrench ``[Fx, Fy, Fz, Tx, Ty, Tz]`` in [N] and [N·m].
+    wrench : ndarray of shape (n_samples, n_axes)
+        Reference wrench, the axes ``axes`` (default ``[Fx, Fy, Fz, Tx, Ty, Tz]``) in [N] and [N·m].
     group : ndarray of shape (n_samples,), optional
-        Integer label per sample (load configuration, sphere index, ...), for
+        Integer label per sample (load configuration, pose, session, file of a folder ...), for
         grouped splits such as ``GroupKFold``.
     meta : dict
         JSON-serialisable facts about where the data came from.
     temperature : ndarray of shape (n_samples,), optional
         Sensor temperature [deg C] per sample (for
         :class:`~ftcal.TemperatureCompensatedCalibrator`: ``features(temperature=True)``).
+    axes : tuple of str, optional
+        The wrench axes, a subset of ``Fx, Fy, Fz, Tx, Ty, Tz`` in that order: a 3-axis load cell has
+        ``("Fx", "Fy", "Fz")``, a 1-axis cell ``("Fz",)``. Default: Fx..Tz for six columns, else the first
+        columns of Fx..Tz.
 
     Examples
     --------
     >>> import numpy as np
     >>> ds = CalibrationDataset(raw=np.ones((4, 6)), wrench=np.zeros((4, 6)))
-    >>> ds.n_samples, ds.n_channels
-    (4, 6)
+    >>> ds.n_samples, ds.n_channels, ds.axes
+    (4, 6, ('Fx', 'Fy', 'Fz', 'Tx', 'Ty', 'Tz'))
+    >>> CalibrationDataset(raw=np.ones((4, 2)), wrench=np.zeros((4, 1)), axes=("Fz",)).n_axes
+    1
     """
 
     raw: NDArray[np.float64]
@@ -172,6 +297,7 @@ class CalibrationDataset:
     group: NDArray[np.int64] | None = None
     meta: dict = field(default_factory=dict)
     temperature: NDArray[np.float64] | None = None
+    axes: tuple[str, ...] | None = None
 
     def __post_init__(self) -> None:
         for name in ("raw", "wrench"):
@@ -182,13 +308,21 @@ class CalibrationDataset:
             setattr(self, name, np.asarray(value, dtype=float))
         if self.raw.ndim != 2:
             raise DatasetFileError(f"raw must be 2-D (n_samples, n_channels); got shape {self.raw.shape}.")
-        if self.raw.shape[1] < MIN_CHANNELS:
+        if self.wrench.ndim != 2 or not 1 <= self.wrench.shape[1] <= len(WRENCH_LABELS):
+            raise DatasetFileError(f"wrench must have shape (n_samples, n_axes), 1 to 6 axes of Fx, Fy, Fz, Tx, Ty, "
+                                   f"Tz; got shape {self.wrench.shape}.")
+        axes = default_axes(self.wrench.shape[1]) if self.axes is None else tuple(str(a) for a in self.axes)
+        if len(axes) != self.wrench.shape[1] or any(a not in WRENCH_LABELS for a in axes) \
+                or list(axes) != sorted(set(axes), key=WRENCH_LABELS.index):
+            raise DatasetFileError(f"axes {axes!r} must name the wrench's {self.wrench.shape[1]} columns, each one of "
+                                   "Fx, Fy, Fz, Tx, Ty, Tz once, in that order.")
+        self.axes = axes
+        needed = min(MIN_CHANNELS, len(axes))
+        if self.raw.shape[1] < needed:
             raise DatasetFileError(
-                f"raw has {self.raw.shape[1]} channel(s) (shape {self.raw.shape}); a 6-axis calibration needs at "
-                f"least {MIN_CHANNELS} raw channels. Fix: one column per strain-gauge channel."
+                f"raw has {self.raw.shape[1]} channel(s) (shape {self.raw.shape}); a {len(axes)}-axis calibration "
+                f"needs at least {needed} raw channels. Fix: one column per strain-gauge channel."
             )
-        if self.wrench.ndim != 2 or self.wrench.shape[1] != 6:
-            raise DatasetFileError(f"wrench must have shape (n_samples, 6); got shape {self.wrench.shape}.")
         if self.raw.shape[0] != self.wrench.shape[0]:
             raise DatasetFileError(
                 f"raw has {self.raw.shape[0]} rows but wrench has {self.wrench.shape[0]}; they must match."
@@ -214,6 +348,11 @@ class CalibrationDataset:
         """Number of raw channels."""
         return int(self.raw.shape[1])
 
+    @property
+    def n_axes(self) -> int:
+        """Number of wrench axes (6 for a 6-axis sensor, 3 for a 3-axis load cell)."""
+        return int(self.wrench.shape[1])
+
     def subset(self, index: NDArray) -> "CalibrationDataset":
         """The rows selected by ``index`` (a boolean mask or integer indices), as a new dataset."""
         return CalibrationDataset(
@@ -222,6 +361,7 @@ class CalibrationDataset:
             group=None if self.group is None else self.group[index],
             meta=dict(self.meta),
             temperature=None if self.temperature is None else self.temperature[index],
+            axes=self.axes,
         )
 
     def features(self, temperature: bool = False) -> NDArray[np.float64]:
@@ -232,6 +372,33 @@ class CalibrationDataset:
             raise DatasetFileError("this dataset has no temperature column; record the sensor temperature "
                                    "(a 'temperature' column in deg C) to compensate thermal drift.")
         return np.column_stack([self.raw, self.temperature])
+
+    def pinned_rows(self, min_rows: int = 3) -> tuple[NDArray[np.bool_], list[str]]:
+        """Rows where a channel sits at its extreme value (the smallest or largest it reads) in at least
+        ``min_rows`` rows and 1 % of them: an ADC pinned at its limit (a saturated channel) reads one value
+        exactly, again and again, while a live reading varies. Returns the mask and one phrase per pinned
+        channel extreme.
+
+        Examples
+        --------
+        >>> raw = np.column_stack([np.r_[np.linspace(0, 1, 97), 4095, 4095, 4095], np.linspace(0, 1, 100)])
+        >>> mask, said = CalibrationDataset(raw=raw, wrench=np.zeros((100, 1)), axes=("Fz",)).pinned_rows()
+        >>> int(mask.sum()), said
+        (3, ['s0 at 4095 in 3 rows'])
+        """
+        mask = np.zeros(self.n_samples, dtype=bool)
+        said = []
+        need = max(int(min_rows), int(np.ceil(0.01 * self.n_samples)))
+        for k in range(self.n_channels):
+            column = self.raw[:, k]
+            if np.ptp(column) == 0:
+                continue
+            for value in (column.min(), column.max()):
+                at = column == value
+                if int(at.sum()) >= need:
+                    mask |= at
+                    said.append(f"s{k} at {value:.10g} in {int(at.sum())} rows")
+        return mask, said
 
     # ------------------------------------------------------------------ files
     def _checked_for_saving(self, path: Path) -> str:
@@ -269,6 +436,8 @@ class CalibrationDataset:
         with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
             if path.suffix == ".npz":
                 arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json)}
+                if self.axes != WRENCH_LABELS:
+                    arrays["axes"] = np.array(self.axes)
                 if self.group is not None:
                     arrays["group"] = self.group
                 if self.temperature is not None:
@@ -276,7 +445,7 @@ class CalibrationDataset:
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                cols = [f"s{i}" for i in range(self.n_channels)] + list(WRENCH_LABELS)
+                cols = [f"s{i}" for i in range(self.n_channels)] + list(self.axes)
                 columns = [self.raw, self.wrench]
                 if self.group is not None:  # exact integer labels (Python ints, never through float64)
                     cols.append("group")
@@ -291,159 +460,178 @@ class CalibrationDataset:
 
     @classmethod
     def load(cls, path: str | Path, *, columns: ColumnMap | None = None) -> "CalibrationDataset":
-        """Read a dataset: ``.csv`` / ``.npz`` as written by :meth:`save` (or by hand), or a MATLAB ``.mat``.
+        """Read a dataset: ``.csv`` / ``.npz`` as written by :meth:`save` (or by hand), a MATLAB ``.mat``, or a
+        folder of such files (one per pose or session, each a group).
 
         Parameters
         ----------
         path : path
-            The file; its suffix chooses the reader.
+            The file (its suffix, in any letter case, chooses the reader) or a folder of files.
         columns : ColumnMap, optional
-            Which columns / variables hold the raw channels and the wrench, and the
+            Which columns / variables hold the raw channels and the wrench, the group column, and the
             units of the file's forces and torques (converted to [N] and [N·m]).
         """
         path = Path(path)
         columns = ColumnMap() if columns is None else columns
+        if path.is_dir():
+            return cls._load_folder(path, columns)
         if not path.is_file():
             raise DatasetFileError(f"{path}: no such dataset file.")
-        readers = {".npz": cls._load_npz, ".csv": cls._load_csv, ".mat": cls._load_mat}
+        if columns.groups == "file":
+            raise DatasetFileError(f"{path}: --groups file makes each file of a folder a group; give the folder of "
+                                   "files, or name the group column.")
+        ds, _ = cls._load_file(path, columns)
+        if columns.groups is not None:
+            _check_groups(ds, f"{path}: --groups {columns.groups}")
+        return ds
+
+    @classmethod
+    def _load_file(cls, path: Path, columns: ColumnMap) -> tuple["CalibrationDataset", tuple[str, ...]]:
+        """The dataset of one file in ftcal's units, and the names of the file's columns (or arrays)."""
+        readers = {".npz": cls._load_arrays, ".csv": cls._load_csv, ".mat": cls._load_arrays}
         reader = readers.get(path.suffix.lower())
         if reader is None:
             raise DatasetFileError(f"{path}: unknown dataset suffix {path.suffix!r}; use .csv, .npz or .mat.")
-        ds = reader(path, columns)
+        ds, names = reader(path, columns)
         if not columns.is_default:
-            ds.wrench = columns.to_si(ds.wrench)
+            ds.wrench = columns.to_si(ds.wrench, ds.axes)
             ds.meta = {**ds.meta, **columns.units_meta()}
+        return ds, names
+
+    @classmethod
+    def _load_folder(cls, folder: Path, columns: ColumnMap) -> "CalibrationDataset":
+        """Every dataset file of ``folder``, read alike and joined; each file a group unless a column is named."""
+        try:
+            files = sorted(p for p in folder.iterdir() if p.suffix.lower() in DATASET_SUFFIXES
+                           and not p.name.startswith(".") and p.is_file())
+        except OSError as exc:
+            raise DatasetFileError(f"{folder}: the folder cannot be read ({exc.strerror or exc}).") from None
+        if not files:
+            raise DatasetFileError(f"{folder}: the folder holds no dataset files ({', '.join(DATASET_SUFFIXES)}); "
+                                   "put one file per pose or session in it.")
+        if len(files) > MAX_FOLDER_FILES:
+            raise DatasetFileError(f"{folder}: {len(files)} files, more than ftcal reads as one dataset "
+                                   f"({MAX_FOLDER_FILES}); join them first.")
+        parts, first_names = [], None
+        by_file = columns.groups in (None, "file")
+        for path in files:
+            ds, names = cls._load_file(path, columns)
+            if first_names is None:
+                first_names = names
+            elif names != first_names:
+                extra = sorted(set(names) - set(first_names)) or sorted(set(first_names) - set(names))
+                raise DatasetFileError(
+                    f"{path}: its columns ({', '.join(names)}) differ from those of {files[0]} "
+                    f"({', '.join(first_names)}{'; ' + extra[0] + ' differs' if extra else ''}); every file of a "
+                    "dataset folder needs the same columns. Fix: move that file out of the folder, or give it the "
+                    "same columns.")
+            if by_file:
+                ds.group = np.full(ds.n_samples, len(parts), dtype=np.int64)
+            parts.append(ds)
+        if len({p.axes for p in parts}) > 1 or len({p.n_channels for p in parts}) > 1:
+            raise DatasetFileError(f"{folder}: the files hold different channels or wrench axes; every file needs "
+                                   "the same columns.")
+        temperature = None
+        if all(p.temperature is not None for p in parts):
+            temperature = np.concatenate([p.temperature for p in parts])
+        groups = None if any(p.group is None for p in parts) else np.concatenate([p.group for p in parts])
+        meta = {**parts[0].meta, "source_files": [p.name for p in files]}
+        if by_file:
+            meta["group_labels"] = [p.name for p in files]
+        ds = cls(raw=np.vstack([p.raw for p in parts]), wrench=np.vstack([p.wrench for p in parts]), group=groups,
+                 meta=meta, temperature=temperature, axes=parts[0].axes)
+        if columns.groups is not None or by_file:
+            _check_groups(ds, f"{folder}: {'--groups ' + columns.groups if columns.groups else 'its files'}")
         return ds
 
     @classmethod
-    def _from_arrays(cls, path: Path, arrays: dict, columns: ColumnMap, meta: dict,
-                     kind: str = "variable") -> "CalibrationDataset":
-        """A dataset from named arrays (``.npz``, ``.mat``), selected by ``columns``."""
-        where = str(path)
-        vector_wrench = []
-        for label in WRENCH_LABELS:
-            found = [n for n in arrays if canonical_wrench_name(n) == label]
-            vector_wrench.append(found[0] if len(found) == 1 else label)
-        channel_vectors = sorted((n for n in arrays if n[:1] == "s" and n[1:].isdigit()), key=lambda n: int(n[1:]))
-        wrench = select_arrays(arrays, columns.wrench, "wrench", vector_wrench, "wrench", where, 6, kind)
-        raw = select_arrays(arrays, columns.channels, "raw", channel_vectors, "raw channels", where, None, kind)
-        if raw.shape[0] != wrench.shape[0] and raw.shape[1] == wrench.shape[0]:
-            raw = raw.T
-        extra = {}
-        for name in ("group", "temperature"):
-            if name in arrays:
-                value = check_real_array(arrays[name], name, where, kind)
-                extra[name] = value.ravel() if value.ndim == 2 and 1 in value.shape else value
-        try:
-            ds = cls(raw=raw, wrench=wrench, meta=meta, **extra)
-        except DatasetFileError as exc:
-            raise DatasetFileError(f"{path}: {exc}") from None
+    def _load_arrays(cls, path: Path, columns: ColumnMap) -> tuple["CalibrationDataset", tuple[str, ...]]:
+        """A dataset from the named arrays of an ``.npz`` / ``.mat``, reading only the arrays it uses."""
+        with ArrayFile(path) as source:
+            meta: dict = {"source_file": path.name} if not source.is_npz else {}
+            if source.is_npz and "meta_json" in source.entries:
+                meta = _npz_meta(source.read("meta_json"), path)
+            names = tuple(n for n in source.names() if n != "meta_json")
+            ds = _dataset_from_arrays(cls, source, columns, meta)
         ds._check_finite(path)
-        return ds
+        return ds, names
 
     @classmethod
-    def _load_mat(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
-        return cls._from_arrays(path, read_mat_arrays(path), columns, {"source_file": path.name})
-
-    @classmethod
-    def _load_npz(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
-        import zipfile
-
-        if not zipfile.is_zipfile(path):  # np.load would try it as a pickle and advise allow_pickle=True
-            raise DatasetFileError(f"{path}: not an .npz (zip) archive: {describe_file_start(path)}. A dataset .npz holds "
-                                   "the arrays raw and wrench (numpy.savez); a .csv dataset must keep its .csv suffix.")
-        try:
-            with np.load(path, allow_pickle=False) as z:
-                arrays = {}
-                for name in z.files:
-                    try:
-                        arrays[name] = z[name]
-                    except ValueError as exc:
-                        if "pickle" not in str(exc):
-                            raise
-                        raise DatasetFileError(f"{path}: array {name!r} holds Python objects (a pickle), which ftcal "
-                                               "never loads; save numeric arrays (numpy.savez(path, raw=..., "
-                                               "wrench=...)).") from None
-        except DatasetFileError:
-            raise
-        except Exception as exc:  # zipfile/numpy errors on truncated or foreign files
-            raise DatasetFileError(f"{path}: not a readable .npz dataset ({exc}).") from exc
-        meta_json = arrays.pop("meta_json", None)
-        try:
-            meta = json.loads(str(meta_json)) if meta_json is not None else {}
-        except (json.JSONDecodeError, RecursionError) as exc:
-            raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
-        if not isinstance(meta, dict):
-            raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
-        return cls._from_arrays(path, arrays, columns, meta, kind="array")
-
-    @classmethod
-    def _load_csv(cls, path: Path, columns: ColumnMap) -> "CalibrationDataset":
+    def _load_csv(cls, path: Path, columns: ColumnMap) -> tuple["CalibrationDataset", tuple[str, ...]]:
         try:
             # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
             lines = path.read_text(encoding="utf-8-sig").splitlines()
         except UnicodeDecodeError as exc:
-            raise DatasetFileError(f"{path}: not a UTF-8 text file ({exc}).") from None
+            line = path.read_bytes()[:exc.start].count(b"\n") + 1
+            raise DatasetFileError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a dataset CSV is a text "
+                                   "file.") from None
         meta, header_no, line_nos = _csv_layout(lines, path)
         if header_no is None:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         where = f"{path}: line {header_no}"
-        fields = [f.strip() for f in lines[header_no - 1].split(",")]
-        if all(f and is_number(f) for f in fields):
+        names = _csv_fields(lines[header_no - 1].lstrip("\ufeff"))
+        if all(f and is_number(f) for f in names):
             raise DatasetFileError(
                 f"{where}: the file has no header: its first line holds numbers, not column names. Fix: add a "
                 f"header line naming the columns ({_CSV_LAYOUT}), or name them with --channels/--wrench after adding "
                 "one."
             )
-        mapped = _mapped_names(fields, columns, where)
-        header = read_header(
-            mapped, where=where, error=DatasetFileError,
-            required=WRENCH_LABELS, optional=("group", "temperature"), expected=_CSV_LAYOUT,
-            allow_other=not columns.is_default and (columns.channels is not None or columns.wrench is not None),
-        )
-        names = [f.lstrip("\ufeff").strip() for f in fields]
+        used = _csv_columns(names, columns, where)
         body_lines = [lines[no - 1] for no in line_nos]
-        width = len(header.names)
-        for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
-            if line.count(",") + 1 != width:
-                raise DatasetFileError(f"{path}: line {no}: {line.count(',') + 1} values but the header names "
-                                       f"{width} columns; repair or remove that line.")
-            # `1_000`, `nan`: float() and numpy take forms no logger writes
-            check_plain_fields(line, f"{path}: line {no}", names, DatasetFileError, quick=True)
         if not body_lines:
             raise DatasetFileError(f"{path}: no data rows after the header.")
+        width = len(names)
+        numeric = used.channels + used.wrench + ([used.temperature] if used.temperature is not None else [])
+        shown = [n or f"{i + 1} (unnamed)" for i, n in enumerate(names)]
+        rows = []
+        group_texts = []
+        for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
+            fields = _csv_fields(line)
+            if len(fields) != width:
+                raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the header names "
+                                       f"{width} columns; repair or remove that line.")
+            values = [fields[i] for i in numeric]
+            # `1_000`, `nan`: float() and numpy take forms no logger writes; only the used columns are looked at
+            check_plain_fields(",".join(values), f"{path}: line {no}", [shown[i] for i in numeric], DatasetFileError,
+                               quick=True)
+            rows.append(values)
+            if used.group is not None:
+                group_texts.append(fields[used.group])
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                data = np.loadtxt(body_lines, delimiter=",", ndmin=2, comments=None)
-        except ValueError as exc:
-            for no, line in zip(line_nos, body_lines):  # name the file's line and the column, not numpy's row
-                check_plain_fields(line, f"{path}: line {no}", names, DatasetFileError)
-            raise DatasetFileError(f"{path}: unreadable number ({' '.join(str(exc).split())[:100]}).") from None
-        used = header.numbered("s") + [header.index[c] for c in WRENCH_LABELS]
-        bad = np.argwhere(~np.isfinite(data[:, used]))
+                data = np.array(rows, dtype=float).reshape(len(rows), len(numeric))
+        except ValueError:  # an empty cell or '1.0.0' passed the quick look: name its line and column
+            for no, values in zip(line_nos, rows):
+                check_plain_fields(",".join(values), f"{path}: line {no}", [shown[i] for i in numeric],
+                                   DatasetFileError)
+            raise
+        n_ch, n_w = len(used.channels), len(used.wrench)
+        bad = np.argwhere(~np.isfinite(data[:, :n_ch + n_w]))
         if bad.size:
-            row, col = int(bad[0, 0]), used[int(bad[0, 1])]
-            raise DatasetFileError(f"{path}: line {line_nos[row]}, column {names[col]}: "
-                                   f"{body_lines[row].split(',')[col].strip()!r} is NaN or inf (or beyond float64); "
+            row, col = int(bad[0, 0]), numeric[int(bad[0, 1])]
+            raise DatasetFileError(f"{path}: line {line_nos[row]}, column {shown[col]}: "
+                                   f"{_csv_fields(body_lines[row])[col]!r} is NaN or inf (or beyond float64); "
                                    "remove or repair that line.")
-        raw = data[:, header.numbered("s")]
-        wrench = data[:, [header.index[c] for c in WRENCH_LABELS]]
-        group = _exact_group_column(body_lines, header.index["group"], line_nos, path) if "group" in header \
-            else None
+        group = None
+        if used.group is not None:
+            group, labels = _group_column(group_texts, line_nos, path, names[used.group])
+            if labels is not None:
+                meta = {**meta, "group_labels": labels}
         temperature = None
-        if "temperature" in header:
+        if used.temperature is not None:
             try:
-                temperature = check_temperature(data[:, header.index["temperature"]], len(line_nos))
+                temperature = check_temperature(data[:, -1], len(line_nos))
             except TemperatureValueError as exc:
                 if exc.row is None:
                     raise DatasetFileError(f"{path}: {exc}") from None
                 raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
         try:
-            ds = cls(raw=raw, wrench=wrench, group=group, meta=meta, temperature=temperature)
+            ds = cls(raw=data[:, :n_ch], wrench=data[:, n_ch:n_ch + n_w], group=group, meta=meta,
+                     temperature=temperature, axes=used.axes)
         except DatasetFileError as exc:
             raise DatasetFileError(f"{path}: {exc}") from None
-        return ds
+        return ds, tuple(names)
 
     def _check_finite(self, path: Path) -> None:
         """NaN or inf in the arrays of a ``.npz`` / ``.mat`` file, named by array and row (counted from 0)."""
@@ -454,6 +642,161 @@ class CalibrationDataset:
                 raise DatasetFileError(f"{path}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
                                        "remove or repair that row.")
 
+
+def _check_groups(ds: CalibrationDataset, where: str) -> None:
+    """A group column given on purpose must tell at least two groups apart (grouped folds hold out whole groups)."""
+    if ds.group is None:
+        return
+    values = np.unique(ds.group)
+    if values.size < 2:
+        labels = ds.meta.get("group_labels")
+        shown = labels[0] if isinstance(labels, list) and labels else int(values[0]) if values.size else "none"
+        raise DatasetFileError(f"{where}: every one of the {ds.n_samples} rows is in one group ({shown}); grouped "
+                               "cross-validation holds out whole groups and needs at least two. Fix: name the column "
+                               "that tells the poses or sessions apart, give a folder of several files, or drop "
+                               "--groups.")
+
+
+def _npz_meta(value: np.ndarray, path: Path) -> dict:
+    """The JSON object of an ``.npz``'s ``meta_json``."""
+    if value.dtype.kind not in "US" or value.size != 1:
+        raise DatasetFileError(f"{path}: meta_json is not a JSON text (dtype {value.dtype}); save it as "
+                               "numpy.array(json.dumps(meta)).")
+    try:
+        meta = json.loads(str(value.reshape(())))
+    except (json.JSONDecodeError, RecursionError) as exc:
+        raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
+    if not isinstance(meta, dict):
+        raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
+    return meta
+
+
+def _rows_first(a: np.ndarray) -> np.ndarray:
+    """A 2-D array with the samples as rows: MATLAB users often store one row per component, so an array wider
+    than tall is transposed (a calibration has more samples than channels or axes); a vector is one column."""
+    if a.ndim == 1:
+        return a[:, None]
+    if a.ndim == 2 and a.shape[0] < a.shape[1]:
+        return a.T
+    return a
+
+
+def _oriented(raw: np.ndarray, wrench: np.ndarray, raw_whole: bool, wrench_whole: bool):
+    """The raw and wrench arrays with the samples as rows. MATLAB users often store one row per component: a whole
+    wrench variable of more than six columns and at most six rows is transposed (a wrench has 1 to 6 axes), and a
+    whole variable is transposed where that makes the two arrays' rows agree."""
+    axes = len(WRENCH_LABELS)
+    if wrench_whole and wrench.shape[1] > axes >= wrench.shape[0]:
+        wrench = wrench.T
+    if raw_whole and raw.shape[0] != wrench.shape[0] and raw.shape[1] == wrench.shape[0]:
+        raw = raw.T
+    if wrench_whole and raw.shape[0] != wrench.shape[0] and wrench.shape[1] == raw.shape[0] and wrench.shape[0] <= axes:
+        wrench = wrench.T
+    return raw, wrench
+
+
+def _vector(source: ArrayFile, name: str, what: str) -> np.ndarray:
+    v = check_real_array(source.read(name), name, source.where, source.kind)
+    if v.ndim == 2 and 1 in v.shape:
+        v = v.ravel()
+    if v.ndim != 1:
+        raise DatasetFileError(f"{source.where}: {source.kind} {name!r} has shape {v.shape}; a {what} column must be "
+                               "a vector.")
+    return v
+
+
+def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vectors: list[str], what: str,
+            option: str) -> tuple[np.ndarray, list[str], str | None]:
+    """One (n, k) array from a file's arrays: one 2-D variable, a column slice of one, or a list of vectors.
+    Returns the array, the names of its columns and the variable a slice came from."""
+    where, kind = source.where, source.kind
+    available = source.names()
+    if names is None:
+        if default in available:
+            names = (default,)
+        elif vectors:
+            names = tuple(vectors)
+        else:
+            raise DatasetFileError(
+                f"{where}: no {kind} {default!r} holding the {what}; the file has "
+                f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}. Fix: name them with "
+                f"{option} NAME[,NAME...] (or a column slice of one array, e.g. {option} 'data[:,0:8]').")
+    spec = parse_column_slice(names[0]) if len(names) == 1 else None
+    base = spec[0] if spec is not None else None
+    missing = [n for n in ([base] if spec is not None else names) if n not in available]
+    if missing:
+        raise DatasetFileError(f"{where}: {option} names {kind} {missing[0]!r}, which the file lacks; the file has "
+                               f"{', '.join(n for n in available if n != 'meta_json')}.")
+    if spec is not None or len(names) == 1:
+        name = base if spec is not None else names[0]
+        a = check_real_array(source.read(name), name, where, kind)
+        if a.ndim > 2:
+            raise DatasetFileError(f"{where}: {kind} {name!r} has shape {a.shape}; expected (n_samples, k).")
+        if spec is None:  # a whole variable: oriented beside the other array (_oriented)
+            return (a[:, None] if a.ndim == 1 else a).astype(float), [name], None
+        a = _rows_first(a).astype(float)
+        picked = _slice_columns(spec, a.shape[1], where, option)
+        return a[:, picked], [f"{name}[:,{k}]" for k in picked], name
+    cols = [_vector(source, n, what) for n in names]
+    if len({c.size for c in cols}) != 1:
+        raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
+                               f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
+    return np.column_stack(cols).astype(float), list(names), None
+
+
+def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict) -> CalibrationDataset:
+    """The dataset the mapped arrays of ``source`` make (only those arrays are read)."""
+    where = source.where
+    available = source.names()
+    found: dict[str, str] = {}
+    for n in available:
+        axis = canonical_wrench_name(n)
+        if axis is not None:
+            if axis in found:
+                raise DatasetFileError(f"{where}: {source.kind}s {found[axis]!r} and {n!r} both read as the wrench "
+                                       "axis {axis}; name the wrench with --wrench.")
+            found[axis] = n
+    vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
+    channel_vectors = sorted((n for n in available if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
+    wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench",
+                                                 "--wrench")
+    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", channel_vectors, "raw channels",
+                                        "--channels")
+    raw, wrench = _oriented(raw, wrench, len(raw_labels) == 1 and raw_base is None,
+                            len(wrench_labels) == 1 and wrench_base is None)
+    if len(wrench_labels) == 1 and wrench_base is None and wrench.shape[1] > 1:
+        wrench_labels = [f"{wrench_labels[0]}[:,{k}]" for k in range(wrench.shape[1])]
+    both = [label for label in raw_labels if label in set(wrench_labels)]
+    if raw_base is not None and both:
+        raise DatasetFileError(
+            f"{where}: --channels {columns.channels[0]} and --wrench {columns.wrench[0]} overlap ({both[0]} would be "
+            f"both). Fix: give disjoint column slices of {raw_base!r}, e.g. --channels '{raw_base}[:,0:8]' --wrench "
+            f"'{raw_base}[:,8:14]'.")
+    if columns.wrench is None and columns.axes is None and "axes" in available and "wrench" in available:
+        stored = source.read("axes")
+        if stored.dtype.kind not in "US" or stored.ndim != 1 or stored.size != wrench.shape[1]:
+            raise DatasetFileError(f"{where}: array 'axes' must name the {wrench.shape[1]} wrench axes as text, "
+                                   "e.g. numpy.array(['Fx', 'Fy', 'Fz']).")
+        axes = tuple(str(a) for a in stored)
+    else:
+        axes = columns.resolve_axes(wrench_labels, wrench.shape[1], where)
+    order = np.argsort([WRENCH_LABELS.index(a) if a in WRENCH_LABELS else 99 for a in axes], kind="stable")
+    wrench, axes = wrench[:, order], tuple(axes[k] for k in order)
+    if raw.shape[0] != wrench.shape[0]:
+        raise DatasetFileError(f"{where}: the raw channels have {raw.shape[0]} rows but the wrench has "
+                               f"{wrench.shape[0]}; they must match (one row per sample).")
+    extra = {}
+    group_name = columns.groups if columns.groups not in (None, "file") else "group"
+    if columns.groups not in (None, "file") and group_name not in available:
+        raise DatasetFileError(f"{where}: --groups names {source.kind} {group_name!r}, which the file lacks; the file "
+                               f"has {', '.join(n for n in available if n != 'meta_json')}.")
+    for key, name in (("group", group_name), ("temperature", "temperature")):
+        if name in available:
+            extra[key] = _vector(source, name, key)
+    try:
+        return cls(raw=raw, wrench=wrench, meta=meta, axes=axes, **extra)
+    except DatasetFileError as exc:
+        raise DatasetFileError(f"{where}: {exc}") from None
 
 
 def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:

@@ -1,103 +1,264 @@
-"""Getting a user's calibration data in: column mappings, name aliases, ``.mat`` files, declared units.
+"""Getting a user's calibration data in: column mappings, name aliases, bounded ``.npz``/``.mat`` reading, units.
 
 A recording rarely arrives in ftcal's own layout. This module maps it onto
 :class:`~ftcal.CalibrationDataset`:
 
 * **column mapping** (:class:`ColumnMap`): which columns (CSV) or variables
-  (``.mat``, ``.npz``) hold the raw channels and the six wrench components,
-  e.g. ``channels=("s1", ..., "s8")``, ``wrench=("Fx", "Fy", "Fz", "Mx", "My", "Mz")``;
-* **name aliases**: without a mapping, torques may be named ``Tx/Ty/Tz`` or
-  ``Mx/My/Mz`` (Bota, MATLAB naming), any letter case;
-* **units** (:func:`unit_scale`): forces in ``N``, ``kN``, ``mN`` or ``lbf``,
-  torques in ``N.m``, ``N.mm``, ``N.cm``, ``kN.m``, ``lbf.in`` or ``lbf.ft``;
-  the data are converted to ftcal's [N] and [N·m] on reading;
+  (``.mat``, ``.npz``) hold the raw channels and the wrench components: a list
+  of names (``g1,g2,g3``), a numbered range (``s0..s7``) or a column slice of
+  one 2-D array (``data[:,0:8]``); the wrench may have any number of axes
+  (``Fx,Fy,Fz`` is a 3-axis calibration), named by its columns or by ``axes``;
+* **name aliases**: torques may be named ``Tx/Ty/Tz`` or ``Mx/My/Mz``, forces
+  ``force_x``, any letter case;
+* **units** (:func:`unit_scale`): one exact, case-sensitive parser (``MN`` is
+  a meganewton, ``mN`` a millinewton): ``N`` with any SI prefix, ``lbf``,
+  ``ozf``, ``kip``, ``dyn``, masses as forces through standard gravity
+  (``g``, ``kg``, ``gf``, ``kgf``), and torques as a force times a length
+  (``N.m``, ``N·mm``, ``N*cm``, ``kN.m``, ``lbf.in``, ``Nmm``); the data are
+  converted to ftcal's [N] and [N·m] on reading;
 * **the lever-arm check** (:func:`lever_arm_problem`): the ratio of the
   largest torque to the largest force is a length, the lever arm of the
-  loads. Torques written in N·mm but read as N·m make it a thousand times too
-  long (a 4 m arm); the check names the likely unit and the fix.
+  loads; torques in N·mm (or forces in kN) read in the wrong unit make it a
+  thousand times too long, and the check names the likely unit and the fix;
+* **bounded reading** (:class:`ArrayFile`): only the variables a dataset uses
+  are read, each after its declared size was checked against ftcal's memory
+  limit, so an unused (or a crafted) huge variable costs nothing.
 """
 
 from __future__ import annotations
 
 import re
+import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core._exceptions import DatasetFileError
 from ..core._columns import DTYPE_KIND_NAMES
-from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS
+from ..core._exceptions import DatasetFileError
+from ..core._memory import MemoryLimitError, check_allocation
+from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
 __all__ = [
     "FORCE_UNITS",
     "TORQUE_UNITS",
+    "STANDARD_GRAVITY",
     "ColumnMap",
     "unit_scale",
     "canonical_wrench_name",
+    "expand_names",
+    "parse_column_slice",
     "lever_arm_m",
     "lever_arm_problem",
-    "read_mat_arrays",
+    "ArrayFile",
+    "read_npy_member",
     "check_real_array",
 ]
 
-#: Force units ftcal reads, as the factor to [N].
-FORCE_UNITS: dict[str, float] = {"N": 1.0, "kN": 1e3, "mN": 1e-3, "lbf": 4.4482216152605}
-#: Torque units ftcal reads, as the factor to [N·m] (``.``, ``*``, ``·`` or nothing between N and m).
+#: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
+STANDARD_GRAVITY = 9.80665
+#: SI prefixes, exact and case-sensitive (``M`` mega, ``m`` milli); ``u`` stands for µ.
+_SI_PREFIXES: dict[str, float] = {"G": 1e9, "M": 1e6, "k": 1e3, "h": 1e2, "da": 1e1, "": 1.0, "d": 1e-1,
+                                  "c": 1e-2, "m": 1e-3, "µ": 1e-6, "μ": 1e-6, "u": 1e-6, "n": 1e-9}
+#: Force units without a prefix, as the factor to [N]; a gram (``g``) is read as the weight of a gram.
+_FORCE_BASES: dict[str, float] = {"N": 1.0, "g": 1e-3 * STANDARD_GRAVITY, "gf": 1e-3 * STANDARD_GRAVITY}
+#: Force units that take no prefix [N].
+_FORCE_OTHER: dict[str, float] = {"lbf": 4.4482216152605, "ozf": 0.27801385095378125, "kip": 4448.2216152605,
+                                  "dyn": 1e-5}
+#: Lengths of a torque's lever [m].
+_LENGTHS: dict[str, float] = {**{f"{p}m": f for p, f in _SI_PREFIXES.items() if p in ("k", "", "d", "c", "m", "µ",
+                                                                                    "μ", "u")},
+                              "in": 0.0254, "ft": 0.3048}
+#: What a torque's force and length may be separated by.
+_TORQUE_SEPARATORS = re.compile(r"\s*[.·⋅*×\s-]\s*")
+#: Common force units ftcal reads, as the factor to [N] (every SI prefix of N and g is read too).
+FORCE_UNITS: dict[str, float] = {"N": 1.0, "kN": 1e3, "mN": 1e-3, "MN": 1e6, "g": 1e-3 * STANDARD_GRAVITY,
+                                 "kg": STANDARD_GRAVITY, "gf": 1e-3 * STANDARD_GRAVITY, "kgf": STANDARD_GRAVITY,
+                                 "lbf": 4.4482216152605}
+#: Common torque units ftcal reads, as the factor to [N·m] (any force unit times m, mm, cm, in, ft is read too).
 TORQUE_UNITS: dict[str, float] = {
-    "N.m": 1.0, "N.mm": 1e-3, "N.cm": 1e-2, "kN.m": 1e3, "mN.m": 1e-3,
+    "N.m": 1.0, "N.mm": 1e-3, "N.cm": 1e-2, "kN.m": 1e3, "mN.m": 1e-3, "kgf.m": STANDARD_GRAVITY,
     "lbf.in": 0.1129848290276167, "lbf.ft": 1.3558179483314004,
 }
 #: Lever arms [m] outside this range are implausible for a force/torque calibration.
 PLAUSIBLE_LEVER_ARM_M = (1e-4, 2.0)
 
 
-def _unit_key(text: str) -> str:
-    return re.sub(r"[\s*·⋅x-]", ".", text.strip()).replace("..", ".")
+def _force_factor(text: str) -> float | None:
+    """The factor of a force unit to [N], or None (exact spelling: ``MN`` is no ``mN``)."""
+    if text in _FORCE_OTHER:
+        return _FORCE_OTHER[text]
+    for base, factor in _FORCE_BASES.items():
+        if text.endswith(base) and text[: -len(base)] in _SI_PREFIXES:
+            return _SI_PREFIXES[text[: -len(base)]] * factor
+    return None
+
+
+def _torque_factor(text: str) -> float | None:
+    """The factor of a torque unit (a force unit times a length) to [N·m], or None."""
+    parts = _TORQUE_SEPARATORS.split(text.strip())
+    if len(parts) == 2:
+        force, length = _force_factor(parts[0]), _LENGTHS.get(parts[1])
+        return None if force is None or length is None else force * length
+    if len(parts) != 1:
+        return None
+    found = {f * _LENGTHS[text[i:]] for i in range(1, len(text)) if text[i:] in _LENGTHS
+             for f in [_force_factor(text[:i])] if f is not None}  # "Nmm", "kNm", "MNm"
+    return found.pop() if len(found) == 1 else None
 
 
 def unit_scale(unit: str, kind: str) -> float:
     """The factor turning values in ``unit`` into ftcal's unit of ``kind`` (``"force"`` [N], ``"torque"`` [N·m]).
 
+    Units are read exactly as written (``MN`` is a meganewton, ``mN`` a millinewton); a mass unit is read as a
+    force through standard gravity (``g``, ``kg``, ``gf``, ``kgf``); a torque is a force unit times a length
+    (``m`` with a prefix, ``in``, ``ft``), joined by ``.``, ``·``, ``*``, a space or nothing.
+
     Examples
     --------
     >>> unit_scale("N.mm", "torque"), unit_scale("Nmm", "torque"), unit_scale("N·m", "torque")
     (0.001, 0.001, 1.0)
-    >>> unit_scale("furlong", "force")
+    >>> unit_scale("MN", "force"), unit_scale("mN", "force"), round(unit_scale("g", "force"), 8)
+    (1000000.0, 0.001, 0.00980665)
+    >>> unit_scale("n.mm", "torque")
     Traceback (most recent call last):
     ...
-    ftcal.core._exceptions.DatasetFileError: unknown force unit 'furlong'; known: N, kN, mN, lbf.
+    ftcal.core._exceptions.DatasetFileError: unknown torque unit 'n.mm' (units are case-sensitive: did you mean 'N.mm'?); known: N.m, N.mm, N.cm, kN.m, mN.m, kgf.m, lbf.in, lbf.ft (any force unit times m, mm, cm, in or ft).
     """
+    if not isinstance(unit, str):
+        raise DatasetFileError(f"the {kind} unit must be text such as 'N' or 'N.m'; got {unit!r}.")
+    text = unit.strip()
+    factor = _force_factor(text) if kind == "force" else _torque_factor(text)
+    if factor is not None:
+        return factor
+    if kind == "torque" and _force_factor(text) is not None:
+        raise DatasetFileError(f"{unit!r} is a force unit, not a torque unit; a torque is a force times a length, "
+                               f"e.g. {text}.m or {text}.mm.")
+    if kind == "force" and _torque_factor(text) is not None:
+        raise DatasetFileError(f"{unit!r} is a torque unit, not a force unit: give it as --torque-unit, and the "
+                               "forces' unit (e.g. N) as --force-unit.")
     table = FORCE_UNITS if kind == "force" else TORQUE_UNITS
-    key = _unit_key(unit)
-    if kind == "torque" and "." not in key:  # "Nmm", "Nm", "kNm", "lbfin"
-        key = re.sub(r"^(k|m)?(N|lbf)(m|mm|cm|in|ft)$", r"\1\2.\3", key)
-    if key in table:
-        return table[key]
-    folded = [name for name in table if name.lower() == key.lower()]
-    if len(folded) == 1:  # "n.mm", "LBF": case does not matter where it cannot change the meaning
-        return table[folded[0]]
-    raise DatasetFileError(f"unknown {kind} unit {unit!r}; known: {', '.join(table)}.")
+    parse = _force_factor if kind == "force" else _torque_factor
+    guesses = sorted({name for name in _spellings(kind) if name.lower() == text.lower() and parse(name) is not None})
+    hint = (f" (units are case-sensitive: did you mean {' or '.join(repr(g) for g in guesses)}?)" if guesses else "")
+    more = "any SI prefix of N or g" if kind == "force" else "any force unit times m, mm, cm, in or ft"
+    raise DatasetFileError(f"unknown {kind} unit {unit!r}{hint}; known: {', '.join(table)} ({more}).")
 
 
-_ALIASES = {f"{p}{a}": name for name in WRENCH_LABELS for a in (name[1],)
-            for p in ((name[0], "M") if name[0] == "T" else (name[0],))}
+def _spellings(kind: str) -> list[str]:
+    """Every unit spelling the parser reads (SI prefixes, the separators as '.'), for case hints."""
+    forces = [p + b for b in _FORCE_BASES for p in _SI_PREFIXES if p not in ("μ", "u")] + list(_FORCE_OTHER)
+    if kind == "force":
+        return forces
+    return [f"{f}.{length}" for f in forces for length in _LENGTHS if length not in ("μm", "um")]
+
+
+_FORCE_NAME = re.compile(r"(?:f|force)[_\s-]?([xyz])", re.IGNORECASE)
+_TORQUE_NAME = re.compile(r"(?:t|m|torque|moment)[_\s-]?([xyz])", re.IGNORECASE)
 
 
 def canonical_wrench_name(name: str) -> str | None:
-    """``Fx``...``Tz`` for a wrench column name or its alias (``Mx`` for ``Tx``, any case), else None.
+    """``Fx``...``Tz`` for a wrench column name or its alias, else None.
+
+    Torques may be named ``Mx`` (Bota, MATLAB naming), ``torque_x`` or ``moment_x``, forces ``force_x`` or
+    ``f_x``; any letter case.
 
     Examples
     --------
-    >>> [canonical_wrench_name(n) for n in ("fx", "Mz", "TY", "s0")]
-    ['Fx', 'Tz', 'Ty', None]
+    >>> [canonical_wrench_name(n) for n in ("fx", "Mz", "TY", "force_x", "Moment-Y", "s0")]
+    ['Fx', 'Tz', 'Ty', 'Fx', 'Ty', None]
     """
     key = name.strip()
-    for alias, canonical in _ALIASES.items():
-        if key.lower() == alias.lower():
-            return canonical
+    for pattern, letter in ((_FORCE_NAME, "F"), (_TORQUE_NAME, "T")):
+        found = pattern.fullmatch(key)
+        if found:
+            return letter + found.group(1).lower()
     return None
+
+
+_RANGE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*?)(\d+)\s*\.\.\s*(?:\1)?(\d+)")
+_SLICE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*)\s*\[\s*:\s*,\s*(?:(-?\d+)|(-?\d*)\s*:\s*(-?\d*))\s*\]")
+#: Most columns one range may name (a typo such as s0..s99999999 would otherwise build a huge list).
+MAX_RANGE_COLUMNS = 100_000
+
+
+def expand_names(items: Sequence[str], what: str = "--channels") -> tuple[str, ...]:
+    """Column names with each range ``s0..s7`` (inclusive) written out; slices ``data[:,0:8]`` are kept.
+
+    Examples
+    --------
+    >>> expand_names(["s0..s3", "temp"])
+    ('s0', 's1', 's2', 's3', 'temp')
+    >>> expand_names(["ch08..ch10"])
+    ('ch08', 'ch09', 'ch10')
+    """
+    out: list[str] = []
+    for item in items:
+        text = str(item).strip()
+        found = _RANGE.fullmatch(text)
+        if found is None:
+            if ".." in text:
+                raise DatasetFileError(f"{what} {text!r}: a range is written PREFIX<first>..PREFIX<last>, e.g. s0..s7 "
+                                       "(both ends included).")
+            out.append(text)
+            continue
+        prefix, first, last = found.group(1), found.group(2), found.group(3)
+        start, stop = int(first), int(last)
+        if stop < start:
+            raise DatasetFileError(f"{what} {text!r}: the range runs backwards; write {prefix}{last}..{prefix}{first} "
+                                   "or list the columns in the order you want.")
+        if stop - start + 1 > MAX_RANGE_COLUMNS:
+            raise DatasetFileError(f"{what} {text!r} names {stop - start + 1} columns, more than ftcal reads "
+                                   f"({MAX_RANGE_COLUMNS}); check the range.")
+        width = len(first) if first.startswith("0") and len(first) > 1 else 0
+        out.extend(f"{prefix}{k:0{width}d}" for k in range(start, stop + 1))
+    return tuple(out)
+
+
+def parse_column_slice(text: str) -> tuple[str, int | None, int | None] | None:
+    """``(variable, start, stop)`` of a column slice ``data[:,0:8]`` (Python's half-open columns), else None.
+
+    Examples
+    --------
+    >>> parse_column_slice("data[:,8:14]"), parse_column_slice("data[:, 3]"), parse_column_slice("raw")
+    (('data', 8, 14), ('data', 3, 4), None)
+    """
+    found = _SLICE.fullmatch(str(text).strip())
+    if found is None:
+        return None
+    name, single, start, stop = found.groups()
+    if single is not None:
+        k = int(single)
+        return name, k, (k + 1) if k != -1 else None
+    return name, int(start) if start else None, int(stop) if stop else None
+
+
+def _slice_columns(spec: tuple[str, int | None, int | None], width: int, where: str, option: str) -> range:
+    """The columns of a 2-D array of ``width`` columns a slice selects; a slice beyond the array is an error."""
+    name, start, stop = spec
+    begin = 0 if start is None else start
+    end = width if stop is None else stop
+    b = begin + width if begin < 0 else begin
+    e = end + width if end < 0 else end
+    if not (0 <= b < e <= width):
+        raise DatasetFileError(f"{where}: {option} {name}[:,{'' if start is None else start}:"
+                               f"{'' if stop is None else stop}] selects no columns of {name!r}, which has {width} "
+                               f"columns (0..{width - 1}). Fix: give a slice within them, e.g. {name}[:,0:{width}].")
+    return range(b, e)
+
+
+def _axis_list(value, what: str) -> tuple[str, ...]:
+    names = tuple(str(v).strip() for v in value)
+    unknown = [n for n in names if n not in WRENCH_LABELS]
+    if unknown or not names:
+        raise DatasetFileError(f"{what} {','.join(names)!r}: name each output axis as one of "
+                               f"{', '.join(WRENCH_LABELS)} (e.g. --axes Fx,Fy,Fz for a 3-axis load cell).")
+    dups = sorted({n for n in names if names.count(n) > 1})
+    if dups:
+        raise DatasetFileError(f"{what} names the axis {dups[0]!r} twice; each axis once.")
+    return names
 
 
 @dataclass(frozen=True)
@@ -107,20 +268,29 @@ class ColumnMap:
     Parameters
     ----------
     channels : sequence of str, optional
-        The raw-channel columns in channel order (``s1,...,s8``); in a ``.mat`` or
-        ``.npz`` one name may be a 2-D variable holding every channel. Default:
-        ``s0, s1, ...`` (CSV) or the variable ``raw``.
+        The raw-channel columns in channel order: names (``g1,...,g8``), ranges
+        (``s0..s7``), or a column slice of one 2-D variable of a ``.mat``/``.npz``
+        (``data[:,0:8]``); one name may be a 2-D variable holding every channel.
+        Default: ``s0, s1, ...`` (CSV) or the variable ``raw``.
     wrench : sequence of str, optional
-        The six wrench columns in the order Fx, Fy, Fz, Tx, Ty, Tz (or one 2-D
-        variable). Default: ``Fx ... Tz`` or their aliases (``Mx/My/Mz``), or the
+        The wrench columns, any number of axes (a 3-axis load cell has three):
+        names, a range, or a column slice (``data[:,8:14]``). Default: every
+        column named like a wrench axis (``Fx ... Tz``, ``Mx``, ``force_x``), or the
         variable ``wrench``.
     force_unit, torque_unit : str
-        The units the file's forces and torques are written in (see
-        :data:`FORCE_UNITS`, :data:`TORQUE_UNITS`); converted to [N] and [N·m].
+        The units the file's forces and torques are written in (:func:`unit_scale`); converted to [N] and [N·m].
+    axes : sequence of str, optional
+        The output axes (``Fx``...``Tz``) of the wrench columns, in their order, when their names do not say
+        (``load`` of a 1-axis cell: ``axes=("Fz",)``); six unnamed columns are Fx, Fy, Fz, Tx, Ty, Tz.
+    groups : str, optional
+        The column holding each row's group (pose, session): integers or text labels. Default: ``group``.
+        ``"file"`` makes each file of a folder a group.
 
     Examples
     --------
-    >>> ColumnMap(channels=("a", "b", "c"), torque_unit="N.mm").torque_factor
+    >>> ColumnMap(channels=("s0..s2",), torque_unit="N.mm").channels
+    ('s0', 's1', 's2')
+    >>> ColumnMap(torque_unit="N.mm").torque_factor
     0.001
     """
 
@@ -128,28 +298,65 @@ class ColumnMap:
     wrench: tuple[str, ...] | None = None
     force_unit: str = "N"
     torque_unit: str = "N.m"
+    axes: tuple[str, ...] | None = None
+    groups: str | None = None
 
     def __post_init__(self) -> None:
-        for field, value in (("channels", self.channels), ("wrench", self.wrench)):
+        for field, option in (("channels", "--channels"), ("wrench", "--wrench")):
+            value = getattr(self, field)
             if value is None:
                 continue
-            names = tuple(str(v).strip() for v in value)
+            if isinstance(value, str):
+                value = value.split(",")
+            names = expand_names(value, option)
             object.__setattr__(self, field, names)
             if not names or any(not n for n in names):
-                raise DatasetFileError(f"{field} mapping {value!r} holds an empty name; give comma-separated names.")
+                raise DatasetFileError(f"{field} mapping {','.join(value)!r} holds an empty name; give "
+                                       "comma-separated names, e.g. s0,s1,s2 or s0..s7.")
             dups = sorted({n for n in names if names.count(n) > 1})
             if dups:
                 raise DatasetFileError(f"{field} mapping names {dups[0]!r} twice; each column once.")
-        if self.wrench is not None and len(self.wrench) not in (1, 6):
-            raise DatasetFileError(
-                f"wrench mapping {','.join(self.wrench)!r} names {len(self.wrench)} columns; give the six columns "
-                "in the order Fx,Fy,Fz,Tx,Ty,Tz (or one variable holding all six)."
-            )
-        if self.channels and self.wrench and set(self.channels) & set(self.wrench):
-            raise DatasetFileError(f"column {sorted(set(self.channels) & set(self.wrench))[0]!r} is mapped both "
-                                   "as a channel and as a wrench component.")
+            slices = [n for n in names if parse_column_slice(n) is not None]
+            if slices and len(names) > 1:
+                raise DatasetFileError(f"{option} {','.join(names)!r}: a column slice such as {slices[0]} stands "
+                                       "alone (it selects every column it needs).")
+            if any("[" in n for n in names) and not slices:
+                bad = next(n for n in names if "[" in n)
+                raise DatasetFileError(f"{option} {bad!r} is no column slice; write NAME[:,FIRST:STOP] (columns "
+                                       "FIRST..STOP-1 counted from 0, e.g. data[:,0:8]).")
+        if self.axes is not None:
+            object.__setattr__(self, "axes", _axis_list(self.axes.split(",") if isinstance(self.axes, str)
+                                                        else self.axes, "--axes"))
+        if self.channels and self.wrench:
+            self._check_no_overlap()
+        if self.groups is not None:
+            used = set(self.channels or ()) | set(self.wrench or ())
+            if self.groups in used:
+                raise DatasetFileError(f"--groups {self.groups!r} is also mapped as a channel or wrench column; the "
+                                       "group column must be another one.")
         unit_scale(self.force_unit, "force")
         unit_scale(self.torque_unit, "torque")
+
+    def _check_no_overlap(self) -> None:
+        """A column (or columns of one array) mapped both as a channel and as a wrench component is an error."""
+        common = sorted(set(self.channels) & set(self.wrench))
+        if common:
+            raise DatasetFileError(
+                f"column {common[0]!r} is mapped both as a channel and as a wrench component. Fix: when one array "
+                f"holds both, give column slices, e.g. --channels '{common[0]}[:,0:8]' --wrench '{common[0]}[:,8:14]'.")
+        a, b = parse_column_slice(self.channels[0]), parse_column_slice(self.wrench[0])
+        whole = {n for n in self.channels + self.wrench if parse_column_slice(n) is None}
+        for spec, other in ((a, b), (b, a)):
+            if spec is not None and spec[0] in whole:
+                raise DatasetFileError(f"{spec[0]!r} is mapped whole and as a column slice; map its columns once, "
+                                       "each as a slice (e.g. --channels 'data[:,0:8]' --wrench 'data[:,8:14]').")
+        if a is not None and b is not None and a[0] == b[0]:
+            starts_known = all(v is not None and v >= 0 for v in (a[1], a[2], b[1], b[2]))
+            if starts_known and max(a[1], b[1]) < min(a[2], b[2]):
+                raise DatasetFileError(
+                    f"--channels {self.channels[0]} and --wrench {self.wrench[0]} overlap (columns "
+                    f"{max(a[1], b[1])}..{min(a[2], b[2]) - 1} of {a[0]!r} would be both). Fix: give disjoint "
+                    f"slices, e.g. --channels '{a[0]}[:,0:{b[1]}]' --wrench '{a[0]}[:,{b[1]}:{b[2]}]'.")
 
     @property
     def force_factor(self) -> float:
@@ -164,69 +371,141 @@ class ColumnMap:
     @property
     def is_default(self) -> bool:
         """Whether nothing is mapped and the units are ftcal's own."""
-        return (self.channels is None and self.wrench is None and self.force_factor == 1.0
-                and self.torque_factor == 1.0)
+        return (self.channels is None and self.wrench is None and self.axes is None and self.groups is None
+                and self.force_factor == 1.0 and self.torque_factor == 1.0)
 
-    def to_si(self, wrench: np.ndarray) -> np.ndarray:
-        """The wrench converted from the declared units to [N] and [N·m]."""
+    def to_si(self, wrench: np.ndarray, axes: Sequence[str] = WRENCH_LABELS) -> np.ndarray:
+        """The wrench (columns ``axes``) converted from the declared units to [N] and [N·m]."""
         out = np.array(wrench, dtype=float)
-        out[:, FORCE] *= self.force_factor
-        out[:, TORQUE] *= self.torque_factor
+        out[:, force_columns(axes)] *= self.force_factor
+        out[:, torque_columns(axes)] *= self.torque_factor
         return out
 
     def units_meta(self) -> dict:
         """What the file declared, for the dataset's ``meta`` (the data themselves are in N and N·m)."""
         return {"source_force_unit": self.force_unit, "source_torque_unit": self.torque_unit}
 
+    def to_dict(self) -> dict:
+        """The mapping as plain JSON (stored in a model file, so that a model reads its data as it was fitted)."""
+        return {"channels": None if self.channels is None else list(self.channels),
+                "wrench": None if self.wrench is None else list(self.wrench),
+                "axes": None if self.axes is None else list(self.axes), "groups": self.groups,
+                "force_unit": self.force_unit, "torque_unit": self.torque_unit}
 
-def lever_arm_m(wrench: ArrayLike) -> float | None:
+    @classmethod
+    def from_dict(cls, facts: dict, where: str = "the model file") -> "ColumnMap":
+        """The mapping :meth:`to_dict` wrote; a damaged entry is a :class:`DatasetFileError` naming ``where``."""
+        if not isinstance(facts, dict):
+            raise DatasetFileError(f"{where}: the stored column mapping is not a JSON object; fit the model again.")
+        kwargs = {}
+        for key in ("channels", "wrench", "axes"):
+            value = facts.get(key)
+            if value is not None and not (isinstance(value, list) and all(isinstance(v, str) for v in value)
+                                          and len(value) <= MAX_RANGE_COLUMNS):
+                raise DatasetFileError(f"{where}: the stored {key} mapping is not a list of names; fit the model "
+                                       "again.")
+            kwargs[key] = None if value is None else tuple(value)
+        for key, default in (("groups", None), ("force_unit", "N"), ("torque_unit", "N.m")):
+            value = facts.get(key, default)
+            if value is not None and not isinstance(value, str):
+                raise DatasetFileError(f"{where}: the stored {key} is not text; fit the model again.")
+            kwargs[key] = value
+        return cls(**kwargs)
+
+    def resolve_axes(self, names: Sequence[str], width: int, where: str) -> tuple[str, ...]:
+        """The output axes of ``width`` wrench columns read from ``names`` (column names, or one variable):
+        ``axes`` if given, else the axes the names say (``Fx``, ``Mz``, ``force_y``), else Fx..Tz for six."""
+        if self.axes is not None:
+            if len(self.axes) != width:
+                raise DatasetFileError(f"{where}: --axes names {len(self.axes)} axes ({','.join(self.axes)}) but the "
+                                       f"wrench has {width} columns ({', '.join(names)}); name one axis per column.")
+            return self.axes
+        said = [canonical_wrench_name(n) for n in names] if len(names) == width else []
+        if said and all(said) and len(set(said)) == width:
+            return tuple(said)
+        if width == len(WRENCH_LABELS):
+            return WRENCH_LABELS
+        raise DatasetFileError(
+            f"{where}: the wrench has {width} column(s) ({', '.join(names)}), which do not say their axes; a "
+            f"calibration of {width} axes needs their names. Fix: pass --axes, e.g. --axes "
+            f"{','.join(('Fx', 'Fy', 'Fz', 'Tx', 'Ty', 'Tz')[:width]) if width < 6 else 'Fx,...'}.")
+
+
+def lever_arm_m(wrench: ArrayLike, axes: Sequence[str] = WRENCH_LABELS) -> float | None:
     """The loads' lever arm [m]: the largest torque norm over the largest force norm (None without both).
 
     Examples
     --------
     >>> lever_arm_m([[10.0, 0, 0, 0, 0.5, 0]])
     0.05
+    >>> lever_arm_m([[10.0, 0, 0]], axes=("Fx", "Fy", "Fz")) is None
+    True
     """
     w = np.asarray(wrench, dtype=float)
-    f = float(np.max(np.linalg.norm(w[:, FORCE], axis=1), initial=0.0))
-    t = float(np.max(np.linalg.norm(w[:, TORQUE], axis=1), initial=0.0))
+    fc, tc = force_columns(axes), torque_columns(axes)
+    if not fc or not tc or w.shape[0] == 0:
+        return None
+    f = float(np.max(np.linalg.norm(w[:, fc], axis=1), initial=0.0))
+    t = float(np.max(np.linalg.norm(w[:, tc], axis=1), initial=0.0))
     if not (f > 0 and t > 0 and np.isfinite(f) and np.isfinite(t)):
         return None
     return t / f
 
 
-def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m") -> str | None:
+#: Largest force [N] a force/torque calibration plausibly applies (a 10 t load); beyond, the forces are probably
+#: in a smaller unit (mN, g); below 0.01 N for the largest load, in a larger one (kN).
+_PLAUSIBLE_FORCE_N = (1e-2, 1e5)
+
+
+def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequence[str] = WRENCH_LABELS,
+                      force_unit: str = "N") -> str | None:
     """What looks wrong with the units of ``wrench`` ([N], [N·m] after conversion), or None when plausible.
 
     The ratio max‖T‖ / max‖F‖ is the lever arm [m] of the loads. A calibration
     fixture holds its loads within about two metres of the sensor and not closer
-    than 0.1 mm; outside that range the torques (or forces) are probably in
-    another unit, and the message says which and how to declare it. (Beyond 2 m
-    is what torques in N·mm read as N·m give for any arm over 2 mm.)
+    than 0.1 mm; outside that range the torques or the forces are probably in
+    another unit. Which one is told by the forces' size: forces in kN read as N
+    are tiny (the largest below 0.01 N), torques in N·mm read as N·m large; the
+    message names the likely unit and the option that declares it.
 
     Examples
     --------
     >>> print(lever_arm_problem([[10.0, 0, 0, 0, 500.0, 0]]))  # doctest: +ELLIPSIS
-    the loads' lever arm max|T|/max|F| is 50 m (alpha = 0.02 1/m), implausible for a force/torque ...
+    the loads' lever arm max|T|/max|F| is 50 m (alpha = 0.02 1/m), implausible ... the torques look like N.mm...
+    >>> print(lever_arm_problem([[0.002, 0, 0, 0, 0.05, 0]]))  # doctest: +ELLIPSIS
+    the loads' ... the forces look like kN (the largest is 0.002 as N), not N. Fix: pass --force-unit kN...
     >>> lever_arm_problem([[10.0, 0, 0, 0, 0.5, 0]]) is None
     True
     """
-    arm = lever_arm_m(wrench)
+    arm = lever_arm_m(wrench, axes)
     if arm is None:
         return None
     low, high = PLAUSIBLE_LEVER_ARM_M
     if low <= arm <= high:
         return None
+    w = np.asarray(wrench, dtype=float)
+    fmax = float(np.max(np.linalg.norm(w[:, force_columns(axes)], axis=1)))
     head = (f"the loads' lever arm max|T|/max|F| is {arm:.3g} m (alpha = {1.0 / arm:.3g} 1/m), implausible for a "
-            f"force/torque calibration (expected {low * 1e3:g} mm to {high:g} m) with torques read as {torque_unit}")
+            f"force/torque calibration (expected {low * 1e3:g} mm to {high:g} m) with forces read as {force_unit} "
+            f"and torques as {torque_unit}")
+    confirm = (f"if both really are right, confirm them with --force-unit {force_unit} --torque-unit {torque_unit}")
     if arm > high:
-        guesses = [(u, arm * f) for u, f in (("N.mm", 1e-3), ("N.cm", 1e-2)) if low <= arm * f <= high]
-        unit = guesses[0][0] if guesses else "N.mm"
-        return (f"{head}: the torques look like {unit}, not N·m. Fix: pass --torque-unit {unit} (the lever arm would "
-                f"be {arm * unit_scale(unit, 'torque') * 1e3:.3g} mm); if they really are in N·m, confirm with "
-                "--torque-unit N.m.")
-    return (f"{head}: the torques look too small for the forces (forces in mN? torques in kN·m?). Fix: declare the "
-            "units with --force-unit / --torque-unit; if the values are right, confirm with --torque-unit N.m.")
+        force_guess = [(u, f) for u, f in (("kN", 1e3), ("MN", 1e6)) if low <= arm / f <= high
+                       and fmax * f <= _PLAUSIBLE_FORCE_N[1]]
+        torque_guess = [(u, f) for u, f in (("N.mm", 1e-3), ("N.cm", 1e-2)) if low <= arm * f <= high]
+        forces_tiny = fmax < _PLAUSIBLE_FORCE_N[0]
+        if force_guess and (forces_tiny or not torque_guess):
+            unit = force_guess[0][0]
+            other = (f" (or the torques are in {torque_guess[0][0]}: --torque-unit {torque_guess[0][0]})"
+                     if torque_guess else "")
+            return (f"{head}: the forces look like {unit} (the largest is {fmax:.3g} as {force_unit}), not "
+                    f"{force_unit}. Fix: pass --force-unit {unit}{other}; {confirm}.")
+        unit = torque_guess[0][0] if torque_guess else "N.mm"
+        other = f" (or the forces are in {force_guess[0][0]}: --force-unit {force_guess[0][0]})" if force_guess else ""
+        return (f"{head}: the torques look like {unit}, not {torque_unit}. Fix: pass --torque-unit {unit} (the lever "
+                f"arm would be {arm * unit_scale(unit, 'torque') * 1e3:.3g} mm){other}; {confirm}.")
+    return (f"{head}: the torques look too small for the forces (forces in mN or g? torques in kN·m?). Fix: declare "
+            f"the units with --force-unit / --torque-unit; {confirm}.")
 
 
 def temperature_message(exc: Exception, path, line_no: int) -> str:
@@ -235,21 +514,240 @@ def temperature_message(exc: Exception, path, line_no: int) -> str:
     return f"{path}: line {line_no}, column temperature: {text}"
 
 
-def read_mat_arrays(path) -> dict:
-    """The variables of a MATLAB ``.mat`` file (v4-v7; v7.3 is HDF5 and refused with the fix).
-
-    Every variable is returned, whatever its type (a cell, struct, char, sparse or complex variable is refused
-    by :func:`check_real_array` when it is used, naming it, instead of looking absent).
+# ------------------------------------------------------------------ bounded reading of .npz and .mat
+def read_npy_member(archive: zipfile.ZipFile, member: str, where: str, error: type[Exception] = DatasetFileError,
+                    *, header_only: bool = False):
+    """The array of the ``.npy`` member of a zip (an ``.npz``), its declared shape and size checked against
+    the member's stored size and ftcal's memory limit *before* anything is decompressed; at most the declared
+    bytes are read, and an object (pickle) array is refused unread. With ``header_only``, ``(shape, dtype)``.
     """
-    from scipy.io import loadmat
-
+    info = archive.getinfo(member)
+    name = member[:-4] if member.endswith(".npy") else member
     try:
-        data = loadmat(path, squeeze_me=False)
-    except NotImplementedError:
-        raise DatasetFileError(f"{path}: a MATLAB v7.3 (HDF5) file; save it with save(..., '-v7') and retry.") from None
-    except Exception as exc:  # scipy raises ValueError/TypeError/OSError on foreign files
-        raise DatasetFileError(f"{path}: not a readable .mat file ({str(exc)[:100]}).") from None
-    return {key: value for key, value in data.items() if not key.startswith("__")}
+        with archive.open(info) as fh:
+            version = np.lib.format.read_magic(fh)
+            shape, fortran, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
+                                     else np.lib.format.read_array_header_2_0(fh))
+            if dtype.hasobject:
+                raise error(f"{where}: array {name!r} holds Python objects (a pickle), which ftcal never loads; save "
+                            "numeric arrays (numpy.savez(path, raw=..., wrench=...)).")
+            n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+            if n_bytes > info.file_size:
+                raise error(f"{where}: array {name!r} declares shape {shape} ({n_bytes:.0f} bytes) but holds only "
+                            f"{info.file_size} bytes; the file is damaged or not written by numpy.")
+            check_allocation(n_bytes, f"{where}: array {name!r} of shape {shape}",
+                             "split the data into smaller files")
+            if header_only:
+                return tuple(shape), dtype
+            data = fh.read(int(n_bytes))
+    except (error, MemoryLimitError):
+        raise
+    except (OSError, ValueError, EOFError, SyntaxError, zipfile.BadZipFile, zlib.error) as exc:
+        raise error(f"{where}: array {name!r} is not a readable numpy array "
+                    f"({' '.join(str(exc).split())[:120]}).") from None
+    if len(data) != int(n_bytes):
+        raise error(f"{where}: array {name!r} is truncated ({len(data)} of {int(n_bytes)} bytes).")
+    array = np.frombuffer(data, dtype=dtype)
+    return np.array(array.reshape(shape[::-1]).T if fortran else array.reshape(shape))
+
+
+#: MATLAB classes of the v5 format (``mxCLASS``) by number, and the item size of the numeric ones.
+_MAT_CLASSES = {1: "cell", 2: "struct", 3: "object", 4: "char", 5: "sparse", 6: "double", 7: "single", 8: "int8",
+                9: "uint8", 10: "int16", 11: "uint16", 12: "int32", 13: "uint32", 14: "int64", 15: "uint64",
+                16: "function_handle", 17: "opaque"}
+_MAT_ITEM_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
+                   "uint32": 4, "int64": 8, "uint64": 8}
+
+
+class ArrayFile:
+    """The named arrays of an ``.npz`` or ``.mat`` file: listed without reading them, read one at a time.
+
+    Only the arrays a dataset uses are read (:meth:`read`), each after its declared size was checked against
+    ftcal's memory limit: an unused variable, however large or however well compressed, costs nothing.
+
+    Parameters
+    ----------
+    path : path
+        The file; ``.npz`` (any letter case) is a zip of ``.npy`` members, ``.mat`` a MATLAB v4-v7 file (v7.3 is
+        HDF5, which ftcal does not read: refused with the fix).
+    """
+
+    def __init__(self, path) -> None:
+        from pathlib import Path
+
+        self.path = Path(path)
+        self.where = str(path)
+        self.is_npz = self.path.suffix.lower() == ".npz"
+        self.kind = "array" if self.is_npz else "variable"
+        self._zip: zipfile.ZipFile | None = None
+        self._mat_elements: dict[str, tuple[int, int]] = {}
+        self._mat_header = b""
+        #: name -> (shape, dtype kind letter or MATLAB class)
+        self.entries: dict[str, tuple[tuple[int, ...], str]] = {}
+        if self.is_npz:
+            self._list_npz()
+        else:
+            self._list_mat()
+
+    # -- .npz
+    def _list_npz(self) -> None:
+        from ..core._files import describe_file_start
+
+        if not zipfile.is_zipfile(self.path):  # np.load would try it as a pickle and advise allow_pickle=True
+            raise DatasetFileError(f"{self.where}: not an .npz (zip) archive: {describe_file_start(self.path)}. A "
+                                   "dataset .npz holds the arrays raw and wrench (numpy.savez); a .csv dataset must "
+                                   "keep its .csv suffix.")
+        try:
+            self._zip = zipfile.ZipFile(self.path)
+        except (OSError, zipfile.BadZipFile) as exc:
+            raise DatasetFileError(f"{self.where}: not a readable .npz dataset ({exc}).") from None
+        for member in self._zip.namelist():
+            if member.endswith(".npy"):
+                self.entries[member[:-4]] = ((), "?")  # the header is read when the array is used
+
+    # -- .mat
+    def _list_mat(self) -> None:
+        with open(self.path, "rb") as fh:
+            head = fh.read(128)
+            if len(head) < 128 or head[:4] == b"\x00\x00\x00\x00" or head[124:126] not in (b"\x00\x01", b"\x01\x00"):
+                self._mat_v4_or_foreign(head)
+                return
+            if head[124:126] in (b"\x00\x02", b"\x02\x00") or b"7.3" in head[:20]:
+                self._refuse_hdf5()
+            order = "<" if head[126:128] == b"IM" else ">"
+            self._mat_header = head
+            self._scan_v5(fh, order)
+
+    def _refuse_hdf5(self) -> None:
+        raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
+                               "package. Fix: save it in MATLAB with save(FILE, ..., '-v7') and retry.")
+
+    def _mat_v4_or_foreign(self, head: bytes) -> None:
+        """A v4 file (no compression: scipy lists and skips its variables without reading them) or no .mat."""
+        if b"MATLAB 7.3" in head or (len(head) >= 126 and head[124:126] in (b"\x00\x02", b"\x02\x00")):
+            self._refuse_hdf5()
+        from scipy.io import whosmat
+
+        try:
+            found = whosmat(self.path)
+        except NotImplementedError:
+            self._refuse_hdf5()
+        except Exception as exc:  # scipy raises ValueError/TypeError/OSError on foreign files
+            raise DatasetFileError(f"{self.where}: not a readable .mat file ({str(exc)[:100]}).") from None
+        for name, shape, cls in found:
+            self.entries[name] = (tuple(shape), cls)
+
+    def _scan_v5(self, fh, order: str) -> None:
+        """Each variable's name, shape and class from its header: a compressed variable is inflated only as far as
+        its header (a few hundred bytes), so a crafted or huge unused variable is never decompressed."""
+        import struct
+
+        size = self.path.stat().st_size
+        pos = 128
+        while pos + 8 <= size:
+            fh.seek(pos)
+            mdtype, nbytes = struct.unpack(order + "II", fh.read(8))
+            start = pos + 8
+            if mdtype == 15:  # miCOMPRESSED
+                inflater = zlib.decompressobj()
+                head = b""
+                fh.seek(start)
+                remaining = nbytes
+                while len(head) < 1024 and remaining > 0:
+                    block = fh.read(min(4096, remaining))
+                    if not block:
+                        break
+                    remaining -= len(block)
+                    try:
+                        head += inflater.decompress(block, 1024 - len(head))
+                    except zlib.error as exc:
+                        raise DatasetFileError(f"{self.where}: a damaged compressed variable at byte {pos} "
+                                               f"({exc}).") from None
+                    while inflater.unconsumed_tail and len(head) < 1024:
+                        head += inflater.decompress(inflater.unconsumed_tail, 1024 - len(head))
+                name, shape, cls = self._matrix_header(head, order, pos)
+            elif mdtype == 14:  # miMATRIX, uncompressed
+                fh.seek(start - 8)
+                name, shape, cls = self._matrix_header(fh.read(min(nbytes + 8, 1024)), order, pos)
+            else:
+                raise DatasetFileError(f"{self.where}: not a MATLAB v5 variable at byte {pos} (data type {mdtype}); "
+                                       "the file is damaged or not a .mat file.")
+            if name:
+                self.entries[name] = (shape, cls)
+                self._mat_elements[name] = (pos, 8 + nbytes)
+            pos = start + nbytes + ((-nbytes) % 8 if mdtype != 15 else 0)
+
+    def _matrix_header(self, data: bytes, order: str, pos: int) -> tuple[str, tuple[int, ...], str]:
+        import struct
+
+        def element(offset: int) -> tuple[int, bytes, int]:
+            word = struct.unpack(order + "I", data[offset:offset + 4])[0]
+            if word >> 16:  # the small data element format: type and size in one word, data in the next
+                return word & 0xFFFF, data[offset + 4:offset + 4 + (word >> 16)], offset + 8
+            n = struct.unpack(order + "I", data[offset + 4:offset + 8])[0]
+            return word, data[offset + 8:offset + 8 + n], offset + 8 + n + ((-n) % 8)
+
+        try:
+            mdtype, _, _ = struct.unpack(order + "II", data[:8]) + (0,)
+            if mdtype != 14:
+                raise ValueError(f"data type {mdtype}")
+            _, flags, offset = element(8)
+            word0 = struct.unpack(order + "I", flags[:4])[0]
+            cls = "logical" if word0 & 0x0200 else _MAT_CLASSES.get(word0 & 0xFF, "unknown")
+            if word0 & 0x0800:
+                cls = f"complex {cls}"
+            _, dims, offset = element(offset)
+            shape = struct.unpack(order + f"{len(dims) // 4}i", dims)
+            _, name, _ = element(offset)
+        except (struct.error, ValueError, IndexError) as exc:
+            raise DatasetFileError(f"{self.where}: the variable at byte {pos} has a damaged header ({exc}); the file "
+                                   "is damaged or not a .mat file.") from None
+        return name.decode("latin1"), tuple(int(d) for d in shape), cls
+
+    # -- both
+    def names(self) -> list[str]:
+        """The arrays' names, in file order."""
+        return list(self.entries)
+
+    def read(self, name: str) -> np.ndarray:
+        """The array ``name`` (its size checked before it is read); a non-numeric one is refused by
+        :func:`check_real_array` when it is used."""
+        if self.is_npz:
+            return read_npy_member(self._zip, f"{name}.npy", self.where)
+        shape, cls = self.entries[name]
+        base = cls.split()[-1]
+        item = _MAT_ITEM_BYTES.get(base, 8) * (2 if cls.startswith("complex") else 1)
+        check_allocation(float(np.prod([float(d) for d in shape])) * item,
+                         f"{self.where}: variable {name!r} of shape {shape}", "split the data into smaller files")
+        if cls == "logical":  # scipy reads it as uint8: refused here, not fitted as 0/1 numbers
+            raise DatasetFileError(f"{self.where}: variable {name!r} is a MATLAB logical array (booleans); it must "
+                                   "hold real numbers (double, single or integer).")
+        from scipy.io import loadmat
+        import io
+
+        try:
+            if name in self._mat_elements:  # only that variable's bytes, behind the file's header
+                pos, length = self._mat_elements[name]
+                with open(self.path, "rb") as fh:
+                    fh.seek(pos)
+                    found = loadmat(io.BytesIO(self._mat_header + fh.read(length)), squeeze_me=False)
+            else:
+                found = loadmat(self.path, variable_names=[name], squeeze_me=False)
+        except Exception as exc:  # scipy raises ValueError/TypeError/OSError/zlib.error on damaged files
+            raise DatasetFileError(f"{self.where}: variable {name!r} cannot be read ({str(exc)[:100]}).") from None
+        if name not in found:
+            raise DatasetFileError(f"{self.where}: variable {name!r} cannot be read; the file is damaged.")
+        return found[name]
+
+    def close(self) -> None:
+        if self._zip is not None:
+            self._zip.close()
+
+    def __enter__(self) -> "ArrayFile":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def check_real_array(value, name: str, where: str, kind: str = "variable") -> np.ndarray:
@@ -275,45 +773,3 @@ def check_real_array(value, name: str, where: str, kind: str = "variable") -> np
         raise DatasetFileError(f"{where}: {kind} {name!r} has dtype {value.dtype} ({shown}); it must hold real "
                                "numbers (float or integer).")
     return value
-
-
-def select_arrays(arrays: dict[str, np.ndarray], names: Sequence[str] | None, default: str,
-                  vector_names: Sequence[str], what: str, where: str, width: int | None,
-                  kind: str = "variable") -> np.ndarray:
-    """One (n, k) array from a file's named arrays: one 2-D variable, or a list of 1-D ones (real numbers only)."""
-    def column(name: str) -> np.ndarray:
-        v = check_real_array(arrays[name], name, where, kind)
-        if v.ndim == 2 and 1 in v.shape:
-            v = v.ravel()
-        if v.ndim != 1:
-            raise DatasetFileError(f"{where}: {kind} {name!r} has shape {v.shape}; a {what} column must be a vector.")
-        return v
-
-    if names is None:
-        if default in arrays:
-            names = (default,)
-        elif vector_names and all(n in arrays for n in vector_names):
-            names = tuple(vector_names)
-        else:
-            raise DatasetFileError(
-                f"{where}: no {kind} {default!r} holding the {what}; the file has "
-                f"{', '.join(sorted(arrays)) or f'no {kind}s'}. Fix: name them with "
-                f"--{'channels' if what == 'raw channels' else 'wrench'} NAME[,NAME...]."
-            )
-    missing = [n for n in names if n not in arrays]
-    if missing:
-        raise DatasetFileError(f"{where}: no {kind} {missing[0]!r}; the file has {', '.join(sorted(arrays))}.")
-    if len(names) == 1:
-        a = check_real_array(arrays[names[0]], names[0], where, kind).astype(float)
-        if a.ndim == 1:
-            a = a[:, None]
-        if a.ndim != 2:
-            raise DatasetFileError(f"{where}: {kind} {names[0]!r} has shape {a.shape}; expected (n_samples, k).")
-        if width is not None and a.shape[1] != width and a.shape[0] == width:
-            a = a.T  # MATLAB users often store one row per component
-        return a
-    cols = [column(n) for n in names]
-    if len({c.size for c in cols}) != 1:
-        raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
-                               f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
-    return np.column_stack(cols).astype(float)
