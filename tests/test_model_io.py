@@ -52,7 +52,7 @@ def test_existing_file_is_not_overwritten_unless_asked(fitted, tmp_path):
     model, _ = fitted
     path = tmp_path / "mine.npz"
     path.write_bytes(b"user data")
-    with pytest.raises(ModelFileError, match="already exists; pass overwrite=True"):
+    with pytest.raises(ModelFileError, match="already exists. Fix: pass overwrite=True"):
         save_model(model, path)
     assert path.read_bytes() == b"user data"
     save_model(model, path, overwrite=True)

@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
 import ftcal
 from ftcal import (
+    CalibrationDataset,
     CalibrationPlan,
     GaussianProcessCalibrator,
     LinearCalibrator,
@@ -151,7 +154,7 @@ def test_which_load_configurations(robot, candidates):
 
 
 def test_plan_bad_input_raises_planning_error(robot, candidates):
-    with pytest.raises(PlanningError, match="only 42 candidate directions are reachable"):
+    with pytest.raises(PlanningError, match="n_poses 43 is more than the 42 reachable candidate directions"):
         plan_calibration_poses(robot, strategy="d-optimal", n_poses=43, candidates=candidates)
     with pytest.raises(ValueError, match="fewer than the 7 parameters"):
         plan_calibration_poses(robot, strategy="random", n_poses=6, candidates=candidates)
@@ -250,7 +253,7 @@ def test_cli_d_optimal_plan_same_format_as_geodesic(tmp_path):
 def test_cli_plan_bad_input_one_line(tmp_path, capsys):
     base = ["plan", "--candidate-subdivisions", "1", "--excluded-cap-deg", "0", "-q"]
     assert main([*base, "--strategy", "random", "--poses", "50", "--out", str(tmp_path / "a")]) == 2
-    assert "only 42 candidate directions are reachable" in _error_line(capsys)
+    assert "--poses 50 is more than the 42 reachable candidate directions" in _error_line(capsys)
     assert main([*base, "--strategy", "d-optimal", "--poses", "5", "--out", str(tmp_path / "b")]) == 2
     assert "fewer than the 7 parameters" in _error_line(capsys)
     assert main([*base, "--poses", "20", "--out", str(tmp_path / "c")]) == 2
@@ -276,3 +279,52 @@ def test_cli_next_writes_proposals_and_refuses_mismatched_model(tmp_path, capsys
     assert main(["plan", "--next", "3", "--dataset", str(tmp_path / "data.csv"), "--model",
                  str(tmp_path / "m8.model.npz"), "--candidate-subdivisions", "1", "--out", str(tmp_path / "x"), "-q"]) == 2
     assert "model reads 8 raw channels but the dataset has 6" in _error_line(capsys)
+
+
+def _cli(*args) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "ftcal", *map(str, args)], capture_output=True, text=True, timeout=300)
+
+
+@pytest.mark.parametrize("case", ["too_many", "no_load_positions", "no_load_mass", "temperature_model",
+                                  "temperature_model_of_another_sensor"])
+def test_cli_next_speaks_in_the_commands_options(tmp_path, half_sphere_dataset, case):
+    """plan --next: its errors name --next / --load-mass / ftcal prepare (never the API's n_poses or
+    load_positions_in_sensor), and a temperature-compensated model's raw channels are counted without the
+    temperature."""
+    ds = half_sphere_dataset
+    meta = dict(ds.meta)
+    if case == "no_load_positions":
+        meta.pop("load_positions_in_sensor_m")
+    if case == "no_load_mass":
+        meta.pop("load_mass_kg")
+    CalibrationDataset(raw=ds.raw, wrench=ds.wrench, meta=meta).save(tmp_path / "data.csv")
+    raw = np.hstack([ds.raw, ds.raw[:, :2]]) if case == "temperature_model_of_another_sensor" else ds.raw
+    if case.startswith("temperature_model"):
+        temperature = np.linspace(20.0, 30.0, len(raw))
+        model = ftcal.TemperatureCompensatedCalibrator(estimator=LinearCalibrator()).fit(
+            np.column_stack([raw, temperature]), ds.wrench)
+    else:
+        model = LinearCalibrator().fit(raw, ds.wrench)
+    ftcal.save_model(model, tmp_path / "m.model.npz")
+    proc = _cli("plan", "--next", "100000" if case == "too_many" else "2", "--dataset", tmp_path / "data.csv",
+                "--model", tmp_path / "m.model.npz", "--candidate-subdivisions", "1", "--excluded-cap-deg", "0",
+                "--out", tmp_path / "next", "-q")
+    if case == "temperature_model":
+        assert proc.returncode == 0, proc.stderr
+        assert np.loadtxt(tmp_path / "next" / "poses.csv", delimiter=",", skiprows=1).shape[0] == 2
+        return
+    assert proc.returncode == 2, proc.stderr
+    line = proc.stderr.strip().splitlines()[-1]
+    assert line.startswith("ftcal: error: ") and len(proc.stderr.strip().splitlines()) == 1
+    expected = {
+        "too_many": ["--next must be an integer in 1..", "got 100000", "--candidate-subdivisions"],
+        "no_load_positions": ["load_positions_in_sensor_m", "ftcal prepare"],
+        "no_load_mass": ["load_mass_kg", "Fix: pass --load-mass KG"],
+        "temperature_model_of_another_sensor": ["reads 8 raw channels and the temperature but the dataset has 6"],
+    }[case]
+    for text in expected:
+        assert text in line, line
+    for api_name in ("n_poses", "load_positions_in_sensor ", "load_positions_in_sensor to", "candidate_subdivisions",
+                     "load_mass (", "propose_next_poses"):
+        assert api_name not in line, line
+    assert not (tmp_path / "next").exists()

@@ -318,7 +318,7 @@ class GroupsFit:
 
     __metadata_request__fit = {"groups": True}
     #: What the groups are for, and the fix, in the one-group error (see :func:`check_groups`).
-    _groups_purpose = ("grouped cross-validation", "pass groups=None for random folds")
+    _groups_purpose = ("grouped cross-validation", "pass {groups} for random folds")
 
     def _uses_groups(self) -> bool:
         """Whether this fit uses the groups with these parameters (else they are only checked for their length)."""

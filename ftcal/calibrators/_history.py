@@ -26,7 +26,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import NO_SETTING, CalibrationInputError
 from ..core._memory import check_allocation
 from ..core._model_selection import simplest_within_one_se
 from ..core._validation import check_bool, check_finite_output, validate_readings
@@ -89,11 +89,11 @@ def reading_history(X: ArrayLike, tau_rows: float, *, state: ArrayLike | None = 
                                     f"{tau_rows!r}.")
     if X.ndim != 2 or len(X) == 0:
         raise CalibrationInputError(f"X must hold at least one row of readings, 2-D (rows in time order x channels); "
-                                    f"got shape {X.shape}.")
+                                    f"got shape {X.shape}.", parameter="X")
     if not np.isfinite(X).all():
         r, c = (int(v) for v in np.argwhere(~np.isfinite(X))[0])
         raise CalibrationInputError(f"X[{r}, {c}] = {X[r, c]}: readings must be finite (a NaN would poison every "
-                                    "later row's history); drop or repair that row.")
+                                    "later row's history); drop or repair that row.", parameter="X")
     start = None
     if state is not None:
         start = _real_array(state, "state")
@@ -322,7 +322,8 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:
         if groups is None:
             if n < self.cv:
-                raise CalibrationInputError(f"X has {n} rows, fewer than cv={self.cv} folds; lower cv or record more.")
+                raise CalibrationInputError(f"X has {n} rows, fewer than cv={self.cv} folds; lower cv or record more.",
+                                            parameter="X", value=n)
             return list(KFold(int(self.cv)).split(np.empty((n, 1))))  # contiguous blocks: the rows are a time series
         return list(GroupKFold(min(int(self.cv), np.unique(groups).size)).split(np.empty((n, 1)), groups=groups))
 
@@ -335,8 +336,10 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         if getattr(template, "_temperature_column", False):
             raise CalibrationInputError(
                 f"HistoryCalibrator cannot wrap {type(template).__name__}: its last column is the temperature, whose "
-                "history is not a load's, and the history columns cannot be temperature-compensated. Calibrate "
-                "with one of the two (ftcal fit --history or --temperature).")
+                "history is not a load's, and the history columns cannot be temperature-compensated.",
+                parameter="estimator", fix="calibrate with one of the two ({HistoryCalibrator} or "
+                "{TemperatureCompensatedCalibrator})",
+                settings={"HistoryCalibrator": NO_SETTING, "TemperatureCompensatedCalibrator": NO_SETTING})
         check_allocation(8.0 * X.size * (len(taus) + 1), f"the history columns of {len(taus)} time constants",
                          "try fewer taus")
         if self.alpha is None and getattr(template, "alpha", None) is not None:

@@ -101,7 +101,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         if X.shape[1] < 2:  # like every calibrator, a regressor of any channel count (the wrench rule is the data's)
             raise CalibrationInputError(
                 f"X has {X.shape[1]} feature(s) (columns); TemperatureCompensatedCalibrator needs the raw channels and, last, "
-                "the temperature [deg C] (at least 1 + 1 columns)."
+                "the temperature [deg C] (at least 1 + 1 columns).", parameter="X"
             )
         raw, temperature = X[:, :-1], X[:, -1]
         return raw, check_temperature(temperature, len(X), "temperature (the last column of X)")

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import contextlib
 import errno
-import re
 import sys
 from collections.abc import Sequence
 
@@ -95,6 +94,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         1 on an unexpected failure.
     """
     args_list = list(sys.argv[1:] if argv is None else argv)
+    args = None
     try:
         with signals_interrupt(), standard_streams():
             parser = build_parser()
@@ -118,7 +118,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         _silence_stdout()
         return 0
     except (FtcalError, OSError, ValueError) as exc:
-        print(f"ftcal: error: {name_the_dataset(_one_line(exc), exc)}", file=sys.stderr)
+        print(f"ftcal: error: {name_the_dataset(_one_line(exc, args), exc)}", file=sys.stderr)
         return EXIT_USAGE
     except MemoryError as exc:  # a step whose size no guard estimated: still the user's input that is too large
         detail = f" ({_one_line(exc)})" if str(exc) else ""
@@ -134,31 +134,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_FAILURE
 
 
-#: The library's advice in terms of its API, and what a command-line user does instead.
-_CLI_ADVICE = (
-    (re.compile(r"Fix: pass groups=None for random folds\.?"),
-     "Fix: give the dataset's group column at least 2 distinct groups, or remove that column for random folds."),
-    (re.compile(r"pass overwrite=True(?: \((?:CLI: )?--force\))?"), "pass --force"),
-    (re.compile(r"pass sensor_frame=<[^>]*>"), "pass --sensor-frame NAME (the frame at the sensing origin)"),
-    (re.compile(r"pass space=\{\{?param: values\}?\}"), "pass --grid KEY=[values]"),
-)
-
-
 #: A full disk or an exhausted quota: the file is named and the user told what to do.
 _FULL = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT") if hasattr(errno, name))
 
 
-def _one_line(exc: BaseException) -> str:
-    """The message of ``exc`` folded onto one line (OSError gets its file name), its API advice (``pass
-    groups=None``) put in command-line terms."""
+def _one_line(exc: BaseException, args=None) -> str:
+    """The message of ``exc`` folded onto one line (OSError gets its file name), a library error's fields (the
+    arguments it names, its fix) spelled as the options of the command that ran (:mod:`ftcal.cli._messages`)."""
+    from ._messages import cli_message
+
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         text = f"{exc.filename}: {exc.strerror}"
         if exc.errno in _FULL:
             text += " (the file was not written); free some space on that disk or write to another folder"
     else:
-        text = str(exc) or type(exc).__name__
-    for pattern, advice in _CLI_ADVICE:
-        text = pattern.sub(advice, text)
+        text = cli_message(exc, args) or type(exc).__name__
     return " ".join(text.split())
 
 

@@ -394,7 +394,9 @@ def load_robot_from_args(args: argparse.Namespace):
         errors = [line.split("Error:", 1)[1].strip() for line in text.splitlines() if line.strip().startswith("Error:")]
         if not errors:
             raise failure
-        raise CliError(f"{failure} urdfdom: {errors[0]}") from None
+        from ._messages import cli_message
+
+        raise CliError(f"{cli_message(failure, args)} urdfdom: {errors[0]}") from None
     if text:
         sys.stderr.write(text)
     return model
@@ -459,10 +461,12 @@ def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
     from ..core._scale_out import SchedulerError, check_scheduler
 
+    from ._messages import cli_message
+
     try:
         return check_scheduler(text)
     except SchedulerError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+        raise argparse.ArgumentTypeError(cli_message(exc)) from None
 
 
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
@@ -507,21 +511,22 @@ def note_dataset(path: str | os.PathLike) -> None:
 
 def name_the_dataset(message: str, exc: BaseException) -> str:
     """``message`` with the file of the one dataset the command loaded in front, when ``exc`` is the library's
-    error about the data (a :class:`~ftcal.CalibrationInputError` about ``X`` or ``y``) and names no loaded file.
+    error about the data (a :class:`~ftcal.CalibrationInputError` whose ``parameter`` is ``X`` or ``y``) and names
+    no loaded file.
 
     Examples
     --------
     >>> from ftcal.core._exceptions import CalibrationInputError
     >>> _datasets[:] = ["d.csv"]
-    >>> name_the_dataset("X (raw readings) spans only 5 directions", CalibrationInputError())
+    >>> name_the_dataset("X (raw readings) spans only 5 directions", CalibrationInputError(parameter="X"))
     'd.csv: X (raw readings) spans only 5 directions'
-    >>> name_the_dataset("The 'ridge' parameter must be >= 0", CalibrationInputError())
+    >>> name_the_dataset("The 'ridge' parameter must be >= 0", CalibrationInputError(parameter="ridge"))
     "The 'ridge' parameter must be >= 0"
     >>> _datasets.clear()
     """
     from ..core._exceptions import CalibrationInputError
 
-    about_data = isinstance(exc, CalibrationInputError) and re.match(r"(X|y)\b", message) is not None
+    about_data = isinstance(exc, CalibrationInputError) and exc.parameter in ("X", "y")
     if about_data and len(_datasets) == 1 and _datasets[0] not in message:  # not a --param value's error
         return f"{_datasets[0]}: {message}"
     return message
@@ -643,7 +648,7 @@ class OutputPlan:
         self.force = force
         self._set: OutputSet | None = None  # the set being written (as_one_set)
         if self.out_dir.exists() and not self.out_dir.is_dir():
-            raise CliError(f"--out {self.out_dir} is a file, not a directory; choose another --out")
+            raise CliError(f"{option} {self.out_dir} is a file, not a directory; choose another {option}")
         try:
             st = self.out_dir.stat()
         except OSError:
@@ -651,7 +656,7 @@ class OutputPlan:
         if st is not None and (st.st_dev, st.st_ino) in _input_dirs:
             raise CliError(f"{option} {self.out_dir} is {_input_dirs[(st.st_dev, st.st_ino)]}, an input of this "
                            f"command: its outputs would mix with (and be read as) its inputs. Choose another {option}")
-        check_writable_dir(self.out_dir, CliError)
+        check_writable_dir(self.out_dir, CliError, option)
         for n in self.names:
             for folder in list((self.out_dir / n).parents)[:len(Path(n).parts) - 1]:  # its folders inside out_dir
                 if folder.exists() and not folder.is_dir():

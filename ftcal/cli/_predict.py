@@ -71,7 +71,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
 
-    The readings are compared as recorded (no re-tare shift); without ``--range`` the model's own range is used.
+    The bounds are those recorded at calibration; a re-tared model moves them by its re-tare shift
+    (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used.
     """
     import json
     import re
@@ -116,6 +117,18 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     if lo.size == n - 1:  # a temperature-compensated model: the temperature column is not range-checked
         lo, hi = np.append(lo, -np.inf), np.append(hi, np.inf)
     return lo, hi
+
+
+def retare_shift(model, n_columns: int) -> np.ndarray:
+    """How far the model's re-tare moved the zero-load reading (``tare_reading_ - zero_reading_``, raw units; zero
+    without a re-tare and for a temperature column): the calibrated range of a re-tared model lies that far away
+    from where it was recorded, as :meth:`~ftcal.calibrators._base.BaseCalibrator.out_of_range` counts it."""
+    shift = np.zeros(n_columns)
+    tare, zero = getattr(model, "tare_reading_", None), getattr(model, "zero_reading_", None)
+    if tare is not None and zero is not None:
+        moved = np.asarray(tare, dtype=float).ravel() - np.asarray(zero, dtype=float).ravel()
+        shift[:min(n_columns, moved.size)] = moved[:n_columns]
+    return shift
 
 
 def _range_bound(found, key: str, path: str) -> np.ndarray:
@@ -179,6 +192,8 @@ def run(args: argparse.Namespace) -> int:
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
     limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature)
+    if limits is not None:  # the range was recorded before any re-tare: it moves with the zero, as the model's own
+        limits = tuple(bound + retare_shift(model, n_channels) for bound in limits)
     # the model's own range (its training readings, re-tare shift applied); files of older versions have none
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
     range_source = args.range_file if limits is not None else f"{args.model} (its training readings)"

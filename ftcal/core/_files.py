@@ -332,7 +332,7 @@ def _umask() -> int:
     return mask
 
 
-def check_writable_dir(directory: str | os.PathLike, error: type[Exception], what: str = "--out") -> None:
+def check_writable_dir(directory: str | os.PathLike, error: type[Exception], what: str = "output folder") -> None:
     """Raise ``error`` now if files cannot be created in ``directory`` (or in its nearest existing parent)."""
     d = Path(directory)
     while not d.exists():

@@ -25,12 +25,13 @@ __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_s
 
 
 def check_groups(groups: ArrayLike | None, n_samples: int, *, labels: bool = True,
-                 purpose: str = "grouped cross-validation", fix: str = "pass groups=None for random folds"
+                 purpose: str = "grouped cross-validation", fix: str = "pass {groups} for random folds"
                  ) -> NDArray | None:
     """Validate ``groups`` (one label per row, at least two distinct labels); ``None`` passes through.
 
     ``labels=False`` checks the shape only (groups a calibrator does not use); ``purpose`` and ``fix`` word the
-    one-group error for what the groups are for.
+    one-group error for what the groups are for (``{groups}`` in ``fix`` stands for ``groups=None``, an error
+    field a front end spells in its own terms).
 
     Examples
     --------
@@ -73,8 +74,8 @@ def check_groups(groups: ArrayLike | None, n_samples: int, *, labels: bool = Tru
     if names.size < 2:
         raise CalibrationInputError(
             f"groups holds {'one group only (label ' + str(names[0]) + ')' if names.size else 'no label'} for the "
-            f"{n_samples} rows; {purpose} needs at least "
-            f"2 groups (e.g. poses or load configurations). Fix: {fix}."
+            f"{n_samples} rows; {purpose} needs at least 2 groups (e.g. poses or load configurations).",
+            parameter="groups", fix=fix, settings={"groups": None} if "{groups}" in fix else None,
         )
     return g
 

@@ -41,7 +41,8 @@ def check_scheduler(scheduler: str) -> str:
     ('tcp://10.0.0.5:8786', 'local')
     """
     if scheduler != "local" and not _ADDRESS.fullmatch(scheduler):
-        raise SchedulerError(f"--scheduler {scheduler!r} is not 'local' nor a scheduler address like tcp://host:8786.")
+        raise SchedulerError(f"{{scheduler}} {scheduler!r} is not 'local' nor a scheduler address like "
+                             "tcp://host:8786.", parameter="scheduler", value=scheduler)
     return scheduler
 
 
@@ -80,7 +81,8 @@ def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> Non
     deadline = time.monotonic() + timeout_s
     hint = "is a Dask scheduler (dask scheduler) running there, and is the address right?"
     if not 0 < port < 65536:
-        raise SchedulerError(f"--scheduler {scheduler}: port {port} is not a TCP port (1-65535).")
+        raise SchedulerError(f"{{scheduler}} {scheduler}: port {port} is not a TCP port (1-65535).",
+                             parameter="scheduler", value=scheduler)
     try:
         sock = socket.create_connection((host, port), timeout=timeout_s)
     except socket.timeout:
@@ -146,7 +148,8 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
         import joblib
         from distributed import Client, LocalCluster
     except ImportError:
-        raise SchedulerError('--scheduler needs Dask: pip install "dask[distributed]"') from None
+        raise SchedulerError('{scheduler} needs Dask: pip install "dask[distributed]"', parameter="scheduler",
+                             value=scheduler) from None
     cluster = None
     try:
         if scheduler == "local":

@@ -51,7 +51,8 @@ def check_all_finite(a: NDArray[np.float64], name: str, fix: str) -> None:
         col = int(where[1]) if where.size > 1 else 0
         value = a[tuple(where)]
         raise CalibrationInputError(
-            f"{name} contains NaN or inf: first at row {row}, column {col} (value {value}). Fix: {fix}."
+            f"{name} contains NaN or inf: first at row {row}, column {col} (value {value}). Fix: {fix}.",
+            parameter=name.split()[0], value=value,
         )
 
 
@@ -76,7 +77,8 @@ def check_magnitude(a: NDArray[np.float64], name: str) -> None:
         row, col = int(where[0]), int(where[1]) if where.size > 1 else 0
         raise CalibrationInputError(
             f"{name} holds {a[tuple(where)]:.6g} at row {row}, column {col}, beyond the {MAX_TRAINING_MAGNITUDE:g} "
-            "ftcal's fits can square without overflow. Fix: check the units and the file (a parsing error?)."
+            "ftcal's fits can square without overflow. Fix: check the units and the file (a parsing error?).",
+            parameter=name.split()[0],
         )
 
 
@@ -88,44 +90,46 @@ def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
     """Complex, boolean, date, text, masked, 1-D or 3-D input gets a short message (scikit-learn's would print
     the whole array, or convert it silently)."""
     if X is None:
-        raise CalibrationInputError(f"{name} is None; pass the {what} as an array of shape (n_samples, n_columns).")
+        raise CalibrationInputError(f"{name} is None; pass the {what} as an array of shape (n_samples, n_columns).",
+                                    parameter=name)
     if not hasattr(X, "__len__") and not hasattr(X, "shape"):
         return  # scalars: validate_data's own message
     if hasattr(X, "format") and hasattr(X, "tocsr"):
         raise CalibrationInputError(
             f"Sparse data was passed for {name} ({type(X).__name__}, shape {X.shape}), but ftcal's calibrators take "
-            f"dense {what}. Fix: pass {name}.toarray()."
+            f"dense {what}. Fix: pass {name}.toarray().", parameter=name,
         )
     if isinstance(X, np.matrix):
-        raise CalibrationInputError(f"{name} is an np.matrix (shape {X.shape}); pass np.asarray({name}).")
+        raise CalibrationInputError(f"{name} is an np.matrix (shape {X.shape}); pass np.asarray({name}).",
+                                    parameter=name)
     columns = getattr(X, "columns", None)
     if columns is not None and len({type(c) is str for c in columns}) > 1:
         raise CalibrationInputError(
             f"{name}'s column names mix text and other types ({list(columns)[:8]}); name every column with text "
-            f"(e.g. s0, s1, ...) or none (pass {name}.to_numpy())."
+            f"(e.g. s0, s1, ...) or none (pass {name}.to_numpy()).", parameter=name,
         )
     try:
         a = np.asarray(X)
     except (ValueError, TypeError):
         raise CalibrationInputError(
             f"{name} is not a rectangular table: its rows have different lengths (ragged lists?). Fix: give every "
-            f"row the same number of {what}."
+            f"row the same number of {what}.", parameter=name,
         ) from None
     if np.iscomplexobj(a):
         raise CalibrationInputError(
             f"Complex data not supported: {name} has complex dtype {a.dtype} and shape {a.shape}; {what} are real "
-            f"numbers. Fix: pass the real part (e.g. {name}.real) if that is what you mean."
+            f"numbers. Fix: pass the real part (e.g. {name}.real) if that is what you mean.", parameter=name,
         )
     if a.dtype.kind in _NOT_MEASUREMENTS:
         raise CalibrationInputError(
             f"{name} has dtype {a.dtype} ({DTYPE_KIND_NAMES[a.dtype.kind]}) and shape {a.shape}; {what} are real "
-            f"numbers. Fix: convert the measured values to floats first (e.g. {name}.astype(float) after parsing)."
+            f"numbers. Fix: convert the measured values to floats first (e.g. {name}.astype(float) after parsing).", parameter=name,
         )
     if isinstance(X, np.ma.MaskedArray) and np.ma.getmaskarray(X).any():
         raise CalibrationInputError(
             f"{name} is a masked array with {int(np.ma.getmaskarray(X).sum())} masked value(s) (shape {a.shape}); "
             f"ftcal would read the values under the mask. Fix: drop the masked rows "
-            f"({name}[~{name}.mask.any(axis=1)]) or pass {name}.data if the values are valid."
+            f"({name}[~{name}.mask.any(axis=1)]) or pass {name}.data if the values are valid.", parameter=name,
         )
     if a.dtype.kind in "O":
         return  # objects: validate_data converts or reports them
@@ -135,7 +139,7 @@ def _check_real_2d(X, name: str, what: str, two_d: bool = True) -> None:
         hint = f" Reshape your data: for one reading, use {name}.reshape(1, -1)." if a.ndim == 1 else ""
         raise CalibrationInputError(
             f"{name} must be a 2-D array of {what} (n_samples, n_columns); got a {a.ndim}-D array of shape "
-            f"{a.shape}.{hint}"
+            f"{a.shape}.{hint}", parameter=name,
         )
 
 
@@ -171,20 +175,21 @@ def check_identifiable(X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
     if rank_x == 0:
         raise CalibrationInputError(
             f"X (raw readings) is the same in all {n} rows (constant or all-zero channels, or only duplicate rows): "
-            "there is nothing to calibrate from. Fix: record readings under different loads."
+            "there is nothing to calibrate from. Fix: record readings under different loads.", parameter="X"
         )
     rank_y = _rank(y)
     if rank_y == 0:
         raise CalibrationInputError(
             f"y (reference wrenches) is the same in all {n} rows: there is no load change to calibrate against. "
-            "Fix: record several different loads."
+            "Fix: record several different loads.", parameter="y"
         )
     need = min(X.shape[1], rank_y)
     if rank_x < need:
         raise CalibrationInputError(
             f"X (raw readings, shape {X.shape}) spans only {rank_x} independent direction(s) but the wrenches y span "
             f"{rank_y}: different loads give the same reading, so no calibration can tell them apart (a dead, "
-            "constant or duplicated channel?). Fix: check the channels, or record loads that excite every channel."
+            "constant or duplicated channel?). Fix: check the channels, or record loads that excite every channel.",
+            parameter="X",
         )
 
 
@@ -240,12 +245,12 @@ def validate_training_data(
         raise CalibrationInputError(
             f"X has {n} sample(s), but {type(estimator).__name__} needs at least {need} "
             f"(n_channels + 1 = {n_channels + 1} for the affine calibration, 7 for the zero-load "
-            f"estimate). Fix: record more load cases."
+            f"estimate). Fix: record more load cases.", parameter="X", value=n,
         )
     if y.ndim not in (1, 2) or (y.ndim == 2 and y.shape[1] == 0):
         raise CalibrationInputError(
             f"y must have shape (n_samples, 6) (the wrench [Fx, Fy, Fz, Tx, Ty, Tz] in [N] and [N·m]) or, for "
-            f"other targets, (n_samples,) or (n_samples, k); got shape {y.shape}."
+            f"other targets, (n_samples,) or (n_samples, k); got shape {y.shape}.", parameter="y"
         )
     estimator.y_1d_ = y.ndim == 1
     y = y.reshape(n, -1)
@@ -312,7 +317,7 @@ def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], est
         raise CalibrationInputError(
             f"X row {row} (largest |value| {big:.3g}) gives a non-finite {what} with {type(estimator).__name__}: "
             f"the reading is outside the range the model can compute ({note}). Fix: check the reading's units, or "
-            "remove that row."
+            "remove that row.", parameter="X", value=row,
         )
 
 

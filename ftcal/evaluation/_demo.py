@@ -144,7 +144,8 @@ def run_demo(
     if out is not None and not overwrite:
         taken = [n for n in demo_files() if (out / n).exists()]
         if taken:
-            raise FtcalError(f"{out / taken[0]} already exists; pass overwrite=True (--force) or another directory")
+            raise FtcalError(f"{out / taken[0]} already exists.", parameter="out", value=str(out),
+                             fix="pass {overwrite}, or another directory", settings={"overwrite": True})
     n_per_sphere, n_test = _QUICK_SIZES if quick else _FULL_SIZES
     log(f"simulating a '{preset}' dataset: {4 * n_per_sphere} training samples on 4 spheres, {n_test} test samples")
     train, test, info = ftcal.make_artificial_dataset(

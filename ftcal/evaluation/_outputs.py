@@ -122,8 +122,9 @@ class OutputFiles:
             if os.path.lexists(path) and not self.force and not self._is_own(path, manifest):
                 what = ("is a link (a benchmark writes regular files)" if path.is_symlink() else
                         f"exists and was not written by this benchmark (or was edited since){self.manifest_note}")
-                raise BenchmarkOutputExistsError(f"{path} {what}; choose another output folder or pass --force "
-                                                 "(force=True) to overwrite it.")
+                raise BenchmarkOutputExistsError(f"{path} {what}.", parameter="out", value=str(path),
+                                                 fix="choose another output folder or pass {force} to overwrite it",
+                                                 settings={"force": True})
 
     @contextlib.contextmanager
     def write(self, name: str) -> Iterator[Path]:

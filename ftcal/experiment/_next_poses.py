@@ -55,7 +55,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import PlanningError
+from ..core._exceptions import NO_SETTING, Placeholder, PlanningError
 from ..io._dataset import CalibrationDataset
 from ..robot._loads import STANDARD_GRAVITY
 from ..robot._pose_planning import (CalibrationPlan, CandidatePoses, pitch_yaw_from_gravity_in_sensor,
@@ -184,16 +184,22 @@ def propose_next_poses(
     if n_in is None:
         raise PlanningError(f"model must be a fitted calibrator (no n_features_in_ on {type(model).__name__}); "
                             "fit it on the dataset first (ftcal fit).")
-    if int(n_in) != dataset.n_channels:
-        raise PlanningError(f"the model reads {int(n_in)} raw channels but the dataset has {dataset.n_channels} "
-                            f"(raw shape {dataset.raw.shape}); pass the model trained on this dataset's sensor.")
+    takes_temperature = bool(getattr(model, "_temperature_column", False))  # its last input is the temperature
+    n_raw = int(n_in) - int(takes_temperature)
+    if n_raw != dataset.n_channels:
+        also = " and the temperature" if takes_temperature else ""
+        raise PlanningError(f"the model reads {n_raw} raw channels{also} but the dataset has {dataset.n_channels} "
+                            f"raw channels (raw shape {dataset.raw.shape}).", parameter="model",
+                            fix="pass the model trained on this dataset's sensor")
     meta = dataset.meta or {}
     if load_positions_in_sensor is None:
         positions = meta.get("load_positions_in_sensor_m")
         if not positions:
             raise PlanningError("the dataset's metadata holds no load_positions_in_sensor_m (it was not made by "
-                                "ftcal prepare, which records them); prepare it from the run logs, or pass "
-                                "load_positions_in_sensor to ftcal.propose_next_poses.")
+                                "prepare_dataset from run logs, which records them).",
+                                parameter="load_positions_in_sensor",
+                                fix="prepare the dataset from the run logs, or pass {load_positions_in_sensor}",
+                                settings={"load_positions_in_sensor": Placeholder("<(n_configurations, 3) array [m]>")})
         load_positions_in_sensor = [positions[k] for k in sorted(positions, key=lambda k: int(k))]
     r = np.asarray(load_positions_in_sensor, dtype=float)
     if r.ndim != 2 or r.shape[1] != 3 or not len(r) or not np.isfinite(r).all():
@@ -202,8 +208,8 @@ def propose_next_poses(
     if load_mass is None:
         load_mass = meta.get("load_mass_kg")
         if load_mass is None:
-            raise PlanningError("the dataset's metadata holds no load_mass_kg; pass load_mass (API) / "
-                                "--load-mass (CLI).")
+            raise PlanningError("the dataset's metadata holds no load_mass_kg.", parameter="load_mass",
+                                fix="pass {load_mass}", settings={"load_mass": Placeholder("<mass [kg]>")})
     if not np.isfinite(load_mass) or load_mass <= 0:
         raise PlanningError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
     g = np.asarray(gravity_in_base if gravity_in_base is not None
@@ -216,7 +222,10 @@ def propose_next_poses(
                                           gravity_in_base=g / np.linalg.norm(g))
     m, n_cfg = len(candidates), len(r)
     if isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)) or not 1 <= n_poses <= m:
-        raise PlanningError(f"n_poses must be an integer in 1..{m} (the reachable candidates); got {n_poses!r}.")
+        raise PlanningError(f"{{n_poses}} must be an integer in 1..{m} (the reachable candidates); got {n_poses!r}.",
+                            parameter="n_poses", value=n_poses,
+                            fix=f"ask for at most {m} poses, or rank the candidates of a denser sphere (a larger "
+                            "{candidate_subdivisions})", settings={"candidate_subdivisions": NO_SETTING})
 
     # Reference wrench of every candidate x configuration (eq. 15-16), then the reading it would give.
     force = float(load_mass) * float(np.linalg.norm(g)) * candidates.gravity_in_sensor

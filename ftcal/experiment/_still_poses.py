@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import NO_SETTING, CalibrationInputError
 
 __all__ = ["StillPoses", "find_still_poses", "DEFAULT_STILL_TOLERANCE_DEG", "DEFAULT_MIN_STILL_S", "UNSTEADY_FACTOR"]
 
@@ -261,8 +261,9 @@ def find_still_poses(
         raise CalibrationInputError(
             f"no still pose in the {n} samples ({t[0]:.6g} to {t[-1]:.6g} s): the pose never stays within "
             f"{tolerance_deg:g} deg for {min_duration_s:g} s (the longest still stretch lasts {longest:.3g} s). "
-            "Fix: record the sensor while the robot stands still at each pose, or loosen --still-tolerance / "
-            "--min-still.")
+            "Fix: record the sensor while the robot stands still at each pose, or loosen {tolerance_deg} / "
+            "{min_duration_s}.", parameter="tolerance_deg", value=tolerance_deg,
+            settings={"min_duration_s": NO_SETTING})
     from_data = settle_s is None
     if from_data:
         settle_s = float(np.percentile([_settle_time(t[a:b], y[a:b]) for a, b in found], 75))
@@ -289,7 +290,7 @@ def find_still_poses(
         raise CalibrationInputError(
             f"found {len(found)} still poses but kept none: {rejected[0][1]} (the first "
             f"{rejected[0][0] - t[0]:.1f} s into the recording). "
-            "Fix: hold each pose longer, or give a shorter --settle.")
+            "Fix: hold each pose longer, or give a shorter {settle_s}.", parameter="settle_s", value=settle_s)
     rotation = None
     if R is not None:
         from scipy.spatial.transform import Rotation

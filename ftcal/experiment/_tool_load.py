@@ -316,7 +316,7 @@ class ToolLoad:
         """Write the tool file (JSON); an existing file is only replaced with ``overwrite=True``."""
         path = Path(path)
         if path.exists() and not overwrite:
-            raise CalibrationInputError(f"{path} already exists; pass overwrite=True or choose another path.")
+            raise CalibrationInputError(f"{path} already exists.", parameter="path", value=str(path), fix="pass {overwrite} to replace it, or choose another path", settings={"overwrite": True})
         with atomic_output(path, overwrite=overwrite, error=CalibrationInputError) as tmp:
             tmp.write_text(json.dumps(self.to_dict(), indent=2) + "\n", encoding="utf-8")
         return path
@@ -468,8 +468,9 @@ def identify_tool_load(
         raise CalibrationInputError(
             f"the {n} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
             f"frame) varies by about {second:.1f} deg in its second direction, but mass, centre of mass and bias "
-            f"need at least {MIN_TILT_DEG:g} deg in two independent directions (and 4 poses). Fix: add poses tilted "
-            "about two axes, e.g. the 11 of 'ftcal plan --subdivisions 0'."
+            f"need at least {MIN_TILT_DEG:g} deg in two independent directions (and 4 poses).", parameter="rotations",
+            value=n, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
+            settings={"subdivisions": 0},
         )
     candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state)
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
@@ -540,29 +541,29 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
     >>> "gripper_mass: 1.0" in text and "pos: [0.0, 0.0, 0.1]" in text
     True
     """
+    import yaml
+
     for name, value in (("sensor_frame", sensor_frame), ("world_frame", world_frame), ("node", node)):
-        if not value or any(c in value for c in ":#{}[],\"'\n"):
-            raise CalibrationInputError(f"{name} {value!r} must be a plain frame / node name.")
-    fmt = lambda v: repr(float(v))  # noqa: E731 - shortest round-trip decimal
-    com = [fmt(v) for v in tool.center_of_mass]
-    weight = [fmt(tool.mass * g) for g in np.asarray(tool.gravity, dtype=float)]
-    lines = [
+        if not isinstance(value, str) or not value.strip() or not value.isprintable():
+            raise CalibrationInputError(f"{name} {value!r} must be a frame / node name: printable text, not empty.",
+                                        parameter=name, value=value)
+
+    def block(mapping: dict) -> str:  # a YAML emitter quotes what a plain scalar would misread (null, yes, 0x10, *ref)
+        return yaml.safe_dump(mapping, default_flow_style=None, sort_keys=False, allow_unicode=True, width=1 << 16)
+
+    floats = lambda values: [float(v) for v in values]  # noqa: E731 - shortest round-trip decimals
+    com = floats(tool.center_of_mass)
+    comment_frame = yaml.safe_dump(sensor_frame, allow_unicode=True, width=1 << 16).splitlines()[0]
+    text = "\n".join([
         "# Tool gravity compensation parameters written by ftcal (identify-load): sensor frame, SI units.",
-        f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in {sensor_frame} [m],",
+        f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in the frame {comment_frame} [m],",
         "# bias [N, N·m] = what the sensor reads with no load at all.",
         "# --- ROS 1 force_torque_tools (gravity_compensation node) ---",
-        f"bias: [{', '.join(fmt(b) for b in tool.bias)}]",
-        f"gripper_mass: {fmt(tool.mass)}",
-        f"gripper_com_frame_id: {sensor_frame}",
-        f"gripper_com_pose: [{', '.join(com)}, 0.0, 0.0, 0.0]",
-        "gripper_com_child_frame_id: gripper_com",
-        "# --- ROS 2 control_toolbox control_filters/GravityCompensation ---",
-        f"{node}:",
-        "  ros__parameters:",
-        f"    world_frame: {world_frame}",
-        f"    sensor_frame: {sensor_frame}",
-        "    CoG:",
-        f"      pos: [{', '.join(com)}]",
-        f"      force: [{', '.join(weight)}]",
-    ]
-    return "\n".join(lines) + "\n"
+    ]) + "\n"
+    text += block({"bias": floats(tool.bias), "gripper_mass": float(tool.mass), "gripper_com_frame_id": sensor_frame,
+                   "gripper_com_pose": com + [0.0, 0.0, 0.0], "gripper_com_child_frame_id": "gripper_com"})
+    text += "# --- ROS 2 control_toolbox control_filters/GravityCompensation ---\n"
+    text += block({node: {"ros__parameters": {
+        "world_frame": world_frame, "sensor_frame": sensor_frame,
+        "CoG": {"pos": com, "force": [float(tool.mass * g) for g in np.asarray(tool.gravity, dtype=float)]}}}})
+    return text

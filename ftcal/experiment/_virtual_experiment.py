@@ -188,8 +188,9 @@ def simulate_experiment(
     paths = [out / f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     existing = [str(p) for p in paths + [out / "virtual_experiment.json"] if p.exists()]
     if existing and not overwrite:
-        raise LogFormatError(f"{existing[0]} exists ({len(existing)} of the logs do); pass overwrite=True "
-                             "or choose an empty out_dir.")
+        raise LogFormatError(f"{existing[0]} exists ({len(existing)} of the logs do).", parameter="out_dir",
+                             value=str(out), fix="pass {overwrite}, or choose an empty out_dir",
+                             settings={"overwrite": True})
     rng = np.random.default_rng(random_state)
     if sensor is None:
         sensor = VirtualSensor(errors=errors, random_state=rng)

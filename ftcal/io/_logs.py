@@ -382,7 +382,7 @@ def write_run_log(
     """
     path = Path(path)
     if path.exists() and not overwrite:
-        raise LogFormatError(f"{path}: file exists; pass overwrite=True to replace it or choose another path.")
+        raise LogFormatError(f"{path}: file exists.", parameter="path", value=str(path), fix="pass {overwrite} to replace it, or choose another path", settings={"overwrite": True})
     q_arr, raw_arr = np.atleast_2d(np.asarray(q, dtype=float)), np.atleast_2d(np.asarray(raw, dtype=float))
     n = q_arr.shape[0]
     cols = {"timestamp": np.asarray(timestamp, dtype=float), "run": np.asarray(run_kind, dtype=str),

@@ -702,7 +702,7 @@ class AutoCalibrator(BaseCalibrator):
         if groups is None and len(X) < self.cv:
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
-                f"(at least 2 and at most {len(X)}).")
+                f"(at least 2 and at most {len(X)}).", parameter="X", value=len(X))
         self.alpha_ = resolve_alpha(self.alpha, y)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)

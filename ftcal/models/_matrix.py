@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..calibrators._history import reads_history
-from ..core._exceptions import ExportError
+from ..core._exceptions import NO_SETTING, ExportError
 from ..core._wrench import WRENCH_LABELS
 
 __all__ = ["linear_calibration_matrix", "matrix_export_dict"]
@@ -45,8 +45,9 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
         raise ExportError(f"{type(model).__name__} is not a fitted calibrator (no n_features_in_); fit it first.")
     if reads_history(model) and getattr(model, "tau_rows_", None) is not None:
         raise ExportError(f"{type(model).__name__} has a load-history term (tau = {model.tau_rows_:g} rows): its "
-                          "wrench depends on the readings before each one, which no matrix can hold. Export a model "
-                          "fitted without --history for a matrix.")
+                          "wrench depends on the readings before each one, which no matrix can hold.",
+                          parameter="model", fix="export a model fitted without {HistoryCalibrator} (no "
+                          "load-history term) for a matrix", settings={"HistoryCalibrator": NO_SETTING})
     center = np.asarray(getattr(model, "zero_reading_", np.zeros(n)), dtype=float).ravel()
     if center.shape != (n,):
         center = np.zeros(n)
@@ -68,11 +69,18 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
     got = out[n + 1:]
     gap = float(np.max(np.abs(got - expected)))
     if not gap <= 1e-7 * (1.0 + float(np.max(np.abs(got)))):
+        if getattr(model, "_temperature_column", False):  # a temperature-compensated model, linear or not
+            raise ExportError(
+                f"{type(model).__name__} is temperature-compensated: its wrench depends on the temperature (its last "
+                f"input) beyond a 6x{n} matrix (by {gap:.3g} on probe readings), so it has no calibration matrix.",
+                parameter="model", fix="export it to ONNX ({export_onnx}), which keeps the compensation, or fit "
+                "without {TemperatureCompensatedCalibrator} for a matrix",
+                settings={"export_onnx": NO_SETTING, "TemperatureCompensatedCalibrator": NO_SETTING})
         raise ExportError(
             f"{type(model).__name__} is not a linear calibration (its prediction departs from the best 6x{n} matrix "
-            f"by {gap:.3g} on probe readings), so it has no calibration matrix. Fix: fit --model linear for a matrix, "
-            "or export this model with --format onnx."
-        )
+            f"by {gap:.3g} on probe readings), so it has no calibration matrix.", parameter="model",
+            fix="fit a linear model ({model}) for a matrix, or export this model to ONNX ({export_onnx})",
+            settings={"model": "linear", "export_onnx": NO_SETTING})
     return matrix, offset
 
 

@@ -191,7 +191,7 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
     if not path.parent.is_dir():
         raise ModelFileError(f"cannot write {path}: the folder {path.parent} does not exist. Fix: create it first.")
     if path.exists() and not overwrite:
-        raise ModelFileError(f"{path} already exists; pass overwrite=True to replace it, or choose another path.")
+        raise ModelFileError(f"{path} already exists.", parameter="path", value=str(path), fix="pass {overwrite} to replace it, or choose another path", settings={"overwrite": True})
     with atomic_output(path, overwrite=overwrite, error=ModelFileError) as tmp, open(tmp, "wb") as f:
         np.savez(f, **arrays)
     return path

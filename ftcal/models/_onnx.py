@@ -31,7 +31,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from ..calibrators._history import reads_history
-from ..core._exceptions import ExportError, ExportExistsError
+from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
 from ..core._files import atomic_output
 
 __all__ = ["export_onnx", "exportable_types", "OPSET"]
@@ -99,11 +99,17 @@ class _Graph:
         calls this again for its inner calibrators.
         """
         emit = _emitter(type(model))
+        static = None
         if reads_history(model):
-            raise ExportError(f"{type(model).__name__} cannot be exported to ONNX: its load-history term depends on "
-                              "the readings before each one, a state an ONNX graph does not keep. Call predict (or "
-                              "stream()) from Python, or export a model fitted without --history.")
-        if emit is None:
+            if getattr(model, "tau_rows_", None) is not None or getattr(model, "estimator_", None) is None:
+                raise ExportError(f"{type(model).__name__} cannot be exported to ONNX: its load-history term depends "
+                                  "on the readings before each one, a state an ONNX graph does not keep.",
+                                  parameter="model", fix="call predict (or stream()) from Python, or export a model "
+                                  "fitted without {HistoryCalibrator} (no load-history term)",
+                                  settings={"HistoryCalibrator": NO_SETTING})
+            # its cross-validation chose no history term: the model is its static calibrator (after its own tare)
+            static = model.estimator_
+        if emit is None and static is None:
             names = ", ".join(t.__name__ for t in exportable_types())
             raise ExportError(
                 f"{type(model).__name__} cannot be exported to ONNX: ftcal knows how to write the graphs of {names} "
@@ -114,7 +120,7 @@ class _Graph:
         tare = getattr(model, "tare_reading_", None)
         if tare is not None:
             x = self.op("Sub", x, self.const(tare - model.zero_reading_))
-        return emit(model, self, x)
+        return self.calibration(static, x) if static is not None else emit(model, self, x)
 
 
 def _n_outputs(model) -> int:
@@ -185,8 +191,7 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
         ) from None
     path = Path(path)
     if path.exists() and not overwrite:
-        raise ExportExistsError(f"{path} exists; pass overwrite=True (CLI: --force) to replace it, or choose another "
-                                "path.")
+        raise ExportExistsError(f"{path} exists.", parameter="path", value=str(path), fix="pass {overwrite} to replace it, or choose another path", settings={"overwrite": True})
     g = _Graph(onnx)
     wrench = g.calibration(model, "readings")
     g.nodes.append(onnx.helper.make_node("Identity", [wrench], ["wrench"]))

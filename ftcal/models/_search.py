@@ -35,7 +35,7 @@ from sklearn import config_context
 from sklearn.model_selection import GridSearchCV, GroupKFold, KFold, RandomizedSearchCV
 
 from ..core._files import plain_json
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError, Placeholder
 from ..core._metrics import neg_scaled_rmse
 
 __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "search_summary"]
@@ -214,7 +214,9 @@ def search_calibrator(
     estimator = make_calibrator(model, schedule=schedule, random_state=random_state, **params)
     if space is None:
         if model not in DEFAULT_SEARCH_SPACES:
-            raise CalibrationInputError(f"no default search space for {model!r}; pass space={{param: values}}.")
+            raise CalibrationInputError(f"no default search space for {model!r}.", parameter="space",
+                                        fix="pass {space}",
+                                        settings={"space": Placeholder("{param: values}")})
         space = DEFAULT_SEARCH_SPACES[model]
     space = dict(space)
     if not space:

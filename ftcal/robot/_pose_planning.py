@@ -90,7 +90,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import KinematicsError, PlanningError
+from ..core._exceptions import NO_SETTING, KinematicsError, PlanningError
 from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_direction_ik
 from ._loads import thesis_load_configurations
 from ._robot import RobotModel, sensor_pose_in_base
@@ -605,8 +605,10 @@ def select_poses(
     if isinstance(n_poses, bool) or not isinstance(n_poses, (int, np.integer)):
         raise PlanningError(f"n_poses must be an integer; got {n_poses!r}.")
     if n_poses > m:
-        raise PlanningError(f"n_poses={n_poses} but only {m} candidate directions are reachable; ask for at most "
-                            f"{m} poses or plan on a denser sphere (candidate_subdivisions / --candidate-subdivisions).")
+        raise PlanningError(f"{{n_poses}} {n_poses} is more than the {m} reachable candidate directions.",
+                            parameter="n_poses", value=n_poses,
+                            fix=f"ask for at most {m} poses, or plan on a denser sphere (a larger "
+                            "{candidate_subdivisions})", settings={"candidate_subdivisions": NO_SETTING})
     if n_poses < LINEAR_MODEL_PARAMETERS:
         raise PlanningError(f"n_poses={n_poses} is fewer than the {LINEAR_MODEL_PARAMETERS} parameters of the linear "
                             f"calibration model per output (6 wrench regressors and an offset); ask for at least "

@@ -28,7 +28,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import KinematicsError
+from ..core._exceptions import KinematicsError, Placeholder
 
 __all__ = [
     "sensor_mounting_transform",
@@ -306,7 +306,9 @@ def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str 
                 f"{key!r} is neither a built-in robot ({', '.join(BUILTIN_ROBOTS)}) nor a .urdf path."
             )
         if sensor_frame is None:
-            raise KinematicsError(f"{urdf}: pass sensor_frame=<frame at the sensing origin> for a URDF path.")
+            raise KinematicsError(f"{urdf}: a URDF path needs the sensor frame.", parameter="sensor_frame",
+                                  fix="pass {sensor_frame}",
+                                  settings={"sensor_frame": Placeholder("<frame at the sensing origin>")})
         frame, name = sensor_frame, urdf.stem
     if not urdf.is_file():
         raise KinematicsError(f"{urdf}: no such URDF file.")

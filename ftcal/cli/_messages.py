@@ -1,0 +1,122 @@
+"""The library's errors in the command line's terms: one table from the Python API's argument names to the options.
+
+A library error names the arguments of the Python API (``n_poses``, ``overwrite=True``) and carries them as
+fields (:class:`ftcal.core._exceptions.FtcalError`); the command line spells each field as its option
+(``--next``, ``--force``) through :data:`CLI_NAMES`, without reading the library's prose. An argument the command
+line has no option for gets the command line's own advice instead of the library's fix.
+
+Examples
+--------
+>>> from ftcal.core._exceptions import ModelFileError
+>>> err = ModelFileError("m.npz already exists.", parameter="path", value="m.npz",
+...                      fix="pass {overwrite} to replace it", settings={"overwrite": True})
+>>> str(err)
+'m.npz already exists. Fix: pass overwrite=True to replace it.'
+>>> cli_message(err)
+'m.npz already exists. Fix: pass --force to replace it.'
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from typing import Any
+
+from ..core._exceptions import NO_SETTING, FtcalError, Placeholder
+
+__all__ = ["Option", "CLI_NAMES", "cli_message", "cli_spelling"]
+
+
+@dataclass(frozen=True)
+class Option:
+    """How the command line names one argument of the library.
+
+    Attributes
+    ----------
+    flags : tuple of (dest, flag)
+        The option, or options by subcommand: the first whose destination is set in the parsed arguments (or the
+        last, as the default) names the argument (``n_poses`` is ``--next`` in ``plan --next``, else ``--poses``).
+    advice : str, optional
+        The command line's own fix where the library's fix proposes this argument and no option sets it
+        (``groups`` come from the dataset's group column).
+    metavar : str, optional
+        How the option's value is written where the library proposes a :class:`Placeholder` (``NAME``).
+    """
+
+    flags: tuple[tuple[str, str], ...] = ()
+    advice: str | None = None
+    metavar: str | None = None
+
+    def flag(self, args: argparse.Namespace | None) -> str | None:
+        """The option naming the argument in the command that ran (``args``), or None when there is none."""
+        for dest, flag in self.flags:
+            if args is not None and getattr(args, dest, None) not in (None, False):
+                return flag
+        return self.flags[-1][1] if self.flags else None
+
+
+def _option(flag: str, metavar: str | None = None) -> Option:
+    return Option(((flag.lstrip("-").replace("-", "_"), flag),), metavar=metavar)
+
+
+#: The library's argument names and the command line's options for them: the one table of the mapping.
+CLI_NAMES: dict[str, Option] = {
+    "overwrite": _option("--force"),
+    "force": _option("--force"),
+    "n_poses": Option((("next_poses", "--next"), ("poses", "--poses"))),
+    "sensor_frame": _option("--sensor-frame", "NAME"),
+    "world_frame": _option("--world-frame"),
+    "subdivisions": _option("--subdivisions"),
+    "candidate_subdivisions": _option("--candidate-subdivisions"),
+    "load_mass": _option("--load-mass", "KG"),
+    "load_positions_in_sensor": Option(advice="prepare the dataset from the run logs with 'ftcal prepare', which "
+                                              "records the load positions, or measure with the thesis fixture"),
+    "space": _option("--grid", "KEY=[values]"),
+    "groups": Option(advice="give the dataset's group column at least 2 distinct groups, or remove that column "
+                            "for random folds"),
+    "HistoryCalibrator": _option("--history"),
+    "TemperatureCompensatedCalibrator": _option("--temperature"),
+    "model": _option("--model"),
+    "export_onnx": Option((("format", "--format onnx"),)),
+    "output": _option("--output"),
+    "scheduler": _option("--scheduler"),
+    "channels": _option("--channels"),
+    "wrench": _option("--wrench"),
+    "force_unit": _option("--force-unit"),
+    "torque_unit": _option("--torque-unit"),
+    "sensor": _option("--sensor"),
+    "tolerance_deg": _option("--still-tolerance"),
+    "min_duration_s": _option("--min-still"),
+    "settle_s": _option("--settle"),
+}
+
+
+def cli_spelling(args: argparse.Namespace | None = None):
+    """A ``spell(name, setting)`` for :meth:`FtcalError.render`: the option of ``name`` (with the proposed value;
+    ``--history`` / ``no --history`` for a switch), or the library's own name where the command line has none."""
+
+    def spell(name: str, setting: Any) -> str:
+        option = CLI_NAMES.get(name)
+        flag = option.flag(args) if option is not None else None
+        if flag is None:
+            return name if setting is NO_SETTING else f"{name}={setting!r}"
+        if setting is NO_SETTING or setting is True:
+            return flag
+        if setting is False or setting is None:
+            return f"no {flag}"
+        if isinstance(setting, Placeholder):
+            return f"{flag} {option.metavar or setting}"
+        return f"{flag} {setting}"
+
+    return spell
+
+
+def cli_message(exc: BaseException, args: argparse.Namespace | None = None) -> str:
+    """The message of ``exc`` in the command line's terms (its fields spelled as options); the plain ``str`` of
+    any error without fields."""
+    if not isinstance(exc, FtcalError) or not exc.has_fields:
+        return str(exc)
+    in_fix = [name for name in exc.fields if "{" + name + "}" in (exc.fix or "")]
+    advice = next((CLI_NAMES[name].advice for name in in_fix
+                   if name in CLI_NAMES and CLI_NAMES[name].advice is not None), None)
+    return exc.render(cli_spelling(args), fix=advice)
