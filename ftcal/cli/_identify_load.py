@@ -303,6 +303,7 @@ def _poses_csv(poses: _Poses) -> str:
 def run_identify(args: argparse.Namespace) -> int:
     import ftcal
     from ..core._exceptions import CalibrationInputError
+    from ._messages import cli_message
 
     console = Console(args.quiet)
     gravity = _gravity(args.gravity)
@@ -312,7 +313,7 @@ def run_identify(args: argparse.Namespace) -> int:
     try:
         tool = ftcal.identify_tool_load(poses.rotations, poses.wrenches, gravity=gravity)
     except CalibrationInputError as exc:
-        raise CliError(f"{', '.join(poses.sources[:3])}: {exc}") from None
+        raise CliError(f"{', '.join(poses.sources[:3])}: {cli_message(exc, args)}") from None
     info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
             str(args.model), "wrench_frame_in_input": args.wrench_frame}
     if _input_kind(args.inputs[0]) == "run log":

@@ -113,10 +113,12 @@ def run(args: argparse.Namespace) -> int:
         dataset = ftcal.prepare_dataset(inputs, robot, args.mass, n_channels=args.channels,
                                         load_configurations=configurations)
     except ftcal.LogFormatError as exc:
-        if "not among the known ones" not in str(exc):
+        if exc.parameter != "load_configurations":
             raise
-        raise CliError(f"{exc} The fixture used was {fixture}: describe yours in a file and pass --fixture FILE "
-                       "(see 'ftcal prepare --help').") from None
+        from ._messages import cli_spelling
+
+        raise CliError(exc.render(cli_spelling(args), fix=f"the fixture used was {fixture}: describe yours in a file "
+                                  "and pass --fixture FILE (see 'ftcal prepare --help')")) from None
     dataset.meta["fixture"] = fixture
     with plan.writing(name) as tmp:
         dataset.save(tmp, overwrite=True)

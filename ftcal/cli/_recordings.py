@@ -89,12 +89,13 @@ def still_poses(args, source: str, time, reading, *, rotations=None, joints=None
     """The still poses of a continuous recording, with the options' thresholds; errors name ``source``."""
     from ..core._exceptions import CalibrationInputError
     from ..experiment._still_poses import find_still_poses
+    from ._messages import cli_message
 
     try:
         return find_still_poses(time, reading, rotations=rotations, joints=joints, tolerance_deg=args.still_tolerance,
                                 settle_s=args.settle, min_duration_s=args.min_still)
     except CalibrationInputError as exc:
-        raise CliError(f"{source}: {exc}") from None
+        raise CliError(f"{source}: {cli_message(exc, args)}") from None
 
 
 def read_bag_from_args(args, path: Path, console: Console):

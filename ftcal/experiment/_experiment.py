@@ -385,7 +385,8 @@ def prepare_dataset(
     if unknown:
         first = pairs.source[int(np.flatnonzero(pairs.config == unknown[0])[0])]
         raise LogFormatError(f"{first}: load configuration {unknown[0]} is not among the known ones "
-                             f"{sorted(positions)}; pass load_configurations with its position.")
+                             f"{sorted(positions)}.", parameter="load_configurations", value=int(unknown[0]),
+                             fix="pass {load_configurations} with its position")
     _check_limits(robot, pairs.q_load, pairs.source, limit_tolerance_rad)
     _check_limits(robot, pairs.q_no_load, pairs.source, limit_tolerance_rad)
     g = np.asarray(gravity_in_base, dtype=float)
