@@ -183,7 +183,7 @@ def test_memory_stays_bounded_whatever_the_bag_size(tmp_path):
     rec_large, peak_large = _peak_while_reading(large)
     assert bag_topics(large)["/ft_sensor/wrench"][1] == 20_000
     assert len(rec_large.time) <= 300 + 1 and len(rec_small.time) <= 300 + 1  # block means, not every message
-    assert any("averaged in blocks of 67" in n for n in rec_large.notes)
+    assert any("averaged in blocks of 67" in str(n) for n in rec_large.notes)
     # ten times the messages, not ten times the memory (a whole-bag reader holds every message: ~10 MB here)
     assert peak_large <= 1.2 * peak_small + 200_000
     # MCAP is read a chunk at a time: its peak is the chunk buffer's (~4 MB), not the bag's

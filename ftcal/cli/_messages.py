@@ -88,6 +88,13 @@ CLI_NAMES: dict[str, Option] = {
     "tolerance_deg": _option("--still-tolerance"),
     "min_duration_s": _option("--min-still"),
     "settle_s": _option("--settle"),
+    "wrench_topic": _option("--wrench-topic", "TOPIC"),
+    "raw_topic": _option("--raw-topic", "TOPIC"),
+    "raw_field": _option("--raw-field", "FIELD"),
+    "joint_topic": _option("--joint-topic", "TOPIC"),
+    "tf": _option("--tf", "BASE,SENSOR"),
+    "stamps": _option("--stamps"),
+    "max_samples": _option("--max-samples"),
 }
 
 

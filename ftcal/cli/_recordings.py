@@ -100,13 +100,18 @@ def still_poses(args, source: str, time, reading, *, rotations=None, joints=None
 
 def read_bag_from_args(args, path: Path, console: Console):
     """The bag at ``path`` read as the options say; its notes (clock offsets, dropped samples) on stderr."""
+    from ..core._exceptions import LogFormatError
     from ..io._bags import read_bag
+    from ._messages import cli_message
 
-    rec = read_bag(path, wrench_topic=getattr(args, "wrench_topic", None), raw_topic=args.raw_topic,
-                   raw_field=args.raw_field, joint_topic=args.joint_topic, tf=getattr(args, "tf", None),
-                   stamps=args.stamps, max_samples=args.max_samples)
+    try:
+        rec = read_bag(path, wrench_topic=getattr(args, "wrench_topic", None), raw_topic=args.raw_topic,
+                       raw_field=args.raw_field, joint_topic=args.joint_topic, tf=getattr(args, "tf", None),
+                       stamps=args.stamps, max_samples=args.max_samples)
+    except LogFormatError as exc:
+        raise CliError(cli_message(exc, args)) from None
     for note in rec.notes:
-        console.info(f"{path}: {note}")
+        console.info(f"{path}: {cli_message(note, args)}")
     return rec
 
 

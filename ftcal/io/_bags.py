@@ -39,7 +39,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import LogFormatError
+from ..core._exceptions import LogFormatError, Placeholder
 
 __all__ = ["BagRecording", "read_bag", "write_bag", "is_bag", "bag_topics", "WRENCH_TYPES", "JOINT_STATE_TYPE",
            "TF_TYPE", "CLOCK_OFFSET_TOLERANCE_S", "DEFAULT_MAX_SAMPLES", "BAG_STORAGES"]
@@ -149,20 +149,25 @@ def _listing(topics: dict[str, tuple[str, int]]) -> str:
     return ", ".join(f"{t} ({typ}, {n} messages)" for t, (typ, n) in sorted(topics.items())) or "no topics"
 
 
-def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str, ...], role: str, option: str) -> str:
-    """The topic of ``role``: the given one (checked), else the bag's only topic of one of ``types``."""
+def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str, ...], role: str,
+                  parameter: str) -> str:
+    """The topic of ``role`` (the argument ``parameter``): the given one (checked), else the bag's only topic of
+    one of ``types``."""
     if given is not None:
         if given not in topics:
-            raise LogFormatError(f"{path}: no topic {given} ({role}); the bag has {_listing(topics)}.")
+            raise LogFormatError(f"{path}: no topic {given} ({role}); the bag has {_listing(topics)}.",
+                                 parameter=parameter, value=given)
         if types and topics[given][0] not in types:
             raise LogFormatError(f"{path}: topic {given} holds {topics[given][0]}, not {' or '.join(types)} ({role}); "
-                                 f"the bag has {_listing(topics)}. Fix: name the right topic with {option}.")
+                                 f"the bag has {_listing(topics)}.", parameter=parameter, value=given,
+                                 fix=f"name the right topic with {{{parameter}}}")
         return given
     candidates = sorted(t for t, (typ, _) in topics.items() if typ in types)
     if len(candidates) != 1:
         what = "no" if not candidates else f"{len(candidates)}"
         raise LogFormatError(f"{path}: {what} topics of type {' or '.join(types)} ({role}); the bag has "
-                             f"{_listing(topics)}. Fix: name it with {option} TOPIC.")
+                             f"{_listing(topics)}.", parameter=parameter, value=None,
+                             fix=f"name it with {{{parameter}}}", settings={parameter: Placeholder("TOPIC")})
     return candidates[0]
 
 
@@ -245,9 +250,9 @@ class BagRecording:
     clock_offset_s : dict
         Per stamped topic, the median of (receive time - header stamp) [s].
     stamps : str
-    notes : list of str
-        What a user should know: clock offsets between topics, samples dropped outside the pose stream,
-        messages averaged per sample.
+    notes : list of LogFormatError
+        What a user should know (not errors; ``str(note)`` is its text, its fields as for an error): clock
+        offsets between topics, samples dropped outside the pose stream, messages averaged per sample.
     topics : dict
         Every topic of the bag: name -> (type, count).
     """
@@ -264,7 +269,7 @@ class BagRecording:
     frame_id: str
     clock_offset_s: dict[str, float]
     stamps: str
-    notes: list[str] = field(default_factory=list)
+    notes: list[LogFormatError] = field(default_factory=list)
     topics: dict[str, tuple[str, int]] = field(default_factory=dict)
 
 
@@ -296,8 +301,9 @@ def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str,
         if frame not in parent or len(chain) > 64:
             known = sorted(set(parent) | set(parent.values()))
             raise LogFormatError(f"{path}: /tf holds no chain of transforms from {base} to {sensor} (stuck at "
-                                 f"{frame}); the frames in /tf and /tf_static are {', '.join(known) or 'none'}. Fix: "
-                                 "--tf BASE,SENSOR with two of them.")
+                                 f"{frame}); the frames in /tf and /tf_static are {', '.join(known) or 'none'}.",
+                                 parameter="tf", value=(base, sensor), fix="give {tf} two of them",
+                                 settings={"tf": Placeholder("BASE,SENSOR")})
         chain.append((parent[frame], frame))
         frame = parent[frame]
     R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
@@ -384,19 +390,19 @@ def read_bag(
     with _Reader(path) as r:
         topics = r.topics()
         if raw_topic is not None:
-            sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "--raw-topic")
+            sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
             kind = "raw"
         else:
-            sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "--wrench-topic")
+            sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
             kind = "wrench"
         if tf is None:
             pose_topics = [_choose_topic(path, topics, joint_topic, (JOINT_STATE_TYPE,), "joint states",
-                                         "--joint-topic")]
+                                         "joint_topic")]
         else:
             pose_topics = [t for t in ("/tf", "/tf_static") if t in topics]
             if "/tf" not in pose_topics and "/tf_static" not in pose_topics:
-                raise LogFormatError(f"{path}: no topic /tf or /tf_static (--tf {','.join(tf)}); the bag has "
-                                     f"{_listing(topics)}.")
+                raise LogFormatError(f"{path}: no topic /tf or /tf_static ({{tf}} {','.join(tf)}); the bag has "
+                                     f"{_listing(topics)}.", parameter="tf", value=tf)
             for t in pose_topics:
                 if topics[t][0] != TF_TYPE:
                     raise LogFormatError(f"{path}: topic {t} holds {topics[t][0]}, not {TF_TYPE}.")
@@ -448,8 +454,9 @@ def read_bag(
                         except AttributeError:
                             fields = [f for f in getattr(msg, "__dataclass_fields__", {})]
                             raise LogFormatError(f"{path}: topic {sensor} ({conn.msgtype}) has no field {raw_field!r}; "
-                                                 f"its fields are {', '.join(fields)}. Fix: --raw-field NAME.") \
-                                from None
+                                                 f"its fields are {', '.join(fields)}.", parameter="raw_field",
+                                                 value=raw_field, fix="name the array field with {raw_field}",
+                                                 settings={"raw_field": Placeholder("NAME")}) from None
                         except (TypeError, ValueError):
                             raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} ({conn.msgtype}) "
                                                  "is not an array of numbers (the raw gauges).") from None
@@ -477,8 +484,8 @@ def read_bag(
     t_s, _, reading = streams[sensor].arrays()
     notes = []
     if streams[sensor].block > 1:
-        notes.append(f"{sensor}: {topics[sensor][1]} messages averaged in blocks of {streams[sensor].block} "
-                     f"(at most {max_samples} samples kept)")
+        notes.append(LogFormatError(f"{sensor}: {topics[sensor][1]} messages averaged in blocks of "
+                                    f"{streams[sensor].block} (at most {max_samples} samples kept)"))
     if not len(t_s):
         raise LogFormatError(f"{path}: topic {sensor} holds no messages; the bag has {_listing(topics)}.")
     if not np.isfinite(reading).all():
@@ -508,10 +515,11 @@ def read_bag(
     if stamps == "header" and sensor in offsets and pose_topic in offsets:
         apart = offsets[sensor] - offsets[pose_topic]
         if abs(apart) > CLOCK_OFFSET_TOLERANCE_S:
-            notes.append(f"clock offset between {sensor} and {pose_topic}: their header stamps differ by "
-                         f"{apart:+.3g} s against the recorder's receive times ({sensor}'s clock "
-                         f"{'behind' if apart > 0 else 'ahead'}); if that is the clocks, not transport latency, use "
-                         "--stamps receive")
+            notes.append(LogFormatError(
+                f"clock offset between {sensor} and {pose_topic}: their header stamps differ by {apart:+.3g} s "
+                f"against the recorder's receive times ({sensor}'s clock {'behind' if apart > 0 else 'ahead'})",
+                parameter="stamps", value=stamps, settings={"stamps": "receive"},
+                fix="if that is the clocks, not transport latency, read the bag with {stamps}"))
     overlap = (t_s >= t_p.min()) & (t_s <= t_p.max())
     if not overlap.any():
         both = sensor in offsets and pose_topic in offsets
@@ -519,11 +527,12 @@ def read_bag(
                   " s apart") if both else ""
         raise LogFormatError(
             f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {pose_topic} "
-            f"{t_p.min():.6f} to {t_p.max():.6f} s, no overlap{detail}. Fix: --stamps receive (the recorder's clock "
-            "for both), or set the sensor driver's clock.")
+            f"{t_p.min():.6f} to {t_p.max():.6f} s, no overlap{detail}.", parameter="stamps", value=stamps,
+            settings={"stamps": "receive"}, fix="{stamps} (the recorder's clock for both), or set the sensor "
+            "driver's clock")
     if not overlap.all():
-        notes.append(f"{int((~overlap).sum())} of {len(t_s)} {sensor} samples lie outside {pose_topic}'s span and "
-                     "were dropped")
+        notes.append(LogFormatError(f"{int((~overlap).sum())} of {len(t_s)} {sensor} samples lie outside "
+                                    f"{pose_topic}'s span and were dropped"))
         t_s, reading = t_s[overlap], reading[overlap]
     joints = rotation = None
     names: tuple[str, ...] = ()
