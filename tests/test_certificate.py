@@ -257,7 +257,7 @@ def test_concurrent_forced_runs_leave_one_whole_set_whose_hashes_are_its_own(tmp
     for k in range(2):
         bent_sensor(seed=10 + k).save(tmp_path / f"d{k}.csv")
     env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
-    for _ in range(2):
+    for _ in range(1):  # each round: the two runs overlap (their fits and reports take seconds, the commits microseconds)
         runs = [subprocess.Popen([sys.executable, "-m", "ftcal", "fit", str(tmp_path / f"d{k}.csv"), "--model",
                                   "linear", "--report", "--no-baselines", "--cv", "3", "--force", "-q", "--out",
                                   str(tmp_path / "cc")], env=env, stderr=subprocess.PIPE, text=True)
@@ -293,3 +293,26 @@ def test_stock_baselines_over_the_memory_limit_or_work_budget_are_skipped_with_t
     assert "GiB" in status["sk_poly3"]
     for name in ("sk_poly2", "sk_kernel_ridge", "sk_gp"):
         assert status[name] == "scored" or status[name].startswith("skipped:"), status[name]
+
+
+def test_report_of_auto_reuses_its_comparison_and_refits_only_its_choice():
+    """auto scored the stock baselines on the same folds when it chose: the report takes those rows (not fitted
+    again) and cross-validates only the chosen model, whose held-out RMSE is then auto's own figure for it."""
+    from ftcal import AutoCalibrator, LinearCalibrator, PolynomialCalibrator, calibration_certificate
+
+    data = bent_sensor(bend=0.6, seed=7)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator())],
+                          cv=4, stack=False).fit(data.raw, data.wrench, groups=data.group)
+    facts = calibration_certificate(auto, data, cv=4, figures=False)
+    res = auto.cv_results_
+    assert facts["validation"]["reused_auto_comparison"] is True
+    rows = {c["model"]: c for c in facts["model_choice"]}
+    for i, name in enumerate(res["name"]):
+        if res["kind"][i] == "baseline":
+            assert rows[name]["rmse"] == res["rmse"][i] and "auto's comparison" in rows[name]["note"]
+    chosen = res["name"].index(auto.best_name_)
+    this = facts["model_choice"][0]
+    assert auto.best_name_ in this["model"] and this["rmse"] == pytest.approx(res["rmse"][chosen], rel=1e-9)
+    # other folds (or another dataset) than auto's: nothing is reused
+    other = calibration_certificate(auto, data, cv=3, figures=False, baselines=False)
+    assert other["validation"]["reused_auto_comparison"] is False

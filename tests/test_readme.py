@@ -109,6 +109,9 @@ def test_from_a_mat_recording_to_report_matrix_and_onnx_with_readme_commands_onl
     facts = json.loads((tmp_path / "models" / "linear.report.json").read_text())
     assert facts["data"]["units"] == {"source_force_unit": "N", "source_torque_unit": "N.mm"}
     assert max(a["rms_pct_fs"] for a in facts["accuracy"]) < 1.0  # torques converted: N·m errors, not N·mm
+    # against the rated capacity and the specification of the README's command
+    assert [a["full_scale"] for a in facts["accuracy"]] == [500, 500, 900, 20, 20, 20]
+    assert facts["verdict"] == "PASS" and f'class="verdict PASS">PASS' in shown.dom
     # the matrix and the ONNX file compute what the model computes
     model = load_model(tmp_path / "models" / "linear.model.npz")
     rows = [line.split(",") for line in (tmp_path / "deploy" / "matrix.csv").read_text().splitlines()
@@ -222,3 +225,12 @@ def test_ros_bag_blocks_run_as_written(tmp_path):
     for out in ("tool_poses", "tool_rec", "tool_joints", "tool_tf"):
         found = ftcal.ToolLoad.load(tmp_path / out / "tool.tool.json")
         assert abs(found.mass - TOOL.mass) <= 4 * found.mass_std_error, out
+
+
+def test_the_readme_shows_the_first_page_of_a_report():
+    readme = README.read_text(encoding="utf-8")
+    found = re.search(r"!\[[^\]]*\]\((docs/[^)]+\.png)\)", readme)
+    assert found is not None and "report_screenshot.py" in readme
+    png = README.parent / found.group(1)
+    assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size < 200_000
+    assert (README.parent / "docs" / "report_screenshot.py").is_file()

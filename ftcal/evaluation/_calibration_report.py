@@ -68,6 +68,8 @@ BASELINE_WORK_BUDGET = 3e11
 #: Training rows a non-kernel stock baseline is fitted on at most per fold (a random subset beyond; the kernel
 #: ones have their own, smaller subset): the report of a million rows stays a matter of seconds per baseline.
 BASELINE_TRAINING_ROWS = 200_000
+#: Test rows predicted at once in the report's cross-validation (a kernel model's cross-kernel stays small).
+PREDICT_CHUNK_ROWS = 20_000
 #: Load cases the JSON holds at most (the worst first; the CSV beside it holds them all).
 CASES_IN_JSON = 200_000
 #: The conditions and traceability fields of a calibration, in the order the page prints them.
@@ -154,10 +156,16 @@ def _fold_predictions(template: Any, X: NDArray, y: NDArray, groups: NDArray | N
         train = np.sort(np.random.default_rng(seed).choice(train, size=max_rows, replace=False))
     with threadpool_limits(1, user_api="blas"):
         est = _fit(clone(template), X[train], y[train], None if groups is None else groups[train])
-        if want_std and provides_std(est):
-            out = est.predict(X[test], return_std=True)
-            return np.asarray(out[0]), np.asarray(out[1])
-        return np.asarray(est.predict(X[test])), None
+        std = want_std and provides_std(est)
+        if reads_history(est) or len(test) <= PREDICT_CHUNK_ROWS:  # a history model reads its fold as one stream
+            out = est.predict(X[test], return_std=True) if std else est.predict(X[test])
+            return (np.asarray(out[0]), np.asarray(out[1])) if std else (np.asarray(out), None)
+        # in blocks: a kernel model's cross-kernel of a large test fold would otherwise take gigabytes
+        parts = [est.predict(X[test[i:i + PREDICT_CHUNK_ROWS]], return_std=True) if std else
+                 (est.predict(X[test[i:i + PREDICT_CHUNK_ROWS]]), None)
+                 for i in range(0, len(test), PREDICT_CHUNK_ROWS)]
+        return (np.concatenate([np.asarray(p) for p, _ in parts]),
+                np.concatenate([np.asarray(s) for _, s in parts]) if std else None)
 
 
 def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
@@ -344,14 +352,18 @@ def _per_axis(value: ArrayLike | None, k: int, what: str) -> NDArray | None:
     return np.array(a, dtype=float)
 
 
-def _reused_auto_choice(model: Any, cv: int, n_folds: int) -> dict | None:
+def _reused_auto_choice(model: Any, X: NDArray, cv: int, n_folds: int, random_state: int) -> dict | None:
     """``auto``'s own comparison (its stock baselines on the same folds), when ``model`` is an AutoCalibrator
-    fitted with these folds: the report then refits only the chosen model, not the baselines."""
+    fitted on these data with these folds: the report then refits only the chosen model, not the baselines."""
     results = getattr(model, "cv_results_", None)
+    fitted_range = getattr(model, "calibrated_range_", None)
     if not isinstance(results, dict) or "kind" not in results or getattr(model, "cv", None) != cv \
-            or results.get("n_splits") != n_folds:
+            or results.get("n_splits") != n_folds or fitted_range is None \
+            or (getattr(model, "random_state", None) or 0) != random_state:  # auto's folds are seeded by it
         return None
-    return results
+    same_data = fitted_range.shape == (2, X.shape[1]) and np.array_equal(
+        fitted_range, np.vstack([X.min(axis=0), X.max(axis=0)]))
+    return results if same_data else None
 
 
 def calibration_certificate(
@@ -465,7 +477,7 @@ def calibration_certificate(
     scale = np.where(torque, alpha, 1.0)
     name = type(model).__name__
     label = f"{name} (this calibration)"
-    reused = None if ordered else _reused_auto_choice(model, cv, len(folds))
+    reused = None if ordered else _reused_auto_choice(model, X, cv, len(folds), random_state)
     template = clone(model)
     if reused is not None and hasattr(model, "best_estimator_"):
         template = clone(model.best_estimator_)  # auto chose on these folds: refit its choice, not the whole search
@@ -645,7 +657,11 @@ def _comparison(choice: list[dict]) -> dict:
     r, rb = this["rmse"], best["rmse"]
     se = float(np.hypot(this.get("rmse_se") or 0.0, best.get("rmse_se") or 0.0))
     ratio = r / rb if rb > 0 else float("inf")
-    if r <= rb:
+    if abs(ratio - 1) < 0.005:
+        outcome = "equal"
+        sentence = (f"This calibration's held-out RMSE, {r:.4g} N, equals the best stock model's ({best['model']}, "
+                    f"{rb:.4g} N) on the same folds (within 0.5 %).")
+    elif r <= rb:
         outcome = "better"
         sentence = (f"This calibration's held-out RMSE, {r:.4g} N, is {100 * (1 - ratio):.0f} % below the best stock "
                     f"model's ({best['model']}, {rb:.4g} N) on the same folds.")
@@ -793,7 +809,7 @@ def render_report_html(report: dict) -> str:
             ["date of issue", _fmt(report["date_utc"])],
             ["data", f"{_fmt(d['rows'])} rows, {_fmt(d['channels'])} channels"
              + (f", {_fmt(d['groups'])} groups" if d.get("groups") else "")
-             + (f", <code>{_fmt(d['file'])}</code>" if d.get("file") else "")],
+             + (f", <code>{_fmt(Path(d['file']).name)}</code>" if d.get("file") else "")],
             ["full scale", _fmt(report.get("full_scale_source", "largest load of the data"))],
             ["specification", "none given (pass --spec 1%FS)" if spec is None else
              "U95 ≤ " + ", ".join(f"{a['axis']} {_fmt(a['spec_pct_fs'])} %" for a in acc) + " of full scale"],
