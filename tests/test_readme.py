@@ -229,7 +229,7 @@ def test_ros_bag_blocks_run_as_written(tmp_path):
 
 def test_the_readme_shows_the_first_page_of_a_report():
     readme = README.read_text(encoding="utf-8")
-    found = re.search(r"!\[[^\]]*\]\((docs/[^)]+\.png)\)", readme)
+    found = re.search(r"!\[The first page of a calibration report\]\((docs/[^)]+\.png)\)", readme)
     assert found is not None and "report_screenshot.py" in readme
     png = README.parent / found.group(1)
     assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size < 200_000
