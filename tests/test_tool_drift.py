@@ -12,6 +12,7 @@ from scipy.spatial.transform import Rotation
 import ftcal
 from ftcal import BiasDrift, CalibrationInputError, DriftExtrapolationWarning, ToolLoad, identify_tool_load
 from ftcal.core._temperature import ThermalDrift
+from ftcal.experiment._drift import identification_report
 from ftcal.simulation._error_models import ErrorModel
 
 G = np.array([0.0, 0.0, -9.81])
@@ -131,6 +132,12 @@ def test_without_drift_the_constant_bias_is_kept_in_nine_of_ten_seeds_and_the_to
         constant = identify_tool_load(R, W, gravity=G)
         if tool.drift is None:  # the same answer as without times
             np.testing.assert_allclose(tool.mass, constant.mass, rtol=1e-12)
+            if seed == 0:  # the report still shows the held-out table that kept the constant bias
+                report = identification_report(R, W, tool, times=t)
+                assert report["drift_model"] == "constant" and report["drift_rate"] is None
+                assert report["selection"][0]["model"] == "constant" and report["selection"][0]["status"] == "chosen"
+                np.testing.assert_allclose(report["residual"]["constant_bias"]["force_N"],
+                                           report["residual"]["with_drift"]["force_N"], rtol=1e-9)
     assert kept <= 1
     assert abs(np.mean(z)) <= 3 / np.sqrt(10) + 0.5  # no systematic mass error (mean z-score near 0)
 
@@ -248,3 +255,78 @@ def test_the_onnx_graph_compensates_like_the_library(knots):
     (external,) = session.run(None, {"rotation": R, "wrench": W, "time": times})
     with pytest.warns(DriftExtrapolationWarning):
         np.testing.assert_allclose(external, tool.compensate(R, W, times=times), atol=1e-12)
+
+
+# ------------------------------------------------------------------ the command line
+def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_the_cli(tmp_path, capsys, robot, plan):
+    from ftcal.cli import main
+
+    rate = 1.0 / 100.0
+    rng = np.random.default_rng(5)
+    sensor = ftcal.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
+    config = ftcal.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
+    ftcal.simulate_experiment(tmp_path / "logs", robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING,
+                              load_configurations=[config], gravity_in_base=G, random_state=5,
+                              bias_drift=wrench_drift(rate_per_s=rate))
+    log = str(tmp_path / "logs" / "config0_no-load.csv")
+    loads = ftcal.VirtualSensor(errors="none").profile  # the sensor's own matrix as the calibration model
+    w = np.random.default_rng(0).normal(0, [50, 50, 50, 2, 2, 2], size=(200, 6))
+    model = ftcal.save_model(ftcal.LinearCalibrator().fit(sensor.read(w, noise=False), w), tmp_path / "m.model.npz")
+    assert np.allclose(loads.wrench_from_reading(loads.reading_from_wrench(w)), w)
+    out = tmp_path / "tool"
+    assert main(["identify-load", log, "--model", str(model), "--gravity", "0,0,-9.81", "--out", str(out), "-q"]) == 0
+    tool = ToolLoad.load(out / "tool.tool.json")
+    assert tool.drift is not None and tool.drift.description == "linear in time"
+    report = json.loads((out / "tool.identification.json").read_text())
+    assert report["drift_rate"]["unit_force"] == "N/h" and report["drift_rate"]["unit_torque"] == "N·m/h"
+    np.testing.assert_allclose(report["drift_rate"]["force"], 3600 * rate * np.array([0.6, -0.5, 0.62]),
+                               atol=4 * max(report["drift_rate"]["force_std_error"]))
+    assert report["residual"]["with_drift"]["rms"][0] < report["residual"]["constant_bias"]["rms"][0] / 3
+    assert len(report["values"]) == len(report["residual"]["constant_bias"]["force_N"]) == plan.n_poses
+    assert (out / "tool.identification.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # compensate uses each row's timestamp: nothing but noise remains
+    capsys.readouterr()
+    assert main(["compensate", log, "--model", str(model), "--tool", str(out / "tool.tool.json")]) == 0
+    lines = capsys.readouterr().out.splitlines()[1:]
+    external = np.array([[float(v) for v in line.split(",")[2:]] for line in lines])
+    assert np.sqrt(np.mean(external[:, :3] ** 2)) <= 1.5 * tool.residual_rms[0]
+    # the ROS YAML cannot carry the drift and says so; the ONNX graph does
+    assert main(["export", str(out / "tool.tool.json"), "--format", "ros", "-q"]) == 0
+    assert "cannot express a" in (out / "tool.ros.yaml").read_text()
+    assert main(["export", str(out / "tool.tool.json"), "--format", "onnx", "-q"]) == 0
+    ort = pytest.importorskip("onnxruntime")
+    R = Rotation.random(4, random_state=0).as_matrix()
+    W = np.random.default_rng(1).normal(size=(4, 6))
+    t = np.linspace(*tool.drift.span, 4)
+    session = ort.InferenceSession(str(out / "tool.onnx"), providers=["CPUExecutionProvider"])
+    np.testing.assert_allclose(session.run(None, {"rotation": R, "wrench": W, "time": t})[0],
+                               tool.compensate(R, W, times=t), atol=1e-9)
+    # re-tare an hour later, the tool on at one pose, the sensor 1.5 N off in Fx
+    t_retare = tool.drift.span[1] + 3600.0
+    with pytest.warns(DriftExtrapolationWarning):
+        reading = tool.gravity_wrench(R[:1], times=[t_retare])[0] + [1.5, 0, 0, 0, 0, 0]
+    quat = Rotation.from_matrix(R[0]).as_quat()
+    readings = tmp_path / "no_load.csv"
+    readings.write_text("time,qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz\n" + "".join(
+        f"{t_retare},{','.join(map(str, quat.tolist()))},{','.join(map(str, (reading + 0.01 * k).tolist()))}\n"
+        for k in (-1, 0, 1)))
+    assert main(["retare", str(out / "tool.tool.json"), str(readings), "-q"]) == 0
+    new = ToolLoad.load(out / "tool-retared.tool.json")
+    assert new.drift.retared_at == t_retare
+    np.testing.assert_allclose(new.compensate(R[:1], reading[None], times=[t_retare]), 0, atol=1e-9)
+    np.testing.assert_array_equal(new.drift.coefficients, tool.drift.coefficients)  # the rate is kept
+    # mistakes: one line each, nothing written
+    (tmp_path / "tool_off.csv").write_text("Fx,Fy,Fz,Tx,Ty,Tz\n0,0,0,0,0,0\n")
+    assert main(["retare", str(out / "tool.tool.json"), str(tmp_path / "tool_off.csv"), "-q",
+                 "--output", str(tmp_path / "off.tool.json")]) == 2
+    assert "needs the sensor's orientation" in capsys.readouterr().err
+    assert main(["retare", str(out / "tool.tool.json"), str(tmp_path / "tool_off.csv"), "--tool-off", "-q",
+                 "--output", str(tmp_path / "off.tool.json")]) == 2
+    assert "pass --time T" in capsys.readouterr().err and not (tmp_path / "off.tool.json").exists()
+    # the recording order as time: the drift is per pose, and compensate must be told so too
+    assert main(["identify-load", log, "--model", str(model), "--time-from-order", "--out", str(tmp_path / "order"),
+                 "-q"]) == 0
+    ordered = ToolLoad.load(tmp_path / "order" / "tool.tool.json")
+    assert ordered.drift is not None and ordered.drift.unit == "pose"
+    assert main(["compensate", log, "--model", str(model), "--tool", str(tmp_path / "order" / "tool.tool.json")]) == 2
+    assert "pass --time-from-order here too" in capsys.readouterr().err

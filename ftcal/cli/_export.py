@@ -28,7 +28,13 @@ matrix, offset, inputs, outputs, units. A nonlinear model has no such matrix and
 
 --format ros (a tool file of 'ftcal identify-load'): the tool's gravity-compensation parameters as
 YAML for ROS: force_torque_tools' keys (bias, gripper_mass, gripper_com_pose, ...) and a ROS 2
-control_toolbox GravityCompensation filter block (CoG.pos, CoG.force, frames).
+control_toolbox GravityCompensation filter block (CoG.pos, CoG.force, frames). Neither can express a bias
+drift: the YAML holds the bias at the drift's reference time and says so in a comment.
+
+--format onnx of a tool file: the tool's compensation as an ONNX graph, inputs 'rotation' float64
+(n, 3, 3) (sensor to base), 'wrench' float64 (n, 6) [N, N·m] and, for a drifting bias, 'time' (n,) or
+'temperature' (n,); output 'external' (n, 6). The graph extrapolates a drift silently beyond the span
+it covers (metadata 'drift_span'); re-tare and export again.
 """
 
 
@@ -58,7 +64,8 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     default = {"onnx": ".onnx", "matrix": ".matrix.csv", "ros": ".ros.yaml"}[args.format]
-    stem = args.model.name.removesuffix(".tool.json") if args.format == "ros" else model_label(args.model)
+    is_tool = args.model.name.endswith(".tool.json")
+    stem = args.model.name.removesuffix(".tool.json") if args.format == "ros" or is_tool else model_label(args.model)
     output = Path(args.output) if args.output else args.model.with_name(f"{stem}{default}")
     plan = OutputPlan.single_file(output, args.force)  # first: never over an input, whatever its name
     suffixes = {"onnx": (".onnx",), "matrix": (".csv", ".json"), "ros": (".yaml", ".yml")}[args.format]
@@ -72,6 +79,14 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(output.name) as tmp:
             tmp.write_text(text, encoding="utf-8")
         console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
+        return 0
+    if is_tool and args.format == "onnx":
+        from ..experiment._drift import tool_onnx_model
+
+        tool = ftcal.ToolLoad.load(args.model)
+        with plan.writing(output.name) as tmp:
+            tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
+        console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")
         return 0
     model = ftcal.load_model(args.model)
     if args.format == "matrix":

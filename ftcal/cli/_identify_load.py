@@ -20,6 +20,7 @@ from ._common import (
 from ._prepare import log_files
 from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
                           still_poses)
+from ._tool_drift import add_drift_options
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -42,6 +43,11 @@ writes DIR/NAME.tool.json: mass [kg], centre of mass [m] (sensor frame), bias [N
 errors, the residual RMS and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
 the wrench in the sensor frame and its spread). Every row of run logs is one static pose (the 'run' column
 is ignored). 'ftcal export NAME.tool.json --format ros' writes the ROS gravity-compensation YAML.
+With the poses' times (run logs' timestamps, a pose file's 'time' column or bag stamps [s], or the row
+order with --time-from-order) or temperatures (a 'temperature' column), a bias drift is added when it
+lowers the held-out error (--drift); the tool file records it and the span it covers, and
+DIR/NAME.identification.json/.png report each pose's residual against time with and without the drift
+and the drift rate [N/h, N·m/h] with its standard error.
 """
 
 COMPENSATE_EXAMPLE = """\
@@ -70,6 +76,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_recording_options(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
     p.add_argument("--name", default="tool", help="file name stem of the tool file")
+    add_drift_options(p)
     add_output_options(p, "ftcal-tool")
     add_run_options(p, seed=False)
     p.set_defaults(handler=run_identify)
@@ -84,6 +91,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
     c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
     c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
+    add_drift_options(c, identify=False)
     add_run_options(c, seed=False)
     c.set_defaults(handler=run_compensate)
 
@@ -139,9 +147,9 @@ def _poses_and_wrenches(args):
 class _Poses:
     """The static poses an identification uses: where they came from, orientation, wrench, time, still-pose info."""
 
-    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None):
+    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None, temperature=None):
         self.sources, self.rotations, self.wrenches, self.time = sources, rotations, wrenches, time
-        self.still, self.model = still, model
+        self.still, self.model, self.temperature = still, model, temperature
 
 
 def _input_kind(item: str) -> str:
@@ -184,7 +192,7 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
     from ..experiment._tool_load import wrench_in_sensor_frame
     from ..io._poses import read_pose_file
 
-    rotations, wrenches, times, still_list, model = [], [], [], [], None
+    rotations, wrenches, times, still_list, model, temperatures = [], [], [], [], None, []
     for path in paths:
         rec = read_pose_file(path, force_unit=args.force_unit, torque_unit=args.torque_unit)
         if rec.wrench is not None:
@@ -208,12 +216,16 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
             rotations.append(still.rotation)
             wrenches.append(still.reading)
             times.append(still.time)
+            temperatures.append(None if rec.temperature is None else np.interp(still.time, rec.time, rec.temperature))
         else:
             rotations.append(rec.rotation)
             wrenches.append(wrench)
             times.append(rec.time)
+            temperatures.append(rec.temperature)
     time = None if any(t is None for t in times) else np.concatenate(times)
-    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches), time, still_list, model)
+    temperature = None if any(t is None for t in temperatures) else np.concatenate(temperatures)
+    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches), time, still_list, model,
+                  temperature)
 
 
 def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
@@ -261,7 +273,9 @@ def _log_poses(args) -> _Poses:
     logs, rotations, wrenches = _poses_and_wrenches(args)
     import numpy as np
 
-    return _Poses([str(lg.path) for lg in logs], rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]))
+    temperature = None if any(lg.temperature is None for lg in logs) else np.concatenate([lg.temperature for lg in logs])
+    return _Poses([str(lg.path) for lg in logs], rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]),
+                  temperature=temperature)
 
 
 def identification_poses(args, console: Console) -> _Poses:
@@ -301,19 +315,15 @@ def _poses_csv(poses: _Poses) -> str:
 
 
 def run_identify(args: argparse.Namespace) -> int:
-    import ftcal
-    from ..core._exceptions import CalibrationInputError
-    from ._messages import cli_message
+    from ._tool_drift import drift_summary, identify, report_names, write_report
 
     console = Console(args.quiet)
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
-    plan = OutputPlan(args.out, [name, poses_name], args.force)
+    plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     poses = identification_poses(args, console)
-    try:
-        tool = ftcal.identify_tool_load(poses.rotations, poses.wrenches, gravity=gravity)
-    except CalibrationInputError as exc:
-        raise CliError(f"{', '.join(poses.sources[:3])}: {cli_message(exc, args)}") from None
+    tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
+                            poses.sources)
     info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
             str(args.model), "wrench_frame_in_input": args.wrench_frame}
     if _input_kind(args.inputs[0]) == "run log":
@@ -326,13 +336,15 @@ def run_identify(args: argparse.Namespace) -> int:
             "settle_from_data": s.settle_from_data} for s in poses.still]
     with plan.writing(poses_name) as tmp:
         tmp.write_text(_poses_csv(poses), encoding="utf-8")
+    if report is not None:
+        write_report(plan, args.name, report)
     with plan.writing(name) as tmp:
         write_json(tmp, {**tool.to_dict(), **info})
     c = tool.center_of_mass * 1000
     console.info(
         f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
         f"(sensor frame), from {len(poses.rotations)} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
-        f"{tool.residual_rms[1]:.3g} N·m -> {plan.path(name)}"
+        f"{tool.residual_rms[1]:.3g} N·m{drift_summary(tool)} -> {plan.path(name)}"
     )
     return 0
 
@@ -342,12 +354,13 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     import ftcal
     from ..core._wrench import WRENCH_LABELS
+    from ._tool_drift import compensation_values
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     tool = ftcal.ToolLoad.load(args.tool)
     logs, rotations, wrenches = _poses_and_wrenches(args)
-    external = tool.compensate(rotations, wrenches)
+    external = tool.compensate(rotations, wrenches, **compensation_values(args, tool, logs))
     timestamp = np.concatenate([lg.timestamp for lg in logs])
     pose = np.concatenate([lg.pose for lg in logs])
     lines = ["timestamp,pose," + ",".join(WRENCH_LABELS)]

@@ -10,6 +10,7 @@ import numpy as np
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
 from ..core._memory import check_allocation
 from ._models import MODEL_SUFFIX, model_label
+from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
 
 EXAMPLE = """\
 examples:
@@ -22,7 +23,7 @@ calibration with the zero-load reading replaced by their mean; no input file is 
 or not. The readings must be quiet (each channel's spread at most --max-spread times the noise seen in
 training, which counts as at least 1e-4 of the channel's training span) and lie near the training
 readings (within half their span beyond them), else the run stops.
-"""
+""" + RETARE_EXAMPLE
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -32,12 +33,14 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Replace a model's zero-load reading by the mean of new zero-load readings.",
         epilog=EXAMPLE,
     )
-    p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
+    p.add_argument("model", type=existing_file,
+                   help="model file written by 'ftcal fit', or a tool file (NAME.tool.json) of 'ftcal identify-load'")
     p.add_argument("readings", help="zero-load raw readings: a text file, a .npz with array 'raw', or '-' (stdin)")
     p.add_argument("--output", metavar="FILE", help="new model file (default: MODEL with '-retared' before the suffix)")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists (never one of the inputs)")
     p.add_argument("--max-spread", type=positive_float, default=5.0,
                    help="largest per-channel std of the readings, in units of the training noise")
+    add_retare_tool_options(p)
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
 
@@ -51,6 +54,13 @@ def run(args: argparse.Namespace) -> int:
     problem = None if args.readings == "-" else path_problem(args.readings, streams=True)
     if problem is not None:
         raise CliError(f"{problem} (the zero-load readings)")
+    if args.model.name.endswith(TOOL_SUFFIX):
+        from ._tool_drift import run_retare_tool
+
+        return run_retare_tool(args)
+    if args.time is not None or args.temperature is not None or args.orientation or args.tool_off:
+        raise CliError("--time, --temperature, --orientation and --tool-off re-tare a tool file (NAME.tool.json); "
+                       f"{args.model} is a model file")
     plan = OutputPlan.single_file(output, args.force)
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)

@@ -518,6 +518,19 @@ def _check_drift_values(name: str, values: ArrayLike | None, n: int) -> NDArray[
     return v
 
 
+def _drift_comment(tool: ToolLoad) -> list[str]:
+    """YAML comment lines on a bias drift these formats cannot express (none without a drift)."""
+    d = tool.drift
+    if d is None:
+        return []
+    rate = d.rate_per_hour()
+    rate_text = (f"{', '.join(f'{v:.3g}' for v in rate[0])} N/h, N·m/h" if rate is not None else
+                 f"{', '.join(f'{v:.3g}' for v in d.mean_rate)} N, N·m per {'pose' if d.unit == 'pose' else 'deg C'}")
+    return [f"# NOTE: the bias drifts ({d.description}, mean rate {rate_text}); these parameters cannot express a",
+            f"# drift: 'bias' is the bias at {d.variable} {d.reference:.10g} {d.unit}. Re-tare periodically (ftcal retare)",
+            "# or deploy the ONNX export (ftcal export TOOL.tool.json --format onnx), which carries the drift."]
+
+
 def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",
                                    node: str = "gravity_compensation") -> str:
     """The tool's parameters as the gravity-compensation YAML ROS users load (text).
@@ -531,7 +544,10 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
       ``world_frame``, ``sensor_frame``, ``CoG.pos`` [m] (sensor frame) and ``CoG.force`` (the tool's weight
       as a force in the world frame, m g [N]).
 
-    The bias is not part of the ROS 2 filter; re-tare (``ftcal retare``) or subtract it upstream.
+    The bias is not part of the ROS 2 filter; re-tare (``ftcal retare``) or subtract it upstream. Neither
+    format can express a bias drift: the file holds the bias at the drift's reference (the end of the
+    identification, or the last re-tare) and a comment with the drift and its rate; re-tare periodically or
+    use the ONNX export (``ftcal export TOOL --format onnx``), which carries the drift.
 
     Examples
     --------
@@ -558,6 +574,7 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
         "# Tool gravity compensation parameters written by ftcal (identify-load): sensor frame, SI units.",
         f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in the frame {comment_frame} [m],",
         "# bias [N, N·m] = what the sensor reads with no load at all.",
+        *_drift_comment(tool),
         "# --- ROS 1 force_torque_tools (gravity_compensation node) ---",
     ]) + "\n"
     text += block({"bias": floats(tool.bias), "gripper_mass": float(tool.mass), "gripper_com_frame_id": sensor_frame,

@@ -1,0 +1,264 @@
+"""The bias drift on the command line: ``identify-load``'s drift options and report, ``compensate``'s times,
+and ``ftcal retare`` of a tool file (the bias reset at the re-tare's time, the drift's rate kept)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ._common import CliError, Console, OutputPlan, finite_float
+
+#: The choices of ``--drift`` (the library's ``DRIFT_CHOICES``; repeated here so that ``--help`` imports nothing).
+DRIFT_CHOICES = ("auto", "none", "linear", "spline", "temperature")
+#: Most no-load readings a tool re-tare reads (a few hundred are plenty).
+MAX_RETARE_READINGS = 1_000_000
+TOOL_SUFFIX = ".tool.json"
+
+
+def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> None:
+    """``--time-from-order`` (both commands), ``--drift`` and ``--drift-cv`` (identify-load)."""
+    g = p.add_argument_group("bias drift")
+    if identify:
+        g.add_argument("--drift", choices=DRIFT_CHOICES, default="auto",
+                       help="auto: add a bias drift (linear or a spline in time, or in temperature when the inputs "
+                       "carry one) when it lowers the held-out error (leave-poses-out CV, one-SE rule); none: a "
+                       "constant bias; linear, spline, temperature: force that drift")
+        g.add_argument("--drift-cv", type=int, default=20, metavar="K",
+                       help="folds of the leave-poses-out cross-validation that chooses the drift")
+    g.add_argument("--time-from-order", action="store_true",
+                   help="the inputs carry no usable time: take each pose's position in the recording (row order) "
+                   "as its time (the drift is then per pose, not per second)")
+
+
+def pose_times(args: argparse.Namespace, n: int, times):
+    """The drift's time of each of ``n`` poses and its unit: the row order with ``--time-from-order``, else the
+    inputs' times [s] (or None)."""
+    import numpy as np
+
+    if getattr(args, "time_from_order", False):
+        return np.arange(n, dtype=float), "pose"
+    return times, "s"
+
+
+def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temperatures, sources: list[str]):
+    """``identify_tool_load`` with the drift options, and the report of the identification (None without a time
+    or temperature). Library errors name the inputs."""
+    import ftcal
+    from ..core._exceptions import CalibrationInputError
+    from ..experiment._drift import identification_report
+    from ._messages import cli_message
+
+    times, unit = pose_times(args, len(rotations), times)
+    if args.drift_cv < 2:
+        raise CliError(f"--drift-cv {args.drift_cv}: give at least 2 folds")
+    if args.drift in ("linear", "spline") and times is None:
+        raise CliError(f"--drift {args.drift} needs the time of each pose: the inputs carry none; pass "
+                       "--time-from-order to use the recording order")
+    settings = dict(drift=args.drift, cv=args.drift_cv, random_state=0)
+    try:
+        tool = ftcal.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
+                                        time_unit=unit, **settings)
+        report = None
+        if times is not None or temperatures is not None:
+            report = identification_report(rotations, wrenches, tool, times=times, temperatures=temperatures,
+                                           **settings)
+    except CalibrationInputError as exc:
+        raise CliError(f"{', '.join(sources[:3])}: {cli_message(exc, args)}") from None
+    return tool, report
+
+
+def report_names(stem: str) -> list[str]:
+    """The files of the identification's report: JSON and its figure."""
+    return [f"{stem}.identification.json", f"{stem}.identification.png"]
+
+
+def write_report(plan: OutputPlan, stem: str, report: dict) -> None:
+    from ..evaluation._drift_plot import plot_drift_residuals
+    from ._common import write_json
+
+    json_name, png_name = report_names(stem)
+    with plan.writing(json_name) as tmp:
+        write_json(tmp, report)
+    with plan.writing(png_name) as tmp:
+        plot_drift_residuals(report, tmp)
+
+
+def drift_summary(tool) -> str:
+    """One line on the drift for the console ('' without a drift)."""
+    d = tool.drift
+    if d is None:
+        return ""
+    rate = d.rate_per_hour()
+    if rate is not None:
+        f, se = rate[0][:3], rate[1][:3]
+        per = "N/h"
+    else:
+        f, se = d.mean_rate[:3], d.mean_rate_std_error[:3]
+        per = "N/pose" if d.unit == "pose" else "N/deg C"
+    return (f"; bias drift {d.description}, mean force rate [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in zip(f, se))}] "
+            f"{per}")
+
+
+def compensation_values(args: argparse.Namespace, tool, logs) -> dict:
+    """``times`` / ``temperatures`` for :meth:`ToolLoad.compensate` from run logs (their timestamps [s] or the row
+    order, their temperature column)."""
+    import numpy as np
+
+    d = tool.drift
+    if d is None:
+        return {}
+    if d.variable == "temperature":
+        if any(lg.temperature is None for lg in logs):
+            missing = next(lg.path for lg in logs if lg.temperature is None)
+            raise CliError(f"{missing}: the tool's bias drifts with temperature ({d.description}) but the log has no "
+                           "'temperature' column")
+        return {"temperatures": np.concatenate([lg.temperature for lg in logs])}
+    n = sum(len(lg.timestamp) for lg in logs)
+    if d.unit == "pose":
+        if not args.time_from_order:
+            raise CliError(f"{args.tool}: the tool's bias drift was identified against the pose order "
+                           "(--time-from-order); pass --time-from-order here too, or re-tare the tool at a known time")
+        return {"times": np.arange(n, dtype=float)}
+    if args.time_from_order:
+        raise CliError(f"{args.tool}: the tool's bias drift is in seconds; --time-from-order does not apply (the "
+                       "logs' timestamps are used)")
+    return {"times": np.concatenate([lg.timestamp for lg in logs])}
+
+
+# ------------------------------------------------------------------------------------------- retare of a tool
+RETARE_EXAMPLE = """\
+
+re-taring a tool file:
+  ftcal retare tool/tool.tool.json no_load.csv --orientation 0,0,0,1 --time 1764100000
+  ftcal retare tool/tool.tool.json no_load_tool_off.csv --tool-off --time 1764100000
+
+A tool file (of 'ftcal identify-load'): READINGS is a CSV of calibrated no-load wrenches, header
+Fx,Fy,Fz,Tx,Ty,Tz [N, N·m] (sensor frame), optional columns time [s] (or the pose order of a
+--time-from-order tool), temperature [deg C] and qx,qy,qz,qw (the sensor's orientation in the base frame,
+scalar last). With the tool mounted (nothing touching it) the orientation is needed (columns or
+--orientation) to remove its weight; with --tool-off the readings are the bias itself. The new tool file's
+bias is their mean at the readings' time (--time, else the mean of the time column); a drift keeps its rate
+from there on.
+"""
+
+
+def add_retare_tool_options(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("re-taring a tool file (MODEL is NAME.tool.json)")
+    g.add_argument("--time", type=finite_float, metavar="T",
+                   help="when the readings were taken (the drift's time unit), for a drifting tool")
+    g.add_argument("--temperature", type=finite_float, metavar="DEG_C",
+                   help="the sensor's temperature during the readings, for a tool whose bias drifts with temperature")
+    g.add_argument("--orientation", metavar="QX,QY,QZ,QW",
+                   help="the sensor's orientation (sensor to base, scalar last) while the readings were taken")
+    g.add_argument("--tool-off", action="store_true", help="the tool was taken off: the readings are the bias")
+
+
+def _read_wrench_readings(path: str):
+    """Columns of a no-load wrench CSV: ``wrench`` (n, 6) and optional ``time``, ``temperature``, ``quaternion``."""
+    import numpy as np
+
+    from ..core._columns import parse_number, read_header
+    from ..core._wrench import WRENCH_LABELS
+
+    optional = ["time", "temperature", "qx", "qy", "qz", "qw", "Mx", "My", "Mz"]
+    rows, header, lineno = [], None, 0
+    with open(path, encoding="utf-8") as fh:
+        for lineno, line in enumerate(fh, 1):
+            if not line.strip() or line.lstrip().startswith("#"):
+                continue
+            fields = line.rstrip("\r\n").split(",")
+            if header is None:
+                names = [f.strip() for f in fields]
+                torque = ["Mx", "My", "Mz"] if "Mx" in names else ["Tx", "Ty", "Tz"]
+                header = read_header(fields, where=f"{path}: line {lineno}", error=CliError, numbered=(),
+                                     required=[*WRENCH_LABELS[:3], *torque], optional=optional + list(WRENCH_LABELS[3:]),
+                                     expected="Fx,Fy,Fz,Tx,Ty,Tz[,time][,temperature][,qx,qy,qz,qw]")
+                continue
+            if len(fields) != len(header.names):
+                raise CliError(f"{path}: line {lineno}: {len(fields)} fields, the header names {len(header.names)}")
+            rows.append([parse_number(f, f"{path}: line {lineno}", CliError) for f in fields])
+            if len(rows) > MAX_RETARE_READINGS:
+                raise CliError(f"{path}: more than {MAX_RETARE_READINGS} readings; a few hundred quiet readings are "
+                               "enough for a re-tare, pass fewer")
+    if header is None or not rows:
+        raise CliError(f"{path}: no readings (a header Fx,Fy,Fz,Tx,Ty,Tz and at least one row are needed)")
+    a = np.asarray(rows, dtype=float)
+    col = header.index
+    torque = ["Mx", "My", "Mz"] if "Mx" in col else ["Tx", "Ty", "Tz"]
+    out = {"wrench": a[:, [col[c] for c in (*WRENCH_LABELS[:3], *torque)]]}
+    for name in ("time", "temperature"):
+        if name in col:
+            out[name] = a[:, col[name]]
+    quat = [c for c in ("qx", "qy", "qz", "qw") if c in col]
+    if quat and len(quat) != 4:
+        raise CliError(f"{path}: the header has {', '.join(quat)} but not all of qx,qy,qz,qw")
+    if quat:
+        out["quaternion"] = a[:, [col[c] for c in ("qx", "qy", "qz", "qw")]]
+    return out
+
+
+def _rotations(quaternions, where: str):
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    q = np.atleast_2d(np.asarray(quaternions, dtype=float))
+    norm = np.linalg.norm(q, axis=1)
+    if not np.isfinite(q).all() or (np.abs(norm - 1.0) > 1e-2).any():
+        bad = int(np.argmax(~np.isfinite(norm) | (np.abs(norm - 1.0) > 1e-2)))
+        raise CliError(f"{where}: quaternion {q[bad].tolist()} is not a unit quaternion (norm {norm[bad]:.4g}); give "
+                       "qx,qy,qz,qw of the sensor's orientation, scalar last")
+    return Rotation.from_quat(q).as_matrix()
+
+
+def run_retare_tool(args: argparse.Namespace) -> int:
+    """``ftcal retare TOOL.tool.json READINGS``: a new tool file whose bias is reset at the readings' time."""
+    import numpy as np
+
+    import ftcal
+    from ..core._exceptions import CalibrationInputError
+
+    console = Console(args.quiet)
+    model = Path(args.model)
+    output = Path(args.output) if args.output else model.with_name(
+        f"{model.name.removesuffix(TOOL_SUFFIX)}-retared{TOOL_SUFFIX}")
+    plan = OutputPlan.single_file(output, args.force)
+    if args.readings == "-":
+        raise CliError("a tool re-tare reads its readings from a file, not stdin")
+    tool = ftcal.ToolLoad.load(model)
+    data = _read_wrench_readings(args.readings)
+    if args.tool_off and (args.orientation or "quaternion" in data):
+        raise CliError("--tool-off: the readings were taken without the tool, so no orientation is needed; drop "
+                       "--orientation (or the qx..qw columns) or --tool-off")
+    rotations = None
+    if args.orientation:
+        try:
+            quat = [float(v) for v in args.orientation.split(",")]
+        except ValueError:
+            quat = []
+        if len(quat) != 4:
+            raise CliError(f"--orientation {args.orientation!r}: give qx,qy,qz,qw, four comma-separated numbers")
+        rotations = _rotations(quat, "--orientation")[0]
+    elif "quaternion" in data:
+        rotations = _rotations(data["quaternion"], args.readings)
+    elif not args.tool_off:
+        raise CliError(f"{args.readings}: with the tool mounted its weight must be removed, which needs the sensor's "
+                       "orientation: add qx,qy,qz,qw columns or --orientation QX,QY,QZ,QW; or, if the tool was taken "
+                       "off, pass --tool-off")
+    time = args.time if args.time is not None else (float(np.mean(data["time"])) if "time" in data else None)
+    temperature = args.temperature if args.temperature is not None else (
+        float(np.mean(data["temperature"])) if "temperature" in data else None)
+    try:
+        new = tool.retare(data["wrench"], sensor_rotations=rotations, time=time, temperature=temperature)
+    except CalibrationInputError as exc:
+        hint = ""
+        if "re-tare needs the" in str(exc):
+            hint = " Fix: pass --time T (or --temperature) or add a time (temperature) column to the readings."
+        raise CliError(f"{args.readings}: {exc}{hint}") from None
+    with plan.writing(output.name) as tmp:
+        new.save(tmp, overwrite=True)
+    before = tool.bias if tool.drift is None else tool.bias + tool.drift.offset([new.drift.reference], warn=False)[0]
+    shift = new.bias - before
+    at = "" if new.drift is None else f" at {new.drift.variable} {new.drift.reference:.6g} (drift rate kept)"
+    console.info(f"re-tared from {len(data['wrench'])} readings{at}: bias moved by "
+                 f"[{', '.join(f'{v:.4g}' for v in shift)}] N, N·m -> {output}")
+    return 0
