@@ -189,7 +189,7 @@ def test_retare_resets_the_bias_at_that_time_and_keeps_the_rate():
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # at the re-tare itself the drift is covered
         np.testing.assert_allclose(new.compensate(R[:1], truth[:1], times=later[:1]), 0, atol=1e-12)
-    with pytest.raises(CalibrationInputError, match="needs the time of the readings"):
+    with pytest.raises(CalibrationInputError, match="needs the time of the readings .* Fix: pass time "):
         tool.retare(readings, sensor_rotations=R[0])
     # the tool off the sensor: the readings are the bias
     off = tool.retare(np.tile(np.arange(6.0), (4, 1)), time=0.0)
@@ -322,7 +322,7 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
     assert "needs the sensor's orientation" in capsys.readouterr().err
     assert main(["retare", str(out / "tool.tool.json"), str(tmp_path / "tool_off.csv"), "--tool-off", "-q",
                  "--output", str(tmp_path / "off.tool.json")]) == 2
-    assert "pass --time T" in capsys.readouterr().err and not (tmp_path / "off.tool.json").exists()
+    assert "the re-tare needs the --time of the readings" in capsys.readouterr().err and not (tmp_path / "off.tool.json").exists()
     # the recording order as time: the drift is per pose, and compensate must be told so too
     assert main(["identify-load", log, "--model", str(model), "--time-from-order", "--out", str(tmp_path / "order"),
                  "-q"]) == 0

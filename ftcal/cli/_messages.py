@@ -95,6 +95,8 @@ CLI_NAMES: dict[str, Option] = {
     "tf": _option("--tf", "BASE,SENSOR"),
     "stamps": _option("--stamps"),
     "max_samples": _option("--max-samples"),
+    "time": _option("--time"),  # a tool re-tare's time (retare of a drifting tool file)
+    "temperature": _option("--temperature"),
 }
 
 

@@ -216,6 +216,7 @@ def run_retare_tool(args: argparse.Namespace) -> int:
 
     import ftcal
     from ..core._exceptions import CalibrationInputError
+    from ._messages import cli_message
 
     console = Console(args.quiet)
     model = Path(args.model)
@@ -250,10 +251,7 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     try:
         new = tool.retare(data["wrench"], sensor_rotations=rotations, time=time, temperature=temperature)
     except CalibrationInputError as exc:
-        hint = ""
-        if "re-tare needs the" in str(exc):
-            hint = " Fix: pass --time T (or --temperature) or add a time (temperature) column to the readings."
-        raise CliError(f"{args.readings}: {exc}{hint}") from None
+        raise CliError(f"{args.readings}: {cli_message(exc, args)}") from None
     with plan.writing(output.name) as tmp:
         new.save(tmp, overwrite=True)
     before = tool.bias if tool.drift is None else tool.bias + tool.drift.offset([new.drift.reference], warn=False)[0]

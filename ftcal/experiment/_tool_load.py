@@ -292,7 +292,8 @@ class ToolLoad:
         if at is None:
             raise CalibrationInputError(
                 f"this tool's bias drifts ({self.drift.description}): the re-tare needs the "
-                f"{'time' if self.drift.variable == 'time' else 'temperature'} of the readings to anchor the drift.")
+                f"{{{self.drift.variable}}} of the readings to anchor the drift.", parameter=self.drift.variable,
+                fix=f"pass {{{self.drift.variable}}} ({'when the readings were taken, in ' + self.drift.unit if self.drift.variable == 'time' else 'the sensor temperature during the readings [deg C]'})")
         at = float(at)
         if not np.isfinite(at):
             raise CalibrationInputError(f"the re-tare's {self.drift.variable} must be finite; got {at!r}.")
@@ -528,7 +529,7 @@ def _drift_comment(tool: ToolLoad) -> list[str]:
                  f"{', '.join(f'{v:.3g}' for v in d.mean_rate)} N, N·m per {'pose' if d.unit == 'pose' else 'deg C'}")
     return [f"# NOTE: the bias drifts ({d.description}, mean rate {rate_text}); these parameters cannot express a",
             f"# drift: 'bias' is the bias at {d.variable} {d.reference:.10g} {d.unit}. Re-tare periodically (ftcal retare)",
-            "# or deploy the ONNX export (ftcal export TOOL.tool.json --format onnx), which carries the drift."]
+            "# or deploy the tool's ONNX export (ftcal export, format onnx), which carries the drift."]
 
 
 def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",
