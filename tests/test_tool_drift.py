@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -290,6 +291,12 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
     lines = capsys.readouterr().out.splitlines()[1:]
     external = np.array([[float(v) for v in line.split(",")[2:]] for line in lines])
     assert np.sqrt(np.mean(external[:, :3] ** 2)) <= 1.5 * tool.residual_rms[0]
+    # a tool whose drift covers another time span: compensated with one warning line naming the tool file
+    late = ToolLoad(**{**tool.__dict__, "drift": replace(tool.drift, span=np.array([1e4, 2e4]), reference=2e4)})
+    late.save(tmp_path / "late.tool.json")
+    assert main(["compensate", log, "--model", str(model), "--tool", str(tmp_path / "late.tool.json")]) == 0
+    err = capsys.readouterr().err
+    assert f"ftcal: warning: {tmp_path / 'late.tool.json'}: {plan.n_poses} of {plan.n_poses} times lie outside" in err
     # the ROS YAML cannot carry the drift and says so; the ONNX graph does
     assert main(["export", str(out / "tool.tool.json"), "--format", "ros", "-q"]) == 0
     assert "cannot express a" in (out / "tool.ros.yaml").read_text()

@@ -354,13 +354,13 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     import ftcal
     from ..core._wrench import WRENCH_LABELS
-    from ._tool_drift import compensation_values
+    from ._tool_drift import compensate_logs
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     tool = ftcal.ToolLoad.load(args.tool)
     logs, rotations, wrenches = _poses_and_wrenches(args)
-    external = tool.compensate(rotations, wrenches, **compensation_values(args, tool, logs))
+    external = compensate_logs(args, tool, rotations, wrenches, logs)
     timestamp = np.concatenate([lg.timestamp for lg in logs])
     pose = np.concatenate([lg.pose for lg in logs])
     lines = ["timestamp,pose," + ",".join(WRENCH_LABELS)]

@@ -99,6 +99,25 @@ def drift_summary(tool) -> str:
             f"{per}")
 
 
+def compensate_logs(args: argparse.Namespace, tool, rotations, wrenches, logs):
+    """The external wrenches of run logs (:meth:`ToolLoad.compensate` with each row's time or temperature); a drift
+    evaluated beyond the span it covers is one ``ftcal: warning:`` line naming the tool file."""
+    import sys
+    import warnings
+
+    from ..experiment._drift import DriftExtrapolationWarning
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DriftExtrapolationWarning)
+        external = tool.compensate(rotations, wrenches, **compensation_values(args, tool, logs))
+    for w in caught:
+        if issubclass(w.category, DriftExtrapolationWarning):
+            print(f"ftcal: warning: {args.tool}: {w.message}", file=sys.stderr)
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return external
+
+
 def compensation_values(args: argparse.Namespace, tool, logs) -> dict:
     """``times`` / ``temperatures`` for :meth:`ToolLoad.compensate` from run logs (their timestamps [s] or the row
     order, their temperature column)."""
