@@ -337,3 +337,30 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
     assert ordered.drift is not None and ordered.drift.unit == "pose"
     assert main(["compensate", log, "--model", str(model), "--tool", str(tmp_path / "order" / "tool.tool.json")]) == 2
     assert "pass --time-from-order here too" in capsys.readouterr().err
+
+
+def test_identify_load_finds_the_drift_from_a_pose_file_time_column_or_its_row_order(tmp_path, capsys, robot, plan):
+    from ftcal.cli import main
+
+    R, W, t, _ = recording(tmp_path, robot, plan, 6, bias_drift=wrench_drift(warm_up=(1.5, 30.0)))
+    quat = Rotation.from_matrix(R).as_quat()
+    rows = [",".join(str(v) for v in [*q, *w, ti]) for q, w, ti in zip(quat.tolist(), W.tolist(), t.tolist())]
+    with_time = tmp_path / "poses.csv"
+    with_time.write_text("qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz,time\n" + "\n".join(rows) + "\n")
+    assert main(["identify-load", str(with_time), "--gravity", "0,0,-9.81", "--out", str(tmp_path / "a"), "-q"]) == 0
+    tool = ToolLoad.load(tmp_path / "a" / "tool.tool.json")
+    assert tool.drift is not None and tool.drift.unit == "s" and tool.drift.n_parameters >= 2
+    np.testing.assert_allclose(tool.drift.span, [t.min(), t.max()])
+    # the same poses without their times: the row order (the poses were recorded one after another, evenly)
+    no_time = tmp_path / "order.csv"
+    no_time.write_text("qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz\n" + "\n".join(r.rsplit(",", 1)[0] for r in rows) + "\n")
+    assert main(["identify-load", str(no_time), "--out", str(tmp_path / "b"), "-q"]) == 0
+    assert ToolLoad.load(tmp_path / "b" / "tool.tool.json").drift is None  # no time: a constant bias
+    assert not (tmp_path / "b" / "tool.identification.json").exists()
+    assert main(["identify-load", str(no_time), "--time-from-order", "--out", str(tmp_path / "c"), "-q"]) == 0
+    ordered = ToolLoad.load(tmp_path / "c" / "tool.tool.json")
+    assert ordered.drift is not None and ordered.drift.unit == "pose"
+    np.testing.assert_allclose(ordered.mass, tool.mass, atol=4 * tool.mass_std_error)
+    assert json.loads((tmp_path / "c" / "tool.identification.json").read_text())["drift_rate"]["unit_force"] == "N/pose"
+    assert main(["identify-load", str(no_time), "--drift", "linear", "--out", str(tmp_path / "d"), "-q"]) == 2
+    assert "--drift linear needs the time of each pose" in capsys.readouterr().err
