@@ -29,6 +29,8 @@ examples:
   ftcal identify-load tool_logs --model models/linear.model.npz --robot kuka_iiwa14 --out tool
   ftcal identify-load poses.csv --wrench-frame base --out tool     # a factory-calibrated sensor: no --model
   ftcal identify-load recording.csv --settle 2 --out tool          # continuous (a 'time' column): still poses found
+  ftcal identify-load my_bag --wrench-topic /ft_sensor/wrench --robot ur5 --out tool   # a ROS bag + joint states
+  ftcal identify-load my.bag --tf base_link,ft_sensor --out tool  # a ROS 1 bag, the orientation from /tf
 
 inputs: run logs (joints and raw channels; need --model), or pose files (CSV): the sensor's orientation in
 the base frame as qx,qy,qz,qw (scalar last, as ROS writes it), R00..R22 (Rij = row i, column j) or
@@ -38,6 +40,10 @@ s0..s{N-1} with --model). A pose file with a 'time' column [s] that holds a cont
 share their neighbour's orientation) has its still poses found: segments that stay within --still-tolerance
 for --min-still seconds, minus the first --settle seconds (default from the data: until the drift has
 decayed into the noise), averaged; how many were found, kept and rejected (and why) is reported.
+ROS bags (rosbag2 sqlite3 / MCAP folders, ROS 1 .bag files; pip install "ftcal[ros]") are continuous
+recordings: the sensor's topic (a wrench, or raw gauges with --raw-topic and --model) with the joint states
+(interpolated at the sensor's stamps; --robot gives the kinematics) or /tf (--tf); see 'From a ROS bag' in
+the README.
 
 writes DIR/NAME.tool.json: mass [kg], centre of mass [m] (sensor frame), bias [N, N·m], their standard
 errors, the residual RMS and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,

@@ -94,6 +94,75 @@ def _bag_paths(path: Path) -> list[Path]:
     return [path]
 
 
+def _streaming_ros1_reader():
+    """rosbags' ROS 1 reader without its per-message index: the chunks are read in file order, one at a time.
+
+    rosbags' reader builds an index entry for every message when it opens a bag (about 160 bytes each: gigabytes
+    for a bag of tens of millions of messages); this one keeps the connections and the per-chunk counts only.
+    """
+    import os
+    from io import BytesIO
+
+    from rosbags.rosbag1.reader import Header, Reader, ReaderError, RecordType, read_bytes, read_uint32
+
+    class StreamingReader(Reader):
+        def open(self) -> None:
+            import re
+
+            self.bio = self.path.open("rb")
+            try:
+                matches = re.match(r"#ROSBAG V(\d+).(\d+)\n", self.bio.readline().decode(errors="replace"))
+                if not matches or matches.groups() != ("2", "0"):
+                    raise ReaderError("not a ROS 1 bag of version 2.0 (file magic)")
+                header = Header.read(self.bio, RecordType.BAGHEADER)
+                index_pos = header.get_uint64("index_pos")
+                conn_count, chunk_count = header.get_uint32("conn_count"), header.get_uint32("chunk_count")
+                if index_pos == 0:
+                    raise ReaderError("Bag is not indexed, reindex before reading.")
+                if chunk_count == 0:
+                    return
+                self.bio.seek(index_pos)
+                try:
+                    connections = [self.read_connection() for _ in range(conn_count)]
+                    self.chunk_infos = [self.read_chunk_info() for _ in range(chunk_count)]
+                except ReaderError as err:
+                    raise ReaderError(f"Bag index looks damaged: {err.args}") from None
+                counts: dict[int, int] = {}
+                for info in self.chunk_infos:
+                    for conn, n in info.connection_counts.items():
+                        counts[conn] = counts.get(conn, 0) + n
+                self.connections = [type(c)(*c[0:5], counts.get(c.id, 0), *c[6:]) for c in connections]
+            except BaseException:
+                self.bio.close()
+                self.bio = None
+                raise
+
+        def messages(self, connections=(), start=None, stop=None):
+            self._check_open()
+            wanted = {c.id for c in (connections or self.connections)}
+            by_id = {c.id: c for c in self.connections}
+            for info in self.chunk_infos:
+                if not wanted & set(info.connection_counts):
+                    continue
+                self.bio.seek(info.pos)
+                chunk = self.read_chunk()
+                self.bio.seek(chunk.datapos)
+                raw = chunk.decompressor(read_bytes(self.bio, chunk.datasize))
+                records = BytesIO(raw)
+                while records.tell() < len(raw):
+                    header = Header.read(records)
+                    size = read_uint32(records)
+                    if header.get_uint8("op") != RecordType.MSGDATA or header.get_uint32("conn") not in wanted:
+                        records.seek(size, os.SEEK_CUR)
+                        continue
+                    time = header.get_time("time")
+                    data = read_bytes(records, size)
+                    if (start is None or time >= start) and (stop is None or time < stop):
+                        yield by_id[header.get_uint32("conn")], time, data
+
+    return StreamingReader
+
+
 class _Reader:
     """An open bag, every failure of the reader (truncated, damaged, not a bag) turned into one LogFormatError."""
 
@@ -104,7 +173,10 @@ class _Reader:
 
         self.path = path
         try:
-            self.reader = AnyReader(_bag_paths(path), default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            paths = _bag_paths(path)
+            self.reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            if not self.reader.is2:  # streamed chunk by chunk (rosbags' reader indexes every message first)
+                self.reader.readers = [_streaming_ros1_reader()(p) for p in paths]
             self.reader.open()
         except LogFormatError:
             raise
@@ -564,6 +636,7 @@ def write_bag(
     frame_id: str = "ft_sensor",
     sensor_clock_offset_s: float = 0.0,
     latency_s: float = 0.001,
+    ros1_chunk_bytes: int | None = None,
 ) -> Path:
     """Write a recording as a ROS bag, as a robot would record it (for tests, examples and the README).
 
@@ -588,6 +661,8 @@ def write_bag(
         clock).
     latency_s : float
         Each message is received this long after its stamp.
+    ros1_chunk_bytes : int, optional
+        Size of a ROS 1 bag's chunks (default rosbags' 1 MiB).
 
     Returns
     -------
@@ -692,6 +767,8 @@ def write_bag(
         from rosbags.rosbag1 import Writer as Writer1
 
         writer = Writer1(path)
+        if ros1_chunk_bytes is not None:
+            writer.chunk_threshold = int(ros1_chunk_bytes)
     else:
         from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
 
