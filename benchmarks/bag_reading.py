@@ -24,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal.io._bags import BAG_STORAGES, _Reader, read_bag, write_bag
+from ftcal import read_bag, write_bag
+
+STORAGES = ("sqlite3", "mcap", "ros1")
 
 
 def make_bag(path: Path, storage: str, n: int) -> Path:
@@ -35,9 +37,11 @@ def make_bag(path: Path, storage: str, n: int) -> Path:
 
 
 def whole_bag(path: Path) -> list:
-    """The baseline: every message of the bag decoded and kept."""
-    with _Reader(path) as r:
-        return [r.reader.deserialize(data, conn.msgtype) for conn, _, data in r.reader.messages()]
+    """The baseline: every message of the bag decoded and kept (rosbags' own reader)."""
+    from rosbags.highlevel import AnyReader
+
+    with AnyReader([path]) as reader:
+        return [reader.deserialize(data, conn.msgtype) for conn, _, data in reader.messages()]
 
 
 def peak_mib(fn) -> float:
@@ -58,7 +62,7 @@ def main() -> None:
     print("| storage | sensor msgs | bag MiB | peak MiB (ftcal) | whole MiB (baseline) | msgs/s (ftcal) |")
     print("|---|---|---|---|---|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for storage in BAG_STORAGES:
+        for storage in STORAGES:
             for n in counts:
                 bag = make_bag(Path(tmp) / f"{storage}_{n}{'.bag' if storage == 'ros1' else ''}", storage, n)
                 size = sum(p.stat().st_size for p in ([bag] if bag.is_file() else bag.rglob("*"))) / 2**20
