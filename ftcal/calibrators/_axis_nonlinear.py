@@ -187,6 +187,8 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
     """
 
     _fitted_state = ("ridge_", "base_matrix_", "base_offset_", "axis_scale_", "coefs_", "intercepts_")
+    _fitted_constraints: dict = {"ridge_": [Interval(Real, 0, np.inf, closed="both")],  # inf: the LTM alone
+                                 "axis_scale_": [Interval(Real, 0, None, closed="neither")]}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "powers": [tuple, list],

@@ -118,6 +118,9 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     #: next to its class, and ``_emit_onnx(graph, x)`` for its ONNX graph (:func:`ftcal.export_onnx`).
     _fitted_state: tuple[str, ...] = ("alpha_", "n_features_in_", "feature_names_in_", "n_outputs_", "y_1d_",
                                       "zero_reading_", "reading_noise_", "tare_reading_", "calibrated_range_")
+    #: Allowed values of fitted attributes, checked when a model file is loaded (with ``_fitted_state``; every numeric
+    #: array is also checked finite): scikit-learn's constraint vocabulary, each entry of an array checked.
+    _fitted_constraints: dict = {"reading_noise_": [Interval(Real, 0, None, closed="left")]}
 
     _parameter_constraints: dict = {
         "alpha": [Interval(Real, *ALPHA_RANGE_PER_M, closed="both"), None],  # lever arms 1 µm - 1 km

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from numbers import Integral
+from numbers import Integral, Real
 import warnings
 
 import numpy as np
@@ -21,7 +21,7 @@ from ..core._memory import check_allocation
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
-__all__ = ["GaussianProcessCalibrator", "GP_MEANS", "GP_KERNELS"]
+__all__ = ["GaussianProcessCalibrator", "GP_MEANS", "GP_KERNELS", "GP_BOUNDS"]
 
 #: Mean functions the GP may use: none (a constant) or the LTM fitted on every row.
 GP_MEANS: tuple[str, ...] = ("none", "linear")
@@ -32,6 +32,9 @@ GP_KERNELS: tuple[str, ...] = ("rbf", "matern52", "rbf+linear", "matern52+linear
 #: LTM mean a stationary kernel models what the LTM leaves.
 _AUTO_COMBINATIONS: tuple[tuple[str, str], ...] = (
     ("none", "rbf+linear"), ("none", "matern52+linear"), ("linear", "rbf"), ("linear", "matern52"))
+#: Hyperparameter bounds and starting values: ftcal's (for standardised data, see :func:`make_kernel`) or
+#: scikit-learn's defaults (the stock GP's: every bound 1e-5..1e5, every start 1).
+GP_BOUNDS: tuple[str, ...] = ("ftcal", "stock")
 #: Rows on which ``per_output="auto"`` compares shared and per-output hyperparameters.
 _PER_OUTPUT_ROWS = 150
 #: Rows of each prediction chunk are chosen so that one chunk's cross-kernel stays under this size [bytes].
@@ -42,19 +45,26 @@ _STD_ROWS = 1000
 _STD_COVERAGE, _STD_Z = 0.95, 1.96
 
 
-def make_kernel(family: str, n_channels: int):
+def make_kernel(family: str, n_channels: int, bounds: str = "ftcal"):
     """The kernel ``C · k(ℓ_1..ℓ_N) [+ C_lin · (x·x + σ₀²)] + White`` of a family in :data:`GP_KERNELS`.
 
-    Bounds are for standardised inputs and outputs: length scales 1e-2..1e3 (a
-    channel without nonlinearity reaches the upper bound), amplitudes
-    1e-4..1e3, noise 1e-8..1.
+    ``bounds="ftcal"``: bounds for standardised inputs and outputs, length
+    scales 1e-2..1e3 (a channel without nonlinearity reaches the upper bound),
+    amplitudes 1e-4..1e3, noise 1e-8..1, starting from a low noise (0.01).
+    ``bounds="stock"``: scikit-learn's defaults, every bound 1e-5..1e5 and
+    every start 1 (the stock GP ``ConstantKernel() * RBF(ones(N)) + WhiteKernel()``).
 
     Examples
     --------
     >>> make_kernel("matern52+linear", 2)
     1**2 * Matern(length_scale=[1, 1], nu=2.5) + 0.1**2 * DotProduct(sigma_0=1) + WhiteKernel(noise_level=0.01)
+    >>> make_kernel("rbf", 2, "stock")
+    1**2 * RBF(length_scale=[1, 1]) + WhiteKernel(noise_level=1)
     """
     base, _, linear = family.partition("+")
+    if bounds == "stock":
+        kernel = ConstantKernel() * (RBF(np.ones(n_channels)) if base == "rbf" else Matern(np.ones(n_channels), nu=2.5))
+        return (kernel + ConstantKernel() * DotProduct() if linear else kernel) + WhiteKernel()
     stationary = (RBF(np.ones(n_channels), (1e-2, 1e3)) if base == "rbf"
                   else Matern(np.ones(n_channels), (1e-2, 1e3), nu=2.5))
     kernel = ConstantKernel(1.0, (1e-4, 1e3)) * stationary
@@ -75,35 +85,58 @@ def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegr
         return gp.fit(u, target)
 
 
-def _left_out_z(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None) -> NDArray:
-    """Each training row's error over its predictive std when left out of the fit, rows of one group together.
+def _left_out(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None):
+    """Each training row's error when left out of the fit (rows of one group together), and its variance.
 
     Closed form for a GP with a mean fitted on the basis ``H`` (the constant ``normalize_y`` removes, plus the
-    LTM's channels with the linear mean), with the hyperparameters fixed (Rasmussen & Williams §2.7, §5.4.2):
-    ``P = K⁻¹ - K⁻¹H (HᵀK⁻¹H)⁻¹ HᵀK⁻¹``; leaving out the rows ``G``, their errors are ``(P_GG)⁻¹ (P y)_G``
-    with covariance ``(P_GG)⁻¹``. Returns ``(n, k)`` z-scores (no row when ``H`` leaves no degree of freedom).
+    LTM's channels with the linear mean), with the hyperparameters fixed (Rasmussen & Williams eq. 5.12, §2.7,
+    §5.4.2): ``P = K⁻¹ - K⁻¹H (HᵀK⁻¹H)⁻¹ HᵀK⁻¹``; leaving out the rows ``G``, their errors are
+    ``(P_GG)⁻¹ (P y)_G`` with covariance ``(P_GG)⁻¹``. Returns ``(errors, variances)``, each ``(m, k)`` in the
+    target's own units (NaN for rows a group's left-out fit cannot predict); ``None`` when ``H`` leaves no degree
+    of freedom.
     """
     from scipy.linalg import cho_solve
 
     m = len(basis)
     if m <= basis.shape[1] + 1:
-        return np.empty((0, np.asarray(gp.alpha_).reshape(m, -1).shape[1]))
+        return None
     K_inv = cho_solve((gp.L_, True), np.eye(m), check_finite=False)
     KH = K_inv @ basis
     P = K_inv - KH @ np.linalg.lstsq(basis.T @ KH, KH.T, rcond=None)[0]
     Py = P @ (gp.L_ @ (gp.L_.T @ np.asarray(gp.alpha_).reshape(m, -1)))  # y = K alpha
+    scale = np.atleast_1d(np.asarray(gp._y_train_std, dtype=float))  # normalize_y's: back to the target's units
     if groups is None:  # one row at a time: (P_ii)⁻¹ is a scalar
         with np.errstate(divide="ignore", invalid="ignore"):
-            z = np.abs(Py) / np.sqrt(np.diag(P))[:, None]
-        return z[np.isfinite(z).all(axis=1)]
-    z = np.full_like(Py, np.nan)
+            diag = np.diag(P)[:, None]
+            return Py / diag * scale, np.broadcast_to(1.0 / diag, Py.shape) * scale**2
+    errors, variances = np.full_like(Py, np.nan), np.full_like(Py, np.nan)
     for rows in (np.flatnonzero(groups == g) for g in np.unique(groups)):
         try:
             cov = np.linalg.inv(P[np.ix_(rows, rows)])
         except np.linalg.LinAlgError:  # a group the basis cannot do without: it says nothing
             continue
-        z[rows] = np.abs(cov @ Py[rows]) / np.sqrt(np.maximum(np.diag(cov), np.finfo(float).tiny))[:, None]
+        errors[rows] = cov @ Py[rows] * scale
+        variances[rows] = np.maximum(np.diag(cov), np.finfo(float).tiny)[:, None] * scale**2
+    return errors, variances
+
+
+def _left_out_z(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None) -> NDArray:
+    """Each training row's left-out error over its predictive std (:func:`_left_out`), rows with a finite one."""
+    left_out = _left_out(gp, basis, groups)
+    if left_out is None:
+        return np.empty((0, np.asarray(gp.alpha_).reshape(len(basis), -1).shape[1]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.abs(left_out[0]) / np.sqrt(left_out[1])
     return z[np.isfinite(z).all(axis=1)]
+
+
+def _held_out_mse(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None) -> float:
+    """Mean squared left-out error over the rows and outputs (target units²; inf when it cannot be computed)."""
+    left_out = _left_out(gp, basis, groups)
+    if left_out is None:
+        return float("inf")
+    errors = left_out[0][np.isfinite(left_out[0]).all(axis=1)]
+    return float(np.mean(errors**2)) if errors.size else float("inf")
 
 
 def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> float:
@@ -113,7 +146,7 @@ def _log_evidence(gp: GaussianProcessRegressor, target: NDArray[np.float64]) -> 
 
 
 class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
-    """A Gaussian process over the readings, with its mean and kernel chosen by marginal likelihood.
+    """A Gaussian process over the readings, with its mean, kernel and hyperparameters chosen by held-out error.
 
     Strain-gauge sensors are linear to first order and smoothly nonlinear
     beyond (creep, hysteresis, the compliance of soft sensors). The model is a
@@ -128,19 +161,30 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
       term (``"+linear"``: the GP then extrapolates linearly, like the LTM,
       beyond the calibrated range instead of reverting to a constant), plus a
       noise term (see :func:`make_kernel`);
+    * **kernel bounds**: ftcal's (tight bounds for standardised data, a low
+      starting noise) or ``"stock"``, scikit-learn's defaults (bounds 1e-5..1e5,
+      every start 1: what ``StandardScaler() + GaussianProcessRegressor(
+      ConstantKernel() * RBF(ones(N)) + WhiteKernel(), normalize_y=True)``
+      uses); ``mean="none", kernel="rbf", per_output=False,
+      kernel_bounds="stock"`` *is* that stock GP (a test checks the
+      predictions agree);
     * with ``"auto"`` the combinations constant mean + (RBF or Matérn) + linear
-      term, and LTM mean + (RBF or Matérn) are each fitted on at most
-      ``selection_samples`` rows, and the one of highest **log marginal
-      likelihood** in the target's own units wins, the LTM mean paying the
-      BIC price ``½ · 6(N+1) · log m`` of its coefficients; the final fit on
-      ``max_samples`` rows starts from the winner's hyperparameters;
+      term and LTM mean + (RBF or Matérn), each with both bounds, are fitted
+      (marginal likelihood) on at most ``selection_samples`` rows, and the one
+      of **least held-out error** wins: the closed-form leave-one-out error of
+      each row (Rasmussen & Williams eq. 5.12, the mean refitted without the
+      row), or with ``fit(..., groups=...)`` leave-one-group-out. On a few
+      hundred rows of correlated channels the likelihood overfits: a higher
+      optimum (ftcal's bounds on a real soft sensor) predicted new rows 1.5x
+      worse than the stock GP's lower one, so the likelihood only fits the
+      hyperparameters, never chooses;
     * **per output**: with ``per_output="auto"`` each of the six components
-      then gets its own hyperparameters when, on the selection rows, the sum of
-      their log marginal likelihoods beats the shared fit by more than the BIC
-      price of the extra hyperparameters (``True``/``False`` force it).
-
-    The hyperparameters are fitted by L-BFGS from the kernel's start plus
-    ``n_restarts_optimizer`` random starts within the bounds.
+      gets its own hyperparameters when that lowers the held-out error on the
+      selection rows (``True``/``False`` force it);
+    * **final fit** on ``max_samples`` rows, from the winner's
+      hyperparameters, from the kernel's own start and from
+      ``n_restarts_optimizer`` random starts within the bounds: the optimum of
+      least held-out error is kept (``held_out_rmse_``).
 
     ``predict(X, return_std=True)`` also returns the predictive standard
     deviation of each component in [N] and [N·m], from
@@ -182,8 +226,11 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         Rows the GP is fitted on (a random subset when the data has more; 10 to 20 000).
     selection_samples : int, default=250
         Rows the ``"auto"`` choices are made on (a subset of the ``max_samples``).
+    kernel_bounds : {"auto", "ftcal", "stock"}, default="auto"
+        Hyperparameter bounds and starting values (see above).
     n_restarts_optimizer : int, default=0
-        Extra random starts of the marginal-likelihood optimiser for the final fit.
+        Extra random starts of the marginal-likelihood optimiser for the final fit (the one of least held-out
+        error is kept, not the one of most likelihood).
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹]; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
@@ -199,8 +246,14 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         The kernel family used.
     per_output_ : bool
         Whether each component has its own hyperparameters.
+    kernel_bounds_ : str
+        The bounds used (``"ftcal"`` or ``"stock"``).
     log_marginal_likelihood_ : dict
-        ``"mean/kernel"`` -> log marginal likelihood (target units) of each combination tried.
+        ``"mean/kernel/bounds"`` -> log marginal likelihood (target units) of each combination tried.
+    held_out_rmse_ : dict
+        ``"mean/kernel/bounds"`` -> held-out RMSE (leave-one-out or leave-one-group-out, torque-scaled [N]) of
+        each combination tried on the selection rows, ``"per_output_shared"`` / ``"per_output_separate"`` when
+        compared, and ``"final"``: that of the fitted GP on its ``max_samples`` rows.
     linear_matrix_ : ndarray of shape (6, N)
         LTM mean in the torque-scaled space, per raw unit (zeros with ``mean_ == "none"``).
     linear_offset_ : ndarray of shape (6,)
@@ -235,9 +288,18 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
     ((2, 6), (2, 6), True)
     """
 
-    _fitted_state = ("mean_", "kernel_", "per_output_", "linear_matrix_", "linear_offset_", "input_mean_",
+    _fitted_state = ("mean_", "kernel_", "per_output_", "kernel_bounds_", "held_out_rmse_", "linear_matrix_", "linear_offset_", "input_mean_",
                      "input_scale_", "train_inputs_", "theta_", "dual_coef_", "cholesky_", "target_mean_",
                      "target_scale_", "log_marginal_likelihood_", "std_scale_")
+    _fitted_constraints: dict = {
+        "mean_": [StrOptions(set(GP_MEANS))], "kernel_": [StrOptions(set(GP_KERNELS))],
+        "kernel_bounds_": [StrOptions(set(GP_BOUNDS))], "per_output_": ["boolean"],
+        "input_scale_": [Interval(Real, 0, None, closed="neither")],
+        "target_scale_": [Interval(Real, 0, None, closed="neither")],
+        "std_scale_": [Interval(Real, 1, None, closed="left")],
+        # log-hyperparameters: every bound of make_kernel lies within exp(-30)..exp(30)
+        "theta_": [Interval(Real, -30, 30, closed="both")],
+    }
     #: What overflows for a reading far outside the training range (see ``check_finite_output``).
     _overflow_note = ("its kernel squares the distance from the reading to the training readings, in units of its "
                       "length scales, which exceeds float64's ~1.8e308 from a distance of ~1.3e154")
@@ -247,16 +309,18 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         "mean": [StrOptions({"auto", *GP_MEANS})],
         "kernel": [StrOptions({"auto", *GP_KERNELS})],
         "per_output": [StrOptions({"auto"}), "boolean"],
+        "kernel_bounds": [StrOptions({"auto", *GP_BOUNDS})],
         "max_samples": [Interval(Integral, 10, 20000, closed="both")],
         "selection_samples": [Interval(Integral, 10, 20000, closed="both")],
         "n_restarts_optimizer": [Interval(Integral, 0, 20, closed="both")],
     }
 
-    def __init__(self, *, mean="auto", kernel="auto", per_output="auto", max_samples=1000, selection_samples=250,
-                 n_restarts_optimizer=0, alpha=None, zero_reading=None, random_state=None):
+    def __init__(self, *, mean="auto", kernel="auto", per_output="auto", kernel_bounds="auto", max_samples=1000,
+                 selection_samples=250, n_restarts_optimizer=0, alpha=None, zero_reading=None, random_state=None):
         self.mean = mean
         self.kernel = kernel
         self.per_output = per_output
+        self.kernel_bounds = kernel_bounds
         self.max_samples = max_samples
         self.selection_samples = selection_samples
         self.n_restarts_optimizer = n_restarts_optimizer
@@ -288,15 +352,25 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         sel = np.arange(m)
         if m > self.selection_samples:
             sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
-        mean, family, per_output, theta = self._choose(u[sel], {k: v[sel] for k, v in targets.items()}, seed)
-        target = targets[mean]
-        if per_output:  # each component from its selection optimum (a warm start)
-            regressors = [_fit_quietly(_regressor(make_kernel(family, n_channels).clone_with_theta(theta[j]),
-                                                  seed, int(self.n_restarts_optimizer)), u, target[:, [j]])
-                          for j in range(target.shape[1])]
-        else:
-            start = make_kernel(family, n_channels).clone_with_theta(theta[0])
-            regressors = [_fit_quietly(_regressor(start, seed, int(self.n_restarts_optimizer)), u, target)]
+        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
+        group_rows = None if groups is None else groups[rows]
+        bases = {"none": np.ones((m, 1)), "linear": np.hstack([np.ones((m, 1)), xc_sub])}
+        mean, family, bounds, per_output, theta = self._choose(
+            u[sel], {k: v[sel] for k, v in targets.items()}, {k: v[sel] for k, v in bases.items()},
+            None if group_rows is None else group_rows[sel], seed)
+        target, basis = targets[mean], bases[mean]
+        starts = self._starts(family, bounds, theta, n_channels, seed)
+        columns = [[j] for j in range(target.shape[1])] if per_output else [list(range(target.shape[1]))]
+        regressors, errors = [], []
+        for j, cols in enumerate(columns):  # each from the start of least held-out error (not of most likelihood)
+            tried = [_fit_quietly(_regressor(make_kernel(family, n_channels, bounds).clone_with_theta(start[j]),
+                                             seed, 0), u, target[:, cols]) for start in starts]
+            scores = [_held_out_mse(gp, basis, group_rows) for gp in tried]
+            best = int(np.argmin(scores))
+            regressors.append(tried[best])
+            errors.append(scores[best] * len(cols))
+        self.held_out_rmse_["final"] = float(np.sqrt(sum(errors) / target.shape[1]))
+        self.kernel_bounds_ = bounds
         self.mean_, self.kernel_, self.per_output_ = mean, family, len(regressors) > 1
         if mean == "linear":
             self.linear_matrix_, self.linear_offset_ = np.asarray(ltm.coef_), np.asarray(ltm.intercept_)
@@ -309,9 +383,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.target_mean_ = np.concatenate([np.atleast_1d(g._y_train_mean) for g in regressors])
         self.target_scale_ = np.concatenate([np.atleast_1d(g._y_train_std) for g in regressors])
         self.std_scale_ = np.ones(target.shape[1])  # the GP's own std, to be calibrated
-        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
-        basis = np.hstack([np.ones((m, 1)), xc_sub]) if mean == "linear" else np.ones((m, 1))
-        z = [_left_out_z(g, basis, None if groups is None else groups[rows]) for g in regressors]
+        z = [_left_out_z(g, basis, group_rows) for g in regressors]
         z = [np.column_stack(z)] if all(len(part) for part in z) else []
         unseen = np.setdiff1d(np.arange(n), rows)
         if groups is not None:  # a row of a group the subset holds is not new: only unseen groups count
@@ -328,42 +400,64 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
                           f"{basis.shape[1]} coefficients, so the predictive std could not be calibrated: it is "
                           "likely too narrow. Record more rows.", UserWarning, stacklevel=4)
 
-    def _choose(self, u, targets, seed):
-        """Mean, kernel family, per-output flag and start hyperparameters, by log marginal likelihood on ``u``."""
+    def _choose(self, u, targets, bases, groups, seed):
+        """Mean, kernel family, bounds, per-output flag and start hyperparameters (one row per regressor), by
+        **held-out error** on ``u``: each combination's closed-form leave-one-out error (leave-one-group-out with
+        ``groups``; Rasmussen & Williams eq. 5.12) at its marginal-likelihood optimum. The likelihood alone
+        overfits on a few hundred rows of correlated channels (an optimum of higher likelihood that predicts new
+        rows worse), so it only fits the hyperparameters; the choice is by the errors on rows left out."""
         n, n_channels = u.shape
         k = targets["none"].shape[1]  # outputs (6 for a wrench)
         combos = [(mean, family) for mean, family in _AUTO_COMBINATIONS
                   if self.mean in ("auto", mean) and self.kernel in ("auto", family)]
         if not combos:  # a combination outside the automatic list, asked for explicitly
             combos = [(self.mean, self.kernel)]
-        self.log_marginal_likelihood_ = {}
+        combos = [(mean, family, bounds) for mean, family in combos for bounds in GP_BOUNDS
+                  if self.kernel_bounds in ("auto", bounds)]
+        self.log_marginal_likelihood_, self.held_out_rmse_ = {}, {}
         if len(combos) == 1 and self.per_output is False:  # nothing to choose: the final fit starts from the default
-            return (*combos[0], False, make_kernel(combos[0][1], n_channels).theta[None, :])
-        scores, fitted = {}, {}
-        for mean, family in combos:
-            gp = _fit_quietly(_regressor(make_kernel(family, n_channels), seed, 0), u, targets[mean])
-            value = _log_evidence(gp, targets[mean])
-            self.log_marginal_likelihood_[f"{mean}/{family}"] = value
-            # the LTM mean pays the BIC price of its k (N + 1) coefficients
-            scores[(mean, family)] = value - (0.5 * k * (n_channels + 1) * np.log(n) if mean == "linear" else 0.0)
-            fitted[(mean, family)] = gp
-        mean, family = max(scores, key=scores.get)
-        shared = fitted[(mean, family)]
+            mean, family, bounds = combos[0]
+            return mean, family, bounds, False, make_kernel(family, n_channels, bounds).theta[None, :]
+        errors, fitted = {}, {}
+        for mean, family, bounds in combos:
+            gp = _fit_quietly(_regressor(make_kernel(family, n_channels, bounds), seed, 0), u, targets[mean])
+            name = f"{mean}/{family}/{bounds}"
+            self.log_marginal_likelihood_[name] = _log_evidence(gp, targets[mean])
+            errors[(mean, family, bounds)] = _held_out_mse(gp, bases[mean], groups)
+            self.held_out_rmse_[name] = float(np.sqrt(errors[(mean, family, bounds)]))
+            fitted[(mean, family, bounds)] = gp
+        mean, family, bounds = min(errors, key=errors.get)
+        shared = fitted[(mean, family, bounds)]
         if self.per_output is False or k == 1:
-            return mean, family, False, shared.kernel_.theta[None, :]
+            return mean, family, bounds, False, shared.kernel_.theta[None, :]
         # per-output fits from the shared optimum on at most _PER_OUTPUT_ROWS rows (six fits: kept cheap)
         few = slice(None) if n <= _PER_OUTPUT_ROWS else np.sort(
             check_random_state(seed).choice(n, size=_PER_OUTPUT_ROWS, replace=False))
-        u, target = u[few], targets[mean][few]
-        n = len(u)
+        u, target, basis = u[few], targets[mean][few], bases[mean][few]
+        groups = None if groups is None else groups[few]
         shared_few = _fit_quietly(_regressor(shared.kernel_, seed, 0, optimizer=None), u, target)
         separate = [_fit_quietly(_regressor(shared.kernel_, seed, 0), u, target[:, [j]]) for j in range(k)]
-        gain = sum(_log_evidence(g, target[:, [j]]) for j, g in enumerate(separate)) \
-            - _log_evidence(shared_few, target)
-        self.log_marginal_likelihood_["per_output_gain"] = float(gain)
-        if self.per_output is True or gain > 0.5 * (k - 1) * shared.kernel_.theta.size * np.log(n):
-            return mean, family, True, np.stack([g.kernel_.theta for g in separate])
-        return mean, family, False, shared.kernel_.theta[None, :]
+        shared_error = _held_out_mse(shared_few, basis, groups)
+        separate_error = float(np.mean([_held_out_mse(g, basis, groups) for g in separate]))
+        self.held_out_rmse_["per_output_shared"] = float(np.sqrt(shared_error))
+        self.held_out_rmse_["per_output_separate"] = float(np.sqrt(separate_error))
+        if self.per_output is True or separate_error < shared_error:
+            return mean, family, bounds, True, np.stack([g.kernel_.theta for g in separate])
+        return mean, family, bounds, False, shared.kernel_.theta[None, :]
+
+    def _starts(self, family: str, bounds: str, theta: NDArray[np.float64], n_channels: int, seed: int
+                ) -> list[NDArray]:
+        """Starting hyperparameters of the final fit, one row per regressor in each: the chosen ones, the kernel's
+        own start (when it differs: a marginal-likelihood optimum reached from there may predict better), and
+        ``n_restarts_optimizer`` drawn uniformly (in log) within the bounds; ``fit`` keeps the start whose
+        optimum has the least held-out error."""
+        kernel = make_kernel(family, n_channels, bounds)
+        default = np.broadcast_to(kernel.theta, theta.shape)
+        starts = [theta] + ([default] if not np.allclose(default, theta) else [])
+        rng = check_random_state(seed)
+        low, high = kernel.bounds[:, 0], kernel.bounds[:, 1]
+        starts += [rng.uniform(low, high, size=theta.shape) for _ in range(int(self.n_restarts_optimizer))]
+        return starts
 
     def structure_params(self) -> dict:
         """The choices ``fit`` made (mean, kernel family, per output) as parameters.
@@ -373,7 +467,8 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         still fitted on each training fold alone), at a fifth of the cost.
         """
         check_is_fitted(self)
-        return {"mean": self.mean_, "kernel": self.kernel_, "per_output": bool(self.per_output_)}
+        return {"mean": self.mean_, "kernel": self.kernel_, "per_output": bool(self.per_output_),
+                "kernel_bounds": self.__dict__.get("kernel_bounds_", "ftcal")}
 
     def latent_covariance(self, X: ArrayLike):
         """Posterior covariance of the GP part at raw readings ``X`` (n, N), summed over the outputs.

@@ -277,6 +277,8 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
 
     _fitted_state = ("estimator_", "tau_rows_", "history_estimator_", "history_coef_", "history_intercept_",
                      "cv_rmse_", "static_choice_", "static_cv_results_")
+    _fitted_constraints: dict = {"tau_rows_": [Interval(Real, 1, None, closed="left")],  # a time constant [rows]
+                                 "cv_rmse_": [Interval(Real, 0, None, closed="left")]}
     # a model file stores no None: these are the values a fit without a history term (or a chooser) leaves
     tau_rows_ = history_estimator_ = history_coef_ = history_intercept_ = static_choice_ = static_cv_results_ = None
     _groups_purpose = ("cross-validating the history term over whole groups",

@@ -133,6 +133,7 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
     """
 
     _fitted_state = ("input_scale_", "coef_", "intercept_")
+    _fitted_constraints: dict = {"input_scale_": [Interval(Real, 0, None, closed="neither")]}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "degree": [Interval(Integral, 1, 5, closed="both")],

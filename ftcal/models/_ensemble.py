@@ -95,6 +95,7 @@ class EnsembleCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("member_seeds_", "estimators_")
+    _fitted_constraints: dict = {"member_seeds_": [Interval(Integral, 0, np.iinfo(np.int32).max, closed="both")]}
     #: Accepts the groups of the rows and passes them on when the members request them.
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {

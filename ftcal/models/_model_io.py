@@ -28,7 +28,10 @@ plain dict as JSON, a fitted calibrator (or a list of them) as children, and
 what the class lists in ``_encoded_state`` by the class' own hooks (a network: its weights and history; this
 module knows no network internals). Which classes a file may name is
 the registry's list (:func:`ftcal.models._registry.model_classes`): adding a
-calibrator is one module and one registry line.
+calibrator is one module and one registry line. **Each fitted value is bounded**: ``_fitted_constraints``
+beside ``_fitted_state`` (scikit-learn's constraint vocabulary, :func:`fitted_constraints`) gives the allowed
+values of a field, checked at load (a tampered ``tau_rows_ = 0.5`` is refused naming the field, the value and
+the range); every numeric array must be finite and every JSON value non-null and not NaN.
 
 Reading is bounded: only the members the model type needs are read (others
 are never decompressed), each member's declared size and the shape in its
@@ -51,6 +54,7 @@ import stat
 import warnings
 import zipfile
 import zlib
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
@@ -61,7 +65,7 @@ from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes
 
-__all__ = ["save_model", "load_model", "fitted_state_names", "FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION"]
 
 FORMAT = "ftcal-model"
 #: Version of the model-file layout written by :func:`save_model` (1: before the per-class declarations).
@@ -91,6 +95,61 @@ def fitted_state_names(cls: type) -> tuple[str, ...]:
             if name not in names:
                 names.append(name)
     return tuple(names)
+
+
+def fitted_constraints(cls: type) -> dict[str, list]:
+    """The allowed values of the fitted attributes of ``cls``: every ``_fitted_constraints`` along its bases.
+
+    Declared next to ``_fitted_state``, in scikit-learn's ``_parameter_constraints`` vocabulary
+    (``Interval``, ``StrOptions``, ``"boolean"``); an array's every entry must satisfy them. A model file whose
+    value breaks them is refused at load, naming the attribute, the value and the allowed range.
+
+    Examples
+    --------
+    >>> from ftcal import GaussianProcessCalibrator
+    >>> str(fitted_constraints(GaussianProcessCalibrator)["std_scale_"][0])
+    'a float in the range [1.0, inf)'
+    """
+    out: dict[str, list] = {}
+    for klass in reversed(cls.__mro__):
+        out.update(klass.__dict__.get("_fitted_constraints", {}))
+    return out
+
+
+def _check_fitted_constraints(estimator) -> None:
+    """Refuse a fitted value outside its declared constraints (:func:`fitted_constraints`), naming it."""
+    from sklearn.utils._param_validation import Interval, make_constraint
+
+    name = type(estimator).__name__
+    for key, declared in fitted_constraints(type(estimator)).items():
+        value = estimator.__dict__.get(key)
+        if value is None:
+            continue
+        constraints = [make_constraint(c) for c in declared]
+        values = np.asarray(value).ravel() if isinstance(value, np.ndarray) else [value]
+        if isinstance(value, np.ndarray) and value.dtype.kind in "biuf" and len(constraints) == 1 \
+                and isinstance(constraints[0], Interval):  # every entry at once: arrays may be large
+            c = constraints[0]
+            low = -np.inf if c.left is None else c.left
+            high = np.inf if c.right is None else c.right
+            below = values < low if c.closed in ("left", "both") else values <= low
+            above = values > high if c.closed in ("right", "both") else values >= high
+            wrong_kind = (values != np.floor(values)) if c.type is Integral and value.dtype.kind == "f" else False
+            bad = np.flatnonzero(below | above | wrong_kind)
+            if not bad.size:
+                continue
+            values = [values[bad[0]].item()]
+        offending = next((v for v in values if not any(c.is_satisfied_by(v) for c in constraints)), _NONE)
+        if offending is _NONE:
+            continue
+        where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
+        raise ModelFileError(
+            f"the {name}'s stored {key}{where} is {offending!r:.80}, outside its allowed values: "
+            f"{' or '.join(str(c) for c in constraints)}. The file is damaged or was edited; fit and save the "
+            "model again.")
+
+
+_NONE = object()
 
 
 def _known_types() -> dict[str, type]:
@@ -515,6 +574,7 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
             lists.setdefault(key, []).append(child)
     for key, value in lists.items():
         setattr(estimator, key, value)
+    _check_fitted_constraints(estimator)
     required = meta.get("state") or [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]
     missing = [k for k in required if k not in estimator.__dict__]
     if missing:

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from skorch.history import History
 from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import Interval, StrOptions
 
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import CalibrationInputError, ModelFileError
@@ -93,6 +93,10 @@ class NetworkCalibrator(BaseCalibrator):
     _transient_params: tuple[str, ...] = ("callbacks",)
     #: Stored by model files (``net_``: the weights and the history).
     _fitted_state = ("n_epochs_", "best_epoch_", "stop_reason_", "net_")
+    _fitted_constraints: dict = {"n_epochs_": [Interval(Integral, 1, None, closed="left")],
+                                 "best_epoch_": [Interval(Integral, 0, None, closed="left")],
+                                 "stop_reason_": [StrOptions({"schedule_end", "within_tolerance", "recover_cap",
+                                                              "callback"})]}
 
     #: Phase 1's length when ``phase1_epochs`` is None [epochs] (the thesis' schedule, III-A-d).
     _default_phase1_epochs = 1700

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+from numbers import Real
+
 import numpy as np
+from sklearn.utils._param_validation import Interval
 
 from ._base import NetworkCalibrator
 from ._modules import ComparativeNet
@@ -57,6 +60,8 @@ class ComparativeCalibrator(NetworkCalibrator):
         return outputs * self.target_scale_ + self.target_mean_
 
     _fitted_state = ("input_mean_", "input_scale_", "target_mean_", "target_scale_")
+    _fitted_constraints: dict = {"input_scale_": [Interval(Real, 0, None, closed="neither")],
+                                 "target_scale_": [Interval(Real, 0, None, closed="neither")]}
 
     def _emit_onnx(self, g, x: str) -> str:
         inputs = g.op("Div", g.op("Sub", x, g.const(self.input_mean_)), g.const(self.input_scale_))

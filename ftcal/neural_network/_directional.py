@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import warnings
-from numbers import Real
+from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import NDArray
@@ -157,6 +157,8 @@ class DirectionalCalibrator(NetworkCalibrator):
         return _unit_rows(X - self.zero_reading_)[1]
 
     _fitted_state = ("scale_reference_", "n_dropped_zero_load_")
+    _fitted_constraints: dict = {"scale_reference_": [Interval(Real, 0, None, closed="neither")],
+                                 "n_dropped_zero_load_": [Interval(Integral, 0, None, closed="left")]}
 
     def _emit_onnx(self, g, x: str) -> str:
         xc = g.op("Sub", x, g.const(self.zero_reading_))

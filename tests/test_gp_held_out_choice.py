@@ -1,0 +1,105 @@
+"""ftcal's GP against the stock scikit-learn GP: parity when set to the stock structure, and the choice of mean,
+kernel, bounds and start by held-out error (closed-form leave-one-out / leave-one-group-out), not by likelihood."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+from sklearn.model_selection import GroupKFold, KFold, cross_val_predict
+
+from ftcal import GaussianProcessCalibrator, wrench_rmse
+from ftcal.calibrators._gaussian_process import _left_out, _regressor, make_kernel
+from ftcal.models import stock_baselines
+
+
+def correlated_sensor(n_rows: int, n_channels: int, seed: int, torque_in_nmm: bool):
+    """Readings of ``n_channels`` correlated channels (shared load components, scales 1e-4..1e4, offsets) that
+    respond smoothly nonlinearly to a 6-axis load; the wrench in N and N·m or N·mm."""
+    rng = np.random.default_rng(seed)
+    load = rng.uniform(-1, 1, size=(n_rows, 6))
+    mixing = rng.normal(size=(6, n_channels)) + 2.0 * rng.normal(size=(1, n_channels))  # a common component
+    response = np.tanh(load @ mixing / 3.0) + 0.01 * rng.normal(size=(n_rows, n_channels))
+    scales = np.logspace(-4, 4, n_channels)[rng.permutation(n_channels)]
+    raw = response * scales + rng.normal(size=n_channels) * scales
+    wrench = load * [10, 10, 30, 0.2, 0.2, 0.1] + 0.05 * rng.normal(size=(n_rows, 6)) * [10, 10, 30, 0.2, 0.2, 0.1]
+    if torque_in_nmm:
+        wrench[:, 3:] *= 1000.0
+    return raw, wrench
+
+
+@pytest.mark.parametrize("n_rows, n_channels, torque_in_nmm", [(20, 3, True), (300, 8, False), (1000, 2, True)])
+def test_set_to_the_stock_structure_it_predicts_as_the_stock_gp(n_rows, n_channels, torque_in_nmm):
+    raw, wrench = correlated_sensor(n_rows, n_channels, seed=n_rows, torque_in_nmm=torque_in_nmm)
+    ours = GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, kernel_bounds="stock",
+                                     max_samples=1000, random_state=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # convergence warnings of both (the stock GP's bounds are reached)
+        ours.fit(raw, wrench)
+        stock = stock_baselines(n_channels, max_kernel_samples=None)["sk_gp"].fit(raw, wrench)
+    rng = np.random.default_rng(1)
+    new = raw[rng.choice(n_rows, size=min(n_rows, 50), replace=False)] * (1 + 0.01 * rng.normal(size=(1, n_channels)))
+    for X in (raw, new):
+        difference = np.abs(ours.predict(X) - stock.predict(X))
+        # optimiser tolerance: both run the same L-BFGS on inputs equal up to rounding
+        assert np.all(difference <= 1e-5 * wrench.std(axis=0) + 1e-9), difference.max(axis=0)
+    gp = stock.estimator_[-1]
+    np.testing.assert_allclose(ours.theta_[0], gp.kernel_.theta, atol=1e-4)
+
+
+def test_left_out_errors_are_those_of_refits_without_the_rows():
+    """Eq. 5.12 with the constant mean refitted: the closed form equals refitting (hyperparameters fixed) without
+    each row, and without each group."""
+    raw, wrench = correlated_sensor(40, 3, seed=5, torque_in_nmm=False)
+    u = (raw - raw.mean(axis=0)) / raw.std(axis=0)
+    gp = _regressor(make_kernel("rbf", 3), 0, 0).fit(u, wrench)
+    y = (wrench - gp._y_train_mean) / gp._y_train_std
+    K = gp.kernel_(u)
+    groups = np.repeat(np.arange(8), 5)
+    for g in (None, groups):
+        errors, _ = _left_out(gp, np.ones((40, 1)), g)
+        for left in ([3], [17]) if g is None else (np.flatnonzero(groups == 2), np.flatnonzero(groups == 6)):
+            rest = np.setdiff1d(np.arange(40), left)
+            K_inv = np.linalg.inv(K[np.ix_(rest, rest)])
+            ones = np.ones(len(rest))
+            beta = (ones @ K_inv @ y[rest]) / (ones @ K_inv @ ones)  # the constant mean refitted (GLS)
+            prediction = beta + K[np.ix_(left, rest)] @ K_inv @ (y[rest] - beta)
+            np.testing.assert_allclose(errors[left], (y[left] - prediction) * gp._y_train_std, rtol=1e-6, atol=1e-9)
+
+
+def test_the_choice_is_the_combination_of_least_held_out_error_and_beats_the_stock_gp_within_noise():
+    raw, wrench = correlated_sensor(150, 4, seed=3, torque_in_nmm=True)
+    model = GaussianProcessCalibrator(selection_samples=100, random_state=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model.fit(raw, wrench)
+    tried = {k: v for k, v in model.held_out_rmse_.items() if k.count("/") == 2}
+    assert len(tried) == 8 and {k.split("/")[2] for k in tried} == {"ftcal", "stock"}
+    assert f"{model.mean_}/{model.kernel_}/{model.kernel_bounds_}" == min(tried, key=tried.get)
+    assert model.structure_params()["kernel_bounds"] == model.kernel_bounds_
+    folds = KFold(3, shuffle=True, random_state=0)
+    alpha = model.alpha_
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ours = cross_val_predict(GaussianProcessCalibrator(selection_samples=100, random_state=0), raw, wrench,
+                                 cv=folds)
+        stock = cross_val_predict(stock_baselines(4)["sk_gp"], raw, wrench, cv=folds)
+    ours_rmse, stock_rmse = wrench_rmse(wrench, ours, alpha), wrench_rmse(wrench, stock, alpha)
+    # within noise: the standard error of an RMSE over 150 x 6 values is ~1/sqrt(2 * 900) of it (~2.4 %)
+    assert ours_rmse <= stock_rmse * 1.05, (ours_rmse, stock_rmse)
+
+
+def test_groups_given_to_fit_choose_by_leave_one_group_out():
+    raw, wrench = correlated_sensor(90, 3, seed=8, torque_in_nmm=False)
+    groups = np.repeat(np.arange(9), 10)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        plain = GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0).fit(
+            raw, wrench)
+        grouped = GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0).fit(
+            raw, wrench, groups=groups)
+    assert plain.held_out_rmse_.keys() == grouped.held_out_rmse_.keys()
+    assert grouped.held_out_rmse_ != plain.held_out_rmse_  # a group left out is not a row left out
+    folds = list(GroupKFold(3).split(raw, wrench, groups))
+    assert np.isfinite(cross_val_predict(grouped, raw, wrench, cv=folds)).all()
