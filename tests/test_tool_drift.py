@@ -245,7 +245,7 @@ def test_bad_times_are_refused_with_the_pose():
 
 @pytest.mark.parametrize("knots", [(0.0, 3600.0), (0.0, 600.0, 1800.0, 3600.0)])
 def test_the_onnx_graph_compensates_like_the_library(knots):
-    ort = pytest.importorskip("onnxruntime")
+    import onnxruntime as ort
     from ftcal.experiment._drift import tool_onnx_model
 
     tool = drifting_tool(knots)
@@ -301,7 +301,7 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
     assert main(["export", str(out / "tool.tool.json"), "--format", "ros", "-q"]) == 0
     assert "cannot express a" in (out / "tool.ros.yaml").read_text()
     assert main(["export", str(out / "tool.tool.json"), "--format", "onnx", "-q"]) == 0
-    ort = pytest.importorskip("onnxruntime")
+    import onnxruntime as ort
     R = Rotation.random(4, random_state=0).as_matrix()
     W = np.random.default_rng(1).normal(size=(4, 6))
     t = np.linspace(*tool.drift.span, 4)
@@ -364,3 +364,19 @@ def test_identify_load_finds_the_drift_from_a_pose_file_time_column_or_its_row_o
     assert json.loads((tmp_path / "c" / "tool.identification.json").read_text())["drift_rate"]["unit_force"] == "N/pose"
     assert main(["identify-load", str(no_time), "--drift", "linear", "--out", str(tmp_path / "d"), "-q"]) == 2
     assert "--drift linear needs the time of each pose" in capsys.readouterr().err
+
+
+def test_samples_of_one_pose_are_held_out_together(tmp_path, robot, plan):
+    # three samples per static pose: the pose is the unit of the cross-validation (groups), not the row
+    R, W, t, _ = recording(tmp_path, robot, plan, 7, samples_per_pose=3)
+    pose = np.repeat(np.arange(plan.n_poses), 3)
+    tool = identify_tool_load(R, W, gravity=G, times=t, groups=pose)
+    assert tool.drift is None
+    assert_tool_unbiased(tool)
+    R, W, t, _ = recording(tmp_path, robot, plan, 8, samples_per_pose=3, bias_drift=wrench_drift(rate_per_s=0.01))
+    tool = identify_tool_load(R, W, gravity=G, times=t, groups=pose)
+    assert tool.drift is not None and tool.drift.description == "linear in time"
+    with pytest.raises(CalibrationInputError, match="groups holds one group only .* leave-poses-out cross-validation"):
+        identify_tool_load(R, W, gravity=G, times=t, groups=np.zeros(len(R), dtype=int))
+    with pytest.raises(CalibrationInputError, match=r"groups must have shape \(126,\)"):
+        identify_tool_load(R, W, gravity=G, times=t, groups=pose[:10])

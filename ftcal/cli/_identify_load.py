@@ -153,9 +153,9 @@ def _poses_and_wrenches(args):
 class _Poses:
     """The static poses an identification uses: where they came from, orientation, wrench, time, still-pose info."""
 
-    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None, temperature=None):
+    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None, temperature=None, groups=None):
         self.sources, self.rotations, self.wrenches, self.time = sources, rotations, wrenches, time
-        self.still, self.model, self.temperature = still, model, temperature
+        self.still, self.model, self.temperature, self.groups = still, model, temperature, groups
 
 
 def _input_kind(item: str) -> str:
@@ -280,8 +280,10 @@ def _log_poses(args) -> _Poses:
     import numpy as np
 
     temperature = None if any(lg.temperature is None for lg in logs) else np.concatenate([lg.temperature for lg in logs])
+    # the rows of one pose of one log are samples of one static pose: held out together when choosing the drift
+    groups = np.concatenate([[f"{i}:{p}" for p in lg.pose] for i, lg in enumerate(logs)])
     return _Poses([str(lg.path) for lg in logs], rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]),
-                  temperature=temperature)
+                  temperature=temperature, groups=groups if np.unique(groups).size > 1 else None)
 
 
 def identification_poses(args, console: Console) -> _Poses:
@@ -329,7 +331,7 @@ def run_identify(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     poses = identification_poses(args, console)
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
-                            poses.sources)
+                            poses.sources, poses.groups)
     info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
             str(args.model), "wrench_frame_in_input": args.wrench_frame}
     if _input_kind(args.inputs[0]) == "run log":

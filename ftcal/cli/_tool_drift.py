@@ -40,7 +40,8 @@ def pose_times(args: argparse.Namespace, n: int, times):
     return times, "s"
 
 
-def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temperatures, sources: list[str]):
+def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temperatures, sources: list[str],
+             groups=None):
     """``identify_tool_load`` with the drift options, and the report of the identification (None without a time
     or temperature). Library errors name the inputs."""
     import ftcal
@@ -54,7 +55,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     if args.drift in ("linear", "spline") and times is None:
         raise CliError(f"--drift {args.drift} needs the time of each pose: the inputs carry none; pass "
                        "--time-from-order to use the recording order")
-    settings = dict(drift=args.drift, cv=args.drift_cv, random_state=0)
+    settings = dict(drift=args.drift, cv=args.drift_cv, random_state=0, groups=groups)
     try:
         tool = ftcal.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
                                         time_unit=unit, **settings)

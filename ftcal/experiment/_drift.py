@@ -425,10 +425,13 @@ def _held_out_errors(g_s: NDArray, W: NDArray, values: dict, candidates: list[_C
 
 
 def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: NDArray | None, *,
-                 choice: str = "auto", cv: int = 20, random_state: int | None = 0
+                 choice: str = "auto", cv: int = 20, random_state: int | None = 0, groups: NDArray | None = None
                  ) -> tuple[_Candidate, list[dict]]:
-    """The drift model chosen by leave-poses-out cross-validation and the one-SE rule, and the table of candidates."""
-    from ..core._model_selection import calibration_folds, simplest_within_one_se
+    """The drift model chosen by leave-poses-out cross-validation and the one-SE rule, and the table of candidates.
+
+    ``groups`` labels the rows of one pose (several samples of a static pose): they are held out together and
+    count as one unit of the standard error; ``None``: every row is a pose."""
+    from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
 
     candidates = drift_candidates(len(W), times, temperatures, choice)
     values = {k: v for k, v in (("time", times), ("temperature", temperatures)) if v is not None}
@@ -439,7 +442,11 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     if len(candidates) == 1:
         return candidates[0], [{"model": candidates[0].name, "n_parameters": 6 * candidates[0].n_parameters,
                                 "status": "the only candidate"}]
-    folds = calibration_folds(len(W), None, n_splits=min(int(cv), len(W)), random_state=random_state)
+    if groups is not None:
+        groups = check_groups(groups, len(W), purpose="leave-poses-out cross-validation of the drift",
+                              fix="pass groups=None when every row is a pose")
+    n_units = len(W) if groups is None else np.unique(groups).size
+    folds = calibration_folds(len(W), groups, n_splits=min(int(cv), n_units), random_state=random_state)
     force, torque = _held_out_errors(g_s, W, values or {"time": np.zeros(len(W))}, candidates, folds)
     scorable = ~np.isnan(force).any(axis=1)
     if not scorable.any():
@@ -448,7 +455,7 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     unit_f = max(float(np.mean(force[reference])), 1e-300)
     unit_t = max(float(np.mean(torque[reference])), 1e-300)
     score = force / unit_f + torque / unit_t
-    best = simplest_within_one_se(score, complexity=[c.n_parameters for c in candidates])
+    best = simplest_within_one_se(score, groups, complexity=[c.n_parameters for c in candidates])
     table = []
     for c, cand in enumerate(candidates):
         row = {"model": cand.name, "n_parameters": 6 * cand.n_parameters}
@@ -458,11 +465,19 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
                        held_out_rms_force_N=float(np.sqrt(np.mean(force[c]) / 3)),
                        held_out_rms_torque_Nm=float(np.sqrt(np.mean(torque[c]) / 3)),
                        score=float(np.mean(score[c])),
-                       score_excess_se=float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else None)
+                       score_excess_se=_mean_se(diff, groups))
         else:
             row["status"] = "not enough poses for its parameters"
         table.append(row)
     return candidates[best], table
+
+
+def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:
+    """Standard error of the mean of ``values`` over the units (groups, else rows)."""
+    if groups is not None:
+        _, inverse = np.unique(groups, return_inverse=True)
+        values = np.bincount(inverse, weights=values) / np.bincount(inverse)
+    return float(values.std(ddof=1) / np.sqrt(values.size)) if values.size > 1 else None
 
 
 def build_drift(candidate: _Candidate, fit: dict, values: NDArray, unit: str, table: list[dict]) -> BiasDrift:
@@ -545,7 +560,7 @@ MAX_REPORT_POSES = 100_000
 
 def identification_report(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool, *, times: ArrayLike | None = None,
                           temperatures: ArrayLike | None = None, drift: str = "auto", cv: int = 20,
-                          random_state: int | None = 0) -> dict:
+                          random_state: int | None = 0, groups: ArrayLike | None = None) -> dict:
     """The report of an in-situ identification: each pose's residual against time (or temperature) with the
     constant bias and with the tool's drift, the drift rate with its standard error, and the held-out choice.
 
@@ -577,7 +592,7 @@ def identification_report(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool
         g_s = np.einsum("nji,j->ni", R, np.asarray(tool.gravity, dtype=float))
         selection = select_drift(g_s, W, None if times is None else np.asarray(times, dtype=float),
                                  None if temperatures is None else np.asarray(temperatures, dtype=float),
-                                 choice=drift, cv=cv, random_state=random_state)[1]
+                                 choice=drift, cv=cv, random_state=random_state, groups=groups)[1]
     else:
         selection = []
     if d is not None and d.variable == "temperature":

@@ -401,7 +401,7 @@ def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayL
 def identify_tool_load(
     sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
     times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
-    time_unit: str = "s", cv: int = 20, random_state: int | None = 0,
+    time_unit: str = "s", cv: int = 20, random_state: int | None = 0, groups: ArrayLike | None = None,
 ) -> ToolLoad:
     """Identify a tool's mass, centre of mass and the sensor bias (and its drift) from static poses.
 
@@ -432,6 +432,9 @@ def identify_tool_load(
         Folds of the leave-poses-out cross-validation (at most one per pose).
     random_state : int or None
         Seed of the folds.
+    groups : array-like of shape (n,), optional
+        The pose of each row when several rows are samples of one static pose (a run log's ``pose`` column):
+        the cross-validation holds a pose's rows out together. ``None``: every row is a pose.
 
     Returns
     -------
@@ -473,7 +476,8 @@ def identify_tool_load(
             value=n, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
             settings={"subdivisions": 0},
         )
-    candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state)
+    candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state,
+                                    groups=None if groups is None else np.asarray(groups))
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
     fit = fit_gravity_blocks(g_s, W, candidate.basis({"time": np.zeros(n)} if values is None
                                                      else {candidate.variable: values}))
