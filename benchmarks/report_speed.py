@@ -15,7 +15,7 @@ and end is printed with the figures.
 
 Run::
 
-    nice -n 10 python benchmarks/report_speed.py --repeats 1
+    nice -n 10 python benchmarks/report_speed.py --repeats 1 --cases 80k,wide,million
 """
 
 from __future__ import annotations
@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -44,49 +45,58 @@ def sensor(n_rows: int, n_channels: int, n_groups: int, seed: int = 0) -> Calibr
         :n_rows], meta={"sensor": "benchmark sensor"})
 
 
-def timed(argv: list[str], repeats: int) -> tuple[float, list[float]]:
-    times = []
+def timed(argv: list[str], repeats: int) -> dict:
+    """Median wall time [s] of ``ftcal ARGV`` and the CPU time [s] it and its worker processes used (user + system:
+    what an idle machine would need at least, divided by the cores it keeps busy)."""
+    walls, cpus = [], []
     for _ in range(repeats):
+        before = resource.getrusage(resource.RUSAGE_CHILDREN)
         t0 = time.perf_counter()
         done = subprocess.run([sys.executable, "-m", "ftcal", *argv], capture_output=True, text=True)
-        times.append(time.perf_counter() - t0)
+        walls.append(time.perf_counter() - t0)
+        after = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
         if done.returncode != 0:
             raise SystemExit(f"ftcal {' '.join(argv)} failed:\n{done.stderr[-2000:]}")
-    return statistics.median(times), times
+    return {"wall_s": round(statistics.median(walls), 1), "cpu_s": round(statistics.median(cpus), 1),
+            "load_average_after": os.getloadavg()[0]}
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=1)
-    parser.add_argument("--skip-million", action="store_true", help="leave out the 10^6-row case")
+    parser.add_argument("--cases", default="80k,wide,million", help="comma-separated: 80k, wide, million")
     args = parser.parse_args()
     results = {"load_average_start": os.getloadavg(), "cores": os.cpu_count()}
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
+        cases = args.cases.split(",")
         sensor(80_000, 8, 40).save(work / "big.csv")
         base = ["fit", str(work / "big.csv"), "--model", "linear", "--report", "--force", "-q", "--out"]
-        results["fit_linear_report_80k_no_baselines_s"] = timed(base + [str(work / "a"), "--no-baselines"],
-                                                                args.repeats)
-        results["fit_linear_report_80k_s"] = timed(base + [str(work / "b")], args.repeats)
-        facts = json.loads((work / "b" / "linear.report.json").read_text())
-        results["80k_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
-        print(json.dumps(results, indent=1), flush=True)
-        wide = sensor(1200, 500, 12, seed=1)
-        wide.save(work / "wide.npz")
-        results["fit_linear_report_1200x500_s"] = timed(["fit", str(work / "wide.npz"), "--model", "linear",
-                                                         "--report", "--force", "-q", "--out", str(work / "w")],
-                                                        args.repeats)
-        facts = json.loads((work / "w" / "linear.report.json").read_text())
-        results["1200x500_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
-        print(json.dumps(results, indent=1), flush=True)
-        if not args.skip_million:
-            big = sensor(1_000_000, 8, 100, seed=2)
-            big.save(work / "million.npz")
+        if "80k" in cases:
+            results["fit_linear_report_80k_no_baselines"] = timed(base + [str(work / "a"), "--no-baselines"],
+                                                                  args.repeats)
+            print(json.dumps(results, indent=1), flush=True)
+            results["fit_linear_report_80k"] = timed(base + [str(work / "b")], args.repeats)
+            facts = json.loads((work / "b" / "linear.report.json").read_text())
+            results["80k_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
+            print(json.dumps(results, indent=1), flush=True)
+        if "wide" in cases:
+            sensor(1200, 500, 12, seed=1).save(work / "wide.npz")
+            results["fit_linear_report_1200x500"] = timed(["fit", str(work / "wide.npz"), "--model", "linear",
+                                                           "--report", "--force", "-q", "--out", str(work / "w")],
+                                                          args.repeats)
+            facts = json.loads((work / "w" / "linear.report.json").read_text())
+            results["1200x500_model_choice"] = {c["model"]: c.get("rmse") or c["status"]
+                                                for c in facts["model_choice"]}
+            print(json.dumps(results, indent=1), flush=True)
+        if "million" in cases:
+            sensor(1_000_000, 8, 100, seed=2).save(work / "million.npz")
             subprocess.run([sys.executable, "-m", "ftcal", "fit", str(work / "million.npz"), "--model", "linear",
                             "-q", "--out", str(work / "mm")], check=True)
-            results["report_linear_1e6_s"] = timed(["report", str(work / "mm" / "linear.model.npz"),
-                                                    str(work / "million.npz"), "--force", "-q", "--out",
-                                                    str(work / "mr")], args.repeats)
+            results["report_linear_1e6"] = timed(["report", str(work / "mm" / "linear.model.npz"),
+                                                  str(work / "million.npz"), "--force", "-q", "--out",
+                                                  str(work / "mr")], args.repeats)
             facts = json.loads((work / "mr" / "linear.report.json").read_text())
             results["1e6_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
     results["load_average_end"] = os.getloadavg()

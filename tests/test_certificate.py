@@ -139,7 +139,7 @@ def test_conditions_are_printed_when_given_and_not_stated_otherwise(certified):
     assert "dead weights, class M1" in shown.dom and "A. Tester" in shown.dom
     # the data have no temperature: not stated, and how to add it
     row = re.search(r"<tr><td>ambient temperature</td><td>(.*?)</td></tr>", shown.dom).group(1)
-    assert "not stated" in row and "temperature" in row and "--ambient-temperature" in row
+    assert "not stated" in row and "temperature" in row and "ambient_temperature: 23 °C" in row
 
 
 def test_warnings_name_a_better_stock_model_errors_beyond_full_scale_and_few_rows(tmp_path):

@@ -295,10 +295,23 @@ def _load_cases(y: NDArray, pred: NDArray, groups: NDArray | None, fs: NDArray) 
 
 
 def _round(a: NDArray, digits: int = 6) -> list:
-    """Floats to ``digits`` significant digits (a compact JSON); NaN becomes None."""
+    """Floats to ``digits`` significant digits (a compact JSON); NaN becomes None.
+
+    Examples
+    --------
+    >>> _round(np.array([[123.456789, float("nan")], [-0.000123456789, 0.0]]), 3)
+    [[123.0, None], [-0.000123, 0.0]]
+    """
     a = np.asarray(a, dtype=float)
-    out = [float(f"{v:.{digits}g}") if np.isfinite(v) else None for v in a.ravel()]
-    return np.array(out, dtype=object).reshape(a.shape).tolist()
+    finite = np.isfinite(a)
+    magnitude = np.floor(np.log10(np.abs(np.where(finite & (a != 0), a, 1.0))))
+    scale = 10.0 ** (digits - 1 - magnitude)
+    rounded = np.where(finite, np.round(np.where(finite, a, 0.0) * scale) / scale, np.nan)
+    if finite.all():
+        return rounded.tolist()
+    out = rounded.astype(object)
+    out[~finite] = None
+    return out.tolist()
 
 
 def _parse_interval(text: str) -> _dt.timedelta | None:
@@ -574,7 +587,7 @@ def calibration_certificate(
         "date_utc": date.strftime("%Y-%m-%d %H:%M:%S UTC"),
         "ftcal_version": getattr(ftcal, "__version__", "unknown"),
         "command": command,
-        "sensor": sensor or str(dataset.meta.get("sensor", "not named (pass --sensor NAME)")),
+        "sensor": sensor or str(dataset.meta.get("sensor", "not named (give the sensor's name or serial number)")),
         "axes": [{"name": a, "unit": u} for a, u in zip(names, units)],
         "model": {"type": name, "file": None if model_path is None else Path(model_path).name,
                   "path": None if model_path is None else str(model_path),
@@ -673,8 +686,8 @@ def _comparison(choice: list[dict]) -> dict:
     else:
         outcome = "stock better"
         sentence = (f"The best stock model, {best['model']}, scores {rb:.4g} N against this calibration's {r:.4g} N: "
-                    f"{100 * (ratio - 1):.0f} % better, beyond one standard error ({se:.2g} N). Consider it (or "
-                    "--model auto, which chooses among them).")
+                    f"{100 * (ratio - 1):.0f} % better, beyond one standard error ({se:.2g} N). Consider it (or the "
+                    "auto model, which chooses among them).")
     return {"best_stock": best["model"], "best_stock_rmse": rb, "rmse": r, "ratio": ratio, "combined_se": se,
             "outcome": outcome, "sentence": sentence}
 
@@ -725,8 +738,9 @@ def _warnings(accuracy: list[dict], comparison: dict, X: NDArray, y: NDArray, fo
                 "expected): the errors are not normal (a few large ones); read U95 with care.")})
     if rated_fs is None:
         out.append({"kind": "no rated capacity", "text": (
-            "No rated capacity was given: every % FS figure is against the largest load of the data. Pass "
-            "--rated Fx=...,Fy=...,... (N, N·m) for figures against the sensor's rated capacity.")})
+            "No rated capacity was given: every % FS figure is against the largest load of the data. Give the "
+            "sensor's rated capacity per axis (N, N·m; rated=, or the rated option of ftcal report) for figures "
+            "against it.")})
     return out
 
 
@@ -811,9 +825,9 @@ def render_report_html(report: dict) -> str:
              + (f", {_fmt(d['groups'])} groups" if d.get("groups") else "")
              + (f", <code>{_fmt(Path(d['file']).name)}</code>" if d.get("file") else "")],
             ["full scale", _fmt(report.get("full_scale_source", "largest load of the data"))],
-            ["specification", "none given (pass --spec 1%FS)" if spec is None else
+            ["specification", "none given (a spec of e.g. 1 % FS gives a PASS/FAIL per axis)" if spec is None else
              "U95 ≤ " + ", ".join(f"{a['axis']} {_fmt(a['spec_pct_fs'])} %" for a in acc) + " of full scale"],
-            ["recalibration due", _not_stated(cond.get("recalibration_due"), "pass --recalibration-interval")],
+            ["recalibration due", _not_stated(cond.get("recalibration_due"), "give a recalibration interval")],
         ]),
     ]
     if verdict is None:
@@ -933,7 +947,7 @@ def render_report_html(report: dict) -> str:
     r = report["calibrated_range"]
     parts += [
         "<section id=\"range\"><h2>Calibrated range</h2><p class=\"note\">Readings or loads beyond these were not "
-        "calibrated (<code>ftcal predict --range</code> flags them).</p>",
+        "calibrated (the range check of <code>ftcal predict</code> flags them).</p>",
         _table(["axis", "min", "max", "|max|"] + (["rated capacity"] if rated else []),
                [[f"{a} [{u}]", _fmt(lo), _fmt(hi), _fmt(mm)] + ([_fmt(ac["rated"])] if rated else [])
                 for a, u, lo, hi, mm, ac in zip(names, units, d["wrench_min"], d["wrench_max"], r["wrench_abs_max"],
@@ -945,8 +959,8 @@ def render_report_html(report: dict) -> str:
         f"{_fmt(d['temperature_range'][0])} to {_fmt(d['temperature_range'][1])} °C (the data's temperature column)"
     ambient = cond.get("ambient_temperature")
     how_temp = ("the data have no temperature column: add one named <code>temperature</code> [°C] to the data file, "
-                "or state the ambient temperature with <code>--ambient-temperature 23</code> or "
-                "<code>ambient_temperature: 23 °C</code> in the conditions file")
+                "or state the ambient temperature (<code>ambient_temperature: 23 °C</code> in the conditions file, "
+                "or the ambient temperature option of <code>ftcal report</code>)")
     cond_rows = []
     for key, label_ in CONDITION_FIELDS.items():
         if key == "ambient_temperature":
@@ -961,8 +975,8 @@ def render_report_html(report: dict) -> str:
     if ambient is not None and temp_data is not None:
         cond_rows.append(["sensor temperature (data)", temp_data])
     parts += ["<h2>Conditions and traceability</h2><p class=\"note\">From the conditions file beside the data "
-              "(<code>DATA.conditions.yaml</code> or <code>.json</code>), <code>--conditions FILE</code> or the "
-              "options of the same names.</p>", _table(["", ""], cond_rows),
+              "(<code>DATA.conditions.yaml</code> or <code>.json</code>), a conditions file named on the command "
+              "line, or the options of the same names.</p>", _table(["", ""], cond_rows),
               "<h3>Data</h3>",
               _table(["", ""], [
                   ["rows", _fmt(d["rows"])], ["raw channels", _fmt(d["channels"])],
@@ -1037,6 +1051,11 @@ def write_calibration_report(report: dict, html_path: str | Path, *, overwrite: 
 def report_json(report: dict) -> str:
     """The report's facts as JSON text (the pictures left out)."""
     facts = plain_json({k: v for k, v in report.items() if k not in ("figures", "_cases", "cases")})
-    if "cases" in report:  # plain already (rounded lists), and large: not walked again
-        facts["cases"] = report["cases"]
-    return json.dumps(facts, indent=1, default=str, allow_nan=False) + "\n"
+    text = json.dumps(facts, indent=1, default=str, allow_nan=False)
+    if "cases" not in report:
+        return text + "\n"
+    # plain already (rounded lists) and large: written compactly, by the C encoder (indentation would take the
+    # pure-Python one, ten times slower on a hundred thousand cases)
+    cases = json.dumps(report["cases"], separators=(",", ":"), allow_nan=False)
+    return text[:-1].rstrip() + (",\n" if facts else "") + f' "cases": {cases}\n}}\n'
+

@@ -448,7 +448,7 @@ def _draw_order(magnitude: NDArray, limit: int, seed: int = 0) -> NDArray[np.int
 
 def error_vs_load_figure(
     applied: ArrayLike, error_pct_fs: ArrayLike, *, axis_names, units, band_pct_fs: ArrayLike,
-    band_label: str = "spec", max_points: int = 20000,
+    band_label: str = "spec", max_points: int = 8000,
 ) -> Figure:
     """Per-axis panels of held-out error [% FS] against the applied load, the largest errors drawn on top.
 
@@ -516,7 +516,7 @@ def error_vs_load_figure(
 
 
 def residual_magnitude_figure(applied: ArrayLike, error: ArrayLike, *, force_columns, torque_columns,
-                              color: str = "#4d4d4d", max_points: int = 20000) -> Figure:
+                              color: str = "#4d4d4d", max_points: int = 8000) -> Figure:
     """Held-out force (and torque) error magnitude against the load magnitude, the largest errors on top.
 
     ``applied`` and ``error`` are ``(n, k)`` in [N] / [N·m]; ``force_columns`` / ``torque_columns`` index them
@@ -548,7 +548,7 @@ def residual_magnitude_figure(applied: ArrayLike, error: ArrayLike, *, force_col
     return fig
 
 
-def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_points: int = 20000) -> Figure:
+def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_points: int = 8000) -> Figure:
     """Held-out force error by load direction (sensor frame), the largest errors drawn on top.
 
     ``force`` and ``force_error`` are ``(n, 3)`` [N].
