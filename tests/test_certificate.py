@@ -316,3 +316,16 @@ def test_report_of_auto_reuses_its_comparison_and_refits_only_its_choice():
     # other folds (or another dataset) than auto's: nothing is reused
     other = calibration_certificate(auto, data, cv=3, figures=False, baselines=False)
     assert other["validation"]["reused_auto_comparison"] is False
+
+
+def test_a_million_rows_keep_every_stock_baseline_within_budget_by_fitting_a_subset():
+    """On 10^6 rows (800 000 per training fold) no baseline is skipped: the polynomial ones are fitted on a subset
+    small enough for the memory limit and the work budget, the kernel ones on their own 1000 rows."""
+    from ftcal.evaluation._calibration_report import (BASELINE_WORK_BUDGET, _baseline_skip_reason, baseline_cost)
+    from ftcal.core._memory import memory_limit_bytes
+    from ftcal.models import stock_baselines
+
+    for name, est in stock_baselines(8).items():
+        n_bytes, flops, rows = baseline_cost(name, est, 800_000, 8, 6, 5)
+        assert rows <= 200_000 and n_bytes < memory_limit_bytes() and flops <= BASELINE_WORK_BUDGET, name
+        assert _baseline_skip_reason(name, est, 800_000, 8, 6, 5) is None

@@ -981,9 +981,10 @@ def render_report_html(report: dict) -> str:
               _table(["", ""], [
                   ["rows", _fmt(d["rows"])], ["raw channels", _fmt(d["channels"])],
                   ["groups (poses / load configurations)", _fmt(d["groups"])],
-                  ["largest |F|", f"{_fmt(d['max_force_norm'])} N"],
-                  ["largest |T|", f"{_fmt(d['max_torque_norm'])} N·m"],
-                  ["command", f"<code>{_fmt(report.get('command'))}</code>"]]),
+                  ["largest |F|", f"{_fmt(d['max_force_norm'])} N"]]
+                  + ([["largest |T|", f"{_fmt(d['max_torque_norm'])} N·m"]] if d.get("max_torque_norm") is not None
+                     else [])
+                  + [["command", f"<code>{_fmt(report.get('command'))}</code>"]]),
               "</section>"]
     pics = [(key, t) for key, t in (("residuals_vs_magnitude", "Held-out error against load magnitude"),
                                      ("residuals_vs_direction", "Held-out error against load direction"))
