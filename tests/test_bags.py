@@ -122,6 +122,30 @@ def test_a_missing_topic_or_a_wrong_type_names_the_topics_present(tmp_path, caps
     assert "no topic /tf or /tf_static" in err
 
 
+def test_a_folder_of_bags_is_read_and_a_raw_field_that_is_not_an_array_is_refused(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=7)
+    (tmp_path / "bags").mkdir()
+    bag = write_bag(tmp_path / "bags" / "rec", "mcap", sensor_time=rec.sensor_time, reading=rec.reading * 100,
+                    raw=True, pose_time=rec.pose_time, joints=rec.joints, joint_names=robot.joint_names)
+    out = tmp_path / "t"
+    data = ftcal.CalibrationDataset(raw=np.eye(6) * 100, wrench=np.eye(6))
+    ftcal.save_model(ftcal.LinearCalibrator().fit(np.vstack([data.raw, 2 * data.raw, -data.raw]),
+                                                  np.vstack([data.wrench, 2 * data.wrench, -data.wrench])),
+                     tmp_path / "x.model.npz")
+    err = _one_line_error(["identify-load", str(tmp_path / "bags"), "--raw-topic", "/ft_sensor/raw", "--raw-field",
+                           "layout", "--model", str(tmp_path / "x.model.npz"), "--out", str(out)], capsys, out)
+    assert f"{bag}: field 'layout' of topic /ft_sensor/raw" in err and "is not an array of numbers" in err
+    err = _one_line_error(["identify-load", str(tmp_path / "bags"), "--raw-topic", "/ft_sensor/raw", "--raw-field",
+                           "values", "--model", str(tmp_path / "x.model.npz"), "--out", str(out)], capsys, out)
+    assert "has no field 'values'; its fields are layout, data" in err and "Fix: name the array field with " \
+        "--raw-field FIELD" in err
+    assert main(["identify-load", str(tmp_path / "bags"), "--raw-topic", "/ft_sensor/raw", "--model",
+                 str(tmp_path / "x.model.npz"), "--out", str(out), "-q"]) == 0
+    tool = ToolLoad.load(out / "tool.tool.json")
+    assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
+
+
 def test_a_bag_without_a_still_segment_is_refused(tmp_path, capsys, robot_poses):
     robot, q = robot_poses
     t = np.arange(0.0, 10.0, 0.02)

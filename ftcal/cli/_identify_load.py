@@ -163,7 +163,7 @@ def _input_kind(item: str) -> str:
     from ..io._poses import is_pose_file
 
     path = Path(item)
-    if is_bag(path):
+    if is_bag(path) or (path.is_dir() and bag_files([item]) is not None):
         return "ROS bag"
     if path.is_file() and path.suffix.lower() == ".csv" and is_pose_file(path):
         return "pose file"

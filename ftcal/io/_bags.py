@@ -524,7 +524,7 @@ def read_bag(
                         try:
                             value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
                         except AttributeError:
-                            fields = [f for f in getattr(msg, "__dataclass_fields__", {})]
+                            fields = [f for f in getattr(msg, "__dataclass_fields__", {}) if not f.startswith("__")]
                             raise LogFormatError(f"{path}: topic {sensor} ({conn.msgtype}) has no field {raw_field!r}; "
                                                  f"its fields are {', '.join(fields)}.", parameter="raw_field",
                                                  value=raw_field, fix="name the array field with {raw_field}",
