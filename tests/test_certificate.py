@@ -195,6 +195,15 @@ def test_the_readme_pdf_command_prints_a_numbered_multi_page_pdf_with_the_summar
     last = subprocess.run(["pdftotext", "-f", str(pages), "-l", str(pages), str(pdf), "-"], capture_output=True,
                           text=True, check=True).stdout
     assert f"page {pages} of {pages}" in last
+    # the wide applied-vs-indicated table gets a landscape page and is not cut: its last column is printed
+    texts = [subprocess.run(["pdftotext", "-f", str(p), "-l", str(p), "-layout", str(pdf), "-"], capture_output=True,
+                            text=True, check=True).stdout for p in range(1, pages + 1)]
+    (cases_page,) = [p for p, t in enumerate(texts, 1) if "Applied against indicated load" in t]
+    assert re.search(r"Tz\s+error", texts[cases_page - 1])
+    sizes = subprocess.run(["pdfinfo", "-f", "1", "-l", str(pages), str(pdf)], capture_output=True, text=True,
+                           check=True).stdout
+    width, height = map(float, re.search(rf"Page\s+{cases_page} size:\s+([\d.]+) x ([\d.]+)", sizes).groups())
+    assert width > height
     subprocess.run(["pdftoppm", "-f", "1", "-l", "1", "-r", "40", "-gray", "-png", str(pdf), str(tmp_path / "p")],
                    check=True)
     (png,) = tmp_path.glob("p*.png")

@@ -768,7 +768,12 @@ section{margin-top:1em}
 @page{size:A4;margin:14mm 12mm 16mm 12mm;
 @bottom-right{content:"page " counter(page) " of " counter(pages);font-size:9pt;color:#444}
 @bottom-left{content:"ftcal calibration report";font-size:9pt;color:#444}}
-@media print{body{margin:0;max-width:none;font-size:10pt}section{break-before:page;margin-top:0}
+.cases{overflow-x:auto}.cases table{font-size:.8em}.cases td,.cases th{padding:.15em .3em}
+@page wide{size:A4 landscape;margin:12mm 12mm 16mm 12mm;
+@bottom-right{content:"page " counter(page) " of " counter(pages);font-size:9pt;color:#444}
+@bottom-left{content:"ftcal calibration report";font-size:9pt;color:#444}}
+@media print{body{margin:0;max-width:none;font-size:10pt}section#cases{page:wide}.cases{overflow:visible}
+.cases table{font-size:7pt}section{break-before:page;margin-top:0}
 section.first{break-before:auto}h2{break-after:avoid}table,img,figure{break-inside:avoid}
 table.long{break-inside:auto}thead{display:table-header-group}tr{break-inside:avoid}}
 """
@@ -913,8 +918,8 @@ def render_report_html(report: dict) -> str:
         rows = []
         for i in range(shown):
             where = cases["group"][i] if cases.get("group") is not None else cases["first_row"][i]
-            rows.append([str(i + 1), _fmt(where)] + [_fmt(x, 5) for x in cases["applied"][i]]
-                        + [_fmt(x, 5) for x in cases["indicated"][i]] + [_fmt(x, 3) for x in cases["error_pct_fs"][i]])
+            rows.append([str(i + 1), _fmt(where)] + [_fmt(x, 4) for x in cases["applied"][i]]
+                        + [_fmt(x, 4) for x in cases["indicated"][i]] + [_fmt(x, 3) for x in cases["error_pct_fs"][i]])
         parts.append(
             "<section id=\"cases\"><h2>Applied against indicated load (held out), worst first</h2>"
             f"<p class=\"note\">One row per {_fmt(cases['by'])}: the applied (reference) load, the load the "
