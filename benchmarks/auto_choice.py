@@ -67,7 +67,7 @@ def part_tare(schedule: str = "short") -> dict:
 
 
 def _auto_record(auto: ftcal.AutoCalibrator, test_rmse: float | None, seconds: float) -> dict:
-    return {"chosen": auto.best_name_, "cv_results": auto.cv_results_, "test_rmse": test_rmse,
+    return {"chosen": auto.best_name_, "cv_results": auto.comparison_, "test_rmse": test_rmse,
             "fit_seconds": seconds, "table": auto.summary()}
 
 

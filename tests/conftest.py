@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import ftcal
 import pytest
 
 from ftcal import (
@@ -40,8 +41,13 @@ TINY_SCHEDULE = dict(
 
 #: Names of the first instances of :func:`tiny_calibrators`, in order: every public calibrator of ftcal (each run
 #: by the ``tiny_calibrator`` fixture through the shared tests on affine data).
+#: Registry names the instances below stand for; every other registered calibrator joins the list, built with its
+#: defaults by the registry (so a calibrator added in one module and one registry line is in the common checks).
+_COVERED = {"linear", "comparative", "directional", "polynomial", "axis_nonlinear", "directional_ensemble",
+            "comparative_ensemble", "gaussian_process", "auto"}
+_REGISTERED = tuple(name for name in ftcal.CALIBRATOR_NAMES if name not in _COVERED)
 CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
-                    "gaussian_process", "auto")
+                    "gaussian_process", "auto") + _REGISTERED
 #: Names of its last instances: the wrappers, in the common checks too, but whose data are not the shared affine
 #: data (a temperature column; fitted members; rows in time order), tested in test_sklearn_compat.py::test_wrappers_*.
 WRAPPER_KINDS = ("stacked", "temperature_compensated", "history")
@@ -63,6 +69,7 @@ def tiny_calibrators(random_state: int = 0) -> list:
                                   random_state=random_state),
         AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator(degree=2))],
                        cv=3, baselines=False),
+        *(ftcal.make_calibrator(name, random_state=random_state) for name in _REGISTERED),
         StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)], weights=[0.5, 0.5]),
         TemperatureCompensatedCalibrator(LinearCalibrator()),
         HistoryCalibrator(LinearCalibrator(), taus=(1.0, 4.0), cv=3),

@@ -49,8 +49,8 @@ def test_auto_picks_the_ltm_on_affine_data():
     raw, w, groups = affine_data()
     auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     assert auto.best_name_ == "linear"
-    assert auto.cv_results_["folds"] == "group" and auto.cv_results_["n_splits"] == 5
-    assert set(auto.cv_results_["status"]) == {"scored"}
+    assert auto.comparison_["folds"] == "group" and auto.comparison_["n_splits"] == 5
+    assert set(auto.comparison_["status"]) == {"scored"}
     np.testing.assert_allclose(auto.predict(raw), LinearCalibrator(alpha=1.0).fit(raw, w).predict(raw))
 
 
@@ -58,7 +58,7 @@ def test_auto_picks_a_nonlinear_model_on_nonlinear_data():
     raw, w = nonlinear_data()
     auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0, baselines=False).fit(raw, w)
     assert auto.best_name_ != "linear"
-    r = auto.cv_results_
+    r = auto.comparison_
     chosen = r["name"].index(auto.best_name_)
     assert r["rmse"][chosen] < 0.5 * r["rmse"][r["name"].index("linear")]
 
@@ -82,7 +82,7 @@ def test_auto_in_a_pipeline_and_grid_search_routes_groups():
                               scoring=ftcal.neg_scaled_rmse)
         search.fit(raw, w, groups=groups)
     fitted = search.best_estimator_.named_steps["auto"]
-    assert fitted.cv_results_["folds"] == "group"  # the groups reached the inner model choice
+    assert fitted.comparison_["folds"] == "group"  # the groups reached the inner model choice
 
 
 def test_auto_model_file_round_trip(tmp_path):
@@ -90,7 +90,7 @@ def test_auto_model_file_round_trip(tmp_path):
     auto = AutoCalibrator(candidates=CLOSED_FORM[:3], alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     path = ftcal.save_model(auto, tmp_path / "auto.model.npz")
     back = ftcal.load_model(path)
-    assert back.best_name_ == auto.best_name_ and back.cv_results_ == auto.cv_results_
+    assert back.best_name_ == auto.best_name_ and back.comparison_ == auto.comparison_
     np.testing.assert_array_equal(back.predict(raw), auto.predict(raw))
 
 

@@ -83,10 +83,10 @@ def test_wrappers_route_groups_to_an_inner_auto():
     raw, wrench, groups, temperature = grouped_data()
     auto = AutoCalibrator(candidates=[("recorder", GroupRecordingCalibrator())], cv=3)
     model = TemperatureCompensatedCalibrator(auto).fit(np.column_stack([raw, temperature]), wrench, groups=groups)
-    assert model.estimator_.cv_results_["folds"] == "group"
+    assert model.estimator_.comparison_["folds"] == "group"
     np.testing.assert_array_equal(model.estimator_.best_estimator_.groups_seen_, groups)
     ensemble = EnsembleCalibrator(auto, n_members=1).fit(raw, wrench, groups=groups)
-    assert ensemble.estimators_[0].cv_results_["folds"] == "group"
+    assert ensemble.estimators_[0].comparison_["folds"] == "group"
 
 
 def test_routing_declarations():
@@ -182,3 +182,104 @@ def test_calibrators_that_take_groups_refuse_bad_groups_before_fitting(calibrato
     else:
         fitted = clone(calibrator).fit(raw, w, groups=groups)
         np.testing.assert_array_equal(fitted.predict(raw), clone(calibrator).fit(raw, w).predict(raw))
+
+
+# ------------------------------------------------------------------ one routed fit: auto and every meta-estimator
+class FitCountingRecorder(GroupRecordingCalibrator):
+    """The recorder, also counting the fits that received groups (in this process: auto's light work)."""
+
+    fits_with_groups = 0
+    fits = 0
+
+    def fit(self, X, y, groups=None):
+        type(self).fits += 1
+        type(self).fits_with_groups += groups is not None
+        return super().fit(X, y, groups=groups)
+
+
+class OtherCountingRecorder(FitCountingRecorder):
+    """The same, counted apart."""
+
+    fits_with_groups = 0
+    fits = 0
+
+
+@pytest.fixture
+def counting():
+    for cls in (FitCountingRecorder, OtherCountingRecorder):
+        cls.fits = cls.fits_with_groups = 0
+    yield FitCountingRecorder
+
+
+def _declining():
+    with config_context(enable_metadata_routing=True):
+        return FitCountingRecorder().set_fit_request(groups=False)
+
+
+def test_auto_routes_groups_to_a_candidate_that_requests_them(counting):
+    raw, wrench, groups, _ = grouped_data()
+    auto = AutoCalibrator(candidates=[("recorder", FitCountingRecorder())], baselines=False, stack=False, cv=3)
+    auto.fit(raw, wrench, groups=groups)
+    assert counting.fits == 4 and counting.fits_with_groups == 4  # 3 folds and the refit
+    np.testing.assert_array_equal(auto.best_estimator_.groups_seen_, groups)
+
+
+def test_a_candidate_that_declines_groups_never_sees_them_through_auto(counting):
+    raw, wrench, groups, _ = grouped_data()
+    auto = AutoCalibrator(candidates=[("declining", _declining())], baselines=False, stack=False, cv=3)
+    auto.fit(raw, wrench, groups=groups)
+    assert counting.fits == 4 and counting.fits_with_groups == 0
+    assert auto.comparison_["folds"] == "group"  # auto itself still holds out whole groups
+
+
+@pytest.mark.parametrize("how", ["pipeline", "grid_search", "cross_validate"])
+def test_a_declining_candidate_never_sees_groups_through_auto_in_scikit_learn(how, counting):
+    raw, wrench, groups, _ = grouped_data()
+    with config_context(enable_metadata_routing=True):
+        auto = AutoCalibrator(candidates=[("declining", FitCountingRecorder().set_fit_request(groups=False)),
+                                          ("recorder", OtherCountingRecorder())], baselines=False, stack=False, cv=3)
+        if how == "pipeline":
+            Pipeline([("scale", FunctionTransformer()), ("auto", auto)]).fit(raw, wrench, groups=groups)
+        elif how == "grid_search":
+            GridSearchCV(auto, {"cv": [3]}, cv=GroupKFold(2)).fit(raw, wrench, groups=groups)
+        else:
+            cross_validate(auto, raw, wrench, cv=GroupKFold(2), params={"groups": groups})
+    # every fit of the recorder got groups, none of the declining one's
+    assert counting.fits >= 3 and counting.fits_with_groups == 0
+    assert OtherCountingRecorder.fits >= 3 and OtherCountingRecorder.fits_with_groups == OtherCountingRecorder.fits
+
+
+def test_auto_declares_its_candidates_in_its_routing():
+    auto = AutoCalibrator(candidates=[("declining", _declining()), ("recorder", GroupRecordingCalibrator())],
+                          baselines=False)
+    routing = auto.get_metadata_routing()
+    assert {"declining", "recorder"} <= {name for name, _ in routing}
+    with config_context(enable_metadata_routing=True):
+        routed = routing.route_params(params={"groups": np.arange(4)}, caller="fit")
+    assert "groups" not in routed["declining"].fit and "groups" in routed["recorder"].fit
+
+
+def test_a_stack_routes_groups_to_its_members_and_takes_fitted_ones_explicitly(counting):
+    from ftcal.models._auto import StackedCalibrator
+
+    raw, wrench, groups, _ = grouped_data()
+    stack = StackedCalibrator(estimators=[FitCountingRecorder(), _declining()], weights=[0.5, 0.5])
+    stack.fit(raw, wrench, groups=groups)
+    assert counting.fits == 2 and counting.fits_with_groups == 1
+    fitted = [LinearCalibrator().fit(raw, wrench), LinearCalibrator().fit(raw, 2 * wrench)]
+    stack = StackedCalibrator(estimators=[LinearCalibrator(), LinearCalibrator()], weights=[0.5, 0.5])
+    stack.fit(raw, wrench, fitted_estimators=fitted)
+    assert stack.estimators_[1] is fitted[1]
+    np.testing.assert_allclose(stack.predict(raw[:3]), 1.5 * wrench[:3], atol=1e-8)
+    assert not any(name.startswith("_fit") for name in vars(stack))  # no hidden fit state
+
+
+def test_history_routes_groups_to_its_estimator(counting):
+    from ftcal import HistoryCalibrator
+
+    raw, wrench, groups, _ = grouped_data()
+    HistoryCalibrator(FitCountingRecorder(), taus=(2.0,), cv=3).fit(raw, wrench, groups=groups)
+    assert counting.fits > 0 and counting.fits_with_groups == counting.fits
+    counting.fits = counting.fits_with_groups = 0
+    HistoryCalibrator(_declining(), taus=(2.0,), cv=3).fit(raw, wrench, groups=groups)
+    assert counting.fits > 0 and counting.fits_with_groups == 0

@@ -9,7 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 from sklearn.utils._param_validation import Interval, Options, StrOptions
 
-from ._base import BaseCalibrator, GroupsFit
+from ._base import BaseCalibrator, GroupsFit, declare
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import calibration_folds, grouped_subsample, simplest_within_one_se
 from ._linear import affine_fit
@@ -199,6 +199,10 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
     def _uses_groups(self) -> bool:
         return isinstance(self.ridge, str)  # "auto": the ridge chosen by a grouped CV
 
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), cost="closed_form", family="axis_nonlinear",
+                       min_training_rows=lambda n_channels: 3 * (n_channels + 1))
+
     def __init__(self, *, powers=(1.5,), ridge="auto", n_refinements=1, alpha=None, zero_reading=None,
                  random_state=None):
         self.powers = powers
@@ -223,7 +227,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         g = gate[:, None]
         return np.hstack([block, g, block * g])
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         ridge = self.ridge if isinstance(self.ridge, str) else float(self.ridge)
         n_ref = int(self.n_refinements)
         ys = scale_torques(y, self.alpha_)
@@ -234,7 +238,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         scale = np.abs(z).max(axis=0)
         self.axis_scale_ = np.where(scale > 0, scale, 1.0)
         block = self._block(z / self.axis_scale_)
-        self.ridge_ = self._cross_validated_ridge(block, z, ys, n_ref) if ridge == "auto" else ridge
+        self.ridge_ = self._cross_validated_ridge(block, z, ys, n_ref, groups) if ridge == "auto" else ridge
         self.coefs_, self.intercepts_ = self._fit_passes(block, z, ys, self.ridge_, n_ref)
 
     def _fit_passes(self, block, z, ys, ridge: float, n_ref: int):
@@ -252,7 +256,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
             previous = self._apply(block, previous, np.array(pass_coefs), np.array(pass_intercepts))
         return np.array(coefs), np.array(intercepts)
 
-    def _cross_validated_ridge(self, block, z, ys, n_ref: int) -> float:
+    def _cross_validated_ridge(self, block, z, ys, n_ref: int, groups: NDArray | None) -> float:
         """The penalty of :data:`RIDGE_GRID` chosen by 5-fold cross-validation with the one-standard-error rule.
 
         Every penalty is scored by the per-sample squared error of the whole
@@ -263,7 +267,6 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         a correction is kept only when the data show that it pays.
         """
         seed = 0 if self.random_state is None else self.random_state
-        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
         rows = grouped_subsample(np.arange(len(ys)), groups, RIDGE_SELECTION_ROWS, seed)  # large data: a subsample
         block, z, ys = block[rows], z[rows], ys[rows]
         groups = None if groups is None else groups[rows]

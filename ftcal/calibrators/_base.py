@@ -24,12 +24,15 @@ common, so each model only implements ``_fit(X, y)`` and
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass, field, fields, replace
 import numbers
 from numbers import Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.utils import Tags
 from sklearn.utils._param_validation import InvalidParameterError, Interval
 from sklearn.utils.validation import check_is_fitted
 
@@ -41,7 +44,115 @@ from ..core._validation import (check_finite_output, check_zero_reading, refuse_
 from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches
 from ._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["BaseCalibrator", "GroupsFit", "with_settings"]
+__all__ = ["BaseCalibrator", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare"]
+
+
+def _rows_per_channel(rows_per_channel: int) -> Callable[[int], int]:
+    return lambda n_channels: rows_per_channel * int(n_channels)
+
+
+#: Kinds of fit by cost, cheapest last: the order ``auto`` schedules its jobs in (the costliest first).
+COSTS: tuple[str, ...] = ("kernel", "network", "heavy", "closed_form")
+
+
+@dataclass
+class CalibrationTags:
+    """What a calibrator can do, declared once next to its class (``__sklearn_tags__().ftcal``).
+
+    Every part of ftcal that needs to know a capability reads it here, never from the class, an attribute or a
+    signature: :class:`~ftcal.AutoCalibrator` (its skipping rule, its job order, how it trains networks, which
+    models choose their structure once), the load-history and temperature wrappers, the CLI (a temperature
+    column), the ONNX export and model files.
+
+    Attributes
+    ----------
+    temperature_column : bool
+        The last column of ``X`` is the sensor temperature [deg C], not a channel.
+    uses_groups : bool
+        ``fit`` uses the rows' groups (one offset per group, a grouped choice inside); requested through metadata
+        routing by default.
+    network : bool
+        A neural network trained by skorch; ``stackable``: trainable with others as one stacked module
+        (:func:`~ftcal.fit_stacked`).
+    stackable : bool
+    reads_history : bool
+        Reads its rows as a time series (a load-history model): must be the outermost model, no ONNX graph.
+    chooses_model : bool
+        Chooses a model by cross-validation inside ``fit`` (``best_estimator_``, ``best_name_``, ``comparison_``).
+    chooses_structure : bool
+        Chooses its structure once on all rows (``structure_params()`` gives it): ``auto`` cross-validates clones
+        with that structure.
+    min_training_rows : callable
+        ``n_channels -> rows``: fewest training rows on which a held-out score says something about the model.
+    cost : {"closed_form", "kernel", "network", "heavy"}
+        What one fit costs: a closed form is light work; a kernel model is cubic in its rows (light on at most
+        ``LIGHT_KERNEL_ROWS``); a network trains for epochs; ``heavy`` anything else (a wrapper of unknown cost).
+    onnx : bool
+        Exportable to an ONNX graph (its class declares ``_emit_onnx``).
+    provides_std : bool
+        ``predict(X, return_std=True)`` gives a standard deviation.
+    family : str
+        What the model is, for ``auto``'s complexity order: ``"linear"`` (the LTM and its equals),
+        ``"polynomial2"``, ``"polynomial3"``, ..., ``"axis_nonlinear"``, ``"kernel"``, ``"network"``; ``""``
+        unknown. A stock baseline of a family is as simple as ftcal's model of that family.
+    """
+
+    temperature_column: bool = False
+    uses_groups: bool = False
+    network: bool = False
+    stackable: bool = False
+    reads_history: bool = False
+    chooses_model: bool = False
+    chooses_structure: bool = False
+    min_training_rows: Callable[[int], int] = field(default_factory=lambda: _rows_per_channel(25))
+    cost: str = "heavy"
+    onnx: bool = False
+    provides_std: bool = False
+    family: str = ""
+
+
+@dataclass
+class FtcalTags(Tags):
+    """scikit-learn's :class:`~sklearn.utils.Tags` with ftcal's :class:`CalibrationTags` as ``ftcal``."""
+
+    ftcal: CalibrationTags = field(default_factory=CalibrationTags)
+
+
+def declare(tags: Tags, **capabilities) -> FtcalTags:
+    """``tags`` with these :class:`CalibrationTags` fields changed: what a class' ``__sklearn_tags__`` calls.
+
+    Any scikit-learn estimator may declare them too (a user's free model given to ``auto`` as a baseline), from
+    its scikit-learn :class:`~sklearn.utils.Tags`.
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import LinearRegression
+    >>> class MyFreeModel(LinearRegression):
+    ...     def __sklearn_tags__(self):
+    ...         return declare(super().__sklearn_tags__(), cost="closed_form")
+    >>> calibration_tags(MyFreeModel()).cost
+    'closed_form'
+    """
+    if not isinstance(tags, FtcalTags):
+        tags = FtcalTags(**{f.name: getattr(tags, f.name) for f in fields(tags)})
+    tags.ftcal = replace(tags.ftcal, **capabilities)
+    return tags
+
+
+def calibration_tags(estimator) -> CalibrationTags:
+    """``estimator``'s :class:`CalibrationTags`; the defaults (a costly model of unknown kind) for any other estimator.
+
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator
+    >>> calibration_tags(LinearCalibrator()).cost
+    'closed_form'
+    >>> from sklearn.linear_model import LinearRegression
+    >>> calibration_tags(LinearRegression()).cost
+    'heavy'
+    """
+    tags = estimator.__sklearn_tags__() if hasattr(estimator, "__sklearn_tags__") else None
+    return getattr(tags, "ftcal", None) or CalibrationTags()
 
 
 def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -305,19 +416,37 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:  # pragma: no cover
         raise NotImplementedError
 
-    def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+    def __sklearn_tags__(self) -> FtcalTags:
+        # a subclass declares what it can do; the defaults describe a costly model of unknown kind
+        tags = declare(super().__sklearn_tags__(), onnx="_emit_onnx" in type(self).__dict__)
         tags.target_tags.required = True
         tags.target_tags.multi_output = True
         tags.target_tags.single_output = False
         tags.input_tags.allow_nan = False
         return tags
 
+    def _adopt_fitted(self, X: NDArray[np.float64], y: NDArray[np.float64], inner, *,
+                      zero_reading: NDArray[np.float64] | None = None) -> None:
+        """The after-fit bookkeeping of a wrapper whose ``inner`` calibrator is fitted: every wrapper calls it.
+
+        ``alpha_`` from ``inner``; ``zero_reading_`` the given one, else ``inner``'s, else estimated from ``X``,
+        ``y``; ``reading_noise_`` and ``calibrated_range_`` of the wrapper's own ``X`` (n, N) (so that
+        :meth:`out_of_range` and :meth:`retare` work on what the wrapper is given); a previous re-tare dropped.
+        """
+        self.alpha_ = float(inner.alpha_)
+        if zero_reading is None:
+            zero_reading = getattr(inner, "zero_reading_", None)
+        self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if zero_reading is None else \
+            np.asarray(zero_reading, dtype=float)
+        self.reading_noise_ = reading_noise(X, y)
+        self.calibrated_range_ = calibrated_range(X)
+        self.__dict__.pop("tare_reading_", None)
+
 
 class GroupsFit:
-    """Mixin of a calibrator that uses the rows' groups inside its ``fit`` (its ``_fit`` reads ``_fit_groups``,
-    checked labels, or None when its parameters do not use them): ``fit(X, y, groups=None)``, the groups requested
-    through metadata routing by default, like a group splitter."""
+    """Mixin of a calibrator that uses the rows' groups inside its ``fit``: ``fit(X, y, groups=None)`` calls
+    ``_fit(X, y, groups)`` with the checked labels (None when its parameters do not use them); the groups are
+    requested through metadata routing by default, like a group splitter."""
 
     __metadata_request__fit = {"groups": True}
     #: What the groups are for, and the fix, in the one-group error (see :func:`check_groups`).
@@ -326,6 +455,9 @@ class GroupsFit:
     def _uses_groups(self) -> bool:
         """Whether this fit uses the groups with these parameters (else they are only checked for their length)."""
         return True
+
+    def __sklearn_tags__(self) -> FtcalTags:
+        return declare(super().__sklearn_tags__(), uses_groups=True)
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
@@ -340,15 +472,9 @@ class GroupsFit:
         -------
         self
         """
-        self._fit_groups = groups
-        try:
-            return super().fit(X, y)
-        finally:
-            del self._fit_groups
-
-    def _prepare_fit(self, X: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        X, y = super()._prepare_fit(X, y)
-        uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
-        groups = check_groups(self.__dict__.get("_fit_groups"), len(X), labels=uses, purpose=purpose, fix=fix)
-        self._fit_groups = groups if uses else None
-        return X, y
+        with limit_threads_here(1):  # as BaseCalibrator.fit
+            X, y = self._prepare_fit(X, y)
+            uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
+            groups = check_groups(groups, len(X), labels=uses, purpose=purpose, fix=fix)
+            self._fit(X, y, groups if uses else None)
+        return self

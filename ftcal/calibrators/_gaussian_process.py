@@ -15,7 +15,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import BaseCalibrator, GroupsFit
+from ._base import BaseCalibrator, GroupsFit, declare
 from ..core._exceptions import ModelFileError
 from ..core._memory import check_allocation
 from ..core._validation import check_bool, check_finite_output, validate_readings
@@ -328,7 +328,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         n, n_channels = X.shape
         m = min(n, int(self.max_samples))
         n_theta = n_channels + 4
@@ -352,7 +352,6 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         sel = np.arange(m)
         if m > self.selection_samples:
             sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
-        groups = getattr(self, "_fit_groups", None)  # checked by GroupsFit before the fit
         group_rows = None if groups is None else groups[rows]
         bases = {"none": np.ones((m, 1)), "linear": np.hstack([np.ones((m, 1)), xc_sub])}
         mean, family, bounds, per_output, theta = self._choose(
@@ -458,6 +457,13 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         low, high = kernel.bounds[:, 0], kernel.bounds[:, 1]
         starts += [rng.uniform(low, high, size=theta.shape) for _ in range(int(self.n_restarts_optimizer))]
         return starts
+
+    def __sklearn_tags__(self):
+        # one length scale per channel to learn: 10 rows per channel; cubic in its rows; chooses its mean and
+        # kernel once (structure_params)
+        return declare(super().__sklearn_tags__(), cost="kernel", family="kernel", provides_std=True,
+                       chooses_structure=True,
+                       min_training_rows=lambda n_channels: 10 * n_channels)
 
     def structure_params(self) -> dict:
         """The choices ``fit`` made (mean, kernel family, per output) as parameters.

@@ -22,16 +22,15 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.signal import lfilter
 from sklearn.base import clone
-from sklearn.model_selection import GroupKFold, KFold
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ..core._exceptions import NO_SETTING, CalibrationInputError
 from ..core._memory import check_allocation
-from ..core._model_selection import simplest_within_one_se
+from ..core._model_selection import calibration_folds, simplest_within_one_se
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques
-from ._base import BaseCalibrator, GroupsFit, with_settings
+from ._base import BaseCalibrator, GroupsFit, calibration_tags, declare, with_settings
 from ._linear import LinearCalibrator
 from ._ridge import ridge_least_squares
 from ._routing import requests_groups, routed_fit_params, wrapper_routing
@@ -170,8 +169,9 @@ def spread_flags(flags: ArrayLike, reach: int, since: int | None = None) -> tupl
 
 
 def reads_history(model) -> bool:
-    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`HistoryCalibrator`)."""
-    return callable(getattr(model, "stream", None))
+    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`HistoryCalibrator`), as its
+    tags declare (:class:`~ftcal.calibrators._base.CalibrationTags`)."""
+    return calibration_tags(model).reads_history
 
 
 def refuse_history_inside(estimator, owner: str) -> None:
@@ -263,7 +263,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     static_choice_ : str or None
         The model a model-choosing ``estimator`` chose (its ``best_name_``).
     static_cv_results_ : dict or None
-        Its ``cv_results_``.
+        Its ``comparison_``.
 
     Examples
     --------
@@ -299,6 +299,9 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), reads_history=True, cost=calibration_tags(self._inner()).cost)
+
     def _taus(self) -> list:
         """The time constants as a flat list (one number counts as a list of one; a table is checked and refused)."""
         return list(np.atleast_1d(np.asarray(self.taus, dtype=object)))
@@ -322,20 +325,19 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         return wrapper_routing(self, self._inner())
 
     def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:
-        if groups is None:
-            if n < self.cv:
-                raise CalibrationInputError(f"X has {n} rows, fewer than cv={self.cv} folds; lower cv or record more.",
-                                            parameter="X", value=n)
-            return list(KFold(int(self.cv)).split(np.empty((n, 1))))  # contiguous blocks: the rows are a time series
-        return list(GroupKFold(min(int(self.cv), np.unique(groups).size)).split(np.empty((n, 1)), groups=groups))
+        if groups is None and n < self.cv:
+            raise CalibrationInputError(f"X has {n} rows, fewer than cv={self.cv} folds; lower cv or record more.",
+                                        parameter="X", value=n)
+        # ftcal's folds, unshuffled: contiguous blocks of rows (a time series), or whole groups
+        return calibration_folds(n, groups, int(self.cv), shuffle=False)
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        groups = self._fit_groups
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         n, taus = len(X), [float(t) for t in self._taus()]
         folds = self._folds(n, groups)
         template = self._inner()
         refuse_history_inside(template, type(self).__name__)
-        if getattr(template, "_temperature_column", False):
+        static = calibration_tags(template)
+        if static.temperature_column:
             raise CalibrationInputError(
                 f"HistoryCalibrator cannot wrap {type(template).__name__}: its last column is the temperature, whose "
                 "history is not a load's, and the history columns cannot be temperature-compensated.",
@@ -347,10 +349,10 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         if self.alpha is None and getattr(template, "alpha", None) is not None:
             self.alpha_ = float(template.alpha)  # the inner calibrator's own torque scale, for every fit
         self.static_choice_ = self.static_cv_results_ = None
-        if getattr(template, "_chooses_a_model", False):  # AutoCalibrator: choose the static model once, on all rows
+        if static.chooses_model:  # AutoCalibrator: choose the static model once, on all rows
             chooser = self._new(template).fit(X, y, **routed_fit_params(self, groups))
             template, self.static_choice_ = clone(chooser.best_estimator_), chooser.best_name_
-            self.static_cv_results_ = chooser.cv_results_
+            self.static_cv_results_ = chooser.comparison_
         histories = [_history(X, tau)[0] for tau in taus]  # over the whole recording: readings only
         held_out = np.empty((1 + len(taus),) + y.shape)
         for train, test in folds:

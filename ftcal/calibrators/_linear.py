@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 from sklearn.linear_model import LinearRegression, Ridge
 from sklearn.utils._param_validation import Interval
 
-from ._base import BaseCalibrator
+from ._base import BaseCalibrator, declare
 
 __all__ = ["LinearCalibrator", "affine_fit"]
 
@@ -91,6 +91,11 @@ class LinearCalibrator(BaseCalibrator):
         self.alpha = alpha
         self.zero_reading = zero_reading
         self.random_state = random_state
+
+    def __sklearn_tags__(self):
+        # its coefficients plus one training row
+        return declare(super().__sklearn_tags__(), cost="closed_form", family="linear",
+                       min_training_rows=lambda n_channels: n_channels + 2)
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         fit = affine_fit(X, y, float(self.ridge))

@@ -12,7 +12,7 @@ from sklearn.utils._param_validation import Interval
 from sklearn.preprocessing import PolynomialFeatures
 
 from ..core._memory import check_allocation
-from ._base import BaseCalibrator, GroupsFit
+from ._base import BaseCalibrator, GroupsFit, declare
 from ..core._exceptions import CalibrationInputError
 from ._ridge import group_means, ridge_least_squares
 
@@ -155,6 +155,12 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
     def _uses_groups(self) -> bool:
         return bool(self.group_offsets)
 
+    def __sklearn_tags__(self):
+        degree = self.degree  # its feature count (with the intercept) training rows
+        family = "linear" if degree == 1 else f"polynomial{degree}"
+        return declare(super().__sklearn_tags__(), cost="closed_form", family=family,
+                       min_training_rows=lambda n_channels: math.comb(n_channels + int(degree), int(degree)))
+
     def _monomials(self) -> PolynomialFeatures:
         # Fitted on one row only to learn the channel count: the monomials depend on nothing else.
         return PolynomialFeatures(int(self.degree), include_bias=False).fit(np.zeros((1, self.n_features_in_)))
@@ -163,7 +169,7 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         """Monomials of degree 1..``degree`` of ``n_channels`` variables: ``C(N + d, d) - 1``."""
         return math.comb(n_channels + int(self.degree), int(self.degree)) - 1
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         n, n_channels = X.shape
         n_features = self._n_monomials(n_channels)
         penalised = n_features - n_channels
@@ -175,7 +181,6 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
             "lower degree (degree=1 is the LTM), use fewer channels, or try AxisNonlinearCalibrator",
         )
         ridge = float(self.ridge)
-        groups = getattr(self, "_fit_groups", None)
         if self.group_offsets and groups is None:
             warnings.warn("PolynomialCalibrator: group_offsets=True but fit() got no groups, so the fit has one "
                           "offset for all rows. Pass fit(X, y, groups=...) (a pose or session per row).",

@@ -9,7 +9,7 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import BaseCalibrator, with_settings
+from ._base import BaseCalibrator, calibration_tags, declare, with_settings
 from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._history import refuse_history_inside
@@ -77,8 +77,6 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
-    #: Its last input column is the temperature, not a channel (a load-history term must not wrap it).
-    _temperature_column = True
     #: Accepts the groups of the rows and passes them on when the inner calibrator requests them.
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
@@ -112,6 +110,13 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
 
     def _inner(self) -> BaseCalibrator:
         return LinearCalibrator() if self.estimator is None else self.estimator
+
+    def __sklearn_tags__(self):
+        # its last input column is the temperature, not a channel; otherwise it is what it wraps
+        inner = calibration_tags(self._inner())
+        return declare(super().__sklearn_tags__(), temperature_column=True, cost=inner.cost,
+                       uses_groups=inner.uses_groups,
+                       min_training_rows=lambda n_columns: inner.min_training_rows(max(n_columns - 1, 1)))
 
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
@@ -159,8 +164,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         inner = with_settings(self._inner(), alpha=self.alpha, zero_reading=self.zero_reading,
                               random_state=self.random_state)
         self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
-        self.alpha_ = self.estimator_.alpha_
-        self.zero_reading_ = np.append(self.estimator_.zero_reading_, t0)
+        # the range and noise of what it is given: the raw channels and the temperature column
+        self._adopt_fitted(X, y, self.estimator_, zero_reading=np.append(self.estimator_.zero_reading_, t0))
         return self
 
     def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):

@@ -199,9 +199,9 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"history: {kept} (cross-validated RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the "
                      f"best time constant: {estimator.cv_rmse_[1:].min():.4g} N, the best of {len(taus)} tried, so "
                      "slightly optimistic; --report gives a held-out figure)")
-    if hasattr(estimator, "cv_results_"):  # auto: the whole comparison it chose from
+    if "comparison_" in estimator.__dict__:  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
-        summary["cv_results"] = estimator.cv_results_
+        summary["cv_results"] = estimator.comparison_
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
     # every output of this run is written into a private folder and moved into place as one set at the end: a
     # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote

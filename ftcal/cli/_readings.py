@@ -201,10 +201,10 @@ def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
 
 
 def takes_temperature(model) -> bool:
-    """Whether the model's last input is the temperature [deg C] (a temperature-compensated model)."""
-    from ..calibrators._temperature_compensation import TemperatureCompensatedCalibrator
+    """Whether the model's last input is the temperature [deg C] (a temperature-compensated model), as its tags say."""
+    from ..calibrators._base import calibration_tags
 
-    return isinstance(model, TemperatureCompensatedCalibrator)
+    return calibration_tags(model).temperature_column
 
 
 def located_error(exc: Exception, source: str, lines: NDArray) -> CliError:

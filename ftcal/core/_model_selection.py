@@ -21,7 +21,8 @@ from sklearn.model_selection import GroupKFold, KFold
 
 from ._exceptions import CalibrationInputError
 
-__all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se"]
+__all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
+           "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
 def check_groups(groups: ArrayLike | None, n_samples: int, *, labels: bool = True,
@@ -108,6 +109,99 @@ def calibration_folds(
     return list(splitter.split(index, groups=g))
 
 
+def routed_groups(estimator, groups: ArrayLike | None) -> dict:
+    """The ``fit`` parameters ``estimator`` gets for these ``groups``: ``{"groups": groups}`` when its metadata
+    routing requests them (its default, or ``set_fit_request``), else ``{}``; what every meta-estimator of ftcal
+    passes to an inner model (scikit-learn's :func:`~sklearn.utils.metadata_routing.get_routing_for_object`).
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import LinearRegression
+    >>> routed_groups(LinearRegression(), [0, 1])
+    {}
+    """
+    if groups is None:
+        return {}
+    from sklearn.utils.metadata_routing import get_routing_for_object
+
+    wants = get_routing_for_object(estimator).consumes(method="fit", params=["groups"])
+    return {"groups": groups} if "groups" in wants else {}
+
+
+def fold_predictions(estimator, X: NDArray, y: NDArray, folds, *, groups: ArrayLike | None = None,
+                     fit_params: dict | None = None) -> list[tuple[NDArray[np.int64], NDArray[np.float64]]]:
+    """``(test rows, predictions)`` of a clone of ``estimator`` fitted on each ``(train, test)`` of ``folds``.
+
+    Built on :func:`sklearn.model_selection.cross_validate` (``return_estimator``, ``return_indices``, its
+    ``params=`` sliced to each training fold); ``groups`` reach the estimator through its metadata routing
+    (:func:`routed_groups`). The folds need not cover every row (a subset of a split, scored in one job).
+    """
+    from sklearn.model_selection import cross_validate
+
+    params = {**routed_groups(estimator, None if groups is None else np.asarray(groups)), **(fit_params or {})}
+    folds = [(np.asarray(train), np.asarray(test)) for train, test in folds]
+    result = cross_validate(estimator, X, y, cv=folds, params=params or None, scoring=_no_score,
+                            return_estimator=True, return_indices=True, error_score="raise")
+    return [(test, np.asarray(model.predict(X[test]), dtype=float).reshape(len(test), -1))
+            for model, test in zip(result["estimator"], result["indices"]["test"])]
+
+
+def _no_score(estimator, X, y) -> float:
+    """A scorer that costs nothing: the held-out predictions are made once, by :func:`fold_predictions`."""
+    return 0.0
+
+
+def held_out_predictions(
+    estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
+    random_state: int | None = 0, shuffle: bool = True, folds=None,
+) -> tuple[list[tuple[NDArray[np.int64], NDArray[np.int64]]], NDArray[np.float64]]:
+    """The one held-out engine of ftcal: the folds (:func:`calibration_folds`) and the out-of-fold predictions.
+
+    Every held-out figure of ftcal comes from here or from the same folds: ``auto``'s comparison, the search,
+    the history term's folds and the calibration report. ``groups`` make the folds (whole groups held out) and
+    reach ``estimator`` when its routing requests them.
+
+    Parameters
+    ----------
+    estimator : regressor
+        Cloned for each fold.
+    X : array-like of shape (n, N)
+    y : array-like of shape (n, k)
+    groups : array-like of shape (n,) or None
+    cv : int, default=5
+        Folds (capped by the groups or the rows).
+    random_state : int or None, default=0
+        Seed of the shuffled k-fold.
+    shuffle : bool, default=True
+        ``False``: contiguous blocks of rows (a time series).
+    folds : list of (train, test) or None
+        Folds made before (e.g. those of ``auto``'s comparison, to reuse them); ``None`` makes them.
+
+    Returns
+    -------
+    folds : list of (train, test) index arrays
+    predictions : ndarray of shape (n, k)
+        Each row predicted by the model that did not see it (NaN for a row no fold tests).
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import LinearRegression
+    >>> X = np.arange(20.0).reshape(10, 2); y = X @ [[1.0], [2.0]]
+    >>> folds, pred = held_out_predictions(LinearRegression(), X, y, cv=5)
+    >>> len(folds), bool(np.allclose(pred, y))
+    (5, True)
+    """
+    X, y = np.asarray(X), np.asarray(y)
+    if folds is None:
+        folds = calibration_folds(len(X), groups, cv, random_state, shuffle=shuffle)
+    pieces = fold_predictions(estimator, X, y, folds, groups=groups)
+    width = pieces[0][1].shape[1] if pieces else (y.shape[1] if y.ndim == 2 else 1)
+    predictions = np.full((len(X), width), np.nan)
+    for test, values in pieces:
+        predictions[test] = values
+    return folds, predictions
+
+
 def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
     """At most ``size`` of ``rows``, the same share from every group (all rows when they fit).
 
@@ -173,6 +267,35 @@ def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[
 TIE_TOLERANCE = 0.01
 
 
+def one_se_qualified(errors: NDArray, units: NDArray | None = None, *, eligible: ArrayLike | None = None
+                     ) -> tuple[int, NDArray[np.bool_]]:
+    """The best candidate (lowest mean error among the eligible scored ones) and which are within one paired
+    standard error of it (or within :data:`TIE_TOLERANCE`): the set :func:`simplest_within_one_se` chooses from.
+
+    Examples
+    --------
+    >>> best, within = one_se_qualified(np.array([[1.1, 0.9, 1.2, 0.9], [1.0, 1.0, 1.0, 1.0], [2, 2, 2.1, 1.9]]))
+    >>> best, within.tolist()
+    (1, [True, True, False])
+    """
+    errors = np.asarray(errors, dtype=float)
+    ok = ~np.isnan(errors).any(axis=1)
+    if eligible is not None:
+        ok &= np.asarray(eligible, dtype=bool)
+    if not ok.any():
+        raise CalibrationInputError("no candidate could be scored; see comparison_ for why each one failed.")
+    means = np.where(ok, np.nanmean(np.where(ok[:, None], errors, 0.0), axis=1), np.inf)
+    best = int(np.argmin(means))
+    units = None if units is None else np.asarray(units)
+    within = np.zeros(errors.shape[0], dtype=bool)
+    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
+    for k in np.flatnonzero(ok):
+        diff = _per_unit(errors[k] - errors[best], units)
+        se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
+        within[k] = k == best or float(diff.mean()) <= max(se, tie)
+    return best, within
+
+
 def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, complexity: ArrayLike | None = None,
                            eligible: ArrayLike | None = None) -> int:
     """The one-standard-error rule of ftcal: the simplest candidate whose error is within one SE of the best.
@@ -214,20 +337,120 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     """
     errors = np.asarray(errors, dtype=float)
     n = errors.shape[0]
-    ok = ~np.isnan(errors).any(axis=1)
-    if eligible is not None:
-        ok &= np.asarray(eligible, dtype=bool)
-    if not ok.any():
-        raise CalibrationInputError("no candidate could be scored; see cv_results_ for why each one failed.")
+    _, within = one_se_qualified(errors, units, eligible=eligible)
     rank = np.arange(n, dtype=float) if complexity is None else np.asarray(complexity, dtype=float)
-    means = np.where(ok, np.nanmean(np.where(ok[:, None], errors, 0.0), axis=1), np.inf)
-    best = int(np.argmin(means))
-    units = None if units is None else np.asarray(units)
-    qualified = []
-    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
-    for k in np.flatnonzero(ok):
-        diff = _per_unit(errors[k] - errors[best], units)
-        se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
-        if k == best or float(diff.mean()) <= max(se, tie):
-            qualified.append(int(k))
-    return min(qualified, key=lambda k: (rank[k], means[k], k))
+    means = np.array([errors[k].mean() if within[k] else np.inf for k in range(n)])
+    simplest = np.flatnonzero(within & (rank == rank[within].min()))
+    lowest = float(means[simplest].min())
+    # among the equally simple: the lowest error, unless an earlier one ties with it (within TIE_TOLERANCE of its
+    # mean squared error: the same model estimated twice, e.g. the LTM and the stock least squares)
+    return int(next(k for k in simplest if means[k] <= lowest * (1.0 + TIE_TOLERANCE)))
+
+
+class DegenerateCalibrationError(CalibrationInputError):
+    """A calibration whose held-out predictions are degenerate (constant, all zero, or no better than the mean):
+    refused before any model is returned or written."""
+
+
+#: Held-out MSE at or above this fraction of the MSE of predicting the training mean: no better than the mean.
+MEAN_MSE_FRACTION = 1.0
+
+
+def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.0) -> str | None:
+    """Why held-out ``predictions`` (n, k) of targets ``y`` are degenerate, in a few words, or None.
+
+    Degenerate: all zero, the same for every row (while ``y`` varies), or no better than predicting the mean of
+    ``y`` (the torque-scaled MSE, eq. 18, at least that of the mean). ``alpha`` scales torques (6 outputs).
+
+    Examples
+    --------
+    >>> y = np.array([[1.0], [2.0], [3.0], [4.0]])
+    >>> degenerate_reason(y, np.zeros_like(y))
+    'it predicts 0 for every reading'
+    >>> degenerate_reason(y, y + 0.1) is None
+    True
+    """
+    from ._wrench import scale_torques
+
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    pred = np.asarray(predictions, dtype=float).reshape(len(y), -1)
+    if not np.isfinite(pred).all():
+        return "its held-out predictions hold NaN or inf"
+    scale = lambda a: scale_torques(a, alpha) if a.shape[1] == 6 else a  # noqa: E731
+    ys, ps = scale(y), scale(pred)
+    spread = np.ptp(ys, axis=0)
+    if not spread.any():
+        return None  # constant targets: nothing to be degenerate against (refused as input elsewhere)
+    if not np.abs(ps).max() > 0:
+        return "it predicts 0 for every reading"
+    if (np.ptp(ps, axis=0) <= 1e-9 * np.maximum(spread, np.abs(ps).max(axis=0))).all():
+        return "it predicts the same wrench for every reading"
+    mse = float(np.mean((ps - ys) ** 2))
+    mean_mse = float(np.mean((ys - ys.mean(axis=0)) ** 2))
+    if mse >= MEAN_MSE_FRACTION * mean_mse:
+        return (f"its held-out error (RMSE {np.sqrt(mse):.4g}) is no better than predicting the mean wrench "
+                f"(RMSE {np.sqrt(mean_mse):.4g})")
+    return None
+
+
+def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alpha: float = 1.0) -> None:
+    """Raise :class:`DegenerateCalibrationError` (one line: ``what`` and why) if ``predictions`` are degenerate
+    (:func:`degenerate_reason`); what ``AutoCalibrator.fit`` and ``ftcal fit`` call before a model is kept.
+
+    Examples
+    --------
+    >>> check_not_degenerate([[1.0], [2.0]], [[0.0], [0.0]], what="the LTM")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._model_selection.DegenerateCalibrationError: refusing the LTM: it predicts 0 for every reading on the readings it did not see; nothing was saved. Fix: record loads on every axis (each axis loaded in more than one group), or choose another model.
+    """
+    reason = degenerate_reason(y, predictions, alpha=alpha)
+    if reason is not None:
+        raise DegenerateCalibrationError(
+            f"refusing {what}: {reason} on the readings it did not see; nothing was saved. Fix: record loads on "
+            "every axis (each axis loaded in more than one group), or choose another model.")
+
+
+#: An output whose training fold spans less than this fraction of its whole span counts as unseen in training.
+UNSEEN_FRACTION = 0.05
+
+
+def unseen_outputs(y: ArrayLike, folds, names: tuple[str, ...] | None = None) -> list[str]:
+    """Outputs that some training fold leaves (nearly) unseen: spanning less than :data:`UNSEEN_FRACTION` of
+    the output's whole span (e.g. grouped folds with one group per loaded axis: holding out the ``Fx`` group
+    leaves no ``Fx`` load to learn from). Such folds cannot judge a model. Returns their names.
+
+    Examples
+    --------
+    >>> y = np.array([[1.0, 0], [2, 0], [0, 1], [0, 2], [1, 1], [2, 2]])
+    >>> unseen_outputs(y, calibration_folds(6, [0, 0, 1, 1, 0, 1], 2), names=("Fx", "Fy"))
+    []
+    >>> unseen_outputs(y[:4], calibration_folds(4, [0, 0, 1, 1], 2), names=("Fx", "Fy"))
+    ['Fx', 'Fy']
+    """
+    y = np.asarray(y, dtype=float).reshape(len(y), -1)
+    span = np.ptp(y, axis=0)
+    unseen = np.zeros(y.shape[1], dtype=bool)
+    for train, _ in folds:
+        unseen |= (span > 0) & (np.ptp(y[train], axis=0) < UNSEEN_FRACTION * span)
+    labels = names or tuple(f"output {j}" for j in range(y.shape[1]))
+    return [labels[j] for j in np.flatnonzero(unseen)]
+
+
+#: Fewest groups whose spread a standard error may be computed from (fewer: the rows' spread is used).
+MIN_SE_GROUPS = 5
+
+
+def se_units(groups: NDArray | None) -> NDArray | None:
+    """The units of the standard errors of a comparison: the groups when there are at least
+    :data:`MIN_SE_GROUPS` (rows of one group are not independent), else the rows (``None``): a standard error
+    from 3 groups' means is no evidence (it can be ~0 when the groups happen to agree).
+
+    Examples
+    --------
+    >>> se_units(np.array([0, 0, 1, 1, 2, 2])) is None
+    True
+    """
+    if groups is None or np.unique(groups).size < MIN_SE_GROUPS:
+        return None
+    return groups

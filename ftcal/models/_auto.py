@@ -11,23 +11,26 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import nnls
-from sklearn import config_context
 from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
+from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
 
 from ..calibrators._history import refuse_history_inside
-from ..calibrators._base import BaseCalibrator, GroupsFit, calibrated_range, resolve_alpha, with_settings
+from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
+                                 resolve_alpha, with_settings)
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import (calibration_folds, check_groups, grouped_subsample, rmse_and_se,
-                                     simplest_within_one_se)
+from ..core._model_selection import (DegenerateCalibrationError, calibration_folds, check_groups,
+                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified,
+                                     rmse_and_se, routed_groups, se_units, simplest_within_one_se, unseen_outputs,
+                                     TIE_TOLERANCE)
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
-from ..core._wrench import scale_torques, unscale_torques
+from ..core._wrench import WRENCH_LABELS, scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates", "score_candidates",
-           "with_alpha_and_tare", "minimum_training_rows"]
+           "with_alpha_and_tare", "minimum_training_rows", "check_calibration", "judging_folds"]
 
 #: Most candidates a stack combines (the best-scoring eligible ones).
 STACK_SIZE = 3
@@ -39,9 +42,10 @@ LIGHT_KERNEL_ROWS = 200
 def default_candidates(schedule: str = "short", grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
     """The candidates of :class:`AutoCalibrator`, in the documented complexity order (simplest first).
 
-    ``grouped`` (the rows come in groups, at least 3, within which the loads vary): each of ``linear`` and
-    ``polynomial(degree=2, ridge=0.01)`` is followed by its twin with one offset per group
-    (``group_offsets=True``, see :class:`~ftcal.PolynomialCalibrator`).
+    They follow from the registry: each registration lists its candidates with a complexity
+    (:func:`~ftcal.register_calibrator`'s ``candidates``). ``grouped`` (the rows come in groups, at least 3,
+    within which the loads vary): each of ``linear`` and ``polynomial(degree=2, ridge=0.01)`` is followed by its
+    twin with one offset per group (``group_offsets=True``, see :class:`~ftcal.PolynomialCalibrator`).
 
     Examples
     --------
@@ -50,23 +54,10 @@ def default_candidates(schedule: str = "short", grouped: bool = False) -> list[t
     >>> [name for name, _ in default_candidates(grouped=True)][:3]
     ['linear', 'linear(group offsets)', 'polynomial(degree=2, ridge=0.01)']
     """
-    from ._registry import make_calibrator
+    from ._registry import make_calibrator, registered_candidates
 
-    candidates: list[tuple[str, BaseCalibrator]] = [("linear", make_calibrator("linear"))]
-    if grouped:
-        candidates.append(("linear(group offsets)", make_calibrator("polynomial", degree=1, group_offsets=True)))
-    for degree in (2, 3):
-        for ridge in (1e-2, 1e-4):
-            candidates.append((f"polynomial(degree={degree}, ridge={ridge:g})",
-                               make_calibrator("polynomial", degree=degree, ridge=ridge)))
-            if grouped and degree == 2 and ridge == 1e-2:
-                candidates.append((f"polynomial(degree={degree}, ridge={ridge:g}, group offsets)", make_calibrator(
-                    "polynomial", degree=degree, ridge=ridge, group_offsets=True)))
-    candidates.append(("axis_nonlinear", make_calibrator("axis_nonlinear")))
-    candidates.append(("gaussian_process", make_calibrator("gaussian_process", random_state=0)))
-    for name in ("directional", "comparative"):
-        candidates.append((name, make_calibrator(name, schedule=schedule, random_state=0)))
-    return candidates
+    return [(label, make_calibrator(name, schedule=schedule, **params))
+            for name, label, params in registered_candidates(grouped)]
 
 
 def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) -> NDArray[np.int64]:
@@ -103,7 +94,110 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
         plain = next((j for j in range(len(candidates)) if not twins[j] and _same_model(keys[j], keys[k])), None)
         if plain is not None:
             ranks[k] = ranks[plain] = min(ranks[k], ranks[plain])
+    # a stock baseline is as simple as the first of ftcal's candidates of its family (sk_linear the LTM, sk_gp
+    # the GP): between the two the lower score decides, an earlier one winning a tie
+    from ._baselines import StockCalibrator
+
+    families = [calibration_tags(est).family for _, est in candidates]
+    for k, (_, est) in enumerate(candidates):
+        if isinstance(est, StockCalibrator) and families[k]:
+            first = next((j for j in range(k) if families[j] == families[k]
+                          and not isinstance(candidates[j][1], StockCalibrator)), None)
+            if first is not None:
+                ranks[k] = ranks[first]
     return ranks
+
+
+def with_stock_candidates(candidates: list[tuple[str, BaseCalibrator]], stock: list[tuple[str, BaseCalibrator]]
+                          ) -> list[tuple[str, BaseCalibrator]]:
+    """``candidates`` with the free models ``stock`` placed by what they are: each after the last candidate of
+    its family (its tags' ``family``: ``sk_linear`` after the LTM, ``sk_poly2`` after the quadratics, ``sk_gp``
+    after the GP), one of no listed family at the end.
+
+    Examples
+    --------
+    >>> from ftcal.models._baselines import StockCalibrator
+    >>> pairs = with_stock_candidates(default_candidates()[:3], [("sk_linear", StockCalibrator())])
+    >>> [name for name, _ in pairs]
+    ['linear', 'sk_linear', 'polynomial(degree=2, ridge=0.01)', 'polynomial(degree=2, ridge=0.0001)']
+    """
+    pairs = list(candidates)
+    for name, model in stock:
+        family = calibration_tags(model).family
+        after = [j for j, (_, est) in enumerate(pairs) if family and calibration_tags(est).family == family]
+        pairs.insert(after[-1] + 1 if after else len(pairs), (name, model))
+    return pairs
+
+
+def make_ltm() -> BaseCalibrator:
+    """The LTM (``make_calibrator("linear")``): ``auto``'s fallback when no folds can judge a model."""
+    from ._registry import make_calibrator
+
+    return make_calibrator("linear")
+
+
+def _unscored_ltm(note: str) -> dict:
+    """The comparison of a fit that no folds could judge: the LTM alone, chosen unscored."""
+    return {"name": ["linear"], "kind": ["candidate"], "status": ["chosen unscored: no folds can judge a model"],
+            "eligible": [True], "rmse": [None], "rmse_se": [None], "axis_rmse": [None], "fit_seconds": [None],
+            "n_splits": 0, "min_training_rows": 0, "verdict": ["chosen (no folds can judge a model)"],
+            "chosen": "linear", "se_units": "rows",
+            "why": f"linear (the LTM) chosen without a held-out score: folds {note}."}
+
+
+def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen: int, ranks: NDArray) -> None:
+    """Mark each row of ``results`` with why it was or was not chosen, and say in words why the winner won.
+
+    ``verdict`` per row: ``chosen``; ``within one SE, more complex`` (or ``within one SE, as simple, higher
+    error``); ``beyond one SE``; or the row's ``skipped``/``failed``/``refused`` status. ``why``: one sentence
+    naming the winner, the best score it was within one standard error of, and its ratio to the best stock
+    model (a free model of scikit-learn's) with whether that is within noise.
+    """
+    names, rmse, se = results["name"], results["rmse"], results["rmse_se"]
+    best, within = one_se_qualified(errors, units, eligible=results["eligible"])
+    verdicts = []
+    for k in range(len(names)):
+        if k == chosen:
+            verdicts.append("chosen")
+        elif not results["eligible"][k]:
+            verdicts.append(results["status"][k] if results["status"][k] != "scored" else "reported only")
+        elif within[k]:
+            verdicts.append("within one SE, as simple (the lower or earlier wins)" if ranks[k] == ranks[chosen]
+                            else "within one SE, more complex")
+        else:
+            verdicts.append("beyond one SE")
+    results["verdict"] = verdicts
+    results["chosen"] = names[chosen]
+    unit = "groups" if units is not None else "rows"
+    if chosen == best:
+        why = (f"{names[chosen]} won: the best held-out RMSE ({rmse[chosen]:.4g} ± {se[chosen]:.2g} N), and no "
+               f"simpler model within one standard error of it ({unit} as units)")
+    else:
+        why = (f"{names[chosen]} won: the simplest of the {int(within.sum())} models within one standard error of "
+               f"the best, {names[best]} ({rmse[best]:.4g} ± {se[best]:.2g} N; {names[chosen]} "
+               f"{rmse[chosen]:.4g} N; {unit} as units)")
+    stock = [k for k, kind in enumerate(results["kind"]) if kind in ("stock", "baseline") and rmse[k] is not None]
+    if stock:
+        s = min(stock, key=lambda k: rmse[k])
+        ratio = rmse[chosen] / rmse[s] if rmse[s] else float("nan")
+        if s == chosen:
+            why += f". It is the best stock model itself ({names[s]})"
+        else:
+            diff = errors[chosen] - errors[s]
+            per = diff if units is None else np.bincount(np.unique(units, return_inverse=True)[1], weights=diff) \
+                / np.bincount(np.unique(units, return_inverse=True)[1])
+            excess_se = float(per.std(ddof=1) / np.sqrt(per.size)) if per.size > 1 else float("inf")
+            if abs(ratio - 1.0) <= TIE_TOLERANCE / 2:
+                how = "ties it"
+            elif ratio < 1.0:
+                how = f"beats it by {100 * (1 - ratio):.1f} %"
+            elif float(per.mean()) <= excess_se:
+                how = "trails it within its standard error (a tie within noise)"
+            else:
+                how = "trails it by more than one standard error, as the one-SE rule allows for a simpler model"
+            why += f"; against the best stock model, {names[s]} ({rmse[s]:.4g} N), it is {ratio:.3f}x: it {how}"
+    results["why"] = why + "."
+
 
 
 def _has_offsets(estimator: BaseCalibrator) -> bool:
@@ -148,7 +242,8 @@ def with_alpha_and_tare(estimator, alpha: float, zero_reading):
 
 
 def minimum_training_rows(estimator, n_channels: int) -> int:
-    """Fewest training rows on which a held-out score says something about ``estimator`` (N channels).
+    """Fewest training rows on which a held-out score says something about ``estimator`` (N channels), as its tags
+    declare (:class:`~ftcal.calibrators._base.CalibrationTags`).
 
     A candidate cross-validated on folds with fewer training rows is reported
     but never chosen: its score on a handful of rows is noise, and a flexible
@@ -163,36 +258,18 @@ def minimum_training_rows(estimator, n_channels: int) -> int:
     >>> minimum_training_rows(LinearCalibrator(), 8), minimum_training_rows(PolynomialCalibrator(degree=2), 8)
     (10, 45)
     """
-    from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
-    from ..calibrators._gaussian_process import GaussianProcessCalibrator
-    from ..calibrators._linear import LinearCalibrator
-    from ..calibrators._polynomial import PolynomialCalibrator
-
-    if isinstance(estimator, LinearCalibrator):
-        return n_channels + 2
-    if isinstance(estimator, PolynomialCalibrator):
-        return comb(n_channels + int(estimator.degree), int(estimator.degree))
-    if isinstance(estimator, AxisNonlinearCalibrator):
-        return 3 * (n_channels + 1)
-    if isinstance(estimator, GaussianProcessCalibrator):
-        return 10 * n_channels
-    return 25 * n_channels
+    return int(calibration_tags(estimator).min_training_rows(n_channels))
 
 
 def _is_network(estimator) -> bool:
-    from ..neural_network._base import NetworkCalibrator
-
-    return isinstance(estimator, NetworkCalibrator) and not estimator.callbacks
+    """Whether ``estimator`` is a network that trains with others as one stacked module."""
+    tags = calibration_tags(estimator)
+    return tags.network and tags.stackable
 
 
 def _fit(estimator, X, y, groups):
-    """Fit, passing ``groups`` to estimators whose ``fit`` takes them (routing off: they are ours, not a user's)."""
-    import inspect
-
-    with config_context(enable_metadata_routing=False):
-        if groups is not None and "groups" in inspect.signature(estimator.fit).parameters:
-            return estimator.fit(X, y, groups=groups)
-        return estimator.fit(X, y)
+    """Fit, passing ``groups`` when ``estimator``'s metadata routing requests them (``set_fit_request``)."""
+    return estimator.fit(X, y, **routed_groups(estimator, groups))
 
 
 def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[tuple[NDArray, NDArray]]:
@@ -201,10 +278,11 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
     Networks: the K fold models are trained as one stacked fit
     (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
     training fold (the same share of every group); everything else fold by
-    fold, as :func:`sklearn.model_selection.cross_val_predict` does (with
-    ``groups`` when its ``fit`` takes them, for its own inner model choice),
-    but for any subset of the folds, so that the folds of one model can run
-    in different jobs (each returns only its folds' rows).
+    fold with ftcal's held-out engine (:func:`~ftcal.core._model_selection.fold_predictions`,
+    on :func:`sklearn.model_selection.cross_validate`; ``groups`` when its routing
+    requests them, for its own inner model choice), for any subset of the folds,
+    so that the folds of one model can run in different jobs (each returns only
+    its folds' rows).
     """
     if _is_network(estimator):
         from ..neural_network._stacked import fit_stacked
@@ -213,8 +291,7 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
         train = [grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
         fit_stacked(models, [X[t] for t in train], [y[t] for t in train])
         return [(test, model.predict(X[test])) for model, (_, test) in zip(models, folds)]
-    return [(test, _fit(clone(estimator), X[train], y[train], None if groups is None else groups[train]).predict(
-        X[test])) for train, test in folds]
+    return fold_predictions(estimator, X, y, folds, groups=groups)
 
 
 def _row_errors(pred: NDArray, y: NDArray, alpha: float) -> NDArray:
@@ -232,7 +309,7 @@ def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
 def score_candidates(
     candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
     zero_reading=None, random_state: int | None = 0, network_samples: int | None = 2000,
-    baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None,
+    baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None, folds=None, units=None,
 ) -> tuple[dict, NDArray[np.float64], list, dict]:
     """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
 
@@ -248,7 +325,16 @@ def score_candidates(
     predictions (each fold's weights from the other folds' rows).
     ``baselines`` (name -> scikit-learn regressor, e.g.
     :func:`ftcal.models.stock_baselines`) are scored on the same folds and
-    never eligible. ``n_jobs`` candidates are scored at once
+    never eligible. A candidate whose held-out predictions are degenerate
+    (constant, all zero, no better than the mean:
+    :func:`~ftcal.core._model_selection.degenerate_reason`) is recorded as
+    refused, never chosen. ``folds`` (train, test) made before replace those of
+    :func:`calibration_folds` (``auto``'s fallback when grouped folds cannot
+    judge), with ``units`` the units of their standard errors (None: rows).
+    Standard errors are over the groups when the folds hold out
+    groups and there are at least
+    :data:`~ftcal.core._model_selection.MIN_SE_GROUPS` of them, else over rows.
+    ``n_jobs`` candidates are scored at once
     (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
     :func:`joblib.parallel_config` context); the figures do not depend on it.
     Light work stays in this process whatever ``n_jobs`` says: when every
@@ -259,8 +345,9 @@ def score_candidates(
     Returns
     -------
     results : dict of lists
-        Per row: ``name``, ``kind`` (``"candidate"``, ``"stack"``,
-        ``"baseline"``), ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``),
+        Per row: ``name``, ``kind`` (``"candidate"``, ``"stock"`` (a stock
+        baseline as a choosable candidate), ``"stack"``, ``"baseline"``),
+        ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``, ``"refused: ..."``),
         ``eligible``, ``rmse`` (held-out, eq. 18 [N]), ``rmse_se`` (its
         standard error over groups or rows), ``axis_rmse`` (6 values, [N] and
         [N·m]), ``fit_seconds`` (all folds, and the all-rows structure fit); plus ``n_splits``,
@@ -278,8 +365,10 @@ def score_candidates(
 
     n, n_channels = X.shape
     seed = 0 if random_state is None else int(random_state)
-    folds = calibration_folds(n, groups, cv, seed)
-    smallest_train = min(len(tr) for tr, _ in folds)
+    if folds is None:
+        folds, units = calibration_folds(n, groups, cv, seed), se_units(groups)
+    # distinct training rows: a repeated row (the same reading and wrench) teaches nothing new
+    smallest_train = min(len(np.unique(np.column_stack([X[tr], y[tr]]), axis=0)) for tr, _ in folds)
     results: dict = {k: [] for k in ("name", "kind", "status", "eligible", "rmse", "rmse_se", "axis_rmse",
                                      "fit_seconds")}
     results.update(n_splits=len(folds), min_training_rows=smallest_train)
@@ -287,14 +376,17 @@ def score_candidates(
     predictions: list = []
 
     def record(name, kind, status, eligible, pred, seconds):
+        ok = pred is not None
+        reason = degenerate_reason(y, pred, alpha=alpha) if ok and kind != "baseline" else None
+        if reason is not None:  # scored, shown, never chosen
+            status, eligible = f"refused: {reason}", False
         results["name"].append(name)
         results["kind"].append(kind)
         results["status"].append(status)
         results["fit_seconds"].append(seconds)
-        ok = pred is not None
         results["eligible"].append(bool(eligible and ok))
         row = _row_errors(pred, y, alpha) if ok else np.full(n, np.nan)
-        rmse, se = rmse_and_se(row, groups) if ok else (None, None)
+        rmse, se = rmse_and_se(row, units) if ok else (None, None)
         results["rmse"].append(rmse)
         results["rmse_se"].append(se)
         results["axis_rmse"].append(np.sqrt(np.mean((pred - y) ** 2, axis=0)).tolist() if ok else None)
@@ -302,14 +394,16 @@ def score_candidates(
         predictions.append(pred)
 
     rows, tasks = [], []  # (name, kind, skipped status or None); the work of the rows that are fitted
+    from ._baselines import StockCalibrator
+
     for name, template in candidates:
         estimator = with_alpha_and_tare(template, alpha, zero_reading)
         needed = minimum_training_rows(estimator, n_channels)
+        kind = "stock" if isinstance(template, StockCalibrator) else "candidate"
         if smallest_train < needed:  # too few rows to judge it: not fitted, never chosen
-            rows.append((name, "candidate", f"skipped: training folds of {smallest_train} rows < the {needed} it "
-                                            "needs"))
+            rows.append((name, kind, f"skipped: training folds of {smallest_train} rows < the {needed} it needs"))
             continue
-        rows.append((name, "candidate", None))
+        rows.append((name, kind, None))
         tasks.append((len(rows) - 1, estimator, network_samples))
     for name, regressor in (baselines or {}).items():
         rows.append((name, "baseline", None))
@@ -330,20 +424,21 @@ def score_candidates(
         outcomes.setdefault(row, []).append(outcome)
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
-        if stack and kind == "baseline" and rows[i - 1][1] == "candidate":  # the stack after the candidates
+        if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
             _score_stack(results, errors, predictions, record, y, alpha, folds)
         model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i], y.shape)
         if model is not None:
             fitted[name] = model
-        record(name, kind, status, kind == "candidate" and not skipped, pred, seconds)
-    if stack and rows and rows[-1][1] == "candidate":
+        record(name, kind, status, kind != "baseline" and not skipped, pred, seconds)
+    if stack and rows and rows[-1][1] != "baseline":
         _score_stack(results, errors, predictions, record, y, alpha, folds)
+    results["se_units"] = "groups" if units is not None else "rows"
     return results, np.vstack(errors), predictions, fitted
 
 
 def _per_fold(estimator) -> bool:
     """Whether ``estimator``'s folds may run as separate jobs (not a stacked network, not a structure search)."""
-    return not _is_network(estimator) and not hasattr(estimator, "structure_params")
+    return not _is_network(estimator) and not calibration_tags(estimator).chooses_structure
 
 
 def _merge(parts: list, shape: tuple) -> tuple:
@@ -359,32 +454,15 @@ def _merge(parts: list, shape: tuple) -> tuple:
 
 
 def _is_light(estimator, training_rows: int) -> bool:
-    """Whether ``estimator`` fits in a moment: a closed form (ftcal's or a stock linear / polynomial pipeline) or a
-    kernel model on at most :data:`LIGHT_KERNEL_ROWS` rows; anything else (networks, ensembles, wrappers) is not."""
-    from sklearn.linear_model import LinearRegression, Ridge, RidgeCV
-    from sklearn.pipeline import Pipeline
-    from sklearn.preprocessing import PolynomialFeatures, StandardScaler
-
-    from ..calibrators._axis_nonlinear import AxisNonlinearCalibrator
-    from ..calibrators._linear import LinearCalibrator
-    from ..calibrators._polynomial import PolynomialCalibrator
-
-    if _cost_rank(estimator) == 0:
-        return training_rows <= LIGHT_KERNEL_ROWS
-    closed = (LinearCalibrator, PolynomialCalibrator, AxisNonlinearCalibrator, LinearRegression, Ridge, RidgeCV)
-    steps = [step for _, step in estimator.steps] if isinstance(estimator, Pipeline) else [estimator]
-    return all(isinstance(step, (*closed, StandardScaler, PolynomialFeatures)) for step in steps) and \
-        isinstance(steps[-1], closed)
+    """Whether ``estimator`` fits in a moment (its tags' ``cost``): a closed form, or a kernel model on at most
+    :data:`LIGHT_KERNEL_ROWS` rows; anything else (networks, ensembles, wrappers of unknown cost) is not."""
+    cost = calibration_tags(estimator).cost
+    return cost == "closed_form" or (cost == "kernel" and training_rows <= LIGHT_KERNEL_ROWS)
 
 
 def _cost_rank(estimator) -> int:
-    """0 for kernel models (the GP, the stock kernel baselines: cubic in the rows), 1 for networks, 2 the rest."""
-    from ..calibrators._gaussian_process import GaussianProcessCalibrator
-    from ._baselines import SubsampledRegressor
-
-    if isinstance(estimator, (GaussianProcessCalibrator, SubsampledRegressor)):
-        return 0
-    return 1 if _is_network(estimator) else 2
+    """Position of ``estimator``'s cost in :data:`~ftcal.calibrators._base.COSTS` (kernel models first)."""
+    return COSTS.index(calibration_tags(estimator).cost)
 
 
 def _score_one(estimator, X, y, folds, groups, network_samples, seed):
@@ -399,7 +477,7 @@ def _score_one(estimator, X, y, folds, groups, network_samples, seed):
         with limit_threads_here(1), warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             fitted = None
-            if hasattr(estimator, "structure_params"):  # choose the structure once, on all rows
+            if calibration_tags(estimator).chooses_structure:  # choose the structure once, on all rows
                 fitted = _fit(clone(estimator), X, y, groups)
                 estimator = clone(estimator).set_params(**fitted.structure_params())
             pred = _out_of_fold(estimator, X, y, folds, groups, network_samples, seed)
@@ -437,13 +515,91 @@ def provides_std(model) -> bool:
     >>> provides_std(GaussianProcessCalibrator()), provides_std(LinearCalibrator())
     (True, False)
     """
-    import inspect
-
-    inner = getattr(model, "best_estimator_", model)
-    return "return_std" in inspect.signature(inner.predict).parameters
+    return calibration_tags(model).provides_std
 
 
-class StackedCalibrator(GroupsFit, BaseCalibrator):
+def judging_folds(X: NDArray, y: NDArray, groups: NDArray | None, cv: int = 5, seed: int = 0
+                  ) -> tuple[list | None, str, NDArray | None]:
+    """Folds that can judge a model, what was done to get them, and the units of their standard errors.
+
+    Grouped folds first; if a training fold leaves an output unseen (one group per loaded axis: holding out
+    the ``Fx`` group leaves no ``Fx`` load to learn), folds over the rows instead; if those cannot judge
+    either, ``None`` (the LTM, unscored). Folds over the rows keep repeated rows (the same reading and
+    wrench) together: a copy on both sides of a split would flatter every model that interpolates.
+
+    Examples
+    --------
+    >>> y = np.repeat(np.eye(6)[:3] * 10, 5, axis=0) * np.tile(np.linspace(-1, 1, 5), 3)[:, None]
+    >>> X = y[:, :3] + np.random.default_rng(0).normal(size=(15, 3))
+    >>> folds, how, units = judging_folds(X, y, np.repeat([0, 1, 2], 5))
+    >>> how.split(":")[0], len(folds)
+    ('kfold', 5)
+    """
+    n = len(y)
+    names = WRENCH_LABELS if y.shape[1] == 6 else None
+    cv = min(int(cv), n)
+    if groups is not None:
+        folds = calibration_folds(n, groups, cv, seed)
+        unseen = unseen_outputs(y, folds, names)
+        if not unseen:
+            return folds, "group", se_units(groups)
+    _, copies = np.unique(np.column_stack([X, y]), axis=0, return_inverse=True)
+    copies = copies.ravel() if np.unique(copies).size < n else None
+    distinct = n if copies is None else int(np.unique(copies).size)
+    if distinct < 2:
+        raise CalibrationInputError(f"X and y hold {n} copies of one row; record different loads.")
+    folds = calibration_folds(n, copies, min(cv, distinct), seed)
+    kind = "kfold" if copies is None else f"kfold over the {distinct} distinct rows (repeated rows kept together)"
+    if groups is None:
+        return folds, kind, se_units(copies)
+    what = f"{', '.join(unseen)} {'is' if len(unseen) == 1 else 'are'} missing from a training fold"
+    if not unseen_outputs(y, folds, names):
+        return folds, (f"{kind}: the grouped folds cannot judge a model ({what}, e.g. one group per loaded "
+                       f"axis); {len(folds)} folds over the rows instead"), se_units(copies)
+    return None, (f"none: no folds can judge a model ({what} even in folds over the rows): the LTM, unscored "
+                  "(record each axis' loads in more than one group and more rows)"), None
+
+
+def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
+                      random_state: int = 0, predictions: ArrayLike | None = None) -> None:
+    """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
+
+    Raises :class:`~ftcal.core._model_selection.DegenerateCalibrationError` (one line, the reason) when the
+    model's predictions on ``X`` are constant or all zero, or its held-out predictions (``predictions``, e.g.
+    the report's, or else made here on :func:`judging_folds` by
+    :func:`~ftcal.core._model_selection.held_out_predictions`) are degenerate (constant, all zero, no better
+    than the mean). A model that chose itself by cross-validation (``auto``: its tags' ``chooses_model``)
+    checked its held-out predictions in ``fit``; only its predictions on ``X`` are checked again.
+
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
+    >>> check_calibration(LinearCalibrator().fit(raw, w), raw, w)  # nothing to refuse
+    """
+    from ..core._model_selection import check_not_degenerate, held_out_predictions
+
+    X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
+    alpha = float(getattr(estimator, "alpha_", 1.0))
+    name = type(estimator).__name__
+    fitted = np.asarray(estimator.predict(X), dtype=float).reshape(len(X), -1)
+    reason = degenerate_reason(y, fitted, alpha=alpha)
+    if reason is not None and "mean" not in reason:
+        raise DegenerateCalibrationError(f"refusing the fitted {name}: {reason} of its own training data; nothing "
+                                         "was saved. Fix: check the data (a constant channel, wrong columns).")
+    if predictions is None:
+        if calibration_tags(estimator).chooses_model:
+            return
+        groups = check_groups(groups, len(X))
+        folds, _, _ = judging_folds(X, y, groups, cv, random_state)
+        if folds is None:
+            return
+        _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=folds)
+    check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha)
+
+
+class StackedCalibrator(BaseCalibrator):
     """A non-negative weighted sum of fitted calibrators' predictions (what ``auto`` builds when it pays).
 
     Parameters
@@ -454,8 +610,10 @@ class StackedCalibrator(GroupsFit, BaseCalibrator):
         Non-negative weight of each member (on the torque-scaled wrench; the sum need not be 1).
     alpha, zero_reading : as for every calibrator
 
-    ``fit(X, y, groups=None)`` hands ``groups`` to the members that use them
-    (one offset per group, grouped choices inside).
+    ``fit(X, y, groups=None)`` hands ``groups`` to the members whose metadata
+    routing requests them (one offset per group, grouped choices inside);
+    ``fitted_estimators`` gives members fitted already (what ``auto`` does: the
+    members exactly as it cross-validated them), used as they are.
 
     Attributes
     ----------
@@ -491,22 +649,64 @@ class StackedCalibrator(GroupsFit, BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
-    def _fit(self, X, y) -> None:
-        members = list(self.estimators or [])
-        for member in members:
-            refuse_history_inside(member, type(self).__name__)
-        self.weights_ = np.asarray(self.weights, dtype=float)
-        if not members or self.weights_.shape != (len(members),) or (self.weights_ < 0).any():
-            raise CalibrationInputError(
-                f"StackedCalibrator needs a non-empty list of estimators and one non-negative weight each; got "
-                f"{len(members)} estimators and weights {self.weights_.tolist()}.")
-        # AutoCalibrator hands over the members exactly as it cross-validated them (the GP with its structure,
-        # networks on their subsample, with the groups); a clone has none and fits its templates
-        self.estimators_ = self.__dict__.pop("_fitted_members", None) or [
-            _fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, self._fit_groups) for e in members]
+    #: Accepts the groups of the rows and passes them on to the members that request them.
+    __metadata_request__fit = {"groups": True}
 
-    def _uses_groups(self) -> bool:
-        return any(isinstance(e, GroupsFit) and e._uses_groups() for e in self.estimators or [])
+    def get_metadata_routing(self):
+        """Routing of ``fit``'s ``groups`` to each member (``member0``, ``member1``, ...)."""
+        router = MetadataRouter(owner=self).add_self_request(self)
+        for i, member in enumerate(self.estimators or []):
+            router.add(**{f"member{i}": member}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
+        return router
+
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, *, fitted_estimators=None):
+        """Fit the members on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6) (or take them fitted).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row, routed to the members that request them.
+        fitted_estimators : list of fitted calibrators or None
+            The members fitted already, one per ``estimators`` entry (``auto`` passes them as it
+            cross-validated them: the GP with its structure, networks on their subsample); ``None`` fits clones of
+            ``estimators``.
+
+        Returns
+        -------
+        self
+        """
+        with limit_threads_here(1):  # as BaseCalibrator.fit
+            X, y = self._prepare_fit(X, y)
+            members = list(self.estimators or [])
+            for member in members:
+                refuse_history_inside(member, type(self).__name__)
+            self.weights_ = np.asarray(self.weights, dtype=float)
+            if not members or self.weights_.shape != (len(members),) or (self.weights_ < 0).any():
+                raise CalibrationInputError(
+                    f"StackedCalibrator needs a non-empty list of estimators and one non-negative weight each; got "
+                    f"{len(members)} estimators and weights {self.weights_.tolist()}.")
+            if fitted_estimators is not None:
+                fitted = list(fitted_estimators)
+                if len(fitted) != len(members):
+                    raise CalibrationInputError(
+                        f"fitted_estimators holds {len(fitted)} models for the {len(members)} estimators; give one "
+                        "fitted model per estimator, in their order.")
+                for model in fitted:
+                    check_is_fitted(model)
+                self.estimators_ = fitted
+                return self
+            uses = any(routed_groups(e, groups) for e in members)
+            groups = check_groups(groups, len(X), labels=uses)
+            self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, groups)
+                                for e in members]
+        return self
+
+    def __sklearn_tags__(self):
+        members = [calibration_tags(e) for e in self.estimators or []]
+        return declare(super().__sklearn_tags__(), uses_groups=any(m.uses_groups for m in members),
+                       min_training_rows=lambda n_channels: max([m.min_training_rows(n_channels) for m in members],
+                                                                default=25 * n_channels),
+                       cost=min((m.cost for m in members), key=COSTS.index, default="heavy"))  # the costliest
 
     def _predict_wrench(self, X):
         scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
@@ -544,9 +744,20 @@ class AutoCalibrator(BaseCalibrator):
        fitted on out-of-fold predictions, cross-fitted over the folds so its
        score is held out too). There is no time budget: the same data and
        seed give the same choice on any machine;
-    3. reports the stock scikit-learn baselines (``baselines``,
-       :func:`ftcal.models.stock_baselines`) on the same folds, never chosen:
-       the margin over what is free;
+    3. scores the stock scikit-learn baselines (``baselines``,
+       :func:`ftcal.models.stock_baselines`, as :class:`~ftcal.models.StockCalibrator`)
+       on the same folds **as candidates**, each placed in the order by what it
+       is (``sk_linear`` as simple as the LTM, ``sk_poly2``/``sk_poly3`` beside
+       the polynomials, ``sk_kernel_ridge`` and ``sk_gp`` beside the GP; between
+       two equally simple models the lower score wins, the earlier a tie): the
+       choice never loses to what is free by more than noise, and the stack may
+       combine them. If the grouped folds leave an output unseen in training
+       (one group per loaded axis), they cannot judge a model: shuffled folds
+       over the rows are used instead, or, when even those cannot, the LTM is
+       returned unscored (``comparison_["folds"]`` says which). A candidate
+       whose held-out predictions are degenerate (constant, all zero, no
+       better than the mean) is refused; if every one is, ``fit`` raises
+       :class:`~ftcal.core._model_selection.DegenerateCalibrationError`;
     4. picks by the **one-standard-error rule**
        (:func:`~ftcal.core._model_selection.simplest_within_one_se`): the
        best-scoring candidate and every one within one paired standard error
@@ -560,7 +771,7 @@ class AutoCalibrator(BaseCalibrator):
     5. refits the winner on all rows (``best_estimator_``).
 
     Every RMSE is eq. 18: over all 6 n torque-scaled values, in [N].
-    ``cv_results_`` keeps the whole comparison; it is stored in the model file
+    ``comparison_`` keeps the whole comparison; it is stored in the model file
     and printed by ``ftcal fit --model auto``.
 
     Parameters
@@ -576,16 +787,21 @@ class AutoCalibrator(BaseCalibrator):
         Training schedule of the network candidates.
     stack : bool, default=True
         Also score a non-negative combination of the best candidates.
-    baselines : bool, default=True
-        Report the stock scikit-learn baselines beside (never chosen); the kernel ones
-        (``sk_kernel_ridge``, ``sk_gp``) fitted on at most 1000 rows, the GP candidate's ``max_samples``.
+    baselines : bool or dict, default=True
+        ``True``: the stock scikit-learn baselines as choosable candidates (the kernel ones,
+        ``sk_kernel_ridge`` and ``sk_gp``, fitted on at most 1000 rows, the GP candidate's ``max_samples``);
+        a dict name -> regressor: your own free models instead (placed by their tags' ``family``, else last);
+        ``False``: none.
     network_samples : int or None, default=2000
         Most training rows a network candidate sees, in each fold and in the
         final refit (a grouped subsample; ``None``: all).
-    n_jobs : int or None, default=None
+    n_jobs : int or None, default=-1
         Candidates scored at once, in separate processes (:class:`joblib.Parallel`);
-        ``None`` is 1 unless in a :func:`joblib.parallel_config` context, ``-1``
-        all cores. The choice and every figure are the same for any value.
+        ``-1`` (the default, as ``ftcal fit``) all cores, ``None`` 1 unless in a
+        :func:`joblib.parallel_config` context. Light work (closed forms, kernel
+        models on few rows) stays in this process whatever it says; ``fit``'s
+        first log line (logger ``ftcal``) says how it scores. The choice and
+        every figure are the same for any value.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹], shared by every candidate; ``None`` derives it from ``y``.
     zero_reading : array-like of shape (N,) or None, default=None
@@ -600,8 +816,13 @@ class AutoCalibrator(BaseCalibrator):
         The chosen candidate (or :class:`StackedCalibrator`), refitted on all data.
     best_name_ : str
         Its name.
-    cv_results_ : dict
-        The comparison (see :func:`score_candidates`), plus ``chosen`` and ``folds``.
+    comparison_ : dict
+        The comparison (see :func:`score_candidates`), plus ``chosen``, ``folds`` (``"group"``, ``"kfold"``, or
+        what was done when the grouped folds could not judge), ``verdict`` (per row: chosen / within one SE but
+        more complex / beyond one SE / skipped, failed or refused) and ``why`` (one sentence: why the winner
+        won, and its ratio to the best stock model). (``cv_results_``, its
+        name before, still answers, with a ``FutureWarning``: scikit-learn's attribute of that name has another
+        schema.)
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -618,10 +839,9 @@ class AutoCalibrator(BaseCalibrator):
     'linear'
     """
 
-    _fitted_state = ("best_name_", "cv_results_", "best_estimator_")
-    #: Chooses a model by cross-validation: a wrapper that refits its estimator many times (the history term)
-    #: fits it once and refits the model it chose (:class:`~ftcal.HistoryCalibrator`).
-    _chooses_a_model = True
+    _fitted_state = ("best_name_", "comparison_", "best_estimator_")
+    #: Fitted attributes earlier model files stored under another name (loaded under the new one).
+    _renamed_state = {"cv_results_": "comparison_"}
     #: Parameters of earlier versions that model files may still carry (ignored when loading): the wall-clock
     #: budget, removed because a choice must not depend on the machine's speed.
     _removed_params = ("time_budget",)
@@ -633,13 +853,13 @@ class AutoCalibrator(BaseCalibrator):
         "cv": [Interval(Integral, 2, None, closed="left")],
         "schedule": [StrOptions({"short", "thesis"})],
         "stack": ["boolean"],
-        "baselines": ["boolean"],
+        "baselines": ["boolean", dict],
         "network_samples": [Interval(Integral, 10, None, closed="left"), None],
         "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
-                 network_samples=2000, n_jobs=None, alpha=None, zero_reading=None, random_state=None):
+                 network_samples=2000, n_jobs=-1, alpha=None, zero_reading=None, random_state=None):
         self.candidates = candidates
         self.cv = cv
         self.schedule = schedule
@@ -651,17 +871,20 @@ class AutoCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
-    def _candidates(self, grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
+    def _candidates(self, grouped: bool = False, n_channels: int | None = None) -> list[tuple[str, BaseCalibrator]]:
+        """The candidates in their complexity order, the choosable stock baselines placed among them."""
         if self.candidates is None:
-            return default_candidates(self.schedule, grouped)
-        pairs = list(self.candidates)
-        if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[1], BaseCalibrator)
-                                for p in pairs):
-            raise CalibrationInputError(
-                "candidates must be a non-empty list of (name, calibrator) pairs, e.g. "
-                "[('linear', LinearCalibrator()), ('gp', GaussianProcessCalibrator())]; got "
-                f"{self.candidates!r:.120}."
-            )
+            pairs = default_candidates(self.schedule, grouped)
+        else:
+            pairs = list(self.candidates)
+            if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[1], BaseCalibrator)
+                                    for p in pairs):
+                raise CalibrationInputError(
+                    "candidates must be a non-empty list of (name, calibrator) pairs, e.g. "
+                    "[('linear', LinearCalibrator()), ('gp', GaussianProcessCalibrator())]; got "
+                    f"{self.candidates!r:.120}."
+                )
+        pairs = with_stock_candidates(pairs, self._stock(n_channels))
         names = [name for name, _ in pairs]
         repeated = sorted({repr(n) for n in names if names.count(n) > 1})
         if repeated or not all(isinstance(n, str) and n for n in names):
@@ -678,27 +901,65 @@ class AutoCalibrator(BaseCalibrator):
                 raise CalibrationInputError(f"candidate {name!r}: {exc}") from None
         return pairs
 
+    def _stock(self, n_channels: int | None) -> list[tuple[str, BaseCalibrator]]:
+        """The choosable free models: the stock baselines (``baselines=True``), a user's own, or none."""
+        from ._baselines import STOCK_BASELINE_NAMES, StockCalibrator
+
+        seed = 0 if self.random_state is None else int(self.random_state)
+        if self.baselines is True:
+            return [(name, StockCalibrator(baseline=name, random_state=seed)) for name in STOCK_BASELINE_NAMES]
+        if not self.baselines:
+            return []
+        models = []
+        for name, model in dict(self.baselines).items():
+            if not (isinstance(name, str) and name and hasattr(model, "fit") and hasattr(model, "predict")):
+                raise CalibrationInputError(
+                    f"baselines must be True, False or a dict of name -> regressor (with fit and predict); got "
+                    f"{name!r}: {model!r:.80}.")
+            models.append((name, model if isinstance(model, BaseCalibrator) else
+                           StockCalibrator(baseline=model, random_state=seed)))
+        return models
+
+    def get_metadata_routing(self):
+        """``groups`` make this calibrator's folds and reach each candidate whose routing requests them (its
+        default, or ``set_fit_request(groups=...)``): a router with one child per candidate, by name."""
+        router = MetadataRouter(owner=self).add_self_request(self)
+        try:
+            pairs = self._candidates(grouped=True)
+        except CalibrationInputError:  # said by fit, with the data
+            pairs = []
+        for name, candidate in pairs:
+            router.add(**{name: candidate}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
+        return router
+
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Cross-validate the candidates on ``X`` (n, N), ``y`` (n, 6), refit the best on all rows.
+
+        Before the model is kept its held-out predictions are checked
+        (:func:`~ftcal.core._model_selection.check_not_degenerate`): a degenerate
+        choice raises :class:`~ftcal.core._model_selection.DegenerateCalibrationError`.
 
         Parameters
         ----------
         groups : array-like of shape (n,) or None
             Group of each row (pose, load configuration); folds keep groups
-            whole. In a ``Pipeline`` or ``GridSearchCV`` request it with
+            whole, and each candidate whose routing requests them receives them.
+            In a ``Pipeline`` or ``GridSearchCV`` request it with
             ``set_fit_request(groups=True)`` (scikit-learn metadata routing).
 
         Returns
         -------
         self
         """
-        from ._baselines import stock_baselines
+        import logging
 
         self._check_parameters()
         self._candidates()  # checked before the data
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
-        candidates = self._candidates(grouped=_offsets_identifiable(y, groups))
+        if groups is not None:  # the candidates' requests (set_fit_request) are validated here
+            process_routing(self, "fit", groups=groups)
+        candidates = self._candidates(grouped=_offsets_identifiable(y, groups), n_channels=X.shape[1])
         if groups is None and len(X) < self.cv:
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
@@ -706,24 +967,34 @@ class AutoCalibrator(BaseCalibrator):
         self.alpha_ = resolve_alpha(self.alpha, y)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
-        results, errors, _, fitted = score_candidates(
-            candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
-            random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
-            # the stock kernel models on as many rows as ftcal's GP (its default max_samples): the same budget
-            baselines=stock_baselines(X.shape[1], random_state=seed)
-            if self.baselines else None,
-        )
-        if not any(results["eligible"]):
-            why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
-            raise CalibrationInputError(f"no candidate could be fitted and judged on these data ({why[:400]}); "
-                                        "record more rows or lower cv.")
-        ranks = None if groups is None else complexity_ranks(candidates, len(errors))  # twins: only with groups
-        chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"], complexity=ranks)
-        results["chosen"] = results["name"][chosen]
-        results["folds"] = "group" if groups is not None else "kfold"
-        self.cv_results_ = results
-        self.best_name_ = results["name"][chosen]
-        templates = dict(candidates)
+        workers = "all cores" if self.n_jobs == -1 else f"n_jobs={self.n_jobs}"
+        logging.getLogger("ftcal").info(
+            "auto: %d candidates on %d rows, scored %s (AutoCalibrator(n_jobs=...) sets it; light work stays in "
+            "this process)", len(candidates), len(X), workers)
+        folds, fold_note, units = judging_folds(X, y, groups, self.cv, seed)
+        if folds is None:  # nothing can be judged: the LTM, the simplest model, never a stack
+            results = _unscored_ltm(fold_note)
+            templates = {"linear": make_ltm()}
+            candidates = [("linear", templates["linear"])]
+            errors, predictions, fitted = None, [None], {}
+        else:
+            results, errors, predictions, fitted = score_candidates(
+                candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
+                random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
+                folds=folds, units=units)
+            templates = dict(candidates)
+        results["folds"] = fold_note
+        if errors is not None:
+            if not any(results["eligible"]):
+                why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
+                raise DegenerateCalibrationError(
+                    f"no candidate could be fitted and judged on these data ({why[:400]}); nothing was saved. "
+                    "Record more rows (each axis loaded in more than one group) or lower cv.")
+            ranks = complexity_ranks(candidates, len(errors))
+            chosen = simplest_within_one_se(errors, units, eligible=results["eligible"], complexity=ranks)
+            explain_choice(results, errors, units, chosen, ranks)
+        self.comparison_ = results
+        self.best_name_ = results["chosen"]
 
         def refit(name):
             """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""
@@ -734,19 +1005,29 @@ class AutoCalibrator(BaseCalibrator):
                 if _is_network(model) else np.arange(len(X))
             return _fit(model, X[rows], y[rows], None if groups is None else groups[rows])
 
-        if results["kind"][chosen] == "stack":
-            best = StackedCalibrator(estimators=[templates[n] for n in results["stack_members"]],
-                                     weights=results["stack_weights"], alpha=self.alpha_, zero_reading=given)
-            best._fitted_members = [refit(n) for n in results["stack_members"]]
-            self.best_estimator_ = best.fit(X, y)
+        if results["kind"][results["name"].index(self.best_name_)] == "stack":
+            members = results["stack_members"]
+            best = StackedCalibrator(estimators=[templates[n] for n in members], weights=results["stack_weights"],
+                                     alpha=self.alpha_, zero_reading=given)
+            self.best_estimator_ = best.fit(X, y, fitted_estimators=[refit(n) for n in members])
         else:
             self.best_estimator_ = refit(self.best_name_)
-        best_zero = getattr(self.best_estimator_, "zero_reading_", None)
-        self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if best_zero is None else np.asarray(best_zero)
-        self.reading_noise_ = reading_noise(X, y)
-        self.calibrated_range_ = calibrated_range(X)
-        self.__dict__.pop("tare_reading_", None)
+        self._adopt_fitted(X, y, self.best_estimator_)
         return self
+
+    @property
+    def cv_results_(self) -> dict:
+        """Deprecated name of :attr:`comparison_` (scikit-learn's ``cv_results_`` has another schema)."""
+        warnings.warn("AutoCalibrator.cv_results_ is renamed comparison_ (scikit-learn's cv_results_ has another "
+                      "schema); cv_results_ will be removed in a future release.", FutureWarning, stacklevel=2)
+        return self.comparison_
+
+    def __sklearn_tags__(self):
+        # chooses a model by cross-validation: a wrapper that refits its estimator many times (the history term)
+        # fits it once and refits the model it chose (HistoryCalibrator); a standard deviation if the chosen one has
+        best = self.__dict__.get("best_estimator_")
+        return declare(super().__sklearn_tags__(), chooses_model=True, uses_groups=True,
+                       provides_std=best is not None and calibration_tags(best).provides_std)
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.best_estimator_.predict(X)
@@ -776,18 +1057,21 @@ class AutoCalibrator(BaseCalibrator):
 
     def summary(self) -> str:
         """The comparison as a markdown table (held-out RMSE ± standard error, fit time, status)."""
-        return comparison_table(self.cv_results_)
+        return comparison_table(self.comparison_)
 
 
 def comparison_table(results: dict) -> str:
-    """``cv_results_`` (or ``ftcal benchmark dataset``'s results) as a markdown table, baselines marked.
+    """``comparison_`` (or ``ftcal benchmark dataset``'s results) as a markdown table, baselines marked, and under
+    it, when the choice was explained (:func:`explain_choice`), one line saying why the winner won.
 
     The RMSE is eq. 18 over all 6 n torque-scaled values [N]; the ratio column
-    is each row's RMSE over the best stock baseline's.
+    is each row's RMSE over the best stock model's (a choosable ``stock`` row or a ``baseline``); the status
+    column says, per row, chosen / within one SE but more complex / beyond one SE / skipped / failed / refused.
     """
-    base = [r for r, k in zip(results["rmse"], results["kind"]) if k == "baseline" and r is not None]
+    base = [r for r, k in zip(results["rmse"], results["kind"]) if k in ("baseline", "stock") and r is not None]
     best_base = min(base) if base else None
-    lines = ["| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock baseline | fit [s, all folds] | "
+    verdicts = results.get("verdict") or results["status"]
+    lines = ["| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s, all folds] | "
              "status |", "|---|---|---|---|---|---|---|"]
     for i, name in enumerate(results["name"]):
         rmse = results["rmse"][i]
@@ -796,5 +1080,7 @@ def comparison_table(results: dict) -> str:
                  "" if rmse is None or not best_base else f"{rmse / best_base:.3f}",
                  "" if results["fit_seconds"][i] is None else f"{results['fit_seconds'][i]:.1f}"]
         mark = " **(chosen)**" if name == results.get("chosen") else ""
-        lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {results['status'][i]} |")
+        lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {verdicts[i]} |")
+    if results.get("why"):
+        lines += ["", results["why"]]
     return "\n".join(lines)

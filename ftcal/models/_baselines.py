@@ -18,10 +18,15 @@ name                model
 The kernel models cost O(n^2) memory and O(n^3) time, so on large data they are fitted on a random
 subset of ``max_kernel_samples`` rows (:class:`SubsampledRegressor`), as a user would have to; the
 subset is part of the baseline and is reported with it.
+
+:class:`StockCalibrator` makes each of them a calibrator: :class:`~ftcal.AutoCalibrator` can then choose
+one (never losing to what is free by construction), and a model file stores it as the arrays its
+prediction needs (no pickle, bounded by the kernel models' subsample).
 """
 
 from __future__ import annotations
 
+from math import comb
 from numbers import Integral
 from typing import Any
 
@@ -30,9 +35,11 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from ..calibrators._base import BaseCalibrator, declare
+from ..core._exceptions import CalibrationInputError
 from ..core._validation import check_arguments
 
-__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES"]
+__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator"]
 
 #: Rows the stock kernel baselines are fitted on at most by default: ``GaussianProcessCalibrator``'s
 #: ``max_samples`` (a test checks they agree), the one budget of every comparison (auto, ``ftcal benchmark``,
@@ -77,6 +84,7 @@ class SubsampledRegressor(RegressorMixin, BaseEstimator):
             rng = np.random.default_rng(self.random_state)
             rows = np.sort(rng.choice(n, size=int(self.max_samples), replace=False))
         self.n_fit_samples_ = rows.size
+        self.sample_rows_ = rows
         self.estimator_ = clone(self.estimator).fit(X[rows], y[rows])
         return self
 
@@ -154,3 +162,177 @@ def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = KERNEL_
         "sk_kernel_ridge": subsampled(kernel_ridge),
         "sk_gp": subsampled(gp),
     }
+
+
+#: What each stock baseline is, for ``auto``'s complexity order and its scheduling: the ftcal family it is as
+#: flexible as, its cost, and the fewest training rows that judge it (as for that family).
+_STOCK_KINDS: dict[str, tuple[str, str]] = {
+    "sk_linear": ("linear", "closed_form"),
+    "sk_poly2": ("polynomial2", "closed_form"),
+    "sk_poly3": ("polynomial3", "closed_form"),
+    "sk_kernel_ridge": ("kernel", "kernel"),
+    "sk_gp": ("kernel", "kernel"),
+}
+
+
+def _family_rows(family: str, n_channels: int) -> int:
+    if family == "linear":
+        return n_channels + 2
+    if family.startswith("polynomial"):
+        degree = int(family[-1])
+        return comb(n_channels + degree, degree)
+    return 10 * n_channels
+
+
+class StockCalibrator(BaseCalibrator):
+    """A stock scikit-learn baseline (:func:`stock_baselines`) as a calibrator that ``auto`` may choose and a model
+    file may hold.
+
+    ``fit`` fits exactly the baseline of that name (the same pipeline every ftcal table shows beside its models),
+    then keeps only the arrays its prediction needs: the input scaling, the polynomial exponents and the linear
+    map, or the kernel model's training inputs (at most ``max_kernel_samples``), dual coefficients and kernel
+    parameters. ``predict`` computes the same numbers from those arrays (to rounding), so a model file stores
+    them without pickling scikit-learn objects, and its size is bounded by the kernel subsample.
+
+    A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted and
+    predicts as is, but a model file cannot hold it (save the named baselines only).
+
+    Parameters
+    ----------
+    baseline : str or regressor, default="sk_linear"
+        One of :data:`STOCK_BASELINE_NAMES`, or a scikit-learn regressor (cloned at fit).
+    max_kernel_samples : int or None, default=1000
+        Rows the kernel baselines are fitted on at most (:data:`KERNEL_SAMPLES`).
+    alpha, zero_reading, random_state
+        As for every calibrator (the stock fit ignores ``alpha``: it is a baseline, fitted as a user would;
+        ``random_state`` seeds the kernel subsample and the GP's optimiser, ``None`` = 0).
+
+    Attributes
+    ----------
+    input_mean_, input_scale_ : ndarray of shape (N,)
+        The standard scaling of the readings (the LTM: 0 and 1).
+    powers_ : ndarray of shape (n_features, N) or None
+        Exponents of the polynomial features (polynomial baselines).
+    coef_ : ndarray of shape (k, n_features) or None
+    intercept_ : ndarray of shape (k,) or None
+    train_inputs_ : ndarray of shape (m, N) or None
+        Scaled training inputs of a kernel baseline.
+    dual_coef_ : ndarray of shape (m, k) or None
+    length_scale_ : ndarray of shape (N,) or None
+        RBF length scales in scaled units (kernel ridge: one, ``1 / sqrt(2 gamma)``, for every channel).
+    amplitude_ : float or None
+    target_mean_, target_scale_ : ndarray of shape (k,) or None
+        The GP's target normalisation (kernel ridge: 0 and 1).
+    estimator_ : regressor or None
+        A user's regressor, fitted (not saved).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(80, 6)); raw = w @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(80, 6))
+    >>> model = StockCalibrator(baseline="sk_poly2").fit(raw, w)
+    >>> stock = stock_baselines(6)["sk_poly2"].fit(raw, w)
+    >>> bool(np.allclose(model.predict(raw[:5]), stock.predict(raw[:5]), atol=1e-9))
+    True
+    """
+
+    _fitted_state = ("input_mean_", "input_scale_", "powers_", "coef_", "intercept_", "train_inputs_", "dual_coef_",
+                     "length_scale_", "amplitude_", "target_mean_", "target_scale_")
+    # a model file stores no None: what a baseline that does not use them leaves
+    powers_ = coef_ = intercept_ = train_inputs_ = dual_coef_ = length_scale_ = amplitude_ = None
+    target_mean_ = target_scale_ = estimator_ = None
+    _transient_params = ()
+    _parameter_constraints: dict = {
+        **BaseCalibrator._parameter_constraints,
+        "baseline": "no_validation",
+        "max_kernel_samples": [Interval(Integral, 1, None, closed="left"), None],
+    }
+
+    def __init__(self, *, baseline="sk_linear", max_kernel_samples=KERNEL_SAMPLES, alpha=None, zero_reading=None,
+                 random_state=None):
+        self.baseline = baseline
+        self.max_kernel_samples = max_kernel_samples
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
+
+    def _check_params(self) -> None:
+        if isinstance(self.baseline, str) and self.baseline not in _STOCK_KINDS:
+            raise CalibrationInputError(
+                f"baseline must be one of {', '.join(STOCK_BASELINE_NAMES)} or a scikit-learn regressor; got "
+                f"{self.baseline!r}.")
+        if not isinstance(self.baseline, str) and not (hasattr(self.baseline, "fit") and
+                                                         hasattr(self.baseline, "predict")):
+            raise CalibrationInputError(
+                f"baseline must be one of {', '.join(STOCK_BASELINE_NAMES)} or a scikit-learn regressor (with fit "
+                f"and predict); got {self.baseline!r:.80}.")
+
+    def family(self) -> str:
+        """The ftcal family this baseline is as flexible as (``"linear"``, ``"polynomial2"``, ``"polynomial3"``,
+        ``"kernel"``), or ``"custom"`` for a user's regressor."""
+        return _STOCK_KINDS[self.baseline][0] if isinstance(self.baseline, str) and self.baseline in _STOCK_KINDS \
+            else "custom"
+
+    def __sklearn_tags__(self):
+        family = self.family()
+        if family == "custom":
+            return declare(super().__sklearn_tags__())
+        return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
+                       min_training_rows=lambda n_channels: _family_rows(family, n_channels))
+
+    def _fit(self, X, y) -> None:
+        for name in self._fitted_state[2:] + ("estimator_",):
+            self.__dict__.pop(name, None)
+        self.input_mean_, self.input_scale_ = np.zeros(X.shape[1]), np.ones(X.shape[1])
+        seed = 0 if self.random_state is None else int(self.random_state)
+        if not isinstance(self.baseline, str):
+            self.estimator_ = clone(self.baseline).fit(X, y)
+            return
+        model = stock_baselines(X.shape[1], max_kernel_samples=self.max_kernel_samples,
+                                random_state=seed)[self.baseline].fit(X, y)
+        if self.baseline == "sk_linear":
+            self.coef_, self.intercept_ = np.atleast_2d(model.coef_), np.atleast_1d(model.intercept_)
+            return
+        if isinstance(model, SubsampledRegressor):
+            rows, model = model.sample_rows_, model.estimator_
+            y = y[rows]
+        scaler, last = model.steps[0][1], model.steps[-1][1]
+        self.input_mean_, self.input_scale_ = np.asarray(scaler.mean_), np.asarray(scaler.scale_)
+        if self.baseline in ("sk_poly2", "sk_poly3"):
+            self.powers_ = np.asarray(model.steps[1][1].powers_, dtype=np.int64)
+            self.coef_, self.intercept_ = np.atleast_2d(last.coef_), np.atleast_1d(last.intercept_)
+        elif self.baseline == "sk_kernel_ridge":
+            best = last.best_estimator_
+            self.train_inputs_ = np.asarray(best.X_fit_)
+            self.dual_coef_ = np.asarray(best.dual_coef_).reshape(len(self.train_inputs_), -1)
+            self.length_scale_ = np.full(X.shape[1], 1.0 / np.sqrt(2.0 * float(best.gamma)))
+            self.amplitude_ = 1.0
+            self.target_mean_, self.target_scale_ = np.zeros(y.shape[1]), np.ones(y.shape[1])
+        else:  # sk_gp: ConstantKernel * RBF + WhiteKernel (no white noise between distinct points), normalize_y
+            kernel = last.kernel_
+            self.train_inputs_ = np.asarray(last.X_train_)
+            self.dual_coef_ = np.asarray(last.alpha_).reshape(len(self.train_inputs_), -1)
+            self.length_scale_ = np.broadcast_to(np.asarray(kernel.k1.k2.length_scale, dtype=float),
+                                                 (X.shape[1],)).copy()
+            self.amplitude_ = float(kernel.k1.k1.constant_value)
+            mean, scale = y.mean(axis=0), y.std(axis=0)
+            self.target_mean_ = mean
+            self.target_scale_ = np.where(scale < 10 * np.finfo(float).eps, 1.0, scale)  # as scikit-learn's
+
+    def _predict_wrench(self, X):
+        if self.estimator_ is not None:
+            return np.asarray(self.estimator_.predict(X), dtype=float).reshape(len(X), -1)
+        if self.coef_ is None and self.train_inputs_ is None:
+            raise CalibrationInputError(
+                "this StockCalibrator wrapped a regressor of the user's, which a model file cannot hold; refit it, "
+                "or save one of the named stock baselines.")
+        z = (X - self.input_mean_) / self.input_scale_
+        if self.train_inputs_ is None:
+            features = z if self.powers_ is None else np.prod(z[:, None, :] ** self.powers_[None, :, :], axis=2)
+            return features @ self.coef_.T + self.intercept_
+        from scipy.spatial.distance import cdist
+
+        kernel = self.amplitude_ * np.exp(-0.5 * cdist(z / self.length_scale_, self.train_inputs_ / self.length_scale_,
+                                                       "sqeuclidean"))
+        return (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_

@@ -14,11 +14,10 @@ from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 
 from ..calibrators._history import refuse_history_inside
-from ..calibrators._base import BaseCalibrator
+from ..calibrators._base import BaseCalibrator, calibration_tags, declare
 from ..calibrators._routing import routed_fit_params, wrapper_routing
 from ..neural_network._directional import DirectionalCalibrator
 from ..core._exceptions import CalibrationInputError
-from ..neural_network._base import NetworkCalibrator
 from ..neural_network._stacked import fit_stacked
 from ..core._validation import validate_training_data
 
@@ -119,6 +118,13 @@ class EnsembleCalibrator(BaseCalibrator):
             )
         return template
 
+    def __sklearn_tags__(self):
+        member = calibration_tags(self.estimator if isinstance(self.estimator, BaseCalibrator) else
+                                  DirectionalCalibrator())
+        # n_members fits: costly work for auto's scheduling whatever the member (a network's when it is one)
+        return declare(super().__sklearn_tags__(), cost="network" if member.network else "heavy",
+                       uses_groups=member.uses_groups)
+
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.calibrators._routing`)."""
         return wrapper_routing(self, self._template())
@@ -142,21 +148,17 @@ class EnsembleCalibrator(BaseCalibrator):
         X, y = validate_training_data(self, X, y)
         refuse_history_inside(template, type(self).__name__)
         routed = routed_fit_params(self, groups)
-        if isinstance(template, NetworkCalibrator):  # every member's training memory, before building any
+        member = calibration_tags(template)
+        if member.network:  # every member's training memory, before building any
             template._check_network_memory(X.shape[1], len(X), members=int(n))
         rng = check_random_state(self.random_state)
         self.member_seeds_ = rng.randint(np.iinfo(np.int32).max, size=int(n))
         members = [clone(template).set_params(random_state=int(s)) for s in self.member_seeds_]
-        if (isinstance(template, NetworkCalibrator) and not template.callbacks and template.device == "cpu"
-                and not routed):
+        if member.stackable and template.device == "cpu" and not routed:
             self.estimators_ = fit_stacked(members, X, y)  # one stacked module: ~1 fit's time, not n_members'
         else:
             self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y, routed) for m in members)
-        self.alpha_ = self.estimators_[0].alpha_
-        self.zero_reading_ = self.estimators_[0].zero_reading_
-        self.reading_noise_ = self.estimators_[0].reading_noise_
-        self.calibrated_range_ = self.estimators_[0].calibrated_range_
-        self.__dict__.pop("tare_reading_", None)
+        self._adopt_fitted(X, y, self.estimators_[0])  # the members share the torque scale and the tare
         return self
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -541,7 +541,8 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
             params["device"] = "cpu"
     estimator = cls(**_known_params(cls, params))
     declared = fitted_state_names(cls)
-    fitted = meta.get("fitted", {})
+    renamed = getattr(cls, "_renamed_state", {})  # names earlier versions stored some attributes under
+    fitted = {renamed.get(k, k): v for k, v in meta.get("fitted", {}).items()}
     for key in declared:
         if key in fitted:
             value = fitted[key]
@@ -575,7 +576,8 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
     for key, value in lists.items():
         setattr(estimator, key, value)
     _check_fitted_constraints(estimator)
-    required = meta.get("state") or [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]
+    required = [renamed.get(k, k) for k in meta.get("state") or []] or \
+        [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]
     missing = [k for k in required if k not in estimator.__dict__]
     if missing:
         raise ModelFileError(f"the {name} model file is incomplete or inconsistent: its fitted {missing[0]!r} is "

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
+from ..calibrators._base import calibration_tags
 from ..calibrators._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
 from ..core._files import atomic_output
@@ -203,8 +204,7 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
         [onnx.helper.make_tensor_value_info("wrench", double, ["n", _n_outputs(model)])],
         initializer=g.initializers,
         doc_string=("readings: raw channels (n, N) in the training order"
-                    + (", temperature [deg C] last" if type(model).__name__ == "TemperatureCompensatedCalibrator"
-                       else "")
+                    + (", temperature [deg C] last" if calibration_tags(model).temperature_column else "")
                     + "; wrench: Fx, Fy, Fz [N], Tx, Ty, Tz [N m]"),
     )
     from .. import __version__

@@ -35,7 +35,8 @@ from typing import Any
 
 from importlib import import_module
 
-__all__ = ["CALIBRATOR_NAMES", "calibrator_parameters", "make_calibrator", "register_calibrator", "training_schedule", "SCHEDULE_NAMES"]
+__all__ = ["CALIBRATOR_NAMES", "calibrator_parameters", "make_calibrator", "register_calibrator", "training_schedule",
+           "SCHEDULE_NAMES", "registered_candidates", "registered_search_spaces"]
 
 #: Names accepted by :func:`training_schedule` and ``make_calibrator(schedule=...)``.
 SCHEDULE_NAMES: tuple[str, ...] = ("thesis", "short")
@@ -71,6 +72,10 @@ def _factory(name: str) -> Callable[..., Any]:
         factory = _FACTORIES[name] = factory.resolve()
     return factory
 _SCHEDULES: dict[str, dict[str, dict[str, Any]]] = {}
+#: name -> ``[(complexity, label, params)]``: the candidates of ``auto`` each registration brings.
+_CANDIDATES: dict[str, list[tuple[float, str, dict[str, Any]]]] = {}
+#: name -> its search space (``ftcal tune``, :func:`~ftcal.search_calibrator`).
+_SEARCH_SPACES: dict[str, dict[str, list]] = {}
 
 
 class _RegisteredNames(Sequence):
@@ -107,8 +112,15 @@ def register_calibrator(
     *,
     schedules: Mapping[str, Mapping[str, Any]] | None = None,
     overwrite: bool = False,
+    candidates: Sequence[tuple[float, str, Mapping[str, Any]]] = (),
+    search_space: Mapping[str, Sequence] | None = None,
 ) -> None:
     """Make ``make_calibrator(name, ...)`` build ``factory(random_state=..., **params)``.
+
+    This one line is all a new calibrator needs besides its module: the CLI's model lists, model files (a
+    class), the ONNX export (its ``_emit_onnx``), ``auto``'s candidates (``candidates``), the search spaces
+    (``search_space``) and the test suite's list of calibrators follow from the registry, and what the model can
+    do from its tags (:class:`~ftcal.calibrators._base.CalibrationTags`).
 
     Parameters
     ----------
@@ -122,6 +134,12 @@ def register_calibrator(
         not listed give ``{}`` (a model without a training schedule).
     overwrite : bool, default=False
         Replace an existing registration instead of raising ``ValueError``.
+    candidates : sequence of (complexity, label, params)
+        What :class:`~ftcal.AutoCalibrator` tries by default: ``make_calibrator(name, **params)`` named ``label``,
+        placed by ``complexity`` (the LTM is 10, the polynomials 20-31, the hybrid 40, the GP 50, the networks
+        60-70; lower is simpler). Params with ``group_offsets=True`` make a twin tried only on grouped data.
+    search_space : mapping or None
+        Its default grid for ``ftcal tune`` / :func:`~ftcal.search_calibrator` (parameter -> values).
 
     Examples
     --------
@@ -142,6 +160,30 @@ def register_calibrator(
         raise ValueError(f"unknown schedule name(s) {sorted(unknown)}; known: {SCHEDULE_NAMES}.")
     _FACTORIES[name] = factory
     _SCHEDULES[name] = {k: dict(v) for k, v in (schedules or {}).items()}
+    _CANDIDATES[name] = [(float(c), str(label), dict(params)) for c, label, params in candidates]
+    if search_space is not None:
+        _SEARCH_SPACES[name] = {k: list(v) for k, v in search_space.items()}
+    else:
+        _SEARCH_SPACES.pop(name, None)
+
+
+def registered_candidates(grouped: bool = False) -> list[tuple[str, str, dict[str, Any]]]:
+    """``(registry name, label, params)`` of every registered ``auto`` candidate, simplest first (by complexity,
+    then registration order); the twins with ``group_offsets=True`` only when ``grouped``.
+
+    Examples
+    --------
+    >>> [label for _, label, _ in registered_candidates()][:2]
+    ['linear', 'polynomial(degree=2, ridge=0.01)']
+    """
+    entries = [(c, i, name, label, params) for i, (name, listed) in enumerate(_CANDIDATES.items())
+               for c, label, params in listed if grouped or not params.get("group_offsets")]
+    return [(name, label, params) for *_, name, label, params in sorted(entries, key=lambda e: (e[0], e[1]))]
+
+
+def registered_search_spaces() -> dict[str, dict[str, list]]:
+    """Registry name -> default search space, for every registration that declares one (a fresh dict)."""
+    return {name: {k: list(v) for k, v in space.items()} for name, space in _SEARCH_SPACES.items()}
 
 
 def _check_name(model: str) -> None:
@@ -201,17 +243,37 @@ def make_calibrator(name: str, schedule: str = "thesis", random_state=None, **pa
 
 _DIRECTIONAL = {"thesis": dict(_THESIS, phase1_epochs=1700), "short": dict(_SHORT, phase1_epochs=150)}
 _COMPARATIVE = {"thesis": dict(_THESIS, phase1_epochs=3000), "short": dict(_SHORT, phase1_epochs=250)}
-register_calibrator("linear", _Lazy("calibrators._linear", "LinearCalibrator"))
-register_calibrator("comparative", _Lazy("neural_network._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE)
-register_calibrator("directional", _Lazy("neural_network._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL)
-register_calibrator("polynomial", _Lazy("calibrators._polynomial", "PolynomialCalibrator"))
-register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "AxisNonlinearCalibrator"))
-register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"))
+_NETWORK_SPACE = {
+    "hidden_layer_sizes": [(32, 32), (64, 64), (64, 64, 64), (128, 128, 128)],
+    "lr": [3e-4, 1e-3, 3e-3],
+    "phase1_epochs": [150, 400, 1000],
+}
+_ENSEMBLE_SPACE = {f"estimator__{k}": v for k, v in _NETWORK_SPACE.items()}
+register_calibrator("linear", _Lazy("calibrators._linear", "LinearCalibrator"), candidates=[(10, "linear", {})],
+                    search_space={"ridge": [0.0, 1e-6, 1e-3, 1.0]})
+register_calibrator("comparative", _Lazy("neural_network._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE,
+                    candidates=[(70, "comparative", {"random_state": 0})], search_space=_NETWORK_SPACE)
+register_calibrator("directional", _Lazy("neural_network._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL,
+                    candidates=[(60, "directional", {"random_state": 0})], search_space=_NETWORK_SPACE)
+register_calibrator("polynomial", _Lazy("calibrators._polynomial", "PolynomialCalibrator"), candidates=[
+    # with groups, the LTM and the mildest quadratic are each followed by a twin with one offset per group
+    (11, "linear(group offsets)", {"degree": 1, "group_offsets": True}),
+    (20, "polynomial(degree=2, ridge=0.01)", {"degree": 2, "ridge": 1e-2}),
+    (21, "polynomial(degree=2, ridge=0.01, group offsets)", {"degree": 2, "ridge": 1e-2, "group_offsets": True}),
+    (22, "polynomial(degree=2, ridge=0.0001)", {"degree": 2, "ridge": 1e-4}),
+    (30, "polynomial(degree=3, ridge=0.01)", {"degree": 3, "ridge": 1e-2}),
+    (31, "polynomial(degree=3, ridge=0.0001)", {"degree": 3, "ridge": 1e-4}),
+], search_space={"degree": [2, 3, 4, 5], "ridge": [1e-6, 1e-4, 1e-3, 1e-2]})
+register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "AxisNonlinearCalibrator"),
+                    candidates=[(40, "axis_nonlinear", {})],
+                    search_space={"powers": [(), (1.0,), (1.5,), (2.0,), (1.0, 2.0)], "ridge": [1e-6, 1e-3, 1e-1]})
+register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"),
+                    candidates=[(50, "gaussian_process", {"random_state": 0})])
 # ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
 register_calibrator("directional_ensemble", _Lazy("neural_network._directional", "DirectionalCalibrator", ensemble_of="directional"),
-                    schedules=_DIRECTIONAL)
+                    schedules=_DIRECTIONAL, search_space=_ENSEMBLE_SPACE)
 register_calibrator("comparative_ensemble", _Lazy("neural_network._comparative", "ComparativeCalibrator", ensemble_of="comparative"),
-                    schedules=_COMPARATIVE)
+                    schedules=_COMPARATIVE, search_space=_ENSEMBLE_SPACE)
 # "auto" chooses among the names above; its schedule goes to its network candidates
 register_calibrator("auto", _Lazy("models._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})
 
@@ -222,6 +284,7 @@ _WRAPPERS: tuple[tuple[str, str], ...] = (
     ("calibrators._temperature_compensation", "TemperatureCompensatedCalibrator"),
     ("calibrators._history", "HistoryCalibrator"),
     ("models._auto", "StackedCalibrator"),
+    ("models._baselines", "StockCalibrator"),
 )
 
 

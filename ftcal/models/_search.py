@@ -32,31 +32,20 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import stats
 from sklearn import config_context
-from sklearn.model_selection import GridSearchCV, GroupKFold, KFold, RandomizedSearchCV
+from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 
 from ..core._files import plain_json
 from ..core._exceptions import CalibrationInputError, Placeholder
 from ..core._metrics import neg_scaled_rmse
+from ..core._model_selection import calibration_folds
+from ._registry import registered_search_spaces
 
 __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "search_summary"]
 
-_NETWORK_SPACE = {
-    "hidden_layer_sizes": [(32, 32), (64, 64), (64, 64, 64), (128, 128, 128)],
-    "lr": [3e-4, 1e-3, 3e-3],
-    "phase1_epochs": [150, 400, 1000],
-}
-_ENSEMBLE_SPACE = {f"estimator__{k}": v for k, v in _NETWORK_SPACE.items()}
-
-#: Search space of each registry model (a grid; also usable by the randomized search).
-DEFAULT_SEARCH_SPACES: dict[str, dict[str, list]] = {
-    "linear": {"ridge": [0.0, 1e-6, 1e-3, 1.0]},
-    "polynomial": {"degree": [2, 3, 4, 5], "ridge": [1e-6, 1e-4, 1e-3, 1e-2]},
-    "axis_nonlinear": {"powers": [(), (1.0,), (1.5,), (2.0,), (1.0, 2.0)], "ridge": [1e-6, 1e-3, 1e-1]},
-    "directional": _NETWORK_SPACE,
-    "comparative": _NETWORK_SPACE,
-    "directional_ensemble": _ENSEMBLE_SPACE,
-    "comparative_ensemble": _ENSEMBLE_SPACE,
-}
+#: Search space of each registry model (a grid; also usable by the randomized search), as each registration
+#: declares it (:func:`~ftcal.register_calibrator`'s ``search_space``): a snapshot taken at import, see
+#: :func:`~ftcal.models._registry.registered_search_spaces` for the live one.
+DEFAULT_SEARCH_SPACES: dict[str, dict[str, list]] = registered_search_spaces()
 
 _DISTRIBUTIONS = {
     "loguniform": lambda a, b: stats.loguniform(a, b),
@@ -213,11 +202,12 @@ def search_calibrator(
 
     estimator = make_calibrator(model, schedule=schedule, random_state=random_state, **params)
     if space is None:
-        if model not in DEFAULT_SEARCH_SPACES:
+        spaces = registered_search_spaces()
+        if model not in spaces:
             raise CalibrationInputError(f"no default search space for {model!r}.", parameter="space",
                                         fix="pass {space}",
                                         settings={"space": Placeholder("{param: values}")})
-        space = DEFAULT_SEARCH_SPACES[model]
+        space = spaces[model]
     space = dict(space)
     if not space:
         raise CalibrationInputError("the search space is empty; give at least one parameter and its values.")
@@ -229,9 +219,8 @@ def search_calibrator(
         n_groups = np.unique(groups).size
         if n_groups < cv:
             raise CalibrationInputError(f"groups has {n_groups} distinct values; cv={cv} folds need at least {cv}.")
-        folds = GroupKFold(n_splits=cv)
-    else:
-        folds = KFold(n_splits=cv, shuffle=True, random_state=random_state)
+    # the folds of every model choice in ftcal: whole groups held out, else shuffled k-fold
+    folds = calibration_folds(len(X), groups, int(cv), random_state)
     common = dict(scoring=neg_scaled_rmse, cv=folds, n_jobs=n_jobs, refit=True, error_score="raise")
     if n_iter is None:
         bad = [k for k, v in space.items() if not isinstance(v, (list, tuple))]

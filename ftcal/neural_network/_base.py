@@ -16,7 +16,7 @@ from sklearn.utils import check_random_state
 from sklearn.utils.validation import check_is_fitted
 from sklearn.utils._param_validation import Interval, StrOptions
 
-from ..calibrators._base import BaseCalibrator
+from ..calibrators._base import BaseCalibrator, declare
 from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
 from ..core._threads import limit_threads_here
@@ -217,6 +217,11 @@ class NetworkCalibrator(BaseCalibrator):
         n_bytes = members * (n_params * (5 * 4 + 8) + 2 * 4 * float(min(self.batch_size, n_rows)) * sum(widths))
         check_allocation(n_bytes, f"{members} x {type(self).__name__}, hidden_layer_sizes={self.hidden_layer_sizes!r}"
                          f" ({n_params:.3g} weights each)", "use fewer members, or narrower or fewer hidden layers")
+
+    def __sklearn_tags__(self):
+        # trained for epochs; without callbacks several train as one stacked module (fit_stacked)
+        return declare(super().__sklearn_tags__(), cost="network", family="network", network=True,
+                       stackable=not self.callbacks)
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
         train_networks([self], [(X, y)])

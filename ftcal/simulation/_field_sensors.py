@@ -29,7 +29,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import Interval, Options
 
 from ..core._exceptions import CalibrationInputError
 from ..core._memory import check_allocation
@@ -222,8 +222,8 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
 
 
 def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, range_factor: float = 2.0,
-                             n_channels: int = 6, nonlinearity: float = 0.01, random_state: int = 0
-                             ) -> tuple[CalibrationDataset, CalibrationDataset]:
+                             n_channels: int = 6, nonlinearity: float = 0.01, loaded_axes: int | None = None,
+                             random_state: int = 0) -> tuple[CalibrationDataset, CalibrationDataset]:
     """Few dead-weight calibration rows in a range, and a validation set at loads up to ``range_factor`` x it.
 
     The calibration loads are uniform within ±(10 N, 10 N, 10 N, 0.5 N·m x 3);
@@ -244,6 +244,11 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
         Raw channels, at least 3.
     nonlinearity : float, default=0.01
         Cubic term at the calibrated range's edge, as a fraction of span, -1 to 1.
+    loaded_axes : {3, 6} or None, default=None
+        ``None``: every calibration row loads all six axes at once. 3 (a 3-axis load cell: Fx, Fy, Fz) or 6:
+        each calibration row loads one of the first ``loaded_axes`` axes only, in turn, and its ``group`` is
+        that axis (one group per loaded axis, as a dead-weight session records them); the validation rows load
+        those axes together (the others stay zero).
     random_state : int, default=0
 
     Returns
@@ -262,9 +267,10 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
         "range_factor": [Interval(Real, 1, 1000, closed="both")],
         "n_channels": [Interval(Integral, MIN_CHANNELS, None, closed="left")],
         "nonlinearity": [Interval(Real, -1, 1, closed="both")],
+        "loaded_axes": [Options(int, {3, 6}), None],
         "random_state": _SEED,
     }, n_samples=n_samples, n_validation=n_validation, range_factor=range_factor, n_channels=n_channels,
-        nonlinearity=nonlinearity, random_state=random_state)
+        nonlinearity=nonlinearity, loaded_axes=loaded_axes, random_state=random_state)
     for name, rows in (("n_samples", n_samples), ("n_validation", n_validation)):
         _check_rows("make_dead_weight_dataset", name, rows, 8 * n_channels + 40)
     rng = np.random.default_rng(random_state)
@@ -273,11 +279,20 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
     a = a + 0.2 * rng.normal(size=a.shape)
     offset = rng.normal(size=n_channels)
 
-    def make(n, factor, name):
+    def make(n, factor, name, one_axis=False):
         w = rng.uniform(-factor, factor, size=(n, 6)) * span
+        group = None
+        if loaded_axes is not None:
+            w[:, loaded_axes:] = 0.0
+            if one_axis:  # each row loads one axis, in turn: its group
+                group = np.arange(n) % loaded_axes
+                w *= np.eye(6)[group]
         s = (w / span) @ a.T
         raw = offset + s + nonlinearity * s**3 + 0.001 * rng.normal(size=s.shape)
         noise = rng.normal(size=w.shape) * span * 0.002
-        return _with_floor(raw, w, noise, None, {"preset": name, "random_state": random_state})
+        if loaded_axes is not None:
+            noise[:, loaded_axes:] = 0.0
+        return _with_floor(raw, w, noise, group, {"preset": name, "random_state": random_state})
 
-    return make(n_samples, 1.0, "dead_weight"), make(n_validation, range_factor, "dead_weight_validation")
+    return (make(n_samples, 1.0, "dead_weight", one_axis=True),
+            make(n_validation, range_factor, "dead_weight_validation"))

@@ -1,4 +1,5 @@
-"""Issue 19: auto against the stock baselines, one RMSE, one 1-SE rule, stacking, the small-data guard, the GP."""
+"""auto's choice: against the stock baselines, one RMSE, one 1-SE rule, stacking, the small-data guard, the GP,
+parallel scoring."""
 
 from __future__ import annotations
 
@@ -17,6 +18,7 @@ from ftcal.core._memory import MemoryLimitError
 from ftcal.core._model_selection import calibration_folds, simplest_within_one_se
 from ftcal.models import STOCK_BASELINE_NAMES
 from ftcal.models._auto import StackedCalibrator, complexity_ranks, minimum_training_rows
+from ftcal.models._baselines import StockCalibrator
 from ftcal.simulation._field_sensors import make_dead_weight_dataset, make_robot_held_dataset, \
     make_soft_sensor_dataset
 
@@ -45,7 +47,7 @@ def test_cv_rmse_is_eq_18_over_all_torque_scaled_values():
     auto = AutoCalibrator(candidates=FAST[:1], alpha=3.0, baselines=False, stack=False).fit(raw, w, groups=groups)
     folds = calibration_folds(len(raw), groups, 5, 0)
     pred = cross_val_predict(LinearCalibrator(alpha=3.0), raw, w, cv=folds)
-    assert auto.cv_results_["rmse"][0] == pytest.approx(ftcal.wrench_rmse(w, pred, alpha=3.0), rel=1e-9)
+    assert auto.comparison_["rmse"][0] == pytest.approx(ftcal.wrench_rmse(w, pred, alpha=3.0), rel=1e-9)
 
 
 # ------------------------------------------------------------------ the one 1-SE rule
@@ -99,7 +101,7 @@ def test_auto_keeps_the_better_of_the_ltm_and_its_twin(pose_offset, seed):
     raw = w @ rng.normal(size=(6, 7)) + pose_offset * rng.normal(size=(8, 7))[groups] + 0.05 * rng.normal(size=(200, 7))
     cands = AutoCalibrator()._candidates(grouped=True)[:2]
     auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, stack=False).fit(raw, w, groups=groups)
-    assert auto.best_name_ == cands[int(np.argmin(auto.cv_results_["rmse"][:2]))][0]
+    assert auto.best_name_ == cands[int(np.argmin(auto.comparison_["rmse"][:2]))][0]
     assert auto.best_name_ == ("linear(group offsets)" if pose_offset else "linear")
 
 
@@ -156,7 +158,7 @@ def test_without_groups_a_twin_is_ranked_by_its_position():
     raw, w, _ = affine(seed=1)  # a seed where the twin's figure happens to be lower in the last bits
     cands = [("linear", LinearCalibrator()), ("twin", PolynomialCalibrator(degree=1, group_offsets=True))]
     auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, stack=False).fit(raw, w)
-    assert auto.cv_results_["rmse"][1] == pytest.approx(auto.cv_results_["rmse"][0], rel=1e-9)
+    assert auto.comparison_["rmse"][1] == pytest.approx(auto.comparison_["rmse"][0], rel=1e-9)
     assert auto.best_name_ == "linear"
 
 
@@ -181,24 +183,24 @@ def test_a_consistent_but_negligible_gain_is_a_tie():
 
 
 # ------------------------------------------------------------------ baselines, stacking, determinism
-def test_cv_results_report_the_stock_baselines_on_the_same_folds_never_chosen():
+def test_the_stock_baselines_are_choosable_candidates_on_the_same_folds():
+    # (they were reported and never chosen before; now they compete under the same one-SE rule)
     raw, w = cubic(160)
     auto = AutoCalibrator(candidates=FAST[:2], alpha=1.0, stack=False).fit(raw, w)
-    r = auto.cv_results_
-    base = [n for n, k in zip(r["name"], r["kind"]) if k == "baseline"]
-    assert base == list(STOCK_BASELINE_NAMES)
-    assert all(r["rmse"][r["name"].index(n)] is not None for n in base)
-    assert auto.best_name_ in ("linear", "polynomial2") and not any(
-        e for e, k in zip(r["eligible"], r["kind"]) if k == "baseline")
+    r = auto.comparison_
+    stock = [n for n, k in zip(r["name"], r["kind"]) if k == "stock"]
+    assert stock == list(STOCK_BASELINE_NAMES)
+    assert all(r["rmse"][r["name"].index(n)] is not None for n in stock)
+    assert all(e for e, k in zip(r["eligible"], r["kind"]) if k == "stock")
     # sk_linear is the LTM: same folds, same eq. 18 figure
     assert r["rmse"][r["name"].index("sk_linear")] == pytest.approx(r["rmse"][0], rel=1e-6)
-    assert "sk_gp" in auto.summary() and "/ best stock baseline" in auto.summary()
+    assert "sk_gp" in auto.summary() and "/ best stock model" in auto.summary()
 
 
 def test_stack_is_scored_held_out_with_non_negative_weights_and_saved(tmp_path):
     raw, w = cubic(240)
     auto = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w)
-    r = auto.cv_results_
+    r = auto.comparison_
     assert r["kind"][-1] == "stack" and r["rmse"][-1] is not None
     assert len(r["stack_members"]) == 3 and min(r["stack_weights"]) >= 0
     stack = StackedCalibrator(estimators=[e for _, e in FAST], weights=r["stack_weights"], alpha=1.0).fit(raw, w)
@@ -214,7 +216,7 @@ def test_auto_is_deterministic_and_has_no_time_budget():
     assert "time_budget" not in params
     a = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     b = AutoCalibrator(candidates=FAST, alpha=1.0, baselines=False).fit(raw, w, groups=groups)
-    assert a.cv_results_["rmse"] == b.cv_results_["rmse"] and a.best_name_ == b.best_name_
+    assert a.comparison_["rmse"] == b.comparison_["rmse"] and a.best_name_ == b.best_name_
 
 
 class PidRecorder(LinearRegression):
@@ -223,6 +225,11 @@ class PidRecorder(LinearRegression):
     def __init__(self, *, path=None):
         super().__init__()
         self.path = path
+
+    def __sklearn_tags__(self):  # a free model of the user's declares its cost (else it counts as heavy work)
+        from ftcal.calibrators._base import declare
+
+        return declare(super().__sklearn_tags__(), cost="closed_form")
 
     def fit(self, X, y):
         with open(self.path, "a") as f:
@@ -241,7 +248,7 @@ def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
 
     raw, w, groups = affine(n=120, n_groups=6)  # 100-row training folds
     assert 100 <= LIGHT_KERNEL_ROWS
-    baselines = {"pid": PidRecorder(path=str(tmp_path / "pids")), "sk_gp": stock_baselines(6)["sk_gp"]}
+    baselines = {"pid": PidRecorder(path=str(tmp_path / "pids")), "sk_gp": StockCalibrator(baseline="sk_gp")}
     score_candidates(FAST, raw, w, groups=groups, alpha=1.0, baselines=baselines, n_jobs=2)
     assert fitting_processes(tmp_path / "pids") == {os.getpid()}
 
@@ -252,13 +259,14 @@ def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fi
     from ftcal.models._auto import LIGHT_KERNEL_ROWS, _is_light
     from ftcal.models._baselines import stock_baselines
 
-    stock = stock_baselines(6)
+    stock = {name: StockCalibrator(baseline=name) for name in STOCK_BASELINE_NAMES}
     assert all(_is_light(stock[n], 10**6) for n in ("sk_linear", "sk_poly2", "sk_poly3"))
     assert all(_is_light(m, LIGHT_KERNEL_ROWS) and not _is_light(m, LIGHT_KERNEL_ROWS + 1)
                for m in (stock["sk_gp"], stock["sk_kernel_ridge"], GaussianProcessCalibrator()))
     # networks however wrapped or configured, ensembles and unknown regressors are heavy
+    # (and a regressor that declares no cost: the raw stock GP pipeline)
     for heavy in (ftcal.DirectionalCalibrator(callbacks=[Callback()]), ftcal.EnsembleCalibrator(LinearCalibrator()),
-                  ftcal.ComparativeCalibrator()):
+                  ftcal.ComparativeCalibrator(), stock_baselines(6)["sk_gp"]):
         assert not _is_light(heavy, 10)
 
 
@@ -291,10 +299,10 @@ def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential(monkeypa
     kw = dict(candidates=cands, alpha=1.0, random_state=0)
     one = AutoCalibrator(n_jobs=1, **kw).fit(raw, w, groups=groups)
     two = AutoCalibrator(n_jobs=2, **kw).fit(raw, w, groups=groups)
-    assert one.cv_results_["name"] == two.cv_results_["name"]
-    assert one.cv_results_["kind"][-1] == "baseline" and "stack" in one.cv_results_["kind"]
-    np.testing.assert_allclose([r for r in one.cv_results_["rmse"] if r is not None],
-                               [r for r in two.cv_results_["rmse"] if r is not None], rtol=1e-9)
+    assert one.comparison_["name"] == two.comparison_["name"]
+    assert one.comparison_["kind"][-1] == "stack" and "stock" in one.comparison_["kind"]
+    np.testing.assert_allclose([r for r in one.comparison_["rmse"] if r is not None],
+                               [r for r in two.comparison_["rmse"] if r is not None], rtol=1e-9)
     assert one.best_name_ == two.best_name_
     np.testing.assert_allclose(one.predict(raw[:5]), two.predict(raw[:5]), rtol=1e-9)
 
@@ -306,7 +314,7 @@ def test_the_stack_auto_chose_holds_the_cross_validated_members_and_a_clone_refi
     raw, w = cubic(240)
     cands = FAST + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
     auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, random_state=0).fit(raw, w)
-    r = auto.cv_results_
+    r = auto.comparison_
     assert r["kind"] == ["candidate"] * 4 + ["stack"]  # the stack row right after the candidates
     if r["chosen"].startswith("stack"):  # its members are fitted on all rows with the cross-validated weights
         best = auto.best_estimator_
@@ -332,8 +340,8 @@ def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsampl
               network_samples=100)
     a = AutoCalibrator(**kw).fit(raw, w, groups=groups)
     b = AutoCalibrator(**kw).fit(raw, w, groups=groups)
-    assert a.cv_results_["status"][1].startswith("scored")
-    assert a.cv_results_["rmse"] == b.cv_results_["rmse"]  # the same seed and data: the same scores
+    assert a.comparison_["status"][1].startswith("scored")
+    assert a.comparison_["rmse"] == b.comparison_["rmse"]  # the same seed and data: the same scores
 
 
 # ------------------------------------------------------------------ small data, extrapolation, bad input
@@ -344,7 +352,7 @@ def test_few_dead_weight_rows_auto_is_never_worse_than_1_1x_the_ltm_at_2x_the_ra
     auto = AutoCalibrator(alpha=alpha, baselines=False,
                           candidates=[c for c in ftcal.models._auto.default_candidates()
                                       if c[0] not in ("directional", "comparative")]).fit(cal.raw, cal.wrench)
-    r = auto.cv_results_
+    r = auto.comparison_
     chosen = r["name"].index(auto.best_name_)
     assert r["eligible"][chosen]
     for k, name in enumerate(r["name"]):
@@ -464,7 +472,7 @@ def test_cli_fit_auto_uses_the_short_schedule_and_jobs(tmp_path):
     assert summary["schedule"] == "short"
     auto = ftcal.load_model(tmp_path / "m" / "auto.model.npz")
     assert auto.n_jobs == 1 and auto.schedule == "short"
-    status = dict(zip(auto.cv_results_["name"], auto.cv_results_["status"]))
+    status = dict(zip(auto.comparison_["name"], auto.comparison_["status"]))
     assert status["gaussian_process"] == "scored" and status["directional"].startswith("skipped")
 
 
@@ -489,7 +497,7 @@ def test_cross_validate_routes_groups_to_auto_through_metadata_routing():
             groups=True)
         out = cross_validate(auto, raw, w, cv=GroupKFold(2), params={"groups": groups},
                              scoring=ftcal.neg_scaled_rmse, return_estimator=True)
-    assert [e.cv_results_["folds"] for e in out["estimator"]] == ["group", "group"]
+    assert [e.comparison_["folds"] for e in out["estimator"]] == ["group", "group"]
 
 
 @pytest.mark.parametrize("mean, kernel, per_output", [("none", "matern52", True), ("linear", "rbf+linear", False)])
