@@ -368,10 +368,12 @@ def _per_axis(value: ArrayLike | None, k: int, what: str) -> NDArray | None:
 def _reused_auto_choice(model: Any, X: NDArray, cv: int, n_folds: int, random_state: int) -> dict | None:
     """``auto``'s own comparison (its stock baselines on the same folds), when ``model`` is an AutoCalibrator
     fitted on these data with these folds: the report then refits only the chosen model, not the baselines."""
-    results = getattr(model, "cv_results_", None)
+    results = model.__dict__.get("comparison_") if hasattr(model, "__dict__") else None
     fitted_range = getattr(model, "calibrated_range_", None)
+    # (folds other than plain grouped or shuffled ones: auto replaced folds that could not judge; not these)
     if not isinstance(results, dict) or "kind" not in results or getattr(model, "cv", None) != cv \
             or results.get("n_splits") != n_folds or fitted_range is None \
+            or results.get("folds") not in ("group", "kfold") \
             or (getattr(model, "random_state", None) or 0) != random_state:  # auto's folds are seeded by it
         return None
     same_data = fitted_range.shape == (2, X.shape[1]) and np.array_equal(
@@ -518,7 +520,7 @@ def calibration_certificate(
     choice.append(scored(label, main["pred"], "calibration"))
     if baselines and reused is not None:
         for i, kind in enumerate(reused["kind"]):
-            if kind != "baseline":
+            if kind not in ("baseline", "stock"):  # auto's stock models are candidates now: the same rows
                 continue
             if reused["rmse"][i] is None:
                 choice.append({"model": reused["name"][i], "kind": "baseline", "status": reused["status"][i]})
