@@ -130,7 +130,7 @@ def test_grid_search(tiny_calibrator, data):
     assert search.best_estimator_.predict(data[0]).shape == (60, 6)
     if "ridge" in grid:  # noise-free affine data: a penalty cannot help; where the penalised terms are zero (the
         # polynomial's and the hybrid's corrections) both are exact, and only rounding (~1e-13 N) tells them apart
-        no_penalty, penalty = search.comparison_["mean_test_score"]
+        no_penalty, penalty = search.cv_results_["mean_test_score"]
         assert no_penalty >= penalty - 1e-9 * np.abs(data[1]).max()
 
 
