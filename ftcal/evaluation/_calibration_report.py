@@ -54,7 +54,7 @@ from ..calibrators._history import reads_history
 from ..core._model_selection import calibration_folds, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
-from ..models._auto import provides_std
+from ..models._auto import LIGHT_KERNEL_ROWS, provides_std
 
 __all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json",
            "report_cases_csv", "file_sha256", "bytes_sha256", "axis_units", "CONDITION_FIELDS", "COVERAGE_FACTOR",
@@ -208,8 +208,9 @@ def baseline_cost(name: str, estimator: Any, n_train: int, n_features: int, n_ou
 
     if isinstance(estimator, SubsampledRegressor):
         m = n_train if estimator.max_samples is None else min(n_train, int(estimator.max_samples))
-        if "gp" in name:  # K and its p + 2 hyperparameter gradients; ~50 optimizer steps of a Cholesky + gradients
-            return 8.0 * m * m * (n_features + 3), n_folds * 50 * (m**3 / 3 + 2.0 * m * m * (n_features + 2)), m
+        if "gp" in name:  # K and its p + 2 hyperparameter gradients; L-BFGS steps (more with more hyperparameters)
+            steps = 50 + 2 * (n_features + 2)  # of a Cholesky and the gradients
+            return 8.0 * m * m * (n_features + 3), n_folds * steps * (m**3 / 3 + 2.0 * m * m * (n_features + 2)), m
         fit_rows = m * 2 // 3  # kernel ridge: 3-fold grid search of 7 x 7 settings, plus the refit
         per_fit = fit_rows**3 / 3 + 2.0 * fit_rows**2 * n_features + fit_rows**2 * n_outputs
         return 8.0 * m * m * 3, n_folds * (147 + 1) * per_fit, m
@@ -217,17 +218,20 @@ def baseline_cost(name: str, estimator: Any, n_train: int, n_features: int, n_ou
     degree = int(re.search(r"poly(\d+)", name).group(1)) if re.search(r"poly(\d+)", name) else 1
     width = math.comb(n_features + degree, degree)
     small = min(m, width)
-    return 8.0 * m * width * 3 + 8.0 * small * small, n_folds * (2.0 * m * width * small + width**3), m
+    # the ridge decomposes the smaller of X^T X (width^2) and X X^T (rows^2)
+    return 8.0 * m * width * 3 + 8.0 * small * small, n_folds * (2.0 * m * width * small + small**3), m
 
 
 def _baseline_skip_reason(name: str, estimator: Any, n_train: int, n_features: int, n_outputs: int,
-                          n_folds: int) -> str | None:
-    """Why a stock baseline is not fitted here (over ftcal's memory limit, or the report's work budget), or None."""
+                          n_folds: int, at_once: int = 1) -> str | None:
+    """Why a stock baseline is not fitted here (over ftcal's memory limit, or the report's work budget), or None;
+    ``at_once`` folds fitted at the same time (in worker processes) each take its memory."""
     from ..core._memory import MemoryLimitError, check_allocation
 
     n_bytes, flops, _ = baseline_cost(name, estimator, n_train, n_features, n_outputs, n_folds)
     try:
-        check_allocation(n_bytes, f"{name} on {n_train} rows x {n_features} channels", "leave it out of the report")
+        check_allocation(n_bytes * at_once, f"{name} on {n_train} rows x {n_features} channels"
+                         + (f" ({at_once} folds at once)" if at_once > 1 else ""), "leave it out of the report")
     except MemoryLimitError as exc:
         return f"skipped: {exc}"
     if flops > BASELINE_WORK_BUDGET:
@@ -500,7 +504,7 @@ def calibration_certificate(
     choice: list[dict] = []
     n_train = min(len(tr) for tr, _ in folds)
     parallel = None
-    if n_jobs not in (None, 1):
+    if n_jobs not in (None, 1) and min(len(tr) for tr, _ in folds) > LIGHT_KERNEL_ROWS:
         from joblib import effective_n_jobs
         from sklearn.utils.parallel import Parallel
 
@@ -535,9 +539,13 @@ def calibration_certificate(
             if skip is not None:
                 choice.append({"model": bname, "kind": "baseline", "status": skip})
                 continue
+            workers = getattr(parallel, "n_jobs", 1) if parallel is not None else 1
+            # folds in parallel only when their memory fits the limit together; else one after the other
+            at_once = parallel if _baseline_skip_reason(bname, est, n_train, X.shape[1], k, len(folds),
+                                                        workers) is None else None
             rows_used = baseline_cost(bname, est, n_train, X.shape[1], k, len(folds))[2]
             try:
-                out = _held_out(est, X, y, groups, folds, want_std=False, seed=random_state, parallel=parallel,
+                out = _held_out(est, X, y, groups, folds, want_std=False, seed=random_state, parallel=at_once,
                                 max_rows=None if bname in ("sk_kernel_ridge", "sk_gp") else BASELINE_TRAINING_ROWS)
             except Exception as exc:  # a baseline that cannot fit these data is reported, not fatal
                 choice.append({"model": bname, "kind": "baseline",
