@@ -338,3 +338,27 @@ def test_a_million_rows_keep_every_stock_baseline_within_budget_by_fitting_a_sub
         n_bytes, flops, rows = baseline_cost(name, est, 800_000, 8, 6, 5)
         assert rows <= 200_000 and n_bytes < memory_limit_bytes() and flops <= BASELINE_WORK_BUDGET, name
         assert _baseline_skip_reason(name, est, 800_000, 8, 6, 5) is None
+
+
+def test_a_three_axis_load_cell_gets_a_report_without_torque_rows(tmp_path, capsys):
+    rng = np.random.default_rng(8)
+    wrench = rng.uniform(-1, 1, size=(90, 3)) * [100, 100, 300]
+    raw = wrench @ rng.normal(size=(3, 4)) / 100 + 0.2 + 1e-3 * rng.normal(size=(90, 4))
+    CalibrationDataset(raw=raw, wrench=wrench, axes=("Fx", "Fy", "Fz"), group=np.repeat(np.arange(6), 15),
+                       meta={"sensor": "3-axis cell"}).save(tmp_path / "cell.csv")
+    assert main(["fit", str(tmp_path / "cell.csv"), "--model", "linear", "--report", "--cv", "3", "--out",
+                 str(tmp_path / "m"), "--rated", "Fx=200,Fy=200,Fz=500", "--spec", "1%FS", "-q"]) == 0
+    facts = json.loads((tmp_path / "m" / "linear.report.json").read_text())
+    assert [a["axis"] for a in facts["accuracy"]] == ["Fx", "Fy", "Fz"]
+    assert [a["full_scale"] for a in facts["accuracy"]] == [200, 200, 500]
+    assert facts["cases"]["axes"] == ["Fx", "Fy", "Fz"] and len(facts["cases"]["applied"][0]) == 3
+    shown = browser.render(tmp_path / "m" / "linear.report.html", tmp_path / "chromium")
+    text = re.sub(r'src="data:[^"]+"', "", shown.dom)
+    assert not re.search(r"\bT[xyz]\b|N·m per raw unit|largest \|T\|", text)
+    header = (tmp_path / "m" / "linear.report.csv").read_text().splitlines()[0]
+    assert "Fz_error [%FS]" in header and "Tx" not in header
+    # a rated capacity for an axis the cell does not measure is refused, naming its axes
+    code = main(["fit", str(tmp_path / "cell.csv"), "--model", "linear", "--report", "--out", str(tmp_path / "n"),
+                 "--rated", "Fx=200,Fy=200,Fz=500,Tx=5"])
+    err = capsys.readouterr().err
+    assert code == 2 and "axis 'Tx' is not an output of this dataset; its axes are Fx, Fy, Fz" in err

@@ -87,7 +87,13 @@ CONDITION_FIELDS: dict[str, str] = {
 
 
 def file_sha256(path: str | Path) -> str:
-    """SHA-256 of a file's bytes (hex), the identity of a model or data file."""
+    """SHA-256 of a file's bytes (hex), the identity of a model or data file; of a folder (a dataset of one file
+    per pose), the SHA-256 of its files' relative names and hashes, in name order."""
+    path = Path(path)
+    if path.is_dir():
+        listing = "".join(f"{p.relative_to(path).as_posix()}\t{file_sha256(p)}\n"
+                          for p in sorted(path.rglob("*")) if p.is_file())
+        return hashlib.sha256(listing.encode("utf-8")).hexdigest()
     digest = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -113,7 +119,7 @@ def axis_units(names) -> list[str]:
 
 def _axis_names(dataset: CalibrationDataset, k: int) -> list[str]:
     """The dataset's output axis names (``axis_names``, or its meta's), else ``Fx..Tz`` for 6 columns."""
-    names = getattr(dataset, "axis_names", None) or dataset.meta.get("axis_names") or dataset.meta.get("axes")
+    names = getattr(dataset, "axes", None) or dataset.meta.get("axis_names") or dataset.meta.get("axes")
     if names is not None and len(names) == k:
         return [str(n) for n in names]
     return list(WRENCH_LABELS) if k == 6 else [f"y{i}" for i in range(k)]
@@ -885,8 +891,9 @@ def render_report_html(report: dict) -> str:
                             [[_fmt(r)] + [_fmt(c, 5) for c in row] + [_fmt(o, 5)]
                              for r, row, o in zip(mx["rows"], mx["matrix"], mx["offset"])]))
     else:
-        parts.append("<p class=\"note\">This model is not affine in the readings: it has no calibration matrix. Its "
-                     "identity is the model file and its SHA-256 above; load it with the command shown.</p>")
+        parts.append("<p class=\"note\">No calibration matrix could be read from this model (its prediction is "
+                     "not affine in the readings, or not a matrix of these axes). Its identity is the model file and "
+                     "its SHA-256 above; load it with the command shown.</p>")
     parts.append("<h3>Frames and units</h3><p>Outputs are <code>[" + ", ".join(names) + "]</code> in the <b>sensor "
                  "frame</b>: forces in N, torques in N·m about the sensor frame's origin. Raw channels are in the "
                  "sensor's own unit, in the channel order of the data file. The RMSE of the whole wrench is over "
