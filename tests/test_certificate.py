@@ -313,11 +313,12 @@ def test_report_of_auto_reuses_its_comparison_and_refits_only_its_choice():
     auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator())],
                           cv=4, stack=False).fit(data.raw, data.wrench, groups=data.group)
     facts = calibration_certificate(auto, data, cv=4, figures=False)
-    res = auto.cv_results_
+    res = auto.comparison_
     assert facts["validation"]["reused_auto_comparison"] is True
+    assert sum(k in ("stock", "baseline") for k in res["kind"]) == 5  # the five stock models, on auto's folds
     rows = {c["model"]: c for c in facts["model_choice"]}
     for i, name in enumerate(res["name"]):
-        if res["kind"][i] == "baseline":
+        if res["kind"][i] in ("stock", "baseline"):
             assert rows[name]["rmse"] == res["rmse"][i] and "auto's comparison" in rows[name]["note"]
     chosen = res["name"].index(auto.best_name_)
     this = facts["model_choice"][0]
