@@ -113,3 +113,70 @@ def test_search_space_bounds_are_checked_when_parsed_not_when_sampled(entry, exp
 
     with pytest.raises(CalibrationInputError, match=re.escape(f"search entry {entry!r}: {expected}")):
         parse_search_space([entry])
+
+
+# ------------------------------------------------------------------ groups: grouped folds, routed only where requested
+def _grouped_sensor(n_groups: int = 6, per_group: int = 20, seed: int = 3):
+    raw, wrench = _cubic_sensor(n=n_groups * per_group, seed=seed)
+    return raw, wrench, np.repeat(np.arange(n_groups), per_group)
+
+
+def _whole_groups(folds, groups) -> bool:
+    return all(not set(groups[train]) & set(groups[test]) for train, test in folds)
+
+
+@pytest.mark.parametrize("model, space, extra", [
+    ("linear", {"ridge": [0.0, 1e-3]}, {}),  # requests no groups
+    ("polynomial", {"degree": [1, 2]}, {}),  # requests them (group offsets)
+    ("axis_nonlinear", {"powers": [(), (1.0,)]}, {}),
+    ("directional", {"lr": [1e-3]}, {k: v for k, v in TINY_SCHEDULE.items()}),  # a network: requests none
+])
+def test_search_with_groups_holds_out_whole_groups_for_every_calibrator(model, space, extra):
+    raw, wrench, groups = _grouped_sensor()
+    search = search_calibrator(model, raw, wrench, space=space, cv=3, groups=groups, **extra)
+    assert search.n_splits_ == 3 and _whole_groups(search.cv, groups)
+    assert search.best_estimator_.predict(raw).shape == wrench.shape
+
+
+def test_search_routes_groups_only_to_a_calibrator_that_requests_them():
+    from sklearn import config_context
+    from ftcal.models._registry import _FACTORIES, register_calibrator
+
+    seen: list = []
+
+    class Recording(PolynomialCalibrator):
+        def fit(self, X, y, groups=None):
+            seen.append(None if groups is None else np.unique(groups).tolist())
+            return super().fit(X, y, groups)
+
+    def declining(**params):
+        with config_context(enable_metadata_routing=True):
+            return Recording(**params).set_fit_request(groups=False)
+
+    raw, wrench, groups = _grouped_sensor()
+    register_calibrator("recording_polynomial", Recording)
+    register_calibrator("declining_polynomial", declining)
+    try:
+        search = search_calibrator("recording_polynomial", raw, wrench, space={"degree": [1, 2]}, cv=3, groups=groups)
+        assert _whole_groups(search.cv, groups)
+        # each fold's fit got its training groups (4 of the 6), the refit all 6
+        assert sorted(map(len, seen)) == [4] * 6 + [6]
+        seen.clear()
+        search = search_calibrator("declining_polynomial", raw, wrench, space={"degree": [1, 2]}, cv=3, groups=groups)
+        assert seen == [None] * 7 and _whole_groups(search.cv, groups)  # folds still grouped, groups never passed
+    finally:
+        _FACTORIES.pop("recording_polynomial"), _FACTORIES.pop("declining_polynomial")
+
+
+def test_cli_tune_on_a_csv_with_a_group_column(tmp_path):
+    import subprocess
+    import sys
+
+    raw, wrench, groups = _grouped_sensor()
+    header = ",".join([f"s{i}" for i in range(6)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz", "group"])
+    np.savetxt(tmp_path / "g.csv", np.c_[raw, wrench, groups], delimiter=",", header=header, comments="")
+    done = subprocess.run([sys.executable, "-m", "ftcal", "tune", str(tmp_path / "g.csv"), "--model", "linear",
+                           "--out", str(tmp_path / "tu"), "-f", "-q"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((tmp_path / "tu" / "linear.tune.json").read_text())
+    assert summary["n_folds"] == 3 and len(summary["candidates"]) == 4

@@ -37,7 +37,7 @@ from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 from ..core._files import plain_json
 from ..core._exceptions import CalibrationInputError, Placeholder
 from ..core._metrics import neg_scaled_rmse
-from ..core._model_selection import calibration_folds
+from ..core._model_selection import calibration_folds, routed_groups
 from ._registry import registered_search_spaces
 
 __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "search_summary"]
@@ -231,12 +231,15 @@ def search_calibrator(
         if isinstance(n_iter, bool) or not isinstance(n_iter, (int, np.integer)) or n_iter < 1:
             raise CalibrationInputError(f"n_iter must be an integer >= 1; got {n_iter!r}.")
         search = RandomizedSearchCV(estimator, space, n_iter=int(n_iter), random_state=random_state, **common)
-    if groups is None:
+    # the groups already shaped the folds above (whole groups held out), whatever the calibrator requests; through
+    # scikit-learn's metadata routing they also reach the calibrator when it requests them (the hybrid's and auto's
+    # own cross-validation inside each fit then hold out whole groups too), and only then: the precomputed folds
+    # consume nothing, so passing groups nobody requests would be refused by the routing
+    fit_params = routed_groups(estimator, groups)
+    if not fit_params:
         return search.fit(X, y)
-    # groups go to the splitter and, through scikit-learn's metadata routing, to every calibrator that requests
-    # them (the hybrid's and auto's own cross-validation inside each fit then hold out whole groups too)
     with config_context(enable_metadata_routing=True):
-        return search.fit(X, y, groups=groups)
+        return search.fit(X, y, **fit_params)
 
 
 def search_summary(search) -> dict[str, Any]:
