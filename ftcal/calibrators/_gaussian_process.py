@@ -358,7 +358,9 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
             u[sel], {k: v[sel] for k, v in targets.items()}, {k: v[sel] for k, v in bases.items()},
             None if group_rows is None else group_rows[sel], seed)
         target, basis = targets[mean], bases[mean]
-        starts = self._starts(family, bounds, theta, n_channels, seed)
+        # the kernel's own start again only where it can reach another optimum: a shared fit on more rows than the
+        # choice saw (on the same rows, the chosen optimum is that start's)
+        starts = self._starts(family, bounds, theta, n_channels, seed, own_start=not per_output and len(sel) < m)
         columns = [[j] for j in range(target.shape[1])] if per_output else [list(range(target.shape[1]))]
         regressors, errors = [], []
         for j, cols in enumerate(columns):  # each from the start of least held-out error (not of most likelihood)
@@ -444,15 +446,15 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
             return mean, family, bounds, True, np.stack([g.kernel_.theta for g in separate])
         return mean, family, bounds, False, shared.kernel_.theta[None, :]
 
-    def _starts(self, family: str, bounds: str, theta: NDArray[np.float64], n_channels: int, seed: int
-                ) -> list[NDArray]:
+    def _starts(self, family: str, bounds: str, theta: NDArray[np.float64], n_channels: int, seed: int,
+                own_start: bool = True) -> list[NDArray]:
         """Starting hyperparameters of the final fit, one row per regressor in each: the chosen ones, the kernel's
-        own start (when it differs: a marginal-likelihood optimum reached from there may predict better), and
+        own start (with ``own_start``, when it differs: an optimum reached from there may predict better), and
         ``n_restarts_optimizer`` drawn uniformly (in log) within the bounds; ``fit`` keeps the start whose
         optimum has the least held-out error."""
         kernel = make_kernel(family, n_channels, bounds)
         default = np.broadcast_to(kernel.theta, theta.shape)
-        starts = [theta] + ([default] if not np.allclose(default, theta) else [])
+        starts = [theta] + ([default] if own_start and not np.allclose(default, theta) else [])
         rng = check_random_state(seed)
         low, high = kernel.bounds[:, 0], kernel.bounds[:, 1]
         starts += [rng.uniform(low, high, size=theta.shape) for _ in range(int(self.n_restarts_optimizer))]
