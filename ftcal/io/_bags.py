@@ -131,7 +131,7 @@ def _streaming_ros1_reader():
                 for info in self.chunk_infos:
                     for conn, n in info.connection_counts.items():
                         counts[conn] = counts.get(conn, 0) + n
-                self.connections = [type(c)(*c[0:5], counts.get(c.id, 0), *c[6:]) for c in connections]
+                self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in connections]
             except BaseException:
                 self.bio.close()
                 self.bio = None
@@ -244,58 +244,73 @@ def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str,
 
 
 class _Stream:
-    """A topic's samples, reduced on the fly to at most ``max_samples`` (block means, or every k-th)."""
+    """A topic's samples, reduced on the fly to at most ``2 * max_samples`` (block means, or every k-th).
+
+    The bag's declared message count only sets the first block size: when the buffer fills (a bag whose index or
+    ``metadata.yaml`` under-counts), neighbouring stored samples are merged in pairs in place and the block doubles,
+    so memory stays bounded whatever the bag declares.
+    """
 
     def __init__(self, count: int, max_samples: int, average: bool) -> None:
         self.block = max(1, math.ceil(count / max_samples))
         self.average = average
-        self.size = max(1, math.ceil(count / self.block))
-        self.times: list[float] = []
-        self.receive: list[float] = []
-        self.values: NDArray[np.float64] | None = None
+        self.capacity = 2 * max_samples
+        self._rows = min(self.capacity, max(1, math.ceil(count / self.block)) + 1)
+        self.data: NDArray[np.float64] | None = None  # columns: header time, receive time, value...
         self.n = 0
         self._seen = 0
-        self._sum_t = self._sum_r = 0.0
-        self._sum_v: NDArray[np.float64] | None = None
+        self._sum: NDArray[np.float64] | None = None
         self._in_block = 0
 
+    @property
+    def n_messages(self) -> int:
+        """How many messages were added."""
+        return self._seen
+
     def add(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
-        if self.values is None:
-            self.values = np.empty((self.size + 1, len(value)))
+        row = np.concatenate([[t, receive], value])
+        if self.data is None:
+            self.data = np.empty((self._rows, len(row)))
         self._seen += 1
         if not self.average:
             if (self._seen - 1) % self.block == 0:
-                self._store(t, receive, value)
+                self._store(row)
             return
-        if self._sum_v is None:
-            self._sum_v = np.zeros(len(value))
-        self._sum_t += t
-        self._sum_r += receive
-        self._sum_v += value
+        if self._sum is None:
+            self._sum = np.zeros(len(row))
+        self._sum += row
         self._in_block += 1
         if self._in_block == self.block:
             self.flush()
 
     def flush(self) -> None:
         if self.average and self._in_block:
-            k = self._in_block
-            self._store(self._sum_t / k, self._sum_r / k, self._sum_v / k)
-            self._sum_t = self._sum_r = 0.0
-            self._sum_v[:] = 0.0
+            self._store(self._sum / self._in_block)
+            self._sum[:] = 0.0
             self._in_block = 0
 
-    def _store(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
-        if self.n >= len(self.values):  # more messages than the bag's index said: grow
-            self.values = np.vstack([self.values, np.empty_like(self.values)])
-        self.values[self.n] = value
-        self.times.append(t)
-        self.receive.append(receive)
+    def _store(self, row: NDArray[np.float64]) -> None:
+        if self.n >= self.capacity:  # more messages than the bag declared: halve what is kept, double the block
+            half = self.n // 2
+            if self.average:  # each stored sample is the mean of one block: a pair's mean is that of two blocks
+                self.data[:half] = 0.5 * (self.data[0:2 * half:2] + self.data[1:2 * half:2])
+            else:  # every k-th message: keep every 2k-th
+                self.data[:half] = self.data[0:2 * half:2]
+            self.n = half
+            self.block *= 2
+        if self.n >= len(self.data):
+            grown = np.empty((min(self.capacity, 2 * len(self.data)), self.data.shape[1]))
+            grown[:self.n] = self.data[:self.n]
+            self.data = grown
+        self.data[self.n] = row
         self.n += 1
 
     def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         self.flush()
-        values = self.values[:self.n] if self.values is not None else np.empty((0, 0))
-        return np.asarray(self.times), np.asarray(self.receive), values
+        if self.data is None:
+            return np.empty(0), np.empty(0), np.empty((0, 0))
+        kept = self.data[:self.n]
+        return kept[:, 0].copy(), kept[:, 1].copy(), kept[:, 2:].copy()
 
 
 @dataclass
@@ -361,6 +376,44 @@ def _field(msg, dotted: str):
 
 def _frame(name: str) -> str:
     return name.strip().lstrip("/")
+
+
+class _FramePair(tuple):
+    """Two frame names, written ``base,sensor`` as ``--tf`` takes them (a tuple in Python)."""
+
+    def __str__(self) -> str:
+        return ",".join(self)
+
+
+def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, n_messages: int = 200) -> None:
+    """A bag with /tf but no joint states: refused with ``tf`` proposed, its frames read from the bag (the first
+    ``n_messages`` of /tf and /tf_static, the sensor's frame from its first message)."""
+    wanted = [c for c in r.reader.connections if c.topic in ("/tf", "/tf_static", sensor)]
+    edges: set[tuple[str, str]] = set()
+    sensor_frame, seen = "", 0
+    try:
+        for conn, _, data in r.reader.messages(connections=wanted):
+            msg = r.reader.deserialize(data, conn.msgtype)
+            if conn.topic == sensor:
+                header = getattr(msg, "header", None)
+                sensor_frame = sensor_frame or (_frame(header.frame_id) if header is not None else "")
+            else:
+                edges |= {(_frame(tr.header.frame_id), _frame(tr.child_frame_id)) for tr in msg.transforms}
+                seen += 1
+            if seen >= n_messages and sensor_frame:
+                break
+    except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
+        raise r.damaged(exc) from None
+    parents, children = {p for p, _ in edges}, {c for _, c in edges}
+    frames = sorted(parents | children)
+    roots = sorted(parents - children)
+    base = roots[0] if roots else (frames[0] if frames else "BASE")
+    sensor_guess = sensor_frame if sensor_frame in children else (sorted(children - parents) or ["SENSOR"])[-1]
+    raise LogFormatError(
+        f"{path}: no topics of type {JOINT_STATE_TYPE} (joint states) for the sensor's pose, but /tf holds the "
+        f"frames {', '.join(frames) or 'none'}; the bag has {_listing(topics)}.", parameter="tf", value=None,
+        fix="take the sensor's orientation from /tf with {tf} (base frame, sensor frame)",
+        settings={"tf": _FramePair((base, sensor_guess))})
 
 
 def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str, t: NDArray[np.float64]):
@@ -468,6 +521,9 @@ def read_bag(
             sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
             kind = "wrench"
         if tf is None:
+            if joint_topic is None and not any(typ == JOINT_STATE_TYPE for typ, _ in topics.values()) and \
+                    any(topics.get(t, ("", 0))[0] == TF_TYPE for t in ("/tf", "/tf_static")):
+                _refuse_without_joints(path, r, topics, sensor)
             pose_topics = [_choose_topic(path, topics, joint_topic, (JOINT_STATE_TYPE,), "joint states",
                                          "joint_topic")]
         else:
@@ -509,6 +565,8 @@ def read_bag(
                             times, quats = edges.setdefault(key, ([], []))
                             times.append(t)
                             quats.append(quat)
+                            if len(times) > 2 * max_samples:  # more /tf than declared: keep every other one
+                                del times[1::2], quats[1::2]
                     continue
                 header = _stamp(msg)
                 if header is not None:
@@ -556,7 +614,7 @@ def read_bag(
     t_s, _, reading = streams[sensor].arrays()
     notes = []
     if streams[sensor].block > 1:
-        notes.append(LogFormatError(f"{sensor}: {topics[sensor][1]} messages averaged in blocks of "
+        notes.append(LogFormatError(f"{sensor}: {streams[sensor].n_messages} messages averaged in blocks of "
                                     f"{streams[sensor].block} (at most {max_samples} samples kept)"))
     if not len(t_s):
         raise LogFormatError(f"{path}: topic {sensor} holds no messages; the bag has {_listing(topics)}.")
