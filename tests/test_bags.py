@@ -222,3 +222,40 @@ def test_memory_of_an_mcap_bag_is_its_chunk_buffer(tmp_path):
     # MCAP is read a chunk at a time: its peak is the chunk buffer's (~4 MB), not the bag's
     _, peak_mcap = _peak_while_reading(_big_bag(tmp_path / "mcap", 20_000, "mcap"))
     assert peak_mcap <= 6_000_000
+
+
+def test_memory_stays_bounded_when_the_bag_metadata_under_counts_its_messages(tmp_path):
+    import re
+
+    n = 20_000
+    bag = _big_bag(tmp_path / "undercounted", n, "sqlite3")
+    meta = bag / "metadata.yaml"
+    text = meta.read_text()
+    # an interrupted or hand-merged recording: the metadata says 10 messages on every topic, the bag holds 20 000
+    meta.write_text(re.sub(r"message_count: \d+", "message_count: 10", text))
+    assert bag_topics(bag)["/ft_sensor/wrench"][1] == 10
+    _peak_while_reading(bag)  # registers the message types
+    rec, peak = _peak_while_reading(bag)
+    honest = _big_bag(tmp_path / "honest", n, "sqlite3")
+    _, peak_honest = _peak_while_reading(honest)
+    assert 300 < len(rec.time) <= 2 * 300  # pairs merged in place as the buffer filled: at most 2 x max_samples
+    assert rec.time[0] >= T0 and rec.time[-1] <= T0 + n * 1e-3  # block means of the whole recording, in order
+    assert np.all(np.diff(rec.time) > 0)
+    assert peak < 3 * peak_honest  # not every message kept (that would be ~70x the buffer)
+    assert any(f"{n} messages averaged in blocks of" in str(note) for note in rec.notes)
+
+
+def test_a_wrench_bag_with_tf_and_no_joint_states_is_told_to_use_tf_with_its_own_frames(tmp_path, capsys,
+                                                                                         robot_poses):
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=4)
+    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    bag = write_bag(tmp_path / "tf_only", "mcap", sensor_time=rec.sensor_time, reading=rec.reading,
+                    pose_time=rec.pose_time, rotations=R, tf_frames=("world", "ft_link"), frame_id="ft_link")
+    assert main(["identify-load", str(bag), "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(bag) in err[0] and "--tf world,ft_link" in err[0], err
+    assert "--joint-topic" not in err[0] and not (tmp_path / "t").exists()
+    assert main(["identify-load", str(bag), "--tf", "world,ft_link", "--out", str(tmp_path / "t"), "-q"]) == 0
+    tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
+    assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
