@@ -76,6 +76,18 @@ def test_poses_that_do_not_excite_the_load_are_refused():
         identify_tool_load(rotations, tool_wrenches(rotations, MASS, COM, BIAS), gravity=G)
 
 
+def test_too_few_poses_are_refused_by_their_count_not_by_their_tilt():
+    # three random orientations tilt the tool about two axes: the only problem is their number
+    rotations = Rotation.random(3, random_state=5).as_matrix()
+    with pytest.raises(CalibrationInputError, match=r"^3 poses; at least 4 are needed") as info:
+        identify_tool_load(rotations, tool_wrenches(rotations, MASS, COM, BIAS), gravity=G)
+    assert "excite" not in str(info.value) and "one axis" not in str(info.value)
+    # samples of one pose are one pose: 3 poses x 5 samples are 3 poses
+    pose = np.repeat(np.arange(3), 5)
+    with pytest.raises(CalibrationInputError, match=r"^3 poses; at least 4 are needed"):
+        identify_tool_load(rotations[pose], tool_wrenches(rotations[pose], MASS, COM, BIAS), gravity=G, groups=pose)
+
+
 def test_the_planned_minimal_pose_set_is_well_conditioned():
     robot = ftcal.load_robot("kuka_iiwa14")
     plan = ftcal.plan_calibration_poses(robot, subdivisions=0)

@@ -380,3 +380,29 @@ def test_samples_of_one_pose_are_held_out_together(tmp_path, robot, plan):
         identify_tool_load(R, W, gravity=G, times=t, groups=np.zeros(len(R), dtype=int))
     with pytest.raises(CalibrationInputError, match=r"groups must have shape \(126,\)"):
         identify_tool_load(R, W, gravity=G, times=t, groups=pose[:10])
+
+
+def test_standard_errors_count_each_pose_once_when_its_samples_share_its_error():
+    # 20 poses x 25 samples: each pose has its own error (orientation, settling: 0.05 N, 0.004 N·m) shared by its
+    # samples, plus a small per-sample noise; the drift rate's and the mass's z-scores over seeds have unit spread
+    # only when the pose, not the sample, is the independent unit
+    n_poses, per_pose, n_seeds = 20, 25, 40
+    truth = ToolLoad(mass=1.2, center_of_mass=np.array([0.01, -0.02, 0.08]), bias=np.array([1, -2, 0.5, .1, 0, .05]))
+    rate = np.array([0.3, 0.0, 0.0, 0.0, 0.0, 0.0]) / 3600  # N/s
+    pose = np.repeat(np.arange(n_poses), per_pose)
+    z_rate, z_mass = [], []
+    for seed in range(n_seeds):
+        rng = np.random.default_rng(seed)
+        R = Rotation.random(n_poses, random_state=seed).as_matrix()[pose]
+        t = pose * 180.0 + np.tile(np.arange(per_pose) * 0.1, n_poses)  # a pose every 3 minutes, 10 Hz samples
+        shared = rng.normal(0, [0.05, 0.05, 0.05, 0.004, 0.004, 0.004], (n_poses, 6))[pose]
+        W = truth.gravity_wrench(R, ) + rate * t[:, None] + shared + rng.normal(0, 0.005, (len(t), 6))
+        tool = identify_tool_load(R, W, gravity=G, times=t, groups=pose, drift="linear")
+        rate_h, rate_se = tool.drift.rate_per_hour()
+        z_rate.append((rate_h[0] - 0.3) / rate_se[0])
+        z_mass.append((tool.mass - truth.mass) / tool.mass_std_error)
+    # the sample standard deviation of n_seeds unit normals lies within 1 +- 3/sqrt(2 (n_seeds - 1)) (3 sigma)
+    band = 3 / np.sqrt(2 * (n_seeds - 1))
+    for z in (z_rate, z_mass):
+        assert abs(np.std(z, ddof=1) - 1) <= band, np.std(z, ddof=1)
+        assert abs(np.mean(z)) <= 3 / np.sqrt(n_seeds)

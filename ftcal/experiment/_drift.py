@@ -278,13 +278,27 @@ def _describe(variable: str, n_knots: int) -> str:
 
 
 # ---------------------------------------------------------------------------------------------- fitting
-def _least_squares(A: NDArray, b: NDArray) -> tuple[NDArray, NDArray, NDArray, float]:
-    """Coefficients, their covariance, the residual and its RMS of ``A x ≈ b``."""
+def _least_squares(A: NDArray, b: NDArray, clusters: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray, float]:
+    """Coefficients, their covariance, the residual and its RMS of ``A x ≈ b``.
+
+    ``clusters`` (len(b),): rows of one cluster (one axis of the samples of one static pose) share an error, so
+    they count as one observation: the covariance is that of the cluster means' least squares (weights = rows per
+    cluster), whose residual variance includes the error they share. ``None``: every row is independent.
+    """
     coef, *_ = np.linalg.lstsq(A, b, rcond=None)
     residual = b - A @ coef
-    dof = max(len(b) - A.shape[1], 1)
-    sigma2 = float(residual @ residual) / dof
-    cov = sigma2 * np.linalg.pinv(A.T @ A)
+    if clusters is None:
+        design, res, weight = A, residual, np.ones(len(b))
+    else:
+        _, inverse = np.unique(clusters, return_inverse=True)
+        weight = np.bincount(inverse).astype(float)
+        design = np.zeros((weight.size, A.shape[1]))
+        np.add.at(design, inverse, A)
+        design /= weight[:, None]
+        res = np.bincount(inverse, weights=residual) / weight
+    dof = max(len(res) - A.shape[1], 1)
+    sigma2 = float(weight @ res**2) / dof
+    cov = sigma2 * np.linalg.pinv(design.T @ (design * weight[:, None]))
     return coef, cov, residual, float(np.sqrt(np.mean(residual**2)))
 
 
@@ -300,14 +314,20 @@ def _block_designs(g_s: NDArray, basis: NDArray) -> tuple[NDArray, NDArray]:
     return force, torque
 
 
-def fit_gravity_blocks(g_s: NDArray, wrenches: NDArray, basis: NDArray) -> dict:
+def fit_gravity_blocks(g_s: NDArray, wrenches: NDArray, basis: NDArray, groups: NDArray | None = None) -> dict:
     """The joint least squares of the tool's gravity wrench, the bias and a drift with basis ``basis`` (n, k).
 
     Returns ``mass``, ``p`` (= m c), ``bias`` (6,) (at ``basis = 0``), ``drift`` (k, 6), their covariances
-    per block (``force_cov``, ``torque_cov``), the fitted wrenches and the residual RMS (force, torque)."""
+    per block (``force_cov``, ``torque_cov``), the fitted wrenches and the residual RMS (force, torque).
+    ``groups`` (n,): the static pose of each row when several rows are samples of one pose; the covariances then
+    count each pose once (its samples share the pose's error: orientation, settling), not each sample."""
     force_A, torque_A = _block_designs(g_s, basis)
-    f_coef, f_cov, f_res, f_rms = _least_squares(force_A, wrenches[:, :3].reshape(-1))
-    t_coef, t_cov, t_res, t_rms = _least_squares(torque_A, wrenches[:, 3:].reshape(-1))
+    clusters = None
+    if groups is not None:
+        _, inverse = np.unique(np.asarray(groups), return_inverse=True)
+        clusters = (3 * inverse[:, None] + np.arange(3)).reshape(-1)  # one cluster per pose and axis
+    f_coef, f_cov, f_res, f_rms = _least_squares(force_A, wrenches[:, :3].reshape(-1), clusters)
+    t_coef, t_cov, t_res, t_rms = _least_squares(torque_A, wrenches[:, 3:].reshape(-1), clusters)
     k = basis.shape[1]
     drift = np.hstack([f_coef[4:].reshape(k, 3), t_coef[6:].reshape(k, 3)])
     return {"mass": float(f_coef[0]), "p": t_coef[:3], "bias": np.concatenate([f_coef[1:4], t_coef[3:6]]),

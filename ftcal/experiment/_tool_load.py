@@ -464,23 +464,36 @@ def identify_tool_load(
     temperatures = _check_drift_values("temperatures", temperatures, n)
     if time_unit not in ("s", "pose"):
         raise CalibrationInputError(f"time_unit must be 's' (seconds) or 'pose' (recording order); got {time_unit!r}.")
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (n,):
+            raise CalibrationInputError(f"groups must have shape ({n},) (one pose label per row); got "
+                                        f"{groups.shape}.", parameter="groups", value=groups.shape)
+    # the poses are the groups (one group is a bad groups argument, refused by the drift selection)
+    n_poses = n if groups is None or np.unique(groups).size < 2 else int(np.unique(groups).size)
+    if n_poses < 4:
+        raise CalibrationInputError(
+            f"{n_poses} poses; at least 4 are needed (each tilting the tool differently) to identify the mass, "
+            "centre of mass and bias.", parameter="rotations", value=n_poses,
+            fix="record at least 4 poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
+            settings={"subdivisions": 0})
     directions = g_s / np.linalg.norm(g_s, axis=1, keepdims=True)
     spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False) / np.sqrt(max(n, 1))
     tilt_deg = np.degrees(np.arcsin(np.clip(spread, 0.0, 1.0)))
-    if n < 4 or tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
+    if tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
         second = float(tilt_deg[1]) if tilt_deg.size > 1 else 0.0
         raise CalibrationInputError(
-            f"the {n} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
+            f"the {n_poses} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
             f"frame) varies by about {second:.1f} deg in its second direction, but mass, centre of mass and bias "
-            f"need at least {MIN_TILT_DEG:g} deg in two independent directions (and 4 poses).", parameter="rotations",
-            value=n, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
+            f"need at least {MIN_TILT_DEG:g} deg in two independent directions.", parameter="rotations",
+            value=n_poses, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
             settings={"subdivisions": 0},
         )
     candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state,
-                                    groups=None if groups is None else np.asarray(groups))
+                                    groups=groups)
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
     fit = fit_gravity_blocks(g_s, W, candidate.basis({"time": np.zeros(n)} if values is None
-                                                     else {candidate.variable: values}))
+                                                     else {candidate.variable: values}), groups)
     f_se = np.sqrt(np.maximum(np.diag(fit["force_cov"]), 0.0))
     t_se = np.sqrt(np.maximum(np.diag(fit["torque_cov"]), 0.0))
     mass, p = fit["mass"], fit["p"]
