@@ -218,3 +218,20 @@ def test_identify_load_without_a_model_refuses_raw_channels_with_the_fix(tmp_pat
     assert main(["identify-load", str(path), "--out", str(tmp_path / "t")]) == 2
     err = capsys.readouterr().err
     assert "holds raw channels" in err and "--model" in err and not (tmp_path / "t").exists()
+
+
+def test_a_missing_or_unreadable_input_is_named_before_anything_else(tmp_path, capsys):
+    missing = tmp_path / "nosuchfile.csv"
+    assert main(["identify-load", str(missing), "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err
+    assert f"{missing} does not exist" in err and "--model" not in err and "raw channels" not in err
+    assert not (tmp_path / "t").exists()
+
+
+def test_three_random_poses_are_refused_for_their_count_not_for_their_tilt(tmp_path, capsys):
+    R, W = _static_poses(3, seed=11)
+    path = _quat_base_file(tmp_path / "three.csv", R, W)
+    assert main(["identify-load", str(path), "--wrench-frame", "base", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(f"ftcal: error: {path}: 3 poses; at least 4 are needed"), err
+    assert "one axis" not in err[0] and not (tmp_path / "t").exists()

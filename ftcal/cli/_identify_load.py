@@ -15,6 +15,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
+    path_problem,
     write_json,
 )
 from ._prepare import log_files
@@ -74,7 +75,7 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of static poses.",
         epilog=IDENTIFY_EXAMPLE,
     )
-    p.add_argument("inputs", nargs="+", metavar="INPUT",
+    p.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
                    help="run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
     p.add_argument("--model", type=existing_file,
                    help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
@@ -100,6 +101,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_drift_options(c, identify=False)
     add_run_options(c, seed=False)
     c.set_defaults(handler=run_compensate)
+
+
+def existing_input(text: str) -> str:
+    """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
+    import os
+
+    path = Path(text)
+    if path.is_dir():
+        if not os.access(path, os.R_OK | os.X_OK):
+            raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
+        return text
+    problem = path_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
+    return text
 
 
 def _add_recording_options(p: argparse.ArgumentParser) -> None:
