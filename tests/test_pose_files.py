@@ -235,3 +235,23 @@ def test_three_random_poses_are_refused_for_their_count_not_for_their_tilt(tmp_p
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"ftcal: error: {path}: 3 poses; at least 4 are needed"), err
     assert "one axis" not in err[0] and not (tmp_path / "t").exists()
+
+
+def test_torques_in_newton_millimetres_read_as_newton_metres_are_refused_naming_the_unit(tmp_path, capsys):
+    R, W = _static_poses(12, seed=12)
+    W_nmm = W.copy()
+    W_nmm[:, 3:] *= 1000.0  # the factory software wrote N·mm
+    path = _quat_base_file(tmp_path / "nmm.csv", R, W_nmm)
+    assert main(["identify-load", str(path), "--wrench-frame", "base", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "the torques look like N.mm" in err[0], err
+    assert "--torque-unit N.mm" in err[0] and not (tmp_path / "t").exists()
+    # declared, the same file gives the tool in metres
+    assert main(["identify-load", str(path), "--wrench-frame", "base", "--torque-unit", "N.mm",
+                 "--out", str(tmp_path / "t"), "-q"]) == 0
+    tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
+    assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 5 * tool.center_of_mass_std_error)
+    # both units declared: an unusual arm is the user's to confirm (warned, not refused)
+    assert main(["identify-load", str(path), "--wrench-frame", "base", "--force-unit", "N", "--torque-unit", "N.m",
+                 "--out", str(tmp_path / "u"), "-q"]) == 0
+    assert "ftcal: warning:" in capsys.readouterr().err

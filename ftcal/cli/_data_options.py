@@ -19,8 +19,8 @@ import sys
 
 from ._common import CliError
 
-__all__ = ["add_dataset_options", "add_channel_option", "dataset_columns", "load_dataset_from_args",
-           "stored_columns"]
+__all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "check_lever_arm", "dataset_columns",
+           "load_dataset_from_args", "stored_columns"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -57,11 +57,43 @@ def add_channel_option(p: argparse.ArgumentParser) -> None:
                    "mapping the model was fitted with, else s0,s1,... or the array 'raw')")
 
 
+def add_unit_options(g: argparse._ArgumentGroup) -> None:
+    """``--force-unit`` and ``--torque-unit`` (unset: N and N·m, checked by the loads' lever arm)."""
+    from ..io._readers import FORCE_UNITS, TORQUE_UNITS
+
+    g.add_argument("--force-unit", metavar="UNIT",
+                   help=f"unit of the file's forces, converted to N, exact and case-sensitive (MN is not mN): "
+                   f"{', '.join(FORCE_UNITS)}, any SI prefix of N or g (masses are read as their weight, g = 9.80665 "
+                   "m/s^2) (default N)")
+    g.add_argument("--torque-unit", metavar="UNIT",
+                   help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)}, any force unit "
+                   "times m, mm, cm, in or ft (default N.m)")
+
+
+def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_unit: str = "N",
+                    torque_unit: str = "N.m", confirmed: bool = False) -> None:
+    """Refuse an implausibly long lever arm of ``wrench`` ([N, N·m] after conversion) naming the likely unit, unless
+    both units were declared (or ``confirmed``); point out an implausibly short one on stderr."""
+    from ..core._wrench import WRENCH_LABELS
+    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
+
+    axes = WRENCH_LABELS if axes is None else axes
+    problem = lever_arm_problem(wrench, torque_unit, axes, force_unit)
+    if problem is None:
+        return
+    # too long an arm (torques in N·mm read as N·m, forces in kN read as N) is refused unless both units were
+    # declared; too short a one (a 3-axis cell whose torque columns hold only noise) is only pointed out
+    too_long = lever_arm_m(wrench, axes) > PLAUSIBLE_LEVER_ARM_M[1]
+    declared = confirmed or (getattr(args, "torque_unit", None) is not None
+                             and getattr(args, "force_unit", None) is not None)
+    if too_long and not declared:
+        raise CliError(f"{where}: {problem}")
+    print(f"ftcal: warning: {where}: {problem}", file=sys.stderr)
+
+
 def add_dataset_options(p: argparse.ArgumentParser) -> None:
     """``--channels``, ``--wrench``, ``--axes``, ``--groups``, ``--force-unit``, ``--torque-unit``,
     ``--exclude-saturated``."""
-    from ..io._readers import FORCE_UNITS, TORQUE_UNITS
-
     g = p.add_argument_group("reading the dataset (.csv, .npz, .mat, or a folder of them: one file per pose)")
     g.add_argument("--channels", type=_names, metavar="SPEC",
                    help=f"the raw-channel columns (or .mat/.npz variables) in channel order: {_SPEC_HELP} "
@@ -76,13 +108,7 @@ def add_dataset_options(p: argparse.ArgumentParser) -> None:
                    help="the column holding each row's pose or session (integers or text), for grouped "
                    "cross-validation (default: 'group'); 'file' for a folder makes each file a group (the default "
                    "for a folder)")
-    g.add_argument("--force-unit", metavar="UNIT",
-                   help=f"unit of the file's forces, converted to N, exact and case-sensitive (MN is not mN): "
-                   f"{', '.join(FORCE_UNITS)}, any SI prefix of N or g (masses are read as their weight, g = 9.80665 "
-                   "m/s^2) (default N)")
-    g.add_argument("--torque-unit", metavar="UNIT",
-                   help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)}, any force unit "
-                   "times m, mm, cm, in or ft (default N.m)")
+    add_unit_options(g)
     g.add_argument("--exclude-saturated", type=_saturation, metavar="LOW,HIGH|auto",
                    help="drop the rows where a raw channel reaches LOW or HIGH (the ADC's limits), or, with auto, "
                    "where a channel sits at its extreme value in several rows (pinned: saturated); without it such "
@@ -124,21 +150,11 @@ def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"
 
     ``confirmed``: the model's stored units were confirmed at fit time (both declared).
     """
-    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
     from ._models import load_dataset
 
     columns = dataset_columns(args, stored)
     data = load_dataset(path, role, columns=columns)
-    problem = lever_arm_problem(data.wrench, columns.torque_unit, data.axes, columns.force_unit)
-    if problem is not None:
-        # too long an arm (torques in N·mm read as N·m, forces in kN read as N) is refused unless both units were
-        # declared; too short a one (a 3-axis cell whose torque columns hold only noise) is only pointed out
-        too_long = lever_arm_m(data.wrench, data.axes) > PLAUSIBLE_LEVER_ARM_M[1]
-        declared = confirmed or (getattr(args, "torque_unit", None) is not None
-                                 and getattr(args, "force_unit", None) is not None)
-        if too_long and not declared:
-            raise CliError(f"{path}: {problem}")
-        print(f"ftcal: warning: {path}: {problem}", file=sys.stderr)
+    check_lever_arm(args, data.wrench, path, data.axes, columns.force_unit, columns.torque_unit, confirmed)
     return _saturated_rows_handled(args, data, path)
 
 

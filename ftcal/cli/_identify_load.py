@@ -18,6 +18,7 @@ from ._common import (
     path_problem,
     write_json,
 )
+from ._data_options import add_unit_options, check_lever_arm
 from ._prepare import log_files
 from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
                           still_poses)
@@ -124,8 +125,7 @@ def _add_recording_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--wrench-frame", choices=("sensor", "base"), default="sensor",
                    help="the frame the input's wrench is written in (base: the robot's base frame, torques about "
                    "the sensor origin)")
-    g.add_argument("--force-unit", default="N", metavar="UNIT", help="unit of the input's forces")
-    g.add_argument("--torque-unit", default="N.m", metavar="UNIT", help="unit of the input's torques")
+    add_unit_options(g)
     g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
                    help="static: every row is a pose; continuous: find the still poses (needs times); auto: "
                    "continuous when the rows carry times and most rows share their neighbour's orientation (a bag "
@@ -216,11 +216,13 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
 
     rotations, wrenches, times, still_list, model, temperatures = [], [], [], [], None, []
     for path in paths:
-        rec = read_pose_file(path, force_unit=args.force_unit, torque_unit=args.torque_unit)
+        rec = read_pose_file(path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
         if rec.wrench is not None:
             if args.model is not None:
                 console.info(f"{path}: the file holds a wrench; --model is not used for it")
             wrench = rec.wrench
+            check_lever_arm(args, wrench, path, force_unit=args.force_unit or "N",
+                            torque_unit=args.torque_unit or "N.m")
         else:
             model = model or _load_model(args, str(path))
             if rec.raw.shape[1] != model.n_features_in_:
@@ -250,6 +252,16 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
                   temperature)
 
 
+def _wrench_in_si(args, wrench):
+    """A wrench read in the options' units (``--force-unit``, ``--torque-unit``) in N and N·m."""
+    from ..io._readers import unit_scale
+
+    wrench = wrench.copy()
+    wrench[:, :3] *= unit_scale(args.force_unit or "N", "force")
+    wrench[:, 3:] *= unit_scale(args.torque_unit or "N.m", "torque")
+    return wrench
+
+
 def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
     """The still poses of each bag: the wrench (or the raw gauges through --model) and the pose (tf, or joints
     through the robot's forward kinematics)."""
@@ -269,6 +281,10 @@ def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
                 raise CliError(f"{path}: topic {rec.sensor_topic} holds {reading.shape[1]} raw values but the model "
                                f"{args.model} takes {model.n_features_in_} channels")
             reading = model.predict(reading)
+        else:  # a wrench message: N and N·m in ROS, unless the driver says otherwise (the options)
+            reading = _wrench_in_si(args, reading)
+            check_lever_arm(args, reading, f"{path} (topic {rec.sensor_topic})", force_unit=args.force_unit or "N",
+                            torque_unit=args.torque_unit or "N.m")
         if robot is None:
             still = still_poses(args, str(path), rec.time, reading, rotations=rec.rotation)
             R = still.rotation
