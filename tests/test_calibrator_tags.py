@@ -176,3 +176,25 @@ def test_every_wrapper_adopts_the_same_after_fit_state():
         for name in ("alpha_", "zero_reading_", "reading_noise_", "calibrated_range_"):
             assert name in model.__dict__, (type(model).__name__, name)
         assert np.array_equal(model.calibrated_range_, [raw.min(axis=0), raw.max(axis=0)])
+
+
+@pytest.mark.parametrize("name, fit_rows", [("sk_poly3", 400), ("sk_kernel_ridge", 300)])
+def test_a_stock_calibrator_predicts_many_rows_in_bounded_memory(name, fit_rows):
+    import tracemalloc
+
+    from ftcal.models._baselines import PREDICT_BLOCK_BYTES
+
+    raw, w = _data(n=fit_rows, channels=8)
+    model = StockCalibrator(baseline=name).fit(raw, w)
+    many = np.random.default_rng(1).normal(size=(100_000, 8)) * raw.std(axis=0) + raw.mean(axis=0)
+    tracemalloc.start()
+    try:
+        wrench = model.predict(many)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    # the input's validated copies and the output, plus a few blocks' temporaries; predicting in one piece would
+    # need 100 000 x 165 x 8 powers (1 GB) or a 100 000 x 300 kernel matrix (240 MB) and its exponential
+    assert peak < 4 * many.nbytes + 3 * wrench.nbytes + 4 * PREDICT_BLOCK_BYTES, peak
+    # the blocks beyond the first predict what the rows alone do (which is the stock pipeline's prediction, above)
+    assert np.allclose(wrench[-5000:], model.predict(many[-5000:]), rtol=1e-9, atol=1e-9 * np.abs(w).max())

@@ -49,6 +49,11 @@ KERNEL_SAMPLES = 1000
 #: Names of :func:`stock_baselines`' models, in order of complexity.
 STOCK_BASELINE_NAMES: tuple[str, ...] = ("sk_linear", "sk_poly2", "sk_poly3", "sk_kernel_ridge", "sk_gp")
 
+#: Bytes of the widest temporary of :meth:`StockCalibrator.predict` per block of rows (the polynomial powers, the
+#: kernel matrix): prediction runs in row blocks of this size, so its memory does not grow with the rows beyond
+#: the input and the output.
+PREDICT_BLOCK_BYTES = 8 * 2**20
+
 
 class SubsampledRegressor(RegressorMixin, BaseEstimator):
     """Fit ``estimator`` on at most ``max_samples`` rows drawn at random (without replacement).
@@ -191,7 +196,8 @@ class StockCalibrator(BaseCalibrator):
     ``fit`` fits exactly the baseline of that name (the same pipeline every ftcal table shows beside its models),
     then keeps only the arrays its prediction needs: the input scaling, the polynomial exponents and the linear
     map, or the kernel model's training inputs (at most ``max_kernel_samples``), dual coefficients and kernel
-    parameters. ``predict`` computes the same numbers from those arrays (to rounding), so a model file stores
+    parameters. ``predict`` computes the same numbers from those arrays (to rounding), in row blocks of bounded
+    memory (:data:`PREDICT_BLOCK_BYTES`), so a model file stores
     them without pickling scikit-learn objects, and its size is bounded by the kernel subsample.
 
     A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted and
@@ -327,12 +333,31 @@ class StockCalibrator(BaseCalibrator):
             raise CalibrationInputError(
                 "this StockCalibrator wrapped a regressor of the user's, which a model file cannot hold; refit it, "
                 "or save one of the named stock baselines.")
+        # row blocks whose widest temporary (the n x features monomials, the kernel's n x m matrix) stays within
+        # PREDICT_BLOCK_BYTES, whatever the number of rows
+        width = len(self.train_inputs_) if self.train_inputs_ is not None else \
+            X.shape[1] if self.powers_ is None else len(self.powers_)
+        rows = max(1, PREDICT_BLOCK_BYTES // (8 * width))
+        out = np.empty((len(X), len(self.intercept_ if self.train_inputs_ is None else self.target_mean_)))
+        for start in range(0, len(X), rows):
+            out[start:start + rows] = self._predict_block(X[start:start + rows])
+        return out
+
+    def _predict_block(self, X):
+        """The wrench of a block of rows, from the stored arrays (see :meth:`_predict_wrench`)."""
         z = (X - self.input_mean_) / self.input_scale_
         if self.train_inputs_ is None:
-            features = z if self.powers_ is None else np.prod(z[:, None, :] ** self.powers_[None, :, :], axis=2)
+            if self.powers_ is None:
+                return z @ self.coef_.T + self.intercept_
+            # the monomials channel by channel: z_c ** p_c picked from the channel's powers 0..degree
+            by_power = z[:, :, None] ** np.arange(int(self.powers_.max()) + 1)
+            features = by_power[:, 0, self.powers_[:, 0]]
+            for channel in range(1, z.shape[1]):
+                features *= by_power[:, channel, self.powers_[:, channel]]
             return features @ self.coef_.T + self.intercept_
         from scipy.spatial.distance import cdist
 
-        kernel = self.amplitude_ * np.exp(-0.5 * cdist(z / self.length_scale_, self.train_inputs_ / self.length_scale_,
-                                                       "sqeuclidean"))
-        return (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_
+        kernel = cdist(z / self.length_scale_, self.train_inputs_ / self.length_scale_, "sqeuclidean")
+        kernel *= -0.5
+        np.exp(kernel, out=kernel)
+        return self.amplitude_ * (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_
