@@ -54,11 +54,12 @@ def limit_threads_here(n_threads: int | None, *, openmp: bool = False):
     >>> def blas_threads():
     ...     return [pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"]
     >>> before = blas_threads()
-    >>> other = threading.Thread(target=threading.Event().wait, args=(0.5,)); other.start()
+    >>> done = threading.Event()
+    >>> other = threading.Thread(target=done.wait); other.start()  # alive until the check is over
     >>> with limit_threads_here(1):  # another thread is alive: BLAS is left alone
     ...     blas_threads() == before
     True
-    >>> other.join()
+    >>> done.set(); other.join()
     """
     if n_threads is None:
         yield
