@@ -22,6 +22,7 @@ from ftcal import (
     TemperatureCompensatedCalibrator,
 )
 from ftcal.models._auto import StackedCalibrator
+from ftcal.models._baselines import StockCalibrator
 
 # the benchmark scripts import their shared helpers (benchmarks/_output.py) as when run from their folder
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
@@ -47,7 +48,7 @@ _COVERED = {"linear", "comparative", "directional", "polynomial", "axis_nonlinea
             "comparative_ensemble", "gaussian_process", "auto"}
 _REGISTERED = tuple(name for name in ftcal.CALIBRATOR_NAMES if name not in _COVERED)
 CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
-                    "gaussian_process", "auto") + _REGISTERED
+                    "gaussian_process", "auto", "stock") + _REGISTERED
 #: Names of its last instances: the wrappers, in the common checks too, but whose data are not the shared affine
 #: data (a temperature column; fitted members; rows in time order), tested in test_sklearn_compat.py::test_wrappers_*.
 WRAPPER_KINDS = ("stacked", "temperature_compensated", "history")
@@ -69,6 +70,7 @@ def tiny_calibrators(random_state: int = 0) -> list:
                                   random_state=random_state),
         AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("polynomial", PolynomialCalibrator(degree=2))],
                        cv=3, baselines=False),
+        StockCalibrator(baseline="sk_poly2"),  # a stock baseline as auto's candidate (saved as its arrays)
         *(ftcal.make_calibrator(name, random_state=random_state) for name in _REGISTERED),
         StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)], weights=[0.5, 0.5]),
         TemperatureCompensatedCalibrator(LinearCalibrator()),

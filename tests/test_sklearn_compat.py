@@ -120,6 +120,8 @@ def _small_grid(estimator) -> dict:
         return {"max_samples": [20, 40]}
     if "network_samples" in params:  # auto
         return {"cv": [2, 3]}
+    if "baseline" in params:  # a stock baseline as a calibrator
+        return {"baseline": ["sk_linear", "sk_poly2"]}
     return {"estimator__hidden_layer_sizes": [(4,), (8,)]}  # an ensemble of networks
 
 
