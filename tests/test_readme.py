@@ -234,3 +234,29 @@ def test_the_readme_shows_the_first_page_of_a_report():
     png = README.parent / found.group(1)
     assert png.read_bytes().startswith(b"\x89PNG") and png.stat().st_size < 200_000
     assert (README.parent / "docs" / "report_screenshot.py").is_file()
+def test_getting_your_data_in_block_runs_as_written(tmp_path):
+    from test_data_shapes import G0, _csv, _sensor
+
+    raw, wrench = _sensor()
+    scipy.io.savemat(tmp_path / "onematrix.mat", {"data": np.hstack([raw, wrench])})
+    _csv(tmp_path / "other_names.csv", [f"ch{i}" for i in range(8)], raw[:10])
+    raw3, wrench3 = _sensor(n_axes=3, n_channels=4)
+    _csv(tmp_path / "cell3.csv", ["", "g1", "g2", "g3", "g4", "force_x", "force_y", "force_z", "time [s]"],
+         np.arange(len(raw3)), raw3, wrench3 / (G0 * 1e-3), np.arange(len(raw3)) * 0.01)
+    raw1, wrench1 = _sensor(n_axes=3, n_channels=2)
+    _csv(tmp_path / "cell1.csv", ["bridge_a", "bridge_b", "load"], raw1, wrench1[:, 2])
+    (tmp_path / "poses").mkdir()
+    names = [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
+    for k in range(8):
+        r = raw[30 * k:30 * (k + 1)].copy()
+        if k in (2, 5):
+            r[:10, 0] = 4095.0
+        _csv(tmp_path / "poses" / f"pose{k}.csv", names, r, wrench[30 * k:30 * (k + 1)])
+    _csv(tmp_path / "soft.csv", names, raw, wrench * [1, 1, 1, 1e3, 1e3, 1e3])
+    (block,) = shell_blocks()["Getting your data in"]
+    run_block(block, tmp_path, _shim(tmp_path))
+    predicted = np.loadtxt(tmp_path / "cell3_wrench.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(predicted, wrench3, atol=0.1)  # grams read as N, the model's own columns
+    one = np.loadtxt(tmp_path / "one_wrench.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(one, wrench[:10], atol=0.1)
+    assert load_model(tmp_path / "pose-model" / "linear.model.npz").n_features_in_ == 8

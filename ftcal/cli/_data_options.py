@@ -20,7 +20,7 @@ import sys
 from ._common import CliError
 
 __all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "check_lever_arm", "dataset_columns",
-           "load_dataset_from_args", "stored_columns"]
+           "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -188,3 +188,47 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
     if not quiet:
         print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
     return kept
+
+
+def fit_data_facts(args: argparse.Namespace, data) -> dict:
+    """What a model file keeps of how its training data were read (``ftcal.save_model(..., data=...)``): the column
+    mapping and units (so that ``predict``, ``evaluate``, ``report`` and ``retare`` read their data alike), the
+    wrench axes, and whether both units were declared (an unusual lever arm confirmed)."""
+    columns = dataset_columns(args)
+    return {"columns": columns.to_dict(), "axes": list(data.axes), "n_channels": data.n_channels,
+            "units_confirmed": getattr(args, "force_unit", None) is not None
+            and getattr(args, "torque_unit", None) is not None}
+
+
+def model_reading(model_path) -> tuple:
+    """``(ColumnMap or None, axes or None, units confirmed)`` a model file keeps of its training data."""
+    from ..core._exceptions import ModelFileError
+    from ..models._model_io import model_data
+
+    try:
+        facts = model_data(model_path)
+    except ModelFileError as exc:
+        raise CliError(str(exc)) from None
+    axes = facts.get("axes")
+    if axes is not None and not (isinstance(axes, list) and all(isinstance(a, str) for a in axes) and len(axes) <= 6):
+        raise CliError(f"{model_path}: the stored wrench axes are damaged; fit the model again")
+    return (stored_columns(facts, str(model_path)), None if axes is None else tuple(axes),
+            bool(facts.get("units_confirmed", False)))
+
+
+def load_dataset_for_models(args: argparse.Namespace, path, role: str, model_paths):
+    """The dataset at ``path`` read as the models were fitted (their stored mapping and units, each option given
+    overriding), refused when the models were fitted on differently read data or on other wrench axes."""
+    readings = [model_reading(m) for m in model_paths]
+    stored, _, confirmed = readings[0]
+    for (other, _, _), m in zip(readings[1:], model_paths[1:]):
+        if (other.to_dict() if other else None) != (stored.to_dict() if stored else None):
+            raise CliError(f"{m} was fitted on data read with other columns or units than {model_paths[0]}; "
+                           "evaluate them one at a time, or give the mapping with --channels/--wrench/--force-unit/"
+                           "--torque-unit")
+    data = load_dataset_from_args(args, path, role, stored=stored, confirmed=confirmed)
+    for (_, axes, _), m in zip(readings, model_paths):
+        if axes is not None and tuple(axes) != tuple(data.axes):
+            raise CliError(f"{path}: the wrench axes read ({', '.join(data.axes)}) are not those {m} was fitted on "
+                           f"({', '.join(axes)}); give the dataset of that sensor, or map its columns with --wrench")
+    return data

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, positive_float, write_json
-from ._data_options import add_dataset_options, load_dataset_from_args
+from ._data_options import add_dataset_options, load_dataset_for_models
 from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
 from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
@@ -62,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     if not args.no_plots:
         names += list(EVALUATION_PLOTS) + [predicted_plot_name(label) for label in labels]
     plan = OutputPlan(args.out, names, args.force)
-    data = load_dataset_from_args(args, args.dataset, "evaluation dataset")
+    data = load_dataset_for_models(args, args.dataset, "evaluation dataset", args.models)  # as they were fitted
     trained_on = training_data_of(args.dataset, args.models)
     for label in trained_on:
         print(f"ftcal: warning: {args.dataset} is the training data of {label}: its figures below are training "
@@ -75,7 +75,10 @@ def run(args: argparse.Namespace) -> int:
         for label, path in zip(labels, args.models):
             model = load_model_file(path)
             predictions[label] = np.asarray(model.predict(model_inputs(model, data)), dtype=float)
-            reports[label] = ftcal.calibration_report(data.wrench, predictions[label], alpha=alpha)
+            if predictions[label].shape != data.wrench.shape:
+                raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "
+                               f"{data.n_axes} ({', '.join(data.axes)}); give the dataset of that sensor")
+            reports[label] = ftcal.calibration_report(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
             bar.update(1)
     table = comparison_table(reports, noise_floor)
     axes = axis_table(reports)

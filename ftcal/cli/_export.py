@@ -19,12 +19,16 @@ examples:
 
 The ONNX graph holds the whole calibration (re-tare, zero-load reading, scaling, the networks,
 torque scaling): input 'readings' float64 (n, N) raw channels in the training order (temperature
-[deg C] last for a temperature-compensated model), output 'wrench' float64 (n, 6) Fx,Fy,Fz [N],
-Tx,Ty,Tz [N·m]. Needs the onnx package: pip install "ftcal[onnx]".
+[deg C] last for a temperature-compensated model), output 'wrench' float64 (n, k) of the model's
+k axes: Fx,Fy,Fz [N],Tx,Ty,Tz [N·m] for a 6-axis sensor, Fx,Fy,Fz for a 3-axis load cell.
+Needs the onnx package: pip install "ftcal[onnx]".
 
---format matrix (a linear model only): wrench = matrix @ raw + offset, the 6 x N matrix and the
-offset (6) in N and N·m. CSV: a header 'axis,s0,...,s{N-1},offset', one row per Fx..Tz; JSON: keys
-matrix, offset, inputs, outputs, units. A nonlinear model has no such matrix and is refused.
+--format matrix (a linear model only): wrench = matrix @ raw + offset, the k x N matrix and the
+offset (k) in N and N·m. CSV (any --output name but .json): a header 'axis,s0,...,s{N-1},offset'
+(the channels the model was fitted on), one row per axis; it reads as it is with
+pandas.read_csv(path, index_col=0) or numpy.loadtxt(path, delimiter=",", skiprows=1,
+usecols=range(1, N + 2)). JSON (.json): keys equation, matrix, offset, inputs, outputs, units.
+A nonlinear model has no such matrix and is refused.
 
 --format ros (a tool file of 'ftcal identify-load'): the tool's gravity-compensation parameters as
 YAML for ROS: force_torque_tools' keys (bias, gripper_mass, gripper_com_pose, ...) and a ROS 2
@@ -68,8 +72,10 @@ def run(args: argparse.Namespace) -> int:
     stem = args.model.name.removesuffix(".tool.json") if args.format == "ros" or is_tool else model_label(args.model)
     output = Path(args.output) if args.output else args.model.with_name(f"{stem}{default}")
     plan = OutputPlan.single_file(output, args.force)  # first: never over an input, whatever its name
-    suffixes = {"onnx": (".onnx",), "matrix": (".csv", ".json"), "ros": (".yaml", ".yml")}[args.format]
-    if output.suffix.lower() not in suffixes:
+    # any output name is accepted with --format matrix (.json is JSON, any other name CSV: x.matrix, cal.txt); an
+    # ONNX or YAML file keeps its suffix, which runtimes and ROS tools go by
+    suffixes = {"onnx": (".onnx",), "ros": (".yaml", ".yml")}.get(args.format)
+    if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
     if args.format == "ros":
         from ..experiment._tool_load import tool_gravity_compensation_yaml
@@ -90,28 +96,35 @@ def run(args: argparse.Namespace) -> int:
         return 0
     model = ftcal.load_model(args.model)
     if args.format == "matrix":
-        return _export_matrix(model, output, plan, console)
+        return _export_matrix(model, output, plan, console, args.model)
     with plan.writing(output.name) as tmp:
         ftcal.export_onnx(model, tmp, overwrite=True)
-    console.info(f"exported {type(model).__name__} ({model.n_features_in_} inputs -> 6) to {output}")
+    console.info(f"exported {type(model).__name__} ({model.n_features_in_} inputs -> {getattr(model, 'n_outputs_', 6)} axes) to {output}")
     return 0
 
 
-def _export_matrix(model, output: Path, plan: OutputPlan, console: Console) -> int:
+def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
     import json
 
     from ..models._matrix import matrix_export_dict
+    from ._data_options import model_reading
 
-    facts = matrix_export_dict(model)
+    stored, axes, _ = model_reading(model_path)  # the axes and channel names the model was fitted with
+    from ..io._readers import parse_column_slice
+
+    inputs = None if stored is None or stored.channels is None or parse_column_slice(stored.channels[0]) \
+        else stored.channels
+    facts = matrix_export_dict(model, axes=axes, inputs=inputs)
     with plan.writing(output.name) as tmp:
         if output.suffix.lower() == ".json":
             tmp.write_text(json.dumps(facts, indent=2) + "\n", encoding="utf-8")
         else:
-            lines = ["# wrench = matrix @ raw + offset; Fx,Fy,Fz [N], Tx,Ty,Tz [N·m], sensor frame",
-                     ",".join(["axis", *facts["inputs"], "offset"])]
+            # no comment line: numpy.loadtxt(path, delimiter=",", skiprows=1, usecols=...) and pandas.read_csv(path,
+            # index_col=0) read it as it is; the formula and units are in the help and the .json form
+            lines = [",".join(["axis", *facts["inputs"], "offset"])]
             for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
                 lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
             tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    console.info(f"exported the 6x{len(facts['inputs'])} calibration matrix and offset of {type(model).__name__} "
+    console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of {type(model).__name__} "
                  f"to {output}")
     return 0

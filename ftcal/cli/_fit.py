@@ -9,7 +9,7 @@ import numpy as np
 
 from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range, positive_float,
                       write_json)
-from ._data_options import add_dataset_options, load_dataset_from_args
+from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
 from ._training import fit_with_progress
 
@@ -170,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
     fit_with_progress(estimator, X, data.wrench, console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
-    report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_)
+    report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
         "model": args.model,
         "schedule": args.schedule,
@@ -206,7 +206,7 @@ def run(args: argparse.Namespace) -> int:
     # every output of this run is written into a private folder and moved into place as one set at the end: a
     # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote
     with OutputSet(plan) as out:
-        ftcal.save_model(estimator, out.path(model_file_name(name)), overwrite=True)
+        ftcal.save_model(estimator, out.path(model_file_name(name)), overwrite=True, data=fit_data_facts(args, data))
         summary["model_sha256"] = out.sha256(model_file_name(name))
         write_json(out.path(f"{name}.fit.json"), summary)
         if args.report:

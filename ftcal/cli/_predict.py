@@ -10,18 +10,22 @@ import numpy as np
 
 from ._models import load_model_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
+from ._data_options import add_channel_option, model_reading
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
-from ..core._wrench import WRENCH_LABELS
+from ..core._wrench import default_axes
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
-naming the channels s0..s{N-1}; '#' comments). output: CSV Fx,Fy,Fz [N],Tx,Ty,Tz [N·m].
+naming the channels s0..s{N-1}, or the columns the model was fitted with (--channels at fit),
+or the columns --channels names; '#' comments), or a .npz / .mat file. output: CSV of the
+model's axes, e.g. Fx,Fy,Fz [N],Tx,Ty,Tz [N·m] (Fx,Fy,Fz for a 3-axis load cell).
 
 examples:
   ftcal predict models/directional.model.npz readings.csv --output wrench.csv
   my_sensor_reader | ftcal predict models/directional.model.npz --line-buffered | my_controller
   ftcal predict models/linear.model.npz data/test.csv --no-header | head -3
   ftcal predict models/linear.model.npz live.csv --range models/linear.report.json   # + out_of_range column
+  ftcal predict models/linear.model.npz log.csv --channels g1..g6     # channels named g1..g6 in log.csv
 
 --range FILE (a calibration report .json, or the calibration dataset) adds a column out_of_range:
 1 when a reading lies beyond the calibrated range (a channel below its smallest or above its
@@ -40,8 +44,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
     p.add_argument(
         "input", nargs="?", default="-",
-        help="raw readings: a CSV / whitespace text file, a .npz with array 'raw', or '-' for stdin",
+        help="raw readings: a CSV / whitespace text file, a .npz or .mat with array 'raw' (or the --channels "
+        "arrays), or '-' for stdin",
     )
+    add_channel_option(p)
     p.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
     p.add_argument("--no-header", action="store_true", help="do not write the Fx,...,Tz header line")
@@ -179,6 +185,9 @@ def run(args: argparse.Namespace) -> int:
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
+    stored, axes, _ = model_reading(args.model)  # the channel mapping and wrench axes the model was fitted with
+    channels = args.channels if args.channels is not None else (stored.channels if stored is not None else None)
+    axes = axes or default_axes(int(getattr(model, "n_outputs_", 6)))
     if args.std and not provides_std(model):
         chosen = getattr(model, "best_name_", type(model).__name__)
         if reads_history(model):  # a load-history wrapper: its history term has no standard deviation
@@ -209,10 +218,11 @@ def run(args: argparse.Namespace) -> int:
     def emit(out) -> int:
         total = 0
         if not args.no_header:  # at once: a reader waiting for the header must not wait for the first reading
-            labels = [*WRENCH_LABELS, *([f"std_{a}" for a in WRENCH_LABELS] if args.std else [])]
+            labels = [*axes, *([f"std_{a}" for a in axes] if args.std else [])]
             out.write(",".join(labels) + (",out_of_range" if limits is not None else "") + "\n")
             out.flush()
-        for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature):
+        for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
+                                     channels=channels):
             try:
                 if args.std:
                     wrench, std = model.predict(raw, return_std=True)
@@ -255,20 +265,33 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False):
+def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
+               channels: tuple[str, ...] | None = None):
     """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
-    rows of a ``.npz`` are numbered from 0)."""
+    rows of a ``.npz`` / ``.mat`` are numbered from 0). ``channels``: the channel columns (or arrays, or a column
+    slice) to read, as ``--channels`` or the model's stored mapping name them."""
+    from ..io._readers import expand_names, parse_column_slice
+
+    names = None if channels is None or parse_column_slice(channels[0]) is not None else expand_names(channels)
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
         yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, with_lines=with_lines,
-                                       temperature=temperature)
-    elif source.endswith(".npz"):
-        raw = read_readings_npz(source, n_channels)
+                                       temperature=temperature, names=names)
+    elif Path(source).suffix.lower() in (".npz", ".mat"):
+        if channels is None and Path(source).suffix.lower() == ".npz":
+            raw = read_readings_npz(source, n_channels)
+        else:
+            from ..io._dataset import read_channels
+
+            raw = read_channels(source, channels)
+            if raw.shape[1] != n_channels:
+                raise CliError(f"{source}: {raw.shape[1]} raw channels but the model takes {n_channels}; name the "
+                               "channels with --channels")
         for start in range(0, len(raw), chunk):
             yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
                 else raw[start:start + chunk]
     else:
         with open(source, encoding="utf-8") as fh:
             yield from iter_reading_chunks(fh, source, n_channels, chunk, with_lines=with_lines,
-                                           temperature=temperature)
+                                           temperature=temperature, names=names)

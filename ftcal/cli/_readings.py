@@ -36,9 +36,21 @@ def _split(line: str) -> list[str]:
     return [v.strip() for v in line.split(",")] if "," in line else line.split()
 
 
-def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int) -> list[int]:
-    """Positions of s0..s{N-1} in a header line (the shared header rules of :mod:`ftcal.core._columns`), then of
-    ``temperature`` when the model takes one input more than there are channels."""
+def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int,
+                     names: tuple[str, ...] | None = None) -> list[int]:
+    """Positions of s0..s{N-1} (or of the columns ``names``: ``--channels``, or the model's mapping) in a header
+    line, then of ``temperature`` when the model takes one input more than there are channels."""
+    if names is not None:
+        header_names = [f.strip().lstrip("\ufeff") for f in fields]
+        missing = [n for n in names if n not in header_names]
+        if missing:
+            raise CliError(f"{source}: line {line_no}: no column {missing[0]!r} (the model reads the channels "
+                           f"{','.join(names)}); the header has {', '.join(header_names)}. Fix: name the input's "
+                           "channel columns with --channels")
+        channels = [header_names.index(n) for n in names]
+        if "temperature" in header_names and len(channels) + 1 == n_inputs:
+            channels.append(header_names.index("temperature"))
+        return channels
     header = read_header(fields, where=f"{source}: line {line_no}", error=CliError, allow_other=True,
                          expected="s0,...,s{N-1}[,temperature] (other columns are ignored)")
     channels = header.numbered("s")
@@ -49,7 +61,7 @@ def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int
 
 def iter_reading_chunks(
     stream: IO[str], source: str, n_channels: int, chunk_size: int, *, with_lines: bool = False,
-    temperature: bool = False,
+    temperature: bool = False, names: tuple[str, ...] | None = None,
 ) -> Iterator[NDArray[np.float64]]:
     """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows.
 
@@ -68,6 +80,9 @@ def iter_reading_chunks(
     temperature : bool
         Whether the model's last input is the temperature [deg C] (a temperature-compensated model): the
         messages then count ``n_channels - 1`` raw channels plus the temperature.
+    names : tuple of str, optional
+        The channel columns of a header (``--channels``, or the model's stored mapping); default s0..s{N-1}.
+        An input without a header is read column by column in the model's channel order.
 
     Raises
     ------
@@ -90,18 +105,19 @@ def iter_reading_chunks(
         if not text or text.startswith("#"):
             continue
         fields = _split(text)
-        first_word = next((f for f in fields if not is_number(f)), None)
+        first_word = next((f for f in fields if f and not is_number(f)), None)
         if not seen_data and columns is None and first_word is not None and first_word[:1].isalpha():
-            columns = _channel_columns(fields, source, line_no, n_channels)
+            columns = _channel_columns(fields, source, line_no, n_channels, names)
             width = len(fields)
             continue
         seen_data = True
         if width is not None and len(fields) != width:
             raise CliError(f"{source}: line {line_no}: {len(fields)} values but the header names {width} columns")
         where = f"{source}: line {line_no}"
-        values = [parse_number(f, where, CliError) for f in fields]
-        if columns is not None:
-            values = [values[i] for i in columns]
+        if columns is not None:  # only the channel columns are read: other columns are ignored, whatever they hold
+            values = [parse_number(fields[i], where, CliError) for i in columns]
+        else:
+            values = [parse_number(f, where, CliError) for f in fields]
         if len(values) != n_channels:
             given = f"{len(values)} values" if columns is None else f"{len(values)} columns of s0..s{{N-1}}" + (
                 "[,temperature]" if temperature else "")

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core._exceptions import CalibrationInputError
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
-from ._data_options import add_dataset_options, load_dataset_from_args
+from ._data_options import add_dataset_options, load_dataset_for_models
 
 EXAMPLE = """\
 examples:
@@ -293,7 +293,7 @@ def run(args: argparse.Namespace) -> int:
     if bytes_sha256(Path(args.model).read_bytes()) != bytes_sha256(model_bytes):
         raise CliError(f"{args.model} changed while it was being read; run the report again")
     dataset_sha256 = file_sha256(args.dataset)
-    data = load_dataset_from_args(args, args.dataset, "calibration dataset")
+    data = load_dataset_for_models(args, args.dataset, "calibration dataset", [args.model])  # as it was fitted
     inputs = model_inputs(model, data)  # a dataset of another sensor is refused before the cross-validation starts
     settings = prepare_report(args, data, args.dataset)
     fitted_range = getattr(model, "calibrated_range_", None)

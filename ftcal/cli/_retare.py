@@ -41,8 +41,18 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--max-spread", type=positive_float, default=5.0,
                    help="largest per-channel std of the readings, in units of the training noise")
     add_retare_tool_options(p)
+    from ._data_options import add_channel_option
+
+    add_channel_option(p)
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
+
+
+def _kept_data(model_path) -> dict | None:
+    """The data description of the model file, kept in the re-tared one (same mapping, units, axes)."""
+    from ..models._model_io import model_data
+
+    return model_data(model_path) or None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,10 +72,14 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--time, --temperature, --orientation and --tool-off re-tare a tool file (NAME.tool.json); "
                        f"{args.model} is a model file")
     plan = OutputPlan.single_file(output, args.force)
+    from ._data_options import model_reading
+
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
+    stored, _, _ = model_reading(args.model)  # the channel mapping the model was fitted with
+    channels = args.channels if args.channels is not None else (stored.channels if stored is not None else None)
     chunks, n_bytes = [], 0.0
-    for chunk in raw_chunks(args.readings, n_channels, 4096):  # a stream of readings may be endless
+    for chunk in raw_chunks(args.readings, n_channels, 4096, channels=channels):  # a stream of readings may be endless
         n_bytes += chunk.nbytes
         check_allocation(2 * n_bytes, f"the zero-load readings of {args.readings} ({n_bytes / chunk.itemsize / n_channels:.0f}"
                          " so far)", "a few hundred readings are enough; pass fewer")
@@ -75,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     readings = np.vstack(chunks)
     model.retare(readings, max_spread=args.max_spread)
     with plan.writing(output.name) as tmp:
-        ftcal.save_model(model, tmp, overwrite=True)
+        ftcal.save_model(model, tmp, overwrite=True, data=_kept_data(args.model))
     shift = model.tare_reading_ - model.zero_reading_
     console.info(
         f"re-tared from {len(readings)} readings: zero-load reading moved by "

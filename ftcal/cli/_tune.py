@@ -9,7 +9,7 @@ import time
 from ..core._exceptions import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
 from ._fit import calibrator_names
-from ._data_options import add_dataset_options, load_dataset_from_args
+from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
 
 EXAMPLE = """\
@@ -143,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
     summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
                "search_seconds": round(seconds, 3), **search_summary(search)}
     with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
-        ftcal.save_model(search.best_estimator_, tmp, overwrite=True)
+        ftcal.save_model(search.best_estimator_, tmp, overwrite=True, data=fit_data_facts(args, data))
     with plan.writing(f"{name}.tune.json") as tmp:
         write_json(tmp, summary)
     console.info(

@@ -47,10 +47,11 @@ def comparison_table(reports: Mapping[str, CalibrationReport], noise_floor: floa
 
 def axis_table(reports: Mapping[str, CalibrationReport]) -> str:
     """Markdown table of the RMSE per axis: forces [N], torques [N·m]."""
-    head = " | ".join(f"{k} [{'N' if k.startswith('F') else 'N·m'}]" for k in WRENCH_LABELS)
-    lines = [f"| model | {head} |", "|---" * 7 + "|"]
+    axes = list(next(iter(reports.values())).axis_rmse) if reports else list(WRENCH_LABELS)  # the axes that exist
+    head = " | ".join(f"{k} [{'N' if k.startswith('F') else 'N·m'}]" for k in axes)
+    lines = [f"| model | {head} |", "|---" * (len(axes) + 1) + "|"]
     for name, r in reports.items():
-        lines.append(f"| {name} | " + " | ".join(f"{r.axis_rmse[k]:.3g}" for k in WRENCH_LABELS) + " |")
+        lines.append(f"| {name} | " + " | ".join(f"{r.axis_rmse[k]:.3g}" for k in axes) + " |")
     return "\n".join(lines)
 
 

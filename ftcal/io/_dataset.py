@@ -54,7 +54,7 @@ from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
                        temperature_message, _slice_columns)
 
-__all__ = ["CalibrationDataset", "DATASET_SUFFIXES"]
+__all__ = ["CalibrationDataset", "DATASET_SUFFIXES", "read_channels"]
 
 _CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
 #: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
@@ -828,3 +828,29 @@ def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:
     return meta, header_no, data
 
 
+
+
+def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> NDArray[np.float64]:
+    """The raw channels of an ``.npz`` / ``.mat`` file: the array ``raw``, the vectors ``s0, s1, ...``, or the
+    variables / column slice ``channels`` names (``("data[:,0:8]",)``); only those arrays are read, bounded.
+
+    Examples
+    --------
+    >>> import numpy as np, tempfile, os
+    >>> path = os.path.join(tempfile.mkdtemp(), "r.npz")
+    >>> np.savez(path, data=np.arange(12.0).reshape(3, 4))
+    >>> read_channels(path, ("data[:,1:3]",)).tolist()
+    [[1.0, 2.0], [5.0, 6.0], [9.0, 10.0]]
+    """
+    if channels is not None:
+        channels = ColumnMap(channels=channels).channels
+    with ArrayFile(path) as source:
+        vectors = sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
+        raw, labels, base = _select(source, channels, "raw", vectors, "raw channels", "--channels")
+    if len(labels) == 1 and base is None and raw.shape[0] < raw.shape[1]:
+        raw = raw.T  # one row per channel (MATLAB)
+    bad = np.argwhere(~np.isfinite(raw))
+    if bad.size:
+        raise DatasetFileError(f"{path}: raw row {int(bad[0, 0])} (rows counted from 0) holds NaN or inf; repair or "
+                               "remove that row.")
+    return raw

@@ -1,7 +1,8 @@
-"""A linear calibration as a plain 6 x N matrix and offset, for a vendor driver or a fieldbus device.
+"""A linear calibration as a plain k x N matrix and offset, for a vendor driver or a fieldbus device.
 
-``wrench = matrix @ raw + offset``: ``matrix`` (6, N) maps the raw channels to ``Fx, Fy, Fz`` [N] and
-``Tx, Ty, Tz`` [N·m], ``offset`` (6,) holds the tare. Any fitted calibrator whose prediction is affine in
+``wrench = matrix @ raw + offset``: ``matrix`` (k, N) maps the raw channels to the sensor's k wrench axes
+(``Fx, Fy, Fz`` [N] and ``Tx, Ty, Tz`` [N·m] for a 6-axis sensor, ``Fx, Fy, Fz`` for a 3-axis load cell),
+``offset`` (k,) holds the tare. Any fitted calibrator whose prediction is affine in
 the raw readings has one (the LTM, a degree-1 polynomial, ``auto`` when it chose one, after a re-tare);
 it is read off the model's own ``predict`` and checked on probe readings, so the numbers a driver gets
 are exactly what ``predict`` computes. A nonlinear model has no such matrix and is refused.
@@ -16,13 +17,13 @@ from numpy.typing import NDArray
 
 from ..calibrators._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError
-from ..core._wrench import WRENCH_LABELS
+from ..core._wrench import axis_unit, default_axes
 
 __all__ = ["linear_calibration_matrix", "matrix_export_dict"]
 
 
 def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """``(matrix (6, N), offset (6,))`` with ``model.predict(X) == X @ matrix.T + offset``.
+    """``(matrix (k, N), offset (k,))`` with ``model.predict(X) == X @ matrix.T + offset`` (k wrench axes).
 
     Raises
     ------
@@ -60,8 +61,8 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
     except Exception as exc:
         raise ExportError(f"{type(model).__name__} could not be evaluated for a matrix export "
                           f"({type(exc).__name__}: {exc}).") from None
-    if out.ndim != 2 or out.shape[1] != 6:
-        raise ExportError(f"{type(model).__name__} does not predict 6 wrench components; got shape {out.shape}.")
+    if out.ndim != 2 or not 1 <= out.shape[1] <= 6:
+        raise ExportError(f"{type(model).__name__} does not predict 1 to 6 wrench components; got shape {out.shape}.")
     offset_at_center = out[0]
     matrix = ((out[1:n + 1] - offset_at_center) / scale).T
     offset = offset_at_center - matrix @ center
@@ -77,21 +78,30 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
                 "without {TemperatureCompensatedCalibrator} for a matrix",
                 settings={"export_onnx": NO_SETTING, "TemperatureCompensatedCalibrator": NO_SETTING})
         raise ExportError(
-            f"{type(model).__name__} is not a linear calibration (its prediction departs from the best 6x{n} matrix "
+            f"{type(model).__name__} is not a linear calibration (its prediction departs from the best {out.shape[1]}x{n} matrix "
             f"by {gap:.3g} on probe readings), so it has no calibration matrix.", parameter="model",
             fix="fit a linear model ({model}) for a matrix, or export this model to ONNX ({export_onnx})",
             settings={"model": "linear", "export_onnx": NO_SETTING})
     return matrix, offset
 
 
-def matrix_export_dict(model: Any) -> dict:
-    """The matrix export as a JSON-able dict (what ``ftcal export --format matrix`` writes to ``.json``)."""
+def matrix_export_dict(model: Any, axes=None, inputs=None) -> dict:
+    """The matrix export as a JSON-able dict (what ``ftcal export --format matrix`` writes to ``.json``).
+
+    ``axes`` names the outputs (the model file's wrench axes; default Fx..Tz for six, else the first of them),
+    ``inputs`` the raw channels (the columns the model was fitted on; default s0..s{N-1}).
+    """
     matrix, offset = linear_calibration_matrix(model)
+    axes = list(axes) if axes is not None else list(default_axes(matrix.shape[0]))
+    if len(axes) != matrix.shape[0]:
+        raise ExportError(f"the model predicts {matrix.shape[0]} axes but {len(axes)} are named ({', '.join(axes)}).")
+    names = list(inputs) if inputs is not None and len(inputs) == matrix.shape[1] else \
+        [f"s{i}" for i in range(matrix.shape[1])]
     return {
         "format": "ftcal-calibration-matrix", "format_version": 1,
         "equation": "wrench = matrix @ raw + offset",
-        "inputs": [f"s{i}" for i in range(matrix.shape[1])], "outputs": list(WRENCH_LABELS),
+        "inputs": names, "outputs": axes,
         "units": {"raw": "the sensor's own unit (as in the calibration data)",
-                  "wrench": "Fx, Fy, Fz in N; Tx, Ty, Tz in N·m, sensor frame"},
+                  "wrench": "; ".join(f"{a} in {axis_unit(a)}" for a in axes) + ", sensor frame"},
         "matrix": matrix.tolist(), "offset": offset.tolist(),
     }

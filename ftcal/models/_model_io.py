@@ -65,7 +65,7 @@ from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes
 
-__all__ = ["save_model", "load_model", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "model_data", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION"]
 
 FORMAT = "ftcal-model"
 #: Version of the model-file layout written by :func:`save_model` (1: before the per-class declarations).
@@ -212,7 +212,7 @@ def _decode(value):
     return value
 
 
-def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
+def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, data: dict | None = None) -> Path:
     """Write a fitted calibrator to one ``.npz`` model file; returns the path.
 
     Parameters
@@ -227,6 +227,9 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
     overwrite : bool, default=False
         Replace an existing file; otherwise an existing file raises
         ``ModelFileError`` and is left untouched.
+    data : dict, optional
+        How the training data were read (plain JSON: the column mapping, units and wrench axes the CLI fitted
+        with), kept in the metadata and returned by :func:`model_data`, so that the model reads its data alike.
 
     Examples
     --------
@@ -241,6 +244,8 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False) -
     meta, arrays = _state(estimator)
     _refuse_non_finite(type(estimator).__name__, meta, arrays)
     meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": _ftcal_version()}
+    if data is not None:
+        meta["data"] = data
     arrays[_META_KEY] = np.array(json.dumps(meta))
     if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
         raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
@@ -424,6 +429,22 @@ def _read_metadata(archive: _Archive) -> dict:
         raise ModelFileError(
             f"{path} is not an ftcal model file (format {meta.get('format') if isinstance(meta, dict) else meta!r}).")
     return meta
+
+
+def model_data(path: str | os.PathLike) -> dict:
+    """How the data of the model file ``path`` were read at fit time (``save_model(..., data=...)``), or ``{}``.
+
+    Only the metadata is read (bounded like :func:`load_model`).
+    """
+    with _Archive(Path(path)) as archive:
+        try:
+            meta = _read_metadata(archive)
+        except MemoryLimitError as exc:
+            raise ModelFileError(str(exc)) from None
+    data = meta.get("data", {})
+    if not isinstance(data, dict):
+        raise ModelFileError(f"{path}: the stored data description is not a JSON object; fit the model again.")
+    return data
 
 
 def load_model(path: str | os.PathLike, *, model_type: str | type | None = None):

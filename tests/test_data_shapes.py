@@ -1,0 +1,270 @@
+"""Data as it comes: one-matrix .mat files, 1- and 3-axis load cells in grams, per-pose folders with saturated
+files, empty and unused column names, N·mm torques on every command, predict --channels, the mapping kept in the
+model file, exact units, and bounded .mat/.npz readers; each through fit, report, predict and export."""
+
+from __future__ import annotations
+
+import json
+import resource
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+import scipy.io
+
+from ftcal import CalibrationDataset, DatasetFileError, load_model
+from ftcal.cli import main
+from ftcal.io._readers import ColumnMap, lever_arm_problem, unit_scale
+
+G0 = 9.80665
+
+
+def one_line_error(capsys, code: int) -> str:
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and err.startswith("ftcal: error:"), err
+    return err
+
+
+def _sensor(n_axes: int = 6, n_channels: int = 8, n: int = 240, seed: int = 0):
+    """Raw bridge readings and the wrench (N, N·m) of a linear sensor with noise, loads up to 50 N / 2.5 N·m."""
+    rng = np.random.default_rng(seed)
+    wrench = rng.uniform(-1, 1, size=(n, 6)) * [50, 50, 50, 2.5, 2.5, 2.5]
+    wrench[:, n_axes:] = 0.0  # a sensor of fewer axes sees no other load
+    gain = rng.normal(size=(n_channels, 6)) * [1, 1, 1, 20, 20, 20]
+    raw = wrench @ gain.T + rng.normal(scale=1e-3, size=(n, n_channels)) + 100.0
+    return raw, wrench[:, :n_axes]
+
+
+def _csv(path, names, *columns):
+    rows = np.column_stack(columns)
+    path.write_text(",".join(names) + "\n" + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows))
+    return path
+
+
+def _through_every_command(tmp_path, dataset, options, axes, capsys, readings=None, predict_options=()):
+    """fit, report, predict and export (matrix and ONNX) of a linear model on ``dataset``; returns the model."""
+    out = tmp_path / "m"
+    assert main(["fit", str(dataset), *options, "--model", "linear", "--out", str(out), "-q"]) == 0, \
+        capsys.readouterr().err
+    model = out / "linear.model.npz"
+    assert main(["report", str(model), str(dataset), "--out", str(tmp_path / "r"), "-q"]) == 0, capsys.readouterr().err
+    facts = json.loads((tmp_path / "r" / "linear.report.json").read_text())
+    assert json.dumps(facts)  # the report of the axes that exist
+    capsys.readouterr()
+    assert main(["predict", str(model), str(readings or dataset), *predict_options]) == 0, capsys.readouterr().err
+    header = capsys.readouterr().out.splitlines()[0]
+    assert header.split(",") == list(axes)
+    assert main(["export", str(model), "--format", "matrix", "--output", str(tmp_path / "cal.matrix")]) == 0
+    import pandas
+
+    table = pandas.read_csv(tmp_path / "cal.matrix", index_col=0)  # reads as it is: no comment line
+    assert list(table.index) == list(axes)
+    loaded = np.loadtxt(tmp_path / "cal.matrix", delimiter=",", skiprows=1, usecols=range(1, table.shape[1] + 1), ndmin=2)
+    assert loaded.shape == (len(axes), table.shape[1])
+    assert main(["export", str(model), "--output", str(tmp_path / "cal.onnx"), "-q"]) == 0
+    return load_model(model)
+
+
+def test_one_matrix_mat_file_with_column_slices(tmp_path, capsys):
+    raw, wrench = _sensor()
+    scipy.io.savemat(tmp_path / "rec.mat", {"data": np.hstack([raw, wrench])})  # 8 bridges then Fx..Mz
+    model = _through_every_command(tmp_path, tmp_path / "rec.mat",
+                                   ["--channels", "data[:,0:8]", "--wrench", "data[:,8:14]"], tuple("Fx Fy Fz Tx Ty Tz".split()),
+                                   capsys)
+    np.testing.assert_allclose(model.predict(raw), wrench, atol=0.1)
+
+
+def test_one_matrix_in_matlab_v73_is_refused_with_the_fix(tmp_path, capsys):
+    header = b"MATLAB 7.3 MAT-file, Platform: GLNXA64, Created on: Mon Jan 1 00:00:00 2024 HDF5 schema 1.00 .".ljust(116)
+    (tmp_path / "rec.mat").write_bytes(header + b"\0" * 8 + b"\x00\x02" + b"IM" + b"\x89HDF\r\n\x1a\n" + b"\0" * 64)
+    err = one_line_error(capsys, main(["fit", str(tmp_path / "rec.mat"), "--out", str(tmp_path / "m")]))
+    assert "v7.3 (HDF5)" in err and "'-v7'" in err
+
+
+def test_three_axis_load_cell_in_grams_with_unused_columns(tmp_path, capsys):
+    raw, wrench = _sensor(n_axes=3, n_channels=4)
+    names = ["", "g1", "g2", "g3", "g4", "force_x", "force_y", "force_z", "time [s]"]  # an index, a time, no name
+    path = _csv(tmp_path / "cell.csv", names, np.arange(len(raw)), raw, wrench / (G0 * 1e-3), np.arange(len(raw)))
+    model = _through_every_command(tmp_path, path, ["--channels", "g1..g4", "--force-unit", "g"], ("Fx", "Fy", "Fz"),
+                                   capsys)
+    np.testing.assert_allclose(model.predict(raw), wrench, atol=0.1)  # grams read as their weight in N
+    assert model.predict(raw).shape == (len(raw), 3)
+
+
+def test_one_axis_cell(tmp_path, capsys):
+    raw, wrench = _sensor(n_axes=3, n_channels=2)
+    path = _csv(tmp_path / "cell.csv", ["bridge_a", "bridge_b", "load"], raw, wrench[:, 2])
+    model = _through_every_command(tmp_path, path, ["--channels", "bridge_a,bridge_b", "--wrench", "load", "--axes",
+                                                    "Fz"], ("Fz",), capsys)
+    assert model.predict(raw).shape == (len(raw), 1)
+
+
+def test_per_pose_folder_with_two_saturated_files(tmp_path, capsys):
+    raw, wrench = _sensor(n=300)
+    folder = tmp_path / "poses"
+    folder.mkdir()
+    for k in range(10):
+        r = raw[30 * k:30 * (k + 1)].copy()
+        if k in (3, 7):  # the ADC pinned at its limit for part of these poses
+            r[:12, 2] = 4095.0
+        _csv(folder / f"pose{k:02d}.csv", [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"], r,
+             wrench[30 * k:30 * (k + 1)])
+    data = CalibrationDataset.load(folder, columns=ColumnMap(groups="file"))
+    assert sorted(set(data.group.tolist())) == list(range(10)) and data.meta["group_labels"][3] == "pose03.csv"
+    code = main(["fit", str(folder), "--groups", "file", "--model", "linear", "--out", str(tmp_path / "w")])
+    assert code == 0 and "24 of 300 rows have a channel pinned" in capsys.readouterr().err
+    model = _through_every_command(tmp_path, folder, ["--groups", "file", "--exclude-saturated", "auto"],
+                                   tuple("Fx Fy Fz Tx Ty Tz".split()), capsys, readings=folder / "pose00.csv")
+    np.testing.assert_allclose(model.predict(raw[:30]), wrench[:30], atol=0.1)
+
+
+def test_predict_channels_and_the_mapping_kept_in_the_model(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6)
+    names = [f"g{i + 1}" for i in range(6)] + ["Fx", "Fy", "Fz", "Mx", "My", "Mz"]
+    path = _csv(tmp_path / "log.csv", names, raw, wrench)
+    out = tmp_path / "m"
+    assert main(["fit", str(path), "--channels", "g6,g5,g4,g3,g2,g1", "--model", "linear", "--out", str(out),
+                 "-q"]) == 0
+    capsys.readouterr()
+    # predict reads the model's own channel order from the file: the numbers are right, whatever the header order
+    assert main(["predict", str(out / "linear.model.npz"), str(path)]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    predicted = np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]])
+    np.testing.assert_allclose(predicted, wrench, atol=0.1)
+    # evaluate and retare read alike; another input's names go through predict --channels
+    assert main(["evaluate", str(path), str(out / "linear.model.npz"), "--no-plots", "--out", str(tmp_path / "e"),
+                 "-q"]) == 0
+    capsys.readouterr()
+    metrics = json.loads((tmp_path / "e" / "metrics.json").read_text())
+    assert metrics["models"]["linear"]["rmse"] < 0.05
+    other = _csv(tmp_path / "other.csv", [f"ch{i}" for i in range(6)], raw[:, ::-1])
+    assert main(["predict", str(out / "linear.model.npz"), str(other), "--channels", "ch0..ch5"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    np.testing.assert_allclose(np.array([[float(v) for v in ln.split(",")] for ln in lines[1:]]), wrench, atol=0.1)
+    # a file without the model's columns is refused, naming the column
+    err = one_line_error(capsys, main(["predict", str(out / "linear.model.npz"), str(other)]))
+    assert "'g6'" in err and "--channels" in err
+
+
+def test_newton_millimetres_given_to_benchmark_dataset_are_refused_with_the_fix(tmp_path, capsys):
+    raw, wrench = _sensor()
+    path = _csv(tmp_path / "soft.csv", [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"], raw,
+                wrench * [1, 1, 1, 1000, 1000, 1000])
+    for argv in (["benchmark", "dataset", str(path)], ["fit", str(path), "--force-unit", "N"]):
+        err = one_line_error(capsys, main([*argv, "--model", "linear", "--out", str(tmp_path / "b")]))
+        assert "--torque-unit N.mm" in err
+    assert main(["benchmark", "dataset", str(path), "--torque-unit", "N.mm", "--model", "linear", "--out",
+                 str(tmp_path / "b"), "-q"]) == 0
+
+
+def test_forces_in_kilonewtons_are_named_as_such():
+    wrench = np.array([[0.004, 0.002, 0.0, 0.0, 0.05, 0.01]])  # kN forces, N·m torques: arm 12 m read as N
+    problem = lever_arm_problem(wrench)
+    assert "forces look like kN" in problem and "--force-unit kN" in problem
+
+
+@pytest.mark.parametrize("unit, kind, factor", [("MN", "force", 1e6), ("mN", "force", 1e-3), ("kgf", "force", G0),
+                                                 ("g", "force", G0 * 1e-3), ("N·mm", "torque", 1e-3),
+                                                 ("MN.m", "torque", 1e6), ("mN.m", "torque", 1e-3),
+                                                 ("kN.m", "torque", 1e3), ("lbf.in", "torque", 0.1129848290276167)])
+def test_units_are_read_exactly(unit, kind, factor):
+    assert unit_scale(unit, kind) == pytest.approx(factor, rel=1e-12)
+
+
+@pytest.mark.parametrize("argv, fragment", [
+    (["--channels", "data[:,0:8]", "--wrench", "data[:,8:20]"], "selects no columns of 'data', which has 14"),
+    (["--channels", "data[:,0:9]", "--wrench", "data[:,8:14]"], "overlap"),
+    (["--force-unit", "furlong"], "unknown force unit 'furlong'"),
+    (["--force-unit", "n"], "did you mean 'N'"),
+])
+def test_bad_mappings_are_one_line_naming_the_fix(tmp_path, capsys, argv, fragment):
+    raw, wrench = _sensor()
+    scipy.io.savemat(tmp_path / "rec.mat", {"data": np.hstack([raw, wrench])})
+    base = [] if "--channels" in argv else ["--channels", "data[:,0:8]", "--wrench", "data[:,8:14]"]
+    err = one_line_error(capsys, main(["fit", str(tmp_path / "rec.mat"), *base, *argv, "--out", str(tmp_path / "m")]))
+    assert fragment in err and "Fix" in err or "known" in err
+
+
+def test_group_column_with_one_value_and_folder_of_other_columns(tmp_path, capsys):
+    raw, wrench = _sensor()
+    names = [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz", "session"]
+    path = _csv(tmp_path / "d.csv", names, raw, wrench, np.ones(len(raw)))
+    err = one_line_error(capsys, main(["fit", str(path), "--groups", "session", "--out", str(tmp_path / "m")]))
+    assert "one group" in err and "Fix" in err
+    folder = tmp_path / "poses"
+    folder.mkdir()
+    _csv(folder / "a.csv", names[:-1], raw[:100], wrench[:100])
+    _csv(folder / "b.csv", names, raw[100:], wrench[100:], np.ones(140))
+    err = one_line_error(capsys, main(["fit", str(folder), "--out", str(tmp_path / "m")]))
+    assert "b.csv" in err and "same columns" in err
+
+
+def test_a_header_with_tx_and_mx_names_the_clash(tmp_path):
+    raw, wrench = _sensor(n_channels=6)
+    names = [f"s{i}" for i in range(6)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz", "Mx"]
+    path = _csv(tmp_path / "d.csv", names, raw, wrench, wrench[:, 3])
+    with pytest.raises(DatasetFileError, match="columns 'Tx' and 'Mx' both read as the wrench axis Tx"):
+        CalibrationDataset.load(path)
+
+
+def test_matlab_logical_array_is_refused(tmp_path):
+    raw, wrench = _sensor()
+    scipy.io.savemat(tmp_path / "rec.mat", {"raw": raw > 100, "wrench": wrench})
+    with pytest.raises(DatasetFileError, match="'raw' is a MATLAB logical array"):
+        CalibrationDataset.load(tmp_path / "rec.mat")
+
+
+def test_upper_case_npz_reads_in_predict_and_retare(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6)
+    with open(tmp_path / "D.NPZ", "wb") as fh:  # numpy.savez would add .npz to a name of another suffix
+        np.savez(fh, raw=raw, wrench=wrench)
+    assert main(["fit", str(tmp_path / "D.NPZ"), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
+    with open(tmp_path / "ZERO.NPZ", "wb") as fh:
+        np.savez(fh, raw=np.full((20, 6), 100.0) + np.random.default_rng(1).normal(scale=1e-3, size=(20, 6)))
+    assert main(["predict", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "D.NPZ"), "-q"]) == 0
+    assert main(["retare", str(tmp_path / "m" / "linear.model.npz"), str(tmp_path / "ZERO.NPZ"), "-q"]) == 0
+
+
+_BOMB = """
+import resource, sys
+import numpy as np
+from ftcal import CalibrationDataset
+from ftcal.io._readers import ColumnMap
+CalibrationDataset.load(sys.argv[1])
+print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)
+"""
+
+
+@pytest.mark.parametrize("suffix", [".mat", ".npz"])
+def test_an_unused_huge_compressed_variable_is_never_decompressed(tmp_path, suffix):
+    """A small file whose unused member inflates to 2 GiB: the reader lists it without reading it."""
+    raw, wrench = _sensor()
+    path = tmp_path / f"bomb{suffix}"
+    if suffix == ".npz":
+        with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+            for name, value in (("raw", raw), ("wrench", wrench)):
+                with z.open(f"{name}.npy", "w") as fh:
+                    np.lib.format.write_array(fh, value)
+            with z.open("junk.npy", "w", force_zip64=True) as fh:  # 2 GiB of zeros, written in blocks
+                np.lib.format.write_array_header_1_0(fh, {"descr": "<f8", "fortran_order": False,
+                                                          "shape": (2**28,)})
+                block = bytes(2**24)
+                for _ in range(2**31 // 2**24):
+                    fh.write(block)
+    else:
+        scipy.io.savemat(path, {"junk": np.zeros(2**25), "raw": raw, "wrench": wrench},  # 256 MiB of zeros first
+                         do_compression=True)
+    assert path.stat().st_size < 4 * 2**20
+    small = tmp_path / f"small{suffix}"
+    if suffix == ".npz":
+        np.savez(small, raw=raw, wrench=wrench)
+    else:
+        scipy.io.savemat(small, {"raw": raw, "wrench": wrench})
+    peaks = []
+    for file in (small, path):
+        done = subprocess.run([sys.executable, "-c", _BOMB, str(file)], capture_output=True, text=True, timeout=300)
+        assert done.returncode == 0, done.stderr
+        peaks.append(int(done.stdout.split()[-1]))  # peak resident set [KiB]
+    assert peaks[1] < peaks[0] + 100_000  # the junk (2 GiB / 256 MiB inflated) never entered memory
