@@ -22,6 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
+           "paired_excess",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -286,14 +287,33 @@ def one_se_qualified(errors: NDArray, units: NDArray | None = None, *, eligible:
         raise CalibrationInputError("no candidate could be scored; see comparison_ for why each one failed.")
     means = np.where(ok, np.nanmean(np.where(ok[:, None], errors, 0.0), axis=1), np.inf)
     best = int(np.argmin(means))
-    units = None if units is None else np.asarray(units)
-    within = np.zeros(errors.shape[0], dtype=bool)
-    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
-    for k in np.flatnonzero(ok):
-        diff = _per_unit(errors[k] - errors[best], units)
-        se = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
-        within[k] = k == best or float(diff.mean()) <= max(se, tie)
+    excess, se, tie = paired_excess(errors, best, units)
+    within = ok & ((np.arange(errors.shape[0]) == best) | (excess <= np.maximum(se, tie)))
     return best, within
+
+
+def paired_excess(errors: NDArray, best: int, units: NDArray | None = None) -> tuple[NDArray, NDArray, float]:
+    """Each candidate's excess mean squared error over candidate ``best``, the **paired** standard error of that
+    excess (the spread of the per-unit differences, not of each candidate's own errors), and the tie margin
+    (:data:`TIE_TOLERANCE` of the best's mean squared error): candidate ``k`` is within one SE when
+    ``excess[k] <= max(se[k], tie)`` (:func:`one_se_qualified`). In the units of ``errors`` ([N²] for eq. 18's);
+    NaN for an unscored candidate.
+
+    Examples
+    --------
+    >>> excess, se, tie = paired_excess(np.array([[1.1, 0.9, 1.2, 0.9], [1.0, 1.0, 1.0, 1.0]]), best=1)
+    >>> excess.round(3).tolist(), se.round(3).tolist(), round(tie, 3)
+    ([0.025, 0.0], [0.075, 0.0], 0.01)
+    """
+    errors = np.asarray(errors, dtype=float)
+    units = None if units is None else np.asarray(units)
+    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
+    excess, se = np.full(errors.shape[0], np.nan), np.full(errors.shape[0], np.nan)
+    for k in np.flatnonzero(~np.isnan(errors).any(axis=1)):
+        diff = _per_unit(errors[k] - errors[best], units)
+        excess[k] = float(diff.mean())
+        se[k] = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
+    return excess, se, tie
 
 
 def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, complexity: ArrayLike | None = None,

@@ -21,7 +21,7 @@ from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_ra
                                  resolve_alpha, with_settings)
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (DegenerateCalibrationError, calibration_folds, check_groups,
-                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified,
+                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified, paired_excess,
                                      rmse_and_se, routed_groups, se_units, simplest_within_one_se, unseen_outputs,
                                      TIE_TOLERANCE)
 from ..core._threads import limit_threads_here
@@ -169,6 +169,12 @@ def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen
     results["verdict"] = verdicts
     results["chosen"] = names[chosen]
     unit = "groups" if units is not None else "rows"
+    # what the rule compared, so that the table lets a reader check each verdict (the paired SE of the excess, not
+    # each row's own SE: two models erring on the same rows differ by less than either's spread)
+    excess, excess_se, tie = paired_excess(errors, best, units)
+    results["excess_mse"] = [None if np.isnan(e) else float(e) for e in excess]
+    results["excess_se"] = [None if np.isnan(e) else float(e) for e in excess_se]
+    results["rule"] = {"best": names[best], "tie_mse": float(tie), "units": unit}
     if chosen == best:
         why = (f"{names[chosen]} won: the best held-out RMSE ({rmse[chosen]:.4g} ± {se[chosen]:.2g} N), and no "
                f"simpler model within one standard error of it ({unit} as units)")
@@ -1067,20 +1073,33 @@ def comparison_table(results: dict) -> str:
     The RMSE is eq. 18 over all 6 n torque-scaled values [N]; the ratio column
     is each row's RMSE over the best stock model's (a choosable ``stock`` row or a ``baseline``); the status
     column says, per row, chosen / within one SE but more complex / beyond one SE / skipped / failed / refused.
+    When the choice was explained, two columns and a line under the table give what the one-SE rule compared, so
+    that every verdict can be checked: each row's excess mean squared error over the best and the **paired**
+    standard error of that excess (:func:`~ftcal.core._model_selection.paired_excess`). A row's own ``± SE`` may
+    overlap the best's while the row is beyond one SE: the paired SE is smaller when both err on the same rows.
     """
     base = [r for r, k in zip(results["rmse"], results["kind"]) if k in ("baseline", "stock") and r is not None]
     best_base = min(base) if base else None
     verdicts = results.get("verdict") or results["status"]
-    lines = ["| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s, all folds] | "
-             "status |", "|---|---|---|---|---|---|---|"]
+    rule = results.get("rule")  # what the one-SE rule compared (explain_choice), when the choice was explained
+    head = "| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s, all folds] | "
+    head += "excess MSE over best [N²] | ± paired SE [N²] | status |" if rule else "status |"
+    lines = [head, "|---" * (9 if rule else 7) + "|"]
+    number = lambda v, form: "" if v is None else format(v, form)  # noqa: E731
     for i, name in enumerate(results["name"]):
         rmse = results["rmse"][i]
-        cells = ["" if rmse is None else f"{rmse:.4g}",
-                 "" if results["rmse_se"][i] is None else f"{results['rmse_se'][i]:.2g}",
+        cells = [number(rmse, ".4g"), number(results["rmse_se"][i], ".2g"),
                  "" if rmse is None or not best_base else f"{rmse / best_base:.3f}",
-                 "" if results["fit_seconds"][i] is None else f"{results['fit_seconds'][i]:.1f}"]
+                 number(results["fit_seconds"][i], ".1f")]
+        if rule:
+            cells += [number(results["excess_mse"][i], ".3g"), number(results["excess_se"][i], ".2g")]
         mark = " **(chosen)**" if name == results.get("chosen") else ""
         lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {verdicts[i]} |")
+    if rule:
+        lines += ["", f"One-SE rule: a row is within one SE of the best ({rule['best']}) when its excess mean squared "
+                      f"error over the best is at most its paired SE (the spread of the per-{rule['units'][:-1]} "
+                      f"differences from the best, not the row's own ± SE) or the tie margin "
+                      f"{rule['tie_mse']:.3g} N² ({100 * TIE_TOLERANCE:g} % of the best's)."]
     if results.get("why"):
         lines += ["", results["why"]]
     return "\n".join(lines)

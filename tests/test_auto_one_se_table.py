@@ -1,0 +1,63 @@
+"""The comparison table lets a reader check every one-SE verdict: the paired SE the rule used, not only each row's
+own SE."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ftcal import AutoCalibrator, LinearCalibrator, PolynomialCalibrator
+from ftcal.core._model_selection import rmse_and_se
+from ftcal.models._auto import comparison_table, explain_choice
+
+
+def _cells(table: str, name: str) -> list[str]:
+    row = next(line for line in table.splitlines() if line.startswith(f"| {name}"))
+    return [c.strip() for c in row.strip("|").split("|")]
+
+
+def test_a_row_beyond_one_se_shows_the_paired_se_though_its_own_se_overlaps_the_best():
+    rng = np.random.default_rng(0)
+    hard = rng.exponential(1.0, size=200)  # rows both models find hard or easy: a wide spread of each's errors
+    errors = np.vstack([hard + 0.05 + 0.005 * rng.normal(size=200), hard])  # simpler one: consistently worse
+    stats = [rmse_and_se(e) for e in errors]
+    results = {"name": ["simple", "complex"], "kind": ["candidate", "candidate"], "status": ["scored", "scored"],
+               "eligible": [True, True], "rmse": [s[0] for s in stats], "rmse_se": [s[1] for s in stats],
+               "fit_seconds": [0.1, 0.2]}
+    explain_choice(results, errors, None, chosen=1, ranks=np.array([0, 1]))
+    (rmse_simple, _), (rmse_complex, se_complex) = stats
+    assert rmse_simple - rmse_complex < se_complex  # within the chosen row's own ± SE ...
+    assert results["verdict"] == ["beyond one SE", "chosen"]  # ... yet beyond one (paired) SE
+    table = comparison_table(results)
+    assert "excess MSE over best [N²] | ± paired SE [N²]" in table.splitlines()[0]
+    simple = _cells(table, "simple")
+    excess, paired = float(simple[6]), float(simple[7])
+    assert abs(excess - 0.05) < 0.01 and 0 < paired < 0.002 and excess > paired  # the reader sees why
+    assert _cells(table, "complex **(chosen)**")[6:8] == ["0", "0"]
+    assert "paired SE" in table and "not the row's own ± SE" in table and "per-row differences" in table
+
+
+def test_every_verdict_of_a_real_fit_follows_from_the_printed_excess_and_paired_se():
+    rng = np.random.default_rng(1)
+    w = rng.uniform(-1, 1, size=(150, 6))
+    raw = w @ rng.normal(size=(6, 6))
+    raw = raw + 0.02 * raw**2 + 0.01 * rng.normal(size=raw.shape)
+    groups = np.repeat(np.arange(6), 25)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("quadratic", PolynomialCalibrator(degree=2)),
+                                      ("cubic", PolynomialCalibrator(degree=3))], random_state=0)
+    table = auto.fit(raw, w, groups=groups).summary()
+    rule = auto.comparison_["rule"]
+    tie = float(re.search(r"tie margin ([0-9.eE+-]+) N²", table).group(1))
+    assert rule["units"] == "groups" and "per-group differences" in table and tie > 0
+    checked = 0
+    for name, verdict in zip(auto.comparison_["name"], auto.comparison_["verdict"]):
+        if not verdict.startswith(("within one SE", "beyond one SE")):
+            continue
+        cells = _cells(table, name)
+        excess, paired = float(cells[6]), float(cells[7])
+        margin = max(paired, tie)
+        if abs(excess - margin) > 0.05 * margin:  # clear of the printed numbers' rounding
+            assert (verdict == "beyond one SE") == (excess > margin), (name, verdict, excess, paired, tie)
+            checked += 1
+    assert checked >= 5
