@@ -363,3 +363,80 @@ def test_a_three_axis_load_cell_gets_a_report_without_torque_rows(tmp_path, caps
                  "--rated", "Fx=200,Fy=200,Fz=500,Tx=5"])
     err = capsys.readouterr().err
     assert code == 2 and "axis 'Tx' is not an output of this dataset; its axes are Fx, Fy, Fz" in err
+
+
+def _ftcal(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parents[1])}
+    return subprocess.run([sys.executable, "-m", "ftcal", *args], cwd=cwd, env=env, capture_output=True, text=True,
+                          timeout=300)
+
+
+@pytest.mark.parametrize("model, report", [("linear", False), ("polynomial", False), ("linear", True)])
+def test_fit_refuses_a_calibration_no_better_than_the_mean_and_writes_nothing(tmp_path, model, report):
+    """Wrenches drawn independently of the readings: any model's held-out error is no better than predicting the
+    mean wrench. ``ftcal fit`` refuses in one line (exit 2) and leaves the folder as it was, ``--force`` or not."""
+    rng = np.random.default_rng(3)
+    wrench = rng.normal(size=(120, 6)) * [10, 10, 10, 1, 1, 1]
+    CalibrationDataset(raw=rng.normal(size=(120, 6)), wrench=wrench,
+                       group=np.repeat(np.arange(10), 12)).save(tmp_path / "noise.csv")
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / f"{model}.model.npz").write_bytes(b"the user's earlier model")
+    done = _ftcal("fit", "noise.csv", "--model", model, "--force", "--out", "m",
+                  *(["--report", "--no-baselines"] if report else []), cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    errors = [line for line in done.stderr.splitlines() if line.startswith("ftcal: error:")]
+    assert len(errors) == 1 and "noise.csv" in errors[0] and "no better than predicting the mean" in errors[0]
+    assert _outputs(tmp_path / "m") == [f"{model}.model.npz"]
+    assert (tmp_path / "m" / f"{model}.model.npz").read_bytes() == b"the user's earlier model"
+
+
+def test_fit_keeps_a_calibration_that_beats_the_mean(tmp_path):
+    bent_sensor(seed=21).save(tmp_path / "d.csv")
+    done = _ftcal("fit", "d.csv", "--model", "linear", "--out", "m", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert _outputs(tmp_path / "m") == ["linear.fit.json", "linear.model.npz"]
+
+
+@pytest.mark.parametrize("start, interval, due", [
+    ("2025-01-15", "12 months", "2026-01-15"),
+    ("2025-01-15", "1 year", "2026-01-15"),
+    ("2025-01-31", "1 month", "2025-02-28"),  # no Feb 31: the last day of the month
+    ("2024-01-31", "1 month", "2024-02-29"),  # a leap year
+    ("2024-02-29", "12 months", "2025-02-28"),
+    ("2024-02-29", "48 months", "2028-02-29"),
+    ("2025-11-30", "3 months", "2026-02-28"),  # across a year end
+    ("2025-01-15", "90 days", "2025-04-15"),
+    ("2025-12-25", "2 weeks", "2026-01-08"),
+    ("2025-01-15", "6", "2025-07-15"),  # a bare number counts months
+])
+def test_recalibration_due_date_is_counted_in_calendar_months_from_the_calibration_date(start, interval, due):
+    import datetime as dt
+
+    from ftcal.evaluation._calibration_report import add_interval
+
+    assert add_interval(dt.date.fromisoformat(start), interval) == dt.date.fromisoformat(due)
+
+
+def test_report_counts_the_due_date_from_the_calibration_date_and_flags_it_overdue(tmp_path):
+    """Calibrated 2025-01-15 with a 12-month interval: due 2026-01-15 (whatever the date of issue), and overdue on
+    any later date of issue; a bare ambient temperature is printed in °C."""
+    import datetime as dt
+
+    bent_sensor(seed=22).save(tmp_path / "d.csv")
+    assert _ftcal("fit", "d.csv", "--model", "linear", "--out", "m", cwd=tmp_path).returncode == 0
+    done = _ftcal("report", "m/linear.model.npz", "d.csv", "--no-baselines", "--calibration-date", "2025-01-15",
+                  "--recalibration-interval", "12 months", "--ambient-temperature", "22.5", "--out", "r",
+                  cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    facts = json.loads((tmp_path / "r" / "linear.report.json").read_text())
+    due = facts["conditions"]["recalibration_due"]
+    assert due.startswith("2026-01-15 (calibration date 2025-01-15 + 12 months)")
+    overdue = dt.date.fromisoformat(facts["date_utc"][:10]) > dt.date(2026, 1, 15)
+    assert facts["recalibration_overdue"] is overdue and due.endswith("OVERDUE on the date of issue") is overdue
+    assert any(w["kind"] == "recalibration overdue" for w in facts["warnings"]) is overdue
+    html = (tmp_path / "r" / "linear.report.html").read_text(encoding="utf-8")
+    assert "2026-01-15 (calibration date 2025-01-15 + 12 months)" in html
+    assert facts["conditions"]["ambient_temperature"] == "22.5 °C" and "22.5 °C" in html
+    bad = _ftcal("report", "m/linear.model.npz", "d.csv", "--no-baselines", "--calibration-date", "last spring",
+                 "--recalibration-interval", "12 months", "--out", "r2", cwd=tmp_path)
+    assert bad.returncode == 2 and "calibration_date 'last spring'" in bad.stderr and not (tmp_path / "r2").exists()

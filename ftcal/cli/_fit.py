@@ -101,6 +101,28 @@ def _parse_tare(text: str | None) -> np.ndarray | None:
     return values
 
 
+def _check_before_saving(estimator, X, y, groups, args, predictions, console: Console) -> None:
+    """Refuse (one line, nothing written) a fitted calibration whose held-out predictions are degenerate:
+    constant, all zero, or no better than the mean wrench (:func:`~ftcal.models._auto.check_calibration`).
+
+    ``predictions`` are the report's held-out predictions (``--report``); without them the held-out check
+    cross-validates the model here when its fits are light (closed form or kernel: ``cost`` tag); a network or a
+    model of unknown cost is checked on its training predictions only (a held-out check would train it ``cv``
+    times more: ``--report`` gives it)."""
+    from ..calibrators._base import calibration_tags
+    from ..core._model_selection import DegenerateCalibrationError
+    from ..models._auto import check_calibration
+
+    y = np.asarray(y, dtype=float)
+    if predictions is None and calibration_tags(estimator).cost not in ("closed_form", "kernel"):
+        predictions = np.asarray(estimator.predict(X), dtype=float).reshape(y.shape)
+        console.info("check: training predictions only (a held-out check of this model needs --report)")
+    try:
+        check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions)
+    except DegenerateCalibrationError as exc:
+        raise CliError(f"{args.dataset}: {' '.join(str(exc).split())}") from None
+
+
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators._routing import requests_groups
@@ -203,6 +225,13 @@ def run(args: argparse.Namespace) -> int:
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.comparison_
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
+    fit_groups = fit_params.get("groups", data.group)
+
+    def gate(predictions=None) -> None:  # never ship a calibration no better than the mean wrench
+        _check_before_saving(estimator, X, data.wrench, fit_groups, args, predictions, console)
+
+    if not args.report:
+        gate()  # with --report: on the report's held-out predictions, before any file is in place
     # every output of this run is written into a private folder and moved into place as one set at the end: a
     # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote
     with OutputSet(plan) as out:
@@ -212,7 +241,7 @@ def run(args: argparse.Namespace) -> int:
         if args.report:
             write_report(out, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
-                         dataset_sha256=dataset_sha256, console=console)
+                         dataset_sha256=dataset_sha256, console=console, check=gate)
         out.commit()
     console.info(
         f"done in {seconds:.1f} s: training RMSE {report.rmse:.4g} N (torque-scaled, alpha={estimator.alpha_:.4g}); "

@@ -230,9 +230,12 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
 
 
 def write_report(out, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
-                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console) -> None:
+                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console,
+                 check=None) -> None:
     """Compute the report of ``model`` on ``data`` and write its three planned files into ``out`` (an
-    :class:`~ftcal.cli._output_set.OutputSet`; nothing is in place before its commit)."""
+    :class:`~ftcal.cli._output_set.OutputSet`; nothing is in place before its commit). ``check``, if given, is
+    called with the report's held-out predictions (shape of ``data.wrench``) before anything is written: it may
+    raise to refuse the calibration."""
     from ..evaluation._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
                                                   report_json)
 
@@ -247,6 +250,8 @@ def write_report(out, label: str, model, data, args: argparse.Namespace, setting
                                          command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
     except CalibrationInputError as exc:
         raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
+    if check is not None:
+        check(report["_held_out_pred"])
 
     html_name, json_name, csv_name = report_file_names(label)
     out.path(html_name).write_text(render_report_html(report), encoding="utf-8")

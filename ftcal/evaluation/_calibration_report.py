@@ -324,13 +324,56 @@ def _round(a: NDArray, digits: int = 6) -> list:
     return out.tolist()
 
 
-def _parse_interval(text: str) -> _dt.timedelta | None:
-    """``"12 months"``, ``"1 year"``, ``"90 days"``, ``"6 weeks"`` -> a time span (months of 30.44 days)."""
-    found = re.fullmatch(r"\s*(\d+(?:\.\d+)?)\s*(day|week|month|year)s?\s*", str(text).lower())
+def _parse_interval(text: str) -> tuple[int, str] | None:
+    """``"12 months"``, ``"1 year"``, ``"90 days"``, ``"6 weeks"``, or a bare whole number (months) -> ``(count,
+    "months" | "days")``; None for anything else (fractions included: a due date is a calendar date)."""
+    found = re.fullmatch(r"\s*(\d+)\s*(?:(day|week|month|year)s?)?\s*", str(text).lower())
     if not found:
         return None
-    days = {"day": 1.0, "week": 7.0, "month": 30.4375, "year": 365.25}[found.group(2)]
-    return _dt.timedelta(days=float(found.group(1)) * days)
+    count, unit = int(found.group(1)), found.group(2) or "month"
+    return {"day": (count, "days"), "week": (7 * count, "days"), "month": (count, "months"),
+            "year": (12 * count, "months")}[unit]
+
+
+def add_interval(start: _dt.date, interval: str) -> _dt.date:
+    """The date ``interval`` after ``start``: the recalibration due date of a calibration made on ``start``.
+
+    The rule: days and weeks are counted as days; months and years (12 months) as calendar months, keeping the
+    day of the month, or the last day of the month when it has no such day (Jan 31 + 1 month = Feb 28, or Feb 29
+    in a leap year; Feb 29 + 12 months = Feb 28).
+
+    Examples
+    --------
+    >>> import datetime as dt
+    >>> add_interval(dt.date(2025, 1, 15), "12 months"), add_interval(dt.date(2024, 1, 31), "1 month")
+    (datetime.date(2026, 1, 15), datetime.date(2024, 2, 29))
+    """
+    import calendar
+
+    parsed = _parse_interval(interval)
+    if parsed is None:
+        raise CalibrationInputError(f"recalibration_interval {interval!r}: give a number and a unit (a "
+                                    "whole number), e.g. '12 months', '1 year', '90 days'.")
+    count, unit = parsed
+    if unit == "days":
+        return start + _dt.timedelta(days=count)
+    months = start.year * 12 + (start.month - 1) + count
+    year, month = divmod(months, 12)
+    month += 1
+    return _dt.date(year, month, min(start.day, calendar.monthrange(year, month)[1]))
+
+
+def _iso_date(text: str) -> _dt.date | None:
+    """``"2025-01-15"`` (or an ISO date and time) -> the date; None for any other text."""
+    try:
+        return _dt.date.fromisoformat(str(text).strip()[:10])
+    except ValueError:
+        return None
+
+
+def _unit_temperature(text: str) -> str:
+    """An ambient temperature with its unit: a bare number is in °C (``"22.5"`` -> ``"22.5 °C"``)."""
+    return f"{text} °C" if re.fullmatch(r"[+-]?\d+(\.\d+)?", text) else text
 
 
 def check_conditions(conditions: dict | None) -> dict[str, str | None]:
@@ -359,9 +402,15 @@ def check_conditions(conditions: dict | None) -> dict[str, str | None]:
                                         f"{type(value).__name__} {value!r}.")
         out[key] = None if value is None or str(value).strip() == "" else str(value).strip()
     interval = out["recalibration_interval"]
-    if interval is not None and _parse_interval(interval) is None and not re.fullmatch(r"\d+(\.\d+)?", interval):
-        raise CalibrationInputError(f"recalibration_interval {interval!r}: give a number and a unit, e.g. "
-                                    "'12 months', '1 year', '90 days'.")
+    if interval is not None and _parse_interval(interval) is None:
+        raise CalibrationInputError(f"recalibration_interval {interval!r}: give a number and a unit (a "
+                                    "whole number), e.g. '12 months', '1 year', '90 days'.")
+    when = out["calibration_date"]
+    if interval is not None and out["recalibration_due"] is None and when is not None and _iso_date(when) is None:
+        raise CalibrationInputError(f"calibration_date {when!r}: give the date as YYYY-MM-DD (the recalibration "
+                                    "due date is counted from it).")
+    if out["ambient_temperature"] is not None:
+        out["ambient_temperature"] = _unit_temperature(out["ambient_temperature"])
     return out
 
 
@@ -581,7 +630,6 @@ def calibration_certificate(
     verdict = None if spec_pct is None else ("PASS" if all(a["verdict"] == "PASS" for a in accuracy) else "FAIL")
 
     comparison = _comparison(choice)
-    warn = _warnings(accuracy, comparison, X, y, folds, groups, rated_fs, n, X.shape[1], dataset)
     cases = _load_cases(y, pred, groups, fs)
     temperature = None if dataset.temperature is None else [float(dataset.temperature.min()),
                                                             float(dataset.temperature.max())]
@@ -591,13 +639,21 @@ def calibration_certificate(
                         "gain_per_deg": np.asarray(model.gain_per_deg_).tolist(),
                         "offset_per_deg": np.asarray(model.offset_per_deg_).tolist()}
     date = _dt.datetime.now(_dt.timezone.utc)
-    due = conditions["recalibration_due"]
     interval = conditions["recalibration_interval"]
-    if due is None and interval is not None:
-        span = _parse_interval(interval if not re.fullmatch(r"\d+(\.\d+)?", interval) else f"{interval} months")
-        if span is not None:
-            due = (date + span).strftime("%Y-%m-%d")
-            conditions["recalibration_due"] = f"{due} (issue date + {interval})"
+    overdue = None
+    if conditions["recalibration_due"] is None and interval is not None:
+        measured = None if conditions["calibration_date"] is None else _iso_date(conditions["calibration_date"])
+        due_date = add_interval(measured or date.date(), interval)  # from the measurements, else from the issue
+        overdue = due_date < date.date()
+        conditions["recalibration_due"] = f"{due_date.isoformat()} (" + (
+            f"calibration date {measured.isoformat()}" if measured else "issue date") + f" + {interval})" + (
+            ": OVERDUE on the date of issue" if overdue else "")
+    warn = _warnings(accuracy, comparison, X, y, folds, groups, rated_fs, n, X.shape[1], dataset)
+    if overdue:
+        warn.insert(0, {"kind": "recalibration overdue", "text": (
+            f"The recalibration was due {conditions['recalibration_due'].split(' ')[0]} ({interval} after the "
+            f"calibration of {conditions['calibration_date']}), before this report's date of issue: these figures "
+            "describe the sensor as it was then, not now.")})
     report = {
         "format": "ftcal-calibration-report", "format_version": 2,
         "date_utc": date.strftime("%Y-%m-%d %H:%M:%S UTC"),
@@ -632,6 +688,7 @@ def calibration_certificate(
         "comparison": comparison,
         "warnings": warn,
         "conditions": conditions,
+        "recalibration_overdue": overdue,
         "model_choice": choice,
         "calibrated_range": {"raw_min": dataset.raw.min(axis=0).tolist(), "raw_max": dataset.raw.max(axis=0).tolist(),
                              "wrench_abs_max": data_max.tolist()},
@@ -644,6 +701,7 @@ def calibration_certificate(
     report["figures"] = _figures(y, pred, names, units, fs, band, "spec" if spec_pct is not None else "U95") \
         if figures else {}
     report["_cases"] = cases  # the full table as arrays, for the CSV (not in the JSON)
+    report["_held_out_pred"] = pred  # the model's held-out predictions (not in the JSON): what ``ftcal fit`` checks
     return report
 
 
@@ -1073,7 +1131,7 @@ def write_calibration_report(report: dict, html_path: str | Path, *, overwrite: 
 
 def report_json(report: dict) -> str:
     """The report's facts as JSON text (the pictures left out)."""
-    facts = plain_json({k: v for k, v in report.items() if k not in ("figures", "_cases", "cases")})
+    facts = plain_json({k: v for k, v in report.items() if k != "figures" and k != "cases" and not k.startswith("_")})
     text = json.dumps(facts, indent=1, default=str, allow_nan=False)
     if "cases" not in report:
         return text + "\n"
