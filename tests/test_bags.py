@@ -54,6 +54,15 @@ def test_identify_load_from_a_bag_recovers_the_tool_within_its_standard_errors(t
     assert f"found {len(q)} still poses, kept {len(q)}, rejected 0" in err
     tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
     assert abs(tool.mass - TOOL.mass) <= 4 * tool.mass_std_error
+    # the same bag compensated with that tool file: every sensor sample at its stamp, nothing but noise left
+    out = tmp_path / "external.csv"
+    assert main(["compensate", str(bag), "--tf", "world,ft_link", "--tool", str(tmp_path / "t" / "tool.tool.json"),
+                 "--output", str(out), "-q"]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time,Fx,Fy,Fz,Tx,Ty,Tz" and len(lines) - 1 == len(rec.sensor_time)
+    table = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    np.testing.assert_allclose(table[:, 0], rec.sensor_time, atol=1e-6)
+    assert np.all(np.median(np.abs(table[:, 1:]), axis=0) <= 2 * NOISE)  # the settling transients are brief
     assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 4 * tool.center_of_mass_std_error)
     assert np.all(np.abs(tool.bias - TOOL.bias) <= 4 * tool.bias_std_error)
     d = json.loads((tmp_path / "t" / "tool.tool.json").read_text())

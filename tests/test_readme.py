@@ -225,6 +225,9 @@ def test_ros_bag_blocks_run_as_written(tmp_path):
     for out in ("tool_poses", "tool_rec", "tool_joints", "tool_tf"):
         found = ftcal.ToolLoad.load(tmp_path / out / "tool.tool.json")
         assert abs(found.mass - TOOL.mass) <= 4 * found.mass_std_error, out
+    # compensated with those tool files: one row per input row (pose file) and per sensor sample (bag)
+    assert len((tmp_path / "external.csv").read_text().splitlines()) == 1 + len(R)
+    assert len((tmp_path / "external_bag.csv").read_text().splitlines()) == 1 + len(rec.sensor_time)
 
 
 def test_the_readme_shows_the_first_page_of_a_report():

@@ -406,3 +406,48 @@ def test_standard_errors_count_each_pose_once_when_its_samples_share_its_error()
     for z in (z_rate, z_mass):
         assert abs(np.std(z, ddof=1) - 1) <= band, np.std(z, ddof=1)
         assert abs(np.mean(z)) <= 3 / np.sqrt(n_seeds)
+
+
+def _pose_file(path, R, W_in_base, t):
+    quat = Rotation.from_matrix(R).as_quat()
+    rows = [",".join(repr(float(v)) for v in [ti, *q, *w]) for ti, q, w in zip(t, quat, W_in_base)]
+    path.write_text("time,qx,qy,qz,qw,Fx,Fy,Fz,Mx,My,Mz\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_a_pose_file_is_identified_then_compensated_at_each_rows_time_without_a_model(tmp_path, capsys):
+    from ftcal.cli import main
+
+    # a factory-calibrated sensor: wrenches in the base frame, a bias drifting 0.5 N/h in Fx over two hours
+    truth = ToolLoad(mass=1.4, center_of_mass=np.array([0.0, 0.015, 0.06]), bias=np.array([1, 0, -1, .05, 0, 0.]))
+    noise = np.array([0.02, 0.02, 0.02, 0.001, 0.001, 0.001])
+    rate = np.array([0.5, 0, 0, 0, 0, 0]) / 3600
+
+    def in_base(R, W):
+        return np.hstack([np.einsum("nij,nj->ni", R, W[:, :3]), np.einsum("nij,nj->ni", R, W[:, 3:])])
+
+    rng = np.random.default_rng(3)
+    R = Rotation.random(30, random_state=3).as_matrix()
+    t = 1.7e9 + np.linspace(0, 7200, 30)
+    W = truth.gravity_wrench(R) + rate * (t - t[0])[:, None] + rng.normal(size=(30, 6)) * noise
+    poses = _pose_file(tmp_path / "poses.csv", R, in_base(R, W), t)
+    assert main(["identify-load", str(poses), "--wrench-frame", "base", "--drift", "linear", "--out",
+                 str(tmp_path / "tool"), "-q"]) == 0
+    # later rows of the same recording with a known external push, compensated from the same kind of file
+    R2 = Rotation.random(6, random_state=4).as_matrix()
+    t2 = 1.7e9 + np.linspace(600, 6600, 6)
+    push = rng.normal(0, [5, 5, 5, 0.3, 0.3, 0.3], size=(6, 6))
+    W2 = truth.gravity_wrench(R2) + rate * (t2 - t[0])[:, None] + push
+    pushed = _pose_file(tmp_path / "pushed.csv", R2, in_base(R2, W2), t2)
+    out = tmp_path / "external.csv"
+    assert main(["compensate", str(pushed), "--wrench-frame", "base", "--tool", str(tmp_path / "tool" /
+                 "tool.tool.json"), "--output", str(out), "-q"]) == 0
+    lines = out.read_text().splitlines()
+    assert lines[0] == "time,Fx,Fy,Fz,Tx,Ty,Tz" and len(lines) == 7
+    table = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    np.testing.assert_allclose(table[:, 0], t2, rtol=0, atol=1e-3)
+    # the external wrench in the sensor frame, within a few noise levels (the drift applied at each row's time)
+    assert np.all(np.abs(table[:, 1:] - push) <= 6 * noise), np.abs(table[:, 1:] - push).max(axis=0)
+    # without the drift the Fx error would be the drift since the reference: far beyond the noise
+    assert np.abs(rate[0] * (t2 - t.max())).max() > 20 * noise[0]
+    assert "--model" not in capsys.readouterr().err  # no model asked for a wrench

@@ -62,10 +62,16 @@ COMPENSATE_EXAMPLE = """\
 examples:
   ftcal compensate run.csv --model models/linear.model.npz --tool tool/tool.tool.json --robot kuka_iiwa14
   ftcal compensate logs/ --model m.model.npz --tool t.tool.json --output external.csv
+  ftcal compensate poses.csv --wrench-frame base --tool tool/tool.tool.json     # a factory-calibrated sensor
+  ftcal compensate my_bag --tf base_link,ft_sensor --tool tool/tool.tool.json --output external.csv
 
-reads run logs (joints and raw channels per row), calibrates the raw channels with the model, and
-subtracts the tool's weight at each row's pose (forward kinematics) and the bias. Output CSV:
-timestamp,pose,Fx,Fy,Fz,Tx,Ty,Tz: the external wrench in the sensor frame [N, N·m].
+reads the inputs as identify-load does (run logs with --model, pose files or continuous CSV recordings, ROS
+bags with the same topic, --tf and --stamps options; --wrench-frame and the units for a wrench), and
+subtracts the tool's weight at each row's pose and the bias at each row's time (a drifting tool file: the
+rows' timestamps, a pose file's 'time' column, the bag stamps; or --time-from-order). Every row is
+compensated (no still-pose search). Output CSV: timestamp,pose,Fx..Tz for run logs; time,Fx..Tz (or
+row,Fx..Tz, the row number, for a pose file without times) otherwise: the external wrench in the sensor
+frame [N, N·m].
 """
 
 
@@ -91,11 +97,19 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     c = sub.add_parser(
         "compensate",
-        help="external wrench from run logs: calibrate, then remove the tool's weight and the bias",
-        description="Calibrate run logs with a model and subtract the identified tool load at each pose.",
+        help="external wrench: remove the tool's weight and the bias from run logs, pose files or ROS bags",
+        description="Subtract the identified tool load (and the bias, with its drift) at each row's pose and time.",
         epilog=COMPENSATE_EXAMPLE,
     )
-    _add_log_inputs(c)
+    c.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
+                   help="run log files or directories of *.csv logs, pose files (CSV) or ROS bags, as identify-load "
+                   "reads them")
+    c.add_argument("--model", type=existing_file,
+                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
+    add_robot_options(c)
+    g = c.add_argument_group("pose files and ROS bags")
+    _add_wrench_options(g)
+    add_bag_options(c)
     c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
     c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
     c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
@@ -122,10 +136,7 @@ def existing_input(text: str) -> str:
 def _add_recording_options(p: argparse.ArgumentParser) -> None:
     """How a pose file or a recording is read: the wrench's frame and units, the bag's topics, the still poses."""
     g = p.add_argument_group("pose files and continuous recordings")
-    g.add_argument("--wrench-frame", choices=("sensor", "base"), default="sensor",
-                   help="the frame the input's wrench is written in (base: the robot's base frame, torques about "
-                   "the sensor origin)")
-    add_unit_options(g)
+    _add_wrench_options(g)
     g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
                    help="static: every row is a pose; continuous: find the still poses (needs times); auto: "
                    "continuous when the rows carry times and most rows share their neighbour's orientation (a bag "
@@ -134,11 +145,12 @@ def _add_recording_options(p: argparse.ArgumentParser) -> None:
     add_bag_options(p)
 
 
-def _add_log_inputs(p: argparse.ArgumentParser) -> None:
-    """The run logs, the model that calibrates them and the robot whose kinematics give their poses."""
-    p.add_argument("logs", nargs="+", metavar="LOG", help="run log files or directories of *.csv logs")
-    p.add_argument("--model", type=existing_file, required=True, help="calibration model file (ftcal fit)")
-    add_robot_options(p)
+def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
+    """The frame and the units of an input's wrench: ``--wrench-frame``, ``--force-unit``, ``--torque-unit``."""
+    g.add_argument("--wrench-frame", choices=("sensor", "base"), default="sensor",
+                   help="the frame the input's wrench is written in (base: the robot's base frame, torques about "
+                   "the sensor origin)")
+    add_unit_options(g)
 
 
 def _gravity(text: str):
@@ -159,7 +171,7 @@ def _poses_and_wrenches(args):
     robot = load_robot_from_args(args)
     model = ftcal.load_model(args.model)
     logs = [ftcal.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
-            for p in log_files(getattr(args, "inputs", None) or args.logs)]
+            for p in log_files(args.inputs)]
     q = np.vstack([lg.q for lg in logs])
     raw = np.vstack([lg.raw for lg in logs])
     rotations = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
@@ -208,29 +220,35 @@ def _is_continuous(args, time, rotations) -> bool:
     return bool(np.mean(still) > 0.5)
 
 
-def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
-    import numpy as np
-
+def _pose_file_rows(args, console: Console, path: Path, model):
+    """A pose file's rows: the record, its wrench in the sensor frame [N, N·m] (units checked, raw channels through
+    the model) and the model (loaded on first need)."""
     from ..experiment._tool_load import wrench_in_sensor_frame
     from ..io._poses import read_pose_file
 
+    rec = read_pose_file(path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
+    if rec.wrench is not None:
+        if args.model is not None:
+            console.info(f"{path}: the file holds a wrench; --model is not used for it")
+        wrench = rec.wrench
+        check_lever_arm(args, wrench, path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
+    else:
+        model = model or _load_model(args, str(path))
+        if rec.raw.shape[1] != model.n_features_in_:
+            raise CliError(f"{path}: {rec.raw.shape[1]} raw channels but the model {args.model} takes "
+                           f"{model.n_features_in_}")
+        wrench = model.predict(rec.raw)
+    if args.wrench_frame == "base":
+        wrench = wrench_in_sensor_frame(rec.rotation, wrench)
+    return rec, wrench, model
+
+
+def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
+    import numpy as np
+
     rotations, wrenches, times, still_list, model, temperatures = [], [], [], [], None, []
     for path in paths:
-        rec = read_pose_file(path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
-        if rec.wrench is not None:
-            if args.model is not None:
-                console.info(f"{path}: the file holds a wrench; --model is not used for it")
-            wrench = rec.wrench
-            check_lever_arm(args, wrench, path, force_unit=args.force_unit or "N",
-                            torque_unit=args.torque_unit or "N.m")
-        else:
-            model = model or _load_model(args, str(path))
-            if rec.raw.shape[1] != model.n_features_in_:
-                raise CliError(f"{path}: {rec.raw.shape[1]} raw channels but the model {args.model} takes "
-                               f"{model.n_features_in_}")
-            wrench = model.predict(rec.raw)
-        if args.wrench_frame == "base":
-            wrench = wrench_in_sensor_frame(rec.rotation, wrench)
+        rec, wrench, model = _pose_file_rows(args, console, path, model)
         if args.poses == "continuous" and rec.time is None:
             raise CliError(f"{path}: --poses continuous needs a 'time' column [s] to find the still poses in")
         if _is_continuous(args, rec.time, rec.rotation):
@@ -262,6 +280,24 @@ def _wrench_in_si(args, wrench):
     return wrench
 
 
+def _bag_rows(args, console: Console, path: Path, model):
+    """A bag's sensor samples: the record, the wrench [N, N·m] as the sensor wrote it (units checked, raw gauges
+    through the model) and the model (loaded on first need)."""
+    rec = read_bag_from_args(args, path, console)
+    reading = rec.reading
+    if rec.kind == "raw":
+        model = model or _load_model(args, f"{path} (topic {rec.sensor_topic})")
+        if reading.shape[1] != model.n_features_in_:
+            raise CliError(f"{path}: topic {rec.sensor_topic} holds {reading.shape[1]} raw values but the model "
+                           f"{args.model} takes {model.n_features_in_} channels")
+        reading = model.predict(reading)
+    else:  # a wrench message: N and N·m in ROS, unless the driver says otherwise (the options)
+        reading = _wrench_in_si(args, reading)
+        check_lever_arm(args, reading, f"{path} (topic {rec.sensor_topic})", force_unit=args.force_unit or "N",
+                        torque_unit=args.torque_unit or "N.m")
+    return rec, reading, model
+
+
 def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
     """The still poses of each bag: the wrench (or the raw gauges through --model) and the pose (tf, or joints
     through the robot's forward kinematics)."""
@@ -273,18 +309,7 @@ def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
     robot = None if args.tf is not None else load_robot_from_args(args)
     rotations, wrenches, times, still_list, model = [], [], [], [], None
     for path in paths:
-        rec = read_bag_from_args(args, path, console)
-        reading = rec.reading
-        if rec.kind == "raw":
-            model = model or _load_model(args, f"{path} (topic {rec.sensor_topic})")
-            if reading.shape[1] != model.n_features_in_:
-                raise CliError(f"{path}: topic {rec.sensor_topic} holds {reading.shape[1]} raw values but the model "
-                               f"{args.model} takes {model.n_features_in_} channels")
-            reading = model.predict(reading)
-        else:  # a wrench message: N and N·m in ROS, unless the driver says otherwise (the options)
-            reading = _wrench_in_si(args, reading)
-            check_lever_arm(args, reading, f"{path} (topic {rec.sensor_topic})", force_unit=args.force_unit or "N",
-                            torque_unit=args.torque_unit or "N.m")
+        rec, reading, model = _bag_rows(args, console, path, model)
         if robot is None:
             still = still_poses(args, str(path), rec.time, reading, rotations=rec.rotation)
             R = still.rotation
@@ -304,10 +329,7 @@ def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
 
 
 def _log_poses(args) -> _Poses:
-    if args.model is None:
-        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
-                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
-                       "file (see 'ftcal identify-load --help')")
+    _log_poses_model_needed(args)
     logs, rotations, wrenches = _poses_and_wrenches(args)
     import numpy as np
 
@@ -318,13 +340,18 @@ def _log_poses(args) -> _Poses:
                   temperature=temperature, groups=groups if np.unique(groups).size > 1 else None)
 
 
-def identification_poses(args, console: Console) -> _Poses:
-    """The poses of the command's inputs (run logs, pose files), each kind read as it must be."""
+def _inputs_kind(args) -> str:
+    """The one kind of the command's inputs (run log, pose file, ROS bag); a mix is refused."""
     kinds = {item: _input_kind(item) for item in args.inputs}
     if len(set(kinds.values())) > 1:
         shown = ", ".join(f"{k} ({v})" for k, v in list(kinds.items())[:4])
         raise CliError(f"the inputs mix kinds: {shown}; give run logs, pose files or ROS bags, one kind")
-    kind = next(iter(kinds.values()))
+    return next(iter(kinds.values()))
+
+
+def identification_poses(args, console: Console) -> _Poses:
+    """The poses of the command's inputs (run logs, pose files), each kind read as it must be."""
+    kind = _inputs_kind(args)
     if kind == "ROS bag":
         return _bag_poses(args, console, bag_files(args.inputs))
     if kind == "pose file":
@@ -389,22 +416,67 @@ def run_identify(args: argparse.Namespace) -> int:
     return 0
 
 
-def run_compensate(args: argparse.Namespace) -> int:
+def _compensation_rows(args, console: Console):
+    """Every row of the inputs: (header, leading columns per row, rotations, wrenches in the sensor frame, times,
+    temperatures); run logs keep their timestamp and pose, pose files and bags give each row's time."""
     import numpy as np
 
     import ftcal
+
+    kind = _inputs_kind(args)
+    if kind == "run log":
+        _log_poses_model_needed(args)
+        logs, rotations, wrenches = _poses_and_wrenches(args)
+        temperature = None if any(lg.temperature is None for lg in logs) else \
+            np.concatenate([lg.temperature for lg in logs])
+        lead = [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)]
+        return "timestamp,pose", lead, rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]), temperature
+    rotations, wrenches, times, temperatures, model = [], [], [], [], None
+    if kind == "pose file":
+        for path in map(Path, args.inputs):
+            rec, wrench, model = _pose_file_rows(args, console, path, model)
+            rotations.append(rec.rotation)
+            wrenches.append(wrench)
+            times.append(rec.time)
+            temperatures.append(rec.temperature)
+    else:
+        from ..experiment._tool_load import wrench_in_sensor_frame
+
+        robot = None if args.tf is not None else load_robot_from_args(args)
+        for path in bag_files(args.inputs):
+            rec, reading, model = _bag_rows(args, console, path, model)
+            R = rec.rotation if robot is None else ftcal.sensor_pose_in_base(robot, bag_joints(rec, robot))[:, :3, :3]
+            rotations.append(R)
+            wrenches.append(wrench_in_sensor_frame(R, reading) if args.wrench_frame == "base" else reading)
+            times.append(rec.time)
+            temperatures.append(None)
+    time = None if any(t is None for t in times) else np.concatenate(times)
+    temperature = None if any(t is None for t in temperatures) else np.concatenate(temperatures)
+    n = sum(len(w) for w in wrenches)
+    lead = [f"{t:.9g}" for t in time] if time is not None else [str(i) for i in range(1, n + 1)]
+    return "time" if time is not None else "row", lead, np.concatenate(rotations), np.concatenate(wrenches), time, \
+        temperature
+
+
+def _log_poses_model_needed(args) -> None:
+    if args.model is None:
+        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
+                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
+                       "file (see 'ftcal identify-load --help')")
+
+
+def run_compensate(args: argparse.Namespace) -> int:
+    import ftcal
     from ..core._wrench import WRENCH_LABELS
-    from ._tool_drift import compensate_logs
+    from ._tool_drift import compensate_rows
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     tool = ftcal.ToolLoad.load(args.tool)
-    logs, rotations, wrenches = _poses_and_wrenches(args)
-    external = compensate_logs(args, tool, rotations, wrenches, logs)
-    timestamp = np.concatenate([lg.timestamp for lg in logs])
-    pose = np.concatenate([lg.pose for lg in logs])
-    lines = ["timestamp,pose," + ",".join(WRENCH_LABELS)]
-    lines += [f"{t:.9g},{p}," + ",".join(f"{v:.9g}" for v in row) for t, p, row in zip(timestamp, pose, external)]
+    head, lead, rotations, wrenches, times, temperatures = _compensation_rows(args, console)
+    external = compensate_rows(args, tool, rotations, wrenches, times, temperatures, ", ".join(args.inputs))
+    lines = [f"{head}," + ",".join(WRENCH_LABELS)]
+    lines += [f"{first}," + ",".join(f"{v:.9g}" for v in row) for first, row in zip(lead, external)]
     text = "\n".join(lines) + "\n"
     if plan is None:
         sys.stdout.write(text)

@@ -100,17 +100,19 @@ def drift_summary(tool) -> str:
             f"{per}")
 
 
-def compensate_logs(args: argparse.Namespace, tool, rotations, wrenches, logs):
-    """The external wrenches of run logs (:meth:`ToolLoad.compensate` with each row's time or temperature); a drift
-    evaluated beyond the span it covers is one ``ftcal: warning:`` line naming the tool file."""
+def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, times, temperatures, source: str):
+    """The external wrenches of the inputs' rows (:meth:`ToolLoad.compensate` with each row's time [s] or
+    temperature [deg C], ``None`` when the inputs have none); a drift evaluated beyond the span it covers is one
+    ``ftcal: warning:`` line naming the tool file. ``source`` names the inputs in errors."""
     import sys
     import warnings
 
     from ..experiment._drift import DriftExtrapolationWarning
 
+    values = compensation_values(args, tool, len(wrenches), times, temperatures, source)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DriftExtrapolationWarning)
-        external = tool.compensate(rotations, wrenches, **compensation_values(args, tool, logs))
+        external = tool.compensate(rotations, wrenches, **values)
     for w in caught:
         if issubclass(w.category, DriftExtrapolationWarning):
             print(f"ftcal: warning: {args.tool}: {w.message}", file=sys.stderr)
@@ -119,21 +121,19 @@ def compensate_logs(args: argparse.Namespace, tool, rotations, wrenches, logs):
     return external
 
 
-def compensation_values(args: argparse.Namespace, tool, logs) -> dict:
-    """``times`` / ``temperatures`` for :meth:`ToolLoad.compensate` from run logs (their timestamps [s] or the row
-    order, their temperature column)."""
+def compensation_values(args: argparse.Namespace, tool, n: int, times, temperatures, source: str) -> dict:
+    """``times`` / ``temperatures`` for :meth:`ToolLoad.compensate` from the inputs' rows (their times [s] or the
+    row order, their temperatures)."""
     import numpy as np
 
     d = tool.drift
     if d is None:
         return {}
     if d.variable == "temperature":
-        if any(lg.temperature is None for lg in logs):
-            missing = next(lg.path for lg in logs if lg.temperature is None)
-            raise CliError(f"{missing}: the tool's bias drifts with temperature ({d.description}) but the log has no "
-                           "'temperature' column")
-        return {"temperatures": np.concatenate([lg.temperature for lg in logs])}
-    n = sum(len(lg.timestamp) for lg in logs)
+        if temperatures is None:
+            raise CliError(f"{source}: the tool's bias drifts with temperature ({d.description}) but the input has "
+                           "no 'temperature' column")
+        return {"temperatures": np.asarray(temperatures, dtype=float)}
     if d.unit == "pose":
         if not args.time_from_order:
             raise CliError(f"{args.tool}: the tool's bias drift was identified against the pose order "
@@ -141,8 +141,11 @@ def compensation_values(args: argparse.Namespace, tool, logs) -> dict:
         return {"times": np.arange(n, dtype=float)}
     if args.time_from_order:
         raise CliError(f"{args.tool}: the tool's bias drift is in seconds; --time-from-order does not apply (the "
-                       "logs' timestamps are used)")
-    return {"times": np.concatenate([lg.timestamp for lg in logs])}
+                       "inputs' times are used)")
+    if times is None:
+        raise CliError(f"{source}: the tool's bias drifts with time ({d.description}) but the input has no times: "
+                       "give a pose file with a 'time' column [s] (or run logs, or a bag)")
+    return {"times": np.asarray(times, dtype=float)}
 
 
 # ------------------------------------------------------------------------------------------- retare of a tool
