@@ -225,9 +225,11 @@ def test_ros_bag_blocks_run_as_written(tmp_path):
     for out in ("tool_poses", "tool_rec", "tool_joints", "tool_tf"):
         found = ftcal.ToolLoad.load(tmp_path / out / "tool.tool.json")
         assert abs(found.mass - TOOL.mass) <= 4 * found.mass_std_error, out
-    # compensated with those tool files: one row per input row (pose file) and per sensor sample (bag)
+    # compensated with those tool files: one row per input row (pose file) and per sensor sample (bag; those outside
+    # the span of the poses, at its ends, have no pose)
     assert len((tmp_path / "external.csv").read_text().splitlines()) == 1 + len(R)
-    assert len((tmp_path / "external_bag.csv").read_text().splitlines()) == 1 + len(rec.sensor_time)
+    assert len(rec.sensor_time) - 2 <= len((tmp_path / "external_bag.csv").read_text().splitlines()) - 1 <= \
+        len(rec.sensor_time)
 
 
 def test_the_readme_shows_the_first_page_of_a_report():

@@ -453,7 +453,7 @@ def _compensation_rows(args, console: Console):
     time = None if any(t is None for t in times) else np.concatenate(times)
     temperature = None if any(t is None for t in temperatures) else np.concatenate(temperatures)
     n = sum(len(w) for w in wrenches)
-    lead = [f"{t:.9g}" for t in time] if time is not None else [str(i) for i in range(1, n + 1)]
+    lead = [repr(float(t)) for t in time] if time is not None else [str(i) for i in range(1, n + 1)]  # ROS stamps: ns
     return "time" if time is not None else "row", lead, np.concatenate(rotations), np.concatenate(wrenches), time, \
         temperature
 
