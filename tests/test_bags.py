@@ -273,3 +273,21 @@ def test_a_wrench_bag_with_tf_and_no_joint_states_is_told_to_use_tf_with_its_own
     for axes in (slice(0, 3), slice(3, 6)):
         assert np.median(np.linalg.norm(left[:, axes], axis=1)) <= 0.1 * np.median(np.linalg.norm(read[:, axes], axis=1))
     assert np.all(np.median(np.abs(left[:, :3]), axis=0) <= 2 * NOISE[:3])
+
+
+def test_a_wrench_bag_in_newton_millimetres_is_refused_naming_the_unit_until_declared(tmp_path, capsys, robot_poses):
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=5)
+    reading = rec.reading.copy()
+    reading[:, 3:] *= 1000.0  # a driver publishing N·mm
+    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    bag = write_bag(tmp_path / "nmm", "sqlite3", sensor_time=rec.sensor_time, reading=reading,
+                    pose_time=rec.pose_time, rotations=R)
+    assert main(["identify-load", str(bag), "--tf", "base_link,ft_sensor", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith(f"ftcal: error: {bag} (topic /ft_sensor/wrench)") and "--torque-unit N.mm" in err, err
+    assert not (tmp_path / "t").exists()
+    assert main(["identify-load", str(bag), "--tf", "base_link,ft_sensor", "--torque-unit", "N.mm",
+                 "--out", str(tmp_path / "t"), "-q"]) == 0
+    tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
+    assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 4 * tool.center_of_mass_std_error)
