@@ -268,3 +268,21 @@ def test_an_unused_huge_compressed_variable_is_never_decompressed(tmp_path, suff
         assert done.returncode == 0, done.stderr
         peaks.append(int(done.stdout.split()[-1]))  # peak resident set [KiB]
     assert peaks[1] < peaks[0] + 100_000  # the junk (2 GiB / 256 MiB inflated) never entered memory
+
+
+@pytest.mark.parametrize("n_axes", [1, 3])
+def test_evaluate_with_plots_of_a_one_and_three_axis_cell(tmp_path, capsys, n_axes):
+    raw, wrench = _sensor(n_axes=3, n_channels=4)
+    axes = ["Fx", "Fy", "Fz"][3 - n_axes:]
+    path = _csv(tmp_path / "cell.csv", ["g1", "g2", "g3", "g4", *axes], raw, wrench[:, 3 - n_axes:])
+    assert main(["fit", str(path), "--channels", "g1..g4", "--wrench", ",".join(axes), "--axes", ",".join(axes),
+                 "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0, capsys.readouterr().err
+    out = tmp_path / "e"
+    run = subprocess.run([sys.executable, "-m", "ftcal", "evaluate", str(path), str(tmp_path / "m" / "linear.model.npz"),
+                          "--out", str(out), "-q"], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    written = sorted(p.name for p in out.iterdir())
+    assert written == ["axis_rmse.png", "errors_linear.png", "metrics.json", "metrics.md", "rmse_distribution.png"]
+    assert list(json.loads((out / "metrics.json").read_text())["models"]["linear"]["axis_rmse"]) == axes
+    for name in written:
+        assert (out / name).stat().st_size > 0

@@ -59,6 +59,24 @@ def test_predicted_vs_reference_titles_carry_hand_computed_rmse(tmp_path):
     assert png_size(_plots.plot_predicted_vs_reference(y, pred, tmp_path / "p.png")) == (1320, 780)
 
 
+def test_axis_and_prediction_figures_show_the_axes_of_a_three_and_one_axis_cell(tmp_path):
+    fig = _plots.axis_errors_figure({"linear": [1.0, 2.0, 3.0], "directional": [0.5, 0.25, 0.125]},
+                                    axes=("Fx", "Fy", "Fz"))
+    (forces,) = fig.axes  # no torque panel for a force-only cell
+    assert forces.get_ylabel() == "RMSE [N]" and forces.get_title() == "forces"
+    assert [t.get_text() for t in forces.get_xticklabels()] == ["Fx", "Fy", "Fz"]
+    assert sorted(round(p.get_height(), 6) for p in forces.patches) == [0.125, 0.25, 0.5, 1.0, 2.0, 3.0]
+    (torque,) = _plots.axis_errors_figure({"m": [0.5]}, axes=("Tz",)).axes
+    assert torque.get_ylabel() == "RMSE [N·m]" and [t.get_text() for t in torque.get_xticklabels()] == ["Tz"]
+    y = np.linspace(-50.0, 50.0, 40)[:, None] * [1.0, -1.0, 0.5]
+    fig = _plots.predicted_vs_reference_figure(y, y + [2.0, 0.0, -4.0], axes=("Fx", "Fy", "Fz"))
+    assert [ax.get_title() for ax in fig.axes if ax.get_visible()] == ["Fx   RMSE 2 N", "Fy   RMSE 0 N", "Fz   RMSE 4 N"]
+    fig = _plots.predicted_vs_reference_figure(y[:, :1], y[:, :1] + 1.5, axes=("Fz",))
+    assert [ax.get_title() for ax in fig.axes if ax.get_visible()] == ["Fz   RMSE 1.5 N"]
+    assert fig.axes[0].get_xlabel() == "reference Fz [N]"
+    assert png_size(_plots.plot_predicted_vs_reference(y, y, tmp_path / "p3.png", axes=("Fx", "Fy", "Fz")))[0] > 0
+
+
 def test_sphere_coverage_counts_reachable_and_unreachable(tmp_path):
     d = np.array([[0, 0, 1.0], [0, 0, -2.0], [1.0, 0, 0], [0, 3.0, 0]])  # not normalised on purpose
     fig = _plots.sphere_coverage_figure(d, reached=[True, True, True, False])
@@ -86,9 +104,14 @@ def test_wrench_coverage_histogram_of_scaled_magnitude(tmp_path):
     [
         (lambda p: _plots.plot_error_distributions({}, p), "errors is empty"),
         (lambda p: _plots.plot_error_distributions({"m": []}, p), "errors['m']"),
-        (lambda p: _plots.plot_axis_errors({"m": [1, 2, 3]}, p), "6 values"),
+        (lambda p: _plots.plot_axis_errors({"m": [1, 2, 3]}, p, axes=("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")), "6 values"),
+        (lambda p: _plots.plot_axis_errors({"m": [1, 2, 3], "n": [1, 2]}, p), "3 values"),
+        (lambda p: _plots.plot_axis_errors({"m": [1, 2]}, p, axes=("Fz", "Fz")), "name each of the"),
         (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 6)), np.zeros((4, 6)), p), "must match"),
-        (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 5)), np.zeros((3, 5)), p), "(n_samples >= 1, 6)"),
+        (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 5)), np.zeros((3, 5)), p, axes=("Fx", "Fy", "Fz")),
+         "(n_samples >= 1, 3 [Fx, Fy, Fz])"),
+        (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 3)), np.zeros((3, 2)), p), "(n_samples >= 1, 3"),
+        (lambda p: _plots.plot_wrench_coverage(np.ones((2, 3)), p), "(n_samples >= 1, 6"),
         (lambda p: _plots.plot_sphere_coverage(np.zeros((2, 3)), p), "non-zero"),
         (lambda p: _plots.plot_sphere_coverage(np.ones((2, 3)), p, reached=[True]), "reached"),
         (lambda p: _plots.plot_wrench_coverage(np.ones((2, 6)), p, alpha=-1.0), "alpha"),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from pathlib import Path
@@ -82,24 +83,26 @@ def run(args: argparse.Namespace) -> int:
             bar.update(1)
     table = comparison_table(reports, noise_floor)
     axes = axis_table(reports)
-    with plan.writing("metrics.json") as tmp:
-        write_json(tmp, {
+    # metrics and plots are one set: all are put in place, or none (a failing plot leaves no metrics behind)
+    with plan.as_one_set(), contextlib.ExitStack() as stack:
+        tmps = {name: stack.enter_context(plan.writing(name)) for name in plan.names}
+        write_json(tmps["metrics.json"], {
             "dataset": str(args.dataset),
             "alpha": alpha,
             "noise_floor": noise_floor,
             "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict()}
                        for label, path in zip(labels, args.models)},
         })
-    with plan.writing("metrics.md") as tmp:
         note = (f"\n**Training data of {', '.join(trained_on)}**: these are training errors, not held-out ones.\n"
                 if trained_on else "")
-        tmp.write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n{note}\n{table}\n\nRMSE per axis:"
-                       f"\n\n{axes}\n")
-    if not args.no_plots:
-        console.info("plotting ...")
-        paths = {"distribution": plan.path(EVALUATION_PLOTS[0]), "axis": plan.path(EVALUATION_PLOTS[1])}
-        paths.update({label: plan.path(predicted_plot_name(label)) for label in labels})
-        write_evaluation_plots(paths, data.wrench, predictions, alpha, noise_floor, dataset_name=str(args.dataset))
+        tmps["metrics.md"].write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n{note}\n{table}\n\n"
+                                      f"RMSE per axis:\n\n{axes}\n")
+        if not args.no_plots:
+            console.info("plotting ...")
+            paths = {"distribution": tmps[EVALUATION_PLOTS[0]], "axis": tmps[EVALUATION_PLOTS[1]]}
+            paths.update({label: tmps[predicted_plot_name(label)] for label in labels})
+            write_evaluation_plots(paths, data.wrench, predictions, alpha, noise_floor, dataset_name=str(args.dataset),
+                                   axes=data.axes)
     print(table)
     print()
     print(axes)

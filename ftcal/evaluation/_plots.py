@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
-from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS
+from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS, axis_unit, default_axes, force_columns, torque_columns
 
 __all__ = [
     "MODEL_COLORS",
@@ -110,12 +110,24 @@ def _save(fig: Figure, path: str | Path) -> Path:
     return path
 
 
-def _wrench_array(name: str, a: ArrayLike) -> NDArray[np.float64]:
+def _plot_axes(axes, width: int | None = None) -> tuple[str, ...]:
+    """The wrench axes a figure shows: ``axes`` (checked against ``width`` columns when given), default Fx..Tz
+    for six columns, else :func:`~ftcal.core._wrench.default_axes`."""
+    if axes is None:
+        return WRENCH_LABELS if width in (None, len(WRENCH_LABELS)) else default_axes(width)
+    names = tuple(str(a) for a in axes)
+    if not names or len(set(names)) != len(names) or (width is not None and len(names) != width):
+        raise CalibrationInputError(f"axes must name each of the {width if width is not None else 'plotted'} wrench "
+                                    f"columns once (e.g. ('Fx', 'Fy', 'Fz')); got {axes!r}.")
+    return names
+
+
+def _wrench_array(name: str, a: ArrayLike, axes=None) -> NDArray[np.float64]:
     arr = np.asarray(a, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 6 or arr.shape[0] == 0:
-        raise CalibrationInputError(
-            f"{name} must have shape (n_samples >= 1, 6) [Fx, Fy, Fz, Tx, Ty, Tz]; got shape {arr.shape}."
-        )
+    want = len(axes) if axes is not None else None
+    if arr.ndim != 2 or arr.shape[0] == 0 or arr.shape[1] == 0 or (want is not None and arr.shape[1] != want):
+        shown = f"{want} [{', '.join(axes)}]" if axes is not None else "n_axes"
+        raise CalibrationInputError(f"{name} must have shape (n_samples >= 1, {shown}); got shape {arr.shape}.")
     return arr
 
 
@@ -215,34 +227,44 @@ def plot_error_distributions(errors: Mapping[str, ArrayLike], path: str | Path, 
 
 # ------------------------------------------------------------------ per-axis errors
 def axis_errors_figure(
-    axis_errors: Mapping[str, ArrayLike], *, title: str = "RMSE per axis"
+    axis_errors: Mapping[str, ArrayLike], *, title: str = "RMSE per axis", axes=None
 ) -> Figure:
-    """Grouped bars of each model's per-axis RMSE: forces [N] left, torques [N·m] right.
+    """Grouped bars of each model's per-axis RMSE: forces [N] left, torques [N·m] right (one panel for a
+    force-only or torque-only sensor).
 
     Parameters
     ----------
-    axis_errors : mapping of str to array-like of shape (6,)
-        Model name -> RMSE of ``Fx, Fy, Fz, Tx, Ty, Tz`` in [N] and [N·m].
+    axis_errors : mapping of str to array-like of shape (n_axes,)
+        Model name -> RMSE of each axis in its own unit, [N] or [N·m].
+    axes : sequence of str, optional
+        The axes of those values, e.g. ``("Fx", "Fy", "Fz")`` for a 3-axis load cell; default Fx..Tz for six
+        values, else the first ones of Fx..Tz.
     """
-    data = _model_arrays("axis_errors", axis_errors, 6)
+    first = next(iter(axis_errors.values()), None) if axis_errors else None
+    names = _plot_axes(axes, None if axes is not None or first is None else np.asarray(first).size)
+    data = _model_arrays("axis_errors", axis_errors, len(names))
     colors = model_colors(data)
+    parts = [(cols, unit) for cols, unit in ((force_columns(names), "N"), (torque_columns(names), "N·m")) if cols]
+    other = [k for k in range(len(names)) if k not in force_columns(names) + torque_columns(names)]
+    if other:  # axes that are neither forces nor torques (unnamed outputs): their own panel
+        parts.append((other, "output unit"))
     fig = Figure(figsize=(9.0 + 0.35 * max(0, len(data) - 3), 4.0), layout="constrained")
-    axes = fig.subplots(1, 2)
+    panels = np.atleast_1d(fig.subplots(1, len(parts)))
     width = 0.8 / len(data)
-    for ax, part, unit in ((axes[0], FORCE, "N"), (axes[1], TORQUE, "N·m")):
-        labels = WRENCH_LABELS[part]
+    for ax, (part, unit) in zip(panels, parts):
+        labels = [names[k] for k in part]
         x = np.arange(len(labels))
         for i, (name, values) in enumerate(data.items()):
             ax.bar(x + (i - (len(data) - 1) / 2) * width, values[part], width, label=name, color=colors[name])
         _label_bars(ax, x, width, [values[part] for values in data.values()])
         ax.set_xticks(x, labels)
         ax.set_ylabel(f"RMSE [{unit}]")
-        ax.set_title("forces" if unit == "N" else "torques")
+        ax.set_title({"N": "forces", "N·m": "torques"}.get(unit, "outputs"))
         ax.grid(axis="y", alpha=0.3)
         top = max(float(np.nanmax(values[part])) for values in data.values())
         ax.set_ylim(0, (top if top > 0 else 1.0) * 1.25)
     # the legend goes below the panels, where it cannot hide a bar or its value
-    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=min(len(data), 5), fontsize=8)
+    fig.legend(*panels[0].get_legend_handles_labels(), loc="outside lower center", ncols=min(len(data), 5), fontsize=8)
     fig.suptitle(title)
     return fig
 
@@ -270,12 +292,13 @@ def predicted_vs_reference_figure(
     model_name: str = "model",
     kind: str = "error",
     max_points: int = 5000,
+    axes=None,
 ) -> Figure:
     """Predictions against the reference wrench, one panel per axis.
 
     Parameters
     ----------
-    y_true, y_pred : array-like of shape (n_samples, 6)
+    y_true, y_pred : array-like of shape (n_samples, n_axes)
         Reference and predicted wrenches in [N] and [N·m].
     model_name : str
         Shown in the title and used for the colour.
@@ -287,19 +310,27 @@ def predicted_vs_reference_figure(
     max_points : int
         At most this many points are drawn (an evenly spaced subset), to keep
         the PNG readable; the RMSE in each panel uses every sample.
+    axes : sequence of str, optional
+        The axes of the columns, e.g. ``("Fx", "Fy", "Fz")`` for a 3-axis load cell; default Fx..Tz for six
+        columns, else the first ones of Fx..Tz.
     """
-    t = _wrench_array("y_true", y_true)
-    p = _wrench_array("y_pred", y_pred)
+    t = _wrench_array("y_true", y_true, None if axes is None else _plot_axes(axes))
+    names = _plot_axes(axes, t.shape[1])
+    p = _wrench_array("y_pred", y_pred, names)
     if t.shape != p.shape:
         raise CalibrationInputError(f"y_true has shape {t.shape} but y_pred has shape {p.shape}; they must match.")
     if kind not in ("error", "value"):
         raise CalibrationInputError(f"kind must be 'error' or 'value'; got {kind!r}.")
     shown = np.linspace(0, len(t) - 1, min(len(t), max_points)).astype(int)
-    fig = Figure(figsize=(11.0, 6.5), layout="constrained")
-    axes = fig.subplots(2, 3)
+    n_cols = min(3, len(names))
+    n_rows = -(-len(names) // n_cols)
+    fig = Figure(figsize=(11.0 * n_cols / 3 + (0.5 if n_cols < 3 else 0.0), 3.25 * n_rows), layout="constrained")
+    panels = np.atleast_1d(fig.subplots(n_rows, n_cols)).ravel()
+    for ax in panels[len(names):]:
+        ax.set_visible(False)
     color = model_color(model_name)
-    for k, ax in enumerate(axes.ravel()):
-        unit = "N" if k < 3 else "N·m"
+    for k, ax in enumerate(panels[:len(names)]):
+        unit = axis_unit(names[k])
         err = p[:, k] - t[:, k]
         rmse = float(np.sqrt(np.mean(err**2)))
         lo, hi = float(t[:, k].min()), float(t[:, k].max())
@@ -314,10 +345,10 @@ def predicted_vs_reference_figure(
             ax.plot(line_x, line_x, color="black", linewidth=0.8, label="ideal")
             ax.scatter(t[shown, k], p[shown, k], s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
             ax.set_ylabel(f"predicted [{unit}]")
-        ax.set_title(f"{WRENCH_LABELS[k]}   RMSE {rmse:.3g} {unit}", fontsize=10)
-        ax.set_xlabel(f"reference {WRENCH_LABELS[k]} [{unit}]")
+        ax.set_title(f"{names[k]}   RMSE {rmse:.3g} {unit}", fontsize=10)
+        ax.set_xlabel(f"reference {names[k]} [{unit}]")
         ax.grid(alpha=0.3)
-    axes[0, 0].legend(fontsize=8, loc="upper left", markerscale=3)
+    panels[0].legend(fontsize=8, loc="upper left", markerscale=3)
     what = "Prediction error" if kind == "error" else "Predicted"
     fig.suptitle(f"{what} vs reference wrench — {model_name} ({len(t)} samples)")
     return fig
@@ -409,7 +440,7 @@ def wrench_coverage_figure(
     alpha : float
         Torque scale [m⁻¹] for the magnitude.
     """
-    w = _wrench_array("wrench", wrench)
+    w = _wrench_array("wrench", wrench, WRENCH_LABELS)
     if not np.isfinite(alpha) or alpha <= 0:
         raise CalibrationInputError(f"alpha must be a finite positive number; got {alpha}.")
     scaled = np.hstack([w[:, FORCE], alpha * w[:, TORQUE]])

@@ -71,25 +71,36 @@ def write_evaluation_plots(
     alpha: float,
     noise_floor: float | None = None,
     dataset_name: str = "test set",
+    axes=None,
 ) -> None:
     """The three evaluation plots: per-sample RMSE distributions, per-axis RMSE, errors vs reference.
 
-    ``paths`` maps ``"distribution"``, ``"axis"`` and each model label to a PNG path.
+    ``paths`` maps ``"distribution"``, ``"axis"`` and each model label to a PNG path; ``axes`` names the wrench
+    columns (e.g. ``("Fx", "Fy", "Fz")`` for a 3-axis load cell: no torque to scale), default Fx..Tz.
     """
     from . import _plots
     from ..core._metrics import axis_rmse, wrench_rmse
+    from ..core._wrench import axis_unit, default_axes, force_columns, torque_columns
+
+    named = tuple(axes) if axes is not None else default_axes(np.shape(y_true)[1])
+    scaled = bool(force_columns(named)) and bool(torque_columns(named))  # forces and torques: [F, alpha*T]
+    units = {axis_unit(a) for a in named}
+    unit = units.pop() if len(units) == 1 else "N"
 
     _plots.plot_error_distributions(
-        {name: per_sample_rmse(y_true, p, alpha) for name, p in predictions.items()},
+        {name: per_sample_rmse(y_true, p, alpha, named) for name, p in predictions.items()},
         paths["distribution"],
         noise_floor=noise_floor,
-        overall={name: wrench_rmse(y_true, p, alpha) for name, p in predictions.items()},
-        title=f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples, α = {alpha:.3g} m⁻¹)",
+        overall={name: wrench_rmse(y_true, p, alpha, named) for name, p in predictions.items()},
+        title=(f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples, α = {alpha:.3g} m⁻¹)"
+               if scaled else f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples)"),
+        xlabel="RMSE of the torque-scaled wrench [N]" if scaled else f"RMSE of {', '.join(named)} [{unit}]",
     )
     _plots.plot_axis_errors(
         {name: axis_rmse(y_true, p) for name, p in predictions.items()},
         paths["axis"],
         title=f"RMSE per axis on the {dataset_name}",
+        axes=named,
     )
     for name, p in predictions.items():
-        _plots.plot_predicted_vs_reference(y_true, p, paths[name], model_name=name)
+        _plots.plot_predicted_vs_reference(y_true, p, paths[name], model_name=name, axes=named)
