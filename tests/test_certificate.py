@@ -440,3 +440,30 @@ def test_report_counts_the_due_date_from_the_calibration_date_and_flags_it_overd
     bad = _ftcal("report", "m/linear.model.npz", "d.csv", "--no-baselines", "--calibration-date", "last spring",
                  "--recalibration-interval", "12 months", "--out", "r2", cwd=tmp_path)
     assert bad.returncode == 2 and "calibration_date 'last spring'" in bad.stderr and not (tmp_path / "r2").exists()
+
+
+def test_fit_report_and_evaluate_a_folder_of_per_pose_files_identified_by_its_data_files(tmp_path):
+    """A folder of one CSV per pose is one dataset: ``fit --report``, ``report`` and ``evaluate`` read it, and its
+    identity (SHA-256) is that of the data files the loader reads: a note beside them changes nothing, an edited
+    data file changes it."""
+    data = bent_sensor(seed=23)
+    (tmp_path / "poses").mkdir()
+    for g in np.unique(data.group):
+        keep = data.group == g
+        CalibrationDataset(raw=data.raw[keep], wrench=data.wrench[keep]).save(tmp_path / "poses" / f"pose {g}.csv")
+    fit = _ftcal("fit", "poses", "--model", "linear", "--report", "--no-baselines", "--out", "m", cwd=tmp_path)
+    assert fit.returncode == 0, fit.stderr
+    facts = json.loads((tmp_path / "m" / "linear.report.json").read_text())
+    summary = json.loads((tmp_path / "m" / "linear.fit.json").read_text())
+    assert facts["data"]["groups"] == 10 and facts["data"]["sha256"] == summary["dataset_sha256"]
+    (tmp_path / "poses" / "notes.txt").write_text("operator's notes", encoding="utf-8")
+    report = _ftcal("report", "m/linear.model.npz", "poses", "--no-baselines", "--out", "r", cwd=tmp_path)
+    assert report.returncode == 0, report.stderr
+    assert json.loads((tmp_path / "r" / "linear.report.json").read_text())["data"]["sha256"] == summary["dataset_sha256"]
+    evaluate = _ftcal("evaluate", "poses", "m/linear.model.npz", "--out", "e", cwd=tmp_path)
+    assert evaluate.returncode == 0, evaluate.stderr
+    first = tmp_path / "poses" / "pose 0.csv"
+    first.write_text(first.read_text() + first.read_text().splitlines()[-1] + "\n")  # one row recorded twice
+    again = _ftcal("report", "m/linear.model.npz", "poses", "--no-baselines", "--out", "r2", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    assert json.loads((tmp_path / "r2" / "linear.report.json").read_text())["data"]["sha256"] != summary["dataset_sha256"]

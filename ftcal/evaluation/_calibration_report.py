@@ -88,11 +88,14 @@ CONDITION_FIELDS: dict[str, str] = {
 
 def file_sha256(path: str | Path) -> str:
     """SHA-256 of a file's bytes (hex), the identity of a model or data file; of a folder (a dataset of one file
-    per pose), the SHA-256 of its files' relative names and hashes, in name order."""
+    per pose), the SHA-256 of the names and hashes of the data files the dataset loader reads from it
+    (:func:`~ftcal.io._dataset.dataset_files`), in name order: a report or a note written beside them changes
+    nothing."""
+    from ..io._dataset import dataset_files
+
     path = Path(path)
     if path.is_dir():
-        listing = "".join(f"{p.relative_to(path).as_posix()}\t{file_sha256(p)}\n"
-                          for p in sorted(path.rglob("*")) if p.is_file())
+        listing = "".join(f"{p.name}\t{file_sha256(p)}\n" for p in dataset_files(path))
         return hashlib.sha256(listing.encode("utf-8")).hexdigest()
     digest = hashlib.sha256()
     with open(path, "rb") as fh:

@@ -59,6 +59,13 @@ __all__ = ["CalibrationDataset", "DATASET_SUFFIXES", "read_channels"]
 _CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
 #: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
 DATASET_SUFFIXES = (".csv", ".npz", ".mat")
+
+
+def dataset_files(folder: Path) -> list[Path]:
+    """The files of a folder dataset that :meth:`CalibrationDataset.load` reads, in name order: its ``.csv``,
+    ``.npz`` and ``.mat`` files, not hidden ones nor sub-folders (the identity of a folder dataset is theirs)."""
+    return sorted(p for p in Path(folder).iterdir() if p.suffix.lower() in DATASET_SUFFIXES
+                  and not p.name.startswith(".") and p.is_file())
 #: Most files of a dataset folder.
 MAX_FOLDER_FILES = 100_000
 
@@ -502,8 +509,7 @@ class CalibrationDataset:
     def _load_folder(cls, folder: Path, columns: ColumnMap) -> "CalibrationDataset":
         """Every dataset file of ``folder``, read alike and joined; each file a group unless a column is named."""
         try:
-            files = sorted(p for p in folder.iterdir() if p.suffix.lower() in DATASET_SUFFIXES
-                           and not p.name.startswith(".") and p.is_file())
+            files = dataset_files(folder)
         except OSError as exc:
             raise DatasetFileError(f"{folder}: the folder cannot be read ({exc.strerror or exc}).") from None
         if not files:
