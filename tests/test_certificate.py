@@ -467,3 +467,33 @@ def test_fit_report_and_evaluate_a_folder_of_per_pose_files_identified_by_its_da
     again = _ftcal("report", "m/linear.model.npz", "poses", "--no-baselines", "--out", "r2", cwd=tmp_path)
     assert again.returncode == 0, again.stderr
     assert json.loads((tmp_path / "r2" / "linear.report.json").read_text())["data"]["sha256"] != summary["dataset_sha256"]
+
+
+def test_report_of_a_one_axis_model_on_six_axis_data_is_refused_naming_both_or_certifies_the_selected_axis(tmp_path):
+    """A 1-axis (Fz) model reported on data of six axes: refused, naming both, nothing written; with the model's
+    axis selected from the same data by name (``--wrench Fz``) the certificate has that one axis."""
+    data = bent_sensor(seed=24)
+    data.save(tmp_path / "d.csv")
+    CalibrationDataset(raw=data.raw, wrench=data.wrench[:, 2:3], group=data.group,
+                       axes=["Fz"]).save(tmp_path / "fz.csv")
+    assert _ftcal("fit", "fz.csv", "--model", "linear", "--out", "m", cwd=tmp_path).returncode == 0
+    bad = _ftcal("report", "m/linear.model.npz", "d.csv", "--no-baselines", "--out", "r", cwd=tmp_path)
+    assert bad.returncode == 2 and len(bad.stderr.strip().splitlines()) == 1
+    assert "(Fx, Fy, Fz, Tx, Ty, Tz)" in bad.stderr and "(Fz)" in bad.stderr
+    assert not (tmp_path / "r").exists() or _outputs(tmp_path / "r") == []
+    good = _ftcal("report", "m/linear.model.npz", "d.csv", "--wrench", "Fz", "--no-baselines", "--out", "r",
+                  cwd=tmp_path)
+    assert good.returncode == 0, good.stderr
+    facts = json.loads((tmp_path / "r" / "linear.report.json").read_text())
+    assert [a["axis"] for a in facts["accuracy"]] == ["Fz"]
+
+
+def test_certificate_of_a_model_of_other_axes_than_the_data_is_refused_by_the_library():
+    from ftcal import LinearCalibrator
+    from ftcal.core._exceptions import CalibrationInputError
+    from ftcal.evaluation._calibration_report import calibration_certificate
+
+    data = bent_sensor(seed=25)
+    one_axis = LinearCalibrator().fit(data.raw, data.wrench[:, 2:3])
+    with pytest.raises(CalibrationInputError, match=r"gives 1 output axis\(es\) but the dataset has 6 \(Fx, Fy"):
+        calibration_certificate(one_axis, data, baselines=False, figures=False)

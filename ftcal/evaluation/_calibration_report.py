@@ -533,6 +533,12 @@ def calibration_certificate(
     y = np.asarray(dataset.wrench, dtype=float)
     n, k = y.shape
     names = _axis_names(dataset, k)
+    n_outputs = getattr(model, "n_outputs_", None)
+    if n_outputs is not None and int(n_outputs) != k:
+        raise CalibrationInputError(
+            f"the model gives {int(n_outputs)} output axis(es) but the dataset has {k} ({', '.join(names)}); a report "
+            "certifies the model's own axes on data of those axes. Fix: select the model's axes from the data "
+            "(ftcal: --wrench with their column names, e.g. --wrench Fz), or report a model of all these axes.")
     units = axis_units(names)
     torque = np.array([u != "N" for u in units])
     groups = dataset.group
