@@ -326,6 +326,26 @@ def test_report_of_auto_reuses_its_comparison_and_refits_only_its_choice():
     # other folds (or another dataset) than auto's: nothing is reused
     other = calibration_certificate(auto, data, cv=3, figures=False, baselines=False)
     assert other["validation"]["reused_auto_comparison"] is False
+    # the same extremes on every channel, rows dropped: other data, nothing is reused
+    extremes = np.unique(np.concatenate([data.raw.argmin(axis=0), data.raw.argmax(axis=0)]))
+    keep = np.ones(len(data.raw), dtype=bool)
+    keep[np.setdiff1d(np.arange(len(keep)), extremes)[::7]] = False
+    fewer = CalibrationDataset(raw=data.raw[keep], wrench=data.wrench[keep], group=data.group[keep])
+    assert np.array_equal(fewer.raw.min(axis=0), data.raw.min(axis=0))
+    assert np.array_equal(fewer.raw.max(axis=0), data.raw.max(axis=0))
+    dropped = calibration_certificate(auto, fewer, cv=4, figures=False, baselines=False)
+    assert dropped["validation"]["reused_auto_comparison"] is False
+
+
+def test_report_of_a_saved_auto_model_reuses_its_comparison_on_its_own_data(tmp_path):
+    from ftcal import AutoCalibrator, LinearCalibrator, calibration_certificate, load_model, save_model
+
+    data = bent_sensor(seed=8)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], cv=4, stack=False).fit(
+        data.raw, data.wrench, groups=data.group)
+    save_model(auto, tmp_path / "auto.model.npz")
+    facts = calibration_certificate(load_model(tmp_path / "auto.model.npz"), data, cv=4, figures=False)
+    assert facts["validation"]["reused_auto_comparison"] is True
 
 
 def test_a_million_rows_keep_every_stock_baseline_within_budget_by_fitting_a_subset():

@@ -54,7 +54,7 @@ from ..calibrators._history import reads_history
 from ..core._model_selection import calibration_folds, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
-from ..models._auto import LIGHT_KERNEL_ROWS, provides_std
+from ..models._auto import LIGHT_KERNEL_ROWS, provides_std, training_data_sha256
 
 __all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json",
            "report_cases_csv", "file_sha256", "bytes_sha256", "axis_units", "CONDITION_FIELDS", "COVERAGE_FACTOR",
@@ -427,7 +427,7 @@ def _per_axis(value: ArrayLike | None, k: int, what: str) -> NDArray | None:
     return np.array(a, dtype=float)
 
 
-def _reused_auto_choice(model: Any, X: NDArray, cv: int, n_folds: int, random_state: int) -> dict | None:
+def _reused_auto_choice(model: Any, X: NDArray, y: NDArray, cv: int, n_folds: int, random_state: int) -> dict | None:
     """``auto``'s own comparison (its stock baselines on the same folds), when ``model`` is an AutoCalibrator
     fitted on these data with these folds: the report then refits only the chosen model, not the baselines."""
     results = model.__dict__.get("comparison_") if hasattr(model, "__dict__") else None
@@ -438,9 +438,8 @@ def _reused_auto_choice(model: Any, X: NDArray, cv: int, n_folds: int, random_st
             or results.get("folds") not in ("group", "kfold") \
             or (getattr(model, "random_state", None) or 0) != random_state:  # auto's folds are seeded by it
         return None
-    same_data = fitted_range.shape == (2, X.shape[1]) and np.array_equal(
-        fitted_range, np.vstack([X.min(axis=0), X.max(axis=0)]))
-    return results if same_data else None
+    # the very rows auto scored its comparison on (a hash of the arrays, not only their extremes)
+    return results if results.get("training_sha256") == training_data_sha256(X, y) else None
 
 
 def calibration_certificate(
@@ -560,7 +559,7 @@ def calibration_certificate(
     scale = np.where(torque, alpha, 1.0)
     name = type(model).__name__
     label = f"{name} (this calibration)"
-    reused = None if ordered else _reused_auto_choice(model, X, cv, len(folds), random_state)
+    reused = None if ordered else _reused_auto_choice(model, X, y, cv, len(folds), random_state)
     template = clone(model)
     if reused is not None and hasattr(model, "best_estimator_"):
         template = clone(model.best_estimator_)  # auto chose on these folds: refit its choice, not the whole search

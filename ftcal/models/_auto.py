@@ -566,6 +566,26 @@ def judging_folds(X: NDArray, y: NDArray, groups: NDArray | None, cv: int = 5, s
                   "(record each axis' loads in more than one group and more rows)"), None
 
 
+def training_data_sha256(X: ArrayLike, y: ArrayLike) -> str:
+    """SHA-256 (hex) of training arrays' shapes and float64 values: the identity of the data a comparison was
+    scored on (a report reuses ``auto``'s comparison only on the very same rows).
+
+    Examples
+    --------
+    >>> a = np.arange(6.0).reshape(3, 2)
+    >>> training_data_sha256(a, a) == training_data_sha256(a[:2], a[:2])
+    False
+    """
+    import hashlib
+
+    digest = hashlib.sha256()
+    for a in (X, y):
+        a = np.ascontiguousarray(a, dtype=np.float64)
+        digest.update(repr(a.shape).encode("ascii"))
+        digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
 def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
                       random_state: int = 0, predictions: ArrayLike | None = None) -> None:
     """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
@@ -990,6 +1010,7 @@ class AutoCalibrator(BaseCalibrator):
                 folds=folds, units=units)
             templates = dict(candidates)
         results["folds"] = fold_note
+        results["training_sha256"] = training_data_sha256(X, y)  # what the comparison was scored on (reuse key)
         if errors is not None:
             if not any(results["eligible"]):
                 why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
