@@ -22,7 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
-           "paired_excess",
+           "paired_excess", "mean_and_se", "se_units_name",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -244,6 +244,32 @@ def _per_unit(values: NDArray, units: NDArray | None) -> NDArray:
     return np.bincount(inverse, weights=values) / np.bincount(inverse)
 
 
+def mean_and_se(values: ArrayLike, units: ArrayLike | None = None) -> tuple[float, float]:
+    """Mean of per-row ``values`` and its standard error, the rows grouped in ``units`` (None: each row its own).
+
+    The mean of the per-unit means, and their SE with at least :data:`MIN_SE_GROUPS` units; with fewer (2 to 4
+    groups) the **larger** of the units' SE and the rows' SE. Rows of one group are not independent, so
+    the rows' SE alone understates the uncertainty (one pose or load the models happen to differ on counts as many
+    rows), and a few groups' SE alone is no evidence either (it is ~0 when 3 groups happen to agree); the larger
+    of the two never understates what either shows. For the one-SE rule this is the conservative side: a larger
+    SE only lets more candidates be within one SE, so a more complex model is chosen only when its gain exceeds
+    both the spread over the rows and the spread between the groups (a gain in one group that the others do not
+    share is not enough). ``inf`` with a single row or unit.
+
+    Examples
+    --------
+    >>> mean_and_se([1.0, 1.2, 3.0, 3.2], units=[0, 0, 1, 1])  # 2 groups disagree: their SE, the larger
+    (2.1, 1.0)
+    """
+    values = np.asarray(values, dtype=float)
+    units = None if units is None else np.asarray(units)
+    se = lambda v: float(v.std(ddof=1) / np.sqrt(v.size)) if v.size > 1 else float("inf")  # noqa: E731
+    if units is None:
+        return float(values.mean()), se(values)
+    per_unit = _per_unit(values, units)
+    return float(per_unit.mean()), se(per_unit) if per_unit.size >= MIN_SE_GROUPS else max(se(per_unit), se(values))
+
+
 def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[float, float]:
     """RMSE and its standard error from per-row mean squared errors (delta method over groups, or rows).
 
@@ -257,9 +283,7 @@ def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[
     (1.5811, 0.4743)
     """
     row_errors = np.asarray(row_errors, dtype=float)
-    per_unit = _per_unit(row_errors, None if units is None else np.asarray(units))
-    mse = float(row_errors.mean())
-    se_mse = float(per_unit.std(ddof=1) / np.sqrt(per_unit.size)) if per_unit.size > 1 else float("inf")
+    mse, se_mse = float(row_errors.mean()), mean_and_se(row_errors, units)[1]
     rmse = float(np.sqrt(mse))
     return rmse, se_mse / (2.0 * rmse) if rmse > 0 else 0.0
 
@@ -307,12 +331,10 @@ def paired_excess(errors: NDArray, best: int, units: NDArray | None = None) -> t
     """
     errors = np.asarray(errors, dtype=float)
     units = None if units is None else np.asarray(units)
-    tie = TIE_TOLERANCE * float(_per_unit(errors[best], units).mean())  # per unit, like the differences
+    tie = TIE_TOLERANCE * mean_and_se(errors[best], units)[0]  # averaged like the differences
     excess, se = np.full(errors.shape[0], np.nan), np.full(errors.shape[0], np.nan)
     for k in np.flatnonzero(~np.isnan(errors).any(axis=1)):
-        diff = _per_unit(errors[k] - errors[best], units)
-        excess[k] = float(diff.mean())
-        se[k] = float(diff.std(ddof=1) / np.sqrt(diff.size)) if diff.size > 1 else float("inf")
+        excess[k], se[k] = mean_and_se(errors[k] - errors[best], units)
     return excess, se, tie
 
 
@@ -325,7 +347,8 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     candidate of lowest mean error; a candidate qualifies when its mean error
     exceeds the best's by at most one **paired** standard error of the
     difference (per group with ``units``: rows of one group are not
-    independent; per row without), or by at most :data:`TIE_TOLERANCE` of the
+    independent; per row without; with fewer than :data:`MIN_SE_GROUPS` groups the larger of the two, see
+    :func:`mean_and_se`), or by at most :data:`TIE_TOLERANCE` of the
     best's mean squared error (averaged per unit like the differences; 0.5 %
     in RMSE: a gain that small is a tie even
     when it is consistent, as on noise-free data). Among those that qualify the one of lowest
@@ -462,15 +485,30 @@ MIN_SE_GROUPS = 5
 
 
 def se_units(groups: NDArray | None) -> NDArray | None:
-    """The units of the standard errors of a comparison: the groups when there are at least
-    :data:`MIN_SE_GROUPS` (rows of one group are not independent), else the rows (``None``): a standard error
-    from 3 groups' means is no evidence (it can be ~0 when the groups happen to agree).
+    """The units of the standard errors of a comparison: the groups (rows of one group are not independent), or
+    the rows (``None``) without groups. With fewer than :data:`MIN_SE_GROUPS` groups the SE is the larger of the
+    rows' and the groups' (:func:`mean_and_se`): a standard error from 3 groups' means alone is no evidence (it
+    can be ~0 when the groups happen to agree), the rows' alone understates it.
 
     Examples
     --------
-    >>> se_units(np.array([0, 0, 1, 1, 2, 2])) is None
-    True
+    >>> se_units(np.array([0, 0, 1, 1, 2, 2])).tolist()
+    [0, 0, 1, 1, 2, 2]
     """
-    if groups is None or np.unique(groups).size < MIN_SE_GROUPS:
+    if groups is None or np.unique(groups).size < 2:
         return None
     return groups
+
+
+def se_units_name(units: NDArray | None) -> str:
+    """What the standard errors of a comparison with these ``units`` (:func:`se_units`) are over, in words.
+
+    Examples
+    --------
+    >>> se_units_name(None), se_units_name(np.array([0, 0, 1, 1, 2, 2]))
+    ('rows', 'rows or groups, the larger (fewer than 5 groups)')
+    """
+    if units is None:
+        return "rows"
+    return "groups" if np.unique(units).size >= MIN_SE_GROUPS else \
+        f"rows or groups, the larger (fewer than {MIN_SE_GROUPS} groups)"

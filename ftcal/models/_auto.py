@@ -21,8 +21,9 @@ from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_ra
                                  resolve_alpha, with_settings)
 from ..core._exceptions import CalibrationInputError
 from ..core._model_selection import (DegenerateCalibrationError, calibration_folds, check_groups,
-                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified, paired_excess,
-                                     rmse_and_se, routed_groups, se_units, simplest_within_one_se, unseen_outputs,
+                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified,
+                                     paired_excess, mean_and_se, rmse_and_se, routed_groups, se_units,
+                                     se_units_name, simplest_within_one_se, unseen_outputs,
                                      TIE_TOLERANCE)
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
@@ -168,7 +169,7 @@ def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen
             verdicts.append("beyond one SE")
     results["verdict"] = verdicts
     results["chosen"] = names[chosen]
-    unit = "groups" if units is not None else "rows"
+    unit = se_units_name(units)
     # what the rule compared, so that the table lets a reader check each verdict (the paired SE of the excess, not
     # each row's own SE: two models erring on the same rows differ by less than either's spread)
     excess, excess_se, tie = paired_excess(errors, best, units)
@@ -177,11 +178,11 @@ def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen
     results["rule"] = {"best": names[best], "tie_mse": float(tie), "units": unit}
     if chosen == best:
         why = (f"{names[chosen]} won: the best held-out RMSE ({rmse[chosen]:.4g} ± {se[chosen]:.2g} N), and no "
-               f"simpler model within one standard error of it ({unit} as units)")
+               f"simpler model within one standard error of it (standard errors over the {unit})")
     else:
         why = (f"{names[chosen]} won: the simplest of the {int(within.sum())} models within one standard error of "
                f"the best, {names[best]} ({rmse[best]:.4g} ± {se[best]:.2g} N; {names[chosen]} "
-               f"{rmse[chosen]:.4g} N; {unit} as units)")
+               f"{rmse[chosen]:.4g} N; standard errors over the {unit})")
     stock = [k for k, kind in enumerate(results["kind"]) if kind in ("stock", "baseline") and rmse[k] is not None]
     if stock:
         s = min(stock, key=lambda k: rmse[k])
@@ -189,15 +190,12 @@ def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen
         if s == chosen:
             why += f". It is the best stock model itself ({names[s]})"
         else:
-            diff = errors[chosen] - errors[s]
-            per = diff if units is None else np.bincount(np.unique(units, return_inverse=True)[1], weights=diff) \
-                / np.bincount(np.unique(units, return_inverse=True)[1])
-            excess_se = float(per.std(ddof=1) / np.sqrt(per.size)) if per.size > 1 else float("inf")
+            gap, gap_se = mean_and_se(errors[chosen] - errors[s], units)
             if abs(ratio - 1.0) <= TIE_TOLERANCE / 2:
                 how = "ties it"
             elif ratio < 1.0:
                 how = f"beats it by {100 * (1 - ratio):.1f} %"
-            elif float(per.mean()) <= excess_se:
+            elif gap <= gap_se:
                 how = "trails it within its standard error (a tie within noise)"
             else:
                 how = "trails it by more than one standard error, as the one-SE rule allows for a simpler model"
@@ -339,7 +337,8 @@ def score_candidates(
     judge), with ``units`` the units of their standard errors (None: rows).
     Standard errors are over the groups when the folds hold out
     groups and there are at least
-    :data:`~ftcal.core._model_selection.MIN_SE_GROUPS` of them, else over rows.
+    :data:`~ftcal.core._model_selection.MIN_SE_GROUPS` of them, with fewer the
+    larger of the rows' and the groups' (:func:`~ftcal.core._model_selection.mean_and_se`), else over rows.
     ``n_jobs`` candidates are scored at once
     (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
     :func:`joblib.parallel_config` context); the figures do not depend on it.
@@ -438,7 +437,7 @@ def score_candidates(
         record(name, kind, status, kind != "baseline" and not skipped, pred, seconds)
     if stack and rows and rows[-1][1] != "baseline":
         _score_stack(results, errors, predictions, record, y, alpha, folds)
-    results["se_units"] = "groups" if units is not None else "rows"
+    results["se_units"] = se_units_name(units)
     return results, np.vstack(errors), predictions, fitted
 
 
@@ -1118,8 +1117,8 @@ def comparison_table(results: dict) -> str:
         lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {verdicts[i]} |")
     if rule:
         lines += ["", f"One-SE rule: a row is within one SE of the best ({rule['best']}) when its excess mean squared "
-                      f"error over the best is at most its paired SE (the spread of the per-{rule['units'][:-1]} "
-                      f"differences from the best, not the row's own ± SE) or the tie margin "
+                      f"error over the best is at most its paired SE (the spread of the differences from the best over "
+                      f"the {rule['units']}, not the row's own ± SE) or the tie margin "
                       f"{rule['tie_mse']:.3g} N² ({100 * TIE_TOLERANCE:g} % of the best's)."]
     if results.get("why"):
         lines += ["", results["why"]]
