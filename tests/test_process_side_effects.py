@@ -120,3 +120,49 @@ def test_network_files_written_before_the_networks_encoded_their_own_weights_sti
         assert weights and weights == sorted(k for k in new.files if "module/" in k)
         for k in weights:
             np.testing.assert_array_equal(old[k], new[k])
+
+
+class _PausingLinear(LinearCalibrator):
+    """An LTM whose first fit while ``armed`` waits (inside the report's fold) until the test releases it."""
+
+    armed, inside, release = False, threading.Event(), threading.Event()
+
+    def fit(self, X, y, **kwargs):
+        cls = type(self)
+        if cls.armed and not cls.inside.is_set():
+            cls.inside.set()
+            assert cls.release.wait(60), "the test never released the fit"
+        return super().fit(X, y, **kwargs)
+
+
+def test_a_thread_outside_the_calibration_report_keeps_its_blas_threads_while_its_folds_are_fitted():
+    from ftcal import CalibrationDataset, calibration_certificate
+
+    rng = np.random.default_rng(1)
+    wrench = rng.normal(size=(60, 6))
+    data = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6)), wrench=wrench)
+    model = _PausingLinear().fit(data.raw, data.wrench)
+    before = _pools()
+    if min(before.values()) < 2:
+        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
+    errors = []
+
+    def report():
+        try:
+            calibration_certificate(model, data, cv=3, baselines=False, figures=False)
+        except BaseException as exc:  # reported by the main thread
+            errors.append(exc)
+            _PausingLinear.inside.set()
+
+    _PausingLinear.armed = True
+    try:
+        worker = threading.Thread(target=report)
+        worker.start()
+        assert _PausingLinear.inside.wait(60)
+        during = _pools()
+        _PausingLinear.release.set()
+        worker.join(120)
+    finally:
+        _PausingLinear.armed = False
+    assert not errors, errors
+    assert during == before

@@ -159,11 +159,12 @@ def _fold_predictions(template: Any, X: NDArray, y: NDArray, groups: NDArray | N
                       want_std: bool, max_rows: int | None, seed: int) -> tuple:
     """One fold: fit a clone on ``train`` (at most ``max_rows`` of them), predict ``test``; ``(pred, std|None)``."""
     from sklearn.base import clone
-    from threadpoolctl import threadpool_limits
+
+    from ..core._threads import limit_threads_here
 
     if max_rows is not None and len(train) > max_rows:
         train = np.sort(np.random.default_rng(seed).choice(train, size=max_rows, replace=False))
-    with threadpool_limits(1, user_api="blas"):
+    with limit_threads_here(1):  # one BLAS thread per fold, never another thread's pools
         est = _fit(clone(template), X[train], y[train], None if groups is None else groups[train])
         std = want_std and provides_std(est)
         if reads_history(est) or len(test) <= PREDICT_CHUNK_ROWS:  # a history model reads its fold as one stream
