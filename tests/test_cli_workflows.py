@@ -7,6 +7,8 @@ import hashlib
 import math
 import io
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -175,6 +177,28 @@ def test_prepare_bad_inputs_give_one_line(tmp_path, capsys):
     assert main(["prepare", str(bad), "--out", str(tmp_path / "d"), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("ftcal: error: ") and "run.csv" in err[0]
+
+
+def test_prepare_channel_count_is_n_channels_and_the_old_spelling_warns(tmp_path):
+    def ftcal_cli(*argv):
+        return subprocess.run([sys.executable, "-m", "ftcal", *map(str, argv)], capture_output=True, text=True)
+
+    logs = tmp_path / "logs"
+    assert ftcal_cli("simulate", "experiment", "--subdivisions", "0", "--seed", "1", "--out", logs, "-q").returncode == 0
+    assert ftcal_cli("prepare", logs, "--out", tmp_path / "a", "-q").returncode == 0
+    n = CalibrationDataset.load(tmp_path / "a" / "dataset.csv").n_channels  # the simulated sensor's bridges
+    wrong = ftcal_cli("prepare", logs, "--n-channels", n - 1, "--out", tmp_path / "x", "-q")
+    assert wrong.returncode == 2 and f"{n} raw channels (s0..s{n - 1}) but {n - 1} expected" in wrong.stderr
+    assert not (tmp_path / "x" / "dataset.csv").exists()
+    assert ftcal_cli("prepare", logs, "--n-channels", n, "--out", tmp_path / "a", "--force", "-q").returncode == 0
+    old = ftcal_cli("prepare", logs, "--channels", n, "--out", tmp_path / "b", "-q")  # the old spelling, one release
+    assert old.returncode == 0 and old.stderr.strip() == (
+        f"ftcal: warning: 'prepare --channels {n}' is deprecated and will be removed in the next release; "
+        f"write --n-channels {n} (--channels names columns on the other commands)")
+    assert (tmp_path / "a" / "dataset.csv").read_bytes() == (tmp_path / "b" / "dataset.csv").read_bytes()
+    spec = ftcal_cli("prepare", logs, "--channels", "g1..g4", "--out", tmp_path / "c")  # a column spec: not here
+    err = spec.stderr.strip().splitlines()
+    assert spec.returncode == 2 and len(err) == 1 and "--n-channels N" in err[0] and "'g1..g4'" in err[0]
 
 
 def test_benchmark_real_world_quick(tmp_path, capsys):

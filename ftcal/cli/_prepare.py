@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from ._common import (
@@ -47,6 +48,23 @@ writes DIR/dataset.<fmt> (group = load configuration id), prepare.json and cover
 """
 
 
+class _DeprecatedChannelCount(argparse.Action):
+    """``prepare --channels N``: the channel count under its old name, kept for one release with a warning line
+    (``--channels`` on fit, evaluate, report, ... names columns; the count is ``--n-channels``)."""
+
+    def __call__(self, parser, namespace, values, option_string=None) -> None:
+        if not values.strip().isdigit():
+            raise argparse.ArgumentError(self, f"{values!r}: prepare takes a raw channel COUNT, as --n-channels N "
+                                         "(its logs' columns are fixed; --channels names columns on the other commands)")
+        try:
+            setattr(namespace, self.dest, int_in_range(3, 1024, "channels")(values))
+        except argparse.ArgumentTypeError as exc:
+            raise argparse.ArgumentError(self, str(exc)) from None
+        print(f"ftcal: warning: 'prepare --channels {values}' is deprecated and will be removed in the next release; "
+              f"write --n-channels {values.strip()} (--channels names columns on the other commands)",
+              file=sys.stderr)
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "prepare",
@@ -62,7 +80,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fixture", default="thesis", metavar="FILE|thesis",
                    help="your load configurations (id, mass, centre of mass in the sensor frame, optional inertia) "
                    "from a .json or .csv file; 'thesis' is the thesis' seven (see 'ftcal prepare --help')")
-    p.add_argument("--channels", type=int_in_range(3, 1024, "channels"), help="expected raw channel count (checked in every log)")
+    p.add_argument("--n-channels", type=int_in_range(3, 1024, "channels"), metavar="N",
+                   help="expected raw channel count (checked in every log)")
+    p.add_argument("--channels", dest="n_channels", action=_DeprecatedChannelCount, metavar="N",
+                   help="deprecated spelling of --n-channels (on the other commands --channels names columns)")
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_bag_options(p, wrench=False)
     add_recording_options(p.add_argument_group("still poses in ROS bags"))
@@ -101,8 +122,8 @@ def run(args: argparse.Namespace) -> int:
     console.info(f"preparing {len(logs)} {what} with {robot.name} (sensor frame {robot.sensor_frame}) ...")
     if bags is not None:
         inputs = [bag_run_log(args, path, robot, console) for path in bags]
-        if args.channels is not None and inputs[0].n_channels != args.channels:
-            raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --channels {args.channels}")
+        if args.n_channels is not None and inputs[0].n_channels != args.n_channels:
+            raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
     else:
         inputs = logs
     from ..robot._loads import load_fixture
@@ -110,7 +131,7 @@ def run(args: argparse.Namespace) -> int:
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
-        dataset = ftcal.prepare_dataset(inputs, robot, args.mass, n_channels=args.channels,
+        dataset = ftcal.prepare_dataset(inputs, robot, args.mass, n_channels=args.n_channels,
                                         load_configurations=configurations)
     except ftcal.LogFormatError as exc:
         if exc.parameter != "load_configurations":
