@@ -286,3 +286,13 @@ def test_evaluate_with_plots_of_a_one_and_three_axis_cell(tmp_path, capsys, n_ax
     assert list(json.loads((out / "metrics.json").read_text())["models"]["linear"]["axis_rmse"]) == axes
     for name in written:
         assert (out / name).stat().st_size > 0
+
+
+def test_fit_of_a_force_only_cell_says_no_torque_scaling(tmp_path):
+    raw, wrench = _sensor(n_axes=3, n_channels=4)
+    path = _csv(tmp_path / "cell.csv", ["g1", "g2", "g3", "g4", "Fx", "Fy", "Fz"], raw, wrench)
+    run = subprocess.run([sys.executable, "-m", "ftcal", "fit", str(path), "--channels", "g1..g4", "--model", "linear",
+                          "--out", str(tmp_path / "m")], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    done = next(line for line in run.stderr.splitlines() if "training RMSE" in line)
+    assert "N (forces only: no torque scaling)" in done and "torque-scaled" not in done and "alpha" not in done

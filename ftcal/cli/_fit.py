@@ -123,6 +123,25 @@ def _check_before_saving(estimator, X, y, groups, args, predictions, console: Co
         raise CliError(f"{args.dataset}: {' '.join(str(exc).split())}") from None
 
 
+def _rmse_text(rmse: float, axes, alpha: float) -> str:
+    """The training RMSE with its unit and scaling: torque-scaled [N] only when the wrench has forces and torques.
+
+    Examples
+    --------
+    >>> _rmse_text(0.5, ("Fx", "Fy", "Fz"), 1.0)
+    '0.5 N (forces only: no torque scaling)'
+    >>> _rmse_text(0.5, ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz"), 50.0)
+    '0.5 N (torque-scaled, alpha=50)'
+    """
+    from ..core._wrench import force_columns, torque_columns
+
+    if torque_columns(axes) and (force_columns(axes) or alpha != 1.0):
+        return f"{rmse:.4g} N (torque-scaled, alpha={alpha:.4g})"
+    if torque_columns(axes):
+        return f"{rmse:.4g} N·m (torques only: no torque scaling)"
+    return f"{rmse:.4g} N (forces only: no torque scaling)"
+
+
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators._routing import requests_groups
@@ -243,8 +262,6 @@ def run(args: argparse.Namespace) -> int:
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
                          dataset_sha256=dataset_sha256, console=console, check=gate)
         out.commit()
-    console.info(
-        f"done in {seconds:.1f} s: training RMSE {report.rmse:.4g} N (torque-scaled, alpha={estimator.alpha_:.4g}); "
-        f"model -> {plan.path(model_file_name(name))}"
-    )
+    console.info(f"done in {seconds:.1f} s: training RMSE {_rmse_text(report.rmse, data.axes, estimator.alpha_)}; "
+                 f"model -> {plan.path(model_file_name(name))}")
     return 0

@@ -83,7 +83,7 @@ def write_evaluation_plots(
     from ..core._wrench import axis_unit, default_axes, force_columns, torque_columns
 
     named = tuple(axes) if axes is not None else default_axes(np.shape(y_true)[1])
-    scaled = bool(force_columns(named)) and bool(torque_columns(named))  # forces and torques: [F, alpha*T]
+    scaled = bool(torque_columns(named)) and (bool(force_columns(named)) or alpha != 1.0)  # [F, alpha*T] in N
     units = {axis_unit(a) for a in named}
     unit = units.pop() if len(units) == 1 else "N"
 
