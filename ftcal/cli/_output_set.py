@@ -6,7 +6,8 @@ inside ``--out``; only when every file is complete are they renamed into place, 
 ``--out`` folder, so that
 
 * a failure (the report's, a full disk, a signal) before the end leaves nothing of the run behind and every
-  file that stood there before untouched;
+  file that stood there before untouched; a rename that fails halfway through the set (``--force``) puts the
+  files it replaced back (each has a second name, a hard link, until the set is in place);
 * two runs with ``--force`` into the same folder never leave a mixed set: their sets are moved one after the
   other, whole, and each file's hash is taken from the bytes this run wrote (its private copy), never from a
   path another run may have replaced meanwhile;
@@ -113,23 +114,32 @@ class OutputSet:
                                    "it was left as it is and this run wrote nothing; pass --force to replace it, or "
                                    "choose another --out")
             moved: list[Path] = []
+            backups: dict[Path, Path] = {}  # with --force: a second name (hard link) of each file replaced
             try:
-                for n in names:
+                for i, n in enumerate(names):
                     target = out / n
                     target.parent.mkdir(parents=True, exist_ok=True)
                     if self.plan.force:
+                        if target.is_file():
+                            backup = self._stage / f".old.{i}"
+                            os.link(target, backup)
+                            backups[target] = backup
                         os.replace(self._stage / n, target)
                     else:
                         os.link(self._stage / n, target)  # fails if a non-ftcal writer made it meanwhile
                     moved.append(target)
-            except OSError as exc:
-                if not self.plan.force:  # take back what this run linked: nothing of a partial set stays
-                    for target in moved:
-                        with contextlib.suppress(OSError):
+            except BaseException as exc:  # take back what this run put in place: the old set stands whole
+                for target in moved:
+                    with contextlib.suppress(OSError):
+                        if target in backups:
+                            os.replace(backups[target], target)
+                        else:
                             target.unlink()
+                if not isinstance(exc, OSError):
+                    raise
                 raise CliError(f"{out}: could not put {exc.filename or 'the outputs'} in place ({exc.strerror}); "
-                               + ("no file of this run was left" if not self.plan.force else
-                                  f"{len(moved)} of {len(names)} files were replaced")) from None
+                               "no file of this run was left and the files that stood there are as they were"
+                               ) from None
         finally:
             os.close(lock)  # closing releases the lock
         self._committed = True
