@@ -10,7 +10,8 @@ import pytest
 from sklearn.model_selection import GroupKFold, KFold, cross_val_predict
 
 from ftcal import GaussianProcessCalibrator, wrench_rmse
-from ftcal.calibrators._gaussian_process import _left_out, _regressor, make_kernel
+from ftcal.calibrators._gaussian_process import _left_out, _mean_basis, _regressor, make_kernel
+from ftcal.core._wrench import scale_torques
 from ftcal.models import stock_baselines
 
 
@@ -66,6 +67,54 @@ def test_left_out_errors_are_those_of_refits_without_the_rows():
             beta = (ones @ K_inv @ y[rest]) / (ones @ K_inv @ ones)  # the constant mean refitted (GLS)
             prediction = beta + K[np.ix_(left, rest)] @ K_inv @ (y[rest] - beta)
             np.testing.assert_allclose(errors[left], (y[left] - prediction) * gp._y_train_std, rtol=1e-6, atol=1e-9)
+
+
+def refit_errors(K, basis, y, left):
+    """``y[left]`` less the prediction of a GP (covariance ``K``, hyperparameters fixed) refitted without the
+    rows ``left``: the mean's coefficients by generalised least squares (QR of the whitened basis), then the
+    posterior mean of what it leaves."""
+    from scipy.linalg import cho_factor, cho_solve, solve_triangular
+
+    rest = np.setdiff1d(np.arange(len(y)), left)
+    L = np.linalg.cholesky(K[np.ix_(rest, rest)])
+    Q, R = np.linalg.qr(solve_triangular(L, basis[rest], lower=True))
+    beta = np.linalg.solve(R, Q.T @ solve_triangular(L, y[rest], lower=True))
+    weights = cho_solve(cho_factor(K[np.ix_(rest, rest)], lower=True), y[rest] - basis[rest] @ beta)
+    return y[left] - (basis[left] @ beta + K[np.ix_(left, rest)] @ weights)
+
+
+@pytest.mark.parametrize("mean", ["none", "linear"])
+@pytest.mark.parametrize("grouped", [False, True])
+def test_left_out_errors_of_each_mean_are_those_of_refits_on_channels_of_scales_1e_4_to_1e4(mean, grouped):
+    """The fitted GP's closed-form held-out errors, its mean's coefficients refitted too, equal refits without
+    each row (each group), with the wrench predicted from the raw channels' span, on channels of scales
+    1e-4..1e4 (raw channels in the mean's basis made its normal matrix singular to rounding: errors off by
+    several N)."""
+    raw, wrench = correlated_sensor(60, 4, seed=11, torque_in_nmm=False)
+    groups = np.repeat(np.arange(12), 5) if grouped else None
+    model = GaussianProcessCalibrator(mean=mean, kernel="rbf", per_output=False, kernel_bounds="ftcal",
+                                      random_state=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model.fit(raw, wrench, groups=groups)
+    assert model.mean_ == mean and model.train_inputs_.shape == (60, 4)
+    gp = model.regressors()[0]
+    K = gp.kernel_(model.train_inputs_)
+    # the brute-force refits take the mean's basis from the raw (tare-corrected) channels, each centred and
+    # scaled over the rows it is fitted on: the span of the constant and the raw channels
+    xc = raw - model.zero_reading_
+    raw_basis = np.hstack([np.ones((60, 1)), (xc - xc.mean(axis=0)) / xc.std(axis=0)]) if mean == "linear" \
+        else np.ones((60, 1))
+    y = scale_torques(wrench, model.alpha_)  # the GP's target plus the linear mean (which the refit re-estimates)
+    folds = [[i] for i in range(60)] if groups is None else [np.flatnonzero(groups == g) for g in range(12)]
+    expected = np.empty_like(y)
+    for left in folds:
+        expected[left] = refit_errors(K, raw_basis, y, left)
+    errors, _ = _left_out(gp, _mean_basis(mean, model.train_inputs_), groups)
+    # conditioning: K's noise term (>= 1e-8 of its scale) and the whitened basis amplify rounding ~1e8-fold
+    np.testing.assert_allclose(errors, expected, rtol=1e-6, atol=1e-6 * np.abs(expected).max())
+    rmse = float(np.sqrt(np.mean(expected**2)))
+    assert model.held_out_rmse_["final"] == pytest.approx(rmse, rel=1e-6)
 
 
 def test_the_choice_is_the_combination_of_least_held_out_error_and_beats_the_stock_gp_within_noise():

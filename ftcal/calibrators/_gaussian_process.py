@@ -85,35 +85,60 @@ def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegr
         return gp.fit(u, target)
 
 
+def _mean_basis(mean: str, u: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The basis ``H`` of a mean in :data:`GP_MEANS` at standardised readings ``u`` (m, N): the constant, plus the
+    channels with the linear mean. Standardised, not raw, channels: the same span (so the same left-out errors),
+    but columns of one scale, where raw channels of scales 1e-4..1e4 make ``H`` numerically rank-deficient."""
+    ones = np.ones((len(u), 1))
+    return np.hstack([ones, u]) if mean == "linear" else ones
+
+
 def _left_out(gp: GaussianProcessRegressor, basis: NDArray[np.float64], groups: NDArray | None):
     """Each training row's error when left out of the fit (rows of one group together), and its variance.
 
-    Closed form for a GP with a mean fitted on the basis ``H`` (the constant ``normalize_y`` removes, plus the
-    LTM's channels with the linear mean), with the hyperparameters fixed (Rasmussen & Williams eq. 5.12, §2.7,
-    §5.4.2): ``P = K⁻¹ - K⁻¹H (HᵀK⁻¹H)⁻¹ HᵀK⁻¹``; leaving out the rows ``G``, their errors are
-    ``(P_GG)⁻¹ (P y)_G`` with covariance ``(P_GG)⁻¹``. Returns ``(errors, variances)``, each ``(m, k)`` in the
-    target's own units (NaN for rows a group's left-out fit cannot predict); ``None`` when ``H`` leaves no degree
-    of freedom.
+    Exact, with the hyperparameters fixed, for the GP whose mean ``Hβ`` on the basis ``H`` (the constant
+    ``normalize_y`` removes, plus the channels with the linear mean, :func:`_mean_basis`) has its coefficients
+    ``β`` refitted by generalised least squares without the left-out rows (Rasmussen & Williams eq. 5.12, §2.7
+    with a vague prior on ``β``, §5.4.2): with ``P = K⁻¹ - K⁻¹H (HᵀK⁻¹H)⁻¹ HᵀK⁻¹``, leaving out the rows ``G``,
+    their errors are ``(P_GG)⁻¹ (P y)_G`` with covariance ``(P_GG)⁻¹``. ``P`` is computed as
+    ``L⁻ᵀ (I - QQᵀ) L⁻¹`` from an orthonormal basis ``Q`` of ``L⁻¹H`` (``K = LLᵀ``; SVD of the column-equilibrated
+    ``L⁻¹H``, directions below rounding dropped), never from the normal matrix ``HᵀK⁻¹H``, whose condition
+    number is the square of ``L⁻¹H``'s. Returns ``(errors, variances)``, each ``(m, k)`` in the target's own
+    units (NaN for rows of a group without which the basis is rank-deficient: the refit cannot predict them);
+    ``None`` when ``H`` leaves no degree of freedom.
     """
-    from scipy.linalg import cho_solve
+    from scipy.linalg import cho_solve, solve_triangular
 
     m = len(basis)
     if m <= basis.shape[1] + 1:
         return None
-    K_inv = cho_solve((gp.L_, True), np.eye(m), check_finite=False)
-    KH = K_inv @ basis
-    P = K_inv - KH @ np.linalg.lstsq(basis.T @ KH, KH.T, rcond=None)[0]
-    Py = P @ (gp.L_ @ (gp.L_.T @ np.asarray(gp.alpha_).reshape(m, -1)))  # y = K alpha
+    L = np.asarray(gp.L_)
+    whitened = solve_triangular(L, basis, lower=True, check_finite=False)  # L⁻¹H
+    norms = np.linalg.norm(whitened, axis=0)
+    whitened = whitened[:, norms > 0] / norms[norms > 0]  # column scaling does not change the span
+    Q, s, _ = np.linalg.svd(whitened, full_matrices=False)
+    rank_tol = max(whitened.shape) * np.finfo(float).eps * (s[0] if s.size else 0.0)
+    Q = Q[:, s > rank_tol]
+    B = solve_triangular(L.T, Q, lower=False, check_finite=False)  # L⁻ᵀQ: P = K⁻¹ - BBᵀ
+    P = cho_solve((L, True), np.eye(m), check_finite=False) - B @ B.T
+    alpha = np.asarray(gp.alpha_).reshape(m, -1)  # K⁻¹y, so L⁻¹y = Lᵀα and P y = α - B Qᵀ Lᵀα
+    Py = alpha - B @ (Q.T @ (L.T @ alpha))
     scale = np.atleast_1d(np.asarray(gp._y_train_std, dtype=float))  # normalize_y's: back to the target's units
     if groups is None:  # one row at a time: (P_ii)⁻¹ is a scalar
         with np.errstate(divide="ignore", invalid="ignore"):
             diag = np.diag(P)[:, None]
             return Py / diag * scale, np.broadcast_to(1.0 / diag, Py.shape) * scale**2
+    rank = Q.shape[1]
     errors, variances = np.full_like(Py, np.nan), np.full_like(Py, np.nan)
     for rows in (np.flatnonzero(groups == g) for g in np.unique(groups)):
+        rest = np.ones(m, dtype=bool)
+        rest[rows] = False
+        if np.linalg.matrix_rank(basis[rest] / np.maximum(np.abs(basis[rest]).max(axis=0), np.finfo(float).tiny)) \
+                < rank:  # a group the basis cannot do without: its refit cannot predict it
+            continue
         try:
             cov = np.linalg.inv(P[np.ix_(rows, rows)])
-        except np.linalg.LinAlgError:  # a group the basis cannot do without: it says nothing
+        except np.linalg.LinAlgError:
             continue
         errors[rows] = cov @ Py[rows] * scale
         variances[rows] = np.maximum(np.diag(cov), np.finfo(float).tiny)[:, None] * scale**2
@@ -172,8 +197,12 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
       term and LTM mean + (RBF or Matérn), each with both bounds, are fitted
       (marginal likelihood) on at most ``selection_samples`` rows, and the one
       of **least held-out error** wins: the closed-form leave-one-out error of
-      each row (Rasmussen & Williams eq. 5.12, the mean refitted without the
-      row), or with ``fit(..., groups=...)`` leave-one-group-out. On a few
+      each row (Rasmussen & Williams eq. 5.12; exact, hyperparameters fixed,
+      for the GP whose mean's coefficients, the constant or the constant and
+      the channels, are refitted by generalised least squares without the row:
+      §2.7), or with ``fit(..., groups=...)`` leave-one-group-out. (The fitted
+      model's LTM is the ordinary least-squares one on every row: the same
+      basis, weighted otherwise.) On a few
       hundred rows of correlated channels the likelihood overfits: a higher
       optimum (ftcal's bounds on a real soft sensor) predicted new rows 1.5x
       worse than the stock GP's lower one, so the likelihood only fits the
@@ -194,15 +223,15 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
     on rows the GP did not see: each component's std is multiplied by
     ``std_scale_``, the smallest factor (at least 1) with which 95 % of those
     rows' errors fall within 1.96 std. The rows are every row of the subset
-    left out in turn (closed form, its mean refitted without it: Rasmussen &
-    Williams §2.7, §5.4.2), with ``fit(..., groups=...)`` every group left out
+    left out in turn (closed form, its mean's coefficients refitted without it by
+    generalised least squares: Rasmussen & Williams §2.7, §5.4.2), with ``fit(..., groups=...)`` every group left out
     together, plus up to 1000 training rows outside the subset (of groups the
     subset does not hold). A marginal-likelihood fit tends to
     make the std too narrow where the errors have heavier tails than a
     Gaussian (e.g. a sign-dependent gain); the factor is never below 1, because
     rows held out at random are closer to the training rows than a new
-    recording (a held-out group) is. (With the LTM mean, those rows did take
-    part in its fit, over all rows: a small, O(N / n) optimism.) The coverage (share of held-out errors
+    recording (a held-out group) is. (The rows outside the subset did take
+    part in the LTM mean's fit, over all rows: a small, O(N / n) optimism.) The coverage (share of held-out errors
     within two std on grouped folds) is measured by
     ``benchmarks/auto_vs_stock.py`` (``gp_coverage_2std``) and recorded in ``benchmarks/RESULTS.md``.
 
@@ -353,7 +382,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         if m > self.selection_samples:
             sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
         group_rows = None if groups is None else groups[rows]
-        bases = {"none": np.ones((m, 1)), "linear": np.hstack([np.ones((m, 1)), xc_sub])}
+        bases = {mean: _mean_basis(mean, u) for mean in GP_MEANS}
         mean, family, bounds, per_output, theta = self._choose(
             u[sel], {k: v[sel] for k, v in targets.items()}, {k: v[sel] for k, v in bases.items()},
             None if group_rows is None else group_rows[sel], seed)
