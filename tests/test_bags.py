@@ -291,3 +291,17 @@ def test_a_wrench_bag_in_newton_millimetres_is_refused_naming_the_unit_until_dec
                  "--out", str(tmp_path / "t"), "-q"]) == 0
     tool = ToolLoad.load(tmp_path / "t" / "tool.tool.json")
     assert np.all(np.abs(tool.center_of_mass - TOOL.center_of_mass) <= 4 * tool.center_of_mass_std_error)
+
+
+def test_joint_states_named_unlike_the_robot_are_refused_even_when_the_counts_agree(tmp_path, capsys, robot_poses):
+    # drivers rename joints and publishers reorder them: taking the bag's columns in order would give wrong FK
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=3)
+    renamed = [f"arm_{name}" for name in robot.joint_names][::-1]
+    bag = write_bag(tmp_path / "renamed", "sqlite3", sensor_time=rec.sensor_time, reading=rec.reading,
+                    pose_time=rec.pose_time, joints=rec.joints[:, ::-1], joint_names=renamed)
+    out = tmp_path / "t"
+    assert main(["identify-load", str(bag), "--robot", "kuka_iiwa14", "--out", str(out)]) == 2
+    err = capsys.readouterr().err.splitlines()[-1]  # after the bag's notes (dropped samples), one error line
+    assert err.startswith("ftcal: error: ") and "arm_" in err and robot.joint_names[0] in err
+    assert "--tf BASE,SENSOR" in err and not out.exists()

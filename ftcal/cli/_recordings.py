@@ -116,13 +116,16 @@ def read_bag_from_args(args, path: Path, console: Console):
 
 
 def bag_joints(rec, robot):
-    """The bag's joint positions in the robot's joint order (by name, else by count)."""
+    """The bag's joint positions in the robot's joint order, matched by name.
+
+    Joint-state publishers do not keep the URDF's order and drivers rename joints, so a bag whose joint names
+    are not the robot's is refused even when the counts agree: taking its columns in order would give wrong
+    forward kinematics without a word.
+    """
     names = list(rec.joint_names)
     wanted = list(robot.joint_names)
     if set(wanted) <= set(names):
         return rec.joints[:, [names.index(n) for n in wanted]]
-    if len(names) == len(wanted):
-        return rec.joints
     raise CliError(f"{rec.path}: the joint states of {rec.pose_topic} name {', '.join(names)} but the robot "
                    f"{robot.name} has {', '.join(wanted)}; give the robot the bag was recorded with (--robot URDF "
                    "--sensor-frame FRAME), or the sensor's orientation from tf (--tf BASE,SENSOR)")
