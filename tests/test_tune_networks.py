@@ -46,8 +46,8 @@ def test_existing_outputs_are_not_overwritten(tune, tmp_path, capsys):
         tune.main(["--out", str(tmp_path)])
     assert stop.value.code == 2
     assert capsys.readouterr().err.strip().splitlines()[-1].endswith(
-        f"{mine} exists and was not written by this benchmark (or was edited since); choose another output folder "
-        "or pass --force (force=True) to overwrite it.")
+        f"{mine} exists and was not written by this benchmark (or was edited since). Fix: choose another output "
+        "folder or pass force=True to overwrite it.")
     assert mine.read_text() == "my notes\n"
 
 

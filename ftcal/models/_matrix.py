@@ -70,7 +70,9 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
     got = out[n + 1:]
     gap = float(np.max(np.abs(got - expected)))
     if not gap <= 1e-7 * (1.0 + float(np.max(np.abs(got)))):
-        if getattr(model, "_temperature_column", False):  # a temperature-compensated model, linear or not
+        from ..calibrators._base import calibration_tags
+
+        if calibration_tags(model).temperature_column:  # a temperature-compensated model, linear or not
             raise ExportError(
                 f"{type(model).__name__} is temperature-compensated: its wrench depends on the temperature (its last "
                 f"input) beyond a 6x{n} matrix (by {gap:.3g} on probe readings), so it has no calibration matrix.",
