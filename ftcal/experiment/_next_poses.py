@@ -184,7 +184,9 @@ def propose_next_poses(
     if n_in is None:
         raise PlanningError(f"model must be a fitted calibrator (no n_features_in_ on {type(model).__name__}); "
                             "fit it on the dataset first (ftcal fit).")
-    takes_temperature = bool(getattr(model, "_temperature_column", False))  # its last input is the temperature
+    # its last input is the temperature: read from the model's own tags (no calibrator import in this layer)
+    tags = model.__sklearn_tags__() if hasattr(model, "__sklearn_tags__") else None
+    takes_temperature = bool(getattr(getattr(tags, "ftcal", None), "temperature_column", False))
     n_raw = int(n_in) - int(takes_temperature)
     if n_raw != dataset.n_channels:
         also = " and the temperature" if takes_temperature else ""
