@@ -538,7 +538,7 @@ def calibration_certificate(
         raise CalibrationInputError(
             f"the model gives {int(n_outputs)} output axis(es) but the dataset has {k} ({', '.join(names)}); a report "
             "certifies the model's own axes on data of those axes. Fix: select the model's axes from the data "
-            "(ftcal: --wrench with their column names, e.g. --wrench Fz), or report a model of all these axes.")
+            "(the wrench mapping naming their columns only, e.g. Fz), or report a model of all these axes.")
     units = axis_units(names)
     torque = np.array([u != "N" for u in units])
     groups = dataset.group
