@@ -40,6 +40,12 @@ TINY_SCHEDULE = dict(
 )
 
 
+#: ``ftcal fit`` options for a network small enough for a test and trained enough to beat the mean wrench on the
+#: simulated datasets (``ftcal fit`` refuses to save a network that does not: its degenerate-calibration check).
+SMALL_NET_CLI = ["--schedule", "short", "--param", "phase1_epochs=20", "--param", "plateau_epochs=1",
+                 "--param", "max_recover_epochs=1", "--param", "hidden_layer_sizes=[16]"]
+
+
 #: Names of the first instances of :func:`tiny_calibrators`, in order: every public calibrator of ftcal (each run
 #: by the ``tiny_calibrator`` fixture through the shared tests on affine data).
 #: Registry names the instances below stand for; every other registered calibrator joins the list, built with its

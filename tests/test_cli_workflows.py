@@ -18,8 +18,8 @@ import ftcal
 from ftcal import CalibrationDataset
 from ftcal.cli import main
 
-TINY_NET = ["--schedule", "short", "--param", "phase1_epochs=3", "--param", "plateau_epochs=1",
-            "--param", "max_recover_epochs=1", "--param", "hidden_layer_sizes=[8]"]
+from conftest import SMALL_NET_CLI
+
 
 
 def digest(folder: Path) -> dict[str, str]:
@@ -83,7 +83,7 @@ def test_end_to_end_artificial(tmp_path, capsys):
     data, models, ev = tmp_path / "data", tmp_path / "models", tmp_path / "eval"
     assert main(["simulate", "dataset", "--n-per-sphere", "30", "--n-test", "40", "--out", str(data), "-q"]) == 0
     assert main(["fit", str(data / "train.csv"), "--model", "linear", "--out", str(models), "-q"]) == 0
-    assert main(["fit", str(data / "train.csv"), "--model", "directional", *TINY_NET, "--out", str(models), "-q"]) == 0
+    assert main(["fit", str(data / "train.csv"), "--model", "directional", *SMALL_NET_CLI, "--out", str(models), "-q"]) == 0
     assert main(["evaluate", str(data / "test.csv"), str(models / "linear.model.npz"),
                  str(models / "directional.model.npz"), "--out", str(ev), "-q"]) == 0
     table = capsys.readouterr().out
@@ -221,7 +221,8 @@ class _Terminal(io.StringIO):
 def test_training_progress_bar_on_a_terminal_and_quiet_silences_it(tmp_path, monkeypatch):
     w = np.random.default_rng(0).uniform(-1, 1, size=(40, 6)) * [100, 100, 100, 2, 2, 2]
     CalibrationDataset(raw=w @ np.diag([1, 2, 3, 4, 5, 6.0]) * 1e-3, wrench=w).save(tmp_path / "t.csv")
-    argv = ["fit", str(tmp_path / "t.csv"), "--model", "directional", *TINY_NET]
+    # 40 rows are one batch an epoch: 100 epochs to beat the mean wrench (ftcal fit refuses a network that does not)
+    argv = ["fit", str(tmp_path / "t.csv"), "--model", "directional", *SMALL_NET_CLI, "--param", "phase1_epochs=100"]
     terminal = _Terminal()
     monkeypatch.setattr("sys.stderr", terminal)
     assert main(argv + ["--out", str(tmp_path / "loud")]) == 0

@@ -37,9 +37,9 @@ from ftcal import (
 from ftcal.core._files import atomic_output
 from ftcal.cli import main
 
+from conftest import SMALL_NET_CLI
+
 TINY = dict(hidden_layer_sizes=(8,), phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
-TINY_CLI = ["--schedule", "short", "--param", "phase1_epochs=3", "--param", "plateau_epochs=1",
-            "--param", "max_recover_epochs=1", "--param", "hidden_layer_sizes=[8]"]
 
 
 def sha(path: Path) -> str:
@@ -66,7 +66,7 @@ def workdir(tmp_path_factory):
     assert main(["simulate", "dataset", "--n-per-sphere", "25", "--n-test", "50", "--out", str(root / "data"),
                  "-q"]) == 0
     for model in ("linear", "comparative", "directional"):
-        extra = [] if model == "linear" else TINY_CLI
+        extra = [] if model == "linear" else SMALL_NET_CLI
         assert run(["fit", str(root / "data" / "train.csv"), "--model", model, *extra, "--out",
                      str(root / "models"), "-q"]) == 0
     return root
@@ -458,7 +458,7 @@ def test_sizes_that_would_exhaust_memory_are_refused(argv, message, capsys):
 # ------------------------------------------------------------------ 11. ensembles through the CLI
 def test_fit_ensemble_with_tare_through_the_cli(workdir, tmp_path):
     tare = ",".join(["0"] * 6)
-    assert run(["fit", workdir / "data" / "train.csv", "--model", "directional_ensemble", *TINY_CLI,
+    assert run(["fit", workdir / "data" / "train.csv", "--model", "directional_ensemble", *SMALL_NET_CLI,
                  "--param", "n_members=2", "--tare", tare, "--out", tmp_path, "-q"]) == 0
     model = ftcal.load_model(tmp_path / "directional_ensemble.model.npz")
     assert len(model.estimators_) == 2
@@ -473,7 +473,7 @@ def test_unknown_parameter_is_named_for_an_ensemble(workdir, capsys, tmp_path):
 
 # ------------------------------------------------------------------ misleading messages
 def test_unwritable_out_is_found_before_training(workdir, capsys):
-    msg = cli_error(["fit", workdir / "data" / "train.csv", "--model", "directional", *TINY_CLI,
+    msg = cli_error(["fit", workdir / "data" / "train.csv", "--model", "directional", *SMALL_NET_CLI,
                      "--out", "/proc/ftcal-cannot-write-here"], capsys)
     assert "cannot create files" in msg
 

@@ -114,11 +114,14 @@ def _check_before_saving(estimator, X, y, groups, args, predictions, console: Co
     from ..models._auto import check_calibration
 
     y = np.asarray(y, dtype=float)
+    held_out = True
     if predictions is None and calibration_tags(estimator).cost not in ("closed_form", "kernel"):
         predictions = np.asarray(estimator.predict(X), dtype=float).reshape(y.shape)
+        held_out = False
         console.info("check: training predictions only (a held-out check of this model needs --report)")
     try:
-        check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions)
+        check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions,
+                          held_out=held_out)
     except DegenerateCalibrationError as exc:
         raise CliError(f"{args.dataset}: {' '.join(str(exc).split())}") from None
 

@@ -436,9 +436,11 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
     return None
 
 
-def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alpha: float = 1.0) -> None:
+def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alpha: float = 1.0,
+                         held_out: bool = True) -> None:
     """Raise :class:`DegenerateCalibrationError` (one line: ``what`` and why) if ``predictions`` are degenerate
     (:func:`degenerate_reason`); what ``AutoCalibrator.fit`` and ``ftcal fit`` call before a model is kept.
+    ``held_out=False`` says the predictions are of the training readings (the message and its fix say so).
 
     Examples
     --------
@@ -448,10 +450,16 @@ def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alp
     ftcal.core._model_selection.DegenerateCalibrationError: refusing the LTM: it predicts 0 for every reading on the readings it did not see; nothing was saved. Fix: record loads on every axis (each axis loaded in more than one group), or choose another model.
     """
     reason = degenerate_reason(y, predictions, alpha=alpha)
-    if reason is not None:
+    if reason is None:
+        return
+    if not held_out:
         raise DegenerateCalibrationError(
-            f"refusing {what}: {reason} on the readings it did not see; nothing was saved. Fix: record loads on "
-            "every axis (each axis loaded in more than one group), or choose another model.")
+            f"refusing {what}: {reason.replace('held-out ', '')} on its own training readings; nothing was saved. "
+            "Fix: train it longer or with other parameters, check the data (a constant channel, wrong columns), "
+            "or choose another model.")
+    raise DegenerateCalibrationError(
+        f"refusing {what}: {reason} on the readings it did not see; nothing was saved. Fix: record loads on "
+        "every axis (each axis loaded in more than one group), or choose another model.")
 
 
 #: An output whose training fold spans less than this fraction of its whole span counts as unseen in training.

@@ -586,7 +586,7 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike) -> str:
 
 
 def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
-                      random_state: int = 0, predictions: ArrayLike | None = None) -> None:
+                      random_state: int = 0, predictions: ArrayLike | None = None, held_out: bool = True) -> None:
     """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
 
     Raises :class:`~ftcal.core._model_selection.DegenerateCalibrationError` (one line, the reason) when the
@@ -595,6 +595,8 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
     :func:`~ftcal.core._model_selection.held_out_predictions`) are degenerate (constant, all zero, no better
     than the mean). A model that chose itself by cross-validation (``auto``: its tags' ``chooses_model``)
     checked its held-out predictions in ``fit``; only its predictions on ``X`` are checked again.
+    ``held_out=False`` says the given ``predictions`` are of the training readings (a network fitted without a
+    report: a held-out check would train it ``cv`` more times); the refusal then says so.
 
     Examples
     --------
@@ -621,7 +623,7 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
         if folds is None:
             return
         _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=folds)
-    check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha)
+    check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out)
 
 
 class StackedCalibrator(BaseCalibrator):
