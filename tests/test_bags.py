@@ -305,3 +305,22 @@ def test_joint_states_named_unlike_the_robot_are_refused_even_when_the_counts_ag
     err = capsys.readouterr().err.splitlines()[-1]  # after the bag's notes (dropped samples), one error line
     assert err.startswith("ftcal: error: ") and "arm_" in err and robot.joint_names[0] in err
     assert "--tf BASE,SENSOR" in err and not out.exists()
+
+
+def test_wrenches_stamped_in_another_frame_than_the_tf_sensor_frame_are_refused_naming_both(tmp_path, capsys,
+                                                                                             robot_poses):
+    # the bag's chain is base_link -> flange -> ft_sensor, the flange turned 90 deg from the sensor; the wrenches
+    # are stamped in ft_sensor: naming the flange as the sensor frame would rotate them by 90 deg without a word
+    robot, q = robot_poses
+    rec = _tool_recording(robot, q, seed=6)
+    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    bag = write_bag(tmp_path / "frames", "sqlite3", sensor_time=rec.sensor_time, reading=rec.reading,
+                    pose_time=rec.pose_time, rotations=R, frame_id="/ft_sensor")
+    with pytest.raises(LogFormatError, match="expressed in frame 'ft_sensor'.*not in 'flange'") as info:
+        read_bag(bag, tf=("base_link", "flange"))
+    assert info.value.parameter == "tf" and info.value.settings["tf"] == ("base_link", "ft_sensor")
+    assert read_bag(bag, tf=("base_link", "ft_sensor")).frame_id == "/ft_sensor"  # a leading slash is the same frame
+    assert main(["identify-load", str(bag), "--tf", "base_link,flange", "--out", str(tmp_path / "t")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "'flange'" in err[0] and "--tf base_link,ft_sensor" in err[0], err
+    assert not (tmp_path / "t").exists()

@@ -416,6 +416,19 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
         settings={"tf": _FramePair((base, sensor_guess))})
 
 
+def _check_wrench_frame(path: Path, sensor: str, frame_id: str, tf: tuple[str, str]) -> None:
+    """Refuse wrench messages stamped in another frame than the sensor frame ``tf`` names: the orientation of
+    one frame applied to wrenches written in another (a flange turned 180 deg from the sensor, a driver's
+    ``tool0_controller``) gives a wrong tool or dataset without a word. A message without a frame passes."""
+    own = _frame(frame_id)
+    if own and own != _frame(tf[1]):
+        raise LogFormatError(
+            f"{path}: the wrenches of {sensor} are expressed in frame {own!r} (their header.frame_id), not in "
+            f"{_frame(tf[1])!r}, the sensor frame named for /tf; the orientation of {_frame(tf[1])!r} would be "
+            "applied to wrenches of another frame.", parameter="tf", value=tuple(tf),
+            fix="name the wrenches' own frame: {tf}", settings={"tf": _FramePair((_frame(tf[0]), own))})
+
+
 def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str, t: NDArray[np.float64]):
     """The rotation base <- sensor at the times ``t`` through the tf tree (dynamic edges slerped)."""
     from scipy.spatial.transform import Rotation, Slerp
@@ -477,7 +490,7 @@ def read_bag(
         The joint states; default the bag's only ``JointState`` topic (unless ``tf`` is given).
     tf : (str, str), optional
         ``(base_frame, sensor_frame)``: take the sensor's orientation from ``/tf`` and ``/tf_static`` instead
-        of joints.
+        of joints. Wrench messages stamped in another frame (their ``header.frame_id``) are refused, naming it.
     stamps : {"header", "receive"}
         Which time each message carries (see the module docstring).
     max_samples : int
@@ -491,7 +504,7 @@ def read_bag(
     ------
     LogFormatError
         Not a bag, truncated or damaged; a missing topic or one of the wrong type (the bag's topics are listed);
-        a raw field that is not a numeric array; clocks that do not overlap; no sensor sample within the pose
+        a raw field that is not a numeric array; wrenches in another frame than ``tf``'s sensor frame; clocks that do not overlap; no sensor sample within the pose
         stream.
 
     Examples
@@ -578,6 +591,8 @@ def read_bag(
                         value = np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
                         if not frame_id and header is not None:
                             frame_id = str(msg.header.frame_id)
+                            if tf is not None:
+                                _check_wrench_frame(path, sensor, frame_id, tf)
                     else:
                         try:
                             value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
