@@ -116,3 +116,19 @@ def test_the_history_time_constant_of_the_field_report_is_refused(tmp_path_facto
         with pytest.raises(ModelFileError, match=rf"tau_rows_ is {value!r}, outside its allowed values: a float in "
                                                  r"the range \[1(\.0)?, inf\)"):
             load_model(_tampered(path, tmp_path, "tau_rows_", value))
+
+
+@pytest.mark.filterwarnings("ignore::sklearn.exceptions.ConvergenceWarning")  # 40 noise-free rows
+@pytest.mark.parametrize("field, value", [("amplitude_", -1.0), ("length_scale_", 0.0), ("target_scale_", -2.0),
+                                          ("input_scale_", 0.0)])
+def test_a_tampered_stock_kernel_baseline_is_refused_naming_the_field(field, value, tmp_path):
+    """A stock GP baseline's file (auto may choose and save one) keeps its kernel's scales bounded too: a zero
+    length scale or a negative amplitude was loaded and predicted before."""
+    from ftcal.models._baselines import StockCalibrator
+
+    raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=3)
+    path = save_model(StockCalibrator(baseline="sk_gp").fit(raw, wrench), tmp_path / "gp.npz")
+    assert load_model(path).amplitude_ > 0
+    with pytest.raises(ModelFileError, match=rf"stored {field} .*is {value!r}, outside its allowed values: a float in "
+                                             r"the range \(0(\.0)?, inf\)"):
+        load_model(_tampered(path, tmp_path, field, value))

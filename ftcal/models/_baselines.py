@@ -27,7 +27,7 @@ prediction needs (no pickle, bounded by the kernel models' subsample).
 from __future__ import annotations
 
 from math import comb
-from numbers import Integral
+from numbers import Integral, Real
 from typing import Any
 
 import numpy as np
@@ -245,6 +245,11 @@ class StockCalibrator(BaseCalibrator):
 
     _fitted_state = ("input_mean_", "input_scale_", "powers_", "coef_", "intercept_", "train_inputs_", "dual_coef_",
                      "length_scale_", "amplitude_", "target_mean_", "target_scale_")
+    _positive = [Interval(Real, 0, None, closed="neither")]
+    #: a scale, a length scale or an amplitude of 0 (or below) divides by zero or flips the kernel; a monomial's
+    #: power is a whole number of at most 3 (sk_poly3)
+    _fitted_constraints: dict = {"input_scale_": _positive, "length_scale_": _positive, "amplitude_": _positive,
+                                 "target_scale_": _positive, "powers_": [Interval(Integral, 0, 3, closed="both")]}
     # a model file stores no None: what a baseline that does not use them leaves
     powers_ = coef_ = intercept_ = train_inputs_ = dual_coef_ = length_scale_ = amplitude_ = None
     target_mean_ = target_scale_ = estimator_ = None
