@@ -210,3 +210,17 @@ def test_held_out_predictions_is_cross_val_predict_on_ftcals_folds():
     folds, pred = held_out_predictions(PolynomialCalibrator(degree=2), raw, w, groups=groups, cv=3)
     assert len(folds) == 3 and all(np.unique(groups[test]).size == 2 for _, test in folds)
     np.testing.assert_allclose(pred, cross_val_predict(PolynomialCalibrator(degree=2), raw, w, cv=folds))
+
+
+def test_the_stack_never_combines_a_model_with_its_own_stock_twin():
+    # a saturating sensor: the LTM and sk_linear (the same least squares) score alike and both rank high; a stack
+    # of the two splits its weight arbitrarily between two equal columns and combines no other kind of model
+    rng = np.random.default_rng(0)
+    wrench = rng.uniform(-1, 1, (150, 6)) * [100, 100, 100, 2, 2, 2]
+    raw = np.tanh(wrench / [150, 150, 150, 3, 3, 3]) @ rng.normal(size=(6, 6)) + 1e-3 * rng.normal(size=(150, 6))
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], cv=3, random_state=0).fit(raw, wrench)
+    c = auto.comparison_
+    rmse = dict(zip(c["name"], c["rmse"]))
+    assert rmse["sk_linear"] == pytest.approx(rmse["linear"], rel=1e-6)  # twins indeed
+    members = c["stack_members"]
+    assert "linear" in members and "sk_linear" not in members and len(members) == 3, members

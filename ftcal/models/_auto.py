@@ -399,6 +399,7 @@ def score_candidates(
         predictions.append(pred)
 
     rows, tasks = [], []  # (name, kind, skipped status or None); the work of the rows that are fitted
+    families = {name: calibration_tags(template).family for name, template in candidates}
     from ._baselines import StockCalibrator
 
     for name, template in candidates:
@@ -430,13 +431,13 @@ def score_candidates(
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
-            _score_stack(results, errors, predictions, record, y, alpha, folds)
+            _score_stack(results, errors, predictions, record, y, alpha, folds, families)
         model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i], y.shape)
         if model is not None:
             fitted[name] = model
         record(name, kind, status, kind != "baseline" and not skipped, pred, seconds)
     if stack and rows and rows[-1][1] != "baseline":
-        _score_stack(results, errors, predictions, record, y, alpha, folds)
+        _score_stack(results, errors, predictions, record, y, alpha, folds, families)
     results["se_units"] = se_units_name(units)
     return results, np.vstack(errors), predictions, fitted
 
@@ -491,10 +492,21 @@ def _score_one(estimator, X, y, folds, groups, network_samples, seed):
         return None, None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
 
 
-def _score_stack(results, errors, predictions, record, y, alpha, folds) -> None:
-    """Score the non-negative combination of the best eligible candidates (weights cross-fitted over folds)."""
+def _score_stack(results, errors, predictions, record, y, alpha, folds, families: dict) -> None:
+    """Score the non-negative combination of the best eligible candidates (weights cross-fitted over folds), a
+    stock model and ftcal's model of the same family (``families``: name -> tags' family) never both."""
     ranked = sorted((r, k) for k, r in enumerate(results["rmse"]) if results["eligible"][k])
-    members = [k for _, k in ranked[:STACK_SIZE]]
+    members: list[int] = []
+    for _, k in ranked:
+        # a stock model beside ftcal's model of its family (sk_linear and the LTM: the same least squares) adds
+        # no kind of model to the combination, only a column its twin already gives (weights split arbitrarily)
+        family = families.get(results["name"][k])
+        if family and any(families.get(results["name"][j]) == family
+                          and "stock" in (results["kind"][j], results["kind"][k]) for j in members):
+            continue
+        members.append(k)
+        if len(members) == STACK_SIZE:
+            break
     if len(members) < 2:
         return
     scaled = [scale_torques(predictions[k], alpha) for k in members]
