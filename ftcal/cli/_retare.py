@@ -68,9 +68,10 @@ def run(args: argparse.Namespace) -> int:
         from ._tool_drift import run_retare_tool
 
         return run_retare_tool(args)
-    if args.time is not None or args.temperature is not None or args.orientation or args.tool_off:
-        raise CliError("--time, --temperature, --orientation and --tool-off re-tare a tool file (NAME.tool.json); "
-                       f"{args.model} is a model file")
+    if args.time is not None or args.temperature is not None or args.orientation or args.tool_off or \
+            args.force_unit is not None or args.torque_unit is not None:
+        raise CliError("--time, --temperature, --orientation, --tool-off, --force-unit and --torque-unit re-tare a "
+                       f"tool file (NAME.tool.json); {args.model} is a model file (its readings are raw)")
     plan = OutputPlan.single_file(output, args.force)
     from ._data_options import model_reading
 

@@ -156,9 +156,9 @@ re-taring a tool file:
   ftcal retare tool/tool.tool.json no_load_tool_off.csv --tool-off --time 1764100000
 
 A tool file (of 'ftcal identify-load'): READINGS is a CSV of calibrated no-load wrenches, header
-Fx,Fy,Fz,Tx,Ty,Tz [N, N·m] (sensor frame), optional columns time [s] (or the pose order of a
---time-from-order tool), temperature [deg C] and qx,qy,qz,qw (the sensor's orientation in the base frame,
-scalar last). With the tool mounted (nothing touching it) the orientation is needed (columns or
+Fx,Fy,Fz,Tx,Ty,Tz (or Mx,My,Mz) in N, N·m or the --force-unit/--torque-unit given (sensor frame), optional
+columns time [s] (or the pose order of a --time-from-order tool), temperature [deg C] and the sensor's
+orientation in the base frame as in a pose file (qx,qy,qz,qw scalar last, or R00..R22, or roll,pitch,yaw). With the tool mounted (nothing touching it) the orientation is needed (columns or
 --orientation) to remove its weight; with --tool-off the readings are the bias itself. The new tool file's
 bias is their mean at the readings' time (--time, else the mean of the time column); a drift keeps its rate
 from there on.
@@ -174,49 +174,37 @@ def add_retare_tool_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--orientation", metavar="QX,QY,QZ,QW",
                    help="the sensor's orientation (sensor to base, scalar last) while the readings were taken")
     g.add_argument("--tool-off", action="store_true", help="the tool was taken off: the readings are the bias")
+    from ._data_options import add_unit_options
+
+    add_unit_options(g)
 
 
-def _read_wrench_readings(path: str):
-    """Columns of a no-load wrench CSV: ``wrench`` (n, 6) and optional ``time``, ``temperature``, ``quaternion``."""
-    import numpy as np
+def _read_wrench_readings(args: argparse.Namespace):
+    """The no-load readings of a tool re-tare, read by the pose-file reader (its layout, units and checks, the
+    orientation optional): ``wrench`` (n, 6) [N, N·m] and, when the file has them, ``time``, ``temperature`` and
+    ``rotation`` (n, 3, 3)."""
+    from ..core._exceptions import LogFormatError
+    from ..io._poses import read_pose_file
+    from ._data_options import check_lever_arm
+    from ._messages import cli_message
 
-    from ..core._columns import parse_number, read_header
-    from ..core._wrench import WRENCH_LABELS
-
-    optional = ["time", "temperature", "qx", "qy", "qz", "qw", "Mx", "My", "Mz"]
-    rows, header, lineno = [], None, 0
-    with open(path, encoding="utf-8") as fh:
-        for lineno, line in enumerate(fh, 1):
-            if not line.strip() or line.lstrip().startswith("#"):
-                continue
-            fields = line.rstrip("\r\n").split(",")
-            if header is None:
-                names = [f.strip() for f in fields]
-                torque = ["Mx", "My", "Mz"] if "Mx" in names else ["Tx", "Ty", "Tz"]
-                header = read_header(fields, where=f"{path}: line {lineno}", error=CliError, numbered=(),
-                                     required=[*WRENCH_LABELS[:3], *torque], optional=optional + list(WRENCH_LABELS[3:]),
-                                     expected="Fx,Fy,Fz,Tx,Ty,Tz[,time][,temperature][,qx,qy,qz,qw]")
-                continue
-            if len(fields) != len(header.names):
-                raise CliError(f"{path}: line {lineno}: {len(fields)} fields, the header names {len(header.names)}")
-            rows.append([parse_number(f, f"{path}: line {lineno}", CliError) for f in fields])
-            if len(rows) > MAX_RETARE_READINGS:
-                raise CliError(f"{path}: more than {MAX_RETARE_READINGS} readings; a few hundred quiet readings are "
-                               "enough for a re-tare, pass fewer")
-    if header is None or not rows:
-        raise CliError(f"{path}: no readings (a header Fx,Fy,Fz,Tx,Ty,Tz and at least one row are needed)")
-    a = np.asarray(rows, dtype=float)
-    col = header.index
-    torque = ["Mx", "My", "Mz"] if "Mx" in col else ["Tx", "Ty", "Tz"]
-    out = {"wrench": a[:, [col[c] for c in (*WRENCH_LABELS[:3], *torque)]]}
-    for name in ("time", "temperature"):
-        if name in col:
-            out[name] = a[:, col[name]]
-    quat = [c for c in ("qx", "qy", "qz", "qw") if c in col]
-    if quat and len(quat) != 4:
-        raise CliError(f"{path}: the header has {', '.join(quat)} but not all of qx,qy,qz,qw")
-    if quat:
-        out["quaternion"] = a[:, [col[c] for c in ("qx", "qy", "qz", "qw")]]
+    force_unit, torque_unit = args.force_unit or "N", args.torque_unit or "N.m"
+    try:
+        rec = read_pose_file(args.readings, force_unit=force_unit, torque_unit=torque_unit,
+                             orientation_required=False, repeated_times=True)
+    except LogFormatError as exc:
+        raise CliError(cli_message(exc, args)) from None
+    if rec.wrench is None:
+        raise CliError(f"{args.readings}: a tool re-tare reads calibrated wrenches, header Fx,Fy,Fz,Tx,Ty,Tz (or "
+                       "Mx,My,Mz); the file holds raw channels: predict them with the sensor's model first")
+    if rec.n_rows > MAX_RETARE_READINGS:
+        raise CliError(f"{args.readings}: more than {MAX_RETARE_READINGS} readings; a few hundred quiet readings are "
+                       "enough for a re-tare, pass fewer")
+    if not args.tool_off:  # the tool's weight and the bias: a lever arm of a tool's size, unless the units are off
+        check_lever_arm(args, rec.wrench, args.readings, force_unit=force_unit, torque_unit=torque_unit)
+    out = {"wrench": rec.wrench}
+    out.update({k: v for k, v in (("time", rec.time), ("temperature", rec.temperature), ("rotation", rec.rotation))
+                if v is not None})
     return out
 
 
@@ -249,10 +237,10 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     if args.readings == "-":
         raise CliError("a tool re-tare reads its readings from a file, not stdin")
     tool = ftcal.ToolLoad.load(model)
-    data = _read_wrench_readings(args.readings)
-    if args.tool_off and (args.orientation or "quaternion" in data):
+    data = _read_wrench_readings(args)
+    if args.tool_off and (args.orientation or "rotation" in data):
         raise CliError("--tool-off: the readings were taken without the tool, so no orientation is needed; drop "
-                       "--orientation (or the qx..qw columns) or --tool-off")
+                       "--orientation (or the orientation columns) or --tool-off")
     rotations = None
     if args.orientation:
         try:
@@ -262,12 +250,12 @@ def run_retare_tool(args: argparse.Namespace) -> int:
         if len(quat) != 4:
             raise CliError(f"--orientation {args.orientation!r}: give qx,qy,qz,qw, four comma-separated numbers")
         rotations = _rotations(quat, "--orientation")[0]
-    elif "quaternion" in data:
-        rotations = _rotations(data["quaternion"], args.readings)
+    elif "rotation" in data:
+        rotations = data["rotation"]
     elif not args.tool_off:
         raise CliError(f"{args.readings}: with the tool mounted its weight must be removed, which needs the sensor's "
-                       "orientation: add qx,qy,qz,qw columns or --orientation QX,QY,QZ,QW; or, if the tool was taken "
-                       "off, pass --tool-off")
+                       "orientation: add qx,qy,qz,qw columns (or R00..R22, or roll,pitch,yaw) or --orientation "
+                       "QX,QY,QZ,QW; or, if the tool was taken off, pass --tool-off")
     time = args.time if args.time is not None else (float(np.mean(data["time"])) if "time" in data else None)
     temperature = args.temperature if args.temperature is not None else (
         float(np.mean(data["temperature"])) if "temperature" in data else None)

@@ -65,8 +65,9 @@ class PoseRecording:
     Attributes
     ----------
     path : pathlib.Path
-    rotation : ndarray of shape (n, 3, 3)
-        Sensor frame to base frame, per row (a proper rotation).
+    rotation : ndarray of shape (n, 3, 3) or None
+        Sensor frame to base frame, per row (a proper rotation); None for a file without orientation columns
+        (read with ``orientation_required=False``).
     wrench : ndarray of shape (n, 6) or None
         [N, N·m], in the frame the file was written in (see ``--wrench-frame``).
     raw : ndarray of shape (n, n_channels) or None
@@ -78,11 +79,11 @@ class PoseRecording:
     line : ndarray of shape (n,), int
         1-based line number of each row.
     orientation : str
-        Which orientation layout the file used (a key of :data:`ORIENTATION_LAYOUTS`).
+        Which orientation layout the file used (a key of :data:`ORIENTATION_LAYOUTS`; '' for none).
     """
 
     path: Path
-    rotation: NDArray[np.float64]
+    rotation: NDArray[np.float64] | None
     wrench: NDArray[np.float64] | None
     raw: NDArray[np.float64] | None
     time: NDArray[np.float64] | None
@@ -93,7 +94,7 @@ class PoseRecording:
     @property
     def n_rows(self) -> int:
         """Number of rows."""
-        return int(len(self.rotation))
+        return int(len(self.line))
 
     @property
     def reading(self) -> NDArray[np.float64]:
@@ -137,7 +138,8 @@ def is_pose_file(path: str | Path) -> bool:
     return False
 
 
-def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str = "N.m") -> PoseRecording:
+def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str = "N.m",
+                   orientation_required: bool = True, repeated_times: bool = False) -> PoseRecording:
     """Read and check a pose file (layout in the module docstring).
 
     Parameters
@@ -147,6 +149,11 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     force_unit, torque_unit : str
         Units of the file's forces and torques (``N``, ``kN``, ``lbf``; ``N.m``, ``N.mm``, ...), converted to
         [N] and [N·m].
+    orientation_required : bool, default=True
+        False: a file without orientation columns is read too (``rotation`` None), as the no-load readings of a
+        tool re-tare with the tool taken off; orientation columns present are checked as always.
+    repeated_times : bool, default=False
+        True: consecutive rows may share a time (readings taken together, as a re-tare's); times never go back.
 
     Returns
     -------
@@ -178,12 +185,12 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     layouts = [name for name, cols in ORIENTATION_LAYOUTS.items() if all(c in head for c in cols)]
     partial = [name for name, cols in ORIENTATION_LAYOUTS.items() if any(c in head for c in cols)
                and name not in layouts]
-    if len(layouts) != 1:
+    if len(layouts) != 1 and not (not layouts and not partial and not orientation_required):
         if layouts:
             raise LogFormatError(f"{where}: the header holds two orientations ({' and '.join(layouts)}); keep one.")
         hint = f" (it has part of the {partial[0]}: {','.join(ORIENTATION_LAYOUTS[partial[0]])})" if partial else ""
         raise LogFormatError(f"{where}: the header names no orientation of the sensor{hint}; expected {_EXPECTED}.")
-    layout = layouts[0]
+    layout = layouts[0] if layouts else ""
     wrench_cols: dict[str, str] = {}
     for n in names:
         canonical = canonical_wrench_name(n)
@@ -206,7 +213,7 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
             raise LogFormatError(f"{where}: {len(channels)} raw channels; a sensor needs at least 3.")
     if not rows:
         raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
-    orientation_cols = ORIENTATION_LAYOUTS[layout]
+    orientation_cols = ORIENTATION_LAYOUTS[layout] if layout else ()
     value_cols = list(orientation_cols) + ([wrench_cols[c] for c in WRENCH_LABELS] if wrench_cols else channels)
     value_cols += [c for c in ("time", "temperature") if c in head]
     n = len(rows)
@@ -225,7 +232,9 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
             values[i, k] = v
     k = len(orientation_cols)
     o = values[:, :k]
-    if layout.startswith("quaternion"):
+    if not layout:
+        rotation = None
+    elif layout.startswith("quaternion"):
         norm = np.linalg.norm(o, axis=1)
         bad = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE)
         if bad.size:
@@ -263,10 +272,11 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     extra = {c: values[:, value_cols.index(c)].copy() for c in ("time", "temperature") if c in head}
     time = extra.get("time")
     if time is not None:
-        back = np.flatnonzero(np.diff(time) <= 0)
+        back = np.flatnonzero(np.diff(time) < 0 if repeated_times else np.diff(time) <= 0)
         if back.size:
             i = int(back[0]) + 1
+            rule = "times must not go back" if repeated_times else "times must increase row by row"
             raise LogFormatError(f"{path}: line {line[i]}, column time: {time[i]:g} s does not follow "
-                                 f"{time[i - 1]:g} s on line {line[i - 1]}; times must increase row by row.")
+                                 f"{time[i - 1]:g} s on line {line[i - 1]}; {rule}.")
     return PoseRecording(path=path, rotation=rotation, wrench=wrench, raw=raw, time=time,
                          temperature=extra.get("temperature"), line=line, orientation=layout)
