@@ -156,6 +156,8 @@ HISTORY_MODELS = ("linear", "polynomial", "axis_nonlinear")
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
+    from ._data_options import add_dataset_options, add_fold_options
+
     d = kinds.add_parser(
         "dataset",
         help="every calibrator on YOUR dataset, cross-validated: which one to use for your sensor",
@@ -165,12 +167,10 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     )
     d.add_argument("dataset", help="calibration dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
                    "session), e.g. as written by 'ftcal prepare'")
-    d.add_argument(
-        "--folds", choices=("auto", "group", "kfold"), default="auto",
-        help="group: hold out whole groups (needs a group column); kfold: shuffled folds; auto: group if present",
-    )
-    d.add_argument("--cv", type=int_in_range(2, 100, "folds"), default=5, help="number of folds")
-    d.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
+    add_fold_options(d.add_argument_group("cross-validation"), cv_default=5)
+    from ._data_options import add_alpha_option
+
+    add_alpha_option(d)
     d.add_argument(
         "--history", action="store_true",
         help="also score each closed-form model (" + ", ".join(HISTORY_MODELS) + ") with a load-history term "
@@ -178,8 +178,6 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
              "each group one recording in time order",
     )
     _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
-    from ._data_options import add_dataset_options
-
     add_dataset_options(d)
     d.set_defaults(handler=run_dataset)
 
@@ -192,7 +190,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..models._baselines import STOCK_BASELINE_NAMES, StockCalibrator
     from ..core._model_selection import simplest_within_one_se
     from ..evaluation._plots import plot_axis_errors
-    from ._data_options import load_dataset_from_args
+    from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, dataset_alpha
 
     console = Console(args.quiet)
@@ -201,10 +199,8 @@ def run_dataset(args: argparse.Namespace) -> int:
         raise CliError("--model auto: 'auto' is itself this comparison; list the calibrators to compare instead")
     plan = OutputPlan(args.out, ["dataset_results.json", "dataset_results.md", "dataset_rmse.png"], args.force)
     data = load_dataset_from_args(args, args.dataset, "dataset")
-    if args.folds == "group" and data.group is None:
-        raise CliError(f"--folds group: {args.dataset} has no group column; use --folds kfold")
+    groups = fold_groups(args, data, args.dataset)
     check_fold_count(data, args.cv, args.dataset)
-    groups = data.group if args.folds in ("auto", "group") else None
     if args.history and groups is None:
         raise CliError(f"--history: a load history runs along consecutive rows, so whole recordings must be held out; "
                        f"{args.dataset} needs a group column (one recording per group, rows in time order) and "

@@ -1,10 +1,21 @@
 """The options that say how to read a user's calibration data, defined once for every command that reads data.
 
-``ftcal fit``, ``evaluate``, ``report``, ``tune`` and ``benchmark dataset`` take ``--channels``, ``--wrench``,
-``--axes``, ``--groups``, ``--force-unit``, ``--torque-unit`` and ``--exclude-saturated``; ``predict`` and
-``retare`` take ``--channels``. A model file keeps the mapping and units it was fitted with, and the commands that
-read data for a model (``evaluate``, ``report``, ``predict``, ``retare``) apply them unless the options say
-otherwise.
+Every command that reads data takes the same options, defined here once (one name, one meaning, one help text;
+``tests/test_cli_shared_options.py`` walks every subcommand's parser to hold that):
+
+* a calibration dataset (``fit``, ``evaluate``, ``report``, ``tune``, ``benchmark dataset``, ``plan --next``):
+  :func:`add_dataset_options` -- ``--channels``, ``--wrench``, ``--axes``, ``--groups``, ``--force-unit``,
+  ``--torque-unit`` and ``--exclude-saturated``;
+* raw readings for a model (``predict``, ``retare``): ``--channels`` (:func:`add_channel_option`);
+* wrenches (``identify-load``, ``compensate``, a tool's ``retare``): ``--force-unit``, ``--torque-unit``
+  (:func:`add_unit_options`);
+* cross-validation (``fit --report``, ``report``, ``tune``, ``benchmark dataset``, ``identify-load``'s drift):
+  :func:`add_fold_options` -- ``--cv K`` and, where the split can be chosen, ``--folds auto|group|kfold``; the
+  seed is ``--seed`` everywhere. Old spellings (``tune --group-folds``/``--random-folds``, ``identify-load
+  --drift-cv``, ``prepare --channels N``) still work, hidden from ``--help``.
+
+A model file keeps the mapping and units it was fitted with, and the commands that read data for a model
+(``evaluate``, ``report``, ``predict``, ``retare``, ``plan --next``) apply them unless the options say otherwise.
 
 The lever-arm check runs on every dataset whatever options are given: an implausibly long arm (torques in N·mm read
 as N·m, or forces in kN read as N) is refused with the likely unit of the forces or of the torques, unless both units
@@ -17,10 +28,11 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import CliError
+from ._common import CliError, int_in_range
 
-__all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "check_lever_arm", "dataset_columns",
-           "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
+__all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
+           "add_alpha_option",
+           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -50,11 +62,52 @@ def _saturation(text: str):
     return low, high
 
 
+#: The one help text of ``--channels``, on every command.
+CHANNELS_HELP = (f"the raw-channel columns (or .mat/.npz variables) in channel order: {_SPEC_HELP} (default: the "
+                 "mapping the model was fitted with, when a model reads the data; else s0,s1,... or the variable 'raw')")
+#: The one help text of ``--cv`` and ``--folds``, on every command that cross-validates.
+CV_HELP = ("cross-validation folds (at least 2): every row is held out once, whole groups (poses, sessions, files) "
+           "together when the data have groups (default: %(default)s)")
+FOLDS_HELP = ("how the rows are split into folds: auto: whole groups held out when the data have groups, else "
+              "shuffled rows; group: whole groups (the data must have groups); kfold: shuffled rows even with groups "
+              "(flatters flexible models: rows of one pose land on both sides of a split)")
+
+
+def _add_channels(g) -> None:
+    g.add_argument("--channels", type=_names, metavar="SPEC", help=CHANNELS_HELP)
+
+
 def add_channel_option(p: argparse.ArgumentParser) -> None:
     """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench)."""
-    p.add_argument("--channels", type=_names, metavar="SPEC",
-                   help=f"the raw-channel columns of the input in channel order: {_SPEC_HELP} (default: the "
-                   "mapping the model was fitted with, else s0,s1,... or the array 'raw')")
+    _add_channels(p)
+
+
+def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
+    """``--cv K`` (default ``cv_default``) and, with ``folds``, ``--folds auto|group|kfold`` (with the hidden old
+    spellings ``--group-folds`` / ``--random-folds``): the same options on every command that cross-validates."""
+    g.add_argument("--cv", type=int_in_range(2, 1000, "folds"), default=cv_default, metavar="K", help=CV_HELP)
+    if folds:
+        g.add_argument("--folds", choices=("auto", "group", "kfold"), default="auto", help=FOLDS_HELP)
+        g.add_argument("--group-folds", dest="folds", action="store_const", const="group", help=argparse.SUPPRESS)
+        g.add_argument("--random-folds", dest="folds", action="store_const", const="kfold", help=argparse.SUPPRESS)
+
+
+def add_alpha_option(p) -> None:
+    """``--alpha``: the torque scale of eq. 18, the same on every command that fits or scores on a dataset."""
+    from ._common import positive_float
+
+    p.add_argument("--alpha", type=positive_float, metavar="1/m",
+                   help="torque scale Fmax/Tmax [1/m] that weighs torques against forces (eq. 18) (default: the "
+                   "dataset's meta 'alpha', else from its wrenches over the axes that exist)")
+
+
+def fold_groups(args: argparse.Namespace, data, path):
+    """The groups the folds keep whole as ``--folds`` says (None: shuffled rows); ``group`` without groups is
+    refused naming the file."""
+    if args.folds == "group" and data.group is None:
+        raise CliError(f"--folds group: {path} has no group column; name it with --groups COLUMN, or use "
+                       "--folds kfold")
+    return None if args.folds == "kfold" else data.group
 
 
 def add_unit_options(g: argparse._ArgumentGroup) -> None:
@@ -91,13 +144,15 @@ def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_un
     print(f"ftcal: warning: {where}: {problem}", file=sys.stderr)
 
 
+#: The destinations of :func:`add_dataset_options` (unset: None).
+DATASET_OPTIONS = ("channels", "wrench", "axes", "groups", "force_unit", "torque_unit", "exclude_saturated")
+
+
 def add_dataset_options(p: argparse.ArgumentParser) -> None:
     """``--channels``, ``--wrench``, ``--axes``, ``--groups``, ``--force-unit``, ``--torque-unit``,
     ``--exclude-saturated``."""
     g = p.add_argument_group("reading the dataset (.csv, .npz, .mat, or a folder of them: one file per pose)")
-    g.add_argument("--channels", type=_names, metavar="SPEC",
-                   help=f"the raw-channel columns (or .mat/.npz variables) in channel order: {_SPEC_HELP} "
-                   "(default: s0,s1,... or the variable 'raw')")
+    _add_channels(g)
     g.add_argument("--wrench", type=_names, metavar="SPEC",
                    help=f"the wrench columns, any number of axes: {_SPEC_HELP}; e.g. Fx,Fy,Fz for a 3-axis load cell, "
                    "data[:,8:14] (default: every column named Fx..Tz, Mx.., force_x.., or the variable 'wrench')")

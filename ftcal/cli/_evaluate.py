@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, positive_float, write_json
+from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, write_json
 from ._data_options import add_dataset_options, load_dataset_for_models
 from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
 from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
@@ -41,10 +41,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("dataset", help="evaluation dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("models", nargs="+", metavar="MODEL", type=existing_file, help="model files written by 'ftcal fit'")
-    p.add_argument(
-        "--alpha", type=positive_float,
-        help="torque scale Fmax/Tmax [1/m] for the RMSE (default: the dataset's meta 'alpha', else from its wrenches)",
-    )
+    from ._data_options import add_alpha_option
+
+    add_alpha_option(p)
     p.add_argument("--no-plots", action="store_true", help="write the metrics only")
     add_dataset_options(p)
     add_output_options(p, "ftcal-eval")

@@ -7,7 +7,7 @@ import time
 
 import numpy as np
 
-from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range, positive_float,
+from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range,
                       write_json)
 from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
@@ -53,10 +53,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
         help="a calibrator parameter, value read as JSON (repeatable), e.g. phase1_epochs=200",
     )
-    p.add_argument(
-        "--alpha", type=positive_float,
-        help="torque scale Fmax/Tmax [1/m] (default: the dataset's meta 'alpha', else from its wrenches)",
-    )
+    from ._data_options import add_alpha_option
+
+    add_alpha_option(p)
     p.add_argument(
         "--tare", metavar="V0,V1,...",
         help="known zero-load raw reading, one value per channel (default: estimated from the data)",

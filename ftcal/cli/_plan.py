@@ -79,6 +79,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--load-mass", type=positive_float, default=None,
                    help="with --next: load mass [kg] if the dataset's metadata lacks it")
     p.add_argument("--degrees", action="store_true", help="write joint angles, pitch and yaw in degrees")
+    from ._data_options import add_dataset_options
+
+    add_dataset_options(p)  # how --next reads --dataset (default: as the model was fitted)
     add_output_options(p, "ftcal-plan")
     add_run_options(p, seed=True)
     p.set_defaults(handler=run)
@@ -96,6 +99,11 @@ def _check_arguments(args: argparse.Namespace) -> None:
         return
     if args.dataset is not None or args.model is not None:
         raise CliError("--dataset and --model are for --next K (which poses to measure next)")
+    from ._data_options import DATASET_OPTIONS
+
+    given = [f"--{k.replace('_', '-')}" for k in DATASET_OPTIONS if getattr(args, k, None) is not None]
+    if given:
+        raise CliError(f"{', '.join(given)} say how --next reads its --dataset; give them with --next K")
     if args.strategy == "geodesic" and args.poses is not None:
         raise CliError(f"--poses {args.poses} needs --strategy d-optimal or random (the geodesic plan takes every "
                        "direction of its sphere; choose its size with --subdivisions)")
@@ -116,9 +124,11 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot_from_args(args)
     extra: dict = {}
     if args.next_poses is not None:
-        from ._models import load_dataset, load_model_file
+        from ._data_options import load_dataset_for_models
+        from ._models import load_model_file
 
-        dataset = load_dataset(args.dataset, "dataset")
+        # read as the model was fitted (its stored columns and units), each option given overriding
+        dataset = load_dataset_for_models(args, args.dataset, "dataset", [args.model])
         model = load_model_file(args.model)
         console.info(f"ranking the reachable poses of {robot.name} by the predicted uncertainty of {args.model} ...")
         candidates = ftcal.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,

@@ -83,7 +83,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--n-channels", type=int_in_range(3, 1024, "channels"), metavar="N",
                    help="expected raw channel count (checked in every log)")
     p.add_argument("--channels", dest="n_channels", action=_DeprecatedChannelCount, metavar="N",
-                   help="deprecated spelling of --n-channels (on the other commands --channels names columns)")
+                   help=argparse.SUPPRESS)  # the old spelling, hidden: --channels names columns everywhere else
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_bag_options(p, wrench=False)
     add_recording_options(p.add_argument_group("still poses in ROS bags"))

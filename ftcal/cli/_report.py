@@ -13,7 +13,7 @@ import numpy as np
 
 from ..core._exceptions import CalibrationInputError
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
-from ._data_options import add_dataset_options, load_dataset_for_models
+from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 
 EXAMPLE = """\
 examples:
@@ -65,7 +65,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 def add_report_options(p: argparse.ArgumentParser) -> None:
     """The options ``ftcal report`` shares with ``ftcal fit --report``."""
     g = p.add_argument_group("calibration report")
-    g.add_argument("--cv", type=int_in_range(2, 50, "folds"), default=5, help="cross-validation folds of the report")
+    add_fold_options(g, cv_default=5, folds=False)
     g.add_argument("--no-baselines", action="store_true",
                    help="leave the stock scikit-learn baselines out of the report's model-choice table")
     g.add_argument("--sensor", help="sensor name / serial number shown in the report (default: dataset meta 'sensor')")

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, finite_float
+from ._common import CliError, Console, OutputPlan, finite_float, int_in_range
 
 #: The choices of ``--drift`` (the library's ``DRIFT_CHOICES``; repeated here so that ``--help`` imports nothing).
 DRIFT_CHOICES = ("auto", "none", "linear", "spline", "temperature")
@@ -16,15 +16,18 @@ TOOL_SUFFIX = ".tool.json"
 
 
 def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> None:
-    """``--time-from-order`` (both commands), ``--drift`` and ``--drift-cv`` (identify-load)."""
+    """``--time-from-order`` (both commands), ``--drift`` and ``--cv`` (identify-load: the leave-poses-out folds
+    that choose the drift; ``--drift-cv`` is its old spelling)."""
     g = p.add_argument_group("bias drift")
     if identify:
         g.add_argument("--drift", choices=DRIFT_CHOICES, default="auto",
                        help="auto: add a bias drift (linear or a spline in time, or in temperature when the inputs "
                        "carry one) when it lowers the held-out error (leave-poses-out CV, one-SE rule); none: a "
                        "constant bias; linear, spline, temperature: force that drift")
-        g.add_argument("--drift-cv", type=int, default=20, metavar="K",
-                       help="folds of the leave-poses-out cross-validation that chooses the drift")
+        from ._data_options import add_fold_options
+
+        add_fold_options(g, cv_default=20, folds=False)  # the poses are the groups the folds keep whole
+        g.add_argument("--drift-cv", dest="cv", type=int_in_range(2, 1000, "folds"), help=argparse.SUPPRESS)
     g.add_argument("--time-from-order", action="store_true",
                    help="the inputs carry no usable time: take each pose's position in the recording (row order) "
                    "as its time (the drift is then per pose, not per second)")
@@ -50,12 +53,10 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
-    if args.drift_cv < 2:
-        raise CliError(f"--drift-cv {args.drift_cv}: give at least 2 folds")
     if args.drift in ("linear", "spline") and times is None:
         raise CliError(f"--drift {args.drift} needs the time of each pose: the inputs carry none; pass "
                        "--time-from-order to use the recording order")
-    settings = dict(drift=args.drift, cv=args.drift_cv, random_state=0, groups=groups)
+    settings = dict(drift=args.drift, cv=args.cv, random_state=0, groups=groups)
     try:
         tool = ftcal.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
                                         time_unit=unit, **settings)

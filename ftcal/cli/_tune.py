@@ -7,9 +7,9 @@ import re
 import time
 
 from ..core._exceptions import CalibrationInputError
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, positive_float, write_json, int_in_range
+from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
-from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
+from ._data_options import add_dataset_options, add_fold_options, fit_data_facts, fold_groups, load_dataset_from_args
 from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
 
 EXAMPLE = """\
@@ -18,7 +18,7 @@ examples:
   ftcal tune data/train.csv --model axis_nonlinear --grid 'powers=[[1.5], [1, 2]]' --grid 'ridge=[1e-6, 1e-3]'
   ftcal tune data/train.csv --model directional --grid 'hidden_layer_sizes=[[64, 64], [128, 128, 128]]' \\
       --grid 'lr=loguniform(1e-4, 1e-2)' --n-iter 8 --cv 3 --out tuned
-  ftcal tune real.csv --model directional_ensemble --grid 'estimator__lr=[3e-4, 1e-3]' --group-folds
+  ftcal tune real.csv --model directional_ensemble --grid 'estimator__lr=[3e-4, 1e-3]' --folds group
 
 searches the values (a JSON list per parameter: grid search over every combination; with --n-iter,
 a randomized search that also takes loguniform(a, b), uniform(a, b), randint(a, b)) by k-fold
@@ -43,24 +43,15 @@ def register(sub: argparse._SubParsersAction) -> None:
         "default: the model's documented search space, ftcal.models._search.DEFAULT_SEARCH_SPACES)",
     )
     p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
-    p.add_argument("--cv", type=int_in_range(1, 100, "folds"), default=3, help="number of cross-validation folds (>= 2)")
-    folds = p.add_mutually_exclusive_group()
-    folds.add_argument(
-        "--group-folds", action="store_true",
-        help="keep the dataset's groups (e.g. poses, load configurations) whole in the folds; the default when "
-        "the dataset has a group column (it is an error without one)",
-    )
-    folds.add_argument(
-        "--random-folds", action="store_true",
-        help="shuffled folds even when the dataset has groups (flatters flexible models: rows of one pose "
-        "land on both sides of a split)",
-    )
+    add_fold_options(p.add_argument_group("cross-validation"), cv_default=3)
     p.add_argument("--schedule", default="short", choices=("thesis", "short"), help="starting training schedule")
     p.add_argument(
         "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
         help="a fixed calibrator parameter, value read as JSON (repeatable)",
     )
-    p.add_argument("--alpha", type=positive_float, help="torque scale Fmax/Tmax [1/m] (default: dataset meta)")
+    from ._data_options import add_alpha_option
+
+    add_alpha_option(p)
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
     add_scheduler_option(p)
     p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
@@ -115,17 +106,13 @@ def run(args: argparse.Namespace) -> int:
     name = args.name or args.model
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
-    if args.cv < 2:
-        raise CliError(f"--cv {args.cv}: cross-validation needs at least 2 folds")
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
     for entry in args.grid:
         check_distribution(entry, randomized=args.n_iter is not None)
     space = parse_search_space(args.grid) if args.grid else None
     data = load_dataset_from_args(args, args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)
-    if args.group_folds and data.group is None:
-        raise CliError(f"--group-folds: {args.dataset} has no group column; drop the option")
-    groups = None if args.random_folds else data.group
+    groups = fold_groups(args, data, args.dataset)
     params = dict(args.param)
     alpha = dataset_alpha(data, args.alpha)
     if alpha is not None and "alpha" not in params:
