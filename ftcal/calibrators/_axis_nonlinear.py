@@ -230,7 +230,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         ridge = self.ridge if isinstance(self.ridge, str) else float(self.ridge)
         n_ref = int(self.n_refinements)
-        ys = scale_torques(y, self.alpha_)
+        ys = scale_torques(y, self.alpha_, self.axes_)
         xc = X - self.zero_reading_
         base = affine_fit(xc, ys)  # the LTM in the torque-scaled space
         self.base_matrix_, self.base_offset_ = base.coef_, base.intercept_
@@ -293,7 +293,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         previous = z
         for coefs, intercepts in zip(self.coefs_, self.intercepts_):
             previous = self._apply(block, previous, coefs, intercepts)
-        return unscale_torques(previous, self.alpha_)
+        return unscale_torques(previous, self.alpha_, self.axes_)
 
     def _emit_onnx(self, g, x: str) -> str:
         z = g.affine(g.op("Sub", x, g.const(self.zero_reading_)), self.base_matrix_.T, self.base_offset_)
@@ -313,5 +313,5 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
             plain = g.affine(block, coefs[:, :width].T)
             gated = g.op("Add", g.affine(block, coefs[:, width + 1:].T), g.const(coefs[:, width]))
             previous = g.op("Add", g.op("Add", plain, g.op("Mul", gate, gated)), g.const(intercepts))
-        return g.unscale_torques(previous, self.alpha_, int(getattr(self, "n_outputs_", 6)))
+        return g.unscale_torques(previous, self.alpha_, int(getattr(self, "n_outputs_", 6)), self.axes_)
 

@@ -41,7 +41,7 @@ from ..core._model_selection import check_groups
 from ..core._threads import limit_threads_here
 from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
                                 validate_training_data)
-from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches
+from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches, target_axes
 from ._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["BaseCalibrator", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare"]
@@ -178,9 +178,12 @@ def _refuse_far_outside(X: NDArray[np.float64], reading_range: ArrayLike, name: 
     return span
 
 
-def resolve_alpha(alpha: float | None, y: NDArray[np.float64]) -> float:
+def resolve_alpha(alpha: float | None, y: NDArray[np.float64], axes=None) -> float:
     if alpha is None:
-        # only a 6-component wrench has torques to scale; other targets keep their units (alpha_ = 1)
+        # Fmax / Tmax over the axes y has (``axes``: named by y's columns); without names only a 6-component wrench
+        # has torques to scale, other targets keep their units (alpha_ = 1)
+        if axes is not None:
+            return alpha_from_wrenches(y, axes)
         return alpha_from_wrenches(y) if y.shape[1] == 6 else 1.0
     if isinstance(alpha, bool) or not isinstance(alpha, numbers.Real) or not np.isfinite(alpha) or alpha <= 0:
         raise CalibrationInputError(
@@ -228,7 +231,10 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     #: Fitted attributes a model file stores (:func:`ftcal.save_model`); each subclass declares its own
     #: next to its class, and ``_emit_onnx(graph, x)`` for its ONNX graph (:func:`ftcal.export_onnx`).
     _fitted_state: tuple[str, ...] = ("alpha_", "n_features_in_", "feature_names_in_", "n_outputs_", "y_1d_",
-                                      "zero_reading_", "reading_noise_", "tare_reading_", "calibrated_range_")
+                                      "zero_reading_", "reading_noise_", "tare_reading_", "calibrated_range_", "axes_")
+    #: The wrench axes ``y``'s columns named at fit (:func:`~ftcal.core._wrench.target_axes`), when not the default
+    #: ones of its width (Fx..Tz for six, else forces only): e.g. Fz, Tx, Ty of a plate, whose torques are scaled.
+    axes_ = None
     #: Allowed values of fitted attributes, checked when a model file is loaded (with ``_fitted_state``; every numeric
     #: array is also checked finite): scikit-learn's constraint vocabulary, each entry of an array checked.
     _fitted_constraints: dict = {"reading_noise_": [Interval(Real, 0, None, closed="left")]}
@@ -272,10 +278,11 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         Shared with :func:`ftcal.fit_stacked`, which then trains several models' ``_fit`` at once.
         """
         self._check_parameters()
+        axes = self._remember_axes(y)
         X, y = validate_training_data(self, X, y)
-        self.alpha_ = resolve_alpha(self.alpha, y)
+        self.alpha_ = resolve_alpha(self.alpha, y, axes)
         if self.zero_reading is None:
-            self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_)
+            self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_, axes)
         else:
             self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
         self.reading_noise_ = reading_noise(X, y)
@@ -285,6 +292,15 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
                                 "pass the reading taken at zero load (or None to estimate it)")
         self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
         return X, y
+
+    def _remember_axes(self, y):
+        """``axes_`` from the columns of ``y`` (a table of wrench axes), or None (the default axes of its width)."""
+        axes = target_axes(y)
+        if axes is None:
+            self.__dict__.pop("axes_", None)  # a refit on unnamed targets forgets earlier names
+        else:
+            self.axes_ = np.asarray(axes, dtype=object)
+        return axes
 
     def out_of_range(self, X: ArrayLike, *, margin: float = 0.0) -> NDArray[np.bool_]:
         """Which rows of raw readings ``X`` (n, N) lie beyond the calibrated range: one bool per row.
@@ -429,11 +445,13 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
                       zero_reading: NDArray[np.float64] | None = None) -> None:
         """The after-fit bookkeeping of a wrapper whose ``inner`` calibrator is fitted: every wrapper calls it.
 
-        ``alpha_`` from ``inner``; ``zero_reading_`` the given one, else ``inner``'s, else estimated from ``X``,
+        ``alpha_`` (and ``axes_``, when it has them) from ``inner``; ``zero_reading_`` the given one, else ``inner``'s, else estimated from ``X``,
         ``y``; ``reading_noise_`` and ``calibrated_range_`` of the wrapper's own ``X`` (n, N) (so that
         :meth:`out_of_range` and :meth:`retare` work on what the wrapper is given); a previous re-tare dropped.
         """
         self.alpha_ = float(inner.alpha_)
+        if getattr(inner, "axes_", None) is not None:
+            self.axes_ = inner.axes_
         if zero_reading is None:
             zero_reading = getattr(inner, "zero_reading_", None)
         self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if zero_reading is None else \

@@ -366,7 +366,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
                          "channels)", "lower max_samples, or use fewer channels (a GP over more than a few dozen "
                          "channels needs few rows)")
         xc = X - self.zero_reading_
-        ys = scale_torques(y, self.alpha_)
+        ys = scale_torques(y, self.alpha_, self.axes_)
         self.input_mean_ = xc.mean(axis=0)
         scale = xc.std(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
@@ -605,7 +605,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         return mean, std
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
-        return unscale_torques(self._predict_scaled(X, False)[0], self.alpha_)
+        return unscale_torques(self._predict_scaled(X, False)[0], self.alpha_, self.axes_)
 
     def _emit_onnx(self, g, x: str) -> str:
         """The predictive mean as ONNX: the linear mean plus each regressor's ``k(u, X_train) @ alpha`` (the white
@@ -641,7 +641,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
                                              g.const(self.target_scale_[cols])), g.const(self.target_mean_[cols])))
         residual = columns[0] if k == 1 else g.op("Concat", *columns, axis=1)
         mean = g.op("Add", g.affine(xc, self.linear_matrix_.T, self.linear_offset_), residual)
-        return g.unscale_torques(mean, self.alpha_, int(getattr(self, "n_outputs_", 6)))
+        return g.unscale_torques(mean, self.alpha_, int(getattr(self, "n_outputs_", 6)), self.axes_)
 
     def predict(self, X: ArrayLike, return_std: bool = False):
         """Wrench in [N] and [N·m] for raw readings ``X`` (n, N); with ``return_std`` also its standard deviation.
@@ -666,7 +666,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         X = self._retared(validate_readings(self, X))
         with np.errstate(over="ignore", invalid="ignore"):  # an overflow is reported below, naming the reading
             mean, std = self._predict_scaled(X, True)
-            wrench, std = unscale_torques(mean, self.alpha_), unscale_torques(std, self.alpha_)
+            wrench, std = unscale_torques(mean, self.alpha_, self.axes_), unscale_torques(std, self.alpha_, self.axes_)
         check_finite_output(X, wrench, self)
         check_finite_output(X, std, self, what="standard deviation")
         return (wrench[:, 0], std[:, 0]) if self.__dict__.get("y_1d_") else (wrench, std)

@@ -402,7 +402,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         return (history - _predicted(g, X)) @ coef + intercept
 
     def _row_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
-        scaled = scale_torques(error, self.alpha_) if error.shape[1] == 6 else error
+        scaled = scale_torques(error, self.alpha_, self.axes_)
         return np.mean(scaled ** 2, axis=1)
 
     def _predict_wrench(self, X: NDArray[np.float64], history: NDArray | None = None) -> NDArray[np.float64]:

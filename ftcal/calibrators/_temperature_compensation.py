@@ -16,6 +16,7 @@ from ._history import refuse_history_inside
 from ._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
 from ..core._validation import validate_readings, validate_training_data
+from ..core._wrench import named_targets
 from ._zero_load import forward_design
 
 __all__ = ["TemperatureCompensatedCalibrator"]
@@ -139,6 +140,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         """
         self._check_parameters()
         t0 = float(self.reference_temperature)
+        axes = self._remember_axes(y)
         X, y = validate_training_data(self, X, y)
         refuse_history_inside(self._inner(), type(self).__name__)
         raw, temperature = self._split(X)
@@ -163,7 +165,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         routed = routed_fit_params(self, groups)
         inner = with_settings(self._inner(), alpha=self.alpha, zero_reading=self.zero_reading,
                               random_state=self.random_state)
-        self.estimator_ = inner.fit(self._compensate(raw, temperature), y, **routed)
+        self.estimator_ = inner.fit(self._compensate(raw, temperature), named_targets(y, axes), **routed)
         # the range and noise of what it is given: the raw channels and the temperature column
         self._adopt_fitted(X, y, self.estimator_, zero_reading=np.append(self.estimator_.zero_reading_, t0))
         return self

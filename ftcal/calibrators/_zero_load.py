@@ -43,7 +43,7 @@ GATED_MIN_SAMPLES = 52
 
 
 def estimate_zero_reading(
-    raw: NDArray[np.float64], wrench: NDArray[np.float64], alpha: float = 1.0
+    raw: NDArray[np.float64], wrench: NDArray[np.float64], alpha: float = 1.0, axes=None
 ) -> NDArray[np.float64]:
     """Raw reading at zero load, shape (N,), estimated from calibration data.
 
@@ -55,6 +55,8 @@ def estimate_zero_reading(
         Applied wrenches in [N] and [N·m].
     alpha : float, default=1.0
         Torque scale [m⁻¹] used to decide which rows are zero-load rows.
+    axes : sequence of str, optional
+        The wrench's axes (default: Fx..Tz for six columns, else forces only).
 
     Examples
     --------
@@ -71,7 +73,7 @@ def estimate_zero_reading(
     >>> bool(np.allclose(estimate_zero_reading(raw, w), 3.0))
     True
     """
-    norm = np.linalg.norm(scale_torques(wrench, alpha), axis=1)
+    norm = np.linalg.norm(scale_torques(wrench, alpha, axes), axis=1)
     unloaded = norm <= ZERO_LOAD_TOLERANCE * norm.max()
     if unloaded.any() and norm.max() > 0:
         return raw[unloaded].mean(axis=0)

@@ -146,6 +146,7 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ..core._wrench import default_axes, named_targets
     from ftcal.calibrators._routing import requests_groups
 
     console = Console(args.quiet)
@@ -211,7 +212,10 @@ def run(args: argparse.Namespace) -> int:
     fit_params = {}
     if data.group is not None and requests_groups(estimator):
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
-    fit_with_progress(estimator, X, data.wrench, console, label=args.model, **fit_params)
+    # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
+    # Tx, Ty as well as a 6-axis sensor's)
+    named = None if tuple(data.axes) == default_axes(len(data.axes)) else data.axes
+    fit_with_progress(estimator, X, named_targets(data.wrench, named), console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
     report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {

@@ -399,11 +399,11 @@ class DegenerateCalibrationError(CalibrationInputError):
 MEAN_MSE_FRACTION = 1.0
 
 
-def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.0) -> str | None:
+def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.0, axes=None) -> str | None:
     """Why held-out ``predictions`` (n, k) of targets ``y`` are degenerate, in a few words, or None.
 
     Degenerate: all zero, the same for every row (while ``y`` varies), or no better than predicting the mean of
-    ``y`` (the torque-scaled MSE, eq. 18, at least that of the mean). ``alpha`` scales torques (6 outputs).
+    ``y`` (the torque-scaled MSE, eq. 18, at least that of the mean). ``alpha`` scales the torques (of ``axes``; default: of 6 outputs).
 
     Examples
     --------
@@ -419,7 +419,7 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
     pred = np.asarray(predictions, dtype=float).reshape(len(y), -1)
     if not np.isfinite(pred).all():
         return "its held-out predictions hold NaN or inf"
-    scale = lambda a: scale_torques(a, alpha) if a.shape[1] == 6 else a  # noqa: E731
+    scale = lambda a: scale_torques(a, alpha, axes)  # noqa: E731 - the torques of the axes y has
     ys, ps = scale(y), scale(pred)
     spread = np.ptp(ys, axis=0)
     if not spread.any():
@@ -437,7 +437,7 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
 
 
 def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alpha: float = 1.0,
-                         held_out: bool = True) -> None:
+                         held_out: bool = True, axes=None) -> None:
     """Raise :class:`DegenerateCalibrationError` (one line: ``what`` and why) if ``predictions`` are degenerate
     (:func:`degenerate_reason`); what ``AutoCalibrator.fit`` and ``ftcal fit`` call before a model is kept.
     ``held_out=False`` says the predictions are of the training readings (the message and its fix say so).
@@ -449,7 +449,7 @@ def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alp
     ...
     ftcal.core._model_selection.DegenerateCalibrationError: refusing the LTM: it predicts 0 for every reading on the readings it did not see; nothing was saved. Fix: record loads on every axis (each axis loaded in more than one group), or choose another model.
     """
-    reason = degenerate_reason(y, predictions, alpha=alpha)
+    reason = degenerate_reason(y, predictions, alpha=alpha, axes=axes)
     if reason is None:
         return
     if not held_out:

@@ -29,6 +29,9 @@ __all__ = [
     "torque_columns",
     "axis_unit",
     "default_axes",
+    "target_axes",
+    "torque_slice",
+    "named_targets",
 ]
 
 #: Column names of a wrench, in order.
@@ -163,22 +166,63 @@ def alpha_from_wrenches(wrench: ArrayLike, axes=None) -> float:
     return float(min(max(fmax / tmax, low), high))
 
 
-def scale_torques(wrench: ArrayLike, alpha: float) -> NDArray[np.float64]:
+def target_axes(y) -> tuple[str, ...] | None:
+    """The wrench axes a calibrator's target ``y`` names, when they are not the default ones of its width.
+
+    ``y`` as a table whose columns are wrench axes (a ``pandas.DataFrame`` with columns among Fx..Tz, each once)
+    names its axes, as ``X``'s columns name the features (``feature_names_in_``); any other ``y`` (an array,
+    other column names) has :func:`default_axes`: Fx..Tz for six columns, else forces only. ``None`` when the axes
+    are the default ones (nothing to remember).
+
+    Examples
+    --------
+    >>> import pandas as pd
+    >>> target_axes(pd.DataFrame([[1.0, 0.1, 0.2]], columns=["Fz", "Tx", "Ty"]))
+    ('Fz', 'Tx', 'Ty')
+    >>> target_axes(pd.DataFrame([[1.0, 2.0, 3.0]], columns=["Fx", "Fy", "Fz"])), target_axes([[1.0, 2.0]])
+    (None, None)
+    """
+    columns = getattr(y, "columns", None)
+    if columns is None or getattr(y, "ndim", 2) != 2:
+        return None
+    names = tuple(str(c) for c in columns)
+    if not names or len(set(names)) != len(names) or not set(names) <= set(WRENCH_LABELS):
+        return None
+    return None if names == default_axes(len(names)) else names
+
+
+def named_targets(y, axes):
+    """``y`` (n, k) as a table whose columns name its wrench ``axes`` (a ``pandas.DataFrame``), so that a calibrator
+    fitted on it knows which columns are torques (:func:`target_axes`); ``y`` itself when ``axes`` is None.
+
+    Examples
+    --------
+    >>> named_targets([[1.0, 0.1, 0.2]], ("Fz", "Tx", "Ty")).columns.tolist()
+    ['Fz', 'Tx', 'Ty']
+    """
+    if axes is None:
+        return y
+    import pandas as pd
+
+    return pd.DataFrame(np.asarray(y, dtype=float).reshape(len(y), -1), columns=[str(a) for a in axes])
+
+
+def scale_torques(wrench: ArrayLike, alpha: float, axes=None) -> NDArray[np.float64]:
     """Return a copy of ``wrench`` with the torque columns multiplied by ``alpha`` (eq. 6).
 
-    Only a 6-column wrench has torques; targets of another width (a calibrator
-    fitted on other outputs, e.g. by scikit-learn's generic checks) are
-    returned unchanged.
+    ``axes`` names the columns (e.g. ``("Fz", "Tx", "Ty")`` for a plate: its torques are scaled); without it
+    only a 6-column wrench has torques, and targets of another width (a force-only cell, a calibrator fitted on
+    other outputs by scikit-learn's generic checks) are returned unchanged.
 
     Examples
     --------
     >>> scale_torques([[1.0, 2, 3, 0.1, 0.2, 0.3]], 10.0)
     array([[1., 2., 3., 1., 2., 3.]])
     """
-    return _scaled(wrench, check_alpha(alpha), multiply=True)
+    return _scaled(wrench, check_alpha(alpha), multiply=True, axes=axes)
 
 
-def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
+def unscale_torques(scaled: ArrayLike, alpha: float, axes=None) -> NDArray[np.float64]:
     """Inverse of :func:`scale_torques`: divide the torque columns by ``alpha``.
 
     Examples
@@ -186,24 +230,43 @@ def unscale_torques(scaled: ArrayLike, alpha: float) -> NDArray[np.float64]:
     >>> unscale_torques([[1.0, 2, 3, 1, 2, 3]], 10.0)
     array([[1. , 2. , 3. , 0.1, 0.2, 0.3]])
     """
-    return _scaled(scaled, check_alpha(alpha), multiply=False)
+    return _scaled(scaled, check_alpha(alpha), multiply=False, axes=axes)
 
 
-def _scaled(wrench: ArrayLike, alpha: float, *, multiply: bool) -> NDArray[np.float64]:
-    """A float copy of ``wrench`` with the torque columns (of a 6-column wrench) multiplied or divided by ``alpha``;
-    an overflow is an error naming alpha, not an inf in the result."""
+def torque_slice(width: int, axes=None):
+    """The torque columns of a target of ``width`` columns named ``axes`` (default: those of a 6-column wrench, no
+    other width has torques): a slice or a list of positions, empty when there is none.
+
+    Examples
+    --------
+    >>> torque_slice(6), torque_slice(3), torque_slice(3, ("Fz", "Tx", "Ty"))
+    (slice(3, 6, None), [], [1, 2])
+    """
+    if axes is None:
+        return TORQUE if width == 6 else []
+    axes = tuple(axes)
+    if len(axes) != width:
+        raise CalibrationInputError(f"axes {axes} name {len(axes)} axes but the wrenches have {width} columns.")
+    columns = torque_columns(axes)
+    return TORQUE if columns == [3, 4, 5] else columns
+
+
+def _scaled(wrench: ArrayLike, alpha: float, *, multiply: bool, axes=None) -> NDArray[np.float64]:
+    """A float copy of ``wrench`` with the torque columns (:func:`torque_slice`) multiplied or divided by
+    ``alpha``; an overflow is an error naming alpha, not an inf in the result."""
     w = np.array(wrench, dtype=float, copy=True)
-    if w.shape[-1] != 6:
+    columns = torque_slice(w.shape[-1], axes)
+    if isinstance(columns, list) and not columns:
         return w
     with np.errstate(over="ignore", divide="ignore", invalid="ignore"):  # 0 * (1 / 5e-324) is NaN: refused below
         # times 1 / alpha, not divided by alpha: the bits every dataset and cached result were made with
-        torque = w[..., TORQUE] * (alpha if multiply else 1.0 / alpha)
-    if not np.isfinite(torque).all() and np.isfinite(w[..., TORQUE]).all():
-        big = float(np.abs(w[..., TORQUE]).max())
+        torque = w[..., columns] * (alpha if multiply else 1.0 / alpha)
+    if not np.isfinite(torque).all() and np.isfinite(w[..., columns]).all():
+        big = float(np.abs(w[..., columns]).max())
         raise CalibrationInputError(
             f"{'multiplying' if multiply else 'dividing'} the torques (largest |value| {big:.3g}) by alpha = "
             f"{alpha:.3g} 1/m overflows float64. Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) "
             "and the torques' unit."
         )
-    w[..., TORQUE] = torque
+    w[..., columns] = torque
     return w

@@ -27,7 +27,7 @@ from ..core._model_selection import (DegenerateCalibrationError, calibration_fol
                                      TIE_TOLERANCE)
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
-from ..core._wrench import WRENCH_LABELS, scale_torques, unscale_torques
+from ..core._wrench import WRENCH_LABELS, named_targets, scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates", "score_candidates",
@@ -298,9 +298,9 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
     return fold_predictions(estimator, X, y, folds, groups=groups)
 
 
-def _row_errors(pred: NDArray, y: NDArray, alpha: float) -> NDArray:
-    """Per-row mean of the six squared torque-scaled errors: their mean is eq. 18's MSE."""
-    return np.mean((scale_torques(pred, alpha) - scale_torques(y, alpha)) ** 2, axis=1)
+def _row_errors(pred: NDArray, y: NDArray, alpha: float, axes=None) -> NDArray:
+    """Per-row mean of the squared torque-scaled errors (the torques of ``axes``): their mean is eq. 18's MSE."""
+    return np.mean((scale_torques(pred, alpha, axes) - scale_torques(y, alpha, axes)) ** 2, axis=1)
 
 
 def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
@@ -314,6 +314,7 @@ def score_candidates(
     candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
     zero_reading=None, random_state: int | None = 0, network_samples: int | None = 2000,
     baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None, folds=None, units=None,
+    axes=None,
 ) -> tuple[dict, NDArray[np.float64], list, dict]:
     """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
 
@@ -335,6 +336,7 @@ def score_candidates(
     refused, never chosen. ``folds`` (train, test) made before replace those of
     :func:`calibration_folds` (``auto``'s fallback when grouped folds cannot
     judge), with ``units`` the units of their standard errors (None: rows).
+    ``axes`` names ``y``'s columns (their torques are scaled; default: Fx..Tz for six, else forces only).
     Standard errors are over the groups when the folds hold out
     groups and there are at least
     :data:`~ftcal.core._model_selection.MIN_SE_GROUPS` of them, with fewer the
@@ -382,7 +384,7 @@ def score_candidates(
 
     def record(name, kind, status, eligible, pred, seconds):
         ok = pred is not None
-        reason = degenerate_reason(y, pred, alpha=alpha) if ok and kind != "baseline" else None
+        reason = degenerate_reason(y, pred, alpha=alpha, axes=axes) if ok and kind != "baseline" else None
         if reason is not None:  # scored, shown, never chosen
             status, eligible = f"refused: {reason}", False
         results["name"].append(name)
@@ -390,7 +392,7 @@ def score_candidates(
         results["status"].append(status)
         results["fit_seconds"].append(seconds)
         results["eligible"].append(bool(eligible and ok))
-        row = _row_errors(pred, y, alpha) if ok else np.full(n, np.nan)
+        row = _row_errors(pred, y, alpha, axes) if ok else np.full(n, np.nan)
         rmse, se = rmse_and_se(row, units) if ok else (None, None)
         results["rmse"].append(rmse)
         results["rmse_se"].append(se)
@@ -431,13 +433,13 @@ def score_candidates(
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
-            _score_stack(results, errors, predictions, record, y, alpha, folds, families)
+            _score_stack(results, errors, predictions, record, y, alpha, folds, families, axes)
         model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i], y.shape)
         if model is not None:
             fitted[name] = model
         record(name, kind, status, kind != "baseline" and not skipped, pred, seconds)
     if stack and rows and rows[-1][1] != "baseline":
-        _score_stack(results, errors, predictions, record, y, alpha, folds, families)
+        _score_stack(results, errors, predictions, record, y, alpha, folds, families, axes)
     results["se_units"] = se_units_name(units)
     return results, np.vstack(errors), predictions, fitted
 
@@ -492,7 +494,7 @@ def _score_one(estimator, X, y, folds, groups, network_samples, seed):
         return None, None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
 
 
-def _score_stack(results, errors, predictions, record, y, alpha, folds, families: dict) -> None:
+def _score_stack(results, errors, predictions, record, y, alpha, folds, families: dict, axes=None) -> None:
     """Score the non-negative combination of the best eligible candidates (weights cross-fitted over folds), a
     stock model and ftcal's model of the same family (``families``: name -> tags' family) never both."""
     ranked = sorted((r, k) for k, r in enumerate(results["rmse"]) if results["eligible"][k])
@@ -509,8 +511,8 @@ def _score_stack(results, errors, predictions, record, y, alpha, folds, families
             break
     if len(members) < 2:
         return
-    scaled = [scale_torques(predictions[k], alpha) for k in members]
-    target = scale_torques(y, alpha)
+    scaled = [scale_torques(predictions[k], alpha, axes) for k in members]
+    target = scale_torques(y, alpha, axes)
     oof = np.empty_like(target)
     for train, test in folds:
         w = _nnls_weights([p[train] for p in scaled], target[train])
@@ -519,7 +521,7 @@ def _score_stack(results, errors, predictions, record, y, alpha, folds, families
     names = [results["name"][k] for k in members]
     results["stack_members"] = names
     results["stack_weights"] = weights.tolist()
-    record("stack(" + " + ".join(names) + ")", "stack", "scored", True, unscale_torques(oof, alpha), None)
+    record("stack(" + " + ".join(names) + ")", "stack", "scored", True, unscale_torques(oof, alpha, axes), None)
 
 
 def provides_std(model) -> bool:
@@ -620,10 +622,10 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
     from ..core._model_selection import check_not_degenerate, held_out_predictions
 
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
-    alpha = float(getattr(estimator, "alpha_", 1.0))
+    alpha, axes = float(getattr(estimator, "alpha_", 1.0)), getattr(estimator, "axes_", None)
     name = type(estimator).__name__
     fitted = np.asarray(estimator.predict(X), dtype=float).reshape(len(X), -1)
-    reason = degenerate_reason(y, fitted, alpha=alpha)
+    reason = degenerate_reason(y, fitted, alpha=alpha, axes=axes)
     if reason is not None and "mean" not in reason:
         raise DegenerateCalibrationError(f"refusing the fitted {name}: {reason} of its own training data; nothing "
                                          "was saved. Fix: check the data (a constant channel, wrong columns).")
@@ -635,7 +637,7 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
         if folds is None:
             return
         _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=folds)
-    check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out)
+    check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out, axes=axes)
 
 
 class StackedCalibrator(BaseCalibrator):
@@ -736,7 +738,8 @@ class StackedCalibrator(BaseCalibrator):
                 return self
             uses = any(routed_groups(e, groups) for e in members)
             groups = check_groups(groups, len(X), labels=uses)
-            self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, y, groups)
+            named = named_targets(y, None if self.axes_ is None else tuple(self.axes_))
+            self.estimators_ = [_fit(with_alpha_and_tare(e, self.alpha_, self.zero_reading), X, named, groups)
                                 for e in members]
         return self
 
@@ -748,8 +751,9 @@ class StackedCalibrator(BaseCalibrator):
                        cost=min((m.cost for m in members), key=COSTS.index, default="heavy"))  # the costliest
 
     def _predict_wrench(self, X):
-        scaled = sum(w * scale_torques(e.predict(X), self.alpha_) for w, e in zip(self.weights_, self.estimators_))
-        return unscale_torques(scaled, self.alpha_)
+        scaled = sum(w * scale_torques(e.predict(X), self.alpha_, self.axes_)
+                     for w, e in zip(self.weights_, self.estimators_))
+        return unscale_torques(scaled, self.alpha_, self.axes_)
 
     def _emit_onnx(self, g, x: str) -> str:
         # torque scaling is linear per component, so the weighted sum commutes with it
@@ -994,6 +998,7 @@ class AutoCalibrator(BaseCalibrator):
 
         self._check_parameters()
         self._candidates()  # checked before the data
+        axes = self._remember_axes(y)  # the wrench axes y's columns name: the torques that are scaled
         X, y = validate_training_data(self, X, y)
         groups = check_groups(groups, len(X))
         if groups is not None:  # the candidates' requests (set_fit_request) are validated here
@@ -1003,7 +1008,7 @@ class AutoCalibrator(BaseCalibrator):
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
                 f"(at least 2 and at most {len(X)}).", parameter="X", value=len(X))
-        self.alpha_ = resolve_alpha(self.alpha, y)
+        self.alpha_ = resolve_alpha(self.alpha, y, axes)
         given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
         workers = "all cores" if self.n_jobs == -1 else f"n_jobs={self.n_jobs}"
@@ -1020,7 +1025,7 @@ class AutoCalibrator(BaseCalibrator):
             results, errors, predictions, fitted = score_candidates(
                 candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
                 random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
-                folds=folds, units=units)
+                folds=folds, units=units, axes=axes)
             templates = dict(candidates)
         results["folds"] = fold_note
         results["training_sha256"] = training_data_sha256(X, y)  # what the comparison was scored on (reuse key)

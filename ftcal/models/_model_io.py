@@ -532,6 +532,9 @@ _SCALAR_RULES = {
     "y_1d_": lambda v: isinstance(v, bool),
     "feature_names_in_": lambda v: isinstance(v, dict) and isinstance(v.get("strings"), list)
     and all(isinstance(s, str) for s in v["strings"]),
+    # the wrench axes named at fit: distinct names among Fx..Tz
+    "axes_": lambda v: isinstance(v, dict) and isinstance(v.get("strings"), list) and 0 < len(v["strings"]) <= 6
+    and len(set(v["strings"])) == len(v["strings"]) and set(v["strings"]) <= {"Fx", "Fy", "Fz", "Tx", "Ty", "Tz"},
 }
 
 

@@ -71,10 +71,12 @@ class _Graph:
         y = self.op("MatMul", x, self.const(matrix_t))
         return y if offset is None else self.op("Add", y, self.const(offset))
 
-    def unscale_torques(self, y: str, alpha: float, n_outputs: int) -> str:
-        if n_outputs != 6:  # only a wrench has torques (as in ftcal.core._wrench.unscale_torques)
-            return y
-        return self.op("Div", y, self.const([1.0, 1.0, 1.0, alpha, alpha, alpha]))
+    def unscale_torques(self, y: str, alpha: float, n_outputs: int, axes=None) -> str:
+        from ..core._wrench import torque_slice
+
+        scale = np.ones(n_outputs)
+        scale[torque_slice(n_outputs, axes)] = alpha  # the torque columns, as ftcal.core._wrench.unscale_torques
+        return y if (scale == 1.0).all() else self.op("Div", y, self.const(scale))
 
     def columns(self, x: str, start: int, end: int) -> str:
         return self.op("Slice", x, self.const([start], np.int64), self.const([end], np.int64),

@@ -9,7 +9,7 @@ from sklearn.utils._param_validation import Interval
 
 from ._base import NetworkCalibrator
 from ._modules import ComparativeNet
-from ..core._wrench import TORQUE
+from ..core._wrench import torque_slice
 
 __all__ = ["ComparativeCalibrator"]
 
@@ -42,8 +42,7 @@ class ComparativeCalibrator(NetworkCalibrator):
 
     def _loss_weights(self) -> list[float]:
         eq10 = np.ones(self._network_outputs())
-        if len(eq10) == 6:  # a wrench: torques weighted by alpha_ (eq. 10)
-            eq10[TORQUE] = self.alpha_
+        eq10[torque_slice(len(eq10), self.axes_)] = self.alpha_  # the torques weighted by alpha_ (eq. 10)
         weights = eq10 * self.target_scale_**2
         return list(weights / weights.mean())
 

@@ -135,7 +135,7 @@ class DirectionalCalibrator(NetworkCalibrator):
     def _training_pairs(self, X, y):
         threshold = float(self.min_relative_magnitude)
         v_in, unit_in = _unit_rows(X - self.zero_reading_)
-        v_out, unit_out = _unit_rows(scale_torques(y, self.alpha_))
+        v_out, unit_out = _unit_rows(scale_torques(y, self.alpha_, self.axes_))
         keep = (v_in > threshold * v_in.max()) & (v_out > threshold * v_out.max())
         self.n_dropped_zero_load_ = int(np.count_nonzero(~keep))
         if np.count_nonzero(keep) < 2:
@@ -167,10 +167,11 @@ class DirectionalCalibrator(NetworkCalibrator):
         out = g.mlp(unit, self._numpy_layers())
         k = self._network_outputs() - 1
         magnitude = g.op("Mul", g.op("Mul", g.columns(out, k, k + 1), g.const(self.scale_reference_)), v_in)
-        return g.unscale_torques(g.op("Mul", g.columns(out, 0, k), magnitude), self.alpha_, k)
+        return g.unscale_torques(g.op("Mul", g.columns(out, 0, k), magnitude), self.alpha_, k, self.axes_)
 
     def _predict_wrench(self, X):
         # the input norm is computed once (eq. 3) and serves both the unit input and the decoding (III-B)
         v_in, unit = _unit_rows(X - self.zero_reading_)
         outputs = self._forward(unit)
-        return unscale_torques(outputs[:, :-1] * (outputs[:, -1] * self.scale_reference_ * v_in)[:, None], self.alpha_)
+        return unscale_torques(outputs[:, :-1] * (outputs[:, -1] * self.scale_reference_ * v_in)[:, None], self.alpha_,
+                               self.axes_)
