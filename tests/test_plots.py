@@ -99,6 +99,24 @@ def test_wrench_coverage_histogram_of_scaled_magnitude(tmp_path):
     assert png_size(_plots.plot_wrench_coverage(w, tmp_path / "w.png", alpha=50.0)) == (1440, 480)
 
 
+@pytest.mark.parametrize("axes, panels", [
+    (("Fz",), [("‖F‖ [N]", "samples"), ("Fz [N]", "samples")]),
+    (("Fx", "Fy", "Fz"), [("‖F‖ [N]", "samples"), ("Fx [N]", "Fy [N]")]),
+    (("Fz", "Tx", "Ty"), [("‖[F, α·T]‖ [N]", "samples"), ("Fz [N]", "samples"), ("Tx [N·m]", "Ty [N·m]")]),
+    (("Tz",), [("‖T‖ [N·m]", "samples"), ("Tz [N·m]", "samples")]),
+])
+def test_wrench_coverage_of_any_axis_set_shows_the_panels_that_exist(axes, panels, tmp_path):
+    w = np.random.default_rng(0).uniform(-1, 1, (40, len(axes))) * [100.0 if a[0] == "F" else 2.0 for a in axes]
+    fig = _plots.wrench_coverage_figure(w, alpha=50.0, axes=axes)
+    got = [(ax.get_xlabel(), ax.get_ylabel()) for ax in fig.axes]
+    assert [(x.split("   (")[0], y) for x, y in got] == panels
+    # the magnitude scales the torques that exist: a plate row of Fz 0 and Tx 2 N·m counts as 100 N
+    scaled = np.where([a[0] == "T" for a in axes], 50.0, 1.0) * w if "F" in "".join(a[0] for a in axes) else w
+    edges = [p.get_x() for p in fig.axes[0].patches]
+    assert max(edges) + fig.axes[0].patches[-1].get_width() == pytest.approx(np.linalg.norm(scaled, axis=1).max())
+    assert png_size(_plots.plot_wrench_coverage(w, tmp_path / "w.png", alpha=50.0, axes=axes))[1] == 480
+
+
 @pytest.mark.parametrize(
     "call, fragment",
     [
@@ -111,7 +129,8 @@ def test_wrench_coverage_histogram_of_scaled_magnitude(tmp_path):
         (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 5)), np.zeros((3, 5)), p, axes=("Fx", "Fy", "Fz")),
          "(n_samples >= 1, 3 [Fx, Fy, Fz])"),
         (lambda p: _plots.plot_predicted_vs_reference(np.zeros((3, 3)), np.zeros((3, 2)), p), "(n_samples >= 1, 3"),
-        (lambda p: _plots.plot_wrench_coverage(np.ones((2, 3)), p), "(n_samples >= 1, 6"),
+        (lambda p: _plots.plot_wrench_coverage(np.ones((2, 3)), p, axes=("Fz", "Tx", "Ty", "Tz")),
+         "(n_samples >= 1, 4 [Fz, Tx, Ty, Tz])"),
         (lambda p: _plots.plot_sphere_coverage(np.zeros((2, 3)), p), "non-zero"),
         (lambda p: _plots.plot_sphere_coverage(np.ones((2, 3)), p, reached=[True]), "reached"),
         (lambda p: _plots.plot_wrench_coverage(np.ones((2, 6)), p, alpha=-1.0), "alpha"),

@@ -25,7 +25,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
-from ..core._wrench import FORCE, TORQUE, WRENCH_LABELS, axis_unit, default_axes, force_columns, torque_columns
+from ..core._wrench import WRENCH_LABELS, axis_unit, default_axes, force_columns, torque_columns
 
 __all__ = [
     "MODEL_COLORS",
@@ -425,36 +425,60 @@ def plot_sphere_coverage(directions: ArrayLike, path: str | Path, **kwargs) -> P
 
 
 def wrench_coverage_figure(
-    wrench: ArrayLike, *, alpha: float = 1.0, title: str = "Wrench coverage of the dataset"
+    wrench: ArrayLike, *, alpha: float = 1.0, title: str = "Wrench coverage of the dataset", axes=None
 ) -> Figure:
-    """Which loads a dataset holds: the torque-scaled magnitude and two projections.
+    """Which loads a dataset holds, for any axis set: the torque-scaled magnitude and the loads per kind.
 
-    Left: histogram of ``||[F, alpha T]||`` [N] (the thesis' training spheres
-    show as sharp peaks); middle: ``Fx`` against ``Fy`` [N]; right: ``Tx``
-    against ``Ty`` [N·m].
+    Left: histogram of ``||[F, alpha T]||`` [N] over the axes that exist (the thesis' training spheres show as
+    sharp peaks); then one panel for the forces and one for the torques, each that exists: the first two
+    against each other (``Fx`` against ``Fy`` [N], ``Tx`` against ``Ty`` [N·m]), or the histogram of a single
+    one (a 1-axis cell's ``Fz``, a plate's ``Fz``).
 
     Parameters
     ----------
-    wrench : array-like of shape (n, 6)
+    wrench : array-like of shape (n, k)
         Wrenches in [N] and [N·m].
     alpha : float
         Torque scale [m⁻¹] for the magnitude.
+    title : str
+    axes : sequence of str, optional
+        The axes of the columns (``("Fz", "Tx", "Ty")`` for a plate); default Fx..Tz for six columns, else
+        :func:`~ftcal.core._wrench.default_axes`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> fig = wrench_coverage_figure(np.random.default_rng(0).normal(size=(50, 3)), alpha=50, axes=("Fz", "Tx", "Ty"))
+    >>> [ax.get_xlabel().split(" [")[0] for ax in fig.axes]
+    ['‖[F, α·T]‖', 'Fz', 'Tx']
     """
-    w = _wrench_array("wrench", wrench, WRENCH_LABELS)
+    w = _wrench_array("wrench", wrench, None if axes is None else tuple(axes))
+    names = tuple(axes) if axes is not None else default_axes(w.shape[1])
     if not np.isfinite(alpha) or alpha <= 0:
         raise CalibrationInputError(f"alpha must be a finite positive number; got {alpha}.")
-    scaled = np.hstack([w[:, FORCE], alpha * w[:, TORQUE]])
-    fig = Figure(figsize=(12.0, 4.0), layout="constrained")
-    axes = fig.subplots(1, 3)
-    axes[0].hist(np.linalg.norm(scaled, axis=1), bins=60, color="#1f77b4")
-    axes[0].set_xlabel(f"‖[F, α·T]‖ [N]   (α = {alpha:.3g} m⁻¹)")
-    axes[0].set_ylabel("samples")
-    for ax, (i, j), unit in ((axes[1], (0, 1), "N"), (axes[2], (3, 4), "N·m")):
-        ax.scatter(w[:, i], w[:, j], s=3, alpha=0.4, color="#1f77b4", linewidths=0)
-        ax.set_xlabel(f"{WRENCH_LABELS[i]} [{unit}]")
-        ax.set_ylabel(f"{WRENCH_LABELS[j]} [{unit}]")
-        ax.set_aspect("equal", adjustable="datalim")
-    for ax in axes:
+    forces, torques = force_columns(names), torque_columns(names)
+    scaled = w.copy()
+    if forces and torques:  # alpha weighs torques against forces; a torque-only wrench keeps its unit
+        scaled[:, torques] *= alpha
+    kinds = [(columns, unit) for columns, unit in ((forces, "N"), (torques, "N·m")) if columns]
+    fig = Figure(figsize=(4.0 * (1 + len(kinds)), 4.0), layout="constrained")
+    panels = np.atleast_1d(fig.subplots(1, 1 + len(kinds)))
+    panels[0].hist(np.linalg.norm(scaled, axis=1), bins=60, color="#1f77b4")
+    panels[0].set_xlabel(f"‖[F, α·T]‖ [N]   (α = {alpha:.3g} m⁻¹)" if forces and torques else
+                         f"‖{'F' if forces else 'T'}‖ [{'N' if forces else 'N·m'}]")
+    panels[0].set_ylabel("samples")
+    for ax, (columns, unit) in zip(panels[1:], kinds):
+        if len(columns) >= 2:
+            i, j = columns[:2]
+            ax.scatter(w[:, i], w[:, j], s=3, alpha=0.4, color="#1f77b4", linewidths=0)
+            ax.set_ylabel(f"{names[j]} [{unit}]")
+            ax.set_aspect("equal", adjustable="datalim")
+        else:
+            i = columns[0]
+            ax.hist(w[:, i], bins=60, color="#1f77b4")
+            ax.set_ylabel("samples")
+        ax.set_xlabel(f"{names[i]} [{unit}]")
+    for ax in panels:
         ax.grid(alpha=0.3)
     fig.suptitle(f"{title} ({len(w)} samples)")
     return fig
