@@ -277,3 +277,21 @@ def test_getting_your_data_in_block_runs_as_written(tmp_path):
     one = np.loadtxt(tmp_path / "one_wrench.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(one, wrench[:10], atol=0.1)
     assert load_model(tmp_path / "pose-model" / "linear.model.npz").n_features_in_ == 8
+
+
+def test_the_readme_names_only_public_python_names():
+    """Every ``ftcal.x.y`` the README names is reachable without a private module (``ftcal.models._auto...``)."""
+    import importlib
+
+    names = set(re.findall(r"`(ftcal(?:\.\w+)+)", README.read_text(encoding="utf-8")))
+    assert "ftcal.models.check_calibration" in names  # the check of any fitted model, named in its public home
+    private = sorted(n for n in names if any(part.startswith("_") for part in n.split(".")[1:]))
+    assert not private, private
+    for name in sorted(names):
+        parts = name.split(".")
+        obj = importlib.import_module(parts[0])
+        for k, part in enumerate(parts[1:], start=1):
+            try:
+                obj = getattr(obj, part)
+            except AttributeError:
+                obj = importlib.import_module(".".join(parts[:k + 1]))

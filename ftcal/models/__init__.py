@@ -11,6 +11,7 @@ from ..core._lazy import lazy_namespace
 
 #: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
 _PUBLIC = dict(search_summary="_search", DEFAULT_SEARCH_SPACES="_search", stock_baselines="_baselines",
-               STOCK_BASELINE_NAMES="_baselines", SubsampledRegressor="_baselines", default_candidates="_auto")
+               STOCK_BASELINE_NAMES="_baselines", SubsampledRegressor="_baselines", default_candidates="_auto",
+               check_calibration="_auto")
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
