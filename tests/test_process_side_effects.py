@@ -19,16 +19,26 @@ def _pools() -> dict:
     return {pool["filepath"]: pool["num_threads"] for pool in threadpool_info()}
 
 
-class _PausingReadings:
-    """Readings that hold the fit at its first look at them (inside ``fit``, where the limits apply) until released."""
+class _Pause:
+    """Holds a fit at one point (``wait``, called from inside it) until the test has looked and releases it."""
 
-    def __init__(self, values):
-        self.values, self.inside, self.release = values, threading.Event(), threading.Event()
+    def __init__(self):
+        self.inside, self.release = threading.Event(), threading.Event()
 
-    def __array__(self, dtype=None, copy=None):
+    def wait(self):
         if not self.inside.is_set():
             self.inside.set()
             assert self.release.wait(60), "the test never released the fit"
+
+
+class _PausingReadings:
+    """Readings that hold the fit at its first look at them (inside ``fit``, where the BLAS limit applies)."""
+
+    def __init__(self, values, pause):
+        self.values, self.pause = values, pause
+
+    def __array__(self, dtype=None, copy=None):
+        self.pause.wait()
         return np.asarray(self.values, dtype=dtype)
 
     def __len__(self):
@@ -39,19 +49,34 @@ class _PausingReadings:
         return self.values.shape
 
 
-@pytest.mark.parametrize("make", [
-    lambda: LinearCalibrator(),
-    lambda: PolynomialCalibrator(degree=2),
-    lambda: GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0),
-    lambda: DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0, max_recover_epochs=0,
-                                  random_state=0),
+def _pausing_in_training(pause):
+    """A skorch callback that holds a network's fit at its first epoch: inside training, where the network's
+    torch / OpenMP limit applies (entered after the data are validated)."""
+    from skorch.callbacks import Callback
+
+    class PauseInTraining(Callback):
+        def on_epoch_begin(self, net, **kwargs):
+            pause.wait()
+
+    return PauseInTraining()
+
+
+@pytest.mark.parametrize("make, in_training", [
+    (lambda pause: LinearCalibrator(), False),
+    (lambda pause: PolynomialCalibrator(degree=2), False),
+    (lambda pause: GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0), False),
+    (lambda pause: DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0,
+                                         max_recover_epochs=0, random_state=0, n_threads=1,  # a limit in force
+                                         callbacks=[_pausing_in_training(pause)]), True),
 ], ids=["linear", "polynomial", "gaussian_process", "directional"])
-def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs(make):
+def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs(make, in_training):
     rng = np.random.default_rng(0)
     wrench = rng.normal(size=(60, 6))
     raw = wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6))
-    readings = _PausingReadings(raw)
-    # the process' own thread counts (a threadpool_limits around the test would hide a limit set in another thread)
+    pause = _Pause()
+    readings = raw if in_training else _PausingReadings(raw, pause)
+    # the process' own thread counts (a threadpool_limits around the test would hide a limit set in another thread:
+    # OpenBLAS then ignores the other thread's setting)
     before, torch_threads = _pools(), torch.get_num_threads()
     if min(before.values()) < 2:
         pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
@@ -59,20 +84,42 @@ def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs
 
     def fit():
         try:
-            make().fit(readings, wrench)
+            make(pause).fit(readings, wrench)
         except BaseException as exc:  # reported by the main thread
             errors.append(exc)
-            readings.inside.set()
+            pause.inside.set()
 
     worker = threading.Thread(target=fit)
     worker.start()
-    assert readings.inside.wait(60)
+    assert pause.inside.wait(60)
     during, torch_during = _pools(), torch.get_num_threads()
-    readings.release.set()
+    pause.release.set()
     worker.join(120)
     assert not errors, errors
     assert during == before
     assert torch_during == torch_threads
+
+
+def test_a_limit_set_for_the_whole_process_in_another_thread_would_show():
+    """The check above can fail: a process-wide BLAS limit to one thread, set in another thread that is still
+    inside its work (as a paused fit is), is seen here."""
+    before = _pools()
+    if min(before.values()) < 2:
+        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
+    pause = _Pause()
+
+    def limit_everything():
+        limits = threadpool_limits(limits=1, user_api="blas")
+        pause.wait()  # held while the other thread looks, as a fit is
+        limits.restore_original_limits()
+
+    worker = threading.Thread(target=limit_everything)
+    worker.start()
+    assert pause.inside.wait(60)
+    during = _pools()
+    pause.release.set()
+    worker.join(60)
+    assert during != before and min(during.values()) == 1
 
 
 def test_the_networks_thread_limit_holds_in_the_fitting_thread():
