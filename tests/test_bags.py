@@ -99,6 +99,41 @@ def test_prepare_and_fit_from_bags_reach_the_calibration_of_the_run_logs(tmp_pat
     assert np.all(np.sqrt(np.mean((from_bag - from_log) ** 2, axis=0)) <= 0.1 * fit_error)
 
 
+def test_prepare_from_bags_with_the_orientation_from_tf_reaches_the_calibration_of_the_run_logs(tmp_path, capsys):
+    """The same runs recorded with /tf (no joint states): --tf BASE,SENSOR, as identify-load takes it."""
+    from ftcal.io._logs import read_run_log
+
+    logs = tmp_path / "sim"
+    assert main(["simulate", "experiment", "--subdivisions", "0", "--seed", "3", "--out", str(logs), "-q"]) == 0
+    robot = ftcal.load_robot("kuka_iiwa14")
+    rng = np.random.default_rng(3)
+    for path in sorted(logs.glob("config*.csv")):
+        run = read_run_log(path)
+        order = np.argsort(run.pose, kind="stable")
+        R = ftcal.sensor_pose_in_base(robot, run.q[order])[:, :3, :3]
+        noise = 1e-4 * np.ptp(run.raw, axis=0) + 1e-12
+        rec = continuous_recording(run.raw[order], rotations=R, noise=noise, settle_amplitude=10 * noise,
+                                   start_time_s=T0, random_state=rng)
+        write_bag(tmp_path / "tf_bags" / path.stem, "sqlite3", sensor_time=rec.sensor_time, reading=rec.reading,
+                  raw=True, pose_time=rec.pose_time, rotations=rec.rotations, tf_frames=("world", "ft_link"))
+    assert main(["prepare", str(tmp_path / "tf_bags"), "--raw-topic", "/ft_sensor/raw", "--tf", "world,ft_link",
+                 "--mass", "2.0", "--out", str(tmp_path / "data_tf")]) == 0
+    err = capsys.readouterr().err
+    assert "the sensor's orientation from /tf (world, ft_link)" in err and err.count("kept 11") == 14, err
+    assert main(["prepare", str(logs), "--mass", "2.0", "--out", str(tmp_path / "data_log"), "-q"]) == 0
+    from_tf = ftcal.CalibrationDataset.load(tmp_path / "data_tf" / "dataset.csv")
+    reference = ftcal.CalibrationDataset.load(tmp_path / "data_log" / "dataset.csv")
+    assert from_tf.meta["orientation_source"] == "recorded (tf)"
+    # the same pairs, the same reference wrenches (the orientation averaged over each still pose's slerped /tf
+    # samples agrees with the joints' to ~1e-5 rad, which moves the load's weight by that fraction), the same fit
+    np.testing.assert_allclose(from_tf.wrench, reference.wrench, atol=1e-5 * np.abs(reference.wrench).max())
+    m_tf = ftcal.LinearCalibrator().fit(from_tf.raw, from_tf.wrench)
+    m_log = ftcal.LinearCalibrator().fit(reference.raw, reference.wrench)
+    fit_error = np.sqrt(np.mean((m_log.predict(reference.raw) - reference.wrench) ** 2, axis=0))
+    assert np.all(np.sqrt(np.mean((m_tf.predict(reference.raw) - m_log.predict(reference.raw)) ** 2, axis=0))
+                  <= 0.1 * fit_error)
+
+
 def _one_line_error(argv, capsys, out):
     capsys.readouterr()
     assert main(argv) == 2

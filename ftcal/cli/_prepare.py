@@ -37,8 +37,9 @@ always named on stderr and in prepare.json.
   ftcal prepare bags/ --raw-topic /ft_sensor/raw --mass 2.0 --out data    # ROS bags of the runs
 
 ROS bags (rosbag2 sqlite3 / MCAP folders, ROS 1 .bag files), one per run, named config<C>_load and
-config<C>_no-load: the raw gauges (--raw-topic, --raw-field) and the joint states (--joint-topic) are
-aligned (joints interpolated at the gauges' stamps), the still poses found in each run (the settling after
+config<C>_no-load: the raw gauges (--raw-topic, --raw-field) and the joint states (--joint-topic), or the
+sensor's orientation from /tf (--tf BASE,SENSOR: no joints, no robot model), are aligned (interpolated at
+the gauges' stamps), the still poses found in each run (the settling after
 each move dropped) and averaged; the k-th still pose of a load run pairs with the k-th of its no-load run.
 
 pairs every load run with its no-load run (same configuration, same pose index), aligns
@@ -119,7 +120,9 @@ def run(args: argparse.Namespace) -> int:
     logs = bags if bags is not None else log_files(args.logs)
     robot = load_robot_from_args(args)
     what = "ROS bags" if bags is not None else "run logs"
-    console.info(f"preparing {len(logs)} {what} with {robot.name} (sensor frame {robot.sensor_frame}) ...")
+    pose = f"the sensor's orientation from /tf ({', '.join(args.tf)})" if bags is not None and args.tf else \
+        f"{robot.name} (sensor frame {robot.sensor_frame})"
+    console.info(f"preparing {len(logs)} {what} with {pose} ...")
     if bags is not None:
         inputs = [bag_run_log(args, path, robot, console) for path in bags]
         if args.n_channels is not None and inputs[0].n_channels != args.n_channels:

@@ -62,10 +62,9 @@ def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
     g.add_argument("--joint-topic", metavar="TOPIC",
                    help="the sensor_msgs/JointState topic (default: the bag's only one); the joints named like "
                    "the robot's are used, in its order")
-    if wrench:
-        g.add_argument("--tf", type=_frames, metavar="BASE,SENSOR",
-                       help="take the sensor's orientation from /tf and /tf_static (base frame to sensor frame) "
-                       "instead of the joints and the robot model")
+    g.add_argument("--tf", type=_frames, metavar="BASE,SENSOR",
+                   help="take the sensor's orientation from /tf and /tf_static (base frame to sensor frame) "
+                   "instead of the joints and the robot model")
     g.add_argument("--stamps", choices=("header", "receive"), default="header",
                    help="the messages' header stamps, or the times the recorder received them (for a sensor "
                    "driver stamping with its own clock)")
@@ -168,12 +167,16 @@ def bag_run_log(args, path: Path, robot, console: Console):
         raise CliError(f"{path}: prepare calibrates raw gauges: name their topic with --raw-topic TOPIC "
                        "(and --raw-field FIELD)")
     rec = read_bag_from_args(args, path, console)
-    q = bag_joints(rec, robot)
-    still = still_poses(args, str(path), rec.time, rec.reading, joints=q)
+    if rec.rotation is not None:  # --tf: the orientation recorded, no joints and no robot model needed
+        still = still_poses(args, str(path), rec.time, rec.reading, rotations=rec.rotation)
+        q, rotation, frame = np.empty((still.n_kept, 0)), still.rotation, None
+    else:
+        still = still_poses(args, str(path), rec.time, rec.reading, joints=bag_joints(rec, robot))
+        q, rotation, frame = still.joints, None, robot.sensor_frame
     console.info(f"{path}: {still.summary()}")
     k = still.n_kept
     return RunLog(path=path, timestamp=still.time, run_kind=np.array([match.group(2)] * k),
                   config=np.full(k, int(match.group(1)), dtype=np.int64), pose=np.arange(k, dtype=np.int64),
-                  q=still.joints, raw=still.reading, line=np.arange(1, k + 1, dtype=np.int64),
-                  raw_unit="raw", robot=robot.name, sensor_frame=robot.sensor_frame,
+                  q=q, raw=still.reading, line=np.arange(1, k + 1, dtype=np.int64),
+                  raw_unit="raw", robot=robot.name, sensor_frame=frame, rotation=rotation,
                   meta={"bag": str(path), "topic": rec.sensor_topic})

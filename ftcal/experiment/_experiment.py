@@ -30,7 +30,7 @@ The dataset's ``group`` is the load configuration id, for grouped splits.
 from __future__ import annotations
 
 from collections import defaultdict
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
 
@@ -158,6 +158,11 @@ class PairedRuns:
         Sensor temperature [deg C] of each load pose, when every load row has one.
     no_load : dict
         No-load run id -> (q (k, n_joints), raw (k, n_channels)) of all its poses.
+    rotation_load, rotation_no_load : ndarray of shape (m, 3, 3) or None
+        The sensor's orientation (sensor to base) of each pose of a pair, when the runs recorded it (tf) instead
+        of joint angles.
+    no_load_rotations : dict
+        No-load run id -> the orientations (k, 3, 3) of all its poses, when recorded.
     """
 
     config: NDArray[np.int64]
@@ -170,10 +175,16 @@ class PairedRuns:
     source: list[str]
     no_load: dict[int, tuple[NDArray[np.float64], NDArray[np.float64]]]
     temperature_load: NDArray[np.float64] | None = None
+    rotation_load: NDArray[np.float64] | None = None
+    rotation_no_load: NDArray[np.float64] | None = None
+    no_load_rotations: dict[int, NDArray[np.float64]] = field(default_factory=dict)
 
 
 def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
-    """(kind, config, pose) -> (mean q, mean raw, first 'file:line', mean temperature or None)."""
+    """(kind, config, pose) -> (mean q, mean raw, first 'file:line', mean temperature or None, mean rotation or
+    None); the rows of one pose must agree within ``same_pose_tol`` [rad] (each joint, or the orientation)."""
+    from scipy.spatial.transform import Rotation
+
     groups: dict[tuple[str, int, int], list[tuple[RunLog, int]]] = defaultdict(list)
     for log in logs:
         for i in range(log.n_rows):
@@ -182,7 +193,7 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
     for key, members in groups.items():
         q = np.array([lg.q[i] for lg, i in members])
         raw = np.array([lg.raw[i] for lg, i in members])
-        spread = float(np.max(np.ptp(q, axis=0)))
+        spread = float(np.max(np.ptp(q, axis=0), initial=0.0))  # no joints when the orientation was recorded
         first = f"{members[0][0].path}:line {members[0][0].line[members[0][1]]}"
         if spread > same_pose_tol:
             j = int(np.argmax(np.ptp(q, axis=0)))
@@ -194,7 +205,18 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
             )
         temps = [lg.temperature[i] for lg, i in members if lg.temperature is not None]
         temperature = float(np.mean(temps)) if len(temps) == len(members) else None
-        out[key] = (q.mean(axis=0), raw.mean(axis=0), first, temperature)
+        rotation = None
+        if members[0][0].rotation is not None:  # the orientation recorded itself (tf), not joints
+            turns = Rotation.from_matrix(np.array([lg.rotation[i] for lg, i in members]))
+            apart = (turns * turns[0].inv()).magnitude()
+            if apart.max() > same_pose_tol:
+                k = int(np.argmax(apart))
+                raise LogFormatError(
+                    f"{first} and {members[k][0].path}:line {members[k][0].line[members[k][1]]}: {key[0]} rows of "
+                    f"config {key[1]}, pose {key[2]} are {apart[k]:.4f} rad apart in orientation; one pose index was "
+                    "used for two different poses. Give each pose its own index.")
+            rotation = turns.mean().as_matrix()
+        out[key] = (q.mean(axis=0), raw.mean(axis=0), first, temperature, rotation)
     return out
 
 
@@ -223,6 +245,9 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
             if a != b:
                 raise LogFormatError(f"{lg.path}: {a} {what} but {ref.path} has {b}; all logs of one "
                                      "experiment must come from the same sensor and robot.")
+        if (lg.rotation is None) != (ref.rotation is None):
+            raise LogFormatError(f"{lg.path} and {ref.path}: one records the sensor's orientation (tf), the other joint "
+                                 "angles; give the runs of one experiment recorded alike.")
     samples = _average_samples(logs, same_pose_tol)
     load_keys = sorted(k for k in samples if k[0] == "load")
     if not load_keys:
@@ -247,7 +272,8 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
     no_loads = [samples[k] for k in partners]
     load_set = {(c, p) for _, c, p in load_keys}
     no_load: dict[int, tuple[list, list]] = defaultdict(lambda: ([], []))
-    for (kind, c, p), (q, raw, where, _) in sorted(samples.items()):
+    no_load_rotations: dict[int, list] = defaultdict(list)
+    for (kind, c, p), (q, raw, where, _, rotation) in sorted(samples.items()):
         if kind != "no-load":
             continue
         if c != SHARED_NO_LOAD_CONFIG and (c, p) not in load_set:
@@ -255,6 +281,9 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
                                  f"config {c} and pose {p}); was the load run cut short?")
         no_load[c][0].append(q)
         no_load[c][1].append(raw)
+        if rotation is not None:
+            no_load_rotations[c].append(rotation)
+    recorded = ref.rotation is not None
     return PairedRuns(
         config=np.array([k[1] for k in load_keys], dtype=np.int64),
         pose=np.array([k[2] for k in load_keys], dtype=np.int64),
@@ -263,6 +292,9 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
         no_load_run=np.array([k[1] for k in partners], dtype=np.int64), source=[s[2] for s in loads],
         no_load={k: (np.array(v[0]), np.array(v[1])) for k, v in no_load.items()},
         temperature_load=(np.array([s[3] for s in loads]) if all(s[3] is not None for s in loads) else None),
+        rotation_load=np.array([s[4] for s in loads]) if recorded else None,
+        rotation_no_load=np.array([s[4] for s in no_loads]) if recorded else None,
+        no_load_rotations={k: np.array(v) for k, v in no_load_rotations.items()},
     )
 
 
@@ -387,13 +419,17 @@ def prepare_dataset(
         raise LogFormatError(f"{first}: load configuration {unknown[0]} is not among the known ones "
                              f"{sorted(positions)}.", parameter="load_configurations", value=int(unknown[0]),
                              fix="pass {load_configurations} with its position")
-    _check_limits(robot, pairs.q_load, pairs.source, limit_tolerance_rad)
-    _check_limits(robot, pairs.q_no_load, pairs.source, limit_tolerance_rad)
     g = np.asarray(gravity_in_base, dtype=float)
     g_hat = g / np.linalg.norm(g)
-    P_load = sensor_pose_in_base(robot, pairs.q_load)
-    P_no_load = sensor_pose_in_base(robot, pairs.q_no_load)
-    R_delta = rotation_delta(P_no_load, P_load)
+    recorded = pairs.rotation_load is not None  # the orientation recorded (tf), else the robot's joints through FK
+    if recorded:
+        R_load, R_no_load = pairs.rotation_load, pairs.rotation_no_load
+    else:
+        _check_limits(robot, pairs.q_load, pairs.source, limit_tolerance_rad)
+        _check_limits(robot, pairs.q_no_load, pairs.source, limit_tolerance_rad)
+        R_load = sensor_pose_in_base(robot, pairs.q_load)[:, :3, :3]
+        R_no_load = sensor_pose_in_base(robot, pairs.q_no_load)[:, :3, :3]
+    R_delta = rotation_delta(R_no_load, R_load)
     angle = np.degrees(np.arccos(np.clip((np.trace(R_delta, axis1=1, axis2=2) - 1) / 2, -1, 1)))
     if np.any(angle > max_pair_rotation_deg):
         i = int(np.argmax(angle))
@@ -402,9 +438,10 @@ def prepare_dataset(
                              "runs do not refer to the same commanded pose.")
     fits = {}
     for run, (q_nl, raw_nl) in pairs.no_load.items():
-        u = np.einsum("nji,j->ni", sensor_pose_in_base(robot, q_nl)[:, :3, :3], g_hat)
+        R_run = pairs.no_load_rotations[run] if recorded else sensor_pose_in_base(robot, q_nl)[:, :3, :3]
+        u = np.einsum("nji,j->ni", R_run, g_hat)
         fits[run] = fit_no_load_model(u, raw_nl)
-    u_no_load = np.einsum("nji,j->ni", P_no_load[:, :3, :3], g_hat)
+    u_no_load = np.einsum("nji,j->ni", R_no_load, g_hat)
     du = np.einsum("nji,nj->ni", R_delta, u_no_load) - u_no_load  # (R_delta^T - I) u_no-load
     aligned = pairs.raw_no_load.copy()
     for run, fit in fits.items():
@@ -413,7 +450,7 @@ def prepare_dataset(
     raw = pairs.raw_load - aligned
     r = np.array([positions[c] for c in pairs.config])
     row_mass = np.array([fixture_mass.get(int(c), load_mass) for c in pairs.config])
-    wrench = reference_wrench(P_load[:, :3, :3], 1.0, r, g) * row_mass[:, None]  # eq. 15-16 are linear in the mass
+    wrench = reference_wrench(R_load, 1.0, r, g) * row_mass[:, None]  # eq. 15-16 are linear in the mass
     meta = {
         "source": "ftcal.prepare_dataset",
         "robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": robot.sensor_frame,
@@ -425,6 +462,7 @@ def prepare_dataset(
         "no_load_fit_residual_rms": {str(k): f.residual_rms.tolist() for k, f in fits.items()},
         "method": "raw = load - (no-load + B (R_delta^T - I) u_no-load); wrench = eq. 15-16 at the load pose",
         "raw_unit": logs[0].raw_unit,
+        "orientation_source": "recorded (tf)" if recorded else "forward kinematics of the joints",
     }
     return CalibrationDataset(raw=raw, wrench=wrench, group=pairs.config, meta=meta,
                               temperature=pairs.temperature_load)

@@ -100,6 +100,11 @@ class RunLog:
         [kg], from the ``load_mass_kg`` comment.
     robot, sensor_frame : str or None
     meta : dict
+    temperature : ndarray of shape (n,) or None
+        [deg C].
+    rotation : ndarray of shape (n, 3, 3) or None
+        The sensor's orientation (sensor to base) of each row when the recording carries it (a ROS bag read with
+        ``/tf``) instead of joint angles for the robot model (``q`` then has no columns).
     """
 
     path: Path
@@ -116,6 +121,7 @@ class RunLog:
     sensor_frame: str | None = None
     meta: dict = field(default_factory=dict)
     temperature: NDArray[np.float64] | None = None
+    rotation: NDArray[np.float64] | None = None
 
     @property
     def n_rows(self) -> int:
