@@ -296,3 +296,18 @@ def test_fit_of_a_force_only_cell_says_no_torque_scaling(tmp_path):
     assert run.returncode == 0, run.stderr
     done = next(line for line in run.stderr.splitlines() if "training RMSE" in line)
     assert "N (forces only: no torque scaling)" in done and "torque-scaled" not in done and "alpha" not in done
+
+
+@pytest.mark.parametrize("axes, says, not_says", [
+    (("Fx", "Fy", "Fz"), "forces in N.", "torques in N·m"),
+    (("Fz", "Tx", "Ty"), "forces in N, torques in N·m", "the axes above, in their unit"),
+])
+def test_the_report_states_the_units_of_the_axes_that_exist(tmp_path, capsys, axes, says, not_says):
+    raw, wrench = _sensor(n_axes=6, n_channels=6)
+    columns = [["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"].index(a) for a in axes]
+    path = _csv(tmp_path / "cell.csv", ["s0", "s1", "s2", "s3", "s4", "s5", *axes], raw, wrench[:, columns])
+    assert main(["fit", str(path), "--model", "linear", "--report", "--no-baselines", "--cv", "3",
+                 "--out", str(tmp_path / "m"), "-q"]) == 0, capsys.readouterr().err
+    html = (tmp_path / "m" / "linear.report.html").read_text()
+    section = html[html.index("Frames and units"):][:600]
+    assert says in section and not_says not in section, section

@@ -961,10 +961,14 @@ def render_report_html(report: dict) -> str:
         parts.append("<p class=\"note\">No calibration matrix could be read from this model (its prediction is "
                      "not affine in the readings, or not a matrix of these axes). Its identity is the model file and "
                      "its SHA-256 above; load it with the command shown.</p>")
+    has_force, has_torque = any(n.startswith("F") for n in names), any(n.startswith("T") for n in names)
+    kinds = ", ".join([k for k, has in (("forces in N", has_force),
+                                         ("torques in N·m about the sensor frame's origin", has_torque)) if has])
+    over = "<code>[F, alpha·T]</code> in N" if has_force and has_torque else "the axes above, in their unit"
     parts.append("<h3>Frames and units</h3><p>Outputs are <code>[" + ", ".join(names) + "]</code> in the <b>sensor "
-                 "frame</b>: forces in N, torques in N·m about the sensor frame's origin. Raw channels are in the "
+                 f"frame</b>: {kinds or 'in the units of the data'}. Raw channels are in the "
                  "sensor's own unit, in the channel order of the data file. The RMSE of the whole wrench is over "
-                 "<code>[F, alpha·T]</code> in N (thesis eq. 18)."
+                 f"{over} (thesis eq. 18)."
                  + (f" The data file declared {_fmt(', '.join(f'{k[7:]}: {u}' for k, u in d['units'].items()))}; "
                     "values were converted to N and N·m." if d.get("units") else "") + "</p>")
     parts.append("</section>")
