@@ -7,6 +7,7 @@ import argparse
 from pathlib import Path
 
 from ftcal import FtcalError
+from ftcal.cli._messages import cli_message
 from ftcal.evaluation import OutputFiles
 
 
@@ -78,7 +79,7 @@ def output_files(parser: argparse.ArgumentParser, out: str, force: bool, names: 
         files = OutputFiles(out, force=force)
         files.check(names)
     except (FtcalError, OSError) as exc:
-        parser.error(str(exc))
+        parser.error(cli_message(exc))
     return files
 
 

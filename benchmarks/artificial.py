@@ -23,6 +23,7 @@ from pathlib import Path
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, FtcalError, run_artificial_benchmark
 from ftcal.models import STOCK_BASELINE_NAMES
+from ftcal.cli._messages import cli_message
 
 #: Default output folder (git-ignored): benchmarks/out/artificial.
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "artificial"
@@ -77,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
             plot=not args.no_plot, stack=args.stack,
         )
     except FtcalError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {cli_message(exc)}", file=sys.stderr)
         return 2
     meta = result["meta"]
     print(open(result["files"]["markdown"], encoding="utf-8").read())

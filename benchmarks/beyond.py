@@ -41,6 +41,7 @@ import numpy as np
 from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
 from ftcal.core import plain_json
 from ftcal.evaluation import wilcoxon_pvalue
+from ftcal.cli._messages import cli_message
 
 from _output import output_files
 
@@ -183,7 +184,7 @@ def main(argv: list[str] | None = None) -> int:
             real_world = run_real_world_benchmark(models=CLOSED_FORM, schedule=args.schedule,
                                                   grouped_schedule=args.schedule, random_state=args.seed)
     except FtcalError as exc:
-        print(f"beyond: error: {exc}", file=sys.stderr)
+        print(f"beyond: error: {cli_message(exc)}", file=sys.stderr)
         return 2
     tgt = targets(payload["summary"], payload["results"], models)
     meta = {"command": "python benchmarks/beyond.py " + " ".join(argv if argv is not None else sys.argv[1:]),

@@ -31,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import ERROR_PRESETS, FtcalError, run_artificial_benchmark
+from ftcal.cli._messages import cli_message
 
 from _output import int_at_least, jobs, output_files
 
@@ -186,7 +187,7 @@ def main(argv: list[str] | None = None) -> int:
             n_test=None if args.quick else args.n_test or 1250, force=args.force,
         )
     except FtcalError as exc:
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {cli_message(exc)}", file=sys.stderr)
         return 2
     table = summarise(result, levels, args.models)
     meta = result["meta"]

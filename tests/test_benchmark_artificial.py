@@ -466,8 +466,8 @@ def test_benchmark_scripts_never_replace_a_users_file_and_refuse_before_any_work
         _script(script).main([*argv, "--out", str(tmp_path)])
     assert stop.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
-    assert err.endswith(f"{mine} exists and was not written by this benchmark (or was edited since); choose another "
-                        "output folder or pass --force (force=True) to overwrite it.")
+    assert err.endswith(f"{mine} exists and was not written by this benchmark (or was edited since). Fix: choose "
+                        "another output folder or pass --force to overwrite it.")
     assert mine.read_text() == "my notes" and sorted(p.name for p in tmp_path.iterdir()) == [name]  # no work done
 
 

@@ -63,7 +63,7 @@ class OutputFiles:
     >>> files.check(["table.md"])
     Traceback (most recent call last):
     ...
-    ftcal.core._exceptions.BenchmarkOutputExistsError: .../table.md exists and was not written by this benchmark (or was edited since); choose another output folder or pass --force (force=True) to overwrite it.
+    ftcal.core._exceptions.BenchmarkOutputExistsError: .../table.md exists and was not written by this benchmark (or was edited since). Fix: choose another output folder or pass force=True to overwrite it.
     >>> OutputFiles(out / "run").write_text("table.md", "| a |").read_text()
     '| a |'
     """
