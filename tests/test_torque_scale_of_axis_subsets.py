@@ -89,3 +89,20 @@ def test_fit_of_a_plate_on_the_command_line_scales_its_torques(tmp_path, capsys)
     auto = ftcal.AutoCalibrator(candidates=[("linear", LinearCalibrator())], baselines=False, stack=False,
                                 cv=3).fit(raw, named_targets(w, PLATE))
     assert auto.alpha_ == pytest.approx(fitted["alpha"]) and tuple(auto.axes_) == PLATE
+
+
+def test_the_scorer_and_a_search_scale_the_plates_torques():
+    from sklearn.model_selection import GridSearchCV
+
+    from ftcal.core._metrics import neg_scaled_rmse
+
+    raw, w = _plate()
+    model = LinearCalibrator().fit(raw[:120], named_targets(w[:120], PLATE))
+    pred = model.predict(raw[120:])
+    assert -neg_scaled_rmse(model, raw[120:], w[120:]) == pytest.approx(
+        ftcal.wrench_rmse(w[120:], pred, alpha=model.alpha_, axes=PLATE))
+    assert -neg_scaled_rmse(model, raw[120:], w[120:]) > ftcal.wrench_rmse(w[120:], pred)  # the torques weigh more
+    # a search hands each fold a slice of the named table: every fitted calibrator knows its torques
+    search = GridSearchCV(AxisNonlinearCalibrator(), {"ridge": [1e-3, 1e-1]}, scoring=neg_scaled_rmse, cv=3)
+    search.fit(raw, named_targets(w, PLATE))
+    assert tuple(search.best_estimator_.axes_) == PLATE and search.best_estimator_.alpha_ > 10

@@ -192,6 +192,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..evaluation._plots import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, dataset_alpha
+    from ..core._wrench import WRENCH_LABELS
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -225,6 +226,8 @@ def run_dataset(args: argparse.Namespace) -> int:
         candidates, data.raw, data.wrench, groups=groups, cv=args.cv, alpha=alpha, random_state=args.seed,
         # the stock baselines as calibrators: their tags say which are light work (scored in this process)
         baselines={name: StockCalibrator(baseline=name, random_state=args.seed or 0) for name in STOCK_BASELINE_NAMES},
+        axes=tuple(data.axes) if len(data.axes) == data.wrench.shape[1] and set(data.axes) <= set(WRENCH_LABELS)
+        else None,  # eq. 18 scales the torques of the axes the data have (a plate's Tx, Ty)
     )
     chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
     results["chosen"] = results["name"][chosen]

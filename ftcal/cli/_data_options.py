@@ -31,7 +31,7 @@ import sys
 from ._common import CliError, int_in_range
 
 __all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
-           "add_alpha_option",
+           "add_alpha_option", "training_targets",
            "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
@@ -243,6 +243,15 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
     if not quiet:
         print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
     return kept
+
+
+def training_targets(data):
+    """The dataset's wrench as the calibrators take it: a table named by its axes when they are not the default
+    ones of its width (a plate's Fz, Tx, Ty: its torques are scaled), else the array."""
+    from ..core._wrench import default_axes, named_targets
+
+    named = None if tuple(data.axes) == default_axes(len(data.axes)) else tuple(data.axes)
+    return named_targets(data.wrench, named)
 
 
 def fit_data_facts(args: argparse.Namespace, data) -> dict:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range,
                       write_json)
-from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
+from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args, training_targets
 from ._models import dataset_alpha, model_file_name, parse_param
 from ._training import fit_with_progress
 
@@ -146,7 +146,6 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ..core._wrench import default_axes, named_targets
     from ftcal.calibrators._routing import requests_groups
 
     console = Console(args.quiet)
@@ -214,8 +213,7 @@ def run(args: argparse.Namespace) -> int:
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
     # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
     # Tx, Ty as well as a 6-axis sensor's)
-    named = None if tuple(data.axes) == default_axes(len(data.axes)) else data.axes
-    fit_with_progress(estimator, X, named_targets(data.wrench, named), console, label=args.model, **fit_params)
+    fit_with_progress(estimator, X, training_targets(data), console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
     report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {

@@ -9,7 +9,8 @@ import time
 from ..core._exceptions import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
-from ._data_options import add_dataset_options, add_fold_options, fit_data_facts, fold_groups, load_dataset_from_args
+from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
+                            load_dataset_from_args, training_targets)
 from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
 
 EXAMPLE = """\
@@ -123,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     with dask_backend(args.scheduler):  # a scheduler that cannot be used fails here, before any status line
         console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
         search = search_calibrator(
-            args.model, data.raw, data.wrench, space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
+            args.model, data.raw, training_targets(data), space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
             schedule=args.schedule, random_state=args.seed, n_jobs=-1 if args.scheduler else args.jobs, **params,
         )
     seconds = time.perf_counter() - start

@@ -282,8 +282,9 @@ def calibration_report(
     )
 
 
-def _torque_scale_of(estimator) -> float:
-    """The ``alpha_`` of ``estimator``, or of the fitted calibrator it wraps: the final step of a ``Pipeline``
+def _torque_scale_of(estimator) -> tuple[float, tuple | None]:
+    """The ``alpha_`` (and the wrench ``axes_`` its target named, or None) of ``estimator``, or of the fitted
+    calibrator it wraps: the final step of a ``Pipeline``
     (nested ones too), the ``best_estimator_`` of a search (``GridSearchCV``, ...), a ``FrozenEstimator``'s
     estimator. Refuses (``CalibrationInputError``) when there is none, rather than scoring with alpha = 1."""
     path, current = [], estimator
@@ -295,7 +296,8 @@ def _torque_scale_of(estimator) -> float:
             if not 0 < alpha < np.inf:
                 raise CalibrationInputError(f"neg_scaled_rmse: the {path[-1]}'s alpha_ is {alpha!r}; a torque scale "
                                             "is a finite number > 0 [1/m]. Fix: fit the calibrator again.")
-            return alpha
+            axes = current.__dict__.get("axes_")
+            return alpha, None if axes is None else tuple(str(a) for a in axes)
         steps = getattr(current, "steps", None)
         if isinstance(steps, list) and steps and isinstance(steps[-1], tuple) and len(steps[-1]) == 2:
             current = steps[-1][1]  # a Pipeline: its final estimator
@@ -313,7 +315,8 @@ def _torque_scale_of(estimator) -> float:
 
 
 def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
-    """scikit-learn scorer: minus the torque-scaled RMSE (eq. 18), with the fitted calibrator's own ``alpha_``.
+    """scikit-learn scorer: minus the torque-scaled RMSE (eq. 18), with the fitted calibrator's own ``alpha_`` (and
+    the wrench axes its target named: a plate's ``Fz, Tx, Ty`` has its torques scaled).
 
     Use it as ``scoring=neg_scaled_rmse`` in ``cross_validate`` or ``GridSearchCV`` (greater is better, as
     scikit-learn expects), on a calibrator or on a ``Pipeline`` ending with one (nested pipelines, a fitted
@@ -333,5 +336,5 @@ def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
     >>> round(neg_scaled_rmse(pipe, raw, wrench + [0, 0, 0, 0, 0, 0.6]), 6)  # 0.6 N·m x 10 / m, one of six
     -2.44949
     """
-    alpha = _torque_scale_of(estimator)
-    return -wrench_rmse(y, estimator.predict(X), alpha)
+    alpha, axes = _torque_scale_of(estimator)  # the torques of the axes the calibrator was fitted on
+    return -wrench_rmse(y, estimator.predict(X), alpha, axes)
