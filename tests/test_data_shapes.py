@@ -162,7 +162,10 @@ def test_newton_millimetres_given_to_benchmark_dataset_are_refused_with_the_fix(
 def test_forces_in_kilonewtons_are_named_as_such():
     wrench = np.array([[0.004, 0.002, 0.0, 0.0, 0.05, 0.01]])  # kN forces, N·m torques: arm 12 m read as N
     problem = lever_arm_problem(wrench)
-    assert "forces look like kN" in problem and "--force-unit kN" in problem
+    assert "forces look like kN" in str(problem) and problem.settings["force_unit"] == "kN"
+    from ftcal.cli._messages import cli_message
+
+    assert "--force-unit kN" in cli_message(problem)
 
 
 @pytest.mark.parametrize("unit, kind, factor", [("MN", "force", 1e6), ("mN", "force", 1e-3), ("kgf", "force", G0),

@@ -40,6 +40,7 @@ from collections.abc import Sequence
 from ..core._exceptions import FtcalError
 from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
                       standard_streams)
+from ._messages import one_line_warnings
 
 __all__ = ["main", "build_parser"]
 
@@ -96,7 +97,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = None
     try:
-        with signals_interrupt(), standard_streams():
+        with signals_interrupt(), standard_streams(), one_line_warnings(lambda: args):
             parser = build_parser()
             args = parser.parse_args(args_list)
             note_inputs(args, parser)  # no output may replace one of these (OutputPlan checks)

@@ -29,6 +29,7 @@ import argparse
 import sys
 
 from ._common import CliError, int_in_range
+from ._messages import cli_error, cli_spelling
 
 __all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
            "add_alpha_option", "training_targets",
@@ -139,9 +140,13 @@ def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_un
     too_long = lever_arm_m(wrench, axes) > PLAUSIBLE_LEVER_ARM_M[1]
     declared = confirmed or (getattr(args, "torque_unit", None) is not None
                              and getattr(args, "force_unit", None) is not None)
+    spell = cli_spelling(args)
+    confirm = (f"if both really are right, confirm them with {spell('force_unit', force_unit)} "
+               f"{spell('torque_unit', torque_unit)}")
+    text = problem.render(spell, fix=f"{problem.render_fix(spell)}; {confirm}")
     if too_long and not declared:
-        raise CliError(f"{where}: {problem}")
-    print(f"ftcal: warning: {where}: {problem}", file=sys.stderr)
+        raise CliError(f"{where}: {text}")
+    print(f"ftcal: warning: {where}: {text}", file=sys.stderr)
 
 
 #: The destinations of :func:`add_dataset_options` (unset: None).
@@ -180,7 +185,7 @@ def stored_columns(facts: dict | None, where: str):
     try:
         return ColumnMap.from_dict(facts["columns"], where)
     except DatasetFileError as exc:
-        raise CliError(str(exc)) from None
+        raise cli_error(exc) from None
 
 
 def dataset_columns(args: argparse.Namespace, stored=None):
@@ -272,7 +277,7 @@ def model_reading(model_path) -> tuple:
     try:
         facts = model_data(model_path)
     except ModelFileError as exc:
-        raise CliError(str(exc)) from None
+        raise cli_error(exc) from None
     axes = facts.get("axes")
     if axes is not None and not (isinstance(axes, list) and all(isinstance(a, str) for a in axes) and len(axes) <= 6):
         raise CliError(f"{model_path}: the stored wrench axes are damaged; fit the model again")

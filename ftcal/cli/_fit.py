@@ -11,6 +11,7 @@ from ._common import (Console, CliError, OutputPlan, add_output_options, add_run
                       write_json)
 from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args, training_targets
 from ._models import dataset_alpha, model_file_name, parse_param
+from ._messages import cli_error
 from ._training import fit_with_progress
 
 EXAMPLE = """\
@@ -122,7 +123,7 @@ def _check_before_saving(estimator, X, y, groups, args, predictions, console: Co
         check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions,
                           held_out=held_out)
     except DegenerateCalibrationError as exc:
-        raise CliError(f"{args.dataset}: {' '.join(str(exc).split())}") from None
+        raise cli_error(exc, args, str(args.dataset)) from None
 
 
 def _rmse_text(rmse: float, axes, alpha: float) -> str:

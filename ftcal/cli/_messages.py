@@ -19,12 +19,16 @@ Examples
 from __future__ import annotations
 
 import argparse
+import contextlib
+import sys
+import warnings
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
 from ..core._exceptions import NO_SETTING, FtcalError, Placeholder
 
-__all__ = ["Option", "CLI_NAMES", "cli_message", "cli_spelling"]
+__all__ = ["Option", "CLI_NAMES", "cli_message", "cli_spelling", "cli_error", "fix_names", "one_line_warnings"]
 
 
 @dataclass(frozen=True)
@@ -82,6 +86,8 @@ CLI_NAMES: dict[str, Option] = {
     "scheduler": _option("--scheduler"),
     "channels": _option("--channels"),
     "wrench": _option("--wrench"),
+    "axes": _option("--axes"),
+    "columns.groups": _option("--groups"),  # the dataset's group column (``groups`` alone: a fit's group labels)
     "force_unit": _option("--force-unit"),
     "torque_unit": _option("--torque-unit"),
     "sensor": _option("--sensor"),
@@ -120,12 +126,55 @@ def cli_spelling(args: argparse.Namespace | None = None):
     return spell
 
 
-def cli_message(exc: BaseException, args: argparse.Namespace | None = None) -> str:
+def fix_names(exc: BaseException, names: tuple[str, ...]) -> bool:
+    """Whether the fix of ``exc`` proposes one of the arguments ``names`` (read from its fields, not its words)."""
+    return isinstance(exc, FtcalError) and any("{" + name + "}" in (exc.fix or "") for name in names
+                                               if name in exc.fields)
+
+
+def cli_message(exc: BaseException, args: argparse.Namespace | None = None, *, fix: str | None = None,
+                row: str | None = None) -> str:
     """The message of ``exc`` in the command line's terms (its fields spelled as options); the plain ``str`` of
-    any error without fields."""
+    any error without fields. ``fix`` replaces the error's fix (``""``: none, where the command has no option the
+    fix could name); ``row`` says the error's offending row in the command's terms (``"the reading"``)."""
     if not isinstance(exc, FtcalError) or not exc.has_fields:
         return str(exc)
     in_fix = [name for name in exc.fields if "{" + name + "}" in (exc.fix or "")]
     advice = next((CLI_NAMES[name].advice for name in in_fix
                    if name in CLI_NAMES and CLI_NAMES[name].advice is not None), None)
-    return exc.render(cli_spelling(args), fix=advice)
+    return exc.render(cli_spelling(args), fix=fix if fix is not None else advice, row=row)
+
+
+def cli_error(exc: BaseException, args: argparse.Namespace | None = None, where: str = "", **kwargs: Any):
+    """A :class:`~ftcal.cli._common.CliError` saying ``exc`` in the command line's terms (:func:`cli_message`),
+    after ``where`` (the file or option it is about), on one line."""
+    from ._common import CliError
+
+    text = " ".join(cli_message(exc, args, **kwargs).split())
+    return CliError(f"{where}: {text}" if where else text)
+
+
+@contextlib.contextmanager
+def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambda: None) -> Iterator[None]:
+    """Show each warning the library gives while the command runs as one ``ftcal: warning: ...`` line on stderr (in
+    the command's terms, :func:`cli_message`; ``arguments`` gives the parsed arguments once there are some), not in
+    Python's two-line format with a source file and line.
+
+    Examples
+    --------
+    >>> import contextlib, io
+    >>> err = io.StringIO()
+    >>> with contextlib.redirect_stderr(err), one_line_warnings():
+    ...     warnings.warn("the drift is extrapolated  beyond the covered span", UserWarning)
+    >>> err.getvalue()
+    'ftcal: warning: the drift is extrapolated beyond the covered span\\n'
+    """
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        text = " ".join(cli_message(message, arguments()).split()) if isinstance(message, BaseException) \
+            else " ".join(str(message).split())
+        with contextlib.suppress(OSError, ValueError):  # a closed stderr loses the warning, not the command
+            print(f"ftcal: warning: {text}", file=sys.stderr if file is None else file)
+
+    with warnings.catch_warnings():
+        warnings.showwarning = show
+        yield

@@ -81,10 +81,10 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used.
     """
     import json
-    import re
 
     from ..core._exceptions import DatasetFileError
     from ..io._dataset import CalibrationDataset
+    from ._messages import cli_message, fix_names
 
     file = Path(path)
     if not file.is_file():
@@ -111,8 +111,8 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
                            "the report)")
         try:
             data = CalibrationDataset.load(file)
-        except DatasetFileError as exc:  # its advice is the data options of fit/evaluate, which predict has not
-            text = re.sub(r"\s*Fix: name them with --(channels|wrench)\b.*$", "", str(exc))
+        except DatasetFileError as exc:  # a fix naming the column options does not apply: --range reads ftcal's layout
+            text = cli_message(exc, fix="" if fix_names(exc, ("channels", "wrench")) else None)
             raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
         lo, hi = data.raw.min(axis=0), data.raw.max(axis=0)
     n = n_channels
@@ -230,7 +230,7 @@ def run(args: argparse.Namespace) -> int:
                 else:
                     values = np.asarray(predict(raw), dtype=float)
             except ValueError as exc:  # name the input's line, not the row inside a chunk
-                raise located_error(exc, "stdin" if args.input == "-" else args.input, lines) from None
+                raise located_error(exc, "stdin" if args.input == "-" else args.input, lines, args) from None
             if limits is not None:
                 flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
             else:

@@ -223,22 +223,19 @@ def takes_temperature(model) -> bool:
     return calibration_tags(model).temperature_column
 
 
-def located_error(exc: Exception, source: str, lines: NDArray) -> CliError:
-    """``exc`` of a model's ``predict`` on one chunk, with the chunk's ``row i`` turned into the input's line (or
-    the ``.npz`` row) it came from and the input named."""
-    import re
+def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> CliError:
+    """``exc`` of a model's ``predict`` on one chunk, with the offending row it carries (its ``row`` field, a row of
+    the chunk) said as the input's line (or the ``.npz`` row) it came from, and the input named."""
+    from ..core._exceptions import FtcalError
+    from ._messages import cli_error
 
-    text = " ".join(str(exc).split())
-    found = re.search(r"\b(?:X )?row (\d+)\b", text)
+    row = exc.row if isinstance(exc, FtcalError) else None
     unit = "row" if source.endswith(".npz") else "line"
-    if found and int(found.group(1)) < len(lines):
-        where = f"{unit} {int(lines[int(found.group(1))])}"
-        text = (text[:found.start()] + "the reading" + text[found.end():]).strip()
-    elif len(lines):
-        where = f"{unit}s {int(lines[0])}-{int(lines[-1])}"
-    else:
-        where = "no readings"
-    return CliError(f"{source}: {where}: {text}")
+    if row is not None and 0 <= row < len(lines):
+        reading = "the reading" if exc.parameter in (None, "X") else f"the reading's {exc.parameter}"
+        return cli_error(exc, args, f"{source}: {unit} {int(lines[row])}", row=reading)
+    where = f"{unit}s {int(lines[0])}-{int(lines[-1])}" if len(lines) else "no readings"
+    return cli_error(exc, args, f"{source}: {where}")
 
 
 def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], header: bool) -> None:

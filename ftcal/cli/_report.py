@@ -11,9 +11,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError, TooFewSamplesError
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
+from ._messages import cli_error, cli_message
 
 EXAMPLE = """\
 examples:
@@ -197,7 +198,7 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     try:
         conditions = check_conditions(fields)
     except CalibrationInputError as exc:
-        raise CliError(f"{'--conditions ' + str(conditions_file) + ': ' if conditions_file else ''}{exc}") from None
+        raise cli_error(exc, args, f"--conditions {conditions_file}" if conditions_file else "") from None
     rated = None
     if args.rated is not None:
         if "=" not in args.rated and Path(args.rated).is_file():
@@ -224,7 +225,7 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
         try:
             tool = ToolLoad.load(args.tool)
         except CalibrationInputError as exc:
-            raise CliError(f"--tool {exc}") from None
+            raise CliError(f"--tool {cli_message(exc, args)}") from None
     return {"tool": tool, "rated": rated, "spec": spec, "conditions": conditions,
             "sensor": None if sensor is None else str(sensor)}
 
@@ -248,7 +249,7 @@ def write_report(out, label: str, model, data, args: argparse.Namespace, setting
                                          cv=args.cv, baselines=not args.no_baselines,
                                          random_state=getattr(args, "seed", 0), n_jobs=jobs or -1,
                                          command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
-    except CalibrationInputError as exc:
+    except TooFewSamplesError as exc:
         raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
     if check is not None:
         check(report["_held_out_pred"])
@@ -261,16 +262,15 @@ def write_report(out, label: str, model, data, args: argparse.Namespace, setting
     console.info(f"report -> {out.final_path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 
 
-def _fold_too_small(exc: Exception, n_rows: int, cv: int, dataset_path) -> CliError | None:
-    """The library's "X has 5 sample(s), but LinearCalibrator needs at least 7" said of a cross-validation fold:
-    which file, how many folds, and how many rows the report needs (None for any other error)."""
+def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path) -> CliError | None:
+    """The library's "X has 5 sample(s), but LinearCalibrator needs at least 7" (its fields: the rows, the estimator,
+    the rows it needs) said of a cross-validation fold: which file, how many folds, and how many rows the report
+    needs (None when the whole dataset was too small, not a fold)."""
     import math
-    import re
 
-    found = re.match(r"X has (\d+) sample\(s\), but (\w+) needs at least (\d+)", str(exc))
-    if found is None or int(found.group(1)) >= n_rows:
+    if exc.needed is None or not isinstance(exc.value, int) or exc.value >= n_rows:
         return None
-    got, name, need = int(found.group(1)), found.group(2), int(found.group(3))
+    got, name, need = exc.value, exc.estimator, exc.needed
 
     def train_rows(n: int, k: int) -> int:  # the smallest training part of k folds of n rows (equal folds)
         return n - math.ceil(n / k)

@@ -9,6 +9,7 @@ import time
 from ..core._exceptions import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
+from ._messages import cli_error
 from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
 from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
@@ -93,7 +94,7 @@ def check_distribution(entry: str, randomized: bool) -> None:
     try:
         _bounds(name, *bounds, where)
     except CalibrationInputError as exc:
-        raise CliError(str(exc)) from None
+        raise cli_error(exc) from None
     if not randomized:
         raise CliError(f"{where}: a distribution is sampled by a randomized search; pass --n-iter N (the number of "
                        f"candidates), or give a JSON list of values")

@@ -15,8 +15,12 @@ templates whose fields are argument names (``"{n_poses} must be ..."``,
 ``"pass {overwrite}"``), and :meth:`FtcalError.render` spells each field as the
 front end names that argument (the command line: ``--next``, ``--force``). Only
 the declared fields are filled (the ``parameter`` and the names of ``settings``;
-a setting of :data:`NO_SETTING` names an argument without proposing a value), so
-a file name or a value with braces in the message stays as it is.
+a setting of :data:`NO_SETTING` names an argument without proposing a value; the
+message only names its fields, the fix spells them with the values it proposes), so
+a file name or a value with braces in the message stays as it is. An error about
+one row of an array carries it as ``row`` and writes ``{row}`` where it names that
+row (``X row 3`` in the library's words); a front end that knows where the row came
+from (the line of a file) says it its own way (``render(..., row="the reading")``).
 
 Examples
 --------
@@ -28,6 +32,9 @@ Examples
 ('n_poses', 100000, True)
 >>> err.render(lambda name, setting: "--" + name.replace("_", "-") + ("" if setting is NO_SETTING else f" {setting}"))
 '--n-poses must be at most 642; got 100000. Fix: pass --candidate-subdivisions 4 for more candidates.'
+>>> bad = CalibrationInputError("{row} is NaN.", parameter="X", row=3)
+>>> str(bad), bad.row, bad.render(api_spelling, row="the reading")
+('X row 3 is NaN.', 3, 'the reading is NaN.')
 """
 
 from __future__ import annotations
@@ -40,6 +47,7 @@ __all__ = [
     "Placeholder",
     "FtcalError",
     "CalibrationInputError",
+    "TooFewSamplesError",
     "ModelFileError",
     "LogFormatError",
     "CalFileError",
@@ -102,17 +110,25 @@ class FtcalError(Exception):
         What to do, in the API's terms (a template as ``message``); ``str(error)`` ends with ``Fix: <fix>``.
     settings : mapping, optional
         The argument values the fix proposes (``{"overwrite": True}``): its fields are spelled with their value.
+    row : int, optional
+        The offending row of ``parameter`` (counted from 0); the message writes it as ``{row}``.
     """
 
     def __init__(self, message: str = "", *, parameter: str | None = None, value: Any = None,
-                 fix: str | None = None, settings: Mapping[str, Any] | None = None) -> None:
+                 fix: str | None = None, settings: Mapping[str, Any] | None = None, row: int | None = None) -> None:
         self.template = str(message)
         self.parameter = parameter
         self.value = value
         self.fix = fix
         self.settings = dict(settings or {})
-        self.has_fields = parameter is not None or bool(self.settings)
+        self.row = row
+        self.has_fields = parameter is not None or bool(self.settings) or row is not None
         super().__init__(self.render(api_spelling))
+
+    def located(self, prefix: str) -> "FtcalError":
+        """The same error (class and fields) with ``prefix`` in front of its message: where it happened
+        (``"data.csv: "``), for a caller that knows more than the function that raised it."""
+        return _with_prefix(self, prefix)
 
     @property
     def fields(self) -> list[str]:
@@ -120,17 +136,27 @@ class FtcalError(Exception):
         return ([self.parameter] if self.parameter is not None else []) + [n for n in self.settings
                                                                             if n != self.parameter]
 
-    def render(self, spell: Callable[[str, Any], str], fix: str | None = None) -> str:
+    def _fill(self, text: str, spell: Callable[[str, Any], str], row: str | None = None, *,
+              proposing: bool = True) -> str:
+        for name in self.fields:
+            setting = self.settings.get(name, NO_SETTING) if proposing else NO_SETTING
+            text = text.replace("{" + name + "}", spell(name, setting))
+        if self.row is not None:
+            own = f"{spell(self.parameter, NO_SETTING)} row {self.row}" if self.parameter else f"row {self.row}"
+            text = text.replace("{row}", own if row is None else row)
+        return text
+
+    def render_fix(self, spell: Callable[[str, Any], str]) -> str | None:
+        """The fix alone, its fields spelled by ``spell`` (None without a fix)."""
+        return self._fill(self.fix, spell) if self.fix else None
+
+    def render(self, spell: Callable[[str, Any], str], fix: str | None = None, row: str | None = None) -> str:
         """The message (and fix) with each field spelled by ``spell(name, setting)``; ``setting`` is the value
         the error proposes for that argument, or :data:`NO_SETTING`. ``fix`` replaces the error's own fix (a
-        front end's advice where it has no equivalent of the argument)."""
-        def fill(text: str) -> str:
-            for name in self.fields:
-                text = text.replace("{" + name + "}", spell(name, self.settings.get(name, NO_SETTING)))
-            return text
-
-        text = fill(self.template)
-        advice = fix if fix is not None else (fill(self.fix) if self.fix else None)
+        front end's advice where it has no equivalent of the argument); ``row`` replaces the error's words for
+        its ``{row}`` (``"the reading"`` where the front end names the line of a file)."""
+        text = self._fill(self.template, spell, row, proposing=False)  # the message names; the fix proposes
+        advice = fix if fix is not None else self.render_fix(spell)
         if advice:
             advice = advice if advice.endswith((".", "!", "?")) else f"{advice}."
             text = text.rstrip()
@@ -138,8 +164,34 @@ class FtcalError(Exception):
         return text
 
 
+def _with_prefix(error: FtcalError, prefix: str) -> FtcalError:
+    copy = type(error).__new__(type(error))
+    copy.__dict__.update(error.__dict__)
+    copy.template = prefix + error.template
+    Exception.__init__(copy, copy.render(api_spelling))
+    return copy
+
+
 class CalibrationInputError(FtcalError, ValueError):
     """Raw readings or wrenches that a calibrator cannot use (shape, NaN, inf, ...)."""
+
+
+class TooFewSamplesError(CalibrationInputError):
+    """Fewer training rows (``value``) than an estimator (named ``estimator``) needs (``needed``).
+
+    Examples
+    --------
+    >>> err = TooFewSamplesError("X has 5 sample(s), but M needs at least 7.", parameter="X", value=5, needed=7,
+    ...                          estimator="M")
+    >>> err.value, err.needed, err.estimator, isinstance(err, CalibrationInputError)
+    (5, 7, 'M', True)
+    """
+
+    def __init__(self, message: str = "", *, needed: int | None = None, estimator: str | None = None,
+                 **fields: Any) -> None:
+        super().__init__(message, **fields)
+        self.needed = needed
+        self.estimator = estimator
 
 
 class ModelFileError(FtcalError, ValueError):

@@ -48,9 +48,8 @@ PLAUSIBLE_TEMPERATURE = (-60.0, 200.0)
 class TemperatureValueError(CalibrationInputError):
     """A temperature that is not a usable value in deg C; ``row`` is the offending row (None for a shape error)."""
 
-    def __init__(self, message: str, row: int | None = None):
-        super().__init__(message)
-        self.row = row
+    def __init__(self, message: str, row: int | None = None, **fields) -> None:
+        super().__init__(message, row=row, **fields)
 
 
 def check_temperature(temperature: ArrayLike, n_rows: int, name: str = "temperature") -> NDArray[np.float64]:
@@ -74,14 +73,14 @@ def check_temperature(temperature: ArrayLike, n_rows: int, name: str = "temperat
     bad = ~np.isfinite(t)
     if bad.any():
         row = int(np.argmax(bad))
-        raise TemperatureValueError(f"{name} row {row} is NaN or inf; repair or drop that row.", row)
+        raise TemperatureValueError("{row} is NaN or inf; repair or drop that reading.", row, parameter=name)
     low, high = PLAUSIBLE_TEMPERATURE
     out = (t < low) | (t > high)
     if out.any():
         i = int(np.argmax(out))
         raise TemperatureValueError(
-            f"{name} row {i} is {t[i]:g} deg C, outside {low:g}..{high:g} deg C: is it in kelvin, or in tenths "
-            "of a degree? Give deg C.", i
+            f"{{row}} is {t[i]:g} deg C, outside {low:g}..{high:g} deg C: is it in kelvin, or in tenths of a degree? "
+            "Give deg C.", i, parameter=name, value=float(t[i])
         )
     return t
 

@@ -15,7 +15,7 @@ from sklearn.utils._param_validation import InvalidParameterError, Interval, val
 from sklearn.utils.validation import check_array, check_consistent_length, validate_data
 
 from ._columns import DTYPE_KIND_NAMES
-from ._exceptions import CalibrationInputError
+from ._exceptions import CalibrationInputError, TooFewSamplesError
 
 __all__ = [
     "check_all_finite",
@@ -242,10 +242,11 @@ def validate_training_data(
     n, n_channels = X.shape
     need = min_training_samples(n_channels)
     if n < need:
-        raise CalibrationInputError(
+        raise TooFewSamplesError(
             f"X has {n} sample(s), but {type(estimator).__name__} needs at least {need} "
             f"(n_channels + 1 = {n_channels + 1} for the affine calibration, 7 for the zero-load "
-            f"estimate). Fix: record more load cases.", parameter="X", value=n,
+            f"estimate). Fix: record more load cases.", parameter="X", value=n, needed=need,
+            estimator=type(estimator).__name__,
         )
     if y.ndim not in (1, 2) or (y.ndim == 2 and y.shape[1] == 0):
         raise CalibrationInputError(
@@ -315,9 +316,9 @@ def check_finite_output(X: NDArray[np.float64], wrench: NDArray[np.float64], est
         big = float(np.abs(X[row]).max()) if X.size else float("nan")
         note = getattr(estimator, "_overflow_note", None) or FLOAT64_OVERFLOW
         raise CalibrationInputError(
-            f"X row {row} (largest |value| {big:.3g}) gives a non-finite {what} with {type(estimator).__name__}: "
+            f"{{row}} (largest |value| {big:.3g}) gives a non-finite {what} with {type(estimator).__name__}: "
             f"the reading is outside the range the model can compute ({note}). Fix: check the reading's units, or "
-            "remove that row.", parameter="X", value=row,
+            "remove that row.", parameter="X", value=big, row=row,
         )
 
 

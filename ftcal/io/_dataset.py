@@ -47,11 +47,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core._columns import check_plain_fields, csv_rows, is_number
-from ..core._exceptions import CalibrationInputError, DatasetFileError
+from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileError, Placeholder
 from ..core._files import atomic_output
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
-from ._readers import (ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
+from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
                        temperature_message, _slice_columns)
 
 __all__ = ["CalibrationDataset", "DATASET_SUFFIXES", "read_channels"]
@@ -160,15 +160,17 @@ class _CsvColumns:
 
 
 def _find(names: list[str], name: str, option: str, where: str) -> int:
-    """The position of the column ``name`` (mapped by ``option``) in the header ``names``."""
+    """The position of the column ``name`` (mapped by the argument ``option``, e.g. ``"channels"``) in the header
+    ``names``."""
     if parse_column_slice(name) is not None:
-        raise DatasetFileError(f"{where}: {option} {name}: a column slice selects columns of one array of a .mat or "
-                               ".npz file; in a CSV name the columns, or a range such as s0..s7.")
+        raise DatasetFileError(f"{where}: {{{option}}} {name}: a column slice selects columns of one array of a .mat "
+                               "or .npz file; in a CSV name the columns, or a range such as s0..s7.", parameter=option,
+                               value=name)
     hits = [i for i, n in enumerate(names) if n == name]
     if not hits:
         shown = ", ".join(n or "''" for n in names)
-        raise DatasetFileError(f"{where}: {option} names column {name!r}, which the header lacks; the header has "
-                               f"{shown}.")
+        raise DatasetFileError(f"{where}: {{{option}}} names column {name!r}, which the header lacks; the header has "
+                               f"{shown}.", parameter=option, value=name)
     if len(hits) > 1:
         raise DatasetFileError(f"{where}: column {name!r} appears {len(hits)} times (columns "
                                f"{', '.join(str(i + 1) for i in hits)}); rename one, so ftcal knows which to use.")
@@ -184,20 +186,21 @@ def _channel_positions(names: list[str], where: str) -> list[int]:
             continue
         if len(m.group(1)) > 1 and m.group(1).startswith("0"):
             raise DatasetFileError(f"{where}: column {name!r}: write raw channel numbers without leading zeros "
-                                   f"(s{int(m.group(1))}), or name the channels with --channels.")
+                                   f"(s{int(m.group(1))}), or name the channels with {{channels}}.",
+                                   parameter="channels", value=name)
         k = int(m.group(1))
         if k in found:
             raise DatasetFileError(f"{where}: column {name!r} appears 2 times; each column must be named once.")
         found[k] = i
     if not found:
         raise DatasetFileError(f"{where}: the header names no raw channel columns s0, s1, ... Expected header: "
-                               f"{_CSV_LAYOUT}. Fix: name the channel columns with --channels (e.g. --channels "
-                               "g1..g6).")
+                               f"{_CSV_LAYOUT}.", parameter="channels", fix="name the channel columns with "
+                               "{channels} (e.g. {channels} g1..g6)", settings={"channels": NO_SETTING})
     missing = sorted(set(range(max(found) + 1)) - set(found))
     if missing:
         raise DatasetFileError(f"{where}: raw channel column s{missing[0]} is missing (the header has "
                                f"s{min(found)}..s{max(found)}); raw channel columns must run from s0 without gaps, "
-                               "or be named with --channels.")
+                               "or be named with {channels}.", parameter="channels")
     return [found[k] for k in sorted(found)]
 
 
@@ -222,11 +225,11 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     """The used columns of a CSV header; every other column is ignored, whatever its name."""
     _refuse_lookalikes(names, where)
     if columns.channels is not None:
-        channels = [_find(names, n, "--channels", where) for n in columns.channels]
+        channels = [_find(names, n, "channels", where) for n in columns.channels]
     else:
         channels = _channel_positions(names, where)
     if columns.wrench is not None:
-        wrench = [_find(names, n, "--wrench", where) for n in columns.wrench]
+        wrench = [_find(names, n, "wrench", where) for n in columns.wrench]
         axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
     else:
         seen: dict[str, int] = {}
@@ -237,12 +240,14 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
             if axis in seen:
                 raise DatasetFileError(
                     f"{where}: columns {names[seen[axis]]!r} and {name!r} both read as the wrench axis {axis}; "
-                    "keep one, or name the wrench columns with --wrench (e.g. --wrench Fx,Fy,Fz,Mx,My,Mz).")
+                    "keep one, or name the wrench columns with {wrench} (e.g. {wrench} Fx,Fy,Fz,Mx,My,Mz).",
+                    parameter="wrench")
             seen[axis] = i
         if not seen:
             raise DatasetFileError(f"{where}: the header names no wrench columns (Fx, Fy, Fz, Tx, Ty, Tz, or Mx, "
-                                   f"force_x, ...). Expected header: {_CSV_LAYOUT}. Fix: name them with --wrench "
-                                   "(and --axes if their names do not say the axes).")
+                                   f"force_x, ...). Expected header: {_CSV_LAYOUT}.", parameter="wrench",
+                                   fix="name them with {wrench} (and {axes} if their names do not say the axes)",
+                                   settings={"wrench": NO_SETTING, "axes": NO_SETTING})
         wrench = list(seen.values())
         axes = columns.resolve_axes([names[i] for i in wrench], len(wrench), where) if columns.axes is not None \
             else tuple(seen)
@@ -253,11 +258,12 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     group = None
     if columns.groups not in (None, "file"):
-        group = _find(names, columns.groups, "--groups", where)
+        group = _find(names, columns.groups, GROUPS, where)
     elif "group" in names and names.count("group") == 1 and names.index("group") not in channels + wrench:
         group = names.index("group")
     if group is not None and group in channels + wrench:
-        raise DatasetFileError(f"{where}: --groups {group_name!r} is also mapped as a channel or wrench column.")
+        raise DatasetFileError(f"{where}: {{{GROUPS}}} {group_name!r} is also mapped as a channel or wrench column.",
+                               parameter=GROUPS, value=group_name)
     temperature = names.index("temperature") if names.count("temperature") == 1 else None
     if temperature in channels + wrench:
         temperature = None
@@ -485,11 +491,11 @@ class CalibrationDataset:
         if not path.is_file():
             raise DatasetFileError(f"{path}: no such dataset file.")
         if columns.groups == "file":
-            raise DatasetFileError(f"{path}: --groups file makes each file of a folder a group; give the folder of "
-                                   "files, or name the group column.")
+            raise DatasetFileError(f"{path}: {{{GROUPS}}} file makes each file of a folder a group; give the folder "
+                                   "of files, or name the group column.", parameter=GROUPS, value="file")
         ds, _ = cls._load_file(path, columns)
         if columns.groups is not None:
-            _check_groups(ds, f"{path}: --groups {columns.groups}")
+            _check_groups(ds, f"{path}: {{{GROUPS}}} {columns.groups}", columns.groups)
         return ds
 
     @classmethod
@@ -547,7 +553,8 @@ class CalibrationDataset:
         ds = cls(raw=np.vstack([p.raw for p in parts]), wrench=np.vstack([p.wrench for p in parts]), group=groups,
                  meta=meta, temperature=temperature, axes=parts[0].axes)
         if columns.groups is not None or by_file:
-            _check_groups(ds, f"{folder}: {'--groups ' + columns.groups if columns.groups else 'its files'}")
+            _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
+                          columns.groups or "file")
         return ds
 
     @classmethod
@@ -578,10 +585,9 @@ class CalibrationDataset:
         names = _csv_fields(lines[header_no - 1].lstrip("\ufeff"))
         if all(f and is_number(f) for f in names):
             raise DatasetFileError(
-                f"{where}: the file has no header: its first line holds numbers, not column names. Fix: add a "
-                f"header line naming the columns ({_CSV_LAYOUT}), or name them with --channels/--wrench after adding "
-                "one."
-            )
+                f"{where}: the file has no header: its first line holds numbers, not column names.",
+                parameter="channels", fix=f"add a header line naming the columns ({_CSV_LAYOUT}), or name them with "
+                "{channels}/{wrench} after adding one", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
         used = _csv_columns(names, columns, where)
         body_lines = [lines[no - 1] for no in line_nos]
         if not body_lines:
@@ -636,7 +642,7 @@ class CalibrationDataset:
             ds = cls(raw=data[:, :n_ch], wrench=data[:, n_ch:n_ch + n_w], group=group, meta=meta,
                      temperature=temperature, axes=used.axes)
         except DatasetFileError as exc:
-            raise DatasetFileError(f"{path}: {exc}") from None
+            raise exc.located(f"{path}: ") from None
         return ds, tuple(names)
 
     def _check_finite(self, path: Path) -> None:
@@ -649,8 +655,9 @@ class CalibrationDataset:
                                        "remove or repair that row.")
 
 
-def _check_groups(ds: CalibrationDataset, where: str) -> None:
-    """A group column given on purpose must tell at least two groups apart (grouped folds hold out whole groups)."""
+def _check_groups(ds: CalibrationDataset, where: str, column: str) -> None:
+    """A group column given on purpose (``column``, or ``"file"``) must tell at least two groups apart (grouped
+    folds hold out whole groups); ``where`` may name the argument as ``{columns.groups}``."""
     if ds.group is None:
         return
     values = np.unique(ds.group)
@@ -658,9 +665,9 @@ def _check_groups(ds: CalibrationDataset, where: str) -> None:
         labels = ds.meta.get("group_labels")
         shown = labels[0] if isinstance(labels, list) and labels else int(values[0]) if values.size else "none"
         raise DatasetFileError(f"{where}: every one of the {ds.n_samples} rows is in one group ({shown}); grouped "
-                               "cross-validation holds out whole groups and needs at least two. Fix: name the column "
-                               "that tells the poses or sessions apart, give a folder of several files, or drop "
-                               "--groups.")
+                               "cross-validation holds out whole groups and needs at least two.", parameter=GROUPS,
+                               value=column, fix="name the column that tells the poses or sessions apart, give a "
+                               f"folder of several files, or drop {{{GROUPS}}}", settings={GROUPS: NO_SETTING})
 
 
 def _npz_meta(value: np.ndarray, path: Path) -> dict:
@@ -725,14 +732,16 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         else:
             raise DatasetFileError(
                 f"{where}: no {kind} {default!r} holding the {what}; the file has "
-                f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}. Fix: name them with "
-                f"{option} NAME[,NAME...] (or a column slice of one array, e.g. {option} 'data[:,0:8]').")
+                f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}.", parameter=option,
+                fix=f"name them with {{{option}}} NAME[,NAME...] (or a column slice of one array, e.g. "
+                f"{{{option}}} 'data[:,0:8]')", settings={option: NO_SETTING})
     spec = parse_column_slice(names[0]) if len(names) == 1 else None
     base = spec[0] if spec is not None else None
     missing = [n for n in ([base] if spec is not None else names) if n not in available]
     if missing:
-        raise DatasetFileError(f"{where}: {option} names {kind} {missing[0]!r}, which the file lacks; the file has "
-                               f"{', '.join(n for n in available if n != 'meta_json')}.")
+        raise DatasetFileError(f"{where}: {{{option}}} names {kind} {missing[0]!r}, which the file lacks; the file "
+                               f"has {', '.join(n for n in available if n != 'meta_json')}.", parameter=option,
+                               value=missing[0])
     if spec is not None or len(names) == 1:
         name = base if spec is not None else names[0]
         a = check_real_array(source.read(name), name, where, kind)
@@ -760,14 +769,12 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
         if axis is not None:
             if axis in found:
                 raise DatasetFileError(f"{where}: {source.kind}s {found[axis]!r} and {n!r} both read as the wrench "
-                                       "axis {axis}; name the wrench with --wrench.")
+                                       f"axis {axis}; name the wrench with {{wrench}}.", parameter="wrench")
             found[axis] = n
     vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
     channel_vectors = sorted((n for n in available if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
-    wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench",
-                                                 "--wrench")
-    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", channel_vectors, "raw channels",
-                                        "--channels")
+    wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench", "wrench")
+    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", channel_vectors, "raw channels", "channels")
     raw, wrench = _oriented(raw, wrench, len(raw_labels) == 1 and raw_base is None,
                             len(wrench_labels) == 1 and wrench_base is None)
     if len(wrench_labels) == 1 and wrench_base is None and wrench.shape[1] > 1:
@@ -775,9 +782,10 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     both = [label for label in raw_labels if label in set(wrench_labels)]
     if raw_base is not None and both:
         raise DatasetFileError(
-            f"{where}: --channels {columns.channels[0]} and --wrench {columns.wrench[0]} overlap ({both[0]} would be "
-            f"both). Fix: give disjoint column slices of {raw_base!r}, e.g. --channels '{raw_base}[:,0:8]' --wrench "
-            f"'{raw_base}[:,8:14]'.")
+            f"{where}: {{channels}} {columns.channels[0]} and {{wrench}} {columns.wrench[0]} overlap ({both[0]} would "
+            "be both).", parameter="channels", value=columns.channels[0],
+            fix=f"give disjoint column slices of {raw_base!r}, e.g. {{channels}} {{wrench}}",
+            settings={"channels": Placeholder(f"'{raw_base}[:,0:8]'"), "wrench": Placeholder(f"'{raw_base}[:,8:14]'")})
     if columns.wrench is None and columns.axes is None and "axes" in available and "wrench" in available:
         stored = source.read("axes")
         if stored.dtype.kind not in "US" or stored.ndim != 1 or stored.size != wrench.shape[1]:
@@ -794,15 +802,16 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
-        raise DatasetFileError(f"{where}: --groups names {source.kind} {group_name!r}, which the file lacks; the file "
-                               f"has {', '.join(n for n in available if n != 'meta_json')}.")
+        raise DatasetFileError(f"{where}: {{{GROUPS}}} names {source.kind} {group_name!r}, which the file lacks; the "
+                               f"file has {', '.join(n for n in available if n != 'meta_json')}.", parameter=GROUPS,
+                               value=group_name)
     for key, name in (("group", group_name), ("temperature", "temperature")):
         if name in available:
             extra[key] = _vector(source, name, key)
     try:
         return cls(raw=raw, wrench=wrench, meta=meta, axes=axes, **extra)
     except DatasetFileError as exc:
-        raise DatasetFileError(f"{where}: {exc}") from None
+        raise exc.located(f"{where}: ") from None
 
 
 def _csv_layout(lines: list[str], path) -> tuple[dict, int | None, list[int]]:
@@ -852,7 +861,7 @@ def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> 
         channels = ColumnMap(channels=channels).channels
     with ArrayFile(path) as source:
         vectors = sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
-        raw, labels, base = _select(source, channels, "raw", vectors, "raw channels", "--channels")
+        raw, labels, base = _select(source, channels, "raw", vectors, "raw channels", "channels")
     if len(labels) == 1 and base is None and raw.shape[0] < raw.shape[1]:
         raw = raw.T  # one row per channel (MATLAB)
     bad = np.argwhere(~np.isfinite(raw))

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core._columns import DTYPE_KIND_NAMES
-from ..core._exceptions import DatasetFileError
+from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
 from ..core._memory import MemoryLimitError, check_allocation
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
@@ -127,24 +127,28 @@ def unit_scale(unit: str, kind: str) -> float:
     ...
     ftcal.core._exceptions.DatasetFileError: unknown torque unit 'n.mm' (units are case-sensitive: did you mean 'N.mm'?); known: N.m, N.mm, N.cm, kN.m, mN.m, kgf.m, lbf.in, lbf.ft (any force unit times m, mm, cm, in or ft).
     """
+    field = f"{kind}_unit"
     if not isinstance(unit, str):
-        raise DatasetFileError(f"the {kind} unit must be text such as 'N' or 'N.m'; got {unit!r}.")
+        raise DatasetFileError(f"the {kind} unit must be text such as 'N' or 'N.m'; got {unit!r}.", parameter=field,
+                               value=unit)
     text = unit.strip()
     factor = _force_factor(text) if kind == "force" else _torque_factor(text)
     if factor is not None:
         return factor
     if kind == "torque" and _force_factor(text) is not None:
         raise DatasetFileError(f"{unit!r} is a force unit, not a torque unit; a torque is a force times a length, "
-                               f"e.g. {text}.m or {text}.mm.")
+                               f"e.g. {text}.m or {text}.mm.", parameter=field, value=unit)
     if kind == "force" and _torque_factor(text) is not None:
-        raise DatasetFileError(f"{unit!r} is a torque unit, not a force unit: give it as --torque-unit, and the "
-                               "forces' unit (e.g. N) as --force-unit.")
+        raise DatasetFileError(f"{unit!r} is a torque unit, not a force unit: give it as {{torque_unit}}, and the "
+                               "forces' unit (e.g. N) as {force_unit}.", parameter="force_unit", value=unit,
+                               settings={"torque_unit": NO_SETTING})
     table = FORCE_UNITS if kind == "force" else TORQUE_UNITS
     parse = _force_factor if kind == "force" else _torque_factor
     guesses = sorted({name for name in _spellings(kind) if name.lower() == text.lower() and parse(name) is not None})
     hint = (f" (units are case-sensitive: did you mean {' or '.join(repr(g) for g in guesses)}?)" if guesses else "")
     more = "any SI prefix of N or g" if kind == "force" else "any force unit times m, mm, cm, in or ft"
-    raise DatasetFileError(f"unknown {kind} unit {unit!r}{hint}; known: {', '.join(table)} ({more}).")
+    raise DatasetFileError(f"unknown {kind} unit {unit!r}{hint}; known: {', '.join(table)} ({more}).",
+                           parameter=field, value=unit)
 
 
 def _spellings(kind: str) -> list[str]:
@@ -184,8 +188,11 @@ _SLICE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*)\s*\[\s*:\s*,\s*(?:(-?\d+)|(-?\d
 MAX_RANGE_COLUMNS = 100_000
 
 
-def expand_names(items: Sequence[str], what: str = "--channels") -> tuple[str, ...]:
+def expand_names(items: Sequence[str], what: str = "channels") -> tuple[str, ...]:
     """Column names with each range ``s0..s7`` (inclusive) written out; slices ``data[:,0:8]`` are kept.
+
+    ``what`` is the argument the names were given as (``"channels"``, ``"wrench"``): the errors carry it as their
+    ``parameter``.
 
     Examples
     --------
@@ -200,18 +207,19 @@ def expand_names(items: Sequence[str], what: str = "--channels") -> tuple[str, .
         found = _RANGE.fullmatch(text)
         if found is None:
             if ".." in text:
-                raise DatasetFileError(f"{what} {text!r}: a range is written PREFIX<first>..PREFIX<last>, e.g. s0..s7 "
-                                       "(both ends included).")
+                raise DatasetFileError(f"{{{what}}} {text!r}: a range is written PREFIX<first>..PREFIX<last>, e.g. "
+                                       "s0..s7 (both ends included).", parameter=what, value=text)
             out.append(text)
             continue
         prefix, first, last = found.group(1), found.group(2), found.group(3)
         start, stop = int(first), int(last)
         if stop < start:
-            raise DatasetFileError(f"{what} {text!r}: the range runs backwards; write {prefix}{last}..{prefix}{first} "
-                                   "or list the columns in the order you want.")
+            raise DatasetFileError(f"{{{what}}} {text!r}: the range runs backwards; write "
+                                   f"{prefix}{last}..{prefix}{first} or list the columns in the order you want.",
+                                   parameter=what, value=text)
         if stop - start + 1 > MAX_RANGE_COLUMNS:
-            raise DatasetFileError(f"{what} {text!r} names {stop - start + 1} columns, more than ftcal reads "
-                                   f"({MAX_RANGE_COLUMNS}); check the range.")
+            raise DatasetFileError(f"{{{what}}} {text!r} names {stop - start + 1} columns, more than ftcal reads "
+                                   f"({MAX_RANGE_COLUMNS}); check the range.", parameter=what, value=text)
         width = len(first) if first.startswith("0") and len(first) > 1 else 0
         out.extend(f"{prefix}{k:0{width}d}" for k in range(start, stop + 1))
     return tuple(out)
@@ -236,16 +244,18 @@ def parse_column_slice(text: str) -> tuple[str, int | None, int | None] | None:
 
 
 def _slice_columns(spec: tuple[str, int | None, int | None], width: int, where: str, option: str) -> range:
-    """The columns of a 2-D array of ``width`` columns a slice selects; a slice beyond the array is an error."""
+    """The columns of a 2-D array of ``width`` columns a slice selects; a slice beyond the array is an error
+    about the argument ``option`` (``"channels"``, ``"wrench"``)."""
     name, start, stop = spec
     begin = 0 if start is None else start
     end = width if stop is None else stop
     b = begin + width if begin < 0 else begin
     e = end + width if end < 0 else end
     if not (0 <= b < e <= width):
-        raise DatasetFileError(f"{where}: {option} {name}[:,{'' if start is None else start}:"
+        raise DatasetFileError(f"{where}: {{{option}}} {name}[:,{'' if start is None else start}:"
                                f"{'' if stop is None else stop}] selects no columns of {name!r}, which has {width} "
-                               f"columns (0..{width - 1}). Fix: give a slice within them, e.g. {name}[:,0:{width}].")
+                               f"columns (0..{width - 1}). Fix: give a slice within them, e.g. {name}[:,0:{width}].",
+                               parameter=option, value=f"{name}[:,{start}:{stop}]")
     return range(b, e)
 
 
@@ -253,12 +263,25 @@ def _axis_list(value, what: str) -> tuple[str, ...]:
     names = tuple(str(v).strip() for v in value)
     unknown = [n for n in names if n not in WRENCH_LABELS]
     if unknown or not names:
-        raise DatasetFileError(f"{what} {','.join(names)!r}: name each output axis as one of "
-                               f"{', '.join(WRENCH_LABELS)} (e.g. --axes Fx,Fy,Fz for a 3-axis load cell).")
+        raise DatasetFileError(f"{{{what}}} {','.join(names)!r}: name each output axis as one of "
+                               f"{', '.join(WRENCH_LABELS)} (e.g. {{{what}}} Fx,Fy,Fz for a 3-axis load cell).",
+                               parameter=what, value=names)
     dups = sorted({n for n in names if names.count(n) > 1})
     if dups:
-        raise DatasetFileError(f"{what} names the axis {dups[0]!r} twice; each axis once.")
+        raise DatasetFileError(f"{{{what}}} names the axis {dups[0]!r} twice; each axis once.", parameter=what,
+                               value=names)
     return names
+
+
+#: The field of an error about the group column of a :class:`ColumnMap` (``columns.groups``; ``groups`` alone are
+#: the group labels of a fit).
+GROUPS = "columns.groups"
+
+
+def _slice_settings(array: str, first: int, split: int, stop: int) -> dict:
+    """An example mapping of one array's columns as channels ``first:split`` and wrench ``split:stop``."""
+    return {"channels": Placeholder(f"'{array}[:,{first}:{split}]'"),
+            "wrench": Placeholder(f"'{array}[:,{split}:{stop}]'")}
 
 
 @dataclass(frozen=True)
@@ -302,38 +325,41 @@ class ColumnMap:
     groups: str | None = None
 
     def __post_init__(self) -> None:
-        for field, option in (("channels", "--channels"), ("wrench", "--wrench")):
+        for field in ("channels", "wrench"):
             value = getattr(self, field)
             if value is None:
                 continue
             if isinstance(value, str):
                 value = value.split(",")
-            names = expand_names(value, option)
+            names = expand_names(value, field)
             object.__setattr__(self, field, names)
             if not names or any(not n for n in names):
-                raise DatasetFileError(f"{field} mapping {','.join(value)!r} holds an empty name; give "
-                                       "comma-separated names, e.g. s0,s1,s2 or s0..s7.")
+                raise DatasetFileError(f"{{{field}}} mapping {','.join(value)!r} holds an empty name; give "
+                                       "comma-separated names, e.g. s0,s1,s2 or s0..s7.", parameter=field,
+                                       value=tuple(value))
             dups = sorted({n for n in names if names.count(n) > 1})
             if dups:
-                raise DatasetFileError(f"{field} mapping names {dups[0]!r} twice; each column once.")
+                raise DatasetFileError(f"{{{field}}} mapping names {dups[0]!r} twice; each column once.",
+                                       parameter=field, value=names)
             slices = [n for n in names if parse_column_slice(n) is not None]
             if slices and len(names) > 1:
-                raise DatasetFileError(f"{option} {','.join(names)!r}: a column slice such as {slices[0]} stands "
-                                       "alone (it selects every column it needs).")
+                raise DatasetFileError(f"{{{field}}} {','.join(names)!r}: a column slice such as {slices[0]} stands "
+                                       "alone (it selects every column it needs).", parameter=field, value=names)
             if any("[" in n for n in names) and not slices:
                 bad = next(n for n in names if "[" in n)
-                raise DatasetFileError(f"{option} {bad!r} is no column slice; write NAME[:,FIRST:STOP] (columns "
-                                       "FIRST..STOP-1 counted from 0, e.g. data[:,0:8]).")
+                raise DatasetFileError(f"{{{field}}} {bad!r} is no column slice; write NAME[:,FIRST:STOP] (columns "
+                                       "FIRST..STOP-1 counted from 0, e.g. data[:,0:8]).", parameter=field,
+                                       value=bad)
         if self.axes is not None:
             object.__setattr__(self, "axes", _axis_list(self.axes.split(",") if isinstance(self.axes, str)
-                                                        else self.axes, "--axes"))
+                                                        else self.axes, "axes"))
         if self.channels and self.wrench:
             self._check_no_overlap()
         if self.groups is not None:
             used = set(self.channels or ()) | set(self.wrench or ())
             if self.groups in used:
-                raise DatasetFileError(f"--groups {self.groups!r} is also mapped as a channel or wrench column; the "
-                                       "group column must be another one.")
+                raise DatasetFileError(f"{{{GROUPS}}} {self.groups!r} is also mapped as a channel or wrench column; "
+                                       "the group column must be another one.", parameter=GROUPS, value=self.groups)
         unit_scale(self.force_unit, "force")
         unit_scale(self.torque_unit, "torque")
 
@@ -342,21 +368,24 @@ class ColumnMap:
         common = sorted(set(self.channels) & set(self.wrench))
         if common:
             raise DatasetFileError(
-                f"column {common[0]!r} is mapped both as a channel and as a wrench component. Fix: when one array "
-                f"holds both, give column slices, e.g. --channels '{common[0]}[:,0:8]' --wrench '{common[0]}[:,8:14]'.")
+                f"column {common[0]!r} is mapped both as a channel and as a wrench component.", parameter="channels",
+                value=common[0], fix="when one array holds both, give column slices, e.g. {channels} {wrench}",
+                settings=_slice_settings(common[0], 0, 8, 14))
         a, b = parse_column_slice(self.channels[0]), parse_column_slice(self.wrench[0])
         whole = {n for n in self.channels + self.wrench if parse_column_slice(n) is None}
         for spec, other in ((a, b), (b, a)):
             if spec is not None and spec[0] in whole:
-                raise DatasetFileError(f"{spec[0]!r} is mapped whole and as a column slice; map its columns once, "
-                                       "each as a slice (e.g. --channels 'data[:,0:8]' --wrench 'data[:,8:14]').")
+                raise DatasetFileError(f"{spec[0]!r} is mapped whole and as a column slice.", parameter="channels",
+                                       value=spec[0], fix="map its columns once, each as a slice, e.g. {channels} "
+                                       "{wrench}", settings=_slice_settings("data", 0, 8, 14))
         if a is not None and b is not None and a[0] == b[0]:
             starts_known = all(v is not None and v >= 0 for v in (a[1], a[2], b[1], b[2]))
             if starts_known and max(a[1], b[1]) < min(a[2], b[2]):
                 raise DatasetFileError(
-                    f"--channels {self.channels[0]} and --wrench {self.wrench[0]} overlap (columns "
-                    f"{max(a[1], b[1])}..{min(a[2], b[2]) - 1} of {a[0]!r} would be both). Fix: give disjoint "
-                    f"slices, e.g. --channels '{a[0]}[:,0:{b[1]}]' --wrench '{a[0]}[:,{b[1]}:{b[2]}]'.")
+                    f"{{channels}} {self.channels[0]} and {{wrench}} {self.wrench[0]} overlap (columns "
+                    f"{max(a[1], b[1])}..{min(a[2], b[2]) - 1} of {a[0]!r} would be both).", parameter="channels",
+                    value=self.channels[0], fix="give disjoint slices, e.g. {channels} {wrench}",
+                    settings=_slice_settings(a[0], 0, b[1], b[2]))
 
     @property
     def force_factor(self) -> float:
@@ -417,18 +446,20 @@ class ColumnMap:
         ``axes`` if given, else the axes the names say (``Fx``, ``Mz``, ``force_y``), else Fx..Tz for six."""
         if self.axes is not None:
             if len(self.axes) != width:
-                raise DatasetFileError(f"{where}: --axes names {len(self.axes)} axes ({','.join(self.axes)}) but the "
-                                       f"wrench has {width} columns ({', '.join(names)}); name one axis per column.")
+                raise DatasetFileError(f"{where}: {{axes}} names {len(self.axes)} axes ({','.join(self.axes)}) but "
+                                       f"the wrench has {width} columns ({', '.join(names)}); name one axis per "
+                                       "column.", parameter="axes", value=self.axes)
             return self.axes
         said = [canonical_wrench_name(n) for n in names] if len(names) == width else []
         if said and all(said) and len(set(said)) == width:
             return tuple(said)
         if width == len(WRENCH_LABELS):
             return WRENCH_LABELS
+        example = ','.join(('Fx', 'Fy', 'Fz', 'Tx', 'Ty', 'Tz')[:width]) if width < 6 else 'Fx,...'
         raise DatasetFileError(
             f"{where}: the wrench has {width} column(s) ({', '.join(names)}), which do not say their axes; a "
-            f"calibration of {width} axes needs their names. Fix: pass --axes, e.g. --axes "
-            f"{','.join(('Fx', 'Fy', 'Fz', 'Tx', 'Ty', 'Tz')[:width]) if width < 6 else 'Fx,...'}.")
+            f"calibration of {width} axes needs their names.", parameter="axes",
+            fix=f"pass {{axes}}, e.g. {{axes}} {example}", settings={"axes": NO_SETTING})
 
 
 def lever_arm_m(wrench: ArrayLike, axes: Sequence[str] = WRENCH_LABELS) -> float | None:
@@ -458,22 +489,26 @@ _PLAUSIBLE_FORCE_N = (1e-2, 1e5)
 
 
 def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequence[str] = WRENCH_LABELS,
-                      force_unit: str = "N") -> str | None:
+                      force_unit: str = "N") -> DatasetFileError | None:
     """What looks wrong with the units of ``wrench`` ([N], [N·m] after conversion), or None when plausible.
 
     The ratio max‖T‖ / max‖F‖ is the lever arm [m] of the loads. A calibration
     fixture holds its loads within about two metres of the sensor and not closer
     than 0.1 mm; outside that range the torques or the forces are probably in
     another unit. Which one is told by the forces' size: forces in kN read as N
-    are tiny (the largest below 0.01 N), torques in N·mm read as N·m large; the
-    message names the likely unit and the option that declares it.
+    are tiny (the largest below 0.01 N), torques in N·mm read as N·m large. The
+    problem is returned as an error (raise it, or show it as a warning): its fix
+    proposes the likely unit (``settings``: ``force_unit`` or ``torque_unit``).
 
     Examples
     --------
     >>> print(lever_arm_problem([[10.0, 0, 0, 0, 500.0, 0]]))  # doctest: +ELLIPSIS
     the loads' lever arm max|T|/max|F| is 50 m (alpha = 0.02 1/m), implausible ... the torques look like N.mm...
-    >>> print(lever_arm_problem([[0.002, 0, 0, 0, 0.05, 0]]))  # doctest: +ELLIPSIS
-    the loads' ... the forces look like kN (the largest is 0.002 as N), not N. Fix: pass --force-unit kN...
+    >>> problem = lever_arm_problem([[0.002, 0, 0, 0, 0.05, 0]])
+    >>> print(problem)  # doctest: +ELLIPSIS
+    the loads' ... the forces look like kN (the largest is 0.002 as N), not N. Fix: pass force_unit='kN'...
+    >>> problem.parameter, problem.settings["force_unit"]
+    ('force_unit', 'kN')
     >>> lever_arm_problem([[10.0, 0, 0, 0, 0.5, 0]]) is None
     True
     """
@@ -488,7 +523,6 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
     head = (f"the loads' lever arm max|T|/max|F| is {arm:.3g} m (alpha = {1.0 / arm:.3g} 1/m), implausible for a "
             f"force/torque calibration (expected {low * 1e3:g} mm to {high:g} m) with forces read as {force_unit} "
             f"and torques as {torque_unit}")
-    confirm = (f"if both really are right, confirm them with --force-unit {force_unit} --torque-unit {torque_unit}")
     if arm > high:
         force_guess = [(u, f) for u, f in (("kN", 1e3), ("MN", 1e6)) if low <= arm / f <= high
                        and fmax * f <= _PLAUSIBLE_FORCE_N[1]]
@@ -496,22 +530,27 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
         forces_tiny = fmax < _PLAUSIBLE_FORCE_N[0]
         if force_guess and (forces_tiny or not torque_guess):
             unit = force_guess[0][0]
-            other = (f" (or the torques are in {torque_guess[0][0]}: --torque-unit {torque_guess[0][0]})"
-                     if torque_guess else "")
-            return (f"{head}: the forces look like {unit} (the largest is {fmax:.3g} as {force_unit}), not "
-                    f"{force_unit}. Fix: pass --force-unit {unit}{other}; {confirm}.")
+            other = f" (or the torques are in {torque_guess[0][0]}: {{torque_unit}})" if torque_guess else ""
+            return DatasetFileError(
+                f"{head}: the forces look like {unit} (the largest is {fmax:.3g} as {force_unit}), not {force_unit}.",
+                parameter="force_unit", value=force_unit, fix=f"pass {{force_unit}}{other}",
+                settings={"force_unit": unit, **({"torque_unit": torque_guess[0][0]} if torque_guess else {})})
         unit = torque_guess[0][0] if torque_guess else "N.mm"
-        other = f" (or the forces are in {force_guess[0][0]}: --force-unit {force_guess[0][0]})" if force_guess else ""
-        return (f"{head}: the torques look like {unit}, not {torque_unit}. Fix: pass --torque-unit {unit} (the lever "
-                f"arm would be {arm * unit_scale(unit, 'torque') * 1e3:.3g} mm){other}; {confirm}.")
-    return (f"{head}: the torques look too small for the forces (forces in mN or g? torques in kN·m?). Fix: declare "
-            f"the units with --force-unit / --torque-unit; {confirm}.")
+        other = f" (or the forces are in {force_guess[0][0]}: {{force_unit}})" if force_guess else ""
+        return DatasetFileError(
+            f"{head}: the torques look like {unit}, not {torque_unit}.", parameter="torque_unit", value=torque_unit,
+            fix=f"pass {{torque_unit}} (the lever arm would be {arm * unit_scale(unit, 'torque') * 1e3:.3g} mm){other}",
+            settings={"torque_unit": unit, **({"force_unit": force_guess[0][0]} if force_guess else {})})
+    return DatasetFileError(f"{head}: the torques look too small for the forces (forces in mN or g? torques in "
+                            "kN·m?).", parameter="torque_unit", value=torque_unit,
+                            fix="declare the units with {force_unit} / {torque_unit}",
+                            settings={"force_unit": NO_SETTING})
 
 
-def temperature_message(exc: Exception, path, line_no: int) -> str:
-    """The library's "temperature row 5 is NaN ..." (a row of the array) as the text file's line and column."""
-    text = re.sub(r"^temperature row \d+ ", "temperature ", str(exc)).replace("that row", "that line")
-    return f"{path}: line {line_no}, column temperature: {text}"
+def temperature_message(exc: FtcalError, path, line_no: int) -> str:
+    """The library's "temperature row 5 is NaN ..." (an error about a row of the array) at the text file's line and
+    column: the error's ``{row}`` is said as the column."""
+    return f"{path}: line {line_no}, column temperature: {exc.render(api_spelling, row='temperature')}"
 
 
 # ------------------------------------------------------------------ bounded reading of .npz and .mat
