@@ -25,7 +25,7 @@ from sklearn.base import clone
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ..core._exceptions import NO_SETTING, CalibrationInputError
+from ..core._exceptions import NO_SETTING, CalibrationInputError, TooFewSamplesError
 from ..core._memory import check_allocation
 from ..core._model_selection import calibration_folds, simplest_within_one_se
 from ..core._validation import check_bool, check_finite_output, validate_readings
@@ -359,11 +359,10 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
             try:
                 static, maps = self._partial_fit(template, X[train], y[train], [h[train] for h in histories],
                                                  _rows(groups, train))
-            except CalibrationInputError as exc:
-                hint = " (fewer folds, cv, make it larger)" if "needs at least" in str(exc) else ""
-                raise CalibrationInputError(
-                    f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds {len(train)} "
-                    f"of the {n} rows{hint}, and there: {exc}") from None
+            except CalibrationInputError as exc:  # said of the fold, the error's class and fields kept
+                hint = " (fewer folds, cv, make it larger)" if isinstance(exc, TooFewSamplesError) else ""
+                raise exc.located(f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds "
+                                  f"{len(train)} of the {n} rows{hint}, and there: ") from None
             held_out[0][test] = _predicted(static, X[test])
             for k, (history, fitted) in enumerate(zip(histories, maps), start=1):
                 held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])

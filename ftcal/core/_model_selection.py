@@ -130,21 +130,41 @@ def routed_groups(estimator, groups: ArrayLike | None) -> dict:
 
 
 def fold_predictions(estimator, X: NDArray, y: NDArray, folds, *, groups: ArrayLike | None = None,
-                     fit_params: dict | None = None) -> list[tuple[NDArray[np.int64], NDArray[np.float64]]]:
-    """``(test rows, predictions)`` of a clone of ``estimator`` fitted on each ``(train, test)`` of ``folds``.
+                     fit_params: dict | None = None, max_train_rows: int | None = None, random_state: int | None = 0,
+                     chunk_rows: int | None = None, has_std=None, n_jobs: int | None = None) -> list[tuple]:
+    """``(test rows, predictions)`` of a clone of ``estimator`` fitted on each ``(train, test)`` of ``folds``
+    (``(test rows, predictions, std or None)`` with ``has_std``).
 
     Built on :func:`sklearn.model_selection.cross_validate` (``return_estimator``, ``return_indices``, its
-    ``params=`` sliced to each training fold); ``groups`` reach the estimator through its metadata routing
-    (:func:`routed_groups`). The folds need not cover every row (a subset of a split, scored in one job).
+    ``params=`` sliced to each training fold, ``n_jobs`` folds at once); ``groups`` reach the estimator through
+    its metadata routing (:func:`routed_groups`). The folds need not cover every row (a subset of a split, scored
+    in one job). ``max_train_rows`` fits each fold on at most that many of its training rows (drawn with
+    ``random_state``); ``chunk_rows`` predicts the test rows in blocks of that many (a kernel model's cross-kernel
+    of a large fold would otherwise take gigabytes; ``None`` for a model that reads its rows as one stream);
+    ``has_std(fitted model)`` says whether a fold's model predicts its std (``predict(X, return_std=True)``).
     """
     from sklearn.model_selection import cross_validate
 
     params = {**routed_groups(estimator, None if groups is None else np.asarray(groups)), **(fit_params or {})}
     folds = [(np.asarray(train), np.asarray(test)) for train, test in folds]
-    result = cross_validate(estimator, X, y, cv=folds, params=params or None, scoring=_no_score,
+    if max_train_rows is not None:  # the same draw for every fold (np.random.default_rng(random_state))
+        folds = [(np.sort(np.random.default_rng(random_state).choice(train, size=max_train_rows, replace=False))
+                  if len(train) > max_train_rows else train, test) for train, test in folds]
+    result = cross_validate(estimator, X, y, cv=folds, params=params or None, scoring=_no_score, n_jobs=n_jobs,
                             return_estimator=True, return_indices=True, error_score="raise")
-    return [(test, np.asarray(model.predict(X[test]), dtype=float).reshape(len(test), -1))
-            for model, test in zip(result["estimator"], result["indices"]["test"])]
+    out = []
+    for model, test in zip(result["estimator"], result["indices"]["test"]):
+        std = has_std is not None and bool(has_std(model))
+        step = len(test) if chunk_rows is None else max(int(chunk_rows), 1)
+        blocks = [test[i:i + step] for i in range(0, len(test), step)]
+        parts = [model.predict(X[rows], return_std=True) if std else (model.predict(X[rows]), None) for rows in blocks]
+        pred = np.concatenate([np.asarray(p, dtype=float) for p, _ in parts]).reshape(len(test), -1)
+        if has_std is None:
+            out.append((test, pred))
+        else:
+            out.append((test, pred, np.concatenate([np.asarray(s, dtype=float) for _, s in parts]).reshape(
+                len(test), -1) if std else None))
+    return out
 
 
 def _no_score(estimator, X, y) -> float:
@@ -154,8 +174,9 @@ def _no_score(estimator, X, y) -> float:
 
 def held_out_predictions(
     estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
-    random_state: int | None = 0, shuffle: bool = True, folds=None,
-) -> tuple[list[tuple[NDArray[np.int64], NDArray[np.int64]]], NDArray[np.float64]]:
+    random_state: int | None = 0, shuffle: bool = True, folds=None, max_train_rows: int | None = None,
+    chunk_rows: int | None = None, has_std=None, n_jobs: int | None = None,
+) -> tuple:
     """The one held-out engine of ftcal: the folds (:func:`calibration_folds`) and the out-of-fold predictions.
 
     Every held-out figure of ftcal comes from here or from the same folds: ``auto``'s comparison, the search,
@@ -177,12 +198,24 @@ def held_out_predictions(
         ``False``: contiguous blocks of rows (a time series).
     folds : list of (train, test) or None
         Folds made before (e.g. those of ``auto``'s comparison, to reuse them); ``None`` makes them.
+    max_train_rows : int or None, default=None
+        Fit each fold on at most this many of its training rows (drawn with ``random_state``; a stock baseline's
+        budget in the calibration report).
+    chunk_rows : int or None, default=None
+        Predict each test fold in blocks of this many rows (bounded memory for kernel models); ``None``: at once,
+        as a model that reads its rows as one stream needs.
+    has_std : callable or None, default=None
+        ``has_std(fitted fold model)``: whether that model predicts its std; given, a third result is returned.
+    n_jobs : int or None, default=None
+        Folds fitted at once (:func:`sklearn.model_selection.cross_validate`).
 
     Returns
     -------
     folds : list of (train, test) index arrays
     predictions : ndarray of shape (n, k)
         Each row predicted by the model that did not see it (NaN for a row no fold tests).
+    std : ndarray of shape (n, k) or None
+        Only with ``has_std``: the predictive std, or None when a fold's model gives none.
 
     Examples
     --------
@@ -195,12 +228,18 @@ def held_out_predictions(
     X, y = np.asarray(X), np.asarray(y)
     if folds is None:
         folds = calibration_folds(len(X), groups, cv, random_state, shuffle=shuffle)
-    pieces = fold_predictions(estimator, X, y, folds, groups=groups)
+    pieces = fold_predictions(estimator, X, y, folds, groups=groups, max_train_rows=max_train_rows,
+                              random_state=random_state, chunk_rows=chunk_rows, has_std=has_std, n_jobs=n_jobs)
     width = pieces[0][1].shape[1] if pieces else (y.shape[1] if y.ndim == 2 else 1)
     predictions = np.full((len(X), width), np.nan)
-    for test, values in pieces:
+    std = np.full((len(X), width), np.nan) if has_std is not None else None
+    for test, values, *rest in pieces:
         predictions[test] = values
-    return folds, predictions
+        if std is not None and rest[0] is None:
+            std = None  # a fold whose model gives no std (auto chose a GP in one fold and not in another)
+        elif std is not None:
+            std[test] = rest[0]
+    return (folds, predictions) if has_std is None else (folds, predictions, std)
 
 
 def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:

@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
 from ..calibrators._history import reads_history
-from ..core._model_selection import calibration_folds, rmse_and_se
+from ..core._model_selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
 from ..models._auto import LIGHT_KERNEL_ROWS, provides_std, training_data_sha256
@@ -143,59 +143,22 @@ def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
     )
 
 
-def _fit(estimator: Any, X: NDArray, y: NDArray, groups: NDArray | None) -> Any:
-    from ..calibrators._base import BaseCalibrator
-    from ..calibrators._routing import requests_groups
-
-    kwargs = {}  # the stock baselines take no groups; an ftcal calibrator gets them when its routing asks
-    if groups is not None and isinstance(estimator, BaseCalibrator) and requests_groups(estimator):
-        kwargs["groups"] = groups
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", UserWarning)
-        return estimator.fit(X, y, **kwargs)
-
-
-def _fold_predictions(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, train, test,
-                      want_std: bool, max_rows: int | None, seed: int) -> tuple:
-    """One fold: fit a clone on ``train`` (at most ``max_rows`` of them), predict ``test``; ``(pred, std|None)``."""
-    from sklearn.base import clone
-
+def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
+              max_rows: int | None = None, seed: int = 0, n_jobs: int | None = None) -> dict:
+    """Out-of-fold predictions (and std where the model gives one in every fold) on ``folds``, from ftcal's one
+    held-out engine (:func:`~ftcal.core._model_selection.held_out_predictions`): ``groups`` reach the model through
+    its metadata routing; each training fold capped at ``max_rows`` rows; the test folds predicted in blocks (one
+    stream for a model that reads the load history); the fits' BLAS on one thread where no other thread sees it."""
     from ..core._threads import limit_threads_here
 
-    if max_rows is not None and len(train) > max_rows:
-        train = np.sort(np.random.default_rng(seed).choice(train, size=max_rows, replace=False))
-    with limit_threads_here(1):  # one BLAS thread per fold, never another thread's pools
-        est = _fit(clone(template), X[train], y[train], None if groups is None else groups[train])
-        std = want_std and provides_std(est)
-        if reads_history(est) or len(test) <= PREDICT_CHUNK_ROWS:  # a history model reads its fold as one stream
-            out = est.predict(X[test], return_std=True) if std else est.predict(X[test])
-            return (np.asarray(out[0]), np.asarray(out[1])) if std else (np.asarray(out), None)
-        # in blocks: a kernel model's cross-kernel of a large test fold would otherwise take gigabytes
-        parts = [est.predict(X[test[i:i + PREDICT_CHUNK_ROWS]], return_std=True) if std else
-                 (est.predict(X[test[i:i + PREDICT_CHUNK_ROWS]]), None)
-                 for i in range(0, len(test), PREDICT_CHUNK_ROWS)]
-        return (np.concatenate([np.asarray(p) for p, _ in parts]),
-                np.concatenate([np.asarray(s) for _, s in parts]) if std else None)
-
-
-def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
-              max_rows: int | None = None, seed: int = 0, parallel=None) -> dict:
-    """Out-of-fold predictions (and std where the model gives one in every fold) on ``folds``."""
-    from sklearn.utils.parallel import delayed
-
-    args = [(template, X, y, groups, train, test, want_std, max_rows, seed) for train, test in folds]
-    done = parallel(delayed(_fold_predictions)(*a) for a in args) if parallel is not None else \
-        [_fold_predictions(*a) for a in args]
-    pred = np.full(y.shape, np.nan)
-    std = np.full(y.shape, np.nan)
-    has_std = want_std
-    for (_, test), (p, s) in zip(folds, done):
-        pred[test] = p
-        if s is None:
-            has_std = False  # auto may choose a GP in one fold and not in another
-        else:
-            std[test] = s
-    return {"pred": pred, "std": std if has_std else None}
+    history = reads_history(template)
+    with limit_threads_here(1), warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        _, pred, std = held_out_predictions(
+            template, X, y, groups=groups, folds=folds, max_train_rows=max_rows, random_state=seed,
+            chunk_rows=None if history else PREDICT_CHUNK_ROWS, n_jobs=n_jobs,
+            has_std=provides_std if want_std else (lambda model: False))
+    return {"pred": pred.reshape(y.shape), "std": None if not want_std or std is None else std.reshape(y.shape)}
 
 
 def baseline_cost(name: str, estimator: Any, n_train: int, n_features: int, n_outputs: int,
@@ -428,7 +391,8 @@ def _per_axis(value: ArrayLike | None, k: int, what: str) -> NDArray | None:
     return np.array(a, dtype=float)
 
 
-def _reused_auto_choice(model: Any, X: NDArray, y: NDArray, cv: int, n_folds: int, random_state: int) -> dict | None:
+def _reused_auto_choice(model: Any, X: NDArray, y: NDArray, groups: NDArray | None, cv: int, n_folds: int,
+                        random_state: int) -> dict | None:
     """``auto``'s own comparison (its stock baselines on the same folds), when ``model`` is an AutoCalibrator
     fitted on these data with these folds: the report then refits only the chosen model, not the baselines."""
     results = model.__dict__.get("comparison_") if hasattr(model, "__dict__") else None
@@ -440,7 +404,7 @@ def _reused_auto_choice(model: Any, X: NDArray, y: NDArray, cv: int, n_folds: in
             or (getattr(model, "random_state", None) or 0) != random_state:  # auto's folds are seeded by it
         return None
     # the very rows auto scored its comparison on (a hash of the arrays, not only their extremes)
-    return results if results.get("training_sha256") == training_data_sha256(X, y) else None
+    return results if results.get("training_sha256") == training_data_sha256(X, y, groups) else None
 
 
 def calibration_certificate(
@@ -560,20 +524,18 @@ def calibration_certificate(
     scale = np.where(torque, alpha, 1.0)
     name = type(model).__name__
     label = f"{name} (this calibration)"
-    reused = None if ordered else _reused_auto_choice(model, X, y, cv, len(folds), random_state)
+    reused = None if ordered else _reused_auto_choice(model, X, y, groups, cv, len(folds), random_state)
     template = clone(model)
     if reused is not None and hasattr(model, "best_estimator_"):
         template = clone(model.best_estimator_)  # auto chose on these folds: refit its choice, not the whole search
         label = f"{name}: {model.best_name_} (this calibration)"
     choice: list[dict] = []
     n_train = min(len(tr) for tr, _ in folds)
-    parallel = None
+    workers = 1
     if n_jobs not in (None, 1) and min(len(tr) for tr, _ in folds) > LIGHT_KERNEL_ROWS:
         from joblib import effective_n_jobs
-        from sklearn.utils.parallel import Parallel
 
         workers = min(effective_n_jobs(n_jobs), len(folds))
-        parallel = Parallel(n_jobs=workers) if workers > 1 else None
 
     def scored(lbl: str, pred: NDArray, kind: str, note: str | None = None) -> dict:
         sq = np.sum(((pred - y) * scale) ** 2, axis=1)
@@ -603,13 +565,13 @@ def calibration_certificate(
             if skip is not None:
                 choice.append({"model": bname, "kind": "baseline", "status": skip})
                 continue
-            workers = getattr(parallel, "n_jobs", 1) if parallel is not None else 1
             # folds in parallel only when their memory fits the limit together; else one after the other
-            at_once = parallel if _baseline_skip_reason(bname, est, n_train, X.shape[1], k, len(folds),
-                                                        workers) is None else None
+            at_once = workers if workers > 1 and _baseline_skip_reason(bname, est, n_train, X.shape[1], k,
+                                                                       len(folds), workers) is None else None
             rows_used = baseline_cost(bname, est, n_train, X.shape[1], k, len(folds))[2]
             try:
-                out = _held_out(est, X, y, groups, folds, want_std=False, seed=random_state, parallel=at_once,
+                # no groups for a stock model (the folds hold them out; RidgeCV's routing cannot be asked)
+                out = _held_out(est, X, y, None, folds, want_std=False, seed=random_state, n_jobs=at_once,
                                 max_rows=None if bname in ("sk_kernel_ridge", "sk_gp") else BASELINE_TRAINING_ROWS)
             except Exception as exc:  # a baseline that cannot fit these data is reported, not fatal
                 choice.append({"model": bname, "kind": "baseline",

@@ -579,14 +579,17 @@ def judging_folds(X: NDArray, y: NDArray, groups: NDArray | None, cv: int = 5, s
                   "(record each axis' loads in more than one group and more rows)"), None
 
 
-def training_data_sha256(X: ArrayLike, y: ArrayLike) -> str:
-    """SHA-256 (hex) of training arrays' shapes and float64 values: the identity of the data a comparison was
-    scored on (a report reuses ``auto``'s comparison only on the very same rows).
+def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None) -> str:
+    """SHA-256 (hex) of training arrays' shapes and float64 values (and of the group labels, which make the
+    folds): the identity of the data a comparison was scored on (a report reuses ``auto``'s comparison only on
+    the very same rows, grouped the same way).
 
     Examples
     --------
     >>> a = np.arange(6.0).reshape(3, 2)
     >>> training_data_sha256(a, a) == training_data_sha256(a[:2], a[:2])
+    False
+    >>> training_data_sha256(a, a, [0, 0, 1]) == training_data_sha256(a, a, [0, 1, 1])
     False
     """
     import hashlib
@@ -596,6 +599,11 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike) -> str:
         a = np.ascontiguousarray(a, dtype=np.float64)
         digest.update(repr(a.shape).encode("ascii"))
         digest.update(a.tobytes())
+    if groups is not None:  # the labels themselves: the group folds depend on them, not only on the partition
+        labels = np.asarray(groups)
+        digest.update(b"groups" + repr((labels.shape, labels.dtype.str)).encode("ascii"))
+        digest.update(np.ascontiguousarray(labels).tobytes() if labels.dtype.kind in "biuf"
+                      else "\x00".join(map(str, labels.reshape(-1))).encode("utf-8"))
     return digest.hexdigest()
 
 
@@ -1028,7 +1036,7 @@ class AutoCalibrator(BaseCalibrator):
                 folds=folds, units=units, axes=axes)
             templates = dict(candidates)
         results["folds"] = fold_note
-        results["training_sha256"] = training_data_sha256(X, y)  # what the comparison was scored on (reuse key)
+        results["training_sha256"] = training_data_sha256(X, y, groups)  # what the comparison was scored on
         if errors is not None:
             if not any(results["eligible"]):
                 why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))

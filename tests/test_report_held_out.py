@@ -1,0 +1,73 @@
+"""The calibration report's held-out figures come from ftcal's one held-out engine (the folds of
+``calibration_folds``, the fits of ``held_out_predictions``), and it reuses ``auto``'s comparison only on the very
+rows and groups that comparison was scored on."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LinearRegression
+
+from ftcal import AutoCalibrator, CalibrationDataset, LinearCalibrator, calibration_certificate
+from ftcal.core._model_selection import calibration_folds, held_out_predictions
+
+
+def _sensor(seed: int = 0, n_groups: int = 8, per_group: int = 10) -> CalibrationDataset:
+    rng = np.random.default_rng(seed)
+    wrench = rng.uniform(-1, 1, size=(n_groups * per_group, 6)) * [200, 200, 400, 3, 3, 3]
+    raw = wrench @ (rng.normal(size=(6, 6)) / [200, 200, 400, 3, 3, 3]).T + 0.3
+    raw += 0.002 * rng.normal(size=raw.shape)
+    return CalibrationDataset(raw=raw, wrench=wrench, group=np.repeat(np.arange(n_groups), per_group))
+
+
+def test_the_reports_held_out_predictions_are_the_engines_on_the_same_folds():
+    data = _sensor()
+    model = LinearCalibrator().fit(data.raw, data.wrench)
+    facts = calibration_certificate(model, data, cv=4, baselines=False, figures=False, random_state=3)
+    folds = calibration_folds(len(data.raw), data.group, 4, 3)
+    _, expected = held_out_predictions(LinearCalibrator(), data.raw, data.wrench, groups=data.group, folds=folds)
+    np.testing.assert_array_equal(facts["_held_out_pred"], expected)
+    # and that is each group predicted by a calibration fitted without it (an independent fold loop)
+    for train, test in folds:
+        assert not np.isin(data.group[test], data.group[train]).any()
+        reference = LinearCalibrator().fit(data.raw[train], data.wrench[train])
+        np.testing.assert_allclose(expected[test], reference.predict(data.raw[test]), rtol=1e-12, atol=1e-12)
+
+
+def test_the_engine_caps_training_rows_and_predicts_in_blocks_without_changing_a_prediction():
+    rng = np.random.default_rng(1)
+    X = rng.normal(size=(90, 3))
+    y = X @ rng.normal(size=(3, 2)) + 0.1 * rng.normal(size=(90, 2))
+    folds = calibration_folds(90, None, 3, 0)
+    _, capped = held_out_predictions(LinearRegression(), X, y, folds=folds, max_train_rows=20, random_state=5,
+                                     chunk_rows=7)
+    for train, test in folds:  # each fold fitted on 20 of its rows, drawn with the seed
+        rows = np.sort(np.random.default_rng(5).choice(train, size=20, replace=False))
+        np.testing.assert_allclose(capped[test], LinearRegression().fit(X[rows], y[rows]).predict(X[test]),
+                                   rtol=1e-12, atol=1e-12)
+    _, full = held_out_predictions(LinearRegression(), X, y, folds=folds)
+    assert not np.allclose(full, capped)  # the cap is real: 20 rows fit another map than 60
+
+
+def test_the_engine_gives_the_std_only_when_every_folds_model_has_one():
+    from ftcal import GaussianProcessCalibrator
+    from ftcal.models._auto import provides_std
+
+    data = _sensor(n_groups=5, per_group=8)
+    folds = calibration_folds(40, data.group, 3, 0)
+    _, _, std = held_out_predictions(GaussianProcessCalibrator(random_state=0), data.raw, data.wrench,
+                                     groups=data.group, folds=folds, has_std=provides_std)
+    assert std.shape == data.wrench.shape and np.all(std > 0)
+    _, _, none = held_out_predictions(LinearCalibrator(), data.raw, data.wrench, folds=folds, has_std=provides_std)
+    assert none is None
+
+
+def test_the_report_does_not_reuse_autos_comparison_for_the_same_rows_grouped_otherwise():
+    data = _sensor(seed=4)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], cv=4, stack=False).fit(
+        data.raw, data.wrench, groups=data.group)
+    same = calibration_certificate(auto, data, cv=4, figures=False)
+    assert same["validation"]["reused_auto_comparison"] is True
+    regrouped = CalibrationDataset(raw=data.raw, wrench=data.wrench, group=np.repeat(np.arange(10), 8))
+    other = calibration_certificate(auto, regrouped, cv=4, figures=False)
+    assert other["validation"]["reused_auto_comparison"] is False
