@@ -147,6 +147,7 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ftcal.calibrators._base import calibration_tags
     from ftcal.calibrators._routing import requests_groups
 
     console = Console(args.quiet)
@@ -245,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"history: {kept} (cross-validated RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the "
                      f"best time constant: {estimator.cv_rmse_[1:].min():.4g} N, the best of {len(taus)} tried, so "
                      "slightly optimistic; --report gives a held-out figure)")
-    if "comparison_" in estimator.__dict__:  # auto: the whole comparison it chose from
+    if calibration_tags(estimator).chooses_model:  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = estimator.comparison_
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")

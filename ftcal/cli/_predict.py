@@ -193,7 +193,7 @@ def run(args: argparse.Namespace) -> int:
         if reads_history(model):  # a load-history wrapper: its history term has no standard deviation
             raise CliError(f"--std: {args.model} has a load-history term (fitted with --history), which gives no "
                            "standard deviation, whatever model it wraps. Drop --std, or fit without --history")
-        if hasattr(model, "offset_per_deg_"):  # a temperature wrapper: it passes no standard deviation through
+        if takes_temperature(model):  # a temperature wrapper (its tags): it passes no standard deviation through
             raise CliError(f"--std: {args.model} is temperature-compensated (fitted with --temperature), and the "
                            "compensation passes no standard deviation through, whatever model it wraps. Drop --std, "
                            "or fit without --temperature")

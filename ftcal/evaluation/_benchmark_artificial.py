@@ -284,15 +284,15 @@ def _run_group(tasks: list[dict]) -> list[dict]:
 
 def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
     """Pending tasks as work units: network fits of one preset and model in chunks of ``stack``; others alone."""
-    from ..neural_network._base import NetworkCalibrator
+    from ..calibrators._base import calibration_tags
     from ..models._registry import CALIBRATOR_NAMES, make_calibrator
 
     if stack <= 1:
         return [[t] for t in pending]
     groups: dict[tuple, list[dict]] = {}
     units = []
-    stackable = {m: m in CALIBRATOR_NAMES and isinstance(make_calibrator(m), NetworkCalibrator)
-                 for m in {t["model"] for t in pending}}
+    tags = {m: calibration_tags(make_calibrator(m)) for m in {t["model"] for t in pending} if m in CALIBRATOR_NAMES}
+    stackable = {m: m in tags and tags[m].network and tags[m].stackable for m in {t["model"] for t in pending}}
     for task in pending:
         if stackable[task["model"]]:
             groups.setdefault((task["preset"], task["model"]), []).append(task)

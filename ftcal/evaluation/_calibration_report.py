@@ -50,6 +50,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
+from ..calibrators._base import calibration_tags
 from ..calibrators._history import reads_history
 from ..core._model_selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
@@ -395,7 +396,7 @@ def _reused_auto_choice(model: Any, X: NDArray, y: NDArray, groups: NDArray | No
                         random_state: int) -> dict | None:
     """``auto``'s own comparison (its stock baselines on the same folds), when ``model`` is an AutoCalibrator
     fitted on these data with these folds: the report then refits only the chosen model, not the baselines."""
-    results = model.__dict__.get("comparison_") if hasattr(model, "__dict__") else None
+    results = getattr(model, "comparison_", None) if calibration_tags(model).chooses_model else None
     fitted_range = getattr(model, "calibrated_range_", None)
     # (folds other than plain grouped or shuffled ones: auto replaced folds that could not judge; not these)
     if not isinstance(results, dict) or "kind" not in results or getattr(model, "cv", None) != cv \
@@ -526,7 +527,7 @@ def calibration_certificate(
     label = f"{name} (this calibration)"
     reused = None if ordered else _reused_auto_choice(model, X, y, groups, cv, len(folds), random_state)
     template = clone(model)
-    if reused is not None and hasattr(model, "best_estimator_"):
+    if reused is not None:  # a model that chose by cross-validation (its tags): best_estimator_, best_name_
         template = clone(model.best_estimator_)  # auto chose on these folds: refit its choice, not the whole search
         label = f"{name}: {model.best_name_} (this calibration)"
     choice: list[dict] = []
@@ -605,7 +606,7 @@ def calibration_certificate(
     temperature = None if dataset.temperature is None else [float(dataset.temperature.min()),
                                                             float(dataset.temperature.max())]
     coefficients = None
-    if hasattr(model, "gain_per_deg_"):
+    if calibration_tags(model).temperature_column:  # the temperature wrapper's drift coefficients
         coefficients = {"reference_temperature": float(model.reference_temperature),
                         "gain_per_deg": np.asarray(model.gain_per_deg_).tolist(),
                         "offset_per_deg": np.asarray(model.offset_per_deg_).tolist()}

@@ -7,6 +7,7 @@ from collections.abc import Sequence
 from numpy.typing import ArrayLike
 
 from ..core._exceptions import CalibrationInputError
+from ..calibrators._base import calibration_tags
 from ._base import NetworkCalibrator, train_networks
 from ._modules import StackedMLP
 
@@ -75,7 +76,7 @@ def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence
     if not estimators:
         raise CalibrationInputError("fit_stacked needs at least one estimator (K >= 1); got an empty list.")
     for k, est in enumerate(estimators):
-        if not isinstance(est, NetworkCalibrator):
+        if not calibration_tags(est).network:  # its tags: a network trained by skorch
             problem = (f" trains network calibrators (DirectionalCalibrator, ComparativeCalibrator); estimator {k} is "
                        f"{type(est).__name__}. Fit it with its own fit().")
         elif est.callbacks and len(estimators) > 1:
