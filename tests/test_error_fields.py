@@ -308,3 +308,20 @@ def test_a_library_warning_is_one_command_line_warning(files, tmp_path):
     warned = [line for line in lines if line.startswith("ftcal: warning: GaussianProcessCalibrator: 7 rows leave")]
     assert len(warned) == 1 and "predictive std could not be calibrated" in warned[0]
     assert all(line.startswith("ftcal: ") for line in lines), lines  # no "UserWarning", no source line
+
+
+def test_a_drift_without_its_values_is_told_in_the_commands_terms():
+    """``--drift temperature`` on poses without temperatures: the library names its argument and what it needs;
+    the command line says the option and the column (not "pass temperatures", which it has no option for)."""
+    from ftcal.cli._messages import cli_message
+    from ftcal.experiment._drift import select_drift
+
+    rng = np.random.default_rng(0)
+    with pytest.raises(CalibrationInputError) as info:
+        select_drift(rng.normal(size=(30, 3)), rng.normal(size=(30, 6)), np.arange(30.0), None, choice="temperature")
+    err = info.value
+    assert (err.parameter, err.value, err.settings["drift"]) == ("drift", "temperature", "auto")
+    assert str(err).endswith("Fix: give temperatures, or drift='auto'.") and not FLAG.search(str(err))
+    line = cli_message(err)
+    assert line.startswith("--drift 'temperature' needs temperatures that vary over the poses")
+    assert line.endswith("Fix: give a 'temperature' column (the sensor's temperature at each pose), or --drift auto.")

@@ -45,11 +45,15 @@ class Option:
         (``groups`` come from the dataset's group column).
     metavar : str, optional
         How the option's value is written where the library proposes a :class:`Placeholder` (``NAME``).
+    words : str, optional
+        How the command line says an argument that comes from its input files, not an option (the drift's
+        ``temperatures``: a ``temperature`` column).
     """
 
     flags: tuple[tuple[str, str], ...] = ()
     advice: str | None = None
     metavar: str | None = None
+    words: str | None = None
 
     def flag(self, args: argparse.Namespace | None) -> str | None:
         """The option naming the argument in the command that ran (``args``), or None when there is none."""
@@ -103,6 +107,9 @@ CLI_NAMES: dict[str, Option] = {
     "max_samples": _option("--max-samples"),
     "time": _option("--time"),  # a tool re-tare's time (retare of a drifting tool file)
     "temperature": _option("--temperature"),
+    "drift": _option("--drift"),
+    "temperatures": Option(words="a 'temperature' column (the sensor's temperature at each pose)"),
+    "times": Option(words="a 'time' column (each pose's time [s])"),
 }
 
 
@@ -113,6 +120,8 @@ def cli_spelling(args: argparse.Namespace | None = None):
     def spell(name: str, setting: Any) -> str:
         option = CLI_NAMES.get(name)
         flag = option.flag(args) if option is not None else None
+        if flag is None and option is not None and option.words is not None:
+            return option.words
         if flag is None:
             return name if setting is NO_SETTING else f"{name}={setting!r}"
         if setting is NO_SETTING or setting is True:

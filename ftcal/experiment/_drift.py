@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import NO_SETTING, CalibrationInputError
 
 __all__ = ["BiasDrift", "DriftExtrapolationWarning", "DRIFT_CHOICES", "MAX_KNOTS", "drift_candidates",
            "fit_gravity_blocks", "select_drift", "tool_onnx_model"]
@@ -456,9 +456,11 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     candidates = drift_candidates(len(W), times, temperatures, choice)
     values = {k: v for k, v in (("time", times), ("temperature", temperatures)) if v is not None}
     if not candidates:
+        values_of = "temperatures" if choice == "temperature" else "times"
         raise CalibrationInputError(
-            f"drift={choice!r} needs {'temperatures' if choice == 'temperature' else 'times'} that vary over the "
-            f"poses (and enough poses for its parameters); got {len(W)} poses. Fix: pass them, or drift='auto'.")
+            f"{{drift}} {choice!r} needs {values_of} that vary over the poses (and enough poses for its parameters); "
+            f"got {len(W)} poses.", parameter="drift", value=choice, fix=f"give {{{values_of}}}, or {{drift}}",
+            settings={values_of: NO_SETTING, "drift": "auto"})
     if len(candidates) == 1:
         return candidates[0], [{"model": candidates[0].name, "n_parameters": 6 * candidates[0].n_parameters,
                                 "status": "the only candidate"}]
