@@ -8,7 +8,7 @@ from pathlib import Path
 
 from ftcal import FtcalError
 from ftcal.cli._messages import cli_message
-from ftcal.evaluation import OutputFiles
+from ftcal.benchmark import OutputFiles
 
 
 class OutputFile:

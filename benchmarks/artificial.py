@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, FtcalError, run_artificial_benchmark
-from ftcal.models import STOCK_BASELINE_NAMES
+from ftcal.calibrators import STOCK_BASELINE_NAMES
 from ftcal.cli._messages import cli_message
 
 #: Default output folder (git-ignored): benchmarks/out/artificial.

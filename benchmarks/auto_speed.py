@@ -31,7 +31,7 @@ import warnings
 from pathlib import Path
 
 import ftcal
-from ftcal.models import stock_baselines
+from ftcal.calibrators import stock_baselines
 
 from _output import single_output
 

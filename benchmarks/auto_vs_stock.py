@@ -66,7 +66,7 @@ from sklearn.model_selection import GroupKFold, KFold
 import ftcal
 from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
 from ftcal.core import read_json_record, write_json
-from ftcal.models import STOCK_BASELINE_NAMES, stock_baselines
+from ftcal.calibrators import STOCK_BASELINE_NAMES, stock_baselines
 
 from _output import output_files, table_or_stop
 

@@ -28,7 +28,7 @@ import numpy as np
 
 from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
 from ftcal.core import read_json_record
-from ftcal.evaluation import dataset_seeds, make_model
+from ftcal.benchmark import dataset_seeds, make_model
 
 from _output import int_at_least, output_files
 
@@ -76,10 +76,10 @@ def spread_explained(cache: Path) -> dict | None:
 
 def restore_effect(models, presets, schedule: str = "short") -> dict:
     """Test RMSE with the best epoch's weights (ftcal) and with the last epoch's, from one fit: the last weights are
-    copied aside just before :class:`~ftcal.neural_network.RestoreBestWeights` loads the best ones."""
+    copied aside just before :class:`~ftcal.networks.RestoreBestWeights` loads the best ones."""
     import torch
 
-    from ftcal.neural_network import RestoreBestWeights
+    from ftcal.networks import RestoreBestWeights
 
     out = {}
     original = RestoreBestWeights.on_train_end

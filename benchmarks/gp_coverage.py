@@ -8,7 +8,7 @@ The cases and outer folds of ``benchmarks/auto_vs_stock.py`` (soft: shuffled 5-f
 group 5-fold, the groups also given to ``fit`` so the std is calibrated leaving whole groups out; the artificial
 presets: their test set). Per case: the share of held-out errors within 2 std (all six components), per
 component, and with the uncalibrated std (``std / std_scale_``), and the factors; beside it the stock scikit-learn
-GP's (``sk_gp`` of :func:`ftcal.models.stock_baselines`, its ``predict(return_std=True)``, same folds), added to
+GP's (``sk_gp`` of :func:`ftcal.calibrators.stock_baselines`, its ``predict(return_std=True)``, same folds), added to
 an earlier run's JSON without refitting ftcal's GP. One JSON per case (resumable).
 """
 
@@ -23,7 +23,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
-from ftcal.models import stock_baselines
+from ftcal.calibrators import stock_baselines
 from ftcal.core import read_json_record
 
 from _output import output_files

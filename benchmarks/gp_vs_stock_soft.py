@@ -18,7 +18,7 @@ from threadpoolctl import threadpool_limits
 
 import ftcal
 from ftcal import GaussianProcessCalibrator, LinearCalibrator, make_soft_sensor_dataset
-from ftcal.models import stock_baselines
+from ftcal.calibrators import stock_baselines
 
 
 def main() -> None:

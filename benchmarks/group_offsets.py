@@ -25,7 +25,8 @@ from sklearn.model_selection import GroupKFold
 
 import ftcal
 from ftcal.core import read_json_record
-from ftcal.models import default_candidates, stock_baselines
+from ftcal.compose import default_candidates
+from ftcal.calibrators import stock_baselines
 
 from _output import parse_output
 

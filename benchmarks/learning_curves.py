@@ -55,10 +55,10 @@ from typing import Callable
 import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
-from ftcal.evaluation import make_model
+from ftcal.benchmark import make_model
 from ftcal.core import (data_fingerprint, is_finite_number, package_versions, plain_json, read_json_record,
                         write_json)
-from ftcal.models import STOCK_BASELINE_NAMES
+from ftcal.calibrators import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files
 

@@ -37,7 +37,7 @@ from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
 import ftcal
-from ftcal.neural_network import DirectionalNet, WeightedSquaredError
+from ftcal.networks import DirectionalNet, WeightedSquaredError
 
 
 def data(n: int, seed: int):

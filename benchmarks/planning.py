@@ -49,7 +49,7 @@ import numpy as np
 
 import ftcal
 from ftcal.core import read_json_record, write_json
-from ftcal.models import default_candidates
+from ftcal.compose import default_candidates
 
 from _output import output_files, single_output
 

@@ -18,7 +18,7 @@ from pathlib import Path
 import torch
 
 from ftcal import CALIBRATOR_NAMES, run_real_world_benchmark
-from ftcal.evaluation import SPLIT_NAMES
+from ftcal.benchmark import SPLIT_NAMES
 
 from _output import single_output
 

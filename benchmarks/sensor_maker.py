@@ -30,9 +30,9 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, SensorProfile, make_artificial_dataset, scale_torques
-from ftcal.evaluation import dataset_seeds, make_model
+from ftcal.benchmark import dataset_seeds, make_model
 from ftcal.core import atomic_output, data_fingerprint
-from ftcal.models import STOCK_BASELINE_NAMES
+from ftcal.calibrators import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, output_files
 

@@ -32,7 +32,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold
 
 import ftcal
-from ftcal.models import stock_baselines
+from ftcal.calibrators import stock_baselines
 
 from _output import parse_output
 

@@ -4,7 +4,7 @@
 For each preset:
 
 1. **search** -- :func:`ftcal.search_calibrator` (scikit-learn's randomized search over
-   :data:`ftcal.models._search.DEFAULT_SEARCH_SPACES`, k-fold cross-validated torque-scaled RMSE, eq. 18) on a *tuning*
+   :data:`ftcal.compose._search.DEFAULT_SEARCH_SPACES`, k-fold cross-validated torque-scaled RMSE, eq. 18) on a *tuning*
    dataset whose seed is not one of the benchmark's (``--tuning-seed``), so the validation below is not
    scored on data the search has seen;
 2. **validate** -- the documented defaults and the search's best setting are trained on the first
@@ -38,8 +38,8 @@ from joblib import Parallel, delayed
 
 from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
 from ftcal.core import mean_std, plain_json
-from ftcal.evaluation import dataset_seeds, format_mean_std, wilcoxon_pvalue
-from ftcal.models import search_summary
+from ftcal.benchmark import dataset_seeds, format_mean_std, wilcoxon_pvalue
+from ftcal.compose import search_summary
 
 from _output import output_files
 

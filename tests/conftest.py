@@ -1,4 +1,4 @@
-"""Shared fixtures of the calibrator tests (issue 2): small data sets and tiny training schedules."""
+"""Shared fixtures of the calibrator tests: small data sets and tiny training schedules."""
 
 from __future__ import annotations
 
@@ -21,8 +21,8 @@ from ftcal import (
     HistoryCalibrator,
     TemperatureCompensatedCalibrator,
 )
-from ftcal.models._auto import StackedCalibrator
-from ftcal.models._baselines import StockCalibrator
+from ftcal.compose._auto import StackedCalibrator
+from ftcal.calibrators._baselines import StockCalibrator
 
 # the benchmark scripts import their shared helpers (benchmarks/_output.py) as when run from their folder
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"

@@ -1,4 +1,4 @@
-"""Artificial datasets of the thesis (IV-A) and the noise floor (issue 3)."""
+"""Artificial datasets of the thesis (IV-A) and the noise floor."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""ATI .cal reader (issue 3): both matrix forms, units, and malformed files."""
+"""ATI .cal reader: both matrix forms, units, and malformed files."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 12: AutoCalibrator, grouped model choice, the Gaussian-process calibrator, the unbiased tare."""
+"""AutoCalibrator, grouped model choice, the Gaussian-process calibrator, the unbiased tare."""
 
 from __future__ import annotations
 
@@ -17,8 +17,8 @@ from ftcal import (
     LinearCalibrator,
     PolynomialCalibrator,
 )
-from ftcal.core._model_selection import calibration_folds
-from ftcal.models._auto import _offsets_identifiable
+from ftcal.model_selection._selection import calibration_folds
+from ftcal.compose._auto import _offsets_identifiable
 from ftcal.calibrators._zero_load import estimate_zero_reading
 from ftcal.cli import main
 

@@ -8,10 +8,10 @@ import pytest
 
 import ftcal
 from ftcal import AutoCalibrator, CalibrationInputError, LinearCalibrator, PolynomialCalibrator
-from ftcal.core._model_selection import (DegenerateCalibrationError, calibration_folds, check_not_degenerate,
+from ftcal.model_selection._selection import (DegenerateCalibrationError, calibration_folds, check_not_degenerate,
                                          degenerate_reason, simplest_within_one_se, unseen_outputs)
-from ftcal.models._auto import with_stock_candidates
-from ftcal.models._baselines import StockCalibrator
+from ftcal.compose._auto import with_stock_candidates
+from ftcal.calibrators._baselines import StockCalibrator
 from ftcal.simulation._field_sensors import make_dead_weight_dataset
 
 
@@ -126,7 +126,7 @@ def test_stock_models_take_their_place_in_the_complexity_order():
     pairs = with_stock_candidates([("linear", LinearCalibrator()), ("quadratic", PolynomialCalibrator(degree=2)),
                                    ("gp", ftcal.GaussianProcessCalibrator())], stock)
     assert [name for name, _ in pairs] == ["linear", "sk_linear", "quadratic", "sk_poly2", "gp", "sk_gp"]
-    from ftcal.models._auto import complexity_ranks
+    from ftcal.compose._auto import complexity_ranks
     assert complexity_ranks(pairs, 7).tolist() == [0, 0, 2, 2, 4, 4, 6]
 
 
@@ -181,7 +181,7 @@ def test_cv_results_is_a_deprecated_alias_of_comparison():
 
 
 def test_check_calibration_refuses_what_must_not_be_saved_and_passes_the_rest():
-    from ftcal.models._auto import check_calibration
+    from ftcal.compose._auto import check_calibration
 
     rng = np.random.default_rng(0)
     w = rng.uniform(-1, 1, size=(60, 6))
@@ -201,7 +201,7 @@ def test_check_calibration_refuses_what_must_not_be_saved_and_passes_the_rest():
 def test_held_out_predictions_is_cross_val_predict_on_ftcals_folds():
     from sklearn.model_selection import cross_val_predict
 
-    from ftcal.core._model_selection import held_out_predictions
+    from ftcal.model_selection._selection import held_out_predictions
 
     rng = np.random.default_rng(0)
     w = rng.uniform(-1, 1, size=(60, 6))

@@ -8,8 +8,8 @@ import re
 import numpy as np
 
 from ftcal import AutoCalibrator, LinearCalibrator, PolynomialCalibrator
-from ftcal.core._model_selection import rmse_and_se
-from ftcal.models._auto import comparison_table, explain_choice
+from ftcal.model_selection._selection import rmse_and_se
+from ftcal.compose._auto import comparison_table, explain_choice
 
 
 def _cells(table: str, name: str) -> list[str]:
@@ -64,7 +64,7 @@ def test_every_verdict_of_a_real_fit_follows_from_the_printed_excess_and_paired_
 
 
 def test_with_few_groups_a_gain_in_one_group_only_does_not_make_the_complex_model_win():
-    from ftcal.core._model_selection import mean_and_se, se_units, simplest_within_one_se
+    from ftcal.model_selection._selection import mean_and_se, se_units, simplest_within_one_se
 
     # 3 groups of 40 rows: the complex model gains a lot in group 0 and loses a little in groups 1 and 2. Over the
     # rows the gain looks sure (the rows' SE of the difference is small); between the groups it is not.

@@ -15,10 +15,10 @@ import ftcal
 from ftcal import (AutoCalibrator, CalibrationInputError, GaussianProcessCalibrator, LinearCalibrator,
                    PolynomialCalibrator)
 from ftcal.core._memory import MemoryLimitError
-from ftcal.core._model_selection import calibration_folds, simplest_within_one_se
-from ftcal.models import STOCK_BASELINE_NAMES
-from ftcal.models._auto import StackedCalibrator, complexity_ranks, minimum_training_rows
-from ftcal.models._baselines import StockCalibrator
+from ftcal.model_selection._selection import calibration_folds, simplest_within_one_se
+from ftcal.calibrators import STOCK_BASELINE_NAMES
+from ftcal.compose._auto import StackedCalibrator, complexity_ranks, minimum_training_rows
+from ftcal.calibrators._baselines import StockCalibrator
 from ftcal.simulation._field_sensors import make_dead_weight_dataset, make_robot_held_dataset, \
     make_soft_sensor_dataset
 
@@ -243,8 +243,8 @@ def fitting_processes(path) -> set[int]:
 
 def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
     # no network, kernel models on <= LIGHT_KERNEL_ROWS training rows: starting workers would cost more than the fits
-    from ftcal.models._auto import LIGHT_KERNEL_ROWS, score_candidates
-    from ftcal.models._baselines import stock_baselines
+    from ftcal.compose._auto import LIGHT_KERNEL_ROWS, score_candidates
+    from ftcal.calibrators._baselines import stock_baselines
 
     raw, w, groups = affine(n=120, n_groups=6)  # 100-row training folds
     assert 100 <= LIGHT_KERNEL_ROWS
@@ -256,8 +256,8 @@ def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
 def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fits():
     from skorch.callbacks import Callback
 
-    from ftcal.models._auto import LIGHT_KERNEL_ROWS, _is_light
-    from ftcal.models._baselines import stock_baselines
+    from ftcal.compose._auto import LIGHT_KERNEL_ROWS, _is_light
+    from ftcal.calibrators._baselines import stock_baselines
 
     stock = {name: StockCalibrator(baseline=name) for name in STOCK_BASELINE_NAMES}
     assert all(_is_light(stock[n], 10**6) for n in ("sk_linear", "sk_poly2", "sk_poly3"))
@@ -272,8 +272,8 @@ def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fi
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="worker processes are capped at the cores: needs 2")
 def test_heavy_work_is_scored_in_worker_processes(tmp_path, monkeypatch):
-    from ftcal.models import _auto
-    from ftcal.models._baselines import stock_baselines
+    from ftcal.compose import _auto
+    from ftcal.calibrators._baselines import stock_baselines
 
     monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds of the stock GP now count as heavy
     raw, w, groups = affine(n=120, n_groups=6)
@@ -283,7 +283,7 @@ def test_heavy_work_is_scored_in_worker_processes(tmp_path, monkeypatch):
 
 
 def test_stock_kernel_baselines_have_the_gp_candidates_budget():
-    from ftcal.models._baselines import KERNEL_SAMPLES, stock_baselines
+    from ftcal.calibrators._baselines import KERNEL_SAMPLES, stock_baselines
 
     assert KERNEL_SAMPLES == GaussianProcessCalibrator().max_samples
     assert {stock_baselines(6)[n].max_samples for n in ("sk_kernel_ridge", "sk_gp")} == {KERNEL_SAMPLES}
@@ -291,7 +291,7 @@ def test_stock_kernel_baselines_have_the_gp_candidates_budget():
 
 def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential(monkeypatch):
     # real joblib worker processes; the GP (structure chosen inside its task) and a stock baseline among them
-    from ftcal.models import _auto
+    from ftcal.compose import _auto
 
     monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds count as heavy: workers are used
     raw, w, groups = affine(n=120, n_groups=6)
@@ -350,14 +350,14 @@ def test_few_dead_weight_rows_auto_is_never_worse_than_1_1x_the_ltm_at_2x_the_ra
     cal, val = make_dead_weight_dataset(n_rows, random_state=0)
     alpha = ftcal.alpha_from_wrenches(cal.wrench)
     auto = AutoCalibrator(alpha=alpha, baselines=False,
-                          candidates=[c for c in ftcal.models._auto.default_candidates()
+                          candidates=[c for c in ftcal.compose._auto.default_candidates()
                                       if c[0] not in ("directional", "comparative")]).fit(cal.raw, cal.wrench)
     r = auto.comparison_
     chosen = r["name"].index(auto.best_name_)
     assert r["eligible"][chosen]
     for k, name in enumerate(r["name"]):
         if r["kind"][k] == "candidate" and name != "linear":
-            est = dict(ftcal.models._auto.default_candidates())[name]
+            est = dict(ftcal.compose._auto.default_candidates())[name]
             assert r["eligible"][k] == (r["min_training_rows"] >= minimum_training_rows(est, cal.n_channels))
     ltm = LinearCalibrator(alpha=alpha).fit(cal.raw, cal.wrench)
     rmse_auto = ftcal.wrench_rmse(val.wrench, auto.predict(val.raw), alpha)
@@ -528,7 +528,7 @@ def test_gp_with_automatic_choices_fits_targets_of_any_width(width):
 
 
 def test_grouped_subsample_is_exactly_the_size_with_each_groups_share():
-    from ftcal.core._model_selection import grouped_subsample
+    from ftcal.model_selection._selection import grouped_subsample
 
     rows = np.arange(9000)
     many_small = rows // 3  # 3000 groups of 3 rows: a share of 1/9 cannot give each group a row

@@ -1,4 +1,4 @@
-"""The artificial benchmark (issue 3): statistics by hand, resumable cache, output safety, smoke run."""
+"""The artificial benchmark: statistics by hand, resumable cache, output safety, smoke run."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import pytest
 import sklearn
 
 from ftcal import BenchmarkOutputExistsError, CalibrationInputError, ErrorModel, run_artificial_benchmark
-from ftcal.evaluation import OutputFiles
-from ftcal.evaluation._benchmark_artificial import summarize_results, wilcoxon_pvalue
+from ftcal.benchmark import OutputFiles
+from ftcal.benchmark._artificial import summarize_results, wilcoxon_pvalue
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -295,7 +295,7 @@ def test_command_lines_add_the_stock_baselines_unless_only_named_models_are_aske
     import argparse
 
     from ftcal.cli._benchmark import _artificial_models
-    from ftcal.models import STOCK_BASELINE_NAMES
+    from ftcal.calibrators import STOCK_BASELINE_NAMES
 
     def models(names, baselines):
         return _artificial_models(argparse.Namespace(models=names, baselines=baselines))

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ftcal.evaluation._benchmark_artificial import summarize_results
+from ftcal.benchmark._artificial import summarize_results
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = ["linear", "axis_nonlinear", "comparative", "directional", "directional_ensemble"]

@@ -1,4 +1,4 @@
-"""``ftcal report`` / ``ftcal fit --report`` (issue 22): the calibration report, checked in a real browser.
+"""``ftcal report`` / ``ftcal fit --report``: the calibration report, checked in a real browser.
 
 The held-out figures are checked against an independent computation (scikit-learn's own
 ``LinearRegression`` on the same ``GroupKFold`` folds), the page in headless Chromium (no console message, no

@@ -12,8 +12,8 @@ import pytest
 import ftcal
 from ftcal import LinearCalibrator, TemperatureCompensatedCalibrator, ThermalDrift
 from ftcal.calibrators._base import CalibrationTags, FtcalTags, calibration_tags
-from ftcal.models._baselines import STOCK_BASELINE_NAMES, StockCalibrator, stock_baselines
-from ftcal.models._registry import CALIBRATOR_NAMES, _CANDIDATES, _FACTORIES, _SEARCH_SPACES, make_calibrator, \
+from ftcal.calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator, stock_baselines
+from ftcal.compose._registry import CALIBRATOR_NAMES, _CANDIDATES, _FACTORIES, _SEARCH_SPACES, make_calibrator, \
     model_classes
 
 
@@ -100,11 +100,11 @@ def test_a_new_calibrator_is_one_module_and_one_registry_line(toy_module, tmp_pa
     ftcal.register_calibrator("toy", toy_module.ToyCalibrator, candidates=[(15, "toy", {})],
                               search_space={"alpha": [1.0, 2.0]})
     # auto's candidates follow from the registry, in their complexity place (after the LTM and its twin)
-    names = [name for name, _ in ftcal.models.default_candidates()]
+    names = [name for name, _ in ftcal.compose.default_candidates()]
     assert names[:2] == ["linear", "toy"]
     raw, w = _data()
     auto = ftcal.AutoCalibrator(baselines=False, stack=False, candidates=None, cv=3)
-    auto.set_params(candidates=[(n, e) for n, e in ftcal.models.default_candidates() if n in ("linear", "toy")])
+    auto.set_params(candidates=[(n, e) for n, e in ftcal.compose.default_candidates() if n in ("linear", "toy")])
     auto.fit(raw, w)
     assert "toy" in auto.comparison_["name"]
     # model files: the class is known by the registry; saved and loaded, it predicts the same
@@ -112,7 +112,7 @@ def test_a_new_calibrator_is_one_module_and_one_registry_line(toy_module, tmp_pa
     path = ftcal.save_model(model, tmp_path / "toy.npz")
     assert np.array_equal(ftcal.load_model(path).predict(raw[:5]), model.predict(raw[:5]))
     # the search space and the CLI lists
-    from ftcal.models._registry import registered_search_spaces
+    from ftcal.compose._registry import registered_search_spaces
     assert registered_search_spaces()["toy"] == {"alpha": [1.0, 2.0]}
     assert "toy" in CALIBRATOR_NAMES
     from ftcal.cli import main
@@ -167,7 +167,7 @@ def test_a_fitted_temperature_compensated_model_answers_out_of_range():
 
 def test_every_wrapper_adopts_the_same_after_fit_state():
     from ftcal import EnsembleCalibrator
-    from ftcal.models._auto import AutoCalibrator
+    from ftcal.compose._auto import AutoCalibrator
 
     raw, w = _data()
     for model in (EnsembleCalibrator(LinearCalibrator(), n_members=2, random_state=0),
@@ -182,7 +182,7 @@ def test_every_wrapper_adopts_the_same_after_fit_state():
 def test_a_stock_calibrator_predicts_many_rows_in_bounded_memory(name, fit_rows):
     import tracemalloc
 
-    from ftcal.models._baselines import PREDICT_BLOCK_BYTES
+    from ftcal.calibrators._baselines import PREDICT_BLOCK_BYTES
 
     raw, w = _data(n=fit_rows, channels=8)
     model = StockCalibrator(baseline=name).fit(raw, w)

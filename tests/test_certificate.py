@@ -351,9 +351,9 @@ def test_report_of_a_saved_auto_model_reuses_its_comparison_on_its_own_data(tmp_
 def test_a_million_rows_keep_every_stock_baseline_within_budget_by_fitting_a_subset():
     """On 10^6 rows (800 000 per training fold) no baseline is skipped: the polynomial ones are fitted on a subset
     small enough for the memory limit and the work budget, the kernel ones on their own 1000 rows."""
-    from ftcal.evaluation._calibration_report import (BASELINE_WORK_BUDGET, _baseline_skip_reason, baseline_cost)
+    from ftcal.reporting._calibration_report import (BASELINE_WORK_BUDGET, _baseline_skip_reason, baseline_cost)
     from ftcal.core._memory import memory_limit_bytes
-    from ftcal.models import stock_baselines
+    from ftcal.calibrators import stock_baselines
 
     for name, est in stock_baselines(8).items():
         n_bytes, flops, rows = baseline_cost(name, est, 800_000, 8, 6, 5)
@@ -432,7 +432,7 @@ def test_fit_keeps_a_calibration_that_beats_the_mean(tmp_path):
 def test_recalibration_due_date_is_counted_in_calendar_months_from_the_calibration_date(start, interval, due):
     import datetime as dt
 
-    from ftcal.evaluation._calibration_report import add_interval
+    from ftcal.reporting._calibration_report import add_interval
 
     assert add_interval(dt.date.fromisoformat(start), interval) == dt.date.fromisoformat(due)
 
@@ -511,7 +511,7 @@ def test_report_of_a_one_axis_model_on_six_axis_data_is_refused_naming_both_or_c
 def test_certificate_of_a_model_of_other_axes_than_the_data_is_refused_by_the_library():
     from ftcal import LinearCalibrator
     from ftcal.core._exceptions import CalibrationInputError
-    from ftcal.evaluation._calibration_report import calibration_certificate
+    from ftcal.reporting._calibration_report import calibration_certificate
 
     data = bent_sensor(seed=25)
     one_axis = LinearCalibrator().fit(data.raw, data.wrench[:, 2:3])

@@ -109,7 +109,7 @@ def test_demo_quick_prints_the_table_and_writes_everything(tmp_path, capsys):
     stdout = capsys.readouterr().out
     rows = [line for line in stdout.splitlines() if line.startswith("| ")]
     assert [r.split("|")[1].strip() for r in rows[1:]] == ["linear", "comparative", "directional", "noise floor"]
-    from ftcal.evaluation._demo import demo_files
+    from ftcal.benchmark._demo import demo_files
 
     for name in demo_files():
         assert (out / name).is_file(), name

@@ -1,4 +1,4 @@
-"""Getting a user's data in (issue 22): column mapping, Mx/My/Mz aliases, .mat and .npz, declared units, the
+"""Getting a user's data in: column mapping, Mx/My/Mz aliases, .mat and .npz, declared units, the
 lever-arm check, a missing header; and data out: the 6xN matrix, predict's header and out-of-range flag."""
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def test_export_matrix_reproduces_predict(linear_model):
     np.testing.assert_allclose(np.asarray(facts["matrix"]), matrix, rtol=1e-12)
     # a re-tared model: the matrix export includes the new zero
     model = LinearCalibrator().fit(data.raw, data.wrench).retare(np.full((3, 6), 0.6))
-    from ftcal.models._matrix import linear_calibration_matrix
+    from ftcal.persistence._matrix import linear_calibration_matrix
 
     C, b = linear_calibration_matrix(model)
     np.testing.assert_allclose(data.raw @ C.T + b, model.predict(data.raw), rtol=1e-9, atol=1e-9)

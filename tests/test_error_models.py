@@ -1,4 +1,4 @@
-"""Each error model of the artificial data, switched on alone, is measurable (issue 3)."""
+"""Each error model of the artificial data, switched on alone, is measurable."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Load / no-load pairing, R_delta (eq. 17), alignment and dataset preparation (issue 4)."""
+"""Load / no-load pairing, R_delta (eq. 17), alignment and dataset preparation."""
 
 from __future__ import annotations
 

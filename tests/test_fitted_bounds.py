@@ -11,8 +11,8 @@ import pytest
 from sklearn.utils._param_validation import Interval, StrOptions, make_constraint
 
 from ftcal import ModelFileError, load_model, make_soft_sensor_dataset, save_model
-from ftcal.models._model_io import fitted_constraints
-from ftcal.models._registry import model_classes
+from ftcal.persistence._model_io import fitted_constraints
+from ftcal.compose._registry import model_classes
 
 from conftest import CALIBRATOR_KINDS, WRAPPER_KINDS, affine_sensor_data, tiny_calibrators
 
@@ -124,7 +124,7 @@ def test_the_history_time_constant_of_the_field_report_is_refused(tmp_path_facto
 def test_a_tampered_stock_kernel_baseline_is_refused_naming_the_field(field, value, tmp_path):
     """A stock GP baseline's file (auto may choose and save one) keeps its kernel's scales bounded too: a zero
     length scale or a negative amplitude was loaded and predicted before."""
-    from ftcal.models._baselines import StockCalibrator
+    from ftcal.calibrators._baselines import StockCalibrator
 
     raw, wrench, _, _ = affine_sensor_data(n_samples=40, seed=3)
     path = save_model(StockCalibrator(baseline="sk_gp").fit(raw, wrench), tmp_path / "gp.npz")

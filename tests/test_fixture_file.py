@@ -1,4 +1,4 @@
-"""Your fixture (issue 22): load configurations from a small file for ``ftcal simulate experiment`` and
+"""Your fixture: load configurations from a small file for ``ftcal simulate experiment`` and
 ``ftcal prepare``; the thesis' fixture the named default; bad fixture files one clear line."""
 
 from __future__ import annotations

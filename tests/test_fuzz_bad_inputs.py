@@ -1,4 +1,4 @@
-"""The bad inputs and faults of issue 11, kept as a regression suite.
+"""The bad inputs and faults found by fuzzing, kept as a regression suite.
 
 Each case is a real call (library or CLI) with a bad input; each must end in a clear domain error (a
 ``ValueError`` subclass naming what is wrong, or ``ftcal: error: ...`` and exit 2 on the command line) or in
@@ -492,7 +492,7 @@ def test_prepare_dataset_takes_one_path(tmp_path):
         ftcal.prepare_dataset(str(tmp_path / "x.csv"))
 
 
-# ------------------------------------------------------------------ the new entry points (issues 12, 13, 15)
+# ------------------------------------------------------------------ grouped CV, ONNX, Dask, tool load and temperature
 @pytest.mark.parametrize("argv, message", [
     (["benchmark", "dataset", "{nogroup}", "--folds", "group", "--out", "{tmp}/b"], "has no group column"),
     (["benchmark", "dataset", "{train}", "--model", "auto", "--out", "{tmp}/b"], "'auto' is itself this comparison"),
@@ -514,7 +514,7 @@ def test_new_entry_points_reject_bad_input(workdir, tmp_path, capsys, argv, mess
     assert message in cli_error([a.format(**fill) for a in argv], capsys)
 
 
-# ================================================================== issue 24: bad input and faults, round 3
+# ================================================================== bad input and faults: files, columns, units, models
 def _inputs_and_outputs(workdir, tmp_path):
     """Real input files of every kind a command reads: a model, a dataset, readings, a log, a tool file."""
     files = {
@@ -1053,7 +1053,7 @@ def test_a_network_too_large_for_memory_is_refused_before_any_allocation():
 
 @pytest.mark.parametrize("groups", [[None] * 40, [0, "a"] * 20, [0.5, 1.5] * 20], ids=["none", "mixed", "fractional"])
 def test_group_labels_without_an_order_are_a_clear_error(groups):
-    from ftcal.core._model_selection import check_groups
+    from ftcal.model_selection._selection import check_groups
 
     with pytest.raises(ftcal.CalibrationInputError, match="integer or string labels"):
         check_groups(np.array(groups, dtype=object if groups[0] is None or "a" in groups else float), 40)
@@ -1102,7 +1102,7 @@ def test_return_std_of_auto_that_is_not_a_bool_is_refused(small_gp, flag):
 
 
 def test_network_overflow_is_named_float32():
-    from ftcal.neural_network._base import NetworkCalibrator
+    from ftcal.networks._base import NetworkCalibrator
 
     assert "float32" in NetworkCalibrator._overflow_note
 
@@ -1185,11 +1185,11 @@ def test_dataset_generators_at_the_edges_of_their_ranges_give_finite_data():
     ({"n_channels": 6, "random_state": -2}, r"'random_state' .* Got -2"),
 ])
 def test_stock_baselines_name_a_bad_argument(kwargs, message):
-    from ftcal.models import stock_baselines
+    from ftcal.calibrators import stock_baselines
 
     with pytest.raises(CalibrationInputError, match=message):
         stock_baselines(**kwargs)
-    assert list(stock_baselines(np.int64(6), max_kernel_samples=None)) == list(ftcal.models.STOCK_BASELINE_NAMES)
+    assert list(stock_baselines(np.int64(6), max_kernel_samples=None)) == list(ftcal.calibrators.STOCK_BASELINE_NAMES)
 
 
 @pytest.mark.parametrize("value", ["1e300", "-1e300", "1e7", "inf", "nan"])

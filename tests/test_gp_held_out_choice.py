@@ -12,7 +12,7 @@ from sklearn.model_selection import GroupKFold, KFold, cross_val_predict
 from ftcal import GaussianProcessCalibrator, wrench_rmse
 from ftcal.calibrators._gaussian_process import _left_out, _mean_basis, _regressor, make_kernel
 from ftcal.core._wrench import scale_torques
-from ftcal.models import stock_baselines
+from ftcal.calibrators import stock_baselines
 
 
 def correlated_sensor(n_rows: int, n_channels: int, seed: int, torque_in_nmm: bool):

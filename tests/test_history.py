@@ -1,4 +1,4 @@
-"""The load-history term (issue 19): ``reading_history`` and ``HistoryCalibrator``, on sensors whose physics is known.
+"""The load-history term: ``reading_history`` and ``HistoryCalibrator``, on sensors whose physics is known.
 
 The sensor of these tests creeps: each reading sees the load plus ``k`` times the lag of the load behind its
 exponential moving average (time constant 3 rows), ``raw = A (w + k (m - w))`` with ``m - w`` =
@@ -20,7 +20,7 @@ import ftcal
 import ftcal.calibrators._base
 from ftcal import CalibrationInputError, HistoryCalibrator, LinearCalibrator, reading_history
 from ftcal.cli import main
-from ftcal.models._auto import StackedCalibrator
+from ftcal.compose._auto import StackedCalibrator
 
 TAU_TRUE = 3.0
 CREEP = 0.2  # k: 20 % of the lag shows in the readings

@@ -1,4 +1,4 @@
-"""Inverse kinematics of calibration poses (issue 4): targets reached within tolerance, limits kept."""
+"""Inverse kinematics of calibration poses: targets reached within tolerance, limits kept."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The package layout is the architecture (issue 14): a package imports only the layers below it.
+"""The package layout is the architecture: a package imports only the layers below it.
 
 The allowed imports are the table of ``docs/architecture.md``; every ``from .x import`` and
 ``import ftcal.x`` in every module is checked, including imports inside functions.
@@ -16,16 +16,24 @@ import ftcal
 PACKAGE = Path(ftcal.__file__).parent
 ALLOWED = {
     "core": set(),
+    "model_selection": {"core"},
     "io": {"core"},
-    "calibrators": {"core"},
+    "calibrators": {"core", "model_selection"},
     "robot": {"core"},
-    "neural_network": {"core", "calibrators"},
+    "networks": {"core", "model_selection", "calibrators"},
     "simulation": {"core", "io"},
-    "models": {"core", "calibrators", "neural_network"},
-    "experiment": {"core", "io", "robot", "simulation"},
-    "evaluation": {"core", "io", "calibrators", "robot", "neural_network", "simulation", "models", "experiment"},
-    "cli": {"core", "io", "calibrators", "robot", "neural_network", "simulation", "models", "experiment",
-            "evaluation"},
+    "compose": {"core", "model_selection", "calibrators", "networks"},
+    "persistence": {"core", "calibrators", "networks", "compose"},
+    "experiment": {"core", "model_selection", "io", "robot", "simulation"},
+    "reporting": {"core", "io", "model_selection", "calibrators", "compose", "persistence"},
+    "benchmark": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
+                  "persistence", "experiment", "reporting"},
+    "cli": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
+            "persistence", "experiment", "reporting", "benchmark"},
+    # deprecated alias packages: names only, resolved lazily from the new homes (core's lazy namespace only)
+    "models": {"core"},
+    "neural_network": {"core"},
+    "evaluation": {"core"},
 }
 
 

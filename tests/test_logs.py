@@ -1,4 +1,4 @@
-"""Run log format (issue 4): round trip and every reader error, naming file and line."""
+"""Run log format: round trip and every reader error, naming file and line."""
 
 from __future__ import annotations
 

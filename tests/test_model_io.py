@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ftcal import ModelFileError, load_model, save_model
-from ftcal.models._model_io import FORMAT_VERSION
+from ftcal.persistence._model_io import FORMAT_VERSION
 
 from conftest import affine_sensor_data
 
@@ -140,7 +140,7 @@ def test_unfitted_model_cannot_be_saved(tiny_calibrator, tmp_path):
     assert not (tmp_path / "model.npz").exists()
 
 
-# --- any target width, every calibrator (issue 21) ------------------------------------------------------------------
+# --- any target width, every calibrator -------------------------------------------------------------------------
 def _fit_on(model, width, seed=5):
     """Fit ``model`` on an affine sensor with targets of ``width`` columns (``None``: a 1-D target)."""
     from ftcal import TemperatureCompensatedCalibrator
@@ -176,7 +176,7 @@ def test_every_calibrator_round_trips_at_every_target_width(index, width, tmp_pa
 def test_saved_state_is_what_the_class_declares(tmp_path):
     """No second list: the file holds exactly the declared fitted attributes the model has."""
     from ftcal import LinearCalibrator
-    from ftcal.models._model_io import fitted_state_names
+    from ftcal.persistence._model_io import fitted_state_names
 
     model, _ = _fit_on(LinearCalibrator(), 6)
     path = save_model(model, tmp_path / "m.npz")
@@ -200,7 +200,7 @@ def test_files_written_by_format_version_1_still_load(name):
     np.testing.assert_array_equal(model.predict(X), np.load(folder / f"{name}.expected.npy"))
 
 
-# --- column names (issue 24) ------------------------------------------------------------------------------------------
+# --- column names ----------------------------------------------------------------------------------------------------
 def test_column_names_survive_save_and_load_and_reordered_frames_are_refused(tmp_path):
     import pickle
 
@@ -220,7 +220,7 @@ def test_column_names_survive_save_and_load_and_reordered_frames_are_refused(tmp
             m.predict(reordered)
 
 
-# --- files that are not what they claim (issue 24) --------------------------------------------------------------------
+# --- files that are not what they claim ------------------------------------------------------------------------------
 @pytest.mark.parametrize("content, what", [
     (b"Fx,Fy,Fz\n1,2,3\n", "text file"),
     (b"\x80\x04\x95\x05\x00\x00\x00\x00\x00\x00\x00K\x01.", "pickle"),

@@ -10,7 +10,7 @@ import torch
 from torch import nn
 
 from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator, wrench_rmse
-from ftcal.neural_network._modules import ComparativeNet, DirectionalNet, WeightedSquaredError
+from ftcal.networks._modules import ComparativeNet, DirectionalNet, WeightedSquaredError
 
 from conftest import TINY_SCHEDULE, affine_sensor_data
 
@@ -166,7 +166,7 @@ def test_callbacks_must_be_a_list():
         DirectionalCalibrator(**TINY_SCHEDULE, callbacks="progress").fit(raw, wrench)
 
 
-# ------------------------------------------------------------------ issue 13: lean loop, numpy inference
+# ------------------------------------------------------------------ lean loop, numpy inference
 @pytest.mark.parametrize("cls", [DirectionalCalibrator, ComparativeCalibrator])
 def test_numpy_forward_matches_torch(cls):
     rng = np.random.default_rng(0)
@@ -188,9 +188,9 @@ def test_engine_trains_like_skorchs_own_loop():
     import torch
     from skorch import NeuralNetRegressor
 
-    from ftcal.neural_network import NetworkRegressor
-    from ftcal.neural_network._engine import MemberSquaredError
-    from ftcal.neural_network._modules import ComparativeNet, WeightedSquaredError
+    from ftcal.networks import NetworkRegressor
+    from ftcal.networks._engine import MemberSquaredError
+    from ftcal.networks._modules import ComparativeNet, WeightedSquaredError
 
     rng = np.random.default_rng(0)
     X = rng.normal(size=(1000, 6)).astype(np.float32)
@@ -259,7 +259,7 @@ def test_a_users_skorch_callback_sees_every_batch_epoch_and_gradient(cls):
 
 def test_skorch_overrides_of_the_engine_are_honoured():
     """A calibrator whose engine overrides skorch's get_loss / train_step: both run for every batch."""
-    from ftcal.neural_network import NetworkRegressor
+    from ftcal.networks import NetworkRegressor
 
     calls = {"get_loss": 0, "train_step": 0}
 
@@ -283,8 +283,8 @@ def test_skorch_overrides_of_the_engine_are_honoured():
 
 
 def test_a_network_calibrator_missing_a_hook_says_which():
-    from ftcal.neural_network._base import NetworkCalibrator
-    from ftcal.neural_network._modules import ComparativeNet
+    from ftcal.networks._base import NetworkCalibrator
+    from ftcal.networks._modules import ComparativeNet
 
     class Unfinished(NetworkCalibrator):
         _module_class = ComparativeNet

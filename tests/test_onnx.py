@@ -1,4 +1,4 @@
-"""ONNX export (issue 13): onnxruntime gives what ``predict`` gives, for every calibrator.
+"""ONNX export: onnxruntime gives what ``predict`` gives, for every calibrator.
 
 Tolerance: 1e-5 relative to each wrench component's range. The float64 parts
 of the graph agree with numpy to ~1e-15; the networks run in float32 in both
@@ -178,7 +178,7 @@ class ClippedLinearCalibrator(LinearCalibrator):
 
 
 def test_a_new_calibrator_needs_one_registry_line_to_be_saved_and_exported(tmp_path):
-    from ftcal.models import _registry
+    from ftcal.compose import _registry
 
     raw, w = _sensor()
     model = ClippedLinearCalibrator().fit(raw[:200], w[:200])

@@ -1,4 +1,4 @@
-"""Issue 23: D-optimal and random plans, "which poses next", and their bad input."""
+"""D-optimal and random plans, "which poses next", and their bad input."""
 
 from __future__ import annotations
 

@@ -11,8 +11,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_hex
 
 import ftcal
-from ftcal.evaluation import _plots
-from ftcal.models import stock_baselines
+from ftcal.reporting import _plots
+from ftcal.calibrators import stock_baselines
 
 #: Every name a figure of ftcal can show: the registry's calibrators and the stock baselines.
 ALL_MODELS = list(ftcal.CALIBRATOR_NAMES) + list(stock_baselines(6))

@@ -1,4 +1,4 @@
-"""PNG plots of ftcal.evaluation._plots: real files, the right content on the axes, clear errors on bad input."""
+"""PNG plots of ftcal.reporting._plots: real files, the right content on the axes, clear errors on bad input."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from ftcal import CalibrationInputError
-from ftcal.evaluation import _plots
+from ftcal.reporting import _plots
 
 
 def png_size(path) -> tuple[int, int]:
@@ -151,5 +151,5 @@ def test_plot_path_must_be_png(tmp_path):
 def test_model_colours_follow_the_thesis():
     assert _plots.model_color("directional") == "#1f77b4"  # blue, as in Fig. 5
     assert _plots.model_color("comparative") == "#d62728"  # red
-    # one colour per name, whatever the model's position in a figure (issue 22: one model, two colours)
+    # one colour per name, whatever the model's position in a figure (one model never gets two colours)
     assert _plots.model_color("polynomial", 0) == _plots.model_color("polynomial", 1)

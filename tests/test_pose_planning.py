@@ -1,4 +1,4 @@
-"""Pose planning (issue 4): icosphere, pitch/yaw, the 155-pose sphere of the thesis."""
+"""Pose planning: icosphere, pitch/yaw, the 155-pose sphere of the thesis."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The README's commands (issue 22): every ``ftcal`` command in its shell blocks parses with today's command
+"""The README's commands: every ``ftcal`` command in its shell blocks parses with today's command
 line, and the workflow blocks run, verbatim, in a fresh directory on data the test makes, as a new user would
 (``my_sensor_reader`` / ``my_controller`` stand for the user's programs; the recordings a block says to make
 are made first). The first block is the issue's "done when": a ``.mat`` of raw channels and wrenches with
@@ -280,11 +280,11 @@ def test_getting_your_data_in_block_runs_as_written(tmp_path):
 
 
 def test_the_readme_names_only_public_python_names():
-    """Every ``ftcal.x.y`` the README names is reachable without a private module (``ftcal.models._auto...``)."""
+    """Every ``ftcal.x.y`` the README names is reachable without a private module (``ftcal.compose._auto...``)."""
     import importlib
 
     names = set(re.findall(r"`(ftcal(?:\.\w+)+)", README.read_text(encoding="utf-8")))
-    assert "ftcal.models.check_calibration" in names  # the check of any fitted model, named in its public home
+    assert "ftcal.compose.check_calibration" in names  # the check of any fitted model, named in its public home
     private = sorted(n for n in names if any(part.startswith("_") for part in n.split(".")[1:]))
     assert not private, private
     for name in sorted(names):

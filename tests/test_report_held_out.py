@@ -9,7 +9,7 @@ import pytest
 from sklearn.linear_model import LinearRegression
 
 from ftcal import AutoCalibrator, CalibrationDataset, LinearCalibrator, calibration_certificate
-from ftcal.core._model_selection import calibration_folds, held_out_predictions
+from ftcal.model_selection._selection import calibration_folds, held_out_predictions
 
 
 def _sensor(seed: int = 0, n_groups: int = 8, per_group: int = 10) -> CalibrationDataset:
@@ -51,7 +51,7 @@ def test_the_engine_caps_training_rows_and_predicts_in_blocks_without_changing_a
 
 def test_the_engine_gives_the_std_only_when_every_folds_model_has_one():
     from ftcal import GaussianProcessCalibrator
-    from ftcal.models._auto import provides_std
+    from ftcal.compose._auto import provides_std
 
     data = _sensor(n_groups=5, per_group=8)
     folds = calibration_folds(40, data.group, 3, 0)

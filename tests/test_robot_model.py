@@ -1,4 +1,4 @@
-"""Robot models and forward kinematics (issue 4): the iiwa URDF against hand-derived DH poses."""
+"""Robot models and forward kinematics: the iiwa URDF against hand-derived DH poses."""
 
 from __future__ import annotations
 

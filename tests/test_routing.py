@@ -1,4 +1,4 @@
-"""``groups`` reach every calibrator that asks for them through scikit-learn's metadata routing (issue 21).
+"""``groups`` reach every calibrator that asks for them through scikit-learn's metadata routing.
 
 The calibrator that receives them here is a real one: a :class:`~ftcal.LinearCalibrator` subclass that fits
 as usual and keeps the groups its ``fit`` was given (and is registered, so it is saved like any calibrator).
@@ -18,8 +18,8 @@ from sklearn.preprocessing import FunctionTransformer
 from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, CalibrationDataset, EnsembleCalibrator,
                    GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator, TemperatureCompensatedCalibrator,
                    load_model, search_calibrator)
-from ftcal.calibrators._routing import requests_groups
-from ftcal.models import _registry
+from ftcal.compose._routing import requests_groups
+from ftcal.compose import _registry
 
 from conftest import affine_sensor_data
 
@@ -260,7 +260,7 @@ def test_auto_declares_its_candidates_in_its_routing():
 
 
 def test_a_stack_routes_groups_to_its_members_and_takes_fitted_ones_explicitly(counting):
-    from ftcal.models._auto import StackedCalibrator
+    from ftcal.compose._auto import StackedCalibrator
 
     raw, wrench, groups, _ = grouped_data()
     stack = StackedCalibrator(estimators=[FitCountingRecorder(), _declining()], weights=[0.5, 0.5])

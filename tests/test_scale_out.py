@@ -1,4 +1,4 @@
-"""Issue 13: the artificial benchmark and the search on a real Dask LocalCluster; bad scheduler addresses."""
+"""Scale-out: the artificial benchmark and the search on a real Dask LocalCluster; bad scheduler addresses."""
 
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ import torch
 from skorch.history import History
 
 from ftcal import ComparativeCalibrator, DirectionalCalibrator, training_schedule
-from ftcal.neural_network._schedule import RecoverStop, phase_of_epoch
+from ftcal.networks._schedule import RecoverStop, phase_of_epoch
 
 from conftest import affine_sensor_data
 

@@ -10,7 +10,7 @@ import pytest
 from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 
 from ftcal import CalibrationDataset, CalibrationInputError, PolynomialCalibrator, load_model, search_calibrator
-from ftcal.models._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
+from ftcal.compose._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
 from ftcal.cli import main
 
 from conftest import TINY_SCHEDULE
@@ -109,7 +109,7 @@ def test_cli_tune_reports_bad_parameters(tmp_path, capsys):
 ])
 def test_search_space_bounds_are_checked_when_parsed_not_when_sampled(entry, expected):
     # scipy would accept these and fail only when the search samples, with "Domain error in arguments"
-    from ftcal.models._search import parse_search_space
+    from ftcal.compose._search import parse_search_space
 
     with pytest.raises(CalibrationInputError, match=re.escape(f"search entry {entry!r}: {expected}")):
         parse_search_space([entry])
@@ -140,7 +140,7 @@ def test_search_with_groups_holds_out_whole_groups_for_every_calibrator(model, s
 
 def test_search_routes_groups_only_to_a_calibrator_that_requests_them():
     from sklearn import config_context
-    from ftcal.models._registry import _FACTORIES, register_calibrator
+    from ftcal.compose._registry import _FACTORIES, register_calibrator
 
     seen: list = []
 

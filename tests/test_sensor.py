@@ -1,4 +1,4 @@
-"""Sensor profiles and the default calibration matrix (issue 3)."""
+"""Sensor profiles and the default calibration matrix."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""A sensor mounted rotated or offset on the flange (issue 22), without editing the URDF:
+"""A sensor mounted rotated or offset on the flange, without editing the URDF:
 ``load_robot(..., sensor_mounting=...)`` and ``--sensor-mounting`` of plan, prepare, identify-load, compensate."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Several nets trained as one stacked module (issue 13): the same nets as separate fits, much cheaper.
+"""Several nets trained as one stacked module: the same nets as separate fits, much cheaper.
 
 Both run the one engine (a separate fit is K = 1). Tolerance: the stacked
 step does the same arithmetic as a separate fit in another summation order
@@ -107,7 +107,7 @@ def test_stacked_fits_datasets_of_different_sizes():
 def test_stacked_module_is_the_members_forward():
     import torch
 
-    from ftcal.neural_network._modules import ComparativeNet
+    from ftcal.networks._modules import ComparativeNet
 
     nets = [ComparativeNet(5, (7, 3)) for _ in range(4)]
     stacked = StackedMLP(nets)

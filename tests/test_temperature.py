@@ -1,4 +1,4 @@
-"""Issue 15: temperature columns, simulated thermal drift and its compensation."""
+"""Temperature columns, simulated thermal drift and its compensation."""
 
 from __future__ import annotations
 

@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 import ftcal
 from ftcal import BiasDrift, CalibrationInputError, DriftExtrapolationWarning, ToolLoad, identify_tool_load
 from ftcal.core._temperature import ThermalDrift
-from ftcal.experiment._drift import identification_report
+from ftcal.experiment._drift import identification_summary
 from ftcal.simulation._error_models import ErrorModel
 
 G = np.array([0.0, 0.0, -9.81])
@@ -134,7 +134,7 @@ def test_without_drift_the_constant_bias_is_kept_in_nine_of_ten_seeds_and_the_to
         if tool.drift is None:  # the same answer as without times
             np.testing.assert_allclose(tool.mass, constant.mass, rtol=1e-12)
             if not reported:  # the first seed that kept the constant bias: its report shows the held-out table
-                report = identification_report(R, W, tool, times=t)
+                report = identification_summary(R, W, tool, times=t)
                 assert report["drift_model"] == "constant" and report["drift_rate"] is None
                 assert report["selection"][0]["model"] == "constant" and report["selection"][0]["status"] == "chosen"
                 np.testing.assert_allclose(report["residual"]["constant_bias"]["force_N"],

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from ftcal.models._search import DEFAULT_SEARCH_SPACES
+from ftcal.compose._search import DEFAULT_SEARCH_SPACES
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,4 +1,4 @@
-"""End to end (issue 4): virtual experiment -> logs on disk -> dataset -> fitted calibrators."""
+"""End to end: virtual experiment -> logs on disk -> dataset -> fitted calibrators."""
 
 from __future__ import annotations
 
@@ -88,7 +88,7 @@ def test_tiny_directional_fit_runs_on_the_dataset(experiment):
 
 def test_benchmark_library_side_scores_both_splits_and_plots(tmp_path):
     from ftcal import run_real_world_benchmark
-    from ftcal.models import STOCK_BASELINE_NAMES
+    from ftcal.calibrators import STOCK_BASELINE_NAMES
 
     res = run_real_world_benchmark(models=("linear",), subdivisions=0, log_dir=tmp_path / "logs",
                                    plot_path=tmp_path / "fig6.png")

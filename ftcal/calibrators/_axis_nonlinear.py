@@ -1,4 +1,4 @@
-"""The axis-nonlinear calibrator: the hybrid of the linear and the directional model (issue 6)."""
+"""The axis-nonlinear calibrator: the hybrid of the linear and the directional model."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, Options, StrOptions
 
 from ._base import BaseCalibrator, GroupsFit, declare
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import calibration_folds, grouped_subsample, simplest_within_one_se
+from ..model_selection._selection import calibration_folds, grouped_subsample, simplest_within_one_se
 from ._linear import affine_fit
 from ._ridge import ridge_least_squares
 from ..core._wrench import scale_torques, unscale_torques
@@ -51,7 +51,7 @@ def one_standard_error_choice(errors: NDArray[np.float64]) -> int:
 
     ``errors[k, i]`` is candidate ``k``'s held-out error on sample ``i``;
     candidates are ordered from the most flexible to the simplest. This is
-    :func:`ftcal.core._model_selection.simplest_within_one_se` (the one rule)
+    :func:`ftcal.model_selection._selection.simplest_within_one_se` (the one rule)
     with that order as the complexity.
 
     Examples
@@ -109,7 +109,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
     (one shared multi-output fit) was tried first: 7 times the features,
     measurably more variance, worse than the LTM on the ``thesis`` preset.
 
-    Evidence (artificial benchmark, issue 6 section of
+    Evidence (artificial benchmark, "beyond the thesis" section of
     ``benchmarks/RESULTS.md``, 30 datasets per preset): on the ``thesis``,
     ``asymmetric`` and ``stress`` presets it reaches the noise floor (ratio
     1.00, 1.00, 0.94), where the LTM is 1 %, 12 % and 100 % above it and the

@@ -37,7 +37,7 @@ from sklearn.utils._param_validation import InvalidParameterError, Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import check_groups
+from ..model_selection._selection import check_groups
 from ..core._threads import limit_threads_here
 from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
                                 validate_training_data)

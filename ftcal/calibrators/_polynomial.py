@@ -1,4 +1,4 @@
-"""Polynomial calibration: polynomial features of the raw channels with a ridge penalty (issue 6)."""
+"""Polynomial calibration: polynomial features of the raw channels with a ridge penalty."""
 
 from __future__ import annotations
 
@@ -85,7 +85,7 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         penalty is multiplied by the number of samples. Tuned on the
         artificial presets (5 datasets each, degree 3): 1e-3 is best on
         ``thesis`` / ``asymmetric`` by ~1 % but 28 % worse on ``stress``;
-        1e-6 overfits (see ``benchmarks/RESULTS.md``, issue 6). Use
+        1e-6 overfits (see ``benchmarks/RESULTS.md``, "beyond the thesis"). Use
         ``ftcal tune --model polynomial`` for your data.
     group_offsets : bool, default=False
         With ``fit(X, y, groups=...)``: every group (a pose, a session, a

@@ -186,10 +186,10 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..models._auto import score_candidates
-    from ..models._baselines import STOCK_BASELINE_NAMES, StockCalibrator
-    from ..core._model_selection import simplest_within_one_se
-    from ..evaluation._plots import plot_axis_errors
+    from ..compose._auto import score_candidates
+    from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
+    from ..model_selection._selection import simplest_within_one_se
+    from ..reporting._plots import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, dataset_alpha
     from ..core._wrench import WRENCH_LABELS
@@ -250,7 +250,7 @@ def run_dataset(args: argparse.Namespace) -> int:
 
 def _dataset_table(results: dict, axes) -> str:
     from ..core._wrench import axis_unit
-    from ..models._auto import comparison_table
+    from ..compose._auto import comparison_table
 
     head = "| model | " + " | ".join(f"{a} [{axis_unit(a)}]" for a in axes) + " |"
     lines = [head, "|" + "---|" * (1 + len(axes))]
@@ -265,7 +265,7 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
-    from ..models._baselines import STOCK_BASELINE_NAMES
+    from ..calibrators._baselines import STOCK_BASELINE_NAMES
 
     baselines = not args.models if args.baselines is None else args.baselines
     return _models(args) + (STOCK_BASELINE_NAMES if baselines else ())

@@ -272,7 +272,7 @@ def fit_data_facts(args: argparse.Namespace, data) -> dict:
 def model_reading(model_path) -> tuple:
     """``(ColumnMap or None, axes or None, units confirmed)`` a model file keeps of its training data."""
     from ..core._exceptions import ModelFileError
-    from ..models._model_io import model_data
+    from ..persistence._model_io import model_data
 
     try:
         facts = model_data(model_path)

@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..evaluation._demo import demo_files, run_demo
+    from ..benchmark._demo import demo_files, run_demo
 
     console = Console(args.quiet)
     OutputPlan(args.out, demo_files(), args.force)  # refuse before any work

@@ -13,7 +13,7 @@ import numpy as np
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, write_json
 from ._data_options import add_dataset_options, load_dataset_for_models
 from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
-from ..evaluation._report import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
+from ..reporting._evaluation import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
 examples:
@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
             if predictions[label].shape != data.wrench.shape:
                 raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "
                                f"{data.n_axes} ({', '.join(data.axes)}); give the dataset of that sensor")
-            reports[label] = ftcal.calibration_report(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
+            reports[label] = ftcal.calibration_metrics(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
             bar.update(1)
     table = comparison_table(reports, noise_floor)
     axes = axis_table(reports)
@@ -112,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
 def training_data_of(dataset, model_paths) -> list[str]:
     """Labels of the models whose ``NAME.fit.json`` (beside the model file) says they were fitted on ``dataset``."""
     from ..core._files import same_file
-    from ..evaluation._calibration_report import file_sha256
+    from ..reporting._calibration_report import file_sha256
 
     found, digest = [], None
     for path in model_paths:

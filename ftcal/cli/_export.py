@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
 def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
     import json
 
-    from ..models._matrix import matrix_export_dict
+    from ..persistence._matrix import matrix_export_dict
     from ._data_options import model_reading
 
     stored, axes, _ = model_reading(model_path)  # the axes and channel names the model was fitted with

@@ -103,15 +103,15 @@ def _parse_tare(text: str | None) -> np.ndarray | None:
 
 def _check_before_saving(estimator, X, y, groups, args, predictions, console: Console) -> None:
     """Refuse (one line, nothing written) a fitted calibration whose held-out predictions are degenerate:
-    constant, all zero, or no better than the mean wrench (:func:`~ftcal.models._auto.check_calibration`).
+    constant, all zero, or no better than the mean wrench (:func:`~ftcal.compose._auto.check_calibration`).
 
     ``predictions`` are the report's held-out predictions (``--report``); without them the held-out check
     cross-validates the model here when its fits are light (closed form or kernel: ``cost`` tag); a network or a
     model of unknown cost is checked on its training predictions only (a held-out check would train it ``cv``
     times more: ``--report`` gives it)."""
     from ..calibrators._base import calibration_tags
-    from ..core._model_selection import DegenerateCalibrationError
-    from ..models._auto import check_calibration
+    from ..model_selection._selection import DegenerateCalibrationError
+    from ..compose._auto import check_calibration
 
     y = np.asarray(y, dtype=float)
     held_out = True
@@ -148,13 +148,13 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators._base import calibration_tags
-    from ftcal.calibrators._routing import requests_groups
+    from ftcal.compose._routing import requests_groups
 
     console = Console(args.quiet)
     name = args.name or args.model
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
-    from ..evaluation._calibration_report import file_sha256
+    from ..reporting._calibration_report import file_sha256
     from ._output_set import OutputSet
     from ._report import prepare_report, report_file_names, write_report
 
@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
     # Tx, Ty as well as a 6-axis sensor's)
     fit_with_progress(estimator, X, training_targets(data), console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
-    report = ftcal.calibration_report(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
+    report = ftcal.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
         "model": args.model,
         "schedule": args.schedule,

@@ -192,7 +192,7 @@ def run(args: argparse.Namespace) -> int:
 
 def write_plan_coverage(files: OutputPlan, plan, title: str) -> None:
     """``coverage.png``: the plan's reachable and unreachable gravity directions on the sphere."""
-    from ..evaluation import _plots
+    from ..reporting import _plots
 
     directions = np.vstack([plan.gravity_in_sensor, plan.unreachable])
     reached = np.r_[np.ones(plan.n_poses, bool), np.zeros(len(plan.unreachable), bool)]

@@ -161,7 +161,7 @@ def _is_model_file(path: Path) -> bool:
     """Whether ``path`` is an ftcal model file (a zip holding the model's ``__metadata__``)."""
     import zipfile
 
-    from ..models._model_io import _META_KEY
+    from ..persistence._model_io import _META_KEY
 
     try:
         with zipfile.ZipFile(path) as archive:
@@ -173,8 +173,8 @@ def _is_model_file(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from functools import partial
 
-    from ..calibrators._history import history_reach, reads_history, spread_flags
-    from ..models._auto import provides_std
+    from ..compose._history import history_reach, reads_history, spread_flags
+    from ..compose._auto import provides_std
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)

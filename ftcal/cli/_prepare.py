@@ -111,7 +111,7 @@ def log_files(items: list[str]) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ..evaluation import _plots
+    from ..reporting import _plots
 
     console = Console(args.quiet)
     name = f"dataset.{args.format}"

@@ -172,8 +172,8 @@ def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np
 
 def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     """Every check of the report's options and files, before any work: the keyword arguments of
-    :func:`~ftcal.evaluation._calibration_report.calibration_certificate` (tool, rated, spec, conditions...)."""
-    from ..evaluation._calibration_report import CONDITION_FIELDS, _axis_names, check_conditions
+    :func:`~ftcal.reporting._calibration_report.calibration_certificate` (tool, rated, spec, conditions...)."""
+    from ..reporting._calibration_report import CONDITION_FIELDS, _axis_names, check_conditions
 
     axes = _axis_names(data, data.wrench.shape[1])
     conditions_file = args.conditions
@@ -237,7 +237,7 @@ def write_report(out, label: str, model, data, args: argparse.Namespace, setting
     :class:`~ftcal.cli._output_set.OutputSet`; nothing is in place before its commit). ``check``, if given, is
     called with the report's held-out predictions (shape of ``data.wrench``) before anything is written: it may
     raise to refuse the calibration."""
-    from ..evaluation._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
+    from ..reporting._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
                                                   report_json)
 
     console.info(f"report: cross-validating {type(model).__name__}"
@@ -286,7 +286,7 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..evaluation._calibration_report import bytes_sha256, file_sha256
+    from ..reporting._calibration_report import bytes_sha256, file_sha256
     from ._models import load_model_file, model_inputs, model_label
     from ._output_set import OutputSet
 

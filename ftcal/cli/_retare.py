@@ -50,7 +50,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _kept_data(model_path) -> dict | None:
     """The data description of the model file, kept in the re-tared one (same mapping, units, axes)."""
-    from ..models._model_io import model_data
+    from ..persistence._model_io import model_data
 
     return model_data(model_path) or None
 

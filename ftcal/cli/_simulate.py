@@ -102,7 +102,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..evaluation import _plots
+    from ..reporting import _plots
 
     console = Console(args.quiet)
     files = _dataset_files(args.n_datasets, args.format)

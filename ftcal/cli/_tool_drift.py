@@ -49,7 +49,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     or temperature). Library errors name the inputs."""
     import ftcal
     from ..core._exceptions import CalibrationInputError
-    from ..experiment._drift import identification_report
+    from ..experiment._drift import identification_summary
     from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
@@ -62,7 +62,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
                                         time_unit=unit, **settings)
         report = None
         if times is not None or temperatures is not None:
-            report = identification_report(rotations, wrenches, tool, times=times, temperatures=temperatures,
+            report = identification_summary(rotations, wrenches, tool, times=times, temperatures=temperatures,
                                            **settings)
     except CalibrationInputError as exc:
         raise CliError(f"{', '.join(sources[:3])}: {cli_message(exc, args)}") from None
@@ -75,7 +75,7 @@ def report_names(stem: str) -> list[str]:
 
 
 def write_report(plan: OutputPlan, stem: str, report: dict) -> None:
-    from ..evaluation._drift_plot import plot_drift_residuals
+    from ..reporting._drift_plot import plot_drift_residuals
     from ._common import write_json
 
     json_name, png_name = report_names(stem)

@@ -42,7 +42,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--grid", action="append", default=[], metavar="KEY=VALUES",
         help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
-        "default: the model's documented search space, ftcal.models._search.DEFAULT_SEARCH_SPACES)",
+        "default: the model's documented search space, ftcal.compose._search.DEFAULT_SEARCH_SPACES)",
     )
     p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
     add_fold_options(p.add_argument_group("cross-validation"), cv_default=3)
@@ -78,7 +78,7 @@ def check_distribution(entry: str, randomized: bool) -> None:
     ...
     ftcal.cli._common.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
     """
-    from ..models._search import _DISTRIBUTIONS, _bounds
+    from ..compose._search import _DISTRIBUTIONS, _bounds
 
     _, _, values = entry.partition("=")
     match = _DISTRIBUTION.match(values)
@@ -101,7 +101,7 @@ def check_distribution(entry: str, randomized: bool) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..models._search import parse_search_space, search_calibrator, search_summary
+    from ..compose._search import parse_search_space, search_calibrator, search_summary
     import ftcal
 
     console = Console(args.quiet)

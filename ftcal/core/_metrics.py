@@ -31,8 +31,8 @@ __all__ = [
     "per_sample_rmse",
     "axis_rmse",
     "relative_errors",
-    "CalibrationReport",
-    "calibration_report",
+    "CalibrationMetrics",
+    "calibration_metrics",
     "neg_scaled_rmse",
     "mean_std",
 ]
@@ -185,7 +185,7 @@ def relative_errors(
 
 
 @dataclass(frozen=True)
-class CalibrationReport:
+class CalibrationMetrics:
     """Summary of a calibrator's errors on one test set.
 
     Attributes
@@ -219,7 +219,7 @@ class CalibrationReport:
     axes: tuple = WRENCH_LABELS
 
     def to_dict(self) -> dict:
-        """Plain-JSON form of the report."""
+        """Plain-JSON form of the metrics."""
         return asdict(self)
 
 
@@ -246,15 +246,15 @@ def mean_std(values: ArrayLike, *, ddof: int) -> dict:
     return {"mean": float(v.mean()), "std": std, "n": int(v.size)}
 
 
-def calibration_report(
+def calibration_metrics(
     y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, min_norm: float = 1e-3, axes=None
-) -> CalibrationReport:
-    """Every metric of section IV-C for one prediction, as a :class:`CalibrationReport`, over the axes that exist
+) -> CalibrationMetrics:
+    """Every metric of section IV-C for one prediction, as a :class:`CalibrationMetrics`, over the axes that exist
     (``axes``, default Fx..Tz for six columns: a 3-axis load cell has no torque scaling and no torque ratios).
 
     Examples
     --------
-    >>> r = calibration_report([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
+    >>> r = calibration_metrics([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
     >>> round(r.rmse, 4), r.rel_force_mean, r.axis_rmse["Fx"]
     (0.4082, 0.1, 1.0)
     """
@@ -265,7 +265,7 @@ def calibration_report(
     ps = per_sample_rmse(t, p, alpha, scaled_axes)
     f, tq = relative_errors(t, p, min_norm, scaled_axes)
     force, torque, per_sample = mean_std(f, ddof=0), mean_std(tq, ddof=0), mean_std(ps, ddof=0)
-    return CalibrationReport(
+    return CalibrationMetrics(
         rmse=wrench_rmse(t, p, alpha, scaled_axes),
         rmse_per_sample_mean=per_sample["mean"],
         rmse_per_sample_std=per_sample["std"],

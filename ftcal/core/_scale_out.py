@@ -1,4 +1,4 @@
-"""Scale-out on an existing engine: run joblib's parallel work on a Dask cluster (issue 13).
+"""Scale-out on an existing engine: run joblib's parallel work on a Dask cluster.
 
 The artificial benchmark (:func:`ftcal.run_artificial_benchmark`) and the searches
 (:func:`ftcal.search_calibrator`, ``ftcal tune``) distribute their fits with joblib.

@@ -1,4 +1,4 @@
-"""Temperature: simulated thermal drift of a sensor, and its compensation (issue 15).
+"""Temperature: simulated thermal drift of a sensor, and its compensation.
 
 Strain gauges drift with temperature in two ways, both specified per channel
 in load-cell and F/T sensor data sheets:
@@ -15,7 +15,7 @@ Over a 20 °C range that is a zero shift of up to 1 % of full scale, i.e. the
     raw_c(T) = raw_c(T0) · (1 + g_c ΔT) + o_c ΔT
 
 :class:`ThermalDrift` simulates it; :class:`~ftcal.TemperatureCompensatedCalibrator`
-(:mod:`ftcal.calibrators._temperature_compensation`) learns ``g`` and ``o`` from calibration data recorded over a temperature
+(:mod:`ftcal.compose._temperature_compensation`) learns ``g`` and ``o`` from calibration data recorded over a temperature
 range (the iCub approach: per-axis temperature coefficients) and undoes them
 before any calibrator sees the readings.
 

@@ -1,6 +1,24 @@
 """The robot-held experiment and in-situ use: pairing load / no-load runs into a calibration dataset
-(R_delta, reference wrenches), the virtual experiment that writes such runs, and the identification of
-a tool's load for gravity compensation, and which poses to measure next (:func:`ftcal.propose_next_poses`).
+(R_delta, reference wrenches), the virtual experiment that writes such runs (and its continuous
+recordings), still poses found in a continuous recording, the identification of a tool's load and its bias
+drift for gravity compensation, and which poses to measure next.
 
-Imports :mod:`ftcal.core`, :mod:`ftcal.io`, :mod:`ftcal.robot` and :mod:`ftcal.simulation`.
+Layer: above :mod:`ftcal.robot` and :mod:`ftcal.simulation`. Imports :mod:`ftcal.core`,
+:mod:`ftcal.model_selection` (the drift's choice by held-out error), :mod:`ftcal.io`, :mod:`ftcal.robot` and
+:mod:`ftcal.simulation`.
 """
+
+from ..core._lazy import lazy_namespace
+
+#: Public names of this package -> the private module holding each.
+_PUBLIC = dict(
+    prepare_dataset="_experiment", pair_runs="_experiment", PairedRuns="_experiment", NoLoadModel="_experiment",
+    fit_no_load_model="_experiment", rotation_delta="_experiment",
+    simulate_experiment="_virtual_experiment", MountingDevice="_virtual_experiment",
+    StillPoses="_still_poses", find_still_poses="_still_poses",
+    ToolLoad="_tool_load", identify_tool_load="_tool_load", wrench_in_sensor_frame="_tool_load",
+    tool_gravity_compensation_yaml="_tool_load", BiasDrift="_drift", DriftExtrapolationWarning="_drift",
+    identification_summary="_drift", propose_next_poses="_next_poses", PoseProposal="_next_poses",
+)
+__all__ = list(_PUBLIC)
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

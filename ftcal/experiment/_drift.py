@@ -23,7 +23,7 @@ error, never by the fit: leave-poses-out cross-validation over the candidates
 in temperature when temperatures are given), each pose's held-out error the
 sum of its force and torque squared errors, each in units of the constant
 bias' held-out mean, and ftcal's one-standard-error rule
-(:func:`ftcal.core._model_selection.simplest_within_one_se`): the fewest drift
+(:func:`ftcal.model_selection._selection.simplest_within_one_se`): the fewest drift
 parameters whose error is within one paired standard error of the best. With
 few poses a flexible drift overfits; its held-out error shows it and the rule
 keeps the simpler one.
@@ -451,7 +451,7 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
 
     ``groups`` labels the rows of one pose (several samples of a static pose): they are held out together and
     count as one unit of the standard error; ``None``: every row is a pose."""
-    from ..core._model_selection import calibration_folds, check_groups, simplest_within_one_se
+    from ..model_selection._selection import calibration_folds, check_groups, simplest_within_one_se
 
     candidates = drift_candidates(len(W), times, temperatures, choice)
     values = {k: v for k, v in (("time", times), ("temperature", temperatures)) if v is not None}
@@ -580,7 +580,7 @@ def tool_onnx_model(tool):
 MAX_REPORT_POSES = 100_000
 
 
-def identification_report(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool, *, times: ArrayLike | None = None,
+def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool, *, times: ArrayLike | None = None,
                           temperatures: ArrayLike | None = None, drift: str = "auto", cv: int = 20,
                           random_state: int | None = 0, groups: ArrayLike | None = None) -> dict:
     """The report of an in-situ identification: each pose's residual against time (or temperature) with the
@@ -597,7 +597,7 @@ def identification_report(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool
     >>> W = ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).gravity_wrench(R)
     >>> W[:, 0] += 0.5 * t / 3600.0 + np.random.default_rng(0).normal(0, 0.01, 30)   # 0.5 N/h in Fx
     >>> tool = identify_tool_load(R, W, times=t)
-    >>> report = identification_report(R, W, tool, times=t)
+    >>> report = identification_summary(R, W, tool, times=t)
     >>> report["drift_model"], round(report["drift_rate"]["force"][0], 1), report["drift_rate"]["unit_force"]
     ('linear in time', 0.5, 'N/h')
     """

@@ -1,4 +1,4 @@
-"""Tool load identification and gravity compensation (issue 15).
+"""Tool load identification and gravity compensation.
 
 A sensor on a robot carries a tool (gripper, probe, mounting plate): its
 weight shows in every reading and changes with the orientation. With the

@@ -1,5 +1,17 @@
-"""Files of calibration data: the calibration dataset (:class:`~ftcal.CalibrationDataset`, CSV/NPZ)
-and the recorded run logs of a robot-held experiment (:class:`~ftcal.RunLog`).
+"""Files of calibration data: the calibration dataset (:class:`CalibrationDataset`: CSV, NPZ, MAT), column
+mappings and declared units (:class:`ColumnMap`), the recorded run logs of a robot-held experiment
+(:class:`RunLog`), pose files (orientation + wrench per row) and ROS bags.
 
-Imports only :mod:`ftcal.core`.
+Layer: above :mod:`ftcal.core`. Imports only :mod:`ftcal.core`.
 """
+
+from ..core._lazy import lazy_namespace
+
+#: Public names of this package -> the private module holding each.
+_PUBLIC = dict(
+    CalibrationDataset="_dataset", ColumnMap="_readers", RunLog="_logs", read_run_log="_logs",
+    write_run_log="_logs", PoseRecording="_poses", read_pose_file="_poses", BagRecording="_bags",
+    read_bag="_bags", write_bag="_bags", FORCE_UNITS="_readers", TORQUE_UNITS="_readers",
+)
+__all__ = list(_PUBLIC)
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -1,17 +1,17 @@
-"""What knows every calibrator: the registry of names (``make_calibrator``), model files
-(``save_model`` / ``load_model``), ONNX export, seed ensembles, the automatic cross-validated choice
-(``AutoCalibrator``) and the hyperparameter search.
+"""Deprecated alias of :mod:`ftcal.compose`, :mod:`ftcal.calibrators` and :mod:`ftcal.persistence` (the
+registry, ``auto``, the search and ensembles moved to :mod:`ftcal.compose`; the stock baselines to
+:mod:`ftcal.calibrators`; model files, ONNX and the matrix export to :mod:`ftcal.persistence`).
 
-Imports :mod:`ftcal.core`, :mod:`ftcal.calibrators` and :mod:`ftcal.neural_network`. A new calibrator is one
-module (its fitted state declared next to its class: ``_fitted_state``, with bounds, and for state it encodes
-itself ``_encoded_state`` and its hooks) and one line in ``_registry.py``; ``_model_io.py`` needs no edit.
+Each old public name still answers, with a :class:`FutureWarning`, for one release. Layer: none of its own;
+it imports nothing at import time.
 """
 
 from ..core._lazy import lazy_namespace
 
-#: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
-_PUBLIC = dict(search_summary="_search", DEFAULT_SEARCH_SPACES="_search", stock_baselines="_baselines",
-               STOCK_BASELINE_NAMES="_baselines", SubsampledRegressor="_baselines", default_candidates="_auto",
-               check_calibration="_auto")
-__all__ = list(_PUBLIC)
-__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
+__all__: list[str] = []
+__getattr__, __dir__ = lazy_namespace(__name__, {}, moved=dict(
+    search_summary="ftcal.compose.search_summary", DEFAULT_SEARCH_SPACES="ftcal.compose.DEFAULT_SEARCH_SPACES",
+    default_candidates="ftcal.compose.default_candidates", stock_baselines="ftcal.calibrators.stock_baselines",
+    STOCK_BASELINE_NAMES="ftcal.calibrators.STOCK_BASELINE_NAMES",
+    SubsampledRegressor="ftcal.calibrators.SubsampledRegressor", check_calibration="ftcal.compose.check_calibration",
+))

@@ -1,15 +1,14 @@
-"""The network calibrators (torch, trained through skorch's loop in one engine for K >= 1 nets; numpy inference).
+"""Deprecated alias of :mod:`ftcal.networks` (the network calibrators moved there).
 
-Imports :mod:`ftcal.core` and :mod:`ftcal.calibrators` (the base class); nothing above.
+Each old public name still answers, with a :class:`FutureWarning`, for one release. Layer: none of its own;
+it imports nothing at import time.
 """
 
 from ..core._lazy import lazy_namespace
 
-#: Public names of this package (beyond those of ``ftcal`` itself) -> the private module holding each.
-_PUBLIC = dict(
-    DirectionalNet="_modules", ComparativeNet="_modules", WeightedSquaredError="_modules",
-    StackedMLP="_modules", fit_stacked="_stacked", NetworkCalibrator="_base",
-    NetworkRegressor="_engine", RestoreBestWeights="_schedule",
-)
-__all__ = list(_PUBLIC)
-__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
+__all__: list[str] = []
+__getattr__, __dir__ = lazy_namespace(__name__, {}, moved={
+    name: f"ftcal.networks.{name}" for name in (
+        "DirectionalNet", "ComparativeNet", "WeightedSquaredError", "StackedMLP", "fit_stacked",
+        "NetworkCalibrator", "NetworkRegressor", "RestoreBestWeights")
+})

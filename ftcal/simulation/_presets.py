@@ -28,11 +28,11 @@
     axes (the mechanism of II-A-d, ``1 ± a/2``), and test loads drawn from
     the ``"ball"`` distribution (force uniform in the 2000 N ball, torque
     independently uniform in the 40 N·m ball) by default. The thesis gives
-    neither number. This is the one setting found (issue 20) that gives the
+    neither number. This is the one setting found (the crossover study, ``benchmarks/crossover.py``) that gives the
     thesis' Table II-III figures *and* ordering with ftcal's generator and
     calibrators: the LTM at 65.0 ± 2.9 N over 30 datasets (relative errors
     0.069 / 0.069; thesis 62.3 N, 0.070 / 0.062) and, on one dataset with the
-    short schedule (issue 20), the directional DNN (13.2 N) below the
+    short schedule (``benchmarks/crossover.py``), the directional DNN (13.2 N) below the
     comparative one (15.4 N), both far below the LTM. Evidence: more eq. 14
     nonlinearity (``stress``) favours the direct-mapping network, not the
     directional one; more noise favours no model; none of 16 readings of

@@ -1,4 +1,4 @@
-"""Writes the version-1 model files of tests/data/model_files_v1 with ftcal before issue 21 (main at bf1836f)."""
+"""Writes the version-1 model files of tests/data/model_files_v1 with ftcal before the one training engine (main at bf1836f)."""
 import sys
 import numpy as np
 import ftcal

@@ -39,8 +39,8 @@ from sklearn.model_selection import LeaveOneGroupOut, ShuffleSplit
 from ..io._dataset import CalibrationDataset
 from ..experiment._experiment import prepare_dataset
 from ..core._metrics import mean_std, per_sample_rmse, relative_errors, wrench_rmse
-from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
-from ..models._registry import make_calibrator, training_schedule
+from ..calibrators._baselines import STOCK_BASELINE_NAMES, stock_baselines
+from ..compose._registry import make_calibrator, training_schedule
 from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
 from ..core._wrench import alpha_from_wrenches
@@ -107,7 +107,7 @@ def _plot(results: dict, path: Path) -> Path:
 
     splits = list(results["splits"])
     fig, axes = plt.subplots(1, len(splits), figsize=(6 * len(splits), 4), squeeze=False)
-    from ._plots import model_color
+    from ..reporting._plots import model_color
     for ax, split in zip(axes[0], splits):
         per_model = results["splits"][split]
         top = max(max(r["per_sample_rmse"]) for r in per_model.values())
@@ -151,7 +151,7 @@ def run_real_world_benchmark(
     models : sequence of str
         Registry names (:data:`ftcal.CALIBRATOR_NAMES`).
     baselines : bool, default=True
-        Also score the stock scikit-learn baselines (:data:`ftcal.models.STOCK_BASELINE_NAMES`) on the same
+        Also score the stock scikit-learn baselines (:data:`ftcal.calibrators.STOCK_BASELINE_NAMES`) on the same
         splits: what every table compares ftcal with.
     splits : sequence of str
         Any of :data:`SPLIT_NAMES`.

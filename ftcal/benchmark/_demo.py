@@ -25,7 +25,7 @@ import numpy as np
 
 from ..io._dataset import CalibrationDataset
 from ..core._exceptions import FtcalError
-from ..core._metrics import CalibrationReport, calibration_report
+from ..core._metrics import CalibrationMetrics, calibration_metrics
 
 __all__ = ["DEMO_MODELS", "DemoResult", "demo_files", "run_demo"]
 
@@ -53,7 +53,7 @@ class DemoResult:
     predictions : dict
         Name -> predicted test wrenches (n_test, 6) [N, N·m].
     reports : dict
-        Name -> :class:`~ftcal.CalibrationReport` on the test set.
+        Name -> :class:`~ftcal.CalibrationMetrics` on the test set.
     fit_seconds : dict
         Name -> training wall time [s].
     table : str
@@ -67,7 +67,7 @@ class DemoResult:
     info: dict
     models: dict = field(default_factory=dict)
     predictions: dict = field(default_factory=dict)
-    reports: dict[str, CalibrationReport] = field(default_factory=dict)
+    reports: dict[str, CalibrationMetrics] = field(default_factory=dict)
     fit_seconds: dict = field(default_factory=dict)
     table: str = ""
     files: list[Path] = field(default_factory=list)
@@ -76,7 +76,7 @@ class DemoResult:
 def demo_files(models: tuple[str, ...] = DEMO_MODELS) -> list[str]:
     """Names (relative to the output directory) of every file :func:`run_demo` writes."""
     from ..core._files import model_file_name
-    from ._report import EVALUATION_PLOTS, predicted_plot_name
+    from ..reporting._evaluation import EVALUATION_PLOTS, predicted_plot_name
 
     return (
         ["train.csv", "test.csv", "coverage.png", "metrics.json", "metrics.md"]
@@ -136,7 +136,7 @@ def run_demo(
     """
     import ftcal
 
-    from ._report import comparison_table
+    from ..reporting._evaluation import comparison_table
 
     fit = fit or _plain_fit
     log = log or (lambda message: None)
@@ -161,7 +161,7 @@ def run_demo(
         result.models[name] = fit(estimator, train.raw, train.wrench, name)
         result.fit_seconds[name] = time.perf_counter() - start
         result.predictions[name] = np.asarray(estimator.predict(test.raw), dtype=float)
-        result.reports[name] = calibration_report(test.wrench, result.predictions[name], alpha=alpha)
+        result.reports[name] = calibration_metrics(test.wrench, result.predictions[name], alpha=alpha)
         log(f"{name}: fitted in {result.fit_seconds[name]:.1f} s, test RMSE {result.reports[name].rmse:.3g} N")
     result.table = comparison_table(result.reports, info["noise_floor"])
     if out is not None:
@@ -172,10 +172,10 @@ def run_demo(
 def _write(out: Path, result: DemoResult, alpha: float) -> list[Path]:
     import ftcal
 
-    from . import _plots
+    from ..reporting import _plots
     from ..core._files import write_json
     from ..core._files import model_file_name
-    from ._report import axis_table, predicted_plot_name, write_evaluation_plots, EVALUATION_PLOTS
+    from ..reporting._evaluation import axis_table, predicted_plot_name, write_evaluation_plots, EVALUATION_PLOTS
 
     (out / "models").mkdir(parents=True, exist_ok=True)
     result.train.save(out / "train.csv", overwrite=True)  # the caller (ftcal demo) checked --force

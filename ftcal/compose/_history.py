@@ -1,4 +1,4 @@
-"""A first-order load-history term behind any calibrator, for sensors with creep or hysteresis (issue 19).
+"""A first-order load-history term behind any calibrator, for sensors with creep or hysteresis.
 
 A soft or viscoelastic sensor reads the same load differently on the way up
 and on the way down: part of each reading follows the load with a lag. No
@@ -27,12 +27,12 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..core._exceptions import NO_SETTING, CalibrationInputError, TooFewSamplesError
 from ..core._memory import check_allocation
-from ..core._model_selection import calibration_folds, simplest_within_one_se
+from ..model_selection._selection import calibration_folds, simplest_within_one_se
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques
-from ._base import BaseCalibrator, GroupsFit, calibration_tags, declare, with_settings
-from ._linear import LinearCalibrator
-from ._ridge import ridge_least_squares
+from ..calibrators._base import BaseCalibrator, GroupsFit, calibration_tags, declare, with_settings
+from ..calibrators._linear import LinearCalibrator
+from ..calibrators._ridge import ridge_least_squares
 from ._routing import requests_groups, routed_fit_params, wrapper_routing
 
 __all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_history_inside", "spread_flags"]
@@ -212,7 +212,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
 
     Cross-validation (contiguous blocks of rows, or whole ``groups`` held
     out) scores the estimator alone and each time constant of ``taus``;
-    ftcal's one-SE rule (:func:`~ftcal.core._model_selection.simplest_within_one_se`)
+    ftcal's one-SE rule (:func:`~ftcal.model_selection._selection.simplest_within_one_se`)
     keeps a history term only when it beats the estimator alone by more than
     one standard error (among the time constants within it, the shortest):
     on shuffled rows, and usually on a sensor without memory, the result is
@@ -321,7 +321,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         return LinearCalibrator() if self.estimator is None else self.estimator
 
     def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
+        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.compose._routing`)."""
         return wrapper_routing(self, self._inner())
 
     def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:

@@ -1,4 +1,4 @@
-"""Cross-validation that respects how calibration data are collected (issue 12).
+"""Cross-validation that respects how calibration data are collected.
 
 Calibration data come in groups: the rows of one robot pose, one load
 configuration or one recording session share their error sources (the pose's
@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.model_selection import GroupKFold, KFold
 
-from ._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
            "paired_excess", "mean_and_se", "se_units_name",
@@ -452,7 +452,7 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
     >>> degenerate_reason(y, y + 0.1) is None
     True
     """
-    from ._wrench import scale_torques
+    from ..core._wrench import scale_torques
 
     y = np.asarray(y, dtype=float).reshape(len(y), -1)
     pred = np.asarray(predictions, dtype=float).reshape(len(y), -1)
@@ -486,7 +486,7 @@ def check_not_degenerate(y: ArrayLike, predictions: ArrayLike, *, what: str, alp
     >>> check_not_degenerate([[1.0], [2.0]], [[0.0], [0.0]], what="the LTM")
     Traceback (most recent call last):
     ...
-    ftcal.core._model_selection.DegenerateCalibrationError: refusing the LTM: it predicts 0 for every reading on the readings it did not see; nothing was saved. Fix: record loads on every axis (each axis loaded in more than one group), or choose another model.
+    ftcal.model_selection._selection.DegenerateCalibrationError: refusing the LTM: it predicts 0 for every reading on the readings it did not see; nothing was saved. Fix: record loads on every axis (each axis loaded in more than one group), or choose another model.
     """
     reason = degenerate_reason(y, predictions, alpha=alpha, axes=axes)
     if reason is None:

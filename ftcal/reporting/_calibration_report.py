@@ -51,11 +51,11 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
 from ..calibrators._base import calibration_tags
-from ..calibrators._history import reads_history
-from ..core._model_selection import calibration_folds, held_out_predictions, rmse_and_se
+from ..compose._history import reads_history
+from ..model_selection._selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
-from ..models._auto import LIGHT_KERNEL_ROWS, provides_std, training_data_sha256
+from ..compose._auto import LIGHT_KERNEL_ROWS, provides_std, training_data_sha256
 
 __all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json",
            "report_cases_csv", "file_sha256", "bytes_sha256", "axis_units", "CONDITION_FIELDS", "COVERAGE_FACTOR",
@@ -147,7 +147,7 @@ def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
 def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
               max_rows: int | None = None, seed: int = 0, n_jobs: int | None = None) -> dict:
     """Out-of-fold predictions (and std where the model gives one in every fold) on ``folds``, from ftcal's one
-    held-out engine (:func:`~ftcal.core._model_selection.held_out_predictions`): ``groups`` reach the model through
+    held-out engine (:func:`~ftcal.model_selection._selection.held_out_predictions`): ``groups`` reach the model through
     its metadata routing; each training fold capped at ``max_rows`` rows; the test folds predicted in blocks (one
     stream for a model that reads the load history); the fits' BLAS on one thread where no other thread sees it."""
     from ..core._threads import limit_threads_here
@@ -165,20 +165,20 @@ def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, fol
 def baseline_cost(name: str, estimator: Any, n_train: int, n_features: int, n_outputs: int,
                   n_folds: int) -> tuple[float, float, int]:
     """``(bytes of its largest allocation, floating-point operations over all folds, rows fitted per fold)`` of a
-    stock baseline (:func:`ftcal.models.stock_baselines`) on training folds of ``n_train`` rows.
+    stock baseline (:func:`ftcal.calibrators.stock_baselines`) on training folds of ``n_train`` rows.
 
     Estimates, from the shapes alone, of what the fit would allocate and compute (polynomial features and the
     ridge's decomposition; the kernel models' kernel matrices, grid search and likelihood gradients).
 
     Examples
     --------
-    >>> from ftcal.models import stock_baselines
+    >>> from ftcal.calibrators import stock_baselines
     >>> b = stock_baselines(500)
     >>> bytes_, flops, rows = baseline_cost("sk_poly3", b["sk_poly3"], 960, 500, 6, 5)
     >>> bytes_ > 100 * 2**30
     True
     """
-    from ..models._baselines import SubsampledRegressor
+    from ..calibrators._baselines import SubsampledRegressor
 
     if isinstance(estimator, SubsampledRegressor):
         m = n_train if estimator.max_samples is None else min(n_train, int(estimator.max_samples))
@@ -452,7 +452,7 @@ def calibration_certificate(
         Folds: whole groups held out when the dataset has groups, else shuffled rows (contiguous blocks for a
         load-history model, which reads its rows in time order).
     baselines : bool
-        Also cross-validate :func:`ftcal.models.stock_baselines` on the same folds (each within ftcal's memory
+        Also cross-validate :func:`ftcal.calibrators.stock_baselines` on the same folds (each within ftcal's memory
         limit and :data:`BASELINE_WORK_BUDGET`, else listed as skipped with the reason).
     rated : array-like of shape (k,), optional
         Rated capacity per axis [N, N·m]: the full scale of every % FS figure. Default the largest absolute
@@ -492,7 +492,7 @@ def calibration_certificate(
     from sklearn.base import clone
 
     import ftcal
-    from ..models._baselines import stock_baselines
+    from ..calibrators._baselines import stock_baselines
 
     X = model_inputs(model, dataset)
     y = np.asarray(dataset.wrench, dtype=float)
@@ -691,7 +691,7 @@ def _cases_json(cases: dict, names: list[str], k: int) -> dict:
 def _matrix(model: Any, names: list[str], units: list[str], n_inputs: int) -> dict | None:
     """The calibration matrix of a model whose prediction is affine in the readings, else None."""
     from ..core._exceptions import ExportError
-    from ..models._matrix import linear_calibration_matrix
+    from ..persistence._matrix import linear_calibration_matrix
 
     try:
         matrix, offset = linear_calibration_matrix(model)
@@ -981,7 +981,7 @@ def render_report_html(report: dict) -> str:
 
     # model choice
     parts.append("<section id=\"choice\"><h2>Model choice (same folds)</h2><p class=\"note\">This calibration beside "
-                 "the stock scikit-learn models a user would try first (<code>ftcal.models.stock_baselines</code>). "
+                 "the stock scikit-learn models a user would try first (<code>ftcal.calibrators.stock_baselines</code>). "
                  "Held-out RMSE of the torque-scaled wrench [N], ± its standard error over groups. A baseline over "
                  "ftcal's memory limit or the report's work budget is skipped, with the reason.</p>"
                  f"<p>{_fmt(report.get('comparison', {}).get('sentence'))}</p>")

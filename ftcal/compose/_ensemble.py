@@ -1,4 +1,4 @@
-"""Seed ensembles of calibrators: lower across-dataset variance of the network models (issue 6)."""
+"""Seed ensembles of calibrators: lower across-dataset variance of the network models."""
 
 from __future__ import annotations
 
@@ -13,12 +13,12 @@ from sklearn.base import clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval
 
-from ..calibrators._history import refuse_history_inside
+from ._history import refuse_history_inside
 from ..calibrators._base import BaseCalibrator, calibration_tags, declare
-from ..calibrators._routing import routed_fit_params, wrapper_routing
-from ..neural_network._directional import DirectionalCalibrator
+from ._routing import routed_fit_params, wrapper_routing
+from ..networks._directional import DirectionalCalibrator
 from ..core._exceptions import CalibrationInputError
-from ..neural_network._stacked import fit_stacked
+from ..networks._stacked import fit_stacked
 from ..core._validation import validate_training_data
 
 __all__ = ["EnsembleCalibrator", "ensemble_factory"]
@@ -126,7 +126,7 @@ class EnsembleCalibrator(BaseCalibrator):
                        uses_groups=member.uses_groups)
 
     def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.calibrators._routing`)."""
+        """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.compose._routing`)."""
         return wrapper_routing(self, self._template())
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):

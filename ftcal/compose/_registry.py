@@ -251,9 +251,9 @@ _NETWORK_SPACE = {
 _ENSEMBLE_SPACE = {f"estimator__{k}": v for k, v in _NETWORK_SPACE.items()}
 register_calibrator("linear", _Lazy("calibrators._linear", "LinearCalibrator"), candidates=[(10, "linear", {})],
                     search_space={"ridge": [0.0, 1e-6, 1e-3, 1.0]})
-register_calibrator("comparative", _Lazy("neural_network._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE,
+register_calibrator("comparative", _Lazy("networks._comparative", "ComparativeCalibrator"), schedules=_COMPARATIVE,
                     candidates=[(70, "comparative", {"random_state": 0})], search_space=_NETWORK_SPACE)
-register_calibrator("directional", _Lazy("neural_network._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL,
+register_calibrator("directional", _Lazy("networks._directional", "DirectionalCalibrator"), schedules=_DIRECTIONAL,
                     candidates=[(60, "directional", {"random_state": 0})], search_space=_NETWORK_SPACE)
 register_calibrator("polynomial", _Lazy("calibrators._polynomial", "PolynomialCalibrator"), candidates=[
     # with groups, the LTM and the mildest quadratic are each followed by a twin with one offset per group
@@ -270,21 +270,21 @@ register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "Axis
 register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"),
                     candidates=[(50, "gaussian_process", {"random_state": 0})])
 # ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
-register_calibrator("directional_ensemble", _Lazy("neural_network._directional", "DirectionalCalibrator", ensemble_of="directional"),
+register_calibrator("directional_ensemble", _Lazy("networks._directional", "DirectionalCalibrator", ensemble_of="directional"),
                     schedules=_DIRECTIONAL, search_space=_ENSEMBLE_SPACE)
-register_calibrator("comparative_ensemble", _Lazy("neural_network._comparative", "ComparativeCalibrator", ensemble_of="comparative"),
+register_calibrator("comparative_ensemble", _Lazy("networks._comparative", "ComparativeCalibrator", ensemble_of="comparative"),
                     schedules=_COMPARATIVE, search_space=_ENSEMBLE_SPACE)
 # "auto" chooses among the names above; its schedule goes to its network candidates
-register_calibrator("auto", _Lazy("models._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})
+register_calibrator("auto", _Lazy("compose._auto", "AutoCalibrator"), schedules={n: {"schedule": n} for n in SCHEDULE_NAMES})
 
 
 #: Meta-estimators that wrap registered calibrators without being registry names themselves.
 _WRAPPERS: tuple[tuple[str, str], ...] = (
-    ("models._ensemble", "EnsembleCalibrator"),
-    ("calibrators._temperature_compensation", "TemperatureCompensatedCalibrator"),
-    ("calibrators._history", "HistoryCalibrator"),
-    ("models._auto", "StackedCalibrator"),
-    ("models._baselines", "StockCalibrator"),
+    ("compose._ensemble", "EnsembleCalibrator"),
+    ("compose._temperature_compensation", "TemperatureCompensatedCalibrator"),
+    ("compose._history", "HistoryCalibrator"),
+    ("compose._auto", "StackedCalibrator"),
+    ("calibrators._baselines", "StockCalibrator"),
 )
 
 

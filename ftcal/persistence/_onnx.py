@@ -31,7 +31,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from ..calibrators._base import calibration_tags
-from ..calibrators._history import reads_history
+from ..compose._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
 from ..core._files import atomic_output
 
@@ -134,7 +134,7 @@ def _n_outputs(model) -> int:
 def _emitter(cls: type) -> Callable | None:
     """The class' own ``_emit_onnx`` if it is a registry class that declares one (never inherited: a subclass
     may compute something else)."""
-    from ._registry import model_classes
+    from ..compose._registry import model_classes
 
     if model_classes().get(cls.__name__) is not cls:
         return None
@@ -143,7 +143,7 @@ def _emitter(cls: type) -> Callable | None:
 
 def exportable_types() -> tuple[type, ...]:
     """The calibrator classes :func:`export_onnx` knows (exactly these, not their subclasses)."""
-    from ._registry import model_classes
+    from ..compose._registry import model_classes
 
     return tuple(cls for cls in model_classes().values() if _emitter(cls) is not None)
 

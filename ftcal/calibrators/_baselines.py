@@ -35,7 +35,7 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ..calibrators._base import BaseCalibrator, declare
+from ._base import BaseCalibrator, declare
 from ..core._exceptions import CalibrationInputError
 from ..core._validation import check_arguments
 

@@ -1,4 +1,4 @@
-"""Hyperparameter search for the calibrators with scikit-learn's search tools (issue 6).
+"""Hyperparameter search for the calibrators with scikit-learn's search tools.
 
 :func:`search_calibrator` runs :class:`~sklearn.model_selection.GridSearchCV`
 (every combination) or :class:`~sklearn.model_selection.RandomizedSearchCV`
@@ -37,14 +37,14 @@ from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 from ..core._files import plain_json
 from ..core._exceptions import CalibrationInputError, Placeholder
 from ..core._metrics import neg_scaled_rmse
-from ..core._model_selection import calibration_folds, routed_groups
+from ..model_selection._selection import calibration_folds, routed_groups
 from ._registry import registered_search_spaces
 
 __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "search_summary"]
 
 #: Search space of each registry model (a grid; also usable by the randomized search), as each registration
 #: declares it (:func:`~ftcal.register_calibrator`'s ``search_space``): a snapshot taken at import, see
-#: :func:`~ftcal.models._registry.registered_search_spaces` for the live one.
+#: :func:`~ftcal.compose._registry.registered_search_spaces` for the live one.
 DEFAULT_SEARCH_SPACES: dict[str, dict[str, list]] = registered_search_spaces()
 
 _DISTRIBUTIONS = {

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._metrics import CalibrationReport, per_sample_rmse
+from ..core._metrics import CalibrationMetrics, per_sample_rmse
 from ..core._wrench import WRENCH_LABELS
 
 __all__ = ["comparison_table", "axis_table", "EVALUATION_PLOTS", "predicted_plot_name", "write_evaluation_plots"]
@@ -19,13 +19,13 @@ def _pm(mean: float, std: float, scale: float = 1.0, digits: int = 3) -> str:
     return f"{mean * scale:.{digits}g} ± {std * scale:.2g}"
 
 
-def comparison_table(reports: Mapping[str, CalibrationReport], noise_floor: float | None = None) -> str:
+def comparison_table(reports: Mapping[str, CalibrationMetrics], noise_floor: float | None = None) -> str:
     """Markdown table: RMSE, per-sample RMSE, relative force / torque errors per model.
 
     Examples
     --------
-    >>> from ftcal import calibration_report
-    >>> r = calibration_report([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
+    >>> from ftcal import calibration_metrics
+    >>> r = calibration_metrics([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
     >>> print(comparison_table({"linear": r}))  # doctest: +NORMALIZE_WHITESPACE
     | model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |
     |---|---|---|---|---|
@@ -45,7 +45,7 @@ def comparison_table(reports: Mapping[str, CalibrationReport], noise_floor: floa
     return "\n".join(lines)
 
 
-def axis_table(reports: Mapping[str, CalibrationReport]) -> str:
+def axis_table(reports: Mapping[str, CalibrationMetrics]) -> str:
     """Markdown table of the RMSE per axis: forces [N], torques [N·m]."""
     axes = list(next(iter(reports.values())).axis_rmse) if reports else list(WRENCH_LABELS)  # the axes that exist
     head = " | ".join(f"{k} [{'N' if k.startswith('F') else 'N·m'}]" for k in axes)

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..calibrators._history import reads_history
+from ..compose._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError
 from ..core._wrench import axis_unit, default_axes
 

@@ -16,11 +16,11 @@ from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
 
-from ..calibrators._history import refuse_history_inside
+from ._history import refuse_history_inside
 from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
                                  resolve_alpha, with_settings)
 from ..core._exceptions import CalibrationInputError
-from ..core._model_selection import (DegenerateCalibrationError, calibration_folds, check_groups,
+from ..model_selection._selection import (DegenerateCalibrationError, calibration_folds, check_groups,
                                      degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified,
                                      paired_excess, mean_and_se, rmse_and_se, routed_groups, se_units,
                                      se_units_name, simplest_within_one_se, unseen_outputs,
@@ -68,7 +68,7 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
     and the same model without them (the LTM for ``degree=1``), listed before or after it, share the earlier of
     their two positions. Both predict with the same map and one intercept, so they are equally flexible: the offsets
     change how the map is estimated (within the groups, free of their shifts), not what it can fit, and between the
-    two the lower score decides (:func:`~ftcal.core._model_selection.simplest_within_one_se`). ``alpha`` and
+    two the lower score decides (:func:`~ftcal.model_selection._selection.simplest_within_one_se`). ``alpha`` and
     ``zero_reading`` are not compared (``auto`` shares its torque scale with every candidate, and a tare makes no
     model more flexible). Rows after the candidates (the stack, the baselines) keep their positions.
 
@@ -97,7 +97,7 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
             ranks[k] = ranks[plain] = min(ranks[k], ranks[plain])
     # a stock baseline is as simple as the first of ftcal's candidates of its family (sk_linear the LTM, sk_gp
     # the GP): between the two the lower score decides, an earlier one winning a tie
-    from ._baselines import StockCalibrator
+    from ..calibrators._baselines import StockCalibrator
 
     families = [calibration_tags(est).family for _, est in candidates]
     for k, (_, est) in enumerate(candidates):
@@ -117,7 +117,7 @@ def with_stock_candidates(candidates: list[tuple[str, BaseCalibrator]], stock: l
 
     Examples
     --------
-    >>> from ftcal.models._baselines import StockCalibrator
+    >>> from ftcal.calibrators._baselines import StockCalibrator
     >>> pairs = with_stock_candidates(default_candidates()[:3], [("sk_linear", StockCalibrator())])
     >>> [name for name, _ in pairs]
     ['linear', 'sk_linear', 'polynomial(degree=2, ridge=0.01)', 'polynomial(degree=2, ridge=0.0001)']
@@ -282,14 +282,14 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
     Networks: the K fold models are trained as one stacked fit
     (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
     training fold (the same share of every group); everything else fold by
-    fold with ftcal's held-out engine (:func:`~ftcal.core._model_selection.fold_predictions`,
+    fold with ftcal's held-out engine (:func:`~ftcal.model_selection._selection.fold_predictions`,
     on :func:`sklearn.model_selection.cross_validate`; ``groups`` when its routing
     requests them, for its own inner model choice), for any subset of the folds,
     so that the folds of one model can run in different jobs (each returns only
     its folds' rows).
     """
     if _is_network(estimator):
-        from ..neural_network._stacked import fit_stacked
+        from ..networks._stacked import fit_stacked
 
         models = [clone(estimator) for _ in folds]
         train = [grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
@@ -329,18 +329,18 @@ def score_candidates(
     candidates is scored too, its weights cross-fitted on the out-of-fold
     predictions (each fold's weights from the other folds' rows).
     ``baselines`` (name -> scikit-learn regressor, e.g.
-    :func:`ftcal.models.stock_baselines`) are scored on the same folds and
+    :func:`ftcal.calibrators.stock_baselines`) are scored on the same folds and
     never eligible. A candidate whose held-out predictions are degenerate
     (constant, all zero, no better than the mean:
-    :func:`~ftcal.core._model_selection.degenerate_reason`) is recorded as
+    :func:`~ftcal.model_selection._selection.degenerate_reason`) is recorded as
     refused, never chosen. ``folds`` (train, test) made before replace those of
     :func:`calibration_folds` (``auto``'s fallback when grouped folds cannot
     judge), with ``units`` the units of their standard errors (None: rows).
     ``axes`` names ``y``'s columns (their torques are scaled; default: Fx..Tz for six, else forces only).
     Standard errors are over the groups when the folds hold out
     groups and there are at least
-    :data:`~ftcal.core._model_selection.MIN_SE_GROUPS` of them, with fewer the
-    larger of the rows' and the groups' (:func:`~ftcal.core._model_selection.mean_and_se`), else over rows.
+    :data:`~ftcal.model_selection._selection.MIN_SE_GROUPS` of them, with fewer the
+    larger of the rows' and the groups' (:func:`~ftcal.model_selection._selection.mean_and_se`), else over rows.
     ``n_jobs`` candidates are scored at once
     (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
     :func:`joblib.parallel_config` context); the figures do not depend on it.
@@ -402,7 +402,7 @@ def score_candidates(
 
     rows, tasks = [], []  # (name, kind, skipped status or None); the work of the rows that are fitted
     families = {name: calibration_tags(template).family for name, template in candidates}
-    from ._baselines import StockCalibrator
+    from ..calibrators._baselines import StockCalibrator
 
     for name, template in candidates:
         estimator = with_alpha_and_tare(template, alpha, zero_reading)
@@ -611,10 +611,10 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
                       random_state: int = 0, predictions: ArrayLike | None = None, held_out: bool = True) -> None:
     """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
 
-    Raises :class:`~ftcal.core._model_selection.DegenerateCalibrationError` (one line, the reason) when the
+    Raises :class:`~ftcal.model_selection._selection.DegenerateCalibrationError` (one line, the reason) when the
     model's predictions on ``X`` are constant or all zero, or its held-out predictions (``predictions``, e.g.
     the report's, or else made here on :func:`judging_folds` by
-    :func:`~ftcal.core._model_selection.held_out_predictions`) are degenerate (constant, all zero, no better
+    :func:`~ftcal.model_selection._selection.held_out_predictions`) are degenerate (constant, all zero, no better
     than the mean). A model that chose itself by cross-validation (``auto``: its tags' ``chooses_model``)
     checked its held-out predictions in ``fit``; only its predictions on ``X`` are checked again.
     ``held_out=False`` says the given ``predictions`` are of the training readings (a network fitted without a
@@ -627,7 +627,7 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
     >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
     >>> check_calibration(LinearCalibrator().fit(raw, w), raw, w)  # nothing to refuse
     """
-    from ..core._model_selection import check_not_degenerate, held_out_predictions
+    from ..model_selection._selection import check_not_degenerate, held_out_predictions
 
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
     alpha, axes = float(getattr(estimator, "alpha_", 1.0)), getattr(estimator, "axes_", None)
@@ -674,7 +674,7 @@ class StackedCalibrator(BaseCalibrator):
     --------
     >>> import numpy as np
     >>> from ftcal import LinearCalibrator, PolynomialCalibrator
-    >>> from ftcal.models._auto import StackedCalibrator
+    >>> from ftcal.compose._auto import StackedCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(80, 6)); raw = w @ rng.normal(size=(6, 6))
     >>> s = StackedCalibrator(estimators=[LinearCalibrator(), PolynomialCalibrator(degree=2)],
@@ -776,7 +776,7 @@ class AutoCalibrator(BaseCalibrator):
     method and the thesis' networks each win somewhere, and a random-fold
     score flatters every flexible model. ``fit`` therefore
 
-    1. builds the folds with :func:`~ftcal.core._model_selection.calibration_folds`:
+    1. builds the folds with :func:`~ftcal.model_selection._selection.calibration_folds`:
        with ``groups`` (a pose or load configuration per row, the dataset's
        ``group`` column) whole groups are held out, so the score says how the
        calibration does on poses it has not seen; without, shuffled k-fold;
@@ -796,7 +796,7 @@ class AutoCalibrator(BaseCalibrator):
        score is held out too). There is no time budget: the same data and
        seed give the same choice on any machine;
     3. scores the stock scikit-learn baselines (``baselines``,
-       :func:`ftcal.models.stock_baselines`, as :class:`~ftcal.models.StockCalibrator`)
+       :func:`ftcal.calibrators.stock_baselines`, as :class:`~ftcal.calibrators.StockCalibrator`)
        on the same folds **as candidates**, each placed in the order by what it
        is (``sk_linear`` as simple as the LTM, ``sk_poly2``/``sk_poly3`` beside
        the polynomials, ``sk_kernel_ridge`` and ``sk_gp`` beside the GP; between
@@ -808,9 +808,9 @@ class AutoCalibrator(BaseCalibrator):
        returned unscored (``comparison_["folds"]`` says which). A candidate
        whose held-out predictions are degenerate (constant, all zero, no
        better than the mean) is refused; if every one is, ``fit`` raises
-       :class:`~ftcal.core._model_selection.DegenerateCalibrationError`;
+       :class:`~ftcal.model_selection._selection.DegenerateCalibrationError`;
     4. picks by the **one-standard-error rule**
-       (:func:`~ftcal.core._model_selection.simplest_within_one_se`): the
+       (:func:`~ftcal.model_selection._selection.simplest_within_one_se`): the
        best-scoring candidate and every one within one paired standard error
        of it (over groups, or rows), or within 0.5 % of its RMSE (a tie:
        ``TIE_TOLERANCE``, 1 % of the mean squared error), qualify, and the
@@ -954,7 +954,7 @@ class AutoCalibrator(BaseCalibrator):
 
     def _stock(self, n_channels: int | None) -> list[tuple[str, BaseCalibrator]]:
         """The choosable free models: the stock baselines (``baselines=True``), a user's own, or none."""
-        from ._baselines import STOCK_BASELINE_NAMES, StockCalibrator
+        from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
 
         seed = 0 if self.random_state is None else int(self.random_state)
         if self.baselines is True:
@@ -987,8 +987,8 @@ class AutoCalibrator(BaseCalibrator):
         """Cross-validate the candidates on ``X`` (n, N), ``y`` (n, 6), refit the best on all rows.
 
         Before the model is kept its held-out predictions are checked
-        (:func:`~ftcal.core._model_selection.check_not_degenerate`): a degenerate
-        choice raises :class:`~ftcal.core._model_selection.DegenerateCalibrationError`.
+        (:func:`~ftcal.model_selection._selection.check_not_degenerate`): a degenerate
+        choice raises :class:`~ftcal.model_selection._selection.DegenerateCalibrationError`.
 
         Parameters
         ----------
@@ -1122,7 +1122,7 @@ def comparison_table(results: dict) -> str:
     column says, per row, chosen / within one SE but more complex / beyond one SE / skipped / failed / refused.
     When the choice was explained, two columns and a line under the table give what the one-SE rule compared, so
     that every verdict can be checked: each row's excess mean squared error over the best and the **paired**
-    standard error of that excess (:func:`~ftcal.core._model_selection.paired_excess`). A row's own ``± SE`` may
+    standard error of that excess (:func:`~ftcal.model_selection._selection.paired_excess`). A row's own ``± SE`` may
     overlap the best's while the row is beyond one SE: the paired SE is smaller when both err on the same rows.
     """
     base = [r for r, k in zip(results["rmse"], results["kind"]) if k in ("baseline", "stock") and r is not None]

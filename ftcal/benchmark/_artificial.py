@@ -60,7 +60,7 @@ from sklearn.utils._param_validation import Interval
 from ..simulation._artificial import make_artificial_dataset
 from ..core._files import data_fingerprint, package_versions, plain_json, read_json_record, write_json
 from ..core._exceptions import CalibrationInputError
-from ..core._metrics import calibration_report, mean_std, wrench_rmse
+from ..core._metrics import calibration_metrics, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
 from ._outputs import OutputFiles, check_file_name
 from ..simulation._error_models import ErrorModel
@@ -210,7 +210,7 @@ def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "the
                overrides: dict | None = None):
     """An unfitted model by name: a registered calibrator, or a stock scikit-learn baseline (``sk_*``).
 
-    The stock baselines (:func:`~ftcal.models.stock_baselines`) are what a
+    The stock baselines (:func:`~ftcal.calibrators.stock_baselines`) are what a
     user gets for free; every table shows them beside ftcal's calibrators.
 
     Examples
@@ -220,8 +220,8 @@ def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "the
     >>> make_model("linear", n_channels=6, alpha=50.0).alpha
     50.0
     """
-    from ..models._baselines import STOCK_BASELINE_NAMES, stock_baselines
-    from ..models._registry import make_calibrator
+    from ..calibrators._baselines import STOCK_BASELINE_NAMES, stock_baselines
+    from ..compose._registry import make_calibrator
 
     if name in STOCK_BASELINE_NAMES:
         return stock_baselines(int(n_channels), random_state=int(random_state))[name]
@@ -231,7 +231,7 @@ def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "the
 def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int = 1) -> dict:
     """Score a fitted model on the task's test set: one cached result."""
     _, test, info = data
-    report = calibration_report(test.wrench, model.predict(test.raw), alpha=profile.alpha)
+    report = calibration_metrics(test.wrench, model.predict(test.raw), alpha=profile.alpha)
     # ensembles: every member's own test RMSE, i.e. the seed-to-seed spread on this one dataset
     members = getattr(model, "estimators_", None)
     member_rmse = None if members is None else [
@@ -273,7 +273,7 @@ def _run_group(tasks: list[dict]) -> list[dict]:
         (data, model, _), = prepared
         model.fit(data[0].raw, data[0].wrench)
     else:
-        from ..neural_network._stacked import fit_stacked
+        from ..networks._stacked import fit_stacked
 
         fit_stacked([m for _, m, _ in prepared], [d[0].raw for d, _, _ in prepared],
                     [d[0].wrench for d, _, _ in prepared])
@@ -285,7 +285,7 @@ def _run_group(tasks: list[dict]) -> list[dict]:
 def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
     """Pending tasks as work units: network fits of one preset and model in chunks of ``stack``; others alone."""
     from ..calibrators._base import calibration_tags
-    from ..models._registry import CALIBRATOR_NAMES, make_calibrator
+    from ..compose._registry import CALIBRATOR_NAMES, make_calibrator
 
     if stack <= 1:
         return [[t] for t in pending]
@@ -367,8 +367,8 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **arguments) -> None:
     """Check the benchmark's arguments (``arguments``: ``seed``, ``n_per_sphere``, ``n_test``,
     ``test_distribution``, ``n_spheres``) before any work; the counts within the CLI's bounds."""
-    from ..models._baselines import STOCK_BASELINE_NAMES
-    from ..models._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
+    from ..calibrators._baselines import STOCK_BASELINE_NAMES
+    from ..compose._registry import CALIBRATOR_NAMES, SCHEDULE_NAMES
 
     seed = arguments.pop("seed")
     check_dataset_arguments("run_artificial_benchmark", **arguments)
@@ -414,7 +414,7 @@ def _names(values, what: str, example: str) -> tuple:
 
 def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_sphere, n_test, test_distribution,
            n_spheres=4) -> list[dict]:
-    from ..models._registry import CALIBRATOR_NAMES, training_schedule
+    from ..compose._registry import CALIBRATOR_NAMES, training_schedule
 
     tasks = []
     # dataset-major order: a run stopped early still covers every preset and model
@@ -491,7 +491,7 @@ def run_artificial_benchmark(
         error models of your own (e.g. a sweep of one parameter).
     models : sequence of str
         Registry names (:data:`~ftcal.CALIBRATOR_NAMES`) and stock
-        scikit-learn baselines (:data:`~ftcal.models.STOCK_BASELINE_NAMES`,
+        scikit-learn baselines (:data:`~ftcal.calibrators.STOCK_BASELINE_NAMES`,
         ``sk_linear`` ... ``sk_gp``), fitted on the same data.
     schedule : {"thesis", "short"}
         Training schedule of the networks.
@@ -584,7 +584,7 @@ def run_artificial_benchmark(
     }
     files = {}
     if plot:
-        from ._plots import plot_error_distributions
+        from ..reporting._plots import plot_error_distributions
 
         for preset in presets:
             per_model = {m: list(summary[preset]["models"][m]["rmse_per_dataset"].values()) for m in models}

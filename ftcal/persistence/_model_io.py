@@ -27,7 +27,7 @@ stored by what it is: a numeric array as a member, a number, string, flag or
 plain dict as JSON, a fitted calibrator (or a list of them) as children, and
 what the class lists in ``_encoded_state`` by the class' own hooks (a network: its weights and history; this
 module knows no network internals). Which classes a file may name is
-the registry's list (:func:`ftcal.models._registry.model_classes`): adding a
+the registry's list (:func:`ftcal.compose._registry.model_classes`): adding a
 calibrator is one module and one registry line. **Each fitted value is bounded**: ``_fitted_constraints``
 beside ``_fitted_state`` (scikit-learn's constraint vocabulary, :func:`fitted_constraints`) gives the allowed
 values of a field, checked at load (a tampered ``tau_rows_ = 0.5`` is refused naming the field, the value and
@@ -153,7 +153,7 @@ _NONE = object()
 
 
 def _known_types() -> dict[str, type]:
-    from ._registry import model_classes
+    from ..compose._registry import model_classes
 
     return model_classes()
 
@@ -555,7 +555,7 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
         raise ModelFileError(f"a sub-model has an unknown model type {name!r}.")
     params = {k: _decode(v) for k, v in meta["params"].items()}
     if params.get("device") not in (None, "cpu"):
-        from ..neural_network._base import device_available
+        from ..networks._base import device_available
 
         if not device_available(params["device"]):
             warnings.warn(

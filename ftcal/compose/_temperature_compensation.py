@@ -1,4 +1,4 @@
-"""Temperature compensation in front of any calibrator (issue 15); the drift model is in :mod:`ftcal.core._temperature`."""
+"""Temperature compensation in front of any calibrator; the drift model is in :mod:`ftcal.core._temperature`."""
 
 from __future__ import annotations
 
@@ -9,15 +9,15 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ._base import BaseCalibrator, calibration_tags, declare, with_settings
+from ..calibrators._base import BaseCalibrator, calibration_tags, declare, with_settings
 from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._history import refuse_history_inside
-from ._linear import LinearCalibrator
+from ..calibrators._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
 from ..core._validation import validate_readings, validate_training_data
 from ..core._wrench import named_targets
-from ._zero_load import forward_design
+from ..calibrators._zero_load import forward_design
 
 __all__ = ["TemperatureCompensatedCalibrator"]
 
@@ -120,7 +120,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                        min_training_rows=lambda n_columns: inner.min_training_rows(max(n_columns - 1, 1)))
 
     def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.calibrators._routing`)."""
+        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.compose._routing`)."""
         return wrapper_routing(self, self._inner())
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):

@@ -1,0 +1,23 @@
+"""What a calibration shows a person: the calibration report (a certificate: held-out accuracy per axis, U95,
+PASS/FAIL, the model's identity; HTML, JSON and CSV), the comparison tables and plots of an evaluation, and
+the plots of tool drift. "Report" in ftcal means the certificate only; the error measures of one prediction
+are :class:`ftcal.core.CalibrationMetrics` (they stay in :mod:`ftcal.core`: the simulation and the search,
+below this layer, use them).
+
+Layer: above :mod:`ftcal.persistence`. Imports :mod:`ftcal.core`, :mod:`ftcal.io`,
+:mod:`ftcal.model_selection`, :mod:`ftcal.calibrators`, :mod:`ftcal.compose` and :mod:`ftcal.persistence`.
+"""
+
+from ..core._lazy import lazy_namespace
+
+#: Public names of this package -> the private module holding each.
+_PUBLIC = dict(
+    calibration_certificate="_calibration_report", write_calibration_report="_calibration_report",
+    render_report_html="_calibration_report", report_json="_calibration_report",
+    report_cases_csv="_calibration_report", comparison_table="_evaluation", axis_table="_evaluation",
+    write_evaluation_plots="_evaluation", MODEL_COLORS="_plots", model_color="_plots",
+    plot_error_distributions="_plots", plot_axis_errors="_plots", plot_predicted_vs_reference="_plots",
+    plot_sphere_coverage="_plots", plot_wrench_coverage="_plots", plot_drift_residuals="_drift_plot",
+)
+__all__ = list(_PUBLIC)
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
