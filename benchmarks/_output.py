@@ -7,7 +7,7 @@ import argparse
 from pathlib import Path
 
 from ftcal import FtcalError
-from ftcal.cli._messages import cli_message
+from ftcal.cli import cli_message
 from ftcal.benchmark import OutputFiles
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, FtcalError, run_artificial_benchmark
 from ftcal.calibrators import STOCK_BASELINE_NAMES
-from ftcal.cli._messages import cli_message
+from ftcal.cli import cli_message
 
 #: Default output folder (git-ignored): benchmarks/out/artificial.
 DEFAULT_OUT = Path(__file__).resolve().parent / "out" / "artificial"

@@ -41,7 +41,7 @@ import numpy as np
 from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
 from ftcal.core import plain_json
 from ftcal.benchmark import wilcoxon_pvalue
-from ftcal.cli._messages import cli_message
+from ftcal.cli import cli_message
 
 from _output import output_files
 

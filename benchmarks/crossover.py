@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from ftcal import ERROR_PRESETS, FtcalError, run_artificial_benchmark
-from ftcal.cli._messages import cli_message
+from ftcal.cli import cli_message
 
 from _output import int_at_least, jobs, output_files
 

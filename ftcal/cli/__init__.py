@@ -42,7 +42,9 @@ from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_da
                       standard_streams)
 from ._messages import one_line_warnings
 
-__all__ = ["main", "build_parser"]
+from ._messages import cli_message
+
+__all__ = ["main", "build_parser", "cli_message"]
 
 #: Modules of the subcommands, in the order ``ftcal --help`` lists them.
 _SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predict", "benchmark", "demo",
