@@ -89,6 +89,7 @@ def test_fit_of_a_plate_on_the_command_line_scales_its_torques(tmp_path, capsys)
     auto = ftcal.AutoCalibrator(candidates=[("linear", LinearCalibrator())], baselines=False, stack=False,
                                 cv=3).fit(raw, named_targets(w, PLATE))
     assert auto.alpha_ == pytest.approx(fitted["alpha"]) and tuple(auto.axes_) == PLATE
+    assert tuple(auto.best_estimator_.axes_) == PLATE  # the chosen model refitted on the named table
 
 
 def test_the_scorer_and_a_search_scale_the_plates_torques():

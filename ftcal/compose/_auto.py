@@ -276,6 +276,11 @@ def _fit(estimator, X, y, groups):
     return estimator.fit(X, y, **routed_groups(estimator, groups))
 
 
+def _rows(y, rows):
+    """The ``rows`` of ``y``, an array or a table named by its axes (:func:`~ftcal.core._wrench.named_targets`)."""
+    return y.iloc[rows] if hasattr(y, "iloc") else y[rows]
+
+
 def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[tuple[NDArray, NDArray]]:
     """Out-of-fold predictions of ``estimator`` on ``folds``: ``(test rows, their predictions)`` per fold.
 
@@ -293,7 +298,7 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
 
         models = [clone(estimator) for _ in folds]
         train = [grouped_subsample(tr, groups, network_samples, seed) for tr, _ in folds]
-        fit_stacked(models, [X[t] for t in train], [y[t] for t in train])
+        fit_stacked(models, [X[t] for t in train], [_rows(y, t) for t in train])
         return [(test, model.predict(X[test])) for model, (_, test) in zip(models, folds)]
     return fold_predictions(estimator, X, y, folds, groups=groups)
 
@@ -425,7 +430,8 @@ def score_candidates(
     # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
     heavy = not all(_is_light(est, smallest_train) for _, est, _ in tasks)
     workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
-    done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, y, part, groups, samples, seed)
+    named = named_targets(y, axes)  # each fold's fits get their slice of the named table: they scale its torques
+    done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed)
                                    for _, est, samples, part in jobs)
     outcomes: dict = {}
     for (row, *_), outcome in zip(jobs, done):
@@ -1035,6 +1041,7 @@ class AutoCalibrator(BaseCalibrator):
                 random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
                 folds=folds, units=units, axes=axes)
             templates = dict(candidates)
+        named = named_targets(y, axes)  # the chosen model refitted on the named table, as it was scored
         results["folds"] = fold_note
         results["training_sha256"] = training_data_sha256(X, y, groups)  # what the comparison was scored on
         if errors is not None:
@@ -1056,13 +1063,13 @@ class AutoCalibrator(BaseCalibrator):
             model = with_alpha_and_tare(templates[name], self.alpha_, given)
             rows = grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
                 if _is_network(model) else np.arange(len(X))
-            return _fit(model, X[rows], y[rows], None if groups is None else groups[rows])
+            return _fit(model, X[rows], _rows(named, rows), None if groups is None else groups[rows])
 
         if results["kind"][results["name"].index(self.best_name_)] == "stack":
             members = results["stack_members"]
             best = StackedCalibrator(estimators=[templates[n] for n in members], weights=results["stack_weights"],
                                      alpha=self.alpha_, zero_reading=given)
-            self.best_estimator_ = best.fit(X, y, fitted_estimators=[refit(n) for n in members])
+            self.best_estimator_ = best.fit(X, named, fitted_estimators=[refit(n) for n in members])
         else:
             self.best_estimator_ = refit(self.best_name_)
         self._adopt_fitted(X, y, self.best_estimator_)
