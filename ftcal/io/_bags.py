@@ -429,6 +429,40 @@ def _check_wrench_frame(path: Path, sensor: str, frame_id: str, tf: tuple[str, s
             fix="name the wrenches' own frame: {tf}", settings={"tf": _FramePair((_frame(tf[0]), own))})
 
 
+class _EdgeSamples:
+    """One /tf edge's stamps and quaternions, in arrays (40 bytes a sample) that grow up to ``2 * max_samples``
+    and, when full, keep every other sample and from then on every other message of *this* edge: memory stays
+    bounded whatever the bag's length or declared counts, and an edge keeps evenly spaced samples however many
+    other edges (or publishers) share /tf."""
+
+    def __init__(self, max_samples: int) -> None:
+        self.capacity = 2 * int(max_samples)
+        self.times, self.quats = np.empty(min(1024, self.capacity)), np.empty((min(1024, self.capacity), 4))
+        self.n = self.seen = 0
+        self.step = 1
+
+    def add(self, t: float, quat: NDArray[np.float64]) -> None:
+        self.seen += 1
+        if (self.seen - 1) % self.step:
+            return
+        if self.n == len(self.times):
+            if self.n < self.capacity:  # grow
+                size = min(2 * self.n, self.capacity)
+                self.times = np.resize(self.times, size)
+                self.quats = np.resize(self.quats, (size, 4))
+            else:  # full: every other sample, every other message from now on
+                half = self.n // 2 + self.n % 2
+                self.times[:half], self.quats[:half] = self.times[:self.n:2], self.quats[:self.n:2]
+                self.n, self.step = half, 2 * self.step
+                if (self.seen - 1) % self.step:
+                    return
+        self.times[self.n], self.quats[self.n] = t, quat
+        self.n += 1
+
+    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        return self.times[:self.n].copy(), self.quats[:self.n].copy()
+
+
 def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str, t: NDArray[np.float64]):
     """The rotation base <- sensor at the times ``t`` through the tf tree (dynamic edges slerped)."""
     from scipy.spatial.transform import Rotation, Slerp
@@ -550,12 +584,11 @@ def read_bag(
         streams = {sensor: _Stream(topics[sensor][1], max_samples, average=True)}
         if tf is None:
             streams[pose_topics[0]] = _Stream(topics[pose_topics[0]][1], max_samples, average=False)
-        tf_block = max(1, math.ceil(topics.get("/tf", ("", 0))[1] / max_samples))
-        edges: dict[tuple[str, str], tuple[list, list]] = {}
+        edges: dict[tuple[str, str], _EdgeSamples] = {}
         static: dict[tuple[str, str], NDArray] = {}
         stamped: set[str] = set()
         joint_names: tuple[str, ...] | None = None
-        frame_id, n_tf = "", 0
+        frame_id = ""
         width = None
         wanted = [c for c in r.reader.connections if c.topic in set(streams) | set(pose_topics)]
         try:
@@ -564,9 +597,6 @@ def read_bag(
                 msg = r.reader.deserialize(data, conn.msgtype)
                 receive = receive_ns * 1e-9
                 if topic in ("/tf", "/tf_static") and tf is not None:
-                    n_tf += 1
-                    if topic == "/tf" and (n_tf - 1) % tf_block:
-                        continue
                     for tr in msg.transforms:
                         key = (_frame(tr.header.frame_id), _frame(tr.child_frame_id))
                         q = tr.transform.rotation
@@ -575,11 +605,9 @@ def read_bag(
                             static[key] = quat
                         else:
                             t = _stamp(tr) if stamps == "header" else receive
-                            times, quats = edges.setdefault(key, ([], []))
-                            times.append(t)
-                            quats.append(quat)
-                            if len(times) > 2 * max_samples:  # more /tf than declared: keep every other one
-                                del times[1::2], quats[1::2]
+                            if key not in edges:
+                                edges[key] = _EdgeSamples(max_samples)
+                            edges[key].add(t, quat)
                     continue
                 header = _stamp(msg)
                 if header is not None:
@@ -656,7 +684,7 @@ def read_bag(
         pose_topic = "/tf"
         if not edges and not static:
             raise LogFormatError(f"{path}: /tf holds no transforms.")
-        t_p = np.concatenate([np.asarray(v[0]) for v in edges.values()]) if edges else t_s[[0, -1]]
+        t_p = np.concatenate([v.arrays()[0] for v in edges.values()]) if edges else t_s[[0, -1]]
     if stamps == "header" and sensor in offsets and pose_topic in offsets:
         apart = offsets[sensor] - offsets[pose_topic]
         if abs(apart) > CLOCK_OFFSET_TOLERANCE_S:
@@ -685,7 +713,7 @@ def read_bag(
         joints = np.column_stack([np.interp(t_s, t_p, q[:, j]) for j in range(q.shape[1])])
         names = joint_names or ()
     else:
-        edge_arrays = {k: (np.asarray(v[0]), np.asarray(v[1])) for k, v in edges.items()}
+        edge_arrays = {k: v.arrays() for k, v in edges.items()}
         rotation = _tf_rotations(path, edge_arrays, static, _frame(tf[0]), _frame(tf[1]), t_s)
     return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
                         joint_names=names, rotation=rotation, pose_topic=pose_topic, frame_id=frame_id,
