@@ -1,6 +1,6 @@
 #!/usr/bin/env python
 """Artificial-data benchmark of the thesis (Tables II-III, Fig. 5): thin wrapper of
-:func:`ftcal.run_artificial_benchmark`.
+:func:`ftcal.benchmark.run_artificial_benchmark`.
 
 Resumable: every (preset, dataset, model) result is cached under ``OUT/cache``;
 run the same command again to continue an interrupted run.
@@ -21,7 +21,10 @@ import sys
 import time
 from pathlib import Path
 
-from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, FtcalError, run_artificial_benchmark
+from ftcal.compose import CALIBRATOR_NAMES
+from ftcal.simulation import ERROR_PRESETS
+from ftcal import FtcalError
+from ftcal.benchmark import run_artificial_benchmark
 from ftcal.calibrators import STOCK_BASELINE_NAMES
 from ftcal.cli import cli_message
 

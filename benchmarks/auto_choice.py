@@ -53,12 +53,12 @@ def part_tare(schedule: str = "short") -> dict:
     out = {"case": "+/-8 % sign-dependent gains, 4 shells (25-100 N), 2500 train / 1000 test rows, 8 channels",
            "alpha": 1.0, "schedule": schedule}
     ltm = ftcal.LinearCalibrator(alpha=1.0).fit(raw, w)
-    out["ltm_rmse"] = ftcal.wrench_rmse(test_w, ltm.predict(test_raw), alpha=1.0)
+    out["ltm_rmse"] = ftcal.core.wrench_rmse(test_w, ltm.predict(test_raw), alpha=1.0)
     for label, tare in (("estimated", None), ("true", zero)):
         t0 = time.perf_counter()
         model = ftcal.make_calibrator("directional", schedule=schedule, random_state=0, alpha=1.0, zero_reading=tare)
         model.fit(raw, w)
-        out[f"directional_{label}_tare_rmse"] = ftcal.wrench_rmse(test_w, model.predict(test_raw), alpha=1.0)
+        out[f"directional_{label}_tare_rmse"] = ftcal.core.wrench_rmse(test_w, model.predict(test_raw), alpha=1.0)
         out[f"directional_{label}_fit_seconds"] = time.perf_counter() - t0
         if tare is None:
             out["tare_error_pct_of_span_max"] = float(np.max(np.abs(model.zero_reading_ - zero) / span) * 100)
@@ -78,7 +78,7 @@ def part_artificial() -> dict:
         t0 = time.perf_counter()
         auto = ftcal.AutoCalibrator(alpha=info["alpha"], random_state=0).fit(train.raw, train.wrench)
         seconds = time.perf_counter() - t0
-        rmse = ftcal.wrench_rmse(test.wrench, auto.predict(test.raw), alpha=info["alpha"])
+        rmse = ftcal.core.wrench_rmse(test.wrench, auto.predict(test.raw), alpha=info["alpha"])
         out[preset] = {**_auto_record(auto, rmse, seconds), "noise_floor": info["noise_floor"]}
         print(f"{preset}: auto chose {auto.best_name_}, test RMSE {rmse:.3f} N in {seconds:.0f} s", flush=True)
     return out
@@ -86,8 +86,8 @@ def part_artificial() -> dict:
 
 def part_robot() -> dict:
     with tempfile.TemporaryDirectory() as tmp:
-        paths = ftcal.simulate_experiment(tmp, random_state=0)
-        data = ftcal.prepare_dataset(paths)
+        paths = ftcal.experiment.simulate_experiment(tmp, random_state=0)
+        data = ftcal.experiment.prepare_dataset(paths)
     t0 = time.perf_counter()
     auto = ftcal.AutoCalibrator(random_state=0).fit(data.raw, data.wrench, groups=data.group)
     seconds = time.perf_counter() - t0

@@ -7,10 +7,10 @@ Usage::
 ``AutoCalibrator`` with its defaults (every candidate, networks on the short schedule, the stack, the five
 stock baselines) and ``n_jobs=--jobs``:
 
-* **400 rows**: the first 400 rows of :func:`ftcal.make_soft_sensor_dataset` (8 channels), shuffled
+* **400 rows**: the first 400 rows of :func:`ftcal.simulation.make_soft_sensor_dataset` (8 channels), shuffled
   5-fold; the median of ``--repeats`` fits after one warm-up fit (the first fit also starts the worker
   processes and imports torch in them, reported apart);
-* **80 000 rows**: :func:`ftcal.make_robot_held_dataset` (80 000 rows, 41 poses, pose-grouped 5-fold), one
+* **80 000 rows**: :func:`ftcal.simulation.make_robot_held_dataset` (80 000 rows, 41 poses, pose-grouped 5-fold), one
   fit; the stock baselines are candidates (the kernel ones on 1000-row subsamples), and the seconds each
   row of the comparison took (all folds) are recorded.
 
@@ -63,7 +63,7 @@ def main() -> None:
     result: dict = {"load_average_before": os.getloadavg(), "jobs": args.jobs,
                     "machine": {"platform": platform.platform(), "cpus": os.cpu_count(),
                                 "python": platform.python_version()}}
-    soft = ftcal.make_soft_sensor_dataset()
+    soft = ftcal.simulation.make_soft_sensor_dataset()
     X, y = soft.raw[:400], soft.wrench[:400]
 
     def fit_small():
@@ -79,7 +79,7 @@ def main() -> None:
     result["small_ratio_to_sk_gp"] = result["small_fit_median_s"] / result["small_sk_gp_fit_s"]
     print(json.dumps(result, indent=1), flush=True)
     if not args.skip_large:
-        robot = ftcal.make_robot_held_dataset(80_000, n_poses=41)
+        robot = ftcal.simulation.make_robot_held_dataset(80_000, n_poses=41)
 
         def fit_large():
             auto = ftcal.AutoCalibrator(random_state=0, n_jobs=args.jobs).fit(robot.raw, robot.wrench,

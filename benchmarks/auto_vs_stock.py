@@ -7,7 +7,7 @@ Usage::
 Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file exists, so a run resumes):
 
 ``soft``
-    :func:`ftcal.make_soft_sensor_dataset` (418 rows, 8 channels), outer 5-fold
+    :func:`ftcal.simulation.make_soft_sensor_dataset` (418 rows, 8 channels), outer 5-fold
     shuffled CV: ``auto`` (default candidates, networks included) fitted on each outer training fold, the
     stock baselines and the LTM on the same folds; held-out RMSE (eq. 18), the GP's 2-std coverage, fit time.
     Its floor is not the reference noise: the readings depend on the load history, which no static map can
@@ -18,7 +18,7 @@ Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file e
     The same with press-grouped 5-fold CV (``GroupKFold`` on the dataset's press column, given to ``auto``
     too): every press is scored by models that never saw it, as on a new recording.
 ``robot_held``
-    :func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses), outer pose-grouped 5-fold
+    :func:`ftcal.simulation.make_robot_held_dataset` (90 000 rows, 47 poses), outer pose-grouped 5-fold
     (``--robot-folds`` of them, default all 5): ``auto`` with the groups, baselines, LTM. Its floor is not
     the reference noise either: every pose has its own offset (mounting, thermal state) that no model can
     learn across poses. ``robot_static_floor`` measures what a static map reaches: flexible models fitted
@@ -27,7 +27,7 @@ Cases (each written to ``<case>.json`` in ``--out`` and skipped when that file e
 ``thesis``, ``asymmetric``, ``reconstructed``
     :func:`ftcal.make_artificial_dataset` (5000 training rows, 1250 test rows), noise floor from the dataset.
 ``dead_weight_15``, ``dead_weight_30``, ``dead_weight_50``
-    :func:`ftcal.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
+    :func:`ftcal.simulation.make_dead_weight_dataset`: ``auto`` vs the LTM on a validation set
     with loads up to 2x the calibrated range (target: auto <= 1.1x the LTM), and the stock baselines fitted on
     the same rows (added to an earlier run's JSON without refitting auto).
 
@@ -39,11 +39,11 @@ Cases made to break ``auto`` (each failure seen on a real sensor, reproduced on 
     file's unit, as a user who does not convert them), shuffled outer 5-fold.
 ``dead_weight_axis_groups``
     15 dead-weight rows of a 3-axis load cell (3 channels) and of a 6-axis sensor, one group per loaded axis
-    (:func:`ftcal.make_dead_weight_dataset` with ``loaded_axes``), given to ``auto`` as groups: auto vs the
+    (:func:`ftcal.simulation.make_dead_weight_dataset` with ``loaded_axes``), given to ``auto`` as groups: auto vs the
     LTM and the stock baselines at 2x the range, 3 seeds (target: auto <= 1.1x the LTM, never constant).
 ``robot_small``
     A robot-held grouped set where the stock kernel ridge is strong: 8000 rows of 41 poses
-    (:func:`ftcal.make_robot_held_dataset`), outer pose-grouped 5-fold, auto given the groups.
+    (:func:`ftcal.simulation.make_robot_held_dataset`), outer pose-grouped 5-fold, auto given the groups.
 
 Since the stock baselines became ``auto``'s candidates, ``auto / best stock`` <= 1.0 (or within its SE) is
 what the design promises; the cases above test it where it failed.
@@ -64,7 +64,8 @@ import numpy as np
 from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
-from ftcal import alpha_from_wrenches, make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
+from ftcal.core import alpha_from_wrenches
+from ftcal.simulation import make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
 from ftcal.core import read_json_record, write_json
 from ftcal.calibrators import STOCK_BASELINE_NAMES, stock_baselines
 
@@ -82,7 +83,7 @@ CASES = ("dead_weight_axis_groups", "soft_nmm", "robot_small", "dead_weight_15",
 
 def rmse(y, pred, alpha):
     """Eq. 18: over all 6 n torque-scaled values [N]."""
-    return ftcal.wrench_rmse(y, pred, alpha)
+    return ftcal.core.wrench_rmse(y, pred, alpha)
 
 
 def outer(raw, wrench, groups, splits, alpha, seed=0, predictions: dict | None = None):
@@ -231,7 +232,7 @@ def run_case(case: str) -> dict:
                 try:
                     auto = ftcal.AutoCalibrator(alpha=alpha, random_state=seed, n_jobs=JOBS).fit(
                         cal.raw, cal.wrench, groups=cal.group)
-                except ftcal.CalibrationInputError as exc:  # a clear refusal is an allowed outcome
+                except ftcal.core.CalibrationInputError as exc:  # a clear refusal is an allowed outcome
                     out.append({"axes": axes, "seed": seed, "refused": str(exc)})
                     continue
                 fit_s = time.perf_counter() - t0

@@ -2,7 +2,7 @@
 
 For each storage (rosbag2 sqlite3, rosbag2 MCAP, ROS 1) and each message count, a bag of a 1 kHz
 ``geometry_msgs/WrenchStamped`` topic and 100 Hz ``sensor_msgs/JointState`` (7 joints) is written with
-``ftcal.write_bag``, then read with ``ftcal.read_bag(max_samples=2000)``:
+``ftcal.io.write_bag``, then read with ``ftcal.io.read_bag(max_samples=2000)``:
 
 * ``peak MiB``: the peak of Python's traced allocations while reading (``tracemalloc``; numpy's arrays
   included), against ``whole MiB``: the same for the baseline that keeps every decoded message of the two topics
@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import read_bag, write_bag
+from ftcal.io import read_bag, write_bag
 
 STORAGES = ("sqlite3", "mcap", "ros1")
 

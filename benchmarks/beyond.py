@@ -2,9 +2,9 @@
 """Issue 6 ("beyond the thesis") benchmark: the polynomial, the axis-nonlinear hybrid and seed ensembles
 against the thesis' three models, on the artificial presets (and optionally the virtual robot experiment).
 
-A thin layer over :func:`ftcal.run_artificial_benchmark` (models by registry
+A thin layer over :func:`ftcal.benchmark.run_artificial_benchmark` (models by registry
 name; every (preset, dataset, model) result cached, so re-running the same
-command resumes) and :func:`ftcal.run_real_world_benchmark`. Two passes share
+command resumes) and :func:`ftcal.benchmark.run_real_world_benchmark`. Two passes share
 one cache: the closed-form models on ``--datasets`` datasets, the network
 models (slow on a CPU) on the first ``--network-datasets`` of them. Then it
 checks the issue's targets on the datasets both have in common and writes
@@ -38,7 +38,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import FtcalError, run_artificial_benchmark, run_real_world_benchmark
+from ftcal import FtcalError
+from ftcal.benchmark import run_artificial_benchmark, run_real_world_benchmark
 from ftcal.core import plain_json
 from ftcal.benchmark import wilcoxon_pvalue
 from ftcal.cli import cli_message

@@ -26,7 +26,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import ERROR_PRESETS, LinearCalibrator, SensorProfile, make_artificial_dataset, per_sample_rmse, wrench_rmse
+from ftcal.simulation import ERROR_PRESETS, SensorProfile
+from ftcal import LinearCalibrator, make_artificial_dataset
+from ftcal.core import per_sample_rmse, wrench_rmse
 from ftcal.core import read_json_record
 from ftcal.benchmark import dataset_seeds, make_model
 

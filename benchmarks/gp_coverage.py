@@ -33,17 +33,17 @@ CASES = ("soft", "soft_grouped", "thesis", "asymmetric", "reconstructed", "robot
 
 def folds(case: str):
     if case in ("soft", "soft_grouped"):
-        d = ftcal.make_soft_sensor_dataset()
+        d = ftcal.simulation.make_soft_sensor_dataset()
         split = KFold(5, shuffle=True, random_state=0).split(d.raw) if case == "soft" else GroupKFold(5).split(
             d.raw, groups=d.group)
         return d.raw, d.wrench, (d.group if case == "soft_grouped" else None), list(split), d.meta["alpha"]
     if case == "robot_held":
-        d = ftcal.make_robot_held_dataset()
+        d = ftcal.simulation.make_robot_held_dataset()
         return d.raw, d.wrench, d.group, list(GroupKFold(5).split(d.raw, groups=d.group)), d.meta["alpha"]
     train, test, _ = ftcal.make_artificial_dataset(case, random_state=0)
     n = train.n_samples
     return (np.vstack([train.raw, test.raw]), np.vstack([train.wrench, test.wrench]), None,
-            [(np.arange(n), np.arange(n, n + test.n_samples))], ftcal.alpha_from_wrenches(train.wrench))
+            [(np.arange(n), np.arange(n, n + test.n_samples))], ftcal.core.alpha_from_wrenches(train.wrench))
 
 
 def run(case: str) -> dict:

@@ -17,7 +17,8 @@ from sklearn.model_selection import KFold
 from threadpoolctl import threadpool_limits
 
 import ftcal
-from ftcal import GaussianProcessCalibrator, LinearCalibrator, make_soft_sensor_dataset
+from ftcal import GaussianProcessCalibrator, LinearCalibrator
+from ftcal.simulation import make_soft_sensor_dataset
 from ftcal.calibrators import stock_baselines
 
 
@@ -55,7 +56,7 @@ def main() -> None:
                         ", per output" if model.per_output_ else "")
                 else:
                     pred[test] = model.predict(d.raw[test])
-            rows.append((name, ftcal.wrench_rmse(wrench, pred, alpha), np.mean(np.vstack(cover)) if cover else None,
+            rows.append((name, ftcal.core.wrench_rmse(wrench, pred, alpha), np.mean(np.vstack(cover)) if cover else None,
                          choice, (time.perf_counter() - start) / 5))
         stock = rows[-1][1]
         for name, rmse, coverage, choice, seconds in rows:

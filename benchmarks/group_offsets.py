@@ -4,7 +4,7 @@ Usage::
 
     python benchmarks/group_offsets.py [--out benchmarks/results/auto_vs_stock/group_offsets.json] [--force]
 
-:func:`ftcal.make_robot_held_dataset` (90 000 rows, 47 poses, each pose shifting all readings by an offset of
+:func:`ftcal.simulation.make_robot_held_dataset` (90 000 rows, 47 poses, each pose shifting all readings by an offset of
 its own), the pose-grouped 5-fold of ``benchmarks/auto_vs_stock.py``'s ``robot_held`` case: the LTM and the
 quadratic (ridge 0.01) with and without one offset per pose (fitted with the training poses as ``groups``),
 beside the stock baselines a user would try first (the kernel ones on 1000 rows) and the static floor that
@@ -33,7 +33,7 @@ from _output import parse_output
 
 def main() -> None:
     out = parse_output(__doc__, "benchmarks/results/auto_vs_stock/group_offsets.json")
-    d = ftcal.make_robot_held_dataset()
+    d = ftcal.simulation.make_robot_held_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
     models = {f"polynomial(degree={k}{', ridge=0.01' if k > 1 else ''}{', group offsets' if offsets else ''})":
               ftcal.PolynomialCalibrator(degree=k, ridge=0.01, group_offsets=offsets, alpha=alpha)
@@ -45,8 +45,8 @@ def main() -> None:
             kwargs = {"groups": groups[train]} if name in models else {}
             pred[name][test] = model.fit(raw[train], wrench[train], **kwargs).predict(raw[test])
         print(f"fold done ({len(test)} held-out rows)", flush=True)
-    rmse = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
-    clean = ftcal.make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(groups).size),
+    rmse = {n: ftcal.core.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
+    clean = ftcal.simulation.make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(groups).size),
                                           random_state=d.meta["random_state"], pose_offset=0.0)
     per_fold = {n: np.empty_like(wrench) for n in ("sk_poly2", "sk_poly3")}
     inner = []
@@ -59,7 +59,7 @@ def main() -> None:
         auto.fit(raw[train], wrench[train], groups=groups[train])
         inner.append({"chosen": auto.best_name_, "table": auto.summary()})
         print(f"fold checked: auto (closed forms) chose {auto.best_name_}", flush=True)
-    floor_per_fold = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in per_fold.items()}
+    floor_per_fold = {n: ftcal.core.wrench_rmse(wrench, p, alpha=alpha) for n, p in per_fold.items()}
     floor_record = read_json_record(out.path.parent / "robot_static_floor_5.json", numbers=("rmse",))
     floor = None if floor_record is None else floor_record["rmse"]
     best_stock = min(v for n, v in rmse.items() if n.startswith("sk_"))

@@ -28,7 +28,7 @@ the cache spans sessions and code versions.
 Work is ordered so that the most informative results come first: the first seed of every dataset and size
 with the closed-form models, then the networks, then further seeds, the kernel models, the ensembles, and
 last ``auto`` (its fits are the longest: minutes each on thousands of rows). Network fits of one dataset,
-seed and model (all sizes) train together as one stacked module (:func:`ftcal.fit_stacked`).
+seed and model (all sizes) train together as one stacked module (:func:`ftcal.networks.fit_stacked`).
 
 Outputs in ``OUT``: ``learning_curves.md``, ``learning_curves.json``, ``learning_curves_<dataset>.png``.
 
@@ -54,7 +54,9 @@ from typing import Callable
 
 import numpy as np
 
-from ftcal import CALIBRATOR_NAMES, make_artificial_dataset, wrench_rmse
+from ftcal.compose import CALIBRATOR_NAMES
+from ftcal import make_artificial_dataset
+from ftcal.core import wrench_rmse
 from ftcal.benchmark import make_model
 from ftcal.core import (data_fingerprint, is_finite_number, package_versions, plain_json, read_json_record,
                         write_json)
@@ -138,7 +140,8 @@ def _robot_dataset(seed: int, errors: str):
     if (seed, errors) not in _ROBOT_CACHE:
         import tempfile
 
-        from ftcal import load_robot, prepare_dataset, simulate_experiment
+        from ftcal.robot import load_robot
+        from ftcal.experiment import prepare_dataset, simulate_experiment
 
         robot = load_robot()
         with tempfile.TemporaryDirectory() as tmp:
@@ -152,7 +155,7 @@ def robot_factory(kind: str, errors: str = "reconstructed") -> Factory:
 
     The sensor's errors: the ``reconstructed`` preset by default (with ``thesis`` errors the LTM sits at the
     noise floor and no model has anything to learn, RESULTS.md issue 6)."""
-    from ftcal import SensorProfile
+    from ftcal.simulation import SensorProfile
 
     def make(seed: int) -> Pool:
         ds = _robot_dataset(seed, errors)
@@ -176,7 +179,7 @@ def robot_factory(kind: str, errors: str = "reconstructed") -> Factory:
 def soft_split(seed: int, test_presses: int = 8):
     """The soft-sensor preset (issue 19) of ``seed``: its last ``test_presses`` presses are the test set (a new
     recording), the other presses' rows the training pool."""
-    from ftcal import make_soft_sensor_dataset
+    from ftcal.simulation import make_soft_sensor_dataset
 
     d = make_soft_sensor_dataset(random_state=seed)
     test = np.isin(d.group, np.unique(d.group)[-test_presses:])
@@ -280,7 +283,7 @@ def verify(records: list[dict], tasks: list[dict], per_group: int, n_jobs: int, 
     A record whose RMSE the refit does not reproduce (within :data:`REPRODUCED`, relative), or a failure whose
     refit succeeds, is replaced by the refit; a success whose refit fails (or gives no finite RMSE) is kept and
     counted as failed. A network is refitted in the stack it was trained in (``stacked_with``; records written
-    before stacks were recorded: the stack :func:`_units` makes of the whole grid), as :func:`ftcal.fit_stacked`
+    before stacks were recorded: the stack :func:`_units` makes of the whole grid), as :func:`ftcal.networks.fit_stacked`
     rounds a stacked step otherwise than a lone one and training can amplify that. The other members of such a
     stack are fitted too: those not cached yet are returned as new records (and saved), the others left alone.
     Returns the records, per model the counts and the largest relative difference (None: none compared), and
@@ -392,7 +395,7 @@ def run_unit(unit: list[dict]) -> list[dict]:
             task, model, rows = prepared[0]
             model.fit(pool.X[rows], pool.y[rows])
         else:
-            from ftcal import fit_stacked
+            from ftcal.networks import fit_stacked
 
             fit_stacked([m for _, m, _ in prepared], [pool.X[r] for _, _, r in prepared],
                         [pool.y[r] for _, _, r in prepared])

@@ -11,7 +11,7 @@ shared or virtual machine hits a measurement and its baseline alike.
   ``skorch.NeuralNetRegressor`` with the same net (64, 64, 64), data (4000 x 6), batch size (32), epochs,
   Adam lr and 20 % validation split; medians of ``--repeats`` runs; also the final held-out RMSE of both;
 * stacked training: a 5-member ``EnsembleCalibrator`` of that directional model (members trained together
-  as one stacked module) against one member's fit, and ``ftcal.fit_stacked`` of ``--stack`` nets (one per
+  as one stacked module) against one member's fit, and ``ftcal.networks.fit_stacked`` of ``--stack`` nets (one per
   seed) against one fit, per net;
 * the floor of the fit: the same net, split, batches, epochs, fused Adam and per-epoch validation loss in a
   bare torch loop (autograd, no skorch): what an engine that calls a user's skorch callbacks per batch cannot beat;
@@ -74,7 +74,7 @@ def main(argv=None) -> int:
     model = ftcal_fit()  # warm-up; also provides the directional inputs/targets for the plain net
     # the same network inputs and targets as the calibrator's (thesis eq. 3-8, scale normalised as documented)
     inputs = model.network_inputs(raw)
-    scaled = ftcal.scale_torques(w, model.alpha_)
+    scaled = ftcal.core.scale_torques(w, model.alpha_)
     magnitude = np.linalg.norm(scaled, axis=1, keepdims=True)
     v_in = np.linalg.norm(raw - model.zero_reading_, axis=1, keepdims=True)
     targets = np.hstack([scaled / magnitude, magnitude / v_in / model.scale_reference_])
@@ -134,11 +134,11 @@ def main(argv=None) -> int:
             single_times.append(time.perf_counter() - start)
         t_ensemble, t_single = statistics.median(ensemble_times), statistics.median(single_times)
         t_stack, _ = median_time(
-            lambda: ftcal.fit_stacked([clone(member).set_params(random_state=s) for s in range(args.stack)], raw, w),
+            lambda: ftcal.networks.fit_stacked([clone(member).set_params(random_state=s) for s in range(args.stack)], raw, w),
             1)
-    rmse = ftcal.wrench_rmse(test_w, model.predict(test_raw), alpha=50.0)
-    rmse_ensemble = ftcal.wrench_rmse(test_w, ensemble.predict(test_raw), alpha=50.0)
-    ltm = ftcal.wrench_rmse(test_w, ftcal.LinearCalibrator(alpha=50.0).fit(raw, w).predict(test_raw), alpha=50.0)
+    rmse = ftcal.core.wrench_rmse(test_w, model.predict(test_raw), alpha=50.0)
+    rmse_ensemble = ftcal.core.wrench_rmse(test_w, ensemble.predict(test_raw), alpha=50.0)
+    ltm = ftcal.core.wrench_rmse(test_w, ftcal.LinearCalibrator(alpha=50.0).fit(raw, w).predict(test_raw), alpha=50.0)
 
     one = test_raw[:1].copy()
     layers = [(w.astype(np.float32), b.astype(np.float32), a) for w, b, a in model.fitted_layers()]  # the float32 floor

@@ -1,6 +1,6 @@
 """Issue 23 figures: fewer poses for the same accuracy (optimal plans, "which poses next").
 
-On the virtual robot (KUKA iiwa 14, :func:`ftcal.simulate_experiment`, thesis load configurations and
+On the virtual robot (KUKA iiwa 14, :func:`ftcal.experiment.simulate_experiment`, thesis load configurations and
 robot errors), for each sensor preset and seed: one virtual sensor (its error parameters drawn from
 the seed), a held-out set of poses, and training plans of several sizes --
 
@@ -8,11 +8,11 @@ the seed), a held-out set of poses, and training plans of several sizes --
 * ``random``: N reachable directions of the level-3 candidate sphere, uniformly;
 * ``d-optimal``: N of them by ``plan_calibration_poses(strategy="d-optimal")``;
 * ``next``: sequential rounds, starting from the D-optimal plan of the smallest size and adding
-  ``--next-step`` poses per round by :func:`ftcal.propose_next_poses` with a Gaussian-process model
+  ``--next-step`` poses per round by :func:`ftcal.experiment.propose_next_poses` with a Gaussian-process model
   fitted on the data so far.
 
 Each plan is run as a load / no-load experiment with all seven load configurations and paired by
-:func:`ftcal.prepare_dataset` exactly as real logs would be; the LTM (``linear``) and ``auto`` are fitted
+:func:`ftcal.experiment.prepare_dataset` exactly as real logs would be; the LTM (``linear``) and ``auto`` are fitted
 and scored on the held-out poses (torque-scaled RMSE [N], ``alpha`` of the sensor). The held-out poses
 are 100 directions of the level-4 sphere that are not level-3 vertices (so no candidate of any plan is a
 test pose), all reachable, run with all load configurations.
@@ -27,7 +27,7 @@ Usage::
     nice -n 19 python benchmarks/planning.py [--sensors thesis,reconstructed,soft] [--seeds 0,1,2]
         [--sizes 12,24,52] [--models linear,auto] [--out benchmarks/results/planning]
 
-``--sensors`` takes error-preset names of :func:`ftcal.error_preset` (``ftcal.ERROR_PRESETS``); presets
+``--sensors`` takes error-preset names of :func:`ftcal.simulation.error_preset` (``ftcal.simulation.ERROR_PRESETS``); presets
 added later (``reconstructed``, the soft-sensor preset) are used by name once they exist. Every fit
 is cached as one JSON file in ``<out>/cache/`` (out of git), so an interrupted run resumes; the LTM pass
 runs over every seed before the (much slower) ``auto`` pass. The
@@ -58,12 +58,12 @@ GEODESIC = {12: 0, 42: 1, 155: 2}
 NETWORKS = ("directional", "comparative", "directional_ensemble", "comparative_ensemble")
 
 
-def make_sensor(name: str, seed: int) -> "ftcal.VirtualSensor":
+def make_sensor(name: str, seed: int) -> "ftcal.simulation.VirtualSensor":
     """The virtual sensor of a preset name, error parameters and tare drawn from ``seed``."""
-    if name not in ftcal.ERROR_PRESETS:
-        raise SystemExit(f"planning.py: unknown sensor preset {name!r}; known: {sorted(ftcal.ERROR_PRESETS)}")
+    if name not in ftcal.simulation.ERROR_PRESETS:
+        raise SystemExit(f"planning.py: unknown sensor preset {name!r}; known: {sorted(ftcal.simulation.ERROR_PRESETS)}")
     rng = np.random.default_rng(1000 + seed)
-    sensor = ftcal.VirtualSensor(errors=name, random_state=rng)
+    sensor = ftcal.simulation.VirtualSensor(errors=name, random_state=rng)
     fs = np.array([sensor.profile.fmax] * 3 + [sensor.profile.tmax] * 3)
     sensor.zero_offset = sensor.profile.reading_from_wrench((rng.normal(0.0, 0.005, 6) * fs)[None])[0]
     return sensor
@@ -83,8 +83,8 @@ def auto_calibrator(seed: int):
 
 def run_plan(robot, plan, sensor, seed: int):
     with tempfile.TemporaryDirectory() as tmp:
-        paths = ftcal.simulate_experiment(tmp, robot=robot, plan=plan, sensor=sensor, random_state=seed)
-        return ftcal.prepare_dataset(paths, robot)
+        paths = ftcal.experiment.simulate_experiment(tmp, robot=robot, plan=plan, sensor=sensor, random_state=seed)
+        return ftcal.experiment.prepare_dataset(paths, robot)
 
 
 def held_out_plan(robot, cache: Path):
@@ -93,17 +93,17 @@ def held_out_plan(robot, cache: Path):
     if path.exists():
         d = np.load(path)
         return d["g"], d["q"]
-    fine = ftcal.reachable_candidates(robot, subdivisions=4)
-    coarse = ftcal.gravity_directions_in_sensor(3, excluded_cap_deg=0)
+    fine = ftcal.robot.reachable_candidates(robot, subdivisions=4)
+    coarse = ftcal.robot.gravity_directions_in_sensor(3, excluded_cap_deg=0)
     new = np.max(fine.gravity_in_sensor @ coarse.T, axis=1) < 1 - 1e-9
     idx = np.sort(np.random.default_rng(2024).choice(np.flatnonzero(new), 100, replace=False))
     np.savez(path, g=fine.gravity_in_sensor[idx], q=fine.q[idx])
     return fine.gravity_in_sensor[idx], fine.q[idx]
 
 
-def as_plan(robot, g, q, name: str) -> "ftcal.CalibrationPlan":
-    pitch, yaw = ftcal.pitch_yaw_from_gravity_in_sensor(g)
-    return ftcal.CalibrationPlan(q=q, gravity_in_sensor=g, pitch=pitch, yaw=yaw, unreachable=np.zeros((0, 3)),
+def as_plan(robot, g, q, name: str) -> "ftcal.robot.CalibrationPlan":
+    pitch, yaw = ftcal.robot.pitch_yaw_from_gravity_in_sensor(g)
+    return ftcal.robot.CalibrationPlan(q=q, gravity_in_sensor=g, pitch=pitch, yaw=yaw, unreachable=np.zeros((0, 3)),
                                  anchor_position_in_base=np.zeros(3), robot_name=robot.name,
                                  sensor_frame=robot.sensor_frame, anchor_frame=robot.anchor_frame,
                                  n_candidates=len(g), settings={"strategy": name})
@@ -119,7 +119,7 @@ def score(model_name: str, train, test, alpha: float, seed: int) -> dict:
         else:
             model.fit(train.raw, train.wrench)
         seconds = time.perf_counter() - t0
-    out = {"rmse": ftcal.wrench_rmse(test.wrench, model.predict(test.raw), alpha=alpha), "fit_seconds": seconds}
+    out = {"rmse": ftcal.core.wrench_rmse(test.wrench, model.predict(test.raw), alpha=alpha), "fit_seconds": seconds}
     if model_name == "auto":
         out["chosen"] = str(model.best_name_)
         out["auto_settings"] = AUTO_SETTINGS
@@ -139,10 +139,10 @@ def load_candidates(robot, cache: Path):
     path = cache / "candidates_level3.npz"
     if path.exists():
         d = np.load(path, allow_pickle=False)
-        return ftcal.CandidatePoses(gravity_in_sensor=d["g"], q=d["q"], unreachable=d["u"],
+        return ftcal.robot.CandidatePoses(gravity_in_sensor=d["g"], q=d["q"], unreachable=d["u"],
                                     anchor_position_in_base=d["a"], n_candidates=int(d["n"]),
                                     settings=json.loads(str(d["s"])))
-    c = ftcal.reachable_candidates(robot, subdivisions=3)
+    c = ftcal.robot.reachable_candidates(robot, subdivisions=3)
     np.savez(path, g=c.gravity_in_sensor, q=c.q, u=c.unreachable, a=c.anchor_position_in_base, n=c.n_candidates,
              s=json.dumps(c.settings))
     return c
@@ -152,7 +152,7 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
     """One pass per model (the cheap LTM first, over every seed; then ``auto``), every result cached."""
     cache = out / "cache"
     cache.mkdir(parents=True, exist_ok=True)
-    robot = ftcal.load_robot()
+    robot = ftcal.robot.load_robot()
     candidates = load_candidates(robot, cache)
     g_test, q_test = held_out_plan(robot, cache)
     for model_name in models:
@@ -168,20 +168,20 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
                 for strategy, n in jobs:
                     def compute(strategy=strategy, n=n):
                         if strategy == "geodesic":
-                            plan = ftcal.plan_calibration_poses(robot, subdivisions=GEODESIC[n],
+                            plan = ftcal.robot.plan_calibration_poses(robot, subdivisions=GEODESIC[n],
                                                                 excluded_cap_deg=0 if n == 12 else 20)
                         else:
-                            plan = ftcal.plan_calibration_poses(robot, strategy=strategy, n_poses=n,
+                            plan = ftcal.robot.plan_calibration_poses(robot, strategy=strategy, n_poses=n,
                                                                 candidates=candidates, random_state=seed)
                         train = run_plan(robot, plan, sensor, 100 * seed + n)
                         return {"sensor": sensor_name, "seed": seed, "strategy": strategy, "n_poses": plan.n_poses,
-                                "model": model_name, "d_criterion": ftcal.d_criterion(plan.gravity_in_sensor),
+                                "model": model_name, "d_criterion": ftcal.robot.d_criterion(plan.gravity_in_sensor),
                                 **score(model_name, train, test, alpha, seed)}
                     r = cached(cache / f"{sensor_name}_s{seed}_{strategy}_{n}_{model_name}.json", compute)
                     print(f"{model_name:6s} {sensor_name} seed {seed} {strategy:9s} {r['n_poses']:4d} poses: "
                           f"{r['rmse']:.4f} N", flush=True)
                 # sequential "next" rounds from the smallest D-optimal plan, a GP telling where to measure
-                plan = ftcal.plan_calibration_poses(robot, strategy="d-optimal", n_poses=min(sizes),
+                plan = ftcal.robot.plan_calibration_poses(robot, strategy="d-optimal", n_poses=min(sizes),
                                                     candidates=candidates)
                 g, q = plan.gravity_in_sensor, plan.q
                 train = run_plan(robot, plan, sensor, 100 * seed + len(g))
@@ -190,14 +190,14 @@ def run(sensors, seeds, sizes, next_step: int, models, out: Path) -> None:
                     poses = cache / f"{sensor_name}_s{seed}_next_{len(g) + next_step}_poses.npz"
                     if not poses.exists():  # the proposals of a round, shared by the model passes
                         gp = ftcal.GaussianProcessCalibrator(alpha=alpha, random_state=seed).fit(train.raw, train.wrench)
-                        prop = ftcal.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
+                        prop = ftcal.experiment.propose_next_poses(robot, train, gp, next_step, candidates=candidates)
                         np.savez(poses, g=prop.gravity_in_sensor, q=prop.q, gain=prop.expected_gain.sum())
                     d = np.load(poses)
                     g, q, gain = np.vstack([g, d["g"]]), np.vstack([q, d["q"]]), float(d["gain"])
                     train = run_plan(robot, as_plan(robot, g, q, "next"), sensor, 100 * seed + len(g) + 7)
                     r = cached(key, lambda: {"sensor": sensor_name, "seed": seed, "strategy": "next",
                                              "n_poses": len(g), "model": model_name,
-                                             "d_criterion": ftcal.d_criterion(g),
+                                             "d_criterion": ftcal.robot.d_criterion(g),
                                              "expected_gain": gain,
                                              **score(model_name, train, test, alpha, seed)})
                     print(f"{model_name:6s} {sensor_name} seed {seed} next      {len(g):4d} poses: {r['rmse']:.4f} N",

@@ -1,6 +1,6 @@
 """Real-world benchmark (thesis V-B, Tables IV-V, Fig. 6) on the simulated robot experiment.
 
-Thin wrapper around :func:`ftcal.run_real_world_benchmark`: runs it, prints the
+Thin wrapper around :func:`ftcal.benchmark.run_real_world_benchmark`: runs it, prints the
 tables as Markdown beside the thesis' values, writes the results as JSON and
 the Fig. 6-like plot as PNG.
 
@@ -17,7 +17,8 @@ from pathlib import Path
 
 import torch
 
-from ftcal import CALIBRATOR_NAMES, run_real_world_benchmark
+from ftcal.compose import CALIBRATOR_NAMES
+from ftcal.benchmark import run_real_world_benchmark
 from ftcal.benchmark import SPLIT_NAMES
 
 from _output import single_output

@@ -29,7 +29,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import CALIBRATOR_NAMES, ERROR_PRESETS, SensorProfile, make_artificial_dataset, scale_torques
+from ftcal.compose import CALIBRATOR_NAMES
+from ftcal.simulation import ERROR_PRESETS, SensorProfile
+from ftcal import make_artificial_dataset
+from ftcal.core import scale_torques
 from ftcal.benchmark import dataset_seeds, make_model
 from ftcal.core import atomic_output, data_fingerprint
 from ftcal.calibrators import STOCK_BASELINE_NAMES

@@ -5,7 +5,7 @@ Usage::
     python benchmarks/soft_history.py [--out benchmarks/results/auto_vs_stock/soft_history.json] [--force]
 
 The press-grouped 5-fold of ``benchmarks/auto_vs_stock.py``'s ``soft_grouped`` case
-(:func:`ftcal.make_soft_sensor_dataset`, 418 rows in recording order, whole presses held out). Every model
+(:func:`ftcal.simulation.make_soft_sensor_dataset`, 418 rows in recording order, whole presses held out). Every model
 is fitted on the training presses (in recording order) and predicts the held-out presses as one recording
 (in recording order, starting at rest: what ``cross_val_predict`` gives; no reading of a training press
 feeds the history of a held-out one). Scored with eq. 18:
@@ -13,7 +13,7 @@ feeds the history of a held-out one). Scored with eq. 18:
 * the static models: ftcal's ``polynomial(degree=3, ridge=0.01)`` (what ``auto`` chooses here), ``auto``
   itself and the five stock scikit-learn baselines;
 * **ftcal's history term** (:class:`ftcal.HistoryCalibrator`, ``ftcal fit --history``): the static model
-  plus a linear map of :func:`ftcal.reading_history` of the readings (their moving average over the rows
+  plus a linear map of :func:`ftcal.compose.reading_history` of the readings (their moving average over the rows
   before each row, minus the row: readings only, nothing a deployed sensor lacks), fitted jointly by
   backfitting, its time constant chosen from ``(1, 2, 4, 8, 16)`` rows by an inner press-grouped CV on the
   training presses alone (the simulator's own, 3 rows, is not given), or no term when it does not pay;
@@ -39,7 +39,7 @@ from _output import parse_output
 
 def main() -> None:
     out = parse_output(__doc__, "benchmarks/results/auto_vs_stock/soft_history.json")
-    d = ftcal.make_soft_sensor_dataset()
+    d = ftcal.simulation.make_soft_sensor_dataset()
     raw, wrench, groups, alpha = d.raw, d.wrench, d.group, d.meta["alpha"]
     stock = list(stock_baselines(raw.shape[1]))
     names = ["polynomial(degree=3, ridge=0.01)", "auto", *stock, "history(polynomial(degree=3, ridge=0.01))",
@@ -71,13 +71,13 @@ def main() -> None:
         chosen["history(auto)"].append(ha.tau_rows_)
         chosen["history(auto) static"].append(ha.static_choice_)
         tau = hp.tau_rows_ or 2.0  # the stock models get the time constant ftcal chose (2 rows if it chose none)
-        with_history = (np.c_[X, ftcal.reading_history(X, tau)],
-                        np.c_[raw[test], ftcal.reading_history(raw[test], tau)])
+        with_history = (np.c_[X, ftcal.compose.reading_history(X, tau)],
+                        np.c_[raw[test], ftcal.compose.reading_history(raw[test], tau)])
         for name, model in stock_baselines(raw.shape[1], random_state=0).items():
             pred[name][test] = model.fit(X, y).predict(raw[test])
         for name, model in stock_baselines(2 * raw.shape[1], random_state=0).items():
             pred[f"{name} + history columns"][test] = model.fit(with_history[0], y).predict(with_history[1])
-    rmse = {n: ftcal.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
+    rmse = {n: ftcal.core.wrench_rmse(wrench, p, alpha=alpha) for n, p in pred.items()}
     best_stock = min(rmse[s] for s in stock)
     best_stock_history = min(rmse[f"{s} + history columns"] for s in stock)
     result = {"rmse": rmse, "best_stock": best_stock, "best_stock_with_history_columns": best_stock_history,

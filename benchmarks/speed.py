@@ -37,7 +37,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from ftcal import CALIBRATOR_NAMES, make_calibrator
+from ftcal.compose import CALIBRATOR_NAMES
+from ftcal import make_calibrator
 
 RESULTS = Path(__file__).with_name("RESULTS.md")
 SECTION = "## Speed (issue 2)"
@@ -122,7 +123,7 @@ def render(args, short: dict, thesis: dict, predict: dict) -> str:
     lines += [
         "",
         "Schedules: `short` = 150 (directional) / 250 (comparative) phase-1 epochs + 30 plateau + up to 50 "
-        "recover; `thesis` = 1700 / 3000 + 100 + up to 500 (see `ftcal.training_schedule`). "
+        "recover; `thesis` = 1700 / 3000 + 100 + up to 500 (see `ftcal.compose.training_schedule`). "
         "The thesis schedule was fitted once per model (minutes each), so its figure is one sample, not a median. "
         "Epochs = epochs actually run (phase 3 ends early by the 5 % rule).",
         "",

@@ -5,7 +5,7 @@ Usage::
     python benchmarks/thermal_drift.py [--datasets 5] [--out benchmarks/results/thermal_drift]
 
 For each preset and dataset: the calibration and test data are read at random temperatures in a 20 deg C
-range (15-35 deg C) by a sensor with data-sheet drift (``ftcal.ThermalDrift.typical``: zero 0.03 % FS/deg C,
+range (15-35 deg C) by a sensor with data-sheet drift (``ftcal.core.ThermalDrift.typical``: zero 0.03 % FS/deg C,
 span 0.02 %/deg C, and the upper bound 0.05 / 0.03), then the LTM and the hybrid are fitted without and
 with ``TemperatureCompensatedCalibrator``. The share of the drift's error removed is
 ``1 - (MSE_compensated - MSE_no_drift) / (MSE_drift - MSE_no_drift)``. Only public ftcal names are used.
@@ -35,7 +35,7 @@ def run(n_datasets: int) -> dict:
             for seed in range(n_datasets):
                 train, test, info = ftcal.make_artificial_dataset(preset=preset, random_state=seed)
                 rng = np.random.default_rng(1000 + seed)
-                drift = ftcal.ThermalDrift.typical(np.abs(train.raw).max(axis=0), zero_pct_per_deg=zero_pct,
+                drift = ftcal.core.ThermalDrift.typical(np.abs(train.raw).max(axis=0), zero_pct_per_deg=zero_pct,
                                                    span_pct_per_deg=span_pct, random_state=rng)
                 t_train = rng.uniform(15, 35, train.n_samples)
                 t_test = rng.uniform(15, 35, test.n_samples)
@@ -44,7 +44,7 @@ def run(n_datasets: int) -> dict:
                 for name, cls in (("linear", ftcal.LinearCalibrator), ("axis_nonlinear", ftcal.AxisNonlinearCalibrator)):
                     def mse(model, X_train, X_test):
                         model.fit(X_train, train.wrench)
-                        return ftcal.wrench_rmse(test.wrench, model.predict(X_test), alpha=alpha) ** 2
+                        return ftcal.core.wrench_rmse(test.wrench, model.predict(X_test), alpha=alpha) ** 2
 
                     clean = mse(cls(alpha=alpha), train.raw, test.raw)
                     drifted = mse(cls(alpha=alpha), drift.apply(train.raw, t_train), drift.apply(test.raw, t_test))

@@ -34,7 +34,7 @@ def cases(auto: bool):
     rng = np.random.default_rng(0)
     X = rng.normal(size=(5000, 8))
     Y = X[:, :6] @ rng.normal(size=(6, 6)) + 0.05 * X[:, 6:7] ** 2
-    soft = ftcal.make_soft_sensor_dataset(random_state=0)
+    soft = ftcal.simulation.make_soft_sensor_dataset(random_state=0)
     yield "LinearCalibrator, 5000 x 8", lambda: ftcal.LinearCalibrator().fit(X, Y)
     yield "PolynomialCalibrator(degree=2), 5000 x 8", lambda: ftcal.PolynomialCalibrator(degree=2).fit(X, Y)
     yield "GaussianProcessCalibrator (rbf, shared), 418 x 8", lambda: ftcal.GaussianProcessCalibrator(

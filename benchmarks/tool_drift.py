@@ -45,8 +45,8 @@ def recording(seed: int, drift: bool, robot) -> tuple[np.ndarray, np.ndarray, np
     """Rotations (100, 3, 3), wrenches (100, 6) and the recording order (100,) of one simulated recording."""
     rng = np.random.default_rng(seed)
     q = rng.uniform(robot.lower_limits, robot.upper_limits, size=(N_POSES, robot.n_joints))
-    R = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
-    tool = ftcal.ToolLoad(mass=MASS, center_of_mass=COM, bias=rng.normal(0, [2, 2, 2, 0.1, 0.1, 0.1]))
+    R = ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]
+    tool = ftcal.experiment.ToolLoad(mass=MASS, center_of_mass=COM, bias=rng.normal(0, [2, 2, 2, 0.1, 0.1, 0.1]))
     W = tool.gravity_wrench(R)
     W[:, :3] += FORCE_NOISE * rng.normal(size=(N_POSES, 3))
     W[:, 3:] += TORQUE_NOISE * rng.normal(size=(N_POSES, 3))
@@ -66,8 +66,8 @@ def recording(seed: int, drift: bool, robot) -> tuple[np.ndarray, np.ndarray, np
 
 def held_out(R, W, order, fit, test, **kwargs) -> tuple[float, bool]:
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", ftcal.DriftExtrapolationWarning)
-        tool = ftcal.identify_tool_load(R[fit], W[fit], GRAVITY, times=order[fit], time_unit="pose", **kwargs)
+        warnings.simplefilter("ignore", ftcal.experiment.DriftExtrapolationWarning)
+        tool = ftcal.experiment.identify_tool_load(R[fit], W[fit], GRAVITY, times=order[fit], time_unit="pose", **kwargs)
         external = tool.compensate(R[test], W[test], times=order[test])
     return float(np.mean(np.linalg.norm(external[:, :3], axis=1))), tool.drift is not None
 
@@ -78,7 +78,7 @@ def main(argv=None) -> int:
     parser.add_argument("--seeds", type=int, default=3, help="simulated recordings per case")
     parser.add_argument("--output", default=str(Path(__file__).parent / "results" / "tool_drift.json"))
     args = parser.parse_args(argv)
-    robot = ftcal.load_robot("kuka_iiwa14")
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
     methods = {"constant": {"drift": "none"}, "linear": {"drift": "linear"}, "ftcal": {"drift": "auto"}}
     summary = {}
     for case in ("drift", "no drift"):

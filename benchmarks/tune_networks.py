@@ -3,7 +3,7 @@
 
 For each preset:
 
-1. **search** -- :func:`ftcal.search_calibrator` (scikit-learn's randomized search over
+1. **search** -- :func:`ftcal.compose.search_calibrator` (scikit-learn's randomized search over
    :data:`ftcal.compose._search.DEFAULT_SEARCH_SPACES`, k-fold cross-validated torque-scaled RMSE, eq. 18) on a *tuning*
    dataset whose seed is not one of the benchmark's (``--tuning-seed``), so the validation below is not
    scored on data the search has seen;
@@ -36,7 +36,10 @@ from pathlib import Path
 import numpy as np
 from joblib import Parallel, delayed
 
-from ftcal import SensorProfile, make_artificial_dataset, make_calibrator, search_calibrator, wrench_rmse
+from ftcal.simulation import SensorProfile
+from ftcal import make_artificial_dataset, make_calibrator
+from ftcal.compose import search_calibrator
+from ftcal.core import wrench_rmse
 from ftcal.core import mean_std, plain_json
 from ftcal.benchmark import dataset_seeds, format_mean_std, wilcoxon_pvalue
 from ftcal.compose import search_summary

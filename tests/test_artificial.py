@@ -7,16 +7,9 @@ import json
 import numpy as np
 import pytest
 
-from ftcal import (
-    CalibrationDataset,
-    CalibrationInputError,
-    ErrorModel,
-    LinearCalibrator,
-    SensorProfile,
-    VirtualSensor,
-    make_artificial_dataset,
-    wrench_rmse,
-)
+from ftcal import CalibrationDataset, LinearCalibrator, make_artificial_dataset
+from ftcal.core import CalibrationInputError, wrench_rmse
+from ftcal.simulation import ErrorModel, SensorProfile, VirtualSensor
 from ftcal.core._wrench import scale_torques
 
 

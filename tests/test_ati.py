@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import CalFileError, read_ati_calibration
+from ftcal.core import CalFileError
+from ftcal.simulation import read_ati_calibration
 
 AXES = ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
 

@@ -9,14 +9,9 @@ from sklearn.model_selection import GridSearchCV, GroupKFold
 from sklearn.pipeline import Pipeline
 
 import ftcal
-from ftcal import (
-    AutoCalibrator,
-    AxisNonlinearCalibrator,
-    CalibrationInputError,
-    GaussianProcessCalibrator,
-    LinearCalibrator,
-    PolynomialCalibrator,
-)
+from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, GaussianProcessCalibrator, LinearCalibrator,
+                   PolynomialCalibrator)
+from ftcal.core import CalibrationInputError
 from ftcal.model_selection._selection import calibration_folds
 from ftcal.compose._auto import _offsets_identifiable
 from ftcal.calibrators._zero_load import estimate_zero_reading
@@ -171,7 +166,7 @@ def test_gp_std_is_calibrated_on_rows_it_did_not_see():
     # 300-row subset widens it. 12 000 checks: a binomial standard error of ~0.3 %, so the bounds separate a
     # calibrated std (>= 90 %, the band) from the uncalibrated one by several errors.
     train, test, _ = ftcal.make_artificial_dataset("reconstructed", random_state=1, n_per_sphere=300, n_test=2000)
-    alpha = ftcal.alpha_from_wrenches(train.wrench)
+    alpha = ftcal.core.alpha_from_wrenches(train.wrench)
     gp = GaussianProcessCalibrator(alpha=alpha, random_state=0, max_samples=300).fit(train.raw, train.wrench)
     assert gp.std_scale_.shape == (6,) and (gp.std_scale_ >= 1.0).all() and gp.std_scale_.max() > 1.05
     pred, std = gp.predict(test.raw, return_std=True)
@@ -244,7 +239,7 @@ def test_gp_subset_approximation_for_large_data():
     assert gp.train_inputs_.shape == (200, 6)
     ltm = LinearCalibrator(alpha=1.0).fit(raw, w)
     test_raw, test_w = smooth_data(500, seed=4)
-    assert ftcal.wrench_rmse(test_w, gp.predict(test_raw), alpha=1.0) < ftcal.wrench_rmse(
+    assert ftcal.core.wrench_rmse(test_w, gp.predict(test_raw), alpha=1.0) < ftcal.core.wrench_rmse(
         test_w, ltm.predict(test_raw), alpha=1.0)
 
 
@@ -290,7 +285,7 @@ def test_tare_estimate_is_unbiased_under_sign_dependent_gains():
 
 @pytest.mark.parametrize("scale", [-1.0, 0.0, np.inf, np.nan, "short"])
 def test_a_gp_whose_std_factors_were_edited_is_refused(scale):
-    from ftcal import ModelFileError
+    from ftcal.core import ModelFileError
 
     raw, w = smooth_data(60, seed=1)
     gp = GaussianProcessCalibrator(alpha=1.0, random_state=0, per_output=False).fit(raw, w)

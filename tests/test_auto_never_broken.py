@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import AutoCalibrator, CalibrationInputError, LinearCalibrator, PolynomialCalibrator
+from ftcal import AutoCalibrator, LinearCalibrator, PolynomialCalibrator
+from ftcal.core import CalibrationInputError
 from ftcal.model_selection._selection import (DegenerateCalibrationError, calibration_folds, check_not_degenerate,
                                          degenerate_reason, simplest_within_one_se, unseen_outputs)
 from ftcal.compose._auto import with_stock_candidates
@@ -16,7 +17,7 @@ from ftcal.simulation._field_sensors import make_dead_weight_dataset
 
 
 def validation_rmse(model, validation, alpha):
-    return ftcal.wrench_rmse(validation.wrench, model.predict(validation.raw), alpha=alpha)
+    return ftcal.core.wrench_rmse(validation.wrench, model.predict(validation.raw), alpha=alpha)
 
 
 # ------------------------------------------------------------------ one group per loaded axis, 15 rows

@@ -12,8 +12,8 @@ from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import cross_val_predict
 
 import ftcal
-from ftcal import (AutoCalibrator, CalibrationInputError, GaussianProcessCalibrator, LinearCalibrator,
-                   PolynomialCalibrator)
+from ftcal import AutoCalibrator, GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator
+from ftcal.core import CalibrationInputError
 from ftcal.core._memory import MemoryLimitError
 from ftcal.model_selection._selection import calibration_folds, simplest_within_one_se
 from ftcal.calibrators import STOCK_BASELINE_NAMES
@@ -47,7 +47,7 @@ def test_cv_rmse_is_eq_18_over_all_torque_scaled_values():
     auto = AutoCalibrator(candidates=FAST[:1], alpha=3.0, baselines=False, stack=False).fit(raw, w, groups=groups)
     folds = calibration_folds(len(raw), groups, 5, 0)
     pred = cross_val_predict(LinearCalibrator(alpha=3.0), raw, w, cv=folds)
-    assert auto.comparison_["rmse"][0] == pytest.approx(ftcal.wrench_rmse(w, pred, alpha=3.0), rel=1e-9)
+    assert auto.comparison_["rmse"][0] == pytest.approx(ftcal.core.wrench_rmse(w, pred, alpha=3.0), rel=1e-9)
 
 
 # ------------------------------------------------------------------ the one 1-SE rule
@@ -348,7 +348,7 @@ def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsampl
 @pytest.mark.parametrize("n_rows", [15, 30, 50])
 def test_few_dead_weight_rows_auto_is_never_worse_than_1_1x_the_ltm_at_2x_the_range(n_rows):
     cal, val = make_dead_weight_dataset(n_rows, random_state=0)
-    alpha = ftcal.alpha_from_wrenches(cal.wrench)
+    alpha = ftcal.core.alpha_from_wrenches(cal.wrench)
     auto = AutoCalibrator(alpha=alpha, baselines=False,
                           candidates=[c for c in ftcal.compose._auto.default_candidates()
                                       if c[0] not in ("directional", "comparative")]).fit(cal.raw, cal.wrench)
@@ -360,8 +360,8 @@ def test_few_dead_weight_rows_auto_is_never_worse_than_1_1x_the_ltm_at_2x_the_ra
             est = dict(ftcal.compose._auto.default_candidates())[name]
             assert r["eligible"][k] == (r["min_training_rows"] >= minimum_training_rows(est, cal.n_channels))
     ltm = LinearCalibrator(alpha=alpha).fit(cal.raw, cal.wrench)
-    rmse_auto = ftcal.wrench_rmse(val.wrench, auto.predict(val.raw), alpha)
-    assert rmse_auto <= 1.1 * ftcal.wrench_rmse(val.wrench, ltm.predict(val.raw), alpha)
+    rmse_auto = ftcal.core.wrench_rmse(val.wrench, auto.predict(val.raw), alpha)
+    assert rmse_auto <= 1.1 * ftcal.core.wrench_rmse(val.wrench, ltm.predict(val.raw), alpha)
     # readings beyond the calibrated range are flagged, those inside are not
     assert not auto.out_of_range(cal.raw).any()
     assert auto.out_of_range(val.raw).mean() > 0.5
@@ -435,7 +435,7 @@ def test_simulated_presets_have_the_documented_shape_and_a_noise_floor():
     assert robot.raw.shape == (20_000, 8) and np.unique(robot.group).size == 45
     # the soft sensor is strongly nonlinear: the LTM is far above the floor even on its own training rows
     ltm = LinearCalibrator(alpha=soft.meta["alpha"]).fit(soft.raw, soft.wrench)
-    assert ftcal.wrench_rmse(soft.wrench, ltm.predict(soft.raw), soft.meta["alpha"]) > 4 * soft.meta["noise_floor_rmse"]
+    assert ftcal.core.wrench_rmse(soft.wrench, ltm.predict(soft.raw), soft.meta["alpha"]) > 4 * soft.meta["noise_floor_rmse"]
 
 
 # ------------------------------------------------------------------ CLI: predict --std

@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import LogFormatError, ToolLoad
+from ftcal.core import LogFormatError
+from ftcal.experiment import ToolLoad
 from ftcal.cli import main
 from ftcal.experiment._virtual_recording import continuous_recording
 from ftcal.io._bags import bag_topics, read_bag, write_bag
@@ -25,13 +26,13 @@ T0 = 1.7e9  # a ROS clock
 
 @pytest.fixture(scope="module")
 def robot_poses():
-    robot = ftcal.load_robot("kuka_iiwa14")
-    plan = ftcal.plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0)
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
+    plan = ftcal.robot.plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0)
     return robot, plan.q
 
 
 def _tool_recording(robot, q, seed, **kwargs):
-    R = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
+    R = ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]
     options = dict(still_s=4.0, move_s=2.0, sensor_rate_hz=100.0, pose_rate_hz=40.0, settle_amplitude=1.0,
                    settle_tau_s=0.5, noise=NOISE, start_time_s=T0, random_state=seed)
     options.update(kwargs)
@@ -63,7 +64,7 @@ def test_identify_load_from_a_bag_recovers_the_tool_within_its_standard_errors(t
 def test_identify_load_takes_the_orientation_from_tf_and_raw_gauges_through_a_model(tmp_path, capsys, robot_poses):
     robot, q = robot_poses
     rec = _tool_recording(robot, q, seed=2)
-    R_at_pose_times = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    R_at_pose_times = ftcal.robot.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
     gain = np.diag([50.0, 50.0, 50.0, 2000.0, 2000.0, 2000.0])  # raw units per N and per N·m
     raw = rec.reading @ gain.T
     bag = write_bag(tmp_path / "raw.bag", "ros1", sensor_time=rec.sensor_time, reading=raw, raw=True,
@@ -284,7 +285,7 @@ def test_a_wrench_bag_with_tf_and_no_joint_states_is_told_to_use_tf_with_its_own
                                                                                          robot_poses):
     robot, q = robot_poses
     rec = _tool_recording(robot, q, seed=4)
-    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    R = ftcal.robot.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
     bag = write_bag(tmp_path / "tf_only", "mcap", sensor_time=rec.sensor_time, reading=rec.reading,
                     pose_time=rec.pose_time, rotations=R, tf_frames=("world", "ft_link"), frame_id="ft_link")
     assert main(["identify-load", str(bag), "--out", str(tmp_path / "t")]) == 2
@@ -315,7 +316,7 @@ def test_a_wrench_bag_in_newton_millimetres_is_refused_naming_the_unit_until_dec
     rec = _tool_recording(robot, q, seed=5)
     reading = rec.reading.copy()
     reading[:, 3:] *= 1000.0  # a driver publishing N·mm
-    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    R = ftcal.robot.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
     bag = write_bag(tmp_path / "nmm", "sqlite3", sensor_time=rec.sensor_time, reading=reading,
                     pose_time=rec.pose_time, rotations=R)
     assert main(["identify-load", str(bag), "--tf", "base_link,ft_sensor", "--out", str(tmp_path / "t")]) == 2
@@ -348,7 +349,7 @@ def test_wrenches_stamped_in_another_frame_than_the_tf_sensor_frame_are_refused_
     # are stamped in ft_sensor: naming the flange as the sensor frame would rotate them by 90 deg without a word
     robot, q = robot_poses
     rec = _tool_recording(robot, q, seed=6)
-    R = ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
+    R = ftcal.robot.sensor_pose_in_base(robot, rec.joints)[:, :3, :3]
     bag = write_bag(tmp_path / "frames", "sqlite3", sensor_time=rec.sensor_time, reading=rec.reading,
                     pose_time=rec.pose_time, rotations=R, frame_id="/ft_sensor")
     with pytest.raises(LogFormatError, match="expressed in frame 'ft_sensor'.*not in 'flange'") as info:

@@ -15,7 +15,9 @@ import numpy as np
 import pytest
 import sklearn
 
-from ftcal import BenchmarkOutputExistsError, CalibrationInputError, ErrorModel, run_artificial_benchmark
+from ftcal.core import BenchmarkOutputExistsError, CalibrationInputError
+from ftcal.simulation import ErrorModel
+from ftcal.benchmark import run_artificial_benchmark
 from ftcal.benchmark import OutputFiles
 from ftcal.benchmark._artificial import summarize_results, wilcoxon_pvalue
 
@@ -279,7 +281,7 @@ def test_stock_baselines_sit_beside_the_calibrators_and_presets_bring_their_test
 
 
 def test_custom_error_models_by_name_and_fewer_spheres(tmp_path):
-    from ftcal import ErrorModel
+    from ftcal.simulation import ErrorModel
 
     presets = {"clean": ErrorModel(), "gain10": ErrorModel(asymmetry=0.1, asymmetry_axes=6)}
     res = run_artificial_benchmark(quick=True, n_datasets=1, presets=presets, models=("linear",), out_dir=tmp_path,

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import LinearCalibrator, TemperatureCompensatedCalibrator, ThermalDrift
+from ftcal import LinearCalibrator, TemperatureCompensatedCalibrator
+from ftcal.core import ThermalDrift
 from ftcal.calibrators._base import CalibrationTags, FtcalTags, calibration_tags
 from ftcal.calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator, stock_baselines
 from ftcal.compose._registry import CALIBRATOR_NAMES, _CANDIDATES, _FACTORIES, _SEARCH_SPACES, make_calibrator, \
@@ -61,7 +62,7 @@ def test_tags_say_what_the_code_used_to_guess():
 TOY_MODULE = '''
 """A toy calibrator: the LTM fitted on twice the readings (one module; nothing else in ftcal edited)."""
 import numpy as np
-from ftcal.calibrators._base import BaseCalibrator, declare
+from ftcal.calibrators import BaseCalibrator, declare
 
 
 class ToyCalibrator(BaseCalibrator):
@@ -144,7 +145,7 @@ def test_a_stock_kernel_calibrator_stores_at_most_its_subsample(tmp_path):
 
 def test_a_stock_calibrator_refuses_an_unknown_baseline_name():
     raw, w = _data(n=30)
-    with pytest.raises(ftcal.CalibrationInputError, match="sk_linear, sk_poly2"):
+    with pytest.raises(ftcal.core.CalibrationInputError, match="sk_linear, sk_poly2"):
         StockCalibrator(baseline="sk_forest").fit(raw, w)
 
 

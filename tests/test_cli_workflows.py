@@ -134,11 +134,11 @@ def test_plan_writes_joint_configurations_that_reach_the_directions(tmp_path):
     with open(tmp_path / "poses.csv") as fh:
         header = fh.readline().strip().split(",")
     table = np.loadtxt(tmp_path / "poses.csv", delimiter=",", skiprows=1)
-    robot = ftcal.load_robot("kuka_iiwa14")
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
     assert header[0] == "pose" and header[1:8] == [f"{j}_rad" for j in robot.joint_names]
     assert table.shape == (12, 13)  # an icosahedron: 12 directions, all reachable
     q, g = table[:, 1:8], table[:, 8:11]
-    R = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
+    R = ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]
     gravity_in_sensor = np.einsum("nji,j->ni", R, [0.0, 0.0, -1.0])  # R^T g_base
     np.testing.assert_allclose(gravity_in_sensor, g, atol=1e-5)
     assert np.all(q >= robot.lower_limits - 1e-9) and np.all(q <= robot.upper_limits + 1e-9)

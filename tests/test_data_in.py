@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from ftcal import CalibrationDataset, DatasetFileError, LinearCalibrator, load_model
+from ftcal import CalibrationDataset, LinearCalibrator, load_model
+from ftcal.core import DatasetFileError
 from ftcal.cli import main
 from ftcal.io._readers import ColumnMap, lever_arm_problem
 
@@ -188,7 +189,7 @@ def test_tool_export_as_ros_gravity_compensation_yaml(tmp_path, capsys):
     import yaml
     from scipy.spatial.transform import Rotation
 
-    from ftcal import ToolLoad
+    from ftcal.experiment import ToolLoad
 
     tool = ToolLoad(mass=1.7, center_of_mass=np.array([0.01, -0.02, 0.08]), bias=np.arange(6) * 0.1)
     tool.save(tmp_path / "grip.tool.json")

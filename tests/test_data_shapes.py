@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 import scipy.io
 
-from ftcal import CalibrationDataset, DatasetFileError, load_model
+from ftcal import CalibrationDataset, load_model
+from ftcal.core import DatasetFileError
 from ftcal.cli import main
 from ftcal.io._readers import ColumnMap, lever_arm_problem, unit_scale
 

@@ -5,16 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import (
-    CalibrationInputError,
-    ComparativeCalibrator,
-    DirectionalCalibrator,
-    EnsembleCalibrator,
-    LinearCalibrator,
-    load_model,
-    make_calibrator,
-    save_model,
-)
+from ftcal.core import CalibrationInputError
+from ftcal import (ComparativeCalibrator, DirectionalCalibrator, EnsembleCalibrator, LinearCalibrator, load_model,
+                   make_calibrator, save_model)
 
 from conftest import TINY_SCHEDULE, affine_sensor_data
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import CalibrationInputError, ErrorModel, SampledErrors, VirtualSensor, error_preset
+from ftcal.core import CalibrationInputError
+from ftcal.simulation import ErrorModel, SampledErrors, VirtualSensor, error_preset
 from ftcal.core._wrench import scale_torques
 
 ALPHA = 50.0

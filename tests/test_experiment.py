@@ -7,19 +7,11 @@ import pytest
 
 from ftcal.experiment._virtual_experiment import JITTER_TRUNCATION
 
-from ftcal import (
-    LogFormatError,
-    VirtualSensor,
-    fit_no_load_model,
-    load_robot,
-    plan_calibration_poses,
-    prepare_dataset,
-    read_run_log,
-    rotation_delta,
-    sensor_pose_in_base,
-    simulate_experiment,
-    write_run_log,
-)
+from ftcal.core import LogFormatError
+from ftcal.simulation import VirtualSensor
+from ftcal.experiment import fit_no_load_model, prepare_dataset, rotation_delta, simulate_experiment
+from ftcal.robot import load_robot, plan_calibration_poses, sensor_pose_in_base
+from ftcal.io import read_run_log, write_run_log
 
 
 @pytest.fixture(scope="module")

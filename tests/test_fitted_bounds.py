@@ -10,7 +10,9 @@ import numpy as np
 import pytest
 from sklearn.utils._param_validation import Interval, StrOptions, make_constraint
 
-from ftcal import ModelFileError, load_model, make_soft_sensor_dataset, save_model
+from ftcal.core import ModelFileError
+from ftcal import load_model, save_model
+from ftcal.simulation import make_soft_sensor_dataset
 from ftcal.persistence._model_io import fitted_constraints
 from ftcal.compose._registry import model_classes
 

@@ -22,18 +22,9 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import (
-    CalFileError,
-    CalibrationDataset,
-    CalibrationInputError,
-    ComparativeCalibrator,
-    DatasetFileError,
-    DirectionalCalibrator,
-    LinearCalibrator,
-    LogFormatError,
-    ModelFileError,
-    PolynomialCalibrator,
-)
+from ftcal.core import CalFileError, CalibrationInputError, DatasetFileError, LogFormatError, ModelFileError
+from ftcal import (CalibrationDataset, ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator,
+                   PolynomialCalibrator)
 from ftcal.core._files import atomic_output
 from ftcal.cli import main
 
@@ -432,7 +423,7 @@ def test_ati_file_with_an_absurd_range_is_refused_before_anything_is_written(tmp
     cal = tmp_path / "FT1.cal"
     cal.write_text(ATI.format(rows=_ati_rows("1e308")))
     with pytest.raises(CalFileError, match=r"rated ranges \['Fx=1e\+308'"):
-        ftcal.read_ati_calibration(cal)
+        ftcal.simulation.read_ati_calibration(cal)
     out = tmp_path / "sim"
     assert "exceed" in cli_error(["simulate", "dataset", "--sensor", cal, "--out", out, "-q"], capsys)
     assert not out.exists() or not any(out.iterdir())
@@ -442,7 +433,7 @@ def test_ati_file_without_calibration_names_the_problem(tmp_path):
     cal = tmp_path / "FT1.cal"
     cal.write_text('<FTSensor Serial="FT1"></FTSensor>')
     with pytest.raises(CalFileError, match="no <Calibration> element inside <FTSensor>"):
-        ftcal.read_ati_calibration(cal)
+        ftcal.simulation.read_ati_calibration(cal)
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -489,7 +480,7 @@ def test_write_errors_name_the_users_file_not_the_temporary_one(tmp_path):
 
 def test_prepare_dataset_takes_one_path(tmp_path):
     with pytest.raises(LogFormatError, match=r"x\.csv: no such log file"):
-        ftcal.prepare_dataset(str(tmp_path / "x.csv"))
+        ftcal.experiment.prepare_dataset(str(tmp_path / "x.csv"))
 
 
 # ------------------------------------------------------------------ grouped CV, ONNX, Dask, tool load and temperature
@@ -527,7 +518,7 @@ def _inputs_and_outputs(workdir, tmp_path):
     files["model"].write_bytes((workdir / "models" / "linear.model.npz").read_bytes())
     files["readings"].write_text("0.1,0.2,0.3,0.4,0.5,0.6\n")
     files["log"].write_bytes((workdir / "data" / "train.csv").read_bytes())
-    ftcal.ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).save(files["tool"])
+    ftcal.experiment.ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).save(files["tool"])
     train = CalibrationDataset.load(workdir / "data" / "train.csv")
     with open(files["dataset"], "wb") as fh:
         np.savez(fh, raw=train.raw, wrench=train.wrench)
@@ -735,17 +726,17 @@ TRUE_TOOL = dict(mass=1.2, center_of_mass=np.array([0.01, -0.02, 0.08]), bias=np
 
 def test_mirrored_frames_are_refused_and_rounded_rotations_accepted():
     R = _rotations()
-    wrench = ftcal.ToolLoad(**TRUE_TOOL).gravity_wrench(R)
+    wrench = ftcal.experiment.ToolLoad(**TRUE_TOOL).gravity_wrench(R)
     mirrored = R.copy()
     mirrored[5, :, 0] *= -1  # one pose logged with a flipped axis: det = -1
     with pytest.raises(CalibrationInputError, match=r"sensor_rotations\[5\] is a reflection"):
-        ftcal.identify_tool_load(mirrored, wrench)
+        ftcal.experiment.identify_tool_load(mirrored, wrench)
     for decimals in (6, 4):  # rotations as a log prints them; the rounding (1e-4) bounds the error
-        tool = ftcal.identify_tool_load(np.round(R, decimals), wrench)
+        tool = ftcal.experiment.identify_tool_load(np.round(R, decimals), wrench)
         assert abs(tool.mass - 1.2) < 1.2 * 10 * 10.0**-decimals
         assert np.abs(tool.center_of_mass - TRUE_TOOL["center_of_mass"]).max() < 10 * 10.0**-decimals
     with pytest.raises(CalibrationInputError, match="not a rotation matrix"):
-        ftcal.identify_tool_load(R * 1.1, wrench)
+        ftcal.experiment.identify_tool_load(R * 1.1, wrench)
 
 
 @pytest.mark.parametrize("field, value, message", [
@@ -760,7 +751,7 @@ def test_mirrored_frames_are_refused_and_rounded_rotations_accepted():
 ])
 def test_tool_load_checks_its_fields(field, value, message):
     with pytest.raises(CalibrationInputError, match=message):
-        ftcal.ToolLoad(**{**TRUE_TOOL, field: value})
+        ftcal.experiment.ToolLoad(**{**TRUE_TOOL, field: value})
 
 
 def _noise_free_model(tmp_path) -> Path:
@@ -797,7 +788,7 @@ def _two_logs(tmp_path, with_temperature):
     paths = []
     for kind, has_t in zip(("load", "no-load"), with_temperature):
         n = 4
-        paths.append(ftcal.write_run_log(
+        paths.append(ftcal.io.write_run_log(
             tmp_path / f"{kind}.csv", timestamp=np.arange(n, dtype=float), run_kind=[kind] * n, config=[0] * n,
             pose=np.arange(n), q=np.zeros((n, 7)) + np.arange(n)[:, None] * 0.1, raw=np.ones((n, 6)),
             load_mass=1.0, temperature=np.full(n, 25.0) if has_t else None))
@@ -806,17 +797,17 @@ def _two_logs(tmp_path, with_temperature):
 
 def test_prepare_never_drops_the_temperature_of_some_logs(tmp_path):
     load, no_load = _two_logs(tmp_path, (True, True))
-    paired = ftcal.pair_runs([ftcal.read_run_log(load), ftcal.read_run_log(no_load)])
+    paired = ftcal.experiment.pair_runs([ftcal.io.read_run_log(load), ftcal.io.read_run_log(no_load)])
     assert paired.temperature_load is not None
-    more = ftcal.write_run_log(
+    more = ftcal.io.write_run_log(
         tmp_path / "load2.csv", timestamp=np.arange(4.0), run_kind=["load"] * 4, config=[1] * 4, pose=np.arange(4),
         q=np.zeros((4, 7)) + np.arange(4)[:, None] * 0.1, raw=np.ones((4, 6)), load_mass=1.0)
-    shared = ftcal.write_run_log(
+    shared = ftcal.io.write_run_log(
         tmp_path / "nl2.csv", timestamp=np.arange(4.0), run_kind=["no-load"] * 4, config=[1] * 4, pose=np.arange(4),
         q=np.zeros((4, 7)) + np.arange(4)[:, None] * 0.1, raw=np.ones((4, 6)), load_mass=1.0)
-    logs = [ftcal.read_run_log(p) for p in (load, no_load, more, shared)]
+    logs = [ftcal.io.read_run_log(p) for p in (load, no_load, more, shared)]
     with pytest.raises(LogFormatError, match=r"load2\.csv:line \d+: this load row has no temperature"):
-        ftcal.pair_runs(logs)
+        ftcal.experiment.pair_runs(logs)
 
 
 @pytest.mark.parametrize("labels, message", [
@@ -853,12 +844,12 @@ def test_log_ids_are_read_exactly(tmp_path):
             fields[ci] = "100000000000000001" if k % 2 else "100000000000000000"
         body.append(",".join(fields))
     load.write_text("\n".join(body) + "\n")
-    log = ftcal.read_run_log(load)
+    log = ftcal.io.read_run_log(load)
     assert sorted(set(log.config.tolist())) == [100000000000000000, 100000000000000001]
     body = [ln.replace("100000000000000001", "99999999999999999999") for ln in body]
     load.write_text("\n".join(body) + "\n")
     with pytest.raises(LogFormatError, match="beyond the 64-bit integers"):
-        ftcal.read_run_log(load)
+        ftcal.io.read_run_log(load)
     assert text
 
 
@@ -1055,7 +1046,7 @@ def test_a_network_too_large_for_memory_is_refused_before_any_allocation():
 def test_group_labels_without_an_order_are_a_clear_error(groups):
     from ftcal.model_selection._selection import check_groups
 
-    with pytest.raises(ftcal.CalibrationInputError, match="integer or string labels"):
+    with pytest.raises(ftcal.core.CalibrationInputError, match="integer or string labels"):
         check_groups(np.array(groups, dtype=object if groups[0] is None or "a" in groups else float), 40)
 
 
@@ -1154,7 +1145,7 @@ def test_return_std_of_a_one_dimensional_target_is_one_dimensional(small_gp):
 ])
 def test_dataset_generators_name_a_bad_argument_and_its_value(make, kwargs, message):
     with pytest.raises(CalibrationInputError, match=message):
-        getattr(ftcal, make)(**kwargs)
+        getattr(ftcal.simulation, make)(**kwargs)
 
 
 @pytest.mark.parametrize("make", ["make_soft_sensor_dataset", "make_robot_held_dataset", "make_dead_weight_dataset"])
@@ -1162,14 +1153,14 @@ def test_dataset_generators_refuse_huge_row_counts_before_allocating(make):
     from ftcal.core._memory import MemoryLimitError
 
     with pytest.raises(MemoryLimitError, match=r"n_samples=1000000000000 rows would need .*; lower n_samples"):
-        getattr(ftcal, make)(n_samples=10**12)
+        getattr(ftcal.simulation, make)(n_samples=10**12)
 
 
 def test_dataset_generators_at_the_edges_of_their_ranges_give_finite_data():
-    datasets = [ftcal.make_soft_sensor_dataset(1, n_zero=0, n_presses=1),
-                ftcal.make_soft_sensor_dataset(10, n_zero=5, n_presses=10, hysteresis=10.0),
-                ftcal.make_robot_held_dataset(np.int64(2), n_poses=2, tool_mass_kg=0.0, pose_offset=1.0),
-                *ftcal.make_dead_weight_dataset(1, n_validation=1, n_channels=3, range_factor=1000, nonlinearity=-1)]
+    datasets = [ftcal.simulation.make_soft_sensor_dataset(1, n_zero=0, n_presses=1),
+                ftcal.simulation.make_soft_sensor_dataset(10, n_zero=5, n_presses=10, hysteresis=10.0),
+                ftcal.simulation.make_robot_held_dataset(np.int64(2), n_poses=2, tool_mass_kg=0.0, pose_offset=1.0),
+                *ftcal.simulation.make_dead_weight_dataset(1, n_validation=1, n_channels=3, range_factor=1000, nonlinearity=-1)]
     assert [d.n_samples for d in datasets] == [1, 10, 2, 1, 1]
     for d in datasets:
         assert np.isfinite(d.raw).all() and np.isfinite(d.wrench).all() and np.isfinite(d.meta["noise_floor_rmse"])
@@ -1215,7 +1206,7 @@ def test_zero_offset_within_range_is_in_the_readings_and_in_the_file_exactly(tmp
     np.testing.assert_allclose(offset.raw - 9e6, tared.raw, rtol=0, atol=4e-9)
     np.testing.assert_array_equal(offset.wrench, tared.wrench)
     with pytest.raises(CalibrationInputError, match=r"zero_offset holds 1e\+12 \(channel 0\); the accepted range"):
-        ftcal.VirtualSensor(zero_offset=np.full(6, 1e12))
+        ftcal.simulation.VirtualSensor(zero_offset=np.full(6, 1e12))
 
 
 def test_dataset_csv_round_trip_is_exact(tmp_path):
@@ -1298,7 +1289,7 @@ def test_gp_far_outside_its_data_gives_the_linear_mean_or_an_error_never_a_warni
         warnings.simplefilter("error")
         mean, std = rbf.predict(far, return_std=True)
         ltm = (far - rbf.zero_reading_) @ rbf.linear_matrix_.T  # the linear mean, in torque-scaled units
-        np.testing.assert_allclose(ftcal.scale_torques(mean[1:], rbf.alpha_), ltm[1:], rtol=1e-9)
+        np.testing.assert_allclose(ftcal.core.scale_torques(mean[1:], rbf.alpha_), ltm[1:], rtol=1e-9)
         assert np.all(np.isfinite(std)) and np.all(std[1] >= std[0])
         with pytest.raises(CalibrationInputError, match="X row 1 .*non-finite standard deviation"):
             with_linear.predict(far, return_std=True)
@@ -1585,7 +1576,7 @@ def test_an_output_folder_named_like_a_choice_is_no_input(workdir, tmp_path, mon
 
 def test_prepare_into_its_own_logs_folder_is_refused_as_such(tmp_path, capsys):
     logs = tmp_path / "logs"
-    ftcal.simulate_experiment(logs, robot=ftcal.load_robot("kuka_iiwa14"), subdivisions=0, random_state=0)
+    ftcal.experiment.simulate_experiment(logs, robot=ftcal.robot.load_robot("kuka_iiwa14"), subdivisions=0, random_state=0)
     before = sorted(p.name for p in logs.iterdir())
     msg = cli_error(["prepare", logs, "--out", logs, "-q"], capsys)
     assert f"--out {logs} is the logs folder {logs}, an input of this command" in msg, msg
@@ -1645,13 +1636,13 @@ def test_digits_of_other_scripts_are_refused_by_every_text_reader(workdir, tmp_p
         msg = cli_error(["predict", workdir / "models" / "linear.model.npz", path], capsys)
         assert f"{path}: line 2: '{arabic}' is not a number" in msg, msg
     else:
-        path = ftcal.write_run_log(tmp_path / "run.csv", timestamp=[0.0, 1.0], run_kind=["load", "load"],
+        path = ftcal.io.write_run_log(tmp_path / "run.csv", timestamp=[0.0, 1.0], run_kind=["load", "load"],
                                    config=[0, 0], pose=[0, 1], q=np.zeros((2, 7)), raw=np.ones((2, 6)), load_mass=2.0)
         lines = path.read_text().splitlines()
         lines[-1] = lines[-1].rsplit(",", 1)[0] + "," + arabic
         path.write_text("\n".join(lines) + "\n")
         with pytest.raises(LogFormatError, match=rf"line {len(lines)}: column s5: '{arabic}' is not a number"):
-            ftcal.read_run_log(path)
+            ftcal.io.read_run_log(path)
 
 
 def test_parameter_errors_are_not_blamed_on_the_dataset(workdir, tmp_path, capsys):

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from sklearn.model_selection import GroupKFold, KFold, cross_val_predict
 
-from ftcal import GaussianProcessCalibrator, wrench_rmse
+from ftcal import GaussianProcessCalibrator
+from ftcal.core import wrench_rmse
 from ftcal.calibrators._gaussian_process import _left_out, _mean_basis, _regressor, make_kernel
 from ftcal.core._wrench import scale_torques
 from ftcal.calibrators import stock_baselines

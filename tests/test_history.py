@@ -18,7 +18,9 @@ from sklearn.model_selection import GroupKFold
 
 import ftcal
 import ftcal.calibrators._base
-from ftcal import CalibrationInputError, HistoryCalibrator, LinearCalibrator, reading_history
+from ftcal.core import CalibrationInputError
+from ftcal import HistoryCalibrator, LinearCalibrator
+from ftcal.compose import reading_history
 from ftcal.cli import main
 from ftcal.compose._auto import StackedCalibrator
 
@@ -45,7 +47,7 @@ def held_out_rmse(make, raw, wrench, groups, alpha):
         model.fit(raw[train], wrench[train], **({"groups": groups[train]} if isinstance(model, HistoryCalibrator)
                                                 else {}))
         pred[test] = model.predict(raw[test])
-    return ftcal.wrench_rmse(wrench, pred, alpha=alpha)
+    return ftcal.core.wrench_rmse(wrench, pred, alpha=alpha)
 
 
 def test_reading_history_is_the_moving_average_of_the_rows_before_minus_the_row():
@@ -76,7 +78,7 @@ def test_reading_history_is_the_moving_average_of_the_rows_before_minus_the_row(
 
 def test_the_history_term_removes_most_of_the_creep_error_and_finds_its_time_constant():
     raw, wrench, groups = creeping_sensor()
-    alpha = ftcal.alpha_from_wrenches(wrench)
+    alpha = ftcal.core.alpha_from_wrenches(wrench)
     static = held_out_rmse(lambda: LinearCalibrator(alpha=alpha), raw, wrench, groups, alpha)
     history = held_out_rmse(lambda: HistoryCalibrator(alpha=alpha), raw, wrench, groups, alpha)
     # the floor: the same sensor and noise without creep, calibrated by the LTM
@@ -249,10 +251,10 @@ def test_groups_reach_the_inner_calibrator_and_bad_input_is_named():
         HistoryCalibrator(cv=1).fit(raw, wrench)
     with pytest.raises(CalibrationInputError, match="training fold holds"):
         HistoryCalibrator(cv=5).fit(raw[:10], wrench[:10])
-    with pytest.raises(ftcal.ExportError, match="load-history term"):
+    with pytest.raises(ftcal.core.ExportError, match="load-history term"):
         ftcal.export_onnx(HistoryCalibrator().fit(raw, wrench, groups=groups), "never-written.onnx")
-    with pytest.raises(ftcal.ExportError, match="load-history term"):
-        ftcal.linear_calibration_matrix(HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups))
+    with pytest.raises(ftcal.core.ExportError, match="load-history term"):
+        ftcal.persistence.linear_calibration_matrix(HistoryCalibrator(taus=(4.0,)).fit(raw, wrench, groups=groups))
     # a history model must be the outermost one: a wrapper would restart its history or shuffle its rows
     warm = np.column_stack([raw, np.linspace(15, 35, len(raw))])
     with pytest.raises(CalibrationInputError, match="use one HistoryCalibrator"):

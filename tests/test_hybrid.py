@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from ftcal.calibrators._axis_nonlinear import one_standard_error_choice
-from ftcal import AxisNonlinearCalibrator, CalibrationInputError, LinearCalibrator, load_model, save_model, wrench_rmse
+from ftcal import AxisNonlinearCalibrator, LinearCalibrator, load_model, save_model
+from ftcal.core import CalibrationInputError, wrench_rmse
 
 
 ALPHA = 1.0  # the synthetic wrenches below share one unit

@@ -5,15 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import (
-    KinematicsError,
-    frame_pose_in_base,
-    load_robot,
-    sensor_pose_in_base,
-    sensor_rotation_from_pitch_yaw,
-    solve_gravity_direction_ik,
-    solve_orientation_ik,
-)
+from ftcal.core import KinematicsError
+from ftcal.robot import (frame_pose_in_base, load_robot, sensor_pose_in_base, sensor_rotation_from_pitch_yaw,
+                         solve_gravity_direction_ik, solve_orientation_ik)
 from ftcal.robot._ik import DEFAULT_LIMIT_MARGIN_RAD
 
 ORIENTATION_TOL = 1e-6  # [rad]

@@ -9,19 +9,10 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import ftcal
-from ftcal import (
-    AutoCalibrator,
-    AxisNonlinearCalibrator,
-    CalibrationInputError,
-    ComparativeCalibrator,
-    DirectionalCalibrator,
-    EnsembleCalibrator,
-    GaussianProcessCalibrator,
-    LinearCalibrator,
-    PolynomialCalibrator,
-    ToolLoad,
-    identify_tool_load,
-)
+from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, ComparativeCalibrator, DirectionalCalibrator,
+                   EnsembleCalibrator, GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator)
+from ftcal.core import CalibrationInputError
+from ftcal.experiment import ToolLoad, identify_tool_load
 from ftcal.cli import main
 
 G = np.array([0.0, 0.0, -9.81])
@@ -89,9 +80,9 @@ def test_too_few_poses_are_refused_by_their_count_not_by_their_tilt():
 
 
 def test_the_planned_minimal_pose_set_is_well_conditioned():
-    robot = ftcal.load_robot("kuka_iiwa14")
-    plan = ftcal.plan_calibration_poses(robot, subdivisions=0)
-    rotations = ftcal.sensor_pose_in_base(robot, plan.q)[:, :3, :3]
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
+    plan = ftcal.robot.plan_calibration_poses(robot, subdivisions=0)
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan.q)[:, :3, :3]
     assert len(rotations) == 11
     rng = np.random.default_rng(0)
     tool = identify_tool_load(rotations, tool_wrenches(rotations, MASS, COM, BIAS, rng), gravity=G)
@@ -146,8 +137,8 @@ def test_a_tool_file_with_an_impossible_value_is_refused_not_compensated_to_inf(
 
 def test_identify_load_and_compensate_through_the_cli(tmp_path, capsys):
     logs, data, models = tmp_path / "logs", tmp_path / "data", tmp_path / "models"
-    mounting = ftcal.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))
-    ftcal.simulate_experiment(logs, subdivisions=1, mounting=mounting, random_state=0)
+    mounting = ftcal.experiment.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))
+    ftcal.experiment.simulate_experiment(logs, subdivisions=1, mounting=mounting, random_state=0)
     assert main(["prepare", str(logs), "--out", str(data), "-q"]) == 0
     assert main(["fit", str(data / "dataset.csv"), "--model", "linear", "--out", str(models), "-q"]) == 0
     model = str(models / "linear.model.npz")
@@ -200,7 +191,7 @@ def test_retare_recovers_a_tare_shift_of_3_percent_of_the_span(kind, tmp_path):
     model = CALIBRATORS[kind]().fit(raw, w)
     alpha = model.alpha_
     reference = model.predict(test_raw)
-    before = ftcal.wrench_rmse(test_w, reference, alpha=alpha)
+    before = ftcal.core.wrench_rmse(test_w, reference, alpha=alpha)
     shift = 0.03 * (raw.max(axis=0) - raw.min(axis=0)) * np.sign(rng.normal(size=6))
     n_quiet = 1000  # e.g. 1 s at 1 kHz
     no_load = zero + shift + SENSOR_NOISE * rng.normal(size=(n_quiet, 6))  # no load: the new zero and noise
@@ -210,11 +201,11 @@ def test_retare_recovers_a_tare_shift_of_3_percent_of_the_span(kind, tmp_path):
     # |C|_F * sigma * sqrt(1 / n_quiet + 13 / n_train) / sqrt(6). Allow 3x for the models' local gain and chance.
     gain = LinearCalibrator(alpha=alpha).fit(raw, w).calibration_matrix_ * np.array([1, 1, 1, alpha, alpha, alpha])[:, None]
     tolerance = 3 * np.linalg.norm(gain) * SENSOR_NOISE * np.sqrt(1 / n_quiet + 13 / len(raw)) / np.sqrt(6)
-    assert ftcal.wrench_rmse(reference, model.predict(test_raw + shift), alpha=alpha) > 2 * tolerance
+    assert ftcal.core.wrench_rmse(reference, model.predict(test_raw + shift), alpha=alpha) > 2 * tolerance
     model.retare(no_load)
     shifted_prediction = model.predict(test_raw + shift)
-    assert ftcal.wrench_rmse(reference, shifted_prediction, alpha=alpha) <= tolerance
-    assert ftcal.wrench_rmse(test_w, shifted_prediction, alpha=alpha) <= 1.1 * before  # the issue's target
+    assert ftcal.core.wrench_rmse(reference, shifted_prediction, alpha=alpha) <= tolerance
+    assert ftcal.core.wrench_rmse(test_w, shifted_prediction, alpha=alpha) <= 1.1 * before  # the issue's target
     back = ftcal.load_model(ftcal.save_model(model, tmp_path / "m.model.npz"))
     np.testing.assert_array_equal(back.predict(test_raw), model.predict(test_raw))
 

@@ -1,12 +1,16 @@
 """The package layout is the architecture: a package imports only the layers below it.
 
 The allowed imports are the table of ``docs/architecture.md``; every ``from .x import`` and
-``import ftcal.x`` in every module is checked, including imports inside functions.
+``import ftcal.x`` in every module is checked, including imports inside functions. Beyond the table: no
+library module imports the CLI, the module import graph has no cycle, the CLI holds no estimator logic,
+each package states its layer, and every public subpackage lists names (``__all__``) that resolve.
 """
 
 from __future__ import annotations
 
 import ast
+import importlib
+import inspect
 from pathlib import Path
 
 import pytest
@@ -78,9 +82,135 @@ def test_every_module_lives_in_a_layer_package():
     assert top_level == {"__init__.py", "__main__.py"}
     packages = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
     assert packages == set(ALLOWED)
-    for name in packages:  # each says what it holds and what it may import
+    for name in packages:  # each says what it holds, its layer and what it may import
         doc = ast.get_docstring(ast.parse((PACKAGE / name / "__init__.py").read_text()))
         assert doc and "import" in doc.lower(), f"ftcal/{name}/__init__.py needs a docstring naming its imports"
+        assert "layer" in doc.lower(), f"ftcal/{name}/__init__.py needs a docstring stating its layer"
+
+
+def _module_graph() -> dict[str, set[str]]:
+    """Every ftcal module (dotted) -> the ftcal modules it imports, at module level or inside a function.
+
+    ``from .x import name`` counts as an import of the module ``x.name`` when that is a module, else of ``x``.
+    """
+    modules = {}
+    for path in PACKAGE.rglob("*.py"):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        is_package = parts[-1] == "__init__"
+        modules[".".join(parts[:-1] if is_package else parts)] = (path, is_package)
+    graph = {}
+    for name, (path, is_package) in modules.items():
+        package = name if is_package else name.rpartition(".")[0]
+        found = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    target = node.module or ""
+                for alias in node.names:
+                    if f"{target}.{alias.name}" in modules:
+                        found.add(f"{target}.{alias.name}")
+                    elif target in modules:
+                        found.add(target)
+            elif isinstance(node, ast.Import):
+                found.update(alias.name for alias in node.names if alias.name in modules)
+        graph[name] = found - {name}
+    return graph
+
+
+def _a_cycle(graph: dict[str, set[str]]) -> list[str] | None:
+    """One cycle of ``graph`` (its nodes in order, the first repeated at the end), or None."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(node: str) -> list[str] | None:
+        state[node] = 1
+        path.append(node)
+        for nxt in sorted(graph.get(node, ())):
+            if state.get(nxt) == 1:
+                return path[path.index(nxt):] + [nxt]
+            if nxt not in state and (cycle := visit(nxt)):
+                return cycle
+        state[node] = 2
+        path.pop()
+        return None
+
+    for start in sorted(graph):
+        if start not in state and (cycle := visit(start)):
+            return cycle
+    return None
+
+
+def test_the_cycle_finder_finds_a_cycle_and_accepts_a_tree():
+    assert _a_cycle({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == ["a", "b", "c", "a"]
+    assert _a_cycle({"a": {"b", "c"}, "b": {"c"}, "c": set()}) is None
+
+
+def test_no_module_of_ftcal_takes_part_in_an_import_cycle():
+    graph = _module_graph()
+    assert "ftcal.cli._simulate" in graph and "ftcal.persistence._model_io" in graph[
+        "ftcal.cli._data_options"]  # the graph sees function-level and relative imports
+    assert _a_cycle(graph) is None, f"import cycle: {' -> '.join(_a_cycle(graph))}"
+    cli = {m: {d for d in deps if d.startswith("ftcal.cli")} for m, deps in graph.items() if m.startswith("ftcal.cli")}
+    assert _a_cycle(cli) is None
+
+
+def test_the_packages_import_each_other_without_a_cycle():
+    graph: dict[str, set[str]] = {}
+    for module, deps in _module_graph().items():
+        package = module.split(".")[1] if "." in module else "ftcal"
+        graph.setdefault(package, set()).update(d.split(".")[1] if "." in d else "ftcal" for d in deps)
+    graph = {p: deps - {p, "ftcal"} for p, deps in graph.items() if p != "ftcal"}  # ftcal: the lazy top level
+    assert _a_cycle(graph) is None, f"package cycle: {' -> '.join(_a_cycle(graph))}"
+
+
+def test_no_library_module_imports_the_cli():
+    for module, deps in _module_graph().items():
+        if module.startswith("ftcal.cli") or module == "ftcal.__main__":
+            continue
+        assert not {d for d in deps if d.startswith("ftcal.cli")}, f"{module} imports the command line"
+
+
+_ESTIMATOR_METHODS = {"fit", "partial_fit", "predict", "fit_predict", "transform", "fit_transform", "score", "_fit",
+                      "_predict_wrench", "__sklearn_tags__"}
+
+
+def test_the_cli_holds_no_estimator_logic():
+    """The command line parses, prints and writes files: no estimator class, no fit or predict of its own."""
+    import sklearn.base
+
+    for path in sorted((PACKAGE / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef):
+                bases = {ast.unparse(b).rsplit(".", 1)[-1] for b in node.bases}
+                assert not {b for b in bases if b.endswith(("Calibrator", "Estimator", "Mixin", "GroupsFit"))}, (
+                    f"cli/{path.name}: class {node.name} derives from an estimator ({sorted(bases)})")
+                methods = {f.name for f in node.body if isinstance(f, (ast.FunctionDef, ast.AsyncFunctionDef))}
+                assert not methods & _ESTIMATOR_METHODS, f"cli/{path.name}: {node.name} defines {methods & _ESTIMATOR_METHODS}"
+            elif isinstance(node, ast.FunctionDef):
+                assert node.name not in {"fit", "predict", "_fit", "_predict_wrench"}, f"cli/{path.name}: {node.name}"
+        module = importlib.import_module(f"ftcal.cli.{path.stem}" if path.stem != "__init__" else "ftcal.cli")
+        for name, value in vars(module).items():
+            if inspect.isclass(value) and value.__module__ == module.__name__:
+                assert not issubclass(value, sklearn.base.BaseEstimator), f"{module.__name__}.{name} is an estimator"
+
+
+PUBLIC_SUBPACKAGES = sorted(set(ALLOWED) - {"cli", "models", "neural_network", "evaluation"})
+
+
+@pytest.mark.parametrize("package", PUBLIC_SUBPACKAGES)
+def test_every_public_subpackage_lists_names_that_resolve_to_its_own_modules(package):
+    module = importlib.import_module(f"ftcal.{package}")
+    assert module.__all__, f"ftcal.{package} has no __all__"
+    assert len(set(module.__all__)) == len(module.__all__)
+    for name in module.__all__:
+        value = getattr(module, name)
+        assert value is not None and not name.startswith("_")
+        if inspect.isclass(value) or inspect.isfunction(value):  # defined in this package, not re-exported
+            assert value.__module__.startswith(f"ftcal.{package}."), f"ftcal.{package}.{name} is {value.__module__}"
+    assert package in ftcal.SUBPACKAGES and getattr(ftcal, package) is module
 
 
 def test_the_public_names_resolve():

@@ -5,14 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import (
-    KinematicsError,
-    STANDARD_GRAVITY,
-    load_robot,
-    reference_wrench,
-    reference_wrench_at_joints,
-    thesis_load_configurations,
-)
+from ftcal.core import KinematicsError
+from ftcal.robot import (STANDARD_GRAVITY, load_robot, reference_wrench, reference_wrench_at_joints,
+                         thesis_load_configurations)
 
 G = STANDARD_GRAVITY
 

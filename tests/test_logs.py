@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import LogFormatError, read_run_log, write_run_log
+from ftcal.core import LogFormatError
+from ftcal.io import read_run_log, write_run_log
 
 
 def _write(tmp_path, name="run.csv", n=3, **kw):

@@ -11,7 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ftcal import ModelFileError, load_model, save_model
+from ftcal.core import ModelFileError
+from ftcal import load_model, save_model
 from ftcal.persistence._model_io import FORMAT_VERSION
 
 from conftest import affine_sensor_data

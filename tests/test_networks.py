@@ -9,7 +9,8 @@ import pytest
 import torch
 from torch import nn
 
-from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator, wrench_rmse
+from ftcal import ComparativeCalibrator, DirectionalCalibrator, LinearCalibrator
+from ftcal.core import wrench_rmse
 from ftcal.networks._modules import ComparativeNet, DirectionalNet, WeightedSquaredError
 
 from conftest import TINY_SCHEDULE, affine_sensor_data

@@ -15,17 +15,9 @@ import numpy as np
 import onnxruntime as ort  # the [onnx] extra, part of [test]
 import pytest
 
-from ftcal import (
-    ComparativeCalibrator,
-    DirectionalCalibrator,
-    EnsembleCalibrator,
-    ExportError,
-    LinearCalibrator,
-    TemperatureCompensatedCalibrator,
-    export_onnx,
-    load_model,
-    save_model,
-)
+from ftcal import (ComparativeCalibrator, DirectionalCalibrator, EnsembleCalibrator, LinearCalibrator,
+                   TemperatureCompensatedCalibrator, export_onnx, load_model, save_model)
+from ftcal.core import ExportError
 from ftcal.cli import main
 
 from conftest import CALIBRATOR_KINDS, TINY_SCHEDULE, tiny_calibrators

@@ -10,24 +10,12 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import (
-    CalibrationDataset,
-    CalibrationPlan,
-    GaussianProcessCalibrator,
-    LinearCalibrator,
-    PlanningError,
-    d_criterion,
-    gravity_directions_in_sensor,
-    load_robot,
-    pitch_yaw_from_gravity_in_sensor,
-    plan_calibration_poses,
-    prepare_dataset,
-    propose_next_poses,
-    reachable_candidates,
-    select_poses,
-    sensor_pose_in_base,
-    simulate_experiment,
-)
+from ftcal import CalibrationDataset, GaussianProcessCalibrator, LinearCalibrator
+from ftcal.robot import (CalibrationPlan, d_criterion, gravity_directions_in_sensor, load_robot,
+                         pitch_yaw_from_gravity_in_sensor, plan_calibration_poses, reachable_candidates, select_poses,
+                         sensor_pose_in_base)
+from ftcal.core import PlanningError
+from ftcal.experiment import prepare_dataset, propose_next_poses, simulate_experiment
 from ftcal.cli import main
 from ftcal.robot._pose_planning import LINEAR_MODEL_PARAMETERS
 
@@ -138,7 +126,7 @@ def test_robot_plans_are_reachable_and_short(robot, candidates, strategy):
 
 
 def test_which_load_configurations(robot, candidates):
-    from ftcal import select_load_configurations, thesis_load_configurations
+    from ftcal.robot import select_load_configurations, thesis_load_configurations
 
     positions = np.array([c.position_in_sensor for c in thesis_load_configurations()])
     chosen = select_load_configurations(CANDIDATES, 3)

@@ -15,7 +15,7 @@ from ftcal.reporting import _plots
 from ftcal.calibrators import stock_baselines
 
 #: Every name a figure of ftcal can show: the registry's calibrators and the stock baselines.
-ALL_MODELS = list(ftcal.CALIBRATOR_NAMES) + list(stock_baselines(6))
+ALL_MODELS = list(ftcal.compose.CALIBRATOR_NAMES) + list(stock_baselines(6))
 
 
 def _draw(fig):

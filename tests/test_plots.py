@@ -7,7 +7,7 @@ import struct
 import numpy as np
 import pytest
 
-from ftcal import CalibrationInputError
+from ftcal.core import CalibrationInputError
 from ftcal.reporting import _plots
 
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import CalibrationInputError, LinearCalibrator, PolynomialCalibrator, load_model, make_calibrator, save_model
+from ftcal.core import CalibrationInputError
+from ftcal import LinearCalibrator, PolynomialCalibrator, load_model, make_calibrator, save_model
 
 
 

@@ -11,7 +11,9 @@ from scipy.optimize import least_squares
 from scipy.spatial.transform import Rotation
 
 import ftcal
-from ftcal import LogFormatError, ToolLoad, find_still_poses, read_pose_file
+from ftcal.core import LogFormatError
+from ftcal.experiment import ToolLoad, find_still_poses
+from ftcal.io import read_pose_file
 from ftcal.cli import main
 from ftcal.experiment._virtual_recording import continuous_recording
 

@@ -5,17 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import (
-    KinematicsError,
-    gravity_directions_in_sensor,
-    gravity_in_sensor_from_pitch_yaw,
-    icosphere,
-    load_robot,
-    pitch_yaw_from_gravity_in_sensor,
-    plan_calibration_poses,
-    sensor_pose_in_base,
-    sensor_rotation_from_pitch_yaw,
-)
+from ftcal.core import KinematicsError
+from ftcal.robot import (gravity_directions_in_sensor, gravity_in_sensor_from_pitch_yaw, icosphere, load_robot,
+                         pitch_yaw_from_gravity_in_sensor, plan_calibration_poses, sensor_pose_in_base,
+                         sensor_rotation_from_pitch_yaw)
 
 
 @pytest.mark.parametrize("k", [0, 1, 2, 3])

@@ -219,23 +219,23 @@ def test_ros_bag_blocks_run_as_written(tmp_path):
     assert done.stderr.count("found 11 still poses, kept 11") == 14 + 1  # 14 runs prepared, 1 tool bag
     assert "gripper_mass:" in (tmp_path / "tool_bag" / "gravity_compensation.yaml").read_text()
     holder = json.loads((tmp_path / "sim" / "virtual_experiment.json").read_text())["mounting_device"]
-    tool = ftcal.ToolLoad.load(tmp_path / "tool_bag" / "tool.tool.json")
+    tool = ftcal.experiment.ToolLoad.load(tmp_path / "tool_bag" / "tool.tool.json")
     assert abs(tool.mass - holder["mass"]) <= 4 * tool.mass_std_error + 0.01 * holder["mass"]
     # the factory-calibrated sensor's recordings the second block reads: a pose file, a continuous CSV, a bag
     R, W = _static_poses(20, seed=12)
     _quat_base_file(tmp_path / "poses.csv", R, W)
     _continuous_file(tmp_path / "recording.csv", Rotation.random(12, random_state=13).as_matrix(), seed=13)
-    robot = ftcal.load_robot("kuka_iiwa14")
-    q = ftcal.plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0).q
-    rec = continuous_recording(TOOL.gravity_wrench(ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]), joints=q,
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
+    q = ftcal.robot.plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0).q
+    rec = continuous_recording(TOOL.gravity_wrench(ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]), joints=q,
                                still_s=4.0, move_s=2.0, sensor_rate_hz=100.0, pose_rate_hz=40.0, noise=0.1,
                                settle_amplitude=0.5, start_time_s=1.7e9, random_state=14)
     write_bag(tmp_path / "wrench_bag", "sqlite3", sensor_time=rec.sensor_time, reading=rec.reading,
               pose_time=rec.pose_time, joints=rec.joints, joint_names=robot.joint_names,
-              rotations=ftcal.sensor_pose_in_base(robot, rec.joints)[:, :3, :3])
+              rotations=ftcal.robot.sensor_pose_in_base(robot, rec.joints)[:, :3, :3])
     run_block(wrench_block, tmp_path, env)
     for out in ("tool_poses", "tool_rec", "tool_joints", "tool_tf"):
-        found = ftcal.ToolLoad.load(tmp_path / out / "tool.tool.json")
+        found = ftcal.experiment.ToolLoad.load(tmp_path / out / "tool.tool.json")
         assert abs(found.mass - TOOL.mass) <= 4 * found.mass_std_error, out
     # compensated with those tool files: one row per input row (pose file) and per sensor sample (bag; those outside
     # the span of the poses, at its ends, have no pose)

@@ -9,7 +9,8 @@ import pytest
 
 import ftcal
 
-from ftcal import KinematicsError, example_robot_data_dir, frame_pose_in_base, load_robot, sensor_pose_in_base
+from ftcal.core import KinematicsError
+from ftcal.robot import example_robot_data_dir, frame_pose_in_base, load_robot, sensor_pose_in_base
 
 REPO = Path(__file__).resolve().parents[1]
 # Manufacturer dimensions [m] and the mount of Fig. 4 (robots/README.md).
@@ -38,7 +39,7 @@ def iiwa():
 def test_builtin_urdf_is_this_folders_file():
     # one copy: robots/ is installed as the data package ftcal.robots
     assert not (REPO / "ftcal" / "data").exists()
-    loaded = ftcal.load_robot("kuka_iiwa14").urdf_path
+    loaded = ftcal.robot.load_robot("kuka_iiwa14").urdf_path
     assert Path(loaded).read_bytes() == (REPO / "robots" / "kuka_iiwa14_ft.urdf").read_bytes()
 
 

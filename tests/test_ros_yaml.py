@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 import yaml
 
-from ftcal import ToolLoad
+from ftcal.experiment import ToolLoad
 from ftcal.experiment._tool_load import tool_gravity_compensation_yaml
 
 #: Names a plain YAML scalar would misread (null, booleans, numbers, aliases, tags, flow and block syntax, comments).

@@ -16,8 +16,9 @@ from sklearn.pipeline import Pipeline
 from sklearn.preprocessing import FunctionTransformer
 
 from ftcal import (AutoCalibrator, AxisNonlinearCalibrator, CalibrationDataset, EnsembleCalibrator,
-                   GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator, TemperatureCompensatedCalibrator,
-                   load_model, search_calibrator)
+                   GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator,
+                   TemperatureCompensatedCalibrator, load_model)
+from ftcal.compose import search_calibrator
 from ftcal.compose._routing import requests_groups
 from ftcal.compose import _registry
 

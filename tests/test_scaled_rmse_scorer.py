@@ -7,7 +7,8 @@ from sklearn.model_selection import GridSearchCV, KFold, cross_validate
 from sklearn.pipeline import Pipeline, make_pipeline
 from sklearn.preprocessing import StandardScaler
 
-from ftcal import CalibrationInputError, LinearCalibrator, PolynomialCalibrator, neg_scaled_rmse, wrench_rmse
+from ftcal.core import CalibrationInputError, wrench_rmse
+from ftcal import LinearCalibrator, PolynomialCalibrator, neg_scaled_rmse
 
 ALPHA = 40.0  # 1/m: a torque error of 1 N·m counts as 40 N
 
@@ -67,7 +68,7 @@ def test_grid_search_over_a_pipeline_scores_each_fold_with_the_fitted_alpha(data
 def test_an_estimator_without_a_calibrator_is_refused_not_scored_with_alpha_one(make, data):
     raw, wrench = data
     model = make().fit(raw, wrench)
-    with pytest.raises(CalibrationInputError, match=r"LinearRegression has none.*make_scorer\(ftcal.wrench_rmse"):
+    with pytest.raises(CalibrationInputError, match=r"LinearRegression has none.*make_scorer\(ftcal.core.wrench_rmse"):
         neg_scaled_rmse(model, raw, wrench)
     with pytest.raises(CalibrationInputError, match="alpha_"):
         cross_validate(make(), raw, wrench, cv=KFold(2), scoring=neg_scaled_rmse, error_score="raise")

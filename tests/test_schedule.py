@@ -9,7 +9,8 @@ import pytest
 import torch
 from skorch.history import History
 
-from ftcal import ComparativeCalibrator, DirectionalCalibrator, training_schedule
+from ftcal import ComparativeCalibrator, DirectionalCalibrator
+from ftcal.compose import training_schedule
 from ftcal.networks._schedule import RecoverStop, phase_of_epoch
 
 from conftest import affine_sensor_data

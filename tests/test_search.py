@@ -9,7 +9,9 @@ import numpy as np
 import pytest
 from sklearn.model_selection import GridSearchCV, RandomizedSearchCV
 
-from ftcal import CalibrationDataset, CalibrationInputError, PolynomialCalibrator, load_model, search_calibrator
+from ftcal import CalibrationDataset, PolynomialCalibrator, load_model
+from ftcal.core import CalibrationInputError
+from ftcal.compose import search_calibrator
 from ftcal.compose._search import DEFAULT_SEARCH_SPACES, parse_search_space, search_summary
 from ftcal.cli import main
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ftcal import CalibrationInputError, SensorProfile, VirtualSensor, default_calibration_matrix
+from ftcal.core import CalibrationInputError
+from ftcal.simulation import SensorProfile, VirtualSensor, default_calibration_matrix
 
 VERTICAL, HORIZONTAL = [0, 2, 4], [1, 3, 5]  # channel order V0 H0 V1 H1 V2 H2
 

@@ -9,7 +9,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from ftcal import CalibrationDataset, KinematicsError, load_robot
+from ftcal import CalibrationDataset
+from ftcal.core import KinematicsError
+from ftcal.robot import load_robot
 from ftcal.cli import main
 from ftcal.robot._robot import sensor_mounting_transform, sensor_pose_in_base
 

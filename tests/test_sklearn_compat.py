@@ -12,7 +12,8 @@ from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 from sklearn.utils.estimator_checks import estimator_checks_generator
 
-from ftcal import CalibrationInputError, neg_scaled_rmse
+from ftcal.core import CalibrationInputError
+from ftcal import neg_scaled_rmse
 
 from conftest import TINY_SCHEDULE, WRAPPER_KINDS, affine_sensor_data, tiny_calibrators
 

@@ -19,16 +19,10 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
-from ftcal import (
-    CalibrationInputError,
-    ComparativeCalibrator,
-    DirectionalCalibrator,
-    EnsembleCalibrator,
-    LinearCalibrator,
-    StackedMLP,
-    fit_stacked,
-    run_artificial_benchmark,
-)
+from ftcal.core import CalibrationInputError
+from ftcal import ComparativeCalibrator, DirectionalCalibrator, EnsembleCalibrator, LinearCalibrator
+from ftcal.networks import StackedMLP, fit_stacked
+from ftcal.benchmark import run_artificial_benchmark
 
 EARLY_EPOCHS, EARLY_LOSS_RTOL = 5, 1e-4
 LOSS_RTOL = 3e-3

@@ -8,16 +8,8 @@ import numpy as np
 import pytest
 
 import ftcal
-from ftcal import (
-    AxisNonlinearCalibrator,
-    CalibrationDataset,
-    CalibrationInputError,
-    DatasetFileError,
-    LinearCalibrator,
-    LogFormatError,
-    TemperatureCompensatedCalibrator,
-    ThermalDrift,
-)
+from ftcal import AxisNonlinearCalibrator, CalibrationDataset, LinearCalibrator, TemperatureCompensatedCalibrator
+from ftcal.core import CalibrationInputError, DatasetFileError, LogFormatError, ThermalDrift
 from ftcal.cli import main
 
 
@@ -48,7 +40,7 @@ def test_compensation_removes_at_least_90_percent_of_the_drift_error(cls):
 
     def mse(model, X_train, X_test):
         model.fit(X_train, train.wrench)
-        return ftcal.wrench_rmse(test.wrench, model.predict(X_test), alpha=alpha) ** 2
+        return ftcal.core.wrench_rmse(test.wrench, model.predict(X_test), alpha=alpha) ** 2
 
     clean = mse(cls(alpha=alpha), train.raw, test.raw)
     drifted = mse(cls(alpha=alpha), drift.apply(train.raw, t_train), drift.apply(test.raw, t_test))
@@ -101,21 +93,21 @@ def test_dataset_files_carry_temperature(tmp_path):
 
 
 def test_run_logs_carry_temperature_into_the_prepared_dataset(tmp_path):
-    robot = ftcal.load_robot("kuka_iiwa14")
-    paths = ftcal.simulate_experiment(tmp_path / "logs", robot=robot, subdivisions=0, random_state=0)
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
+    paths = ftcal.experiment.simulate_experiment(tmp_path / "logs", robot=robot, subdivisions=0, random_state=0)
     for k, path in enumerate(paths):  # add a temperature column to the virtual logs
-        log = ftcal.read_run_log(path)
-        ftcal.write_run_log(path, timestamp=log.timestamp, run_kind=log.run_kind, config=log.config, pose=log.pose,
+        log = ftcal.io.read_run_log(path)
+        ftcal.io.write_run_log(path, timestamp=log.timestamp, run_kind=log.run_kind, config=log.config, pose=log.pose,
                             q=log.q, raw=log.raw, load_mass=log.load_mass, overwrite=True,
                             temperature=20.0 + 0.1 * np.arange(log.n_rows) + k)
-    assert ftcal.read_run_log(paths[1]).temperature is not None
-    ds = ftcal.prepare_dataset(paths, robot)
+    assert ftcal.io.read_run_log(paths[1]).temperature is not None
+    ds = ftcal.experiment.prepare_dataset(paths, robot)
     assert ds.temperature is not None and ds.temperature.shape == (ds.n_samples,)
     lines = paths[0].read_text().splitlines()
     lines[-1] = lines[-1].rsplit(",", 1)[0] + ",1e9"
     paths[0].write_text("\n".join(lines) + "\n")
     with pytest.raises(LogFormatError, match=r"line \d+, column temperature: temperature is 1e\+09 deg C"):
-        ftcal.read_run_log(paths[0])
+        ftcal.io.read_run_log(paths[0])
 
 
 def test_predict_std_of_a_temperature_compensated_model_says_why_not(tmp_path, capsys):
@@ -157,7 +149,7 @@ def test_virtual_experiment_with_thermal_drift_through_the_cli(tmp_path):
     logs, data, models = tmp_path / "logs", tmp_path / "data", tmp_path / "models"
     assert main(["simulate", "experiment", "--subdivisions", "0", "--temperature-range", "15,35", "--out", str(logs),
                  "-q"]) == 0
-    log = ftcal.read_run_log(logs / "config0_load.csv")
+    log = ftcal.io.read_run_log(logs / "config0_load.csv")
     assert log.temperature is not None and 15 <= log.temperature.min() and log.temperature.max() <= 35
     truth = json.loads((logs / "virtual_experiment.json").read_text())
     assert truth["thermal_drift"]["temperature_range_deg"] == [15.0, 35.0]

@@ -11,38 +11,39 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 import ftcal
-from ftcal import BiasDrift, CalibrationInputError, DriftExtrapolationWarning, ToolLoad, identify_tool_load
+from ftcal.experiment import BiasDrift, DriftExtrapolationWarning, ToolLoad, identify_tool_load
+from ftcal.core import CalibrationInputError
 from ftcal.core._temperature import ThermalDrift
-from ftcal.experiment._drift import identification_summary
+from ftcal.experiment import identification_summary
 from ftcal.simulation._error_models import ErrorModel
 
 G = np.array([0.0, 0.0, -9.81])
-MOUNTING = ftcal.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))
+MOUNTING = ftcal.experiment.MountingDevice(mass=0.9, center_of_mass_in_sensor=(0.09, 0.0, 0.045))
 NOISE = 0.004  # relative sensor noise (eq. 12): ~0.04 N on the mounting device's 9 N
 
 
 @pytest.fixture(scope="module")
 def robot():
-    return ftcal.load_robot("kuka_iiwa14")
+    return ftcal.robot.load_robot("kuka_iiwa14")
 
 
 @pytest.fixture(scope="module")
 def plan(robot):
-    return ftcal.plan_calibration_poses(robot, subdivisions=1, excluded_cap_deg=0)
+    return ftcal.robot.plan_calibration_poses(robot, subdivisions=1, excluded_cap_deg=0)
 
 
 def recording(tmp_path, robot, plan, seed, **drift):
     """The no-load run of the virtual experiment (the mounting device is its tool), read back from its log:
     rotations, calibrated wrenches (the simulated sensor's own matrix), times [s] and temperatures."""
-    config = ftcal.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
+    config = ftcal.robot.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
     rng = np.random.default_rng(seed)
-    sensor = ftcal.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
+    sensor = ftcal.simulation.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
     sensor.zero_offset = sensor.profile.reading_from_wrench(rng.normal(0, [2, 2, 2, 0.1, 0.1, 0.1])[None])[0]
     out = tmp_path / f"run{seed}"
-    ftcal.simulate_experiment(out, robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING, random_state=seed,
+    ftcal.experiment.simulate_experiment(out, robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING, random_state=seed,
                               load_configurations=[config], gravity_in_base=G, **drift)
-    log = ftcal.read_run_log(out / "config0_no-load.csv")
-    R = ftcal.sensor_pose_in_base(robot, log.q)[:, :3, :3]
+    log = ftcal.io.read_run_log(out / "config0_no-load.csv")
+    R = ftcal.robot.sensor_pose_in_base(robot, log.q)[:, :3, :3]
     return R, sensor.profile.wrench_from_reading(log.raw), log.timestamp, log.temperature
 
 
@@ -93,7 +94,7 @@ def test_a_warm_up_exponential_is_followed_by_a_spline(tmp_path, robot, plan):
     assert tool.drift.reference == t.max()
     assert_tool_unbiased(tool)
     # the spline's drift over the recording matches the simulated one within noise
-    rows = ftcal.WRENCH_LABELS
+    rows = ftcal.core.WRENCH_LABELS
     span = tool.drift.offset(np.array([t.min()])) - tool.drift.offset(np.array([t.max()]))
     truth = wrench_drift(warm_up=(1.5, 30.0))(np.array([t.min()])) - wrench_drift(warm_up=(1.5, 30.0))(np.array([t.max()]))
     np.testing.assert_allclose(span[0, :3], truth[0, :3], atol=0.1, err_msg=str(rows))
@@ -104,7 +105,7 @@ def test_a_temperature_driven_drift_is_attributed_to_the_temperature(tmp_path, r
     def temperature(t):
         return 25.0 + 3.0 * np.sin(2 * np.pi * np.asarray(t) / 80.0)
 
-    probe = ftcal.VirtualSensor(errors="none")
+    probe = ftcal.simulation.VirtualSensor(errors="none")
     per_deg = np.array([0.25, -0.2, 0.3, 0.01, 0.008, -0.006])  # [N, N·m] per deg C
     thermal = ThermalDrift(offset_per_deg=probe.profile.reading_from_wrench(per_deg[None])[0],
                            gain_per_deg=np.zeros(6), reference_temperature=25.0)
@@ -265,13 +266,13 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
 
     rate = 1.0 / 100.0
     rng = np.random.default_rng(5)
-    sensor = ftcal.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
-    config = ftcal.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
-    ftcal.simulate_experiment(tmp_path / "logs", robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING,
+    sensor = ftcal.simulation.VirtualSensor(errors=ErrorModel(noise=NOISE), random_state=rng)
+    config = ftcal.robot.LoadConfiguration(config_id=0, name="one", position_in_sensor=(0.0, 0.0, 0.1), mass_kg=1.0)
+    ftcal.experiment.simulate_experiment(tmp_path / "logs", robot=robot, plan=plan, sensor=sensor, mounting=MOUNTING,
                               load_configurations=[config], gravity_in_base=G, random_state=5,
                               bias_drift=wrench_drift(rate_per_s=rate))
     log = str(tmp_path / "logs" / "config0_no-load.csv")
-    loads = ftcal.VirtualSensor(errors="none").profile  # the sensor's own matrix as the calibration model
+    loads = ftcal.simulation.VirtualSensor(errors="none").profile  # the sensor's own matrix as the calibration model
     w = np.random.default_rng(0).normal(0, [50, 50, 50, 2, 2, 2], size=(200, 6))
     model = ftcal.save_model(ftcal.LinearCalibrator().fit(sensor.read(w, noise=False), w), tmp_path / "m.model.npz")
     assert np.allclose(loads.wrench_from_reading(loads.reading_from_wrench(w)), w)

@@ -10,7 +10,8 @@ import pandas as pd
 import pytest
 
 import ftcal
-from ftcal import AxisNonlinearCalibrator, ComparativeCalibrator, LinearCalibrator, ModelFileError, load_model, save_model
+from ftcal import AxisNonlinearCalibrator, ComparativeCalibrator, LinearCalibrator, load_model, save_model
+from ftcal.core import ModelFileError
 from ftcal.cli import main
 from ftcal.core._wrench import named_targets, scale_torques, target_axes
 
@@ -74,7 +75,7 @@ def test_scaled_predictions_round_trip_and_the_onnx_graph_unscales_the_plates_to
     session = ort.InferenceSession(str(path), providers=["CPUExecutionProvider"])
     got = session.run(None, {session.get_inputs()[0].name: raw[:20]})[0]
     np.testing.assert_allclose(got, model.predict(raw[:20]), rtol=1e-6, atol=1e-6 * np.abs(w).max())
-    assert ftcal.wrench_rmse(w, model.predict(raw), alpha=model.alpha_, axes=PLATE) < 0.05 * model.alpha_
+    assert ftcal.core.wrench_rmse(w, model.predict(raw), alpha=model.alpha_, axes=PLATE) < 0.05 * model.alpha_
 
 
 def test_fit_of_a_plate_on_the_command_line_scales_its_torques(tmp_path, capsys):

@@ -7,20 +7,11 @@ import json
 import numpy as np
 import pytest
 
-from ftcal import (
-    DirectionalCalibrator,
-    LinearCalibrator,
-    LogFormatError,
-    MountingDevice,
-    load_robot,
-    plan_calibration_poses,
-    prepare_dataset,
-    read_run_log,
-    reference_wrench_at_joints,
-    scale_torques,
-    simulate_experiment,
-    wrench_rmse,
-)
+from ftcal import DirectionalCalibrator, LinearCalibrator
+from ftcal.core import LogFormatError, scale_torques, wrench_rmse
+from ftcal.experiment import MountingDevice, prepare_dataset, simulate_experiment
+from ftcal.robot import load_robot, plan_calibration_poses, reference_wrench_at_joints
+from ftcal.io import read_run_log
 
 
 @pytest.fixture(scope="module")
@@ -87,7 +78,7 @@ def test_tiny_directional_fit_runs_on_the_dataset(experiment):
 
 
 def test_benchmark_library_side_scores_both_splits_and_plots(tmp_path):
-    from ftcal import run_real_world_benchmark
+    from ftcal.benchmark import run_real_world_benchmark
     from ftcal.calibrators import STOCK_BASELINE_NAMES
 
     res = run_real_world_benchmark(models=("linear",), subdivisions=0, log_dir=tmp_path / "logs",

@@ -263,7 +263,7 @@ def _run_group(tasks: list[dict]) -> list[dict]:
 
     One task: one ordinary fit. Several (network models of one preset and
     model name on several datasets): the nets train together as one stacked
-    module (:func:`~ftcal.fit_stacked`); each record's ``fit_seconds`` is
+    module (:func:`~ftcal.networks.fit_stacked`); each record's ``fit_seconds`` is
     its share of that fit's wall time, ``stacked`` the number of nets.
     """
     # the networks limit their own threads during fit (n_threads, in the fitting thread): nothing process-wide
@@ -487,10 +487,10 @@ def run_artificial_benchmark(
     n_datasets : int, default=30
         Datasets per preset (indices 0 .. n-1; the same data for every model).
     presets : sequence of str or mapping of str to ErrorModel, default=("thesis",)
-        Error presets (:data:`~ftcal.ERROR_PRESETS`), or names mapped to
+        Error presets (:data:`~ftcal.simulation.ERROR_PRESETS`), or names mapped to
         error models of your own (e.g. a sweep of one parameter).
     models : sequence of str
-        Registry names (:data:`~ftcal.CALIBRATOR_NAMES`) and stock
+        Registry names (:data:`~ftcal.compose.CALIBRATOR_NAMES`) and stock
         scikit-learn baselines (:data:`~ftcal.calibrators.STOCK_BASELINE_NAMES`,
         ``sk_linear`` ... ``sk_gp``), fitted on the same data.
     schedule : {"thesis", "short"}
@@ -521,7 +521,7 @@ def run_artificial_benchmark(
     stack : int, default=1
         Train up to ``stack`` network fits of one preset and model (on
         different datasets) together as one stacked module
-        (:func:`~ftcal.fit_stacked`): the same results up to float32
+        (:func:`~ftcal.networks.fit_stacked`): the same results up to float32
         rounding, about 10x less CPU time with 30. 1 fits one by one.
     n_spheres : int, default=4
         Training spheres, the outermost ones (see :func:`~ftcal.make_artificial_dataset`).

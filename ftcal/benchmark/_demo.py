@@ -53,7 +53,7 @@ class DemoResult:
     predictions : dict
         Name -> predicted test wrenches (n_test, 6) [N, N·m].
     reports : dict
-        Name -> :class:`~ftcal.CalibrationMetrics` on the test set.
+        Name -> :class:`~ftcal.core.CalibrationMetrics` on the test set.
     fit_seconds : dict
         Name -> training wall time [s].
     table : str

@@ -1,7 +1,7 @@
 """The real-world benchmark (thesis V-B, Tables IV-V, Fig. 6) on the virtual experiment.
 
-Pipeline: :func:`ftcal.simulate_experiment` writes the 7 x 155 load / no-load
-run logs; :func:`ftcal.prepare_dataset` turns them into a dataset exactly as it
+Pipeline: :func:`ftcal.experiment.simulate_experiment` writes the 7 x 155 load / no-load
+run logs; :func:`ftcal.experiment.prepare_dataset` turns them into a dataset exactly as it
 would real logs; each calibrator (built only through
 :func:`ftcal.make_calibrator`) is fitted and scored on two splits a
 practitioner would use:
@@ -149,7 +149,7 @@ def run_real_world_benchmark(
     Parameters
     ----------
     models : sequence of str
-        Registry names (:data:`ftcal.CALIBRATOR_NAMES`).
+        Registry names (:data:`ftcal.compose.CALIBRATOR_NAMES`).
     baselines : bool, default=True
         Also score the stock scikit-learn baselines (:data:`ftcal.calibrators.STOCK_BASELINE_NAMES`) on the same
         splits: what every table compares ftcal with.

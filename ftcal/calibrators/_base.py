@@ -9,7 +9,7 @@ common, so each model only implements ``_fit(X, y)`` and
   the first bad row; at ``predict`` the channel count must match ``fit``;
   ``predict`` before ``fit`` raises scikit-learn's ``NotFittedError``;
 * **torque scale** ``alpha_`` (eq. 5-6): the ``alpha`` parameter, or
-  :func:`~ftcal.alpha_from_wrenches` of the training targets when ``None``.
+  :func:`~ftcal.core.alpha_from_wrenches` of the training targets when ``None``.
   Models apply it inside their losses; ``predict`` always returns the
   wrench in [N] and [N·m];
 * **zero-load reading** ``zero_reading_`` (N,): the ``zero_reading``
@@ -73,7 +73,7 @@ class CalibrationTags:
         routing by default.
     network : bool
         A neural network trained by skorch; ``stackable``: trainable with others as one stacked module
-        (:func:`~ftcal.fit_stacked`).
+        (:func:`~ftcal.networks.fit_stacked`).
     stackable : bool
     reads_history : bool
         Reads its rows as a time series (a load-history model): must be the outermost model, no ONNX graph.
@@ -222,7 +222,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     ``_parameter_constraints`` (name -> allowed types and ranges, see
     ``sklearn.utils._param_validation``), extended by each subclass and
     checked once, at the start of ``fit`` (:meth:`_check_parameters`); a
-    bad value raises :class:`~ftcal.CalibrationInputError` naming the
+    bad value raises :class:`~ftcal.core.CalibrationInputError` naming the
     parameter, the allowed values and the value given. Checks a table cannot
     express (the entries of ``hidden_layer_sizes``) follow it in
     ``_check_params`` of the subclass.
@@ -275,7 +275,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         """Everything ``fit`` does before the model's own ``_fit``: check the parameters, validate the data, set
         ``alpha_``, ``zero_reading_`` and ``reading_noise_``, drop a re-tare. Returns the validated ``X``, ``y``.
 
-        Shared with :func:`ftcal.fit_stacked`, which then trains several models' ``_fit`` at once.
+        Shared with :func:`ftcal.networks.fit_stacked`, which then trains several models' ``_fit`` at once.
         """
         self._check_parameters()
         axes = self._remember_axes(y)

@@ -651,7 +651,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         X : array-like of shape (n_samples, n_channels)
         return_std : bool, default=False
             ``True`` or ``False`` (numpy booleans too); anything else raises
-            :class:`~ftcal.CalibrationInputError`.
+            :class:`~ftcal.core.CalibrationInputError`.
 
         Returns
         -------

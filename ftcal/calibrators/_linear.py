@@ -46,7 +46,7 @@ class LinearCalibrator(BaseCalibrator):
         least squares). Raw channels are centred first.
     alpha : float or None, default=None
         Torque scale ``Fmax / Tmax`` [m⁻¹] (eq. 5); ``None`` derives it from
-        ``y`` with :func:`~ftcal.alpha_from_wrenches`.
+        ``y`` with :func:`~ftcal.core.alpha_from_wrenches`.
     zero_reading : array-like of shape (N,) or None, default=None
         Known raw reading at zero load; ``None`` estimates it from the data
         (affine fit ``raw ≈ A w + z``). The LTM's offset absorbs it; it is

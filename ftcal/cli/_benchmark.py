@@ -66,9 +66,9 @@ def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True,
     import ftcal
 
     p.add_argument(
-        "--model", dest="models", action="append", choices=tuple(ftcal.CALIBRATOR_NAMES), metavar="NAME",
+        "--model", dest="models", action="append", choices=tuple(ftcal.compose.CALIBRATOR_NAMES), metavar="NAME",
         help=f"calibrator to include (repeatable; default: {', '.join(default_models)}; "
-        f"known: {', '.join(ftcal.CALIBRATOR_NAMES)})",
+        f"known: {', '.join(ftcal.compose.CALIBRATOR_NAMES)})",
     )
     p.add_argument("--schedule", default="thesis", choices=("thesis", "short"), help="training schedule")
     p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs")
@@ -209,12 +209,12 @@ def run_dataset(args: argparse.Namespace) -> int:
     if args.history and not set(names) & set(HISTORY_MODELS):
         raise CliError(f"--history scores the closed-form models with a history term ({', '.join(HISTORY_MODELS)}); "
                        "list at least one of them with --model")
-    alpha = ftcal.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
+    alpha = ftcal.core.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
     candidates = []
     for name in names:
         extra = {"phase1_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
-            ftcal.training_schedule(schedule, name) else {}
+            ftcal.compose.training_schedule(schedule, name) else {}
         candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
     if args.history:  # after the static models: a history term is the more complex model
         candidates += [(f"history({name})", ftcal.HistoryCalibrator(ftcal.make_calibrator(name), random_state=args.seed))
@@ -286,7 +286,7 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.set_postfix_str(f"{record['preset']} #{record['dataset']} {record['model']}", refresh=False)
             bar.update(done - bar.n)
 
-        result = ftcal.run_artificial_benchmark(
+        result = ftcal.benchmark.run_artificial_benchmark(
             n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
             test_distribution=args.test_distribution,
             seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
@@ -314,7 +314,7 @@ def run_real_world(args: argparse.Namespace) -> int:
     if args.mass is not None:
         kwargs["load_mass"] = args.mass
     console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
-    result = ftcal.run_real_world_benchmark(**kwargs)
+    result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
     markdown = real_world_markdown(result)
     with plan.writing("real_world_results.md") as tmp:
         tmp.write_text(markdown + "\n", encoding="utf-8")

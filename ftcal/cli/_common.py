@@ -373,19 +373,16 @@ def add_robot_options(parser: argparse.ArgumentParser) -> None:
 def load_robot_from_args(args: argparse.Namespace):
     """The robot of ``--robot`` / ``--sensor-frame`` / ``--sensor-mounting``, every problem in one line.
 
-    A ``.urdf`` path is first checked as XML (a syntax error is named with its line and column), then parsed by
-    Pinocchio with the C++ stderr of urdfdom captured: its ``Error:`` lines would otherwise precede ftcal's own
-    message; the first of them says what is wrong and joins the message. After a successful parse its
+    The library checks a ``.urdf`` path (:func:`ftcal.robot.load_robot`: a syntax error is named with its line and
+    column); Pinocchio parses it with the C++ stderr of urdfdom captured here: its ``Error:`` lines would otherwise
+    precede ftcal's own message; the first of them says what is wrong and joins the message. After a successful parse its
     warnings, if any, are shown as they would have been.
     """
     import ftcal
 
-    robot = str(args.robot)
-    if robot.lower().endswith(".urdf") and Path(robot).is_file():
-        _check_urdf_xml(Path(robot))
     with _captured_stderr_fd() as captured:
         try:
-            model = ftcal.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+            model = ftcal.robot.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
         except (FtcalError, ValueError) as exc:
             failure, text = exc, captured()
         else:
@@ -400,23 +397,6 @@ def load_robot_from_args(args: argparse.Namespace):
     if text:
         sys.stderr.write(text)
     return model
-
-
-def _check_urdf_xml(path: Path) -> None:
-    """Raise :class:`CliError` naming the line and column of an XML syntax error of the URDF ``path``."""
-    import xml.etree.ElementTree as ET
-
-    try:
-        ET.parse(path)
-    except ET.ParseError as exc:
-        line, column = getattr(exc, "position", (None, None))
-        reason = str(exc).split(":")[0]
-        if path.stat().st_size == 0:
-            raise CliError(f"--robot {path}: the URDF file is empty") from None
-        raise CliError(f"--robot {path}: line {line}, column {column + 1 if column is not None else '?'}: not "
-                       f"valid XML ({reason}); a URDF is an XML file") from None
-    except OSError as exc:
-        raise CliError(f"--robot {path}: {exc.strerror or exc}") from None
 
 
 @contextlib.contextmanager
@@ -511,7 +491,7 @@ def note_dataset(path: str | os.PathLike) -> None:
 
 def name_the_dataset(message: str, exc: BaseException) -> str:
     """``message`` with the file of the one dataset the command loaded in front, when ``exc`` is the library's
-    error about the data (a :class:`~ftcal.CalibrationInputError` whose ``parameter`` is ``X`` or ``y``) and names
+    error about the data (a :class:`~ftcal.core.CalibrationInputError` whose ``parameter`` is ``X`` or ``y``) and names
     no loaded file.
 
     Examples

@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
             if predictions[label].shape != data.wrench.shape:
                 raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "
                                f"{data.n_axes} ({', '.join(data.axes)}); give the dataset of that sensor")
-            reports[label] = ftcal.calibration_metrics(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
+            reports[label] = ftcal.core.calibration_metrics(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
             bar.update(1)
     table = comparison_table(reports, noise_floor)
     axes = axis_table(reports)

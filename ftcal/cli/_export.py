@@ -80,7 +80,7 @@ def run(args: argparse.Namespace) -> int:
     if args.format == "ros":
         from ..experiment._tool_load import tool_gravity_compensation_yaml
 
-        tool = ftcal.ToolLoad.load(args.model)
+        tool = ftcal.experiment.ToolLoad.load(args.model)
         text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
         with plan.writing(output.name) as tmp:
             tmp.write_text(text, encoding="utf-8")
@@ -89,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     if is_tool and args.format == "onnx":
         from ..experiment._drift import tool_onnx_model
 
-        tool = ftcal.ToolLoad.load(args.model)
+        tool = ftcal.experiment.ToolLoad.load(args.model)
         with plan.writing(output.name) as tmp:
             tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
         console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")

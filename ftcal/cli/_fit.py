@@ -31,7 +31,7 @@ with --report also DIR/NAME.report.html / .json, the calibration report (see 'ft
 def calibrator_names() -> tuple[str, ...]:
     import ftcal
 
-    return tuple(ftcal.CALIBRATOR_NAMES)
+    return tuple(ftcal.compose.CALIBRATOR_NAMES)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -177,7 +177,7 @@ def run(args: argparse.Namespace) -> int:
         params["alpha"] = alpha
     if tare is not None:
         params["zero_reading"] = tare
-    known = ftcal.calibrator_parameters(args.model)
+    known = ftcal.compose.calibrator_parameters(args.model)
     if args.jobs is not None and "n_jobs" not in known and not args.report:
         raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does, and the "
                        "report's stock baselines with --report); drop --jobs")
@@ -207,7 +207,7 @@ def run(args: argparse.Namespace) -> int:
     if args.history:
         estimator = ftcal.HistoryCalibrator(
             estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
-    schedule = f" ({args.schedule} schedule)" if ftcal.training_schedule(args.schedule, args.model) else ""
+    schedule = f" ({args.schedule} schedule)" if ftcal.compose.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
     fit_params = {}
@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
     # Tx, Ty as well as a 6-axis sensor's)
     fit_with_progress(estimator, X, training_targets(data), console, label=args.model, **fit_params)
     seconds = time.perf_counter() - start
-    report = ftcal.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
+    report = ftcal.core.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
         "model": args.model,
         "schedule": args.schedule,

@@ -170,11 +170,11 @@ def _poses_and_wrenches(args):
 
     robot = load_robot_from_args(args)
     model = ftcal.load_model(args.model)
-    logs = [ftcal.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
+    logs = [ftcal.io.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
             for p in log_files(args.inputs)]
     q = np.vstack([lg.q for lg in logs])
     raw = np.vstack([lg.raw for lg in logs])
-    rotations = ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]
+    rotations = ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]
     return logs, rotations, model.predict(raw)
 
 
@@ -315,7 +315,7 @@ def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
             R = still.rotation
         else:
             still = still_poses(args, str(path), rec.time, reading, joints=bag_joints(rec, robot))
-            R = ftcal.sensor_pose_in_base(robot, still.joints)[:, :3, :3]
+            R = ftcal.robot.sensor_pose_in_base(robot, still.joints)[:, :3, :3]
         console.info(f"{path}: {still.summary()}")
         wrench = still.reading
         if args.wrench_frame == "base":
@@ -445,7 +445,7 @@ def _compensation_rows(args, console: Console):
         robot = None if args.tf is not None else load_robot_from_args(args)
         for path in bag_files(args.inputs):
             rec, reading, model = _bag_rows(args, console, path, model)
-            R = rec.rotation if robot is None else ftcal.sensor_pose_in_base(robot, bag_joints(rec, robot))[:, :3, :3]
+            R = rec.rotation if robot is None else ftcal.robot.sensor_pose_in_base(robot, bag_joints(rec, robot))[:, :3, :3]
             rotations.append(R)
             wrenches.append(wrench_in_sensor_frame(R, reading) if args.wrench_frame == "base" else reading)
             times.append(rec.time)
@@ -472,7 +472,7 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
-    tool = ftcal.ToolLoad.load(args.tool)
+    tool = ftcal.experiment.ToolLoad.load(args.tool)
     head, lead, rotations, wrenches, times, temperatures = _compensation_rows(args, console)
     external = compensate_rows(args, tool, rotations, wrenches, times, temperatures, ", ".join(args.inputs))
     lines = [f"{head}," + ",".join(WRENCH_LABELS)]

@@ -131,9 +131,9 @@ def run(args: argparse.Namespace) -> int:
         dataset = load_dataset_for_models(args, args.dataset, "dataset", [args.model])
         model = load_model_file(args.model)
         console.info(f"ranking the reachable poses of {robot.name} by the predicted uncertainty of {args.model} ...")
-        candidates = ftcal.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,
+        candidates = ftcal.robot.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,
                                                 excluded_cap_deg=args.excluded_cap_deg)
-        plan = ftcal.propose_next_poses(robot, dataset, model, args.next_poses, candidates=candidates,
+        plan = ftcal.experiment.propose_next_poses(robot, dataset, model, args.next_poses, candidates=candidates,
                                         load_mass=args.load_mass)
         extra = {"uncertainty": plan.uncertainty, "predicted_std_N": plan.predicted_std,
                  "expected_gain": plan.expected_gain, "total_variance_before_N2": plan.total_variance_before,
@@ -141,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
                  "model": str(args.model)}
     else:
         console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
-        plan = ftcal.plan_calibration_poses(
+        plan = ftcal.robot.plan_calibration_poses(
             robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg, strategy=args.strategy,
             n_poses=args.poses, candidate_subdivisions=args.candidate_subdivisions,
             space_filling=args.space_filling, n_load_configurations=args.load_configurations,

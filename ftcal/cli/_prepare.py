@@ -134,9 +134,9 @@ def run(args: argparse.Namespace) -> int:
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
-        dataset = ftcal.prepare_dataset(inputs, robot, args.mass, n_channels=args.n_channels,
+        dataset = ftcal.experiment.prepare_dataset(inputs, robot, args.mass, n_channels=args.n_channels,
                                         load_configurations=configurations)
-    except ftcal.LogFormatError as exc:
+    except ftcal.core.LogFormatError as exc:
         if exc.parameter != "load_configurations":
             raise
         from ._messages import cli_spelling
@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
             "fixture": fixture,
             "meta": dataset.meta,
         })
-    alpha = ftcal.alpha_from_wrenches(dataset.wrench)
+    alpha = ftcal.core.alpha_from_wrenches(dataset.wrench)
     with plan.writing("coverage.png") as tmp:
         _plots.plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
     console.info(

@@ -14,6 +14,7 @@ from ._common import (
     add_robot_options,
     add_run_options,
     existing_file,
+    load_robot_from_args,
     finite_float,
     positive_float,
     write_json,
@@ -78,7 +79,7 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
     d.add_argument(
         "--temperature-range", metavar="LOW,HIGH",
         help="simulate thermal drift: each sample at a random temperature in LOW..HIGH deg C, the sensor's zero "
-        "and span drifting by data-sheet magnitudes (ftcal.ThermalDrift.typical); adds a temperature column",
+        "and span drifting by data-sheet magnitudes (ftcal.core.ThermalDrift.typical); adds a temperature column",
     )
     d.add_argument(
         "--zero-offset", type=finite_float, default=0.0, metavar="RAW",
@@ -174,7 +175,7 @@ def _with_thermal_drift(train, test, bounds, rng):
 
     import ftcal
 
-    drift = ftcal.ThermalDrift.typical(np.abs(train.raw).max(axis=0), random_state=rng)
+    drift = ftcal.core.ThermalDrift.typical(np.abs(train.raw).max(axis=0), random_state=rng)
     out = []
     for ds in (train, test):
         temperature = rng.uniform(*bounds, size=ds.n_samples)
@@ -190,11 +191,8 @@ def _profile(cal_path: Path | None):
     import ftcal
 
     if cal_path is None:
-        return ftcal.SensorProfile.default()
-    reader = getattr(ftcal, "read_ati_calibration", None)
-    if reader is None:
-        raise CliError("this ftcal build cannot read vendor calibration files (read_ati_calibration is missing)")
-    return reader(cal_path)
+        return ftcal.simulation.SensorProfile.default()
+    return ftcal.simulation.read_ati_calibration(cal_path)
 
 
 def _register_experiment(kinds: argparse._SubParsersAction) -> None:
@@ -231,6 +229,49 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
 
 
 def run_experiment(args: argparse.Namespace) -> int:
-    from ._experiment import simulate_logs
+    """Plan the poses, simulate the load / no-load runs, write the logs and a coverage plot."""
+    import ftcal
 
-    return simulate_logs(args)
+    from ._plan import write_plan_coverage
+
+    console = Console(args.quiet)
+    from ..robot._loads import load_fixture
+
+    fixture, configs = load_fixture(getattr(args, "fixture", None))
+    names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
+    plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
+    bag_storage = getattr(args, "bag", None)
+    if bag_storage is not None:
+        bag_names = [n[:-4] + (".bag" if bag_storage == "ros1" else "") for n in names]
+        taken = [Path(args.out) / "bags" / n for n in bag_names if (Path(args.out) / "bags" / n).exists()]
+        if taken:  # a bag is never replaced, --force or not
+            raise CliError(f"{taken[0]} exists; a bag is never overwritten: remove it or choose another --out")
+        from ..io._bags import check_rosbags
+
+        check_rosbags()
+    robot = load_robot_from_args(args)
+    kwargs = {} if args.subdivisions is None else {"subdivisions": args.subdivisions}
+    console.info(f"planning the pose sphere of {robot.name} ...")
+    plan = ftcal.robot.plan_calibration_poses(robot, **kwargs)
+    if plan.n_poses == 0:
+        raise ftcal.core.KinematicsError(f"no calibration pose of {robot.name} is reachable; try another --robot")
+    mass = {} if args.mass is None else {"load_mass": args.mass}
+    thermal = temperature_range(args.temperature_range)
+    if thermal is not None:
+        mass.update(thermal_drift="typical", temperature_range_deg=thermal)
+    console.info(f"fixture: {fixture}")  # never silent: the simulated loads rest on it
+    console.info(f"simulating {len(configs)} load configurations x {plan.n_poses} poses (load and no-load runs) ...")
+    paths = ftcal.experiment.simulate_experiment(
+        args.out, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=args.force,
+        load_configurations=configs, **mass,
+    )
+    write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
+    console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")
+    if bag_storage is not None:
+        from ..experiment._virtual_recording import write_run_bags
+
+        bags = write_run_bags(paths, Path(args.out) / "bags", bag_storage, joint_names=robot.joint_names,
+                              random_state=args.seed)
+        console.info(f"wrote {len(bags)} ROS bags ({bag_storage}) of the same runs to {Path(args.out) / 'bags'}/ "
+                     f"(next: ftcal prepare {Path(args.out) / 'bags'} --raw-topic /ft_sensor/raw --out DIR)")
+    return 0

@@ -49,7 +49,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     or temperature). Library errors name the inputs."""
     import ftcal
     from ..core._exceptions import CalibrationInputError
-    from ..experiment._drift import identification_summary
+    from ..experiment._tool_load import identification_summary
     from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
@@ -58,7 +58,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
                        "--time-from-order to use the recording order")
     settings = dict(drift=args.drift, cv=args.cv, random_state=0, groups=groups)
     try:
-        tool = ftcal.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
+        tool = ftcal.experiment.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
                                         time_unit=unit, **settings)
         report = None
         if times is not None or temperatures is not None:
@@ -237,7 +237,7 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     plan = OutputPlan.single_file(output, args.force)
     if args.readings == "-":
         raise CliError("a tool re-tare reads its readings from a file, not stdin")
-    tool = ftcal.ToolLoad.load(model)
+    tool = ftcal.experiment.ToolLoad.load(model)
     data = _read_wrench_readings(args)
     if args.tool_off and (args.orientation or "rotation" in data):
         raise CliError("--tool-off: the readings were taken without the tool, so no orientation is needed; drop "

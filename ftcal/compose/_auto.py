@@ -285,7 +285,7 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
     """Out-of-fold predictions of ``estimator`` on ``folds``: ``(test rows, their predictions)`` per fold.
 
     Networks: the K fold models are trained as one stacked fit
-    (:func:`ftcal.fit_stacked`), each on at most ``network_samples`` rows of its
+    (:func:`ftcal.networks.fit_stacked`), each on at most ``network_samples`` rows of its
     training fold (the same share of every group); everything else fold by
     fold with ftcal's held-out engine (:func:`~ftcal.model_selection._selection.fold_predictions`,
     on :func:`sklearn.model_selection.cross_validate`; ``groups`` when its routing
@@ -1099,7 +1099,7 @@ class AutoCalibrator(BaseCalibrator):
         """Wrench [N, N·m] for raw readings ``X``; with ``return_std`` also the chosen model's standard deviation.
 
         ``return_std=True`` needs a chosen model that gives one (the Gaussian
-        process); otherwise a :class:`~ftcal.CalibrationInputError` says which was chosen.
+        process); otherwise a :class:`~ftcal.core.CalibrationInputError` says which was chosen.
         """
         from ..core._validation import check_bool
 

@@ -50,7 +50,7 @@ class EnsembleCalibrator(BaseCalibrator):
     which every seed shares; use :class:`~ftcal.AxisNonlinearCalibrator`.
     Network members (:class:`~ftcal.DirectionalCalibrator`,
     :class:`~ftcal.ComparativeCalibrator` on the CPU, without ``callbacks``)
-    are trained together as one stacked module (:func:`~ftcal.fit_stacked`):
+    are trained together as one stacked module (:func:`~ftcal.networks.fit_stacked`):
     five members cost about one fit's time (``benchmarks/network_speed.py``),
     with the weights separate fits would reach. Other members cost one fit
     each, run in parallel with ``n_jobs``.

@@ -268,7 +268,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
     Examples
     --------
     >>> import ftcal
-    >>> d = ftcal.make_soft_sensor_dataset()
+    >>> d = ftcal.simulation.make_soft_sensor_dataset()
     >>> model = ftcal.HistoryCalibrator(ftcal.PolynomialCalibrator(degree=2, ridge=0.01)).fit(
     ...     d.raw, d.wrench, groups=d.group)
     >>> model.tau_rows_ is not None, model.predict(d.raw[:5]).shape
@@ -439,7 +439,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         Examples
         --------
         >>> import numpy as np, ftcal
-        >>> d = ftcal.make_soft_sensor_dataset()
+        >>> d = ftcal.simulation.make_soft_sensor_dataset()
         >>> model = ftcal.HistoryCalibrator(taus=(2.0,)).fit(d.raw, d.wrench, groups=d.group)
         >>> predict = model.stream()
         >>> parts = [predict(d.raw[:100]), predict(d.raw[100:])]

@@ -74,7 +74,7 @@ def _factory(name: str) -> Callable[..., Any]:
 _SCHEDULES: dict[str, dict[str, dict[str, Any]]] = {}
 #: name -> ``[(complexity, label, params)]``: the candidates of ``auto`` each registration brings.
 _CANDIDATES: dict[str, list[tuple[float, str, dict[str, Any]]]] = {}
-#: name -> its search space (``ftcal tune``, :func:`~ftcal.search_calibrator`).
+#: name -> its search space (``ftcal tune``, :func:`~ftcal.compose.search_calibrator`).
 _SEARCH_SPACES: dict[str, dict[str, list]] = {}
 
 
@@ -139,7 +139,7 @@ def register_calibrator(
         placed by ``complexity`` (the LTM is 10, the polynomials 20-31, the hybrid 40, the GP 50, the networks
         60-70; lower is simpler). Params with ``group_offsets=True`` make a twin tried only on grouped data.
     search_space : mapping or None
-        Its default grid for ``ftcal tune`` / :func:`~ftcal.search_calibrator` (parameter -> values).
+        Its default grid for ``ftcal tune`` / :func:`~ftcal.compose.search_calibrator` (parameter -> values).
 
     Examples
     --------

@@ -154,7 +154,7 @@ def search_calibrator(
     Parameters
     ----------
     model : str
-        Registry name (:data:`~ftcal.CALIBRATOR_NAMES`).
+        Registry name (:data:`~ftcal.compose.CALIBRATOR_NAMES`).
     X : array-like of shape (n, N)
         Raw readings.
     y : array-like of shape (n, 6)

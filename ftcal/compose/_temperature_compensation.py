@@ -66,7 +66,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     Examples
     --------
     >>> import numpy as np
-    >>> from ftcal import TemperatureCompensatedCalibrator, ThermalDrift
+    >>> from ftcal import TemperatureCompensatedCalibrator
+    >>> from ftcal.core import ThermalDrift
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(400, 6)); raw = w @ rng.normal(size=(6, 6))
     >>> T = rng.uniform(15, 35, size=400)

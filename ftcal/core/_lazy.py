@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import sys
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from importlib import import_module
 
 __all__ = ["lazy_namespace", "moved_name_warning"]
@@ -23,8 +23,8 @@ def moved_name_warning(old: str, new: str) -> FutureWarning:
                          f"next release: import it from {new.rsplit('.', 1)[0]}")
 
 
-def lazy_namespace(package: str, names: Mapping[str, str], moved: Mapping[str, str] | None = None
-                   ) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
+def lazy_namespace(package: str, names: Mapping[str, str], moved: Mapping[str, str] | None = None,
+                   subpackages: Iterable[str] = ()) -> tuple[Callable[[str], object], Callable[[], list[str]]]:
     """``__getattr__`` and ``__dir__`` for ``package`` that import ``names[attr]`` (a submodule) on first use.
 
     Keeps ``import ftcal`` and ``import ftcal.<package>`` light: torch and pinocchio load only when a name
@@ -34,6 +34,7 @@ def lazy_namespace(package: str, names: Mapping[str, str], moved: Mapping[str, s
     ``moved`` maps a name that used to be public here to its public path now (absolute and dotted, e.g.
     ``"ftcal.robot.icosphere"``; the last part may be a new name): each access returns that object and warns
     with a :class:`FutureWarning` (never stored, so every access warns); ``__dir__`` does not list it.
+    ``subpackages`` are imported on first access (``ftcal.robot`` after only ``import ftcal``).
 
     Examples
     --------
@@ -41,10 +42,12 @@ def lazy_namespace(package: str, names: Mapping[str, str], moved: Mapping[str, s
     >>> getattr_("mean_std").__name__
     'mean_std'
     """
-    moved = dict(moved or {})
+    moved, subpackages = dict(moved or {}), frozenset(subpackages)
 
     def __getattr__(name: str):
         module = names.get(name)
+        if name in subpackages:
+            return import_module(f"{package}.{name}")  # the import binds it in the package
         if module is None:
             new = moved.get(name)
             if new is None:
@@ -57,6 +60,6 @@ def lazy_namespace(package: str, names: Mapping[str, str], moved: Mapping[str, s
         return value
 
     def __dir__() -> list[str]:
-        return sorted(set(vars(sys.modules[package])) | set(names))
+        return sorted(set(vars(sys.modules[package])) | set(names) | subpackages)
 
     return __getattr__, __dir__

@@ -311,7 +311,7 @@ def _torque_scale_of(estimator) -> tuple[float, tuple | None]:
         f"neg_scaled_rmse needs the torque scale alpha_ [1/m] of a fitted ftcal calibrator (eq. 18), but "
         f"{' -> '.join(path)} has none (it looks through Pipeline final steps, a search's best_estimator_ and "
         "FrozenEstimator). Fix: end the pipeline with an ftcal calibrator, or score with a fixed torque scale: "
-        "sklearn.metrics.make_scorer(ftcal.wrench_rmse, greater_is_better=False, alpha=<Fmax / Tmax in 1/m>).")
+        "sklearn.metrics.make_scorer(ftcal.core.wrench_rmse, greater_is_better=False, alpha=<Fmax / Tmax in 1/m>).")
 
 
 def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
@@ -321,7 +321,7 @@ def neg_scaled_rmse(estimator, X: ArrayLike, y: ArrayLike) -> float:
     Use it as ``scoring=neg_scaled_rmse`` in ``cross_validate`` or ``GridSearchCV`` (greater is better, as
     scikit-learn expects), on a calibrator or on a ``Pipeline`` ending with one (nested pipelines, a fitted
     search's ``best_estimator_`` and a ``FrozenEstimator`` are looked through). An estimator without such a
-    calibrator is refused with a :class:`~ftcal.CalibrationInputError`: torques scored with ``alpha = 1`` would
+    calibrator is refused with a :class:`~ftcal.core.CalibrationInputError`: torques scored with ``alpha = 1`` would
     count a torque error in N·m as a force error in N. For a fixed torque scale use
     ``make_scorer(wrench_rmse, greater_is_better=False, alpha=...)``.
 

@@ -1,7 +1,7 @@
 """Scale-out on an existing engine: run joblib's parallel work on a Dask cluster.
 
-The artificial benchmark (:func:`ftcal.run_artificial_benchmark`) and the searches
-(:func:`ftcal.search_calibrator`, ``ftcal tune``) distribute their fits with joblib.
+The artificial benchmark (:func:`ftcal.benchmark.run_artificial_benchmark`) and the searches
+(:func:`ftcal.compose.search_calibrator`, ``ftcal tune``) distribute their fits with joblib.
 :func:`dask_backend` points joblib at a Dask cluster: ``"local"`` starts a
 ``distributed.LocalCluster`` on this machine (one single-threaded worker process
 per core), any other value is the address of a running scheduler

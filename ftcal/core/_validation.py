@@ -1,6 +1,6 @@
 """Input validation shared by every calibrator.
 
-All checks raise :class:`~ftcal.CalibrationInputError` (a ``ValueError``) with
+All checks raise :class:`~ftcal.core.CalibrationInputError` (a ``ValueError``) with
 a message that names the array, its shape or the first offending row, and
 says how to fix it. Shape and dtype handling goes through scikit-learn's
 ``validate_data`` so ``n_features_in_`` and the feature-count check at

@@ -103,7 +103,7 @@ MAX_LOAD_MASS_KG = 1e4
 
 
 def check_alpha(alpha, name: str = "alpha") -> float:
-    """``alpha`` as a float when it is a finite torque scale > 0 [1/m], else :class:`~ftcal.CalibrationInputError`.
+    """``alpha`` as a float when it is a finite torque scale > 0 [1/m], else :class:`~ftcal.core.CalibrationInputError`.
 
     Examples
     --------

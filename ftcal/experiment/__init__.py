@@ -18,7 +18,7 @@ _PUBLIC = dict(
     StillPoses="_still_poses", find_still_poses="_still_poses",
     ToolLoad="_tool_load", identify_tool_load="_tool_load", wrench_in_sensor_frame="_tool_load",
     tool_gravity_compensation_yaml="_tool_load", BiasDrift="_drift", DriftExtrapolationWarning="_drift",
-    identification_summary="_drift", propose_next_poses="_next_poses", PoseProposal="_next_poses",
+    identification_summary="_tool_load", propose_next_poses="_next_poses", PoseProposal="_next_poses",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

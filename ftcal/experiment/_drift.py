@@ -2,7 +2,7 @@
 
 Real sensors drift (warm-up, a restart, the room warming): a tool identified
 with a *constant* bias leaves that drift in every compensated wrench. Here the
-bias of :func:`ftcal.identify_tool_load` may move with a variable ``v`` (the
+bias of :func:`ftcal.experiment.identify_tool_load` may move with a variable ``v`` (the
 time of each pose, or the sensor's temperature)::
 
     bias(v) = b + (B(v) - B(v_ref)) @ D
@@ -43,7 +43,7 @@ from ..core._exceptions import NO_SETTING, CalibrationInputError
 __all__ = ["BiasDrift", "DriftExtrapolationWarning", "DRIFT_CHOICES", "MAX_KNOTS", "drift_candidates",
            "fit_gravity_blocks", "select_drift", "tool_onnx_model"]
 
-#: Values of ``drift=`` of :func:`ftcal.identify_tool_load`: ``auto`` chooses among every candidate the data
+#: Values of ``drift=`` of :func:`ftcal.experiment.identify_tool_load`: ``auto`` chooses among every candidate the data
 #: allow (the constant bias included); ``none`` keeps the bias constant; ``linear`` (in time), ``spline`` (in time)
 #: and ``temperature`` force a drift of that family (the number of knots still chosen by held-out error).
 DRIFT_CHOICES = ("auto", "none", "linear", "spline", "temperature")
@@ -108,7 +108,7 @@ def spline_basis(values: ArrayLike, knots: ArrayLike) -> NDArray[np.float64]:
 
 @dataclass(frozen=True)
 class BiasDrift:
-    """How the bias of a :class:`ftcal.ToolLoad` moves with time or temperature.
+    """How the bias of a :class:`ftcal.experiment.ToolLoad` moves with time or temperature.
 
     ``bias(v) = tool.bias + offset(v)``, ``offset(v) = (B(v) - B(reference)) @ coefficients``.
 
@@ -129,7 +129,7 @@ class BiasDrift:
     mean_rate, mean_rate_std_error : ndarray of shape (6,)
         The drift's average rate over the span [N, N·m per ``unit``] and its standard error.
     retared_at : float or None
-        The value of the variable at the last re-tare (:meth:`ftcal.ToolLoad.retare`).
+        The value of the variable at the last re-tare (:meth:`ftcal.experiment.ToolLoad.retare`).
     selection : tuple of dict
         The candidates' held-out errors that chose this drift (for the record).
 
@@ -573,76 +573,3 @@ def tool_onnx_model(tool):
     onnx.helper.set_model_props(model, meta)
     onnx.checker.check_model(model)
     return model
-
-
-# ---------------------------------------------------------------------------------------------- report
-#: Most poses a report lists one by one (a longer recording is summarised by its RMS only).
-MAX_REPORT_POSES = 100_000
-
-
-def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool, *, times: ArrayLike | None = None,
-                          temperatures: ArrayLike | None = None, drift: str = "auto", cv: int = 20,
-                          random_state: int | None = 0, groups: ArrayLike | None = None) -> dict:
-    """The report of an in-situ identification: each pose's residual against time (or temperature) with the
-    constant bias and with the tool's drift, the drift rate with its standard error, and the held-out choice.
-
-    ``tool`` is what :func:`ftcal.identify_tool_load` returned for these poses with these settings.
-
-    Examples
-    --------
-    >>> from scipy.spatial.transform import Rotation
-    >>> from ftcal import ToolLoad, identify_tool_load
-    >>> R = Rotation.random(30, random_state=0).as_matrix()
-    >>> t = np.linspace(0.0, 3600.0, 30)
-    >>> W = ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).gravity_wrench(R)
-    >>> W[:, 0] += 0.5 * t / 3600.0 + np.random.default_rng(0).normal(0, 0.01, 30)   # 0.5 N/h in Fx
-    >>> tool = identify_tool_load(R, W, times=t)
-    >>> report = identification_summary(R, W, tool, times=t)
-    >>> report["drift_model"], round(report["drift_rate"]["force"][0], 1), report["drift_rate"]["unit_force"]
-    ('linear in time', 0.5, 'N/h')
-    """
-    from ._tool_load import _check_inputs, identify_tool_load
-
-    R, W = _check_inputs(sensor_rotations, wrenches)
-    constant = identify_tool_load(R, W, tool.gravity, drift="none")
-    residual_constant = W - constant.gravity_wrench(R)
-    residual_drift = W - tool.gravity_wrench(R, times=times, temperatures=temperatures)
-    d = tool.drift
-    if d is not None:
-        selection = list(d.selection)
-    elif times is not None or temperatures is not None:
-        g_s = np.einsum("nji,j->ni", R, np.asarray(tool.gravity, dtype=float))
-        selection = select_drift(g_s, W, None if times is None else np.asarray(times, dtype=float),
-                                 None if temperatures is None else np.asarray(temperatures, dtype=float),
-                                 choice=drift, cv=cv, random_state=random_state, groups=groups)[1]
-    else:
-        selection = []
-    if d is not None and d.variable == "temperature":
-        axis, values = {"name": "temperature", "unit": "degC"}, np.asarray(temperatures, dtype=float)
-    elif times is not None:
-        axis = {"name": "time", "unit": d.unit if d is not None and d.variable == "time" else "s"}
-        values = np.asarray(times, dtype=float)
-    else:
-        axis, values = {"name": "pose", "unit": "pose"}, np.arange(len(W), dtype=float)
-    rate = None
-    if d is not None:
-        per = {"s": (_SECONDS_PER_HOUR, "h"), "pose": (1.0, "pose"), "degC": (1.0, "deg C")}[d.unit]
-        rate = {"force": (d.mean_rate[:3] * per[0]).tolist(), "force_std_error": (d.mean_rate_std_error[:3] * per[0]).tolist(),
-                "torque": (d.mean_rate[3:] * per[0]).tolist(),
-                "torque_std_error": (d.mean_rate_std_error[3:] * per[0]).tolist(),
-                "unit_force": f"N/{per[1]}", "unit_torque": f"N·m/{per[1]}",
-                "meaning": "the drift's mean rate over the span (end minus start over the span's length)"}
-    listed = len(W) <= MAX_REPORT_POSES
-
-    def norms(residual: NDArray) -> dict:
-        return {"force_N": np.linalg.norm(residual[:, :3], axis=1).tolist() if listed else None,
-                "torque_Nm": np.linalg.norm(residual[:, 3:], axis=1).tolist() if listed else None,
-                "rms": [float(np.sqrt(np.mean(residual[:, :3] ** 2))), float(np.sqrt(np.mean(residual[:, 3:] ** 2)))]}
-
-    return {"format": "ftcal-tool-identification", "format_version": 1, "n_poses": int(len(W)),
-            "drift_model": "constant" if d is None else d.description, "axis": axis,
-            "values": values.tolist() if listed else None,
-            "span": None if d is None else list(d.covered), "drift_rate": rate, "selection": selection,
-            "residual": {"constant_bias": norms(residual_constant), "with_drift": norms(residual_drift)},
-            "note": "residual = the identification poses' wrench minus the fitted gravity wrench and bias (in-sample); "
-                    "the held-out errors that chose the drift are in 'selection'"}

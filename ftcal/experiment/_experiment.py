@@ -226,7 +226,7 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
     Parameters
     ----------
     logs : sequence of RunLog
-        All files of an experiment, read with :func:`ftcal.read_run_log`.
+        All files of an experiment, read with :func:`ftcal.io.read_run_log`.
     same_pose_tol : float, default=0.01
         Largest joint spread [rad] among repeated rows of one pose.
 
@@ -333,7 +333,7 @@ def prepare_dataset(
     ----------
     log_paths : sequence of paths or RunLog, or one path
         Every log file of the experiment (any split of runs into files), or the
-        run logs already read (:class:`ftcal.RunLog`); a single path is one log
+        run logs already read (:class:`ftcal.io.RunLog`); a single path is one log
         file, or a folder whose ``*.csv`` are the logs.
     robot : RobotModel, built-in name or URDF path, default="kuka_iiwa14"
         The arm the joint angles belong to (its sensor frame gives the poses).
@@ -341,7 +341,7 @@ def prepare_dataset(
         Mass of the external load [kg]; default the logs' ``load_mass_kg``.
     load_configurations : sequence of LoadConfiguration or mapping, optional
         Load positions in the sensor frame [m] by config id; default the
-        thesis' seven (:func:`ftcal.thesis_load_configurations`).
+        thesis' seven (:func:`ftcal.robot.thesis_load_configurations`).
     gravity_in_base : array-like of shape (3,), default=(0, 0, -9.80665)
         Gravity in the base frame [m/s²].
     n_channels : int, optional
@@ -361,7 +361,7 @@ def prepare_dataset(
 
     Examples
     --------
-    See :func:`ftcal.simulate_experiment` for logs to feed it.
+    See :func:`ftcal.experiment.simulate_experiment` for logs to feed it.
     """
     if isinstance(robot, (str, Path)):
         robot = load_robot(robot)
@@ -452,7 +452,7 @@ def prepare_dataset(
     row_mass = np.array([fixture_mass.get(int(c), load_mass) for c in pairs.config])
     wrench = reference_wrench(R_load, 1.0, r, g) * row_mass[:, None]  # eq. 15-16 are linear in the mass
     meta = {
-        "source": "ftcal.prepare_dataset",
+        "source": "ftcal.experiment.prepare_dataset",
         "robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": robot.sensor_frame,
         "load_mass_kg": float(load_mass), "gravity_in_base_m_s2": g.tolist(),
         "load_mass_kg_by_config": {str(k): float(v) for k, v in sorted(fixture_mass.items())},

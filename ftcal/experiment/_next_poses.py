@@ -1,7 +1,7 @@
 """Which poses next: sequential design from a dataset recorded so far and a fitted model.
 
 Given the calibration dataset measured so far (load minus no-load readings and
-the reference wrenches, :func:`ftcal.prepare_dataset`) and a model fitted on
+the reference wrenches, :func:`ftcal.experiment.prepare_dataset`) and a model fitted on
 it, :func:`propose_next_poses` ranks the reachable candidate directions of a
 dense sphere by how uncertain the model's wrench would be there, and proposes
 ``n_poses`` of them.
@@ -66,7 +66,7 @@ __all__ = ["PoseProposal", "propose_next_poses"]
 
 @dataclass
 class PoseProposal(CalibrationPlan):
-    """The poses proposed next, most informative first: a :class:`ftcal.CalibrationPlan` plus the gains.
+    """The poses proposed next, most informative first: a :class:`ftcal.robot.CalibrationPlan` plus the gains.
 
     Its ``q`` are reachable (IK residual and joint limits checked), so it can be run (and simulated,
     ``simulate_experiment(plan=...)``) like any plan; ``unreachable`` are the candidates IK missed.
@@ -146,7 +146,7 @@ def propose_next_poses(
     n_poses : int
         How many poses to propose, 1 .. number of reachable candidates.
     candidates : CandidatePoses, optional
-        Precomputed :func:`ftcal.reachable_candidates`; default level ``candidate_subdivisions``.
+        Precomputed :func:`ftcal.robot.reachable_candidates`; default level ``candidate_subdivisions``.
     load_positions_in_sensor : array-like of shape (n_configurations, 3), optional
         Load positions [m] run at every pose; default ``dataset.meta["load_positions_in_sensor_m"]``.
     load_mass : float, optional
@@ -167,8 +167,9 @@ def propose_next_poses(
     Examples
     --------
     >>> import tempfile
-    >>> from ftcal import (LinearCalibrator, load_robot, plan_calibration_poses, prepare_dataset,
-    ...                    reachable_candidates, simulate_experiment)
+    >>> from ftcal import LinearCalibrator
+    >>> from ftcal.robot import load_robot, plan_calibration_poses, reachable_candidates
+    >>> from ftcal.experiment import prepare_dataset, simulate_experiment
     >>> robot = load_robot()
     >>> plan = plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0)
     >>> ds = prepare_dataset(simulate_experiment(tempfile.mkdtemp(), robot=robot, plan=plan, random_state=0), robot)

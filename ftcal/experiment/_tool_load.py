@@ -2,7 +2,7 @@
 
 A sensor on a robot carries a tool (gripper, probe, mounting plate): its
 weight shows in every reading and changes with the orientation. With the
-sensor's orientation from forward kinematics (:func:`ftcal.sensor_pose_in_base`),
+sensor's orientation from forward kinematics (:func:`ftcal.robot.sensor_pose_in_base`),
 the tool's mass ``m`` [kg], centre of mass ``c`` [m] (sensor frame) and the
 reading's bias ``b`` (6,) [N, N·m] follow from a few static poses by linear
 least squares, in closed form. With the gravity vector in the sensor frame
@@ -40,10 +40,10 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._drift import (BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks, functional_se,
-                     select_drift)
+from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
+                     functional_se, select_drift)
 
-__all__ = ["ToolLoad", "identify_tool_load", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
+__all__ = ["ToolLoad", "identify_tool_load", "identification_summary", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
            "wrench_in_sensor_frame"]
 
@@ -65,7 +65,7 @@ def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None
     if R.ndim != 3 or R.shape[1:] != (3, 3):
         raise CalibrationInputError(
             f"sensor_rotations must have shape (n, 3, 3), one rotation (sensor to base frame) per pose; got "
-            f"shape {R.shape}. Take them from ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]."
+            f"shape {R.shape}. Take them from ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]."
         )
     if not np.isfinite(R).all():
         raise CalibrationInputError("sensor_rotations holds NaN or inf.")
@@ -414,7 +414,7 @@ def identify_tool_load(
     ----------
     sensor_rotations : array-like of shape (n, 3, 3)
         Rotation from the sensor frame to the base frame at each pose
-        (``ftcal.sensor_pose_in_base(robot, q)[:, :3, :3]``).
+        (``ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]``).
     wrenches : array-like of shape (n, 6)
         Calibrated readings at those poses [N, N·m] (the tool mounted, nothing else touching it).
     gravity : array-like of shape (3,), default=(0, 0, -9.81)
@@ -602,3 +602,74 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
         "world_frame": world_frame, "sensor_frame": sensor_frame,
         "CoG": {"pos": com, "force": [float(tool.mass * g) for g in np.asarray(tool.gravity, dtype=float)]}}}})
     return text
+
+
+# ------------------------------------------------------------------------------ identification summary
+#: Most poses a summary lists one by one (a longer recording is summarised by its RMS only).
+MAX_LISTED_POSES = 100_000
+
+
+def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, tool, *, times: ArrayLike | None = None,
+                          temperatures: ArrayLike | None = None, drift: str = "auto", cv: int = 20,
+                          random_state: int | None = 0, groups: ArrayLike | None = None) -> dict:
+    """The summary of an in-situ identification: each pose's residual against time (or temperature) with the
+    constant bias and with the tool's drift, the drift rate with its standard error, and the held-out choice.
+
+    ``tool`` is what :func:`ftcal.experiment.identify_tool_load` returned for these poses with these settings.
+
+    Examples
+    --------
+    >>> from scipy.spatial.transform import Rotation
+    >>> from ftcal.experiment import ToolLoad, identify_tool_load
+    >>> R = Rotation.random(30, random_state=0).as_matrix()
+    >>> t = np.linspace(0.0, 3600.0, 30)
+    >>> W = ToolLoad(mass=1.0, center_of_mass=np.zeros(3), bias=np.zeros(6)).gravity_wrench(R)
+    >>> W[:, 0] += 0.5 * t / 3600.0 + np.random.default_rng(0).normal(0, 0.01, 30)   # 0.5 N/h in Fx
+    >>> tool = identify_tool_load(R, W, times=t)
+    >>> summary = identification_summary(R, W, tool, times=t)
+    >>> summary["drift_model"], round(summary["drift_rate"]["force"][0], 1), summary["drift_rate"]["unit_force"]
+    ('linear in time', 0.5, 'N/h')
+    """
+    R, W = _check_inputs(sensor_rotations, wrenches)
+    constant = identify_tool_load(R, W, tool.gravity, drift="none")
+    residual_constant = W - constant.gravity_wrench(R)
+    residual_drift = W - tool.gravity_wrench(R, times=times, temperatures=temperatures)
+    d = tool.drift
+    if d is not None:
+        selection = list(d.selection)
+    elif times is not None or temperatures is not None:
+        g_s = np.einsum("nji,j->ni", R, np.asarray(tool.gravity, dtype=float))
+        selection = select_drift(g_s, W, None if times is None else np.asarray(times, dtype=float),
+                                 None if temperatures is None else np.asarray(temperatures, dtype=float),
+                                 choice=drift, cv=cv, random_state=random_state, groups=groups)[1]
+    else:
+        selection = []
+    if d is not None and d.variable == "temperature":
+        axis, values = {"name": "temperature", "unit": "degC"}, np.asarray(temperatures, dtype=float)
+    elif times is not None:
+        axis = {"name": "time", "unit": d.unit if d is not None and d.variable == "time" else "s"}
+        values = np.asarray(times, dtype=float)
+    else:
+        axis, values = {"name": "pose", "unit": "pose"}, np.arange(len(W), dtype=float)
+    rate = None
+    if d is not None:
+        per = {"s": (_SECONDS_PER_HOUR, "h"), "pose": (1.0, "pose"), "degC": (1.0, "deg C")}[d.unit]
+        rate = {"force": (d.mean_rate[:3] * per[0]).tolist(), "force_std_error": (d.mean_rate_std_error[:3] * per[0]).tolist(),
+                "torque": (d.mean_rate[3:] * per[0]).tolist(),
+                "torque_std_error": (d.mean_rate_std_error[3:] * per[0]).tolist(),
+                "unit_force": f"N/{per[1]}", "unit_torque": f"N·m/{per[1]}",
+                "meaning": "the drift's mean rate over the span (end minus start over the span's length)"}
+    listed = len(W) <= MAX_LISTED_POSES
+
+    def norms(residual: NDArray) -> dict:
+        return {"force_N": np.linalg.norm(residual[:, :3], axis=1).tolist() if listed else None,
+                "torque_Nm": np.linalg.norm(residual[:, 3:], axis=1).tolist() if listed else None,
+                "rms": [float(np.sqrt(np.mean(residual[:, :3] ** 2))), float(np.sqrt(np.mean(residual[:, 3:] ** 2)))]}
+
+    return {"format": "ftcal-tool-identification", "format_version": 1, "n_poses": int(len(W)),
+            "drift_model": "constant" if d is None else d.description, "axis": axis,
+            "values": values.tolist() if listed else None,
+            "span": None if d is None else list(d.covered), "drift_rate": rate, "selection": selection,
+            "residual": {"constant_bias": norms(residual_constant), "with_drift": norms(residual_drift)},
+            "note": "residual = the identification poses' wrench minus the fitted gravity wrench and bias (in-sample); "
+                    "the held-out errors that chose the drift are in 'selection'"}

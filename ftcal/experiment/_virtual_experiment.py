@@ -2,7 +2,7 @@
 
 What is simulated (thesis IV-B):
 
-* the planned sphere of poses (:func:`ftcal.plan_calibration_poses`), run once
+* the planned sphere of poses (:func:`ftcal.robot.plan_calibration_poses`), run once
   without and once with the external load for every load configuration;
 * the **mounting device** (Fig. 4, item 2), a rigid mass on the sensor in both
   runs. Its mass and centre of mass are not in the thesis; the defaults
@@ -15,16 +15,16 @@ What is simulated (thesis IV-B):
   two poses of a pair is then at most ``3 * n_joints * load_pose_jitter_deg``
   (the angle of a product of joint rotations is at most the sum of the joint
   angles): 2.1 deg for the defaults on a 7-joint arm, within
-  :func:`ftcal.prepare_dataset`'s pairing limit of 3 deg;
+  :func:`ftcal.experiment.prepare_dataset`'s pairing limit of 3 deg;
 * **robot accuracy** (IV-B-f): the true joint angles differ from the logged
   ones by a uniform error of at most ``joint_error_max / n_joints`` per joint
   (0.0055 / 7 = 0.00079 rad, the thesis' per-link estimate), so that the
   accumulated error stays below 0.0055 rad. Fresh per pose and run;
-* the **sensor**: a :class:`ftcal.VirtualSensor` (calibration matrix, the
+* the **sensor**: a :class:`ftcal.simulation.VirtualSensor` (calibration matrix, the
   error models of the artificial benchmark, a zero offset), read at the true
   pose under the true wrench of mounting device plus load.
 
-The logs go through :func:`ftcal.prepare_dataset` exactly as real ones would.
+The logs go through :func:`ftcal.experiment.prepare_dataset` exactly as real ones would.
 """
 
 from __future__ import annotations
@@ -163,7 +163,8 @@ def simulate_experiment(
     Examples
     --------
     >>> import tempfile
-    >>> from ftcal import load_robot, plan_calibration_poses, prepare_dataset
+    >>> from ftcal.robot import load_robot, plan_calibration_poses
+    >>> from ftcal.experiment import prepare_dataset
     >>> robot = load_robot()
     >>> plan = plan_calibration_poses(robot, subdivisions=0, excluded_cap_deg=0)
     >>> paths = simulate_experiment(tempfile.mkdtemp(), robot=robot, plan=plan, random_state=0)

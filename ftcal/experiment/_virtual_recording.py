@@ -13,7 +13,7 @@ poses and the sensor's reading at each:
 * the pose stream (joint states, or orientations as tf would give them) and the sensor stream run at
   **different rates** (``pose_rate_hz``, ``sensor_rate_hz``), with their own stamps.
 
-:func:`ftcal.find_still_poses` must find the poses, drop the settling and recover the pose readings.
+:func:`ftcal.experiment.find_still_poses` must find the poses, drop the settling and recover the pose readings.
 """
 
 from __future__ import annotations
@@ -184,7 +184,7 @@ def write_run_bags(
     Parameters
     ----------
     log_paths : sequence of paths
-        Run logs (e.g. of :func:`ftcal.simulate_experiment`).
+        Run logs (e.g. of :func:`ftcal.experiment.simulate_experiment`).
     out_dir : str or path
         Folder for the bags (created); an existing bag is an error.
     storage : {"sqlite3", "mcap", "ros1"}

@@ -26,7 +26,7 @@ averaging blocks of consecutive messages, which a still pose's average does anyw
 keeping every k-th message, they are smooth). A several-GB bag is read in the memory of ``max_samples``
 samples.
 
-Every error is a :class:`~ftcal.LogFormatError` naming the bag and, for a missing topic or a wrong type,
+Every error is a :class:`~ftcal.core.LogFormatError` naming the bag and, for a missing topic or a wrong type,
 the topics the bag holds.
 """
 

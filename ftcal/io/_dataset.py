@@ -437,7 +437,7 @@ class CalibrationDataset:
 
         The file is written to a unique temporary file beside ``path`` and
         renamed into place, so an interrupted save never leaves half a file.
-        An existing ``path`` raises :class:`~ftcal.DatasetFileError` unless
+        An existing ``path`` raises :class:`~ftcal.core.DatasetFileError` unless
         ``overwrite=True``.
         """
         path = Path(path)

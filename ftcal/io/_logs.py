@@ -35,7 +35,7 @@ Then one header line and one row per sample with these columns (any order)::
 
 Runs may be split over several files in any way (one file per run is usual).
 :func:`read_run_log` checks each file; pairing across files happens in
-:func:`ftcal.prepare_dataset`. Every error is a :class:`ftcal.LogFormatError`
+:func:`ftcal.experiment.prepare_dataset`. Every error is a :class:`ftcal.core.LogFormatError`
 naming the file and the line.
 """
 

@@ -23,9 +23,9 @@ and the reading, one of:
 * ``s0,...,s{N-1}``: raw channels, calibrated with a model (``--model``).
 
 Optional columns: ``time`` [s] (a continuous recording: the still poses are found in it, see
-:func:`ftcal.find_still_poses`), ``temperature`` [deg C]. Other columns are ignored.
+:func:`ftcal.experiment.find_still_poses`), ``temperature`` [deg C]. Other columns are ignored.
 
-Every error is a :class:`~ftcal.LogFormatError` naming the file, the line and the column.
+Every error is a :class:`~ftcal.core.LogFormatError` naming the file, the line and the column.
 """
 
 from __future__ import annotations

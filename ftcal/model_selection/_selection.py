@@ -6,7 +6,7 @@ gravity direction, the mounting, the drift of that session). Random folds put
 rows of the same group on both sides of a split and so flatter every flexible
 model; a calibration must work on poses it has not seen. Every model choice
 in ftcal (the hybrid's ridge, :class:`~ftcal.AutoCalibrator`,
-:func:`~ftcal.search_calibrator`, ``ftcal tune``, ``ftcal benchmark dataset``)
+:func:`~ftcal.compose.search_calibrator`, ``ftcal tune``, ``ftcal benchmark dataset``)
 therefore splits with :func:`calibration_folds`: whole groups when the data
 have them, shuffled k-fold otherwise.
 """

@@ -1,4 +1,4 @@
-"""The network calibrators' base: ``fit`` and :func:`~ftcal.fit_stacked` both run :func:`train_networks` (the
+"""The network calibrators' base: ``fit`` and :func:`~ftcal.networks.fit_stacked` both run :func:`train_networks` (the
 one engine, in a forked torch RNG, torch's threads limited in the fitting thread alone); float32 training, float64
 numpy inference."""
 
@@ -51,7 +51,7 @@ def train_networks(estimators: Sequence["NetworkCalibrator"], datasets: Sequence
     """Train ``K >= 1`` network calibrators of one kind as one engine run; each ends fitted as by its own ``fit``.
 
     ``datasets``: one validated ``(X, y)`` per estimator (after ``_prepare_fit``); the estimators share the
-    architecture and schedule (checked by :func:`~ftcal.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``; a
+    architecture and schedule (checked by :func:`~ftcal.networks.fit_stacked`). A Ctrl-C raises ``KeyboardInterrupt``; a
     callback ending training at an epoch's end (``EarlyStopping``) leaves ``stop_reason_ == "callback"``."""
     setups = [est._training_setup(X, y) for est, (X, y) in zip(estimators, datasets)]
     template = estimators[0]

@@ -63,7 +63,8 @@ def fit_stacked(estimators: Sequence[NetworkCalibrator], X: ArrayLike | Sequence
     Examples
     --------
     >>> import numpy as np
-    >>> from ftcal import DirectionalCalibrator, fit_stacked
+    >>> from ftcal import DirectionalCalibrator
+    >>> from ftcal.networks import fit_stacked
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
     >>> nets = [DirectionalCalibrator(phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=s)

@@ -7,8 +7,10 @@ it imports nothing at import time.
 from ..core._lazy import lazy_namespace
 
 __all__: list[str] = []
-__getattr__, __dir__ = lazy_namespace(__name__, {}, moved={
+#: Old public name -> its public path now (each access warns with a FutureWarning).
+_MOVED: dict[str, str] = {
     name: f"ftcal.networks.{name}" for name in (
         "DirectionalNet", "ComparativeNet", "WeightedSquaredError", "StackedMLP", "fit_stacked",
         "NetworkCalibrator", "NetworkRegressor", "RestoreBestWeights")
-})
+}
+__getattr__, __dir__ = lazy_namespace(__name__, {}, _MOVED)

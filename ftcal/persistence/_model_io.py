@@ -40,7 +40,7 @@ are never decompressed), each member's declared size and the shape in its
 is allocated, and at most the declared bytes are decompressed. A file that is
 missing, not a zip archive, truncated, not an ftcal model, of another format
 version, of an unknown model type, or inconsistent raises
-:class:`~ftcal.ModelFileError` saying which. Files of format version 1 (ftcal
+:class:`~ftcal.core.ModelFileError` saying which. Files of format version 1 (ftcal
 before the declarations) are read too. Files are written to a temporary file
 next to the target and then renamed, so an interrupted save never leaves half
 a file, and an existing file is only replaced with ``overwrite=True``.
@@ -218,7 +218,7 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, d
     Parameters
     ----------
     estimator : fitted calibrator
-        Any calibrator of the registry (:data:`~ftcal.CALIBRATOR_NAMES`), an
+        Any calibrator of the registry (:data:`~ftcal.compose.CALIBRATOR_NAMES`), an
         :class:`~ftcal.EnsembleCalibrator` or a
         :class:`~ftcal.TemperatureCompensatedCalibrator`, fitted on targets of
         any width.

@@ -18,7 +18,7 @@ _COLORS = {"constant_bias": "#7f7f7f", "with_drift": "#1f77b4"}
 
 def drift_residuals_figure(report: dict) -> Figure:
     """Force and torque residual norms of each pose against the drift variable (report of
-    :func:`ftcal.experiment._drift.identification_summary`): the constant bias in grey, the chosen drift in blue.
+    :func:`ftcal.experiment.identification_summary`): the constant bias in grey, the chosen drift in blue.
 
     Examples
     --------

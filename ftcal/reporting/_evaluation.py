@@ -24,7 +24,7 @@ def comparison_table(reports: Mapping[str, CalibrationMetrics], noise_floor: flo
 
     Examples
     --------
-    >>> from ftcal import calibration_metrics
+    >>> from ftcal.core import calibration_metrics
     >>> r = calibration_metrics([[10.0, 0, 0, 0, 0, 1]], [[11.0, 0, 0, 0, 0, 1]], alpha=10.0)
     >>> print(comparison_table({"linear": r}))  # doctest: +NORMALIZE_WHITESPACE
     | model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |

@@ -226,7 +226,7 @@ def solve_gravity_direction_ik(
     Examples
     --------
     >>> import numpy as np
-    >>> from ftcal import load_robot, sensor_pose_in_base
+    >>> from ftcal.robot import load_robot, sensor_pose_in_base
     >>> robot = load_robot()
     >>> res = solve_gravity_direction_ik(robot, [1.0, 0.0, 0.0])
     >>> res.success
@@ -268,7 +268,7 @@ def solve_orientation_ik(
     Examples
     --------
     >>> import numpy as np
-    >>> from ftcal import load_robot
+    >>> from ftcal.robot import load_robot
     >>> robot = load_robot()
     >>> R_down = np.diag([-1.0, 1.0, -1.0])  # tool face down, as at home
     >>> solve_orientation_ik(robot, R_down).success

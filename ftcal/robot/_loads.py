@@ -178,7 +178,7 @@ def reference_wrench_at_joints(
 
     Examples
     --------
-    >>> from ftcal import load_robot
+    >>> from ftcal.robot import load_robot
     >>> w = reference_wrench_at_joints(load_robot(), [0.0] * 7, 2.0, [0, 0, 0.1])
     >>> w.round(3) + 0.0  # arm upright: load straight down the sensor z axis
     array([[ 0.   ,  0.   , -19.613,  0.   ,  0.   ,  0.   ]])

@@ -5,7 +5,7 @@ frame, a unit vector ``g_s``. The directions are the vertices of an icosphere
 (an icosahedron whose faces are split ``subdivisions`` times and pushed onto the
 unit sphere: ``10 * 4**k + 2`` vertices, 162 for ``k = 2``). Each direction is
 written as **pitch** and **yaw** and turned into a joint configuration by
-inverse kinematics (:func:`ftcal.solve_gravity_direction_ik`) with the arm's
+inverse kinematics (:func:`ftcal.robot.solve_gravity_direction_ik`) with the arm's
 wrist centre held at one point, inside the joint limits. Directions without an
 IK solution are dropped and reported.
 
@@ -378,13 +378,13 @@ def reachable_candidates(
 ) -> CandidatePoses:
     """The directions of a dense sphere that the robot reaches, with their joint configurations.
 
-    The candidate set of the random and D-optimal plans and of :func:`ftcal.propose_next_poses`;
+    The candidate set of the random and D-optimal plans and of :func:`ftcal.experiment.propose_next_poses`;
     compute it once and pass it as ``candidates=`` to plan several times (IK for the 610
     candidates of level 3 takes a while). Parameters as for :func:`plan_calibration_poses`.
 
     Examples
     --------
-    >>> from ftcal import load_robot
+    >>> from ftcal.robot import load_robot
     >>> cands = reachable_candidates(load_robot(), subdivisions=1, excluded_cap_deg=0)
     >>> len(cands), cands.q.shape[1]
     (42, 7)
@@ -452,7 +452,7 @@ def d_criterion(gravity_in_sensor: ArrayLike, load_positions_in_sensor: ArrayLik
     Examples
     --------
     >>> import numpy as np
-    >>> from ftcal import gravity_directions_in_sensor
+    >>> from ftcal.robot import gravity_directions_in_sensor
     >>> d_criterion(gravity_directions_in_sensor(1)) > d_criterion(gravity_directions_in_sensor(0))
     True
     """
@@ -518,7 +518,7 @@ def select_load_configurations(gravity_in_sensor: ArrayLike, n_load_configuratio
 
     Examples
     --------
-    >>> from ftcal import gravity_directions_in_sensor
+    >>> from ftcal.robot import gravity_directions_in_sensor
     >>> select_load_configurations(gravity_directions_in_sensor(2), 3).tolist()  # of the thesis' seven
     [1, 2, 4]
     """
@@ -594,7 +594,7 @@ def select_poses(
 
     Examples
     --------
-    >>> from ftcal import gravity_directions_in_sensor
+    >>> from ftcal.robot import gravity_directions_in_sensor
     >>> cands = gravity_directions_in_sensor(2)
     >>> idx = select_poses(cands, 12)
     >>> len(set(idx.tolist())), d_criterion(cands[idx]) > d_criterion(cands[:12])
@@ -686,7 +686,7 @@ def plan_calibration_poses(
     limit_margin : float, default=1 degree
         Distance kept from the joint limits [rad].
     max_iterations, n_random_seeds : int
-        IK effort per direction (see :func:`ftcal.solve_gravity_direction_ik`).
+        IK effort per direction (see :func:`ftcal.robot.solve_gravity_direction_ik`).
     strategy : {"geodesic", "random", "d-optimal"}, default="geodesic"
     n_poses : int, optional
         Poses to choose (random and D-optimal only; required there).
@@ -716,7 +716,7 @@ def plan_calibration_poses(
 
     Examples
     --------
-    >>> from ftcal import load_robot
+    >>> from ftcal.robot import load_robot
     >>> plan = plan_calibration_poses(load_robot(), subdivisions=0, excluded_cap_deg=0)
     >>> plan.n_poses, plan.q.shape
     (12, (12, 7))

@@ -257,6 +257,42 @@ def _mount_sensor(model: pin.Model, frame: str, mounting) -> str:
     return MOUNTED_SENSOR_FRAME
 
 
+def check_urdf_xml(path: str | Path) -> None:
+    """Refuse a URDF file that is not well-formed XML, naming the line and column of the syntax error.
+
+    Pinocchio's own parser (urdfdom) only says that parsing failed; this names where.
+
+    Raises
+    ------
+    KinematicsError
+        The file is empty or not valid XML (its line and column, 1-based); or it cannot be read.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "broken.urdf")
+    >>> _ = open(path, "w").write('<robot name="r">\\n  <link name="a">\\n</robot>\\n')
+    >>> check_urdf_xml(path)
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.KinematicsError: .../broken.urdf: line 3, column 3: not valid XML (mismatched tag); a URDF is an XML file.
+    """
+    import xml.etree.ElementTree as ET
+
+    path = Path(path)
+    try:
+        ET.parse(path)
+    except ET.ParseError as exc:
+        line, column = getattr(exc, "position", (None, None))
+        reason = str(exc).split(":")[0]
+        if path.stat().st_size == 0:
+            raise KinematicsError(f"{path}: the URDF file is empty.") from None
+        raise KinematicsError(f"{path}: line {line}, column {column + 1 if column is not None else '?'}: not "
+                              f"valid XML ({reason}); a URDF is an XML file.") from None
+    except OSError as exc:
+        raise KinematicsError(f"{path}: {exc.strerror or exc}.") from None
+
+
 def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str | None = None, *,
                sensor_mounting=None) -> RobotModel:
     """Load a built-in robot or a URDF file as a :class:`RobotModel`.
@@ -312,6 +348,8 @@ def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str 
         frame, name = sensor_frame, urdf.stem
     if not urdf.is_file():
         raise KinematicsError(f"{urdf}: no such URDF file.")
+    if spec is None:
+        check_urdf_xml(urdf)
     try:
         full = pin.buildModelFromUrdf(str(urdf))
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError on malformed XML
