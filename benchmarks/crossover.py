@@ -5,7 +5,7 @@ the hybrid, as the sign-dependent gain grows?
 Every level is the ``thesis`` error model plus a sign-dependent gain ``1 ± a/2`` on all six axes
 (``ErrorModel(asymmetry=a, asymmetry_axes=6)``; ``a = 0.2`` is the ``reconstructed`` preset), test loads
 from the ``ball`` distribution, several datasets per level (the same dataset seeds at every level). It
-runs :func:`ftcal.run_artificial_benchmark` with one custom preset per level, so every fit is cached
+runs :func:`ftcal.benchmark.run_artificial_benchmark` with one custom preset per level, so every fit is cached
 under ``OUT/cache`` and the same command resumes; ``--aggregate-only`` builds the table and the plot from
 whatever is cached.
 
@@ -30,7 +30,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ftcal import ERROR_PRESETS, FtcalError, run_artificial_benchmark
+from ftcal.simulation import ERROR_PRESETS
+from ftcal import FtcalError
+from ftcal.benchmark import run_artificial_benchmark
 from ftcal.cli import cli_message
 
 from _output import int_at_least, jobs, output_files

@@ -106,12 +106,12 @@ def test_prepare_from_bags_with_the_orientation_from_tf_reaches_the_calibration_
 
     logs = tmp_path / "sim"
     assert main(["simulate", "experiment", "--subdivisions", "0", "--seed", "3", "--out", str(logs), "-q"]) == 0
-    robot = ftcal.load_robot("kuka_iiwa14")
+    robot = ftcal.robot.load_robot("kuka_iiwa14")
     rng = np.random.default_rng(3)
     for path in sorted(logs.glob("config*.csv")):
         run = read_run_log(path)
         order = np.argsort(run.pose, kind="stable")
-        R = ftcal.sensor_pose_in_base(robot, run.q[order])[:, :3, :3]
+        R = ftcal.robot.sensor_pose_in_base(robot, run.q[order])[:, :3, :3]
         noise = 1e-4 * np.ptp(run.raw, axis=0) + 1e-12
         rec = continuous_recording(run.raw[order], rotations=R, noise=noise, settle_amplitude=10 * noise,
                                    start_time_s=T0, random_state=rng)

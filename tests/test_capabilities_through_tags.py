@@ -68,7 +68,8 @@ def test_no_module_guesses_a_capability(path):
 
 
 def test_fit_stacked_refuses_by_the_tags(tmp_path):
-    from ftcal import LinearCalibrator, fit_stacked
+    from ftcal import LinearCalibrator
+    from ftcal.networks import fit_stacked
     from ftcal.core._exceptions import CalibrationInputError
 
     with pytest.raises(CalibrationInputError, match="estimator 0 is LinearCalibrator"):

@@ -102,8 +102,8 @@ def test_the_scorer_and_a_search_scale_the_plates_torques():
     model = LinearCalibrator().fit(raw[:120], named_targets(w[:120], PLATE))
     pred = model.predict(raw[120:])
     assert -neg_scaled_rmse(model, raw[120:], w[120:]) == pytest.approx(
-        ftcal.wrench_rmse(w[120:], pred, alpha=model.alpha_, axes=PLATE))
-    assert -neg_scaled_rmse(model, raw[120:], w[120:]) > ftcal.wrench_rmse(w[120:], pred)  # the torques weigh more
+        ftcal.core.wrench_rmse(w[120:], pred, alpha=model.alpha_, axes=PLATE))
+    assert -neg_scaled_rmse(model, raw[120:], w[120:]) > ftcal.core.wrench_rmse(w[120:], pred)  # the torques weigh more
     # a search hands each fold a slice of the named table: every fitted calibrator knows its torques
     search = GridSearchCV(AxisNonlinearCalibrator(), {"ridge": [1e-3, 1e-1]}, scoring=neg_scaled_rmse, cv=3)
     search.fit(raw, named_targets(w, PLATE))

@@ -27,6 +27,7 @@ from typing import Any
 
 from ..core._exceptions import FtcalError
 from ..core._files import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
+from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
 __all__ = [
     "CliError",
@@ -61,14 +62,6 @@ __all__ = [
 EXIT_USAGE = 2
 #: Exit status of a run that failed for another reason (an unexpected error).
 EXIT_FAILURE = 1
-
-
-class CliError(FtcalError):
-    """A problem the user can fix, reported as one ``ftcal: error:`` line."""
-
-
-class UsageError(CliError):
-    """Bad command-line arguments (raised instead of argparse's own exit)."""
 
 
 class _Formatter(argparse.RawDescriptionHelpFormatter):

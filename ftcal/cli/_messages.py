@@ -28,7 +28,15 @@ from typing import Any
 
 from ..core._exceptions import NO_SETTING, FtcalError, Placeholder
 
-__all__ = ["Option", "CLI_NAMES", "cli_message", "cli_spelling", "cli_error", "fix_names", "one_line_warnings"]
+__all__ = ["CliError", "UsageError", "Option", "CLI_NAMES", "cli_message", "cli_spelling", "cli_error", "fix_names", "one_line_warnings"]
+
+
+class CliError(FtcalError):
+    """A problem the user can fix, reported as one ``ftcal: error:`` line."""
+
+
+class UsageError(CliError):
+    """Bad command-line arguments (raised instead of argparse's own exit)."""
 
 
 @dataclass(frozen=True)
@@ -155,10 +163,8 @@ def cli_message(exc: BaseException, args: argparse.Namespace | None = None, *, f
 
 
 def cli_error(exc: BaseException, args: argparse.Namespace | None = None, where: str = "", **kwargs: Any):
-    """A :class:`~ftcal.cli._common.CliError` saying ``exc`` in the command line's terms (:func:`cli_message`),
+    """A :class:`CliError` saying ``exc`` in the command line's terms (:func:`cli_message`),
     after ``where`` (the file or option it is about), on one line."""
-    from ._common import CliError
-
     text = " ".join(cli_message(exc, args, **kwargs).split())
     return CliError(f"{where}: {text}" if where else text)
 

@@ -76,7 +76,7 @@ def check_distribution(entry: str, randomized: bool) -> None:
     >>> check_distribution("ridge=loguniform(1, 0)", randomized=True)
     Traceback (most recent call last):
     ...
-    ftcal.cli._common.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
+    ftcal.cli._messages.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
     """
     from ..compose._search import _DISTRIBUTIONS, _bounds
 
