@@ -137,3 +137,30 @@ def test_the_suite_turns_a_moved_name_into_an_error():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert ftcal.icosphere is ftcal.robot.icosphere
+
+
+def test_a_models_inputs_have_one_definition_for_the_report_and_the_command_line():
+    """``ftcal evaluate`` / ``ftcal report`` (the CLI) and the calibration report take a model's ``X`` from one
+    function: the raw channels, plus the temperature column for a model whose tags say it reads one."""
+    import numpy as np
+
+    from ftcal import CalibrationDataset, LinearCalibrator, TemperatureCompensatedCalibrator
+    from ftcal.cli._models import model_inputs as cli_inputs
+    from ftcal.core import CalibrationInputError
+    from ftcal.reporting import model_inputs
+
+    rng = np.random.default_rng(0)
+    raw = rng.normal(size=(40, 6))
+    wrench = raw @ rng.normal(size=(6, 6))
+    warm = CalibrationDataset(raw=raw, wrench=wrench, temperature=rng.uniform(15.0, 35.0, 40))
+    cold = CalibrationDataset(raw=raw, wrench=wrench)
+    linear = LinearCalibrator().fit(raw, wrench)
+    compensated = TemperatureCompensatedCalibrator().fit(warm.features(temperature=True), wrench)
+    for inputs in (model_inputs, cli_inputs):
+        assert inputs(linear, warm) is warm.raw  # a model without a temperature input ignores the column
+        np.testing.assert_array_equal(inputs(compensated, warm), warm.features(temperature=True))
+        with pytest.raises(CalibrationInputError, match="takes 6 raw channels and a temperature column but the dataset "
+                                                        "has 6 raw channels and no temperature column"):
+            inputs(compensated, cold)
+        with pytest.raises(CalibrationInputError, match="takes 6 raw channels but the dataset has 5 raw channels"):
+            inputs(linear, CalibrationDataset(raw=raw[:, :5], wrench=wrench))

@@ -41,20 +41,11 @@ def load_model_file(path: str | Path):
 
 
 def model_inputs(model, dataset: CalibrationDataset):
-    """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
-    temperature-compensated model (one input more than the dataset has channels)."""
-    from ._readings import takes_temperature
+    """The ``X`` a fitted model takes from a dataset (the library's one definition,
+    :func:`ftcal.reporting.model_inputs`)."""
+    from ..reporting._calibration_report import model_inputs as inputs
 
-    n = int(model.n_features_in_)
-    temperature = takes_temperature(model)
-    if n == dataset.n_channels and not temperature:
-        return dataset.raw
-    if temperature and n == dataset.n_channels + 1 and dataset.temperature is not None:
-        return dataset.features(temperature=True)
-    wants = f"{n - 1} raw channels and a temperature column" if temperature else f"{n} raw channels"
-    has = f"{dataset.n_channels} raw channels" + (" and no temperature column" if temperature and
-                                                  dataset.temperature is None else "")
-    raise CliError(f"the model takes {wants} but the dataset has {has}; use the dataset the model was made for")
+    return inputs(model, dataset)
 
 
 def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> CalibrationDataset:

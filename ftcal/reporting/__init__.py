@@ -14,7 +14,7 @@ from ..core._lazy import lazy_namespace
 _PUBLIC = dict(
     calibration_certificate="_calibration_report", write_calibration_report="_calibration_report",
     render_report_html="_calibration_report", report_json="_calibration_report",
-    report_cases_csv="_calibration_report", comparison_table="_evaluation", axis_table="_evaluation",
+    report_cases_csv="_calibration_report", model_inputs="_calibration_report", comparison_table="_evaluation", axis_table="_evaluation",
     write_evaluation_plots="_evaluation", MODEL_COLORS="_plots", model_color="_plots",
     plot_error_distributions="_plots", plot_axis_errors="_plots", plot_predicted_vs_reference="_plots",
     plot_sphere_coverage="_plots", plot_wrench_coverage="_plots", plot_drift_residuals="_drift_plot",

@@ -131,17 +131,31 @@ def _axis_names(dataset: CalibrationDataset, k: int) -> list[str]:
 
 def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
     """The ``X`` a fitted model takes from a dataset: the raw channels, plus the temperature column for a
-    temperature-compensated model; a dataset of another sensor (other channel count) is refused."""
+    temperature-compensated model (its tags say so); a dataset of another sensor (other channel count) is refused.
+
+    The one definition: the report, ``ftcal evaluate`` and ``ftcal report`` all take a model's inputs here.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import CalibrationDataset, LinearCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> raw = rng.normal(size=(30, 6))
+    >>> data = CalibrationDataset(raw=raw, wrench=raw @ rng.normal(size=(6, 6)))
+    >>> model_inputs(LinearCalibrator().fit(data.raw, data.wrench), data).shape
+    (30, 6)
+    """
     n = int(getattr(model, "n_features_in_", data.n_channels))
-    if n == data.n_channels:
+    temperature = calibration_tags(model).temperature_column
+    if n == data.n_channels and not temperature:
         return data.raw
-    if n == data.n_channels + 1 and data.temperature is not None:
+    if temperature and n == data.n_channels + 1 and data.temperature is not None:
         return data.features(temperature=True)
-    extra = " and a temperature column" if n == data.n_channels + 1 else ""
-    raise CalibrationInputError(
-        f"the model takes {n} inputs but the dataset has {data.n_channels} raw channels{extra}; a report needs the "
-        "data the model was calibrated on (same sensor, same channel order)."
-    )
+    wants = f"{n - 1} raw channels and a temperature column" if temperature else f"{n} raw channels"
+    has = f"{data.n_channels} raw channels" + (" and no temperature column" if temperature and data.temperature is None
+                                               else "")
+    raise CalibrationInputError(f"the model takes {wants} but the dataset has {has}; use the data the model was "
+                                "calibrated on (same sensor, same channel order).")
 
 
 def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
