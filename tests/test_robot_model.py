@@ -115,8 +115,12 @@ def test_loading_errors_are_clear(tmp_path):
         load_robot(tmp_path / "missing.urdf", sensor_frame="x")
     bad = tmp_path / "bad.urdf"
     bad.write_text("<robot name='x'><link name='a'>")
-    with pytest.raises(KinematicsError, match="cannot parse"):
-        load_robot(bad, sensor_frame="a")
+    with pytest.raises(KinematicsError, match=r"bad.urdf: line 1, column 32: not valid XML \(no element found\)"):
+        load_robot(bad, sensor_frame="a")  # the library names where the XML breaks (urdfdom only says it failed)
+    empty = tmp_path / "empty.urdf"
+    empty.write_text("")
+    with pytest.raises(KinematicsError, match="empty.urdf: the URDF file is empty"):
+        load_robot(empty, sensor_frame="a")
 
 
 def test_fk_rejects_bad_joint_vectors(iiwa):
