@@ -1,4 +1,4 @@
-"""Issue 12 figures: the unbiased tare under sign-dependent gains, and what ``auto`` chooses on ftcal's own data.
+"""Figures of grouped model choice: the unbiased tare under sign-dependent gains, and what ``auto`` chooses on ftcal's own data.
 
 Usage::
 

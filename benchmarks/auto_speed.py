@@ -14,7 +14,7 @@ stock baselines) and ``n_jobs=--jobs``:
   fit; the stock baselines are candidates (the kernel ones on 1000-row subsamples), and the seconds each
   row of the comparison took (all folds) are recorded.
 
-Beside each, in the same process, the stock scikit-learn GP of issue 19 fitted once on the same rows (on
+Beside each, in the same process, the stock scikit-learn GP fitted once on the same rows (on
 1000 of them for the large set, as ``auto`` does): the ratio says how the time compares with what a user
 would run instead, whatever the machine's speed. The load average before and after is recorded.
 """

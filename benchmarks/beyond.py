@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Issue 6 ("beyond the thesis") benchmark: the polynomial, the axis-nonlinear hybrid and seed ensembles
+"""The "beyond the thesis" benchmark: the polynomial, the axis-nonlinear hybrid and seed ensembles
 against the thesis' three models, on the artificial presets (and optionally the virtual robot experiment).
 
 A thin layer over :func:`ftcal.benchmark.run_artificial_benchmark` (models by registry

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The crossover (issue 20): where does the directional DNN start to beat the LTM, the comparative DNN and
+"""The crossover: where does the directional DNN start to beat the LTM, the comparative DNN and
 the hybrid, as the sign-dependent gain grows?
 
 Every level is the ``thesis`` error model plus a sign-dependent gain ``1 ± a/2`` on all six axes

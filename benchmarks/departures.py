@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Measured effects of ftcal's departures from the thesis (issue 20, RESULTS.md "Departures from the thesis").
+"""Measured effects of ftcal's departures from the thesis (RESULTS.md "Departures from the thesis").
 
 1. Nonlinearity γ: 1 % of full scale (ftcal) against the printed 1e-3 (0.1 %), LTM RMSE and noise floor on
    ``thesis`` data (the LTM is the model eq. 14 hurts).

@@ -1,4 +1,4 @@
-"""Issue 21: the engine candidates measured before choosing one (per mini-batch step: forward, loss, backward, Adam).
+"""The training-engine candidates measured before choosing one (per mini-batch step: forward, loss, backward, Adam).
 
 Usage::
 

@@ -1,4 +1,4 @@
-"""Issue 19: the GP calibrator's predictive std on held-out data, 2-std coverage per case (target 90-97 %).
+"""The GP calibrator's predictive std on held-out data, 2-std coverage per case (target 90-97 %).
 
 Usage::
 

@@ -1,4 +1,4 @@
-"""Issue 19: one offset per pose (``PolynomialCalibrator(group_offsets=True)``) on the simulated robot-held sensor.
+"""One offset per pose (``PolynomialCalibrator(group_offsets=True)``) on the simulated robot-held sensor.
 
 Usage::
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Learning curves (issue 20): held-out RMSE against the amount of calibration data — the thesis' central
+"""Learning curves: held-out RMSE against the amount of calibration data — the thesis' central
 claim (accuracy from limited calibration data), tested where it can hold.
 
 Datasets come from the table :data:`FACTORIES` (name -> :class:`Factory`): each makes one full dataset per
@@ -154,7 +154,7 @@ def robot_factory(kind: str, errors: str = "reconstructed") -> Factory:
     """Configurations 0-4 train, 5-6 test; ``kind`` "poses": 5 configurations x m poses; "configs": k x all.
 
     The sensor's errors: the ``reconstructed`` preset by default (with ``thesis`` errors the LTM sits at the
-    noise floor and no model has anything to learn, RESULTS.md issue 6)."""
+    noise floor and no model has anything to learn, RESULTS.md, "beyond the thesis")."""
     from ftcal.simulation import SensorProfile
 
     def make(seed: int) -> Pool:
@@ -177,7 +177,7 @@ def robot_factory(kind: str, errors: str = "reconstructed") -> Factory:
 
 
 def soft_split(seed: int, test_presses: int = 8):
-    """The soft-sensor preset (issue 19) of ``seed``: its last ``test_presses`` presses are the test set (a new
+    """The soft-sensor preset of ``seed``: its last ``test_presses`` presses are the test set (a new
     recording), the other presses' rows the training pool."""
     from ftcal.simulation import make_soft_sensor_dataset
 

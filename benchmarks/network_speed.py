@@ -1,4 +1,4 @@
-"""Issues 13 and 21 figures: the one training engine (skorch's loop) and the numpy inference path, as ratios in one process.
+"""Figures of the one training engine (skorch's loop) and the numpy inference path, as ratios in one process.
 
 Usage::
 

@@ -1,4 +1,4 @@
-"""Issue 23 figures: fewer poses for the same accuracy (optimal plans, "which poses next").
+"""Figures of pose planning: fewer poses for the same accuracy (optimal plans, "which poses next").
 
 On the virtual robot (KUKA iiwa 14, :func:`ftcal.experiment.simulate_experiment`, thesis load configurations and
 robot errors), for each sensor preset and seed: one virtual sensor (its error parameters drawn from
@@ -69,7 +69,7 @@ def make_sensor(name: str, seed: int) -> "ftcal.simulation.VirtualSensor":
     return sensor
 
 
-#: Recorded in every ``auto`` result: the AutoCalibrator settings of this script since issue 19's rewrite of auto
+#: Recorded in every ``auto`` result: the AutoCalibrator settings of this script since auto's rewrite with stock baselines
 #: (stacking on by default, candidates scored by ``n_jobs``). Rows without it were measured with the earlier auto.
 AUTO_SETTINGS = "closed-form candidates, stack=True, baselines=False, n_jobs=1"
 

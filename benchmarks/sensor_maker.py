@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""The figures a sensor maker reports (issue 20): per-axis RMSE and maximum error in % of full scale, and the
+"""The figures a sensor maker reports: per-axis RMSE and maximum error in % of full scale, and the
 error against load magnitude, including loads beyond the largest training sphere (extrapolation).
 
 Each model is fitted on the four-sphere train set of an artificial dataset (outer sphere 0.8 Fmax = 1600 N

@@ -1,4 +1,4 @@
-"""Issue 19: the soft sensor's load history, and ftcal's ``HistoryCalibrator`` against the stock baselines.
+"""The soft sensor's load history, and ftcal's ``HistoryCalibrator`` against the stock baselines.
 
 Usage::
 

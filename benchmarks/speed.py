@@ -1,4 +1,4 @@
-"""Speed of the calibrators (issue 2): fit time, one-sample predict latency, throughput.
+"""Speed of the calibrators: fit time, one-sample predict latency, throughput.
 
 On ``--n-samples`` (default 5000) samples of a 6-channel affine sensor with
 thesis-like loads (forces O(100 N), torques O(2 N·m)):
@@ -14,7 +14,7 @@ The figures are written to ``benchmarks/RESULTS.md`` under ``## Speed (issue 2)`
 (other sections are kept); the short/predict figures are written before the
 thesis runs start and completed afterwards.
 
-Then the network figures of issue 13 (``benchmarks/network_speed.py``: the
+Then the network figures (``benchmarks/network_speed.py``: the
 lean loop against plain skorch, stacked ensembles against one member,
 one-sample and bulk ``predict`` against the numpy forward pass).
 
@@ -163,7 +163,7 @@ def main(argv: list[str] | None = None) -> None:
             print(f"{name}: thesis fit {seconds:.1f} s, {thesis[name][1]} epochs", flush=True)
             write_section(render(args, short, thesis, predict))
     print(f"wrote {RESULTS}")
-    if not args.skip_networks:  # issue 13: lean loop, stacked nets, inference, as ratios in this process
+    if not args.skip_networks:  # lean loop, stacked nets, inference, as ratios in this process
         import network_speed
 
         network_speed.main([])

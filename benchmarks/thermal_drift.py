@@ -1,4 +1,4 @@
-"""Issue 15 figures: how much of a simulated thermal drift's error temperature compensation removes.
+"""Thermal drift figures: how much of a simulated thermal drift's error temperature compensation removes.
 
 Usage::
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Hyperparameter search of the network calibrators (issue 6), and whether the tuned setting wins.
+"""Hyperparameter search of the network calibrators, and whether the tuned setting wins.
 
 For each preset:
 
