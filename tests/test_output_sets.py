@@ -111,24 +111,3 @@ def test_plan_on_a_full_disk_names_the_file_and_leaves_no_part_of_its_outputs(tm
             assert all(p.read_text() == f"previous {p.name}" for p in out.iterdir())
         else:
             assert not out.exists() or list(out.iterdir()) == []
-
-
-def test_a_forced_cli_output_set_whose_rename_fails_halfway_puts_the_old_set_back(tmp_path):
-    """``--force`` into a folder holding an older set: the first file is replaced, the second cannot be (a
-    folder stands in its place): the first is put back, so the old set stands whole and nothing of the run stays."""
-    from ftcal.cli._common import CliError, OutputPlan
-    from ftcal.cli._output_set import OutputSet
-
-    out = tmp_path / "out"
-    out.mkdir()
-    (out / "a.model.npz").write_text("old A")
-    with pytest.raises(CliError, match="as they were"):
-        with OutputSet(OutputPlan(out, ["a.model.npz", "b.fit.json"], force=True)) as files:
-            files.path("a.model.npz").write_text("new A")
-            files.path("b.fit.json").write_text("new B")
-            (out / "b.fit.json").mkdir()  # made meanwhile (after the plan's checks), by someone else
-            (out / "b.fit.json" / "keep").write_text("in the way")
-            files.commit()
-    assert (out / "a.model.npz").read_text() == "old A"
-    assert sorted(p.name for p in out.iterdir()) == ["a.model.npz", "b.fit.json"]
-    assert (out / "b.fit.json" / "keep").read_text() == "in the way"

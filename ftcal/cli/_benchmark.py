@@ -233,14 +233,15 @@ def run_dataset(args: argparse.Namespace) -> int:
     results["chosen"] = results["name"][chosen]
     results.update(dataset=str(args.dataset), alpha=alpha, folds="group" if groups is not None else "kfold",
                    cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels, axes=list(data.axes))
-    with plan.writing("dataset_results.json") as tmp:
-        write_json(tmp, results)
     table = _dataset_table(results, data.axes)
-    with plan.writing("dataset_results.md") as tmp:
-        tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
     axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
-    with plan.writing("dataset_rmse.png") as tmp:
-        plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({results['folds']} folds)")
+    with plan.as_one_set():  # the results, their table and their figure: all or none
+        with plan.writing("dataset_results.json") as tmp:
+            write_json(tmp, results)
+        with plan.writing("dataset_results.md") as tmp:
+            tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
+        with plan.writing("dataset_rmse.png") as tmp:
+            plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({results['folds']} folds)")
     print(table)
     console.info(f"choose {results['chosen']} (the simplest within one standard error of the best, or within 0.5 % "
                  "of its RMSE); "
@@ -316,10 +317,11 @@ def run_real_world(args: argparse.Namespace) -> int:
     console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
     result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
     markdown = real_world_markdown(result)
-    with plan.writing("real_world_results.md") as tmp:
-        tmp.write_text(markdown + "\n", encoding="utf-8")
-    with plan.writing("real_world_results.json") as tmp:
-        write_json(tmp, result)
+    with plan.as_one_set():
+        with plan.writing("real_world_results.md") as tmp:
+            tmp.write_text(markdown + "\n", encoding="utf-8")
+        with plan.writing("real_world_results.json") as tmp:
+            write_json(tmp, result)
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0

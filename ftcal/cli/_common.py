@@ -682,10 +682,40 @@ class OutputPlan:
             yield tmp
 
     @contextlib.contextmanager
+    def staging(self) -> Iterator[Path]:
+        """Within :meth:`as_one_set`: a private folder inside ``out_dir`` for a library function that writes its
+        files itself (the virtual experiment's logs, the demo's files); the planned files it holds when the block
+        ends join the set, and the folder is removed whatever happens."""
+        import shutil
+        import tempfile
+
+        if self._set is None:
+            raise AssertionError("staging() outside as_one_set()")
+        self.out_dir.mkdir(parents=True, exist_ok=True)
+        stage = Path(tempfile.mkdtemp(prefix=".ftcal-run.", suffix=".partial", dir=self.out_dir))
+        try:
+            yield stage
+            for name in self.names:
+                if (stage / name).is_file():
+                    with self.writing(name) as tmp:
+                        os.replace(stage / name, tmp)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
+
+    def leaving_out(self, name: str) -> None:
+        """A planned file this run does not write after all (a report it has no data for): within
+        :meth:`as_one_set`, an older file of that name (``--force``) is removed with the set, so that no output of
+        an earlier run stays beside the new ones and describes another run."""
+        if self._set is None:
+            raise AssertionError("leaving_out() outside as_one_set()")
+        self._set.removing(self.path(name))
+
+    @contextlib.contextmanager
     def as_one_set(self) -> Iterator[OutputSet]:
         """Within the block, the files written with :meth:`writing` are put in place together when it ends, and
         none of them when it fails (an error, a full disk, a signal): a run leaves all its outputs or none, and a
-        replaced set is never half old, half new (:func:`ftcal.core._files.atomic_output_set`)."""
+        replaced set is never half old, half new (:class:`ftcal.core._files.OutputSet`: the renames under a lock on
+        the folder, the termination signals held back, a failed rename puts the old set back)."""
         if self._set is not None:
             raise AssertionError("as_one_set() is already active on this OutputPlan")
         with atomic_output_set(overwrite=self.force, error=CliError) as files:

@@ -41,12 +41,13 @@ def run(args: argparse.Namespace) -> int:
     from ..benchmark._demo import demo_files, run_demo
 
     console = Console(args.quiet)
-    OutputPlan(args.out, demo_files(), args.force)  # refuse before any work
-    result = run_demo(
-        args.out, preset=args.preset, quick=args.quick, random_state=args.seed, overwrite=True,
-        fit=lambda est, X, y, name: fit_with_progress(est, X, y, console, label=name),
-        log=console.info,
-    )
+    plan = OutputPlan(args.out, demo_files(), args.force)  # refuse before any work
+    with plan.as_one_set(), plan.staging() as stage:  # the demo's files as one set
+        result = run_demo(
+            stage, preset=args.preset, quick=args.quick, random_state=args.seed, overwrite=True,
+            fit=lambda est, X, y, name: fit_with_progress(est, X, y, console, label=name),
+            log=console.info,
+        )
     print(f"ftcal demo: '{args.preset}' preset, seed {args.seed}, test set of {result.test.n_samples} samples, "
           f"alpha = {result.info['alpha']:.3g} 1/m")
     print()

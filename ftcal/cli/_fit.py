@@ -155,7 +155,6 @@ def run(args: argparse.Namespace) -> int:
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     from ..reporting._calibration_report import file_sha256
-    from ._output_set import OutputSet
     from ._report import prepare_report, report_file_names, write_report
 
     names = [model_file_name(name), f"{name}.fit.json"] + (report_file_names(name) if args.report else [])
@@ -257,17 +256,18 @@ def run(args: argparse.Namespace) -> int:
 
     if not args.report:
         gate()  # with --report: on the report's held-out predictions, before any file is in place
-    # every output of this run is written into a private folder and moved into place as one set at the end: a
+    # every output of this run is written to its own temporary file and put in place as one set at the end: a
     # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote
-    with OutputSet(plan) as out:
-        ftcal.save_model(estimator, out.path(model_file_name(name)), overwrite=True, data=fit_data_facts(args, data))
-        summary["model_sha256"] = out.sha256(model_file_name(name))
-        write_json(out.path(f"{name}.fit.json"), summary)
+    with plan.as_one_set() as files:
+        with plan.writing(model_file_name(name)) as tmp:
+            ftcal.save_model(estimator, tmp, overwrite=True, data=fit_data_facts(args, data))
+        summary["model_sha256"] = files.sha256(plan.path(model_file_name(name)))
+        with plan.writing(f"{name}.fit.json") as tmp:
+            write_json(tmp, summary)
         if args.report:
-            write_report(out, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
+            write_report(plan, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
                          dataset_sha256=dataset_sha256, console=console, check=gate)
-        out.commit()
     console.info(f"done in {seconds:.1f} s: training RMSE {_rmse_text(report.rmse, data.axes, estimator.alpha_)}; "
                  f"model -> {plan.path(model_file_name(name))}")
     return 0

@@ -401,12 +401,16 @@ def run_identify(args: argparse.Namespace) -> int:
         info["still_poses"] = [{"found": s.n_found, "kept": s.n_kept, "rejected": [
             {"start_time_s": t, "reason": why} for t, why in s.rejected], "settle_s": s.settle_s,
             "settle_from_data": s.settle_from_data} for s in poses.still]
-    with plan.writing(poses_name) as tmp:
-        tmp.write_text(_poses_csv(poses), encoding="utf-8")
-    if report is not None:
-        write_report(plan, args.name, report)
-    with plan.writing(name) as tmp:
-        write_json(tmp, {**tool.to_dict(), **info})
+    with plan.as_one_set():  # the tool file and the report describing it: all or none, never another run's report
+        with plan.writing(poses_name) as tmp:
+            tmp.write_text(_poses_csv(poses), encoding="utf-8")
+        if report is not None:
+            write_report(plan, args.name, report)
+        else:
+            for stale in report_names(args.name):
+                plan.leaving_out(stale)
+        with plan.writing(name) as tmp:
+            write_json(tmp, {**tool.to_dict(), **info})
     c = tool.center_of_mass * 1000
     console.info(
         f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "

@@ -144,25 +144,27 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(exc.render(cli_spelling(args), fix=f"the fixture used was {fixture}: describe yours in a file "
                                   "and pass --fixture FILE (see 'ftcal prepare --help')")) from None
     dataset.meta["fixture"] = fixture
-    with plan.writing(name) as tmp:
-        dataset.save(tmp, overwrite=True)
     groups = {} if dataset.group is None else {
         str(g): int((dataset.group == g).sum()) for g in sorted(set(dataset.group.tolist()))
     }
-    with plan.writing("prepare.json") as tmp:
-        write_json(tmp, {
-            "logs": [str(p) for p in logs],
-            "robot": robot.name,
-            "sensor_frame": robot.sensor_frame,
-            "n_samples": dataset.n_samples,
-            "n_channels": dataset.n_channels,
-            "samples_per_configuration": groups,
-            "fixture": fixture,
-            "meta": dataset.meta,
-        })
     alpha = ftcal.core.alpha_from_wrenches(dataset.wrench)
-    with plan.writing("coverage.png") as tmp:
-        _plots.plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
+    with plan.as_one_set():  # the dataset, its summary and its figure: all or none
+        with plan.writing(name) as tmp:
+            dataset.save(tmp, overwrite=True)
+        with plan.writing("prepare.json") as tmp:
+            write_json(tmp, {
+                "logs": [str(p) for p in logs],
+                "robot": robot.name,
+                "sensor_frame": robot.sensor_frame,
+                "n_samples": dataset.n_samples,
+                "n_channels": dataset.n_channels,
+                "samples_per_configuration": groups,
+                "fixture": fixture,
+                "meta": dataset.meta,
+            })
+        with plan.writing("coverage.png") as tmp:
+            _plots.plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha,
+                                        title="Reference wrenches of the prepared dataset")
     console.info(
         f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
         f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)"

@@ -230,11 +230,11 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
             "sensor": None if sensor is None else str(sensor)}
 
 
-def write_report(out, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
+def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
                  model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console,
                  check=None) -> None:
-    """Compute the report of ``model`` on ``data`` and write its three planned files into ``out`` (an
-    :class:`~ftcal.cli._output_set.OutputSet`; nothing is in place before its commit). ``check``, if given, is
+    """Compute the report of ``model`` on ``data`` and write its three planned files with ``out`` (within its
+    :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is). ``check``, if given, is
     called with the report's held-out predictions (shape of ``data.wrench``) before anything is written: it may
     raise to refuse the calibration."""
     from ..reporting._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
@@ -255,11 +255,12 @@ def write_report(out, label: str, model, data, args: argparse.Namespace, setting
         check(report["_held_out_pred"])
 
     html_name, json_name, csv_name = report_file_names(label)
-    out.path(html_name).write_text(render_report_html(report), encoding="utf-8")
-    out.path(json_name).write_text(report_json(report), encoding="utf-8")
-    out.path(csv_name).write_text(report_cases_csv(report), encoding="utf-8")
+    for file_name, text in ((html_name, render_report_html(report)), (json_name, report_json(report)),
+                            (csv_name, report_cases_csv(report))):
+        with out.writing(file_name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
     verdict = report.get("verdict")
-    console.info(f"report -> {out.final_path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
+    console.info(f"report -> {out.path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 
 
 def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path) -> CliError | None:
@@ -288,7 +289,6 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 def run(args: argparse.Namespace) -> int:
     from ..reporting._calibration_report import bytes_sha256, file_sha256
     from ._models import load_model_file, model_inputs, model_label
-    from ._output_set import OutputSet
 
     console = Console(args.quiet)
     label = model_label(args.model)
@@ -307,9 +307,8 @@ def run(args: argparse.Namespace) -> int:
         print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
               "another range); the report's held-out figures are of the model refitted on this dataset by "
               "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
-    with OutputSet(plan) as out:
-        write_report(out, label, model, data, args, settings, model_path=args.model,
+    with plan.as_one_set():
+        write_report(plan, label, model, data, args, settings, model_path=args.model,
                      model_sha256=bytes_sha256(model_bytes), dataset_path=args.dataset, dataset_sha256=dataset_sha256,
                      console=console)
-        out.commit()
     return 0

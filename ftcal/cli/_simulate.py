@@ -114,7 +114,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     thermal = temperature_range(args.temperature_range)
     infos = []
     first_train = None
-    with console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
+    with plan.as_one_set(), console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
         for k in range(args.n_datasets):
             train, test, info = ftcal.make_artificial_dataset(
                 args.preset, random_state=rng, profile=profile, n_per_sphere=args.n_per_sphere,
@@ -130,13 +130,13 @@ def run_dataset(args: argparse.Namespace) -> int:
             infos.append(info)
             first_train = train if first_train is None else first_train
             bar.update(1)
-    with plan.writing("info.json") as tmp:
-        write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
-    with plan.writing("coverage.png") as tmp:
-        _plots.plot_wrench_coverage(
-            first_train.wrench, tmp, alpha=profile.alpha,
-            title=f"Training wrenches ({args.preset} preset)",
-        )
+        with plan.writing("info.json") as tmp:
+            write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
+        with plan.writing("coverage.png") as tmp:
+            _plots.plot_wrench_coverage(
+                first_train.wrench, tmp, alpha=profile.alpha,
+                title=f"Training wrenches ({args.preset} preset)",
+            )
     floors = [i["noise_floor"] for i in infos]
     console.info(
         f"wrote {args.n_datasets} dataset(s) to {args.out}/ ({first_train.n_samples} train, {args.n_test} test "
@@ -261,11 +261,15 @@ def run_experiment(args: argparse.Namespace) -> int:
         mass.update(thermal_drift="typical", temperature_range_deg=thermal)
     console.info(f"fixture: {fixture}")  # never silent: the simulated loads rest on it
     console.info(f"simulating {len(configs)} load configurations x {plan.n_poses} poses (load and no-load runs) ...")
-    paths = ftcal.experiment.simulate_experiment(
-        args.out, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=args.force,
-        load_configurations=configs, **mass,
-    )
-    write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
+    # the logs, the truths and the figure as one set: simulated into a private folder, put in place together
+    with plan_files.as_one_set():
+        with plan_files.staging() as stage:
+            staged = ftcal.experiment.simulate_experiment(
+                stage, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=True,
+                load_configurations=configs, **mass,
+            )
+        write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
+    paths = [plan_files.path(file.name) for file in staged]
     console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")
     if bag_storage is not None:
         from ..experiment._virtual_recording import write_run_bags

@@ -131,10 +131,11 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
                "search_seconds": round(seconds, 3), **search_summary(search)}
-    with plan.writing(model_file_name(name)) as tmp:  # atomic; never replaces another run's file
-        ftcal.save_model(search.best_estimator_, tmp, overwrite=True, data=fit_data_facts(args, data))
-    with plan.writing(f"{name}.tune.json") as tmp:
-        write_json(tmp, summary)
+    with plan.as_one_set():  # the model and its search summary: all or none, never another run's file replaced
+        with plan.writing(model_file_name(name)) as tmp:
+            ftcal.save_model(search.best_estimator_, tmp, overwrite=True, data=fit_data_facts(args, data))
+        with plan.writing(f"{name}.tune.json") as tmp:
+            write_json(tmp, summary)
     console.info(
         f"done in {seconds:.1f} s: best {summary['best_params']} with cross-validated RMSE "
         f"{summary['best_rmse']:.4g} N; model -> {plan.path(model_file_name(name))}"

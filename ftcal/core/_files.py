@@ -13,24 +13,38 @@ Every file ftcal writes (datasets, model files, CLI outputs) goes through
   only ``[Errno 28] No space left on device``.
 
 The outputs of one run that belong together (a plan's poses, its summary and
-its figure; a model and its fit summary) go through :func:`atomic_output_set`:
-every file is written to its temporary name first and only when all are
-written are they renamed into place, so a failure (a full disk, a signal, an
-error in a later step) leaves none of them, and a replaced set is never half
-old and half new.
+its figure; a model, its fit summary and its report) go through one
+:class:`OutputSet` (:func:`atomic_output_set`; the command line's
+``OutputPlan.as_one_set``): every file is written to its temporary name first
+and only when all are written are they renamed into place, so that
+
+* a failure (a full disk, a signal, an error in a later step) leaves none of
+  them and every file that stood there before untouched;
+* the renames run under a lock on the set's folders, with the termination
+  signals held back: two runs' sets are put in place one after the other,
+  whole, and a signal arriving meanwhile acts after the set is in place;
+* with ``overwrite``, each file replaced keeps a second name (a hard link)
+  until the whole set is in place: a rename that fails halfway (a folder made
+  where a file goes) puts every old file back, so a replaced set is never
+  half old and half new;
+* without ``overwrite``, a file another run wrote meanwhile is not replaced,
+  and none of this run's files is put in place.
 """
 
 from __future__ import annotations
 
 import contextlib
 import errno
+import hashlib
 import itertools
 import json
 import math
 import numbers
 import os
+import signal
 import tempfile
-from collections.abc import Iterator
+import threading
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 __all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
@@ -151,13 +165,23 @@ class OutputSet:
     """Files written together: each to its own temporary file, all renamed into place by :meth:`commit`.
 
     Made by :func:`atomic_output_set`, which commits when its block succeeds and otherwise removes every
-    temporary file (so no file of the set is written).
+    temporary file (so no file of the set is written). The one implementation of a run's output set: the
+    command line's ``OutputPlan.as_one_set`` yields it too.
     """
 
     def __init__(self, *, overwrite: bool, error: type[Exception]) -> None:
         self.overwrite = overwrite
         self.error = error
         self._pending: dict[Path, Path] = {}  # final path -> its temporary file
+        self._removed: list[Path] = []  # outputs of an earlier run this set replaces by nothing
+
+    def removing(self, path: str | os.PathLike) -> None:
+        """Remove ``path`` when the set is put in place (with ``overwrite``; put back if the set fails): an output
+        of an earlier run that this run does not write would otherwise stay beside the new set and describe
+        another run."""
+        path = Path(path)
+        if path not in self._removed and path not in self._pending:
+            self._removed.append(path)
 
     @contextlib.contextmanager
     def writing(self, path: str | os.PathLike) -> Iterator[Path]:
@@ -183,6 +207,19 @@ class OutputSet:
         """The final paths written so far (committed or not)."""
         return list(self._pending)
 
+    def sha256(self, path: str | os.PathLike) -> str:
+        """SHA-256 of the bytes this run wrote for ``path`` (its own temporary file, which no other run can change;
+        before or after the commit)."""
+        path = Path(path)
+        source = self._pending.get(path)
+        if source is None:
+            raise KeyError(f"{path} was not written in this set")
+        digest = hashlib.sha256()
+        with open(source if source.exists() else path, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+        return digest.hexdigest()
+
     def commit(self) -> None:
         """Rename every written file into place, all or none.
 
@@ -192,6 +229,14 @@ class OutputSet:
         that fails halfway puts every old file back.
         """
         pending = list(self._pending.items())
+        for _, tmp in pending:  # on disk before any rename: a full disk fails here, with nothing in place yet
+            _fsync(tmp)
+        with _locked({path.parent for path, _ in pending} | {path.parent for path in self._removed}), \
+                _signals_held():
+            self._put_in_place(pending)
+        self._discard()
+
+    def _put_in_place(self, pending: list[tuple[Path, Path]]) -> None:
         if not self.overwrite:
             placed: list[tuple[Path, Path]] = []
             for path, tmp in pending:
@@ -211,22 +256,27 @@ class OutputSet:
                                          "was put in place.") from None
                     os.replace(tmp, path)
                 placed.append((path, tmp))
-            self._discard()
             return
         backups: dict[Path, Path | None] = {}
         try:
+            for path in self._removed:  # first: a failure below puts them back with the rest
+                backups[path] = _second_name(path)
+                if backups[path] is not None:
+                    path.unlink()
             for path, tmp in pending:
                 backups[path] = _second_name(path)
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
-                    raise type(exc)(exc.errno, exc.strerror, str(path)) from None
+                    raise type(exc)(exc.errno, f"{exc.strerror or os.strerror(exc.errno or 0)}; none of this run's "
+                                    "files was left and the files that stood there are as they were", str(path)
+                                    ) from None
         except BaseException:
             for path, backup in backups.items():  # put the old set back
                 with contextlib.suppress(OSError):
                     if backup is not None:
                         os.replace(backup, path)
-                    elif not self._pending[path].exists():  # the new file was put in place: remove it
+                    elif path in self._pending and not self._pending[path].exists():  # put in place: remove it
                         path.unlink()
             raise
         finally:
@@ -234,7 +284,6 @@ class OutputSet:
                 if backup is not None:
                     with contextlib.suppress(FileNotFoundError):
                         backup.unlink()
-        self._discard()
 
     @staticmethod
     def _undo_links(placed: list[tuple[Path, Path]]) -> None:
@@ -248,6 +297,54 @@ class OutputSet:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
         self._pending.clear()
+
+
+def _fsync(path: Path) -> None:
+    fd = os.open(path, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def _locked(folders: Iterable[Path]) -> Iterator[None]:
+    """An exclusive ``flock`` on each folder (in one order, so two runs never wait on each other crosswise): the
+    sets of two ftcal runs into the same folder are put in place one after the other. Where ``flock`` is missing
+    (not POSIX) or refused (some network file systems), the set is put in place without it."""
+    try:
+        import fcntl
+    except ImportError:  # pragma: no cover - not POSIX
+        yield
+        return
+    with contextlib.ExitStack() as stack:
+        for folder in sorted({str(Path(f).resolve()) for f in folders}):
+            try:
+                fd = os.open(folder, os.O_RDONLY)
+            except OSError:
+                continue
+            stack.callback(os.close, fd)  # closing releases the lock
+            with contextlib.suppress(OSError):
+                fcntl.flock(fd, fcntl.LOCK_EX)
+        yield
+
+
+#: The signals that end a run (Ctrl-C, ``kill``, a closed terminal).
+_TERMINATING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
+
+
+@contextlib.contextmanager
+def _signals_held() -> Iterator[None]:
+    """Hold the terminating signals back while a set is renamed into place (in the main thread, where Python runs
+    its signal handlers): one that arrives meanwhile acts right after, on a set that is whole, old or new."""
+    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+        yield
+        return
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _TERMINATING)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _second_name(path: Path) -> Path | None:
