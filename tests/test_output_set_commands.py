@@ -152,7 +152,7 @@ def _write_static_poses(path: Path) -> None:
     import numpy as np
     from scipy.spatial.transform import Rotation
 
-    from ftcal import ToolLoad
+    from ftcal.experiment import ToolLoad
 
     tool = ToolLoad(mass=1.3, center_of_mass=np.array([0.012, -0.008, 0.065]),
                     bias=np.array([1.5, -2.0, 0.7, 0.05, -0.03, 0.02]))
