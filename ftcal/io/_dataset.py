@@ -853,9 +853,11 @@ def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> 
     --------
     >>> import numpy as np, tempfile, os
     >>> path = os.path.join(tempfile.mkdtemp(), "r.npz")
-    >>> np.savez(path, data=np.arange(12.0).reshape(3, 4))
+    >>> np.savez(path, data=np.arange(20.0).reshape(5, 4))  # 5 readings of 4 columns (more rows than columns)
     >>> read_channels(path, ("data[:,1:3]",)).tolist()
-    [[1.0, 2.0], [5.0, 6.0], [9.0, 10.0]]
+    [[1.0, 2.0], [5.0, 6.0], [9.0, 10.0], [13.0, 14.0], [17.0, 18.0]]
+
+    An array wider than tall holds one row per column (MATLAB): it is read transposed.
     """
     if channels is not None:
         channels = ColumnMap(channels=channels).channels
