@@ -24,6 +24,10 @@ from ftcal import (
 from ftcal.compose._auto import StackedCalibrator
 from ftcal.calibrators._baselines import StockCalibrator
 
+#: ``tests/data`` holds the scripts that wrote the stored model files (each folder's ``make_files.py``): data, not
+#: tests, and two modules of one name, which ``--doctest-modules`` would otherwise import as one.
+collect_ignore_glob = ["data/*"]
+
 # the benchmark scripts import their shared helpers (benchmarks/_output.py) as when run from their folder
 BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 if str(BENCHMARKS) not in sys.path:
