@@ -325,3 +325,19 @@ def test_a_drift_without_its_values_is_told_in_the_commands_terms():
     line = cli_message(err)
     assert line.startswith("--drift 'temperature' needs temperatures that vary over the poses")
     assert line.endswith("Fix: give a 'temperature' column (the sensor's temperature at each pose), or --drift auto.")
+
+
+def test_the_load_mass_and_pose_count_are_said_as_the_options_of_the_command_that_ran(tmp_path):
+    # prepare and simulate call the load mass --mass, plan --load-mass; plan's pose count is --poses
+    line = _error(_cli("plan", "--strategy", "random", "--poses", "3", "--subdivisions", "0", "--out", tmp_path / "p",
+                       "-q"))
+    assert line.startswith("ftcal: error: --poses 3 is fewer than the 7 parameters") and "n_poses" not in line
+    assert _cli("simulate", "experiment", "--subdivisions", "0", "--seed", "1", "--out", tmp_path / "e",
+                "-q").returncode == 0
+    line = _error(_cli("prepare", tmp_path / "e", "--mass", "5", "--out", tmp_path / "d", "-q"))
+    assert "--mass 5 kg but the logs declare [2.0] kg; which one is right? Fix: correct --mass" in line
+    assert "load_mass" not in line.replace("load_mass_kg", "")
+    log = tmp_path / "e" / "config0_load.csv"
+    (tmp_path / "e" / "extra_load.csv").write_text(log.read_text().replace("# load_mass_kg: 2.0", "# load_mass_kg: 2.5"))
+    line = _error(_cli("prepare", tmp_path / "e", "--out", tmp_path / "d", "-q"))
+    assert "--mass not given and the logs declare [2.0, 2.5]. Fix: pass --mass KG" in line

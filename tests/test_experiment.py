@@ -138,7 +138,7 @@ def test_shared_no_load_run_and_repeated_samples(tmp_path, iiwa, small_plan):
 
 def test_dataset_level_errors(tmp_path, iiwa, small_plan):
     paths = _pair_logs(tmp_path, iiwa, small_plan)
-    with pytest.raises(LogFormatError, match=r"load_mass=5.0 kg but the logs declare \[2.0\] kg"):
+    with pytest.raises(LogFormatError, match=r"load_mass 5 kg but the logs declare \[2.0\] kg"):
         prepare_dataset(paths, iiwa, load_mass=5.0)
     with pytest.raises(LogFormatError, match="load configuration 3 is not among the known ones"):
         prepare_dataset(paths, iiwa, load_configurations={0: [0.1, 0, 0], 1: [0, 0.1, 0], 2: [0.1, 0.1, 0]})

@@ -71,8 +71,21 @@ def test_a_replaced_set_is_all_new_and_a_set_meeting_another_runs_file_replaces_
             (fresh / "b.json").write_text("another run")  # finished first
     assert (fresh / "b.json").read_text() == "another run"
     assert not (fresh / "a.csv").exists()  # none of the set was put in place
-    kept = sorted(p.name for p in fresh.iterdir() if p.name != "b.json")
-    assert kept == ["a.1.csv", "b.1.json"]  # this run's work is kept beside, as the message says
+    assert sorted(p.name for p in fresh.iterdir()) == ["b.json", "unplaced.1"]
+    # this run's work is kept whole in a sub-folder, as the message says, where the folder's readers do not take it
+    # for the other run's files (a run-log or dataset folder is read by its *.csv)
+    assert {p.name: p.read_text() for p in (fresh / "unplaced.1").iterdir()} == {"a.csv": "this run",
+                                                                                 "b.json": "this run"}
+
+
+def test_run_logs_of_a_folder_leave_out_temporaries_and_a_lost_race(tmp_path):
+    from ftcal.io import run_log_files
+
+    for name in ("config0_load.csv", ".config0_load.k2x9.partial.csv"):
+        (tmp_path / name).write_text("")
+    (tmp_path / "unplaced.1").mkdir()
+    (tmp_path / "unplaced.1" / "config1_load.csv").write_text("")
+    assert [p.name for p in run_log_files(tmp_path)] == ["config0_load.csv"]
 
 
 @contextlib.contextmanager

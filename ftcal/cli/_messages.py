@@ -68,6 +68,9 @@ class Option:
         for dest, flag in self.flags:
             if args is not None and getattr(args, dest, None) not in (None, False):
                 return flag
+        for dest, flag in self.flags:  # none given: the option the command has (prepare's --mass, plan's --load-mass)
+            if args is not None and hasattr(args, dest):
+                return flag
         return self.flags[-1][1] if self.flags else None
 
 
@@ -84,7 +87,7 @@ CLI_NAMES: dict[str, Option] = {
     "world_frame": _option("--world-frame"),
     "subdivisions": _option("--subdivisions"),
     "candidate_subdivisions": _option("--candidate-subdivisions"),
-    "load_mass": _option("--load-mass", "KG"),
+    "load_mass": Option((("mass", "--mass"), ("load_mass", "--load-mass")), metavar="KG"),
     "load_positions_in_sensor": Option(advice="prepare the dataset from the run logs with 'ftcal prepare', which "
                                               "records the load positions, or measure with the thesis fixture"),
     "space": _option("--grid", "KEY=[values]"),

@@ -19,6 +19,7 @@ from ._common import (
     path_problem,
     write_json,
 )
+from ..io._logs import run_log_files
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log
 
 EXAMPLE = """\
@@ -98,7 +99,7 @@ def log_files(items: list[str]) -> list[Path]:
     for item in items:
         path = Path(item)
         if path.is_dir():
-            found = sorted(path.glob("*.csv"))
+            found = run_log_files(path)
             if not found:
                 raise CliError(f"{path}: directory holds no *.csv run logs")
             files += found

@@ -160,7 +160,7 @@ class FtcalError(Exception):
         if advice:
             advice = advice if advice.endswith((".", "!", "?")) else f"{advice}."
             text = text.rstrip()
-            text = f"{text} Fix: {advice}" if text.endswith((".", ":", ";")) else f"{text}. Fix: {advice}"
+            text = f"{text} Fix: {advice}" if text.endswith((".", ":", ";", "?", "!")) else f"{text}. Fix: {advice}"
         return text
 
 

@@ -244,10 +244,11 @@ class OutputSet:
                     os.link(tmp, path)
                 except FileExistsError:
                     self._undo_links(placed)
-                    kept = [str(link_beside(t, p)) for p, t in pending]
+                    kept = keep_aside(pending)
                     raise self.error(
                         f"{path} appeared while this run was working (another run wrote it?); none of this run's "
-                        f"files was put in place (they are kept as {', '.join(kept)})."
+                        f"files was put in place (they are kept in {kept}, where no reader of the folder "
+                        "takes them for the other run's)."
                     ) from None
                 except OSError:  # a file system without hard links: check, then rename
                     if path.exists():
@@ -401,6 +402,38 @@ def atomic_output_set(*, overwrite: bool, error: type[Exception]) -> Iterator[Ou
         files.commit()
     finally:
         files._discard()
+
+
+def keep_aside(pending: list[tuple[Path, Path]]) -> Path:
+    """Keep the temporaries of a set that could not be put in place in a new sub-folder ``unplaced.K`` of the
+    first file's folder (``K`` = 1, 2, ...: never one that exists), under their final names; returns the folder.
+
+    A sub-folder, not names beside the other run's files (``stem.1.csv``): whoever reads the folder's
+    ``*.csv`` (run logs, a folder dataset) must not take this run's files for the other run's.
+    """
+    parent = pending[0][0].parent
+    for k in itertools.count(1):
+        folder = parent / f"unplaced.{k}"
+        try:
+            folder.mkdir()
+            break
+        except FileExistsError:
+            continue
+    for path, tmp in pending:
+        target = folder / path.name
+        if target.exists():  # two files of one name in different folders of the set
+            link_beside(tmp, target)
+        else:
+            _link_or_copy(tmp, target)
+    return folder
+
+
+def _link_or_copy(tmp: Path, target: Path) -> None:
+    try:
+        os.link(tmp, target)
+    except OSError:  # a file system without hard links
+        with open(target, "xb") as f:
+            f.write(Path(tmp).read_bytes())
 
 
 def link_beside(tmp: Path, path: Path) -> Path:

@@ -39,9 +39,9 @@ from sklearn.linear_model import LinearRegression
 from numpy.typing import ArrayLike, NDArray
 
 from ..io._dataset import CalibrationDataset
-from ..core._exceptions import KinematicsError, LogFormatError
+from ..core._exceptions import KinematicsError, LogFormatError, Placeholder
 from ..robot._loads import GRAVITY_IN_BASE, LoadConfiguration, reference_wrench, thesis_load_configurations
-from ..io._logs import SHARED_NO_LOAD_CONFIG, RunLog, read_run_log
+from ..io._logs import SHARED_NO_LOAD_CONFIG, RunLog, read_run_log, run_log_files
 from ..robot._robot import RobotModel, load_robot, sensor_pose_in_base
 
 __all__ = ["rotation_delta", "NoLoadModel", "fit_no_load_model", "PairedRuns", "pair_runs", "prepare_dataset"]
@@ -367,7 +367,7 @@ def prepare_dataset(
         robot = load_robot(robot)
     if isinstance(log_paths, (str, Path)):  # one file or a folder of logs, not a string of characters
         one = Path(log_paths)
-        paths = sorted(one.glob("*.csv")) if one.is_dir() else [one]
+        paths = run_log_files(one) if one.is_dir() else [one]
         if not paths:
             raise LogFormatError(f"{one}: the folder holds no .csv run logs.")
     else:
@@ -403,12 +403,14 @@ def prepare_dataset(
         masses = set()
     if load_mass is None:
         if len(masses) != 1:
-            raise LogFormatError(f"load_mass not given and the logs declare {sorted(masses) or 'none'}; "
-                                 "pass load_mass=<kg> or write '# load_mass_kg: <kg>' in the logs.")
+            raise LogFormatError(f"{{load_mass}} not given and the logs declare {sorted(masses) or 'none'}.",
+                                 parameter="load_mass", fix="pass {load_mass} or write '# load_mass_kg: <kg>' in "
+                                 "the logs", settings={"load_mass": Placeholder("<kg>")})
         load_mass = masses.pop()
     elif masses and any(abs(m - load_mass) > 1e-9 for m in masses):
-        raise LogFormatError(f"load_mass={load_mass} kg but the logs declare {sorted(masses)} kg; "
-                             "which one is right? Fix the argument or the '# load_mass_kg' comments.")
+        raise LogFormatError(f"{{load_mass}} {load_mass:g} kg but the logs declare {sorted(masses)} kg; which one "
+                             "is right?", parameter="load_mass", value=load_mass,
+                             fix="correct {load_mass} or the '# load_mass_kg' comments")
     if not np.isfinite(load_mass) or load_mass <= 0:
         raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
     positions = _config_positions(load_configurations)

@@ -10,7 +10,7 @@ from ..core._lazy import lazy_namespace
 #: Public names of this package -> the private module holding each.
 _PUBLIC = dict(
     CalibrationDataset="_dataset", ColumnMap="_readers", RunLog="_logs", read_run_log="_logs",
-    write_run_log="_logs", PoseRecording="_poses", read_pose_file="_poses", BagRecording="_bags",
+    write_run_log="_logs", run_log_files="_logs", PoseRecording="_poses", read_pose_file="_poses", BagRecording="_bags",
     read_bag="_bags", write_bag="_bags", FORCE_UNITS="_readers", TORQUE_UNITS="_readers",
 )
 __all__ = list(_PUBLIC)

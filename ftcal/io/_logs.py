@@ -57,7 +57,7 @@ from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
 from ._readers import temperature_message
 
-__all__ = ["RunLog", "read_run_log", "write_run_log", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
+__all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
 #: Allowed values of the ``run`` column.
 RUN_KINDS: tuple[str, str] = ("load", "no-load")
@@ -154,6 +154,22 @@ def _parse_comments(path: Path, lines: list[str]) -> tuple[dict[str, str], int, 
             info[key.strip()] = value.strip()
             where[key.strip()] = n
     return info, n, where
+
+
+def run_log_files(folder: str | Path) -> list[Path]:
+    """The run logs of a folder, in name order: its ``*.csv`` files, not hidden ones (a killed run's temporaries,
+    ``.NAME.XXXX.partial.csv``) nor sub-folders (a run that lost a race keeps its files in one).
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> folder = Path(tempfile.mkdtemp())
+    >>> for name in ("config1_load.csv", "config0_load.csv", ".config0_load.x1.partial.csv", "notes.txt"):
+    ...     _ = (folder / name).write_text("")
+    >>> [p.name for p in run_log_files(folder)]
+    ['config0_load.csv', 'config1_load.csv']
+    """
+    return sorted(p for p in Path(folder).glob("*.csv") if not p.name.startswith(".") and p.is_file())
 
 
 def read_text_lines(path: Path, what: str, fix: str) -> list[str]:

@@ -610,9 +610,9 @@ def select_poses(
                             fix=f"ask for at most {m} poses, or plan on a denser sphere (a larger "
                             "{candidate_subdivisions})", settings={"candidate_subdivisions": NO_SETTING})
     if n_poses < LINEAR_MODEL_PARAMETERS:
-        raise PlanningError(f"n_poses={n_poses} is fewer than the {LINEAR_MODEL_PARAMETERS} parameters of the linear "
-                            f"calibration model per output (6 wrench regressors and an offset); ask for at least "
-                            f"{LINEAR_MODEL_PARAMETERS} poses.")
+        raise PlanningError(f"{{n_poses}} {n_poses} is fewer than the {LINEAR_MODEL_PARAMETERS} parameters of the "
+                            "linear calibration model per output (6 wrench regressors and an offset).",
+                            parameter="n_poses", value=n_poses, fix=f"ask for at least {LINEAR_MODEL_PARAMETERS} poses")
     if not np.isfinite(space_filling) or space_filling < 0:
         raise PlanningError(f"space_filling must be a finite weight >= 0; got {space_filling!r}.")
     if strategy == "random":
