@@ -234,3 +234,27 @@ def test_training_progress_bar_on_a_terminal_and_quiet_silences_it(tmp_path, mon
     monkeypatch.setattr("sys.stderr", quiet)
     assert main(argv + ["--out", str(tmp_path / "quiet"), "-q"]) == 0
     assert quiet.getvalue() == ""
+
+
+def test_a_forced_refit_without_report_removes_the_old_report_and_predict_warns_of_a_report_of_another_fit(
+        tmp_path, capsys):
+    data, out = tmp_path / "d", tmp_path / "m"
+    assert main(["simulate", "dataset", "--n-per-sphere", "20", "--n-test", "40", "--out", str(data), "-q"]) == 0
+    assert main(["fit", str(data / "train.csv"), "--model", "linear", "--report", "--no-baselines", "--out", str(out),
+                 "-q"]) == 0
+    old_report = tmp_path / "old.report.json"
+    old_report.write_bytes((out / "linear.report.json").read_bytes())
+    assert main(["fit", str(data / "test.csv"), "--model", "linear", "--out", str(out), "-q", "--force"]) == 0
+    # the report certified the replaced model: it goes with the set, not kept beside the new model
+    assert sorted(p.name for p in out.iterdir()) == ["linear.fit.json", "linear.model.npz"]
+    capsys.readouterr()
+    model = str(out / "linear.model.npz")
+    assert main(["predict", model, str(data / "test.csv"), "--range", str(old_report), "-q"]) == 0
+    err = capsys.readouterr().err
+    assert f"ftcal: warning: --range {old_report} certifies another model file" in err
+    # the report of this very model gives no such warning
+    assert main(["report", model, str(data / "test.csv"), "--no-baselines", "--out", str(tmp_path / "r"), "-q"]) == 0
+    capsys.readouterr()
+    assert main(["predict", model, str(data / "test.csv"), "--range", str(tmp_path / "r" / "linear.report.json"),
+                 "-q"]) == 0
+    assert "certifies another model file" not in capsys.readouterr().err

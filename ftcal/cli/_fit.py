@@ -157,7 +157,9 @@ def run(args: argparse.Namespace) -> int:
     from ..reporting._calibration_report import file_sha256
     from ._report import prepare_report, report_file_names, write_report
 
-    names = [model_file_name(name), f"{name}.fit.json"] + (report_file_names(name) if args.report else [])
+    # the report files are planned without --report too: a forced refit removes an earlier fit's report with the
+    # set (it would certify the replaced model, and 'predict --range' would read its range), never keeps it beside
+    names = [model_file_name(name), f"{name}.fit.json"] + report_file_names(name)
     plan = OutputPlan(args.out, names, args.force)
     tare = _parse_tare(args.tare)
     report_given = [o for o, given in (("--tool", args.tool), ("--rated", args.rated), ("--spec", args.spec),
@@ -268,6 +270,9 @@ def run(args: argparse.Namespace) -> int:
             write_report(plan, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
                          dataset_sha256=dataset_sha256, console=console, check=gate)
+        else:
+            for stale in report_file_names(name):
+                plan.leaving_out(stale)
     console.info(f"done in {seconds:.1f} s: training RMSE {_rmse_text(report.rmse, data.axes, estimator.alpha_)}; "
                  f"model -> {plan.path(model_file_name(name))}")
     return 0

@@ -125,6 +125,27 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     return lo, hi
 
 
+def range_of_another_fit(range_file: str, model_path: str, model, limits) -> str | None:
+    """Why the calibration report ``range_file`` describes another fit than ``model_path``, or None: it certifies
+    a model file of another SHA-256 *and* its range is not the model's own training range (a re-tared model has
+    another SHA-256 but the same range; a report of this model on other data the same SHA-256)."""
+    import json
+
+    from ..reporting._calibration_report import file_sha256
+
+    if Path(range_file).suffix.lower() != ".json" or getattr(model, "calibrated_range_", None) is None:
+        return None
+    certified = (json.loads(Path(range_file).read_text(encoding="utf-8")).get("model") or {}).get("sha256")
+    own = np.asarray(model.calibrated_range_, dtype=float)
+    lo, hi = (np.asarray(b, dtype=float)[: own.shape[1]] for b in limits)
+    if not certified or certified == file_sha256(model_path) or (own.shape == (2, lo.size)
+                                                                  and np.allclose(own, [lo, hi])):
+        return None
+    return (f"--range {range_file} certifies another model file (SHA-256 {certified[:12]}...) calibrated on other "
+            f"readings than {model_path}: its range is not this model's; run 'ftcal report' for this model, or "
+            "drop --range to check against the model's own training readings")
+
+
 def retare_shift(model, n_columns: int) -> np.ndarray:
     """How far the model's re-tare moved the zero-load reading (``tare_reading_ - zero_reading_``, raw units; zero
     without a re-tare and for a temperature column): the calibrated range of a re-tared model lies that far away
@@ -202,6 +223,9 @@ def run(args: argparse.Namespace) -> int:
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
     limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature)
     if limits is not None:  # the range was recorded before any re-tare: it moves with the zero, as the model's own
+        stale = range_of_another_fit(args.range_file, args.model, model, limits)
+        if stale:
+            print(f"ftcal: warning: {stale}", file=sys.stderr, flush=True)
         limits = tuple(bound + retare_shift(model, n_channels) for bound in limits)
     # the model's own range (its training readings, re-tare shift applied); files of older versions have none
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
