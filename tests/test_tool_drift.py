@@ -325,6 +325,10 @@ def test_identify_load_with_a_drift_then_compensate_retare_and_export_through_th
     np.testing.assert_allclose(new.compensate(R[:1], reading[None], times=[t_retare]), 0, atol=1e-9)
     np.testing.assert_array_equal(new.drift.coefficients, tool.drift.coefficients)  # the rate is kept
     # mistakes: one line each, nothing written
+    assert main(["retare", str(out / "tool.tool.json"), str(readings), "--orientation", "1,0,0,0", "-q",
+                 "--output", str(tmp_path / "two.tool.json")]) == 2  # two orientations for one reading: which?
+    assert f"--orientation: {readings} has its own orientation columns" in capsys.readouterr().err
+    assert not (tmp_path / "two.tool.json").exists()
     (tmp_path / "tool_off.csv").write_text("Fx,Fy,Fz,Tx,Ty,Tz\n0,0,0,0,0,0\n")
     assert main(["retare", str(out / "tool.tool.json"), str(tmp_path / "tool_off.csv"), "-q",
                  "--output", str(tmp_path / "off.tool.json")]) == 2

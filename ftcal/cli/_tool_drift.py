@@ -242,6 +242,10 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     if args.tool_off and (args.orientation or "rotation" in data):
         raise CliError("--tool-off: the readings were taken without the tool, so no orientation is needed; drop "
                        "--orientation (or the orientation columns) or --tool-off")
+    if args.orientation and "rotation" in data:
+        raise CliError(f"--orientation: {args.readings} has its own orientation columns, one orientation per row; "
+                       "give one or the other (drop --orientation to use the file's, or the file's orientation "
+                       "columns to hold the sensor at --orientation)")
     rotations = None
     if args.orientation:
         try:
