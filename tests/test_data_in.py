@@ -251,3 +251,16 @@ def test_a_dataset_that_would_not_read_back_is_not_saved(tmp_path, suffix):
         with pytest.raises(DatasetFileError, match=f"cannot save .*ds{suffix}: {message}"):
             CalibrationDataset(**fields).save(tmp_path / f"ds{suffix}")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_wrench_columns_given_as_channels_are_refused_not_read_as_a_smaller_wrench(tmp_path):
+    # Fx,Fy,Fz as the channels: the wrench found by its names would have been Tx,Ty,Tz alone, the inputs the reference
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(30, 6))
+    CalibrationDataset(raw=w @ rng.normal(size=(6, 6)), wrench=w).save(tmp_path / "d.csv")
+    with pytest.raises(DatasetFileError, match=r"channels takes column 'Fx', which is named as a wrench axis") as err:
+        CalibrationDataset.load(tmp_path / "d.csv", columns=ColumnMap(channels=["Fx", "Fy", "Fz"]))
+    assert err.value.parameter == "channels" and err.value.value == "Fx"
+    # a raw channel that happens to be named like an axis is read when the wrench is named
+    d = CalibrationDataset.load(tmp_path / "d.csv", columns=ColumnMap(channels=["s0", "s1", "Fx"], wrench=["Fy", "Fz"]))
+    np.testing.assert_array_equal(d.raw[:, 2], w[:, 0])

@@ -232,6 +232,13 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
         wrench = [_find(names, n, "wrench", where) for n in columns.wrench]
         axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
     else:
+        named = [names[i] for i in channels if canonical_wrench_name(names[i])]
+        if columns.channels is not None and named:  # the wrench found by its names would lose these axes
+            raise DatasetFileError(
+                f"{where}: {{channels}} takes column {named[0]!r}, which is named as a wrench axis; the reference "
+                "wrench cannot be an input.", parameter="channels", value=named[0],
+                fix="name only the sensor's raw channels in {channels}; if that column really is a raw channel, "
+                "name the wrench columns with {wrench}", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
         seen: dict[str, int] = {}
         for i, name in enumerate(names):
             axis = canonical_wrench_name(name) if i not in channels else None
@@ -786,6 +793,11 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
             "be both).", parameter="channels", value=columns.channels[0],
             fix=f"give disjoint column slices of {raw_base!r}, e.g. {{channels}} {{wrench}}",
             settings={"channels": Placeholder(f"'{raw_base}[:,0:8]'"), "wrench": Placeholder(f"'{raw_base}[:,8:14]'")})
+    if both:  # e.g. channels named by hand that include the wrench columns found by their names
+        raise DatasetFileError(f"{where}: column {both[0]!r} is read both as a raw channel and as the wrench; the "
+                               "reference wrench cannot be an input.", parameter="channels", value=both[0],
+                               fix="name only the sensor's raw channels in {channels} (and the wrench in {wrench})",
+                               settings={"channels": NO_SETTING, "wrench": NO_SETTING})
     if columns.wrench is None and columns.axes is None and "axes" in available and "wrench" in available:
         stored = source.read("axes")
         if stored.dtype.kind not in "US" or stored.ndim != 1 or stored.size != wrench.shape[1]:
