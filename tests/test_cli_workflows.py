@@ -177,6 +177,12 @@ def test_prepare_bad_inputs_give_one_line(tmp_path, capsys):
     assert main(["prepare", str(bad), "--out", str(tmp_path / "d"), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith("ftcal: error: ") and "run.csv" in err[0]
+    # the bag options on run logs would do nothing: refused by name, before any work
+    assert main(["prepare", str(bad), "--tf", "base_link,ft_sensor", "--stamps", "receive", "--out",
+                 str(tmp_path / "d"), "-q"]) == 2
+    assert capsys.readouterr().err == ("ftcal: error: --tf, --stamps read ROS bags, but the inputs are run logs; drop "
+                                       "them, or give the recording's bag\n")
+    assert not (tmp_path / "d").exists()
 
 
 def test_prepare_channel_count_is_n_channels_and_the_old_spelling_warns(tmp_path):

@@ -21,7 +21,7 @@ from ._common import (
 from ._data_options import add_unit_options, check_lever_arm
 from ._prepare import log_files
 from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
-                          still_poses)
+                          refuse_bag_options, still_poses)
 from ._tool_drift import add_drift_options
 
 IDENTIFY_EXAMPLE = """\
@@ -354,6 +354,7 @@ def identification_poses(args, console: Console) -> _Poses:
     kind = _inputs_kind(args)
     if kind == "ROS bag":
         return _bag_poses(args, console, bag_files(args.inputs))
+    refuse_bag_options(args, f"{kind}s")
     if kind == "pose file":
         return _pose_file_poses(args, console, [Path(p) for p in args.inputs])
     return _log_poses(args)

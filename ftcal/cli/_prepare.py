@@ -20,7 +20,7 @@ from ._common import (
     write_json,
 )
 from ..io._logs import run_log_files
-from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log
+from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
 
 EXAMPLE = """\
 examples:
@@ -118,6 +118,8 @@ def run(args: argparse.Namespace) -> int:
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
     bags = bag_files(args.logs)
+    if bags is None:
+        refuse_bag_options(args, "run logs")
     logs = bags if bags is not None else log_files(args.logs)
     robot = load_robot_from_args(args)
     what = "ROS bags" if bags is not None else "run logs"

@@ -73,6 +73,20 @@ def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
                    "stays bounded for a bag of any size")
 
 
+def refuse_bag_options(args: argparse.Namespace, inputs: str) -> None:
+    """Refuse the ROS bag options (:func:`add_bag_options`) given for inputs that are not bags (``inputs`` says
+    what they are): they would do nothing, without a word."""
+    from ..io._bags import DEFAULT_MAX_SAMPLES
+
+    defaults = {"wrench_topic": None, "raw_topic": None, "raw_field": "data", "joint_topic": None, "tf": None,
+                "stamps": "header", "max_samples": DEFAULT_MAX_SAMPLES}
+    given = ["--" + dest.replace("_", "-") for dest, default in defaults.items()
+             if hasattr(args, dest) and getattr(args, dest) != default]
+    if given:
+        raise CliError(f"{', '.join(given)} read{'s' if len(given) == 1 else ''} ROS bags, but the inputs are "
+                       f"{inputs}; drop {'it' if len(given) == 1 else 'them'}, or give the recording's bag")
+
+
 def positive_int_10(text: str) -> int:
     """argparse type: an integer >= 10."""
     try:
