@@ -87,6 +87,7 @@ CLI_NAMES: dict[str, Option] = {
     "world_frame": _option("--world-frame"),
     "subdivisions": _option("--subdivisions"),
     "candidate_subdivisions": _option("--candidate-subdivisions"),
+    "cv": _option("--cv", "K"),
     "load_mass": Option((("mass", "--mass"), ("load_mass", "--load-mass")), metavar="KG"),
     "load_positions_in_sensor": Option(advice="prepare the dataset from the run logs with 'ftcal prepare', which "
                                               "records the load positions, or measure with the thesis fixture"),

@@ -218,7 +218,9 @@ def search_calibrator(
         groups = np.asarray(groups)
         n_groups = np.unique(groups).size
         if n_groups < cv:
-            raise CalibrationInputError(f"groups has {n_groups} distinct values; cv={cv} folds need at least {cv}.")
+            raise CalibrationInputError(f"groups has {n_groups} distinct values; {{cv}} {cv} folds need at least {cv}.",
+                                        parameter="cv", value=cv, fix=f"ask for at most {n_groups} folds ({{cv}}) or "
+                                        "record more groups", settings={"cv": int(n_groups)})
     # the folds of every model choice in ftcal: whole groups held out, else shuffled k-fold
     folds = calibration_folds(len(X), groups, int(cv), random_state)
     common = dict(scoring=neg_scaled_rmse, cv=folds, n_jobs=n_jobs, refit=True, error_score="raise")
