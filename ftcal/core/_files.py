@@ -259,13 +259,15 @@ class OutputSet:
                 placed.append((path, tmp))
             return
         backups: dict[Path, Path | None] = {}
+        kept: set[Path] = set()  # backups that could not be put back: never deleted (the old file lives on there)
         try:
             for path in self._removed:  # first: a failure below puts them back with the rest
                 backups[path] = _second_name(path)
                 if backups[path] is not None:
                     path.unlink()
             for path, tmp in pending:
-                backups[path] = _second_name(path)
+                if path not in backups:  # a removed path written after all keeps its first backup
+                    backups[path] = _second_name(path)
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
@@ -274,15 +276,17 @@ class OutputSet:
                                     ) from None
         except BaseException:
             for path, backup in backups.items():  # put the old set back
-                with contextlib.suppress(OSError):
+                try:
                     if backup is not None:
                         os.replace(backup, path)
                     elif path in self._pending and not self._pending[path].exists():  # put in place: remove it
                         path.unlink()
+                except OSError:
+                    kept.add(path)
             raise
         finally:
-            for backup in backups.values():
-                if backup is not None:
+            for path, backup in backups.items():
+                if backup is not None and path not in kept:
                     with contextlib.suppress(FileNotFoundError):
                         backup.unlink()
 
