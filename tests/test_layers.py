@@ -42,14 +42,18 @@ ALLOWED = {
 
 
 def _imported_packages(path: Path, package: str) -> set[str]:
-    """The ftcal packages (first component under ``ftcal``) that the module at ``path`` imports."""
+    """The ftcal packages (first component under ``ftcal``) that the module at ``path`` imports, also as
+    ``from .. import robot`` / ``from ftcal import robot``."""
     found = set()
+    packages = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.ImportFrom):
             if node.level == 0:
                 parts = (node.module or "").split(".")
                 if parts[0] == "ftcal":
                     found.add(parts[1] if len(parts) > 1 else "ftcal")
+                    if len(parts) == 1:  # ``from ftcal import robot``: the package itself
+                        found |= {a.name for a in node.names} & packages
                 continue
             # a relative import from ftcal/<package>/<module>.py: level 1 is <package>, level 2 is ftcal
             if node.level == 1:
@@ -57,6 +61,8 @@ def _imported_packages(path: Path, package: str) -> set[str]:
             else:
                 target = (node.module or "").split(".")[0]
                 found.add(target or "ftcal")
+                if not target:  # ``from .. import robot``: the package itself
+                    found |= {a.name for a in node.names} & packages
         elif isinstance(node, ast.Import):
             for alias in node.names:
                 parts = alias.name.split(".")
@@ -230,3 +236,10 @@ def test_benchmark_scripts_use_only_public_names():
                 assert not private, f"{path.name}:{node.lineno} imports private {private} from {node.module}"
             elif isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__"):
                 raise AssertionError(f"{path.name}:{node.lineno} uses the private attribute .{node.attr}")
+
+
+def test_the_import_reader_sees_a_package_imported_by_name(tmp_path):
+    module = tmp_path / "probe.py"
+    module.write_text("from .. import robot\nfrom ftcal import reporting\nfrom ..core import _wrench\n"
+                      "def f():\n    from .. import __version__\n")
+    assert _imported_packages(module, "io") == {"robot", "reporting", "core", "ftcal"}
