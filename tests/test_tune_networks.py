@@ -47,7 +47,7 @@ def test_existing_outputs_are_not_overwritten(tune, tmp_path, capsys):
     assert stop.value.code == 2
     assert capsys.readouterr().err.strip().splitlines()[-1].endswith(
         f"{mine} exists and was not written by this benchmark (or was edited since). Fix: choose another output "
-        "folder or pass force=True to overwrite it.")
+        "folder or pass --force to overwrite it.")
     assert mine.read_text() == "my notes\n"
 
 

@@ -46,6 +46,7 @@ import tempfile
 import threading
 from collections.abc import Iterable, Iterator
 from pathlib import Path
+from typing import Any
 
 __all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
            "model_file_name", "is_finite_number", "describe_file_start", "read_json_record"]
@@ -342,14 +343,26 @@ _TERMINATING = tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SI
 def _signals_held() -> Iterator[None]:
     """Hold the terminating signals back while a set is renamed into place (in the main thread, where Python runs
     its signal handlers): one that arrives meanwhile acts right after, on a set that is whole, old or new."""
-    if threading.current_thread() is not threading.main_thread() or not hasattr(signal, "pthread_sigmask"):
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, _TERMINATING)
+    # Python-level handlers that only record, not a thread's signal mask: the kernel may hand a process-directed
+    # signal to any thread that does not block it (a BLAS or torch thread), whose handler flag the main thread
+    # then acts on at once, mid-set; a Python handler always runs in the main thread, and here it only records.
+    caught: list[int] = []
+    previous: dict[int, Any] = {}
+    for sig in _TERMINATING:
+        try:
+            previous[sig] = signal.signal(sig, lambda signum, frame: caught.append(signum))
+        except (ValueError, OSError):  # not settable here
+            continue
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)
+        for sig in dict.fromkeys(caught):  # acted on now, by the handler that was there (default, ignore, ftcal's)
+            signal.raise_signal(sig)
 
 
 def _second_name(path: Path) -> Path | None:
