@@ -421,21 +421,31 @@ def score_candidates(
     for name, regressor in (baselines or {}).items():
         rows.append((name, "baseline", None))
         tasks.append((len(rows) - 1, regressor, None))
-    # a job per fold (a stacked network fit and a structure search take all folds in one), the costliest first
-    # (kernel models, then networks), so that the last job to finish is a short one
-    jobs = [(row, est, samples, [fold] if _per_fold(est) else folds)
-            for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
-    jobs.sort(key=lambda job: _cost_rank(job[1]))
     # never more worker processes than cores or jobs (each costs a Python with torch imported), and none when
     # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
     heavy = not all(_is_light(est, smallest_train) for _, est, _ in tasks)
-    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
     named = named_targets(y, axes)  # each fold's fits get their slice of the named table: they scale its torques
-    done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed)
-                                   for _, est, samples, part in jobs)
+
+    def run(jobs, choose_structure):
+        workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
+        done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed,
+                                                            choose_structure) for _, est, samples, part in jobs)
+        for (row, *_), outcome in zip(jobs, done):
+            outcomes.setdefault(row, []).append(outcome)
+
+    # first a job per fold (a stacked network fit takes all folds in one) and, for a candidate that chooses its
+    # structure, its all-rows structure fit alone; then that candidate's folds, a job each, with its structure
+    # fixed: so its folds share the cores instead of running one after another in one job. The costliest jobs
+    # first (structure searches, kernel models, then networks), so that the last job to finish is a short one.
     outcomes: dict = {}
-    for (row, *_), outcome in zip(jobs, done):
-        outcomes.setdefault(row, []).append(outcome)
+    jobs = [(row, est, samples, [] if _searches(est) else [fold] if _per_fold(est) else folds)
+            for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
+    jobs.sort(key=lambda job: (not _searches(job[1]), _cost_rank(job[1])))
+    run(jobs, True)
+    searched = [(row, outcomes[row][0][0], samples) for row, est, samples in tasks if _searches(est)]
+    run(sorted([(row, clone(fitted).set_params(**fitted.structure_params()), samples, [fold])
+                for row, fitted, samples in searched if fitted is not None for fold in folds],
+               key=lambda job: _cost_rank(job[1])), False)
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
@@ -448,6 +458,11 @@ def score_candidates(
         _score_stack(results, errors, predictions, record, y, alpha, folds, families, axes)
     results["se_units"] = se_units_name(units)
     return results, np.vstack(errors), predictions, fitted
+
+
+def _searches(estimator) -> bool:
+    """Whether ``estimator`` chooses its structure on all rows first (``chooses_structure``; not a network)."""
+    return not _is_network(estimator) and calibration_tags(estimator).chooses_structure
 
 
 def _per_fold(estimator) -> bool:
@@ -479,8 +494,9 @@ def _cost_rank(estimator) -> int:
     return COSTS.index(calibration_tags(estimator).cost)
 
 
-def _score_one(estimator, X, y, folds, groups, network_samples, seed):
-    """One candidate's (or baseline's) all-rows structure fit, if it has one, and out-of-fold predictions.
+def _score_one(estimator, X, y, folds, groups, network_samples, seed, choose_structure=True):
+    """One candidate's (or baseline's) all-rows structure fit, if it has one and ``choose_structure``, and its
+    out-of-fold predictions on ``folds`` (none: the structure fit alone).
 
     Returns ``(fitted on all rows or None, [(test rows, predictions)] per fold or None, status, seconds)``; a
     candidate that cannot fit these data is recorded as failed, not fatal.
@@ -491,10 +507,10 @@ def _score_one(estimator, X, y, folds, groups, network_samples, seed):
         with limit_threads_here(1), warnings.catch_warnings():
             warnings.simplefilter("ignore", UserWarning)
             fitted = None
-            if calibration_tags(estimator).chooses_structure:  # choose the structure once, on all rows
+            if choose_structure and calibration_tags(estimator).chooses_structure:  # once, on all rows
                 fitted = _fit(clone(estimator), X, y, groups)
                 estimator = clone(estimator).set_params(**fitted.structure_params())
-            pred = _out_of_fold(estimator, X, y, folds, groups, network_samples, seed)
+            pred = _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) if folds else []
         return fitted, pred, "scored", time.perf_counter() - t0
     except Exception as exc:
         return None, None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
