@@ -128,6 +128,15 @@ def outer(raw, wrench, groups, splits, alpha, seed=0, predictions: dict | None =
             "auto_table_first_split": inside[0]["table"], "n_train": int(len(splits[0][0]))}
 
 
+def best_model(scores: dict) -> str:
+    """The name of the least RMSE in ``scores``, a model that could not be scored (NaN, or ``null`` in a cached
+    JSON) never counted as the best (``min`` over NaN depends on the order)."""
+    finite = {name: value for name, value in scores.items() if value is not None and np.isfinite(value)}
+    if not finite:
+        raise SystemExit(f"auto_vs_stock.py: no model of {sorted(scores)} could be scored")
+    return min(finite, key=finite.get)
+
+
 def best_static_map(cache: Path | None, setup) -> dict:
     """The best held-out RMSE of the models ``setup()`` gives, ``(models, known, test_raw, test_wrench, alpha,
     info)``, fitted on ``known`` (a large recording of the same sensor); kept in ``cache`` (a JSON file) once
@@ -137,7 +146,7 @@ def best_static_map(cache: Path | None, setup) -> dict:
         return earlier
     models, known, test_raw, test_wrench, alpha, info = setup()
     scores = {n: rmse(test_wrench, m.fit(known.raw, known.wrench).predict(test_raw), alpha) for n, m in models.items()}
-    result = {"rmse": min(scores.values()), "by_model": scores, "n_rows": known.n_samples, **info}
+    result = {"rmse": scores[best_model(scores)], "by_model": scores, "n_rows": known.n_samples, **info}
     if cache is not None:
         write_json(cache, result, indent=1)
     return result
@@ -193,7 +202,7 @@ def robot_floor_predictions(d, splits: list, floor: dict) -> np.ndarray:
     """The held-out predictions of the static floor's best map (fitted again on the offset-free recording)."""
     clean = make_robot_held_dataset(d.n_samples, n_poses=int(np.unique(d.group).size),
                                     random_state=d.meta["random_state"], pose_offset=0.0)
-    best = min(floor["by_model"], key=floor["by_model"].get)
+    best = best_model(floor["by_model"])
     model = stock_baselines(8)[best] if best.startswith("sk_") else ftcal.AxisNonlinearCalibrator(alpha=d.meta["alpha"])
     model.fit(clean.raw, clean.wrench)
     pred = np.full(d.wrench.shape, np.nan)

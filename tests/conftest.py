@@ -55,7 +55,7 @@ SMALL_NET_CLI = ["--schedule", "short", "--param", "phase1_epochs=20", "--param"
 #: Registry names the instances below stand for; every other registered calibrator joins the list, built with its
 #: defaults by the registry (so a calibrator added in one module and one registry line is in the common checks).
 _COVERED = {"linear", "comparative", "directional", "polynomial", "axis_nonlinear", "directional_ensemble",
-            "comparative_ensemble", "gaussian_process", "auto"}
+            "comparative_ensemble", "gaussian_process", "auto", "stock"}
 _REGISTERED = tuple(name for name in ftcal.compose.CALIBRATOR_NAMES if name not in _COVERED)
 CALIBRATOR_KINDS = ("linear", "comparative", "directional", "polynomial", "axis_nonlinear", "ensemble",
                     "gaussian_process", "auto", "stock") + _REGISTERED

@@ -225,3 +225,21 @@ def test_the_stack_never_combines_a_model_with_its_own_stock_twin():
     assert rmse["sk_linear"] == pytest.approx(rmse["linear"], rel=1e-6)  # twins indeed
     members = c["stack_members"]
     assert "linear" in members and "sk_linear" not in members and len(members) == 3, members
+
+
+def test_a_stock_model_is_fitted_by_name_through_the_cli_and_predicts_as_the_stock_pipeline(tmp_path):
+    from ftcal.cli import main
+    from ftcal.calibrators import stock_baselines
+
+    raw, w = cubic(120)
+    data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
+    np.savetxt(tmp_path / "r.csv", raw[:7], delimiter=",")
+    assert main(["fit", str(data), "--model", "stock", "--param", "baseline=sk_poly3", "--name", "free",
+                 "--out", str(tmp_path / "m"), "-q"]) == 0
+    model = ftcal.load_model(tmp_path / "m" / "free.model.npz")
+    assert isinstance(model, StockCalibrator) and model.baseline == "sk_poly3"
+    assert main(["predict", str(tmp_path / "m" / "free.model.npz"), str(tmp_path / "r.csv"),
+                 "--output", str(tmp_path / "w.csv")]) == 0
+    written = np.loadtxt(tmp_path / "w.csv", delimiter=",", skiprows=1)
+    expected = stock_baselines(6)["sk_poly3"].fit(raw, w).predict(raw[:7])
+    np.testing.assert_allclose(written, expected, atol=1e-6 * np.abs(w).max())

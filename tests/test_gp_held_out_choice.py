@@ -50,6 +50,35 @@ def test_set_to_the_stock_structure_it_predicts_as_the_stock_gp(n_rows, n_channe
     np.testing.assert_allclose(ours.theta_[0], gp.kernel_.theta, atol=1e-4)
 
 
+@pytest.mark.parametrize("family", ["rbf", "matern52", "rbf+linear", "matern52+linear"])
+@pytest.mark.parametrize("n_rows, n_channels, n_outputs", [(60, 1, 1), (100, 8, 6), (80, 3, 2)])
+def test_the_likelihood_gradient_from_matrix_products_is_scikit_learns(family, n_rows, n_channels, n_outputs):
+    """ftcal's regressor computes eq. 5.9 without scikit-learn's kernel-gradient tensor: the same value and gradient
+    (to rounding), and a kernel of another form takes scikit-learn's own path."""
+    from sklearn.gaussian_process import GaussianProcessRegressor
+    from sklearn.gaussian_process.kernels import RBF, WhiteKernel
+
+    rng = np.random.default_rng(n_rows)
+    X = rng.normal(size=(n_rows, n_channels))
+    y = np.tanh(X).sum(axis=1, keepdims=True) * rng.normal(size=(1, n_outputs)) + 0.1 * rng.normal(
+        size=(n_rows, n_outputs))
+    for bounds in ("ftcal", "stock"):
+        kernel = make_kernel(family, n_channels, bounds)
+        ours = _regressor(kernel, 0, 0, optimizer=None).fit(X, y)
+        theirs = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None).fit(X, y)
+        for theta in rng.uniform(np.log(1e-2), np.log(1e2), size=(4, kernel.n_dims)):
+            value, gradient = ours.log_marginal_likelihood(theta, eval_gradient=True)
+            expected, expected_gradient = theirs.log_marginal_likelihood(theta, eval_gradient=True)
+            np.testing.assert_allclose(value, expected, rtol=1e-9)
+            np.testing.assert_allclose(gradient, expected_gradient, rtol=1e-7,
+                                       atol=1e-9 * np.abs(expected_gradient).max())
+    other = RBF(np.ones(n_channels)) + WhiteKernel()  # not make_kernel's form: scikit-learn computes it
+    ours = _regressor(other, 0, 0, optimizer=None).fit(X, y)
+    theirs = GaussianProcessRegressor(other, normalize_y=True, optimizer=None).fit(X, y)
+    np.testing.assert_array_equal(ours.log_marginal_likelihood(other.theta, eval_gradient=True)[1],
+                                  theirs.log_marginal_likelihood(other.theta, eval_gradient=True)[1])
+
+
 def test_left_out_errors_are_those_of_refits_without_the_rows():
     """Eq. 5.12 with the constant mean refitted: the closed form equals refitting (hyperparameters fixed) without
     each row, and without each group."""

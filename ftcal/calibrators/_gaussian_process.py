@@ -73,9 +73,97 @@ def make_kernel(family: str, n_channels: int, bounds: str = "ftcal"):
     return kernel + WhiteKernel(1e-2, (1e-8, 1.0))
 
 
+class _Regressor(GaussianProcessRegressor):
+    """:class:`~sklearn.gaussian_process.GaussianProcessRegressor` whose log-marginal-likelihood gradient, for the
+    kernels of :func:`make_kernel`, is computed from ``m x m`` matrices and matrix products.
+
+    The same function and gradient as scikit-learn's (Rasmussen & Williams eq. 5.9: ``½ tr((ααᵀ - K⁻¹) ∂K/∂θ)``,
+    summed over the outputs), to rounding, without the ``(m, m, n_θ)`` kernel-gradient tensor and the ``(m, m,
+    n_outputs)`` inner term scikit-learn builds at every step of the optimiser: for a length scale ``ℓ_d``,
+    ``∂K_ij/∂log ℓ_d = c F_ij (z_id - z_jd)²`` (``z = x / ℓ``; ``F = k`` for the RBF, ``5/3 (1 + √5 r) e^{-√5 r}``
+    for the Matérn 5/2), so with ``G = W ∘ c F`` (``W = ααᵀ - k K⁻¹``, symmetric) the trace is ``2 (z_d² · G1 -
+    z_dᵀ G z_d)``: one product ``G Z``. Any other kernel takes scikit-learn's path.
+    """
+
+    def log_marginal_likelihood(self, theta=None, eval_gradient=False, clone_kernel=True):
+        parts = _kernel_parts(self.kernel_) if eval_gradient and theta is not None else None
+        if parts is None:
+            return super().log_marginal_likelihood(theta, eval_gradient, clone_kernel)
+        from scipy.linalg import cho_solve, cholesky
+        from scipy.spatial.distance import cdist
+
+        if clone_kernel:
+            kernel = self.kernel_.clone_with_theta(theta)
+        else:
+            kernel = self.kernel_
+            kernel.theta = theta
+        constant, stationary, linear_constant, dot, white = _kernel_parts(kernel)
+        X = self.X_train_
+        m, n_channels = X.shape
+        scaled = X / np.broadcast_to(np.asarray(stationary.length_scale, dtype=float), (n_channels,))
+        squared = cdist(scaled, scaled, "sqeuclidean")
+        if type(stationary) is RBF:  # (Matern is a subclass of RBF)
+            shape = np.exp(-0.5 * squared)
+            slope = shape
+        else:  # Matérn 5/2 (_kernel_parts admits no other)
+            t = np.sqrt(5.0 * squared)
+            decay = np.exp(-t)
+            shape = (1.0 + t + t * t / 3.0) * decay
+            slope = 5.0 / 3.0 * (1.0 + t) * decay
+        c = float(constant.constant_value)
+        K = c * shape
+        if dot is not None:
+            K_linear = float(linear_constant.constant_value) * (X @ X.T + float(dot.sigma_0) ** 2)
+            K = K + K_linear
+        noise = float(white.noise_level)
+        K[np.diag_indices_from(K)] += noise + self.alpha
+        try:
+            L = cholesky(K, lower=True, check_finite=False)
+        except np.linalg.LinAlgError:
+            return -np.inf, np.zeros_like(theta)
+        y = self.y_train_ if self.y_train_.ndim == 2 else self.y_train_[:, None]
+        alpha = cho_solve((L, True), y, check_finite=False)
+        log_likelihood = float(np.sum(-0.5 * np.einsum("ik,ik->k", y, alpha) - np.log(np.diag(L)).sum()
+                                      - m / 2 * np.log(2 * np.pi)))
+        W = alpha @ alpha.T - y.shape[1] * cho_solve((L, True), np.eye(m), check_finite=False)
+        G = W * (c * slope)
+        np.fill_diagonal(G, 0.0)  # (z_id - z_id)² = 0: the diagonal adds nothing, and would only add rounding
+        centred = scaled - scaled.mean(axis=0)  # differences do not change; smaller terms cancel more exactly
+        length = np.sum(centred**2 * G.sum(axis=1)[:, None], axis=0) - np.sum(centred * (G @ centred), axis=0)
+        if np.ndim(stationary.length_scale) == 0 or np.size(stationary.length_scale) == 1:
+            length = np.atleast_1d(length.sum())  # one length scale for every channel
+        gradient = [0.5 * np.sum(W * (c * shape)), *length]
+        if dot is not None:
+            gradient += [0.5 * np.sum(W * K_linear),
+                         0.5 * float(linear_constant.constant_value) * 2.0 * float(dot.sigma_0) ** 2 * W.sum()]
+        gradient.append(0.5 * noise * np.trace(W))
+        return log_likelihood, np.asarray(gradient, dtype=float)
+
+
+def _kernel_parts(kernel):
+    """``(C, stationary, C_lin or None, DotProduct or None, White)`` of a kernel built as :func:`make_kernel` builds
+    them, every hyperparameter free; ``None`` for any other kernel."""
+    from sklearn.gaussian_process.kernels import Product, Sum
+
+    if not (isinstance(kernel, Sum) and isinstance(kernel.k2, WhiteKernel)) or any(
+            h.fixed for h in kernel.hyperparameters):
+        return None
+    body, linear_constant, dot = kernel.k1, None, None
+    if isinstance(body, Sum):
+        body, linear = body.k1, body.k2
+        if not (isinstance(linear, Product) and isinstance(linear.k1, ConstantKernel)
+                and isinstance(linear.k2, DotProduct)):
+            return None
+        linear_constant, dot = linear.k1, linear.k2
+    if not (isinstance(body, Product) and isinstance(body.k1, ConstantKernel)
+            and (type(body.k2) is RBF or (type(body.k2) is Matern and body.k2.nu == 2.5))):
+        return None
+    return body.k1, body.k2, linear_constant, dot, kernel.k2
+
+
 def _regressor(kernel, random_state, n_restarts: int, optimizer="fmin_l_bfgs_b") -> GaussianProcessRegressor:
-    return GaussianProcessRegressor(kernel, normalize_y=True, n_restarts_optimizer=n_restarts, copy_X_train=False,
-                                    random_state=random_state, optimizer=optimizer)
+    return _Regressor(kernel, normalize_y=True, n_restarts_optimizer=n_restarts, copy_X_train=False,
+                      random_state=random_state, optimizer=optimizer)
 
 
 def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegressor:

@@ -269,6 +269,8 @@ register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "Axis
                     search_space={"powers": [(), (1.0,), (1.5,), (2.0,), (1.0, 2.0)], "ridge": [1e-6, 1e-3, 1e-1]})
 register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"),
                     candidates=[(50, "gaussian_process", {"random_state": 0})])
+# the stock scikit-learn baselines every table shows, as a model of their own: stock(baseline="sk_gp")
+register_calibrator("stock", _Lazy("calibrators._baselines", "StockCalibrator"))
 # ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
 register_calibrator("directional_ensemble", _Lazy("networks._directional", "DirectionalCalibrator", ensemble_of="directional"),
                     schedules=_DIRECTIONAL, search_space=_ENSEMBLE_SPACE)
@@ -284,7 +286,6 @@ _WRAPPERS: tuple[tuple[str, str], ...] = (
     ("compose._temperature_compensation", "TemperatureCompensatedCalibrator"),
     ("compose._history", "HistoryCalibrator"),
     ("compose._auto", "StackedCalibrator"),
-    ("calibrators._baselines", "StockCalibrator"),
 )
 
 

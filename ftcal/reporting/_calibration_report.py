@@ -51,6 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
 from ..calibrators._base import calibration_tags
+from ..calibrators._baselines import STOCK_BASELINE_NAMES
 from ..compose._history import reads_history
 from ..model_selection._selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
@@ -746,8 +747,9 @@ def _comparison(choice: list[dict]) -> dict:
     else:
         outcome = "stock better"
         sentence = (f"The best stock model, {best['model']}, scores {rb:.4g} N against this calibration's {r:.4g} N: "
-                    f"{100 * (ratio - 1):.0f} % better, beyond one standard error ({se:.2g} N). Consider it (or the "
-                    "auto model, which chooses among them).")
+                    f"{100 * (ratio - 1):.0f} % better, beyond one standard error ({se:.2g} N). Consider it"
+                    + (f" (the calibrator stock with baseline={best['model']})" if best["model"] in STOCK_BASELINE_NAMES
+                       else "") + ", or the auto model, which chooses among them.")
     return {"best_stock": best["model"], "best_stock_rmse": rb, "rmse": r, "ratio": ratio, "combined_se": se,
             "outcome": outcome, "sentence": sentence}
 
