@@ -4,6 +4,9 @@ Cases (a smooth 8-channel sensor with a mild nonlinearity, groups of rows as pos
 
 * ``fit --model linear --report`` on 80 000 rows x 8 channels (target: under a minute on 2 cores), against
   ``fit --model linear --report --no-baselines`` in the same run (the report's own cross-validation alone);
+* ``fit --model auto --report`` on the same 80 000 rows (case ``80k_auto``; target: under 5 minutes on 2 cores):
+  every candidate, the networks and the stock models scored on the pose-grouped folds, the chosen one refitted,
+  the report from auto's own comparison;
 * ``report`` of a linear model on 1 000 000 rows x 8 channels (must finish: the stock baselines subsampled and
   budgeted);
 * ``fit --model linear --report`` on 1 200 rows x 500 channels (must finish: no baseline may ask for more memory
@@ -65,7 +68,8 @@ def timed(argv: list[str], repeats: int) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=1)
-    parser.add_argument("--cases", default="80k,wide,million", help="comma-separated: 80k, wide, million")
+    parser.add_argument("--cases", default="80k,80k_auto,wide,million",
+                        help="comma-separated: 80k, 80k_auto, wide, million")
     args = parser.parse_args()
     results = {"load_average_start": os.getloadavg(), "cores": os.cpu_count()}
     with tempfile.TemporaryDirectory() as tmp:
@@ -80,6 +84,12 @@ def main() -> None:
             results["fit_linear_report_80k"] = timed(base + [str(work / "b")], args.repeats)
             facts = json.loads((work / "b" / "linear.report.json").read_text())
             results["80k_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
+            print(json.dumps(results, indent=1), flush=True)
+        if "80k_auto" in cases:
+            results["fit_auto_report_80k"] = timed(["fit", str(work / "big.csv"), "--model", "auto", "--report",
+                                                    "--force", "-q", "--out", str(work / "c")], args.repeats)
+            facts = json.loads((work / "c" / "auto.report.json").read_text())
+            results["80k_auto_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
             print(json.dumps(results, indent=1), flush=True)
         if "wide" in cases:
             sensor(1200, 500, 12, seed=1).save(work / "wide.npz")

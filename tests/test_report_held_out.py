@@ -71,3 +71,34 @@ def test_the_report_does_not_reuse_autos_comparison_for_the_same_rows_grouped_ot
     regrouped = CalibrationDataset(raw=data.raw, wrench=data.wrench, group=np.repeat(np.arange(10), 8))
     other = calibration_certificate(auto, regrouped, cv=4, figures=False)
     assert other["validation"]["reused_auto_comparison"] is False
+
+
+class _CountingLinear(LinearCalibrator):
+    """The LTM, counting its fits in a class attribute (the report runs in this process)."""
+
+    fits = 0
+
+    def fit(self, X, y):
+        type(self).fits += 1
+        return super().fit(X, y)
+
+
+def test_the_report_of_auto_takes_its_choices_held_out_predictions_instead_of_refitting_the_folds():
+    from ftcal import PolynomialCalibrator
+
+    data = _sensor(seed=2)
+    auto = AutoCalibrator(candidates=[("counted", _CountingLinear()), ("quadratic", PolynomialCalibrator(degree=2))],
+                          cv=4, stack=False, baselines=False, n_jobs=1).fit(data.raw, data.wrench, groups=data.group)
+    assert auto.best_name_ == "counted"  # an affine sensor: the LTM, the simplest within noise
+    row = auto.comparison_["name"].index("counted")
+    _CountingLinear.fits = 0
+    facts = calibration_certificate(auto, data, cv=4, baselines=False, figures=False)
+    assert facts["validation"]["reused_auto_comparison"] is True
+    assert _CountingLinear.fits == 0  # no fold refitted
+    np.testing.assert_array_equal(facts["_held_out_pred"], auto.held_out_predictions_)
+    assert facts["model_choice"][0]["rmse"] == pytest.approx(auto.comparison_["rmse"][row], rel=1e-12)
+    # and those predictions are each group's from a fit without it (an independent fold loop)
+    for train, test in calibration_folds(len(data.raw), data.group, 4, 0):
+        reference = LinearCalibrator(alpha=auto.alpha_).fit(data.raw[train], data.wrench[train])
+        np.testing.assert_allclose(auto.held_out_predictions_[test], reference.predict(data.raw[test]),
+                                   rtol=1e-9, atol=1e-9)

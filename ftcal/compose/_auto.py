@@ -896,6 +896,10 @@ class AutoCalibrator(BaseCalibrator):
         won, and its ratio to the best stock model). (``cv_results_``, its
         name before, still answers, with a ``FutureWarning``: scikit-learn's attribute of that name has another
         schema.)
+    held_out_predictions_ : ndarray of shape (n_samples, n_outputs) or None
+        The chosen row's out-of-fold predictions on the comparison's folds (the wrench, in the units of ``y``;
+        ``None`` when no folds could judge). Not kept in a model file: the calibration report of a loaded model
+        refits the choice on the folds instead.
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -1071,6 +1075,8 @@ class AutoCalibrator(BaseCalibrator):
             explain_choice(results, errors, units, chosen, ranks)
         self.comparison_ = results
         self.best_name_ = results["chosen"]
+        # the winner's out-of-fold predictions, for a report on the same folds (not saved in a model file)
+        self.held_out_predictions_ = predictions[results["name"].index(self.best_name_)]
 
         def refit(name):
             """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""

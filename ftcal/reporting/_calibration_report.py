@@ -562,7 +562,13 @@ def calibration_certificate(
             row["note"] = note
         return row
 
-    main = _held_out(template, X, y, groups, folds, seed=random_state)
+    main = None
+    if reused is not None and not provides_std(template):  # auto's own out-of-fold predictions of its choice
+        known = getattr(model, "held_out_predictions_", None)
+        if known is not None and np.shape(known) == y.shape and np.all(np.isfinite(known)):
+            main = {"pred": np.asarray(known, dtype=float), "std": None}
+    if main is None:  # the folds of the model's own refits share the cores like the baselines' (tags: light work)
+        main = _held_out(template, X, y, groups, folds, seed=random_state, n_jobs=workers if workers > 1 else None)
     choice.append(scored(label, main["pred"], "calibration"))
     if baselines and reused is not None:
         for i, kind in enumerate(reused["kind"]):
