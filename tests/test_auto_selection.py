@@ -256,18 +256,18 @@ def test_light_work_is_scored_in_this_process_whatever_n_jobs(tmp_path):
 def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fits():
     from skorch.callbacks import Callback
 
-    from ftcal.compose._auto import LIGHT_KERNEL_ROWS, _is_light
+    from ftcal.compose._auto import LIGHT_KERNEL_ROWS, is_light
     from ftcal.calibrators._baselines import stock_baselines
 
     stock = {name: StockCalibrator(baseline=name) for name in STOCK_BASELINE_NAMES}
-    assert all(_is_light(stock[n], 10**6) for n in ("sk_linear", "sk_poly2", "sk_poly3"))
-    assert all(_is_light(m, LIGHT_KERNEL_ROWS) and not _is_light(m, LIGHT_KERNEL_ROWS + 1)
+    assert all(is_light(stock[n], 10**6) for n in ("sk_linear", "sk_poly2", "sk_poly3"))
+    assert all(is_light(m, LIGHT_KERNEL_ROWS) and not is_light(m, LIGHT_KERNEL_ROWS + 1)
                for m in (stock["sk_gp"], stock["sk_kernel_ridge"], GaussianProcessCalibrator()))
     # networks however wrapped or configured, ensembles and unknown regressors are heavy
     # (and a regressor that declares no cost: the raw stock GP pipeline)
     for heavy in (ftcal.DirectionalCalibrator(callbacks=[Callback()]), ftcal.EnsembleCalibrator(LinearCalibrator()),
                   ftcal.ComparativeCalibrator(), stock_baselines(6)["sk_gp"]):
-        assert not _is_light(heavy, 10)
+        assert not is_light(heavy, 10)
 
 
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="worker processes are capped at the cores: needs 2")

@@ -423,7 +423,7 @@ def score_candidates(
         tasks.append((len(rows) - 1, regressor, None))
     # never more worker processes than cores or jobs (each costs a Python with torch imported), and none when
     # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
-    heavy = not all(_is_light(est, smallest_train) for _, est, _ in tasks)
+    heavy = not all(is_light(est, smallest_train) for _, est, _ in tasks)
     named = named_targets(y, axes)  # each fold's fits get their slice of the named table: they scale its torques
 
     def run(jobs, choose_structure):
@@ -482,7 +482,7 @@ def _merge(parts: list, shape: tuple) -> tuple:
     return parts[0][0], pred, "scored", sum(seconds for *_, seconds in parts)
 
 
-def _is_light(estimator, training_rows: int) -> bool:
+def is_light(estimator, training_rows: int) -> bool:
     """Whether ``estimator`` fits in a moment (its tags' ``cost``): a closed form, or a kernel model on at most
     :data:`LIGHT_KERNEL_ROWS` rows; anything else (networks, ensembles, wrappers of unknown cost) is not."""
     cost = calibration_tags(estimator).cost

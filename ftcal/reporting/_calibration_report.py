@@ -56,7 +56,7 @@ from ..compose._history import reads_history
 from ..model_selection._selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
-from ..compose._auto import LIGHT_KERNEL_ROWS, provides_std, training_data_sha256
+from ..compose._auto import LIGHT_KERNEL_ROWS, is_light, provides_std, training_data_sha256
 
 __all__ = ["model_inputs", "calibration_certificate", "render_report_html", "write_calibration_report", "report_json",
            "report_cases_csv", "file_sha256", "bytes_sha256", "axis_units", "CONDITION_FIELDS", "COVERAGE_FACTOR",
@@ -567,8 +567,9 @@ def calibration_certificate(
         known = getattr(model, "held_out_predictions_", None)
         if known is not None and np.shape(known) == y.shape and np.all(np.isfinite(known)):
             main = {"pred": np.asarray(known, dtype=float), "std": None}
-    if main is None:  # the folds of the model's own refits share the cores like the baselines' (tags: light work)
-        main = _held_out(template, X, y, groups, folds, seed=random_state, n_jobs=workers if workers > 1 else None)
+    if main is None:  # the folds of the model's own refits share the cores, unless light work (its tags' cost)
+        main = _held_out(template, X, y, groups, folds, seed=random_state,
+                         n_jobs=workers if workers > 1 and not is_light(template, n_train) else None)
     choice.append(scored(label, main["pred"], "calibration"))
     if baselines and reused is not None:
         for i, kind in enumerate(reused["kind"]):
