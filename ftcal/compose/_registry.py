@@ -289,6 +289,23 @@ _WRAPPERS: tuple[tuple[str, str], ...] = (
 )
 
 
+def model_class(name: str) -> type | None:
+    """The class of :func:`model_classes` called ``name``, importing only its own module (``None`` if none is).
+
+    Saving a linear model then never imports the networks' torch.
+
+    Examples
+    --------
+    >>> model_class("LinearCalibrator").__name__, model_class("os")
+    ('LinearCalibrator', None)
+    """
+    places = list(_WRAPPERS) + [(f.module, f.attribute) for f in list(_FACTORIES.values()) if isinstance(f, _Lazy)]
+    for module, attribute in places:
+        if attribute == name:
+            return getattr(import_module(f"ftcal.{module}"), attribute)
+    return next((f for f in list(_FACTORIES.values()) if isinstance(f, type) and f.__name__ == name), None)
+
+
 def model_classes() -> dict[str, type]:
     """The calibrator classes of the registry by class name: the only types model files may name.
 

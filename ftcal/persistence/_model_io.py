@@ -158,8 +158,14 @@ def _known_types() -> dict[str, type]:
     return model_classes()
 
 
+def _known_type(name: str) -> type | None:
+    from ..compose._registry import model_class
+
+    return model_class(name)
+
+
 def _is_known(estimator) -> bool:
-    return _known_types().get(type(estimator).__name__) is type(estimator)
+    return _known_type(type(estimator).__name__) is type(estimator)
 
 
 def _encode(value):
@@ -203,7 +209,7 @@ def _decode(value):
         return np.asarray(value["array"], dtype=float)
     if isinstance(value, dict) and set(value) == {"estimator"}:
         name = value["estimator"]["model_type"]
-        cls = _known_types().get(name)
+        cls = _known_type(name)
         if cls is None:
             raise ModelFileError(f"a parameter names an unknown model type {name!r}.")
         return cls(**_known_params(cls, {k: _decode(v) for k, v in value["estimator"]["params"].items()}))
@@ -481,7 +487,7 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         expected = model_type.__name__ if isinstance(model_type, type) else model_type
         if expected is not None and name != expected:
             raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
-        if name not in _known_types():
+        if not isinstance(name, str) or _known_type(name) is None:
             raise ModelFileError(
                 f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_known_types())}.")
         try:
@@ -550,7 +556,7 @@ def _check_scalar(name: str, key: str, value) -> None:
 def _from_state(meta: dict, archive: _Archive, prefix: str):
     """The fitted model of :func:`_state`'s output, reading only the members its declarations name."""
     name = meta["model_type"]
-    cls = _known_types().get(name)
+    cls = _known_type(name)
     if cls is None:
         raise ModelFileError(f"a sub-model has an unknown model type {name!r}.")
     params = {k: _decode(v) for k, v in meta["params"].items()}
