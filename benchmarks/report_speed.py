@@ -83,13 +83,13 @@ def main() -> None:
             print(json.dumps(results, indent=1), flush=True)
             results["fit_linear_report_80k"] = timed(base + [str(work / "b")], args.repeats)
             facts = json.loads((work / "b" / "linear.report.json").read_text())
-            results["80k_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
+            results["80k_model_choice"] = {c["model"]: c["status"] if c.get("rmse") is None else c["rmse"] for c in facts["model_choice"]}
             print(json.dumps(results, indent=1), flush=True)
         if "80k_auto" in cases:
             results["fit_auto_report_80k"] = timed(["fit", str(work / "big.csv"), "--model", "auto", "--report",
                                                     "--force", "-q", "--out", str(work / "c")], args.repeats)
             facts = json.loads((work / "c" / "auto.report.json").read_text())
-            results["80k_auto_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
+            results["80k_auto_model_choice"] = {c["model"]: c["status"] if c.get("rmse") is None else c["rmse"] for c in facts["model_choice"]}
             print(json.dumps(results, indent=1), flush=True)
         if "wide" in cases:
             sensor(1200, 500, 12, seed=1).save(work / "wide.npz")
@@ -97,7 +97,7 @@ def main() -> None:
                                                            "--report", "--force", "-q", "--out", str(work / "w")],
                                                           args.repeats)
             facts = json.loads((work / "w" / "linear.report.json").read_text())
-            results["1200x500_model_choice"] = {c["model"]: c.get("rmse") or c["status"]
+            results["1200x500_model_choice"] = {c["model"]: c["status"] if c.get("rmse") is None else c["rmse"]
                                                 for c in facts["model_choice"]}
             print(json.dumps(results, indent=1), flush=True)
         if "million" in cases:
@@ -108,7 +108,7 @@ def main() -> None:
                                                   str(work / "million.npz"), "--force", "-q", "--out",
                                                   str(work / "mr")], args.repeats)
             facts = json.loads((work / "mr" / "linear.report.json").read_text())
-            results["1e6_model_choice"] = {c["model"]: c.get("rmse") or c["status"] for c in facts["model_choice"]}
+            results["1e6_model_choice"] = {c["model"]: c["status"] if c.get("rmse") is None else c["rmse"] for c in facts["model_choice"]}
     results["load_average_end"] = os.getloadavg()
     print(json.dumps(results, indent=1))
 

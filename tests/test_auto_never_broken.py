@@ -243,3 +243,35 @@ def test_a_stock_model_is_fitted_by_name_through_the_cli_and_predicts_as_the_sto
     written = np.loadtxt(tmp_path / "w.csv", delimiter=",", skiprows=1)
     expected = stock_baselines(6)["sk_poly3"].fit(raw, w).predict(raw[:7])
     np.testing.assert_allclose(written, expected, atol=1e-6 * np.abs(w).max())
+
+
+def test_a_stock_model_of_the_users_regressor_is_refused_at_save_not_written_as_another_model(tmp_path):
+    from sklearn.linear_model import Ridge
+
+    from ftcal.core import ModelFileError
+
+    raw, w = cubic(60)
+    model = StockCalibrator(baseline=Ridge()).fit(raw, w)
+    with pytest.raises(ModelFileError, match="holds a Ridge of the user.s .estimator_."):
+        ftcal.save_model(model, tmp_path / "mine.model.npz")
+    assert not (tmp_path / "mine.model.npz").exists()
+
+
+def test_a_stock_model_file_whose_arrays_are_not_its_baselines_is_refused(tmp_path):
+    from ftcal.core import ModelFileError
+
+    raw, w = cubic(60)
+    model = StockCalibrator(baseline="sk_linear").fit(raw, w)
+    model.powers_ = np.eye(6, dtype=np.int64)  # an edited file: monomials in a least-squares map
+    ftcal.save_model(model, tmp_path / "edited.model.npz")
+    with pytest.raises(ModelFileError, match="not those of baseline='sk_linear'"):
+        ftcal.load_model(tmp_path / "edited.model.npz").predict(raw[:3])
+
+
+def test_a_stock_kernel_fit_over_the_memory_limit_is_refused_before_it_allocates(monkeypatch):
+    from ftcal.core._memory import MemoryLimitError
+
+    monkeypatch.setenv("FTCAL_MEMORY_LIMIT_GB", "0.01")  # 10 MB: a 600-row kernel and its gradient need ~29 MB
+    raw, w = cubic(600)
+    with pytest.raises(MemoryLimitError, match="max_kernel_samples"):
+        StockCalibrator(baseline="sk_gp", max_kernel_samples=None).fit(raw, w)

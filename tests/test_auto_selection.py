@@ -4,19 +4,21 @@ parallel scoring."""
 from __future__ import annotations
 
 import os
+from numbers import Real
 from pathlib import Path
 
 import numpy as np
 import pytest
 from sklearn.linear_model import LinearRegression
 from sklearn.model_selection import cross_val_predict
+from sklearn.utils._param_validation import Interval, StrOptions
 
 import ftcal
 from ftcal import AutoCalibrator, GaussianProcessCalibrator, LinearCalibrator, PolynomialCalibrator
 from ftcal.core import CalibrationInputError
 from ftcal.core._memory import MemoryLimitError
 from ftcal.model_selection._selection import calibration_folds, simplest_within_one_se
-from ftcal.calibrators import STOCK_BASELINE_NAMES
+from ftcal.calibrators import STOCK_BASELINE_NAMES, declare
 from ftcal.compose._auto import StackedCalibrator, complexity_ranks, minimum_training_rows
 from ftcal.calibrators._baselines import StockCalibrator
 from ftcal.simulation._field_sensors import make_dead_weight_dataset, make_robot_held_dataset, \
@@ -465,13 +467,15 @@ def test_cli_fit_auto_uses_the_short_schedule_and_jobs(tmp_path):
 
     from ftcal.cli import main
 
-    raw, w = cubic(100)  # 80-row training folds: the networks (they need 25 N rows) are skipped, the GP is scored
+    raw, w = cubic(100)  # 75-row training folds: the networks (they need 25 N rows) are skipped, the GP is scored
     data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
-    assert main(["fit", str(data), "--model", "auto", "--jobs", "1", "--out", str(tmp_path / "m"), "-q"]) == 0
+    assert main(["fit", str(data), "--model", "auto", "--jobs", "1", "--cv", "4", "--out", str(tmp_path / "m"),
+                 "-q"]) == 0
     summary = json.loads((tmp_path / "m" / "auto.fit.json").read_text())
     assert summary["schedule"] == "short"
     auto = ftcal.load_model(tmp_path / "m" / "auto.model.npz")
     assert auto.n_jobs == 1 and auto.schedule == "short"
+    assert auto.cv == 4 and auto.comparison_["n_splits"] == 4  # the folds --cv asks for, as its report's
     status = dict(zip(auto.comparison_["name"], auto.comparison_["status"]))
     assert status["gaussian_process"] == "scored" and status["directional"].startswith("skipped")
 
@@ -539,3 +543,52 @@ def test_grouped_subsample_is_exactly_the_size_with_each_groups_share():
     assert counts.sum() == 900
     np.testing.assert_allclose(counts, [600, 200, 90, 10], atol=3)  # floor of the share, the rest at random
     assert np.array_equal(grouped_subsample(rows[:50], uneven, 100, seed=0), rows[:50])  # all fit: all rows
+
+
+class _ChoosesRidge(LinearCalibrator):
+    """The LTM choosing its ridge on the rows it is given (``ridge="choose"``): a candidate that chooses its
+    structure, recording every fit's (ridge asked, rows) in a class list (in-process scoring)."""
+
+    fits: list = []
+    _parameter_constraints = {**LinearCalibrator._parameter_constraints,
+                              "ridge": [StrOptions({"choose", "fail"}), Interval(Real, 0, None, closed="left")]}
+
+    def fit(self, X, y):
+        type(self).fits.append((self.ridge, len(X)))
+        if self.ridge == "fail":
+            raise ValueError("no structure fits these rows")
+        if self.ridge == "choose":  # the structure: a ridge that depends on the rows seen
+            chosen = float(len(X)) * 1e-6
+            fitted = LinearCalibrator(ridge=chosen, alpha=self.alpha).fit(X, y)
+            self.__dict__.update({k: v for k, v in vars(fitted).items() if k.endswith("_")})
+            self.ridge_chosen_ = chosen
+            return self
+        return super().fit(X, y)
+
+    def structure_params(self) -> dict:
+        return {"ridge": self.ridge_chosen_}
+
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), chooses_structure=True)
+
+
+@pytest.mark.parametrize("n_jobs", [1, 2])
+def test_a_candidate_that_chooses_its_structure_chooses_once_on_all_rows_and_its_folds_use_it(n_jobs):
+    raw, w = cubic(120)
+    _ChoosesRidge.fits = []
+    auto = AutoCalibrator(candidates=[("choosing", _ChoosesRidge(ridge="choose"))], cv=4, stack=False,
+                          baselines=False, n_jobs=n_jobs, random_state=0).fit(raw, w)
+    if n_jobs == 1:  # in this process: every fit is seen
+        assert _ChoosesRidge.fits[0] == ("choose", 120)  # once, on all rows
+        assert sorted(_ChoosesRidge.fits[1:]) == [(120 * 1e-6, 90)] * 4  # each fold with that structure
+    assert auto.best_estimator_.ridge_chosen_ == pytest.approx(120e-6)  # the all-rows fit is the model kept
+    assert auto.comparison_["status"] == ["scored"]
+
+
+def test_a_structure_fit_that_fails_is_recorded_as_failed_not_fatal():
+    raw, w = cubic(120)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("failing", _ChoosesRidge(ridge="fail"))],
+                          cv=4, stack=False, baselines=False, n_jobs=1, random_state=0).fit(raw, w)
+    status = dict(zip(auto.comparison_["name"], auto.comparison_["status"]))
+    assert status["failing"].startswith("failed: ValueError: no structure fits these rows")
+    assert auto.best_name_ == "linear"

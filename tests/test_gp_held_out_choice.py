@@ -72,6 +72,17 @@ def test_the_likelihood_gradient_from_matrix_products_is_scikit_learns(family, n
             np.testing.assert_allclose(value, expected, rtol=1e-9)
             np.testing.assert_allclose(gradient, expected_gradient, rtol=1e-7,
                                        atol=1e-9 * np.abs(expected_gradient).max())
+    # clusters of near-duplicate rows, short length scales, almost no noise: terms that nearly cancel
+    clustered = np.repeat(X[:10], 6, axis=0) + 1e-4 * rng.normal(size=(60, n_channels))
+    target = np.tanh(clustered).sum(axis=1, keepdims=True) + 0.01 * rng.normal(size=(60, 1))
+    kernel = make_kernel(family, n_channels)
+    theta = kernel.theta.copy()
+    theta[1:1 + n_channels], theta[-1] = np.log(1e-2), np.log(1e-8)
+    ours = _regressor(kernel, 0, 0, optimizer=None).fit(clustered, target)
+    theirs = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None).fit(clustered, target)
+    expected_gradient = theirs.log_marginal_likelihood(theta, eval_gradient=True)[1]
+    np.testing.assert_allclose(ours.log_marginal_likelihood(theta, eval_gradient=True)[1], expected_gradient,
+                               rtol=1e-6, atol=1e-8 * np.abs(expected_gradient).max())
     other = RBF(np.ones(n_channels)) + WhiteKernel()  # not make_kernel's form: scikit-learn computes it
     ours = _regressor(other, 0, 0, optimizer=None).fit(X, y)
     theirs = GaussianProcessRegressor(other, normalize_y=True, optimizer=None).fit(X, y)

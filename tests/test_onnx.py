@@ -18,6 +18,7 @@ import pytest
 from ftcal import (ComparativeCalibrator, DirectionalCalibrator, EnsembleCalibrator, LinearCalibrator,
                    TemperatureCompensatedCalibrator, export_onnx, load_model, save_model)
 from ftcal.core import ExportError
+from ftcal.calibrators import STOCK_BASELINE_NAMES, StockCalibrator
 from ftcal.cli import main
 
 from conftest import CALIBRATOR_KINDS, TINY_SCHEDULE, tiny_calibrators
@@ -63,7 +64,7 @@ def fitted_models():
     return models
 
 
-#: Every calibrator whose tags declare an ONNX graph (the stock baselines as calibrators do not: Python only).
+#: Every calibrator whose tags declare an ONNX graph.
 ONNX_KINDS = [kind for kind, model in zip(CALIBRATOR_KINDS, tiny_calibrators()) if calibration_tags(model).onnx]
 
 
@@ -74,6 +75,15 @@ def test_onnx_output_equals_predict(fitted_models, kind, tmp_path):
     raw, _ = _sensor(400, seed=1)  # new readings: 1 row (numpy forward), 400 rows (torch forward)
     _assert_parity(model, path, raw)
     _assert_parity(model, path, raw[:1], scale=np.abs(model.predict(raw)).max(axis=0))
+
+
+@pytest.mark.parametrize("baseline", STOCK_BASELINE_NAMES)
+def test_onnx_of_every_stock_model_equals_predict(baseline, tmp_path):
+    raw, w = _sensor()
+    model = StockCalibrator(baseline=baseline, max_kernel_samples=200).fit(raw, w)
+    path = export_onnx(model, tmp_path / f"{baseline}.onnx")
+    new, _ = _sensor(300, seed=1)
+    _assert_parity(model, path, new)
 
 
 def test_onnx_of_a_retared_model_includes_the_new_tare(fitted_models, tmp_path):

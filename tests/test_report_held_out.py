@@ -102,3 +102,18 @@ def test_the_report_of_auto_takes_its_choices_held_out_predictions_instead_of_re
         reference = LinearCalibrator(alpha=auto.alpha_).fit(data.raw[train], data.wrench[train])
         np.testing.assert_allclose(auto.held_out_predictions_[test], reference.predict(data.raw[test]),
                                    rtol=1e-9, atol=1e-9)
+
+
+def test_a_loaded_auto_gives_the_same_report_as_the_fitted_one(tmp_path):
+    from ftcal import PolynomialCalibrator, load_model, save_model
+
+    data = _sensor(seed=5)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("quadratic", PolynomialCalibrator(degree=2))],
+                          cv=4, n_jobs=1).fit(data.raw, data.wrench, groups=data.group)
+    save_model(auto, tmp_path / "auto.model.npz")
+    loaded = load_model(tmp_path / "auto.model.npz")
+    np.testing.assert_array_equal(loaded.held_out_predictions_, auto.held_out_predictions_)
+    fitted_facts, loaded_facts = (calibration_certificate(m, data, cv=4, figures=False) for m in (auto, loaded))
+    assert loaded_facts["validation"]["reused_auto_comparison"] is True
+    np.testing.assert_array_equal(loaded_facts["_held_out_pred"], fitted_facts["_held_out_pred"])
+    assert loaded_facts["model_choice"] == fitted_facts["model_choice"]

@@ -36,7 +36,8 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from ._base import BaseCalibrator, declare
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError, ModelFileError
+from ..core._memory import check_allocation
 from ..core._validation import check_arguments
 
 __all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator"]
@@ -244,7 +245,8 @@ class StockCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("input_mean_", "input_scale_", "powers_", "coef_", "intercept_", "train_inputs_", "dual_coef_",
-                     "length_scale_", "amplitude_", "target_mean_", "target_scale_")
+                     "length_scale_", "amplitude_", "target_mean_", "target_scale_",
+                     "estimator_")  # (a user's regressor: declared so that saving it is refused, never dropped)
     _positive = [Interval(Real, 0, None, closed="neither")]
     #: a scale, a length scale or an amplitude of 0 (or below) divides by zero or flips the kernel; a monomial's
     #: power is a whole number of at most 3 (sk_poly3)
@@ -287,19 +289,24 @@ class StockCalibrator(BaseCalibrator):
 
     def __sklearn_tags__(self):
         family = self.family()
-        if family == "custom":
-            return declare(super().__sklearn_tags__())
+        if family == "custom":  # a user's regressor: no graph, no model file
+            return declare(super().__sklearn_tags__(), onnx=False)
         return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
                        min_training_rows=lambda n_channels: _family_rows(family, n_channels))
 
     def _fit(self, X, y) -> None:
-        for name in self._fitted_state[2:] + ("estimator_",):
+        for name in self._fitted_state[2:]:
             self.__dict__.pop(name, None)
         self.input_mean_, self.input_scale_ = np.zeros(X.shape[1]), np.ones(X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
         if not isinstance(self.baseline, str):
             self.estimator_ = clone(self.baseline).fit(X, y)
             return
+        if _STOCK_KINDS[self.baseline][1] == "kernel":  # the kernel matrix and the GP's gradient, before fitting
+            m = len(X) if self.max_kernel_samples is None else min(len(X), int(self.max_kernel_samples))
+            check_allocation(8.0 * m * m * (X.shape[1] + 4), f"the stock {self.baseline}'s kernel and its "
+                             f"gradient ({m} rows, {X.shape[1]} channels)", "lower max_kernel_samples (default "
+                             f"{KERNEL_SAMPLES})")
         model = stock_baselines(X.shape[1], max_kernel_samples=self.max_kernel_samples,
                                 random_state=seed)[self.baseline].fit(X, y)
         if self.baseline == "sk_linear":
@@ -338,6 +345,7 @@ class StockCalibrator(BaseCalibrator):
             raise CalibrationInputError(
                 "this StockCalibrator wrapped a regressor of the user's, which a model file cannot hold; refit it, "
                 "or save one of the named stock baselines.")
+        self._check_arrays()
         # row blocks whose widest temporary (the n x features monomials, the kernel's n x m matrix) stays within
         # PREDICT_BLOCK_BYTES, whatever the number of rows
         width = len(self.train_inputs_) if self.train_inputs_ is not None else \
@@ -347,6 +355,39 @@ class StockCalibrator(BaseCalibrator):
         for start in range(0, len(X), rows):
             out[start:start + rows] = self._predict_block(X[start:start + rows])
         return out
+
+    def _check_arrays(self) -> None:
+        """The stored arrays are those of ``baseline`` (a model file may have been edited): else ModelFileError."""
+        kind = _STOCK_KINDS.get(self.baseline) if isinstance(self.baseline, str) else None
+        degree = {"sk_poly2": 2, "sk_poly3": 3}.get(self.baseline)
+        polynomial = self.powers_ is not None and self.coef_ is not None and self.train_inputs_ is None
+        wanted = (kind is not None and kind[1] == "kernel" and self.train_inputs_ is not None) or (
+            degree is not None and polynomial and int(np.max(self.powers_)) <= degree) or (
+            self.baseline == "sk_linear" and self.powers_ is None and self.train_inputs_ is None)
+        if not wanted:
+            raise ModelFileError(f"the arrays of this StockCalibrator are not those of baseline={self.baseline!r} "
+                                 "(one of " + ", ".join(STOCK_BASELINE_NAMES) + "); the model file is damaged or "
+                                 "was edited: fit and save the model again.")
+
+    def _emit_onnx(self, g, x: str) -> str:
+        """The same prediction as ONNX: the scaled readings' least-squares map, monomials (as
+        :class:`~ftcal.PolynomialCalibrator`'s graph) or RBF kernel sum (as the GP's)."""
+        self._check_arrays()
+        z = g.op("Div", g.op("Sub", x, g.const(self.input_mean_)), g.const(self.input_scale_))
+        if self.train_inputs_ is None:
+            if self.powers_ is not None:
+                expanded = g.op("Unsqueeze", z, g.const([1], np.int64))  # (n, 1, N) ** (n_monomials, N)
+                z = g.op("ReduceProd", g.op("Pow", expanded, g.const(self.powers_.astype(np.float64))), axes=[2],
+                         keepdims=0)
+            return g.affine(z, self.coef_.T, self.intercept_)
+        train = self.train_inputs_ / self.length_scale_
+        scaled = g.op("Div", z, g.const(self.length_scale_))
+        squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1), g.const((train * train).sum(axis=1)))
+        d2 = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), g.op("MatMul", scaled, g.const(train.T)))),
+                  g.const(0.0))
+        kernel = g.op("Mul", g.const(float(self.amplitude_)), g.op("Exp", g.op("Mul", g.const(-0.5), d2)))
+        return g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_)), g.const(self.target_scale_)),
+                    g.const(self.target_mean_))
 
     def _predict_block(self, X):
         """The wrench of a block of rows, from the stored arrays (see :meth:`_predict_wrench`)."""

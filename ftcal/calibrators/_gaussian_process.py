@@ -79,10 +79,11 @@ class _Regressor(GaussianProcessRegressor):
 
     The same function and gradient as scikit-learn's (Rasmussen & Williams eq. 5.9: ``½ tr((ααᵀ - K⁻¹) ∂K/∂θ)``,
     summed over the outputs), to rounding, without the ``(m, m, n_θ)`` kernel-gradient tensor and the ``(m, m,
-    n_outputs)`` inner term scikit-learn builds at every step of the optimiser: for a length scale ``ℓ_d``,
-    ``∂K_ij/∂log ℓ_d = c F_ij (z_id - z_jd)²`` (``z = x / ℓ``; ``F = k`` for the RBF, ``5/3 (1 + √5 r) e^{-√5 r}``
-    for the Matérn 5/2), so with ``G = W ∘ c F`` (``W = ααᵀ - k K⁻¹``, symmetric) the trace is ``2 (z_d² · G1 -
-    z_dᵀ G z_d)``: one product ``G Z``. Any other kernel takes scikit-learn's path.
+    n_outputs)`` inner term scikit-learn builds at every step of the optimiser: the outputs are summed first,
+    ``W = ααᵀ - k K⁻¹``, and for a length scale ``ℓ_d``, ``∂K_ij/∂log ℓ_d = c F_ij (z_id - z_jd)²`` (``z = x / ℓ``;
+    ``F = k`` for the RBF, ``5/3 (1 + √5 r) e^{-√5 r}`` for the Matérn 5/2), so the trace is
+    ``½ Σ_ij W_ij c F_ij (z_id - z_jd)²``, one ``m x m`` pass a channel. Any other kernel takes scikit-learn's
+    path.
     """
 
     def log_marginal_likelihood(self, theta=None, eval_gradient=False, clone_kernel=True):
@@ -90,6 +91,7 @@ class _Regressor(GaussianProcessRegressor):
         if parts is None:
             return super().log_marginal_likelihood(theta, eval_gradient, clone_kernel)
         from scipy.linalg import cho_solve, cholesky
+        from scipy.linalg.lapack import dpotri
         from scipy.spatial.distance import cdist
 
         if clone_kernel:
@@ -125,11 +127,20 @@ class _Regressor(GaussianProcessRegressor):
         alpha = cho_solve((L, True), y, check_finite=False)
         log_likelihood = float(np.sum(-0.5 * np.einsum("ik,ik->k", y, alpha) - np.log(np.diag(L)).sum()
                                       - m / 2 * np.log(2 * np.pi)))
-        W = alpha @ alpha.T - y.shape[1] * cho_solve((L, True), np.eye(m), check_finite=False)
+        inverse, info = dpotri(L, lower=1)  # K⁻¹ from its Cholesky factor (a third of cho_solve(L, I)'s work)
+        if info != 0:
+            return -np.inf, np.zeros_like(theta)
+        inverse = np.tril(inverse) + np.tril(inverse, -1).T  # dpotri fills the lower triangle only
+        W = alpha @ alpha.T - y.shape[1] * inverse
         G = W * (c * slope)
-        np.fill_diagonal(G, 0.0)  # (z_id - z_id)² = 0: the diagonal adds nothing, and would only add rounding
-        centred = scaled - scaled.mean(axis=0)  # differences do not change; smaller terms cancel more exactly
-        length = np.sum(centred**2 * G.sum(axis=1)[:, None], axis=0) - np.sum(centred * (G @ centred), axis=0)
+        # Σ_ij G_ij (z_id - z_jd)², one channel at a time: exact (expanding the square into products cancels
+        # catastrophically for near-duplicate rows and short length scales), O(m² N) without the tensor
+        length = np.empty(n_channels)
+        difference = np.empty_like(G)
+        for d in range(n_channels):
+            np.subtract(scaled[:, d, None], scaled[None, :, d], out=difference)
+            np.multiply(difference, difference, out=difference)
+            length[d] = 0.5 * np.vdot(G, difference)
         if np.ndim(stationary.length_scale) == 0 or np.size(stationary.length_scale) == 1:
             length = np.atleast_1d(length.sum())  # one length scale for every channel
         gradient = [0.5 * np.sum(W * (c * shape)), *length]

@@ -184,6 +184,8 @@ def run(args: argparse.Namespace) -> int:
                        "report's stock baselines with --report); drop --jobs")
     if "n_jobs" in known and "n_jobs" not in params:
         params["n_jobs"] = args.jobs or -1
+    if "cv" in known and "cv" not in params and getattr(args, "cv", None) is not None:
+        params["cv"] = args.cv  # auto chooses on the folds its report shows
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")

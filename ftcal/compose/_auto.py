@@ -426,26 +426,28 @@ def score_candidates(
     heavy = not all(is_light(est, smallest_train) for _, est, _ in tasks)
     named = named_targets(y, axes)  # each fold's fits get their slice of the named table: they scale its torques
 
-    def run(jobs, choose_structure):
+    def run(jobs):  # (row, estimator, network samples, folds, whether it chooses its structure first)
         workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
-        done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed,
-                                                            choose_structure) for _, est, samples, part in jobs)
+        done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed, choose)
+                                       for _, est, samples, part, choose in jobs)
         for (row, *_), outcome in zip(jobs, done):
             outcomes.setdefault(row, []).append(outcome)
 
-    # first a job per fold (a stacked network fit takes all folds in one) and, for a candidate that chooses its
-    # structure, its all-rows structure fit alone; then that candidate's folds, a job each, with its structure
-    # fixed: so its folds share the cores instead of running one after another in one job. The costliest jobs
-    # first (structure searches, kernel models, then networks), so that the last job to finish is a short one.
+    # First the all-rows structure fit of each candidate that chooses its structure, beside a job per fold of
+    # every other model but the networks; then that candidate's folds, a job each with its structure fixed (so
+    # they share the cores instead of running one after another in one job), beside the networks (one job
+    # each, all folds: a stacked fit), which go first there, being the longest jobs. The costliest jobs first in
+    # each round, so that the last job to finish is a short one.
     outcomes: dict = {}
-    jobs = [(row, est, samples, [] if _searches(est) else [fold] if _per_fold(est) else folds)
-            for row, est, samples in tasks for fold in (folds if _per_fold(est) else [None])]
-    jobs.sort(key=lambda job: (not _searches(job[1]), _cost_rank(job[1])))
-    run(jobs, True)
+    first = [(row, est, samples, [] if _searches(est) else [fold], True)
+             for row, est, samples in tasks if not _is_network(est)
+             for fold in ([None] if _searches(est) else folds)]
+    run(sorted(first, key=lambda job: (not _searches(job[1]), _cost_rank(job[1]))))
     searched = [(row, outcomes[row][0][0], samples) for row, est, samples in tasks if _searches(est)]
-    run(sorted([(row, clone(fitted).set_params(**fitted.structure_params()), samples, [fold])
-                for row, fitted, samples in searched if fitted is not None for fold in folds],
-               key=lambda job: _cost_rank(job[1])), False)
+    second = [(row, est, samples, folds, True) for row, est, samples in tasks if _is_network(est)]
+    second += [(row, clone(fitted).set_params(**fitted.structure_params()), samples, [fold], False)
+               for row, fitted, samples in searched if fitted is not None for fold in folds]
+    run(second)
     fitted = {}
     for i, (name, kind, skipped) in enumerate(rows):
         if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
@@ -463,11 +465,6 @@ def score_candidates(
 def _searches(estimator) -> bool:
     """Whether ``estimator`` chooses its structure on all rows first (``chooses_structure``; not a network)."""
     return not _is_network(estimator) and calibration_tags(estimator).chooses_structure
-
-
-def _per_fold(estimator) -> bool:
-    """Whether ``estimator``'s folds may run as separate jobs (not a stacked network, not a structure search)."""
-    return not _is_network(estimator) and not calibration_tags(estimator).chooses_structure
 
 
 def _merge(parts: list, shape: tuple) -> tuple:
@@ -898,8 +895,10 @@ class AutoCalibrator(BaseCalibrator):
         schema.)
     held_out_predictions_ : ndarray of shape (n_samples, n_outputs) or None
         The chosen row's out-of-fold predictions on the comparison's folds (the wrench, in the units of ``y``;
-        ``None`` when no folds could judge). Not kept in a model file: the calibration report of a loaded model
-        refits the choice on the folds instead.
+        ``None`` when no folds could judge), kept in the model file: the calibration report on the same rows
+        and folds shows them (the very figures of the comparison), in memory or loaded, instead of refitting
+        the choice on every fold in another way (a network on all rows of a fold, a stack with the weights of
+        all rows).
     alpha_, zero_reading_, n_features_in_
         As for every calibrator.
 
@@ -916,7 +915,7 @@ class AutoCalibrator(BaseCalibrator):
     'linear'
     """
 
-    _fitted_state = ("best_name_", "comparison_", "best_estimator_")
+    _fitted_state = ("best_name_", "comparison_", "best_estimator_", "held_out_predictions_")
     #: Fitted attributes earlier model files stored under another name (loaded under the new one).
     _renamed_state = {"cv_results_": "comparison_"}
     #: Parameters of earlier versions that model files may still carry (ignored when loading): the wall-clock
@@ -1075,7 +1074,7 @@ class AutoCalibrator(BaseCalibrator):
             explain_choice(results, errors, units, chosen, ranks)
         self.comparison_ = results
         self.best_name_ = results["chosen"]
-        # the winner's out-of-fold predictions, for a report on the same folds (not saved in a model file)
+        # the winner's out-of-fold predictions, for a report on the same folds
         self.held_out_predictions_ = predictions[results["name"].index(self.best_name_)]
 
         def refit(name):

@@ -319,6 +319,13 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
         elif isinstance(value, np.ndarray) and all(isinstance(v, str) for v in value.ravel()):
             meta["fitted"][key] = {"strings": [str(v) for v in value.ravel()]}
         else:
+            from sklearn.base import BaseEstimator
+
+            if isinstance(value, BaseEstimator):  # the fitted model itself: a file would load as another model
+                raise ModelFileError(
+                    f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
+                    "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
+                    "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
             meta["fitted"][key] = _encode(value)
     if any(key in encoded for key in meta["state"]):
         own_arrays, own_meta = estimator._state_to_arrays()

@@ -51,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output, plain_json
 from ..calibrators._base import calibration_tags
-from ..calibrators._baselines import STOCK_BASELINE_NAMES
+from ..calibrators import STOCK_BASELINE_NAMES
 from ..compose._history import reads_history
 from ..model_selection._selection import calibration_folds, held_out_predictions, rmse_and_se
 from ..core._wrench import WRENCH_LABELS, alpha_from_wrenches
@@ -452,8 +452,10 @@ def calibration_certificate(
     model : fitted calibrator
         The calibration (e.g. from :func:`ftcal.load_model`); cloned and refitted on each fold for the
         held-out figures (its parameters, not its fitted state, are judged). An
-        :class:`~ftcal.AutoCalibrator` fitted with the same ``cv`` lends its comparison (the stock baselines on
-        the same folds) instead of the baselines being fitted again, and only its chosen model is refitted.
+        :class:`~ftcal.AutoCalibrator` fitted on these rows with the same ``cv`` and seed lends its comparison
+        (the stock baselines on the same folds) instead of the baselines being fitted again, and its chosen row's
+        out-of-fold predictions (``held_out_predictions_``, kept in its model file) instead of a refit of the
+        choice; a choice that gives a standard deviation (the GP) is refitted on every fold, for its std.
     dataset : CalibrationDataset
         The calibration data (the training data of ``model``); ``k`` output axes (named by the dataset).
     model_path, dataset_path : path, optional
@@ -483,7 +485,8 @@ def calibration_certificate(
     figures : bool
         Include the plots (PNG data URIs).
     n_jobs : int, optional
-        Processes that fit the folds of the stock baselines at once (``None``: 1); the figures do not depend on it.
+        Processes that fit the folds at once (the stock baselines', and the model's own when they are not light
+        work; ``None``: 1); the figures do not depend on it.
     command : str, optional
         The command that made the report, printed on the page.
 
