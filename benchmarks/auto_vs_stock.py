@@ -345,6 +345,16 @@ def _summary(out: Path) -> str:
                      f"{r['fit_seconds_total']['auto'] / r['n_outer_splits']:.0f} |")
     lines += ["", "| dead-weight rows | seed | auto chose | auto RMSE at 2x range | LTM | auto / LTM | "
               + " | ".join(STOCK_BASELINE_NAMES) + " | auto / best stock | fit [s] |", "|" + "---|" * 13]
+    for case in CASES:
+        path = out / f"{case}.json"
+        r = read_json_record(path)
+        if r is not None and case.startswith("dead_weight") and case != "dead_weight_axis_groups":
+            for o in r["seeds"]:
+                stock = o.get("stock_rmse_2x", {})
+                lines.append(f"| {case.rsplit('_', 1)[1]} | {o['seed']} | {o['chosen']} | {o['auto_rmse_2x']:.4g} | "
+                             f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | "
+                             + " | ".join(f"{stock[n]:.4g}" if n in stock else "" for n in STOCK_BASELINE_NAMES)
+                             + f" | {o.get('auto_over_best_stock', float('nan')):.3f} | {o['fit_seconds']:.1f} |")
     axis = read_json_record(out / "dead_weight_axis_groups.json")
     if axis is not None:
         lines += ["", "| one group per loaded axis (15 rows) | seed | auto chose | folds used | auto RMSE at 2x | LTM | "
@@ -356,16 +366,6 @@ def _summary(out: Path) -> str:
             lines.append(f"| {o['axes']} axes | {o['seed']} | {o['chosen']} | {o['folds'].split(':')[0]} | "
                          f"{o['auto_rmse_2x']:.4g} | {o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | "
                          f"{o['auto_over_best_stock']:.3f} | {'yes' if o['constant'] else 'no'} |")
-    for case in CASES:
-        path = out / f"{case}.json"
-        r = read_json_record(path)
-        if r is not None and case.startswith("dead_weight") and case != "dead_weight_axis_groups":
-            for o in r["seeds"]:
-                stock = o.get("stock_rmse_2x", {})
-                lines.append(f"| {case.rsplit('_', 1)[1]} | {o['seed']} | {o['chosen']} | {o['auto_rmse_2x']:.4g} | "
-                             f"{o['linear_rmse_2x']:.4g} | {o['auto_over_linear']:.3f} | "
-                             + " | ".join(f"{stock[n]:.4g}" if n in stock else "" for n in STOCK_BASELINE_NAMES)
-                             + f" | {o.get('auto_over_best_stock', float('nan')):.3f} | {o['fit_seconds']:.1f} |")
     return "\n".join(lines)
 
 
