@@ -303,10 +303,16 @@ def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential(monkeypa
     two = AutoCalibrator(n_jobs=2, **kw).fit(raw, w, groups=groups)
     assert one.comparison_["name"] == two.comparison_["name"]
     assert one.comparison_["kind"][-1] == "stack" and "stock" in one.comparison_["kind"]
-    np.testing.assert_allclose([r for r in one.comparison_["rmse"] if r is not None],
-                               [r for r in two.comparison_["rmse"] if r is not None], rtol=1e-9)
+    # closed forms to rounding; an iterative fit (the GP's L-BFGS, the stock GP's, the stack over them) to the
+    # optimiser's tolerance: its path may differ by rounding between processes, whose arrays are aligned otherwise
+    iterative = [n in ("gaussian_process", "sk_gp", "sk_kernel_ridge") or n.startswith("stack")
+                 for n in one.comparison_["name"]]
+    for rows, rtol in (([not i for i in iterative], 1e-9), (iterative, 1e-4)):
+        np.testing.assert_allclose([r for r, k in zip(one.comparison_["rmse"], rows) if k and r is not None],
+                                   [r for r, k in zip(two.comparison_["rmse"], rows) if k and r is not None],
+                                   rtol=rtol)
     assert one.best_name_ == two.best_name_
-    np.testing.assert_allclose(one.predict(raw[:5]), two.predict(raw[:5]), rtol=1e-9)
+    np.testing.assert_allclose(one.predict(raw[:5]), two.predict(raw[:5]), rtol=1e-4)
 
 
 def test_the_stack_auto_chose_holds_the_cross_validated_members_and_a_clone_refits():
