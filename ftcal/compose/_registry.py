@@ -299,11 +299,23 @@ def model_class(name: str) -> type | None:
     >>> model_class("LinearCalibrator").__name__, model_class("os")
     ('LinearCalibrator', None)
     """
-    places = list(_WRAPPERS) + [(f.module, f.attribute) for f in list(_FACTORIES.values()) if isinstance(f, _Lazy)]
-    for module, attribute in places:
+    for attribute, load in _class_places():
         if attribute == name:
-            return getattr(import_module(f"ftcal.{module}"), attribute)
-    return next((f for f in list(_FACTORIES.values()) if isinstance(f, type) and f.__name__ == name), None)
+            return load()
+    return None
+
+
+def _class_places() -> list[tuple[str, Callable[[], Any]]]:
+    """``(class name, loader)`` of every class :func:`model_classes` lists, wrappers first; nothing imported."""
+    places = [(attribute, lambda m=module, a=attribute: getattr(import_module(f"ftcal.{m}"), a))
+              for module, attribute in _WRAPPERS]
+    for factory in list(_FACTORIES.values()):
+        if isinstance(factory, _Lazy):
+            places.append((factory.attribute, lambda f=factory: getattr(import_module(f"ftcal.{f.module}"),
+                                                                         f.attribute)))
+        elif isinstance(factory, type):
+            places.append((factory.__name__, lambda f=factory: f))
+    return places
 
 
 def model_classes() -> dict[str, type]:
@@ -322,13 +334,8 @@ def model_classes() -> dict[str, type]:
     ['AutoCalibrator', 'AxisNonlinearCalibrator', 'ComparativeCalibrator']
     """
     classes: dict[str, type] = {}
-    for module, attribute in _WRAPPERS:
-        cls = getattr(import_module(f"ftcal.{module}"), attribute)
-        classes[cls.__name__] = cls
-    for name, factory in list(_FACTORIES.items()):
-        target = factory
-        if isinstance(factory, _Lazy):
-            target = getattr(import_module(f"ftcal.{factory.module}"), factory.attribute)
+    for _, load in _class_places():
+        target = load()
         if isinstance(target, type):
             classes.setdefault(target.__name__, target)
     return classes
