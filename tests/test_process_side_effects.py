@@ -13,6 +13,9 @@ from ftcal import (ComparativeCalibrator, DirectionalCalibrator, GaussianProcess
                    PolynomialCalibrator, load_model, save_model)
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
+#: These tests look at what a fit does beside threads of the user's: the process is not claimed for ftcal here
+#: (tests/conftest.py claims it for every other test, as the ``ftcal`` command claims its own).
+pytestmark = pytest.mark.user_threads
 
 
 def _pools() -> dict:
@@ -120,6 +123,47 @@ def test_a_limit_set_for_the_whole_process_in_another_thread_would_show():
     pause.release.set()
     worker.join(60)
     assert during != before and min(during.values()) == 1
+
+
+def test_the_ftcal_command_fits_on_one_blas_thread_beside_its_own_threads(tmp_path, monkeypatch):
+    """The command shows a fit's progress from a second thread and keeps joblib's executor threads: its process is
+    ftcal's own, so its fits still run BLAS on one thread (with the process' BLAS threads they took 2-13x longer),
+    and the process' counts are restored afterwards."""
+    from ftcal import CalibrationDataset
+    from ftcal.cli import main
+
+    before = _pools()
+    if min(before.values()) < 2:
+        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
+    rng = np.random.default_rng(0)
+    wrench = rng.normal(size=(60, 6))
+    path = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)), wrench=wrench).save(tmp_path / "d.csv")
+    seen = []
+    original = LinearCalibrator._fit
+
+    def blas_threads():
+        return sorted({pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"})
+
+    def recording_fit(self, *args, **kwargs):
+        seen.append((threading.active_count(), blas_threads()))
+        return original(self, *args, **kwargs)
+
+    monkeypatch.setattr(LinearCalibrator, "_fit", recording_fit)
+    blas_before = blas_threads()
+    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "m")]) == 0  # not -q: the timer runs
+    assert seen and all(n_threads >= 2 for n_threads, _ in seen)  # the progress timer was alive beside the fit
+    assert all(blas == [1] for _, blas in seen)
+    assert _pools() == before
+    seen.clear()
+    done = threading.Event()
+    users = threading.Thread(target=done.wait)  # a thread of the user's program, which ftcal cannot know idle
+    users.start()
+    try:
+        LinearCalibrator().fit(CalibrationDataset.load(path).raw, wrench)  # the same fit as a library call
+    finally:
+        done.set()
+        users.join()
+    assert seen and seen[0][1] == blas_before != [1]  # left as the process has it
 
 
 def test_the_networks_thread_limit_holds_in_the_fitting_thread():
