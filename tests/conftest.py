@@ -33,33 +33,6 @@ BENCHMARKS = Path(__file__).resolve().parents[1] / "benchmarks"
 if str(BENCHMARKS) not in sys.path:
     sys.path.append(str(BENCHMARKS))
 
-
-
-@pytest.fixture(autouse=True)
-def _the_test_process_is_ftcal_s(request):
-    """Every test runs as in the ``ftcal`` command: the process is ftcal's (joblib's executor and tqdm's monitor
-    threads, alive after the first parallel test, never compute), so fits limit BLAS to one thread as the command's
-    do; without this, every fit after the first parallel test ran with the process' BLAS threads, 2-13x slower.
-    Tests of what a fit does beside the user's own threads are marked ``user_threads`` and run without it.
-
-    torch's thread count, which a benchmark script run in the test's process may set for itself, is restored
-    after each test, so that no test sees another's."""
-    from ftcal.core._threads import whole_process_is_ftcal
-
-    import torch
-
-    torch_threads = torch.get_num_threads()
-    try:
-        if request.node.get_closest_marker("user_threads"):
-            yield
-        else:
-            with whole_process_is_ftcal():
-                yield
-    finally:
-        if torch.get_num_threads() != torch_threads:
-            torch.set_num_threads(torch_threads)
-
-
 #: A schedule of a handful of epochs: enough to exercise all three phases in well under a second.
 TINY_SCHEDULE = dict(
     hidden_layer_sizes=(16, 16),

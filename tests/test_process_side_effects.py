@@ -14,7 +14,7 @@ from ftcal import (ComparativeCalibrator, DirectionalCalibrator, GaussianProcess
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
 #: These tests look at what a fit does beside threads of the user's: the process is not claimed for ftcal here
-#: (tests/conftest.py claims it for every other test, as the ``ftcal`` command claims its own).
+#: (conftest.py claims it for every other test, as the ``ftcal`` command claims its own).
 pytestmark = pytest.mark.user_threads
 
 
