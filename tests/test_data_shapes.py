@@ -121,6 +121,20 @@ def test_per_pose_folder_with_two_saturated_files(tmp_path, capsys):
     np.testing.assert_allclose(model.predict(raw[:30]), wrench[:30], atol=0.1)
 
 
+def test_repeated_load_cases_are_not_taken_for_a_saturated_channel(tmp_path, capsys):
+    raw, wrench = _sensor(n=40)
+    path = _csv(tmp_path / "repeats.csv", [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"],
+                np.repeat(raw, 8, axis=0), np.repeat(wrench, 8, axis=0))  # every load case recorded 8 times
+    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "m")]) == 0
+    assert "pinned" not in capsys.readouterr().err
+    pinned = raw.copy()
+    pinned[:12, 2] = pinned[:, 2].max() + 1.0  # and one channel pinned under 12 different loads is still said
+    path = _csv(tmp_path / "pinned.csv", [f"s{i}" for i in range(8)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"],
+                np.repeat(pinned, 8, axis=0), np.repeat(wrench, 8, axis=0))
+    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "p")]) == 0
+    assert "96 of 320 rows have a channel pinned" in capsys.readouterr().err
+
+
 def test_predict_channels_and_the_mapping_kept_in_the_model(tmp_path, capsys):
     raw, wrench = _sensor(n_channels=6)
     names = [f"g{i + 1}" for i in range(6)] + ["Fx", "Fy", "Fz", "Mx", "My", "Mz"]

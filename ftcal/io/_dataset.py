@@ -394,17 +394,24 @@ class CalibrationDataset:
         return np.column_stack([self.raw, self.temperature])
 
     def pinned_rows(self, min_rows: int = 3) -> tuple[NDArray[np.bool_], list[str]]:
-        """Rows where a channel sits at its extreme value (the smallest or largest it reads) in at least
-        ``min_rows`` rows and 1 % of them: an ADC pinned at its limit (a saturated channel) reads one value
-        exactly, again and again, while a live reading varies. Returns the mask and one phrase per pinned
-        channel extreme.
+        """Rows where a channel sits at its extreme value (the smallest or largest it reads) under at least
+        ``min_rows`` different loads and 1 % of the rows: an ADC pinned at its limit (a saturated channel) reads one
+        value exactly whatever the load, while a live reading varies with it. Rows that repeat one load case (the
+        same wrench recorded again) count as one load: a repeated load reads the same value without any
+        saturation. Returns the mask and one phrase per pinned channel extreme.
 
         Examples
         --------
         >>> raw = np.column_stack([np.r_[np.linspace(0, 1, 97), 4095, 4095, 4095], np.linspace(0, 1, 100)])
-        >>> mask, said = CalibrationDataset(raw=raw, wrench=np.zeros((100, 1)), axes=("Fz",)).pinned_rows()
+        >>> loads = np.linspace(0, 50, 100)[:, None]
+        >>> mask, said = CalibrationDataset(raw=raw, wrench=loads, axes=("Fz",)).pinned_rows()
         >>> int(mask.sum()), said
         (3, ['s0 at 4095 in 3 rows'])
+        >>> cases = np.column_stack([np.r_[np.linspace(0, 1, 9), 4095], np.linspace(0, 1, 10)])  # the top load: 4095
+        >>> repeated = CalibrationDataset(raw=np.repeat(cases, 10, axis=0), axes=("Fz",),  # 10 rows a load case
+        ...                               wrench=np.repeat(np.linspace(0, 50, 10)[:, None], 10, axis=0))
+        >>> repeated.pinned_rows()[1]
+        []
         """
         mask = np.zeros(self.n_samples, dtype=bool)
         said = []
@@ -415,7 +422,7 @@ class CalibrationDataset:
                 continue
             for value in (column.min(), column.max()):
                 at = column == value
-                if int(at.sum()) >= need:
+                if int(at.sum()) >= need and len(np.unique(self.wrench[at], axis=0)) >= min(need, int(at.sum())):
                     mask |= at
                     said.append(f"s{k} at {value:.10g} in {int(at.sum())} rows")
         return mask, said
