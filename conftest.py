@@ -18,19 +18,21 @@ USER_THREADS_FILES = {"ftcal/core/_threads.py"}
 
 @pytest.fixture(autouse=True)
 def _the_test_process_is_ftcal_s(request):
-    """Every test and doctest runs as in the ``ftcal`` command: the process is ftcal's (joblib's executor and
-    tqdm's monitor threads, alive after the first parallel test, never compute), so fits limit BLAS to one thread
-    as the command's do; without this, every fit after the first parallel test ran with the process' BLAS
-    threads, 2-13x slower. Tests of what a fit does beside the user's own threads are marked ``user_threads`` (or
-    are in :data:`USER_THREADS_FILES`) and run without it.
+    """Every test and doctest runs with the process declared ftcal's: the test runner's own threads (execnet's,
+    under ``pytest -n``) never compute, but ftcal cannot know them idle, so without this every fit would run with
+    the process' BLAS threads, several times slower. Tests of what a fit does beside the user's own threads are
+    marked ``user_threads`` (or are in :data:`USER_THREADS_FILES`) and run without it.
 
-    torch's thread count, which a benchmark script run in the test's process may set for itself, is restored
-    after each test, so that no test sees another's."""
+    A test that leaves the process' BLAS thread count changed fails (a fit must restore it); torch's thread count,
+    which the benchmark scripts some tests run in-process set for themselves, is restored after each test."""
     import torch
 
-    from ftcal.core._threads import whole_process_is_ftcal
+    from ftcal.core._threads import _controller, whole_process_is_ftcal
 
-    torch_threads = torch.get_num_threads()
+    def blas_threads() -> dict:  # through ftcal's cached controller: threadpool_info() scans the libraries, ~10 ms
+        return {pool["filepath"]: pool["num_threads"] for pool in _controller().info() if pool["user_api"] == "blas"}
+
+    torch_threads, blas_before = torch.get_num_threads(), blas_threads()
     users = (request.node.get_closest_marker("user_threads") is not None
              or request.node.nodeid.split("::")[0] in USER_THREADS_FILES)
     try:
@@ -42,3 +44,5 @@ def _the_test_process_is_ftcal_s(request):
     finally:
         if torch.get_num_threads() != torch_threads:
             torch.set_num_threads(torch_threads)
+    blas_after = {path: n for path, n in blas_threads().items() if path in blas_before}
+    assert blas_after == blas_before, f"the test left the process' BLAS threads at {blas_after} (were {blas_before})"

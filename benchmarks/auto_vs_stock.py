@@ -230,7 +230,7 @@ def dead_weight_stock(case: str, result: dict) -> dict:
     stock model the folds choose is what scikit-learn gives for free."""
     from sklearn.base import clone
 
-    from ftcal.model_selection import calibration_folds
+    from ftcal.model_selection import calibration_folds, held_out_predictions
 
     for o in result["seeds"]:
         if "stock_chosen_on_folds" in o:
@@ -240,13 +240,10 @@ def dead_weight_stock(case: str, result: dict) -> dict:
         o["stock_rmse_2x"] = {name: rmse(val.wrench, clone(model).fit(cal.raw, cal.wrench).predict(val.raw), alpha)
                               for name, model in models.items()}
         o["auto_over_best_stock"] = o["auto_rmse_2x"] / min(o["stock_rmse_2x"].values())
-        folds = calibration_folds(len(cal.raw), None, 5, o["seed"])
-        o["stock_fold_rmse"] = {}
-        for name, model in models.items():
-            pred = np.empty_like(cal.wrench)
-            for train, test in folds:
-                pred[test] = clone(model).fit(cal.raw[train], cal.wrench[train]).predict(cal.raw[test])
-            o["stock_fold_rmse"][name] = rmse(cal.wrench, pred, alpha)
+        folds = calibration_folds(len(cal.raw), None, 5, o["seed"])  # auto's (the sets repeat no row)
+        o["stock_fold_rmse"] = {name: rmse(cal.wrench, held_out_predictions(model, cal.raw, cal.wrench,
+                                                                            folds=folds)[1], alpha)
+                                for name, model in models.items()}
         chosen = best_model(o["stock_fold_rmse"])
         o["stock_chosen_on_folds"] = chosen
         o["auto_over_fold_chosen_stock"] = o["auto_rmse_2x"] / o["stock_rmse_2x"][chosen]

@@ -14,7 +14,7 @@ from ftcal import (ComparativeCalibrator, DirectionalCalibrator, GaussianProcess
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
 #: These tests look at what a fit does beside threads of the user's: the process is not claimed for ftcal here
-#: (conftest.py claims it for every other test, as the ``ftcal`` command claims its own).
+#: (conftest.py declares it ftcal's for every other test: the test runner's threads never compute).
 pytestmark = pytest.mark.user_threads
 
 
@@ -103,67 +103,155 @@ def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs
     assert torch_during == torch_threads
 
 
+_LIMIT_IN_ANOTHER_THREAD = r"""
+import json, threading
+import scipy.linalg  # both OpenBLAS libraries loaded: numpy's and scipy's
+from threadpoolctl import threadpool_info, threadpool_limits
+
+def pools():
+    return {p["filepath"]: p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"}
+
+inside, release = threading.Event(), threading.Event()
+
+def limit_everything():
+    limits = threadpool_limits(limits=1, user_api="blas")
+    inside.set()
+    release.wait(60)  # held while the other thread looks, as a fit is
+    limits.restore_original_limits()
+
+before = pools()
+worker = threading.Thread(target=limit_everything)
+worker.start()
+inside.wait(60)
+during = pools()
+release.set()
+worker.join(60)
+print(json.dumps({"before": before, "during": during}))
+"""
+
+
 def test_a_limit_set_for_the_whole_process_in_another_thread_would_show():
     """The check above can fail: a process-wide BLAS limit to one thread, set in another thread that is still
-    inside its work (as a paused fit is), is seen here."""
-    before = _pools()
-    if min(before.values()) < 2:
-        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
-    pause = _Pause()
+    inside its work (as a paused fit is), is seen here. In a fresh process: no thread of another test may change
+    the process' count meanwhile."""
+    import json
+    import subprocess
+    import sys
 
-    def limit_everything():
-        limits = threadpool_limits(limits=1, user_api="blas")
-        pause.wait()  # held while the other thread looks, as a fit is
-        limits.restore_original_limits()
-
-    worker = threading.Thread(target=limit_everything)
-    worker.start()
-    assert pause.inside.wait(60)
-    during = _pools()
-    pause.release.set()
-    worker.join(60)
-    assert during != before and min(during.values()) == 1
+    done = subprocess.run([sys.executable, "-c", _LIMIT_IN_ANOTHER_THREAD], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0, done.stderr
+    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    if min(facts["before"].values()) < 2:
+        pytest.skip(f"the thread pools run one thread already ({facts['before']}): a limit to one could not show")
+    assert facts["during"] != facts["before"] and min(facts["during"].values()) == 1
 
 
-def test_the_ftcal_command_fits_on_one_blas_thread_beside_its_own_threads(tmp_path, monkeypatch):
-    """The command shows a fit's progress from a second thread and keeps joblib's executor threads: its process is
-    ftcal's own, so its fits still run BLAS on one thread (with the process' BLAS threads they took 2-13x longer),
-    and the process' counts are restored afterwards."""
+_BESIDE_IDLE_THREADS = r"""
+import json, sys, threading
+import numpy as np
+from joblib import Parallel, delayed
+from threadpoolctl import threadpool_info
+from ftcal import LinearCalibrator
+from ftcal.cli import main
+
+def blas():
+    return sorted({p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"})
+
+Parallel(n_jobs=2)(delayed(np.sum)(np.ones(3)) for _ in range(2))  # joblib's pool threads stay alive after it
+seen, original = [], LinearCalibrator._fit
+def recording_fit(self, *args, **kwargs):
+    seen.append({"threads": sorted(t.name for t in threading.enumerate()), "blas": blas()})
+    return original(self, *args, **kwargs)
+LinearCalibrator._fit = recording_fit
+before = blas()
+code = main(["fit", sys.argv[1], "--model", "linear", "--out", sys.argv[2]])  # not -q: its progress timer runs
+print(json.dumps({"code": code, "before": before, "seen": seen, "after": blas()}))
+"""
+
+
+def test_fits_run_blas_on_one_thread_beside_threads_known_idle(tmp_path):
+    """A script that used a joblib process pool keeps its pool's threads; the command shows a fit's progress from
+    a timer thread: neither computes, so the fit still runs BLAS on one thread (with the process' BLAS threads
+    these fits took 4.8-17x longer), and the process' count is restored after it. In a fresh process: the test
+    runner's own threads are not among those ftcal knows idle."""
+    import json
+    import subprocess
+    import sys
+
     from ftcal import CalibrationDataset
-    from ftcal.cli import main
 
-    before = _pools()
-    if min(before.values()) < 2:
-        pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
     rng = np.random.default_rng(0)
     wrench = rng.normal(size=(60, 6))
     path = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)), wrench=wrench).save(tmp_path / "d.csv")
-    seen = []
-    original = LinearCalibrator._fit
+    done = subprocess.run([sys.executable, "-c", _BESIDE_IDLE_THREADS, str(path), str(tmp_path / "m")],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    if facts["before"] == [1]:
+        pytest.skip(f"BLAS runs one thread in a fresh process here ({facts['before']}): a limit could not show")
+    assert facts["code"] == 0 and facts["seen"]
+    assert any("ftcal-idle-progress" in fit["threads"] for fit in facts["seen"])  # the timer beside the fit
+    assert all("ExecutorManagerThread" in fit["threads"] for fit in facts["seen"])  # and joblib's pool threads
+    assert all(fit["blas"] == [1] for fit in facts["seen"]), facts["seen"]
+    assert facts["after"] == facts["before"]
 
-    def blas_threads():
-        return sorted({pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"})
 
-    def recording_fit(self, *args, **kwargs):
-        seen.append((threading.active_count(), blas_threads()))
-        return original(self, *args, **kwargs)
+_OVERLAPPING_FITS = r"""
+import json, threading
+import scipy.linalg  # both OpenBLAS libraries loaded: numpy's and scipy's
+from threadpoolctl import threadpool_info
+from ftcal.core._threads import limit_threads_here, whole_process_is_ftcal
 
-    monkeypatch.setattr(LinearCalibrator, "_fit", recording_fit)
-    blas_before = blas_threads()
-    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "m")]) == 0  # not -q: the timer runs
-    assert seen and all(n_threads >= 2 for n_threads, _ in seen)  # the progress timer was alive beside the fit
-    assert all(blas == [1] for _, blas in seen)
-    assert _pools() == before
-    seen.clear()
-    done = threading.Event()
-    users = threading.Thread(target=done.wait)  # a thread of the user's program, which ftcal cannot know idle
-    users.start()
-    try:
-        LinearCalibrator().fit(CalibrationDataset.load(path).raw, wrench)  # the same fit as a library call
-    finally:
-        done.set()
-        users.join()
-    assert seen and seen[0][1] == blas_before != [1]  # left as the process has it
+def blas():
+    return sorted({p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"})
+
+first_in, second_in, first_out, release_second = (threading.Event() for _ in range(4))
+seen = {}
+
+def first():
+    with limit_threads_here(1):
+        first_in.set()
+        second_in.wait(60)
+    first_out.set()
+
+def second():
+    first_in.wait(60)
+    with limit_threads_here(1):
+        second_in.set()
+        first_out.wait(60)
+        seen["second, after the first left"] = blas()
+        release_second.wait(60)
+
+before = blas()
+with whole_process_is_ftcal():
+    threads = [threading.Thread(target=first), threading.Thread(target=second)]
+    for t in threads:
+        t.start()
+    first_out.wait(60)
+    seen["main, after the first left"] = blas()
+    release_second.set()
+    for t in threads:
+        t.join(60)
+print(json.dumps({"before": before, "seen": seen, "after": blas()}))
+"""
+
+
+def test_fits_that_overlap_share_the_blas_limit_and_the_last_restores_it():
+    """Two fits in two threads of a process declared ftcal's: the first leaves while the second runs, which keeps
+    BLAS on one thread; the last to leave restores the process' count (restoring in entry order left it at 1). In
+    a fresh process: no thread of another test may change the process' count meanwhile."""
+    import json
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _OVERLAPPING_FITS], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    if facts["before"] == [1]:
+        pytest.skip(f"BLAS runs one thread in a fresh process here ({facts['before']}): a limit could not show")
+    assert facts["seen"] == {"second, after the first left": [1], "main, after the first left": [1]}
+    assert facts["after"] == facts["before"]
 
 
 def test_the_networks_thread_limit_holds_in_the_fitting_thread():

@@ -38,7 +38,6 @@ import sys
 from collections.abc import Sequence
 
 from ..core._exceptions import FtcalError
-from ..core._threads import whole_process_is_ftcal
 from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
                       standard_streams)
 from ._messages import one_line_warnings
@@ -104,8 +103,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser = build_parser()
             args = parser.parse_args(args_list)
             note_inputs(args, parser)  # no output may replace one of these (OutputPlan checks)
-            with whole_process_is_ftcal():  # its other threads (progress timer, joblib's) never compute
-                return int(args.handler(args) or 0)
+            return int(args.handler(args) or 0)
     except SystemExit as exc:  # --help and --version exit through argparse
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
     except Interrupted as exc:  # SIGINT / SIGTERM / SIGHUP: outputs in progress were removed while unwinding
