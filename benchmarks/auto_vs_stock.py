@@ -145,7 +145,9 @@ def best_static_map(cache: str | None, setup) -> dict:
     (a JSON file, written through :data:`FILES` so that its manifest knows it) once computed, so that a resumed
     run neither builds the data nor fits the models again."""
     cache = None if FILES is None else cache
-    earlier = None if cache is None else read_json_record(FILES.out_dir / cache, numbers=("rmse",))
+    # a cache this script did not write (or one edited since) is not reused: it is computed again
+    earlier = None if cache is None or not FILES.is_own(cache) else read_json_record(FILES.out_dir / cache,
+                                                                                     numbers=("rmse",))
     if earlier is not None:
         return earlier
     models, known, test_raw, test_wrench, alpha, info = setup()
@@ -394,12 +396,16 @@ def _summary(out: Path) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--out", default="benchmarks/results/auto_vs_stock")
+    parser.add_argument("--out", default="benchmarks/results/auto_vs_stock",
+                        help="folder of the case JSON files and summary.md (a case already written there is skipped, "
+                        "so the command resumes)")
     parser.add_argument("--case", action="append", choices=CASES)
     parser.add_argument("--jobs", type=int, default=2, help="auto's n_jobs (default: 2, the machine's cores)")
     parser.add_argument("--robot-folds", type=int, default=5, choices=range(1, 6),
                         help="outer pose-grouped folds of robot_held to run (1-5, default 5)")
-    parser.add_argument("--force", action="store_true", help="replace a summary.md this script did not write")
+    parser.add_argument("--force", action="store_true",
+                        help="replace files in --out this script did not write, or that were edited since (their "
+                        "cases run again)")
     args = parser.parse_args()
     # a case's JSON (written once, then skipped) and the summary: a user's file of those names stops the run now
     files = output_files(parser, args.out, args.force, ["summary.md", *(f"{c}.json" for c in args.case or CASES),
@@ -410,7 +416,9 @@ def main() -> None:
     out = files.out_dir
     for case in args.case or CASES:
         path = out / f"{case}.json"
-        earlier = read_json_record(path)  # an unreadable or foreign file is not a result: the case runs again
+        # an unreadable file, or one this script did not write or that was edited since (--force lets the run
+        # replace it), is not a result: the case runs again
+        earlier = read_json_record(path) if files.is_own(path.name) else None
         if earlier is not None and case.startswith("dead_weight") and case != "dead_weight_axis_groups":
             # an earlier run's JSON: add the stock baselines
             files.write_text(path.name, json.dumps(dead_weight_stock(case, earlier), indent=1, default=float))

@@ -107,6 +107,20 @@ class OutputFiles:
         recorded = (self.manifest if manifest is None else manifest).get(path.name)
         return _sha(path) in ([recorded] if isinstance(recorded, str) else recorded or [])
 
+    def is_own(self, name: str) -> bool:
+        """Whether the file ``name`` in the folder is one this benchmark wrote, unchanged since (its SHA-256 in the
+        manifest): a result a resumed run may reuse. A file it did not write, or edited, is not, ``force`` or not.
+
+        Examples
+        --------
+        >>> import tempfile
+        >>> files = OutputFiles(tempfile.mkdtemp())
+        >>> _ = files.write_text("table.md", "| a |")
+        >>> files.is_own("table.md"), files.is_own("other.md")
+        (True, False)
+        """
+        return self._is_own(self.out_dir / name)
+
     def check(self, names: Sequence[str]) -> None:
         """Refuse, before any work, a name that is a folder, or a file or link the benchmark did not write (unless
         ``force``); and a folder where the manifest goes."""
