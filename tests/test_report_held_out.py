@@ -117,32 +117,3 @@ def test_a_loaded_auto_gives_the_same_report_as_the_fitted_one(tmp_path):
     assert loaded_facts["validation"]["reused_auto_comparison"] is True
     np.testing.assert_array_equal(loaded_facts["_held_out_pred"], fitted_facts["_held_out_pred"])
     assert loaded_facts["model_choice"] == fitted_facts["model_choice"]
-
-
-class _FailsOnLargeFolds(LinearRegression):
-    """A regressor whose fit fails on training folds of more than 50 rows (a stock model these data break)."""
-
-    def fit(self, X, y, sample_weight=None):
-        if len(X) > 50:
-            raise np.linalg.LinAlgError("SVD did not converge")
-        return super().fit(X, y, sample_weight)
-
-
-@pytest.mark.parametrize("n_jobs", [1, 2])
-def test_the_stock_models_folds_in_one_pool_predict_as_the_engine_and_a_failing_one_is_reported(n_jobs):
-    from ftcal.calibrators import stock_baselines
-    from ftcal.reporting._calibration_report import _BaselineJob, _baselines_held_out
-
-    data = _sensor(n_groups=8, per_group=10)
-    folds = calibration_folds(len(data.raw), data.group, 4, 3)
-    stock = stock_baselines(6)
-    jobs = [_BaselineJob("sk_linear", stock["sk_linear"], None, True, 1.0, 60),
-            _BaselineJob("sk_poly2", stock["sk_poly2"], 50, True, 5.0, 50),  # capped rows: the same draw
-            _BaselineJob("sk_gp", stock["sk_gp"], None, False, 9.0, 60),  # memory: one fold at a time
-            _BaselineJob("broken", _FailsOnLargeFolds(), None, True, 2.0, 60)]
-    out = _baselines_held_out(jobs, data.raw, data.wrench, folds, n_jobs=n_jobs, seed=3)
-    for job in jobs[:3]:
-        _, expected = held_out_predictions(job.estimator, data.raw, data.wrench, folds=folds,
-                                           max_train_rows=job.max_rows, random_state=3)
-        np.testing.assert_allclose(out[job.name], expected, rtol=1e-9, atol=1e-9 * np.abs(expected).max())
-    assert isinstance(out["broken"], np.linalg.LinAlgError) and "did not converge" in str(out["broken"])

@@ -43,7 +43,7 @@ import math
 import re
 import warnings
 from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -175,64 +175,6 @@ def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, fol
             chunk_rows=None if history else PREDICT_CHUNK_ROWS, n_jobs=n_jobs,
             has_std=provides_std if want_std else (lambda model: False))
     return {"pred": pred.reshape(y.shape), "std": None if not want_std or std is None else std.reshape(y.shape)}
-
-
-class _BaselineJob(NamedTuple):
-    """A stock baseline to score on the report's folds: its fit's row cap, whether its folds may run at once
-    (their memory together within the limit), the work of one fold (floating-point operations) and its rows."""
-
-    name: str
-    estimator: Any
-    max_rows: int | None
-    together: bool
-    fold_flops: float
-    rows_used: int
-
-
-def _one_baseline_fold(estimator: Any, X: NDArray, y: NDArray, fold: tuple, max_rows: int | None,
-                       seed: int) -> tuple | Exception:
-    """``(test rows, predictions)`` of ``estimator`` fitted on one fold (BLAS on one thread where no other thread
-    sees it), or the exception the fit raised: a baseline that cannot fit these data is reported, not fatal."""
-    from ..core._threads import limit_threads_here
-    from ..model_selection._selection import fold_predictions
-
-    try:
-        with limit_threads_here(1), warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            [(test, pred)] = fold_predictions(estimator, X, y, [fold], max_train_rows=max_rows, random_state=seed,
-                                              chunk_rows=PREDICT_CHUNK_ROWS)
-        return test, pred
-    except Exception as exc:  # noqa: BLE001 - any failure of a stock model's fit is its row's status
-        return exc
-
-
-def _baselines_held_out(jobs: list[_BaselineJob], X: NDArray, y: NDArray, folds: list, *, n_jobs: int,
-                        seed: int) -> dict[str, NDArray | Exception]:
-    """Name -> out-of-fold predictions of each stock baseline of ``jobs`` (NaN for rows no fold tests), or the
-    first exception one of its folds raised.
-
-    Every (baseline, fold) whose folds may run at once is one task of a single pool of ``n_jobs`` processes,
-    the costliest first, so that no core waits on one baseline's last fold while another's are ready (one pool
-    per baseline left a core idle at each one's end: 5 folds on 2 cores); the others run one fold at a time.
-    The predictions are those of :func:`~ftcal.model_selection.held_out_predictions` on the same folds."""
-    from sklearn.utils.parallel import Parallel, delayed
-
-    tasks = sorted(((job, fold) for job in jobs for fold in folds), key=lambda t: -t[0].fold_flops)
-    pooled = [(job, fold) for job, fold in tasks if job.together and n_jobs > 1]
-    alone = [(job, fold) for job, fold in tasks if not (job.together and n_jobs > 1)]
-    results = list(Parallel(n_jobs=n_jobs)(delayed(_one_baseline_fold)(job.estimator, X, y, fold, job.max_rows,
-                                                                        seed) for job, fold in pooled)) if pooled else []
-    results += [_one_baseline_fold(job.estimator, X, y, fold, job.max_rows, seed) for job, fold in alone]
-    out: dict[str, NDArray | Exception] = {job.name: np.full(y.shape, np.nan) for job in jobs}
-    for (job, _), result in zip(pooled + alone, results):
-        if isinstance(out[job.name], Exception):
-            continue
-        if isinstance(result, Exception):
-            out[job.name] = result
-        else:
-            test, pred = result
-            out[job.name][test] = np.asarray(pred, dtype=float).reshape(len(test), -1)
-    return out
 
 
 def baseline_cost(name: str, estimator: Any, n_train: int, n_features: int, n_outputs: int,
@@ -644,27 +586,25 @@ def calibration_certificate(
                                "axis_rmse": list(reused["axis_rmse"][i]),
                                "note": "from auto's comparison on the same folds"})
     elif baselines:
-        jobs = []
         for bname, est in stock_baselines(X.shape[1], random_state=random_state).items():
             skip = _baseline_skip_reason(bname, est, n_train, X.shape[1], k, len(folds))
             if skip is not None:
                 choice.append({"model": bname, "kind": "baseline", "status": skip})
                 continue
             # folds in parallel only when their memory fits the limit together; else one after the other
-            together = workers > 1 and _baseline_skip_reason(bname, est, n_train, X.shape[1], k, len(folds),
-                                                              workers) is None
-            _, flops, rows_used = baseline_cost(bname, est, n_train, X.shape[1], k, len(folds))
-            jobs.append(_BaselineJob(bname, est, None if bname in ("sk_kernel_ridge", "sk_gp")
-                                     else BASELINE_TRAINING_ROWS, together, flops / len(folds), rows_used))
-        held_out = _baselines_held_out(jobs, X, y, folds, n_jobs=workers, seed=random_state)
-        for job in jobs:
-            out = held_out[job.name]
-            if isinstance(out, Exception):  # a baseline that cannot fit these data is reported, not fatal
-                choice.append({"model": job.name, "kind": "baseline",
-                               "status": f"failed: {type(out).__name__}: {' '.join(str(out).split())[:160]}"})
+            at_once = workers if workers > 1 and _baseline_skip_reason(bname, est, n_train, X.shape[1], k,
+                                                                       len(folds), workers) is None else None
+            rows_used = baseline_cost(bname, est, n_train, X.shape[1], k, len(folds))[2]
+            try:
+                # no groups for a stock model (the folds hold them out; RidgeCV's routing cannot be asked)
+                out = _held_out(est, X, y, None, folds, want_std=False, seed=random_state, n_jobs=at_once,
+                                max_rows=None if bname in ("sk_kernel_ridge", "sk_gp") else BASELINE_TRAINING_ROWS)
+            except Exception as exc:  # a baseline that cannot fit these data is reported, not fatal
+                choice.append({"model": bname, "kind": "baseline",
+                               "status": f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:160]}"})
                 continue
-            note = f"fitted on {job.rows_used} of {n_train}+ rows per fold" if job.rows_used < n_train else None
-            choice.append(scored(job.name, out, "baseline", note))
+            note = f"fitted on {rows_used} of {n_train}+ rows per fold" if rows_used < n_train else None
+            choice.append(scored(bname, out["pred"], "baseline", note))
 
     pred = main["pred"]
     err = pred - y
