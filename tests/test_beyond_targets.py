@@ -1,4 +1,4 @@
-"""The issue-6 target checks of ``benchmarks/beyond.py`` on hand-built benchmark records."""
+"""The target checks of ``benchmarks/beyond.py`` (the "beyond the thesis" study) on hand-built benchmark records."""
 
 from __future__ import annotations
 
