@@ -1,7 +1,6 @@
 """Test-session settings shared by the doctests in ftcal/ and the tests in tests/."""
 
 import os
-import sys
 
 import pytest
 

@@ -9,7 +9,7 @@ import pytest
 import torch
 from threadpoolctl import threadpool_info, threadpool_limits
 
-from ftcal import (ComparativeCalibrator, DirectionalCalibrator, GaussianProcessCalibrator, LinearCalibrator,
+from ftcal import (DirectionalCalibrator, GaussianProcessCalibrator, LinearCalibrator,
                    PolynomialCalibrator, load_model, save_model)
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
@@ -103,6 +103,18 @@ def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs
     assert torch_during == torch_threads
 
 
+def _in_a_fresh_process(script: str, *args: str) -> dict:
+    """The JSON that ``script`` prints last, run with ``args`` in a new Python process: a check of the process'
+    thread counts that no thread of another test may change meanwhile."""
+    import json
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", script, *args], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout.strip().splitlines()[-1])
+
+
 _LIMIT_IN_ANOTHER_THREAD = r"""
 import json, threading
 import scipy.linalg  # both OpenBLAS libraries loaded: numpy's and scipy's
@@ -134,14 +146,7 @@ def test_a_limit_set_for_the_whole_process_in_another_thread_would_show():
     """The check above can fail: a process-wide BLAS limit to one thread, set in another thread that is still
     inside its work (as a paused fit is), is seen here. In a fresh process: no thread of another test may change
     the process' count meanwhile."""
-    import json
-    import subprocess
-    import sys
-
-    done = subprocess.run([sys.executable, "-c", _LIMIT_IN_ANOTHER_THREAD], capture_output=True, text=True,
-                          timeout=300)
-    assert done.returncode == 0, done.stderr
-    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    facts = _in_a_fresh_process(_LIMIT_IN_ANOTHER_THREAD)
     if min(facts["before"].values()) < 2:
         pytest.skip(f"the thread pools run one thread already ({facts['before']}): a limit to one could not show")
     assert facts["during"] != facts["before"] and min(facts["during"].values()) == 1
@@ -175,19 +180,12 @@ def test_fits_run_blas_on_one_thread_beside_threads_known_idle(tmp_path):
     a timer thread: neither computes, so the fit still runs BLAS on one thread (with the process' BLAS threads
     these fits took 4.8-17x longer), and the process' count is restored after it. In a fresh process: the test
     runner's own threads are not among those ftcal knows idle."""
-    import json
-    import subprocess
-    import sys
-
     from ftcal import CalibrationDataset
 
     rng = np.random.default_rng(0)
     wrench = rng.normal(size=(60, 6))
     path = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)), wrench=wrench).save(tmp_path / "d.csv")
-    done = subprocess.run([sys.executable, "-c", _BESIDE_IDLE_THREADS, str(path), str(tmp_path / "m")],
-                          capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    facts = _in_a_fresh_process(_BESIDE_IDLE_THREADS, str(path), str(tmp_path / "m"))
     if facts["before"] == [1]:
         pytest.skip(f"BLAS runs one thread in a fresh process here ({facts['before']}): a limit could not show")
     assert facts["code"] == 0 and facts["seen"]
@@ -241,13 +239,7 @@ def test_fits_that_overlap_share_the_blas_limit_and_the_last_restores_it():
     """Two fits in two threads of a process declared ftcal's: the first leaves while the second runs, which keeps
     BLAS on one thread; the last to leave restores the process' count (restoring in entry order left it at 1). In
     a fresh process: no thread of another test may change the process' count meanwhile."""
-    import json
-    import subprocess
-    import sys
-
-    done = subprocess.run([sys.executable, "-c", _OVERLAPPING_FITS], capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    facts = json.loads(done.stdout.strip().splitlines()[-1])
+    facts = _in_a_fresh_process(_OVERLAPPING_FITS)
     if facts["before"] == [1]:
         pytest.skip(f"BLAS runs one thread in a fresh process here ({facts['before']}): a limit could not show")
     assert facts["seen"] == {"second, after the first left": [1], "main, after the first left": [1]}
