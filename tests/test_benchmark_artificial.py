@@ -585,3 +585,15 @@ def test_two_processes_writing_into_one_folder_keep_every_manifest_entry(tmp_pat
     manifest = json.loads((tmp_path / ".ftcal-benchmark-manifest.json").read_text())
     assert sorted(manifest) == sorted(f"{p}{i}.md" for p in "ab" for i in range(40))
     OutputFiles(tmp_path).check(list(manifest))  # every file is known as the benchmark's own
+
+
+def test_a_result_file_edited_or_not_written_by_the_benchmark_is_not_its_own(tmp_path):
+    files = OutputFiles(tmp_path)
+    files.write_text("case.json", '{"rmse": 1.0}')
+    assert files.is_own("case.json")
+    (tmp_path / "case.json").write_text('{"rmse": 0.5}')  # edited since: a resumed run must not reuse it
+    assert not files.is_own("case.json")
+    (tmp_path / "mine.json").write_text("{}")  # the user's, never written by the benchmark
+    assert not OutputFiles(tmp_path, force=True).is_own("mine.json")  # --force lets it be replaced, not reused
+    assert not files.is_own("absent.json")
+
