@@ -75,7 +75,7 @@ print(json.dumps({"seconds": seconds, "ftcal": ftcal.__file__}))
 """
 
 _AUTO = _PRELUDE + """
-try:  # its home after the redesign (the top-level name is a deprecated alias there)
+try:  # its home after the redesign (the top-level name is gone there)
     from ftcal.simulation import make_soft_sensor_dataset
 except ImportError:  # before: a top-level name only
     from ftcal import make_soft_sensor_dataset

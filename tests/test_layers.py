@@ -34,10 +34,6 @@ ALLOWED = {
                   "persistence", "experiment", "reporting"},
     "cli": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
             "persistence", "experiment", "reporting", "benchmark"},
-    # deprecated alias packages: names only, resolved lazily from the new homes (core's lazy namespace only)
-    "models": {"core"},
-    "neural_network": {"core"},
-    "evaluation": {"core"},
 }
 
 
@@ -203,7 +199,7 @@ def test_the_cli_holds_no_estimator_logic():
                 assert not issubclass(value, sklearn.base.BaseEstimator), f"{module.__name__}.{name} is an estimator"
 
 
-PUBLIC_SUBPACKAGES = sorted(set(ALLOWED) - {"cli", "models", "neural_network", "evaluation"})
+PUBLIC_SUBPACKAGES = sorted(set(ALLOWED) - {"cli"})
 
 
 @pytest.mark.parametrize("package", PUBLIC_SUBPACKAGES)

@@ -23,7 +23,5 @@ _PUBLIC = dict(
     read_json_record="_files", data_fingerprint="_files", package_versions="_files",
     check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
-#: Names that moved to another public package: each still answers, with a FutureWarning, for one release.
-_MOVED = dict(calibration_folds="ftcal.model_selection.calibration_folds")
 __all__ = list(_PUBLIC)
-__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC, _MOVED)
+__getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
