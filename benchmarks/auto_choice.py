@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
-from ftcal.core import read_json_record
+from ftcal.benchmark import read_json_record
 
 from _output import output_files, table_or_stop
 

@@ -67,7 +67,7 @@ from sklearn.model_selection import GroupKFold, KFold
 import ftcal
 from ftcal.core import alpha_from_wrenches
 from ftcal.simulation import make_dead_weight_dataset, make_robot_held_dataset, make_soft_sensor_dataset
-from ftcal.core import read_json_record
+from ftcal.benchmark import read_json_record
 from ftcal.benchmark import OutputFiles
 from ftcal.calibrators import STOCK_BASELINE_NAMES, stock_baselines
 

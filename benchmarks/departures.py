@@ -29,7 +29,7 @@ import numpy as np
 from ftcal.simulation import ERROR_PRESETS, SensorProfile
 from ftcal import LinearCalibrator, make_artificial_dataset
 from ftcal.core import per_sample_rmse, wrench_rmse
-from ftcal.core import read_json_record
+from ftcal.benchmark import read_json_record
 from ftcal.benchmark import dataset_seeds, make_model
 
 from _output import int_at_least, output_files

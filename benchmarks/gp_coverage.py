@@ -24,7 +24,7 @@ from sklearn.model_selection import GroupKFold, KFold
 
 import ftcal
 from ftcal.calibrators import stock_baselines
-from ftcal.core import read_json_record
+from ftcal.benchmark import read_json_record
 
 from _output import output_files
 

@@ -24,7 +24,7 @@ import numpy as np
 from sklearn.model_selection import GroupKFold
 
 import ftcal
-from ftcal.core import read_json_record
+from ftcal.benchmark import read_json_record
 from ftcal.compose import default_candidates
 from ftcal.calibrators import stock_baselines
 

@@ -19,7 +19,7 @@ configurations 0-4.
 
 Every fit is cached as one JSON file under ``OUT/cache`` as soon as it ends (keyed by a hash of its
 configuration, and holding a fingerprint of its training and test data,
-:func:`ftcal.core.data_fingerprint`: a record whose data the current code no longer makes is fitted again),
+:func:`ftcal.benchmark.data_fingerprint`: a record whose data the current code no longer makes is fitted again),
 so the same command resumes; ``--aggregate-only`` writes the tables and plots from whatever is cached.
 A fingerprint cannot tell older model code on the same data: ``--verify K`` fits again, with the current code,
 the K cached records of each model and dataset with the fewest training rows (networks in the stack they
@@ -58,8 +58,8 @@ from ftcal.compose import CALIBRATOR_NAMES
 from ftcal import make_artificial_dataset
 from ftcal.core import wrench_rmse
 from ftcal.benchmark import make_model
-from ftcal.core import (data_fingerprint, is_finite_number, package_versions, plain_json, read_json_record,
-                        write_json)
+from ftcal.benchmark import data_fingerprint, package_versions, read_json_record
+from ftcal.core import is_finite_number, plain_json, write_json
 from ftcal.calibrators import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, jobs, output_files

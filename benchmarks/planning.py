@@ -48,7 +48,8 @@ from pathlib import Path
 import numpy as np
 
 import ftcal
-from ftcal.core import read_json_record, write_json
+from ftcal.benchmark import read_json_record
+from ftcal.core import write_json
 from ftcal.compose import default_candidates
 
 from _output import output_files, single_output

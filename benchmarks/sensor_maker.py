@@ -34,7 +34,8 @@ from ftcal.simulation import ERROR_PRESETS, SensorProfile
 from ftcal import make_artificial_dataset
 from ftcal.core import scale_torques
 from ftcal.benchmark import dataset_seeds, make_model
-from ftcal.core import atomic_output, data_fingerprint
+from ftcal.benchmark import data_fingerprint
+from ftcal.core import atomic_output
 from ftcal.calibrators import STOCK_BASELINE_NAMES
 
 from _output import int_at_least, output_files

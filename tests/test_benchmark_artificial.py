@@ -181,14 +181,14 @@ def test_a_tampered_record_is_recomputed_not_hidden_from_the_table(tmp_path, cha
     (np.ma.array([1.0, 2.0], mask=[True, False]), "a masked array"), ([[1.0, 2.0], [3.0]], "not a rectangular array"),
 ])
 def test_data_fingerprint_refuses_what_is_not_an_array_of_real_numbers(bad, words):
-    from ftcal.core import data_fingerprint
+    from ftcal.benchmark import data_fingerprint
 
     with pytest.raises(CalibrationInputError, match=f"data_fingerprint: argument 1 is {re.escape(words)}"):
         data_fingerprint(np.zeros(3), bad)
 
 
 def test_data_fingerprint_tells_values_shapes_and_order_apart():
-    from ftcal.core import data_fingerprint
+    from ftcal.benchmark import data_fingerprint
 
     a = np.arange(12.0).reshape(3, 4)
     same = [data_fingerprint(a), data_fingerprint(a.copy(order="F")), data_fingerprint(a.astype(np.float32)),

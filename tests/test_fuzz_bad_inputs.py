@@ -703,7 +703,7 @@ def test_a_real_dask_scheduler_still_passes_the_handshake_check():
     import joblib
     from distributed import LocalCluster
 
-    from ftcal.core._scale_out import dask_backend, probe_scheduler
+    from ftcal.cli._scale_out import dask_backend, probe_scheduler
 
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://",
                       dashboard_address=None) as cluster:

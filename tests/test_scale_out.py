@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from ftcal.core._scale_out import SchedulerError, dask_backend
+from ftcal.cli._scale_out import SchedulerError, dask_backend
 from ftcal.cli import main
 
 

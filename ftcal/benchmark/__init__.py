@@ -1,5 +1,6 @@
 """The thesis' benchmarks and the demo: the artificial benchmark (Tables II-III), the real-world benchmark
-(Tables IV-V), their summary files (never replacing a file they did not write), and the demo that compares
+(Tables IV-V), their summary files (never replacing a file they did not write), their per-fit caches (JSON records
+with a fingerprint of their data), and the demo that compares
 the thesis' three calibrators on simulated data.
 
 Layer: above :mod:`ftcal.reporting` and :mod:`ftcal.experiment`; may import every ftcal package except
@@ -14,7 +15,7 @@ _PUBLIC = dict(
     wilcoxon_pvalue="_artificial", format_mean_std="_artificial", dataset_seeds="_artificial",
     summarize_results="_artificial", THESIS_TABLES="_artificial", make_model="_artificial",
     SPLIT_NAMES="_real_world", THESIS_TABLES_IV_V="_real_world", run_demo="_demo", DemoResult="_demo",
-    OutputFiles="_outputs",
+    OutputFiles="_outputs", read_json_record="_records", data_fingerprint="_records", package_versions="_records",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -13,7 +13,7 @@ soon as that fit ends. A later call with the same configuration skips every
 result already there, so a long run can be spread over many sessions (or
 killed and restarted); results of another configuration (schedule, seed,
 sizes, preset definition) have another hash and are never mixed in, and a
-result holds a fingerprint of its data (:func:`~ftcal.core.data_fingerprint`)
+result holds a fingerprint of its data (:func:`~ftcal.benchmark.data_fingerprint`)
 and the package versions it was fitted with, so one computed on data the
 current code no longer makes is fitted again (results written before
 fingerprints: when their sampled sensor errors or noise floor differ; a
@@ -58,7 +58,8 @@ from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.utils._param_validation import Interval
 
 from ..simulation._artificial import make_artificial_dataset
-from ..core._files import data_fingerprint, package_versions, plain_json, read_json_record, write_json
+from ..core._files import plain_json, write_json
+from ._records import data_fingerprint, package_versions, read_json_record
 from ..core._exceptions import CalibrationInputError
 from ..core._metrics import calibration_metrics, mean_std, wrench_rmse
 from ..core._validation import check_arguments, check_bool
@@ -192,7 +193,7 @@ def _dataset(task: dict):
 
 
 def _data_key(data, profile) -> str:
-    """Fingerprint of a dataset ``(train, test, info)`` as a fit sees it (:func:`~ftcal.core.data_fingerprint`)."""
+    """Fingerprint of a dataset ``(train, test, info)`` as a fit sees it (:func:`~ftcal.benchmark.data_fingerprint`)."""
     train, test, _ = data
     return data_fingerprint(train.raw, train.wrench, test.raw, test.wrench, [profile.alpha])
 

@@ -275,7 +275,7 @@ def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
 
-    from ..core._scale_out import dask_backend
+    from ._scale_out import dask_backend
 
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))

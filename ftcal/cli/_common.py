@@ -432,7 +432,7 @@ def _mounting(text: str) -> tuple[float, ...]:
 
 def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
-    from ..core._scale_out import SchedulerError, check_scheduler
+    from ._scale_out import SchedulerError, check_scheduler
 
     from ._messages import cli_message
 
@@ -443,7 +443,7 @@ def _scheduler(text: str) -> str:
 
 
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
-    """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal.core._scale_out`)."""
+    """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal.cli._scale_out`)."""
     parser.add_argument(
         "--scheduler", metavar="ADDRESS|local", type=_scheduler,
         help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "

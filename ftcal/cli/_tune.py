@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     if alpha is not None and "alpha" not in params:
         params["alpha"] = alpha
     start = time.perf_counter()
-    from ..core._scale_out import dask_backend
+    from ._scale_out import dask_backend
 
     with dask_backend(args.scheduler):  # a scheduler that cannot be used fails here, before any status line
         console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")

@@ -1,6 +1,6 @@
 """Shared basics every layer uses: the domain errors, the wrench conventions (units, torque scaling),
 input validation, the error measures of one prediction (:class:`CalibrationMetrics`), CSV columns, safe
-output files, the memory guard, the thermal drift model and the Dask scale-out.
+output files, the memory guard and the thermal drift model.
 
 Layer: the lowest. Imports only numpy, scipy, scikit-learn and the standard library; never another ftcal
 package.
@@ -20,7 +20,6 @@ _PUBLIC = dict(
     per_sample_rmse="_metrics", relative_errors="_metrics", neg_scaled_rmse="_metrics", mean_std="_metrics",
     ThermalDrift="_temperature",
     plain_json="_files", write_json="_files", atomic_output="_files", is_finite_number="_files",
-    read_json_record="_files", data_fingerprint="_files", package_versions="_files",
     check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
 __all__ = list(_PUBLIC)

@@ -10,7 +10,8 @@ and ``dask worker tcp://host:8786 --nthreads 1`` on each node (every worker
 needs ftcal installed). Results come back to the calling process, which writes
 every file, so the benchmark's cache and resumability are unchanged.
 
-Dask is an optional dependency: ``pip install "dask[distributed]"``.
+Dask is an optional dependency: ``pip install "dask[distributed]"``. The command line's ``--scheduler`` is
+its only user, so it lives here (the library's own entry points take joblib's backend from the caller).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import contextlib
 import re
 from collections.abc import Iterator
 
-from ._exceptions import FtcalError
+from ..core._exceptions import FtcalError
 
 __all__ = ["dask_backend", "check_scheduler", "probe_scheduler", "SchedulerError", "CONNECT_TIMEOUT_S"]
 
