@@ -33,8 +33,55 @@ def test_every_registered_calibrator_declares_its_tags(cls):
     assert tags.ftcal.cost in ("closed_form", "kernel", "network", "heavy")
     rows = tags.ftcal.min_training_rows(8)
     assert isinstance(rows, int) and rows >= 9  # at least one row more than the channels
-    # ONNX support is what the class declares next to itself
-    assert tags.ftcal.onnx == ("_emit_onnx" in cls.__dict__)
+    # ONNX support is what the class (or a parent) declares next to itself
+    assert tags.ftcal.onnx == callable(getattr(cls, "_emit_onnx", None))
+
+
+class _ShiftedLinear(LinearCalibrator):
+    """A user's subclass that adds nothing: it keeps every tag of its parent."""
+
+
+class _Clipped(LinearCalibrator):
+    """A user's subclass whose predict is not its parent's graph: it says so by its tags."""
+
+    def _predict_wrench(self, X):
+        return np.clip(super()._predict_wrench(X), -0.5, 0.5)
+
+    def __sklearn_tags__(self):
+        from ftcal.calibrators import declare
+
+        return declare(super().__sklearn_tags__(), onnx=False)
+
+
+def test_a_subclass_keeps_its_parents_tags_and_exports_its_graph(tmp_path):
+    pytest.importorskip("onnx")
+    onnxruntime = pytest.importorskip("onnxruntime")
+    from ftcal import export_onnx
+
+    from dataclasses import asdict
+
+    sub, parent = asdict(calibration_tags(_ShiftedLinear())), asdict(calibration_tags(LinearCalibrator()))
+    assert sub.pop("min_training_rows")(6) == parent.pop("min_training_rows")(6) == 8
+    assert sub == parent
+    assert calibration_tags(_ShiftedLinear()).onnx and calibration_tags(_ShiftedLinear()).cost == "closed_form"
+    raw, w = _data()
+    model = _ShiftedLinear().fit(raw, w)
+    path = export_onnx(model, tmp_path / "sub.onnx")
+    session = onnxruntime.InferenceSession(str(path))
+    np.testing.assert_allclose(session.run(None, {"readings": raw})[0], model.predict(raw), rtol=1e-9, atol=1e-9)
+
+
+def test_a_subclass_that_computes_something_else_declares_it_and_is_not_exported(tmp_path):
+    pytest.importorskip("onnx")
+    from ftcal import export_onnx
+    from ftcal.core import ExportError
+
+    assert not calibration_tags(_Clipped()).onnx
+    assert calibration_tags(_Clipped()).cost == "closed_form"  # the rest is inherited
+    raw, w = _data()
+    with pytest.raises(ExportError, match="_Clipped cannot be exported to ONNX"):
+        export_onnx(_Clipped().fit(raw, w), tmp_path / "clipped.onnx")
+    assert not (tmp_path / "clipped.onnx").exists()
 
 
 def test_tags_say_what_the_code_used_to_guess():

@@ -88,7 +88,8 @@ class CalibrationTags:
         What one fit costs: a closed form is light work; a kernel model is cubic in its rows (light on at most
         ``LIGHT_KERNEL_ROWS``); a network trains for epochs; ``heavy`` anything else (a wrapper of unknown cost).
     onnx : bool
-        Exportable to an ONNX graph (its class declares ``_emit_onnx``).
+        Exportable to an ONNX graph (its class or a parent declares ``_emit_onnx``; a subclass whose ``predict``
+        computes something else declares ``onnx=False``).
     provides_std : bool
         ``predict(X, return_std=True)`` gives a standard deviation.
     family : str
@@ -433,8 +434,10 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         raise NotImplementedError
 
     def __sklearn_tags__(self) -> FtcalTags:
-        # a subclass declares what it can do; the defaults describe a costly model of unknown kind
-        tags = declare(super().__sklearn_tags__(), onnx="_emit_onnx" in type(self).__dict__)
+        # a subclass declares what it can do; the defaults describe a costly model of unknown kind. Tags are
+        # inherited (each class chains super().__sklearn_tags__()): a subclass of an exportable calibrator is
+        # exportable, unless it declares ``onnx=False`` (it computes something its parent's graph does not)
+        tags = declare(super().__sklearn_tags__(), onnx=callable(getattr(type(self), "_emit_onnx", None)))
         tags.target_tags.required = True
         tags.target_tags.multi_output = True
         tags.target_tags.single_output = False

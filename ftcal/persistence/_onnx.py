@@ -101,7 +101,7 @@ class _Graph:
         The model's own part is the ``_emit_onnx(graph, x)`` its class declares next to itself; a wrapper's
         calls this again for its inner calibrators.
         """
-        emit = _emitter(type(model))
+        emit = _emitter(model)
         static = None
         if reads_history(model):
             if getattr(model, "tau_rows_", None) is not None or getattr(model, "estimator_", None) is None:
@@ -116,8 +116,8 @@ class _Graph:
             names = ", ".join(t.__name__ for t in exportable_types())
             raise ExportError(
                 f"{type(model).__name__} cannot be exported to ONNX: ftcal knows how to write the graphs of {names} "
-                "(a subclass or a registered custom calibrator may compute something else). Export one of those, "
-                "or call predict from Python."
+                "and of their subclasses whose tags keep onnx=True (a custom calibrator may compute something "
+                "else). Export one of those, or call predict from Python."
             )
         check_is_fitted(model)
         tare = getattr(model, "tare_reading_", None)
@@ -131,21 +131,18 @@ def _n_outputs(model) -> int:
     return int(getattr(model, "n_outputs_", 6))
 
 
-def _emitter(cls: type) -> Callable | None:
-    """The class' own ``_emit_onnx`` if it is a registry class that declares one (never inherited: a subclass
-    may compute something else)."""
-    from ..compose._registry import model_classes
-
-    if model_classes().get(cls.__name__) is not cls:
-        return None
-    return cls.__dict__.get("_emit_onnx")
+def _emitter(model) -> Callable | None:
+    """The ``_emit_onnx`` of ``model``'s class (its own or inherited) when its tags say it is exportable: a
+    subclass of an exportable calibrator keeps its parent's graph unless it declares ``onnx=False``."""
+    emit = getattr(type(model), "_emit_onnx", None)
+    return emit if callable(emit) and calibration_tags(model).onnx else None
 
 
 def exportable_types() -> tuple[type, ...]:
-    """The calibrator classes :func:`export_onnx` knows (exactly these, not their subclasses)."""
+    """The registry's calibrator classes :func:`export_onnx` knows (and their subclasses that keep the tag)."""
     from ..compose._registry import model_classes
 
-    return tuple(cls for cls in model_classes().values() if _emitter(cls) is not None)
+    return tuple(cls for cls in model_classes().values() if callable(getattr(cls, "_emit_onnx", None)))
 
 
 def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
