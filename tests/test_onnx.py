@@ -182,14 +182,16 @@ class ClippedLinearCalibrator(LinearCalibrator):
         return g.op("Min", g.op("Max", out, g.const(-self.limit_)), g.const(self.limit_))
 
 
-def test_a_new_calibrator_needs_one_registry_line_to_be_saved_and_exported(tmp_path):
+def test_a_new_calibrator_exports_its_own_graph_and_needs_one_registry_line_to_be_saved(tmp_path):
     from ftcal.compose import _registry
+    from ftcal.core import ModelFileError
 
     raw, w = _sensor()
     model = ClippedLinearCalibrator().fit(raw[:200], w[:200])
     far = raw * 3.0  # beyond the training loads: the clipping is in the graph
-    with pytest.raises(ExportError, match="ClippedLinearCalibrator cannot be exported"):
-        export_onnx(model, tmp_path / "before.onnx")
+    _assert_parity(model, export_onnx(model, tmp_path / "before.onnx"), far)  # its tags say onnx: its own graph
+    with pytest.raises((ModelFileError, ValueError), match="ClippedLinearCalibrator"):
+        save_model(model, tmp_path / "before.model.npz")
     _registry.register_calibrator("clipped_linear", ClippedLinearCalibrator)
     try:
         _assert_parity(model, export_onnx(model, tmp_path / "clipped.onnx"), far)
