@@ -284,3 +284,101 @@ def test_history_routes_groups_to_its_estimator(counting):
     counting.fits = counting.fits_with_groups = 0
     HistoryCalibrator(_declining(), taus=(2.0,), cv=3).fit(raw, wrench, groups=groups)
     assert counting.fits > 0 and counting.fits_with_groups == 0
+
+
+# ------------------------------------------------------------------------------------------ sample weights
+
+
+def _weighted_least_squares(X, y, w):
+    """``[C.T; b]`` minimising ``sum_i w_i ||y_i - C x_i - b||²``: the weighted normal equations."""
+    A = np.hstack([X, np.ones((len(X), 1))])
+    return np.linalg.solve(A.T @ (w[:, None] * A), A.T @ (w[:, None] * y))
+
+
+def _noisy(seed=0, n=80):
+    rng = np.random.default_rng(seed)
+    raw = rng.normal(size=(n, 6))
+    wrench = raw @ rng.normal(size=(6, 6)) + 0.5 * rng.normal(size=(n, 6))  # noise: weights move the fit
+    return raw, wrench, rng.uniform(0.0, 3.0, n)
+
+
+def test_linear_calibrator_with_weights_is_weighted_least_squares():
+    raw, wrench, w = _noisy()
+    model = LinearCalibrator().fit(raw, wrench, sample_weight=w)
+    expected = _weighted_least_squares(raw, wrench, w)
+    np.testing.assert_allclose(model.calibration_matrix_, expected[:6].T, rtol=1e-9, atol=1e-12)
+    np.testing.assert_allclose(model.offset_, expected[6], rtol=1e-9, atol=1e-12)
+    unweighted = LinearCalibrator().fit(raw, wrench)
+    assert np.abs(unweighted.calibration_matrix_ - model.calibration_matrix_).max() > 1e-3  # the weights count
+    np.testing.assert_allclose(LinearCalibrator().fit(raw, wrench, sample_weight=np.full(len(raw), 3.0))
+                               .calibration_matrix_, unweighted.calibration_matrix_, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("group_offsets", [False, True])
+@pytest.mark.parametrize("ridge", [0.0, 1e-3])
+def test_polynomial_weights_count_as_repeated_rows(ridge, group_offsets):
+    """An integer weight k is the row given k times (the penalty scales with the total weight, as with rows)."""
+    raw, wrench, _ = _noisy(seed=1, n=60)
+    groups = np.repeat(np.arange(6), 10)
+    k = np.r_[np.full(30, 2), np.ones(30, dtype=int), ][np.random.default_rng(2).permutation(60)]
+    k[:3] = 0  # zero weight: the row does not count
+    make = lambda: PolynomialCalibrator(degree=2, ridge=ridge, group_offsets=group_offsets,  # noqa: E731
+                                        zero_reading=np.zeros(6))
+    weighted = make().fit(raw, wrench, groups=groups, sample_weight=k.astype(float))
+    repeated = make().fit(np.repeat(raw, k, axis=0), np.repeat(wrench, k, axis=0), groups=np.repeat(groups, k))
+    np.testing.assert_allclose(weighted.coef_, repeated.coef_, rtol=1e-8, atol=1e-10)
+    np.testing.assert_allclose(weighted.intercept_, repeated.intercept_, rtol=1e-8, atol=1e-10)
+    assert np.abs(make().fit(raw, wrench, groups=groups).coef_ - weighted.coef_).max() > 1e-4
+
+
+def test_wrappers_route_weights_to_their_inner_calibrator():
+    raw, wrench, w = _noisy(seed=3)
+    direct = LinearCalibrator().fit(raw, wrench, sample_weight=w)
+    ensemble = EnsembleCalibrator(LinearCalibrator(), n_members=2, random_state=0).fit(raw, wrench, sample_weight=w)
+    for member in ensemble.estimators_:
+        np.testing.assert_allclose(member.calibration_matrix_, direct.calibration_matrix_, rtol=1e-12)
+    temperature = np.random.default_rng(3).uniform(15.0, 35.0, len(raw))
+    X = np.column_stack([raw, temperature])
+    compensated = TemperatureCompensatedCalibrator().fit(X, wrench, sample_weight=w)
+    inner_X = compensated._compensate(raw, temperature)
+    expected = _weighted_least_squares(inner_X, wrench, w)
+    np.testing.assert_allclose(compensated.estimator_.calibration_matrix_, expected[:6].T, rtol=1e-8, atol=1e-10)
+
+
+@pytest.mark.parametrize("wrapper", [
+    lambda inner: EnsembleCalibrator(inner, n_members=2, random_state=0),
+    lambda inner: TemperatureCompensatedCalibrator(inner),
+], ids=["ensemble", "temperature"])
+def test_a_wrapper_refuses_weights_its_inner_calibrator_cannot_take(wrapper):
+    raw, wrench, w = _noisy(seed=4)
+    X = np.column_stack([raw, np.linspace(15.0, 35.0, len(raw))])
+    with pytest.raises(ValueError, match="was given sample_weight but AxisNonlinearCalibrator does not take sample "
+                                         "weights"):
+        wrapper(AxisNonlinearCalibrator()).fit(X, wrench, sample_weight=w)
+    with config_context(enable_metadata_routing=True):
+        declined = LinearCalibrator().set_fit_request(sample_weight=False)
+    with pytest.raises(ValueError, match="but LinearCalibrator does not take sample weights"):
+        wrapper(declined).fit(X, wrench, sample_weight=w)
+    with pytest.raises(TypeError, match="sample_weight"):  # a calibrator without weights: Python's own error
+        AxisNonlinearCalibrator().fit(raw, wrench, sample_weight=w)
+
+
+@pytest.mark.parametrize("bad, words", [
+    (lambda n: np.ones(n - 1), "must have shape"), (lambda n: -np.ones(n), "finite and >= 0"),
+    (lambda n: np.r_[np.nan, np.ones(n - 1)], "finite and >= 0"), (lambda n: np.zeros(n), "zero for every row"),
+])
+def test_bad_weights_get_a_clear_error_before_fitting(bad, words):
+    raw, wrench, _ = _noisy(seed=5)
+    model = LinearCalibrator()
+    with pytest.raises(ValueError, match=words):
+        model.fit(raw, wrench, sample_weight=bad(len(raw)))
+    assert not hasattr(model, "calibration_matrix_")
+
+
+def test_pipeline_and_cross_validate_route_weights_to_the_calibrator():
+    raw, wrench, w = _noisy(seed=6)
+    with config_context(enable_metadata_routing=True):
+        pipe = Pipeline([("id", FunctionTransformer()), ("cal", LinearCalibrator())])
+        pipe.fit(raw, wrench, sample_weight=w)
+    np.testing.assert_allclose(pipe[-1].calibration_matrix_,
+                               LinearCalibrator().fit(raw, wrench, sample_weight=w).calibration_matrix_, rtol=1e-12)

@@ -44,7 +44,8 @@ from ..core._validation import (check_finite_output, check_zero_reading, refuse_
 from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches, target_axes
 from ._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["BaseCalibrator", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare"]
+__all__ = ["BaseCalibrator", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare",
+           "check_sample_weight"]
 
 
 def _rows_per_channel(rows_per_channel: int) -> Callable[[int], int]:
@@ -156,6 +157,43 @@ def calibration_tags(estimator) -> CalibrationTags:
     return getattr(tags, "ftcal", None) or CalibrationTags()
 
 
+def check_sample_weight(sample_weight: ArrayLike | None, n_samples: int) -> NDArray[np.float64] | None:
+    """``sample_weight`` checked as one finite weight >= 0 per row, not all zero; ``None`` passes through.
+
+    The weight of a row multiplies its squared residual in a weighted least-squares fit (a row of weight 2
+    counts as two equal rows).
+
+    Examples
+    --------
+    >>> check_sample_weight([1, 2, 0], 3).tolist()
+    [1.0, 2.0, 0.0]
+    >>> check_sample_weight([1, -1], 2)
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: sample_weight must be finite and >= 0 (one weight per row of X); got -1 at row 1.
+    """
+    if sample_weight is None:
+        return None
+    try:
+        w = np.asarray(sample_weight, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise CalibrationInputError(f"sample_weight must be numbers, one weight per row of X; got {sample_weight!r:.80}.",
+                                    parameter="sample_weight") from None
+    if w.ndim == 0:
+        w = np.full(n_samples, float(w))
+    if w.shape != (n_samples,):
+        raise CalibrationInputError(f"sample_weight must have shape ({n_samples},), one weight per row of X; got shape "
+                                    f"{w.shape}.", parameter="sample_weight")
+    bad = np.flatnonzero(~np.isfinite(w) | (w < 0))
+    if bad.size:
+        raise CalibrationInputError(f"sample_weight must be finite and >= 0 (one weight per row of X); got "
+                                    f"{w[bad[0]]:g} at row {bad[0]}.", parameter="sample_weight")
+    if not w.any():
+        raise CalibrationInputError("sample_weight is zero for every row: nothing is left to fit; give some rows a "
+                                    "positive weight.", parameter="sample_weight")
+    return w
+
+
 def calibrated_range(X: NDArray[np.float64]) -> NDArray[np.float64]:
     """Min and max of each channel of the training readings, shape (2, N)."""
     return np.vstack([X.min(axis=0), X.max(axis=0)])
@@ -265,12 +303,23 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         -------
         self
         """
+        return self._checked_fit(X, y)
+
+    def _checked_fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None,
+                     sample_weight: ArrayLike | None = None):
+        """``fit``'s body for every calibrator: prepare (:meth:`_prepare_fit`), check the metadata its ``fit``
+        takes (:meth:`_fit_metadata`), then the model's own ``_fit``."""
         # one BLAS thread: the least-squares problems are small; threaded OpenBLAS made a 5000-row polynomial fit 20x
         # slower on a busy machine (benchmarks/thread_limits.py). Never another thread's: see limit_threads_here.
         with limit_threads_here(1):
             X, y = self._prepare_fit(X, y)
-            self._fit(X, y)
+            self._fit(X, y, **self._fit_metadata(len(X), groups, sample_weight))
         return self
+
+    def _fit_metadata(self, n_samples: int, groups, sample_weight) -> dict:
+        """The keyword arguments of ``_fit`` from ``fit``'s metadata (only a class whose ``fit`` takes one gets it)."""
+        weights = check_sample_weight(sample_weight, n_samples)
+        return {} if weights is None else {"sample_weight": weights}
 
     def _prepare_fit(self, X: ArrayLike, y: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Everything ``fit`` does before the model's own ``_fit``: check the parameters, validate the data, set
@@ -493,9 +542,9 @@ class GroupsFit:
         -------
         self
         """
-        with limit_threads_here(1):  # as BaseCalibrator.fit
-            X, y = self._prepare_fit(X, y)
-            uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
-            groups = check_groups(groups, len(X), labels=uses, purpose=purpose, fix=fix)
-            self._fit(X, y, groups if uses else None)
-        return self
+        return self._checked_fit(X, y, groups)
+
+    def _fit_metadata(self, n_samples: int, groups, sample_weight) -> dict:
+        uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
+        groups = check_groups(groups, n_samples, labels=uses, purpose=purpose, fix=fix)
+        return {**super()._fit_metadata(n_samples, None, sample_weight), "groups": groups if uses else None}

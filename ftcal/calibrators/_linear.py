@@ -14,8 +14,10 @@ from ._base import BaseCalibrator, declare
 __all__ = ["LinearCalibrator", "affine_fit"]
 
 
-def affine_fit(X: NDArray[np.float64], y: NDArray[np.float64], ridge: float = 0.0) -> LinearRegression | Ridge:
-    """The affine least-squares fit ``y ≈ X C.T + b`` of scikit-learn (``Ridge`` on ``C`` when ``ridge > 0``).
+def affine_fit(X: NDArray[np.float64], y: NDArray[np.float64], ridge: float = 0.0,
+               sample_weight: NDArray[np.float64] | None = None) -> LinearRegression | Ridge:
+    """The affine least-squares fit ``y ≈ X C.T + b`` of scikit-learn (``Ridge`` on ``C`` when ``ridge > 0``),
+    weighted by ``sample_weight`` (one weight >= 0 per row) when given.
 
     The one affine fit of ftcal: the LTM, the hybrid's and the GP's linear
     bases, the zero-load forward model. ``coef_`` is ``C`` (k, N) and
@@ -28,7 +30,7 @@ def affine_fit(X: NDArray[np.float64], y: NDArray[np.float64], ridge: float = 0.
     >>> np.round(fit.coef_, 6).tolist(), np.round(fit.intercept_, 6).tolist()
     ([[3.0]], [1.0])
     """
-    return (Ridge(ridge) if ridge > 0 else LinearRegression()).fit(X, y)
+    return (Ridge(ridge) if ridge > 0 else LinearRegression()).fit(X, y, sample_weight=sample_weight)
 
 
 class LinearCalibrator(BaseCalibrator):
@@ -36,7 +38,8 @@ class LinearCalibrator(BaseCalibrator):
 
     ``C`` (6 x N) and ``b`` (6,) minimise ``sum_i ||W_i - C S_i - b||²``
     (eq. 2), optionally plus ``ridge * ||C||²`` (the offset is not
-    penalised). The per-component least-squares solution does not depend on
+    penalised); ``fit(X, y, sample_weight=w)`` weighs row i's squared
+    residual by ``w_i`` (weighted least squares). The per-component least-squares solution does not depend on
     the torque scale, so ``alpha_`` only enters the metrics.
 
     Parameters
@@ -92,13 +95,31 @@ class LinearCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    #: Takes ``sample_weight`` and asks for it through metadata routing by default (like ``groups``).
+    __metadata_request__fit = {"sample_weight": True}
+
+    def fit(self, X, y, sample_weight=None):
+        """Fit ``C`` and ``b`` on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row's squared residual (weighted least squares); ``None``: all rows alike. The
+            zero-load reading and the noise estimate stay unweighted (properties of the sensor, not the fit).
+
+        Returns
+        -------
+        self
+        """
+        return self._checked_fit(X, y, sample_weight=sample_weight)
+
     def __sklearn_tags__(self):
         # its coefficients plus one training row
         return declare(super().__sklearn_tags__(), cost="closed_form", family="linear",
                        min_training_rows=lambda n_channels: n_channels + 2)
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:
-        fit = affine_fit(X, y, float(self.ridge))
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], sample_weight=None) -> None:
+        fit = affine_fit(X, y, float(self.ridge), sample_weight)
         self.calibration_matrix_, self.offset_ = fit.coef_.reshape(y.shape[1], -1), np.reshape(fit.intercept_, -1)
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -151,6 +151,26 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         self.random_state = random_state
 
     _groups_purpose = ("one offset per group", "fit without group_offsets")
+    #: Takes ``sample_weight`` and asks for it through metadata routing by default (``groups`` too: GroupsFit).
+    __metadata_request__fit = {"sample_weight": True}
+
+    def fit(self, X, y, groups=None, sample_weight=None):
+        """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
+
+        Parameters
+        ----------
+        groups : array-like of shape (n,) or None
+            Group of each row (pose, session): one offset per group with ``group_offsets=True``; else only
+            checked for its length.
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row's squared residual (weighted least squares; the penalty is ``ridge`` times the
+            sum of the weights, so weights that are all equal give the unweighted fit). ``None``: all rows alike.
+
+        Returns
+        -------
+        self
+        """
+        return self._checked_fit(X, y, groups, sample_weight)
 
     def _uses_groups(self) -> bool:
         return bool(self.group_offsets)
@@ -169,7 +189,8 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         """Monomials of degree 1..``degree`` of ``n_channels`` variables: ``C(N + d, d) - 1``."""
         return math.comb(n_channels + int(self.degree), int(self.degree)) - 1
 
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None,
+             sample_weight: NDArray[np.float64] | None = None) -> None:
         n, n_channels = X.shape
         n_features = self._n_monomials(n_channels)
         penalised = n_features - n_channels
@@ -199,8 +220,9 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         scale = np.abs(xc).max(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
         features = self._monomials().transform(xc / self.input_scale_)
-        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * len(y), n_unpenalised=X.shape[1],
-                                                          groups=groups)
+        total = len(y) if sample_weight is None else float(sample_weight.sum())  # the penalty per unit of weight
+        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * total, n_unpenalised=X.shape[1],
+                                                          groups=groups, sample_weight=sample_weight)
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         monomials = self._monomials()

@@ -26,8 +26,10 @@ from numpy.typing import NDArray
 __all__ = ["ridge_least_squares", "group_means"]
 
 
-def group_means(values: NDArray[np.float64], groups: NDArray) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """Each group's mean row of ``values`` (groups in sorted label order) and each row's group index.
+def group_means(values: NDArray[np.float64], groups: NDArray, weights: NDArray[np.float64] | None = None
+                ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """Each group's mean row of ``values`` (groups in sorted label order; weighted by ``weights``, a group of zero
+    weight has NaN means) and each row's group index.
 
     Examples
     --------
@@ -38,13 +40,15 @@ def group_means(values: NDArray[np.float64], groups: NDArray) -> tuple[NDArray[n
     from scipy.sparse import csr_matrix
 
     index = np.unique(groups, return_inverse=True)[1].ravel()
-    members = csr_matrix((np.ones(len(index)), (index, np.arange(len(index)))))  # groups x rows
-    return np.asarray(members @ values) / np.asarray(members.sum(axis=1)), index
+    w = np.ones(len(index)) if weights is None else weights
+    members = csr_matrix((w, (index, np.arange(len(index)))), shape=(index.max(initial=-1) + 1, len(index)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.asarray(members @ values) / np.asarray(members.sum(axis=1)), index
 
 
 def ridge_least_squares(
     features: NDArray[np.float64], y: NDArray[np.float64], penalty: float, n_unpenalised: int,
-    groups: NDArray | None = None,
+    groups: NDArray | None = None, sample_weight: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``coef, intercept`` minimising ``||y - features @ coef - intercept||² + penalty ||coef[n_unpenalised:]||²``.
 
@@ -53,7 +57,9 @@ def ridge_least_squares(
     exactly zero, the rest ordinary least squares), ``penalty = 0`` ordinary
     least squares (the minimum-norm solution for rank-deficient features).
     ``groups`` (one label per row): one intercept per group instead of one in
-    all, and the mean of the groups' intercepts returned (see the module).
+    all, and the mean of the groups' intercepts returned (see the module). ``sample_weight`` (one weight >= 0 per
+    row): weighted least squares, ``sum_i w_i ||r_i||²`` (the means weighted too; a group of zero weight has no
+    intercept of its own to average).
 
     Examples
     --------
@@ -64,13 +70,17 @@ def ridge_least_squares(
     """
     n_features, k = features.shape[1], y.shape[1]
     if groups is None:
-        feature_mean, target_mean = features.mean(axis=0), y.mean(axis=0)
+        feature_mean, target_mean = (np.average(v, axis=0, weights=sample_weight) for v in (features, y))
         centred, target = features - feature_mean, y - target_mean
     else:  # each group centred on its own means; the intercept: the mean over the groups of theirs
-        means, index = group_means(np.hstack([features, y]), groups)  # one pass over the rows
-        feature_means, target_means = means[:, :n_features], means[:, n_features:]
+        means, index = group_means(np.hstack([features, y]), groups, sample_weight)  # one pass over the rows
+        weighed = ~np.isnan(means[:, 0])  # groups of zero weight: their rows count for nothing
+        feature_means, target_means = np.nan_to_num(means[:, :n_features]), np.nan_to_num(means[:, n_features:])
         centred, target = features - feature_means[index], y - target_means[index]
-        feature_mean, target_mean = feature_means.mean(axis=0), target_means.mean(axis=0)
+        feature_mean, target_mean = feature_means[weighed].mean(axis=0), target_means[weighed].mean(axis=0)
+    if sample_weight is not None:  # sum_i w_i r_i²: each row scaled by sqrt(w_i)
+        root = np.sqrt(sample_weight)[:, None]
+        centred, target = centred * root, target * root
     n_penalised = n_features - n_unpenalised
     coef = np.zeros((n_features, k))
     if np.isinf(penalty):  # the limit: penalised coefficients zero, the free ones by least squares

@@ -129,7 +129,7 @@ class EnsembleCalibrator(BaseCalibrator):
         """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.compose._routing`)."""
         return wrapper_routing(self, self._template())
 
-    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, sample_weight: ArrayLike | None = None):
         """Fit every member on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
 
         Parameters
@@ -137,6 +137,9 @@ class EnsembleCalibrator(BaseCalibrator):
         groups : array-like of shape (n,) or None
             Group of each row, passed to every member that requests them
             (metadata routing; e.g. members that choose by cross-validation).
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row, passed to every member (metadata routing); an error when the members do not
+            take weights.
 
         Returns
         -------
@@ -147,7 +150,7 @@ class EnsembleCalibrator(BaseCalibrator):
         template = self._template()
         X, y = validate_training_data(self, X, y)
         refuse_history_inside(template, type(self).__name__)
-        routed = routed_fit_params(self, groups)
+        routed = routed_fit_params(self, groups, sample_weight=sample_weight, inner=template)
         member = calibration_tags(template)
         if member.network:  # every member's training memory, before building any
             template._check_network_memory(X.shape[1], len(X), members=int(n))

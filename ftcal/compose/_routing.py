@@ -1,4 +1,5 @@
-"""``groups`` through scikit-learn's metadata routing, for ftcal's wrappers and its model-choosing calibrators.
+"""``groups`` and ``sample_weight`` through scikit-learn's metadata routing, for ftcal's wrappers and its
+model-choosing calibrators.
 
 Calibration data come in groups (the rows of one pose, one load
 configuration); a calibrator that chooses something by cross-validation
@@ -19,6 +20,12 @@ hold out whole groups. ``groups`` reach it the scikit-learn way:
   and :func:`~sklearn.model_selection.cross_validate` pass them through to
   every ftcal calibrator that requests them (and to their group splitters).
 
+``sample_weight`` goes the same way: the calibrators that weigh their rows (a weighted least squares:
+:class:`~ftcal.LinearCalibrator`, :class:`~ftcal.PolynomialCalibrator`) request it by default, and a wrapper
+given weights passes them to its inner calibrator, as scikit-learn's ``StackingRegressor`` passes them to its
+estimators; a wrapper whose inner calibrator does not take them refuses them with an error naming it (weights
+silently dropped would be a fit other than the one asked for).
+
 No signature is inspected: what a calibrator receives is what its routing says.
 """
 
@@ -26,20 +33,44 @@ from __future__ import annotations
 
 from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, get_routing_for_object, process_routing
 
-__all__ = ["wrapper_routing", "routed_fit_params", "requests_groups"]
+from ..core._exceptions import CalibrationInputError
+
+__all__ = ["wrapper_routing", "routed_fit_params", "requests_groups", "requests"]
 
 
 def wrapper_routing(owner, estimator) -> MetadataRouter:
-    """The routing of a wrapper: it accepts ``groups`` itself and routes ``fit`` metadata to ``estimator``."""
+    """The routing of a wrapper: it accepts ``groups`` (and ``sample_weight``) itself and routes ``fit`` metadata to
+    ``estimator``."""
     return MetadataRouter(owner=owner).add_self_request(owner).add(
         estimator=estimator, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
 
 
-def routed_fit_params(owner, groups) -> dict:
-    """The ``fit`` parameters ``owner``'s routing gives its inner ``estimator`` for these ``groups``."""
-    if groups is None:
+def routed_fit_params(owner, groups=None, *, sample_weight=None, inner=None) -> dict:
+    """The ``fit`` parameters ``owner``'s routing gives its inner ``estimator`` for these ``groups`` and weights.
+
+    Raises
+    ------
+    CalibrationInputError
+        ``sample_weight`` given while the inner calibrator (``inner``, named in the message) does not take or
+        request it.
+    """
+    params = {name: value for name, value in (("groups", groups), ("sample_weight", sample_weight))
+              if value is not None}
+    if not params:
         return {}
-    return dict(process_routing(owner, "fit", groups=groups).estimator.fit)
+    if sample_weight is not None and not requests(owner, "sample_weight"):
+        what = type(inner).__name__ if inner is not None else "its estimator"
+        raise CalibrationInputError(
+            f"{type(owner).__name__} was given sample_weight but {what} does not take sample weights (its fit has "
+            "no sample_weight, or it was set with set_fit_request(sample_weight=False)); use an estimator that "
+            "weighs its rows (LinearCalibrator, PolynomialCalibrator) or fit without sample_weight.",
+            parameter="sample_weight")
+    return dict(process_routing(owner, "fit", **params).estimator.fit)
+
+
+def requests(estimator, name: str) -> bool:
+    """Whether ``estimator.fit`` (or a calibrator inside it) asks for the metadata ``name`` through its routing."""
+    return name in get_routing_for_object(estimator).consumes(method="fit", params=[name])
 
 
 def requests_groups(estimator) -> bool:
@@ -51,4 +82,4 @@ def requests_groups(estimator) -> bool:
     >>> requests_groups(AxisNonlinearCalibrator()), requests_groups(LinearCalibrator())
     (True, False)
     """
-    return "groups" in get_routing_for_object(estimator).consumes(method="fit", params=["groups"])
+    return requests(estimator, "groups")

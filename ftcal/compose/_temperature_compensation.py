@@ -124,7 +124,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.compose._routing`)."""
         return wrapper_routing(self, self._inner())
 
-    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
+    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, sample_weight: ArrayLike | None = None):
         """Learn the thermal coefficients, then fit ``estimator`` on compensated readings.
 
         Parameters
@@ -134,6 +134,9 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
             ``estimator`` when it requests them (metadata routing), so that
             an inner model choice (``auto``, the hybrid's ridge) holds out
             whole groups.
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row, passed to ``estimator`` (metadata routing; an error when it does not take
+            weights). The thermal coefficients are fitted unweighted (a property of the sensor).
 
         Returns
         -------
@@ -163,7 +166,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 # ... and linear in (g, o) for fixed f
                 (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
         self.gain_per_deg_, self.offset_per_deg_ = gain, offset
-        routed = routed_fit_params(self, groups)
+        routed = routed_fit_params(self, groups, sample_weight=sample_weight, inner=self._inner())
         inner = with_settings(self._inner(), alpha=self.alpha, zero_reading=self.zero_reading,
                               random_state=self.random_state)
         self.estimator_ = inner.fit(self._compensate(raw, temperature), named_targets(y, axes), **routed)
