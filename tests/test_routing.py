@@ -382,3 +382,30 @@ def test_pipeline_and_cross_validate_route_weights_to_the_calibrator():
         pipe.fit(raw, wrench, sample_weight=w)
     np.testing.assert_allclose(pipe[-1].calibration_matrix_,
                                LinearCalibrator().fit(raw, wrench, sample_weight=w).calibration_matrix_, rtol=1e-12)
+
+
+# ------------------------------------------------------------------------------------------ users' regressors
+
+
+def test_a_users_regressor_is_a_member_composed_with_tare_torque_scale_and_range():
+    """Any scikit-learn regressor is a member or an inner model: composed into a calibrator (alpha_, the zero-load
+    reading, the calibrated range, re-tare) around its own predict."""
+    from sklearn.linear_model import Ridge
+
+    raw, wrench, w = _noisy(seed=7)
+    ridge = Ridge(alpha=2.0).fit(raw, wrench)
+    ensemble = EnsembleCalibrator(Ridge(alpha=2.0), n_members=2, random_state=0).fit(raw, wrench)
+    np.testing.assert_allclose(ensemble.predict(raw), ridge.predict(raw), rtol=1e-12, atol=1e-12)
+    assert ensemble.alpha_ > 0 and ensemble.calibrated_range_.shape == (2, 6)
+    assert ensemble.out_of_range(10 * raw[:1]).tolist() == [True]
+    shifted = ensemble.retare(np.tile(ensemble.zero_reading_ + 0.5, (3, 1))).predict(raw + 0.5)
+    np.testing.assert_allclose(shifted, ridge.predict(raw), rtol=1e-9, atol=1e-9)  # the re-tare around it
+
+    temperature = np.random.default_rng(7).uniform(15.0, 35.0, len(raw))
+    compensated = TemperatureCompensatedCalibrator(Ridge(alpha=2.0)).fit(np.column_stack([raw, temperature]),
+                                                                        wrench)
+    inner = Ridge(alpha=2.0).fit(compensated._compensate(raw, temperature), wrench)
+    np.testing.assert_allclose(compensated.estimator_.predict(raw), inner.predict(raw), rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="'estimator' parameter of EnsembleCalibrator must be an object "
+                                         "implementing 'fit' and 'predict'"):
+        EnsembleCalibrator("ridge").fit(raw, wrench)

@@ -40,7 +40,8 @@ from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
 from ..core._validation import check_arguments
 
-__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator"]
+__all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator",
+           "as_calibrator"]
 
 #: Rows the stock kernel baselines are fitted on at most by default: ``GaussianProcessCalibrator``'s
 #: ``max_samples`` (a test checks they agree), the one budget of every comparison (auto, ``ftcal benchmark``,
@@ -407,3 +408,24 @@ class StockCalibrator(BaseCalibrator):
         kernel *= -0.5
         np.exp(kernel, out=kernel)
         return self.amplitude_ * (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_
+
+
+def as_calibrator(estimator) -> BaseCalibrator:
+    """``estimator`` itself when it is a calibrator, else a user's regressor composed into one: a
+    :class:`StockCalibrator` around it, which adds what every calibrator has around its model (the torque scale
+    ``alpha_``, the zero-load reading and its re-tare, the calibrated range, the checks of ``predict``).
+
+    What a wrapper (:class:`~ftcal.EnsembleCalibrator`, :class:`~ftcal.TemperatureCompensatedCalibrator`) calls
+    on its ``estimator``, so that any scikit-learn regressor can be a member.
+
+    Examples
+    --------
+    >>> from sklearn.linear_model import Ridge
+    >>> type(as_calibrator(Ridge())).__name__, as_calibrator(Ridge()).baseline
+    ('StockCalibrator', Ridge())
+    >>> from ftcal import LinearCalibrator
+    >>> model = LinearCalibrator(); as_calibrator(model) is model
+    True
+    """
+    return estimator if isinstance(estimator, BaseCalibrator) else StockCalibrator(baseline=estimator)
+

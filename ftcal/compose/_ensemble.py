@@ -11,10 +11,11 @@ from joblib import Parallel, delayed
 from numpy.typing import ArrayLike, NDArray
 from sklearn.base import clone
 from sklearn.utils import check_random_state
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import HasMethods, Interval
 
 from ._history import refuse_history_inside
 from ..calibrators._base import BaseCalibrator, calibration_tags, declare
+from ..calibrators._baselines import as_calibrator
 from ._routing import routed_fit_params, wrapper_routing
 from ..networks._directional import DirectionalCalibrator
 from ..core._exceptions import CalibrationInputError
@@ -59,10 +60,14 @@ class EnsembleCalibrator(BaseCalibrator):
 
     Parameters
     ----------
-    estimator : calibrator or None, default=None
+    estimator : calibrator, regressor or None, default=None
         The member template (e.g. :class:`~ftcal.DirectionalCalibrator` with a
         schedule); ``None`` means ``DirectionalCalibrator()``. Its own
-        ``random_state`` is replaced per member.
+        ``random_state`` is replaced per member. Any scikit-learn regressor
+        may be given: it is composed into a calibrator
+        (:func:`~ftcal.calibrators._baselines.as_calibrator`: a
+        :class:`~ftcal.calibrators.StockCalibrator` around it, whose seed does
+        not reach the regressor's own ``random_state``).
     n_members : int, default=5
         Number of members averaged.
     n_jobs : int or None, default=None
@@ -98,7 +103,7 @@ class EnsembleCalibrator(BaseCalibrator):
     #: Accepts the groups of the rows and passes them on when the members request them.
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
-        "estimator": [BaseCalibrator, None],
+        "estimator": [HasMethods(["fit", "predict"]), None],
         "n_members": [Interval(Integral, 1, None, closed="left")],
         "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
         "random_state": ["random_state"],
@@ -110,17 +115,12 @@ class EnsembleCalibrator(BaseCalibrator):
         self.n_jobs = n_jobs
         self.random_state = random_state
 
-    def _template(self):
-        template = DirectionalCalibrator() if self.estimator is None else self.estimator
-        if not isinstance(template, BaseCalibrator):
-            raise CalibrationInputError(
-                f"estimator must be an ftcal calibrator (e.g. DirectionalCalibrator(...)); got {template!r}."
-            )
-        return template
+    def _template(self) -> BaseCalibrator:
+        # a user's regressor becomes a calibrator (tare, torque scale, range around it): as_calibrator
+        return DirectionalCalibrator() if self.estimator is None else as_calibrator(self.estimator)
 
     def __sklearn_tags__(self):
-        member = calibration_tags(self.estimator if isinstance(self.estimator, BaseCalibrator) else
-                                  DirectionalCalibrator())
+        member = calibration_tags(self._template())
         # n_members fits: costly work for auto's scheduling whatever the member (a network's when it is one)
         return declare(super().__sklearn_tags__(), cost="network" if member.network else "heavy",
                        uses_groups=member.uses_groups)

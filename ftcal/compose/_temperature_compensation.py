@@ -6,10 +6,11 @@ from numbers import Integral, Real
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import HasMethods, Interval
 from sklearn.utils.validation import check_is_fitted
 
 from ..calibrators._base import BaseCalibrator, calibration_tags, declare, with_settings
+from ..calibrators._baselines import as_calibrator
 from ._routing import routed_fit_params, wrapper_routing
 from ..core._exceptions import CalibrationInputError
 from ._history import refuse_history_inside
@@ -38,8 +39,10 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
 
     Parameters
     ----------
-    estimator : calibrator or None, default=None
-        The calibrator fed the compensated readings; ``None``: :class:`~ftcal.LinearCalibrator`.
+    estimator : calibrator, regressor or None, default=None
+        The calibrator fed the compensated readings; ``None``: :class:`~ftcal.LinearCalibrator`. Any
+        scikit-learn regressor may be given: it is composed into a calibrator (a
+        :class:`~ftcal.calibrators.StockCalibrator` around it: tare, torque scale and range).
     reference_temperature : float, default=25
         ``T0`` [deg C].
     n_iterations : int, default=5
@@ -83,7 +86,7 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
-        "estimator": [BaseCalibrator, None],
+        "estimator": [HasMethods(["fit", "predict"]), None],
         "reference_temperature": [Interval(Real, -273.15, None, closed="neither")],
         "n_iterations": [Interval(Integral, 1, None, closed="left")],
     }
@@ -111,7 +114,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         return (raw - dt * self.offset_per_deg_) / (1.0 + dt * self.gain_per_deg_)
 
     def _inner(self) -> BaseCalibrator:
-        return LinearCalibrator() if self.estimator is None else self.estimator
+        # a user's regressor becomes a calibrator (tare, torque scale, range around it): as_calibrator
+        return LinearCalibrator() if self.estimator is None else as_calibrator(self.estimator)
 
     def __sklearn_tags__(self):
         # its last input column is the temperature, not a channel; otherwise it is what it wraps
