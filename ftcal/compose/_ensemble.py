@@ -65,7 +65,7 @@ class EnsembleCalibrator(BaseCalibrator):
         schedule); ``None`` means ``DirectionalCalibrator()``. Its own
         ``random_state`` is replaced per member. Any scikit-learn regressor
         may be given: it is composed into a calibrator
-        (:func:`~ftcal.calibrators._baselines.as_calibrator`: a
+        (:func:`~ftcal.calibrators.as_calibrator`: a
         :class:`~ftcal.calibrators.StockCalibrator` around it, whose seed does
         not reach the regressor's own ``random_state``).
     n_members : int, default=5
