@@ -33,6 +33,7 @@ examples:
   ftcal identify-load recording.csv --settle 2 --out tool          # continuous (a 'time' column): still poses found
   ftcal identify-load my_bag --wrench-topic /ft_sensor/wrench --robot ur5 --out tool   # a ROS bag + joint states
   ftcal identify-load my.bag --tf base_link,ft_sensor --out tool  # a ROS 1 bag, the orientation from /tf
+  ftcal identify-load poses.csv --mounting --out tool             # with the sensor's mounting rotation
 
 inputs: run logs (joints and raw channels; need --model), or pose files (CSV): the sensor's orientation in
 the base frame as qx,qy,qz,qw (scalar last, as ROS writes it), R00..R22 (Rij = row i, column j) or
@@ -48,7 +49,8 @@ recordings: the sensor's topic (a wrench, or raw gauges with --raw-topic and --m
 the README.
 
 writes DIR/NAME.tool.json: mass [kg], centre of mass [m] (sensor frame), bias [N, N·m], their standard
-errors, the residual RMS and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
+errors, the residual RMS in-sample and held out (leave-poses-out: each pose predicted by the tool identified on
+the other poses; K-fold over poses, leave-one-out on at most --cv poses) and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
 the wrench in the sensor frame and its spread). Every row of run logs is one static pose (the 'run' column
 is ignored). 'ftcal export NAME.tool.json --format ros' writes the ROS gravity-compensation YAML.
 With the poses' times (run logs' timestamps, a pose file's 'time' column or bag stamps [s], or the row
@@ -90,6 +92,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_recording_options(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
     p.add_argument("--name", default="tool", help="file name stem of the tool file")
+    p.add_argument("--mounting", action="store_true",
+                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
+                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
     add_drift_options(p)
     add_output_options(p, "ftcal-tool")
     add_run_options(p, seed=False)
@@ -383,13 +388,14 @@ def _poses_csv(poses: _Poses) -> str:
 
 
 def run_identify(args: argparse.Namespace) -> int:
-    from ._tool_drift import drift_summary, identify, report_names, write_report
+    from ._tool_drift import identify, report_names, write_report
 
     console = Console(args.quiet)
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     poses = identification_poses(args, console)
+    _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
                             poses.sources, poses.groups)
     info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
@@ -412,13 +418,57 @@ def run_identify(args: argparse.Namespace) -> int:
                 plan.leaving_out(stale)
         with plan.writing(name) as tmp:
             write_json(tmp, {**tool.to_dict(), **info})
-    c = tool.center_of_mass * 1000
-    console.info(
-        f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
-        f"(sensor frame), from {len(poses.rotations)} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
-        f"{tool.residual_rms[1]:.3g} N·m{drift_summary(tool)} -> {plan.path(name)}"
-    )
+    console.info(f"{tool_line(tool, len(poses.rotations))} -> {plan.path(name)}")
+    _say_drift(args, poses, gravity)
     return 0
+
+
+def tool_line(tool, n_poses: int) -> str:
+    """The console's line on an identified tool: mass, centre of mass, the residual in-sample and held out, the
+    mounting rotation and the drift, each with its standard error where it has one."""
+    import numpy as np
+
+    from ._tool_drift import drift_summary
+
+    c = tool.center_of_mass * 1000
+    held = tool.held_out_residual_rms
+    held_text = "" if held is None else f"; held out (leave-poses-out) {held[0]:.3g} N, {held[1]:.3g} N·m"
+    mount = ""
+    if np.any(tool.mounting_rotation):
+        r, se = np.degrees(tool.mounting_rotation), np.degrees(tool.mounting_rotation_std_error)
+        mount = (f"; mounting rotation [{', '.join(f'{v:.2f}±{s:.2g}' for v, s in zip(r, se))}] deg (rotation "
+                 "vector, sensor frame)")
+    return (f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
+            f"(sensor frame), from {n_poses} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
+            f"{tool.residual_rms[1]:.3g} N·m in-sample{held_text}{mount}{drift_summary(tool)}")
+
+
+def _check_frame(args, poses, gravity) -> None:
+    """A warning line on stderr when gravity fits the wrench far better in the other frame than the declared one."""
+    from ftcal.core import CalibrationInputError
+    from ftcal.experiment import check_wrench_frame
+
+    try:
+        frame = check_wrench_frame(poses.rotations, poses.wrenches, args.wrench_frame, gravity=gravity)
+    except CalibrationInputError:  # inputs the identification refuses with its own words
+        return
+    if frame.other_fits_better:
+        print(f"ftcal: warning: {', '.join(poses.sources[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
+
+
+def _say_drift(args, poses, gravity) -> None:
+    """For poses without times (in recording order), one line on stderr when a drift over the row order cuts the
+    held-out residual by more than its paired SE: the figures, the mass and centre of mass change, the option."""
+    from ftcal.experiment import drift_in_recording_order
+
+    if poses.time is None and not args.time_from_order and args.drift == "auto" and poses.temperature is None:
+        try:
+            found = drift_in_recording_order(poses.rotations, poses.wrenches, gravity, groups=poses.groups,
+                                             cv=args.cv, random_state=0)
+        except ValueError:  # too few poses for a drift: nothing to say
+            found = None
+        if found is not None:
+            print(f"ftcal: note: {', '.join(poses.sources[:3])}: {found.words('--time-from-order')}", file=sys.stderr)
 
 
 def _compensation_rows(args, console: Console):
@@ -480,6 +530,10 @@ def run_compensate(args: argparse.Namespace) -> int:
     tool = ftcal.experiment.ToolLoad.load(args.tool)
     head, lead, rotations, wrenches, times, temperatures = _compensation_rows(args, console)
     external = compensate_rows(args, tool, rotations, wrenches, times, temperatures, ", ".join(args.inputs))
+    if tool.drift is None:  # (a drifting tool needs each row's time for both frames: the frame is checked at identify)
+        frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool)
+        if frame.other_fits_better:
+            print(f"ftcal: warning: {', '.join(args.inputs[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
     lines = [f"{head}," + ",".join(WRENCH_LABELS)]
     lines += [f"{first}," + ",".join(f"{v:.9g}" for v in row) for first, row in zip(lead, external)]
     text = "\n".join(lines) + "\n"

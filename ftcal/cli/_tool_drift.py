@@ -49,7 +49,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     or temperature). Library errors name the inputs."""
     import ftcal
     from ..core._exceptions import CalibrationInputError
-    from ..experiment._tool_load import identification_summary
+    from ftcal.experiment import identification_summary
     from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
@@ -59,7 +59,7 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     settings = dict(drift=args.drift, cv=args.cv, random_state=0, groups=groups)
     try:
         tool = ftcal.experiment.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
-                                        time_unit=unit, **settings)
+                                        time_unit=unit, mounting=getattr(args, "mounting", False), **settings)
         report = None
         if times is not None or temperatures is not None:
             report = identification_summary(rotations, wrenches, tool, times=times, temperatures=temperatures,

@@ -19,6 +19,10 @@ _PUBLIC = dict(
     ToolLoad="_tool_load", identify_tool_load="_tool_load", wrench_in_sensor_frame="_tool_load",
     tool_gravity_compensation_yaml="_tool_load", BiasDrift="_drift", DriftExtrapolationWarning="_drift",
     identification_summary="_tool_load", propose_next_poses="_next_poses", PoseProposal="_next_poses",
+    FrameCheck="_tool_checks", check_wrench_frame="_tool_checks", OrderDrift="_tool_checks",
+    drift_in_recording_order="_tool_checks", Observability="_mounting", ParameterBlock="_mounting",
+    tool_load_observability="_mounting", continuous_recording="_virtual_recording",
+    ContinuousRecording="_virtual_recording",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -330,7 +330,7 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
         raise CalibrationInputError(
             f"the poses cannot tell the sensor's mounting rotation: {'; '.join(problems)}.", parameter="mounting",
             value=True, fix="add poses that tilt the tool about the axis named (two tilt axes, large angles, e.g. the "
-            "11 of a plan with {subdivisions}), or identify without {mounting}",
+            "11 of a plan with {subdivisions}), or identify with {mounting}",
             settings={"subdivisions": 0, "mounting": False})
     r, r_cov, joint_cov = fit_mounting_rotation(gp, Wp, bp, fit, scale)
     return g_s @ Rotation.from_rotvec(r).as_matrix(), r, r_cov, joint_cov
