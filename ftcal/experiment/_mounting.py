@@ -15,7 +15,7 @@ a non-linear least-squares problem in ``r`` (Gauss-Newton by :func:`scipy.optimi
 inverse of its closed-form residual RMS, and the standard errors come from the Jacobian and the residual
 variance at the optimum (``s² (JᵀJ)⁻¹``).
 
-**Observability** (:func:`tool_load_observability`): before fitting, the Jacobian at the closed-form tool says
+**Observability** (:func:`ftcal.experiment.tool_load_observability`): before fitting, the Jacobian at the closed-form tool says
 what the poses can tell. For each parameter block (mass, centre of mass, force bias, torque bias, mounting
 rotation, drift) the block's columns are projected off the others' span; the smallest singular value of what
 remains, relative to the block's own scale, is its *identifiability* (1: independent of the others; 0: not
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["ParameterBlock", "Observability", "tool_load_observability", "fit_mounting_rotation", "identify_mounting",
+__all__ = ["ParameterBlock", "Observability", "fit_mounting_rotation", "identify_mounting", "block_observability",
            "UNIDENTIFIABLE", "MAX_MOUNTING_SE_DEG"]
 
 #: A block whose identifiability (smallest singular value of its columns off the others', relative) is below this
@@ -88,11 +88,9 @@ class ParameterBlock:
     def direction_text(self) -> str:
         """The weakest direction in words: ``"about the sensor's x axis"`` for a rotation, ``"along ..."`` for the
         centre of mass or a bias (empty for a one-parameter block)."""
-        from ._tool_load import _axis_text
-
         if self.n_parameters != 3:
             return ""
-        axis = _axis_text(self.weakest_direction)
+        axis = axis_text(self.weakest_direction)
         axis = f"{axis} axis" if len(axis) == 1 else f"axis {axis}"
         return f" about the sensor's {axis}" if self.name == "mounting rotation" else f" along the sensor's {axis}"
 
@@ -100,7 +98,7 @@ class ParameterBlock:
 @dataclass(frozen=True)
 class Observability:
     """Rank and condition of each parameter block of a tool identification at a pose set
-    (:func:`tool_load_observability`)."""
+    (:func:`ftcal.experiment.tool_load_observability`)."""
 
     blocks: tuple[ParameterBlock, ...]
     n_poses: int
@@ -129,6 +127,14 @@ class Observability:
              "condition": None if not np.isfinite(b.condition) else b.condition,
              "weakest_direction": b.weakest_direction.tolist(), "expected_std_error": b.expected_std_error,
              "unit": b.unit, "confused_with": b.confused_with} for b in self.blocks]}
+
+
+def axis_text(v: NDArray[np.float64]) -> str:
+    """An axis (a unit vector, either sign) as ``x`` when it lies along one (within 10 deg), else as components."""
+    k = int(np.argmax(np.abs(v)))
+    if abs(v[k]) >= np.cos(np.radians(10.0)):
+        return "xyz"[k]
+    return "[" + ", ".join(f"{c:.2f}" for c in np.sign(v[k]) * v) + "]"
 
 
 def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -163,7 +169,7 @@ def _jacobian(g_s: NDArray, mass: float, p: NDArray, basis: NDArray, scale: NDAr
     return np.hstack(parts), blocks
 
 
-def _block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> list[ParameterBlock]:
+def block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> list[ParameterBlock]:
     out = []
     for name, sl in blocks.items():
         Jk = J[:, sl]
@@ -194,55 +200,6 @@ def _block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> 
         out.append(ParameterBlock(name=name, n_parameters=sl.stop - sl.start, rank=rank, identifiability=ratio,
                                   weakest_direction=direction, expected_std_error=se, unit=unit, confused_with=best))
     return out
-
-
-def tool_load_observability(sensor_rotations: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *,
-                            mass: float = 1.0, center_of_mass: ArrayLike = (0.0, 0.0, 0.0),
-                            mounting: bool = True, basis: ArrayLike | None = None,
-                            noise: ArrayLike = (0.05, 0.005)) -> Observability:
-    """What a pose set can tell of a tool identification: rank and condition of each parameter block.
-
-    Parameters
-    ----------
-    sensor_rotations : array-like of shape (n, 3, 3)
-        The robot's sensor frame in the base frame at each pose.
-    gravity : array-like of shape (3,)
-        [m/s²] in the base frame.
-    mass, center_of_mass : float, array-like of shape (3,)
-        The tool the Jacobian is taken at [kg, m] (the closed-form estimate, or the expected tool).
-    mounting : bool, default=True
-        Whether the mounting rotation is a parameter.
-    basis : array-like of shape (n, k), optional
-        A bias drift's basis (:mod:`ftcal.experiment._drift`); ``None``: a constant bias.
-    noise : array-like of shape (2,)
-        The residual RMS of force [N] and torque [N·m] the expected standard errors are scaled to.
-
-    Returns
-    -------
-    Observability
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> from scipy.spatial.transform import Rotation
-    >>> R = Rotation.from_euler("z", np.linspace(0, 300, 6)[:, None], degrees=True).as_matrix()  # never tilted
-    >>> obs = tool_load_observability(R, mass=1.0, center_of_mass=[0.0, 0.0, 0.1])
-    >>> obs.problems()[0]
-    'the mass is not identifiable from these 6 poses: the force bias absorbs it'
-    >>> R = Rotation.random(11, random_state=0).as_matrix()                                      # well spread
-    >>> obs = tool_load_observability(R, mass=1.0, center_of_mass=[0.0, 0.0, 0.1], noise=[0.05, 0.005])
-    >>> obs.problems(), obs.block("mounting rotation").rank
-    ([], 3)
-    """
-    from ._tool_load import _check_inputs, _gravity_in_sensor
-
-    R, _ = _check_inputs(sensor_rotations)
-    g_s = _gravity_in_sensor(R, gravity)
-    b = np.zeros((len(R), 0)) if basis is None else np.asarray(basis, dtype=float)
-    scale = np.maximum(np.asarray(noise, dtype=float), 1e-12)
-    c = np.asarray(center_of_mass, dtype=float)
-    J, blocks = _jacobian(g_s, float(mass), float(mass) * c, b, scale, mounting)
-    return Observability(blocks=tuple(_block_observability(J, blocks, noise=1.0)), n_poses=len(R))
 
 
 def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: dict, scale: NDArray
@@ -299,7 +256,7 @@ def _right_jacobian(r: NDArray) -> NDArray:
 def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, groups: NDArray | None = None
                       ) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """The mounting rotation of a closed-form identification ``fit`` (of gravity ``g_s`` in the robot's sensor
-    frame): checks what the poses can tell first (:func:`tool_load_observability`'s blocks at the fitted tool,
+    frame): checks what the poses can tell first (:func:`ftcal.experiment.tool_load_observability`'s blocks at the fitted tool,
     refused with the block and the axis they cannot tell), then fits it (:func:`fit_mounting_rotation`; the
     samples of one pose averaged when ``groups`` label them).
 
@@ -323,7 +280,7 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
         gp, Wp, bp = mean(g_s), mean(W), mean(basis) if basis.shape[1] else np.zeros((count.size, 0))
     J, blocks = _jacobian(gp, fit["mass"], fit["p"], bp, scale, mounting=True)
     dof = max(J.shape[0] - J.shape[1], 1)
-    observability = Observability(blocks=tuple(_block_observability(J, blocks, noise=float(
+    observability = Observability(blocks=tuple(block_observability(J, blocks, noise=float(
         np.sqrt(np.sum(fit["residual"] ** 2 / np.repeat(scale, 3) ** 2) / dof)))), n_poses=len(gp))
     problems = observability.problems()
     if problems:

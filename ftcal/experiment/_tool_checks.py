@@ -8,6 +8,8 @@
   drifts over the recording (warm-up) then shows as a drift in the row order. When a drift over the row order cuts
   the held-out residual by more than its paired standard error, it is named with the change of mass and centre
   of mass it brings.
+* :func:`tool_load_observability`: what a pose set can tell of each parameter block (mass, centre of mass,
+  biases, mounting rotation, drift) before fitting (:mod:`ftcal.experiment._mounting`).
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["FrameCheck", "check_wrench_frame", "OrderDrift", "drift_in_recording_order", "FRAME_RATIO"]
+__all__ = ["FrameCheck", "check_wrench_frame", "OrderDrift", "drift_in_recording_order", "FRAME_RATIO",
+           "tool_load_observability"]
 
 #: The other frame is "far better" when its force residual is at most the declared frame's divided by this.
 FRAME_RATIO = 3.0
@@ -219,3 +222,53 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
     return OrderDrift(description=drifting.drift.description, held_out_constant=rms_c, held_out_drift=rms_d,
                       paired_se=se, mass_constant=constant.mass, mass_drift=drifting.mass,
                       center_of_mass_shift=drifting.center_of_mass - constant.center_of_mass, tool=drifting)
+
+
+def tool_load_observability(sensor_rotations: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81), *,
+                            mass: float = 1.0, center_of_mass: ArrayLike = (0.0, 0.0, 0.0),
+                            mounting: bool = True, basis: ArrayLike | None = None,
+                            noise: ArrayLike = (0.05, 0.005)) -> "Observability":
+    """What a pose set can tell of a tool identification: rank and condition of each parameter block.
+
+    Parameters
+    ----------
+    sensor_rotations : array-like of shape (n, 3, 3)
+        The robot's sensor frame in the base frame at each pose.
+    gravity : array-like of shape (3,)
+        [m/s²] in the base frame.
+    mass, center_of_mass : float, array-like of shape (3,)
+        The tool the Jacobian is taken at [kg, m] (the closed-form estimate, or the expected tool).
+    mounting : bool, default=True
+        Whether the mounting rotation is a parameter.
+    basis : array-like of shape (n, k), optional
+        A bias drift's basis (:mod:`ftcal.experiment._drift`); ``None``: a constant bias.
+    noise : array-like of shape (2,)
+        The residual RMS of force [N] and torque [N·m] the expected standard errors are scaled to.
+
+    Returns
+    -------
+    Observability
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scipy.spatial.transform import Rotation
+    >>> R = Rotation.from_euler("z", np.linspace(0, 300, 6)[:, None], degrees=True).as_matrix()  # never tilted
+    >>> obs = tool_load_observability(R, mass=1.0, center_of_mass=[0.0, 0.0, 0.1])
+    >>> obs.problems()[0]
+    'the mass is not identifiable from these 6 poses: the force bias absorbs it'
+    >>> R = Rotation.random(11, random_state=0).as_matrix()                                      # well spread
+    >>> obs = tool_load_observability(R, mass=1.0, center_of_mass=[0.0, 0.0, 0.1], noise=[0.05, 0.005])
+    >>> obs.problems(), obs.block("mounting rotation").rank
+    ([], 3)
+    """
+    from ._mounting import Observability, _jacobian, block_observability
+    from ._tool_load import _check_inputs, _gravity_in_sensor
+
+    R, _ = _check_inputs(sensor_rotations)
+    g_s = _gravity_in_sensor(R, gravity)
+    b = np.zeros((len(R), 0)) if basis is None else np.asarray(basis, dtype=float)
+    scale = np.maximum(np.asarray(noise, dtype=float), 1e-12)
+    c = np.asarray(center_of_mass, dtype=float)
+    J, blocks = _jacobian(g_s, float(mass), float(mass) * c, b, scale, mounting)
+    return Observability(blocks=tuple(block_observability(J, blocks, noise=1.0)), n_poses=len(R))

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 from ..core._wrench import MAX_LOAD_MASS_KG
+from ._mounting import axis_text
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
                      functional_se, held_out_residual, select_drift)
 
@@ -404,14 +405,6 @@ class ToolLoad:
         return tool
 
 
-def _axis_text(v: NDArray[np.float64]) -> str:
-    """An axis (a unit vector, either sign) as ``x`` when it lies along one (within 10 deg), else as components."""
-    k = int(np.argmax(np.abs(v)))
-    if abs(v[k]) >= np.cos(np.radians(10.0)):
-        return "xyz"[k]
-    return "[" + ", ".join(f"{c:.2f}" for c in np.sign(v[k]) * v) + "]"
-
-
 def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]) -> str:
     """`` (tilted about the sensor's x axis only; none about z)`` for gravity directions that vary in one
     direction only (empty when they do not vary at all, or in two directions)."""
@@ -421,8 +414,8 @@ def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]
     mean /= np.linalg.norm(mean)
     varied = np.linalg.svd(directions - directions.mean(axis=0))[2][0]  # gravity moves along this direction
     tilted_about = np.cross(mean, varied)  # a tilt about this axis moves gravity along `varied`
-    return (f" (they tilt the tool about the sensor's {_axis_text(tilted_about / np.linalg.norm(tilted_about))} axis "
-            f"only, by {tilt_deg[0]:.3g} deg; none about {_axis_text(varied)})")
+    return (f" (they tilt the tool about the sensor's {axis_text(tilted_about / np.linalg.norm(tilted_about))} axis "
+            f"only, by {tilt_deg[0]:.3g} deg; none about {axis_text(varied)})")
 
 
 def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayLike) -> NDArray[np.float64]:
