@@ -548,6 +548,10 @@ def tool_onnx_model(tool):
     m, c, g = tool.mass, np.asarray(tool.center_of_mass), np.asarray(tool.gravity, dtype=float)
     # gravity wrench = g_s @ M, g_s = Rᵀ g: force m g_s, torque c × (m g_s) = m g_s @ [c]×ᵀ
     M = np.hstack([m * np.eye(3), m * _skew(c[None])[0].T])
+    if np.any(tool.mounting_rotation):  # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M
+        from scipy.spatial.transform import Rotation
+
+        M = Rotation.from_rotvec(np.asarray(tool.mounting_rotation, dtype=float)).as_matrix() @ M
     drift = tool.drift
     bias = np.asarray(tool.bias, dtype=float)
     inits = {"g": g.reshape(3, 1), "M": M, "flat": np.array([-1, 3], dtype=np.int64)}

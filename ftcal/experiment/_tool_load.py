@@ -619,6 +619,16 @@ def _drift_comment(tool: ToolLoad) -> list[str]:
             "# or deploy the tool's ONNX export (ftcal export, format onnx), which carries the drift."]
 
 
+def _mounting_comment(tool: ToolLoad) -> list[str]:
+    """YAML comment lines on a mounting rotation these formats cannot express (none without one)."""
+    if not np.any(tool.mounting_rotation):
+        return []
+    r = np.degrees(tool.mounting_rotation)
+    return [f"# NOTE: the sensor is mounted turned by the rotation vector [{', '.join(f'{v:.3g}' for v in r)}] deg from",
+            "# the robot's sensor frame; these formats take the frame from tf: add that rotation to the sensor frame's",
+            "# transform (URDF), or deploy the tool's ONNX export (ftcal export, format onnx), which carries it."]
+
+
 def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",
                                    node: str = "gravity_compensation") -> str:
     """The tool's parameters as the gravity-compensation YAML ROS users load (text).
@@ -662,7 +672,7 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
         "# Tool gravity compensation parameters written by ftcal (identify-load): sensor frame, SI units.",
         f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in the frame {comment_frame} [m],",
         "# bias [N, N·m] = what the sensor reads with no load at all.",
-        *_drift_comment(tool),
+        *_drift_comment(tool), *_mounting_comment(tool),
         "# --- ROS 1 force_torque_tools (gravity_compensation node) ---",
     ]) + "\n"
     text += block({"bias": floats(tool.bias), "gripper_mass": float(tool.mass), "gripper_com_frame_id": sensor_frame,
