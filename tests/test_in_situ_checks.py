@@ -228,3 +228,38 @@ def test_poses_that_cannot_tell_the_mounting_are_named(robot):
     well = tool_load_observability(ftcal.robot.sensor_pose_in_base(robot, plan.q)[:, :3, :3], mass=MASS,
                                    center_of_mass=COM, noise=[FORCE_NOISE, TORQUE_NOISE])
     assert well.problems() == [] and all(b.rank == b.n_parameters for b in well.blocks)
+
+
+def test_a_mounted_tool_exports_to_onnx_and_compensates_like_the_library(robot, plan_q):
+    ort = pytest.importorskip("onnxruntime")
+    from ftcal.experiment._drift import tool_onnx_model
+
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    tool = ToolLoad(mass=MASS, center_of_mass=COM, bias=BIAS, mounting_rotation=np.radians(MOUNTING_DEG))
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(8))
+    session = ort.InferenceSession(tool_onnx_model(tool).SerializeToString())
+    external = session.run(None, {"rotation": rotations, "wrench": wrenches})[0]
+    np.testing.assert_allclose(external, tool.compensate(rotations, wrenches), atol=1e-9)
+    assert "mounted turned by the rotation vector" in ftcal.experiment.tool_gravity_compensation_yaml(tool)
+
+
+# ------------------------------------------------------------------ the workflow in the library
+def test_static_poses_gives_a_python_user_the_poses_the_command_used(tmp_path, capsys, robot, plan_q):
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q[:20])[:, :3, :3]
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(9))
+    rec = ftcal.experiment.continuous_recording(
+        wrenches, rotations=rotations, still_s=3.0, move_s=1.0, sensor_rate_hz=20.0, pose_rate_hz=20.0,
+        settle_amplitude=0.3, noise=[FORCE_NOISE] * 3 + [TORQUE_NOISE] * 3, random_state=1)
+    path = write_pose_file(tmp_path / "recording.csv", rec.rotations, rec.reading, time=rec.sensor_time)
+    assert main(["identify-load", str(path), "--drift", "none", "--out", str(tmp_path / "tool")]) == 0
+    err = capsys.readouterr().err
+    poses = ftcal.experiment.static_poses(path)
+    assert poses.kind == "pose file" and poses.n_poses == 20 and len(poses.still) == 1
+    assert f"{path}: {poses.notes[0][1]}" in err  # the command printed the library's note
+    tool = identify_tool_load(poses.rotations, poses.wrenches, gravity=G, drift="none")
+    record = json.loads((tmp_path / "tool" / "tool.tool.json").read_text())
+    assert record["mass_kg"] == pytest.approx(tool.mass, rel=1e-12)
+    np.testing.assert_allclose(record["held_out_residual_rms"], tool.held_out_residual_rms, rtol=1e-12)
+    assert (tmp_path / "tool" / "tool.poses.csv").read_text() == poses.to_csv()
+    # the poses found are the recording's: within a few noise levels of the settled readings
+    assert np.abs(poses.wrenches[:, :3] - wrenches[:, :3]).max() < 10 * FORCE_NOISE
