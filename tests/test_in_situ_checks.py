@@ -263,3 +263,18 @@ def test_static_poses_gives_a_python_user_the_poses_the_command_used(tmp_path, c
     assert (tmp_path / "tool" / "tool.poses.csv").read_text() == poses.to_csv()
     # the poses found are the recording's: within a few noise levels of the settled readings
     assert np.abs(poses.wrenches[:, :3] - wrenches[:, :3]).max() < 10 * FORCE_NOISE
+
+
+def test_the_frame_check_of_a_drifting_tool_compensates_each_row_at_its_time(robot, plan_q):
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    t = np.linspace(0.0, 3600.0, len(rotations))
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(10))
+    wrenches[:, 0] += 0.8 * t / 3600.0  # 0.8 N/h
+    tool = identify_tool_load(rotations, wrenches, gravity=G, times=t)
+    assert tool.drift is not None
+    right = check_wrench_frame(rotations, wrenches, "sensor", tool=tool, times=t)
+    assert not right.other_fits_better and right.residual_declared[0] < 2 * FORCE_NOISE
+    wrong = check_wrench_frame(rotations, ftcal.experiment.wrench_in_sensor_frame(rotations, wrenches), "base",
+                               tool=tool, times=t)
+    assert wrong.other_fits_better and wrong.other == "sensor"
+    np.testing.assert_allclose(wrong.residual_other, right.residual_declared, rtol=1e-9)

@@ -321,7 +321,7 @@ def _log_poses_model_needed(args) -> None:
 def run_compensate(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.core import WRENCH_LABELS
-    from ._tool_drift import compensate_rows
+    from ._tool_drift import compensate_rows, compensation_values
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
@@ -331,10 +331,10 @@ def run_compensate(args: argparse.Namespace) -> int:
     rows = _read_inputs(args, console, recording_rows)
     head, lead, rotations, wrenches = rows.lead_names, rows.lead, rows.rotations, rows.wrenches
     external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, ", ".join(args.inputs))
-    if tool.drift is None:  # (a drifting tool needs each row's time for both frames: the frame is checked at identify)
-        frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool)
-        if frame.other_fits_better:
-            print(f"ftcal: warning: {', '.join(args.inputs[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
+    values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, ", ".join(args.inputs))
+    frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool, **values)
+    if frame.other_fits_better:
+        print(f"ftcal: warning: {', '.join(args.inputs[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
     lines = [f"{head}," + ",".join(WRENCH_LABELS)]
     lines += [f"{first}," + ",".join(f"{v:.9g}" for v in row) for first, row in zip(lead, external)]
     text = "\n".join(lines) + "\n"

@@ -213,7 +213,7 @@ def _still(options: RecordingOptions, source: str, time, reading, **pose) -> Sti
                                     fix=exc.fix, settings=exc.settings) from None
 
 
-def _joined(parts: list, n_key: str = "") -> NDArray | None:
+def _joined(parts: list) -> NDArray | None:
     return None if not parts or any(p is None for p in parts) else np.concatenate(parts)
 
 

@@ -65,7 +65,8 @@ def _other_frame_wrench(R: NDArray, W: NDArray, declared: str) -> NDArray:
 
 
 def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declared: str = "sensor", *,
-                       gravity: ArrayLike = (0.0, 0.0, -9.81), tool=None) -> FrameCheck:
+                       gravity: ArrayLike = (0.0, 0.0, -9.81), tool=None, times: ArrayLike | None = None,
+                       temperatures: ArrayLike | None = None) -> FrameCheck:
     """Compare how gravity fits the wrench in the declared frame and in the other (sensor vs base).
 
     Parameters
@@ -81,6 +82,8 @@ def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declare
     tool : ToolLoad, optional
         A known tool (compensation): each hypothesis' residual is its compensated wrench. ``None``: a tool with a
         constant bias is identified under each hypothesis.
+    times, temperatures : array-like of shape (n,), optional
+        Each row's time or temperature, for a ``tool`` whose bias drifts (:meth:`ToolLoad.bias_at`).
 
     Returns
     -------
@@ -109,7 +112,12 @@ def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declare
     other = _FRAMES[1 - _FRAMES.index(declared)]
     W_other = _other_frame_wrench(R, W, declared)
     if tool is not None:
-        rms = [np.sqrt(np.mean(tool.compensate(R, w) ** 2, axis=0).reshape(2, 3).mean(axis=1)) for w in (W, W_other)]
+        import warnings
+
+        with warnings.catch_warnings():  # the drift's extrapolation is the compensation's to say, once
+            warnings.simplefilter("ignore")
+            rms = [np.sqrt(np.mean(tool.compensate(R, w, times=times, temperatures=temperatures) ** 2,
+                                   axis=0).reshape(2, 3).mean(axis=1)) for w in (W, W_other)]
     else:
         g_s = _gravity_in_sensor(R, gravity)
         rms = [fit_gravity_blocks(g_s, w, np.zeros((len(w), 0)))["residual_rms"] for w in (W, W_other)]
