@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._exceptions import NO_SETTING, CalibrationInputError
+from ..core._exceptions import NO_SETTING, CalibrationInputError, Placeholder
 from ._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG, StillPoses, find_still_poses
 
 __all__ = ["StaticPoses", "static_poses", "RecordingRows", "recording_rows", "recording_kind", "bag_run_log",
@@ -278,7 +278,7 @@ def bag_joints(rec, robot) -> NDArray[np.float64]:
         f"{rec.path}: the joint states of {rec.pose_topic} name {', '.join(names)} but the robot {robot.name} has "
         f"{', '.join(wanted)}.", parameter="robot", value=robot.name,
         fix="give the robot the bag was recorded with, or the sensor's orientation from {tf}",
-        settings={"tf": NO_SETTING})
+        settings={"tf": Placeholder("(<base frame>, <sensor frame>)")})
 
 
 def _bag_poses(paths, model, robot, options, check_wrench) -> StaticPoses:
