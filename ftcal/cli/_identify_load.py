@@ -20,8 +20,7 @@ from ._common import (
 )
 from ._data_options import add_unit_options, check_lever_arm
 from ._prepare import log_files
-from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
-                          refuse_bag_options, still_poses)
+from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
 from ._tool_drift import add_drift_options
 
 IDENTIFY_EXAMPLE = """\
@@ -33,6 +32,7 @@ examples:
   ftcal identify-load recording.csv --settle 2 --out tool          # continuous (a 'time' column): still poses found
   ftcal identify-load my_bag --wrench-topic /ft_sensor/wrench --robot ur5 --out tool   # a ROS bag + joint states
   ftcal identify-load my.bag --tf base_link,ft_sensor --out tool  # a ROS 1 bag, the orientation from /tf
+  ftcal identify-load poses.csv --mounting --out tool             # with the sensor's mounting rotation
 
 inputs: run logs (joints and raw channels; need --model), or pose files (CSV): the sensor's orientation in
 the base frame as qx,qy,qz,qw (scalar last, as ROS writes it), R00..R22 (Rij = row i, column j) or
@@ -48,7 +48,8 @@ recordings: the sensor's topic (a wrench, or raw gauges with --raw-topic and --m
 the README.
 
 writes DIR/NAME.tool.json: mass [kg], centre of mass [m] (sensor frame), bias [N, N·m], their standard
-errors, the residual RMS and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
+errors, the residual RMS in-sample and held out (leave-poses-out: each pose predicted by the tool identified on
+the other poses; K-fold over poses, leave-one-out on at most --cv poses) and each pose's time; DIR/NAME.poses.csv: the poses used (time, orientation,
 the wrench in the sensor frame and its spread). Every row of run logs is one static pose (the 'run' column
 is ignored). 'ftcal export NAME.tool.json --format ros' writes the ROS gravity-compensation YAML.
 With the poses' times (run logs' timestamps, a pose file's 'time' column or bag stamps [s], or the row
@@ -90,6 +91,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_recording_options(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
     p.add_argument("--name", default="tool", help="file name stem of the tool file")
+    p.add_argument("--mounting", action="store_true",
+                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
+                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
     add_drift_options(p)
     add_output_options(p, "ftcal-tool")
     add_run_options(p, seed=False)
@@ -163,248 +167,90 @@ def _gravity(text: str):
     return values
 
 
-def _poses_and_wrenches(args):
-    import numpy as np
+def _recording_options(args):
+    """The library's :class:`RecordingOptions` from the command's options."""
+    from ftcal.experiment import RecordingOptions
 
-    import ftcal
-
-    robot = load_robot_from_args(args)
-    model = ftcal.load_model(args.model)
-    logs = [ftcal.io.read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints)
-            for p in log_files(args.inputs)]
-    q = np.vstack([lg.q for lg in logs])
-    raw = np.vstack([lg.raw for lg in logs])
-    rotations = ftcal.robot.sensor_pose_in_base(robot, q)[:, :3, :3]
-    return logs, rotations, model.predict(raw)
-
-
-class _Poses:
-    """The static poses an identification uses: where they came from, orientation, wrench, time, still-pose info."""
-
-    def __init__(self, sources, rotations, wrenches, time=None, still=None, model=None, temperature=None, groups=None):
-        self.sources, self.rotations, self.wrenches, self.time = sources, rotations, wrenches, time
-        self.still, self.model, self.temperature, self.groups = still, model, temperature, groups
-
-
-def _input_kind(item: str) -> str:
-    from ..io._bags import is_bag
-    from ..io._poses import is_pose_file
-
-    path = Path(item)
-    if is_bag(path) or (path.is_dir() and bag_files([item]) is not None):
-        return "ROS bag"
-    if path.is_file() and path.suffix.lower() == ".csv" and is_pose_file(path):
-        return "pose file"
-    return "run log"
-
-
-def _load_model(args, what: str):
-    import ftcal
-
-    if args.model is None:
-        raise CliError(f"{what} holds raw channels: give the calibration model that turns them into a wrench, "
-                       "--model MODEL.model.npz (ftcal fit)")
-    return ftcal.load_model(args.model)
-
-
-def _is_continuous(args, time, rotations) -> bool:
-    """Whether the rows are a continuous recording (most rows share a neighbour's orientation) or static poses."""
-    import numpy as np
-
-    if args.poses != "auto":
-        return args.poses == "continuous"
-    if time is None or len(rotations) < 3:
-        return False
-    cos = (np.einsum("nij,nij->n", rotations[1:], rotations[:-1]) - 1.0) / 2.0
-    still = np.arccos(np.clip(cos, -1.0, 1.0)) <= np.radians(args.still_tolerance)
-    return bool(np.mean(still) > 0.5)
-
-
-def _pose_file_rows(args, console: Console, path: Path, model):
-    """A pose file's rows: the record, its wrench in the sensor frame [N, N·m] (units checked, raw channels through
-    the model) and the model (loaded on first need)."""
-    from ..experiment._tool_load import wrench_in_sensor_frame
-    from ..io._poses import read_pose_file
-
-    rec = read_pose_file(path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
-    if rec.wrench is not None:
-        if args.model is not None:
-            console.info(f"{path}: the file holds a wrench; --model is not used for it")
-        wrench = rec.wrench
-        check_lever_arm(args, wrench, path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
-    else:
-        model = model or _load_model(args, str(path))
-        if rec.raw.shape[1] != model.n_features_in_:
-            raise CliError(f"{path}: {rec.raw.shape[1]} raw channels but the model {args.model} takes "
-                           f"{model.n_features_in_}")
-        wrench = model.predict(rec.raw)
-    if args.wrench_frame == "base":
-        wrench = wrench_in_sensor_frame(rec.rotation, wrench)
-    return rec, wrench, model
-
-
-def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
-    import numpy as np
-
-    rotations, wrenches, times, still_list, model, temperatures = [], [], [], [], None, []
-    for path in paths:
-        rec, wrench, model = _pose_file_rows(args, console, path, model)
-        if args.poses == "continuous" and rec.time is None:
-            raise CliError(f"{path}: --poses continuous needs a 'time' column [s] to find the still poses in")
-        if _is_continuous(args, rec.time, rec.rotation):
-            still = still_poses(args, str(path), rec.time, wrench, rotations=rec.rotation)
-            console.info(f"{path}: {still.summary()}")
-            still_list.append(still)
-            rotations.append(still.rotation)
-            wrenches.append(still.reading)
-            times.append(still.time)
-            temperatures.append(None if rec.temperature is None else np.interp(still.time, rec.time, rec.temperature))
-        else:
-            rotations.append(rec.rotation)
-            wrenches.append(wrench)
-            times.append(rec.time)
-            temperatures.append(rec.temperature)
-    time = None if any(t is None for t in times) else np.concatenate(times)
-    temperature = None if any(t is None for t in temperatures) else np.concatenate(temperatures)
-    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches), time, still_list, model,
-                  temperature)
-
-
-def _wrench_in_si(args, wrench):
-    """A wrench read in the options' units (``--force-unit``, ``--torque-unit``) in N and N·m."""
-    from ..io._readers import unit_scale
-
-    wrench = wrench.copy()
-    wrench[:, :3] *= unit_scale(args.force_unit or "N", "force")
-    wrench[:, 3:] *= unit_scale(args.torque_unit or "N.m", "torque")
-    return wrench
-
-
-def _bag_rows(args, console: Console, path: Path, model):
-    """A bag's sensor samples: the record, the wrench [N, N·m] as the sensor wrote it (units checked, raw gauges
-    through the model) and the model (loaded on first need)."""
-    rec = read_bag_from_args(args, path, console)
-    reading = rec.reading
-    if rec.kind == "raw":
-        model = model or _load_model(args, f"{path} (topic {rec.sensor_topic})")
-        if reading.shape[1] != model.n_features_in_:
-            raise CliError(f"{path}: topic {rec.sensor_topic} holds {reading.shape[1]} raw values but the model "
-                           f"{args.model} takes {model.n_features_in_} channels")
-        reading = model.predict(reading)
-    else:  # a wrench message: N and N·m in ROS, unless the driver says otherwise (the options)
-        reading = _wrench_in_si(args, reading)
-        check_lever_arm(args, reading, f"{path} (topic {rec.sensor_topic})", force_unit=args.force_unit or "N",
-                        torque_unit=args.torque_unit or "N.m")
-    return rec, reading, model
-
-
-def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
-    """The still poses of each bag: the wrench (or the raw gauges through --model) and the pose (tf, or joints
-    through the robot's forward kinematics)."""
-    import numpy as np
-
-    import ftcal
-    from ..experiment._tool_load import wrench_in_sensor_frame
-
-    robot = None if args.tf is not None else load_robot_from_args(args)
-    rotations, wrenches, times, still_list, model = [], [], [], [], None
-    for path in paths:
-        rec, reading, model = _bag_rows(args, console, path, model)
-        if robot is None:
-            still = still_poses(args, str(path), rec.time, reading, rotations=rec.rotation)
-            R = still.rotation
-        else:
-            still = still_poses(args, str(path), rec.time, reading, joints=bag_joints(rec, robot))
-            R = ftcal.robot.sensor_pose_in_base(robot, still.joints)[:, :3, :3]
-        console.info(f"{path}: {still.summary()}")
-        wrench = still.reading
-        if args.wrench_frame == "base":
-            wrench = wrench_in_sensor_frame(R, wrench)
-        rotations.append(R)
-        wrenches.append(wrench)
-        times.append(still.time)
-        still_list.append(still)
-    return _Poses([str(p) for p in paths], np.concatenate(rotations), np.concatenate(wrenches),
-                  np.concatenate(times), still_list, model)
-
-
-def _log_poses(args) -> _Poses:
-    _log_poses_model_needed(args)
-    logs, rotations, wrenches = _poses_and_wrenches(args)
-    import numpy as np
-
-    temperature = None if any(lg.temperature is None for lg in logs) else np.concatenate([lg.temperature for lg in logs])
-    # the rows of one pose of one log are samples of one static pose: held out together when choosing the drift
-    groups = np.concatenate([[f"{i}:{p}" for p in lg.pose] for i, lg in enumerate(logs)])
-    return _Poses([str(lg.path) for lg in logs], rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]),
-                  temperature=temperature, groups=groups if np.unique(groups).size > 1 else None)
+    return RecordingOptions(
+        wrench_frame=args.wrench_frame, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m",
+        poses=getattr(args, "poses", "static"), tolerance_deg=getattr(args, "still_tolerance", 0.5),
+        min_duration_s=getattr(args, "min_still", 1.0), settle_s=getattr(args, "settle", None),
+        wrench_topic=args.wrench_topic, raw_topic=args.raw_topic, raw_field=args.raw_field,
+        joint_topic=args.joint_topic, tf=args.tf, stamps=args.stamps, max_samples=args.max_samples)
 
 
 def _inputs_kind(args) -> str:
     """The one kind of the command's inputs (run log, pose file, ROS bag); a mix is refused."""
-    kinds = {item: _input_kind(item) for item in args.inputs}
+    from ftcal.experiment import recording_kind
+
+    kinds = {item: recording_kind(item) for item in args.inputs}
     if len(set(kinds.values())) > 1:
         shown = ", ".join(f"{k} ({v})" for k, v in list(kinds.items())[:4])
         raise CliError(f"the inputs mix kinds: {shown}; give run logs, pose files or ROS bags, one kind")
     return next(iter(kinds.values()))
 
 
-def identification_poses(args, console: Console) -> _Poses:
-    """The poses of the command's inputs (run logs, pose files), each kind read as it must be."""
+def _read_inputs(args, console: Console, reader):
+    """``reader`` (the library's :func:`static_poses` or :func:`recording_rows`) on the command's inputs: the
+    paths, model and robot they need, the options mapped, the lever-arm check; its notes on stderr and its errors
+    as one line."""
+    import ftcal
+    from ftcal.core import FtcalError
+
+    from ._messages import cli_message
+
     kind = _inputs_kind(args)
     if kind == "ROS bag":
-        return _bag_poses(args, console, bag_files(args.inputs))
-    refuse_bag_options(args, f"{kind}s")
-    if kind == "pose file":
-        return _pose_file_poses(args, console, [Path(p) for p in args.inputs])
-    return _log_poses(args)
+        paths = bag_files(args.inputs)
+    else:
+        refuse_bag_options(args, f"{kind}s")
+        paths = log_files(args.inputs) if kind == "run log" else [Path(p) for p in args.inputs]
+    if kind == "run log":
+        _log_poses_model_needed(args)
+    robot = load_robot_from_args(args) if kind == "run log" or (kind == "ROS bag" and args.tf is None) else None
+    model = None if args.model is None else ftcal.load_model(args.model)
+
+    def check_wrench(wrench, where: str) -> None:
+        check_lever_arm(args, wrench, where, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
+
+    try:
+        result = reader(paths, model=model, robot=robot, options=_recording_options(args), check_wrench=check_wrench)
+    except FtcalError as exc:
+        raise CliError(" ".join(cli_message(exc, args).split())) from None
+    for source, note in result.notes:
+        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
+    return result
 
 
-def _poses_csv(poses: _Poses) -> str:
-    from scipy.spatial.transform import Rotation
+def identification_poses(args, console: Console):
+    """The static poses of the command's inputs (:func:`ftcal.experiment.static_poses`)."""
+    from ftcal.experiment import static_poses
 
-    from ..core._columns import csv_rows
-    from ..core._wrench import WRENCH_LABELS
-
-    import numpy as np
-
-    quat = Rotation.from_matrix(poses.rotations).as_quat()  # x, y, z, w
-    names = ["qx", "qy", "qz", "qw", *WRENCH_LABELS]
-    blocks = [quat, poses.wrenches]
-    if poses.time is not None:
-        names.insert(0, "time")
-        blocks.insert(0, poses.time[:, None])
-    if poses.still and len(poses.still) == 1:  # the spread of each averaged pose
-        names += ["n_samples"] + [f"{c}_std" for c in WRENCH_LABELS]
-        blocks += [poses.still[0].n_samples[:, None].astype(object), poses.still[0].spread]
-    head = "# the static poses ftcal identify-load used: orientation sensor -> base (x, y, z, w), wrench in the " \
-           "sensor frame [N, N·m]\n"
-    return head + ",".join(names) + "\n" + "".join(csv_rows(*[np.asarray(b) for b in blocks]))
+    return _read_inputs(args, console, static_poses)
 
 
 def run_identify(args: argparse.Namespace) -> int:
-    from ._tool_drift import drift_summary, identify, report_names, write_report
+    from ._tool_drift import identify, report_names, write_report
 
     console = Console(args.quiet)
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     poses = identification_poses(args, console)
+    _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
                             poses.sources, poses.groups)
     info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
             str(args.model), "wrench_frame_in_input": args.wrench_frame}
-    if _input_kind(args.inputs[0]) == "run log":
+    if poses.kind == "run log":
         info.update(logs=poses.sources, robot=args.robot)
     if poses.time is not None:
         info["pose_time_s"] = poses.time.tolist()
     if poses.still:
-        info["still_poses"] = [{"found": s.n_found, "kept": s.n_kept, "rejected": [
-            {"start_time_s": t, "reason": why} for t, why in s.rejected], "settle_s": s.settle_s,
-            "settle_from_data": s.settle_from_data} for s in poses.still]
+        info["still_poses"] = poses.still_summary()
     with plan.as_one_set():  # the tool file and the report describing it: all or none, never another run's report
         with plan.writing(poses_name) as tmp:
-            tmp.write_text(_poses_csv(poses), encoding="utf-8")
+            tmp.write_text(poses.to_csv(), encoding="utf-8")
         if report is not None:
             write_report(plan, args.name, report)
         else:
@@ -412,55 +258,57 @@ def run_identify(args: argparse.Namespace) -> int:
                 plan.leaving_out(stale)
         with plan.writing(name) as tmp:
             write_json(tmp, {**tool.to_dict(), **info})
-    c = tool.center_of_mass * 1000
-    console.info(
-        f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
-        f"(sensor frame), from {len(poses.rotations)} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
-        f"{tool.residual_rms[1]:.3g} N·m{drift_summary(tool)} -> {plan.path(name)}"
-    )
+    console.info(f"{tool_line(tool, len(poses.rotations))} -> {plan.path(name)}")
+    _say_drift(args, poses, gravity)
     return 0
 
 
-def _compensation_rows(args, console: Console):
-    """Every row of the inputs: (header, leading columns per row, rotations, wrenches in the sensor frame, times,
-    temperatures); run logs keep their timestamp and pose, pose files and bags give each row's time."""
+def tool_line(tool, n_poses: int) -> str:
+    """The console's line on an identified tool: mass, centre of mass, the residual in-sample and held out, the
+    mounting rotation and the drift, each with its standard error where it has one."""
     import numpy as np
 
-    import ftcal
+    from ._tool_drift import drift_summary
 
-    kind = _inputs_kind(args)
-    if kind == "run log":
-        _log_poses_model_needed(args)
-        logs, rotations, wrenches = _poses_and_wrenches(args)
-        temperature = None if any(lg.temperature is None for lg in logs) else \
-            np.concatenate([lg.temperature for lg in logs])
-        lead = [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)]
-        return "timestamp,pose", lead, rotations, wrenches, np.concatenate([lg.timestamp for lg in logs]), temperature
-    rotations, wrenches, times, temperatures, model = [], [], [], [], None
-    if kind == "pose file":
-        for path in map(Path, args.inputs):
-            rec, wrench, model = _pose_file_rows(args, console, path, model)
-            rotations.append(rec.rotation)
-            wrenches.append(wrench)
-            times.append(rec.time)
-            temperatures.append(rec.temperature)
-    else:
-        from ..experiment._tool_load import wrench_in_sensor_frame
+    c = tool.center_of_mass * 1000
+    held = tool.held_out_residual_rms
+    held_text = "" if held is None else f"; held out (leave-poses-out) {held[0]:.3g} N, {held[1]:.3g} N·m"
+    mount = ""
+    if np.any(tool.mounting_rotation):
+        r, se = np.degrees(tool.mounting_rotation), np.degrees(tool.mounting_rotation_std_error)
+        mount = (f"; mounting rotation [{', '.join(f'{v:.2f}±{s:.2g}' for v, s in zip(r, se))}] deg (rotation "
+                 "vector, sensor frame)")
+    return (f"tool: {tool.mass:.4f} ± {tool.mass_std_error:.2g} kg at [{c[0]:.1f}, {c[1]:.1f}, {c[2]:.1f}] mm "
+            f"(sensor frame), from {n_poses} poses; residual RMS {tool.residual_rms[0]:.3g} N, "
+            f"{tool.residual_rms[1]:.3g} N·m in-sample{held_text}{mount}{drift_summary(tool)}")
 
-        robot = None if args.tf is not None else load_robot_from_args(args)
-        for path in bag_files(args.inputs):
-            rec, reading, model = _bag_rows(args, console, path, model)
-            R = rec.rotation if robot is None else ftcal.robot.sensor_pose_in_base(robot, bag_joints(rec, robot))[:, :3, :3]
-            rotations.append(R)
-            wrenches.append(wrench_in_sensor_frame(R, reading) if args.wrench_frame == "base" else reading)
-            times.append(rec.time)
-            temperatures.append(None)
-    time = None if any(t is None for t in times) else np.concatenate(times)
-    temperature = None if any(t is None for t in temperatures) else np.concatenate(temperatures)
-    n = sum(len(w) for w in wrenches)
-    lead = [repr(float(t)) for t in time] if time is not None else [str(i) for i in range(1, n + 1)]  # ROS stamps: ns
-    return "time" if time is not None else "row", lead, np.concatenate(rotations), np.concatenate(wrenches), time, \
-        temperature
+
+def _check_frame(args, poses, gravity) -> None:
+    """A warning line on stderr when gravity fits the wrench far better in the other frame than the declared one."""
+    from ftcal.core import CalibrationInputError
+    from ftcal.experiment import check_wrench_frame
+
+    try:
+        frame = check_wrench_frame(poses.rotations, poses.wrenches, args.wrench_frame, gravity=gravity)
+    except CalibrationInputError:  # inputs the identification refuses with its own words
+        return
+    if frame.other_fits_better:
+        print(f"ftcal: warning: {', '.join(poses.sources[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
+
+
+def _say_drift(args, poses, gravity) -> None:
+    """For poses without times (in recording order), one line on stderr when a drift over the row order cuts the
+    held-out residual by more than its paired SE: the figures, the mass and centre of mass change, the option."""
+    from ftcal.experiment import drift_in_recording_order
+
+    if poses.time is None and not args.time_from_order and args.drift == "auto" and poses.temperature is None:
+        try:
+            found = drift_in_recording_order(poses.rotations, poses.wrenches, gravity, groups=poses.groups,
+                                             cv=args.cv, random_state=0)
+        except ValueError:  # too few poses for a drift: nothing to say
+            found = None
+        if found is not None:
+            print(f"ftcal: note: {', '.join(poses.sources[:3])}: {found.words('--time-from-order')}", file=sys.stderr)
 
 
 def _log_poses_model_needed(args) -> None:
@@ -472,14 +320,21 @@ def _log_poses_model_needed(args) -> None:
 
 def run_compensate(args: argparse.Namespace) -> int:
     import ftcal
-    from ..core._wrench import WRENCH_LABELS
-    from ._tool_drift import compensate_rows
+    from ftcal.core import WRENCH_LABELS
+    from ._tool_drift import compensate_rows, compensation_values
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     tool = ftcal.experiment.ToolLoad.load(args.tool)
-    head, lead, rotations, wrenches, times, temperatures = _compensation_rows(args, console)
-    external = compensate_rows(args, tool, rotations, wrenches, times, temperatures, ", ".join(args.inputs))
+    from ftcal.experiment import recording_rows
+
+    rows = _read_inputs(args, console, recording_rows)
+    head, lead, rotations, wrenches = rows.lead_names, rows.lead, rows.rotations, rows.wrenches
+    external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, ", ".join(args.inputs))
+    values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, ", ".join(args.inputs))
+    frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool, **values)
+    if frame.other_fits_better:
+        print(f"ftcal: warning: {', '.join(args.inputs[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
     lines = [f"{head}," + ",".join(WRENCH_LABELS)]
     lines += [f"{first}," + ",".join(f"{v:.9g}" for v in row) for first, row in zip(lead, external)]
     text = "\n".join(lines) + "\n"

@@ -120,6 +120,7 @@ CLI_NAMES: dict[str, Option] = {
     "time": _option("--time"),  # a tool re-tare's time (retare of a drifting tool file)
     "temperature": _option("--temperature"),
     "drift": _option("--drift"),
+    "mounting": _option("--mounting"),
     "temperatures": Option(words="a 'temperature' column (the sensor's temperature at each pose)"),
     "times": Option(words="a 'time' column (each pose's time [s])"),
 }

@@ -8,13 +8,11 @@
 from __future__ import annotations
 
 import argparse
-import re
 from pathlib import Path
 
 from ._common import CliError, Console, finite_float, positive_float
 
-__all__ = ["add_recording_options", "add_bag_options", "still_poses", "read_bag_from_args", "bag_joints",
-           "bag_files", "bag_run_log"]
+__all__ = ["add_recording_options", "add_bag_options", "bag_files", "bag_run_log", "refuse_bag_options"]
 
 
 def nonnegative_float(text: str) -> float:
@@ -34,7 +32,7 @@ def _frames(text: str) -> tuple[str, str]:
 
 def add_recording_options(g: argparse._ArgumentGroup) -> None:
     """The still-pose thresholds: ``--still-tolerance``, ``--min-still``, ``--settle``."""
-    from ..experiment._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
+    from ftcal.experiment import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
 
     g.add_argument("--still-tolerance", type=positive_float, default=DEFAULT_STILL_TOLERANCE_DEG, metavar="DEG",
                    help="a pose is still while it stays within this [deg] (each joint, or the orientation)")
@@ -98,52 +96,6 @@ def positive_int_10(text: str) -> int:
     return value
 
 
-def still_poses(args, source: str, time, reading, *, rotations=None, joints=None):
-    """The still poses of a continuous recording, with the options' thresholds; errors name ``source``."""
-    from ..core._exceptions import CalibrationInputError
-    from ..experiment._still_poses import find_still_poses
-    from ._messages import cli_message
-
-    try:
-        return find_still_poses(time, reading, rotations=rotations, joints=joints, tolerance_deg=args.still_tolerance,
-                                settle_s=args.settle, min_duration_s=args.min_still)
-    except CalibrationInputError as exc:
-        raise CliError(f"{source}: {cli_message(exc, args)}") from None
-
-
-def read_bag_from_args(args, path: Path, console: Console):
-    """The bag at ``path`` read as the options say; its notes (clock offsets, dropped samples) on stderr."""
-    from ..core._exceptions import LogFormatError
-    from ..io._bags import read_bag
-    from ._messages import cli_message
-
-    try:
-        rec = read_bag(path, wrench_topic=getattr(args, "wrench_topic", None), raw_topic=args.raw_topic,
-                       raw_field=args.raw_field, joint_topic=args.joint_topic, tf=getattr(args, "tf", None),
-                       stamps=args.stamps, max_samples=args.max_samples)
-    except LogFormatError as exc:
-        raise CliError(cli_message(exc, args)) from None
-    for note in rec.notes:
-        console.info(f"{path}: {cli_message(note, args)}")
-    return rec
-
-
-def bag_joints(rec, robot):
-    """The bag's joint positions in the robot's joint order, matched by name.
-
-    Joint-state publishers do not keep the URDF's order and drivers rename joints, so a bag whose joint names
-    are not the robot's is refused even when the counts agree: taking its columns in order would give wrong
-    forward kinematics without a word.
-    """
-    names = list(rec.joint_names)
-    wanted = list(robot.joint_names)
-    if set(wanted) <= set(names):
-        return rec.joints[:, [names.index(n) for n in wanted]]
-    raise CliError(f"{rec.path}: the joint states of {rec.pose_topic} name {', '.join(names)} but the robot "
-                   f"{robot.name} has {', '.join(wanted)}; give the robot the bag was recorded with (--robot URDF "
-                   "--sensor-frame FRAME), or the sensor's orientation from tf (--tf BASE,SENSOR)")
-
-
 def bag_files(items: list[str]) -> list[Path] | None:
     """The bags among ``items`` (a bag, or a folder holding bags and no *.csv), or None when they are not bags;
     a mix of bags and other inputs is refused."""
@@ -163,34 +115,23 @@ def bag_files(items: list[str]) -> list[Path] | None:
     return found or None
 
 
-_RUN_NAME = re.compile(r"config(-?\d+)_(load|no-load)")
-
-
 def bag_run_log(args, path: Path, robot, console: Console):
-    """A bag of one run (raw gauges + joints) as a run log of its still poses: one row per pose, in order."""
-    import numpy as np
+    """A bag of one run (raw gauges + joints, or /tf) as a run log of its still poses
+    (:func:`ftcal.experiment.bag_run_log` with the options); its notes on stderr, its errors as one line."""
+    from ftcal.core import FtcalError
+    from ftcal.experiment import RecordingOptions, bag_run_log as read_run
 
-    from ..io._logs import RunLog
+    from ._messages import cli_message
 
-    match = _RUN_NAME.search(path.name)
-    if match is None:
-        raise CliError(f"{path}: name each bag after its run, config<C>_load or config<C>_no-load (C the load "
-                       "configuration id, -1 for a no-load run shared by all), as 'ftcal simulate experiment --bag' "
-                       "writes them; the still poses of a load run and its no-load run pair in order")
-    if args.raw_topic is None:
-        raise CliError(f"{path}: prepare calibrates raw gauges: name their topic with --raw-topic TOPIC "
-                       "(and --raw-field FIELD)")
-    rec = read_bag_from_args(args, path, console)
-    if rec.rotation is not None:  # --tf: the orientation recorded, no joints and no robot model needed
-        still = still_poses(args, str(path), rec.time, rec.reading, rotations=rec.rotation)
-        q, rotation, frame = np.empty((still.n_kept, 0)), still.rotation, None
-    else:
-        still = still_poses(args, str(path), rec.time, rec.reading, joints=bag_joints(rec, robot))
-        q, rotation, frame = still.joints, None, robot.sensor_frame
+    options = RecordingOptions(tolerance_deg=args.still_tolerance, min_duration_s=args.min_still,
+                               settle_s=args.settle, raw_topic=args.raw_topic, raw_field=args.raw_field,
+                               joint_topic=args.joint_topic, tf=args.tf, stamps=args.stamps,
+                               max_samples=args.max_samples)
+    try:
+        log, still, notes = read_run(path, robot, options=options)
+    except FtcalError as exc:
+        raise CliError(" ".join(cli_message(exc, args).split())) from None
+    for source, note in notes:
+        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
     console.info(f"{path}: {still.summary()}")
-    k = still.n_kept
-    return RunLog(path=path, timestamp=still.time, run_kind=np.array([match.group(2)] * k),
-                  config=np.full(k, int(match.group(1)), dtype=np.int64), pose=np.arange(k, dtype=np.int64),
-                  q=q, raw=still.reading, line=np.arange(1, k + 1, dtype=np.int64),
-                  raw_unit="raw", robot=robot.name, sensor_frame=frame, rotation=rotation,
-                  meta={"bag": str(path), "topic": rec.sensor_topic})
+    return log

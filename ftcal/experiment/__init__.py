@@ -1,6 +1,6 @@
 """The robot-held experiment and in-situ use: pairing load / no-load runs into a calibration dataset
 (R_delta, reference wrenches), the virtual experiment that writes such runs (and its continuous
-recordings), still poses found in a continuous recording, the identification of a tool's load and its bias
+recordings), still poses found in a continuous recording, a robot's recordings read into static poses, the identification of a tool's load and its bias
 drift for gravity compensation, and which poses to measure next.
 
 Layer: above :mod:`ftcal.robot` and :mod:`ftcal.simulation`. Imports :mod:`ftcal.core`,
@@ -19,6 +19,13 @@ _PUBLIC = dict(
     ToolLoad="_tool_load", identify_tool_load="_tool_load", wrench_in_sensor_frame="_tool_load",
     tool_gravity_compensation_yaml="_tool_load", BiasDrift="_drift", DriftExtrapolationWarning="_drift",
     identification_summary="_tool_load", propose_next_poses="_next_poses", PoseProposal="_next_poses",
+    FrameCheck="_tool_checks", check_wrench_frame="_tool_checks", OrderDrift="_tool_checks",
+    drift_in_recording_order="_tool_checks", Observability="_mounting", ParameterBlock="_mounting",
+    tool_load_observability="_tool_checks", continuous_recording="_virtual_recording",
+    ContinuousRecording="_virtual_recording", StaticPoses="_static_poses", static_poses="_static_poses",
+    RecordingRows="_static_poses", recording_rows="_static_poses", RecordingOptions="_static_poses",
+    recording_kind="_static_poses", bag_run_log="_static_poses", DEFAULT_STILL_TOLERANCE_DEG="_still_poses",
+    DEFAULT_MIN_STILL_S="_still_poses",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -41,7 +41,8 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import NO_SETTING, CalibrationInputError
 
 __all__ = ["BiasDrift", "DriftExtrapolationWarning", "DRIFT_CHOICES", "MAX_KNOTS", "drift_candidates",
-           "fit_gravity_blocks", "select_drift", "tool_onnx_model"]
+           "fit_gravity_blocks", "select_drift", "tool_onnx_model", "held_out_predictions", "held_out_residual",
+           "pose_folds"]
 
 #: Values of ``drift=`` of :func:`ftcal.experiment.identify_tool_load`: ``auto`` chooses among every candidate the data
 #: allow (the constant bias included); ``none`` keeps the bias constant; ``linear`` (in time), ``spline`` (in time)
@@ -417,6 +418,40 @@ def drift_candidates(n_poses: int, times: NDArray | None, temperatures: NDArray 
     return out
 
 
+def held_out_predictions(g_s: NDArray, W: NDArray, basis: NDArray, folds) -> NDArray[np.float64] | None:
+    """The gravity wrench plus bias (and drift with ``basis`` (n, k)) of each row predicted by the fit on the other
+    folds' rows (n, 6) [N, N·m]; ``None`` when some training set cannot determine every parameter."""
+    pred = np.empty_like(W)
+    for train, test in folds:
+        fit = fit_gravity_blocks(g_s[train], W[train], basis[train])
+        if (fit["force_rank"] < fit["n_force_columns"] or fit["torque_rank"] < fit["n_torque_columns"]
+                or 3 * len(train) <= fit["n_torque_columns"]):
+            return None
+        force_A, torque_A = _block_designs(g_s[test], basis[test])
+        f_coef = np.concatenate([[fit["mass"]], fit["bias"][:3], fit["drift"][:, :3].reshape(-1)])
+        t_coef = np.concatenate([fit["p"], fit["bias"][3:], fit["drift"][:, 3:].reshape(-1)])
+        pred[test, :3] = (force_A @ f_coef).reshape(-1, 3)
+        pred[test, 3:] = (torque_A @ t_coef).reshape(-1, 3)
+    return pred
+
+
+def pose_folds(n: int, groups: NDArray | None, cv: int, random_state: int | None):
+    """The leave-poses-out folds: ``min(cv, poses)`` folds holding each pose's rows out together (leave-one-pose-out
+    when there are at most ``cv`` poses)."""
+    from ..model_selection._selection import calibration_folds
+
+    n_units = n if groups is None else np.unique(groups).size
+    return calibration_folds(n, groups, n_splits=min(int(cv), n_units), random_state=random_state)
+
+
+def held_out_residual(g_s: NDArray, W: NDArray, basis: NDArray, *, groups: NDArray | None = None, cv: int = 20,
+                      random_state: int | None = 0) -> NDArray[np.float64] | None:
+    """Each row's wrench minus its leave-poses-out prediction (n, 6) [N, N·m] (:func:`held_out_predictions` over
+    :func:`pose_folds`), ``None`` when a fold cannot be fitted (too few poses)."""
+    pred = held_out_predictions(g_s, W, basis, pose_folds(len(W), groups, cv, random_state))
+    return None if pred is None else W - pred
+
+
 def _held_out_errors(g_s: NDArray, W: NDArray, values: dict, candidates: list[_Candidate],
                      folds) -> tuple[NDArray, NDArray]:
     """Held-out squared force and torque errors (n_candidates, n_poses) per pose (NaN: not scorable)."""
@@ -424,21 +459,8 @@ def _held_out_errors(g_s: NDArray, W: NDArray, values: dict, candidates: list[_C
     force = np.full((len(candidates), n), np.nan)
     torque = np.full((len(candidates), n), np.nan)
     for c, cand in enumerate(candidates):
-        basis = cand.basis(values)
-        ok = True
-        pred = np.empty_like(W)
-        for train, test in folds:
-            fit = fit_gravity_blocks(g_s[train], W[train], basis[train])
-            if (fit["force_rank"] < fit["n_force_columns"] or fit["torque_rank"] < fit["n_torque_columns"]
-                    or 3 * len(train) <= fit["n_torque_columns"]):
-                ok = False
-                break
-            force_A, torque_A = _block_designs(g_s[test], basis[test])
-            f_coef = np.concatenate([[fit["mass"]], fit["bias"][:3], fit["drift"][:, :3].reshape(-1)])
-            t_coef = np.concatenate([fit["p"], fit["bias"][3:], fit["drift"][:, 3:].reshape(-1)])
-            pred[test, :3] = (force_A @ f_coef).reshape(-1, 3)
-            pred[test, 3:] = (torque_A @ t_coef).reshape(-1, 3)
-        if ok:
+        pred = held_out_predictions(g_s, W, cand.basis(values), folds)
+        if pred is not None:
             err = (pred - W) ** 2
             force[c], torque[c] = err[:, :3].sum(axis=1), err[:, 3:].sum(axis=1)
     return force, torque
@@ -451,7 +473,7 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
 
     ``groups`` labels the rows of one pose (several samples of a static pose): they are held out together and
     count as one unit of the standard error; ``None``: every row is a pose."""
-    from ..model_selection._selection import calibration_folds, check_groups, simplest_within_one_se
+    from ..model_selection._selection import check_groups, simplest_within_one_se
 
     candidates = drift_candidates(len(W), times, temperatures, choice)
     values = {k: v for k, v in (("time", times), ("temperature", temperatures)) if v is not None}
@@ -467,8 +489,7 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     if groups is not None:
         groups = check_groups(groups, len(W), purpose="leave-poses-out cross-validation of the drift",
                               fix="pass groups=None when every row is a pose")
-    n_units = len(W) if groups is None else np.unique(groups).size
-    folds = calibration_folds(len(W), groups, n_splits=min(int(cv), n_units), random_state=random_state)
+    folds = pose_folds(len(W), groups, cv, random_state)
     force, torque = _held_out_errors(g_s, W, values or {"time": np.zeros(len(W))}, candidates, folds)
     scorable = ~np.isnan(force).any(axis=1)
     if not scorable.any():
@@ -527,6 +548,10 @@ def tool_onnx_model(tool):
     m, c, g = tool.mass, np.asarray(tool.center_of_mass), np.asarray(tool.gravity, dtype=float)
     # gravity wrench = g_s @ M, g_s = Rᵀ g: force m g_s, torque c × (m g_s) = m g_s @ [c]×ᵀ
     M = np.hstack([m * np.eye(3), m * _skew(c[None])[0].T])
+    if np.any(tool.mounting_rotation):  # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M
+        from scipy.spatial.transform import Rotation
+
+        M = Rotation.from_rotvec(np.asarray(tool.mounting_rotation, dtype=float)).as_matrix() @ M
     drift = tool.drift
     bias = np.asarray(tool.bias, dtype=float)
     inits = {"g": g.reshape(3, 1), "M": M, "flat": np.array([-1, 3], dtype=np.int64)}

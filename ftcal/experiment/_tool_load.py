@@ -40,8 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
 from ..core._wrench import MAX_LOAD_MASS_KG
+from ._mounting import axis_text
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
-                     functional_se, select_drift)
+                     functional_se, held_out_residual, select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "identification_summary", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
@@ -58,6 +59,16 @@ DEFAULT_GRAVITY = (0.0, 0.0, -9.81)
 ROTATION_TOLERANCE = 5e-3
 #: The gravity directions (sensor frame) must vary by at least this much in two independent directions [deg].
 MIN_TILT_DEG = 10.0
+#: Largest mounting rotation a tool holds [rad] (20 deg): a mounting error is a few degrees; a larger turn belongs
+#: in the robot model (``load_robot(sensor_mounting=...)``).
+MAX_MOUNTING_ROTATION_RAD = float(np.radians(20.0))
+
+
+def mounting_matrix(rotation_vector: ArrayLike) -> NDArray[np.float64]:
+    """The rotation matrix (3, 3) of a mounting rotation vector [rad] (the sensor's frame in the robot's)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_rotvec(np.asarray(rotation_vector, dtype=float)).as_matrix()
 
 
 def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None):
@@ -135,7 +146,9 @@ def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np
 _FILE_KEYS = {"mass_std_error": "mass_std_error_kg", "mass": "mass_kg",
               "center_of_mass_std_error": "center_of_mass_std_error_m", "center_of_mass": "center_of_mass_m",
               "bias_std_error": "bias_std_error", "bias": "bias", "gravity": "gravity_m_s2",
-              "residual_rms": "residual_rms"}
+              "residual_rms": "residual_rms", "held_out_residual_rms": "held_out_residual_rms",
+              "mounting_rotation_std_error": "mounting_rotation_std_error_rad",
+              "mounting_rotation": "mounting_rotation_rad"}
 
 
 @dataclass(frozen=True)
@@ -155,7 +168,17 @@ class ToolLoad:
     gravity : ndarray of shape (3,)
         Gravity in the base frame [m/s²] used for the identification.
     residual_rms : ndarray of shape (2,)
-        RMS of the force [N] and torque [N·m] residuals of the identification poses.
+        RMS of the force [N] and torque [N·m] residuals of the identification poses (in-sample).
+    held_out_residual_rms : ndarray of shape (2,) or None
+        The same RMS [N, N·m] of each pose's residual predicted by the identification on the other poses
+        (leave-poses-out: K-fold over poses, leave-one-out on at most ``cv`` poses): how well the tool predicts
+        a pose it has not seen. ``None`` when unknown (a tool file of an older ftcal, too few poses).
+    mounting_rotation : ndarray of shape (3,)
+        The sensor's mounting rotation relative to the robot's sensor frame, a rotation vector [rad]
+        (``identify_tool_load(..., mounting=True)``; zero otherwise): the sensor's true orientation is
+        ``R @ Rotation.from_rotvec(mounting_rotation).as_matrix()`` with ``R`` the robot's.
+    mounting_rotation_std_error : ndarray of shape (3,)
+        Its standard error [rad].
     drift : BiasDrift or None
         How the bias moves with time or temperature (``None``: a constant bias). With a drift, ``bias`` is
         the bias at ``drift.reference`` (the end of the identification, or the last re-tare) and every
@@ -171,6 +194,9 @@ class ToolLoad:
     gravity: NDArray[np.float64] = field(default_factory=lambda: np.asarray(DEFAULT_GRAVITY))
     residual_rms: NDArray[np.float64] = field(default_factory=lambda: np.zeros(2))
     drift: BiasDrift | None = None
+    held_out_residual_rms: NDArray[np.float64] | None = None
+    mounting_rotation: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
+    mounting_rotation_std_error: NDArray[np.float64] = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self) -> None:
         """Check every field: finite values of the right shapes, a mass and standard errors >= 0, a gravity."""
@@ -195,6 +221,15 @@ class ToolLoad:
         array("bias_std_error", (6,), nonnegative=True)
         array("gravity", (3,))
         array("residual_rms", (2,), nonnegative=True)
+        if self.held_out_residual_rms is not None:
+            array("held_out_residual_rms", (2,), nonnegative=True)
+        array("mounting_rotation", (3,))
+        array("mounting_rotation_std_error", (3,), nonnegative=True)
+        if np.linalg.norm(self.mounting_rotation) > MAX_MOUNTING_ROTATION_RAD:
+            raise CalibrationInputError(
+                f"ToolLoad mounting_rotation turns by {np.degrees(np.linalg.norm(self.mounting_rotation)):.3g} deg, "
+                f"more than the {np.degrees(MAX_MOUNTING_ROTATION_RAD):g} deg a mounting error can be. Fix: give the "
+                "sensor's mounting to the robot model (sensor_mounting) and identify the small rest.")
         if not np.abs(self.gravity).max() > 0:
             raise CalibrationInputError(f"ToolLoad gravity must be a non-zero vector in [m/s²]; got {self.gravity!r}.")
         for name in TOOL_LIMITS:
@@ -231,8 +266,9 @@ class ToolLoad:
         return self._weight_wrench(R) + self.bias_at(len(R), times, temperatures)
 
     def _weight_wrench(self, R: NDArray[np.float64]) -> NDArray[np.float64]:
-        """The tool's weight alone as a wrench in the sensor frame (n, 6) [N, N·m]."""
-        force = self.mass * _gravity_in_sensor(R, self.gravity)
+        """The tool's weight alone as a wrench in the sensor frame (n, 6) [N, N·m] (the sensor's frame turned by the
+        mounting rotation from the robot's)."""
+        force = self.mass * _gravity_in_sensor(R @ mounting_matrix(self.mounting_rotation), self.gravity)
         return np.hstack([force, np.cross(np.asarray(self.center_of_mass), force)])
 
     def compensate(self, sensor_rotations: ArrayLike, wrenches: ArrayLike, *, times: ArrayLike | None = None,
@@ -310,6 +346,11 @@ class ToolLoad:
             "center_of_mass_std_error_m": np.asarray(self.center_of_mass_std_error).tolist(),
             "bias_std_error": np.asarray(self.bias_std_error).tolist(),
             "gravity_m_s2": np.asarray(self.gravity).tolist(), "residual_rms": np.asarray(self.residual_rms).tolist(),
+            "held_out_residual_rms": None if self.held_out_residual_rms is None else
+            np.asarray(self.held_out_residual_rms).tolist(),
+            **({} if not np.any(self.mounting_rotation) else {
+                "mounting_rotation_rad": np.asarray(self.mounting_rotation).tolist(),
+                "mounting_rotation_std_error_rad": np.asarray(self.mounting_rotation_std_error).tolist()}),
             **extra,
         }
 
@@ -346,6 +387,10 @@ class ToolLoad:
                 bias_std_error=np.asarray(d.get("bias_std_error", [0.0] * 6), dtype=float),
                 gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
                 residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
+                held_out_residual_rms=None if d.get("held_out_residual_rms") is None else
+                np.asarray(d["held_out_residual_rms"], dtype=float),
+                mounting_rotation=np.asarray(d.get("mounting_rotation_rad", [0.0] * 3), dtype=float),
+                mounting_rotation_std_error=np.asarray(d.get("mounting_rotation_std_error_rad", [0.0] * 3), dtype=float),
                 drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]),
             )
         except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
@@ -360,14 +405,6 @@ class ToolLoad:
         return tool
 
 
-def _axis_text(v: NDArray[np.float64]) -> str:
-    """An axis (a unit vector, either sign) as ``x`` when it lies along one (within 10 deg), else as components."""
-    k = int(np.argmax(np.abs(v)))
-    if abs(v[k]) >= np.cos(np.radians(10.0)):
-        return "xyz"[k]
-    return "[" + ", ".join(f"{c:.2f}" for c in np.sign(v[k]) * v) + "]"
-
-
 def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]) -> str:
     """`` (tilted about the sensor's x axis only; none about z)`` for gravity directions that vary in one
     direction only (empty when they do not vary at all, or in two directions)."""
@@ -377,8 +414,8 @@ def _missing_tilt(directions: NDArray[np.float64], tilt_deg: NDArray[np.float64]
     mean /= np.linalg.norm(mean)
     varied = np.linalg.svd(directions - directions.mean(axis=0))[2][0]  # gravity moves along this direction
     tilted_about = np.cross(mean, varied)  # a tilt about this axis moves gravity along `varied`
-    return (f" (they tilt the tool about the sensor's {_axis_text(tilted_about / np.linalg.norm(tilted_about))} axis "
-            f"only, by {tilt_deg[0]:.3g} deg; none about {_axis_text(varied)})")
+    return (f" (they tilt the tool about the sensor's {axis_text(tilted_about / np.linalg.norm(tilted_about))} axis "
+            f"only, by {tilt_deg[0]:.3g} deg; none about {axis_text(varied)})")
 
 
 def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayLike) -> NDArray[np.float64]:
@@ -402,6 +439,7 @@ def identify_tool_load(
     sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
     times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
     time_unit: str = "s", cv: int = 20, random_state: int | None = 0, groups: ArrayLike | None = None,
+    mounting: bool = False,
 ) -> ToolLoad:
     """Identify a tool's mass, centre of mass and the sensor bias (and its drift) from static poses.
 
@@ -435,11 +473,19 @@ def identify_tool_load(
     groups : array-like of shape (n,), optional
         The pose of each row when several rows are samples of one static pose (a run log's ``pose`` column):
         the cross-validation holds a pose's rows out together. ``None``: every row is a pose.
+    mounting : bool, default=False
+        Also estimate the sensor's small mounting rotation relative to the robot's sensor frame (a few degrees),
+        jointly with mass, centre of mass and bias, with its standard error (:mod:`ftcal.experiment._mounting`).
+        The poses are checked first: a rotation they cannot tell (the tilt axis missing, too few or too similar
+        poses) is refused, naming the axis and the parameter that absorbs it.
 
     Returns
     -------
     ToolLoad
-        With ``drift`` set when a drift was chosen; its ``selection`` holds every candidate's held-out error.
+        With ``drift`` set when a drift was chosen (its ``selection`` holds every candidate's held-out error),
+        ``held_out_residual_rms`` the leave-poses-out residual of the chosen model (K-fold over the poses with
+        ``cv`` folds; leave-one-pose-out on at most ``cv`` poses; the mounting rotation, when estimated, held at
+        its estimate), and ``mounting_rotation`` with ``mounting=True``.
 
     Raises
     ------
@@ -492,29 +538,53 @@ def identify_tool_load(
     candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state,
                                     groups=groups)
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
-    fit = fit_gravity_blocks(g_s, W, candidate.basis({"time": np.zeros(n)} if values is None
-                                                     else {candidate.variable: values}), groups)
+    basis = candidate.basis({"time": np.zeros(n)} if values is None else {candidate.variable: values})
+    fit = fit_gravity_blocks(g_s, W, basis, groups)
+    if not fit["mass"] > 0:
+        raise CalibrationInputError(
+            f"the identified mass is {fit['mass']:.4g} kg (not positive): the wrenches do not show a tool's weight. "
+            "Check the gravity direction and that the wrenches are in the sensor frame."
+        )
+    rotation, rotation_cov, joint_cov = np.zeros(3), np.zeros((3, 3)), None
+    if mounting:
+        from ._mounting import identify_mounting
+
+        g_s, rotation, rotation_cov, joint_cov = identify_mounting(g_s, W, basis, fit, groups)
+        fit = fit_gravity_blocks(g_s, W, basis, groups)  # the tool given the rotation (the optimum's linear part)
     f_se = np.sqrt(np.maximum(np.diag(fit["force_cov"]), 0.0))
     t_se = np.sqrt(np.maximum(np.diag(fit["torque_cov"]), 0.0))
     mass, p = fit["mass"], fit["p"]
-    if not mass > 0:
-        raise CalibrationInputError(
-            f"the identified mass is {mass:.4g} kg (not positive): the wrenches do not show a tool's weight. "
-            "Check the gravity direction and that the wrenches are in the sensor frame."
-        )
     com = p / mass
     com_se = np.sqrt((t_se[:3] / mass) ** 2 + (p * f_se[0] / mass**2) ** 2)
     bias, bias_se, bias_drift = fit["bias"], np.concatenate([f_se[1:4], t_se[3:6]]), None
+    if joint_cov is not None:  # the tool's standard errors with the rotation's uncertainty in them
+        f_se[0], com_se, bias_se = _joint_standard_errors(mass, p, joint_cov)
     if values is not None:
         unit = time_unit if candidate.variable == "time" else "degC"
         bias_drift = build_drift(candidate, fit, values, unit, table)
         bias = bias + (candidate.basis({candidate.variable: np.array([bias_drift.reference])}) @ fit["drift"])[0]
         bias_se = functional_se(fit, candidate.basis({candidate.variable: np.array([bias_drift.reference])})[0], 1.0)
+    held_out = held_out_residual(g_s, W, basis, groups=groups, cv=cv, random_state=random_state)
     return ToolLoad(
         mass=mass, center_of_mass=com, bias=bias, mass_std_error=float(f_se[0]), center_of_mass_std_error=com_se,
         bias_std_error=bias_se, gravity=np.asarray(gravity, dtype=float), residual_rms=fit["residual_rms"],
-        drift=bias_drift,
+        drift=bias_drift, held_out_residual_rms=None if held_out is None else residual_rms_of(held_out),
+        mounting_rotation=rotation, mounting_rotation_std_error=np.sqrt(np.maximum(np.diag(rotation_cov), 0.0)),
     )
+
+
+def residual_rms_of(residual: NDArray[np.float64]) -> NDArray[np.float64]:
+    """RMS of the force [N] and torque [N·m] components of residual wrenches (n, 6) (as ``residual_rms``)."""
+    return np.array([np.sqrt(np.mean(residual[:, :3] ** 2)), np.sqrt(np.mean(residual[:, 3:] ** 2))])
+
+
+def _joint_standard_errors(mass: float, p: NDArray, cov: NDArray) -> tuple[float, NDArray, NDArray]:
+    """Standard errors of mass, centre of mass (delta method for ``c = p / m``) and bias from the joint covariance
+    of ``[r, m, p, b_F, b_τ]``."""
+    J = np.hstack([-p[:, None] / mass**2, np.eye(3) / mass])  # dc / d(m, p)
+    com_cov = J @ cov[3:7, 3:7] @ J.T
+    diag = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    return float(diag[3]), np.sqrt(np.maximum(np.diag(com_cov), 0.0)), diag[7:13]
 
 
 def _check_drift_values(name: str, values: ArrayLike | None, n: int) -> NDArray[np.float64] | None:
@@ -547,6 +617,16 @@ def _drift_comment(tool: ToolLoad) -> list[str]:
     return [f"# NOTE: the bias drifts ({d.description}, mean rate {rate_text}); these parameters cannot express a",
             f"# drift: 'bias' is the bias at {d.variable} {d.reference:.10g} {d.unit}. Re-tare periodically (ftcal retare)",
             "# or deploy the tool's ONNX export (ftcal export, format onnx), which carries the drift."]
+
+
+def _mounting_comment(tool: ToolLoad) -> list[str]:
+    """YAML comment lines on a mounting rotation these formats cannot express (none without one)."""
+    if not np.any(tool.mounting_rotation):
+        return []
+    r = np.degrees(tool.mounting_rotation)
+    return [f"# NOTE: the sensor is mounted turned by the rotation vector [{', '.join(f'{v:.3g}' for v in r)}] deg from",
+            "# the robot's sensor frame; these formats take the frame from tf: add that rotation to the sensor frame's",
+            "# transform (URDF), or deploy the tool's ONNX export (ftcal export, format onnx), which carries it."]
 
 
 def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_sensor", world_frame: str = "world",
@@ -592,7 +672,7 @@ def tool_gravity_compensation_yaml(tool: ToolLoad, *, sensor_frame: str = "ft_se
         "# Tool gravity compensation parameters written by ftcal (identify-load): sensor frame, SI units.",
         f"# mass {tool.mass:.6g} kg (± {tool.mass_std_error:.2g}), centre of mass in the frame {comment_frame} [m],",
         "# bias [N, N·m] = what the sensor reads with no load at all.",
-        *_drift_comment(tool),
+        *_drift_comment(tool), *_mounting_comment(tool),
         "# --- ROS 1 force_torque_tools (gravity_compensation node) ---",
     ]) + "\n"
     text += block({"bias": floats(tool.bias), "gripper_mass": float(tool.mass), "gripper_com_frame_id": sensor_frame,
