@@ -25,6 +25,7 @@ ftcal's networks limit themselves to ``n_threads=1`` (a threadpoolctl context) b
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import statistics
 import time
@@ -56,6 +57,11 @@ def median_time(fn, repeats: int) -> tuple[float, object]:
     return statistics.median(times), out
 
 
+def _ratio(times: dict, a: str, b: str) -> float:
+    """Median of ``times[a]`` over median of ``times[b]``."""
+    return statistics.median(times[a]) / statistics.median(times[b])
+
+
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeats", type=int, default=3)
@@ -63,6 +69,7 @@ def main(argv=None) -> int:
     parser.add_argument("--latency-calls", type=int, default=3000)
     parser.add_argument("--stack", type=int, default=30, help="nets in the fit_stacked measurement")
     args = parser.parse_args(argv)
+    load_before = os.getloadavg()[0]
     raw, w = data(4000, 0)
     test_raw, test_w = data(2000, 1)
     torch.set_num_threads(1)
@@ -115,23 +122,27 @@ def main(argv=None) -> int:
 
     with threadpool_limits(1):  # interleaved, so that a slow spell of a shared machine hits all three alike
         times: dict = {"plain": [], "ftcal": [], "bare": []}
+        cpu: dict = {"plain": [], "ftcal": [], "bare": [], "ensemble": [], "single": []}  # process CPU time [s]
         for _ in range(args.repeats):
             for name, fn in (("plain", plain_fit), ("ftcal", ftcal_fit), ("bare", bare_loop)):
-                start = time.perf_counter()
+                start, start_cpu = time.perf_counter(), time.process_time()
                 out = fn()
                 times[name].append(time.perf_counter() - start)
+                cpu[name].append(time.process_time() - start_cpu)
                 model = out if name == "ftcal" else model
         t_plain, t_ftcal, t_bare = (statistics.median(times[k]) for k in ("plain", "ftcal", "bare"))
     member = ftcal.DirectionalCalibrator(phase1_epochs=args.epochs, plateau_epochs=0, max_recover_epochs=0, alpha=50.0)
     with threadpool_limits(1):  # the ensemble interleaved with one member's fit, its baseline
         ensemble_times, single_times = [], []
         for _ in range(args.repeats):
-            start = time.perf_counter()
+            start, start_cpu = time.perf_counter(), time.process_time()
             ensemble = ftcal.EnsembleCalibrator(member, n_members=5, random_state=0).fit(raw, w)
             ensemble_times.append(time.perf_counter() - start)
-            start = time.perf_counter()
+            cpu["ensemble"].append(time.process_time() - start_cpu)
+            start, start_cpu = time.perf_counter(), time.process_time()
             ftcal_fit()
             single_times.append(time.perf_counter() - start)
+            cpu["single"].append(time.process_time() - start_cpu)
         t_ensemble, t_single = statistics.median(ensemble_times), statistics.median(single_times)
         t_stack, _ = median_time(
             lambda: ftcal.networks.fit_stacked([clone(member).set_params(random_state=s) for s in range(args.stack)], raw, w),
@@ -163,7 +174,7 @@ def main(argv=None) -> int:
         thr_predict, _ = median_time(lambda: model.predict(big), 5)
     lines = [
         f"machine: {platform.machine()}, {torch.get_num_threads()} torch thread, Python {platform.python_version()}, "
-        f"torch {torch.__version__}",
+        f"torch {torch.__version__}; ftcal from {ftcal.__file__}",
         "",
         "| measure | ftcal | baseline (same process) | ratio | target |",
         "|---|---|---|---|---|",
@@ -181,6 +192,11 @@ def main(argv=None) -> int:
         f"| {lat_predict / lat_numpy:.2f} | <= 5 |",
         f"| 100 000-row predict throughput | {len(big) / thr_predict:,.0f} rows/s | numpy forward "
         f"{len(big) / thr_numpy:,.0f} rows/s | {thr_numpy / thr_predict:.2f} of numpy's | >= 0.5 |",
+        "",
+        "the same ratios in process CPU time (less moved by other processes' time slices on a shared machine): "
+        f"fit / plain skorch {_ratio(cpu, 'ftcal', 'plain'):.3f}, bare loop / plain skorch "
+        f"{_ratio(cpu, 'bare', 'plain'):.3f}, ensemble / one member {_ratio(cpu, 'ensemble', 'single'):.3f}; "
+        f"load average {load_before:.1f} before, {os.getloadavg()[0]:.1f} after",
         "",
         f"held-out RMSE after {args.epochs} epochs: directional {rmse:.3f} N, its 5-member ensemble "
         f"{rmse_ensemble:.3f} N (LTM {ltm:.3f} N)",

@@ -1,5 +1,7 @@
-"""A fit or a model load changes nothing of the process beyond the estimator: other threads keep their BLAS and
-OpenMP threads while a fit runs, and torch's global random generator is left as it was."""
+"""A fit or a model load changes nothing of the process beyond the estimator, but for one documented, scoped
+limit: while a fit runs, the process' BLAS runs one thread (as in scikit-learn's KMeans), whatever other threads
+are alive, and the count is back after it; another thread keeps its OpenMP (torch) threads; torch's global random
+generator is left as it was."""
 
 import threading
 from pathlib import Path
@@ -13,35 +15,46 @@ from ftcal import (DirectionalCalibrator, GaussianProcessCalibrator, LinearCalib
                    PolynomialCalibrator, load_model, save_model)
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
-#: These tests look at what a fit does beside threads of the user's: the process is not claimed for ftcal here
-#: (conftest.py declares it ftcal's for every other test: the test runner's threads never compute).
-pytestmark = pytest.mark.user_threads
-
 
 def _pools() -> dict:
     return {pool["filepath"]: pool["num_threads"] for pool in threadpool_info()}
 
 
-class _Pause:
-    """Holds a fit at one point (``wait``, called from inside it) until the test has looked and releases it."""
+def _blas_pools() -> dict:
+    return {pool["filepath"]: pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"}
+
+
+class _Look:
+    """Records, from inside a fit (``wait``, called at its first look at the data or its first epoch), the process'
+    thread pools as the fitting thread sees them, and the torch thread count of another live thread (the user's,
+    which waits for the request and answers it)."""
 
     def __init__(self):
-        self.inside, self.release = threading.Event(), threading.Event()
+        self.asked, self.answered, self.done = threading.Event(), threading.Event(), threading.Event()
+        self.seen: dict = {}
 
     def wait(self):
-        if not self.inside.is_set():
-            self.inside.set()
-            assert self.release.wait(60), "the test never released the fit"
+        if "fit" not in self.seen:
+            self.seen["fit"] = _pools()
+            self.asked.set()
+            assert self.answered.wait(60), "the other thread never answered"
+
+    def other_thread(self):
+        while not self.done.is_set():
+            if self.asked.wait(0.05):
+                self.seen["other torch threads"] = torch.get_num_threads()
+                self.answered.set()
+                return
 
 
-class _PausingReadings:
-    """Readings that hold the fit at its first look at them (inside ``fit``, where the BLAS limit applies)."""
+class _LookingReadings:
+    """Readings that look at the threads at the fit's first look at them (inside ``fit``, where the limit applies)."""
 
-    def __init__(self, values, pause):
-        self.values, self.pause = values, pause
+    def __init__(self, values, look):
+        self.values, self.look = values, look
 
     def __array__(self, dtype=None, copy=None):
-        self.pause.wait()
+        self.look.wait()
         return np.asarray(self.values, dtype=dtype)
 
     def __len__(self):
@@ -52,55 +65,53 @@ class _PausingReadings:
         return self.values.shape
 
 
-def _pausing_in_training(pause):
-    """A skorch callback that holds a network's fit at its first epoch: inside training, where the network's
-    torch / OpenMP limit applies (entered after the data are validated)."""
+def _looking_in_training(look):
+    """A skorch callback that looks at the threads at a network's first epoch: inside training, where the
+    network's torch / OpenMP limit applies (entered after the data are validated)."""
     from skorch.callbacks import Callback
 
-    class PauseInTraining(Callback):
+    class LookInTraining(Callback):
         def on_epoch_begin(self, net, **kwargs):
-            pause.wait()
+            look.wait()
 
-    return PauseInTraining()
+    return LookInTraining()
 
 
 @pytest.mark.parametrize("make, in_training", [
-    (lambda pause: LinearCalibrator(), False),
-    (lambda pause: PolynomialCalibrator(degree=2), False),
-    (lambda pause: GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0), False),
-    (lambda pause: DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0,
-                                         max_recover_epochs=0, random_state=0, n_threads=1,  # a limit in force
-                                         callbacks=[_pausing_in_training(pause)]), True),
+    (lambda look: LinearCalibrator(), False),
+    (lambda look: PolynomialCalibrator(degree=2), False),
+    (lambda look: GaussianProcessCalibrator(mean="none", kernel="rbf", per_output=False, random_state=0), False),
+    (lambda look: DirectionalCalibrator(hidden_layer_sizes=(8,), phase1_epochs=2, plateau_epochs=0,
+                                        max_recover_epochs=0, random_state=0, n_threads=1,  # a limit in force
+                                        callbacks=[_looking_in_training(look)]), True),
 ], ids=["linear", "polynomial", "gaussian_process", "directional"])
-def test_a_thread_outside_fit_keeps_its_blas_and_openmp_threads_while_a_fit_runs(make, in_training):
+def test_a_fit_runs_blas_on_one_thread_and_leaves_other_threads_openmp_alone(make, in_training):
+    """Beside a live thread of the program's, the fit limits the process' BLAS to one thread (it never looks at
+    other threads; OpenBLAS has one count per process), the other thread keeps its OpenMP (torch) count, and every
+    count is as before after the fit. (The fit runs in the test's thread: OpenBLAS ignores a count set from another
+    thread once one thread has set it.)"""
     rng = np.random.default_rng(0)
     wrench = rng.normal(size=(60, 6))
     raw = wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6))
-    pause = _Pause()
-    readings = raw if in_training else _PausingReadings(raw, pause)
-    # the process' own thread counts (a threadpool_limits around the test would hide a limit set in another thread:
-    # OpenBLAS then ignores the other thread's setting)
-    before, torch_threads = _pools(), torch.get_num_threads()
+    look = _Look()
+    readings = raw if in_training else _LookingReadings(raw, look)
+    before = _pools()
     if min(before.values()) < 2:
         pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
-    errors = []
-
-    def fit():
+    with threadpool_limits(2, user_api="openmp"):  # the other thread starts with 2 torch threads
+        user = threading.Thread(target=look.other_thread)
+        user.start()
         try:
-            make(pause).fit(readings, wrench)
-        except BaseException as exc:  # reported by the main thread
-            errors.append(exc)
-            pause.inside.set()
-
-    worker = threading.Thread(target=fit)
-    worker.start()
-    assert pause.inside.wait(60)
-    during, torch_during = _pools(), torch.get_num_threads()
-    pause.release.set()
-    worker.join(120)
-    assert not errors, errors
-    assert during == before
-    assert torch_during == torch_threads
+            make(look).fit(readings, wrench)
+        finally:
+            look.done.set()
+            user.join(60)
+    blas = set(_blas_pools())
+    assert {path: n for path, n in look.seen["fit"].items() if path in blas} == dict.fromkeys(blas, 1)
+    assert look.seen["other torch threads"] == 2
+    if in_training:  # the network's n_threads: the fitting thread's OpenMP
+        assert {n for path, n in look.seen["fit"].items() if path not in blas} == {1}
+    assert _pools() == before
 
 
 def _in_a_fresh_process(script: str, *args: str) -> dict:
@@ -115,44 +126,7 @@ def _in_a_fresh_process(script: str, *args: str) -> dict:
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
-_LIMIT_IN_ANOTHER_THREAD = r"""
-import json, threading
-import scipy.linalg  # both OpenBLAS libraries loaded: numpy's and scipy's
-from threadpoolctl import threadpool_info, threadpool_limits
-
-def pools():
-    return {p["filepath"]: p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"}
-
-inside, release = threading.Event(), threading.Event()
-
-def limit_everything():
-    limits = threadpool_limits(limits=1, user_api="blas")
-    inside.set()
-    release.wait(60)  # held while the other thread looks, as a fit is
-    limits.restore_original_limits()
-
-before = pools()
-worker = threading.Thread(target=limit_everything)
-worker.start()
-inside.wait(60)
-during = pools()
-release.set()
-worker.join(60)
-print(json.dumps({"before": before, "during": during}))
-"""
-
-
-def test_a_limit_set_for_the_whole_process_in_another_thread_would_show():
-    """The check above can fail: a process-wide BLAS limit to one thread, set in another thread that is still
-    inside its work (as a paused fit is), is seen here. In a fresh process: no thread of another test may change
-    the process' count meanwhile."""
-    facts = _in_a_fresh_process(_LIMIT_IN_ANOTHER_THREAD)
-    if min(facts["before"].values()) < 2:
-        pytest.skip(f"the thread pools run one thread already ({facts['before']}): a limit to one could not show")
-    assert facts["during"] != facts["before"] and min(facts["during"].values()) == 1
-
-
-_BESIDE_IDLE_THREADS = r"""
+_THE_COMMAND_S_POLICY = r"""
 import json, sys, threading
 import numpy as np
 from joblib import Parallel, delayed
@@ -164,34 +138,40 @@ def blas():
     return sorted({p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"})
 
 Parallel(n_jobs=2)(delayed(np.sum)(np.ones(3)) for _ in range(2))  # joblib's pool threads stay alive after it
-seen, original = [], LinearCalibrator._fit
+done = threading.Event()
+user = threading.Thread(target=done.wait, name="the-user-s-thread")  # a thread of the program's own
+user.start()
+seen, fit, predict = {"fit": [], "predict": []}, LinearCalibrator._fit, LinearCalibrator.predict
 def recording_fit(self, *args, **kwargs):
-    seen.append({"threads": sorted(t.name for t in threading.enumerate()), "blas": blas()})
-    return original(self, *args, **kwargs)
-LinearCalibrator._fit = recording_fit
+    seen["fit"].append(blas())
+    return fit(self, *args, **kwargs)
+def recording_predict(self, *args, **kwargs):  # outside any fit: the command's own policy
+    seen["predict"].append(blas())
+    return predict(self, *args, **kwargs)
+LinearCalibrator._fit, LinearCalibrator.predict = recording_fit, recording_predict
 before = blas()
 code = main(["fit", sys.argv[1], "--model", "linear", "--out", sys.argv[2]])  # not -q: its progress timer runs
-print(json.dumps({"code": code, "before": before, "seen": seen, "after": blas()}))
+after = blas()
+done.set()
+user.join()
+print(json.dumps({"code": code, "before": before, "seen": seen, "after": after}))
 """
 
 
-def test_fits_run_blas_on_one_thread_beside_threads_known_idle(tmp_path):
-    """A script that used a joblib process pool keeps its pool's threads; the command shows a fit's progress from
-    a timer thread: neither computes, so the fit still runs BLAS on one thread (with the process' BLAS threads
-    these fits took 4.8-17x longer), and the process' count is restored after it. In a fresh process: the test
-    runner's own threads are not among those ftcal knows idle."""
+def test_the_command_runs_blas_on_one_thread_whatever_threads_are_alive_and_restores_it(tmp_path):
+    """The command sets its process' policy once (one BLAS thread, for the fits and everything between them),
+    beside a joblib pool's threads, its progress timer and a thread of the calling program's; after it returns,
+    the program's count is back. In a fresh process: no thread of another test may change the count meanwhile."""
     from ftcal import CalibrationDataset
 
     rng = np.random.default_rng(0)
     wrench = rng.normal(size=(60, 6))
     path = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)), wrench=wrench).save(tmp_path / "d.csv")
-    facts = _in_a_fresh_process(_BESIDE_IDLE_THREADS, str(path), str(tmp_path / "m"))
+    facts = _in_a_fresh_process(_THE_COMMAND_S_POLICY, str(path), str(tmp_path / "m"))
     if facts["before"] == [1]:
         pytest.skip(f"BLAS runs one thread in a fresh process here ({facts['before']}): a limit could not show")
-    assert facts["code"] == 0 and facts["seen"]
-    assert any("ftcal-idle-progress" in fit["threads"] for fit in facts["seen"])  # the timer beside the fit
-    assert all("ExecutorManagerThread" in fit["threads"] for fit in facts["seen"])  # and joblib's pool threads
-    assert all(fit["blas"] == [1] for fit in facts["seen"]), facts["seen"]
+    assert facts["code"] == 0 and facts["seen"]["fit"] and facts["seen"]["predict"]
+    assert all(seen == [1] for seen in facts["seen"]["fit"] + facts["seen"]["predict"]), facts["seen"]
     assert facts["after"] == facts["before"]
 
 
@@ -199,7 +179,7 @@ _OVERLAPPING_FITS = r"""
 import json, threading
 import scipy.linalg  # both OpenBLAS libraries loaded: numpy's and scipy's
 from threadpoolctl import threadpool_info
-from ftcal.core._threads import limit_threads_here, whole_process_is_ftcal
+from ftcal.core._threads import limit_threads_here
 
 def blas():
     return sorted({p["num_threads"] for p in threadpool_info() if p["user_api"] == "blas"})
@@ -222,21 +202,20 @@ def second():
         release_second.wait(60)
 
 before = blas()
-with whole_process_is_ftcal():
-    threads = [threading.Thread(target=first), threading.Thread(target=second)]
-    for t in threads:
-        t.start()
-    first_out.wait(60)
-    seen["main, after the first left"] = blas()
-    release_second.set()
-    for t in threads:
-        t.join(60)
+threads = [threading.Thread(target=first), threading.Thread(target=second)]
+for t in threads:
+    t.start()
+first_out.wait(60)
+seen["main, after the first left"] = blas()
+release_second.set()
+for t in threads:
+    t.join(60)
 print(json.dumps({"before": before, "seen": seen, "after": blas()}))
 """
 
 
 def test_fits_that_overlap_share_the_blas_limit_and_the_last_restores_it():
-    """Two fits in two threads of a process declared ftcal's: the first leaves while the second runs, which keeps
+    """Two fits in two threads: the first leaves while the second runs, which keeps
     BLAS on one thread; the last to leave restores the process' count (restoring in entry order left it at 1). In
     a fresh process: no thread of another test may change the process' count meanwhile."""
     facts = _in_a_fresh_process(_OVERLAPPING_FITS)
@@ -293,47 +272,33 @@ def test_network_files_written_before_the_networks_encoded_their_own_weights_sti
             np.testing.assert_array_equal(old[k], new[k])
 
 
-class _PausingLinear(LinearCalibrator):
-    """An LTM whose first fit while ``armed`` waits (inside the report's fold) until the test releases it."""
+class _RecordingLinear(LinearCalibrator):
+    """An LTM that records the process' BLAS counts at each fit while ``armed`` (inside the report's folds)."""
 
-    armed, inside, release = False, threading.Event(), threading.Event()
+    armed, seen = False, []
 
     def fit(self, X, y, **kwargs):
-        cls = type(self)
-        if cls.armed and not cls.inside.is_set():
-            cls.inside.set()
-            assert cls.release.wait(60), "the test never released the fit"
+        if type(self).armed:
+            type(self).seen.append(set(_blas_pools().values()))
         return super().fit(X, y, **kwargs)
 
 
-def test_a_thread_outside_the_calibration_report_keeps_its_blas_threads_while_its_folds_are_fitted():
+def test_the_calibration_report_runs_its_fold_loop_with_one_blas_thread_and_restores_the_count():
+    """The report's fold loop (ftcal's own small fits) is one scoped limit: BLAS on one thread while it runs, and
+    the count as before after it."""
     from ftcal import CalibrationDataset, calibration_certificate
 
     rng = np.random.default_rng(1)
     wrench = rng.normal(size=(60, 6))
     data = CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6)), wrench=wrench)
-    model = _PausingLinear().fit(data.raw, data.wrench)
+    model = _RecordingLinear().fit(data.raw, data.wrench)
     before = _pools()
     if min(before.values()) < 2:
         pytest.skip(f"the thread pools run one thread already ({before}): a limit to one could not show")
-    errors = []
-
-    def report():
-        try:
-            calibration_certificate(model, data, cv=3, baselines=False, figures=False)
-        except BaseException as exc:  # reported by the main thread
-            errors.append(exc)
-            _PausingLinear.inside.set()
-
-    _PausingLinear.armed = True
+    _RecordingLinear.armed, _RecordingLinear.seen = True, []
     try:
-        worker = threading.Thread(target=report)
-        worker.start()
-        assert _PausingLinear.inside.wait(60)
-        during = _pools()
-        _PausingLinear.release.set()
-        worker.join(120)
+        calibration_certificate(model, data, cv=3, baselines=False, figures=False)
     finally:
-        _PausingLinear.armed = False
-    assert not errors, errors
-    assert during == before
+        _RecordingLinear.armed = False
+    assert _RecordingLinear.seen and all(seen == {1} for seen in _RecordingLinear.seen), _RecordingLinear.seen
+    assert _pools() == before

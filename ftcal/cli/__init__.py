@@ -103,7 +103,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             parser = build_parser()
             args = parser.parse_args(args_list)
             note_inputs(args, parser)  # no output may replace one of these (OutputPlan checks)
-            return int(args.handler(args) or 0)
+            with _thread_policy():
+                return int(args.handler(args) or 0)
     except SystemExit as exc:  # --help and --version exit through argparse
         return exc.code if isinstance(exc.code, int) else (0 if exc.code is None else EXIT_FAILURE)
     except Interrupted as exc:  # SIGINT / SIGTERM / SIGHUP: outputs in progress were removed while unwinding
@@ -135,6 +136,19 @@ def main(argv: Sequence[str] | None = None) -> int:
             file=sys.stderr,
         )
         return EXIT_FAILURE
+
+
+def _thread_policy() -> contextlib.AbstractContextManager:
+    """The command's thread policy, set once for its whole run: BLAS on one thread. Its work is ftcal's small matrix
+    problems, which a threaded BLAS only slows on a busy machine (``benchmarks/thread_limits.py``); the command owns
+    its process, so the limit reaches every thread of it (joblib's workers are processes that limit their own).
+    Restored when :func:`main` returns (a program may call it). numpy's and scipy's BLAS are loaded first: a limit
+    reaches only the libraries loaded when it is set."""
+    import numpy  # noqa: F401
+    import scipy.linalg  # noqa: F401
+    from threadpoolctl import threadpool_limits
+
+    return threadpool_limits(limits=1, user_api="blas")
 
 
 #: A full disk or an exhausted quota: the file is named and the user told what to do.

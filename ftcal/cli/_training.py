@@ -7,7 +7,6 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from ..core._threads import IDLE_THREAD_PREFIX
 from ._common import Console
 
 __all__ = ["fit_with_progress"]
@@ -89,8 +88,7 @@ def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str
         while not done.wait(0.5):
             bar.refresh()
 
-    # named as idle: the fit beside it still runs its BLAS on one thread (ftcal.core._threads.is_idle_thread)
-    ticker = threading.Thread(target=tick, daemon=True, name=f"{IDLE_THREAD_PREFIX}progress")
+    ticker = threading.Thread(target=tick, daemon=True, name="ftcal-progress")
     ticker.start()
     try:
         return estimator.fit(X, y, **fit_params)
