@@ -353,8 +353,8 @@ def _budget(model: Any, X: NDArray, y: NDArray, pred: NDArray, names: list[str],
     return uncertainty_budget(
         pred - y, axes=names, cases=cases, n_units=n_units, units_name="groups" if grouped else "load cases",
         resolution=None if res is None else np.broadcast_to(res, (y.shape[1],)),
-        resolution_note="channel LSB " + ", ".join(f"{v:.3g}" for v in lsb) + " (the smallest step of each "
-        "channel's values), LSB/√12", reference=ref, reference_note=ref_note, temperature=temp,
+        resolution_note="" if res is None else "channel LSB " + ", ".join(f"{v:.3g}" for v in lsb)
+        + " (the quantisation step of each channel's values; 0: continuous), LSB/√12", reference=ref, reference_note=ref_note, temperature=temp,
         temperature_note=f"coefficient × ±{deviation} °C, rectangular (Type B)")
 
 

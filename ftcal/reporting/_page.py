@@ -287,7 +287,7 @@ def _readings(c) -> str:
         if items:
             parts.append(f"<h3>Readings {what}: {len(items)}</h3>" + _table(
                 ["kind", "file", "line", "channel", "value", "reason"],
-                [[_fmt(i.get(f)) for f in ("kind", "file", "line", "channel", "value", "reason")]
+                [[_fmt(i.get(f), 7) for f in ("kind", "file", "line", "channel", "value", "reason")]
                  for i in items[:READINGS_ON_PAGE]], long=True)
                 + (f"<p class=\"note\">{READINGS_ON_PAGE} of {len(items)} shown; all are in the JSON.</p>"
                    if len(items) > READINGS_ON_PAGE else ""))
