@@ -23,11 +23,11 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import scale_torques
 from ._plan import FoldPlan
-from ._selection import (TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
+from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
                          rmse_and_se, simplest_within_one_se)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
-           "choice_stability", "model_cost", "LIGHT_KERNEL_ROWS"]
+           "choice_stability", "model_cost", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
 
 LOGGER = logging.getLogger("ftcal")
 
@@ -81,6 +81,8 @@ class ComparisonRow:
     verdict: str = ""
     excess_mse: float | None = None
     excess_se: float | None = None
+    #: this row against the chosen one in symmetric words (:meth:`PairedDifference.words`), set by ``choose``
+    against: str = ""
 
     @property
     def status_text(self) -> str:
@@ -153,6 +155,20 @@ class ChoiceStability:
                 "choices": list(self.choices), "words": self.words()}
 
 
+def _short(words: str) -> str:
+    """The verdict part of :meth:`PairedDifference.words` for a table cell: ``"2.1 % worse"``, ``"equivalent
+    within noise"`` (empty for none)."""
+    if not words:
+        return ""
+    if "equivalent within noise" in words:
+        return "equivalent within noise"
+    head = words.split(" (")[0]
+    for verdict in ("better", "worse"):
+        if f" % {verdict} than " in head:
+            return head.split(" is ")[-1].split(" than ")[0]
+    return head
+
+
 def _number(value) -> float | None:
     return None if value is None else float(value)
 
@@ -217,6 +233,20 @@ class Comparison:
         """The plan's :meth:`FoldPlan.to_dict` (kept in model files when the plan's arrays are not)."""
         return self.plan.to_dict() if self.plan is not None else dict(self.plan_facts)
 
+    @property
+    def se_units(self) -> str:
+        """What the standard errors are over, in words: ``"groups"``, ``"folds"``, ``"rows"``, or with fewer than
+        :data:`~ftcal.model_selection._selection.MIN_SE_GROUPS` units ``"rows or groups, the larger (fewer than 5
+        groups)"`` (:func:`mean_and_se`)."""
+        if self.facts.get("se_units"):  # an earlier file's words
+            return str(self.facts["se_units"])
+        name = self.facts.get("units_name", "row")
+        units = self._units()
+        count = np.unique(units).size if units is not None else self.facts.get("n_units")
+        if name == "row" or count is None or count >= MIN_SE_GROUPS:
+            return name + "s"
+        return f"rows or {name}s, the larger (fewer than {MIN_SE_GROUPS} {name}s)"
+
     def _units(self) -> NDArray | None:
         return None if self.plan is None else self.plan.units
 
@@ -249,6 +279,18 @@ class Comparison:
         return PairedDifference(a, b, float(ra.rmse), float(rb.rmse), float(difference), float(paired_se), combined,
                                 verdict)
 
+    def add_scored(self, name: str, kind: str, predictions: ArrayLike, y: ArrayLike, *, complexity: float,
+                   axes=None, index: int | None = None, seconds: float = 0.0) -> ComparisonRow:
+        """Add a row made from out-of-fold ``predictions`` on this plan (e.g. a stack of the other rows), scored
+        and checked like :func:`compare`'s rows; inserted at ``index`` (default: last)."""
+        y = np.asarray(y, dtype=float).reshape(self.plan.n_rows, -1)
+        pred = np.asarray(predictions, dtype=float).reshape(y.shape)
+        row = ComparisonRow(name=name, kind=kind, status=RowStatus.SCORED, seconds=float(seconds),
+                            complexity=float(complexity), eligible=kind != "baseline", predictions=pred)
+        _score_row(row, pred, y, self.alpha, axes, self.plan.units)
+        self.rows.insert(len(self.rows) if index is None else index, row)
+        return row
+
     # ------------------------------------------------------------------ the one-SE rule
     def choose(self) -> str:
         """Apply the one-standard-error rule (:func:`simplest_within_one_se`) over the eligible scored rows, by
@@ -280,11 +322,14 @@ class Comparison:
             else:
                 r.verdict = "beyond one SE"
         self.chosen, self.best_name = rows[chosen].name, rows[best].name
+        for r in rows:
+            r.against = self.paired(r.name, self.chosen).words() if r is not rows[chosen] and \
+                r.row_errors is not None and r.rmse is not None and r.status is RowStatus.SCORED else ""
         self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1))
         return self.chosen
 
     def _why(self, chosen: int, best: int, n_within: int) -> str:
-        rows, unit = self.rows, self.facts.get("units_name", "fold") + "s"
+        rows, unit = self.rows, self.se_units
         c, b = rows[chosen], rows[best]
         if chosen == best:
             why = (f"{c.name} won: the best held-out RMSE ({c.rmse:.4g} ± {c.rmse_se:.2g} N), and no simpler model "
@@ -317,10 +362,10 @@ class Comparison:
                           for r in rows],
             "fit_seconds": [_number(r.seconds) for r in rows], "complexity": [float(r.complexity) for r in rows],
             "verdict": [r.verdict for r in rows], "excess_mse": [r.excess_mse for r in rows],
-            "excess_se": [r.excess_se for r in rows],
+            "excess_se": [r.excess_se for r in rows], "against": [r.against for r in rows],
             "chosen": self.chosen, "best": self.best_name, "why": self.why, "alpha": float(self.alpha),
-            "plan": self.facts, "folds": self.facts.get("kind", "none"), "n_splits": self.facts.get("n_splits", 0),
-            "se_units": self.facts.get("units_name", "fold") + "s", "tie_mse": self.tie_mse,
+            "plan": self.facts, "folds": self.facts.get("note") or self.facts.get("kind", "none"), "n_splits": self.facts.get("n_splits", 0),
+            "se_units": self.se_units, "tie_mse": self.tie_mse,
             "min_training_rows": self.min_training_rows,
             "stability": None if self.stability is None else self.stability.to_dict(),
             "training_sha256": self.training_sha256,
@@ -330,6 +375,10 @@ class Comparison:
         if self.tie_mse is not None and self.best_name is not None:
             out["rule"] = {"best": self.best_name, "tie_mse": self.tie_mse, "units": out["se_units"]}
         return out
+
+    def to_state(self) -> dict:
+        """What a model file keeps: :meth:`to_dict` (read back by :meth:`from_dict`)."""
+        return self.to_dict()
 
     @classmethod
     def from_dict(cls, data: dict) -> "Comparison":
@@ -357,11 +406,12 @@ class Comparison:
                 axis_rmse=None if axis is None else np.asarray(axis, dtype=float),
                 seconds=float(get("fit_seconds", i) or 0.0), complexity=float(get("complexity", i, i) or 0.0),
                 eligible=bool(get("eligible", i, True)), verdict=str(get("verdict", i, "") or ""),
-                excess_mse=_number(get("excess_mse", i)), excess_se=_number(get("excess_se", i))))
+                excess_mse=_number(get("excess_mse", i)), excess_se=_number(get("excess_se", i)),
+                against=str(get("against", i, "") or "")))
         plan = data.get("plan") if isinstance(data.get("plan"), dict) else \
             {"kind": str(data.get("folds", "none")).split(":")[0], "n_splits": data.get("n_splits", 0),
-             "units_name": "group" if "group" in str(data.get("se_units", "")) else "fold",
-             "note": str(data.get("folds", ""))}
+             "units_name": "group" if "group" in str(data.get("se_units", "")) else "row",
+             "note": str(data.get("folds", "")), "se_units": data.get("se_units")}
         stab = data.get("stability")
         stability = None if not isinstance(stab, dict) else ChoiceStability(
             stab["chosen"], int(stab["count"]), int(stab["repeats"]), tuple(stab.get("seeds", ())),
@@ -386,23 +436,21 @@ class Comparison:
         """The comparison as a markdown table: held-out RMSE ± SE, against the chosen row in symmetric words
         (paired SE on the same folds), seconds, status (stopped rows with why), then why the choice won and how
         stable it is."""
-        head = ("| model | kind | held-out RMSE (eq. 18) [N] | ± SE | fit [s] | excess MSE over best [N²] | "
-                "± paired SE [N²] | against the choice | status |")
-        lines = [head, "|---" * 9 + "|"]
+        head = ("| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s] | "
+                "excess MSE over best [N²] | ± paired SE [N²] | against the choice | status |")
+        lines = [head, "|---" * 10 + "|"]
+        stock = [r.rmse for r in self.rows if r.kind in ("stock", "baseline") and r.rmse is not None]
+        best_stock = min(stock) if stock else None
         num = lambda v, form: "" if v is None else format(v, form)  # noqa: E731
         chosen = self.chosen
         for r in self.rows:
             mark = " **(chosen)**" if r.name == chosen else ""
-            against = ""
-            if chosen and r.name != chosen and r.row_errors is not None and r.rmse is not None \
-                    and self.row(chosen).row_errors is not None:
-                d = self.paired(r.name, chosen)
-                against = {"better": f"{d.percent:.1f} % better", "worse": f"{d.percent:.1f} % worse",
-                           "equivalent": "equivalent within noise"}[d.verdict]
-            cells = [num(r.rmse, ".4g"), num(r.rmse_se, ".2g"), num(r.seconds, ".1f"), num(r.excess_mse, ".3g"),
+            against = _short(r.against)
+            ratio = None if r.rmse is None or not best_stock else r.rmse / best_stock
+            cells = [num(r.rmse, ".4g"), num(r.rmse_se, ".2g"), num(ratio, ".3f"), num(r.seconds, ".1f"), num(r.excess_mse, ".3g"),
                      num(r.excess_se, ".2g"), against, r.verdict or r.status_text]
             lines.append(f"| {r.name}{mark} | {r.kind} | " + " | ".join(cells) + " |")
-        units = self.facts.get("units_name", "fold") + "s"
+        units = self.se_units
         if self.tie_mse is not None and self.best_name:
             lines += ["", f"One-SE rule: a row is within one SE of the best ({self.best_name}) when its excess mean "
                           f"squared error over the best is at most its paired SE (the spread of the differences from "
@@ -414,10 +462,10 @@ class Comparison:
             lines += ["", "Stopped early (raced out): " + "; ".join(f"{r.name}: {r.reason}" for r in stopped) + "."]
         if self.facts.get("note"):
             lines += ["", f"Folds: {self.facts['note']}."]
-        if self.why:
-            lines += ["", self.why]
         if self.stability is not None:
             lines += ["", f"Stability: {self.stability.chosen} {self.stability.words()}."]
+        if self.why:
+            lines += ["", self.why]
         return "\n".join(lines)
 
 
@@ -469,8 +517,16 @@ def _row_errors(pred: NDArray, y: NDArray, alpha: float, axes=None) -> NDArray:
     return np.mean((scale_torques(pred, alpha, axes) - scale_torques(y, alpha, axes)) ** 2, axis=1)
 
 
-def _y_rows(y, rows):
-    return y.iloc[rows] if hasattr(y, "iloc") else y[rows]
+def _score_row(row: ComparisonRow, pred: NDArray, y: NDArray, alpha: float, axes, units, refuse: bool = True
+               ) -> None:
+    """Fill ``row``'s errors, RMSE ± SE and per-axis RMSE from its out-of-fold ``pred``; a degenerate one is kept
+    but made ineligible, the reason said."""
+    row.row_errors = _row_errors(pred, y, alpha, axes)
+    row.rmse, row.rmse_se = rmse_and_se(row.row_errors, units)
+    row.axis_rmse = np.sqrt(np.mean((pred - y) ** 2, axis=0))
+    bad = degenerate_reason(y, pred, alpha=alpha, axes=axes) if refuse and row.eligible else None
+    if bad is not None:
+        row.eligible, row.reason = False, f"refused: {bad}"
 
 
 def _default_out_of_fold(estimator, X, y, folds, groups):
@@ -546,7 +602,8 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     ``chooses_structure``), when it has them, say what a fit costs and how many training rows it needs
     (without them: a model of unknown cost needing ``25 N`` rows). Never its name.
 
-    1. A model whose smallest training fold holds fewer distinct rows than it needs is SKIPPED.
+    1. A model whose smallest training fold holds fewer distinct rows than it needs is SKIPPED (not a baseline:
+       reported only, never chosen).
     2. The cheap models (closed forms, kernel models on at most :data:`LIGHT_KERNEL_ROWS` training rows) are
        scored on every fold, in this process.
     3. The costly ones (networks, kernel models on more rows, unknown cost) are raced (``race=True`` and a
@@ -638,13 +695,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
             for test, values in w.pieces:
                 pred[test] = values.reshape(len(test), -1)
             row.predictions = pred
-            row.row_errors = _row_errors(pred, y_arr, alpha, axes)
-            row.rmse, row.rmse_se = rmse_and_se(row.row_errors, plan.units)
-            row.axis_rmse = np.sqrt(np.mean((pred - y_arr) ** 2, axis=0))
-            bad = degenerate_reason(y_arr, pred, alpha=alpha, axes=axes) if refuse_degenerate and row.eligible \
-                else None
-            if bad is not None:
-                row.eligible, row.reason = False, f"refused: {bad}"
+            _score_row(row, pred, y_arr, alpha, axes, plan.units, refuse_degenerate)
         if status is not RowStatus.SCORED:
             row.eligible = False
         comparison.rows[w.index] = row
@@ -660,7 +711,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
         needed = need(w.estimator, n_channels)
         if not folds:
             finish(w, RowStatus.SKIPPED, "no folds can judge a model")
-        elif smallest < needed:
+        elif smallest < needed and w.kind != "baseline":  # (a baseline is reported only, never chosen)
             finish(w, RowStatus.SKIPPED, f"training folds of {smallest} rows < the {needed} it needs")
         else:
             pending.append(w)

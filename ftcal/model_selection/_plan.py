@@ -77,7 +77,9 @@ class FoldPlan:
 
     @property
     def units_name(self) -> str:
-        """What the standard errors are over: ``"group"`` or ``"fold"``."""
+        """What the standard errors are over: ``"group"`` or ``"fold"`` (``"row"`` for a plan without units)."""
+        if self.units is None:
+            return "row"
         return "group" if self.kind == "group" else "fold"
 
     def fingerprint(self) -> str:
@@ -98,6 +100,7 @@ class FoldPlan:
         """JSON-able facts of the plan (no arrays): kind, note, cv, seed, rows, folds, units and fingerprint."""
         return {"kind": self.kind, "note": self.note, "cv": int(self.cv), "seed": int(self.seed),
                 "n_rows": int(self.n_rows), "n_splits": self.n_splits, "units_name": self.units_name,
+                "n_units": None if self.units is None else int(np.unique(self.units).size),
                 "fingerprint": self.fingerprint()}
 
     def with_seed(self, seed: int, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None) -> "FoldPlan | None":
@@ -115,6 +118,27 @@ class FoldPlan:
             return FoldPlan(tuple(folds), self.units, "group", self.note, self.cv, int(seed), self.n_rows)
         plan = FoldPlan.for_data(X, y, None, cv=self.cv, seed=seed)
         return FoldPlan(plan.folds, plan.units, self.kind, self.note, self.cv, int(seed), self.n_rows)
+
+    def to_state(self) -> dict:
+        """:meth:`to_dict` plus the fold of each row and the units: what a model file keeps to rebuild the plan."""
+        fold_of = np.full(self.n_rows, -1, dtype=np.int64)
+        for i, (_, test) in enumerate(self.folds):
+            fold_of[np.asarray(test)] = i
+        units = None if self.units is None else np.asarray(self.units).tolist()
+        return {**self.to_dict(), "fold_of_row": fold_of.tolist(), "units": units}
+
+    @classmethod
+    def from_state(cls, state: dict) -> "FoldPlan":
+        """The plan :meth:`to_state` describes (its folds rebuilt from the fold of each row)."""
+        fold_of = np.asarray(state["fold_of_row"], dtype=np.int64)
+        rows = np.arange(fold_of.size)
+        folds = tuple((rows[fold_of != i], rows[fold_of == i]) for i in range(int(state["n_splits"])))
+        units = None if state.get("units") is None else np.asarray(state["units"])
+        plan = cls(folds, units, str(state["kind"]), str(state["note"]), int(state["cv"]), int(state["seed"]),
+                   int(state["n_rows"]))
+        if state.get("fingerprint") not in (None, plan.fingerprint()):
+            raise ValueError("the stored folds do not match their fingerprint")
+        return plan
 
     @classmethod
     def for_data(cls, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, *, cv: int = 5, seed: int = 0,
@@ -189,9 +213,9 @@ class FoldPlan:
             kind, how = "ordered", f"ordered: {len(folds)} contiguous blocks of rows (a time series, never shuffled)"
         else:
             kind = "kfold"
-            how = f"kfold: {len(folds)} shuffled folds over the rows (seed {seed})"
-            if copies is not None:
-                how += f", the {n - distinct} repeated rows kept with their copies"
+            how = f"kfold: {len(folds)} shuffled folds over the rows (seed {seed})" if copies is None else \
+                f"kfold: {len(folds)} shuffled folds over the {distinct} distinct rows (seed {seed}; repeated rows " \
+                "kept together)"
         how += "; standard errors over the folds"
         if groups is None:
             return cls(tuple(folds), units, kind, how, int(cv), seed, n)
