@@ -22,16 +22,18 @@ examples:
   ftcal report models/linear.model.npz data.csv --rated Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20 --spec 1%FS
   ftcal report models/auto.model.npz data.mat --torque-unit N.mm --sensor "FT-1234" --tool tool/tool.tool.json
   ftcal report m.model.npz data.csv --spec 1%FS,Fz=0.5%FS --operator "A. Tester" --recalibration-interval "12 months"
+  ftcal report m.model.npz data.csv --reference-uncertainty 0.05% --spec 1%FS
   chromium --headless --no-sandbox --no-pdf-header-footer --print-to-pdf=report/linear.report.pdf report/linear.report.html
 
 writes DIR/NAME.report.html (open it in any browser; no network needed, pictures inline; it prints to a
 multi-page PDF with page numbers), DIR/NAME.report.json (the same facts) and DIR/NAME.report.csv (every
 held-out load case, applied against indicated, worst first), as one set. The first page is the summary:
-U95 per axis in % of full scale (the rated capacity of --rated, else the largest load of the data), PASS or
-FAIL against --spec, the comparison with the best stock model, and warnings. Held-out accuracy comes from
-grouped cross-validation of the model's settings (whole groups held out when the dataset has a group column),
-beside the stock scikit-learn baselines on the same folds (each within ftcal's memory limit and a work
-budget, else listed as skipped). Conditions and traceability (reference standard, procedure, operator,
+U95 per axis in % of full scale (the rated capacity of --rated, else the largest load of the data) from an
+uncertainty budget in the GUM's form (held-out reproducibility, repeatability, resolution, the reference of
+--reference-uncertainty; k from the Welch-Satterthwaite degrees of freedom), PASS or FAIL against --spec, the
+comparison with the best stock model (paired standard error on the same folds), and warnings. Held-out
+accuracy comes from ftcal's one fold plan (whole groups held out when the dataset has a group column), beside
+the stock scikit-learn baselines on the same folds (a model that cannot be judged is listed as skipped). Conditions and traceability (reference standard, procedure, operator,
 ambient temperature, recalibration interval) come from DATA.conditions.yaml / .json beside the dataset,
 --conditions FILE, or the options below.
 """

@@ -40,7 +40,7 @@ from ..core._files import plain_json
 from ..core._wrench import alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
 from ..model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus, compare
-from ._budget import AxisBudget, channel_lsb, resolution_uncertainty, uncertainty_budget
+from ._budget import COVERAGE_PROBABILITY, AxisBudget, channel_lsb, resolution_uncertainty, uncertainty_budget
 from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, _axis_names, _figures, _held_out, _matrix,
                                   _per_axis, _round, _warnings, add_interval, axis_units, check_conditions,
                                   file_sha256, load_case_labels, model_inputs, _iso_date)
@@ -254,38 +254,44 @@ class _KnownPredictions:
 
 
 def _auto_comparison(model: Any, plan: FoldPlan, X: NDArray, y: NDArray, groups) -> Comparison | None:
-    """An auto model's own comparison when it was scored on this very plan (same folds, same rows' hash) and still
-    holds its rows' errors (fitted in this process): the certificate then fits no stock model again."""
+    """An auto model's own comparison when it was scored on this very plan (same folds, same rows' hash): the
+    certificate then takes its choice's out-of-fold predictions, and its stock rows when they still hold their
+    rows' errors (fitted in this process; a model file keeps the figures, not the errors)."""
     comp, own = getattr(model, "comparison_", None), getattr(model, "fold_plan_", None)
     if not calibration_tags(model).chooses_model or not isinstance(comp, Comparison) \
             or not isinstance(own, FoldPlan) or not plan.same_folds(own):
         return None
-    if comp.training_sha256 != training_data_sha256(X, y, groups):
+    return comp if comp.training_sha256 == training_data_sha256(X, y, groups) else None
+
+
+def _reusable_stock(reused: Comparison | None, chosen: str | None) -> list[ComparisonRow] | None:
+    """The stock rows of an auto model's comparison, when every scored one can still be paired."""
+    if reused is None:
         return None
-    rows = [r for r in comp.rows if r.status is RowStatus.SCORED]
-    return comp if rows and all(r.row_errors is not None for r in rows) else None
+    rows = [r for r in reused.rows if r.kind in ("stock", "baseline") and r.name != chosen]
+    ok = rows and all(r.row_errors is not None for r in rows if r.status is RowStatus.SCORED)
+    return rows if ok else None
 
 
 def _comparison_rows(label: str, pred: NDArray, X: NDArray, y: NDArray, plan: FoldPlan, *, alpha: float,
-                     axes: tuple, reused: Comparison | None, chosen: str | None, baselines: bool, seed: int,
+                     axes: tuple, stock: list[ComparisonRow] | None, baselines: bool, seed: int,
                      n_jobs: int | None) -> Comparison:
-    """This calibration (its held-out predictions) and the stock models on ``plan``, as one comparison."""
+    """This calibration (its held-out predictions) and the stock models on ``plan``, as one comparison: ``stock``
+    rows already scored on the plan (an auto model's), else :func:`~ftcal.calibrators.stock_baselines` scored
+    by :func:`~ftcal.model_selection.compare`."""
     known = _KnownPredictions(pred)
     this = compare([(label, known)], X, y, plan, alpha=alpha, race=False, kinds={label: "calibration"},
                    out_of_fold=known.folds, min_rows=lambda est, n: 0, refuse_degenerate=False, axes=axes)
-    stock_rows: list[ComparisonRow] = []
-    if reused is not None:
-        stock_rows = [r for r in reused.rows if r.kind in ("stock", "baseline") and r.name != chosen]
-    elif baselines:
+    if stock is None and baselines:
         from ..calibrators._baselines import stock_baselines
 
         models = list(stock_baselines(X.shape[1], random_state=seed).items())
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             # a stock model is scored whenever its training folds hold more rows than an affine map's parameters
-            stock_rows = compare(models, X, y, plan, alpha=alpha, n_jobs=n_jobs, axes=axes,
-                                 kinds={name: "stock" for name, _ in models}, min_rows=lambda est, n: n + 2).rows
-    return Comparison(rows=this.rows + stock_rows, plan=plan, alpha=alpha)
+            stock = compare(models, X, y, plan, alpha=alpha, n_jobs=n_jobs, axes=axes,
+                            kinds={name: "stock" for name, _ in models}, min_rows=lambda est, n: n + 2).rows
+    return Comparison(rows=this.rows + list(stock or []), plan=plan, alpha=alpha)
 
 
 def comparison_facts(comp: Comparison) -> dict:
@@ -466,10 +472,9 @@ def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: Fold
     from sklearn.base import clone
 
     template = clone(model) if reused is None else clone(model.best_estimator_)
-    if reused is not None and not provides_std(template):
-        row = reused.row(model.best_name_)
-        if row.predictions is not None:
-            return template, np.asarray(row.predictions, dtype=float), None
+    known = getattr(model, "held_out_predictions_", None)
+    if reused is not None and not provides_std(template) and known is not None and np.shape(known) == y.shape:
+        return template, np.asarray(known, dtype=float), None
     out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=n_jobs)
     return template, out["pred"], out["std"]
 
@@ -580,9 +585,9 @@ def calibration_certificate(
     reused = _auto_comparison(model, plan, X, y, groups)
     label = f"{name}: {model.best_name_} (this calibration)" if reused is not None else f"{name} (this calibration)"
     template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs)
-    comp = comparison_facts(_comparison_rows(
-        label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names), reused=reused,
-        chosen=getattr(model, "best_name_", None), baselines=baselines, seed=random_state, n_jobs=n_jobs))
+    stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
+    comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),
+                                             stock=stock, baselines=baselines, seed=random_state, n_jobs=n_jobs))
     gnames = group_names(dataset)
     channels = channel_names(dataset, X.shape[1])
     case_of, table = load_case_labels(y, pred, groups, fs)
@@ -613,7 +618,8 @@ def calibration_certificate(
         accuracy=accuracy, comparison=comp, budget=budget, warnings=warn, conditions=conditions,
         axes=[{"name": a, "unit": u} for a, u in zip(names, units)],
         validation={"folds": plan.n_splits, "plan": plan.to_dict(), "split": plan.note,
-                    "coverage_probability": 0.9545, "reused_auto_comparison": reused is not None},
+                    "coverage_probability": COVERAGE_PROBABILITY, "reused_auto_comparison": stock is not None,
+                    "reused_auto_predictions": reused is not None},
         verdict=verdict, spec_pct_fs=None if spec_pct is None else spec_pct.tolist(),
         full_scale_source="rated capacity" if rated_fs is not None else
         "the largest absolute load of the calibration data per axis (no rated capacity given)",

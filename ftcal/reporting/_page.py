@@ -219,7 +219,7 @@ def _accuracy(c) -> str:
              f"not see. Full scale (FS): {_fmt(c.full_scale_source)}. U95 = k·u<sub>c</sub> from the budget (first "
              "page); <i>coverage</i> is the fraction of held-out errors within ±U95."
              + (" auto chose its model on these same folds, so the figures of its choice are slightly optimistic."
-                if v.get("reused_auto_comparison") else "") + "</p>",
+                if v.get("reused_auto_predictions") else "") + "</p>",
              _table(["axis", "full scale", "RMS error", "RMS [% FS]", "max error", "max [% FS]", "U95", "U95 [% FS]",
                      "coverage of U95", "coverage of ±2 std"],
                     [[a["axis"], f"{_fmt(a['full_scale'])} {a['unit']}", f"{_fmt(a['rms'])} {a['unit']}",
