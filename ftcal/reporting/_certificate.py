@@ -65,7 +65,9 @@ class LoadCases:
 
     @property
     def by(self) -> str:
-        return "load case (rows of one group under one applied load, averaged)" if self.rows.max() > 1 else "row"
+        if self.rows.max() <= 1:
+            return "row"
+        return f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
 
     def to_dict(self, axes: list[str], limit: int = CASES_IN_JSON) -> dict:
         """JSON-able (rounded lists), at most ``limit`` cases (the worst)."""

@@ -27,7 +27,7 @@ body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;margin:1.5
 line-height:1.4;padding:0 1em}h1{font-size:1.55em;margin:0 0 .2em}h2{font-size:1.2em;border-bottom:1px solid #ccc;
 margin-top:1.4em}h3{font-size:1.02em;margin:1em 0 .3em}table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
 th,td{border:1px solid #bbb;padding:.2em .55em;text-align:right}th{background:#eee}
-td:first-child,th:first-child{text-align:left}.note{color:#444;font-size:.88em}img{max-width:100%;height:auto}
+td:first-child,th:first-child{text-align:left;white-space:nowrap}.note{color:#444;font-size:.88em}img{max-width:100%;height:auto}
 code{background:#f3f3f3;padding:0 .2em;word-break:break-all}.best{font-weight:bold}
 .PASS{color:#0a6b2a;font-weight:bold}.FAIL{color:#b00020;font-weight:bold}
 .verdict{font-size:1.25em;padding:.35em .7em;border:2px solid;display:inline-block;margin:.3em 0}
@@ -158,13 +158,25 @@ def _budget_table(c) -> str:
     for b in c.budget:
         comp = {x.name: x for x in b.components}
         rows.append([f"{b.axis} [{units[b.axis]}]"] + [
-            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" if n in comp
-            else "–" for n in names] + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof),
+            "–" if n not in comp else "0" if comp[n].standard_uncertainty == 0 else
+            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" for n in names] + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof),
                                         _fmt(b.coverage_factor), _fmt(b.expanded_uncertainty)])
-    sources = "; ".join(f"<i>{_fmt(x.name)}</i>: {_fmt(x.source)}" for x in c.budget[0].components) if c.budget else ""
     return ("<h3>Uncertainty budget (standard uncertainties, degrees of freedom in brackets)</h3>"
             + _table(["axis"] + [_fmt(n) for n in names] + ["u<sub>c</sub>", "ν<sub>eff</sub>", "k", "U95"], rows)
-            + f"<p class=\"note\">{_fmt(BUDGET_MODEL)} Sources: {sources}.</p>")
+            + "<p class=\"note\">GUM (JCGM 100), EURAMET cg-4: uncorrelated components, u<sub>c</sub> their root "
+            "sum of squares; the held-out error is split into reproducibility and repeatability (nothing counted "
+            "twice); k the t-factor at 95.45 % for the Welch-Satterthwaite ν<sub>eff</sub>; U95 = k·u<sub>c</sub>. "
+            "The model and the source of each component: under <i>Held-out accuracy per axis</i>.</p>")
+
+
+def _budget_sources(c) -> str:
+    """The budget's model and where each component of the first axis comes from (the others alike)."""
+    if not c.budget:
+        return ""
+    sources = "".join(f"<li><i>{_fmt(x.name)}</i>: {_fmt(x.source)}</li>" for x in c.budget[0].components)
+    return (f"<h3>The uncertainty budget's model</h3><p class=\"note\">{_fmt(BUDGET_MODEL)}</p>"
+            f"<p class=\"note\">Sources ({_fmt(c.budget[0].axis)}; the other axes alike):</p>"
+            f"<ul class=\"note\">{sources}</ul>")
 
 
 def _warnings(c) -> str:
@@ -226,7 +238,7 @@ def _accuracy(c) -> str:
                       _fmt(a["rms_pct_fs"]), f"{_fmt(a['max'])} {a['unit']}", _fmt(a["max_pct_fs"]),
                       f"{_fmt(a['u95'])} {a['unit']}", _fmt(a["u95_pct_fs"]), f"{100 * a['coverage_u95']:.1f} %",
                       "model gives no std" if a["coverage_std"] is None else f"{100 * a['coverage_std']:.1f} %"]
-                     for a in c.accuracy])]
+                     for a in c.accuracy]), _budget_sources(c)]
     if "error_vs_load" in c.figures:
         band = "the specification" if c.spec_pct_fs is not None else "±U95 (no specification given)"
         parts.append(f"<h3>Held-out error against applied load</h3><p class=\"note\">Shaded: {band}; errors beyond it "
