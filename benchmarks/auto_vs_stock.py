@@ -340,6 +340,76 @@ def run_case(case: str) -> dict:
     return {**res, "info": {k: v for k, v in info.items() if isinstance(v, (int, float, str))}}
 
 
+def case_training_set(case: str) -> tuple:
+    """``(raw, wrench, groups, alpha)`` of the rows ``auto`` is fitted on first in ``case`` (its first outer
+    training fold, or its calibration rows with seed 0)."""
+    if case == "dead_weight_axis_groups":
+        cal, _ = make_dead_weight_dataset(15, loaded_axes=6, n_channels=6, random_state=0)
+        return cal.raw, cal.wrench, cal.group, alpha_from_wrenches(cal.wrench)
+    if case.startswith("dead_weight_"):
+        cal, _, alpha = dead_weight_data(case, 0)
+        return cal.raw, cal.wrench, None, alpha
+    if case in ("soft", "soft_grouped", "soft_nmm"):
+        d = make_soft_sensor_dataset()
+        raw, wrench, groups = d.raw, d.wrench, d.group if case == "soft_grouped" else None
+        if case == "soft_nmm":
+            raw = 0.8 * d.raw.mean(axis=1, keepdims=True) + 0.2 * d.raw
+            wrench = d.wrench * np.r_[np.ones(3), np.full(3, 1000.0)]
+        splits = GroupKFold(5).split(raw, groups=groups) if groups is not None else \
+            KFold(5, shuffle=True, random_state=0).split(raw)
+        train = next(iter(splits))[0]
+        return raw[train], wrench[train], None if groups is None else groups[train], alpha_from_wrenches(wrench)
+    if case in ("robot_small", "robot_held"):
+        d = make_robot_held_dataset(8000, n_poses=41, random_state=0) if case == "robot_small" else \
+            make_robot_held_dataset()
+        train = next(iter(GroupKFold(5).split(d.raw, groups=d.group)))[0]
+        return d.raw[train], d.wrench[train], d.group[train], d.meta["alpha"]
+    train, _, _ = ftcal.make_artificial_dataset(case, random_state=0)
+    return train.raw, train.wrench, None, alpha_from_wrenches(train.wrench)
+
+
+def race_check(case: str) -> dict:
+    """``auto`` raced (the default) and in full (``race=False``) on the same rows, seed and fold plan: the two
+    choices, the raced choice against the full choice on the full comparison's folds (paired SE, symmetric
+    words: the race must not cost more than noise), which candidates the race stopped and why, and both times."""
+    raw, wrench, groups, alpha = case_training_set(case)
+    out = {"n_train": int(len(raw)), "groups": None if groups is None else int(np.unique(groups).size)}
+    fits = {}
+    for race in (True, False):
+        t0 = time.perf_counter()
+        fits[race] = ftcal.AutoCalibrator(alpha=alpha, random_state=0, n_jobs=JOBS, race=race).fit(
+            raw, wrench, groups=groups)
+        out["raced_seconds" if race else "full_seconds"] = time.perf_counter() - t0
+        print(f"  race={race}: {out['raced_seconds' if race else 'full_seconds']:.1f} s, chose "
+              f"{fits[race].best_name_}", flush=True)
+    raced, full = fits[True].comparison_, fits[False].comparison_
+    assert raced.plan.same_folds(full.plan)
+    out.update(raced_choice=raced.chosen, full_choice=full.chosen,
+               stopped={r.name: r.reason for r in raced.rows if r.status.name == "STOPPED"},
+               raced_table=raced.table(), full_table=full.table())
+    if raced.chosen == full.chosen:
+        out.update(verdict="equivalent", words=f"the same choice ({raced.chosen})")
+    elif raced.chosen in [r.name for r in full.scored()]:
+        d = full.paired(raced.chosen, full.chosen)
+        out.update(verdict=d.verdict, words=d.words(), difference=d.difference, paired_se=d.paired_se)
+    else:  # the raced choice is a stack of other members than the full one's: compare on held-out figures
+        out.update(verdict="not comparable", words=f"{raced.chosen} is not a row of the full comparison")
+    return out
+
+
+def race_summary(out: Path) -> str:
+    rows = ["| case | rows | raced choice | full choice | raced vs full (paired SE) | stopped early | raced s | full s |",
+            "|---|---|---|---|---|---|---|---|"]
+    for case in CASES:
+        r = read_json_record(out / f"race_{case}.json")
+        if r is None:
+            rows.append(f"| {case} | not run | | | | | | |")
+            continue
+        rows.append(f"| {case} | {r['n_train']} | {r['raced_choice']} | {r['full_choice']} | {r['words']} | "
+                    f"{', '.join(r['stopped']) or 'none'} | {r['raced_seconds']:.0f} | {r['full_seconds']:.0f} |")
+    return "\n".join(rows)
+
+
 def summary(out: Path) -> str:
     """The table of every case result in ``out`` (see :func:`table_or_stop`)."""
     return table_or_stop("auto_vs_stock.py", out, _summary)
@@ -406,12 +476,31 @@ def main() -> None:
     parser.add_argument("--force", action="store_true",
                         help="replace files in --out this script did not write, or that were edited since (their "
                         "cases run again)")
+    parser.add_argument("--race-check", action="store_true",
+                        help="instead: auto raced and in full on each case's first training fold, the choices "
+                        "compared (race_<case>.json, race_summary.md)")
     args = parser.parse_args()
+    if args.race_check:
+        files = output_files(parser, args.out, args.force, ["race_summary.md",
+                                                            *(f"race_{c}.json" for c in args.case or CASES)])
+        global JOBS
+        JOBS = args.jobs
+        for case in args.case or CASES:
+            path = files.out_dir / f"race_{case}.json"
+            if files.is_own(path.name) and read_json_record(path) is not None:
+                continue
+            print(f"race check {case} ...", flush=True)
+            result = race_check(case)
+            result.update(case=case, load_average=os.getloadavg(), auto_jobs=JOBS)
+            files.write_text(path.name, json.dumps(result, indent=1, default=float))
+            files.write_text("race_summary.md", race_summary(files.out_dir) + "\n")
+        print(race_summary(files.out_dir), flush=True)
+        return
     # a case's JSON (written once, then skipped) and the summary: a user's file of those names stops the run now
     files = output_files(parser, args.out, args.force, ["summary.md", *(f"{c}.json" for c in args.case or CASES),
                                                         "soft_static_floor.json",  # the static floors' caches
                                                         f"robot_static_floor_{args.robot_folds}.json"])
-    global JOBS, FILES, ROBOT_FOLDS
+    global FILES, ROBOT_FOLDS
     JOBS, ROBOT_FOLDS, FILES = args.jobs, args.robot_folds, files
     out = files.out_dir
     for case in args.case or CASES:

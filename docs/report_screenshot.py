@@ -49,6 +49,7 @@ def main() -> None:
             encoding="utf-8")
         subprocess.run([sys.executable, "-m", "ftcal", "fit", str(work / "recording.csv"), "--model", "linear",
                         "--report", "--rated", "Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20", "--spec", "1%FS",
+                        "--reference-uncertainty", "0.02%",
                         "--out", str(work / "models"), "-q"], check=True)
         pdf = work / "models" / "linear.report.pdf"
         subprocess.run([chromium, "--headless", "--no-sandbox", "--no-pdf-header-footer", "--disable-gpu",

@@ -55,7 +55,7 @@ _PUBLIC: dict[str, str] = {
     "make_artificial_dataset": "simulation._artificial",
     "neg_scaled_rmse": "core._metrics",
     "export_onnx": "persistence._onnx",
-    "calibration_certificate": "reporting._calibration_report",
+    "calibration_certificate": "reporting._certificate",
     "FtcalError": "core._exceptions",
 }
 

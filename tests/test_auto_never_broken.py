@@ -28,7 +28,8 @@ def test_one_group_per_loaded_axis_gives_a_model_as_good_as_the_ltm_at_twice_the
     alpha = calibration.meta["alpha"]
     auto = AutoCalibrator(random_state=0).fit(calibration.raw, calibration.wrench, groups=calibration.group)
     # the grouped folds leave each loaded axis unseen in training: said, and replaced by folds over the rows
-    assert auto.comparison_["folds"].startswith("kfold") and "cannot judge" in auto.comparison_["folds"]
+    assert auto.comparison_["folds"].startswith("replaced") and "cannot judge" in auto.comparison_["folds"]
+    assert auto.fold_plan_.kind == "replaced" and auto.fold_plan_.units_name == "fold"
     ltm = LinearCalibrator().fit(calibration.raw, calibration.wrench)
     assert validation_rmse(auto, validation, alpha) <= 1.1 * validation_rmse(ltm, validation, alpha)
     predictions = auto.predict(validation.raw)

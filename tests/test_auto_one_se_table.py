@@ -9,7 +9,8 @@ import numpy as np
 
 from ftcal import AutoCalibrator, LinearCalibrator, PolynomialCalibrator
 from ftcal.model_selection._selection import rmse_and_se
-from ftcal.compose._auto import comparison_table, explain_choice
+from ftcal.compose._auto import comparison_table
+from ftcal.model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus
 
 
 def _cells(table: str, name: str) -> list[str]:
@@ -22,14 +23,17 @@ def test_a_row_beyond_one_se_shows_the_paired_se_though_its_own_se_overlaps_the_
     hard = rng.exponential(1.0, size=200)  # rows both models find hard or easy: a wide spread of each's errors
     errors = np.vstack([hard + 0.05 + 0.005 * rng.normal(size=200), hard])  # simpler one: consistently worse
     stats = [rmse_and_se(e) for e in errors]
-    results = {"name": ["simple", "complex"], "kind": ["candidate", "candidate"], "status": ["scored", "scored"],
-               "eligible": [True, True], "rmse": [s[0] for s in stats], "rmse_se": [s[1] for s in stats],
-               "fit_seconds": [0.1, 0.2]}
-    explain_choice(results, errors, None, chosen=1, ranks=np.array([0, 1]))
+    rows = [ComparisonRow(name=name, kind="candidate", status=RowStatus.SCORED, rmse=st[0], rmse_se=st[1],
+                          seconds=sec, complexity=rank, row_errors=e)
+            for name, st, sec, rank, e in zip(["simple", "complex"], stats, [0.1, 0.2], [0, 1], errors)]
+    comparison = Comparison(rows=rows, plan=FoldPlan((), None, "kfold", "", 5, 0, 200))  # SEs over the rows
+    assert comparison.choose() == "complex"
+    results = comparison.to_dict()
     (rmse_simple, _), (rmse_complex, se_complex) = stats
     assert rmse_simple - rmse_complex < se_complex  # within the chosen row's own ± SE ...
     assert results["verdict"] == ["beyond one SE", "chosen"]  # ... yet beyond one (paired) SE
-    table = comparison_table(results)
+    table = comparison_table(comparison)
+    assert comparison_table(results) == table  # the JSON columns give the same table
     assert "excess MSE over best [N²] | ± paired SE [N²]" in table.splitlines()[0]
     simple = _cells(table, "simple")
     excess, paired = float(simple[6]), float(simple[7])

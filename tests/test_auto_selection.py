@@ -239,6 +239,15 @@ class PidRecorder(LinearRegression):
         return super().fit(X, y)
 
 
+class HeavyPidRecorder(PidRecorder):
+    """The same regressor declaring no cost: a model of unknown cost, scored in worker processes."""
+
+    def __sklearn_tags__(self):
+        from ftcal.calibrators._base import declare
+
+        return declare(super().__sklearn_tags__(), cost="heavy")
+
+
 def fitting_processes(path) -> set[int]:
     return {int(line) for line in Path(path).read_text().split()}
 
@@ -276,10 +285,11 @@ def test_what_counts_as_light_work_is_a_list_of_closed_forms_and_small_kernel_fi
 def test_heavy_work_is_scored_in_worker_processes(tmp_path, monkeypatch):
     from ftcal.compose import _auto
     from ftcal.calibrators._baselines import stock_baselines
+    from ftcal.model_selection import _comparison
 
-    monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds of the stock GP now count as heavy
+    monkeypatch.setattr(_comparison, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds of the stock GP now count as heavy
     raw, w, groups = affine(n=120, n_groups=6)
-    baselines = {"pid": PidRecorder(path=str(tmp_path / "pids")), "sk_gp": stock_baselines(6)["sk_gp"]}
+    baselines = {"pid": HeavyPidRecorder(path=str(tmp_path / "pids")), "sk_gp": stock_baselines(6)["sk_gp"]}
     _auto.score_candidates(FAST[:1], raw, w, groups=groups, alpha=1.0, baselines=baselines, n_jobs=2)
     assert fitting_processes(tmp_path / "pids") - {os.getpid()}, "no worker process fitted anything"
 
@@ -293,9 +303,9 @@ def test_stock_kernel_baselines_have_the_gp_candidates_budget():
 
 def test_parallel_scoring_gives_the_same_table_and_choice_as_sequential(monkeypatch):
     # real joblib worker processes; the GP (structure chosen inside its task) and a stock baseline among them
-    from ftcal.compose import _auto
+    from ftcal.model_selection import _comparison
 
-    monkeypatch.setattr(_auto, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds count as heavy: workers are used
+    monkeypatch.setattr(_comparison, "LIGHT_KERNEL_ROWS", 50)  # the 100-row folds count as heavy: workers are used
     raw, w, groups = affine(n=120, n_groups=6)
     cands = FAST[:2] + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
     kw = dict(candidates=cands, alpha=1.0, random_state=0)
@@ -345,7 +355,7 @@ def test_network_candidates_are_trained_as_one_stacked_fit_on_a_grouped_subsampl
     raw, w, groups = affine(n=240, n_groups=8)
     net = ftcal.make_calibrator("directional", phase1_epochs=3, plateau_epochs=1, max_recover_epochs=1, random_state=0)
     kw = dict(candidates=[FAST[0], ("directional", net)], alpha=1.0, baselines=False, stack=False,
-              network_samples=100)
+              network_samples=100, race=False)  # scored on every fold, not raced out by the LTM
     a = AutoCalibrator(**kw).fit(raw, w, groups=groups)
     b = AutoCalibrator(**kw).fit(raw, w, groups=groups)
     assert a.comparison_["status"][1].startswith("scored")

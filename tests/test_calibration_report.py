@@ -14,11 +14,12 @@ import re
 import numpy as np
 import pytest
 from sklearn.linear_model import LinearRegression
-from sklearn.model_selection import GroupKFold
+from scipy import stats
 
 import browser
 from ftcal import CalibrationDataset
 from ftcal.cli import main
+from ftcal.model_selection import FoldPlan
 
 N_GROUPS, PER_GROUP, NOISE = 8, 20, 0.01
 
@@ -48,22 +49,27 @@ def fitted(tmp_path_factory):
 def test_report_states_held_out_accuracy_per_axis_as_independently_computed(fitted):
     work, data = fitted
     facts = json.loads((work / "models" / "linear.report.json").read_text())
-    # independent: scikit-learn's OLS on GroupKFold(4) folds of the same groups
+    # independent: scikit-learn's OLS on the folds of ftcal's one fold rule (4 folds of whole groups)
+    plan = FoldPlan.for_data(data.raw, data.wrench, data.group, cv=4)
     pred = np.empty_like(data.wrench)
-    for train, test in GroupKFold(4).split(data.raw, groups=data.group):
+    for train, test in plan.folds:
         pred[test] = LinearRegression().fit(data.raw[train], data.wrench[train]).predict(data.raw[test])
     err = pred - data.wrench
     rms = np.sqrt(np.mean(err**2, axis=0))
     fs = np.abs(data.wrench).max(axis=0)
+    # continuous readings, no load read twice, no reference given: u_c = RMS, 8 groups -> 7 dof, k the t-factor
+    k = stats.t.ppf(0.5 + 0.9545 / 2, N_GROUPS - 1)
     acc = {a["axis"]: a for a in facts["accuracy"]}
-    for k, axis in enumerate(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")):
-        assert acc[axis]["rms"] == pytest.approx(rms[k], rel=1e-6)
-        assert acc[axis]["max"] == pytest.approx(np.abs(err[:, k]).max(), rel=1e-6)
-        assert acc[axis]["rms_pct_fs"] == pytest.approx(100 * rms[k] / fs[k], rel=1e-6)
-        assert acc[axis]["u95"] == pytest.approx(2 * rms[k], rel=1e-6)
-        # normal errors: about 95 % within 2 RMS (160 rows: binomial spread ~2 %)
+    for j, axis in enumerate(("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")):
+        assert acc[axis]["rms"] == pytest.approx(rms[j], rel=1e-6)
+        assert acc[axis]["max"] == pytest.approx(np.abs(err[:, j]).max(), rel=1e-6)
+        assert acc[axis]["rms_pct_fs"] == pytest.approx(100 * rms[j] / fs[j], rel=1e-6)
+        assert acc[axis]["coverage_factor"] == pytest.approx(k, rel=1e-6)
+        assert acc[axis]["u95"] == pytest.approx(k * rms[j], rel=1e-6)
+        # normal errors: about 95 % within U95 (160 rows: binomial spread ~2 %)
         assert 0.85 <= acc[axis]["coverage_u95"] <= 1.0
-    assert facts["validation"]["folds"] == 4 and "GroupKFold" in facts["validation"]["split"]
+    assert facts["validation"]["folds"] == 4 and "whole groups held out" in facts["validation"]["split"]
+    assert facts["validation"]["plan"]["fingerprint"] == plan.fingerprint()
     assert facts["data"]["rows"] == 160 and facts["data"]["groups"] == 8
     assert facts["sensor"] == "test sensor SN-1"
     model_file = work / "models" / "linear.model.npz"
@@ -79,6 +85,11 @@ def test_report_compares_with_every_stock_baseline_on_the_same_folds(fitted):
     # the LTM and scikit-learn's OLS are the same least-squares problem: equal held-out RMSE on the same folds
     assert choice[0]["rmse"] == pytest.approx(choice[1]["rmse"], rel=1e-6)
     assert all(c["status"] == "scored" and c["rmse"] > 0 for c in choice)
+    # each stock row against this calibration: its paired SE on the same folds, in symmetric words
+    assert all(c["paired_se"] >= 0 and c["against"] for c in choice[1:])
+    comparison = json.loads((work / "models" / "linear.report.json").read_text())["comparison"]
+    assert comparison["paired_se"] >= 0 and comparison["combined_se"] > 0
+    assert comparison["verdict"] == "equivalent" and "equivalent within noise" in comparison["sentence"]
 
 
 def test_report_page_is_self_contained(fitted):

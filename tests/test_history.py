@@ -314,10 +314,10 @@ def test_the_report_of_a_history_model_keeps_the_rows_in_time_order(tmp_path):
     dataset = ftcal.CalibrationDataset(raw=raw, wrench=wrench)
     model = HistoryCalibrator(taus=(4.0,)).fit(raw, wrench)
     report = ftcal.calibration_certificate(model, dataset, baselines=False, figures=False)
-    assert "contiguous" in report["validation"]["split"]
+    assert "contiguous" in report.validation["split"]
     plain = ftcal.calibration_certificate(LinearCalibrator().fit(raw, wrench), dataset, baselines=False,
                                           figures=False)
-    assert "shuffled" in plain["validation"]["split"]
+    assert "shuffled" in plain.validation["split"]
 
 
 def test_benchmark_dataset_scores_the_closed_forms_with_a_history_term(tmp_path, capsys):

@@ -32,8 +32,10 @@ ALLOWED = {
     "reporting": {"core", "io", "model_selection", "calibrators", "compose", "persistence"},
     "benchmark": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
                   "persistence", "experiment", "reporting"},
+    "workflow": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
+                 "persistence", "experiment", "reporting", "benchmark"},
     "cli": {"core", "io", "model_selection", "calibrators", "robot", "networks", "simulation", "compose",
-            "persistence", "experiment", "reporting", "benchmark"},
+            "persistence", "experiment", "reporting", "benchmark", "workflow"},
 }
 
 

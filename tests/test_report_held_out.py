@@ -1,6 +1,6 @@
-"""The calibration report's held-out figures come from ftcal's one held-out engine (the folds of
-``calibration_folds``, the fits of ``held_out_predictions``), and it reuses ``auto``'s comparison only on the very
-rows and groups that comparison was scored on."""
+"""The calibration report's held-out figures come from ftcal's one fold plan (:class:`FoldPlan`) and one held-out
+engine (``held_out_predictions``), and it takes ``auto``'s own comparison and out-of-fold predictions only when
+``auto`` was scored on the very same plan (same folds, same rows)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import pytest
 from sklearn.linear_model import LinearRegression
 
 from ftcal import AutoCalibrator, CalibrationDataset, LinearCalibrator, calibration_certificate
+from ftcal.model_selection import FoldPlan
 from ftcal.model_selection._selection import calibration_folds, held_out_predictions
 
 
@@ -20,13 +21,15 @@ def _sensor(seed: int = 0, n_groups: int = 8, per_group: int = 10) -> Calibratio
     return CalibrationDataset(raw=raw, wrench=wrench, group=np.repeat(np.arange(n_groups), per_group))
 
 
-def test_the_reports_held_out_predictions_are_the_engines_on_the_same_folds():
+def test_the_reports_held_out_predictions_are_the_engines_on_the_one_fold_plan():
     data = _sensor()
     model = LinearCalibrator().fit(data.raw, data.wrench)
-    facts = calibration_certificate(model, data, cv=4, baselines=False, figures=False, random_state=3)
-    folds = calibration_folds(len(data.raw), data.group, 4, 3)
+    cert = calibration_certificate(model, data, cv=4, baselines=False, figures=False, random_state=3)
+    plan = FoldPlan.for_data(data.raw, data.wrench, data.group, cv=4, seed=3)
+    assert cert.validation["plan"] == plan.to_dict()
+    folds = list(plan.folds)
     _, expected = held_out_predictions(LinearCalibrator(), data.raw, data.wrench, groups=data.group, folds=folds)
-    np.testing.assert_array_equal(facts["_held_out_pred"], expected)
+    np.testing.assert_array_equal(cert.held_out_predictions, expected)
     # and that is each group predicted by a calibration fitted without it (an independent fold loop)
     for train, test in folds:
         assert not np.isin(data.group[test], data.group[train]).any()
@@ -62,17 +65,6 @@ def test_the_engine_gives_the_std_only_when_every_folds_model_has_one():
     assert none is None
 
 
-def test_the_report_does_not_reuse_autos_comparison_for_the_same_rows_grouped_otherwise():
-    data = _sensor(seed=4)
-    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], cv=4, stack=False).fit(
-        data.raw, data.wrench, groups=data.group)
-    same = calibration_certificate(auto, data, cv=4, figures=False)
-    assert same["validation"]["reused_auto_comparison"] is True
-    regrouped = CalibrationDataset(raw=data.raw, wrench=data.wrench, group=np.repeat(np.arange(10), 8))
-    other = calibration_certificate(auto, regrouped, cv=4, figures=False)
-    assert other["validation"]["reused_auto_comparison"] is False
-
-
 class _CountingLinear(LinearCalibrator):
     """The LTM, counting its fits in a class attribute (the report runs in this process)."""
 
@@ -83,28 +75,30 @@ class _CountingLinear(LinearCalibrator):
         return super().fit(X, y)
 
 
-def test_the_report_of_auto_takes_its_choices_held_out_predictions_instead_of_refitting_the_folds():
+def test_the_report_of_auto_reuses_its_comparison_on_the_same_plan_and_not_on_rows_grouped_otherwise():
     from ftcal import PolynomialCalibrator
 
     data = _sensor(seed=2)
     auto = AutoCalibrator(candidates=[("counted", _CountingLinear()), ("quadratic", PolynomialCalibrator(degree=2))],
-                          cv=4, stack=False, baselines=False, n_jobs=1).fit(data.raw, data.wrench, groups=data.group)
+                          cv=4, stack=False, n_jobs=1).fit(data.raw, data.wrench, groups=data.group)
     assert auto.best_name_ == "counted"  # an affine sensor: the LTM, the simplest within noise
-    row = auto.comparison_["name"].index("counted")
     _CountingLinear.fits = 0
-    facts = calibration_certificate(auto, data, cv=4, baselines=False, figures=False)
-    assert facts["validation"]["reused_auto_comparison"] is True
-    assert _CountingLinear.fits == 0  # no fold refitted
-    np.testing.assert_array_equal(facts["_held_out_pred"], auto.held_out_predictions_)
-    assert facts["model_choice"][0]["rmse"] == pytest.approx(auto.comparison_["rmse"][row], rel=1e-12)
-    # and those predictions are each group's from a fit without it (an independent fold loop)
-    for train, test in calibration_folds(len(data.raw), data.group, 4, 0):
-        reference = LinearCalibrator(alpha=auto.alpha_).fit(data.raw[train], data.wrench[train])
-        np.testing.assert_allclose(auto.held_out_predictions_[test], reference.predict(data.raw[test]),
-                                   rtol=1e-9, atol=1e-9)
+    cert = calibration_certificate(auto, data, cv=4, figures=False)
+    assert cert.validation["reused_auto_comparison"] is True and cert.validation["reused_auto_predictions"] is True
+    assert _CountingLinear.fits == 0  # no fold refitted, no stock model scored again
+    np.testing.assert_array_equal(cert.held_out_predictions, auto.held_out_predictions_)
+    rows = cert.comparison["rows"]
+    assert rows[0]["rmse"] == pytest.approx(auto.comparison_.row("counted").rmse, rel=1e-12)
+    stock = [r.name for r in auto.comparison_.rows if r.kind in ("stock", "baseline")]
+    assert [r["model"] for r in rows[1:]] == stock and stock
+    assert cert.comparison["paired_se"] >= 0 and cert.comparison["best_stock"] in stock
+    # the same rows in other groups make other folds: nothing is reused
+    regrouped = CalibrationDataset(raw=data.raw, wrench=data.wrench, group=np.repeat(np.arange(10), 8))
+    other = calibration_certificate(auto, regrouped, cv=4, figures=False, baselines=False)
+    assert other.validation["reused_auto_predictions"] is False and _CountingLinear.fits > 0
 
 
-def test_a_loaded_auto_gives_the_same_report_as_the_fitted_one(tmp_path):
+def test_a_loaded_auto_gives_the_same_held_out_figures_as_the_fitted_one(tmp_path):
     from ftcal import PolynomialCalibrator, load_model, save_model
 
     data = _sensor(seed=5)
@@ -112,8 +106,13 @@ def test_a_loaded_auto_gives_the_same_report_as_the_fitted_one(tmp_path):
                           cv=4, n_jobs=1).fit(data.raw, data.wrench, groups=data.group)
     save_model(auto, tmp_path / "auto.model.npz")
     loaded = load_model(tmp_path / "auto.model.npz")
-    np.testing.assert_array_equal(loaded.held_out_predictions_, auto.held_out_predictions_)
-    fitted_facts, loaded_facts = (calibration_certificate(m, data, cv=4, figures=False) for m in (auto, loaded))
-    assert loaded_facts["validation"]["reused_auto_comparison"] is True
-    np.testing.assert_array_equal(loaded_facts["_held_out_pred"], fitted_facts["_held_out_pred"])
-    assert loaded_facts["model_choice"] == fitted_facts["model_choice"]
+    fitted_cert, loaded_cert = (calibration_certificate(m, data, cv=4, figures=False) for m in (auto, loaded))
+    assert loaded_cert.validation["reused_auto_predictions"] is True
+    np.testing.assert_array_equal(loaded_cert.held_out_predictions, fitted_cert.held_out_predictions)
+    # the file keeps the stock rows' figures, not their errors per row: the loaded one scores them again, alike
+    assert loaded_cert.validation["reused_auto_comparison"] is False
+    fitted_rows, loaded_rows = fitted_cert.comparison["rows"], loaded_cert.comparison["rows"]
+    assert [r["model"] for r in fitted_rows] == [r["model"] for r in loaded_rows]
+    for a, b in zip(fitted_rows, loaded_rows):
+        if a["rmse"] is not None and b["rmse"] is not None:
+            assert a["rmse"] == pytest.approx(b["rmse"], rel=1e-6)

@@ -188,7 +188,6 @@ def run_dataset(args: argparse.Namespace) -> int:
     import ftcal
     from ..compose._auto import score_candidates
     from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
-    from ..model_selection._selection import simplest_within_one_se
     from ..reporting._plots import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, dataset_alpha
@@ -222,18 +221,19 @@ def run_dataset(args: argparse.Namespace) -> int:
     split = f"{len(np.unique(groups))} groups" if groups is not None else "shuffled rows"
     console.info(f"cross-validating {len(candidates)} calibrators on {data.n_samples} samples, {args.cv} folds "
                  f"over {split}")
-    results, errors, predictions, _ = score_candidates(
+    comparison = score_candidates(
         candidates, data.raw, data.wrench, groups=groups, cv=args.cv, alpha=alpha, random_state=args.seed,
         # the stock baselines as calibrators: their tags say which are light work (scored in this process)
         baselines={name: StockCalibrator(baseline=name, random_state=args.seed or 0) for name in STOCK_BASELINE_NAMES},
         axes=tuple(data.axes) if len(data.axes) == data.wrench.shape[1] and set(data.axes) <= set(WRENCH_LABELS)
         else None,  # eq. 18 scales the torques of the axes the data have (a plate's Tx, Ty)
+        race=False,  # a benchmark scores every model on every fold
     )
-    chosen = simplest_within_one_se(errors, groups, eligible=results["eligible"])
-    results["chosen"] = results["name"][chosen]
-    results.update(dataset=str(args.dataset), alpha=alpha, folds="group" if groups is not None else "kfold",
-                   cv=args.cv, n_samples=data.n_samples, n_channels=data.n_channels, axes=list(data.axes))
-    table = _dataset_table(results, data.axes)
+    comparison.choose()  # the one-SE rule; each row against the choice in symmetric words (paired SE)
+    results = comparison.to_dict()
+    results.update(dataset=str(args.dataset), alpha=alpha, cv=args.cv, n_samples=data.n_samples,
+                   n_channels=data.n_channels, axes=list(data.axes))
+    table = _dataset_table(comparison, data.axes)
     axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
     with plan.as_one_set():  # the results, their table and their figure: all or none
         with plan.writing("dataset_results.json") as tmp:
@@ -241,7 +241,7 @@ def run_dataset(args: argparse.Namespace) -> int:
         with plan.writing("dataset_results.md") as tmp:
             tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
         with plan.writing("dataset_rmse.png") as tmp:
-            plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({results['folds']} folds)")
+            plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({comparison.facts['kind']} folds)")
     print(table)
     console.info(f"choose {results['chosen']} (the simplest within one standard error of the best, or within 0.5 % "
                  "of its RMSE); "
@@ -249,16 +249,15 @@ def run_dataset(args: argparse.Namespace) -> int:
     return 0
 
 
-def _dataset_table(results: dict, axes) -> str:
+def _dataset_table(comparison, axes) -> str:
     from ..core._wrench import axis_unit
-    from ..compose._auto import comparison_table
 
     head = "| model | " + " | ".join(f"{a} [{axis_unit(a)}]" for a in axes) + " |"
     lines = [head, "|" + "---|" * (1 + len(axes))]
-    for name, axes in zip(results["name"], results["axis_rmse"]):
-        if axes is not None:
-            lines.append(f"| {name} | " + " | ".join(f"{v:.3g}" for v in axes) + " |")
-    return comparison_table(results) + "\n\nHeld-out RMSE per axis:\n\n" + "\n".join(lines)
+    for row in comparison.rows:
+        if row.axis_rmse is not None:
+            lines.append(f"| {row.name} | " + " | ".join(f"{v:.3g}" for v in row.axis_rmse) + " |")
+    return comparison.table() + "\n\nHeld-out RMSE per axis:\n\n" + "\n".join(lines)
 
 
 def _models(args: argparse.Namespace) -> tuple[str, ...]:

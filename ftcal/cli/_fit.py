@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import logging
+import threading
 import time
 
 import numpy as np
 
 from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range,
                       write_json)
-from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args, training_targets
+from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
 from ._messages import cli_error
 from ._training import fit_with_progress
@@ -110,18 +113,25 @@ def _check_before_saving(estimator, X, y, groups, args, predictions, console: Co
     model of unknown cost is checked on its training predictions only (a held-out check would train it ``cv``
     times more: ``--report`` gives it)."""
     from ..calibrators._base import calibration_tags
+    from ..model_selection import FoldPlan
     from ..model_selection._selection import DegenerateCalibrationError
     from ..compose._auto import check_calibration
 
     y = np.asarray(y, dtype=float)
     held_out = True
-    if predictions is None and calibration_tags(estimator).cost not in ("closed_form", "kernel"):
+    tags = calibration_tags(estimator)
+    light = tags.cost in ("closed_form", "kernel")
+    if light:  # judged on the one fold plan (the certificate's and auto's), with or without --report: one verdict
+        predictions = None
+    elif predictions is None:
         predictions = np.asarray(estimator.predict(X), dtype=float).reshape(y.shape)
         held_out = False
         console.info("check: training predictions only (a held-out check of this model needs --report)")
+    plan = getattr(estimator, "fold_plan_", None) or FoldPlan.for_data(
+        X, y, groups, cv=getattr(args, "cv", None) or 5, seed=args.seed or 0, ordered=tags.reads_history)
     try:
         check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions,
-                          held_out=held_out)
+                          held_out=held_out, plan=plan)
     except DegenerateCalibrationError as exc:
         raise cli_error(exc, args, str(args.dataset)) from None
 
@@ -143,6 +153,72 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
     if torque_columns(axes):
         return f"{rmse:.4g} N·m (torques only: no torque scaling)"
     return f"{rmse:.4g} N (forces only: no torque scaling)"
+
+
+#: Longest silence [s] of a long fit before a heartbeat line says it is still working.
+HEARTBEAT_SECONDS = 10.0
+
+
+def _json_comparison(comparison):
+    """A comparison as JSON columns (:meth:`~ftcal.model_selection.Comparison.to_dict`), a dict as it is."""
+    return comparison.to_dict() if hasattr(comparison, "to_dict") else comparison
+
+
+class _ProgressLines(logging.Handler):
+    """Prints each finished row of a comparison (the ``compare:`` records of the ``ftcal`` logger) as one line."""
+
+    def __init__(self, console: Console, said) -> None:
+        super().__init__(logging.INFO)
+        self.console, self.said = console, said
+
+    def emit(self, record: logging.LogRecord) -> None:
+        message = record.getMessage()
+        if message.startswith("compare: "):
+            self.console.info("  " + message[len("compare: "):])
+            self.said()
+
+
+@contextlib.contextmanager
+def comparison_progress(console: Console, label: str, every: float = HEARTBEAT_SECONDS):
+    """While a model chooses among candidates: each candidate's line as it finishes (name, held-out RMSE ± SE,
+    seconds; through :mod:`logging`), and a heartbeat line whenever nothing was said for ``every`` seconds. Silent
+    with ``--quiet``."""
+    if console.quiet:
+        yield
+        return
+    start = time.perf_counter()
+    last = [start]
+    lock = threading.Lock()
+
+    def said() -> None:
+        with lock:
+            last[0] = time.perf_counter()
+
+    logger = logging.getLogger("ftcal")
+    handler, level = _ProgressLines(console, said), logger.level
+    logger.addHandler(handler)
+    if logger.getEffectiveLevel() > logging.INFO:
+        logger.setLevel(logging.INFO)
+    done = threading.Event()
+
+    def beat() -> None:
+        while not done.wait(0.5):
+            now = time.perf_counter()
+            with lock:
+                quiet_for = now - last[0]
+            if quiet_for >= every:
+                console.info(f"  ... {label} still fitting ({now - start:.0f} s so far)")
+                said()
+
+    beater = threading.Thread(target=beat, daemon=True, name="ftcal-heartbeat")
+    beater.start()
+    try:
+        yield
+    finally:
+        done.set()
+        beater.join()
+        logger.removeHandler(handler)
+        logger.setLevel(level)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -218,7 +294,14 @@ def run(args: argparse.Namespace) -> int:
         fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
     # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
     # Tx, Ty as well as a 6-axis sensor's)
-    fit_with_progress(estimator, X, training_targets(data), console, label=args.model, **fit_params)
+    from ..workflow import calibrate
+
+    chooses = calibration_tags(estimator).chooses_model or args.history and args.model == "auto"
+    # the library's workflow fits (the gate runs below: with --report on the report's folds of a costly model)
+    with comparison_progress(console, args.model) if chooses else contextlib.nullcontext():
+        calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0, check=False,
+                  fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(est, X_, y_, console,
+                                                                                      label=args.model, **kw))
     seconds = time.perf_counter() - start
     report = ftcal.core.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
@@ -243,7 +326,8 @@ def run(args: argparse.Namespace) -> int:
         summary["history_cv_rmse"] = {"none": estimator.cv_rmse_[0],  # held-out RMSE (eq. 18) of each candidate
                                       **{f"tau={t:g}": v for t, v in zip(taus, estimator.cv_rmse_[1:])}}
         if estimator.static_choice_ is not None:
-            summary["chosen"], summary["cv_results"] = estimator.static_choice_, estimator.static_cv_results_
+            summary["chosen"], summary["cv_results"] = estimator.static_choice_, _json_comparison(
+                estimator.static_cv_results_)
             console.info(f"auto chose {estimator.static_choice_} (the static model, before the history term)")
         kept = "no history term" if estimator.tau_rows_ is None else f"a history term, tau = {estimator.tau_rows_:g} rows"
         console.info(f"history: {kept} (cross-validated RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the "
@@ -251,7 +335,8 @@ def run(args: argparse.Namespace) -> int:
                      "slightly optimistic; --report gives a held-out figure)")
     if calibration_tags(estimator).chooses_model:  # auto: the whole comparison it chose from
         summary["chosen"] = estimator.best_name_
-        summary["cv_results"] = estimator.comparison_
+        summary["cv_results"] = _json_comparison(estimator.comparison_)
+        summary["fold_plan"] = estimator.comparison_.facts
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
     fit_groups = fit_params.get("groups", data.group)
 

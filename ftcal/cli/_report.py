@@ -22,16 +22,18 @@ examples:
   ftcal report models/linear.model.npz data.csv --rated Fx=500,Fy=500,Fz=900,Tx=20,Ty=20,Tz=20 --spec 1%FS
   ftcal report models/auto.model.npz data.mat --torque-unit N.mm --sensor "FT-1234" --tool tool/tool.tool.json
   ftcal report m.model.npz data.csv --spec 1%FS,Fz=0.5%FS --operator "A. Tester" --recalibration-interval "12 months"
+  ftcal report m.model.npz data.csv --reference-uncertainty 0.05% --spec 1%FS
   chromium --headless --no-sandbox --no-pdf-header-footer --print-to-pdf=report/linear.report.pdf report/linear.report.html
 
 writes DIR/NAME.report.html (open it in any browser; no network needed, pictures inline; it prints to a
 multi-page PDF with page numbers), DIR/NAME.report.json (the same facts) and DIR/NAME.report.csv (every
 held-out load case, applied against indicated, worst first), as one set. The first page is the summary:
-U95 per axis in % of full scale (the rated capacity of --rated, else the largest load of the data), PASS or
-FAIL against --spec, the comparison with the best stock model, and warnings. Held-out accuracy comes from
-grouped cross-validation of the model's settings (whole groups held out when the dataset has a group column),
-beside the stock scikit-learn baselines on the same folds (each within ftcal's memory limit and a work
-budget, else listed as skipped). Conditions and traceability (reference standard, procedure, operator,
+U95 per axis in % of full scale (the rated capacity of --rated, else the largest load of the data) from an
+uncertainty budget in the GUM's form (held-out reproducibility, repeatability, resolution, the reference of
+--reference-uncertainty; k from the Welch-Satterthwaite degrees of freedom), PASS or FAIL against --spec, the
+comparison with the best stock model (paired standard error on the same folds), and warnings. Held-out
+accuracy comes from ftcal's one fold plan (whole groups held out when the dataset has a group column), beside
+the stock scikit-learn baselines on the same folds (a model that cannot be judged is listed as skipped). Conditions and traceability (reference standard, procedure, operator,
 ambient temperature, recalibration interval) come from DATA.conditions.yaml / .json beside the dataset,
 --conditions FILE, or the options below.
 """
@@ -78,10 +80,14 @@ def add_report_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--spec", metavar="1%FS|Fx=1%FS,...",
                    help="largest U95 allowed, in %% of full scale, for every axis (1%%FS) or per axis "
                    "(1%%FS,Fz=0.5%%FS): each axis PASSES or FAILS against it on the first page")
+    g.add_argument("--reference-uncertainty", metavar="0.05%|Fx=0.1,...",
+                   help="expanded uncertainty (k = 2) of the reference loads, as its certificate states it: relative "
+                   "to the load (0.05%%) or absolute per axis in N and N.m (Fx=0.1,Fy=0.1,...); a component of the "
+                   "report's uncertainty budget (also 'reference_uncertainty' in the conditions file)")
     g.add_argument("--conditions", type=existing_file, metavar="FILE",
                    help="YAML/JSON file of the calibration's conditions and traceability (reference_standard, "
                    "procedure, operator, calibration_date, ambient_temperature, recalibration_interval, "
-                   "recalibration_due, location, notes; also sensor, rated, spec); default DATA.conditions.yaml or "
+                   "recalibration_due, location, notes; also sensor, rated, spec, reference_uncertainty); default DATA.conditions.yaml or "
                    ".json beside the dataset when present")
     for option, field in CONDITION_OPTIONS.items():
         g.add_argument(option, metavar="TEXT", help=f"{field.replace('_', ' ')} (overrides the conditions file)")
@@ -187,10 +193,11 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     fields = {} if conditions_file is None else _read_mapping(Path(conditions_file), "--conditions")
     sensor = args.sensor or fields.pop("sensor", None)
     rated_field, spec_field = fields.pop("rated", None), fields.pop("spec", None)
+    reference_field = fields.pop("reference_uncertainty", None)
     unknown = sorted(set(fields) - set(CONDITION_FIELDS))
     if unknown:
         raise CliError(f"--conditions {conditions_file}: field {unknown[0]!r} is not known; the fields are "
-                       f"{', '.join(CONDITION_FIELDS)}, sensor, rated, spec")
+                       f"{', '.join(CONDITION_FIELDS)}, sensor, rated, spec, reference_uncertainty")
     for option, field in CONDITION_OPTIONS.items():
         value = getattr(args, field)
         if value is not None:
@@ -226,8 +233,27 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
             tool = ToolLoad.load(args.tool)
         except CalibrationInputError as exc:
             raise CliError(f"--tool {cli_message(exc, args)}") from None
+    reference = _reference(args.reference_uncertainty, "--reference-uncertainty", axes) \
+        if args.reference_uncertainty is not None else None if reference_field is None else \
+        _reference(reference_field, f"--conditions {conditions_file}: reference_uncertainty", axes)
     return {"tool": tool, "rated": rated, "spec": spec, "conditions": conditions,
-            "sensor": None if sensor is None else str(sensor)}
+            "sensor": None if sensor is None else str(sensor), **(reference or {})}
+
+
+def _reference(value, option: str, axes: list[str]) -> dict:
+    """``0.05%`` (relative) or ``Fx=0.1,...`` / a mapping (absolute per axis) -> the certificate's keyword."""
+    text = str(value).strip() if not isinstance(value, dict) else None
+    if text is not None and "=" not in text:
+        if not text.endswith("%"):
+            raise CliError(f"{option} {text!r}: give it relative to the load (0.05%) or per axis (Fx=0.1,...)")
+        try:
+            relative = float(text[:-1]) / 100
+        except ValueError:
+            relative = float("nan")
+        if not (np.isfinite(relative) and 0 < relative < 1):
+            raise CliError(f"{option} {text!r}: not a percentage between 0 and 100 (e.g. 0.05%)")
+        return {"reference_relative": relative}
+    return {"reference_uncertainty": _axis_values(value, axes, option, percent=False)}
 
 
 def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
@@ -237,29 +263,27 @@ def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namesp
     :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is). ``check``, if given, is
     called with the report's held-out predictions (shape of ``data.wrench``) before anything is written: it may
     raise to refuse the calibration."""
-    from ..reporting._calibration_report import (calibration_certificate, render_report_html, report_cases_csv,
-                                                  report_json)
+    from ..reporting import calibration_certificate
 
     console.info(f"report: cross-validating {type(model).__name__}"
                  f"{'' if args.no_baselines else ' and the stock baselines'} ({args.cv} folds) ...")
     jobs = getattr(args, "jobs", None)
     try:
-        report = calibration_certificate(model, data, model_path=model_path, model_sha256=model_sha256,
-                                         dataset_path=dataset_path, dataset_sha256=dataset_sha256,
-                                         cv=args.cv, baselines=not args.no_baselines,
-                                         random_state=getattr(args, "seed", 0), n_jobs=jobs or -1,
-                                         command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
+        cert = calibration_certificate(model, data, model_path=model_path, model_sha256=model_sha256,
+                                       dataset_path=dataset_path, dataset_sha256=dataset_sha256,
+                                       cv=args.cv, baselines=not args.no_baselines,
+                                       random_state=getattr(args, "seed", 0), n_jobs=jobs or -1,
+                                       command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
     except TooFewSamplesError as exc:
         raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
     if check is not None:
-        check(report["_held_out_pred"])
+        check(cert.held_out_predictions)
 
     html_name, json_name, csv_name = report_file_names(label)
-    for file_name, text in ((html_name, render_report_html(report)), (json_name, report_json(report)),
-                            (csv_name, report_cases_csv(report))):
+    for file_name, text in ((html_name, cert.to_html()), (json_name, cert.to_json()), (csv_name, cert.to_csv())):
         with out.writing(file_name) as tmp:
             tmp.write_text(text, encoding="utf-8")
-    verdict = report.get("verdict")
+    verdict = cert.verdict
     console.info(f"report -> {out.path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 
 

@@ -20,24 +20,27 @@ from ._history import refuse_history_inside
 from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
                                  resolve_alpha, with_settings)
 from ..core._exceptions import CalibrationInputError
-from ..model_selection._selection import (DegenerateCalibrationError, calibration_folds, check_groups,
-                                     degenerate_reason, fold_predictions, grouped_subsample, one_se_qualified,
-                                     paired_excess, mean_and_se, rmse_and_se, routed_groups, se_units,
-                                     se_units_name, simplest_within_one_se, unseen_outputs,
-                                     TIE_TOLERANCE)
+from ..model_selection._comparison import (COST_TIERS, LIGHT_KERNEL_ROWS, TIER_STEP, Comparison, ComparisonRow,
+                                           RowStatus, choice_stability, compare, model_cost)
+from ..model_selection._plan import FoldPlan
+from ..model_selection._selection import (DegenerateCalibrationError, check_groups, degenerate_reason,
+                                          fold_predictions, grouped_subsample, routed_groups)
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
-from ..core._wrench import WRENCH_LABELS, named_targets, scale_torques, unscale_torques
+from ..core._wrench import named_targets, scale_torques, unscale_torques
 from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates", "score_candidates",
-           "with_alpha_and_tare", "minimum_training_rows", "check_calibration", "judging_folds"]
+__all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates",
+           "score_candidates", "add_stack", "complexity_of", "with_alpha_and_tare", "minimum_training_rows",
+           "check_calibration"]
 
 #: Most candidates a stack combines (the best-scoring eligible ones).
 STACK_SIZE = 3
-#: Training rows up to which a kernel model's fit is light work: with no network to train either, the candidates
-#: are scored in this process (worker processes would take longer to start than the fits).
-LIGHT_KERNEL_ROWS = 200
+#: Most rows on which the choice's stability is repeated over other fold seeds (when every model within one SE
+#: of the best is light work: a count of work, never a time).
+STABILITY_ROWS = 5000
+#: Fold seeds of the stability repeats (the plan's own seed is the first repeat).
+STABILITY_SEEDS = (1, 2, 3, 4)
 
 
 def default_candidates(schedule: str = "short", grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
@@ -137,70 +140,30 @@ def make_ltm() -> BaseCalibrator:
     return make_calibrator("linear")
 
 
-def _unscored_ltm(note: str) -> dict:
+def _unscored_ltm(plan: FoldPlan, alpha: float) -> Comparison:
     """The comparison of a fit that no folds could judge: the LTM alone, chosen unscored."""
-    return {"name": ["linear"], "kind": ["candidate"], "status": ["chosen unscored: no folds can judge a model"],
-            "eligible": [True], "rmse": [None], "rmse_se": [None], "axis_rmse": [None], "fit_seconds": [None],
-            "n_splits": 0, "min_training_rows": 0, "verdict": ["chosen (no folds can judge a model)"],
-            "chosen": "linear", "se_units": "rows",
-            "why": f"linear (the LTM) chosen without a held-out score: folds {note}."}
+    row = ComparisonRow(name="linear", kind="candidate", status=RowStatus.SKIPPED,
+                        reason="no folds can judge a model", verdict="chosen (no folds can judge a model)")
+    return Comparison(rows=[row], plan=plan, alpha=alpha, chosen="linear",
+                      why=f"linear (the LTM) chosen without a held-out score: folds {plan.note}.")
 
 
-def explain_choice(results: dict, errors: NDArray, units: NDArray | None, chosen: int, ranks: NDArray) -> None:
-    """Mark each row of ``results`` with why it was or was not chosen, and say in words why the winner won.
+def complexity_of(candidates: list[tuple[str, object]], training_rows: int) -> list[float]:
+    """Each candidate's complexity for the one-SE rule: what it can fit, by its tags' ``cost`` tier (a closed
+    form, then a kernel model, then a model of unknown cost, then a network:
+    :data:`~ftcal.model_selection._comparison.COST_TIERS`), then its position (:func:`complexity_ranks`: a twin
+    with group offsets and a stock model of a family as simple as their counterpart). A network never wins a
+    one-SE tie over a closed-form model, nor over a stack of closed-form models (a stack ranks just after its
+    most complex member).
 
-    ``verdict`` per row: ``chosen``; ``within one SE, more complex`` (or ``within one SE, as simple, higher
-    error``); ``beyond one SE``; or the row's ``skipped``/``failed``/``refused`` status. ``why``: one sentence
-    naming the winner, the best score it was within one standard error of, and its ratio to the best stock
-    model (a free model of scikit-learn's) with whether that is within noise.
+    Examples
+    --------
+    >>> from ftcal import LinearCalibrator, PolynomialCalibrator
+    >>> complexity_of([("a", PolynomialCalibrator(degree=2)), ("b", LinearCalibrator())], 100)
+    [0.0, 1.0]
     """
-    names, rmse, se = results["name"], results["rmse"], results["rmse_se"]
-    best, within = one_se_qualified(errors, units, eligible=results["eligible"])
-    verdicts = []
-    for k in range(len(names)):
-        if k == chosen:
-            verdicts.append("chosen")
-        elif not results["eligible"][k]:
-            verdicts.append(results["status"][k] if results["status"][k] != "scored" else "reported only")
-        elif within[k]:
-            verdicts.append("within one SE, as simple (the lower or earlier wins)" if ranks[k] == ranks[chosen]
-                            else "within one SE, more complex")
-        else:
-            verdicts.append("beyond one SE")
-    results["verdict"] = verdicts
-    results["chosen"] = names[chosen]
-    unit = se_units_name(units)
-    # what the rule compared, so that the table lets a reader check each verdict (the paired SE of the excess, not
-    # each row's own SE: two models erring on the same rows differ by less than either's spread)
-    excess, excess_se, tie = paired_excess(errors, best, units)
-    results["excess_mse"] = [None if np.isnan(e) else float(e) for e in excess]
-    results["excess_se"] = [None if np.isnan(e) else float(e) for e in excess_se]
-    results["rule"] = {"best": names[best], "tie_mse": float(tie), "units": unit}
-    if chosen == best:
-        why = (f"{names[chosen]} won: the best held-out RMSE ({rmse[chosen]:.4g} ± {se[chosen]:.2g} N), and no "
-               f"simpler model within one standard error of it (standard errors over the {unit})")
-    else:
-        why = (f"{names[chosen]} won: the simplest of the {int(within.sum())} models within one standard error of "
-               f"the best, {names[best]} ({rmse[best]:.4g} ± {se[best]:.2g} N; {names[chosen]} "
-               f"{rmse[chosen]:.4g} N; standard errors over the {unit})")
-    stock = [k for k, kind in enumerate(results["kind"]) if kind in ("stock", "baseline") and rmse[k] is not None]
-    if stock:
-        s = min(stock, key=lambda k: rmse[k])
-        ratio = rmse[chosen] / rmse[s] if rmse[s] else float("nan")
-        if s == chosen:
-            why += f". It is the best stock model itself ({names[s]})"
-        else:
-            gap, gap_se = mean_and_se(errors[chosen] - errors[s], units)
-            if abs(ratio - 1.0) <= TIE_TOLERANCE / 2:
-                how = "ties it"
-            elif ratio < 1.0:
-                how = f"beats it by {100 * (1 - ratio):.1f} %"
-            elif gap <= gap_se:
-                how = "trails it within its standard error (a tie within noise)"
-            else:
-                how = "trails it by more than one standard error, as the one-SE rule allows for a simpler model"
-            why += f"; against the best stock model, {names[s]} ({rmse[s]:.4g} N), it is {ratio:.3f}x: it {how}"
-    results["why"] = why + "."
+    ranks = complexity_ranks(candidates, len(candidates))
+    return [COST_TIERS[model_cost(est)] * TIER_STEP + float(ranks[k]) for k, (_, est) in enumerate(candidates)]
 
 
 
@@ -303,11 +266,6 @@ def _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) -> list[
     return fold_predictions(estimator, X, y, folds, groups=groups)
 
 
-def _row_errors(pred: NDArray, y: NDArray, alpha: float, axes=None) -> NDArray:
-    """Per-row mean of the squared torque-scaled errors (the torques of ``axes``): their mean is eq. 18's MSE."""
-    return np.mean((scale_torques(pred, alpha, axes) - scale_torques(y, alpha, axes)) ** 2, axis=1)
-
-
 def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
     """Non-negative weights of the (torque-scaled) predictions that best fit ``target`` in least squares."""
     design = np.column_stack([p.ravel() for p in predictions])
@@ -315,232 +273,99 @@ def _nnls_weights(predictions: list[NDArray], target: NDArray) -> NDArray:
     return weights
 
 
-def score_candidates(
-    candidates, X: NDArray[np.float64], y: NDArray[np.float64], *, groups=None, cv: int = 5, alpha: float,
-    zero_reading=None, random_state: int | None = 0, network_samples: int | None = 2000,
-    baselines: dict | None = None, stack: bool = False, n_jobs: int | None = None, folds=None, units=None,
-    axes=None,
-) -> tuple[dict, NDArray[np.float64], list, dict]:
-    """Cross-validate every candidate on the same folds; the engine of ``auto`` and ``ftcal benchmark dataset``.
+def _auto_out_of_fold(network_samples: int | None, seed: int):
+    """The fold runner ``auto`` gives :func:`~ftcal.model_selection.compare`: :func:`_out_of_fold` with its
+    network subsample and seed, BLAS on one thread (small matrices; the jobs share the cores)."""
+    def run(estimator, X, y, folds, groups):
+        with limit_threads_here(1):
+            return _out_of_fold(estimator, X, y, folds, groups, network_samples, seed)
+    return run
 
-    Every figure is eq. 18's RMSE (over the 6 n torque-scaled values, [N]).
-    Candidates whose training folds hold fewer rows than
-    :func:`minimum_training_rows` are skipped (recorded, never chosen). A
-    candidate that chooses its own structure (the GP's mean and kernel,
-    ``structure_params``) chooses it once, fitted on all rows; its clones with
-    that structure are then cross-validated (their hyperparameters fitted on
-    each training fold alone), at a fifth of the cost. With ``stack``, a
-    non-negative combination of the best (up to :data:`STACK_SIZE`) eligible
-    candidates is scored too, its weights cross-fitted on the out-of-fold
-    predictions (each fold's weights from the other folds' rows).
-    ``baselines`` (name -> scikit-learn regressor, e.g.
-    :func:`ftcal.calibrators.stock_baselines`) are scored on the same folds and
-    never eligible. A candidate whose held-out predictions are degenerate
-    (constant, all zero, no better than the mean:
-    :func:`~ftcal.model_selection._selection.degenerate_reason`) is recorded as
-    refused, never chosen. ``folds`` (train, test) made before replace those of
-    :func:`calibration_folds` (``auto``'s fallback when grouped folds cannot
-    judge), with ``units`` the units of their standard errors (None: rows).
-    ``axes`` names ``y``'s columns (their torques are scaled; default: Fx..Tz for six, else forces only).
-    Standard errors are over the groups when the folds hold out
-    groups and there are at least
-    :data:`~ftcal.model_selection._selection.MIN_SE_GROUPS` of them, with fewer the
-    larger of the rows' and the groups' (:func:`~ftcal.model_selection._selection.mean_and_se`), else over rows.
-    ``n_jobs`` candidates are scored at once
-    (:class:`joblib.Parallel`, processes; ``None`` is 1 unless in a
-    :func:`joblib.parallel_config` context); the figures do not depend on it.
-    Light work stays in this process whatever ``n_jobs`` says: when every
-    job is a closed form (the LTM, polynomials, the hybrid, the stock linear
-    and polynomial pipelines) or a kernel model on at most
-    :data:`LIGHT_KERNEL_ROWS` training rows (a count of work, not a time).
+
+def score_candidates(
+    candidates, X: NDArray[np.float64], y, *, groups=None, cv: int = 5, alpha: float, zero_reading=None,
+    random_state: int | None = 0, network_samples: int | None = 2000, baselines: dict | None = None,
+    stack: bool = False, n_jobs: int | None = None, plan: FoldPlan | None = None, axes=None, race: bool = True,
+    progress=None,
+) -> Comparison:
+    """Score every candidate on one fold plan with :func:`~ftcal.model_selection.compare`; the engine of ``auto``
+    and ``ftcal benchmark dataset``.
+
+    Every figure is eq. 18's RMSE (over the torque-scaled values, [N]). The candidates get the shared torque
+    scale and tare (:func:`with_alpha_and_tare`); a candidate needs :func:`minimum_training_rows` in its training
+    folds (else SKIPPED); the costly ones are raced (``race``: STOPPED when they cannot come within one SE of
+    the best); networks' folds train as one stacked fit on at most ``network_samples`` rows each. ``baselines``
+    (name -> regressor) are scored on the same folds, never eligible. With ``stack``, a non-negative combination
+    of the best (up to :data:`STACK_SIZE`) eligible candidates is scored too, its weights cross-fitted over the
+    folds (:func:`add_stack`). ``plan`` defaults to :meth:`FoldPlan.for_data` with ``cv`` and the seed.
 
     Returns
     -------
-    results : dict of lists
-        Per row: ``name``, ``kind`` (``"candidate"``, ``"stock"`` (a stock
-        baseline as a choosable candidate), ``"stack"``, ``"baseline"``),
-        ``status`` (``"scored"``, ``"skipped: ..."``, ``"failed: ..."``, ``"refused: ..."``),
-        ``eligible``, ``rmse`` (held-out, eq. 18 [N]), ``rmse_se`` (its
-        standard error over groups or rows), ``axis_rmse`` (6 values, [N] and
-        [N·m]), ``fit_seconds`` (all folds, and the all-rows structure fit); plus ``n_splits``,
-        ``min_training_rows`` and, with a stack, ``stack_members`` and
-        ``stack_weights``.
-    errors : ndarray of shape (n_rows, n_samples)
-        Held-out per-row errors (NaN when not scored).
-    predictions : list of ndarray of shape (n_samples, 6) or None
-        Out-of-fold predictions.
-    fitted : dict
-        Name -> the candidate fitted on all rows, for those that chose their structure there.
+    Comparison
+        Rows in the candidates' order, then the stack, then the baselines; not yet chosen
+        (:meth:`~ftcal.model_selection.Comparison.choose`).
     """
-    from joblib import effective_n_jobs
-    from sklearn.utils.parallel import Parallel, delayed
-
-    n, n_channels = X.shape
-    seed = 0 if random_state is None else int(random_state)
-    if folds is None:
-        folds, units = calibration_folds(n, groups, cv, seed), se_units(groups)
-    # distinct training rows: a repeated row (the same reading and wrench) teaches nothing new
-    smallest_train = min(len(np.unique(np.column_stack([X[tr], y[tr]]), axis=0)) for tr, _ in folds)
-    results: dict = {k: [] for k in ("name", "kind", "status", "eligible", "rmse", "rmse_se", "axis_rmse",
-                                     "fit_seconds")}
-    results.update(n_splits=len(folds), min_training_rows=smallest_train)
-    errors: list[NDArray] = []
-    predictions: list = []
-
-    def record(name, kind, status, eligible, pred, seconds):
-        ok = pred is not None
-        reason = degenerate_reason(y, pred, alpha=alpha, axes=axes) if ok and kind != "baseline" else None
-        if reason is not None:  # scored, shown, never chosen
-            status, eligible = f"refused: {reason}", False
-        results["name"].append(name)
-        results["kind"].append(kind)
-        results["status"].append(status)
-        results["fit_seconds"].append(seconds)
-        results["eligible"].append(bool(eligible and ok))
-        row = _row_errors(pred, y, alpha, axes) if ok else np.full(n, np.nan)
-        rmse, se = rmse_and_se(row, units) if ok else (None, None)
-        results["rmse"].append(rmse)
-        results["rmse_se"].append(se)
-        results["axis_rmse"].append(np.sqrt(np.mean((pred - y) ** 2, axis=0)).tolist() if ok else None)
-        errors.append(row)
-        predictions.append(pred)
-
-    rows, tasks = [], []  # (name, kind, skipped status or None); the work of the rows that are fitted
-    families = {name: calibration_tags(template).family for name, template in candidates}
     from ..calibrators._baselines import StockCalibrator
 
-    for name, template in candidates:
-        estimator = with_alpha_and_tare(template, alpha, zero_reading)
-        needed = minimum_training_rows(estimator, n_channels)
-        kind = "stock" if isinstance(template, StockCalibrator) else "candidate"
-        if smallest_train < needed:  # too few rows to judge it: not fitted, never chosen
-            rows.append((name, kind, f"skipped: training folds of {smallest_train} rows < the {needed} it needs"))
-            continue
-        rows.append((name, kind, None))
-        tasks.append((len(rows) - 1, estimator, network_samples))
+    seed = 0 if random_state is None else int(random_state)
+    y_arr = np.asarray(y, dtype=float)
+    if plan is None:
+        plan = FoldPlan.for_data(X, y_arr, groups, cv=cv, seed=seed)
+    models = [(name, with_alpha_and_tare(t, alpha, zero_reading)) for name, t in candidates]
+    kinds = {name: "stock" if isinstance(t, StockCalibrator) else "candidate" for name, t in candidates}
+    complexity = complexity_of(candidates, plan.n_rows)
     for name, regressor in (baselines or {}).items():
-        rows.append((name, "baseline", None))
-        tasks.append((len(rows) - 1, regressor, None))
-    # never more worker processes than cores or jobs (each costs a Python with torch imported), and none when
-    # every job is light (no network, kernel models on few rows): starting workers would cost more than the work
-    heavy = not all(is_light(est, smallest_train) for _, est, _ in tasks)
-    named = named_targets(y, axes)  # each fold's fits get their slice of the named table: they scale its torques
-
-    def run(jobs):  # (row, estimator, network samples, folds, whether it chooses its structure first)
-        workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, max(len(jobs), 1)) if heavy else 1
-        done = Parallel(n_jobs=workers)(delayed(_score_one)(est, X, named, part, groups, samples, seed, choose)
-                                       for _, est, samples, part, choose in jobs)
-        for (row, *_), outcome in zip(jobs, done):
-            outcomes.setdefault(row, []).append(outcome)
-
-    # First the all-rows structure fit of each candidate that chooses its structure, beside a job per fold of
-    # every other model but the networks; then that candidate's folds, a job each with its structure fixed (so
-    # they share the cores instead of running one after another in one job), beside the networks (one job
-    # each, all folds: a stacked fit), which go first there, being the longest jobs. The costliest jobs first in
-    # each round, so that the last job to finish is a short one.
-    outcomes: dict = {}
-    first = [(row, est, samples, [] if _searches(est) else [fold], True)
-             for row, est, samples in tasks if not _is_network(est)
-             for fold in ([None] if _searches(est) else folds)]
-    run(sorted(first, key=lambda job: (not _searches(job[1]), _cost_rank(job[1]))))
-    searched = [(row, outcomes[row][0][0], samples) for row, est, samples in tasks if _searches(est)]
-    second = [(row, est, samples, folds, True) for row, est, samples in tasks if _is_network(est)]
-    second += [(row, clone(fitted).set_params(**fitted.structure_params()), samples, [fold], False)
-               for row, fitted, samples in searched if fitted is not None for fold in folds]
-    run(second)
-    fitted = {}
-    for i, (name, kind, skipped) in enumerate(rows):
-        if stack and kind == "baseline" and rows[i - 1][1] != "baseline":  # the stack after the candidates
-            _score_stack(results, errors, predictions, record, y, alpha, folds, families, axes)
-        model, pred, status, seconds = (None, None, skipped, None) if skipped else _merge(outcomes[i], y.shape)
-        if model is not None:
-            fitted[name] = model
-        record(name, kind, status, kind != "baseline" and not skipped, pred, seconds)
-    if stack and rows and rows[-1][1] != "baseline":
-        _score_stack(results, errors, predictions, record, y, alpha, folds, families, axes)
-    results["se_units"] = se_units_name(units)
-    return results, np.vstack(errors), predictions, fitted
+        models.append((name, regressor))
+        kinds[name] = "baseline"
+        complexity.append(COST_TIERS[model_cost(regressor)] * TIER_STEP + len(complexity))
+    comparison = compare(models, X, named_targets(y, axes) if not hasattr(y, "iloc") else y, plan, alpha=alpha,
+                         groups=groups, n_jobs=n_jobs, race=race, kinds=kinds, progress=progress, axes=axes,
+                         complexity=complexity, out_of_fold=_auto_out_of_fold(network_samples, seed),
+                         min_rows=minimum_training_rows)
+    if stack:
+        families = {name: calibration_tags(t).family for name, t in candidates}
+        add_stack(comparison, y_arr, families, axes)
+    return comparison
 
 
-def _searches(estimator) -> bool:
-    """Whether ``estimator`` chooses its structure on all rows first (``chooses_structure``; not a network)."""
-    return not _is_network(estimator) and calibration_tags(estimator).chooses_structure
-
-
-def _merge(parts: list, shape: tuple) -> tuple:
-    """One model's ``(fitted, predictions of shape `shape`, status, seconds)`` from its jobs' (one per fold, or one)."""
-    failed = [status for _, _, status, _ in parts if status != "scored"]
-    if failed:
-        return None, None, failed[0], None
-    pred = np.full(shape, np.nan)
-    for _, folds, _, _ in parts:
-        for test, values in folds:
-            pred[test] = values
-    return parts[0][0], pred, "scored", sum(seconds for *_, seconds in parts)
+def add_stack(comparison: Comparison, y: NDArray, families: dict, axes=None) -> None:
+    """Score the non-negative combination of the best eligible candidates (weights cross-fitted over the plan's
+    folds) and insert it after the candidates; a stock model and ftcal's model of the same family (``families``:
+    name -> tags' family) never both. Its complexity is just after its most complex member's."""
+    rows = comparison.rows
+    ranked = sorted((r for r in rows if r.eligible and r.status is RowStatus.SCORED and r.kind != "stack"),
+                    key=lambda r: r.rmse)
+    members: list = []
+    for r in ranked:
+        # a stock model beside ftcal's model of its family (sk_linear and the LTM: the same least squares) adds
+        # no kind of model to the combination, only a column its twin already gives (weights split arbitrarily)
+        family = families.get(r.name)
+        if family and any(families.get(m.name) == family and "stock" in (m.kind, r.kind) for m in members):
+            continue
+        members.append(r)
+        if len(members) == STACK_SIZE:
+            break
+    if len(members) < 2:
+        return
+    alpha = comparison.alpha
+    scaled = [scale_torques(m.predictions, alpha, axes) for m in members]
+    target = scale_torques(y, alpha, axes)
+    oof = np.empty_like(target)
+    for train, test in comparison.plan.folds:
+        w = _nnls_weights([p[train] for p in scaled], target[train])
+        oof[test] = sum(wk * p[test] for wk, p in zip(w, scaled))
+    comparison.stack_members = [m.name for m in members]
+    comparison.stack_weights = _nnls_weights(scaled, target).tolist()
+    at = next((k for k, r in enumerate(rows) if r.kind == "baseline"), len(rows))
+    comparison.add_scored("stack(" + " + ".join(comparison.stack_members) + ")", "stack",
+                          unscale_torques(oof, alpha, axes), y, complexity=max(m.complexity for m in members) + 0.5,
+                          axes=axes, index=at)
 
 
 def is_light(estimator, training_rows: int) -> bool:
     """Whether ``estimator`` fits in a moment (its tags' ``cost``): a closed form, or a kernel model on at most
     :data:`LIGHT_KERNEL_ROWS` rows; anything else (networks, ensembles, wrappers of unknown cost) is not."""
-    cost = calibration_tags(estimator).cost
-    return cost == "closed_form" or (cost == "kernel" and training_rows <= LIGHT_KERNEL_ROWS)
-
-
-def _cost_rank(estimator) -> int:
-    """Position of ``estimator``'s cost in :data:`~ftcal.calibrators._base.COSTS` (kernel models first)."""
-    return COSTS.index(calibration_tags(estimator).cost)
-
-
-def _score_one(estimator, X, y, folds, groups, network_samples, seed, choose_structure=True):
-    """One candidate's (or baseline's) all-rows structure fit, if it has one and ``choose_structure``, and its
-    out-of-fold predictions on ``folds`` (none: the structure fit alone).
-
-    Returns ``(fitted on all rows or None, [(test rows, predictions)] per fold or None, status, seconds)``; a
-    candidate that cannot fit these data is recorded as failed, not fatal.
-    """
-    t0 = time.perf_counter()
-    try:
-        # small matrices: BLAS threads only contend on a shared machine (and with the other jobs)
-        with limit_threads_here(1), warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            fitted = None
-            if choose_structure and calibration_tags(estimator).chooses_structure:  # once, on all rows
-                fitted = _fit(clone(estimator), X, y, groups)
-                estimator = clone(estimator).set_params(**fitted.structure_params())
-            pred = _out_of_fold(estimator, X, y, folds, groups, network_samples, seed) if folds else []
-        return fitted, pred, "scored", time.perf_counter() - t0
-    except Exception as exc:
-        return None, None, f"failed: {type(exc).__name__}: {' '.join(str(exc).split())[:200]}", None
-
-
-def _score_stack(results, errors, predictions, record, y, alpha, folds, families: dict, axes=None) -> None:
-    """Score the non-negative combination of the best eligible candidates (weights cross-fitted over folds), a
-    stock model and ftcal's model of the same family (``families``: name -> tags' family) never both."""
-    ranked = sorted((r, k) for k, r in enumerate(results["rmse"]) if results["eligible"][k])
-    members: list[int] = []
-    for _, k in ranked:
-        # a stock model beside ftcal's model of its family (sk_linear and the LTM: the same least squares) adds
-        # no kind of model to the combination, only a column its twin already gives (weights split arbitrarily)
-        family = families.get(results["name"][k])
-        if family and any(families.get(results["name"][j]) == family
-                          and "stock" in (results["kind"][j], results["kind"][k]) for j in members):
-            continue
-        members.append(k)
-        if len(members) == STACK_SIZE:
-            break
-    if len(members) < 2:
-        return
-    scaled = [scale_torques(predictions[k], alpha, axes) for k in members]
-    target = scale_torques(y, alpha, axes)
-    oof = np.empty_like(target)
-    for train, test in folds:
-        w = _nnls_weights([p[train] for p in scaled], target[train])
-        oof[test] = sum(wk * p[test] for wk, p in zip(w, scaled))
-    weights = _nnls_weights(scaled, target)
-    names = [results["name"][k] for k in members]
-    results["stack_members"] = names
-    results["stack_weights"] = weights.tolist()
-    record("stack(" + " + ".join(names) + ")", "stack", "scored", True, unscale_torques(oof, alpha, axes), None)
+    return model_cost(estimator, training_rows) == "closed_form"
 
 
 def provides_std(model) -> bool:
@@ -554,48 +379,6 @@ def provides_std(model) -> bool:
     (True, False)
     """
     return calibration_tags(model).provides_std
-
-
-def judging_folds(X: NDArray, y: NDArray, groups: NDArray | None, cv: int = 5, seed: int = 0
-                  ) -> tuple[list | None, str, NDArray | None]:
-    """Folds that can judge a model, what was done to get them, and the units of their standard errors.
-
-    Grouped folds first; if a training fold leaves an output unseen (one group per loaded axis: holding out
-    the ``Fx`` group leaves no ``Fx`` load to learn), folds over the rows instead; if those cannot judge
-    either, ``None`` (the LTM, unscored). Folds over the rows keep repeated rows (the same reading and
-    wrench) together: a copy on both sides of a split would flatter every model that interpolates.
-
-    Examples
-    --------
-    >>> y = np.repeat(np.eye(6)[:3] * 10, 5, axis=0) * np.tile(np.linspace(-1, 1, 5), 3)[:, None]
-    >>> X = y[:, :3] + np.random.default_rng(0).normal(size=(15, 3))
-    >>> folds, how, units = judging_folds(X, y, np.repeat([0, 1, 2], 5))
-    >>> how.split(":")[0], len(folds)
-    ('kfold', 5)
-    """
-    n = len(y)
-    names = WRENCH_LABELS if y.shape[1] == 6 else None
-    cv = min(int(cv), n)
-    if groups is not None:
-        folds = calibration_folds(n, groups, cv, seed)
-        unseen = unseen_outputs(y, folds, names)
-        if not unseen:
-            return folds, "group", se_units(groups)
-    _, copies = np.unique(np.column_stack([X, y]), axis=0, return_inverse=True)
-    copies = copies.ravel() if np.unique(copies).size < n else None
-    distinct = n if copies is None else int(np.unique(copies).size)
-    if distinct < 2:
-        raise CalibrationInputError(f"X and y hold {n} copies of one row; record different loads.")
-    folds = calibration_folds(n, copies, min(cv, distinct), seed)
-    kind = "kfold" if copies is None else f"kfold over the {distinct} distinct rows (repeated rows kept together)"
-    if groups is None:
-        return folds, kind, se_units(copies)
-    what = f"{', '.join(unseen)} {'is' if len(unseen) == 1 else 'are'} missing from a training fold"
-    if not unseen_outputs(y, folds, names):
-        return folds, (f"{kind}: the grouped folds cannot judge a model ({what}, e.g. one group per loaded "
-                       f"axis); {len(folds)} folds over the rows instead"), se_units(copies)
-    return None, (f"none: no folds can judge a model ({what} even in folds over the rows): the LTM, unscored "
-                  "(record each axis' loads in more than one group and more rows)"), None
 
 
 def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None) -> str:
@@ -627,17 +410,19 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = 
 
 
 def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
-                      random_state: int = 0, predictions: ArrayLike | None = None, held_out: bool = True) -> None:
+                      random_state: int = 0, predictions: ArrayLike | None = None, held_out: bool = True,
+                      plan: FoldPlan | None = None) -> None:
     """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
 
     Raises :class:`~ftcal.model_selection._selection.DegenerateCalibrationError` (one line, the reason) when the
-    model's predictions on ``X`` are constant or all zero, or its held-out predictions (``predictions``, e.g.
-    the report's, or else made here on :func:`judging_folds` by
-    :func:`~ftcal.model_selection._selection.held_out_predictions`) are degenerate (constant, all zero, no better
-    than the mean). A model that chose itself by cross-validation (``auto``: its tags' ``chooses_model``)
-    checked its held-out predictions in ``fit``; only its predictions on ``X`` are checked again.
-    ``held_out=False`` says the given ``predictions`` are of the training readings (a network fitted without a
-    report: a held-out check would train it ``cv`` more times); the refusal then says so.
+    model's predictions on ``X`` are constant or all zero, or its held-out predictions (``predictions``, else made
+    here on ``plan``, by default :meth:`~ftcal.model_selection.FoldPlan.for_data`, the one fold rule that
+    ``auto`` and the certificate use, by :func:`~ftcal.model_selection._selection.held_out_predictions`) are
+    degenerate (constant, all zero, no better than the mean). A model that chose itself by cross-validation
+    (``auto``: its tags' ``chooses_model``) checked its held-out predictions in ``fit`` on the same plan; only its
+    predictions on ``X`` are checked again. ``held_out=False`` says the given ``predictions`` are of the training
+    readings (a network fitted without a report: a held-out check would train it ``cv`` more times); the refusal
+    then says so.
 
     Examples
     --------
@@ -660,10 +445,12 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
         if calibration_tags(estimator).chooses_model:
             return
         groups = check_groups(groups, len(X))
-        folds, _, _ = judging_folds(X, y, groups, cv, random_state)
-        if folds is None:
+        if plan is None:
+            plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=random_state,
+                                     ordered=calibration_tags(estimator).reads_history)
+        if not plan.n_splits:
             return
-        _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=folds)
+        _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=list(plan.folds))
     check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out, axes=axes)
 
 
@@ -795,11 +582,14 @@ class AutoCalibrator(BaseCalibrator):
     method and the thesis' networks each win somewhere, and a random-fold
     score flatters every flexible model. ``fit`` therefore
 
-    1. builds the folds with :func:`~ftcal.model_selection._selection.calibration_folds`:
+    1. builds the folds with :meth:`~ftcal.model_selection.FoldPlan.for_data` (the one fold rule, shared with
+       the save gate of ``ftcal fit`` and the certificate; kept as ``fold_plan_``):
        with ``groups`` (a pose or load configuration per row, the dataset's
        ``group`` column) whole groups are held out, so the score says how the
        calibration does on poses it has not seen; without, shuffled k-fold;
-    2. scores every candidate on those folds, **in this complexity order**
+    2. scores every candidate on those folds with :func:`~ftcal.model_selection.compare` (the cheap ones on
+       every fold; the costly ones, by their tags' ``cost``, raced: fitted on the first fold and STOPPED when
+       they cannot come within one standard error of the best, ``race=True``), **in this complexity order**
        (simplest first): ``linear`` (the LTM); ``polynomial`` of degree 2 and 3,
        each with ridge 1e-2 and 1e-4 (with ``groups``, at least 3 within which
        the loads vary, the LTM and the degree-2 polynomial with ridge 1e-2 are
@@ -828,7 +618,10 @@ class AutoCalibrator(BaseCalibrator):
        whose held-out predictions are degenerate (constant, all zero, no
        better than the mean) is refused; if every one is, ``fit`` raises
        :class:`~ftcal.model_selection._selection.DegenerateCalibrationError`;
-    4. picks by the **one-standard-error rule**
+    4. picks by the **one-standard-error rule** over a complexity that says what a model can fit
+       (:func:`complexity_of`: a closed form, then a kernel model, then a model of unknown cost, then a network,
+       by their tags' ``cost``; a stack just after its most complex member: a network never wins a tie over
+       closed-form models or a stack of them)
        (:func:`~ftcal.model_selection._selection.simplest_within_one_se`): the
        best-scoring candidate and every one within one paired standard error
        of it (over groups, or rows), or within 0.5 % of its RMSE (a tie:
@@ -877,6 +670,9 @@ class AutoCalibrator(BaseCalibrator):
     zero_reading : array-like of shape (N,) or None, default=None
         Measured tare, given to every candidate; ``None``: each uses its own
         ``zero_reading`` if it has one, else estimates its own.
+    race : bool, default=True
+        Race the costly candidates (stop those that cannot come within one SE of the best after their first
+        fold); ``False`` scores every candidate on every fold.
     random_state : int or None, default=None
         Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
@@ -886,13 +682,15 @@ class AutoCalibrator(BaseCalibrator):
         The chosen candidate (or :class:`StackedCalibrator`), refitted on all data.
     best_name_ : str
         Its name.
-    comparison_ : dict
-        The comparison (see :func:`score_candidates`), plus ``chosen``, ``folds`` (``"group"``, ``"kfold"``, or
-        what was done when the grouped folds could not judge), ``verdict`` (per row: chosen / within one SE but
-        more complex / beyond one SE / skipped, failed or refused) and ``why`` (one sentence: why the winner
-        won, and its ratio to the best stock model). (``cv_results_``, its
-        name before, still answers, with a ``FutureWarning``: scikit-learn's attribute of that name has another
-        schema.)
+    comparison_ : Comparison
+        The comparison (:class:`~ftcal.model_selection.Comparison`): one row per candidate with its
+        :class:`~ftcal.model_selection.RowStatus` (scored, skipped, failed, stopped) and reason, held-out RMSE ±
+        SE, seconds, complexity, verdict (chosen / within one SE but more complex / beyond one SE / ...) and
+        the row against the choice in symmetric words; ``chosen``, ``why``, ``stability`` (the choice repeated
+        on folds with other seeds, where cheap). ``to_dict()`` gives JSON columns. (``cv_results_``, its name
+        before, still answers, with a ``FutureWarning``.)
+    fold_plan_ : FoldPlan
+        The folds the comparison was scored on.
     held_out_predictions_ : ndarray of shape (n_samples, n_outputs) or None
         The chosen row's out-of-fold predictions on the comparison's folds (the wrench, in the units of ``y``;
         ``None`` when no folds could judge), kept in the model file: the calibration report on the same rows
@@ -915,7 +713,9 @@ class AutoCalibrator(BaseCalibrator):
     'linear'
     """
 
-    _fitted_state = ("best_name_", "comparison_", "best_estimator_", "held_out_predictions_")
+    _fitted_state = ("best_name_", "comparison_", "best_estimator_", "held_out_predictions_", "fold_plan_")
+    #: Typed results a model file stores as their own state (and reads back, also from an earlier file's dict).
+    _typed_state = {"comparison_": Comparison.from_dict, "fold_plan_": FoldPlan.from_state}
     #: Fitted attributes earlier model files stored under another name (loaded under the new one).
     _renamed_state = {"cv_results_": "comparison_"}
     #: Parameters of earlier versions that model files may still carry (ignored when loading): the wall-clock
@@ -932,11 +732,13 @@ class AutoCalibrator(BaseCalibrator):
         "baselines": ["boolean", dict],
         "network_samples": [Interval(Integral, 10, None, closed="left"), None],
         "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
+        "race": ["boolean"],
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
-                 network_samples=2000, n_jobs=-1, alpha=None, zero_reading=None, random_state=None):
+                 network_samples=2000, n_jobs=-1, race=True, alpha=None, zero_reading=None, random_state=None):
         self.candidates = candidates
+        self.race = race
         self.cv = cv
         self.schedule = schedule
         self.stack = stack
@@ -953,11 +755,11 @@ class AutoCalibrator(BaseCalibrator):
             pairs = default_candidates(self.schedule, grouped)
         else:
             pairs = list(self.candidates)
-            if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and isinstance(p[1], BaseCalibrator)
-                                    for p in pairs):
+            if not pairs or not all(isinstance(p, tuple) and len(p) == 2 and hasattr(p[1], "fit")
+                                    and hasattr(p[1], "predict") for p in pairs):
                 raise CalibrationInputError(
-                    "candidates must be a non-empty list of (name, calibrator) pairs, e.g. "
-                    "[('linear', LinearCalibrator()), ('gp', GaussianProcessCalibrator())]; got "
+                    "candidates must be a non-empty list of (name, regressor) pairs (any scikit-learn regressor; "
+                    "ftcal's tags optional), e.g. [('linear', LinearCalibrator()), ('ridge', Ridge())]; got "
                     f"{self.candidates!r:.120}."
                 )
         pairs = with_stock_candidates(pairs, self._stock(n_channels))
@@ -972,7 +774,8 @@ class AutoCalibrator(BaseCalibrator):
         for name, candidate in pairs:  # its shuffled or grouped folds and chunked predict would break a history model
             refuse_history_inside(candidate, type(self).__name__)
             try:  # a user's mistake, said before any fitting rather than as a "failed" row of the table
-                candidate._check_parameters()
+                if hasattr(candidate, "_check_parameters"):
+                    candidate._check_parameters()
             except CalibrationInputError as exc:
                 raise CalibrationInputError(f"candidate {name!r}: {exc}") from None
         return pairs
@@ -1048,34 +851,31 @@ class AutoCalibrator(BaseCalibrator):
         logging.getLogger("ftcal").info(
             "auto: %d candidates on %d rows, scored %s (AutoCalibrator(n_jobs=...) sets it; light work stays in "
             "this process)", len(candidates), len(X), workers)
-        folds, fold_note, units = judging_folds(X, y, groups, self.cv, seed)
-        if folds is None:  # nothing can be judged: the LTM, the simplest model, never a stack
-            results = _unscored_ltm(fold_note)
-            templates = {"linear": make_ltm()}
-            candidates = [("linear", templates["linear"])]
-            errors, predictions, fitted = None, [None], {}
+        plan = FoldPlan.for_data(X, y, groups, cv=self.cv, seed=seed)
+        self.fold_plan_ = plan
+        if not plan.n_splits:  # nothing can be judged: the LTM, the simplest model, never a stack
+            comparison = _unscored_ltm(plan, self.alpha_)
+            candidates = [("linear", make_ltm())]
         else:
-            results, errors, predictions, fitted = score_candidates(
-                candidates, X, y, groups=groups, cv=self.cv, alpha=self.alpha_, zero_reading=given,
-                random_state=seed, network_samples=self.network_samples, stack=self.stack, n_jobs=self.n_jobs,
-                folds=folds, units=units, axes=axes)
-            templates = dict(candidates)
-        named = named_targets(y, axes)  # the chosen model refitted on the named table, as it was scored
-        results["folds"] = fold_note
-        results["training_sha256"] = training_data_sha256(X, y, groups)  # what the comparison was scored on
-        if errors is not None:
-            if not any(results["eligible"]):
-                why = "; ".join(f"{n}: {st}" for n, st in zip(results["name"], results["status"]))
+            comparison = score_candidates(
+                candidates, X, named_targets(y, axes), groups=groups, cv=self.cv, alpha=self.alpha_,
+                zero_reading=given, random_state=seed, network_samples=self.network_samples, stack=self.stack,
+                n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race)
+            if not any(r.eligible and r.status is RowStatus.SCORED for r in comparison.rows):
+                why = "; ".join(f"{r.name}: {r.status_text}" for r in comparison.rows)
                 raise DegenerateCalibrationError(
                     f"no candidate could be fitted and judged on these data ({why[:400]}); nothing was saved. "
                     "Record more rows (each axis loaded in more than one group) or lower cv.")
-            ranks = complexity_ranks(candidates, len(errors))
-            chosen = simplest_within_one_se(errors, units, eligible=results["eligible"], complexity=ranks)
-            explain_choice(results, errors, units, chosen, ranks)
-        self.comparison_ = results
-        self.best_name_ = results["chosen"]
+            comparison.choose()
+            comparison.stability = self._stability(comparison, candidates, X, y, groups, given, axes)
+        templates = dict(candidates)
+        fitted = comparison.fitted
+        named = named_targets(y, axes)  # the chosen model refitted on the named table, as it was scored
+        comparison.training_sha256 = training_data_sha256(X, y, groups)  # what the comparison was scored on
+        self.comparison_ = comparison
+        self.best_name_ = comparison.chosen
         # the winner's out-of-fold predictions, for a report on the same folds
-        self.held_out_predictions_ = predictions[results["name"].index(self.best_name_)]
+        self.held_out_predictions_ = comparison.row(self.best_name_).predictions
 
         def refit(name):
             """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""
@@ -1086,9 +886,9 @@ class AutoCalibrator(BaseCalibrator):
                 if _is_network(model) else np.arange(len(X))
             return _fit(model, X[rows], _rows(named, rows), None if groups is None else groups[rows])
 
-        if results["kind"][results["name"].index(self.best_name_)] == "stack":
-            members = results["stack_members"]
-            best = StackedCalibrator(estimators=[templates[n] for n in members], weights=results["stack_weights"],
+        if comparison.row(self.best_name_).kind == "stack":
+            members = comparison.stack_members
+            best = StackedCalibrator(estimators=[templates[n] for n in members], weights=comparison.stack_weights,
                                      alpha=self.alpha_, zero_reading=given)
             self.best_estimator_ = best.fit(X, named, fitted_estimators=[refit(n) for n in members])
         else:
@@ -1137,44 +937,46 @@ class AutoCalibrator(BaseCalibrator):
         return self.best_estimator_.predict(self._retared(validate_readings(self, X)), return_std=True)
 
     def summary(self) -> str:
-        """The comparison as a markdown table (held-out RMSE ± standard error, fit time, status)."""
+        """The comparison as a markdown table (:meth:`~ftcal.model_selection.Comparison.table`): held-out RMSE ± SE,
+        each row against the choice in symmetric words, seconds, status (stopped rows with why), why the choice won
+        and how stable it is over other fold seeds."""
+        check_is_fitted(self)
         return comparison_table(self.comparison_)
 
+    def _stability(self, comparison: Comparison, candidates, X, y, groups, given, axes):
+        """How often the choice is made again on folds with other seeds, when that is cheap: at most
+        :data:`STABILITY_ROWS` rows and every model within one SE of the best light work (a closed form, a kernel
+        model on few rows, or a stack of them); the models within one SE (and the stack's members) are compared
+        again, the stack rebuilt. None otherwise."""
+        plan = self.fold_plan_
+        within = [r for r in comparison.rows if r.verdict == "chosen" or r.verdict.startswith("within")]
+        names = {r.name for r in within if r.kind != "stack"}
+        if any(r.kind == "stack" for r in within):
+            names |= set(comparison.stack_members)
+        pairs = [(n, t) for n, t in candidates if n in names]
+        smallest = comparison.min_training_rows or 0
+        if plan.n_rows > STABILITY_ROWS or len(within) < 2 or \
+                not all(model_cost(t, smallest) == "closed_form" for _, t in pairs):
+            return None
+        families = {n: calibration_tags(t).family for n, t in pairs}
+        stack = self.stack and any(r.kind == "stack" for r in within)
+        ranks = dict(zip([n for n, _ in candidates], complexity_of(candidates, plan.n_rows)))
+        named = named_targets(y, axes)
+        return choice_stability(
+            [(n, with_alpha_and_tare(t, self.alpha_, given)) for n, t in pairs], X, named, plan,
+            chosen=comparison.chosen, seeds=STABILITY_SEEDS, groups=groups, alpha=self.alpha_, axes=axes,
+            complexity=[ranks[n] for n, _ in pairs], min_rows=minimum_training_rows,
+            finish=(lambda c: add_stack(c, y, families, axes)) if stack else None,
+            out_of_fold=_auto_out_of_fold(self.network_samples, int(self.random_state or 0)))
 
-def comparison_table(results: dict) -> str:
-    """``comparison_`` (or ``ftcal benchmark dataset``'s results) as a markdown table, baselines marked, and under
-    it, when the choice was explained (:func:`explain_choice`), one line saying why the winner won.
 
-    The RMSE is eq. 18 over all 6 n torque-scaled values [N]; the ratio column
-    is each row's RMSE over the best stock model's (a choosable ``stock`` row or a ``baseline``); the status
-    column says, per row, chosen / within one SE but more complex / beyond one SE / skipped / failed / refused.
-    When the choice was explained, two columns and a line under the table give what the one-SE rule compared, so
-    that every verdict can be checked: each row's excess mean squared error over the best and the **paired**
-    standard error of that excess (:func:`~ftcal.model_selection._selection.paired_excess`). A row's own ``± SE`` may
-    overlap the best's while the row is beyond one SE: the paired SE is smaller when both err on the same rows.
-    """
-    base = [r for r, k in zip(results["rmse"], results["kind"]) if k in ("baseline", "stock") and r is not None]
-    best_base = min(base) if base else None
-    verdicts = results.get("verdict") or results["status"]
-    rule = results.get("rule")  # what the one-SE rule compared (explain_choice), when the choice was explained
-    head = "| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s, all folds] | "
-    head += "excess MSE over best [N²] | ± paired SE [N²] | status |" if rule else "status |"
-    lines = [head, "|---" * (9 if rule else 7) + "|"]
-    number = lambda v, form: "" if v is None else format(v, form)  # noqa: E731
-    for i, name in enumerate(results["name"]):
-        rmse = results["rmse"][i]
-        cells = [number(rmse, ".4g"), number(results["rmse_se"][i], ".2g"),
-                 "" if rmse is None or not best_base else f"{rmse / best_base:.3f}",
-                 number(results["fit_seconds"][i], ".1f")]
-        if rule:
-            cells += [number(results["excess_mse"][i], ".3g"), number(results["excess_se"][i], ".2g")]
-        mark = " **(chosen)**" if name == results.get("chosen") else ""
-        lines.append(f"| {name}{mark} | {results['kind'][i]} | " + " | ".join(cells) + f" | {verdicts[i]} |")
-    if rule:
-        lines += ["", f"One-SE rule: a row is within one SE of the best ({rule['best']}) when its excess mean squared "
-                      f"error over the best is at most its paired SE (the spread of the differences from the best over "
-                      f"the {rule['units']}, not the row's own ± SE) or the tie margin "
-                      f"{rule['tie_mse']:.3g} N² ({100 * TIE_TOLERANCE:g} % of the best's)."]
-    if results.get("why"):
-        lines += ["", results["why"]]
-    return "\n".join(lines)
+def comparison_table(comparison) -> str:
+    """``comparison_`` (a :class:`~ftcal.model_selection.Comparison`, or the comparison dict of an earlier model
+    file or of ``ftcal benchmark dataset``'s JSON) as a markdown table
+    (:meth:`~ftcal.model_selection.Comparison.table`): every row's held-out RMSE ± SE, its excess mean squared
+    error over the best and the **paired** SE of that excess (what the one-SE rule compared), the row against the
+    choice in symmetric words (better / worse only beyond the paired SE, else equivalent within noise), its
+    seconds and status, then why the choice won and how stable it is."""
+    if not isinstance(comparison, Comparison):
+        comparison = Comparison.from_dict(dict(comparison))
+    return comparison.table()

@@ -352,7 +352,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         if static.chooses_model:  # AutoCalibrator: choose the static model once, on all rows
             chooser = self._new(template).fit(X, y, **routed_fit_params(self, groups))
             template, self.static_choice_ = clone(chooser.best_estimator_), chooser.best_name_
-            self.static_cv_results_ = chooser.comparison_
+            self.static_cv_results_ = chooser.comparison_.to_dict()  # JSON-able, as the model file keeps it
         histories = [_history(X, tau)[0] for tau in taus]  # over the whole recording: readings only
         held_out = np.empty((1 + len(taus),) + y.shape)
         for train, test in folds:

@@ -633,6 +633,8 @@ class CalibrationDataset:
                                    DatasetFileError)
             raise
         n_ch, n_w = len(used.channels), len(used.wrench)
+        if [names[i] for i in used.channels] != [f"s{i}" for i in range(len(used.channels))]:  # the user's names
+            meta = {**meta, "channel_names": [str(names[i]) for i in used.channels]}  # (the report prints them)
         bad = np.argwhere(~np.isfinite(data[:, :n_ch + n_w]))
         if bad.size:
             row, col = int(bad[0, 0]), numeric[int(bad[0, 1])]

@@ -326,7 +326,9 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
                     f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
                     "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
                     "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
-            meta["fitted"][key] = _encode(value)
+            typed = getattr(type(estimator), "_typed_state", {})
+            # a typed result (a Comparison, a FoldPlan) stores its own JSON-able state, read back by its class
+            meta["fitted"][key] = value.to_state() if key in typed else _encode(value)
     if any(key in encoded for key in meta["state"]):
         own_arrays, own_meta = estimator._state_to_arrays()
         arrays.update({f"module/{k}": v for k, v in own_arrays.items()})
@@ -586,6 +588,14 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
             _check_scalar(name, key, value)
             if isinstance(value, dict) and set(value) == {"strings"}:
                 value = np.asarray(value["strings"], dtype=object)
+            reader = getattr(cls, "_typed_state", {}).get(key)
+            if reader is not None:  # the class' typed result (also from an earlier file's plain dict)
+                try:
+                    setattr(estimator, key, reader(value))
+                except (KeyError, TypeError, ValueError) as exc:
+                    raise ModelFileError(f"the {name}'s stored {key} cannot be read ({exc}); the file is damaged or "
+                                         "was edited. Fit and save the model again.") from None
+                continue
             setattr(estimator, key, _decode(value))
         elif archive.has(f"{prefix}fitted/{key}"):
             array = archive.read(f"{prefix}fitted/{key}")

@@ -1,5 +1,6 @@
 """What a calibration shows a person: the calibration report (a certificate: held-out accuracy per axis, U95,
-PASS/FAIL, the model's identity; HTML, JSON and CSV), the comparison tables and plots of an evaluation, and
+PASS/FAIL, the uncertainty budget, the model's identity: a
+:class:`CalibrationCertificate` written as HTML, JSON and CSV), the comparison tables and plots of an evaluation, and
 the plots of tool drift. "Report" in ftcal means the certificate only; the error measures of one prediction
 are :class:`ftcal.core.CalibrationMetrics` (they stay in :mod:`ftcal.core`: the simulation and the search,
 below this layer, use them).
@@ -12,9 +13,8 @@ from ..core._lazy import lazy_namespace
 
 #: Public names of this package -> the private module holding each.
 _PUBLIC = dict(
-    calibration_certificate="_calibration_report", write_calibration_report="_calibration_report",
-    render_report_html="_calibration_report", report_json="_calibration_report",
-    report_cases_csv="_calibration_report", model_inputs="_calibration_report", comparison_table="_evaluation", axis_table="_evaluation",
+    calibration_certificate="_certificate", CalibrationCertificate="_certificate", AxisBudget="_budget",
+    BudgetComponent="_budget", write_calibration_report="_calibration_report", model_inputs="_calibration_report", comparison_table="_evaluation", axis_table="_evaluation",
     write_evaluation_plots="_evaluation", MODEL_COLORS="_plots", model_color="_plots",
     plot_error_distributions="_plots", plot_axis_errors="_plots", plot_predicted_vs_reference="_plots",
     plot_sphere_coverage="_plots", plot_wrench_coverage="_plots", plot_drift_residuals="_drift_plot",

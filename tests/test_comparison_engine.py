@@ -1,0 +1,126 @@
+"""The one fold rule and the one comparison engine: FoldPlan, compare, paired differences in symmetric words,
+racing of costly models, progress, and a typed comparison that survives JSON."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+from sklearn.linear_model import LinearRegression, Ridge
+from sklearn.neighbors import KNeighborsRegressor
+
+from ftcal.model_selection import (Comparison, FoldPlan, PairedDifference, RowStatus, choice_stability, compare)
+
+class TaggedOLS(LinearRegression):
+    """A user's regressor declaring ftcal's optional tags: a closed form."""
+
+    def __sklearn_tags__(self):
+        from ftcal.calibrators import declare
+
+        return declare(super().__sklearn_tags__(), cost="closed_form")
+
+
+ANY_ROWS = lambda estimator, n_channels: 5  # noqa: E731 - plain regressors judged on any fold
+
+
+def linear_data(n=120, seed=0, noise=0.05):
+    rng = np.random.default_rng(seed)
+    X = rng.normal(size=(n, 4))
+    return X, X @ rng.normal(size=(4, 3)) + noise * rng.normal(size=(n, 3))
+
+
+def test_one_group_per_loaded_axis_replaces_the_grouped_folds_and_says_so():
+    y = np.repeat(np.eye(6)[:3] * 10, 8, axis=0) * np.tile(np.linspace(-1, 1, 8), 3)[:, None]
+    X = y[:, :3] + np.random.default_rng(0).normal(size=(24, 3))
+    plan = FoldPlan.for_data(X, y, np.repeat([0, 1, 2], 8))
+    assert plan.kind == "replaced" and "missing from a training fold" in plan.note
+    assert plan.units_name == "fold" and sorted(np.unique(plan.units)) == list(range(plan.n_splits))
+    for train, test in plan.folds:  # every fold's training rows load every axis
+        assert all(np.ptp(y[train][:, j]) > 0 for j in range(3))
+
+
+def test_grouped_plan_holds_out_whole_groups_with_group_units_and_a_stable_fingerprint():
+    X, y = linear_data(100)
+    groups = np.repeat(np.arange(10), 10)
+    plan = FoldPlan.for_data(X, y, groups)
+    assert plan.kind == "group" and plan.units_name == "group" and plan.n_splits == 5
+    for train, test in plan.folds:
+        assert not set(groups[train]) & set(groups[test])
+    again = FoldPlan.for_data(X, y, groups)
+    assert plan.same_folds(again) and plan.same_folds(again.to_dict())
+    assert not plan.same_folds(FoldPlan.for_data(X, y))
+    json.dumps(plan.to_dict())
+
+
+def test_ordered_plan_uses_contiguous_blocks():
+    X, y = linear_data(50)
+    plan = FoldPlan.for_data(X, y, ordered=True)
+    assert plan.kind == "ordered"
+    for _, test in plan.folds:
+        assert np.all(np.diff(test) == 1)
+
+
+def test_paired_words_are_mirrored_when_the_sides_swap():
+    X, y = linear_data(150, noise=0.2)
+    plan = FoldPlan.for_data(X, y)
+    c = compare([("ols", LinearRegression()), ("ridge", Ridge(alpha=200.0)), ("ridge_tiny", Ridge(alpha=1e-3))],
+                X, y, plan, min_rows=ANY_ROWS)
+    ab, ba = c.paired("ols", "ridge"), c.paired("ridge", "ols")
+    assert isinstance(ab, PairedDifference)
+    assert ab.difference == pytest.approx(-ba.difference) and ab.paired_se == pytest.approx(ba.paired_se)
+    assert (ab.verdict, ba.verdict) == ("better", "worse")
+    figures = lambda a, b: f"({a:.4g} vs {b:.4g} N, paired SE {ab.paired_se:.2g} N)"  # noqa: E731
+    assert ab.words() == f"ols is {ab.percent:.1f} % better than ridge " + figures(ab.rmse_a, ab.rmse_b)
+    assert ba.words() == f"ridge is {ab.percent:.1f} % worse than ols " + figures(ab.rmse_b, ab.rmse_a)
+    assert f"{ab.percent:.1f} % better" in ab.words() and f"{ba.percent:.1f} % worse" in ba.words()
+    tie, eit = c.paired("ols", "ridge_tiny"), c.paired("ridge_tiny", "ols")
+    assert tie.verdict == eit.verdict == "equivalent"
+    assert "equivalent within noise" in tie.words() and "equivalent within noise" in eit.words()
+
+
+def test_any_regressor_is_a_model_and_a_costly_bad_one_is_raced_out_with_its_reason():
+    X, y = linear_data(200, noise=0.01)
+    seen = []
+    c = compare([("ols", TaggedOLS()), ("knn", KNeighborsRegressor(n_neighbors=30))], X, y,
+                FoldPlan.for_data(X, y), min_rows=ANY_ROWS, progress=seen.append)
+    knn = c.row("knn")
+    assert knn.status is RowStatus.STOPPED and "after fold 1 of 5" in knn.reason and knn.rmse is None
+    assert [r.name for r in seen] == ["ols", "knn"]  # each row reported as it finished
+    assert c.choose() == "ols" and "Stopped early" in c.table() and "knn" in c.table()
+    full = compare([("ols", TaggedOLS()), ("knn", KNeighborsRegressor(n_neighbors=30))], X, y,
+                   FoldPlan.for_data(X, y), min_rows=ANY_ROWS, race=False)
+    assert full.row("knn").status is RowStatus.SCORED and full.choose() == "ols"  # the same choice in full
+    assert full.paired("knn", "ols").verdict == "worse"
+
+
+def test_too_few_rows_skips_from_the_tags_rule_and_a_failing_model_is_a_failed_row():
+    class Broken(LinearRegression):
+        def fit(self, X, y):
+            raise RuntimeError("cannot fit")
+
+    X, y = linear_data(30)
+    c = compare([("ols", LinearRegression()), ("broken", Broken())], X, y, FoldPlan.for_data(X, y),
+                min_rows=lambda est, n: 5 if type(est) is LinearRegression else 5)
+    assert c.row("broken").status is RowStatus.FAILED and "cannot fit" in c.row("broken").reason
+    skipped = compare([("ols", LinearRegression())], X, y, FoldPlan.for_data(X, y))  # untagged: 25 N rows needed
+    assert skipped.row("ols").status is RowStatus.SKIPPED and "< the 100 it needs" in skipped.row("ols").reason
+
+
+def test_to_dict_is_json_and_reads_back_with_its_statuses():
+    X, y = linear_data(200, noise=0.01)
+    c = compare([("ols", TaggedOLS()), ("knn", KNeighborsRegressor(n_neighbors=30))], X, y,
+                FoldPlan.for_data(X, y), min_rows=ANY_ROWS)
+    c.choose()
+    data = json.loads(json.dumps(c.to_dict()))
+    back = Comparison.from_dict(data)
+    assert [r.status for r in back.rows] == [RowStatus.SCORED, RowStatus.STOPPED]
+    assert back.chosen == "ols" and back.row("ols").rmse == pytest.approx(c.row("ols").rmse)
+    assert back.facts["fingerprint"] == c.plan.fingerprint()
+
+
+def test_choice_stability_counts_the_repeats_that_choose_the_same():
+    X, y = linear_data(120, noise=0.05)
+    models = [("ols", LinearRegression()), ("ridge", Ridge(alpha=500.0))]
+    stab = choice_stability(models, X, y, FoldPlan.for_data(X, y), chosen="ols", min_rows=ANY_ROWS)
+    assert (stab.count, stab.repeats) == (5, 5) and stab.words().startswith("chosen in 5 of 5 repeats")

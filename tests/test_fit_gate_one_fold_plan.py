@@ -1,0 +1,63 @@
+"""`ftcal fit` and `ftcal fit --report` judge a model on the same fold plan, so they give the same verdict; auto's
+fold plan is the one FoldPlan.for_data makes, kept with the model; auto prints each candidate as it finishes."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import ftcal
+from ftcal.cli import main
+from ftcal.model_selection import FoldPlan
+from ftcal.simulation._field_sensors import make_dead_weight_dataset
+
+
+@pytest.fixture(scope="module")
+def one_axis_per_group(tmp_path_factory):
+    """72 dead-weight rows, each group loading one axis only (as a dead-weight session records them)."""
+    calibration, _ = make_dead_weight_dataset(72, loaded_axes=6, n_channels=6, random_state=0)
+    path = tmp_path_factory.mktemp("data") / "dead_weight.csv"
+    calibration.save(path)
+    return calibration, path
+
+
+def test_the_grouped_folds_cannot_judge_and_the_plan_replaces_them(one_axis_per_group):
+    calibration, _ = one_axis_per_group
+    plan = FoldPlan.for_data(calibration.raw, calibration.wrench, calibration.group)
+    assert plan.kind == "replaced" and "cannot judge" in plan.note
+
+
+def test_fit_and_fit_with_report_give_the_same_verdict(one_axis_per_group, tmp_path, capsys):
+    _, path = one_axis_per_group
+    plain = main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "a"), "-q"])
+    reported = main(["fit", str(path), "--model", "linear", "--report", "--out", str(tmp_path / "b"), "-q"])
+    assert plain == reported == 0, capsys.readouterr().err
+    assert (tmp_path / "a" / "linear.model.npz").exists() and (tmp_path / "b" / "linear.model.npz").exists()
+
+
+def test_auto_keeps_its_fold_plan_through_the_model_file(one_axis_per_group, tmp_path):
+    calibration, _ = one_axis_per_group
+    auto = ftcal.AutoCalibrator(candidates=[("linear", ftcal.LinearCalibrator()),
+                                            ("quadratic", ftcal.PolynomialCalibrator(degree=2))], random_state=0)
+    auto.fit(calibration.raw, calibration.wrench, groups=calibration.group)
+    plan = FoldPlan.for_data(calibration.raw, calibration.wrench, calibration.group)
+    assert auto.fold_plan_.same_folds(plan)  # the certificate compares its own plan with the model's
+    ftcal.save_model(auto, tmp_path / "auto.model.npz")
+    loaded = ftcal.load_model(tmp_path / "auto.model.npz")
+    assert loaded.fold_plan_.same_folds(plan) and loaded.fold_plan_.kind == "replaced"
+    assert loaded.comparison_.chosen == auto.best_name_
+    assert [r.status for r in loaded.comparison_.rows] == [r.status for r in auto.comparison_.rows]
+    np.testing.assert_allclose(loaded.held_out_predictions_, auto.held_out_predictions_)
+    assert loaded.summary().splitlines()[0] == auto.summary().splitlines()[0]
+
+
+def test_cli_auto_prints_each_candidate_as_it_finishes_and_q_keeps_quiet(one_axis_per_group, tmp_path, capsys):
+    _, path = one_axis_per_group
+    args = ["fit", str(path), "--model", "auto", "--jobs", "1", "--param", "baselines=false",
+            "--param", "stack=false"]
+    assert main(args + ["--out", str(tmp_path / "a")]) == 0
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if line.startswith("  linear ")]
+    assert lines and "scored, RMSE" in lines[0] and lines[0].endswith(" s)")
+    assert main(args + ["--out", str(tmp_path / "b"), "-q"]) == 0
+    assert capsys.readouterr().err == ""
