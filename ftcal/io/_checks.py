@@ -1,0 +1,460 @@
+"""Readings checked before anything is fitted or predicted: impossible values, spikes, stuck channels, repeated rows.
+
+A recording can hold readings no sensor gave: a value an ADC cannot produce (``4598`` on a 10-bit channel that reads
+0..1023), a single glitch among steady neighbours, a channel frozen while the others move, a row the logger wrote
+twice. Fitted silently they turn into calibration errors with no pointer to the cause. :func:`check_readings` finds
+them and names each by file, line and channel (:class:`~ftcal.io.RowSources`); ``ftcal fit``, ``report``,
+``evaluate`` and ``predict`` print them and can drop them (``--drop-bad-readings``).
+
+The thresholds come from the data's own noise and one false-alarm budget, not from fixed numbers:
+
+* **out of range** -- for an integer-valued channel, the smallest power-of-two range (unsigned ``0..2^b-1`` or
+  signed ``-2^(b-1)..2^(b-1)-1``) that holds all but the ``max(1, 0.1 %)`` most extreme readings is the ADC's range
+  the other readings fit in; a reading beyond *twice* that range (two more bits) is impossible for it (one more bit
+  could be a larger ADC whose top the other readings never reached). A reading exactly at the range's limit (``0``)
+  is flagged too when it is rare and stands out from its neighbours in time (a dropped sample reads 0);
+* **spike** -- a reading that differs from the median of its three neighbours before *and* the median of its three
+  neighbours after, in the same direction, by more than ``z`` robust standard deviations (1.4826 x the median
+  absolute difference of the channel in its group, at least one quantisation step). ``z`` is the Gaussian quantile
+  that keeps the expected number of false alarms over the whole dataset at ``false_alarm_rate`` (Bonferroni over
+  every reading tested): about 4.8 for 6 000 readings, 5.9 for a million. A load step matches one side and is no
+  spike; a row where the reference wrench or another channel stands out too (beyond a single test at 1 %, z 2.58)
+  is a change of load, not a glitch of one channel; the first and last rows of a group, having one side only, are
+  not tested;
+* **stuck** -- a channel exactly constant over a group of at least :data:`MIN_STUCK_ROWS` rows while most other
+  channels move there, and that moves in most other groups (a live channel's noise changes its reading);
+* **repeated** -- rows (readings and wrench) that equal an earlier row of their group exactly, when more such pairs
+  occur than quantisation explains: the expected number of equal pairs is the product over channels of each
+  channel's chance that two readings of the group are equal; the rows are flagged when the Poisson chance of as
+  many pairs is below ``false_alarm_rate``.
+"""
+
+from __future__ import annotations
+
+import enum
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["FindingKind", "ReadingFinding", "ReadingChecks", "check_readings", "MIN_STUCK_ROWS"]
+
+#: Fewest rows of a group over which an exactly constant channel is called stuck (a live channel whose noise spans
+#: at least one quantisation step stays put for ten rows with a chance of about 2^-9).
+MIN_STUCK_ROWS = 10
+#: Fewest readings of a channel from which its ADC range is inferred.
+_MIN_RANGE_ROWS = 20
+#: Fraction of a channel's readings (at least one) left out at each end when its ADC range is inferred.
+_RANGE_TRIM = 0.001
+#: Neighbours on each side of a reading whose median it is compared with (three: the median ignores one glitch).
+_SIDE = 3
+#: Fewest rows of a group whose own noise scales its spikes; smaller groups use the channel's scale over all groups.
+_MIN_SCALE_ROWS = 20
+#: Most rows at a range limit still called isolated readings (more are a pinned, saturated channel).
+_MAX_RAIL_ROWS = 3
+
+
+class FindingKind(str, enum.Enum):
+    """What is wrong with a reading (the ``kind`` of :class:`ReadingFinding`; its value is the JSON spelling)."""
+
+    OUT_OF_RANGE = "out_of_range"
+    SPIKE = "spike"
+    STUCK = "stuck"
+    REPEATED = "repeated"
+    SATURATED = "saturated"
+
+
+@dataclass(frozen=True)
+class ReadingFinding:
+    """One bad reading (or a stuck channel over a group's rows), and where it came from.
+
+    Attributes
+    ----------
+    kind : FindingKind
+    rows : ndarray of int
+        The rows of the dataset it covers (counted from 0; one row except for a stuck channel).
+    file : str
+        The file the (first) row came from.
+    line : int
+        Its 1-based line (the 1-based row of an ``.npz`` / ``.mat`` array).
+    channel : str or None
+        The channel (None: the whole row, a repeated row).
+    value : float or None
+        The reading.
+    reason : str
+        One sentence: why it is flagged, with the figures.
+    """
+
+    kind: FindingKind
+    rows: NDArray[np.int64]
+    file: str
+    line: int
+    channel: str | None
+    value: float | None
+    reason: str
+
+    def where(self) -> str:
+        """``file:line:channel`` (``file:line`` for a whole row)."""
+        return f"{self.file}:{self.line}" + (f":{self.channel}" if self.channel is not None else "")
+
+    def to_dict(self) -> dict:
+        """The finding as plain JSON: ``kind``, ``file``, ``line``, ``channel``, ``value``, ``reason``, ``rows``
+        (how many rows it covers)."""
+        return {"kind": self.kind.value, "file": self.file, "line": int(self.line), "channel": self.channel,
+                "value": None if self.value is None else float(self.value), "reason": self.reason,
+                "rows": int(self.rows.size)}
+
+
+@dataclass(frozen=True)
+class ReadingChecks:
+    """What :func:`check_readings` found.
+
+    Attributes
+    ----------
+    findings : tuple of ReadingFinding
+        In kind order, then row order.
+    n_rows : int
+        Rows checked.
+    adc_ranges : dict
+        Channel name -> ``(low, high)``: the power-of-two range inferred for each integer-valued channel.
+    spike_z : float
+        The spike threshold used [robust standard deviations].
+    """
+
+    findings: tuple[ReadingFinding, ...]
+    n_rows: int
+    adc_ranges: dict = field(default_factory=dict)
+    spike_z: float = float("nan")
+
+    @property
+    def clean(self) -> bool:
+        """Whether nothing was found."""
+        return not self.findings
+
+    def of_kind(self, kind: FindingKind | str) -> tuple[ReadingFinding, ...]:
+        """The findings of one kind."""
+        kind = FindingKind(kind)
+        return tuple(f for f in self.findings if f.kind is kind)
+
+    def kinds(self) -> list[FindingKind]:
+        """The kinds found, in :class:`FindingKind` order."""
+        return [k for k in FindingKind if self.of_kind(k)]
+
+    def mask(self, kinds=None) -> NDArray[np.bool_]:
+        """The rows the findings of ``kinds`` (default: all) cover, as a mask over the checked rows."""
+        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
+        out = np.zeros(self.n_rows, dtype=bool)
+        for f in self.findings:
+            if f.kind in wanted:
+                out[f.rows] = True
+        return out
+
+    def to_json(self, kinds=None) -> list[dict]:
+        """The findings of ``kinds`` (default: all) as plain JSON (:meth:`ReadingFinding.to_dict`)."""
+        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
+        return [f.to_dict() for f in self.findings if f.kind in wanted]
+
+    def summary(self, shown: int = 3) -> list[str]:
+        """One line per kind found: how many, the rows they cover and the first ``shown`` as ``file:line:channel``.
+
+        Examples
+        --------
+        >>> raw = np.round(700 + 5 * np.random.default_rng(1).standard_normal((40, 3)))
+        >>> raw[20, 1] = 4598.0
+        >>> print(check_readings(raw).summary()[0])  # doctest: +ELLIPSIS
+        1 out_of_range reading (1 row): dataset:21:s1 = 4598 (beyond twice the 0..1023 range ...
+        """
+        lines = []
+        for kind in self.kinds():
+            found = self.of_kind(kind)
+            rows = int(self.mask([kind]).sum())
+            first = "; ".join(f"{f.where()}" + ("" if f.value is None else f" = {f.value:.6g}") for f in found[:shown])
+            more = f"; ... ({len(found) - shown} more)" if len(found) > shown else ""
+            noun = "reading" if kind is not FindingKind.REPEATED else "row"
+            if kind is FindingKind.STUCK:
+                noun = "stuck channel"
+            plural = "s" if len(found) != 1 else ""
+            lines.append(f"{len(found)} {kind.value} {noun}{plural} ({rows} row{'s' if rows != 1 else ''}): "
+                         f"{first}{more} ({found[0].reason})")
+        return lines
+
+
+def _gaussian_z(p: float) -> float:
+    """The upper-tail Gaussian quantile of ``p``."""
+    from scipy.special import ndtri  # scipy.stats takes seconds to import
+
+    return float(-ndtri(p))
+
+
+def _group_rows(groups, n: int) -> list[NDArray[np.int64]]:
+    """The rows of each group, in dataset (time) order; one group of every row without groups."""
+    if groups is None:
+        return [np.arange(n)]
+    g = np.asarray(groups)
+    order = np.argsort(g, kind="stable")
+    cuts = np.flatnonzero(np.diff(g[order])) + 1
+    return np.split(order, cuts)
+
+
+def _quantum(column: NDArray[np.float64]) -> float:
+    """The channel's quantisation step: the smallest gap between two distinct readings (0 for a constant one)."""
+    u = np.unique(column)
+    return float(np.min(np.diff(u))) if u.size > 1 else 0.0
+
+
+def _adc_range(column: NDArray[np.float64]) -> tuple[float, float] | None:
+    """The power-of-two range (low, high) that holds the bulk of an integer-valued channel, or None."""
+    n = column.size
+    if n < _MIN_RANGE_ROWS or not np.all(column == np.round(column)):
+        return None
+    m = max(1, int(_RANGE_TRIM * n))
+    s = np.sort(column)
+    low, high = s[m], s[n - 1 - m]
+    if high <= low:
+        return None
+    if low >= 0:
+        bits = max(1, int(np.ceil(np.log2(high + 1))))
+        return 0.0, float(2**bits - 1)
+    bits = max(1, int(np.ceil(np.log2(max(-low, high + 1)))) + 1)
+    return float(-(2 ** (bits - 1))), float(2 ** (bits - 1) - 1)
+
+
+def _side_medians(x: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    """The median of the ``_SIDE`` readings before and after each row (NaN where a side is empty)."""
+    m, k = x.shape
+    pad = np.full((_SIDE, k), np.nan)
+    padded = np.vstack([pad, x, pad])
+    before = np.sort(np.stack([padded[_SIDE - j:_SIDE - j + m] for j in range(1, _SIDE + 1)]), axis=0)
+    after = np.sort(np.stack([padded[_SIDE + j:_SIDE + j + m] for j in range(1, _SIDE + 1)]), axis=0)
+    return _median_of_sorted(before), _median_of_sorted(after)
+
+
+def _median_of_sorted(side: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The median over the first axis of up to three values sorted with the NaNs (missing neighbours) last."""
+    count = np.isfinite(side).sum(axis=0)
+    out = np.where(count == 3, side[1], np.where(count == 2, (side[0] + side[1]) / 2, side[0]))
+    return np.where(count == 0, np.nan, out)
+
+
+class _Finder:
+    """The state one :func:`check_readings` call shares between its checks."""
+
+    def __init__(self, raw, wrench, groups, sources, names, false_alarm_rate):
+        from ._dataset import RowSources
+
+        self.raw, self.wrench = raw, wrench
+        self.n, self.k = raw.shape
+        self.sources = sources if sources is not None else \
+            RowSources.of_file("dataset", np.arange(1, self.n + 1), "row")
+        self.names = list(names) if names is not None else [f"s{j}" for j in range(self.k)]
+        self.groups = _group_rows(groups, self.n)
+        self.alpha = false_alarm_rate
+        self.findings: list[ReadingFinding] = []
+        self.flagged = np.zeros((self.n, self.k), dtype=bool)  # (row, channel) already named
+
+    def add(self, kind, rows, channel, value, reason) -> None:
+        rows = np.atleast_1d(np.asarray(rows, dtype=np.int64))
+        file, line = self.sources.where(int(rows[0]))
+        self.findings.append(ReadingFinding(kind=kind, rows=rows, file=file, line=line,
+                                            channel=None if channel is None else self.names[channel],
+                                            value=value, reason=reason))
+
+    def place(self, row: int) -> str:
+        return self.sources.describe(row)
+
+    # ---------------------------------------------------------------- spikes (and the statistics the range needs)
+    def side_statistics(self):
+        """Per row and channel: the same-direction distance to both sides' medians over the robust scale (0 where
+        the directions differ, NaN where a side is missing), and the distance to the one side there is."""
+        z_both = np.full((self.n, self.k), np.nan)
+        z_one = np.full((self.n, self.k), np.nan)
+        quanta = np.array([_quantum(self.raw[:, j]) for j in range(self.k)])
+        pooled_rows, pooled_scale = [], np.zeros(self.k)
+        parts = []
+        for rows in self.groups:
+            x = self.raw[rows]
+            before, after = _side_medians(x)
+            dl, dr = x - before, x - after
+            parts.append((rows, dl, dr))
+            pooled_rows.append(np.abs(dl[np.isfinite(dl).all(axis=1)]))
+        stacked = np.vstack(pooled_rows) if pooled_rows else np.zeros((0, self.k))
+        if stacked.size:
+            pooled_scale = 1.4826 * np.median(stacked, axis=0)
+        for rows, dl, dr in parts:
+            finite = np.isfinite(dl).all(axis=1)
+            own = 1.4826 * np.median(np.abs(dl[finite]), axis=0) if finite.sum() >= _MIN_SCALE_ROWS else pooled_scale
+            scale = np.maximum(own, quanta)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                same = np.sign(dl) == np.sign(dr)
+                both = np.where(same, np.minimum(np.abs(dl), np.abs(dr)), 0.0) / scale
+                one = np.where(np.isnan(dl), np.abs(dr), np.abs(dl)) / scale
+            both[np.isnan(dl) | np.isnan(dr)] = np.nan
+            both[:, scale == 0] = np.nan
+            one[:, scale == 0] = np.nan
+            z_both[rows], z_one[rows] = both, one
+        return z_both, z_one
+
+    def out_of_range(self, z_both, z_one) -> dict:
+        ranges = {}
+        for j in range(self.k):
+            column = self.raw[:, j]
+            found = _adc_range(column)
+            if found is None:
+                continue
+            low, high = found
+            ranges[self.names[j]] = found
+            width = high - low + 1
+            beyond = np.flatnonzero((column < low - width) | (column > high + width))
+            for r in beyond:
+                self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
+                         f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC of "
+                         "that range gives it")
+                self.flagged[r, j] = True
+            for rail in (low, high):
+                at = np.flatnonzero(column == rail)
+                if not 0 < at.size <= _MAX_RAIL_ROWS:
+                    continue
+                z = np.where(np.isnan(z_both[at, j]), z_one[at, j], z_both[at, j])
+                limit = _gaussian_z(self.alpha / (2 * max(1, at.size)))
+                for r, zr in zip(at, z):
+                    if np.isfinite(zr) and zr > limit:
+                        self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
+                                 f"at the limit {int(rail)} of the channel's {int(low)}..{int(high)} range, alone "
+                                 f"({zr:.1f} robust SD from its neighbours in time; {at.size} such reading(s))")
+                        self.flagged[r, j] = True
+        return ranges
+
+    def load_moves(self, z_both) -> NDArray[np.bool_]:
+        """Rows where the load changes abruptly: the reference wrench, or at least two channels at once, stand out
+        from their neighbours in time by more than a single test at 1 % would allow (a reading's jump is then the
+        load's, not a glitch's: a glitch is one channel's)."""
+        excuse = _gaussian_z(0.005)
+        crowd = np.nan_to_num(z_both, nan=0.0) > excuse
+        moves = crowd.sum(axis=1) >= 2
+        if self.wrench is not None:
+            w = _Finder(self.wrench, None, None, self.sources, None, self.alpha)
+            w.groups = self.groups
+            wz, _ = w.side_statistics()
+            moves |= (np.nan_to_num(wz, nan=0.0) > excuse).any(axis=1)
+        return moves
+
+    def spikes(self, z_both) -> float:
+        tested = int(np.isfinite(z_both).sum())
+        if not tested:
+            return float("nan")
+        limit = _gaussian_z(self.alpha / (2 * tested))
+        hits = np.argwhere(np.nan_to_num(z_both, nan=0.0) > limit)
+        moves = self.load_moves(z_both) if hits.size else None
+        for r, j in hits:
+            if self.flagged[r, j] or moves[r]:
+                continue
+            self.add(FindingKind.SPIKE, r, j, float(self.raw[r, j]),
+                     f"differs from its neighbours in time on both sides by more than {limit:.1f} robust SD (the "
+                     f"threshold that keeps false alarms below {self.alpha:g} per dataset over {tested} readings)")
+            self.flagged[r, j] = True
+        return limit
+
+    # ---------------------------------------------------------------- stuck channels
+    def stuck(self) -> None:
+        big = [rows for rows in self.groups if rows.size >= MIN_STUCK_ROWS]
+        if not big:
+            return
+        constant = np.array([np.ptp(self.raw[rows], axis=0) == 0 for rows in big])  # (groups, channels)
+        for g, rows in enumerate(big):
+            for j in np.flatnonzero(constant[g]):
+                others = np.delete(constant[g], j)
+                if others.size == 0 or others.mean() >= 0.5:  # the others do not move either: a still sensor
+                    continue
+                elsewhere = np.delete(constant[:, j], g)
+                if elsewhere.size and elsewhere.mean() >= 0.5:  # constant in most groups: a quiet channel
+                    continue
+                first, last = self.place(int(rows[0])), self.place(int(rows[-1]))
+                self.add(FindingKind.STUCK, rows, j, float(self.raw[rows[0], j]),
+                         f"constant over {rows.size} rows ({first} to {last}) while the other channels move")
+
+    # ---------------------------------------------------------------- repeated rows
+    def repeated(self) -> None:
+        table = self.raw if self.wrench is None else np.hstack([self.raw, self.wrench])
+        observed, expected, copies = 0, 0.0, []
+        for rows in self.groups:
+            m = rows.size
+            if m < 2:
+                continue
+            _, first, inverse, counts = np.unique(table[rows], axis=0, return_index=True, return_inverse=True,
+                                                  return_counts=True)
+            inverse = inverse.ravel()
+            observed += int(np.sum(counts * (counts - 1) // 2))
+            chance = 1.0
+            for j in range(self.k):
+                _, c = np.unique(self.raw[rows, j], return_counts=True)
+                chance *= float(np.sum((c / m) ** 2))
+            expected += m * (m - 1) / 2 * chance
+            later = np.flatnonzero(np.arange(m) != first[inverse])
+            copies.extend((int(rows[i]), int(rows[first[inverse[i]]])) for i in later)
+        if not copies:
+            return
+        from scipy.special import pdtrc
+
+        if pdtrc(observed - 1, expected) >= self.alpha:  # the Poisson chance of at least `observed` pairs
+            return
+        for row, original in copies:
+            self.add(FindingKind.REPEATED, row, None, None,
+                     f"repeats {self.place(original)} exactly; {observed} equal pairs of rows where quantisation "
+                     f"explains {expected:.2g}")
+
+
+def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: ArrayLike | None = None,
+                   sources=None, channel_names=None, false_alarm_rate: float = 0.01) -> ReadingChecks:
+    """Find readings no sensor gave: out of the channel's range, spikes, stuck channels, repeated rows.
+
+    The rules and their thresholds are in the module docstring: every threshold comes from the data's noise and
+    ``false_alarm_rate`` (the expected number of false alarms of each check over the dataset, for Gaussian noise).
+
+    Parameters
+    ----------
+    raw : array-like of shape (n, N)
+        The raw readings, rows in recording order within each group.
+    wrench : array-like of shape (n, k), optional
+        The reference wrench: a repeated row repeats it too.
+    groups : array-like of shape (n,), optional
+        A label per row (a pose, a session, a file): neighbours in time are looked for within a group.
+    sources : RowSources, optional
+        Where each row came from (:attr:`CalibrationDataset.sources`); default: rows of ``"dataset"`` from 1.
+    channel_names : sequence of str, optional
+        The channels' names (default ``s0, s1, ...``).
+    false_alarm_rate : float, default=0.01
+
+    Returns
+    -------
+    ReadingChecks
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> raw = np.round(500 + 5 * rng.standard_normal((200, 4)))  # a 10-bit channel near mid-range
+    >>> raw[50, 2] = 4598; raw[120, 0] = 560; raw[150, 3] = 0
+    >>> found = check_readings(raw)
+    >>> [(f.kind.value, f.line, f.channel, f.value) for f in found.findings]
+    [('out_of_range', 51, 's2', 4598.0), ('out_of_range', 151, 's3', 0.0), ('spike', 121, 's0', 560.0)]
+    >>> found.adc_ranges["s2"]
+    (0.0, 1023.0)
+    >>> check_readings(np.round(500 + 5 * rng.standard_normal((200, 4)))).clean
+    True
+    """
+    x = np.asarray(raw, dtype=float)
+    if x.ndim != 2:
+        raise ValueError(f"raw must be 2-D (n_rows, n_channels); got shape {x.shape}.")
+    w = None if wrench is None else np.asarray(wrench, dtype=float)
+    if not 0 < false_alarm_rate < 1:
+        raise ValueError(f"false_alarm_rate must lie in (0, 1); got {false_alarm_rate!r}.")
+    finder = _Finder(x, w, groups, sources, channel_names, false_alarm_rate)
+    if x.shape[0] == 0:
+        return ReadingChecks(findings=(), n_rows=0)
+    z_both, z_one = finder.side_statistics()
+    ranges = finder.out_of_range(z_both, z_one)
+    z = finder.spikes(z_both)
+    finder.stuck()
+    finder.repeated()
+    order = {k: i for i, k in enumerate(FindingKind)}
+    findings = sorted(finder.findings, key=lambda f: (order[f.kind], int(f.rows[0])))
+    return ReadingChecks(findings=tuple(findings), n_rows=x.shape[0], adc_ranges=ranges, spike_z=z)
