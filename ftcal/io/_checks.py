@@ -14,15 +14,19 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
   could be a larger ADC whose top the other readings never reached). A reading exactly at the range's limit (``0``)
   is flagged too when it is rare and stands out from its neighbours in time (a dropped sample reads 0);
 * **spike** -- a reading that differs from the median of its three neighbours before *and* the median of its three
-  neighbours after, in the same direction, by more than ``z`` robust standard deviations (1.4826 x the median
-  absolute difference of the channel in its group, at least one quantisation step). ``z`` is the Gaussian quantile
+  neighbours after, in the same direction, by more than ``z`` robust standard deviations (the mean absolute
+  difference of the channel in its group over its 99 % smallest, scaled to a Gaussian standard deviation; at least
+  one quantisation step). ``z`` is the Gaussian quantile
   that keeps the expected number of false alarms over the whole dataset at ``false_alarm_rate`` (Bonferroni over
   every reading tested): about 4.8 for 6 000 readings, 5.9 for a million. A load step matches one side and is no
   spike; a row where the reference wrench or another channel stands out too (beyond a single test at 1 %, z 2.58)
   is a change of load, not a glitch of one channel; the first and last rows of a group, having one side only, are
   not tested;
-* **stuck** -- a channel exactly constant over a group of at least :data:`MIN_STUCK_ROWS` rows while most other
-  channels move there, and that moves in most other groups (a live channel's noise changes its reading);
+* **stuck** -- a channel exactly constant over a run of rows of a group while most other channels move there: a
+  live channel gives its commonest value with a chance ``p`` (the larger of its share in the group outside the run
+  and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
+  ``n p^L`` times; runs longer than where that falls below ``false_alarm_rate`` (and at
+  least :data:`MIN_STUCK_ROWS`) are stuck;
 * **repeated** -- rows (readings and wrench) that equal an earlier row of their group exactly, when more such pairs
   occur than quantisation explains: the expected number of equal pairs is the product over channels of each
   channel's chance that two readings of the group are equal; the rows are flagged when the Poisson chance of as
@@ -170,12 +174,11 @@ class ReadingChecks:
             rows = int(self.mask([kind]).sum())
             first = "; ".join(f"{f.where()}" + ("" if f.value is None else f" = {f.value:.6g}") for f in found[:shown])
             more = f"; ... ({len(found) - shown} more)" if len(found) > shown else ""
-            noun = "reading" if kind is not FindingKind.REPEATED else "row"
-            if kind is FindingKind.STUCK:
-                noun = "stuck channel"
+            noun = {FindingKind.REPEATED: "row", FindingKind.STUCK: "channel run"}.get(kind, "reading")
             plural = "s" if len(found) != 1 else ""
+            said = found[0].reason if len({f.reason for f in found}) == 1 else f"the first: {found[0].reason}"
             lines.append(f"{len(found)} {kind.value} {noun}{plural} ({rows} row{'s' if rows != 1 else ''}): "
-                         f"{first}{more} ({found[0].reason})")
+                         f"{first}{more} ({said})")
         return lines
 
 
@@ -217,6 +220,38 @@ def _adc_range(column: NDArray[np.float64]) -> tuple[float, float] | None:
         return 0.0, float(2**bits - 1)
     bits = max(1, int(np.ceil(np.log2(max(-low, high + 1)))) + 1)
     return float(-(2 ** (bits - 1))), float(2 ** (bits - 1) - 1)
+
+
+#: E|Z| over the 99 % smallest |Z| of a standard normal Z: the trimmed mean absolute deviation over this is a
+#: robust standard deviation that, unlike the median absolute deviation, does not jump with the quantisation steps.
+_TRIMMED_MEAN_ABS = 2 * (1 / np.sqrt(2 * np.pi)) * (1 - np.exp(-2.5758293035489 ** 2 / 2)) / 0.99
+
+
+def _robust_scale(deviations: NDArray[np.float64]) -> NDArray[np.float64]:
+    """A robust standard deviation of each column of absolute deviations: their mean over the 99 % smallest
+    (finite ones), over :data:`_TRIMMED_MEAN_ABS` (0 for a column without any)."""
+    out = np.zeros(deviations.shape[1])
+    for j in range(deviations.shape[1]):
+        column = deviations[:, j]
+        column = np.sort(column[np.isfinite(column)])
+        kept = column[: max(1, int(np.ceil(0.99 * column.size)))] if column.size else column
+        out[j] = float(np.mean(kept)) / _TRIMMED_MEAN_ABS if kept.size else 0.0
+    return out
+
+
+def _top_share(column: NDArray[np.float64]) -> float:
+    """The share of the commonest value among ``column``'s readings."""
+    if column.size == 0:
+        return 0.0
+    _, counts = np.unique(column, return_counts=True)
+    return float(counts.max() / column.size)
+
+
+def _runs(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """``(start, stop)`` of each run of True in ``flags``."""
+    padded = np.concatenate([[False], flags, [False]])
+    edges = np.flatnonzero(np.diff(padded.astype(np.int8)))
+    return list(zip(edges[::2], edges[1::2]))
 
 
 def _side_medians(x: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
@@ -263,27 +298,28 @@ class _Finder:
         return self.sources.describe(row)
 
     # ---------------------------------------------------------------- spikes (and the statistics the range needs)
-    def side_statistics(self):
+    def side_statistics(self, exclude=None):
         """Per row and channel: the same-direction distance to both sides' medians over the robust scale (0 where
-        the directions differ, NaN where a side is missing), and the distance to the one side there is."""
+        the directions differ, NaN where a side is missing), and the distance to the one side there is. The
+        readings ``exclude`` (n, N) marks (a stuck run) do not set the scale."""
         z_both = np.full((self.n, self.k), np.nan)
         z_one = np.full((self.n, self.k), np.nan)
         quanta = np.array([_quantum(self.raw[:, j]) for j in range(self.k)])
-        pooled_rows, pooled_scale = [], np.zeros(self.k)
         parts = []
         for rows in self.groups:
             x = self.raw[rows]
             before, after = _side_medians(x)
             dl, dr = x - before, x - after
-            parts.append((rows, dl, dr))
-            pooled_rows.append(np.abs(dl[np.isfinite(dl).all(axis=1)]))
-        stacked = np.vstack(pooled_rows) if pooled_rows else np.zeros((0, self.k))
-        if stacked.size:
-            pooled_scale = 1.4826 * np.median(stacked, axis=0)
-        for rows, dl, dr in parts:
-            finite = np.isfinite(dl).all(axis=1)
-            own = 1.4826 * np.median(np.abs(dl[finite]), axis=0) if finite.sum() >= _MIN_SCALE_ROWS else pooled_scale
-            scale = np.maximum(own, quanta)
+            usable = np.abs(dl)
+            if exclude is not None:
+                usable = np.where(exclude[rows], np.nan, usable)
+            parts.append((rows, dl, dr, usable))
+        pooled = np.vstack([u for *_, u in parts]) if parts else np.zeros((0, self.k))
+        pooled_scale = _robust_scale(pooled)
+        for rows, dl, dr, usable in parts:
+            own = _robust_scale(usable)
+            small = np.isfinite(usable).sum(axis=0) < _MIN_SCALE_ROWS
+            scale = np.maximum(np.where(small, pooled_scale, own), quanta)
             with np.errstate(divide="ignore", invalid="ignore"):
                 same = np.sign(dl) == np.sign(dr)
                 both = np.where(same, np.minimum(np.abs(dl), np.abs(dr)), 0.0) / scale
@@ -355,22 +391,46 @@ class _Finder:
         return limit
 
     # ---------------------------------------------------------------- stuck channels
-    def stuck(self) -> None:
+    def stuck(self) -> NDArray[np.bool_]:
+        """Runs of a channel exactly constant while most other channels move; returns the (row, channel) mask."""
+        mask = np.zeros((self.n, self.k), dtype=bool)
+        same = np.zeros((self.n, self.k), dtype=bool)  # the reading equals the previous one of its group
+        for rows in self.groups:
+            if rows.size > 1:
+                same[rows[1:]] = self.raw[rows[1:]] == self.raw[rows[:-1]]
+        pairs = max(1, self.n - len(self.groups))
         big = [rows for rows in self.groups if rows.size >= MIN_STUCK_ROWS]
-        if not big:
-            return
-        constant = np.array([np.ptp(self.raw[rows], axis=0) == 0 for rows in big])  # (groups, channels)
+        # how concentrated each channel's readings are in each group: a quiet channel (noise below a quantisation
+        # step, its mean near a level) reads one value most of the time, and a run there is less telling
+        peak = np.array([[_top_share(self.raw[rows, j]) for j in range(self.k)] for rows in big]) if big \
+            else np.zeros((0, self.k))
         for g, rows in enumerate(big):
-            for j in np.flatnonzero(constant[g]):
-                others = np.delete(constant[g], j)
-                if others.size == 0 or others.mean() >= 0.5:  # the others do not move either: a still sensor
-                    continue
-                elsewhere = np.delete(constant[:, j], g)
-                if elsewhere.size and elsewhere.mean() >= 0.5:  # constant in most groups: a quiet channel
-                    continue
-                first, last = self.place(int(rows[0])), self.place(int(rows[-1]))
-                self.add(FindingKind.STUCK, rows, j, float(self.raw[rows[0], j]),
-                         f"constant over {rows.size} rows ({first} to {last}) while the other channels move")
+            for j in range(self.k):
+                for start, stop in _runs(same[rows, j]):
+                    if stop - start + 1 < MIN_STUCK_ROWS:
+                        continue
+                    span = rows[start - 1:stop]  # the run's first reading is the one the others repeat
+                    # a live channel reads its commonest value with a chance p: a run of L equal readings comes by
+                    # chance about n p^L times; it is stuck when that is below the false-alarm rate. p: the larger
+                    # of the group's own outside the run and the 90th percentile of the other groups'
+                    outside = np.setdiff1d(rows, span)
+                    p = _top_share(self.raw[outside, j]) if outside.size >= _MIN_SCALE_ROWS else 0.0
+                    if len(big) > 1:
+                        p = max(p, float(np.quantile(np.delete(peak[:, j], g), 0.9)))
+                    elif outside.size < _MIN_SCALE_ROWS:
+                        continue  # one short group: nothing tells a quiet channel from a stuck one
+                    needed = MIN_STUCK_ROWS if p <= 0 else max(MIN_STUCK_ROWS,
+                                                               np.log(self.alpha / pairs) / np.log(min(p, 0.999)))
+                    moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
+                    if span.size < needed or moving.size == 0 or moving.mean() <= 0.5:
+                        continue
+                    mask[span, j] = True
+                    first, last = self.place(int(span[0])), self.place(int(span[-1]))
+                    self.add(FindingKind.STUCK, span, j, float(self.raw[span[0], j]),
+                             f"constant over {span.size} rows ({first} to {last}) while the other channels move "
+                             f"(a live reading gives one value with chance {p:.2g} at most: runs of "
+                             f"{int(np.ceil(needed))} rows or more are beyond chance)")
+        return mask
 
     # ---------------------------------------------------------------- repeated rows
     def repeated(self) -> None:
@@ -450,10 +510,11 @@ def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: A
     finder = _Finder(x, w, groups, sources, channel_names, false_alarm_rate)
     if x.shape[0] == 0:
         return ReadingChecks(findings=(), n_rows=0)
-    z_both, z_one = finder.side_statistics()
+    stuck = finder.stuck()
+    finder.flagged |= stuck
+    z_both, z_one = finder.side_statistics(exclude=stuck)
     ranges = finder.out_of_range(z_both, z_one)
     z = finder.spikes(z_both)
-    finder.stuck()
     finder.repeated()
     order = {k: i for i, k in enumerate(FindingKind)}
     findings = sorted(finder.findings, key=lambda f: (order[f.kind], int(f.rows[0])))
