@@ -169,7 +169,7 @@ def test_fit_points_out_each_kind_and_drops_them_on_request(tmp_path, capsys):
     assert every.n_samples == raw.shape[0] - 26 and "readings_flagged" not in every.meta
 
 
-@pytest.mark.parametrize("value", ["sometimes", "spike,typo", ""])
+@pytest.mark.parametrize("value", ["sometimes", "spike,typo", "none,spike"])
 def test_drop_bad_readings_refuses_unknown_kinds(tmp_path, value, capsys):
     raw, wrench, group = static_poses(n_groups=2, rows=5)
     folder = write_folder(tmp_path / "poses", raw, wrench, group)
