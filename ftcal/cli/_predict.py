@@ -10,7 +10,7 @@ import numpy as np
 
 from ._models import load_model_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
-from ._data_options import add_channel_option, model_reading
+from ._data_options import add_channel_option, channel_names, model_reading, print_reading_findings
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core._wrench import default_axes
 
@@ -238,6 +238,9 @@ def run(args: argparse.Namespace) -> int:
     if reach is not None and own_range is not None:
         own_range = partial(model.out_of_range, spread=False)  # spread below, across the chunks
     since = [None]
+    # the readings of a file are checked as they go by (a live stream, one line at a time, is not)
+    checking = args.input != "-" and chunk > 1
+    findings: list = []
 
     def emit(out) -> int:
         total = 0
@@ -263,6 +266,8 @@ def run(args: argparse.Namespace) -> int:
                 flags, since[0] = spread_flags(flags, reach, since[0])
             if flags is not None:
                 beyond[0] += int(flags.sum())
+            if checking:
+                findings.extend(_chunk_findings(raw, lines, args.input, channels, total))
             if limits is None:
                 write_wrench_rows(out, values, False)
             else:
@@ -280,6 +285,10 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
             total = emit(fh)
         console.info(f"wrote {total} wrenches to {args.output}")
+    if findings:
+        from ..io import ReadingChecks
+
+        print_reading_findings(ReadingChecks(findings=tuple(findings), n_rows=total), args.input, fix=False)
     if beyond[0]:
         column = " (out_of_range = 1)" if limits is not None else ""
         what = ("readings lie beyond the calibrated range, or follow one closely enough that their load history holds "
@@ -287,6 +296,22 @@ def run(args: argparse.Namespace) -> int:
         print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}; their wrenches are "
               "extrapolations", file=sys.stderr)
     return 0
+
+
+def _chunk_findings(raw, lines, source: str, channels, offset: int) -> list:
+    """The bad readings (:func:`ftcal.io.check_readings`) of one chunk of ``source``, its rows counted from
+    ``offset``: named by the input's line (the row of an ``.npz`` / ``.mat``)."""
+    from dataclasses import replace
+
+    from ..io import RowSources, check_readings
+
+    counted = "row" if Path(source).suffix.lower() in (".npz", ".mat") else "line"
+    numbers = np.asarray(lines) + (1 if counted == "row" else 0)
+    named = channels is not None and len(channels) + 1 == raw.shape[1]  # a temperature-compensated model's input
+    names = channel_names(channels, raw.shape[1] - 1) + ["temperature"] if named else \
+        channel_names(channels, raw.shape[1])
+    found = check_readings(raw, sources=RowSources.of_file(Path(source).name, numbers, counted), channel_names=names)
+    return [replace(f, rows=f.rows + offset) for f in found.findings]
 
 
 def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
