@@ -34,7 +34,7 @@ from ._messages import cli_error, cli_spelling
 __all__ = ["add_dataset_options", "add_channel_option", "add_bad_readings_option", "bad_readings_handled",
            "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
            "add_alpha_option", "training_targets",
-           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
+           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_wrench_range", "model_reading", "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -391,7 +391,31 @@ def fit_data_facts(args: argparse.Namespace, data) -> dict:
     columns = dataset_columns(args)
     return {"columns": columns.to_dict(), "axes": list(data.axes), "n_channels": data.n_channels,
             "units_confirmed": getattr(args, "force_unit", None) is not None
-            and getattr(args, "torque_unit", None) is not None}
+            and getattr(args, "torque_unit", None) is not None,
+            "wrench_range": [data.wrench.min(axis=0).tolist(), data.wrench.max(axis=0).tolist()]}
+
+
+def model_wrench_range(model_path, axes):
+    """The calibrated range of each of ``axes`` (the loads the model was fitted on, [N, N·m]) as ``(low, high)``
+    arrays, or None for a model file that does not keep it (fitted by an older ftcal, or in Python)."""
+    import numpy as np
+
+    from ..core._exceptions import ModelFileError
+    from ..persistence import model_data
+
+    try:
+        facts = model_data(model_path)
+    except ModelFileError as exc:
+        raise cli_error(exc) from None
+    found, fitted_axes = facts.get("wrench_range"), facts.get("axes")
+    try:
+        low, high = (np.asarray(b, dtype=float) for b in found)
+    except (TypeError, ValueError):
+        return None
+    if not isinstance(fitted_axes, list) or low.shape != (len(fitted_axes),) or high.shape != low.shape \
+            or list(fitted_axes) != list(axes) or not (np.isfinite(low).all() and np.isfinite(high).all()):
+        return None
+    return low, high
 
 
 def model_reading(model_path) -> tuple:

@@ -13,6 +13,7 @@ from ._common import CliError, Console, OutputPlan, add_run_options, existing_fi
 from ._data_options import add_channel_option, channel_names, model_reading, print_reading_findings
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core._wrench import default_axes
+from ..io import RangeExcess, range_excess
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -241,6 +242,8 @@ def run(args: argparse.Namespace) -> int:
     # the readings of a file are checked as they go by (a live stream, one line at a time, is not)
     checking = args.input != "-" and chunk > 1
     findings: list = []
+    excess: list = []  # per chunk, the readings beyond --range
+    range_names = partial(_range_names, channels, temperature)
 
     def emit(out) -> int:
         total = 0
@@ -259,7 +262,8 @@ def run(args: argparse.Namespace) -> int:
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines, args) from None
             if limits is not None:
-                flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
+                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1])))
+                flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
             if flags is not None and reach is not None:
@@ -267,7 +271,7 @@ def run(args: argparse.Namespace) -> int:
             if flags is not None:
                 beyond[0] += int(flags.sum())
             if checking:
-                findings.extend(_chunk_findings(raw, lines, args.input, channels, total))
+                findings.extend(_chunk_findings(raw, lines, args.input, channels, temperature, total))
             if limits is None:
                 write_wrench_rows(out, values, False)
             else:
@@ -293,12 +297,20 @@ def run(args: argparse.Namespace) -> int:
         column = " (out_of_range = 1)" if limits is not None else ""
         what = ("readings lie beyond the calibrated range, or follow one closely enough that their load history holds "
                 "it," if reach is not None else "readings lie beyond the calibrated range")
-        print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}; their wrenches are "
-              "extrapolations", file=sys.stderr)
+        per_channel = f" ({RangeExcess.combined(excess).words()})" if excess else ""
+        print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}{per_channel}; their wrenches "
+              "are extrapolations", file=sys.stderr)
     return 0
 
 
-def _chunk_findings(raw, lines, source: str, channels, offset: int) -> list:
+def _range_names(channels, temperature: bool, width: int) -> list[str]:
+    """The names of an input's ``width`` columns (its channels, then the temperature of a compensated model)."""
+    if temperature:
+        return channel_names(channels, width - 1) + ["temperature"]
+    return channel_names(channels, width)
+
+
+def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset: int) -> list:
     """The bad readings (:func:`ftcal.io.check_readings`) of one chunk of ``source``, its rows counted from
     ``offset``: named by the input's line (the row of an ``.npz`` / ``.mat``)."""
     from dataclasses import replace
@@ -307,10 +319,8 @@ def _chunk_findings(raw, lines, source: str, channels, offset: int) -> list:
 
     counted = "row" if Path(source).suffix.lower() in (".npz", ".mat") else "line"
     numbers = np.asarray(lines) + (1 if counted == "row" else 0)
-    named = channels is not None and len(channels) + 1 == raw.shape[1]  # a temperature-compensated model's input
-    names = channel_names(channels, raw.shape[1] - 1) + ["temperature"] if named else \
-        channel_names(channels, raw.shape[1])
-    found = check_readings(raw, sources=RowSources.of_file(Path(source).name, numbers, counted), channel_names=names)
+    found = check_readings(raw, sources=RowSources.of_file(Path(source).name, numbers, counted),
+                           channel_names=_range_names(channels, temperature, raw.shape[1]))
     return [replace(f, rows=f.rows + offset) for f in found.findings]
 
 

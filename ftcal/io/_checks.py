@@ -31,6 +31,10 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
   occur than quantisation explains: the expected number of equal pairs is the product over channels of each
   channel's chance that two readings of the group are equal; the rows are flagged when the Poisson chance of as
   many pairs is below ``false_alarm_rate``.
+
+:func:`range_excess` says, per axis, how many rows lie beyond a calibrated range and how far (x the range): the
+loads of a validation session beyond those a model was calibrated on (``ftcal evaluate``), or readings beyond the
+calibration's (``ftcal predict``).
 """
 
 from __future__ import annotations
@@ -41,7 +45,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["FindingKind", "ReadingFinding", "ReadingChecks", "check_readings", "MIN_STUCK_ROWS"]
+__all__ = ["FindingKind", "ReadingFinding", "ReadingChecks", "check_readings", "MIN_STUCK_ROWS", "AxisExcess",
+           "RangeExcess", "range_excess"]
 
 #: Fewest rows of a group over which an exactly constant channel is called stuck (a live channel whose noise spans
 #: at least one quantisation step stays put for ten rows with a chance of about 2^-9).
@@ -519,3 +524,145 @@ def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: A
     order = {k: i for i, k in enumerate(FindingKind)}
     findings = sorted(finder.findings, key=lambda f: (order[f.kind], int(f.rows[0])))
     return ReadingChecks(findings=tuple(findings), n_rows=x.shape[0], adc_ranges=ranges, spike_z=z)
+
+
+@dataclass(frozen=True)
+class AxisExcess:
+    """How far the values of one axis (or channel) go beyond its calibrated range.
+
+    Attributes
+    ----------
+    name : str
+        The axis (``Fz``) or channel (``s3``).
+    low, high : float
+        The calibrated range [N, N·m, or raw units].
+    n_rows : int
+        Rows looked at.
+    n_beyond : int
+        Rows below ``low`` or above ``high``.
+    largest_factor : float
+        The largest ``|value| / max(|low|, |high|)`` of a row beyond: how many times the calibrated full scale it
+        reaches (``inf`` for a range of zero; 0 when no row is beyond).
+    opposite_sign : int
+        Rows beyond of a sign the range never had (a negative load on an axis calibrated from 0 up).
+    """
+
+    name: str
+    low: float
+    high: float
+    n_rows: int
+    n_beyond: int
+    largest_factor: float
+    opposite_sign: int
+
+    def words(self, unit: str = "") -> str:
+        """One phrase: ``"Fz: 14 of 18 rows beyond -10..10 N, up to 2.23x the range"``."""
+        u = f" {unit}" if unit else ""
+        sign = f", {self.opposite_sign} of the opposite sign" if self.opposite_sign else ""
+        return (f"{self.name}: {self.n_beyond} of {self.n_rows} rows beyond {self.low:.4g}..{self.high:.4g}{u}, up "
+                f"to {self.largest_factor:.3g}x the range{sign}")
+
+    def to_dict(self) -> dict:
+        """Plain JSON."""
+        return {"axis": self.name, "low": self.low, "high": self.high, "rows": self.n_rows, "beyond": self.n_beyond,
+                "largest_factor": None if not np.isfinite(self.largest_factor) else self.largest_factor,
+                "opposite_sign": self.opposite_sign}
+
+
+@dataclass(frozen=True)
+class RangeExcess:
+    """Per axis, the rows beyond a calibrated range (:func:`range_excess`).
+
+    Attributes
+    ----------
+    axes : tuple of AxisExcess
+    mask : ndarray of bool, shape (n,)
+        The rows beyond the range on any axis.
+    """
+
+    axes: tuple[AxisExcess, ...]
+    mask: NDArray[np.bool_]
+
+    @property
+    def any(self) -> bool:
+        """Whether some row lies beyond the range."""
+        return bool(self.mask.any())
+
+    def beyond(self) -> tuple[AxisExcess, ...]:
+        """The axes some row goes beyond."""
+        return tuple(a for a in self.axes if a.n_beyond)
+
+    def words(self, units=None) -> str:
+        """The axes beyond, one phrase each (:meth:`AxisExcess.words`), joined by ``"; "``."""
+        units = dict(units or {})
+        return "; ".join(a.words(units.get(a.name, "")) for a in self.beyond())
+
+    @classmethod
+    def combined(cls, parts: list["RangeExcess"]) -> "RangeExcess":
+        """The excess of the rows of ``parts`` (chunks of one input, same columns and range) taken together."""
+        axes = []
+        for column in zip(*(p.axes for p in parts)):
+            first = column[0]
+            axes.append(AxisExcess(name=first.name, low=first.low, high=first.high,
+                                   n_rows=sum(a.n_rows for a in column), n_beyond=sum(a.n_beyond for a in column),
+                                   largest_factor=max(a.largest_factor for a in column),
+                                   opposite_sign=sum(a.opposite_sign for a in column)))
+        return cls(axes=tuple(axes), mask=np.concatenate([p.mask for p in parts]))
+
+    def to_dict(self) -> dict:
+        """Plain JSON: ``rows_beyond`` (any axis) and ``axes``."""
+        return {"rows": int(self.mask.size), "rows_beyond": int(self.mask.sum()),
+                "axes": [a.to_dict() for a in self.axes]}
+
+
+def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None) -> RangeExcess:
+    """Per axis, how many rows of ``values`` lie beyond the calibrated range ``low..high`` and by how much.
+
+    Used on wrenches (the loads of a validation session against those a model was calibrated on: ``ftcal
+    evaluate``, the certificate) and on raw readings (``ftcal predict``: a reading beyond the calibration's).
+
+    Parameters
+    ----------
+    values : array-like of shape (n, k)
+    low, high : array-like of shape (k,)
+        The calibrated range of each column (its smallest and largest calibration value); ``-inf`` / ``inf``
+        leave a column unchecked.
+    names : sequence of str, optional
+        The columns' names (default ``0, 1, ...``).
+
+    Returns
+    -------
+    RangeExcess
+
+    Examples
+    --------
+    >>> loads = np.array([[0.0, 5.0], [0.0, 22.0], [-3.0, 8.0]])
+    >>> found = range_excess(loads, [0.0, -10.0], [10.0, 10.0], names=["Fx", "Fz"])
+    >>> found.mask.tolist()
+    [False, True, True]
+    >>> print(found.words({"Fx": "N", "Fz": "N"}))
+    Fx: 1 of 3 rows beyond 0..10 N, up to 0.3x the range, 1 of the opposite sign; Fz: 1 of 3 rows beyond -10..10 N, up to 2.2x the range
+    """
+    v = np.asarray(values, dtype=float)
+    if v.ndim == 1:
+        v = v[:, None]
+    lo = np.broadcast_to(np.asarray(low, dtype=float), (v.shape[1],))
+    hi = np.broadcast_to(np.asarray(high, dtype=float), (v.shape[1],))
+    names = [str(j) for j in range(v.shape[1])] if names is None else [str(n) for n in names]
+    if len(names) != v.shape[1]:
+        raise ValueError(f"names gives {len(names)} names for {v.shape[1]} columns.")
+    out_low, out_high = v < lo, v > hi
+    outside = out_low | out_high
+    axes = []
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for j, name in enumerate(names):
+            rows = outside[:, j]
+            finite = [abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)]
+            reach = max(finite) if finite else np.inf
+            factor = float(np.max(np.abs(v[rows, j]))) / reach if rows.any() else 0.0
+            opposite = int(np.sum((out_low[:, j] & (lo[j] >= 0) & (v[:, j] < 0))
+                                  | (out_high[:, j] & (hi[j] <= 0) & (v[:, j] > 0))))
+            axes.append(AxisExcess(name=name, low=float(lo[j]), high=float(hi[j]), n_rows=int(v.shape[0]),
+                                   n_beyond=int(rows.sum()), largest_factor=factor if reach > 0 or not rows.any()
+                                   else float("inf"), opposite_sign=opposite))
+    return RangeExcess(axes=tuple(axes), mask=outside.any(axis=1))
