@@ -31,7 +31,7 @@ import sys
 from ._common import CliError, int_in_range
 from ._messages import cli_error, cli_spelling
 
-__all__ = ["add_dataset_options", "add_channel_option", "add_bad_readings_option", "bad_readings_handled",
+__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "joined_origin", "add_bad_readings_option", "bad_readings_handled",
            "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
            "add_alpha_option", "training_targets",
            "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_wrench_range", "model_reading", "load_dataset_for_models"]
@@ -103,8 +103,111 @@ def _add_channels(g) -> None:
 
 
 def add_channel_option(p: argparse.ArgumentParser) -> None:
-    """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench)."""
+    """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench), and ``--columns``."""
     _add_channels(p)
+    add_columns_option(p)
+
+
+#: The one help text of ``--columns``.
+COLUMNS_HELP = ("the names of the columns of input files without a header line, in order (a range s0..s5 counts); "
+                "several such inputs of one row per sample are joined side by side in the order given, e.g. "
+                "pose.txt wrench.txt --columns x,y,z,qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz")
+
+
+def add_columns_option(g) -> None:
+    """``--columns NAMES`` (once per command, whichever option group asks first)."""
+    if "--columns" in getattr(g, "_option_string_actions", {}):
+        return
+    g.add_argument("--columns", type=_names, metavar="NAME,...", help=COLUMNS_HELP)
+
+
+#: The joined file behind each input path :func:`named_inputs` made -> its table (where its rows came from).
+_JOINED: dict[str, object] = {}
+
+
+def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: bool = True) -> list[str]:
+    """The inputs as the commands read them: with ``--columns``, the headerless text files ``items`` joined side by
+    side into one file with a header (:func:`ftcal.io.join_headerless`, written to a temporary folder removed at
+    exit); without it, ``items`` themselves, a headerless text file refused in one line naming ``--columns`` when
+    ``header_needed`` (a raw-readings input reads without a header)."""
+    import atexit
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from ..core import DatasetFileError
+    from ..io import has_header, join_headerless
+
+    columns = getattr(args, "columns", None)
+    texts = [i for i in items if i != "-" and Path(i).is_file()
+             and Path(i).suffix.lower() not in (".npz", ".mat", ".bag", ".mcap", ".db3", ".json")]
+    spell = cli_spelling(args)
+
+    def said(exc) -> str:
+        return " ".join(exc.render(lambda name, setting: "--columns" if name == "columns" else
+                                   spell(name, setting)).split())
+
+    try:
+        if columns is None:
+            if header_needed:
+                for item in texts:
+                    if not has_header(item):
+                        raise CliError(f"{item}: the file has no header line (its first line holds numbers). Fix: "
+                                       "name its columns with --columns NAME,... (e.g. --columns x,y,z,qx,qy,qz,qw,"
+                                       "Fx,Fy,Fz,Tx,Ty,Tz; several such files are joined side by side), or add a "
+                                       "header line")
+            return items
+        if len(texts) != len(items):
+            other = next(i for i in items if i not in texts)
+            raise CliError(f"--columns names the columns of text files without a header; {other} is not one (give "
+                           "text files only, or drop --columns)")
+        table = join_headerless(texts, columns)
+    except DatasetFileError as exc:
+        raise CliError(said(exc)) from None
+    folder = Path(tempfile.mkdtemp(prefix="ftcal-columns-"))
+    atexit.register(shutil.rmtree, folder, True)
+    joined = folder / f"{table.name}.csv"
+    table.write(joined)
+    _JOINED[str(joined)] = table
+    return [str(joined)]
+
+
+def _in_user_terms(text: str, path: str) -> str:
+    """An error about a file :func:`named_inputs` joined, in the user's terms: their files and lines (the joined
+    file's line 1 is the header --columns gave)."""
+    import re
+
+    table = _JOINED.get(str(path))
+    if table is None:
+        return text
+
+    def line(found) -> str:
+        n = int(found.group(1))
+        return "the --columns names" if n == 1 or n - 2 >= len(table.lines) else f"line {table.lines[n - 2]}"
+
+    return re.sub(r"line (\d+)", line, text.replace(str(path), table.name))
+
+
+def joined_origin(path: str, lines):
+    """``(name, lines)``: the user's file(s) and lines of rows read from ``path`` at the 1-based ``lines``, when
+    :func:`named_inputs` joined ``path`` (its line 1 the header ``--columns`` gave); else ``(file name, lines)``."""
+    import numpy as np
+    from pathlib import Path
+
+    table = _JOINED.get(str(path))
+    if table is None:
+        return Path(path).name, np.asarray(lines)
+    return table.name, np.asarray(table.lines)[np.asarray(lines) - 2]
+
+
+def _sources_of_joined(data, path: str):
+    """A dataset read from a file :func:`named_inputs` joined: its rows named by the user's files and lines."""
+    from ..io import RowSources
+
+    table = _JOINED.get(str(path))
+    if table is not None and data.sources is not None and data.n_samples == len(table.lines):
+        data.sources = RowSources.of_file(table.name, table.lines)
+    return data
 
 
 def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
@@ -146,6 +249,7 @@ def add_unit_options(g: argparse._ArgumentGroup) -> None:
     g.add_argument("--torque-unit", metavar="UNIT",
                    help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)}, any force unit "
                    "times m, mm, cm, in or ft (default N.m)")
+    add_columns_option(g)
 
 
 def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_unit: str = "N",
@@ -249,10 +353,18 @@ def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"
 
     ``confirmed``: the model's stored units were confirmed at fit time (both declared).
     """
+    from ..core import DatasetFileError
     from ._models import load_dataset
 
     columns = dataset_columns(args, stored)
-    data = load_dataset(path, role, columns=columns)
+    read = named_inputs(args, [str(path)])[0]
+    try:
+        data = _sources_of_joined(load_dataset(read, role, columns=columns), read)
+    except (CliError, DatasetFileError) as exc:
+        if read == str(path):
+            raise
+        text = str(exc) if isinstance(exc, CliError) else str(cli_error(exc, args))
+        raise CliError(_in_user_terms(text, read)) from None
     check_lever_arm(args, data.wrench, path, data.axes, columns.force_unit, columns.torque_unit, confirmed)
     data = _saturated_rows_handled(args, data, path)
     return bad_readings_handled(args, data, path, channel_names(columns.channels, data.n_channels))

@@ -18,7 +18,7 @@ from ._common import (
     path_problem,
     write_json,
 )
-from ._data_options import add_unit_options, check_lever_arm
+from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._recordings import (add_bag_options, add_recording_options, bag_files, bag_joints, read_bag_from_args,
                           refuse_bag_options, still_poses)
@@ -389,6 +389,7 @@ def run_identify(args: argparse.Namespace) -> int:
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
+    args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     poses = identification_poses(args, console)
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
                             poses.sources, poses.groups)
@@ -477,6 +478,7 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
+    args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     tool = ftcal.experiment.ToolLoad.load(args.tool)
     head, lead, rotations, wrenches, times, temperatures = _compensation_rows(args, console)
     external = compensate_rows(args, tool, rotations, wrenches, times, temperatures, ", ".join(args.inputs))

@@ -10,7 +10,8 @@ import numpy as np
 
 from ._models import load_model_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
-from ._data_options import add_channel_option, channel_names, model_reading, print_reading_findings
+from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
+                            print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core._wrench import default_axes
 from ..io import RangeExcess, range_excess
@@ -200,6 +201,8 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
+    shown = args.input
+    args.input = named_inputs(args, [args.input], header_needed=False)[0]  # --columns: a headerless file named
     problem = None if args.input == "-" else path_problem(args.input, streams=True)
     if problem is not None:
         raise CliError(f"{problem} (the raw readings to predict)")
@@ -292,7 +295,7 @@ def run(args: argparse.Namespace) -> int:
     if findings:
         from ..io import ReadingChecks
 
-        print_reading_findings(ReadingChecks(findings=tuple(findings), n_rows=total), args.input, fix=False)
+        print_reading_findings(ReadingChecks(findings=tuple(findings), n_rows=total), shown, fix=False)
     if beyond[0]:
         column = " (out_of_range = 1)" if limits is not None else ""
         what = ("readings lie beyond the calibrated range, or follow one closely enough that their load history holds "
@@ -317,9 +320,11 @@ def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset
 
     from ..io import RowSources, check_readings
 
-    counted = "row" if Path(source).suffix.lower() in (".npz", ".mat") else "line"
-    numbers = np.asarray(lines) + (1 if counted == "row" else 0)
-    found = check_readings(raw, sources=RowSources.of_file(Path(source).name, numbers, counted),
+    if Path(source).suffix.lower() in (".npz", ".mat"):
+        name, numbers, counted = Path(source).name, np.asarray(lines) + 1, "row"
+    else:
+        (name, numbers), counted = joined_origin(source, lines), "line"
+    found = check_readings(raw, sources=RowSources.of_file(name, numbers, counted),
                            channel_names=_range_names(channels, temperature, raw.shape[1]))
     return [replace(f, rows=f.rows + offset) for f in found.findings]
 

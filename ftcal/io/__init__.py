@@ -14,7 +14,8 @@ _PUBLIC = dict(
     write_run_log="_logs", run_log_files="_logs", PoseRecording="_poses", read_pose_file="_poses", BagRecording="_bags",
     read_bag="_bags", write_bag="_bags", FORCE_UNITS="_readers", TORQUE_UNITS="_readers",
     RowSources="_dataset", check_readings="_checks", ReadingChecks="_checks", ReadingFinding="_checks",
-    FindingKind="_checks", range_excess="_checks", RangeExcess="_checks", AxisExcess="_checks",
+    FindingKind="_checks", has_header="_readers", join_headerless="_readers", JoinedTable="_readers",
+    range_excess="_checks", RangeExcess="_checks", AxisExcess="_checks",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
