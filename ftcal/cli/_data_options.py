@@ -172,22 +172,6 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
     return [str(joined)]
 
 
-def _in_user_terms(text: str, path: str) -> str:
-    """An error about a file :func:`named_inputs` joined, in the user's terms: their files and lines (the joined
-    file's line 1 is the header --columns gave)."""
-    import re
-
-    table = _JOINED.get(str(path))
-    if table is None:
-        return text
-
-    def line(found) -> str:
-        n = int(found.group(1))
-        return "the --columns names" if n == 1 or n - 2 >= len(table.lines) else f"line {table.lines[n - 2]}"
-
-    return re.sub(r"line (\d+)", line, text.replace(str(path), table.name))
-
-
 def joined_origin(path: str, lines):
     """``(name, lines)``: the user's file(s) and lines of rows read from ``path`` at the 1-based ``lines``, when
     :func:`named_inputs` joined ``path`` (its line 1 the header ``--columns`` gave); else ``(file name, lines)``."""
@@ -353,18 +337,11 @@ def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"
 
     ``confirmed``: the model's stored units were confirmed at fit time (both declared).
     """
-    from ..core import DatasetFileError
     from ._models import load_dataset
 
     columns = dataset_columns(args, stored)
     read = named_inputs(args, [str(path)])[0]
-    try:
-        data = _sources_of_joined(load_dataset(read, role, columns=columns), read)
-    except (CliError, DatasetFileError) as exc:
-        if read == str(path):
-            raise
-        text = str(exc) if isinstance(exc, CliError) else str(cli_error(exc, args))
-        raise CliError(_in_user_terms(text, read)) from None
+    data = _sources_of_joined(load_dataset(read, role, columns=columns), read)
     check_lever_arm(args, data.wrench, path, data.axes, columns.force_unit, columns.torque_unit, confirmed)
     data = _saturated_rows_handled(args, data, path)
     return bad_readings_handled(args, data, path, channel_names(columns.channels, data.n_channels))
