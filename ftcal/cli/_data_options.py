@@ -31,9 +31,10 @@ import sys
 from ._common import CliError, int_in_range
 from ._messages import cli_error, cli_spelling
 
-__all__ = ["add_dataset_options", "add_channel_option", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
+__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "joined_origin", "add_bad_readings_option", "bad_readings_handled",
+           "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
            "add_alpha_option", "training_targets",
-           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_reading", "load_dataset_for_models"]
+           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_wrench_range", "model_reading", "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -47,6 +48,29 @@ def _names(text: str) -> tuple[str, ...]:
         raise argparse.ArgumentTypeError(f"{text!r}: give comma-separated column names, e.g. s1,s2,s3, or a range "
                                          "s0..s7")
     return names
+
+
+#: What ``--drop-bad-readings auto`` drops: single readings no sensor gave and rows written twice (a stuck channel
+#: spoils a whole group: dropped only when named, or with ``all``).
+AUTO_DROPPED = ("out_of_range", "spike", "repeated")
+_CHECKED_KINDS = ("out_of_range", "spike", "stuck", "repeated")
+
+
+def _bad_readings(text: str) -> tuple[str, ...]:
+    """``--drop-bad-readings``: none, auto, all, or a comma-separated list of kinds."""
+    word = text.strip()
+    if word == "none":
+        return ()
+    if word == "auto":
+        return AUTO_DROPPED
+    if word == "all":
+        return _CHECKED_KINDS
+    kinds = tuple(k.strip() for k in word.split(","))
+    unknown = [k for k in kinds if k not in _CHECKED_KINDS]
+    if unknown or not kinds:
+        raise argparse.ArgumentTypeError(f"{text!r}: give none, auto ({','.join(AUTO_DROPPED)}), all, or kinds "
+                                         f"among {','.join(_CHECKED_KINDS)}")
+    return kinds
 
 
 def _saturation(text: str):
@@ -79,8 +103,95 @@ def _add_channels(g) -> None:
 
 
 def add_channel_option(p: argparse.ArgumentParser) -> None:
-    """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench)."""
+    """``--channels`` alone (``predict``, ``retare``: raw readings in, no wrench), and ``--columns``."""
     _add_channels(p)
+    add_columns_option(p)
+
+
+#: The one help text of ``--columns``.
+COLUMNS_HELP = ("the names of the columns of input files without a header line, in order (a range s0..s5 counts); "
+                "several such inputs of one row per sample are joined side by side in the order given, e.g. "
+                "pose.txt wrench.txt --columns x,y,z,qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz")
+
+
+def add_columns_option(g) -> None:
+    """``--columns NAMES`` (once per command, whichever option group asks first)."""
+    if "--columns" in getattr(g, "_option_string_actions", {}):
+        return
+    g.add_argument("--columns", type=_names, metavar="NAME,...", help=COLUMNS_HELP)
+
+
+#: The joined file behind each input path :func:`named_inputs` made -> its table (where its rows came from).
+_JOINED: dict[str, object] = {}
+
+
+def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: bool = True) -> list[str]:
+    """The inputs as the commands read them: with ``--columns``, the headerless text files ``items`` joined side by
+    side into one file with a header (:func:`ftcal.io.join_headerless`, written to a temporary folder removed at
+    exit); without it, ``items`` themselves, a headerless text file refused in one line naming ``--columns`` when
+    ``header_needed`` (a raw-readings input reads without a header)."""
+    import atexit
+    import shutil
+    import tempfile
+    from pathlib import Path
+
+    from ..core import DatasetFileError
+    from ..io import has_header, join_headerless
+
+    columns = getattr(args, "columns", None)
+    texts = [i for i in items if i != "-" and Path(i).is_file()
+             and Path(i).suffix.lower() not in (".npz", ".mat", ".bag", ".mcap", ".db3", ".json")]
+    spell = cli_spelling(args)
+
+    def said(exc) -> str:
+        return " ".join(exc.render(lambda name, setting: "--columns" if name == "columns" else
+                                   spell(name, setting)).split())
+
+    try:
+        if columns is None:
+            if header_needed:
+                for item in texts:
+                    if not has_header(item):
+                        raise CliError(f"{item}: the file has no header line (its first line holds numbers). Fix: "
+                                       "name its columns with --columns NAME,... (e.g. --columns x,y,z,qx,qy,qz,qw,"
+                                       "Fx,Fy,Fz,Tx,Ty,Tz; several such files are joined side by side), or add a "
+                                       "header line")
+            return items
+        if len(texts) != len(items):
+            other = next(i for i in items if i not in texts)
+            raise CliError(f"--columns names the columns of text files without a header; {other} is not one (give "
+                           "text files only, or drop --columns)")
+        table = join_headerless(texts, columns)
+    except DatasetFileError as exc:
+        raise CliError(said(exc)) from None
+    folder = Path(tempfile.mkdtemp(prefix="ftcal-columns-"))
+    atexit.register(shutil.rmtree, folder, True)
+    joined = folder / f"{table.name}.csv"
+    table.write(joined)
+    _JOINED[str(joined)] = table
+    return [str(joined)]
+
+
+def joined_origin(path: str, lines):
+    """``(name, lines)``: the user's file(s) and lines of rows read from ``path`` at the 1-based ``lines``, when
+    :func:`named_inputs` joined ``path`` (its line 1 the header ``--columns`` gave); else ``(file name, lines)``."""
+    import numpy as np
+    from pathlib import Path
+
+    table = _JOINED.get(str(path))
+    if table is None:
+        return Path(path).name, np.asarray(lines)
+    return table.name, np.asarray(table.lines)[np.asarray(lines) - 2]
+
+
+def _sources_of_joined(data, path: str):
+    """A dataset read from a file :func:`named_inputs` joined: its rows named by the user's files and lines."""
+    from ..io import RowSources
+
+    table = _JOINED.get(str(path))
+    if table is not None and data.sources is not None and data.n_samples == len(table.lines):
+        data.sources = RowSources.of_file(table.name, table.lines)
+    return data
 
 
 def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
@@ -122,6 +233,7 @@ def add_unit_options(g: argparse._ArgumentGroup) -> None:
     g.add_argument("--torque-unit", metavar="UNIT",
                    help=f"unit of the file's torques, converted to N·m: {', '.join(TORQUE_UNITS)}, any force unit "
                    "times m, mm, cm, in or ft (default N.m)")
+    add_columns_option(g)
 
 
 def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_unit: str = "N",
@@ -150,7 +262,8 @@ def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_un
 
 
 #: The destinations of :func:`add_dataset_options` (unset: None).
-DATASET_OPTIONS = ("channels", "wrench", "axes", "groups", "force_unit", "torque_unit", "exclude_saturated")
+DATASET_OPTIONS = ("channels", "wrench", "axes", "groups", "force_unit", "torque_unit", "exclude_saturated",
+                   "drop_bad_readings")
 
 
 def add_dataset_options(p: argparse.ArgumentParser) -> None:
@@ -173,6 +286,20 @@ def add_dataset_options(p: argparse.ArgumentParser) -> None:
                    help="drop the rows where a raw channel reaches LOW or HIGH (the ADC's limits), or, with auto, "
                    "where a channel sits at its extreme value in several rows (pinned: saturated); without it such "
                    "rows are pointed out")
+    add_bad_readings_option(g)
+
+
+#: The one help text of ``--drop-bad-readings``.
+BAD_READINGS_HELP = ("the readings are checked before use for values beyond the channel's ADC range, spikes, stuck "
+                     "channels and repeated rows, each pointed out by file:line:channel; this option drops them: "
+                     f"auto ({','.join(AUTO_DROPPED)}), all (stuck channels' rows too), a list of those kinds, or none "
+                     "(default: none, they are pointed out)")
+
+
+def add_bad_readings_option(g) -> None:
+    """``--drop-bad-readings``: which of the flagged readings (:func:`ftcal.io.check_readings`) are dropped."""
+    g.add_argument("--drop-bad-readings", type=_bad_readings, metavar="none|auto|all|KIND,...",
+                   help=BAD_READINGS_HELP)
 
 
 def stored_columns(facts: dict | None, where: str):
@@ -213,9 +340,81 @@ def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset"
     from ._models import load_dataset
 
     columns = dataset_columns(args, stored)
-    data = load_dataset(path, role, columns=columns)
+    read = named_inputs(args, [str(path)])[0]
+    data = _sources_of_joined(load_dataset(read, role, columns=columns), read)
     check_lever_arm(args, data.wrench, path, data.axes, columns.force_unit, columns.torque_unit, confirmed)
-    return _saturated_rows_handled(args, data, path)
+    data = _saturated_rows_handled(args, data, path)
+    return bad_readings_handled(args, data, path, channel_names(columns.channels, data.n_channels))
+
+
+def channel_names(channels, n_channels: int) -> list[str]:
+    """The raw channels' names: those the mapping gives (not a column slice), else ``s0, s1, ...``."""
+    if channels and len(channels) == n_channels and "[" not in channels[0]:  # not a column slice (data[:,0:8])
+        return list(channels)
+    return [f"s{k}" for k in range(n_channels)]
+
+
+#: Most entries of one kind kept in a dataset's ``meta["readings_dropped"]`` / ``["readings_flagged"]`` (the rest
+#: are counted in one more entry).
+MAX_LISTED_READINGS = 100
+
+
+def _listed(entries: list[dict]) -> list[dict]:
+    """``entries`` with at most :data:`MAX_LISTED_READINGS` of each kind, the rest counted in one entry."""
+    out, seen = [], {}
+    for entry in entries:
+        seen[entry["kind"]] = seen.get(entry["kind"], 0) + 1
+        if seen[entry["kind"]] <= MAX_LISTED_READINGS:
+            out.append(entry)
+    for kind, count in seen.items():
+        if count > MAX_LISTED_READINGS:
+            out.append({"kind": kind, "file": None, "line": None, "channel": None, "value": None,
+                        "reason": f"and {count - MAX_LISTED_READINGS} more of this kind"})
+    return out
+
+
+def _record(data, key: str, entries: list[dict]) -> None:
+    if entries:
+        data.meta[key] = _listed(list(data.meta.get(key, [])) + entries)
+
+
+def print_reading_findings(found, source, fix: bool = True) -> None:
+    """One warning line per kind of bad reading found (:meth:`ftcal.io.ReadingChecks.summary`)."""
+    for kind, line in zip(found.kinds(), found.summary()):
+        option = "auto" if kind.value in AUTO_DROPPED else kind.value
+        hint = f"; drop them with --drop-bad-readings {option}" if fix else ""
+        print(f"ftcal: warning: {source}: {line}{hint}", file=sys.stderr)
+
+
+def bad_readings_handled(args: argparse.Namespace, data, path, names=None):
+    """The dataset checked (:func:`ftcal.io.check_readings`): each kind found said in one warning line; the kinds
+    ``--drop-bad-readings`` names dropped. The dropped and the flagged ones are recorded in the dataset's
+    ``meta["readings_dropped"]`` / ``meta["readings_flagged"]``."""
+    from ..io import check_readings
+
+    found = check_readings(data.raw, wrench=data.wrench, groups=data.group, sources=data.row_sources(),
+                           channel_names=names)
+    drop_kinds = tuple(getattr(args, "drop_bad_readings", None) or ())
+    kept_kinds = [k for k in found.kinds() if k.value not in drop_kinds]
+    if found.clean:
+        return data
+    dropping = [k for k in found.kinds() if k.value in drop_kinds]
+    drop = found.mask(dropping)
+    if drop.all():
+        raise CliError(f"{path}: --drop-bad-readings would drop every one of the {data.n_samples} rows; check the "
+                       "data (ftcal names each bad reading without the option)")
+    print_reading_findings(type(found)(findings=tuple(f for f in found.findings if f.kind in kept_kinds),
+                                       n_rows=found.n_rows), path)
+    dropped = found.to_json(dropping)
+    flagged = found.to_json(kept_kinds)
+    if drop.any():
+        if not getattr(args, "quiet", False):
+            print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with bad readings ("
+                  f"{', '.join(f'{len(found.of_kind(k))} {k.value}' for k in dropping)})", file=sys.stderr)
+        data = data.subset(~drop)
+    _record(data, "readings_dropped", dropped)
+    _record(data, "readings_flagged", flagged)
+    return data
 
 
 def _saturated_rows_handled(args: argparse.Namespace, data, path):
@@ -236,18 +435,33 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
                 print(f"ftcal: warning: {path}: {int(drop.sum())} of {data.n_samples} rows have {said}: saturated "
                       "readings? Fix: drop them with --exclude-saturated auto (or LOW,HIGH, the ADC's limits)",
                       file=sys.stderr)
+                _record(data, "readings_flagged", _saturated_entries(data, drop, said))
             return data
     if not drop.any():
         if not quiet:
             print(f"ftcal: {path}: no rows with {said.split(' (')[0]}; none dropped", file=sys.stderr)
         return data
+    entries = _saturated_entries(data, drop, said)
     if drop.all():
         raise CliError(f"{path}: --exclude-saturated would drop every one of the {data.n_samples} rows ({said}); "
                        "check the limits")
     kept = data.subset(~drop)
+    _record(kept, "readings_dropped", entries)
     if not quiet:
         print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
     return kept
+
+
+def _saturated_entries(data, mask, said: str) -> list[dict]:
+    """The rows of ``mask`` as ``saturated`` entries of ``meta["readings_dropped"/"readings_flagged"]``."""
+    import numpy as np
+
+    sources = data.row_sources()
+    out = []
+    for row in np.flatnonzero(mask):
+        file, line = sources.where(int(row))
+        out.append({"kind": "saturated", "file": file, "line": line, "channel": None, "value": None, "reason": said})
+    return out
 
 
 def training_targets(data):
@@ -266,7 +480,31 @@ def fit_data_facts(args: argparse.Namespace, data) -> dict:
     columns = dataset_columns(args)
     return {"columns": columns.to_dict(), "axes": list(data.axes), "n_channels": data.n_channels,
             "units_confirmed": getattr(args, "force_unit", None) is not None
-            and getattr(args, "torque_unit", None) is not None}
+            and getattr(args, "torque_unit", None) is not None,
+            "wrench_range": [data.wrench.min(axis=0).tolist(), data.wrench.max(axis=0).tolist()]}
+
+
+def model_wrench_range(model_path, axes):
+    """The calibrated range of each of ``axes`` (the loads the model was fitted on, [N, N·m]) as ``(low, high)``
+    arrays, or None for a model file that does not keep it (fitted by an older ftcal, or in Python)."""
+    import numpy as np
+
+    from ..core._exceptions import ModelFileError
+    from ..persistence import model_data
+
+    try:
+        facts = model_data(model_path)
+    except ModelFileError as exc:
+        raise cli_error(exc) from None
+    found, fitted_axes = facts.get("wrench_range"), facts.get("axes")
+    try:
+        low, high = (np.asarray(b, dtype=float) for b in found)
+    except (TypeError, ValueError):
+        return None
+    if not isinstance(fitted_axes, list) or low.shape != (len(fitted_axes),) or high.shape != low.shape \
+            or list(fitted_axes) != list(axes) or not (np.isfinite(low).all() and np.isfinite(high).all()):
+        return None
+    return low, high
 
 
 def model_reading(model_path) -> tuple:

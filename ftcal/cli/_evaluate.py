@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
               "DATASET' for held-out figures by grouped cross-validation.", file=sys.stderr)
     alpha = evaluation_alpha(data, args.alpha)
     noise_floor = data.meta.get("noise_floor")
-    predictions, reports = {}, {}
+    predictions, reports, beyond = {}, {}, {}
     with console.progress(total=len(labels), desc="evaluating", unit="model") as bar:
         for label, path in zip(labels, args.models):
             model = load_model_file(path)
@@ -79,7 +79,14 @@ def run(args: argparse.Namespace) -> int:
                 raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "
                                f"{data.n_axes} ({', '.join(data.axes)}); give the dataset of that sensor")
             reports[label] = ftcal.core.calibration_metrics(data.wrench, predictions[label], alpha=alpha, axes=data.axes)
+            beyond[label] = extrapolation(model, path, data)
             bar.update(1)
+    for label, found in beyond.items():
+        for what, excess in found.items():
+            if excess.any:
+                print(f"ftcal: warning: {args.dataset}: {int(excess.mask.sum())} of {data.n_samples} rows go beyond "
+                      f"the {what} {label} was calibrated on ({excess.words(AXIS_UNITS)}); its figures there are "
+                      "extrapolations", file=sys.stderr)
     table = comparison_table(reports, noise_floor)
     axes = axis_table(reports)
     # metrics and plots are one set: all are put in place, or none (a failing plot leaves no metrics behind)
@@ -89,13 +96,16 @@ def run(args: argparse.Namespace) -> int:
             "dataset": str(args.dataset),
             "alpha": alpha,
             "noise_floor": noise_floor,
-            "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict()}
+            "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict(),
+                               "extrapolation": {what.split()[0]: e.to_dict() for what, e in beyond[label].items()}}
                        for label, path in zip(labels, args.models)},
         })
         note = (f"\n**Training data of {', '.join(trained_on)}**: these are training errors, not held-out ones.\n"
                 if trained_on else "")
-        tmps["metrics.md"].write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n{note}\n{table}\n\n"
-                                      f"RMSE per axis:\n\n{axes}\n")
+        outside = "".join(f"\n**Beyond the {what} {label} was calibrated on**: {e.words(AXIS_UNITS)}.\n"
+                          for label, found in beyond.items() for what, e in found.items() if e.any)
+        tmps["metrics.md"].write_text(f"# Evaluation on {args.dataset} (alpha = {alpha:.4g} 1/m)\n{note}{outside}\n"
+                                      f"{table}\n\nRMSE per axis:\n\n{axes}\n")
         if not args.no_plots:
             console.info("plotting ...")
             paths = {"distribution": tmps[EVALUATION_PLOTS[0]], "axis": tmps[EVALUATION_PLOTS[1]]}
@@ -107,6 +117,31 @@ def run(args: argparse.Namespace) -> int:
     print(axes)
     console.info(f"results in {args.out}/")
     return 0
+
+
+#: The unit of each wrench axis, for the extrapolation's words.
+AXIS_UNITS = {"Fx": "N", "Fy": "N", "Fz": "N", "Tx": "N·m", "Ty": "N·m", "Tz": "N·m"}
+
+
+def extrapolation(model, model_path, data) -> dict:
+    """How far the dataset goes beyond what the model was calibrated on (:func:`ftcal.io.range_excess`): its loads
+    beyond the calibration's wrench range per axis (``"loads"``, when the model file keeps that range), and its
+    readings beyond the calibration's readings per channel (``"readings"``, as ``predict --range`` counts them)."""
+    from ..io import range_excess
+    from ._data_options import channel_names, model_wrench_range
+    from ._predict import retare_shift
+
+    found = {}
+    loads = model_wrench_range(model_path, data.axes)
+    if loads is not None:
+        found["loads"] = range_excess(data.wrench, *loads, names=data.axes)
+    own = getattr(model, "calibrated_range_", None)
+    X = np.asarray(model_inputs(model, data), dtype=float)
+    if own is not None and np.shape(own) == (2, X.shape[1]):
+        shift = retare_shift(model, X.shape[1])
+        names = channel_names(None, data.n_channels) + ["temperature"] * (X.shape[1] - data.n_channels)
+        found["readings"] = range_excess(X, own[0] + shift, own[1] + shift, names=names)
+    return found
 
 
 def training_data_of(dataset, model_paths) -> list[str]:

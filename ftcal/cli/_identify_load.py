@@ -18,7 +18,7 @@ from ._common import (
     path_problem,
     write_json,
 )
-from ._data_options import add_unit_options, check_lever_arm
+from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
 from ._tool_drift import add_drift_options
@@ -236,6 +236,7 @@ def run_identify(args: argparse.Namespace) -> int:
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
+    args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     poses = identification_poses(args, console)
     _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
@@ -325,6 +326,7 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
+    args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     tool = ftcal.experiment.ToolLoad.load(args.tool)
     from ftcal.experiment import recording_rows
 

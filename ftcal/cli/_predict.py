@@ -10,9 +10,11 @@ import numpy as np
 
 from ._models import load_model_file
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
-from ._data_options import add_channel_option, model_reading
+from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
+                            print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core._wrench import default_axes
+from ..io import RangeExcess, range_excess
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -199,6 +201,8 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
+    shown = args.input
+    args.input = named_inputs(args, [args.input], header_needed=False)[0]  # --columns: a headerless file named
     problem = None if args.input == "-" else path_problem(args.input, streams=True)
     if problem is not None:
         raise CliError(f"{problem} (the raw readings to predict)")
@@ -238,6 +242,11 @@ def run(args: argparse.Namespace) -> int:
     if reach is not None and own_range is not None:
         own_range = partial(model.out_of_range, spread=False)  # spread below, across the chunks
     since = [None]
+    # the readings of a file are checked as they go by (a live stream, one line at a time, is not)
+    checking = args.input != "-" and chunk > 1
+    findings: list = []
+    excess: list = []  # per chunk, the readings beyond --range
+    range_names = partial(_range_names, channels, temperature)
 
     def emit(out) -> int:
         total = 0
@@ -256,13 +265,16 @@ def run(args: argparse.Namespace) -> int:
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines, args) from None
             if limits is not None:
-                flags = np.any((raw < limits[0]) | (raw > limits[1]), axis=1)
+                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1])))
+                flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
             if flags is not None and reach is not None:
                 flags, since[0] = spread_flags(flags, reach, since[0])
             if flags is not None:
                 beyond[0] += int(flags.sum())
+            if checking:
+                findings.extend(_chunk_findings(raw, lines, args.input, channels, temperature, total))
             if limits is None:
                 write_wrench_rows(out, values, False)
             else:
@@ -280,13 +292,41 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
             total = emit(fh)
         console.info(f"wrote {total} wrenches to {args.output}")
+    if findings:
+        from ..io import ReadingChecks
+
+        print_reading_findings(ReadingChecks(findings=tuple(findings), n_rows=total), shown, fix=False)
     if beyond[0]:
         column = " (out_of_range = 1)" if limits is not None else ""
         what = ("readings lie beyond the calibrated range, or follow one closely enough that their load history holds "
                 "it," if reach is not None else "readings lie beyond the calibrated range")
-        print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}; their wrenches are "
-              "extrapolations", file=sys.stderr)
+        per_channel = f" ({RangeExcess.combined(excess).words()})" if excess else ""
+        print(f"ftcal: warning: {beyond[0]} of {total} {what} of {range_source}{column}{per_channel}; their wrenches "
+              "are extrapolations", file=sys.stderr)
     return 0
+
+
+def _range_names(channels, temperature: bool, width: int) -> list[str]:
+    """The names of an input's ``width`` columns (its channels, then the temperature of a compensated model)."""
+    if temperature:
+        return channel_names(channels, width - 1) + ["temperature"]
+    return channel_names(channels, width)
+
+
+def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset: int) -> list:
+    """The bad readings (:func:`ftcal.io.check_readings`) of one chunk of ``source``, its rows counted from
+    ``offset``: named by the input's line (the row of an ``.npz`` / ``.mat``)."""
+    from dataclasses import replace
+
+    from ..io import RowSources, check_readings
+
+    if Path(source).suffix.lower() in (".npz", ".mat"):
+        name, numbers, counted = Path(source).name, np.asarray(lines) + 1, "row"
+    else:
+        (name, numbers), counted = joined_origin(source, lines), "line"
+    found = check_readings(raw, sources=RowSources.of_file(name, numbers, counted),
+                           channel_names=_range_names(channels, temperature, raw.shape[1]))
+    return [replace(f, rows=f.rows + offset) for f in found.findings]
 
 
 def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,

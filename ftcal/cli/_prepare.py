@@ -20,6 +20,7 @@ from ._common import (
     write_json,
 )
 from ..io._logs import run_log_files
+from ._data_options import add_columns_option, named_inputs
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
 
 EXAMPLE = """\
@@ -87,6 +88,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--channels", dest="n_channels", action=_DeprecatedChannelCount, metavar="N",
                    help=argparse.SUPPRESS)  # the old spelling, hidden: --channels names columns everywhere else
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
+    add_columns_option(p)
     add_bag_options(p, wrench=False)
     add_recording_options(p.add_argument_group("still poses in ROS bags"))
     add_output_options(p, "ftcal-data")
@@ -115,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     from ..reporting import _plots
 
     console = Console(args.quiet)
+    args.logs = named_inputs(args, args.logs)  # --columns: headerless logs named, joined side by side
     name = f"dataset.{args.format}"
     plan = OutputPlan(args.out, [name, "prepare.json", "coverage.png"], args.force)
     bags = bag_files(args.logs)

@@ -57,9 +57,11 @@ def _kept_data(model_path) -> dict | None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ._data_options import named_inputs
     from ._predict import raw_chunks
 
     console = Console(args.quiet)
+    args.readings = named_inputs(args, [args.readings], header_needed=False)[0]  # --columns: a headerless file named
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
     problem = None if args.readings == "-" else path_problem(args.readings, streams=True)
     if problem is not None:

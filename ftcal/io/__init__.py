@@ -1,6 +1,7 @@
 """Files of calibration data: the calibration dataset (:class:`CalibrationDataset`: CSV, NPZ, MAT), column
 mappings and declared units (:class:`ColumnMap`), the recorded run logs of a robot-held experiment
-(:class:`RunLog`), pose files (orientation + wrench per row) and ROS bags.
+(:class:`RunLog`), pose files (orientation + wrench per row) and ROS bags; the readings checked before use
+(:func:`check_readings`: impossible values, spikes, stuck channels, repeated rows, each named by file and line).
 
 Layer: above :mod:`ftcal.core`. Imports only :mod:`ftcal.core`.
 """
@@ -12,6 +13,9 @@ _PUBLIC = dict(
     CalibrationDataset="_dataset", ColumnMap="_readers", RunLog="_logs", read_run_log="_logs",
     write_run_log="_logs", run_log_files="_logs", PoseRecording="_poses", read_pose_file="_poses", BagRecording="_bags",
     read_bag="_bags", write_bag="_bags", FORCE_UNITS="_readers", TORQUE_UNITS="_readers",
+    RowSources="_dataset", check_readings="_checks", ReadingChecks="_checks", ReadingFinding="_checks",
+    FindingKind="_checks", has_header="_readers", join_headerless="_readers", JoinedTable="_readers",
+    range_excess="_checks", RangeExcess="_checks", AxisExcess="_checks",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -54,7 +54,7 @@ from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
                        temperature_message, _slice_columns)
 
-__all__ = ["CalibrationDataset", "DATASET_SUFFIXES", "read_channels"]
+__all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
 _CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
 #: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
@@ -279,6 +279,59 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
                        group=group, temperature=temperature)
 
 
+@dataclass(frozen=True)
+class RowSources:
+    """Where each row of a dataset came from: the file (by name) and the 1-based line of a CSV, or the 1-based row
+    of an ``.npz`` / ``.mat`` array.
+
+    Examples
+    --------
+    >>> src = RowSources(files=("a.csv",), counted=("line",), file_index=np.zeros(2, int), number=np.array([3, 4]))
+    >>> src.where(1)
+    ('a.csv', 4)
+    >>> src.describe(1)
+    'a.csv:4'
+    """
+
+    files: tuple[str, ...]
+    counted: tuple[str, ...]
+    file_index: NDArray[np.int64]
+    number: NDArray[np.int64]
+
+    @classmethod
+    def of_file(cls, name: str, numbers, counted: str = "line") -> "RowSources":
+        """The rows of one file, numbered ``numbers`` (1-based lines of a text file, rows of an array file)."""
+        numbers = np.asarray(numbers, dtype=np.int64)
+        return cls(files=(str(name),), counted=(counted,), file_index=np.zeros(numbers.size, dtype=np.int64),
+                   number=numbers)
+
+    @classmethod
+    def joined(cls, parts: list["RowSources"]) -> "RowSources":
+        """The sources of datasets stacked in the order given."""
+        files, counted, index, number = [], [], [], []
+        for part in parts:
+            index.append(part.file_index + len(files))
+            files.extend(part.files)
+            counted.extend(part.counted)
+            number.append(part.number)
+        return cls(files=tuple(files), counted=tuple(counted), file_index=np.concatenate(index),
+                   number=np.concatenate(number))
+
+    def subset(self, index) -> "RowSources":
+        """The sources of the rows ``index`` (a mask or integer indices)."""
+        return RowSources(self.files, self.counted, self.file_index[index], self.number[index])
+
+    def where(self, row: int) -> tuple[str, int]:
+        """``(file name, 1-based line or row)`` of ``row`` (counted from 0 in the dataset)."""
+        return self.files[int(self.file_index[row])], int(self.number[row])
+
+    def describe(self, row: int) -> str:
+        """``"file:line"`` of ``row`` (``"file:row N"`` for an array file)."""
+        f = int(self.file_index[row])
+        n = int(self.number[row])
+        return f"{self.files[f]}:{n}" if self.counted[f] == "line" else f"{self.files[f]}:row {n}"
+
+
 @dataclass
 class CalibrationDataset:
     """Raw readings and the reference wrenches they were recorded under.
@@ -301,6 +354,8 @@ class CalibrationDataset:
         The wrench axes, a subset of ``Fx, Fy, Fz, Tx, Ty, Tz`` in that order: a 3-axis load cell has
         ``("Fx", "Fy", "Fz")``, a 1-axis cell ``("Fz",)``. Default: Fx..Tz for six columns, else the first
         columns of Fx..Tz.
+    sources : RowSources, optional
+        Where each row came from (file and line), set by :meth:`load`; kept by :meth:`subset`. Not saved.
 
     Examples
     --------
@@ -318,6 +373,7 @@ class CalibrationDataset:
     meta: dict = field(default_factory=dict)
     temperature: NDArray[np.float64] | None = None
     axes: tuple[str, ...] | None = None
+    sources: RowSources | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for name in ("raw", "wrench"):
@@ -357,6 +413,17 @@ class CalibrationDataset:
                 raise DatasetFileError(f"{exc}{counted}") from None
         if not isinstance(self.meta, dict):
             raise DatasetFileError(f"meta must be a dict (JSON object); got {type(self.meta).__name__}.")
+        if self.sources is not None and self.sources.number.shape != (self.raw.shape[0],):
+            raise DatasetFileError(f"sources name {self.sources.number.size} rows but the dataset has "
+                                   f"{self.raw.shape[0]}.")
+
+    def row_sources(self) -> RowSources:
+        """Where each row came from: :attr:`sources`, else the rows of the dataset numbered from 1 (named by the
+        meta's ``source_file`` when known)."""
+        if self.sources is not None:
+            return self.sources
+        name = self.meta.get("source_file") if isinstance(self.meta.get("source_file"), str) else "dataset"
+        return RowSources.of_file(name, np.arange(1, self.n_samples + 1), "row")
 
     @property
     def n_samples(self) -> int:
@@ -382,6 +449,7 @@ class CalibrationDataset:
             meta=dict(self.meta),
             temperature=None if self.temperature is None else self.temperature[index],
             axes=self.axes,
+            sources=None if self.sources is None else self.sources.subset(index),
         )
 
     def features(self, temperature: bool = False) -> NDArray[np.float64]:
@@ -562,10 +630,18 @@ class CalibrationDataset:
             temperature = np.concatenate([p.temperature for p in parts])
         groups = None if any(p.group is None for p in parts) else np.concatenate([p.group for p in parts])
         meta = {**parts[0].meta, "source_files": [p.name for p in files]}
+        meta.pop("group_names", None)
+        meta.pop("group_labels", None)
+        if not by_file and groups is not None and all(isinstance(p.meta.get("group_names"), list) for p in parts):
+            names: dict[str, int] = {}  # text labels, numbered per file: one numbering for the folder
+            groups = np.concatenate([np.array([names.setdefault(p.meta["group_names"][g], len(names))
+                                               for g in p.group], dtype=np.int64) for p in parts])
+            meta["group_labels"] = meta["group_names"] = list(names)
         if by_file:
-            meta["group_labels"] = [p.name for p in files]
+            meta["group_labels"] = meta["group_names"] = [p.name for p in files]
+        sources = RowSources.joined([p.row_sources() for p in parts])
         ds = cls(raw=np.vstack([p.raw for p in parts]), wrench=np.vstack([p.wrench for p in parts]), group=groups,
-                 meta=meta, temperature=temperature, axes=parts[0].axes)
+                 meta=meta, temperature=temperature, axes=parts[0].axes, sources=sources)
         if columns.groups is not None or by_file:
             _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
                           columns.groups or "file")
@@ -581,6 +657,7 @@ class CalibrationDataset:
             names = tuple(n for n in source.names() if n != "meta_json")
             ds = _dataset_from_arrays(cls, source, columns, meta)
         ds._check_finite(path)
+        ds.sources = RowSources.of_file(path.name, np.arange(1, ds.n_samples + 1), "row")
         return ds, names
 
     @classmethod
@@ -645,7 +722,7 @@ class CalibrationDataset:
         if used.group is not None:
             group, labels = _group_column(group_texts, line_nos, path, names[used.group])
             if labels is not None:
-                meta = {**meta, "group_labels": labels}
+                meta = {**meta, "group_labels": labels, "group_names": labels}
         temperature = None
         if used.temperature is not None:
             try:
@@ -656,7 +733,7 @@ class CalibrationDataset:
                 raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
         try:
             ds = cls(raw=data[:, :n_ch], wrench=data[:, n_ch:n_ch + n_w], group=group, meta=meta,
-                     temperature=temperature, axes=used.axes)
+                     temperature=temperature, axes=used.axes, sources=RowSources.of_file(path.name, line_nos))
         except DatasetFileError as exc:
             raise exc.located(f"{path}: ") from None
         return ds, tuple(names)

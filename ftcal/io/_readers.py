@@ -55,6 +55,9 @@ __all__ = [
     "ArrayFile",
     "read_npy_member",
     "check_real_array",
+    "has_header",
+    "join_headerless",
+    "JoinedTable",
 ]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
@@ -812,3 +815,163 @@ def check_real_array(value, name: str, where: str, kind: str = "variable") -> np
         raise DatasetFileError(f"{where}: {kind} {name!r} has dtype {value.dtype} ({shown}); it must hold real "
                                "numbers (float or integer).")
     return value
+
+
+# ------------------------------------------------------------------ headerless text files named by the user
+def _text_fields(line: str) -> list[str]:
+    """A text line's fields: comma-separated, or separated by spaces / tabs when the line holds no comma."""
+    return [f.strip() for f in line.split(",")] if "," in line else line.split()
+
+
+def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]], list[str] | None]:
+    """A text file's leading ``#`` comment lines, its data rows ``(1-based line, fields)`` and its header's fields
+    (None without one: a header is a first line holding a field that is not a number)."""
+    from pathlib import Path
+
+    from ..core._columns import is_number
+
+    try:
+        text = Path(path).read_text(encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        raise DatasetFileError(f"{path}: not UTF-8 text ({exc.reason}); {what} is a text file.") from None
+    except OSError as exc:
+        raise DatasetFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
+    comments, rows, header = [], [], None
+    for no, line in enumerate(text.splitlines(), 1):
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if stripped.startswith("#"):
+            if not rows and header is None:
+                comments.append(stripped)
+            continue
+        fields = _text_fields(stripped)
+        if not rows and header is None and any(f and not is_number(f) for f in fields):
+            header = fields
+            continue
+        rows.append((no, fields))
+    return comments, rows, header
+
+
+def has_header(path) -> bool:
+    """Whether the text file ``path`` starts (after ``#`` comments and blank lines) with a line naming its columns.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (folder / "a.txt").write_text("0.1 0.2 0.3\\n"); _ = (folder / "b.csv").write_text("# x\\nFx,Fy\\n1,2\\n")
+    >>> has_header(folder / "a.txt"), has_header(folder / "b.csv")
+    (False, True)
+    """
+    return _data_lines(path, "the file")[2] is not None
+
+
+@dataclass(frozen=True)
+class JoinedTable:
+    """Headerless text files joined side by side under the column names the user gave (:func:`join_headerless`).
+
+    Attributes
+    ----------
+    names : tuple of str
+        The columns, in order.
+    rows : list of list of str
+        The fields of each row (the files' fields, side by side).
+    lines : tuple of int
+        The 1-based line of each row in the first file (the files' rows are paired in order).
+    files : tuple of str
+        The files joined.
+    comments : tuple of str
+        The first file's leading ``#`` comment lines.
+    """
+
+    names: tuple[str, ...]
+    rows: list
+    lines: tuple[int, ...]
+    files: tuple[str, ...]
+    comments: tuple[str, ...] = ()
+
+    @property
+    def name(self) -> str:
+        """The files' names joined by ``+`` (``pose.txt+wrench.txt``)."""
+        from pathlib import Path
+
+        return "+".join(Path(f).name for f in self.files)
+
+    def to_csv(self) -> str:
+        """The table as CSV text: the comments, a header line of :attr:`names`, one line per row."""
+        body = [",".join(self.names)] + [",".join(r) for r in self.rows]
+        return "\n".join([*self.comments, *body]) + "\n"
+
+    def write(self, path) -> None:
+        """Write :meth:`to_csv` to ``path`` (a new file)."""
+        from pathlib import Path
+
+        with open(Path(path), "x", encoding="utf-8", newline="\n") as fh:
+            fh.write(self.to_csv())
+
+
+def join_headerless(paths: Sequence, names: Sequence[str]) -> JoinedTable:
+    """Text files without a header, joined side by side in the order given, their columns named ``names``.
+
+    A pose file ``x,y,z,qx,qy,qz,qw`` and a wrench file ``Fx,...,Tz`` of a gravity-compensation tool, both
+    without a header and one row per pose, become one table of 13 named columns. Fields are comma-separated, or
+    separated by spaces / tabs; ``#`` comments and blank lines are skipped. Ranges such as ``s0..s5`` are written
+    out (:func:`expand_names`).
+
+    Raises
+    ------
+    DatasetFileError
+        A file that has a header (its names would be lost), files of different row counts (naming both and their
+        counts), a row of another width than the file's first, or names that do not count the files' columns.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> folder = pathlib.Path(tempfile.mkdtemp())
+    >>> _ = (folder / "pose.txt").write_text("0 0 0.5\\n0 0.1 0.5\\n")
+    >>> _ = (folder / "wrench.txt").write_text("1.0,2.0\\n1.5,2.5\\n")
+    >>> table = join_headerless([folder / "pose.txt", folder / "wrench.txt"], ["x", "y", "z", "Fx", "Fz"])
+    >>> print(table.to_csv(), end="")
+    x,y,z,Fx,Fz
+    0,0,0.5,1.0,2.0
+    0,0.1,0.5,1.5,2.5
+    >>> table.name, table.lines
+    ('pose.txt+wrench.txt', (1, 2))
+    """
+    names = expand_names(list(names), "columns")
+    if not names or any(not n for n in names):
+        raise DatasetFileError(f"{{columns}} {','.join(names)!r} holds an empty name; give comma-separated names, "
+                               "e.g. x,y,z,qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz.", parameter="columns", value=names)
+    dups = sorted({n for n in names if names.count(n) > 1})
+    if dups:
+        raise DatasetFileError(f"{{columns}} names {dups[0]!r} twice; each column once.", parameter="columns",
+                               value=names)
+    parts, widths = [], []
+    for path in paths:
+        comments, rows, header = _data_lines(path, "a headerless input")
+        if header is not None:
+            raise DatasetFileError(f"{path}: the file has a header ({','.join(header)[:80]}); {{columns}} names the "
+                                   "columns of files without one. Fix: drop {columns}, or drop the header line.",
+                                   parameter="columns", value=names)
+        if not rows:
+            raise DatasetFileError(f"{path}: no data rows.")
+        width = len(rows[0][1])
+        for no, fields in rows:
+            if len(fields) != width:
+                raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the file's first row has "
+                                       f"{width}; repair or remove that line.")
+        parts.append((comments, rows))
+        widths.append(width)
+    counts = [len(rows) for _, rows in parts]
+    if len(set(counts)) > 1:
+        k = next(i for i, c in enumerate(counts) if c != counts[0])
+        raise DatasetFileError(f"{paths[0]} holds {counts[0]} rows but {paths[k]} holds {counts[k]}; files joined "
+                               "side by side need one row each per sample, in the same order.")
+    if sum(widths) != len(names):
+        held = " + ".join(f"{p} ({w})" for p, w in zip(paths, widths))
+        raise DatasetFileError(f"{{columns}} names {len(names)} columns but the files hold {sum(widths)}: {held}; "
+                               "name each column once, in file order.", parameter="columns", value=names)
+    rows = [[f for _, part in parts for f in part[i][1]] for i in range(counts[0])]
+    return JoinedTable(names=names, rows=rows, lines=tuple(no for no, _ in parts[0][1]),
+                       files=tuple(str(p) for p in paths), comments=tuple(parts[0][0]))
