@@ -62,7 +62,7 @@ _PUBLIC: dict[str, str] = {
 }
 
 #: The public subpackages (imported on first access: ``ftcal.robot`` after ``import ftcal``).
-SUBPACKAGES = ("core", "model_selection", "io", "calibrators", "networks", "compose", "persistence", "reporting", "robot", "simulation", "experiment", "benchmark")
+SUBPACKAGES = ("core", "model_selection", "io", "calibrators", "networks", "compose", "persistence", "reporting", "robot", "simulation", "experiment", "benchmark", "workflow")
 
 #: Public names that moved to a subpackage or were renamed: each still answers, with a FutureWarning naming its
 #: new home, for one release (then it is removed).
