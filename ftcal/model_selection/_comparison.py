@@ -55,7 +55,7 @@ class RowStatus(enum.Enum):
     STOPPED = "stopped"
 
 
-@dataclass
+@dataclass(eq=False)  # rows hold arrays: compare their to_dict() figures, not the objects
 class ComparisonRow:
     """One model of a :class:`Comparison`.
 
@@ -173,7 +173,7 @@ def _number(value) -> float | None:
     return None if value is None else float(value)
 
 
-@dataclass
+@dataclass(eq=False)  # compare to_dict() (what a model file keeps), not the arrays
 class Comparison:
     """Rows scored on one :class:`FoldPlan`, the one-SE choice among them and why.
 
