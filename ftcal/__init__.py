@@ -60,7 +60,7 @@ _PUBLIC: dict[str, str] = {
 }
 
 #: The public subpackages (imported on first access: ``ftcal.robot`` after ``import ftcal``).
-SUBPACKAGES = ("core", "model_selection", "io", "calibrators", "networks", "compose", "persistence", "reporting", "robot", "simulation", "experiment", "benchmark")
+SUBPACKAGES = ("core", "model_selection", "io", "calibrators", "networks", "compose", "persistence", "reporting", "robot", "simulation", "experiment", "benchmark", "workflow")
 
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC, SUBPACKAGES)

@@ -85,7 +85,7 @@ def test_auto_model_file_round_trip(tmp_path):
     auto = AutoCalibrator(candidates=CLOSED_FORM[:3], alpha=1.0, baselines=False).fit(raw, w, groups=groups)
     path = ftcal.save_model(auto, tmp_path / "auto.model.npz")
     back = ftcal.load_model(path)
-    assert back.best_name_ == auto.best_name_ and back.comparison_ == auto.comparison_
+    assert back.best_name_ == auto.best_name_ and back.comparison_.to_dict() == auto.comparison_.to_dict()
     np.testing.assert_array_equal(back.predict(raw), auto.predict(raw))
 
 

@@ -55,7 +55,7 @@ class RowStatus(enum.Enum):
     STOPPED = "stopped"
 
 
-@dataclass
+@dataclass(eq=False)  # rows hold arrays: compare their to_dict() figures, not the objects
 class ComparisonRow:
     """One model of a :class:`Comparison`.
 
@@ -173,7 +173,7 @@ def _number(value) -> float | None:
     return None if value is None else float(value)
 
 
-@dataclass
+@dataclass(eq=False)  # compare to_dict() (what a model file keeps), not the arrays
 class Comparison:
     """Rows scored on one :class:`FoldPlan`, the one-SE choice among them and why.
 
@@ -364,7 +364,7 @@ class Comparison:
             "verdict": [r.verdict for r in rows], "excess_mse": [r.excess_mse for r in rows],
             "excess_se": [r.excess_se for r in rows], "against": [r.against for r in rows],
             "chosen": self.chosen, "best": self.best_name, "why": self.why, "alpha": float(self.alpha),
-            "plan": self.facts, "folds": self.facts.get("note") or self.facts.get("kind", "none"), "n_splits": self.facts.get("n_splits", 0),
+            "plan": self.facts, "folds": self._folds_word(), "n_splits": self.facts.get("n_splits", 0),
             "se_units": self.se_units, "tie_mse": self.tie_mse,
             "min_training_rows": self.min_training_rows,
             "stability": None if self.stability is None else self.stability.to_dict(),
@@ -375,6 +375,14 @@ class Comparison:
         if self.tie_mse is not None and self.best_name is not None:
             out["rule"] = {"best": self.best_name, "tie_mse": self.tie_mse, "units": out["se_units"]}
         return out
+
+    def _folds_word(self) -> str:
+        """The ``folds`` column of earlier versions: ``"group"`` or ``"kfold"`` for plain folds, else the note
+        (replaced folds, repeated rows kept together, ordered blocks, none)."""
+        kind, note = self.facts.get("kind", "none"), str(self.facts.get("note") or "")
+        if kind == "group" or (kind == "kfold" and "distinct rows" not in note):
+            return kind
+        return note or kind
 
     def to_state(self) -> dict:
         """What a model file keeps: :meth:`to_dict` (read back by :meth:`from_dict`)."""
@@ -538,9 +546,12 @@ def _score_job(estimator, X, y, folds, groups, out_of_fold, structure) -> tuple:
     Returns ``(structured estimator or None, [(test, pred)], error text or None, seconds)``."""
     from sklearn.base import clone
 
+    from threadpoolctl import threadpool_limits
+
     t0 = time.perf_counter()
     try:
-        with warnings.catch_warnings():
+        # BLAS on one thread, scoped to this job: the matrices are small and the jobs share the cores
+        with warnings.catch_warnings(), threadpool_limits(limits=1):
             warnings.simplefilter("ignore", UserWarning)
             chosen = None
             if structure:
