@@ -429,7 +429,7 @@ def _check_wrench_frame(path: Path, sensor: str, first: str | None, frame_id: st
     own = _frame(frame_id)
     if first is not None and _frame(first) != own:
         raise LogFormatError(
-            f"{path}: the wrenches of {sensor} change frame at {t:.9g} s, from {_frame(first)!r} to {own!r} (their "
+            f"{path}: the wrenches of {sensor} change frame at {t:.3f} s, from {_frame(first)!r} to {own!r} (their "
             "header.frame_id); a recording's wrenches are in one frame, and those after the change would be read "
             "in the wrong one. Cut the bag at the change (ros2 bag convert / rosbag filter) and read each part "
             "with its own frame.")
@@ -497,7 +497,7 @@ def _add_joint_state(path: Path, topic: str, count: int, max_samples: int, group
     if names not in groups:
         if len(groups) >= _MAX_JOINT_GROUPS:
             raise LogFormatError(f"{path}: topic {topic} names more than {_MAX_JOINT_GROUPS} different sets of joints "
-                                 f"(at {t:.9g} s); give the arm's joint-state topic.", parameter="joint_topic",
+                                 f"(at {t:.3f} s); give the arm's joint-state topic.", parameter="joint_topic",
                                  value=topic, fix="name it with {joint_topic}",
                                  settings={"joint_topic": Placeholder("TOPIC")})
         groups[names] = _Stream(count, max_samples, average=False)
@@ -562,7 +562,7 @@ def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], q
     if np.isfinite(norm) and norm > _MIN_QUATERNION_NORM:
         return ""
     what = "is not finite" if not np.isfinite(norm) else "has zero length"
-    return (f"{path}: topic {topic} at {t:.9g} s: the transform {edge[0]} -> {edge[1]} has the quaternion "
+    return (f"{path}: topic {topic} at {t:.3f} s: the transform {edge[0]} -> {edge[1]} has the quaternion "
             f"(x, y, z, w) = ({', '.join(f'{c:.6g}' for c in quat)}), which {what}; a rotation's quaternion has "
             "length 1. Fix the publisher of that transform, or record again.")
 
@@ -582,7 +582,7 @@ class _TfTree:
         key = (_frame(tr.header.frame_id), _frame(tr.child_frame_id))
         known = self.parents.setdefault(key[1], {})
         if key[0] not in known and len(known) < 8:
-            known[key[0]] = f"{topic} at {t:.9g} s"
+            known[key[0]] = f"{topic} at {t:.3f} s"
         q = tr.transform.rotation
         quat = np.array([q.x, q.y, q.z, q.w], dtype=float)
         bad = _check_quaternion(path, topic, t, key, quat)
@@ -608,7 +608,7 @@ class _TfTree:
                                      settings={"tf": Placeholder("BASE,SENSOR")})
             options = self.parents[frame]
             if len(options) > 1:
-                said = "; ".join(f"{p} ({where})" for p, where in options.items())
+                said = "; ".join(f"{p} ({where})" for p, where in sorted(options.items()))
                 raise LogFormatError(f"{path}: /tf gives frame {frame} more than one parent: {said}; a tf tree has "
                                      f"one parent per frame, so the orientation of {sensor} is ambiguous. Record the "
                                      "bag with one publisher of that transform.")
@@ -633,7 +633,7 @@ class _TfTree:
             return None
         start = max(spans, key=lambda s: s[0])
         end = min(spans, key=lambda s: s[1])
-        which = end[2] if end[2] == start[2] else f"{start[2]} from {start[0]:.9g} s, {end[2]} until {end[1]:.9g} s"
+        which = end[2] if end[2] == start[2] else f"{start[2]} from {start[0]:.3f} s, {end[2]} until {end[1]:.3f} s"
         return start[0], end[1], which
 
     def rotations(self, chain: list[tuple[str, str]], t: NDArray[np.float64]) -> NDArray[np.float64]:
