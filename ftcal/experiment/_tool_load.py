@@ -39,7 +39,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
 from ..core._files import atomic_output
-from ..core._wrench import MAX_LOAD_MASS_KG
+from ..core._validation import check_quiet
+from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
                      functional_se, select_drift)
 
@@ -252,7 +253,7 @@ class ToolLoad:
         return W - self.gravity_wrench(R, times=times, temperatures=temperatures)
 
     def retare(self, wrenches: ArrayLike, *, sensor_rotations: ArrayLike | None = None,
-               time: float | None = None, temperature: float | None = None) -> "ToolLoad":
+               time: float | None = None, temperature: float | None = None, max_spread: float = 5.0) -> "ToolLoad":
         """A copy whose bias is reset from a few no-load readings; the drift's shape (its rate) is kept.
 
         Parameters
@@ -266,6 +267,10 @@ class ToolLoad:
             When the readings were taken (the drift's unit) / the sensor's temperature [deg C]; required when
             the bias drifts in that variable. The drift is re-anchored there: ``bias(v) = new bias +
             offset(v) - offset(time)``.
+        max_spread : float, default=5.0
+            The readings must be quiet (the rule of a model's re-tare, :func:`ftcal.core._validation.check_quiet`):
+            each axis's std at most ``max_spread`` times the identification's residual RMS (force or torque);
+            a tool file without residuals (all zero) is not checked.
 
         Examples
         --------
@@ -284,6 +289,10 @@ class ToolLoad:
             R = np.broadcast_to(R, (len(W), 3, 3)) if R.shape == (3, 3) else R
             R, W = _check_inputs(R, W)
             W = W - self._weight_wrench(R)
+        noise = np.repeat(np.asarray(self.residual_rms, dtype=float), 3)
+        if noise.any():
+            check_quiet(W, noise, max_spread=max_spread, name="wrenches", labels=list(WRENCH_LABELS),
+                        noise_words="the residual RMS of the tool's identification")
         new_bias = W.mean(axis=0)
         new_se = W.std(axis=0, ddof=1) / np.sqrt(len(W)) if len(W) > 1 else np.zeros(6)
         if self.drift is None:
