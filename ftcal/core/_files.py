@@ -166,7 +166,7 @@ class OutputSet:
     """Files written together: each to its own temporary file, all renamed into place by :meth:`commit`.
 
     Made by :func:`atomic_output_set`, which commits when its block succeeds and otherwise removes every
-    temporary file (so no file of the set is written). The one implementation of a run's output set: the
+    temporary file (so no file of the set is written). A set replaces only the files it writes: it removes none. The one implementation of a run's output set: the
     command line's ``OutputPlan.as_one_set`` yields it too.
     """
 
@@ -174,15 +174,6 @@ class OutputSet:
         self.overwrite = overwrite
         self.error = error
         self._pending: dict[Path, Path] = {}  # final path -> its temporary file
-        self._removed: list[Path] = []  # outputs of an earlier run this set replaces by nothing
-
-    def removing(self, path: str | os.PathLike) -> None:
-        """Remove ``path`` when the set is put in place (with ``overwrite``; put back if the set fails): an output
-        of an earlier run that this run does not write would otherwise stay beside the new set and describe
-        another run."""
-        path = Path(path)
-        if path not in self._removed and path not in self._pending:
-            self._removed.append(path)
 
     @contextlib.contextmanager
     def writing(self, path: str | os.PathLike) -> Iterator[Path]:
@@ -232,7 +223,7 @@ class OutputSet:
         pending = list(self._pending.items())
         for _, tmp in pending:  # on disk before any rename: a full disk fails here, with nothing in place yet
             _fsync(tmp)
-        with _locked({path.parent for path, _ in pending} | {path.parent for path in self._removed}), \
+        with _locked({path.parent for path, _ in pending}), \
                 _signals_held():
             self._put_in_place(pending)
         self._discard()
@@ -262,13 +253,8 @@ class OutputSet:
         backups: dict[Path, Path | None] = {}
         kept: set[Path] = set()  # backups that could not be put back: never deleted (the old file lives on there)
         try:
-            for path in self._removed:  # first: a failure below puts them back with the rest
-                backups[path] = _second_name(path)
-                if backups[path] is not None:
-                    path.unlink()
             for path, tmp in pending:
-                if path not in backups:  # a removed path written after all keeps its first backup
-                    backups[path] = _second_name(path)
+                backups[path] = _second_name(path)
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
