@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
+from ..core._fields import number_field, numbers_field
 from ..core._files import atomic_output
 from ..core._validation import check_quiet
 from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
@@ -348,16 +349,22 @@ class ToolLoad:
             raise CalibrationInputError(f"{path}: tool file format_version {str(version)[:20]} is not one this ftcal "
                                         f"reads (1, {TOOL_FORMAT_VERSION}); upgrade ftcal.")
         try:
+            def vector(key: str, n: int, default=None):  # typed: a bool or text is no number (core._fields)
+                return numbers_field(d[key] if default is None else d.get(key, default), key, (n,), where=str(path))
+
             tool = cls(
-                mass=float(d["mass_kg"]), center_of_mass=np.asarray(d["center_of_mass_m"], dtype=float),
-                bias=np.asarray(d["bias"], dtype=float), mass_std_error=float(d.get("mass_std_error_kg", 0.0)),
-                center_of_mass_std_error=np.asarray(d.get("center_of_mass_std_error_m", [0.0] * 3), dtype=float),
-                bias_std_error=np.asarray(d.get("bias_std_error", [0.0] * 6), dtype=float),
-                gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
-                residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
+                mass=number_field(d["mass_kg"], "mass_kg", where=str(path)), center_of_mass=vector("center_of_mass_m", 3),
+                bias=vector("bias", 6),
+                mass_std_error=number_field(d.get("mass_std_error_kg", 0.0), "mass_std_error_kg", where=str(path)),
+                center_of_mass_std_error=vector("center_of_mass_std_error_m", 3, [0.0] * 3),
+                bias_std_error=vector("bias_std_error", 6, [0.0] * 6),
+                gravity=vector("gravity_m_s2", 3, list(DEFAULT_GRAVITY)),
+                residual_rms=vector("residual_rms", 2, [0.0, 0.0]),
                 drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]),
             )
         except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
+            if str(exc).startswith(f"{path}: "):  # a field's type, said by core._fields with the file's name
+                raise
             text = str(exc)
             for field_name, key in _FILE_KEYS.items():
                 text = text.replace(f"ToolLoad {field_name} ", f"{key} ", 1)
