@@ -566,6 +566,20 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
                         file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
 
 
+def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
+    """Refuse inputs that hold the same content (one recording given twice, under two names or twice in a folder):
+    it would count its poses twice, and its twins would fall in different folds, so a model would be judged on
+    its own training rows. ``what`` says what the inputs are (``"ROS bag"``)."""
+    from ..core._files import content_twins
+
+    twins = content_twins(paths)
+    if twins:
+        first, second = twins[0]
+        more = f" (and {len(twins) - 1} more pairs)" if len(twins) > 1 else ""
+        raise CliError(f"{second} holds the same {what} as {first} (identical content){more}: one recording given "
+                       "twice would count its poses twice and judge a model on its own rows; give each recording once")
+
+
 def check_not_an_input(output: str | os.PathLike) -> None:
     """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
     file_id = _regular_file_id(output)

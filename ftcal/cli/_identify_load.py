@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (
+from ._common import (refuse_twins,
     load_robot_from_args,
     CliError,
     Console,
@@ -356,6 +356,7 @@ def identification_poses(args, console: Console) -> _Poses:
         return _bag_poses(args, console, bag_files(args.inputs))
     refuse_bag_options(args, f"{kind}s")
     if kind == "pose file":
+        refuse_twins(args.inputs, "pose file")
         return _pose_file_poses(args, console, [Path(p) for p in args.inputs])
     return _log_poses(args)
 

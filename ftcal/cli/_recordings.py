@@ -11,7 +11,7 @@ import argparse
 import re
 from pathlib import Path
 
-from ._common import CliError, Console, finite_float, positive_float
+from ._common import CliError, Console, finite_float, positive_float, refuse_twins
 
 __all__ = ["add_recording_options", "add_bag_options", "still_poses", "read_bag_from_args", "bag_joints",
            "bag_files", "bag_run_log"]
@@ -160,6 +160,7 @@ def bag_files(items: list[str]) -> list[Path] | None:
             other.append(path)
     if found and other:
         raise CliError(f"the inputs mix ROS bags ({found[0]}) and other files ({other[0]}); give one kind")
+    refuse_twins(found, "ROS bag")
     return found or None
 
 

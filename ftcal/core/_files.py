@@ -48,7 +48,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
+__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "content_twins", "plain_json", "write_json", "MODEL_SUFFIX",
            "model_file_name", "is_finite_number", "describe_file_start", "read_json_record"]
 
 
@@ -480,6 +480,62 @@ def check_writable_dir(directory: str | os.PathLike, error: type[Exception], wha
         raise error(f"{what} {directory}: cannot create files in {d} ({exc.strerror}); choose another {what}.") from None
     os.close(fd)
     os.unlink(probe)
+
+
+def _content_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes, or of a folder's files (their names relative to it and their bytes, in order)."""
+    digest = hashlib.sha256()
+    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+    for f in files:
+        if path.is_dir():
+            digest.update(str(f.relative_to(path)).encode("utf-8", "surrogateescape") + b"\0")
+        with open(f, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
+
+
+def _content_size(path: Path) -> int:
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size
+
+
+def content_twins(paths: Iterable[str | os.PathLike]) -> list[tuple[Path, Path]]:
+    """Pairs of ``paths`` (files, or folders such as a rosbag2 bag) that hold the same content (byte for byte, for a
+    folder also its file names), the later one second: one recording given twice (two names, a copy in a folder).
+    Only inputs of equal size are read (hashed), so distinct inputs cost a ``stat``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> for name, text in (("a.csv", "1,2\\n"), ("b.csv", "3,4\\n"), ("copy.csv", "1,2\\n")):
+    ...     _ = (d / name).write_text(text)
+    >>> [(a.name, b.name) for a, b in content_twins([d / "a.csv", d / "b.csv", d / "copy.csv"])]
+    [('a.csv', 'copy.csv')]
+    """
+    paths = [Path(p) for p in paths]
+    by_size: dict[int, list[Path]] = {}
+    for p in paths:
+        try:
+            by_size.setdefault(_content_size(p), []).append(p)
+        except OSError:
+            continue
+    twins, first = [], {}
+    for group in by_size.values():
+        if len(group) < 2:
+            continue
+        for p in group:
+            try:
+                key = _content_digest(p)
+            except OSError:
+                continue
+            if key in first:
+                twins.append((first[key], p))
+            else:
+                first[key] = p
+    return sorted(twins, key=lambda pair: paths.index(pair[1]))
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
