@@ -603,7 +603,11 @@ def _check_regular_target(path: Path) -> None:
         try:
             st = os.stat(path)
         except OSError:
-            return  # a dangling link is replaced by the file, as a missing file would be created
+            raise CliError(f"{path} is a symbolic link to {os.readlink(path)}, which does not exist; ftcal would "
+                           "replace the link itself. Remove the link or choose another name") from None
+    if stat.S_ISREG(st.st_mode) and not st.st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH):
+        raise CliError(f"{path} is read-only (write-protected), and ftcal does not replace a protected file, "
+                       "--force or not; make it writable (chmod u+w) or choose another name")
     if stat.S_ISDIR(st.st_mode):
         raise CliError(f"{path} is a directory; name a file to write")
     if not stat.S_ISREG(st.st_mode):
