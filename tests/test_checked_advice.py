@@ -25,3 +25,19 @@ def test_a_looser_still_tolerance_is_advised_only_when_it_finds_still_poses():
     with pytest.raises(CalibrationInputError, match="the pose moves throughout") as info:
         find_still_poses(t, reading, joints=moving)
     assert not info.value.settings
+
+
+def test_a_mat_file_of_structs_only_is_told_to_save_the_fields_not_to_slice_a_struct(tmp_path, capsys):
+    import scipy.io
+
+    from ftcal.cli import main
+
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(60, 6))
+    path = tmp_path / "s.mat"
+    scipy.io.savemat(path, {"data": {"raw": w @ rng.normal(size=(6, 6)), "wrench": w}})
+    assert main(["fit", str(path), "--out", str(tmp_path / "o"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "holds no numeric array, only data (a struct)" in err[0], err
+    assert "save(FILE, '-struct', 'data', '-v7')" in err[0] and "[:,0:8]" not in err[0]
+    assert not (tmp_path / "o").exists()

@@ -736,6 +736,19 @@ def _vector(source: ArrayFile, name: str, what: str) -> np.ndarray:
     return v
 
 
+def _refuse_containers_only(source: ArrayFile, available: list[str]) -> None:
+    """A .mat file holding only structs or cells (no numeric array): said as such, with the MATLAB fix; a column
+    slice of a struct, the generic advice, would fail the same way."""
+    classes = {n: getattr(source, "entries", {}).get(n, ((), "double"))[1] for n in available if n != "meta_json"}
+    containers = {n: c for n, c in classes.items() if c in ("struct", "cell", "object")}
+    if classes and len(containers) == len(classes):
+        name, cls = next(iter(containers.items()))
+        raise DatasetFileError(f"{source.where}: the file holds no numeric array, only "
+                               f"{', '.join(f'{n} (a {c})' for n, c in containers.items())}; ftcal reads numeric "
+                               f"arrays. Fix: in MATLAB, save the fields as variables: save(FILE, '-struct', "
+                               f"'{name}', '-v7')" + ("." if cls == "struct" else f" (for a {cls}, its arrays one by one)."))
+
+
 def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vectors: list[str], what: str,
             option: str) -> tuple[np.ndarray, list[str], str | None]:
     """One (n, k) array from a file's arrays: one 2-D variable, a column slice of one, or a list of vectors.
@@ -748,6 +761,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         elif vectors:
             names = tuple(vectors)
         else:
+            _refuse_containers_only(source, available)
             raise DatasetFileError(
                 f"{where}: no {kind} {default!r} holding the {what}; the file has "
                 f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}.", parameter=option,
