@@ -92,25 +92,22 @@ def test_a_failed_rename_in_the_middle_of_a_forced_set_puts_the_old_set_back(tmp
     assert (out / "b.fit.json" / "keep").read_text() == "in the way"
 
 
-def test_an_output_the_new_run_does_not_write_is_removed_with_the_set_and_put_back_if_it_fails(tmp_path):
+def test_a_set_replaces_only_what_it_writes_and_puts_the_old_files_back_if_it_fails(tmp_path):
     for name in ("tool.json", "tool.identification.json"):
         (tmp_path / name).write_text(f"old {name}")
     with atomic_output_set(overwrite=True, error=FileExistsError) as files:
         with files.writing(tmp_path / "tool.json") as tmp:
             tmp.write_text("new tool")
-        files.removing(tmp_path / "tool.identification.json")  # this run has no report: the old one must go
-    assert _contents(tmp_path) == {"tool.json": b"new tool"}
+    assert _contents(tmp_path) == {"tool.json": b"new tool", "tool.identification.json": b"old tool.identification.json"}
 
-    (tmp_path / "tool.identification.json").write_text("old report")
     (tmp_path / "tool.json").write_text("old tool")
     with pytest.raises(OSError), atomic_output_set(overwrite=True, error=FileExistsError) as files:
-        files.removing(tmp_path / "tool.identification.json")
         with files.writing(tmp_path / "tool.json") as tmp:
             tmp.write_text("new tool")
         with files.writing(tmp_path / "poses.csv") as tmp:
             tmp.write_text("new poses")
         (tmp_path / "poses.csv").mkdir()  # the rename of the last file fails
-    assert _contents(tmp_path) == {"tool.identification.json": b"old report", "tool.json": b"old tool"}
+    assert _contents(tmp_path) == {"tool.identification.json": b"old tool.identification.json", "tool.json": b"old tool"}
 
 
 def test_a_set_is_put_in_place_under_the_folders_lock(tmp_path):
@@ -139,18 +136,23 @@ def test_a_set_is_put_in_place_under_the_folders_lock(tmp_path):
     assert not errors and _contents(tmp_path) == {"a.csv": b"this run", "b.json": b"this run"}
 
 
-def test_identify_load_with_force_and_no_report_leaves_no_report_of_an_earlier_run(tmp_path):
+def test_identify_load_with_force_and_no_report_keeps_a_file_of_a_report_name_and_says_so(tmp_path, capsys):
+    # the user's own tool.identification.json (or an earlier run's: ftcal cannot tell) is not this run's output:
+    # --force replaces what the run writes, never removes what it does not
     from ftcal.cli._tool_drift import report_names
 
     out = tmp_path / "t"
     out.mkdir()
-    stale = report_names("tool")
-    for name in stale:
-        (out / name).write_text("the report of another tool")
+    kept = report_names("tool")
+    for name in kept:
+        (out / name).write_text(f"my own notes in {name}")
     poses = tmp_path / "poses.csv"
     _write_static_poses(poses)
     assert main(["identify-load", str(poses), "--out", str(out), "--force", "-q"]) == 0
-    assert (out / "tool.tool.json").exists() and not any((out / name).exists() for name in stale)
+    assert (out / "tool.tool.json").exists()
+    assert all((out / name).read_text() == f"my own notes in {name}" for name in kept)
+    err = capsys.readouterr().err
+    assert all(f"ftcal: warning: {out / name} was kept as it is" in err for name in kept), err
 
 
 def _write_static_poses(path: Path) -> None:

@@ -124,3 +124,33 @@ def test_plan_on_a_full_disk_names_the_file_and_leaves_no_part_of_its_outputs(tm
             assert all(p.read_text() == f"previous {p.name}" for p in out.iterdir())
         else:
             assert not out.exists() or list(out.iterdir()) == []
+
+
+def test_a_dangling_link_or_a_read_only_file_is_never_replaced_force_or_not(tmp_path, capsys):
+    import os
+    import stat
+
+    from ftcal.cli import main
+
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(60, 6))
+    raw = w @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6))
+    data = tmp_path / "d.csv"
+    data.write_text("s0,s1,s2,s3,s4,s5,Fx,Fy,Fz,Tx,Ty,Tz\n" + "".join(
+        ",".join(f"{v:.6f}" for v in row) + "\n" for row in np.hstack([raw, w])))
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "linear.model.npz").symlink_to(tmp_path / "elsewhere" / "my.model.npz")  # the user's link, dangling
+    assert main(["fit", str(data), "--model", "linear", "--out", str(out), "--force", "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is a symbolic link to" in err[0] and "does not exist" in err[0], err
+    assert (out / "linear.model.npz").is_symlink()
+    (out / "linear.model.npz").unlink()
+    (out / "linear.model.npz").write_text("my protected notes")
+    os.chmod(out / "linear.model.npz", stat.S_IRUSR | stat.S_IRGRP)
+    assert main(["fit", str(data), "--model", "linear", "--out", str(out), "--force", "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "is read-only (write-protected)" in err[0], err
+    assert (out / "linear.model.npz").read_text() == "my protected notes"

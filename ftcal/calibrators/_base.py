@@ -39,7 +39,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..core._exceptions import CalibrationInputError
 from ..model_selection._selection import check_groups
 from ..core._threads import limit_threads_here
-from ..core._validation import (check_finite_output, check_zero_reading, refuse_bool_numbers, validate_readings,
+from ..core._validation import (check_finite_output, check_quiet, check_zero_reading, refuse_bool_numbers, validate_readings,
                                 validate_training_data)
 from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches, target_axes
 from ._zero_load import estimate_zero_reading, reading_noise
@@ -436,21 +436,12 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         if reading_range is not None:
             span = _refuse_far_outside(X, reading_range, "X_no_load", "fit the calibration again")
         noise = getattr(self, "reading_noise_", None)
-        if noise is not None and len(X) > 1:
-            noise = np.asarray(noise, dtype=float)
+        if noise is not None:
             # floor: noise-free or averaged training data (noise ~ 1e-13) must not refuse every real reading
             floor = RETARE_NOISE_FLOOR * span if span is not None else 0.0
-            noise = np.maximum(noise, np.maximum(floor, 16 * np.finfo(float).eps * np.abs(X).max(axis=0)))
-            spread = X.std(axis=0, ddof=1)
-            limit = max_spread * np.maximum(noise, np.finfo(float).tiny)
-            bad = np.flatnonzero(spread > limit)
-            if bad.size:
-                c = int(bad[0])
-                raise CalibrationInputError(
-                    f"X_no_load is not quiet: channel s{c} varies by {spread[c]:.4g} (std) over the {len(X)} "
-                    f"readings, more than {max_spread:g} times the noise of the training data ({noise[c]:.4g}). "
-                    "Was something touching or moving the sensor? Take the readings again, holding it still."
-                )
+            check_quiet(X, np.maximum(np.asarray(noise, dtype=float), floor), max_spread=max_spread,
+                        name="X_no_load", labels=[f"channel s{c}" for c in range(X.shape[1])],
+                        noise_words="the noise of the training data")
         self.tare_reading_ = X.mean(axis=0)
         return self
 

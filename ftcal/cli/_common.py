@@ -566,6 +566,20 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
                         file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
 
 
+def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
+    """Refuse inputs that hold the same content (one recording given twice, under two names or twice in a folder):
+    it would count its poses twice, and its twins would fall in different folds, so a model would be judged on
+    its own training rows. ``what`` says what the inputs are (``"ROS bag"``)."""
+    from ..core._files import content_twins
+
+    twins = content_twins(paths)
+    if twins:
+        first, second = twins[0]
+        more = f" (and {len(twins) - 1} more pairs)" if len(twins) > 1 else ""
+        raise CliError(f"{second} holds the same {what} as {first} (identical content){more}: one recording given "
+                       "twice would count its poses twice and judge a model on its own rows; give each recording once")
+
+
 def check_not_an_input(output: str | os.PathLike) -> None:
     """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
     file_id = _regular_file_id(output)
@@ -589,7 +603,11 @@ def _check_regular_target(path: Path) -> None:
         try:
             st = os.stat(path)
         except OSError:
-            return  # a dangling link is replaced by the file, as a missing file would be created
+            raise CliError(f"{path} is a symbolic link to {os.readlink(path)}, which does not exist; ftcal would "
+                           "replace the link itself. Remove the link or choose another name") from None
+    if stat.S_ISREG(st.st_mode) and not st.st_mode & (stat.S_IWUSR | stat.S_IWGRP | stat.S_IWOTH):
+        raise CliError(f"{path} is read-only (write-protected), and ftcal does not replace a protected file, "
+                       "--force or not; make it writable (chmod u+w) or choose another name")
     if stat.S_ISDIR(st.st_mode):
         raise CliError(f"{path} is a directory; name a file to write")
     if not stat.S_ISREG(st.st_mode):
@@ -703,12 +721,18 @@ class OutputPlan:
             shutil.rmtree(stage, ignore_errors=True)
 
     def leaving_out(self, name: str) -> None:
-        """A planned file this run does not write after all (a report it has no data for): within
-        :meth:`as_one_set`, an older file of that name (``--force``) is removed with the set, so that no output of
-        an earlier run stays beside the new ones and describes another run."""
+        """A planned file this run does not write after all (a report it has no data for). An output set replaces
+        only the files it writes: a file of that name is never removed (ftcal cannot tell an earlier run's report
+        from a user's own file of that name), and a warning names it, since it does not describe this run."""
         if self._set is None:
             raise AssertionError("leaving_out() outside as_one_set()")
-        self._set.removing(self.path(name))
+        path = self.out_dir / name
+        if path.exists() or path.is_symlink():
+            import warnings
+
+            warnings.warn(f"{path} was kept as it is: this run does not write it, so it does not describe this run "
+                          "(an earlier run's, or your own file); remove it if it is an earlier run's", UserWarning,
+                          stacklevel=2)
 
     @contextlib.contextmanager
     def as_one_set(self) -> Iterator[OutputSet]:

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (
+from ._common import (refuse_twins,
     load_robot_from_args,
     CliError,
     Console,
@@ -204,6 +204,8 @@ def _read_inputs(args, console: Console, reader):
         paths = bag_files(args.inputs)
     else:
         refuse_bag_options(args, f"{kind}s")
+        if kind == "pose file":
+            refuse_twins(args.inputs, "pose file")
         paths = log_files(args.inputs) if kind == "run log" else [Path(p) for p in args.inputs]
     if kind == "run log":
         _log_poses_model_needed(args)

@@ -89,8 +89,9 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     from ._messages import cli_message, fix_names
 
     file = Path(path)
-    if not file.is_file():
-        raise CliError(f"--range {path}: no such file (give the report .json of 'ftcal report' or the dataset)")
+    problem = path_problem(file)  # a pipe (<(...)), a directory, a broken link: said as what it is
+    if problem is not None:
+        raise CliError(f"--range {problem} (give the report .json of 'ftcal report' or the dataset)")
     takes = "--range takes the calibration report .json of 'ftcal report' or the calibration dataset"
     if file.suffix.lower() == ".json":
         try:

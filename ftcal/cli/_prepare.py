@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (
+from ._common import (refuse_twins,
     load_robot_from_args,
     int_in_range,
     CliError,
@@ -109,7 +109,9 @@ def log_files(items: list[str]) -> list[Path]:
             files.append(path)
         else:
             raise CliError(f"{path_problem(path)} (a run log, or a directory of *.csv run logs)")
-    return list(dict.fromkeys(files))
+    files = list(dict.fromkeys(files))
+    refuse_twins(files, "run log")
+    return files
 
 
 def run(args: argparse.Namespace) -> int:

@@ -39,7 +39,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--output", metavar="FILE", help="new model file (default: MODEL with '-retared' before the suffix)")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists (never one of the inputs)")
     p.add_argument("--max-spread", type=positive_float, default=5.0,
-                   help="largest per-channel std of the readings, in units of the training noise")
+                   help="largest per-channel std of the readings, in units of the training noise (a tool file: of its "
+                   "identification's residual RMS)")
     add_retare_tool_options(p)
     from ._data_options import add_channel_option
 

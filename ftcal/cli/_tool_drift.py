@@ -265,7 +265,8 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     temperature = args.temperature if args.temperature is not None else (
         float(np.mean(data["temperature"])) if "temperature" in data else None)
     try:
-        new = tool.retare(data["wrench"], sensor_rotations=rotations, time=time, temperature=temperature)
+        new = tool.retare(data["wrench"], sensor_rotations=rotations, time=time, temperature=temperature,
+                          max_spread=args.max_spread)
     except CalibrationInputError as exc:
         raise CliError(f"{args.readings}: {cli_message(exc, args)}") from None
     with plan.writing(output.name) as tmp:

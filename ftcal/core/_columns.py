@@ -27,7 +27,8 @@ from collections.abc import Iterable, Iterator, Sequence
 from dataclasses import dataclass
 from itertools import chain
 
-__all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_fields", "DTYPE_KIND_NAMES", "csv_rows"]
+__all__ = ["Header", "read_header", "parse_number", "is_number", "check_plain_fields", "DTYPE_KIND_NAMES", "csv_rows",
+           "repeated_names"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_\-]*")
 _NUMBER = re.compile(r"[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE | re.ASCII)
@@ -192,9 +193,9 @@ def read_header(
                 f"{where}: column {pos + 1} is named {shown!r}; column names must be ASCII letters, digits, '_' or "
                 f"'-' (a look-alike character or an empty name would silently drop a column).{layout}"
             )
-    dups = sorted({n for n in names if names.count(n) > 1})
-    if dups:
-        raise error(f"{where}: column {dups[0]!r} appears {names.count(dups[0])} times; each column must be named once.")
+    twice = repeated_names(names)  # one pass: a header of 200 000 columns is read in linear time
+    if twice:
+        raise error(f"{where}: column {twice[0][0]!r} appears {twice[0][1]} times; each column must be named once.")
     index = {n: i for i, n in enumerate(names)}
     family_names: set[str] = set()
     for prefix, first, what in numbered:
@@ -223,3 +224,16 @@ def read_header(
         if other:
             raise error(f"{where}: unknown column {other[0]!r}.{layout}")
     return Header(names=tuple(names), index=index)
+
+
+def repeated_names(names) -> list[tuple[str, int]]:
+    """The names that appear more than once in ``names``, sorted, each with its count (one pass: linear time).
+
+    Examples
+    --------
+    >>> repeated_names(["s1", "s0", "s1", "Fx", "s0", "s1"])
+    [('s0', 2), ('s1', 3)]
+    """
+    from collections import Counter
+
+    return sorted((n, k) for n, k in Counter(names).items() if k > 1)

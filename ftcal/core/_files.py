@@ -48,7 +48,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "plain_json", "write_json", "MODEL_SUFFIX",
+__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "content_twins", "plain_json", "write_json", "MODEL_SUFFIX",
            "model_file_name", "is_finite_number", "describe_file_start"]
 
 
@@ -166,7 +166,7 @@ class OutputSet:
     """Files written together: each to its own temporary file, all renamed into place by :meth:`commit`.
 
     Made by :func:`atomic_output_set`, which commits when its block succeeds and otherwise removes every
-    temporary file (so no file of the set is written). The one implementation of a run's output set: the
+    temporary file (so no file of the set is written). A set replaces only the files it writes: it removes none. The one implementation of a run's output set: the
     command line's ``OutputPlan.as_one_set`` yields it too.
     """
 
@@ -174,15 +174,6 @@ class OutputSet:
         self.overwrite = overwrite
         self.error = error
         self._pending: dict[Path, Path] = {}  # final path -> its temporary file
-        self._removed: list[Path] = []  # outputs of an earlier run this set replaces by nothing
-
-    def removing(self, path: str | os.PathLike) -> None:
-        """Remove ``path`` when the set is put in place (with ``overwrite``; put back if the set fails): an output
-        of an earlier run that this run does not write would otherwise stay beside the new set and describe
-        another run."""
-        path = Path(path)
-        if path not in self._removed and path not in self._pending:
-            self._removed.append(path)
 
     @contextlib.contextmanager
     def writing(self, path: str | os.PathLike) -> Iterator[Path]:
@@ -232,7 +223,7 @@ class OutputSet:
         pending = list(self._pending.items())
         for _, tmp in pending:  # on disk before any rename: a full disk fails here, with nothing in place yet
             _fsync(tmp)
-        with _locked({path.parent for path, _ in pending} | {path.parent for path in self._removed}), \
+        with _locked({path.parent for path, _ in pending}), \
                 _signals_held():
             self._put_in_place(pending)
         self._discard()
@@ -262,13 +253,8 @@ class OutputSet:
         backups: dict[Path, Path | None] = {}
         kept: set[Path] = set()  # backups that could not be put back: never deleted (the old file lives on there)
         try:
-            for path in self._removed:  # first: a failure below puts them back with the rest
-                backups[path] = _second_name(path)
-                if backups[path] is not None:
-                    path.unlink()
             for path, tmp in pending:
-                if path not in backups:  # a removed path written after all keeps its first backup
-                    backups[path] = _second_name(path)
+                backups[path] = _second_name(path)
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
@@ -494,6 +480,62 @@ def check_writable_dir(directory: str | os.PathLike, error: type[Exception], wha
         raise error(f"{what} {directory}: cannot create files in {d} ({exc.strerror}); choose another {what}.") from None
     os.close(fd)
     os.unlink(probe)
+
+
+def _content_digest(path: Path) -> str:
+    """SHA-256 of a file's bytes, or of a folder's files (their names relative to it and their bytes, in order)."""
+    digest = hashlib.sha256()
+    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
+    for f in files:
+        if path.is_dir():
+            digest.update(str(f.relative_to(path)).encode("utf-8", "surrogateescape") + b"\0")
+        with open(f, "rb") as fh:
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+    return digest.hexdigest()
+
+
+def _content_size(path: Path) -> int:
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size
+
+
+def content_twins(paths: Iterable[str | os.PathLike]) -> list[tuple[Path, Path]]:
+    """Pairs of ``paths`` (files, or folders such as a rosbag2 bag) that hold the same content (byte for byte, for a
+    folder also its file names), the later one second: one recording given twice (two names, a copy in a folder).
+    Only inputs of equal size are read (hashed), so distinct inputs cost a ``stat``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> for name, text in (("a.csv", "1,2\\n"), ("b.csv", "3,4\\n"), ("copy.csv", "1,2\\n")):
+    ...     _ = (d / name).write_text(text)
+    >>> [(a.name, b.name) for a, b in content_twins([d / "a.csv", d / "b.csv", d / "copy.csv"])]
+    [('a.csv', 'copy.csv')]
+    """
+    paths = [Path(p) for p in paths]
+    by_size: dict[int, list[Path]] = {}
+    for p in paths:
+        try:
+            by_size.setdefault(_content_size(p), []).append(p)
+        except OSError:
+            continue
+    twins, first = [], {}
+    for group in by_size.values():
+        if len(group) < 2:
+            continue
+        for p in group:
+            try:
+                key = _content_digest(p)
+            except OSError:
+                continue
+            if key in first:
+                twins.append((first[key], p))
+            else:
+                first[key] = p
+    return sorted(twins, key=lambda pair: paths.index(pair[1]))
 
 
 def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:

@@ -9,6 +9,8 @@ says how to fix it. Shape and dtype handling goes through scikit-learn's
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from sklearn.utils._param_validation import InvalidParameterError, Interval, validate_parameter_constraints
@@ -29,6 +31,7 @@ __all__ = [
     "check_bool",
     "check_arguments",
     "refuse_bool_numbers",
+    "check_quiet",
     "FLOAT64_OVERFLOW",
 ]
 
@@ -395,3 +398,57 @@ def refuse_bool_numbers(owner: str, constraints: dict, values: dict) -> None:
         if isinstance(value, (bool, np.bool_)) and not takes_bools and any(isinstance(c, Interval) for c in allowed):
             raise CalibrationInputError(f"The {name!r} parameter of {owner} must be a number, not a bool. Got "
                                         f"{value!r} instead.")
+
+
+def check_quiet(X: NDArray[np.float64], noise: ArrayLike, *, max_spread: float, name: str, labels: list[str],
+                noise_words: str) -> None:
+    """Refuse re-tare readings that are not quiet: a column whose standard deviation over the rows of ``X`` is more
+    than ``max_spread`` times its ``noise`` means something touched or moved the sensor while they were taken
+    (a load on it, a hand), and their mean would be a wrong zero. The one rule of every re-tare (a model's raw
+    readings, a tool's wrenches).
+
+    Parameters
+    ----------
+    X : ndarray of shape (n, k)
+        The readings (one row passes: no spread to judge).
+    noise : array-like of shape (k,)
+        Each column's noise (std), floored at a few ulps of the readings' size.
+    max_spread : float
+        Positive; how many times the noise a column's std may be.
+    name : str
+        The argument ``X`` came from (``X_no_load``), named in the message.
+    labels : list of str
+        Each column's name (``s0``, ``Fx``).
+    noise_words : str
+        Where the noise comes from (``"the noise of the training data"``).
+
+    Raises
+    ------
+    CalibrationInputError
+        ``max_spread`` not a positive number, or a column that is not quiet (naming it, its std, the limit).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> quiet = np.random.default_rng(0).normal(0.0, 0.1, size=(50, 2))
+    >>> check_quiet(quiet, [0.1, 0.1], max_spread=5.0, name="X", labels=["Fx", "Fy"], noise_words="the noise")
+    >>> loaded = quiet + np.c_[np.zeros(50), np.linspace(-900, 900, 50)]
+    >>> check_quiet(loaded, [0.1, 0.1], max_spread=5.0, name="X", labels=["Fx", "Fy"], noise_words="the noise")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.CalibrationInputError: X is not quiet: Fy varies by 535.5 (std) over the 50 readings, more than 5 times the noise (0.1). Was something touching or moving the sensor? Take the readings again, holding it still.
+    """
+    if isinstance(max_spread, bool) or not isinstance(max_spread, numbers.Real) or not max_spread > 0:
+        raise CalibrationInputError(f"max_spread must be a positive number; got {max_spread!r}.")
+    if len(X) < 2:
+        return
+    noise = np.maximum(np.asarray(noise, dtype=float), 16 * np.finfo(float).eps * np.abs(X).max(axis=0))
+    spread = X.std(axis=0, ddof=1)
+    limit = max_spread * np.maximum(noise, np.finfo(float).tiny)
+    bad = np.flatnonzero(spread > limit)
+    if bad.size:
+        c = int(bad[0])
+        raise CalibrationInputError(
+            f"{name} is not quiet: {labels[c]} varies by {spread[c]:.4g} (std) over the {len(X)} readings, more "
+            f"than {max_spread:g} times {noise_words} ({noise[c]:.4g}). Was something touching or moving the "
+            "sensor? Take the readings again, holding it still.")

@@ -133,6 +133,11 @@ def _deviation(rotations: NDArray | None, joints: NDArray | None):
     return angle
 
 
+#: A looser still tolerance is advised at most this many times the given one, and at most this large [deg]; a
+#: shorter still segment is advised only if the longest one lasts at least this long [s].
+_LOOSER_TOLERANCE, _MAX_ADVISED_TOLERANCE_DEG, _MIN_ADVISED_STILL_S = 4.0, 5.0, 0.2
+
+
 def _segments(n: int, dev, tol_rad: float) -> list[tuple[int, int]]:
     """Maximal runs ``[a, b)`` whose samples stay within ``tol_rad`` of sample ``a``, in order."""
     out = []
@@ -258,12 +263,24 @@ def find_still_poses(
     found = [(a, b) for a, b in segments if t[b - 1] - t[a] >= min_duration_s]
     if not found:
         longest = max((t[b - 1] - t[a] for a, b in segments), default=0.0)
+        said = (f"no still pose in the {n} samples ({t[0]:.6g} to {t[-1]:.6g} s): the pose never stays within "
+                f"{tolerance_deg:g} deg for {min_duration_s:g} s (the longest still stretch lasts {longest:.3g} s). ")
+        # advice checked before it is given: a looser threshold is proposed only where it finds a still pose
+        looser = _LOOSER_TOLERANCE * tolerance_deg
+        wider = [(a, b) for a, b in _segments(n, dev, np.radians(looser)) if t[b - 1] - t[a] >= min_duration_s]
+        options = {}
+        if wider and looser <= _MAX_ADVISED_TOLERANCE_DEG:
+            options["tolerance_deg"] = float(f"{looser:.3g}")
+        if longest >= _MIN_ADVISED_STILL_S:
+            options["min_duration_s"] = float(f"{longest * 0.9:.2g}")
+        if not options:
+            raise CalibrationInputError(said + "Loosening the thresholds would not find one either (the pose "
+                                        "moves throughout). Fix: record the sensor while the robot stands still "
+                                        "at each pose.", parameter="tolerance_deg", value=tolerance_deg)
         raise CalibrationInputError(
-            f"no still pose in the {n} samples ({t[0]:.6g} to {t[-1]:.6g} s): the pose never stays within "
-            f"{tolerance_deg:g} deg for {min_duration_s:g} s (the longest still stretch lasts {longest:.3g} s). "
-            "Fix: record the sensor while the robot stands still at each pose, or loosen {tolerance_deg} / "
-            "{min_duration_s}.", parameter="tolerance_deg", value=tolerance_deg,
-            settings={"min_duration_s": NO_SETTING})
+            said + "Fix: record the sensor while the robot stands still at each pose, or loosen "
+            + " / ".join("{" + k + "}" for k in options) + " (checked: that finds still poses).",
+            parameter="tolerance_deg", value=tolerance_deg, settings=options)
     from_data = settle_s is None
     if from_data:
         settle_s = float(np.percentile([_settle_time(t[a:b], y[a:b]) for a, b in found], 75))

@@ -38,8 +38,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
+from ..core._fields import number_field, numbers_field
 from ..core._files import atomic_output
-from ..core._wrench import MAX_LOAD_MASS_KG
+from ..core._validation import check_quiet
+from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
 from ._mounting import axis_text
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
                      functional_se, held_out_residual, select_drift)
@@ -288,7 +290,7 @@ class ToolLoad:
         return W - self.gravity_wrench(R, times=times, temperatures=temperatures)
 
     def retare(self, wrenches: ArrayLike, *, sensor_rotations: ArrayLike | None = None,
-               time: float | None = None, temperature: float | None = None) -> "ToolLoad":
+               time: float | None = None, temperature: float | None = None, max_spread: float = 5.0) -> "ToolLoad":
         """A copy whose bias is reset from a few no-load readings; the drift's shape (its rate) is kept.
 
         Parameters
@@ -302,6 +304,10 @@ class ToolLoad:
             When the readings were taken (the drift's unit) / the sensor's temperature [deg C]; required when
             the bias drifts in that variable. The drift is re-anchored there: ``bias(v) = new bias +
             offset(v) - offset(time)``.
+        max_spread : float, default=5.0
+            The readings must be quiet (the rule of a model's re-tare, :func:`ftcal.core._validation.check_quiet`):
+            each axis's std at most ``max_spread`` times the identification's residual RMS (force or torque);
+            a tool file without residuals (all zero) is not checked.
 
         Examples
         --------
@@ -320,6 +326,10 @@ class ToolLoad:
             R = np.broadcast_to(R, (len(W), 3, 3)) if R.shape == (3, 3) else R
             R, W = _check_inputs(R, W)
             W = W - self._weight_wrench(R)
+        noise = np.repeat(np.asarray(self.residual_rms, dtype=float), 3)
+        if noise.any():
+            check_quiet(W, noise, max_spread=max_spread, name="wrenches", labels=list(WRENCH_LABELS),
+                        noise_words="the residual RMS of the tool's identification")
         new_bias = W.mean(axis=0)
         new_se = W.std(axis=0, ddof=1) / np.sqrt(len(W)) if len(W) > 1 else np.zeros(6)
         if self.drift is None:
@@ -380,20 +390,26 @@ class ToolLoad:
             raise CalibrationInputError(f"{path}: tool file format_version {str(version)[:20]} is not one this ftcal "
                                         f"reads (1, {TOOL_FORMAT_VERSION}); upgrade ftcal.")
         try:
+            def vector(key: str, n: int, default=None):  # typed: a bool or text is no number (core._fields)
+                return numbers_field(d[key] if default is None else d.get(key, default), key, (n,), where=str(path))
+
             tool = cls(
-                mass=float(d["mass_kg"]), center_of_mass=np.asarray(d["center_of_mass_m"], dtype=float),
-                bias=np.asarray(d["bias"], dtype=float), mass_std_error=float(d.get("mass_std_error_kg", 0.0)),
-                center_of_mass_std_error=np.asarray(d.get("center_of_mass_std_error_m", [0.0] * 3), dtype=float),
-                bias_std_error=np.asarray(d.get("bias_std_error", [0.0] * 6), dtype=float),
-                gravity=np.asarray(d.get("gravity_m_s2", DEFAULT_GRAVITY), dtype=float),
-                residual_rms=np.asarray(d.get("residual_rms", [0.0, 0.0]), dtype=float),
+                mass=number_field(d["mass_kg"], "mass_kg", where=str(path)), center_of_mass=vector("center_of_mass_m", 3),
+                bias=vector("bias", 6),
+                mass_std_error=number_field(d.get("mass_std_error_kg", 0.0), "mass_std_error_kg", where=str(path)),
+                center_of_mass_std_error=vector("center_of_mass_std_error_m", 3, [0.0] * 3),
+                bias_std_error=vector("bias_std_error", 6, [0.0] * 6),
+                gravity=vector("gravity_m_s2", 3, list(DEFAULT_GRAVITY)),
+                residual_rms=vector("residual_rms", 2, [0.0, 0.0]),
                 held_out_residual_rms=None if d.get("held_out_residual_rms") is None else
-                np.asarray(d["held_out_residual_rms"], dtype=float),
-                mounting_rotation=np.asarray(d.get("mounting_rotation_rad", [0.0] * 3), dtype=float),
-                mounting_rotation_std_error=np.asarray(d.get("mounting_rotation_std_error_rad", [0.0] * 3), dtype=float),
+                vector("held_out_residual_rms", 2),
+                mounting_rotation=vector("mounting_rotation_rad", 3, [0.0] * 3),
+                mounting_rotation_std_error=vector("mounting_rotation_std_error_rad", 3, [0.0] * 3),
                 drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]),
             )
         except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
+            if str(exc).startswith(f"{path}: "):  # a field's type, said by core._fields with the file's name
+                raise
             text = str(exc)
             for field_name, key in _FILE_KEYS.items():
                 text = text.replace(f"ToolLoad {field_name} ", f"{key} ", 1)

@@ -57,6 +57,10 @@ _STAMP_SEC, _STAMP_NSEC = 0x1234567, 0x7654321
 _STAMP_SENTINEL = np.array([(_STAMP_SEC, _STAMP_NSEC)], dtype=[("s", "<i4"), ("n", "<u4")]).tobytes()
 #: The bag formats :func:`write_bag` writes (and :func:`read_bag` reads).
 BAG_STORAGES = ("sqlite3", "mcap", "ros1")
+#: A /tf quaternion shorter than this is no rotation (a zero quaternion); scipy would normalise anything longer.
+_MIN_QUATERNION_NORM = 1e-6
+#: Most distinct joint-name sets read from one joint-state topic (an arm's, a gripper's, ...).
+_MAX_JOINT_GROUPS = 16
 
 
 def check_rosbags() -> None:
@@ -409,24 +413,113 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
     roots = sorted(parents - children)
     base = roots[0] if roots else (frames[0] if frames else "BASE")
     sensor_guess = sensor_frame if sensor_frame in children else (sorted(children - parents) or ["SENSOR"])[-1]
+    proposal = _FramePair((base, sensor_guess)) if base != sensor_guess else Placeholder("BASE,SENSOR")
     raise LogFormatError(
         f"{path}: no topics of type {JOINT_STATE_TYPE} (joint states) for the sensor's pose, but /tf holds the "
         f"frames {', '.join(frames) or 'none'}; the bag has {_listing(topics)}.", parameter="tf", value=None,
         fix="take the sensor's orientation from /tf with {tf} (base frame, sensor frame)",
-        settings={"tf": _FramePair((base, sensor_guess))})
+        settings={"tf": proposal})
 
 
-def _check_wrench_frame(path: Path, sensor: str, frame_id: str, tf: tuple[str, str]) -> None:
-    """Refuse wrench messages stamped in another frame than the sensor frame ``tf`` names: the orientation of
-    one frame applied to wrenches written in another (a flange turned 180 deg from the sensor, a driver's
-    ``tool0_controller``) gives a wrong tool or dataset without a word. A message without a frame passes."""
+def _check_wrench_frame(path: Path, sensor: str, first: str | None, frame_id: str, t: float) -> str:
+    """The frame of the wrench messages so far, after one more message's ``frame_id`` (stamped at ``t`` [s]):
+    called on every change of frame. Refused: wrenches that change frame within the recording (a driver switched
+    from ``ft_sensor`` to ``tool0`` half way: one frame's orientation or kinematics would be applied to wrenches of
+    another)."""
     own = _frame(frame_id)
-    if own and own != _frame(tf[1]):
+    if first is not None and _frame(first) != own:
         raise LogFormatError(
-            f"{path}: the wrenches of {sensor} are expressed in frame {own!r} (their header.frame_id), not in "
+            f"{path}: the wrenches of {sensor} change frame at {t:.3f} s, from {_frame(first)!r} to {own!r} (their "
+            "header.frame_id); a recording's wrenches are in one frame, and those after the change would be read "
+            "in the wrong one. Cut the bag at the change (ros2 bag convert / rosbag filter) and read each part "
+            "with its own frame.")
+    return frame_id
+
+
+def _check_tf_frame(path: Path, sensor: str, frame_id: str, tf: tuple[str, str], tree: "_TfTree") -> None:
+    """Refuse wrenches stamped in another frame than the sensor frame ``tf`` names (a flange turned 180 deg from
+    the sensor, a driver's ``tool0_controller``): one frame's orientation applied to another frame's wrenches.
+    The fix proposes the wrenches' own frame only where /tf holds a chain to it from a frame other than itself."""
+    own, base = _frame(frame_id), _frame(tf[0])
+    if not own or own == _frame(tf[1]):
+        return
+    said = (f"{path}: the wrenches of {sensor} are expressed in frame {own!r} (their header.frame_id), not in "
             f"{_frame(tf[1])!r}, the sensor frame named for /tf; the orientation of {_frame(tf[1])!r} would be "
-            "applied to wrenches of another frame.", parameter="tf", value=tuple(tf),
-            fix="name the wrenches' own frame: {tf}", settings={"tf": _FramePair((_frame(tf[0]), own))})
+            "applied to wrenches of another frame.")
+    try:
+        tree.chain(path, base, own)
+        works = base != own
+    except LogFormatError:
+        works = False
+    if works:
+        raise LogFormatError(said, parameter="tf", value=tuple(tf), fix="name the wrenches' own frame: {tf}",
+                             settings={"tf": _FramePair((base, own))})
+    frames = sorted(set(tree.parents) | {p for ps in tree.parents.values() for p in ps})
+    raise LogFormatError(said + f" /tf holds no chain to {own!r} from another frame (its frames: "
+                         f"{', '.join(frames) or 'none'}); the wrenches' frame is not in the recorded tree.")
+
+
+def _raw_value(path: Path, sensor: str, msgtype: str, msg, raw_field: str, width: int | None,
+               t: float) -> tuple[NDArray[np.float64], int]:
+    """A raw-gauge message's values and the channel count (refused: no such field, not numbers, fewer than 3
+    values, a count that changes)."""
+    try:
+        value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
+    except AttributeError:
+        fields = [f for f in getattr(msg, "__dataclass_fields__", {}) if not f.startswith("__")]
+        raise LogFormatError(f"{path}: topic {sensor} ({msgtype}) has no field {raw_field!r}; its fields are "
+                             f"{', '.join(fields)}.", parameter="raw_field", value=raw_field,
+                             fix="name the array field with {raw_field}",
+                             settings={"raw_field": Placeholder("NAME")}) from None
+    except (TypeError, ValueError):
+        raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} ({msgtype}) is not an array of numbers "
+                             "(the raw gauges).") from None
+    if width is None:
+        if len(value) < 3:
+            raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} holds {len(value)} values; raw "
+                                 "gauges are at least 3 channels.")
+    elif len(value) != width:
+        raise LogFormatError(f"{path}: topic {sensor} changes from {width} to {len(value)} raw values at {t:.9g} s; "
+                             "one sensor has a fixed channel count.")
+    return value, len(value)
+
+
+def _add_joint_state(path: Path, topic: str, count: int, max_samples: int, groups: dict, msg, t: float,
+                     receive: float) -> None:
+    """Add a joint-state message to the group of the joints it names (its own names, message by message: a
+    gripper's messages on the arm's topic form their own group). A message naming another count of joints than
+    it has positions is skipped."""
+    names = tuple(msg.name)
+    position = np.asarray(msg.position, dtype=float)
+    if names and len(names) != len(position):
+        return
+    names = names or tuple(f"joint{i + 1}" for i in range(len(position)))
+    if names not in groups:
+        if len(groups) >= _MAX_JOINT_GROUPS:
+            raise LogFormatError(f"{path}: topic {topic} names more than {_MAX_JOINT_GROUPS} different sets of joints "
+                                 f"(at {t:.3f} s); give the arm's joint-state topic.", parameter="joint_topic",
+                                 value=topic, fix="name it with {joint_topic}",
+                                 settings={"joint_topic": Placeholder("TOPIC")})
+        groups[names] = _Stream(count, max_samples, average=False)
+        groups[names]._rows = min(groups[names]._rows, 1024)  # grows as messages come (most groups are small)
+    groups[names].add(t, receive, position)
+
+
+def _joint_group(topic: str, groups: dict, notes: list) -> tuple[tuple[str, ...], NDArray, NDArray]:
+    """The arm's joint states among the groups of a joint-state topic: the group naming the most joints (the most
+    messages on a tie), its names, times (sorted, distinct) and positions; the other groups are noted."""
+    names = max(groups, key=lambda g: (len(g), groups[g].n_messages))
+    others = [g for g in groups if g != names]
+    if others:
+        skipped = sum(groups[g].n_messages for g in others)
+        notes.append(LogFormatError(f"{topic}: {skipped} messages naming other joints ("
+                                    f"{'; '.join(', '.join(g) for g in others[:3])}) were set aside; the arm's are "
+                                    f"the {groups[names].n_messages} naming {', '.join(names)}"))
+    t_p, _, q = groups[names].arrays()
+    o = np.argsort(t_p, kind="stable")
+    t_p, q = t_p[o], q[o]
+    keep = np.concatenate([[True], np.diff(t_p) > 0])
+    return names, t_p[keep], q[keep]
 
 
 class _EdgeSamples:
@@ -437,7 +530,7 @@ class _EdgeSamples:
 
     def __init__(self, max_samples: int) -> None:
         self.capacity = 2 * int(max_samples)
-        self.times, self.quats = np.empty(min(1024, self.capacity)), np.empty((min(1024, self.capacity), 4))
+        self.times, self.quats = np.empty(min(16, self.capacity)), np.empty((min(16, self.capacity), 4))
         self.n = self.seen = 0
         self.step = 1
 
@@ -463,37 +556,106 @@ class _EdgeSamples:
         return self.times[:self.n].copy(), self.quats[:self.n].copy()
 
 
-def _tf_rotations(path: Path, edges: dict, static: dict, base: str, sensor: str, t: NDArray[np.float64]):
-    """The rotation base <- sensor at the times ``t`` through the tf tree (dynamic edges slerped)."""
-    from scipy.spatial.transform import Rotation, Slerp
+def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], quat: NDArray[np.float64]) -> str:
+    """'' for a quaternion that is a rotation, else the sentence saying why not (naming the bag, topic, edge, time)."""
+    norm = float(np.sqrt(np.sum(quat * quat))) if np.isfinite(quat).all() else float("nan")
+    if np.isfinite(norm) and norm > _MIN_QUATERNION_NORM:
+        return ""
+    what = "is not finite" if not np.isfinite(norm) else "has zero length"
+    return (f"{path}: topic {topic} at {t:.3f} s: the transform {edge[0]} -> {edge[1]} has the quaternion "
+            f"(x, y, z, w) = ({', '.join(f'{c:.6g}' for c in quat)}), which {what}; a rotation's quaternion has "
+            "length 1. Fix the publisher of that transform, or record again.")
 
-    parent = {child: par for par, child in list(edges) + list(static)}
-    chain, frame = [], sensor
-    while frame != base:
-        if frame not in parent or len(chain) > 64:
-            known = sorted(set(parent) | set(parent.values()))
-            raise LogFormatError(f"{path}: /tf holds no chain of transforms from {base} to {sensor} (stuck at "
-                                 f"{frame}); the frames in /tf and /tf_static are {', '.join(known) or 'none'}.",
-                                 parameter="tf", value=(base, sensor), fix="give {tf} two of them",
-                                 settings={"tf": Placeholder("BASE,SENSOR")})
-        chain.append((parent[frame], frame))
-        frame = parent[frame]
-    R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
-    for edge in reversed(chain):  # base -> ... -> sensor
-        if edge in static:
-            Re = np.broadcast_to(Rotation.from_quat(static[edge]).as_matrix(), (len(t), 3, 3))
+
+@dataclass
+class _TfTree:
+    """What /tf and /tf_static say, gathered while streaming: each child's parents (with where each was first
+    seen), the dynamic edges' samples, the static edges, and each edge's first invalid quaternion."""
+
+    max_samples: int
+    parents: dict[str, dict[str, str]] = field(default_factory=dict)
+    edges: dict[tuple[str, str], _EdgeSamples] = field(default_factory=dict)
+    static: dict[tuple[str, str], NDArray[np.float64]] = field(default_factory=dict)
+    invalid: dict[tuple[str, str], str] = field(default_factory=dict)
+
+    def add(self, path: Path, topic: str, tr, t: float) -> None:
+        key = (_frame(tr.header.frame_id), _frame(tr.child_frame_id))
+        known = self.parents.setdefault(key[1], {})
+        if key[0] not in known and len(known) < 8:
+            known[key[0]] = f"{topic} at {t:.3f} s"
+        q = tr.transform.rotation
+        quat = np.array([q.x, q.y, q.z, q.w], dtype=float)
+        bad = _check_quaternion(path, topic, t, key, quat)
+        if bad:
+            self.invalid.setdefault(key, bad)
+        elif topic == "/tf_static":
+            self.static[key] = quat
         else:
-            times, quats = edges[edge]
-            order = np.argsort(times, kind="stable")
-            times, quats = times[order], quats[order]
-            keep = np.concatenate([[True], np.diff(times) > 0])
-            times, quats = times[keep], quats[keep]
-            if len(times) == 1:
-                Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
+            if key not in self.edges:
+                self.edges[key] = _EdgeSamples(self.max_samples)
+            self.edges[key].add(t, quat)
+
+    def chain(self, path: Path, base: str, sensor: str) -> list[tuple[str, str]]:
+        """The edges from ``base`` down to ``sensor`` (base first). Refused: no chain, a frame of the chain with two
+        parents (which one holds is not for ftcal to guess), an edge of the chain with an invalid quaternion."""
+        chain, frame = [], sensor
+        while frame != base:
+            if frame not in self.parents or len(chain) > 64:
+                known = sorted(set(self.parents) | {p for ps in self.parents.values() for p in ps})
+                raise LogFormatError(f"{path}: /tf holds no chain of transforms from {base} to {sensor} (stuck at "
+                                     f"{frame}); the frames in /tf and /tf_static are {', '.join(known) or 'none'}.",
+                                     parameter="tf", value=(base, sensor), fix="give {tf} two of them",
+                                     settings={"tf": Placeholder("BASE,SENSOR")})
+            options = self.parents[frame]
+            if len(options) > 1:
+                said = "; ".join(f"{p} ({where})" for p, where in sorted(options.items()))
+                raise LogFormatError(f"{path}: /tf gives frame {frame} more than one parent: {said}; a tf tree has "
+                                     f"one parent per frame, so the orientation of {sensor} is ambiguous. Record the "
+                                     "bag with one publisher of that transform.")
+            parent = next(iter(options))
+            chain.append((parent, frame))
+            frame = parent
+        for edge in chain:
+            if edge in self.invalid:
+                raise LogFormatError(self.invalid[edge])
+        return chain[::-1]
+
+    def span(self, chain: list[tuple[str, str]]) -> tuple[float, float, str] | None:
+        """The time span every dynamic edge of ``chain`` covers (the latest start, the earliest end) and the edge that
+        limits it, or None for a chain of static transforms only."""
+        spans = []
+        for edge in chain:
+            if edge in self.static:
+                continue
+            times = self.edges[edge].arrays()[0]
+            spans.append((float(times.min()), float(times.max()), f"{edge[0]} -> {edge[1]}"))
+        if not spans:
+            return None
+        start = max(spans, key=lambda s: s[0])
+        end = min(spans, key=lambda s: s[1])
+        which = end[2] if end[2] == start[2] else f"{start[2]} from {start[0]:.3f} s, {end[2]} until {end[1]:.3f} s"
+        return start[0], end[1], which
+
+    def rotations(self, chain: list[tuple[str, str]], t: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The rotation base <- sensor at the times ``t`` (within :meth:`span`) through ``chain``."""
+        from scipy.spatial.transform import Rotation, Slerp
+
+        R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
+        for edge in chain:  # base -> ... -> sensor
+            if edge in self.static:
+                Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
             else:
-                Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
-        R = R @ Re
-    return R
+                times, quats = self.edges[edge].arrays()
+                order = np.argsort(times, kind="stable")
+                times, quats = times[order], quats[order]
+                keep = np.concatenate([[True], np.diff(times) > 0])
+                times, quats = times[keep], quats[keep]
+                if len(times) == 1:
+                    Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
+                else:
+                    Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
+            R = R @ Re
+        return R
 
 
 def read_bag(
@@ -582,13 +744,10 @@ def read_bag(
                 if topics[t][0] != TF_TYPE:
                     raise LogFormatError(f"{path}: topic {t} holds {topics[t][0]}, not {TF_TYPE}.")
         streams = {sensor: _Stream(topics[sensor][1], max_samples, average=True)}
-        if tf is None:
-            streams[pose_topics[0]] = _Stream(topics[pose_topics[0]][1], max_samples, average=False)
-        edges: dict[tuple[str, str], _EdgeSamples] = {}
-        static: dict[tuple[str, str], NDArray] = {}
+        joint_groups: dict[tuple[str, ...], _Stream] = {}  # the joint-state messages, by the joints they name
+        tree = _TfTree(max_samples)
         stamped: set[str] = set()
-        joint_names: tuple[str, ...] | None = None
-        frame_id = ""
+        frame_id: str | None = None
         width = None
         wanted = [c for c in r.reader.connections if c.topic in set(streams) | set(pose_topics)]
         try:
@@ -598,16 +757,7 @@ def read_bag(
                 receive = receive_ns * 1e-9
                 if topic in ("/tf", "/tf_static") and tf is not None:
                     for tr in msg.transforms:
-                        key = (_frame(tr.header.frame_id), _frame(tr.child_frame_id))
-                        q = tr.transform.rotation
-                        quat = np.array([q.x, q.y, q.z, q.w])
-                        if topic == "/tf_static":
-                            static[key] = quat
-                        else:
-                            t = _stamp(tr) if stamps == "header" else receive
-                            if key not in edges:
-                                edges[key] = _EdgeSamples(max_samples)
-                            edges[key].add(t, quat)
+                        tree.add(path, topic, tr, _stamp(tr) if stamps == "header" else receive)
                     continue
                 header = _stamp(msg)
                 if header is not None:
@@ -617,43 +767,18 @@ def read_bag(
                     if kind == "wrench":
                         w = getattr(msg, "wrench", msg)
                         value = np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
-                        if not frame_id and header is not None:
-                            frame_id = str(msg.header.frame_id)
-                            if tf is not None:
-                                _check_wrench_frame(path, sensor, frame_id, tf)
+                        if header is not None and msg.header.frame_id != frame_id:
+                            frame_id = _check_wrench_frame(path, sensor, frame_id, str(msg.header.frame_id), t)
                     else:
-                        try:
-                            value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
-                        except AttributeError:
-                            fields = [f for f in getattr(msg, "__dataclass_fields__", {}) if not f.startswith("__")]
-                            raise LogFormatError(f"{path}: topic {sensor} ({conn.msgtype}) has no field {raw_field!r}; "
-                                                 f"its fields are {', '.join(fields)}.", parameter="raw_field",
-                                                 value=raw_field, fix="name the array field with {raw_field}",
-                                                 settings={"raw_field": Placeholder("NAME")}) from None
-                        except (TypeError, ValueError):
-                            raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} ({conn.msgtype}) "
-                                                 "is not an array of numbers (the raw gauges).") from None
-                        if width is None:
-                            width = len(value)
-                            if width < 3:
-                                raise LogFormatError(f"{path}: field {raw_field!r} of topic {sensor} holds {width} "
-                                                     "values; raw gauges are at least 3 channels.")
-                        elif len(value) != width:
-                            raise LogFormatError(f"{path}: topic {sensor} changes from {width} to {len(value)} raw "
-                                                 f"values at {t:.9g} s; one sensor has a fixed channel count.")
+                        value, width = _raw_value(path, sensor, conn.msgtype, msg, raw_field, width, t)
                     streams[sensor].add(t, receive, value)
-                else:  # joint states
-                    names = tuple(msg.name)
-                    position = np.asarray(msg.position, dtype=float)
-                    if joint_names is None:
-                        joint_names = names if names else tuple(f"joint{i + 1}" for i in range(len(position)))
-                    if len(position) != len(joint_names) or (names and names != joint_names):
-                        continue  # a message of another joint group (e.g. the gripper's) on the same topic
-                    streams[topic].add(t, receive, position)
+                else:  # joint states: grouped by the joints each message names (an arm's, a gripper's)
+                    _add_joint_state(path, topic, topics[topic][1], max_samples, joint_groups, msg, t, receive)
         except LogFormatError:
             raise
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
             raise r.damaged(exc) from None
+    frame_id = frame_id or ""
     t_s, _, reading = streams[sensor].arrays()
     notes = []
     if streams[sensor].block > 1:
@@ -671,20 +796,31 @@ def read_bag(
         times, receive, _ = streams[topic].arrays() if topic in streams else ([], [], None)
         if len(times):
             offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
+    chain, names = [], ()
     if tf is None:
         pose_topic = pose_topics[0]
-        t_p, _, q = streams[pose_topic].arrays()
-        if not len(t_p):
+        if not joint_groups:
             raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
-        o = np.argsort(t_p, kind="stable")
-        t_p, q = t_p[o], q[o]
-        keep = np.concatenate([[True], np.diff(t_p) > 0])
-        t_p, q = t_p[keep], q[keep]
+        names, t_p, q = _joint_group(pose_topic, joint_groups, notes)
+        if pose_topic in stamped and stamps == "header":
+            times, receive, _ = joint_groups[names].arrays()
+            offsets[pose_topic] = float(np.median(receive - times))
+        span = (float(t_p.min()), float(t_p.max()))
+        span_words = f"{pose_topic} {span[0]:.6f} to {span[1]:.6f} s"
     else:
         pose_topic = "/tf"
-        if not edges and not static:
+        if not tree.edges and not tree.static:
             raise LogFormatError(f"{path}: /tf holds no transforms.")
-        t_p = np.concatenate([v.arrays()[0] for v in edges.values()]) if edges else t_s[[0, -1]]
+        _check_tf_frame(path, sensor, frame_id, tf, tree)
+        chain = tree.chain(path, _frame(tf[0]), _frame(tf[1]))
+        covered = tree.span(chain)
+        span = (float(t_s[0]), float(t_s[-1])) if covered is None else covered[:2]
+        span_words = (f"the /tf chain {_frame(tf[0])} to {_frame(tf[1])} {span[0]:.6f} to {span[1]:.6f} s (limited "
+                      f"by {covered[2]})") if covered is not None else ""
+        if covered is not None and span[0] > span[1]:
+            raise LogFormatError(f"{path}: the transforms of the /tf chain {_frame(tf[0])} to {_frame(tf[1])} are "
+                                 f"never recorded at one time together ({covered[2]}); the sensor's orientation is "
+                                 "known at no time.")
     if stamps == "header" and sensor in offsets and pose_topic in offsets:
         apart = offsets[sensor] - offsets[pose_topic]
         if abs(apart) > CLOCK_OFFSET_TOLERANCE_S:
@@ -693,28 +829,28 @@ def read_bag(
                 f"against the recorder's receive times ({sensor}'s clock {'behind' if apart > 0 else 'ahead'})",
                 parameter="stamps", value=stamps, settings={"stamps": "receive"},
                 fix="if that is the clocks, not transport latency, read the bag with {stamps}"))
-    overlap = (t_s >= t_p.min()) & (t_s <= t_p.max())
+    overlap = (t_s >= span[0]) & (t_s <= span[1])
     if not overlap.any():
         both = sensor in offsets and pose_topic in offsets
         detail = (f"; against the recorder's receive times their clocks are {offsets[sensor] - offsets[pose_topic]:+.6g}"
                   " s apart") if both else ""
-        raise LogFormatError(
-            f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {pose_topic} "
-            f"{t_p.min():.6f} to {t_p.max():.6f} s, no overlap{detail}.", parameter="stamps", value=stamps,
-            settings={"stamps": "receive"}, fix="{stamps} (the recorder's clock for both), or set the sensor "
-            "driver's clock")
+        said = f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {span_words}, no " \
+               f"overlap{detail}."
+        if stamps == "header":
+            raise LogFormatError(said, parameter="stamps", value=stamps, settings={"stamps": "receive"},
+                                 fix="{stamps} (the recorder's clock for both), or set the sensor driver's clock")
+        raise LogFormatError(said.replace("clocks apart", "no common time").replace("is stamped", "is received") +
+                             " Even on the recorder's receive times they were not recorded together: record the "
+                             "sensor and the pose in one bag run.")
     if not overlap.all():
         notes.append(LogFormatError(f"{int((~overlap).sum())} of {len(t_s)} {sensor} samples lie outside "
-                                    f"{pose_topic}'s span and were dropped"))
+                                    f"{span_words or pose_topic + chr(39) + 's span'} and were dropped"))
         t_s, reading = t_s[overlap], reading[overlap]
     joints = rotation = None
-    names: tuple[str, ...] = ()
     if tf is None:
         joints = np.column_stack([np.interp(t_s, t_p, q[:, j]) for j in range(q.shape[1])])
-        names = joint_names or ()
     else:
-        edge_arrays = {k: v.arrays() for k, v in edges.items()}
-        rotation = _tf_rotations(path, edge_arrays, static, _frame(tf[0]), _frame(tf[1]), t_s)
+        rotation = tree.rotations(chain, t_s)
     return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
                         joint_names=names, rotation=rotation, pose_topic=pose_topic, frame_id=frame_id,
                         clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)

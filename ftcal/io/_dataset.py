@@ -159,14 +159,14 @@ class _CsvColumns:
     temperature: int | None
 
 
-def _find(names: list[str], name: str, option: str, where: str) -> int:
+def _find(names: list[str], name: str, option: str, where: str, positions: dict[str, list[int]] | None = None) -> int:
     """The position of the column ``name`` (mapped by the argument ``option``, e.g. ``"channels"``) in the header
-    ``names``."""
+    ``names`` (``positions``: each name's positions in it, made once for many look-ups: linear time)."""
     if parse_column_slice(name) is not None:
         raise DatasetFileError(f"{where}: {{{option}}} {name}: a column slice selects columns of one array of a .mat "
                                "or .npz file; in a CSV name the columns, or a range such as s0..s7.", parameter=option,
                                value=name)
-    hits = [i for i, n in enumerate(names) if n == name]
+    hits = positions.get(name, []) if positions is not None else [i for i, n in enumerate(names) if n == name]
     if not hits:
         shown = ", ".join(n or "''" for n in names)
         raise DatasetFileError(f"{where}: {{{option}}} names column {name!r}, which the header lacks; the header has "
@@ -224,8 +224,11 @@ def _refuse_lookalikes(names: list[str], where: str) -> None:
 def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumns:
     """The used columns of a CSV header; every other column is ignored, whatever its name."""
     _refuse_lookalikes(names, where)
+    positions: dict[str, list[int]] = {}
+    for i, n in enumerate(names):
+        positions.setdefault(n, []).append(i)
     if columns.channels is not None:
-        channels = [_find(names, n, "channels", where) for n in columns.channels]
+        channels = [_find(names, n, "channels", where, positions) for n in columns.channels]
     else:
         channels = _channel_positions(names, where)
     if columns.wrench is not None:
@@ -240,8 +243,9 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
                 fix="name only the sensor's raw channels in {channels}; if that column really is a raw channel, "
                 "name the wrench columns with {wrench}", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
         seen: dict[str, int] = {}
+        taken = set(channels)
         for i, name in enumerate(names):
-            axis = canonical_wrench_name(name) if i not in channels else None
+            axis = canonical_wrench_name(name) if i not in taken else None
             if axis is None:
                 continue
             if axis in seen:
@@ -811,6 +815,19 @@ def _vector(source: ArrayFile, name: str, what: str) -> np.ndarray:
     return v
 
 
+def _refuse_containers_only(source: ArrayFile, available: list[str]) -> None:
+    """A .mat file holding only structs or cells (no numeric array): said as such, with the MATLAB fix; a column
+    slice of a struct, the generic advice, would fail the same way."""
+    classes = {n: getattr(source, "entries", {}).get(n, ((), "double"))[1] for n in available if n != "meta_json"}
+    containers = {n: c for n, c in classes.items() if c in ("struct", "cell", "object")}
+    if classes and len(containers) == len(classes):
+        name, cls = next(iter(containers.items()))
+        raise DatasetFileError(f"{source.where}: the file holds no numeric array, only "
+                               f"{', '.join(f'{n} (a {c})' for n, c in containers.items())}; ftcal reads numeric "
+                               f"arrays. Fix: in MATLAB, save the fields as variables: save(FILE, '-struct', "
+                               f"'{name}', '-v7')" + ("." if cls == "struct" else f" (for a {cls}, its arrays one by one)."))
+
+
 def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vectors: list[str], what: str,
             option: str) -> tuple[np.ndarray, list[str], str | None]:
     """One (n, k) array from a file's arrays: one 2-D variable, a column slice of one, or a list of vectors.
@@ -823,6 +840,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         elif vectors:
             names = tuple(vectors)
         else:
+            _refuse_containers_only(source, available)
             raise DatasetFileError(
                 f"{where}: no {kind} {default!r} holding the {what}; the file has "
                 f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}.", parameter=option,

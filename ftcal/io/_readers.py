@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core._columns import DTYPE_KIND_NAMES
+from ..core._columns import DTYPE_KIND_NAMES, repeated_names
 from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
 from ..core._memory import MemoryLimitError, check_allocation
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
@@ -340,7 +340,7 @@ class ColumnMap:
                 raise DatasetFileError(f"{{{field}}} mapping {','.join(value)!r} holds an empty name; give "
                                        "comma-separated names, e.g. s0,s1,s2 or s0..s7.", parameter=field,
                                        value=tuple(value))
-            dups = sorted({n for n in names if names.count(n) > 1})
+            dups = [n for n, _ in repeated_names(names)]
             if dups:
                 raise DatasetFileError(f"{{{field}}} mapping names {dups[0]!r} twice; each column once.",
                                        parameter=field, value=names)

@@ -397,6 +397,11 @@ class _Archive:
                     raise ModelFileError(f"{what} holds Python objects (a pickle); ftcal model files never do, and "
                                          "ftcal does not unpickle. The file is not an ftcal model.")
                 n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+                n_items = n_bytes / max(dtype.itemsize, 1)
+                if any(d > max(n_items, _MAX_EMPTY_DIM) for d in shape):  # (1e10, 0): no bytes, an absurd length
+                    raise ModelFileError(f"{what} declares shape {shape}, a dimension longer than the "
+                                         f"{int(n_items)} values it holds; the file is damaged or not ftcal's. "
+                                         "Fit and save the model again.")
                 if n_bytes > info.file_size:  # checked before any allocation
                     raise ModelFileError(f"{what} declares shape {shape} ({format_bytes(n_bytes)}) but holds only "
                                          f"{format_bytes(info.file_size)}; the file is damaged. Fit and save the "
@@ -414,6 +419,10 @@ class _Archive:
         array = np.frombuffer(data, dtype=dtype)
         array = array.reshape(shape[::-1]).T if fortran else array.reshape(shape)
         return np.array(array)  # an owned, writable copy
+
+
+#: Longest dimension of an empty model array (shape (n, 0)); any longer one is a damaged or crafted header.
+_MAX_EMPTY_DIM = 1 << 20
 
 
 def _check_is_regular_file(path: Path) -> None:

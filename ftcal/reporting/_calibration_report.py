@@ -291,6 +291,8 @@ def check_conditions(conditions: dict | None) -> dict[str, str | None]:
     >>> check_conditions({"operator": "A. Tester"})["operator"]
     'A. Tester'
     """
+    from ..core._fields import celsius_field, number_field
+
     conditions = dict(conditions or {})
     unknown = sorted(set(conditions) - set(CONDITION_FIELDS))
     if unknown:
@@ -299,9 +301,11 @@ def check_conditions(conditions: dict | None) -> dict[str, str | None]:
     out: dict[str, str | None] = {}
     for key in CONDITION_FIELDS:
         value = conditions.get(key)
-        if value is not None and not isinstance(value, (str, int, float, _dt.date)):
+        if value is not None and (isinstance(value, bool) or not isinstance(value, (str, int, float, _dt.date))):
             raise CalibrationInputError(f"conditions field {key!r} must be text or a number; got "
                                         f"{type(value).__name__} {value!r}.")
+        if isinstance(value, (int, float)):  # a finite number a float holds (NaN, inf, 10**400 refused)
+            number_field(value, f"conditions field {key!r}")
         out[key] = None if value is None or str(value).strip() == "" else str(value).strip()
     interval = out["recalibration_interval"]
     if interval is not None and _parse_interval(interval) is None:
@@ -311,8 +315,8 @@ def check_conditions(conditions: dict | None) -> dict[str, str | None]:
     if interval is not None and out["recalibration_due"] is None and when is not None and _iso_date(when) is None:
         raise CalibrationInputError(f"calibration_date {when!r}: give the date as YYYY-MM-DD (the recalibration "
                                     "due date is counted from it).")
-    if out["ambient_temperature"] is not None:
-        out["ambient_temperature"] = _unit_temperature(out["ambient_temperature"])
+    if out["ambient_temperature"] is not None:  # in °C, within an ambient range (296 is kelvin, not °C)
+        out["ambient_temperature"] = f"{celsius_field(conditions['ambient_temperature'], 'ambient_temperature'):g} °C"
     return out
 
 
