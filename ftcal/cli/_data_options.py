@@ -113,7 +113,7 @@ def fold_groups(args: argparse.Namespace, data, path):
 
 def add_unit_options(g: argparse._ArgumentGroup) -> None:
     """``--force-unit`` and ``--torque-unit`` (unset: N and N·m, checked by the loads' lever arm)."""
-    from ..io._readers import FORCE_UNITS, TORQUE_UNITS
+    from ..io import FORCE_UNITS, TORQUE_UNITS
 
     g.add_argument("--force-unit", metavar="UNIT",
                    help=f"unit of the file's forces, converted to N, exact and case-sensitive (MN is not mN): "
@@ -128,8 +128,8 @@ def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_un
                     torque_unit: str = "N.m", confirmed: bool = False) -> None:
     """Refuse an implausibly long lever arm of ``wrench`` ([N, N·m] after conversion) naming the likely unit, unless
     both units were declared (or ``confirmed``); point out an implausibly short one on stderr."""
-    from ..core._wrench import WRENCH_LABELS
-    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
+    from ..core import WRENCH_LABELS
+    from ..io import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
 
     axes = WRENCH_LABELS if axes is None else axes
     problem = lever_arm_problem(wrench, torque_unit, axes, force_unit)
@@ -177,8 +177,8 @@ def add_dataset_options(p: argparse.ArgumentParser) -> None:
 
 def stored_columns(facts: dict | None, where: str):
     """The :class:`~ftcal.io.ColumnMap` a model file stored (``None`` for a file without one)."""
-    from ..core._exceptions import DatasetFileError
-    from ..io._readers import ColumnMap
+    from ..core import DatasetFileError
+    from ..io import ColumnMap
 
     if not facts or not isinstance(facts, dict) or "columns" not in facts:
         return None
@@ -190,7 +190,7 @@ def stored_columns(facts: dict | None, where: str):
 
 def dataset_columns(args: argparse.Namespace, stored=None):
     """The :class:`~ftcal.io.ColumnMap` of the options, each unset one taken from ``stored`` (a model's)."""
-    from ..io._readers import ColumnMap
+    from ..io import ColumnMap
 
     def pick(option: str, default):
         value = getattr(args, option, None)
@@ -253,7 +253,7 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
 def training_targets(data):
     """The dataset's wrench as the calibrators take it: a table named by its axes when they are not the default
     ones of its width (a plate's Fz, Tx, Ty: its torques are scaled), else the array."""
-    from ..core._wrench import default_axes, named_targets
+    from ..core import default_axes, named_targets
 
     named = None if tuple(data.axes) == default_axes(len(data.axes)) else tuple(data.axes)
     return named_targets(data.wrench, named)
@@ -271,8 +271,8 @@ def fit_data_facts(args: argparse.Namespace, data) -> dict:
 
 def model_reading(model_path) -> tuple:
     """``(ColumnMap or None, axes or None, units confirmed)`` a model file keeps of its training data."""
-    from ..core._exceptions import ModelFileError
-    from ..persistence._model_io import model_data
+    from ..core import ModelFileError
+    from ..persistence import model_data
 
     try:
         facts = model_data(model_path)

@@ -187,8 +187,8 @@ class _Poses:
 
 
 def _input_kind(item: str) -> str:
-    from ..io._bags import is_bag
-    from ..io._poses import is_pose_file
+    from ..io import is_bag
+    from ..io import is_pose_file
 
     path = Path(item)
     if is_bag(path) or (path.is_dir() and bag_files([item]) is not None):
@@ -223,8 +223,8 @@ def _is_continuous(args, time, rotations) -> bool:
 def _pose_file_rows(args, console: Console, path: Path, model):
     """A pose file's rows: the record, its wrench in the sensor frame [N, N·m] (units checked, raw channels through
     the model) and the model (loaded on first need)."""
-    from ..experiment._tool_load import wrench_in_sensor_frame
-    from ..io._poses import read_pose_file
+    from ..experiment import wrench_in_sensor_frame
+    from ..io import read_pose_file
 
     rec = read_pose_file(path, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
     if rec.wrench is not None:
@@ -272,7 +272,7 @@ def _pose_file_poses(args, console: Console, paths: list[Path]) -> _Poses:
 
 def _wrench_in_si(args, wrench):
     """A wrench read in the options' units (``--force-unit``, ``--torque-unit``) in N and N·m."""
-    from ..io._readers import unit_scale
+    from ..io import unit_scale
 
     wrench = wrench.copy()
     wrench[:, :3] *= unit_scale(args.force_unit or "N", "force")
@@ -304,7 +304,7 @@ def _bag_poses(args, console: Console, paths: list[Path]) -> _Poses:
     import numpy as np
 
     import ftcal
-    from ..experiment._tool_load import wrench_in_sensor_frame
+    from ..experiment import wrench_in_sensor_frame
 
     robot = None if args.tf is not None else load_robot_from_args(args)
     rotations, wrenches, times, still_list, model = [], [], [], [], None
@@ -363,8 +363,8 @@ def identification_poses(args, console: Console) -> _Poses:
 def _poses_csv(poses: _Poses) -> str:
     from scipy.spatial.transform import Rotation
 
-    from ..core._columns import csv_rows
-    from ..core._wrench import WRENCH_LABELS
+    from ..core import csv_rows
+    from ..core import WRENCH_LABELS
 
     import numpy as np
 
@@ -445,7 +445,7 @@ def _compensation_rows(args, console: Console):
             times.append(rec.time)
             temperatures.append(rec.temperature)
     else:
-        from ..experiment._tool_load import wrench_in_sensor_frame
+        from ..experiment import wrench_in_sensor_frame
 
         robot = None if args.tf is not None else load_robot_from_args(args)
         for path in bag_files(args.inputs):
@@ -472,7 +472,7 @@ def _log_poses_model_needed(args) -> None:
 
 def run_compensate(args: argparse.Namespace) -> int:
     import ftcal
-    from ..core._wrench import WRENCH_LABELS
+    from ..core import WRENCH_LABELS
     from ._tool_drift import compensate_rows
 
     console = Console(args.quiet)

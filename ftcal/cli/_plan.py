@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
                      f"{plan_files.path('poses.csv')}")
-    from ..robot._pose_planning import LINEAR_MODEL_PARAMETERS
+    from ..robot import LINEAR_MODEL_PARAMETERS
 
     if args.next_poses is None and plan.n_poses < LINEAR_MODEL_PARAMETERS:
         print(f"ftcal: warning: {plan.n_poses} poses cannot calibrate even the linear model (it needs "

@@ -34,7 +34,7 @@ def _frames(text: str) -> tuple[str, str]:
 
 def add_recording_options(g: argparse._ArgumentGroup) -> None:
     """The still-pose thresholds: ``--still-tolerance``, ``--min-still``, ``--settle``."""
-    from ..experiment._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
+    from ..experiment import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG
 
     g.add_argument("--still-tolerance", type=positive_float, default=DEFAULT_STILL_TOLERANCE_DEG, metavar="DEG",
                    help="a pose is still while it stays within this [deg] (each joint, or the orientation)")
@@ -47,7 +47,7 @@ def add_recording_options(g: argparse._ArgumentGroup) -> None:
 
 def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
     """The topics and stamps of a ROS bag input."""
-    from ..io._bags import DEFAULT_MAX_SAMPLES
+    from ..io import DEFAULT_MAX_SAMPLES
 
     g = p.add_argument_group("ROS bags (rosbag2 sqlite3 / MCAP folders, ROS 1 .bag files; pip install \"ftcal[ros]\")")
     if wrench:
@@ -76,7 +76,7 @@ def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
 def refuse_bag_options(args: argparse.Namespace, inputs: str) -> None:
     """Refuse the ROS bag options (:func:`add_bag_options`) given for inputs that are not bags (``inputs`` says
     what they are): they would do nothing, without a word."""
-    from ..io._bags import DEFAULT_MAX_SAMPLES
+    from ..io import DEFAULT_MAX_SAMPLES
 
     defaults = {"wrench_topic": None, "raw_topic": None, "raw_field": "data", "joint_topic": None, "tf": None,
                 "stamps": "header", "max_samples": DEFAULT_MAX_SAMPLES}
@@ -100,8 +100,8 @@ def positive_int_10(text: str) -> int:
 
 def still_poses(args, source: str, time, reading, *, rotations=None, joints=None):
     """The still poses of a continuous recording, with the options' thresholds; errors name ``source``."""
-    from ..core._exceptions import CalibrationInputError
-    from ..experiment._still_poses import find_still_poses
+    from ..core import CalibrationInputError
+    from ..experiment import find_still_poses
     from ._messages import cli_message
 
     try:
@@ -113,8 +113,8 @@ def still_poses(args, source: str, time, reading, *, rotations=None, joints=None
 
 def read_bag_from_args(args, path: Path, console: Console):
     """The bag at ``path`` read as the options say; its notes (clock offsets, dropped samples) on stderr."""
-    from ..core._exceptions import LogFormatError
-    from ..io._bags import read_bag
+    from ..core import LogFormatError
+    from ..io import read_bag
     from ._messages import cli_message
 
     try:
@@ -147,7 +147,7 @@ def bag_joints(rec, robot):
 def bag_files(items: list[str]) -> list[Path] | None:
     """The bags among ``items`` (a bag, or a folder holding bags and no *.csv), or None when they are not bags;
     a mix of bags and other inputs is refused."""
-    from ..io._bags import is_bag
+    from ..io import is_bag
 
     found, other = [], []
     for item in items:
@@ -170,7 +170,7 @@ def bag_run_log(args, path: Path, robot, console: Console):
     """A bag of one run (raw gauges + joints) as a run log of its still poses: one row per pose, in order."""
     import numpy as np
 
-    from ..io._logs import RunLog
+    from ..io import RunLog
 
     match = _RUN_NAME.search(path.name)
     if match is None:

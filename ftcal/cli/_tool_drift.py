@@ -48,8 +48,8 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     """``identify_tool_load`` with the drift options, and the report of the identification (None without a time
     or temperature). Library errors name the inputs."""
     import ftcal
-    from ..core._exceptions import CalibrationInputError
-    from ..experiment._tool_load import identification_summary
+    from ..core import CalibrationInputError
+    from ..experiment import identification_summary
     from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
@@ -75,7 +75,7 @@ def report_names(stem: str) -> list[str]:
 
 
 def write_report(plan: OutputPlan, stem: str, report: dict) -> None:
-    from ..reporting._drift_plot import plot_drift_residuals
+    from ..reporting import plot_drift_residuals
     from ._common import write_json
 
     json_name, png_name = report_names(stem)
@@ -108,7 +108,7 @@ def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, times, 
     import sys
     import warnings
 
-    from ..experiment._drift import DriftExtrapolationWarning
+    from ..experiment import DriftExtrapolationWarning
 
     values = compensation_values(args, tool, len(wrenches), times, temperatures, source)
     with warnings.catch_warnings(record=True) as caught:
@@ -184,8 +184,8 @@ def _read_wrench_readings(args: argparse.Namespace):
     """The no-load readings of a tool re-tare, read by the pose-file reader (its layout, units and checks, the
     orientation optional): ``wrench`` (n, 6) [N, N·m] and, when the file has them, ``time``, ``temperature`` and
     ``rotation`` (n, 3, 3)."""
-    from ..core._exceptions import LogFormatError
-    from ..io._poses import read_pose_file
+    from ..core import LogFormatError
+    from ..io import read_pose_file
     from ._data_options import check_lever_arm
     from ._messages import cli_message
 
@@ -227,7 +227,7 @@ def run_retare_tool(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..core._exceptions import CalibrationInputError
+    from ..core import CalibrationInputError
     from ._messages import cli_message
 
     console = Console(args.quiet)

@@ -7,7 +7,7 @@ import threading
 from collections.abc import Iterator
 from typing import Any
 
-from ..core._threads import IDLE_THREAD_PREFIX
+from ..core import IDLE_THREAD_PREFIX
 from ._common import Console
 
 __all__ = ["fit_with_progress"]

@@ -20,5 +20,9 @@ _PUBLIC = dict(
     tool_gravity_compensation_yaml="_tool_load", BiasDrift="_drift", DriftExtrapolationWarning="_drift",
     identification_summary="_tool_load", propose_next_poses="_next_poses", PoseProposal="_next_poses",
 )
+_PUBLIC.update(  # names the CLI uses
+    DEFAULT_MIN_STILL_S="_still_poses", DEFAULT_STILL_TOLERANCE_DEG="_still_poses", tool_onnx_model="_drift",
+    write_run_bags="_virtual_recording",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
