@@ -148,7 +148,7 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators import calibration_tags
-    from ftcal.compose._routing import requests_groups
+    from ftcal.compose import requests_groups
 
     console = Console(args.quiet)
     name = args.name or args.model

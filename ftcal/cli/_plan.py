@@ -192,9 +192,9 @@ def run(args: argparse.Namespace) -> int:
 
 def write_plan_coverage(files: OutputPlan, plan, title: str) -> None:
     """``coverage.png``: the plan's reachable and unreachable gravity directions on the sphere."""
-    from ..reporting import _plots
+    from ..reporting import plot_sphere_coverage
 
     directions = np.vstack([plan.gravity_in_sensor, plan.unreachable])
     reached = np.r_[np.ones(plan.n_poses, bool), np.zeros(len(plan.unreachable), bool)]
     with files.writing("coverage.png") as tmp:
-        _plots.plot_sphere_coverage(directions, tmp, reached=reached, title=title)
+        plot_sphere_coverage(directions, tmp, reached=reached, title=title)

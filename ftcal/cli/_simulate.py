@@ -103,7 +103,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..reporting import _plots
+    from ..reporting import plot_wrench_coverage
 
     console = Console(args.quiet)
     files = _dataset_files(args.n_datasets, args.format)
@@ -133,7 +133,7 @@ def run_dataset(args: argparse.Namespace) -> int:
         with plan.writing("info.json") as tmp:
             write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
         with plan.writing("coverage.png") as tmp:
-            _plots.plot_wrench_coverage(
+            plot_wrench_coverage(
                 first_train.wrench, tmp, alpha=profile.alpha,
                 title=f"Training wrenches ({args.preset} preset)",
             )

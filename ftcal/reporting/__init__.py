@@ -20,6 +20,7 @@ _PUBLIC = dict(
     plot_sphere_coverage="_plots", plot_wrench_coverage="_plots", plot_drift_residuals="_drift_plot",
 )
 _PUBLIC.update(  # names the CLI uses
+    plot_sphere_coverage="_plots", plot_wrench_coverage="_plots",
     CONDITION_FIELDS="_calibration_report", EVALUATION_PLOTS="_evaluation", bytes_sha256="_calibration_report",
     check_conditions="_calibration_report", file_sha256="_calibration_report",
     predicted_plot_name="_evaluation",
