@@ -17,5 +17,8 @@ _PUBLIC = dict(
     SPLIT_NAMES="_real_world", THESIS_TABLES_IV_V="_real_world", run_demo="_demo", DemoResult="_demo",
     OutputFiles="_outputs", read_json_record="_records", data_fingerprint="_records", package_versions="_records",
 )
+_PUBLIC.update(  # names the CLI uses
+    demo_files="_demo",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -37,7 +37,7 @@ import errno
 import sys
 from collections.abc import Sequence
 
-from ..core._exceptions import FtcalError
+from ..core import FtcalError
 from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
                       standard_streams)
 from ._messages import one_line_warnings

@@ -79,8 +79,8 @@ def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True,
 
 
 def _register_artificial(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS, MAX_DATASETS
-    from ..simulation._sampling import TEST_DISTRIBUTIONS
+    from ..simulation import ERROR_PRESETS, MAX_DATASETS
+    from ..simulation import TEST_DISTRIBUTIONS
 
     a = kinds.add_parser(
         "artificial",
@@ -113,7 +113,7 @@ def _register_artificial(kinds: argparse._SubParsersAction) -> None:
 
 
 def _register_real_world(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS
+    from ..simulation import ERROR_PRESETS
 
     r = kinds.add_parser(
         "real-world",
@@ -186,12 +186,12 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..compose._auto import score_candidates
-    from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
-    from ..reporting._plots import plot_axis_errors
+    from ..compose import score_candidates
+    from ..calibrators import STOCK_BASELINE_NAMES, StockCalibrator
+    from ..reporting import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, dataset_alpha
-    from ..core._wrench import WRENCH_LABELS
+    from ..core import WRENCH_LABELS
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -250,7 +250,7 @@ def run_dataset(args: argparse.Namespace) -> int:
 
 
 def _dataset_table(comparison, axes) -> str:
-    from ..core._wrench import axis_unit
+    from ..core import axis_unit
 
     head = "| model | " + " | ".join(f"{a} [{axis_unit(a)}]" for a in axes) + " |"
     lines = [head, "|" + "---|" * (1 + len(axes))]
@@ -265,7 +265,7 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
-    from ..calibrators._baselines import STOCK_BASELINE_NAMES
+    from ..calibrators import STOCK_BASELINE_NAMES
 
     baselines = not args.models if args.baselines is None else args.baselines
     return _models(args) + (STOCK_BASELINE_NAMES if baselines else ())

@@ -25,8 +25,8 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-from ..core._exceptions import FtcalError
-from ..core._files import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
+from ..core import FtcalError
+from ..core import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
 from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
 __all__ = [
@@ -497,7 +497,7 @@ def name_the_dataset(message: str, exc: BaseException) -> str:
     "The 'ridge' parameter must be >= 0"
     >>> _datasets.clear()
     """
-    from ..core._exceptions import CalibrationInputError
+    from ..core import CalibrationInputError
 
     about_data = isinstance(exc, CalibrationInputError) and exc.parameter in ("X", "y")
     if about_data and len(_datasets) == 1 and _datasets[0] not in message:  # not a --param value's error
@@ -570,7 +570,7 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     """Refuse inputs that hold the same content (one recording given twice, under two names or twice in a folder):
     it would count its poses twice, and its twins would fall in different folds, so a model would be judged on
     its own training rows. ``what`` says what the inputs are (``"ROS bag"``)."""
-    from ..core._files import content_twins
+    from ..core import content_twins
 
     twins = content_twins(paths)
     if twins:

@@ -224,7 +224,7 @@ def fold_groups(args: argparse.Namespace, data, path):
 
 def add_unit_options(g: argparse._ArgumentGroup) -> None:
     """``--force-unit`` and ``--torque-unit`` (unset: N and N·m, checked by the loads' lever arm)."""
-    from ..io._readers import FORCE_UNITS, TORQUE_UNITS
+    from ..io import FORCE_UNITS, TORQUE_UNITS
 
     g.add_argument("--force-unit", metavar="UNIT",
                    help=f"unit of the file's forces, converted to N, exact and case-sensitive (MN is not mN): "
@@ -240,8 +240,8 @@ def check_lever_arm(args: argparse.Namespace, wrench, where, axes=None, force_un
                     torque_unit: str = "N.m", confirmed: bool = False) -> None:
     """Refuse an implausibly long lever arm of ``wrench`` ([N, N·m] after conversion) naming the likely unit, unless
     both units were declared (or ``confirmed``); point out an implausibly short one on stderr."""
-    from ..core._wrench import WRENCH_LABELS
-    from ..io._readers import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
+    from ..core import WRENCH_LABELS
+    from ..io import PLAUSIBLE_LEVER_ARM_M, lever_arm_m, lever_arm_problem
 
     axes = WRENCH_LABELS if axes is None else axes
     problem = lever_arm_problem(wrench, torque_unit, axes, force_unit)
@@ -304,8 +304,8 @@ def add_bad_readings_option(g) -> None:
 
 def stored_columns(facts: dict | None, where: str):
     """The :class:`~ftcal.io.ColumnMap` a model file stored (``None`` for a file without one)."""
-    from ..core._exceptions import DatasetFileError
-    from ..io._readers import ColumnMap
+    from ..core import DatasetFileError
+    from ..io import ColumnMap
 
     if not facts or not isinstance(facts, dict) or "columns" not in facts:
         return None
@@ -317,7 +317,7 @@ def stored_columns(facts: dict | None, where: str):
 
 def dataset_columns(args: argparse.Namespace, stored=None):
     """The :class:`~ftcal.io.ColumnMap` of the options, each unset one taken from ``stored`` (a model's)."""
-    from ..io._readers import ColumnMap
+    from ..io import ColumnMap
 
     def pick(option: str, default):
         value = getattr(args, option, None)
@@ -467,7 +467,7 @@ def _saturated_entries(data, mask, said: str) -> list[dict]:
 def training_targets(data):
     """The dataset's wrench as the calibrators take it: a table named by its axes when they are not the default
     ones of its width (a plate's Fz, Tx, Ty: its torques are scaled), else the array."""
-    from ..core._wrench import default_axes, named_targets
+    from ..core import default_axes, named_targets
 
     named = None if tuple(data.axes) == default_axes(len(data.axes)) else tuple(data.axes)
     return named_targets(data.wrench, named)
@@ -489,7 +489,7 @@ def model_wrench_range(model_path, axes):
     arrays, or None for a model file that does not keep it (fitted by an older ftcal, or in Python)."""
     import numpy as np
 
-    from ..core._exceptions import ModelFileError
+    from ..core import ModelFileError
     from ..persistence import model_data
 
     try:
@@ -509,8 +509,8 @@ def model_wrench_range(model_path, axes):
 
 def model_reading(model_path) -> tuple:
     """``(ColumnMap or None, axes or None, units confirmed)`` a model file keeps of its training data."""
-    from ..core._exceptions import ModelFileError
-    from ..persistence._model_io import model_data
+    from ..core import ModelFileError
+    from ..persistence import model_data
 
     try:
         facts = model_data(model_path)

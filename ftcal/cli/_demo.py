@@ -22,7 +22,7 @@ model files, metrics.json/.md and PNG plots to DIR.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS
+    from ..simulation import ERROR_PRESETS
 
     p = sub.add_parser(
         "demo",
@@ -38,7 +38,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..benchmark._demo import demo_files, run_demo
+    from ..benchmark import demo_files, run_demo
 
     console = Console(args.quiet)
     plan = OutputPlan(args.out, demo_files(), args.force)  # refuse before any work

@@ -13,7 +13,7 @@ import numpy as np
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, write_json
 from ._data_options import add_dataset_options, load_dataset_for_models
 from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
-from ..reporting._evaluation import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
+from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
 examples:
@@ -146,8 +146,8 @@ def extrapolation(model, model_path, data) -> dict:
 
 def training_data_of(dataset, model_paths) -> list[str]:
     """Labels of the models whose ``NAME.fit.json`` (beside the model file) says they were fitted on ``dataset``."""
-    from ..core._files import same_file
-    from ..reporting._calibration_report import file_sha256
+    from ..core import same_file
+    from ..reporting import file_sha256
 
     found, digest = [], None
     for path in model_paths:

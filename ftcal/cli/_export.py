@@ -78,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
     if args.format == "ros":
-        from ..experiment._tool_load import tool_gravity_compensation_yaml
+        from ..experiment import tool_gravity_compensation_yaml
 
         tool = ftcal.experiment.ToolLoad.load(args.model)
         text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
@@ -87,7 +87,7 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
         return 0
     if is_tool and args.format == "onnx":
-        from ..experiment._drift import tool_onnx_model
+        from ..experiment import tool_onnx_model
 
         tool = ftcal.experiment.ToolLoad.load(args.model)
         with plan.writing(output.name) as tmp:
@@ -106,11 +106,11 @@ def run(args: argparse.Namespace) -> int:
 def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
     import json
 
-    from ..persistence._matrix import matrix_export_dict
+    from ..persistence import matrix_export_dict
     from ._data_options import model_reading
 
     stored, axes, _ = model_reading(model_path)  # the axes and channel names the model was fitted with
-    from ..io._readers import parse_column_slice
+    from ..io import parse_column_slice
 
     inputs = None if stored is None or stored.channels is None or parse_column_slice(stored.channels[0]) \
         else stored.channels

@@ -112,10 +112,10 @@ def _check_before_saving(estimator, X, y, groups, args, predictions, console: Co
     cross-validates the model here when its fits are light (closed form or kernel: ``cost`` tag); a network or a
     model of unknown cost is checked on its training predictions only (a held-out check would train it ``cv``
     times more: ``--report`` gives it)."""
-    from ..calibrators._base import calibration_tags
+    from ..calibrators import calibration_tags
     from ..model_selection import FoldPlan
-    from ..model_selection._selection import DegenerateCalibrationError
-    from ..compose._auto import check_calibration
+    from ..model_selection import DegenerateCalibrationError
+    from ..compose import check_calibration
 
     y = np.asarray(y, dtype=float)
     held_out = True
@@ -146,7 +146,7 @@ def _rmse_text(rmse: float, axes, alpha: float) -> str:
     >>> _rmse_text(0.5, ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz"), 50.0)
     '0.5 N (torque-scaled, alpha=50)'
     """
-    from ..core._wrench import force_columns, torque_columns
+    from ..core import force_columns, torque_columns
 
     if torque_columns(axes) and (force_columns(axes) or alpha != 1.0):
         return f"{rmse:.4g} N (torque-scaled, alpha={alpha:.4g})"
@@ -223,14 +223,14 @@ def comparison_progress(console: Console, label: str, every: float = HEARTBEAT_S
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ftcal.calibrators._base import calibration_tags
-    from ftcal.compose._routing import requests_groups
+    from ftcal.calibrators import calibration_tags
+    from ftcal.compose import requests_groups
 
     console = Console(args.quiet)
     name = args.name or args.model
     if not name.replace("-", "_").isidentifier():
         raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
-    from ..reporting._calibration_report import file_sha256
+    from ..reporting import file_sha256
     from ._report import prepare_report, report_file_names, write_report
 
     # the report files are planned without --report too: a forced refit removes an earlier fit's report with the

@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import Any
 
-from ..core._exceptions import NO_SETTING, FtcalError, Placeholder
+from ..core import NO_SETTING, FtcalError, Placeholder
 
 __all__ = ["CliError", "UsageError", "Option", "CLI_NAMES", "cli_message", "cli_spelling", "cli_error", "fix_names", "one_line_warnings"]
 

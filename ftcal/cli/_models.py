@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from ..io._dataset import CalibrationDataset
-from ..core._wrench import alpha_from_wrenches
-from ..core._files import MODEL_SUFFIX, model_file_name
+from ..io import CalibrationDataset
+from ..core import alpha_from_wrenches
+from ..core import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
 __all__ = [
@@ -43,7 +43,7 @@ def load_model_file(path: str | Path):
 def model_inputs(model, dataset: CalibrationDataset):
     """The ``X`` a fitted model takes from a dataset (the library's one definition,
     :func:`ftcal.reporting.model_inputs`)."""
-    from ..reporting._calibration_report import model_inputs as inputs
+    from ..reporting import model_inputs as inputs
 
     return inputs(model, dataset)
 
@@ -55,7 +55,7 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
     problem = None if path.is_dir() else path_problem(path)  # a folder of files (one per pose) is one dataset
     if problem is not None:
         raise CliError(f"{problem} (the {role})")
-    from ..core._validation import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
+    from ..core import MAX_TRAINING_MAGNITUDE  # scikit-learn behind it: not at `ftcal --help`
 
     dataset = CalibrationDataset.load(path, columns=columns)
     note_dataset(path)

@@ -181,7 +181,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
                      f"{plan_files.path('poses.csv')}")
-    from ..robot._pose_planning import LINEAR_MODEL_PARAMETERS
+    from ..robot import LINEAR_MODEL_PARAMETERS
 
     if args.next_poses is None and plan.n_poses < LINEAR_MODEL_PARAMETERS:
         print(f"ftcal: warning: {plan.n_poses} poses cannot calibrate even the linear model (it needs "
@@ -192,9 +192,9 @@ def run(args: argparse.Namespace) -> int:
 
 def write_plan_coverage(files: OutputPlan, plan, title: str) -> None:
     """``coverage.png``: the plan's reachable and unreachable gravity directions on the sphere."""
-    from ..reporting import _plots
+    from ..reporting import plot_sphere_coverage
 
     directions = np.vstack([plan.gravity_in_sensor, plan.unreachable])
     reached = np.r_[np.ones(plan.n_poses, bool), np.zeros(len(plan.unreachable), bool)]
     with files.writing("coverage.png") as tmp:
-        _plots.plot_sphere_coverage(directions, tmp, reached=reached, title=title)
+        plot_sphere_coverage(directions, tmp, reached=reached, title=title)

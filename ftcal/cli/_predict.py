@@ -13,7 +13,7 @@ from ._common import CliError, Console, OutputPlan, add_run_options, existing_fi
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
                             print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
-from ..core._wrench import default_axes
+from ..core import default_axes
 from ..io import RangeExcess, range_excess
 
 EXAMPLE = """\
@@ -84,8 +84,8 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
     """
     import json
 
-    from ..core._exceptions import DatasetFileError
-    from ..io._dataset import CalibrationDataset
+    from ..core import DatasetFileError
+    from ..io import CalibrationDataset
     from ._messages import cli_message, fix_names
 
     file = Path(path)
@@ -134,7 +134,7 @@ def range_of_another_fit(range_file: str, model_path: str, model, limits) -> str
     another SHA-256 but the same range; a report of this model on other data the same SHA-256)."""
     import json
 
-    from ..reporting._calibration_report import file_sha256
+    from ..reporting import file_sha256
 
     if Path(range_file).suffix.lower() != ".json" or getattr(model, "calibrated_range_", None) is None:
         return None
@@ -197,8 +197,8 @@ def _is_model_file(path: Path) -> bool:
 def run(args: argparse.Namespace) -> int:
     from functools import partial
 
-    from ..compose._history import history_reach, reads_history, spread_flags
-    from ..compose._auto import provides_std
+    from ..compose import history_reach, reads_history, spread_flags
+    from ..compose import provides_std
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
@@ -335,7 +335,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
     """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
     rows of a ``.npz`` / ``.mat`` are numbered from 0). ``channels``: the channel columns (or arrays, or a column
     slice) to read, as ``--channels`` or the model's stored mapping name them."""
-    from ..io._readers import expand_names, parse_column_slice
+    from ..io import expand_names, parse_column_slice
 
     names = None if channels is None or parse_column_slice(channels[0]) is not None else expand_names(channels)
     if source == "-":
@@ -347,7 +347,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
         if channels is None and Path(source).suffix.lower() == ".npz":
             raw = read_readings_npz(source, n_channels)
         else:
-            from ..io._dataset import read_channels
+            from ..io import read_channels
 
             raw = read_channels(source, channels)
             if raw.shape[1] != n_channels:

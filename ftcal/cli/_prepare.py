@@ -19,7 +19,7 @@ from ._common import (refuse_twins,
     path_problem,
     write_json,
 )
-from ..io._logs import run_log_files
+from ..io import run_log_files
 from ._data_options import add_columns_option, named_inputs
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
 
@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
     else:
         inputs = logs
-    from ..robot._loads import load_fixture
+    from ..robot import load_fixture
 
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it

@@ -25,8 +25,8 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core._wrench import WRENCH_LABELS
-from ..core._columns import is_number, parse_number, read_header
+from ..core import WRENCH_LABELS
+from ..core import is_number, parse_number, read_header
 from ._common import CliError
 
 __all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows", "takes_temperature", "located_error"]
@@ -166,7 +166,7 @@ def _bounded_lines(stream: IO[str], source: str) -> Iterator[str]:
 def _npz_member_header(archive, member: str, path: str) -> tuple[tuple[int, ...], np.dtype]:
     """Shape and dtype an ``.npy`` member of a zip declares, checked against its stored size and ftcal's memory
     limit *before* anything is decompressed into an array."""
-    from ..core._memory import check_allocation
+    from ..core import check_allocation
 
     info = archive.getinfo(member)
     with archive.open(member) as fh:
@@ -188,7 +188,7 @@ def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
     """The array ``raw`` of a ``.npz`` file, checked for size (before reading), type, shape and finiteness."""
     import zipfile
 
-    from ..core._memory import MemoryLimitError
+    from ..core import MemoryLimitError
 
     try:
         with zipfile.ZipFile(path) as archive:
@@ -218,7 +218,7 @@ def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
 
 def takes_temperature(model) -> bool:
     """Whether the model's last input is the temperature [deg C] (a temperature-compensated model), as its tags say."""
-    from ..calibrators._base import calibration_tags
+    from ..calibrators import calibration_tags
 
     return calibration_tags(model).temperature_column
 
@@ -226,7 +226,7 @@ def takes_temperature(model) -> bool:
 def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> CliError:
     """``exc`` of a model's ``predict`` on one chunk, with the offending row it carries (its ``row`` field, a row of
     the chunk) said as the input's line (or the ``.npz`` row) it came from, and the input named."""
-    from ..core._exceptions import FtcalError
+    from ..core import FtcalError
     from ._messages import cli_error
 
     row = exc.row if isinstance(exc, FtcalError) else None

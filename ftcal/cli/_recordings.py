@@ -45,7 +45,7 @@ def add_recording_options(g: argparse._ArgumentGroup) -> None:
 
 def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
     """The topics and stamps of a ROS bag input."""
-    from ..io._bags import DEFAULT_MAX_SAMPLES
+    from ..io import DEFAULT_MAX_SAMPLES
 
     g = p.add_argument_group("ROS bags (rosbag2 sqlite3 / MCAP folders, ROS 1 .bag files; pip install \"ftcal[ros]\")")
     if wrench:
@@ -74,7 +74,7 @@ def add_bag_options(p: argparse.ArgumentParser, *, wrench: bool = True) -> None:
 def refuse_bag_options(args: argparse.Namespace, inputs: str) -> None:
     """Refuse the ROS bag options (:func:`add_bag_options`) given for inputs that are not bags (``inputs`` says
     what they are): they would do nothing, without a word."""
-    from ..io._bags import DEFAULT_MAX_SAMPLES
+    from ..io import DEFAULT_MAX_SAMPLES
 
     defaults = {"wrench_topic": None, "raw_topic": None, "raw_field": "data", "joint_topic": None, "tf": None,
                 "stamps": "header", "max_samples": DEFAULT_MAX_SAMPLES}
@@ -99,7 +99,7 @@ def positive_int_10(text: str) -> int:
 def bag_files(items: list[str]) -> list[Path] | None:
     """The bags among ``items`` (a bag, or a folder holding bags and no *.csv), or None when they are not bags;
     a mix of bags and other inputs is refused."""
-    from ..io._bags import is_bag
+    from ..io import is_bag
 
     found, other = [], []
     for item in items:

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..core._exceptions import CalibrationInputError, TooFewSamplesError
+from ..core import CalibrationInputError, TooFewSamplesError
 from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
@@ -131,7 +131,7 @@ def _read_mapping(path: Path, what: str) -> dict:
 
 def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np.ndarray:
     """Per-axis values from ``Fx=500,Fy=...`` (or a mapping); with ``percent``, ``1%FS`` and a bare default."""
-    from ..io._readers import canonical_wrench_name
+    from ..io import canonical_wrench_name
 
     def number(raw, where: str) -> float:
         t = str(raw).strip()
@@ -227,7 +227,7 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
                             f"--conditions {conditions_file}: spec", percent=True)
     tool = None
     if args.tool is not None:
-        from ..experiment._tool_load import ToolLoad
+        from ..experiment import ToolLoad
 
         try:
             tool = ToolLoad.load(args.tool)
@@ -311,7 +311,7 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..reporting._calibration_report import bytes_sha256, file_sha256
+    from ..reporting import bytes_sha256, file_sha256
     from ._models import load_model_file, model_inputs, model_label
 
     console = Console(args.quiet)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
-from ..core._memory import check_allocation
+from ..core import check_allocation
 from ._models import MODEL_SUFFIX, model_label
 from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
 
@@ -51,7 +51,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def _kept_data(model_path) -> dict | None:
     """The data description of the model file, kept in the re-tared one (same mapping, units, axes)."""
-    from ..persistence._model_io import model_data
+    from ..persistence import model_data
 
     return model_data(model_path) or None
 

@@ -20,7 +20,7 @@ import contextlib
 import re
 from collections.abc import Iterator
 
-from ..core._exceptions import FtcalError
+from ..core import FtcalError
 
 __all__ = ["dask_backend", "check_scheduler", "probe_scheduler", "SchedulerError", "CONNECT_TIMEOUT_S"]
 

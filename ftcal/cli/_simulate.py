@@ -56,8 +56,8 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS, MAX_DATASETS
-    from ..simulation._sampling import MAX_POINTS, TEST_DISTRIBUTIONS
+    from ..simulation import ERROR_PRESETS, MAX_DATASETS
+    from ..simulation import MAX_POINTS, TEST_DISTRIBUTIONS
 
     d = kinds.add_parser(
         "dataset",
@@ -103,7 +103,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..reporting import _plots
+    from ..reporting import plot_wrench_coverage
 
     console = Console(args.quiet)
     files = _dataset_files(args.n_datasets, args.format)
@@ -133,7 +133,7 @@ def run_dataset(args: argparse.Namespace) -> int:
         with plan.writing("info.json") as tmp:
             write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
         with plan.writing("coverage.png") as tmp:
-            _plots.plot_wrench_coverage(
+            plot_wrench_coverage(
                 first_train.wrench, tmp, alpha=profile.alpha,
                 title=f"Training wrenches ({args.preset} preset)",
             )
@@ -147,7 +147,7 @@ def run_dataset(args: argparse.Namespace) -> int:
 
 def _zero_offset(value: float, profile) -> float:
     """``--zero-offset`` if the virtual sensor accepts it, else a one-line error saying the accepted range."""
-    from ..simulation._artificial import ZERO_OFFSET_LIMIT, zero_offset_bound
+    from ..simulation import ZERO_OFFSET_LIMIT, zero_offset_bound
 
     bound, full_scale = zero_offset_bound(profile)
     if abs(value) > bound:
@@ -196,7 +196,7 @@ def _profile(cal_path: Path | None):
 
 
 def _register_experiment(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation._presets import ERROR_PRESETS
+    from ..simulation import ERROR_PRESETS
 
     e = kinds.add_parser(
         "experiment",
@@ -235,7 +235,7 @@ def run_experiment(args: argparse.Namespace) -> int:
     from ._plan import write_plan_coverage
 
     console = Console(args.quiet)
-    from ..robot._loads import load_fixture
+    from ..robot import load_fixture
 
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
@@ -246,7 +246,7 @@ def run_experiment(args: argparse.Namespace) -> int:
         taken = [Path(args.out) / "bags" / n for n in bag_names if (Path(args.out) / "bags" / n).exists()]
         if taken:  # a bag is never replaced, --force or not
             raise CliError(f"{taken[0]} exists; a bag is never overwritten: remove it or choose another --out")
-        from ..io._bags import check_rosbags
+        from ..io import check_rosbags
 
         check_rosbags()
     robot = load_robot_from_args(args)
@@ -272,7 +272,7 @@ def run_experiment(args: argparse.Namespace) -> int:
     paths = [plan_files.path(file.name) for file in staged]
     console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")
     if bag_storage is not None:
-        from ..experiment._virtual_recording import write_run_bags
+        from ..experiment import write_run_bags
 
         bags = write_run_bags(paths, Path(args.out) / "bags", bag_storage, joint_names=robot.joint_names,
                               random_state=args.seed)

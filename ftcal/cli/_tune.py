@@ -6,7 +6,7 @@ import argparse
 import re
 import time
 
-from ..core._exceptions import CalibrationInputError
+from ..core import CalibrationInputError
 from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
 from ._messages import cli_error
@@ -101,7 +101,7 @@ def check_distribution(entry: str, randomized: bool) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..compose._search import parse_search_space, search_calibrator, search_summary
+    from ..compose import parse_search_space, search_calibrator, search_summary
     import ftcal
 
     console = Console(args.quiet)

@@ -23,5 +23,9 @@ _PUBLIC = dict(
     search_calibrator="_search", search_summary="_search", parse_search_space="_search",
     DEFAULT_SEARCH_SPACES="_search",
 )
+_PUBLIC.update(  # names the CLI uses
+    comparison_table="_auto", history_reach="_history", provides_std="_auto", reads_history="_history",
+    score_candidates="_auto", spread_flags="_history", requests_groups="_routing",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -22,5 +22,13 @@ _PUBLIC = dict(
     plain_json="_files", write_json="_files", atomic_output="_files", is_finite_number="_files",
     check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
+_PUBLIC.update(  # names the CLI uses
+    content_twins="_files", MAX_TRAINING_MAGNITUDE="_validation", MODEL_SUFFIX="_files",
+    NO_SETTING="_exceptions", OutputSet="_files", Placeholder="_exceptions", TooFewSamplesError="_exceptions",
+    atomic_output_set="_files", axis_unit="_wrench", check_writable_dir="_files", csv_rows="_columns",
+    default_axes="_wrench", force_columns="_wrench", is_number="_columns", model_file_name="_files",
+    named_targets="_wrench", parse_number="_columns", read_header="_columns", same_file="_files",
+    torque_columns="_wrench",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

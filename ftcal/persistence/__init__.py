@@ -13,5 +13,8 @@ _PUBLIC = dict(
     save_model="_model_io", load_model="_model_io", model_data="_model_io", FORMAT_VERSION="_model_io",
     export_onnx="_onnx", exportable_types="_onnx", linear_calibration_matrix="_matrix",
 )
+_PUBLIC.update(  # names the CLI uses
+    matrix_export_dict="_matrix",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -21,5 +21,8 @@ _PUBLIC = dict(
     gravity_directions_in_sensor="_pose_planning", gravity_in_sensor_from_pitch_yaw="_pose_planning",
     pitch_yaw_from_gravity_in_sensor="_pose_planning", sensor_rotation_from_pitch_yaw="_pose_planning",
 )
+_PUBLIC.update(  # names the CLI uses
+    LINEAR_MODEL_PARAMETERS="_pose_planning", load_fixture="_loads",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -15,5 +15,9 @@ _PUBLIC = dict(
     make_dead_weight_dataset="_field_sensors", make_robot_held_dataset="_field_sensors",
     make_soft_sensor_dataset="_field_sensors",
 )
+_PUBLIC.update(  # names the CLI uses
+    MAX_DATASETS="_presets", MAX_POINTS="_sampling", TEST_DISTRIBUTIONS="_sampling",
+    ZERO_OFFSET_LIMIT="_artificial", zero_offset_bound="_artificial",
+)
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
