@@ -104,7 +104,7 @@ def test_fit_evaluate_and_predict_read_a_headerless_dataset(tmp_path, capsys):
     code = main(["fit", str(tmp_path / "bad.txt"), "--columns", names, "--model", "linear", "--out",
                  str(tmp_path / "m2")])
     err = one_line_error(capsys, code)
-    assert "bad.txt.csv: line 8, column s2" in err  # the joined file, named after the user's: its header is line 1
+    assert "bad.txt: line 7: 'oops' is not a finite number" in err  # the user's own file and line
 
 
 @pytest.mark.parametrize("command", ["fit", "evaluate", "report", "predict", "retare", "compensate",

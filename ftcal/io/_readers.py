@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from ..core._columns import DTYPE_KIND_NAMES, repeated_names
+from ..core._columns import DTYPE_KIND_NAMES, is_number, repeated_names
 from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
 from ..core._memory import MemoryLimitError, check_allocation
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
@@ -961,6 +961,10 @@ def join_headerless(paths: Sequence, names: Sequence[str]) -> JoinedTable:
             if len(fields) != width:
                 raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the file's first row has "
                                        f"{width}; repair or remove that line.")
+            bad = next((f for f in fields if not is_number(f) or not np.isfinite(float(f))), None)
+            if bad is not None:  # said here, in the user's file and line (the joined table is ftcal's own)
+                raise DatasetFileError(f"{path}: line {no}: {bad.strip()[:40]!r} is not a finite number; repair or "
+                                       "remove that line.")
         parts.append((comments, rows))
         widths.append(width)
     counts = [len(rows) for _, rows in parts]
