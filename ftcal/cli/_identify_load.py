@@ -238,12 +238,14 @@ def run_identify(args: argparse.Namespace) -> int:
     gravity = _gravity(args.gravity)
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
+    given = list(args.inputs)
     args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     poses = identification_poses(args, console)
+    sources = poses.sources if args.inputs == given else [str(p) for p in given]  # the user's files, not the join
     _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
-                            poses.sources, poses.groups)
-    info = {"inputs": poses.sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
+                            sources, poses.groups)
+    info = {"inputs": sources, "n_poses": len(poses.rotations), "model": None if args.model is None else
             str(args.model), "wrench_frame_in_input": args.wrench_frame}
     if poses.kind == "run log":
         info.update(logs=poses.sources, robot=args.robot)
@@ -328,17 +330,18 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
+    given = ", ".join(args.inputs)  # the user's files (named in messages, not ftcal's join of them)
     args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
     tool = ftcal.experiment.ToolLoad.load(args.tool)
     from ftcal.experiment import recording_rows
 
     rows = _read_inputs(args, console, recording_rows)
     head, lead, rotations, wrenches = rows.lead_names, rows.lead, rows.rotations, rows.wrenches
-    external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, ", ".join(args.inputs))
-    values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, ", ".join(args.inputs))
+    external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, given)
+    values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, given)
     frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool, **values)
     if frame.other_fits_better:
-        print(f"ftcal: warning: {', '.join(args.inputs[:3])}: {frame.words('--wrench-frame')}", file=sys.stderr)
+        print(f"ftcal: warning: {given}: {frame.words('--wrench-frame')}", file=sys.stderr)
     lines = [f"{head}," + ",".join(WRENCH_LABELS)]
     lines += [f"{first}," + ",".join(f"{v:.9g}" for v in row) for first, row in zip(lead, external)]
     text = "\n".join(lines) + "\n"

@@ -99,8 +99,9 @@ class PairedDifference:
     ``difference = rmse_a - rmse_b`` [N]; ``paired_se`` the standard error of that difference from the per-unit
     differences of their squared errors (groups, or folds; delta method: the MSE difference over
     ``rmse_a + rmse_b``); ``combined_se`` the unpaired ``sqrt(se_a² + se_b²)`` beside it. The rule (symmetric):
-    ``noise = max(paired_se, TIE_TOLERANCE / 4 · (rmse_a + rmse_b))`` (0.5 % of the mean RMSE: a gain that small
-    is a tie even when consistent); ``"better"`` when ``difference < -noise``, ``"worse"`` when
+    ``noise = max(t · paired_se, TIE_TOLERANCE / 4 · (rmse_a + rmse_b))`` with ``t`` the two-sided 95 % quantile of
+    Student's t on (units - 1) degrees of freedom (a direction is named only at 95 % confidence: at one SE, a third
+    of true ties would get one), and 0.5 % of the mean RMSE (a gain that small is a tie even when consistent); ``"better"`` when ``difference < -noise``, ``"worse"`` when
     ``difference > noise``, else ``"equivalent"``. Swapping ``a`` and ``b`` negates the difference and mirrors
     the verdict and the words exactly.
     """
@@ -133,6 +134,17 @@ class PairedDifference:
         if self.verdict == "equivalent":
             return f"{self.a} and {self.b} are equivalent within noise {figures}"
         return f"{self.a} is {self.percent:.1f} % {self.verdict} than {self.b} {figures}"
+
+
+def _t95(dof: int) -> float:
+    """The two-sided 95 % quantile of Student's t on ``dof`` degrees of freedom (1.96 for many).
+
+    >>> round(_t95(4), 3), round(_t95(10**6), 3)
+    (2.776, 1.96)
+    """
+    from scipy.stats import t
+
+    return float(t.ppf(0.975, max(int(dof), 1)))
 
 
 @dataclass(frozen=True)
@@ -274,7 +286,8 @@ class Comparison:
         difference = ra.rmse - rb.rmse
         paired_se = se_mse / total if total > 0 else 0.0
         combined = float(np.hypot(ra.rmse_se or 0.0, rb.rmse_se or 0.0))
-        noise = max(paired_se, TIE_TOLERANCE / 4.0 * total)
+        n_units = ra.row_errors.size if units is None else np.unique(units).size
+        noise = max(_t95(n_units - 1) * paired_se, TIE_TOLERANCE / 4.0 * total)
         verdict = "better" if difference < -noise else "worse" if difference > noise else "equivalent"
         return PairedDifference(a, b, float(ra.rmse), float(rb.rmse), float(difference), float(paired_se), combined,
                                 verdict)

@@ -9,18 +9,18 @@ The quantity certified is the error of one indicated load of the calibrated sens
 reproducibility (held-out)
     The held-out RMS error of the calibration (every row predicted by a model fitted without its group or
     fold) with the repeatability taken out: ``sqrt(max(rms² - s_r², 0))``. Across groups (poses, sessions)
-    when the folds hold out groups. Type A; degrees of freedom: the independent units minus one (the groups,
-    else the load cases).
+    when the folds hold out groups. Type A; degrees of freedom: Satterthwaite's for a difference of two mean
+    squares (at most the independent units minus one: the groups, else the load cases).
 repeatability
     ``s_r``, the pooled standard deviation of the held-out errors of rows of one load case within one group
     (the same load read again). Type A; degrees of freedom ``sum(n_i - 1)``. With the reproducibility it adds
-    up to the held-out RMS error exactly: neither is counted twice.
+    up to the held-out RMS error (exactly, unless the repeatability exceeds it): neither is counted twice.
 resolution
     The channels' least significant bit (the smallest step of each channel's values in the data) through the
     model's sensitivity (a finite-difference Jacobian at readings of the data): ``u = sqrt(sum_c (J_c LSB_c)²
     / 12)`` (a rectangular distribution of width one LSB, GUM 4.3.7 and F.2.2.1). The held-out error already
-    holds the readings' quantisation, so only the part the repeatability does not show is added:
-    ``sqrt(max(u_res² - s_r², 0))`` (the usual floor when the scatter is below the resolution). Type B.
+    holds the readings' quantisation, so only the part the held-out error does not show is added:
+    ``sqrt(max(u_res² - rms², 0))`` (the usual floor when the scatter is below the resolution). Type B.
 reference standard
     The reference load's own uncertainty, given as an expanded uncertainty at k = 2 (as a reference's
     certificate states it), relative (of the largest applied load of the axis) or absolute: ``u = U / 2``.
@@ -53,9 +53,9 @@ COVERAGE_PROBABILITY = 0.9545
 BUDGET_MODEL = (
     "Budget model (GUM, JCGM 100; EURAMET cg-4): the held-out RMS error of the calibration is split into "
     "repeatability s_r (pooled scatter of the rows of one load case within one group) and reproducibility "
-    "(the rest, sqrt(rms² − s_r²): across groups when the folds hold out groups), so the two add up to the held-out "
-    "error exactly. The readings' resolution (channel LSB/√12 through the model's sensitivity) is already inside "
-    "that error; only its part beyond s_r is added. The reference standard (its expanded uncertainty at k = 2, "
+    "(the rest, sqrt(max(rms² − s_r², 0)): across groups when the folds hold out groups; Satterthwaite's dof), so "
+    "the two add up to the held-out error. The readings' resolution (channel LSB/√12 through the model's "
+    "sensitivity) is already inside that error; only its part beyond the held-out error is added. The reference standard (its expanded uncertainty at k = 2, "
     "halved) and, when known, a temperature term are added. The components are uncorrelated; u_c is their root "
     "sum of squares, k the t-factor at 95.45 % for the Welch-Satterthwaite degrees of freedom, U = k·u_c. "
     "dof '∞': a Type B component taken as exactly known.")
@@ -198,7 +198,7 @@ def resolution_uncertainty(model: Any, X: NDArray, lsb: NDArray, *, rows: int = 
 
 
 def _type_a(errors: NDArray, cases: NDArray, n_units: int) -> tuple[NDArray, NDArray, int, int]:
-    """``(reproducibility u, repeatability s_r, dof of the first, dof of the second)`` per axis."""
+    """``(reproducibility u, repeatability s_r, dof of the first (per axis), dof of the second)`` per axis."""
     _, case = np.unique(cases, return_inverse=True)
     count = np.bincount(case)
     means = np.zeros((count.size, errors.shape[1]))
@@ -207,7 +207,14 @@ def _type_a(errors: NDArray, cases: NDArray, n_units: int) -> tuple[NDArray, NDA
     dof_r = int(len(errors) - count.size)
     s_r = np.sqrt(np.sum((errors - means[case]) ** 2, axis=0) / dof_r) if dof_r > 0 else np.zeros(errors.shape[1])
     ms = np.mean(errors**2, axis=0)
-    return np.sqrt(np.maximum(ms - s_r**2, 0.0)), s_r, max(int(n_units) - 1, 1), dof_r
+    u2 = np.maximum(ms - s_r**2, 0.0)
+    nu = max(int(n_units) - 1, 1)
+    # a difference of two mean squares: Satterthwaite's dof (fewer than the units' when the repeatability is a
+    # large part of the held-out error), at least 1; a zero component keeps the units' dof (it weighs nothing)
+    denom = ms**2 / nu + (s_r**4 / dof_r if dof_r > 0 else 0.0)
+    ratio = np.divide(u2**2, denom, out=np.full_like(u2, float(nu)), where=denom > 0)
+    dof = np.where((u2 > 0) & (s_r > 0), np.clip(ratio, 1.0, nu), float(nu))
+    return np.sqrt(u2), s_r, dof, dof_r
 
 
 def uncertainty_budget(errors: NDArray, *, axes: list[str], cases: NDArray, n_units: int, units_name: str,
@@ -246,7 +253,7 @@ def uncertainty_budget(errors: NDArray, *, axes: list[str], cases: NDArray, n_un
     repro, s_r, dof_repro, dof_r = _type_a(np.asarray(errors, dtype=float), np.asarray(cases), n_units)
     out = []
     for j, axis in enumerate(axes):
-        comps = [BudgetComponent("reproducibility (held-out)", float(repro[j]), float(dof_repro), (
+        comps = [BudgetComponent("reproducibility (held-out)", float(repro[j]), float(dof_repro[j]), (
             f"held-out RMS error less the repeatability, over {n_units} {units_name} (Type A)")),
                  BudgetComponent("repeatability", float(s_r[j]), float(dof_r) if dof_r > 0 else math.inf, (
                      f"pooled scatter of rows of one load case within a group, {dof_r} dof (Type A)" if dof_r > 0
@@ -256,10 +263,11 @@ def uncertainty_budget(errors: NDArray, *, axes: list[str], cases: NDArray, n_un
             comps.append(BudgetComponent("resolution", 0.0, math.inf, resolution_note or (
                 "the readings show no quantisation step (continuous values): no resolution term")))
         else:
-            extra = math.sqrt(max(float(resolution[j]) ** 2 - float(s_r[j]) ** 2, 0.0))
+            held = float(repro[j]) ** 2 + float(s_r[j]) ** 2  # the held-out error's variance: it holds the resolution
+            extra = math.sqrt(max(float(resolution[j]) ** 2 - held, 0.0))
             comps.append(BudgetComponent("resolution", extra, math.inf, (
-                f"{resolution_note}: {float(resolution[j]):.3g} through the model; the part beyond the repeatability "
-                "(the rest is inside the held-out error) (Type B, rectangular)")))
+                f"{resolution_note}: {float(resolution[j]):.3g} through the model; the part beyond the held-out "
+                "error (the rest is inside it) (Type B, rectangular)")))
         if reference is not None:
             comps.append(BudgetComponent("reference standard", float(reference[j]), math.inf, reference_note))
         if temperature is not None:
