@@ -278,3 +278,19 @@ def test_the_frame_check_of_a_drifting_tool_compensates_each_row_at_its_time(rob
                                tool=tool, times=t)
     assert wrong.other_fits_better and wrong.other == "sensor"
     np.testing.assert_allclose(wrong.residual_other, right.residual_declared, rtol=1e-9)
+
+
+def test_the_held_out_residual_with_a_mounting_refits_the_rotation_without_the_held_out_pose(robot, plan_q):
+    """With ``mounting=True`` the held-out figure is a leave-poses-out one for the rotation too: each held-out pose
+    is compensated by the tool *and rotation* identified on the other poses (a rotation fitted on all poses saw it)."""
+    rng = np.random.default_rng(5)
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q[:15])[:, :3, :3]
+    wrenches = sensor_wrenches(rotations, rng)  # no true rotation: three parameters the data do not need
+    tool = identify_tool_load(rotations, wrenches, gravity=G, drift="none", mounting=True)
+    residual = np.empty_like(wrenches)
+    for i in range(len(wrenches)):
+        keep = np.arange(len(wrenches)) != i
+        held = identify_tool_load(rotations[keep], wrenches[keep], gravity=G, drift="none", mounting=True)
+        residual[i] = held.compensate(rotations[i:i + 1], wrenches[i:i + 1])[0]
+    hand = np.sqrt(np.mean(residual[:, :3] ** 2)), np.sqrt(np.mean(residual[:, 3:] ** 2))
+    np.testing.assert_allclose(tool.held_out_residual_rms, hand, rtol=1e-6)

@@ -500,8 +500,8 @@ def identify_tool_load(
     ToolLoad
         With ``drift`` set when a drift was chosen (its ``selection`` holds every candidate's held-out error),
         ``held_out_residual_rms`` the leave-poses-out residual of the chosen model (K-fold over the poses with
-        ``cv`` folds; leave-one-pose-out on at most ``cv`` poses; the mounting rotation, when estimated, held at
-        its estimate), and ``mounting_rotation`` with ``mounting=True``.
+        ``cv`` folds; leave-one-pose-out on at most ``cv`` poses; the mounting rotation, when estimated, fitted
+        again on each fold's training poses), and ``mounting_rotation`` with ``mounting=True``.
 
     Raises
     ------
@@ -561,7 +561,7 @@ def identify_tool_load(
             f"the identified mass is {fit['mass']:.4g} kg (not positive): the wrenches do not show a tool's weight. "
             "Check the gravity direction and that the wrenches are in the sensor frame."
         )
-    rotation, rotation_cov, joint_cov = np.zeros(3), np.zeros((3, 3)), None
+    rotation, rotation_cov, joint_cov, g_robot = np.zeros(3), np.zeros((3, 3)), None, g_s
     if mounting:
         from ._mounting import identify_mounting
 
@@ -580,13 +580,40 @@ def identify_tool_load(
         bias_drift = build_drift(candidate, fit, values, unit, table)
         bias = bias + (candidate.basis({candidate.variable: np.array([bias_drift.reference])}) @ fit["drift"])[0]
         bias_se = functional_se(fit, candidate.basis({candidate.variable: np.array([bias_drift.reference])})[0], 1.0)
-    held_out = held_out_residual(g_s, W, basis, groups=groups, cv=cv, random_state=random_state)
+    held_out = (_held_out_with_mounting(g_robot, W, basis, groups, cv, random_state, rotation) if mounting
+                else held_out_residual(g_s, W, basis, groups=groups, cv=cv, random_state=random_state))
     return ToolLoad(
         mass=mass, center_of_mass=com, bias=bias, mass_std_error=float(f_se[0]), center_of_mass_std_error=com_se,
         bias_std_error=bias_se, gravity=np.asarray(gravity, dtype=float), residual_rms=fit["residual_rms"],
         drift=bias_drift, held_out_residual_rms=None if held_out is None else residual_rms_of(held_out),
         mounting_rotation=rotation, mounting_rotation_std_error=np.sqrt(np.maximum(np.diag(rotation_cov), 0.0)),
     )
+
+
+def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups: NDArray | None, cv: int,
+                            random_state: int | None, rotation: NDArray) -> NDArray[np.float64] | None:
+    """Each row's leave-poses-out residual (n, 6) with the mounting rotation fitted again on every fold's training
+    poses (a rotation fitted on all poses would see the held-out ones); a fold whose poses cannot tell the
+    rotation apart keeps the all-poses rotation. ``None`` when a fold cannot be fitted."""
+    from scipy.spatial.transform import Rotation
+
+    from ._drift import held_out_predictions, pose_folds
+    from ._mounting import identify_mounting
+
+    residual = np.empty_like(W)
+    for train, test in pose_folds(len(W), groups, cv, random_state):
+        sub = None if groups is None else groups[train]
+        r = rotation
+        try:
+            start = fit_gravity_blocks(g_robot[train], W[train], basis[train], sub)
+            r = identify_mounting(g_robot[train], W[train], basis[train], start, sub)[1]
+        except (CalibrationInputError, np.linalg.LinAlgError):
+            pass
+        pred = held_out_predictions(g_robot @ Rotation.from_rotvec(r).as_matrix(), W, basis, [(train, test)])
+        if pred is None:
+            return None
+        residual[test] = W[test] - pred[test]
+    return residual
 
 
 def residual_rms_of(residual: NDArray[np.float64]) -> NDArray[np.float64]:
