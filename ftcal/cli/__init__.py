@@ -146,9 +146,10 @@ def _thread_policy() -> contextlib.AbstractContextManager:
     reaches only the libraries loaded when it is set."""
     import numpy  # noqa: F401
     import scipy.linalg  # noqa: F401
-    from threadpoolctl import threadpool_limits
 
-    return threadpool_limits(limits=1, user_api="blas")
+    from ftcal.core import limit_threads_here  # its cached controller: a new one scans every loaded library
+
+    return limit_threads_here(1)
 
 
 #: A full disk or an exhausted quota: the file is named and the user told what to do.

@@ -559,12 +559,12 @@ def _score_job(estimator, X, y, folds, groups, out_of_fold, structure) -> tuple:
     Returns ``(structured estimator or None, [(test, pred)], error text or None, seconds)``."""
     from sklearn.base import clone
 
-    from threadpoolctl import threadpool_limits
+    from ..core._threads import limit_threads_here
 
     t0 = time.perf_counter()
     try:
         # BLAS on one thread, scoped to this job: the matrices are small and the jobs share the cores
-        with warnings.catch_warnings(), threadpool_limits(limits=1):
+        with warnings.catch_warnings(), limit_threads_here(1, openmp=True):
             warnings.simplefilter("ignore", UserWarning)
             chosen = None
             if structure:
