@@ -561,6 +561,13 @@ def identify_tool_load(
             f"the identified mass is {fit['mass']:.4g} kg (not positive): the wrenches do not show a tool's weight. "
             "Check the gravity direction and that the wrenches are in the sensor frame."
         )
+    mass_se = float(np.sqrt(max(fit["force_cov"][0, 0], 0.0)))
+    if fit["mass"] < 3.0 * mass_se:  # not told apart from no weight at all: the force does not turn with the poses
+        raise CalibrationInputError(
+            f"the identified mass, {fit['mass']:.4g} ± {mass_se:.2g} kg, is not distinguishable from zero: the force "
+            "does not turn with the sensor's orientation as a tool's weight does (the bias took it). A wrench "
+            "recorded in the robot's base frame, not turned into the sensor frame, looks like this: declare its "
+            "frame as the base frame; or the tool is too light for these readings' noise.")
     rotation, rotation_cov, joint_cov, g_robot = np.zeros(3), np.zeros((3, 3)), None, g_s
     if mounting:
         from ._mounting import identify_mounting
