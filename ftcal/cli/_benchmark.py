@@ -201,6 +201,9 @@ def run_dataset(args: argparse.Namespace) -> int:
     data = load_dataset_from_args(args, args.dataset, "dataset")
     groups = fold_groups(args, data, args.dataset)
     check_fold_count(data, args.cv, args.dataset)
+    if args.folds == "group" and groups is not None and np.unique(groups).size < 2:
+        raise CliError(f"--folds group holds whole groups out, but {args.dataset}'s group column holds one group; "
+                       "give at least 2 groups, or remove that column (or use --folds kfold) to hold out rows")
     if args.history and groups is None:
         raise CliError(f"--history: a load history runs along consecutive rows, so whole recordings must be held out; "
                        f"{args.dataset} needs a group column (one recording per group, rows in time order) and "

@@ -448,7 +448,7 @@ def bag_run_log(path, robot=None, *, options: RecordingOptions | None = None):
     if match is None:
         raise CalibrationInputError(
             f"{path}: name each bag after its run, config<C>_load or config<C>_no-load (C the load configuration id, "
-            "-1 for a no-load run shared by all), as 'ftcal simulate experiment --bag' writes them; the still poses "
+            "-1 for a no-load run shared by all), as ftcal's virtual experiment writes them; the still poses "
             "of a load run and its no-load run pair in order.")
     if options.raw_topic is None:
         raise CalibrationInputError(f"{path}: a calibration run's bag holds raw gauges: name their topic.",
