@@ -41,6 +41,11 @@ def cubic(n=240, seed=0):
 
 FAST = [("linear", LinearCalibrator()), ("polynomial2", PolynomialCalibrator(degree=2)),
         ("polynomial3", PolynomialCalibrator(degree=3))]
+#: A GP whose structure is given (nothing to choose: one fit of its hyperparameters), where a test is about what
+#: auto does with a GP, not about the GP's choice of structure (its own tests; the parallel-scoring test keeps it)
+GIVEN_GP = dict(mean="linear", kernel="rbf", per_output=False, kernel_bounds="ftcal")
+#: The same as ``ftcal fit`` options
+GIVEN_GP_CLI = [arg for key, value in GIVEN_GP.items() for arg in ("--param", f"{key}={str(value).lower()}")]
 
 
 # ------------------------------------------------------------------ one RMSE (eq. 18)
@@ -330,7 +335,7 @@ def test_the_stack_auto_chose_holds_the_cross_validated_members_and_a_clone_refi
     from sklearn.model_selection import cross_val_score
 
     raw, w = cubic(240)
-    cands = FAST + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0))]
+    cands = FAST + [("gaussian_process", GaussianProcessCalibrator(max_samples=60, random_state=0, **GIVEN_GP))]
     auto = AutoCalibrator(candidates=cands, alpha=1.0, baselines=False, random_state=0).fit(raw, w)
     r = auto.comparison_
     assert r["kind"] == ["candidate"] * 4 + ["stack"]  # the stack row right after the candidates
@@ -403,7 +408,7 @@ def test_auto_bad_input_is_a_clear_error(kwargs, n, groups, message):
 # ------------------------------------------------------------------ the GP
 def test_gp_return_std_through_auto_and_a_saved_auto(tmp_path):
     raw, w = cubic(120)
-    auto = AutoCalibrator(candidates=[("gaussian_process", GaussianProcessCalibrator(random_state=0))],
+    auto = AutoCalibrator(candidates=[("gaussian_process", GaussianProcessCalibrator(random_state=0, **GIVEN_GP))],
                           alpha=1.0, baselines=False, stack=False).fit(raw, w)
     mean, std = auto.predict(raw[:4], return_std=True)
     back = ftcal.load_model(ftcal.save_model(auto, tmp_path / "auto.model.npz"))
@@ -463,8 +468,8 @@ def test_cli_predict_std_writes_std_columns_and_refuses_models_without_one(tmp_p
     raw, w = cubic(100)
     data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
     np.savetxt(tmp_path / "r.csv", raw[:5], delimiter=",")
-    for model in ("gaussian_process", "linear"):
-        assert main(["fit", str(data), "--model", model, "--out", str(tmp_path / "m"), "-q"]) == 0
+    for model, given in (("gaussian_process", GIVEN_GP_CLI), ("linear", [])):
+        assert main(["fit", str(data), "--model", model, *given, "--out", str(tmp_path / "m"), "-q"]) == 0
     out = tmp_path / "w.csv"
     assert main(["predict", str(tmp_path / "m" / "gaussian_process.model.npz"), str(tmp_path / "r.csv"), "--std",
                  "--output", str(out)]) == 0
@@ -485,8 +490,9 @@ def test_cli_fit_auto_uses_the_short_schedule_and_jobs(tmp_path):
 
     raw, w = cubic(100)  # 75-row training folds: the networks (they need 25 N rows) are skipped, the GP is scored
     data = ftcal.CalibrationDataset(raw=raw, wrench=w).save(tmp_path / "d.csv")
-    assert main(["fit", str(data), "--model", "auto", "--jobs", "1", "--cv", "4", "--out", str(tmp_path / "m"),
-                 "-q"]) == 0
+    # (the stock baselines left out: what is tested is the schedule, the jobs and the folds of ftcal's candidates)
+    assert main(["fit", str(data), "--model", "auto", "--jobs", "1", "--cv", "4", "--param", "baselines=false",
+                 "--out", str(tmp_path / "m"), "-q"]) == 0
     summary = json.loads((tmp_path / "m" / "auto.fit.json").read_text())
     assert summary["schedule"] == "short"
     auto = ftcal.load_model(tmp_path / "m" / "auto.model.npz")
