@@ -117,15 +117,26 @@ def test_hybrid_ridge_choice_honours_groups():
         AxisNonlinearCalibrator().fit(raw, w, groups=np.zeros(len(w)))
 
 
-def test_fit_auto_and_benchmark_dataset_through_the_cli(tmp_path, capsys):
+def _grouped_csv(tmp_path):
     raw, w, groups = affine_data(n=150)  # 120 training rows a fold: the networks are skipped (too few), the GP runs
-    path = ftcal.CalibrationDataset(raw=raw, wrench=w, group=groups).save(tmp_path / "d.csv")
+    return ftcal.CalibrationDataset(raw=raw, wrench=w, group=groups).save(tmp_path / "d.csv")
+
+
+# (fit and benchmark in two tests: each a long run of its own, which two test processes share better)
+def test_fit_auto_through_the_cli(tmp_path):
+    path = _grouped_csv(tmp_path)
     assert main(["fit", str(path), "--model", "auto", "--param", "baselines=false", "--param", "stack=false",
                  "--out", str(tmp_path / "m"), "-q"]) == 0
     import json
 
     summary = json.loads((tmp_path / "m" / "auto.fit.json").read_text())
     assert summary["chosen"] == "linear" and summary["cv_results"]["folds"] == "group"
+
+
+def test_benchmark_dataset_through_the_cli(tmp_path, capsys):
+    import json
+
+    path = _grouped_csv(tmp_path)
     assert main(["benchmark", "dataset", str(path), "--out", str(tmp_path / "b"), "-q"]) == 0
     table = capsys.readouterr().out
     assert "linear **(chosen)**" in table and "gaussian_process" in table and "sk_gp" in table
