@@ -39,7 +39,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._files import plain_json
 from ..core._wrench import alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
-from ..model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus, compare
+from ..model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus, compare, model_cost
 from ._budget import COVERAGE_PROBABILITY, AxisBudget, channel_lsb, resolution_uncertainty, uncertainty_budget
 from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, _axis_names, _figures, _held_out, _matrix,
                                   _per_axis, _round, _warnings, add_interval, axis_units, check_conditions,
@@ -477,7 +477,10 @@ def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: Fold
     known = getattr(model, "held_out_predictions_", None)
     if reused is not None and not provides_std(template) and known is not None and np.shape(known) == y.shape:
         return template, np.asarray(known, dtype=float), None
-    out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=n_jobs)
+    # light work (a closed form, a kernel model on few rows) in this process, as the comparison engine scores it:
+    # starting worker processes (each importing ftcal) costs more than the fits
+    light = model_cost(template, min((len(train) for train, _ in plan.folds), default=0)) == "closed_form"
+    out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
     return template, out["pred"], out["std"]
 
 
