@@ -1,0 +1,68 @@
+"""Bad input, round 6: advice checked before it is given, the reading checks' false alarms and misses, duplicate
+files in a folder, headerless run logs with a text column, predict's bad input, a zero reference uncertainty."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ftcal.cli import main
+
+
+def write_csv(path, raw, wrench, sep=",", names=None, extra=None):
+    """A CSV of readings ``s0..`` and a wrench ``Fx..Tz`` (``extra``: name -> column of text appended)."""
+    names = names or [f"s{i}" for i in range(raw.shape[1])] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"][:wrench.shape[1]]
+    extra = extra or {}
+    lines = [sep.join(names + list(extra))]
+    for i, row in enumerate(np.hstack([raw, wrench])):
+        lines.append(sep.join([f"{v:.10g}" for v in row] + [str(c[i]) for c in extra.values()]))
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def sensor_data(n=200, seed=0, channels=6):
+    """Loads up to 80 N and 2 N·m (a lever arm of a few cm) and affine readings of them with noise."""
+    rng = np.random.default_rng(seed)
+    wrench = rng.uniform(-1, 1, (n, 6)) * [50, 50, 80, 2, 2, 1]
+    gains = rng.normal(size=(channels, 6))
+    raw = wrench @ gains.T * 10 + 2000 + rng.normal(size=(n, channels))
+    return raw, wrench
+
+
+def one_error(capsys, code):
+    err = capsys.readouterr().err.strip().splitlines()
+    errors = [line for line in err if line.startswith("ftcal: error:")]
+    assert code == 2 and len(errors) == 1, err
+    return errors[0]
+
+
+# ---------------------------------------------------------------- 1. unit advice is checked before it is given
+@pytest.mark.parametrize("declared, right", [("uN", "N"), ("mN", "N"), ("kN", "N")])
+def test_a_wrong_force_unit_is_answered_with_the_unit_that_makes_the_loads_plausible(tmp_path, capsys, declared,
+                                                                                      right):
+    from ftcal.io._readers import lever_arm_problem, unit_scale
+
+    raw, wrench = sensor_data()  # forces in N, torques in N·m
+    path = write_csv(tmp_path / "d.csv", raw, wrench)
+    as_read = wrench * np.r_[[unit_scale(declared, "force")] * 3, 1, 1, 1]  # [N, N·m] as ftcal converts them
+    problem = lever_arm_problem(as_read, "N.m", force_unit=declared)
+    assert problem.settings["force_unit"] == right, str(problem)
+    # the advice followed: the loads' check passes and the fit runs
+    followed = as_read * np.r_[[unit_scale(right, "force") / unit_scale(declared, "force")] * 3, 1, 1, 1]
+    assert lever_arm_problem(followed, "N.m", force_unit=right) is None
+    code = main(["fit", str(path), "--model", "linear", "--force-unit", declared, "--out", str(tmp_path / "m")])
+    if declared == "kN":  # too short an arm is only pointed out
+        assert code == 0 and f"--force-unit {right} " in capsys.readouterr().err
+    else:
+        err = one_error(capsys, code)
+        assert f"Fix: pass --force-unit {right} " in err and "MN" not in err and "uN.m" not in err, err
+    assert main(["fit", str(path), "--model", "linear", "--force-unit", right, "--out", str(tmp_path / "n"),
+                 "-q"]) == 0
+
+
+def test_no_unit_is_proposed_when_none_makes_the_loads_plausible():
+    from ftcal.io._readers import lever_arm_problem
+
+    problem = lever_arm_problem([[1e-3, 0, 0, 0, 1e9, 0]])  # an arm of 1e12 m: no unit change of 1e3/1e6 helps
+    assert "no common unit" in str(problem) and "force_unit" not in {k for k, v in problem.settings.items()
+                                                                     if isinstance(v, str)}
