@@ -66,3 +66,20 @@ def test_no_unit_is_proposed_when_none_makes_the_loads_plausible():
     problem = lever_arm_problem([[1e-3, 0, 0, 0, 1e9, 0]])  # an arm of 1e12 m: no unit change of 1e3/1e6 helps
     assert "no common unit" in str(problem) and "force_unit" not in {k for k, v in problem.settings.items()
                                                                      if isinstance(v, str)}
+
+
+# ---------------------------------------------------------------- 2. a row budget advised is one that works
+def test_the_gp_memory_advice_names_a_row_count_that_fits_and_following_it_succeeds(tmp_path, capsys, monkeypatch):
+    import re
+
+    monkeypatch.setenv("FTCAL_MEMORY_LIMIT_GB", "0.001")  # 1 MiB: about 100 rows of a 6-channel GP
+    raw, wrench = sensor_data(n=300)
+    path = write_csv(tmp_path / "d.csv", raw, wrench)
+    err = one_error(capsys, main(["fit", str(path), "--model", "gaussian_process", "--out", str(tmp_path / "a")]))
+    rows = int(re.search(r"Fix: pass --param max_samples=(\d+) ", err).group(1))
+    assert 10 <= rows < 300, err
+    argv = ["fit", str(path), "--model", "gaussian_process", "-q", "--param"]
+    assert main([*argv, f"max_samples={rows}", "--out", str(tmp_path / "b")]) == 0
+    capsys.readouterr()
+    again = one_error(capsys, main([*argv, f"max_samples={rows + 1}", "--out", str(tmp_path / "c")]))
+    assert f"max_samples={rows} " in again  # one more row is over: the advice is the largest that works
