@@ -83,3 +83,24 @@ def test_the_gp_memory_advice_names_a_row_count_that_fits_and_following_it_succe
     capsys.readouterr()
     again = one_error(capsys, main([*argv, f"max_samples={rows + 1}", "--out", str(tmp_path / "c")]))
     assert f"max_samples={rows} " in again  # one more row is over: the advice is the largest that works
+
+
+# ---------------------------------------------------------------- 3. the training rows of a sliced .mat are in range
+def test_the_training_rows_of_a_sliced_mat_are_within_the_range_read_from_that_mat(tmp_path, capsys):
+    from scipy.io import savemat
+
+    raw, wrench = sensor_data()
+    path = tmp_path / "session.mat"
+    # the calibration in one array sliced by the options; 'raw' and 'wrench' of another (a tenth of the readings)
+    savemat(path, {"data": np.hstack([raw, wrench]), "raw": raw / 10, "wrench": wrench})
+    slices = ["--channels", "data[:,0:6]", "--wrench", "data[:,6:12]"]
+    assert main(["fit", str(path), *slices, "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
+    model = str(tmp_path / "m" / "linear.model.npz")
+    capsys.readouterr()
+    assert main(["predict", model, str(path), "--range", str(path)]) == 0
+    out, err = capsys.readouterr()
+    flags = [line.rsplit(",", 1)[1] for line in out.splitlines()[1:]]
+    assert len(flags) == raw.shape[0] and set(flags) == {"0"}, err  # read as the model was: data[:,0:6]
+    assert "beyond" not in err
+    assert main(["evaluate", str(path), model, "--no-plots", "-o", str(tmp_path / "ev")]) == 0
+    assert "beyond" not in capsys.readouterr().err

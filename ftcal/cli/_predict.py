@@ -76,11 +76,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(handler=run)
 
 
-def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
+                         columns=None) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
 
     The bounds are those recorded at calibration; a re-tared model moves them by its re-tare shift
-    (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used.
+    (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used. A
+    dataset is read as the model's training data were (``columns``: the mapping the model file keeps, e.g. a
+    ``.mat`` sliced as ``data[:,0:6]``), so that its readings are the channels the model takes.
     """
     import json
 
@@ -113,7 +116,8 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")
         try:
-            data = CalibrationDataset.load(file)
+            data = CalibrationDataset.load(file, columns=columns) if columns is not None \
+                else CalibrationDataset.load(file)
         except DatasetFileError as exc:  # a fix naming the column options does not apply: --range reads ftcal's layout
             text = cli_message(exc, fix="" if fix_names(exc, ("channels", "wrench")) else None)
             raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
@@ -226,7 +230,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
-    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature)
+    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature,
+                                                                      columns=stored)
     if limits is not None:  # the range was recorded before any re-tare: it moves with the zero, as the model's own
         stale = range_of_another_fit(args.range_file, args.model, model, limits)
         if stale:
