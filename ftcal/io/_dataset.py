@@ -40,6 +40,7 @@ import csv
 import json
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,6 +60,33 @@ __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channel
 _CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
 #: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
 DATASET_SUFFIXES = (".csv", ".npz", ".mat")
+
+
+def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDataset"]) -> None:
+    """Refuse two files of a folder that hold the same readings and wrenches (a recording copied in twice, under
+    another name or in another format): its rows would count twice and its twins fall in different folds, so a
+    model would be judged on its own training rows. The files are compared by what was read from them (a hash of
+    the arrays), so a copy saved as ``.npz`` of a ``.csv`` is found too."""
+    import hashlib
+
+    seen: dict[bytes, Path] = {}
+    for path, part in zip(files, parts):
+        digest = hashlib.sha256()
+        for array in (part.raw, part.wrench, part.temperature):
+            if array is not None:
+                a = np.ascontiguousarray(array, dtype=float)
+                digest.update(repr(a.shape).encode())
+                digest.update(a.tobytes())
+        if part.group is not None:  # rows labelled as other poses or sessions are told apart by their labels
+            digest.update(np.ascontiguousarray(part.group, dtype=np.int64).tobytes())
+            digest.update(repr(part.meta.get("group_names")).encode())
+        key = digest.digest()
+        if part.n_samples and key in seen:
+            raise DatasetFileError(
+                f"{path} holds the same readings and wrenches as {seen[key]} ({part.n_samples} rows): one recording "
+                "given twice would count its rows twice and judge a model on its own rows. Fix: move one of them "
+                "out of the folder (give each recording once).")
+        seen.setdefault(key, path)
 
 
 def dataset_files(folder: Path) -> list[Path]:
@@ -629,6 +657,7 @@ class CalibrationDataset:
         if len({p.axes for p in parts}) > 1 or len({p.n_channels for p in parts}) > 1:
             raise DatasetFileError(f"{folder}: the files hold different channels or wrench axes; every file needs "
                                    "the same columns.")
+        _refuse_twin_files(files, parts)
         temperature = None
         if all(p.temperature is not None for p in parts):
             temperature = np.concatenate([p.temperature for p in parts])
