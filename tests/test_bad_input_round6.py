@@ -104,3 +104,66 @@ def test_the_training_rows_of_a_sliced_mat_are_within_the_range_read_from_that_m
     assert "beyond" not in err
     assert main(["evaluate", str(path), model, "--no-plots", "-o", str(tmp_path / "ev")]) == 0
     assert "beyond" not in capsys.readouterr().err
+
+
+# ---------------------------------------------------------------- 4. one recording twice in a folder
+@pytest.mark.parametrize("command", ["fit", "report"])
+def test_a_recording_twice_in_a_folder_is_refused_by_every_command_that_reads_a_folder(tmp_path, capsys, command):
+    from ftcal import CalibrationDataset
+
+    folder = tmp_path / "poses"
+    folder.mkdir()
+    raw, wrench = sensor_data(n=120)
+    for k in range(3):
+        write_csv(folder / f"pose_{k}.csv", raw[40 * k:40 * k + 40], wrench[40 * k:40 * k + 40])
+    copy = (folder / "pose_1.csv").read_bytes()
+    (folder / "pose_1 (copy).csv").write_bytes(copy)  # the same recording twice, under another name
+    argv = [command, str(folder), "--model", "linear", "--out", str(tmp_path / "m")] if command == "fit" else \
+        [command, "--help"]
+    if command == "report":  # report reads the folder with its model: fit one on the clean files first
+        clean = tmp_path / "clean"
+        clean.mkdir()
+        for k in range(3):
+            (clean / f"pose_{k}.csv").write_bytes((folder / f"pose_{k}.csv").read_bytes())
+        assert main(["fit", str(clean), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
+        argv = [command, str(tmp_path / "m" / "linear.model.npz"), str(folder), "-o", str(tmp_path / "r")]
+    capsys.readouterr()
+    err = one_error(capsys, main(argv))
+    assert "holds the same readings and wrenches as" in err and "pose_1 (copy).csv" in err and "pose_1.csv" in err
+    # the same rows written otherwise (a comment line, CRLF line ends) are the same recording too
+    (folder / "pose_1 (copy).csv").unlink()
+    (folder / "pose_9.csv").write_bytes(b"# exported again\r\n" + copy.replace(b"\n", b"\r\n"))
+    with pytest.raises(ValueError, match="pose_9.csv holds the same readings and wrenches as .*pose_1.csv"):
+        CalibrationDataset.load(folder)
+    (folder / "pose_9.csv").unlink()
+    assert CalibrationDataset.load(folder).n_samples == 120  # distinct recordings are read
+
+
+# ---------------------------------------------------------------- 8. an ideal reference: 0 uncertainty
+@pytest.mark.parametrize("given", ["0%", "Fx=0,Fy=0,Fz=0"])
+def test_a_zero_reference_uncertainty_is_an_ideal_reference_not_an_error(tmp_path, capsys, given):
+    import json
+
+    from test_certificate_budget import LoadCell
+
+    data = LoadCell(seed=13).session(6, 5, 1, seed=14)
+    lines = ["pose,g_a,g_b,g_c,Fx,Fy,Fz"] + [f"p{int(g)},{r[0]:.0f},{r[1]:.0f},{r[2]:.0f},{w[0]},{w[1]},{w[2]}"
+                                            for g, r, w in zip(data.group, data.raw, data.wrench)]
+    (tmp_path / "cell.csv").write_text("\n".join(lines) + "\n")
+    read = ["--channels", "g_a,g_b,g_c", "--wrench", "Fx,Fy,Fz", "--groups", "pose"]
+    assert main(["fit", str(tmp_path / "cell.csv"), *read, "--model", "linear", "--out", str(tmp_path / "m"),
+                 "-q"]) == 0
+    model = str(tmp_path / "m" / "linear.model.npz")
+    budgets = []
+    for out, extra in (("zero", ["--reference-uncertainty", given]), ("none", [])):
+        assert main(["report", model, str(tmp_path / "cell.csv"), *read, "--no-baselines", *extra, "--out",
+                     str(tmp_path / out), "-q"]) == 0, capsys.readouterr().err
+        budgets.append(json.loads((tmp_path / out / "linear.report.json").read_text())["uncertainty_budget"])
+    for zero, none in zip(*budgets):
+        named = {c["name"]: c["standard_uncertainty"] for c in zero["components"]}
+        assert named["reference standard"] == 0.0
+        assert zero["expanded_uncertainty"] == pytest.approx(none["expanded_uncertainty"])  # adds nothing
+    capsys.readouterr()
+    err = one_error(capsys, main(["report", model, str(tmp_path / "cell.csv"), *read, "--no-baselines",
+                                  "--reference-uncertainty", "-1%", "--out", str(tmp_path / "neg")]))
+    assert "--reference-uncertainty" in err
