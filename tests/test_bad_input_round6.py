@@ -167,3 +167,22 @@ def test_a_zero_reference_uncertainty_is_an_ideal_reference_not_an_error(tmp_pat
     err = one_error(capsys, main(["report", model, str(tmp_path / "cell.csv"), *read, "--no-baselines",
                                   "--reference-uncertainty", "-1%", "--out", str(tmp_path / "neg")]))
     assert "--reference-uncertainty" in err
+
+
+# ---------------------------------------------------------------- 9. semicolons and tabs: the conversion that works
+@pytest.mark.parametrize("sep, decimal", [(";", "."), (";", ","), ("\t", ".")])
+def test_a_csv_separated_otherwise_is_told_the_conversion_and_the_converted_file_fits(tmp_path, capsys, sep,
+                                                                                       decimal):
+    import shlex
+    import subprocess
+
+    raw, wrench = sensor_data()
+    text = write_csv(tmp_path / "comma.csv", raw, wrench).read_text()
+    other = text.replace(",", "\0").replace(".", decimal).replace("\0", sep)
+    (tmp_path / "IN.csv").write_text(other)
+    err = one_error(capsys, main(["fit", str(tmp_path / "IN.csv"), "--model", "linear", "--out", str(tmp_path / "a")]))
+    assert "IN.csv: line 1: the fields are separated by" in err
+    command = err.split(", e.g. ", 1)[1].rstrip(".")  # the advice followed, as written
+    subprocess.run(command, shell=True, cwd=tmp_path, check=True)
+    assert (tmp_path / "OUT.csv").read_text() == text, shlex.quote(command)
+    assert main(["fit", str(tmp_path / "OUT.csv"), "--model", "linear", "--out", str(tmp_path / "b"), "-q"]) == 0
