@@ -186,3 +186,43 @@ def test_a_csv_separated_otherwise_is_told_the_conversion_and_the_converted_file
     subprocess.run(command, shell=True, cwd=tmp_path, check=True)
     assert (tmp_path / "OUT.csv").read_text() == text, shlex.quote(command)
     assert main(["fit", str(tmp_path / "OUT.csv"), "--model", "linear", "--out", str(tmp_path / "b"), "-q"]) == 0
+
+
+# ---------------------------------------------------------------- 7. predict's bad input
+@pytest.fixture
+def six_channel_model(tmp_path):
+    raw, wrench = sensor_data()
+    path = write_csv(tmp_path / "train.csv", raw, wrench)
+    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 0
+    return str(tmp_path / "m" / "linear.model.npz"), raw
+
+
+def test_predict_of_a_file_with_too_few_columns_writes_nothing_and_says_what_to_do(tmp_path, capsys,
+                                                                                    six_channel_model):
+    from scipy.io import savemat
+
+    model, raw = six_channel_model
+    capsys.readouterr()
+    write_csv(tmp_path / "five.csv", raw[:5, :5], np.zeros((5, 0)), names=[f"s{i}" for i in range(5)])
+    err = one_error(capsys, main(["predict", model, str(tmp_path / "five.csv")]))
+    assert "five.csv: line 2: 5 channel columns (s0,s1,...) but the model takes 6" in err
+    err = one_error(capsys, main(["predict", model, str(tmp_path / "train.csv"), "--channels", "s0..s4"]))
+    assert "train.csv: line 2: 5 channel columns (s0,s1,s2,s3,s4)" in err
+    savemat(tmp_path / "five.mat", {"raw": raw[:, :5]})
+    err = one_error(capsys, main(["predict", model, str(tmp_path / "five.mat")]))
+    assert "no array of the file holds 6 columns" in err and "--channels" not in err  # it could not help
+    savemat(tmp_path / "eight.mat", {"data": np.hstack([raw, raw[:, :2]])})
+    err = one_error(capsys, main(["predict", model, str(tmp_path / "eight.mat"), "--channels", "data[:,0:5]"]))
+    assert "--channels (e.g. a column slice such as data[:,0:6])" in err
+    assert main(["predict", model, str(tmp_path / "eight.mat"), "--channels", "data[:,0:6]"]) == 0  # followed
+    assert capsys.readouterr().out.count("\n") == 1 + raw.shape[0]
+    # nothing on stdout before the error (a header with no rows reads as an empty result)
+    for argv in (["predict", model, str(tmp_path / "five.csv")], ["predict", model, str(tmp_path / "five.mat")]):
+        assert main(argv) == 2 and capsys.readouterr().out == ""
+
+
+def test_predict_refuses_drop_bad_readings_and_says_why(tmp_path, capsys, six_channel_model):
+    model, _ = six_channel_model
+    capsys.readouterr()
+    err = one_error(capsys, main(["predict", model, str(tmp_path / "train.csv"), "--drop-bad-readings", "auto"]))
+    assert "one wrench per input line" in err and capsys.readouterr().out == ""

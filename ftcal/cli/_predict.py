@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 from pathlib import Path
 
@@ -32,6 +33,8 @@ examples:
 --range FILE (a calibration report .json, or the calibration dataset) adds a column out_of_range:
 1 when a reading lies beyond the calibrated range (a channel below its smallest or above its
 largest calibration reading), else 0; a count of such readings goes to stderr at the end.
+Bad readings of a file (out of the ADC range, spikes, stuck, repeated) are pointed out on stderr by
+file:line:channel and still predicted: the output keeps one wrench per input line (no --drop-bad-readings).
   ftcal predict models/gaussian_process.model.npz readings.csv --std     # + std_Fx..std_Tz columns
 """
 
@@ -72,6 +75,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
              "models, also when auto chose one)",
     )
+    # one wrench per input line, in order: predict points bad readings out but drops none (refused with the reason)
+    p.add_argument("--drop-bad-readings", metavar="KIND", help=argparse.SUPPRESS)
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
 
@@ -204,6 +209,11 @@ def run(args: argparse.Namespace) -> int:
     from ..compose import history_reach, reads_history, spread_flags
     from ..compose import provides_std
 
+    if args.drop_bad_readings is not None:
+        raise CliError(f"--drop-bad-readings {args.drop_bad_readings}: predict writes one wrench per input line, in "
+                       "order, so it drops no reading (dropping would misalign the output with the input); it points "
+                       "the bad readings out on stderr by file:line:channel. Drop --drop-bad-readings, and remove "
+                       "those lines from the input if they must not be predicted")
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     shown = args.input
@@ -256,12 +266,16 @@ def run(args: argparse.Namespace) -> int:
 
     def emit(out) -> int:
         total = 0
-        if not args.no_header:  # at once: a reader waiting for the header must not wait for the first reading
+        chunks = raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
+                            channels=channels)
+        # a file's first chunk is read (its columns checked) before anything is written: a wrong file leaves no
+        # header behind; from stdin the header goes at once (a driver waiting for it must not wait for a reading)
+        first = [] if args.input == "-" else list(itertools.islice(chunks, 1))
+        if not args.no_header:
             labels = [*axes, *([f"std_{a}" for a in axes] if args.std else [])]
             out.write(",".join(labels) + (",out_of_range" if limits is not None else "") + "\n")
             out.flush()
-        for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
-                                     channels=channels):
+        for raw, lines in itertools.chain(first, chunks):
             try:
                 if args.std:
                     wrench, std = model.predict(raw, return_std=True)
@@ -335,6 +349,20 @@ def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset
     return [replace(f, rows=f.rows + offset) for f in found.findings]
 
 
+def _most_columns(source: str) -> tuple[str, int] | None:
+    """The 2-D array of a ``.npz`` / ``.mat`` with the most columns as ftcal reads it (an array wider than tall is
+    read transposed: :func:`ftcal.io.read_channels`), as ``(name, columns)`` (None if unreadable)."""
+    from ..io._readers import ArrayFile
+
+    try:
+        with ArrayFile(source) as archive:
+            shapes = {name: np.shape(archive.read(name)) for name in archive.names()}
+    except (OSError, ValueError):
+        return None
+    wide = [(name, int(min(shape))) for name, shape in shapes.items() if len(shape) == 2]  # wide: read transposed
+    return max(wide, key=lambda item: item[1]) if wide else None
+
+
 def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
                channels: tuple[str, ...] | None = None):
     """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
@@ -355,9 +383,15 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
             from ..io import read_channels
 
             raw = read_channels(source, channels)
-            if raw.shape[1] != n_channels:
-                raise CliError(f"{source}: {raw.shape[1]} raw channels but the model takes {n_channels}; name the "
-                               "channels with --channels")
+            if raw.shape[1] != n_channels:  # --channels can help only where the file holds enough columns
+                held = _most_columns(source)
+                fix = ("name the model's channels with --channels (e.g. a column slice such as "
+                       f"{held[0]}[:,0:{n_channels}])" if held is not None and held[1] >= n_channels else
+                       f"no array of the file holds {n_channels} columns: give the readings this model was "
+                       "calibrated for, or the model of this sensor")
+                raise CliError(f"{source}: {raw.shape[1]} raw channels read"
+                               f"{' (--channels ' + ','.join(channels) + ')' if channels else ''} but the model takes "
+                               f"{n_channels}; {fix}")
         for start in range(0, len(raw), chunk):
             yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
                 else raw[start:start + chunk]

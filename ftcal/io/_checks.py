@@ -4,7 +4,8 @@ A recording can hold readings no sensor gave: a value an ADC cannot produce (``4
 0..1023), a single glitch among steady neighbours, a channel frozen while the others move, a row the logger wrote
 twice. Fitted silently they turn into calibration errors with no pointer to the cause. :func:`check_readings` finds
 them and names each by file, line and channel (:class:`~ftcal.io.RowSources`); ``ftcal fit``, ``report``,
-``evaluate`` and ``predict`` print them and can drop them (``--drop-bad-readings``).
+``evaluate`` and ``predict`` print them; all but ``predict`` can drop them (``--drop-bad-readings``): ``predict``
+writes one wrench per input line, in order, so it points them out and drops none.
 
 The thresholds come from the data's own noise and one false-alarm budget, not from fixed numbers:
 
