@@ -226,3 +226,19 @@ def test_predict_refuses_drop_bad_readings_and_says_why(tmp_path, capsys, six_ch
     capsys.readouterr()
     err = one_error(capsys, main(["predict", model, str(tmp_path / "train.csv"), "--drop-bad-readings", "auto"]))
     assert "one wrench per input line" in err and capsys.readouterr().out == ""
+
+
+# ---------------------------------------------------------------- 5d. beyond the range: a tolerance, clear words
+def test_range_excess_ignores_a_hair_past_the_edge_and_says_how_far_past_which_edge():
+    from ftcal.io import range_excess
+
+    rng = np.random.default_rng(0)
+    readings = np.round(500 + 400 * np.sin(np.arange(2000) / 50) + rng.normal(0, 2, 2000))  # an LSB and 2 of noise
+    low, high = readings.min(), readings.max()
+    again = readings + np.round(rng.normal(0, 2, 2000))  # the same loads read again: a few LSB past an edge
+    assert (again > high).any() and not range_excess(again[:, None], [low], [high]).any
+    asymmetric = np.array([[-3.0], [2.0], [11.2]])  # a range of 0..10: 3 below, 1.2 above
+    found = range_excess(asymmetric, [0.0], [10.0], names=["Fx"], tolerance=[0.0])
+    words = found.words({"Fx": "N"})
+    assert "up to 3 N past the low edge (30 % of the calibrated span)" in words, words
+    assert "x the range" not in words and found.axes[0].to_dict()["edge"] == "low"

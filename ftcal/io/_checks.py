@@ -546,6 +546,12 @@ class AxisExcess:
         reaches (``inf`` for a range of zero; 0 when no row is beyond).
     opposite_sign : int
         Rows beyond of a sign the range never had (a negative load on an axis calibrated from 0 up).
+    largest_excess : float
+        How far the row furthest beyond lies past the edge it crossed (same unit as the range; 0 when none).
+    edge : str or None
+        ``"low"`` or ``"high"``: the edge that row crossed.
+    tolerance : float
+        How far past an edge a value may lie and still count as within (the values' resolution and noise).
     """
 
     name: str
@@ -555,18 +561,26 @@ class AxisExcess:
     n_beyond: int
     largest_factor: float
     opposite_sign: int
+    largest_excess: float = 0.0
+    edge: str | None = None
+    tolerance: float = 0.0
 
     def words(self, unit: str = "") -> str:
-        """One phrase: ``"Fz: 14 of 18 rows beyond -10..10 N, up to 2.23x the range"``."""
+        """One phrase: ``"Fz: 14 of 18 rows beyond -10..10 N, up to 15 N past the high edge (75 % of the calibrated
+        span)"``."""
         u = f" {unit}" if unit else ""
         sign = f", {self.opposite_sign} of the opposite sign" if self.opposite_sign else ""
+        span = self.high - self.low
+        share = f" ({100 * self.largest_excess / span:.3g} % of the calibrated span)" if span > 0 and \
+            np.isfinite(span) else ""
         return (f"{self.name}: {self.n_beyond} of {self.n_rows} rows beyond {self.low:.4g}..{self.high:.4g}{u}, up "
-                f"to {self.largest_factor:.3g}x the range{sign}")
+                f"to {self.largest_excess:.3g}{u} past the {self.edge} edge{share}{sign}")
 
     def to_dict(self) -> dict:
         """Plain JSON."""
         return {"axis": self.name, "low": self.low, "high": self.high, "rows": self.n_rows, "beyond": self.n_beyond,
                 "largest_factor": None if not np.isfinite(self.largest_factor) else self.largest_factor,
+                "largest_excess": self.largest_excess, "edge": self.edge, "tolerance": self.tolerance,
                 "opposite_sign": self.opposite_sign}
 
 
@@ -604,10 +618,13 @@ class RangeExcess:
         axes = []
         for column in zip(*(p.axes for p in parts)):
             first = column[0]
+            furthest = max(column, key=lambda a: a.largest_excess)
             axes.append(AxisExcess(name=first.name, low=first.low, high=first.high,
                                    n_rows=sum(a.n_rows for a in column), n_beyond=sum(a.n_beyond for a in column),
                                    largest_factor=max(a.largest_factor for a in column),
-                                   opposite_sign=sum(a.opposite_sign for a in column)))
+                                   opposite_sign=sum(a.opposite_sign for a in column),
+                                   largest_excess=furthest.largest_excess, edge=furthest.edge,
+                                   tolerance=max(a.tolerance for a in column)))
         return cls(axes=tuple(axes), mask=np.concatenate([p.mask for p in parts]))
 
     def to_dict(self) -> dict:
@@ -616,7 +633,8 @@ class RangeExcess:
                 "axes": [a.to_dict() for a in self.axes]}
 
 
-def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None) -> RangeExcess:
+def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None,
+                 tolerance: ArrayLike | None = None) -> RangeExcess:
     """Per axis, how many rows of ``values`` lie beyond the calibrated range ``low..high`` and by how much.
 
     Used on wrenches (the loads of a validation session against those a model was calibrated on: ``ftcal
@@ -630,6 +648,11 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
         leave a column unchecked.
     names : sequence of str, optional
         The columns' names (default ``0, 1, ...``).
+    tolerance : array-like of shape (k,), optional
+        How far past an edge a value still counts as within. Default: per column, the larger of the values'
+        resolution (their smallest step, an ADC's LSB) and twice their noise (a robust standard deviation of the
+        differences of consecutive rows, over sqrt 2), at most 1 % of the calibrated span: a reading a hair past
+        the edge (the same load read again, one LSB of noise) is not an extrapolation.
 
     Returns
     -------
@@ -641,8 +664,11 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
     >>> found = range_excess(loads, [0.0, -10.0], [10.0, 10.0], names=["Fx", "Fz"])
     >>> found.mask.tolist()
     [False, True, True]
-    >>> print(found.words({"Fx": "N", "Fz": "N"}))
-    Fx: 1 of 3 rows beyond 0..10 N, up to 0.3x the range, 1 of the opposite sign; Fz: 1 of 3 rows beyond -10..10 N, up to 2.2x the range
+    >>> print(found.words({"Fx": "N", "Fz": "N"}))  # doctest: +NORMALIZE_WHITESPACE
+    Fx: 1 of 3 rows beyond 0..10 N, up to 3 N past the low edge (30 % of the calibrated span), 1 of the opposite
+    sign; Fz: 1 of 3 rows beyond -10..10 N, up to 12 N past the high edge (60 % of the calibrated span)
+    >>> range_excess([[10.0005], [3.0]], [0.0], [10.0]).any  # a hair past the edge: within the tolerance
+    False
     """
     v = np.asarray(values, dtype=float)
     if v.ndim == 1:
@@ -652,7 +678,9 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
     names = [str(j) for j in range(v.shape[1])] if names is None else [str(n) for n in names]
     if len(names) != v.shape[1]:
         raise ValueError(f"names gives {len(names)} names for {v.shape[1]} columns.")
-    out_low, out_high = v < lo, v > hi
+    tol = _edge_tolerance(v, lo, hi) if tolerance is None else \
+        np.broadcast_to(np.asarray(tolerance, dtype=float), (v.shape[1],))
+    out_low, out_high = v < lo - tol, v > hi + tol
     outside = out_low | out_high
     axes = []
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -661,9 +689,27 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
             finite = [abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)]
             reach = max(finite) if finite else np.inf
             factor = float(np.max(np.abs(v[rows, j]))) / reach if rows.any() else 0.0
+            below = float(np.max(lo[j] - v[out_low[:, j], j], initial=0.0))
+            above = float(np.max(v[out_high[:, j], j] - hi[j], initial=0.0))
             opposite = int(np.sum((out_low[:, j] & (lo[j] >= 0) & (v[:, j] < 0))
                                   | (out_high[:, j] & (hi[j] <= 0) & (v[:, j] > 0))))
             axes.append(AxisExcess(name=name, low=float(lo[j]), high=float(hi[j]), n_rows=int(v.shape[0]),
                                    n_beyond=int(rows.sum()), largest_factor=factor if reach > 0 or not rows.any()
-                                   else float("inf"), opposite_sign=opposite))
+                                   else float("inf"), opposite_sign=opposite, largest_excess=max(below, above),
+                                   edge=None if not rows.any() else "low" if below >= above else "high",
+                                   tolerance=float(tol[j])))
     return RangeExcess(axes=tuple(axes), mask=outside.any(axis=1))
+
+
+def _edge_tolerance(v: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray:
+    """Per column: the larger of the values' resolution and twice their noise, at most 1 % of the span
+    (:func:`range_excess`)."""
+    out = np.zeros(v.shape[1])
+    for j in range(v.shape[1]):
+        span = hi[j] - lo[j]
+        column = v[:, j][np.isfinite(v[:, j])]
+        if column.size < 2 or not np.isfinite(span) or span <= 0:
+            continue
+        noise = float(_robust_scale(np.abs(np.diff(column))[:, None])[0]) / np.sqrt(2)
+        out[j] = min(max(_quantum(column), 2 * noise), 0.01 * span)
+    return out
