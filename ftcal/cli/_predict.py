@@ -285,7 +285,9 @@ def run(args: argparse.Namespace) -> int:
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines, args) from None
             if limits is not None:
-                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1])))
+                # no tolerance from the readings: a chunk's (a line's) own noise would make the flags depend on the
+                # chunk size; they are the model's own out_of_range (exact edges)
+                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1]), tolerance=0.0))
                 flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
