@@ -242,3 +242,29 @@ def test_range_excess_ignores_a_hair_past_the_edge_and_says_how_far_past_which_e
     words = found.words({"Fx": "N"})
     assert "up to 3 N past the low edge (30 % of the calibrated span)" in words, words
     assert "x the range" not in words and found.axes[0].to_dict()["edge"] == "low"
+
+
+# ---------------------------------------------------------------- 5b. steady data without groups: no false alarm
+def test_steady_poses_without_a_group_column_give_no_repeated_rows_nor_stuck_channels():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_reading_checks import static_poses
+
+    from ftcal.io import check_readings
+
+    found = []
+    for seed in range(3):
+        for noise in (0.3, 0.5, 0.8):  # quiet 10-bit channels: consecutive rows repeat by quantisation alone
+            raw, wrench, _ = static_poses(n_groups=6, rows=200, noise=noise, seed=seed)
+            found += check_readings(raw, wrench=wrench).findings  # no groups: six poses in one file
+        rng = np.random.default_rng(seed)  # one static recording, one load
+        still = np.round(512 + 0.3 * rng.standard_normal((2000, 6)))
+        found += check_readings(still, wrench=np.tile([0, 0, 10.0, 0, 0, 0], (2000, 1))).findings
+        found += check_readings(still).findings
+    assert [f.where() for f in found] == []
+    # a row the logger wrote twice is still found where the loads move
+    raw, wrench = 1000 * rng.normal(size=(200, 6)), rng.normal(size=(200, 6))
+    raw[150], wrench[150] = raw[40], wrench[40]
+    assert [f.line for f in check_readings(raw, wrench=wrench).of_kind("repeated")] == [151]

@@ -24,14 +24,17 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
   is a change of load, not a glitch of one channel; the first and last rows of a group, having one side only, are
   not tested;
 * **stuck** -- a channel exactly constant over a run of rows of a group while most other channels move there: a
-  live channel gives its commonest value with a chance ``p`` (the larger of its share in the group outside the run
-  and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
+  live channel gives its commonest value with a chance ``p`` (the largest of its share in the group outside the run,
+  its share in the rows next to the run, and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
   ``n p^L`` times; runs longer than where that falls below ``false_alarm_rate`` (and at
   least :data:`MIN_STUCK_ROWS`) are stuck;
 * **repeated** -- rows (readings and wrench) that equal an earlier row of their group exactly, when more such pairs
   occur than quantisation explains: the expected number of equal pairs is the product over channels of each
-  channel's chance that two readings of the group are equal; the rows are flagged when the Poisson chance of as
-  many pairs is below ``false_alarm_rate``.
+  channel's chance that two readings of the group under the same reference wrench are equal (one steady load's
+  spread, not that of several poses mixed in one file); the rows are flagged when the Poisson chance of as
+  many pairs is below ``false_alarm_rate`` and, where quantisation alone gives pairs, when the excess is beyond
+  the Gaussian quantile of ``false_alarm_rate`` in standard deviations of the pair count (the pairs share rows:
+  its variance is a U-statistic's, far wider than a Poisson count's).
 
 :func:`range_excess` says, per axis, how many rows lie beyond a calibrated range and how far (x the range): the
 loads of a validation session beyond those a model was calibrated on (``ftcal evaluate``), or readings beyond the
@@ -60,6 +63,9 @@ _RANGE_TRIM = 0.001
 _SIDE = 3
 #: Fewest rows of a group whose own noise scales its spikes; smaller groups use the channel's scale over all groups.
 _MIN_SCALE_ROWS = 20
+#: Rows on each side of a constant run (at least the run's length) whose commonest value's share tells how often a
+#: live channel holds one value there.
+_LOCAL_ROWS = 50
 #: Most rows at a range limit still called isolated readings (more are a pinned, saturated channel).
 _MAX_RAIL_ROWS = 3
 
@@ -425,6 +431,12 @@ class _Finder:
                         p = max(p, float(np.quantile(np.delete(peak[:, j], g), 0.9)))
                     elif outside.size < _MIN_SCALE_ROWS:
                         continue  # one short group: nothing tells a quiet channel from a stuck one
+                    # and the share near the run: a group spanning several steady poses (no group column) mixes
+                    # their levels, and its overall share understates how often a quiet channel holds one value
+                    reach = max(_LOCAL_ROWS, stop - start)
+                    for near in (rows[max(0, start - 1 - reach):max(0, start - 1)], rows[stop:stop + reach]):
+                        if near.size >= _MIN_SCALE_ROWS:  # each side alone: the run may sit where the pose changes
+                            p = max(p, _top_share(self.raw[near, j]))
                     needed = MIN_STUCK_ROWS if p <= 0 else max(MIN_STUCK_ROWS,
                                                                np.log(self.alpha / pairs) / np.log(min(p, 0.999)))
                     moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
@@ -439,10 +451,26 @@ class _Finder:
         return mask
 
     # ---------------------------------------------------------------- repeated rows
+    def _same_load(self, groups: list[NDArray[np.int64]]) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
+        """The rows of each group split by their reference wrench, each with the rows whose spread gives the
+        readings' chance to coincide: equal rows have equal wrenches, so that chance is the one under one load (a
+        steady pose's), not that of the group's whole spread (several poses without a group column mix their
+        levels); a load held for fewer than ``_MIN_SCALE_ROWS`` rows takes its group's spread."""
+        if self.wrench is None:
+            return [(rows, rows) for rows in groups]
+        out = []
+        for rows in groups:
+            if rows.size < 2:
+                continue
+            _, inverse = np.unique(self.wrench[rows], axis=0, return_inverse=True)
+            for part in _group_rows(inverse.ravel(), rows.size):  # a load's own spread needs rows enough to tell
+                out.append((rows[part], rows[part] if part.size >= _MIN_SCALE_ROWS else rows))
+        return out
+
     def repeated(self) -> None:
         table = self.raw if self.wrench is None else np.hstack([self.raw, self.wrench])
-        observed, expected, copies = 0, 0.0, []
-        for rows in self.groups:
+        observed, expected, variance, copies = 0, 0.0, 0.0, []
+        for rows, spread in self._same_load(self.groups):
             m = rows.size
             if m < 2:
                 continue
@@ -450,11 +478,15 @@ class _Finder:
                                                   return_counts=True)
             inverse = inverse.ravel()
             observed += int(np.sum(counts * (counts - 1) // 2))
-            chance = 1.0
+            chance, triple = 1.0, 1.0  # two (three) readings of the group equal, channels independent
             for j in range(self.k):
-                _, c = np.unique(self.raw[rows, j], return_counts=True)
-                chance *= float(np.sum((c / m) ** 2))
+                _, c = np.unique(self.raw[spread, j], return_counts=True)
+                chance *= float(np.sum((c / spread.size) ** 2))
+                triple *= float(np.sum((c / spread.size) ** 3))
             expected += m * (m - 1) / 2 * chance
+            # the pairs share rows, so their count varies more than a Poisson count of that mean: its variance
+            # (a U-statistic's) adds the covariance of the pairs that share a row
+            variance += m * (m - 1) / 2 * chance * (1 - chance) + m * (m - 1) * (m - 2) * max(triple - chance**2, 0)
             later = np.flatnonzero(np.arange(m) != first[inverse])
             copies.extend((int(rows[i]), int(rows[first[inverse[i]]])) for i in later)
         if not copies:
@@ -462,6 +494,10 @@ class _Finder:
         from scipy.special import pdtrc
 
         if pdtrc(observed - 1, expected) >= self.alpha:  # the Poisson chance of at least `observed` pairs
+            return
+        # many expected pairs (a quiet channel near one level): the count is near Gaussian with the U-statistic's
+        # variance, far wider than a Poisson count's; rows are repeated only beyond that too
+        if expected >= 1 and observed - expected <= _gaussian_z(self.alpha) * np.sqrt(max(variance, expected)):
             return
         for row, original in copies:
             self.add(FindingKind.REPEATED, row, None, None,
