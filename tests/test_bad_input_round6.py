@@ -268,3 +268,25 @@ def test_steady_poses_without_a_group_column_give_no_repeated_rows_nor_stuck_cha
     raw, wrench = 1000 * rng.normal(size=(200, 6)), rng.normal(size=(200, 6))
     raw[150], wrench[150] = raw[40], wrench[40]
     assert [f.line for f in check_readings(raw, wrench=wrench).of_kind("repeated")] == [151]
+
+
+# ---------------------------------------------------------------- 5a. a channel dead over whole groups
+def test_a_channel_frozen_over_whole_groups_of_differing_loads_is_stuck():
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).parent))
+    from test_reading_checks import static_poses
+
+    from ftcal.io import FindingKind, check_readings
+
+    raw, wrench, group = static_poses(n_groups=12, rows=60, noise=2.0)
+    dead = raw.copy()
+    dead[group >= 6, 2] = dead[np.flatnonzero(group == 6)[0], 2]  # s2 dead for the second half of the recording
+    found = check_readings(dead, wrench=wrench, groups=group)
+    assert [(f.kind, f.line, f.channel, f.rows.size) for f in found.findings] == \
+        [(FindingKind.STUCK, 361, "s2", 360)]
+    for seed in range(3):  # live channels, quiet ones too, are not
+        for noise in (0.2, 2.0):
+            raw, wrench, group = static_poses(n_groups=12, rows=60, noise=noise, seed=seed)
+            assert check_readings(raw, wrench=wrench, groups=group).clean

@@ -27,7 +27,10 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
   live channel gives its commonest value with a chance ``p`` (the largest of its share in the group outside the run,
   its share in the rows next to the run, and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
   ``n p^L`` times; runs longer than where that falls below ``false_alarm_rate`` (and at
-  least :data:`MIN_STUCK_ROWS`) are stuck;
+  least :data:`MIN_STUCK_ROWS`) are stuck. A channel is stuck too where it holds one value over whole groups whose
+  loads differ (the other channels' group means spread at least half as much there as over the groups where it
+  lives) while elsewhere its group means follow the loads over at least :data:`_FROZEN_STEPS` quantisation steps
+  (a value at the channel's extreme is a pinned, saturated channel, not this);
 * **repeated** -- rows (readings and wrench) that equal an earlier row of their group exactly, when more such pairs
   occur than quantisation explains: the expected number of equal pairs is the product over channels of each
   channel's chance that two readings of the group under the same reference wrench are equal (one steady load's
@@ -66,6 +69,9 @@ _MIN_SCALE_ROWS = 20
 #: Rows on each side of a constant run (at least the run's length) whose commonest value's share tells how often a
 #: live channel holds one value there.
 _LOCAL_ROWS = 50
+#: Fewest quantisation steps a channel's group means spread over (standard deviation across the groups where it
+#: lives) for one value held over whole groups of differing loads to be called frozen.
+_FROZEN_STEPS = 5
 #: Most rows at a range limit still called isolated readings (more are a pinned, saturated channel).
 _MAX_RAIL_ROWS = 3
 
@@ -448,7 +454,43 @@ class _Finder:
                              f"constant over {span.size} rows ({first} to {last}) while the other channels move "
                              f"(a live reading gives one value with chance {p:.2g} at most: runs of "
                              f"{int(np.ceil(needed))} rows or more are beyond chance)")
+        self.frozen_across_groups(mask)
         return mask
+
+    def frozen_across_groups(self, mask: NDArray[np.bool_]) -> None:
+        """A channel that keeps one value over whole groups whose loads differ (dead for the second half of a
+        steady-pose recording): in the groups where it lives, its group means spread over several quantisation
+        steps with the load, while over the frozen groups the other channels' means spread as much (their loads
+        differ) and it does not move at all. Adds to ``mask`` (row, channel)."""
+        if len(self.groups) < 4 or self.k < 2:
+            return
+        sizes = np.array([rows.size for rows in self.groups])
+        means = np.array([self.raw[rows].mean(axis=0) for rows in self.groups])
+        for j in range(self.k):
+            q = _quantum(self.raw[:, j])
+            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not mask[rows, j].any()
+                                 for rows in self.groups])
+            live = ~constant & (sizes >= 2)
+            if q <= 0 or live.sum() < 2 or constant.sum() < 2:
+                continue
+            live_spread = np.std(means[live], axis=0, ddof=1)
+            if live_spread[j] < _FROZEN_STEPS * q:  # a channel that barely follows the loads may hold one value
+                continue
+            others = [i for i in range(self.k) if i != j and live_spread[i] > 0]
+            extremes = (self.raw[:, j].min(), self.raw[:, j].max())
+            for value in np.unique(means[constant, j]):
+                frozen = np.flatnonzero(constant & (means[:, j] == value))
+                if frozen.size < 2 or not others or value in extremes:  # at its extreme: pinned (saturated)
+                    continue
+                moved = np.std(means[frozen][:, others], axis=0, ddof=1) / live_spread[others]
+                if np.median(moved) < 0.5:  # the frozen groups' loads hardly differ: one value is no surprise
+                    continue
+                rows = np.concatenate([self.groups[g] for g in frozen])
+                mask[rows, j] = True
+                self.add(FindingKind.STUCK, np.sort(rows), j, float(value),
+                         f"holds {value:.6g} over all {rows.size} rows of {frozen.size} groups whose loads differ "
+                         f"(the other channels' means spread {np.median(moved):.2g}x as much as over all groups) while "
+                         f"it follows the loads elsewhere (its group means spread {live_spread[j] / q:.3g} steps)")
 
     # ---------------------------------------------------------------- repeated rows
     def _same_load(self, groups: list[NDArray[np.int64]]) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
