@@ -290,3 +290,20 @@ def test_a_channel_frozen_over_whole_groups_of_differing_loads_is_stuck():
         for noise in (0.2, 2.0):
             raw, wrench, group = static_poses(n_groups=12, rows=60, noise=noise, seed=seed)
             assert check_readings(raw, wrench=wrench, groups=group).clean
+
+
+# ---------------------------------------------------------------- 5c. a genuine peak is no impossible reading
+def test_a_genuine_peak_past_the_bulk_range_is_not_out_of_range_but_a_lone_jump_is():
+    from ftcal.io import check_readings
+
+    rng = np.random.default_rng(1)
+    t = np.arange(20000)
+    slow = 500 + 300 * np.sin(t / 400) + 3 * rng.standard_normal(t.size)  # a 10-bit bulk (0..1023)
+    peak = 2100 * np.exp(-((t - 9000) / 12.0) ** 2)  # a rare load to 2600 (a 12-bit ADC), rising over samples
+    x = np.round(slow + peak)
+    quiet = np.round(500 + 3 * rng.standard_normal(t.size))
+    found = check_readings(np.column_stack([x, quiet]))
+    assert not found.of_kind("out_of_range"), found.summary()
+    x[15000] = 4598  # alone beyond twice the range: a glitch
+    found = check_readings(np.column_stack([x, quiet]))
+    assert [(f.line, f.channel, f.value) for f in found.of_kind("out_of_range")] == [(15001, "s0", 4598.0)]

@@ -12,7 +12,9 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
 * **out of range** -- for an integer-valued channel, the smallest power-of-two range (unsigned ``0..2^b-1`` or
   signed ``-2^(b-1)..2^(b-1)-1``) that holds all but the ``max(1, 0.1 %)`` most extreme readings is the ADC's range
   the other readings fit in; a reading beyond *twice* that range (two more bits) is impossible for it (one more bit
-  could be a larger ADC whose top the other readings never reached). A reading exactly at the range's limit (``0``)
+  could be a larger ADC whose top the other readings never reached) when it is alone there: none of its three
+  neighbours before and after lies beyond the range. A genuine peak of a rare load rises and falls through its
+  neighbours and is never called impossible (nor dropped by ``--drop-bad-readings auto``); a glitch jumps alone. A reading exactly at the range's limit (``0``)
   is flagged too when it is rare and stands out from its neighbours in time (a dropped sample reads 0);
 * **spike** -- a reading that differs from the median of its three neighbours before *and* the median of its three
   neighbours after, in the same direction, by more than ``z`` robust standard deviations (the mean absolute
@@ -301,6 +303,9 @@ class _Finder:
             RowSources.of_file("dataset", np.arange(1, self.n + 1), "row")
         self.names = list(names) if names is not None else [f"s{j}" for j in range(self.k)]
         self.groups = _group_rows(groups, self.n)
+        self._group_index = np.zeros(self.n, dtype=np.int64)  # row -> its group (rows in time order within each)
+        for g, rows in enumerate(self.groups):
+            self._group_index[rows] = g
         self.alpha = false_alarm_rate
         self.findings: list[ReadingFinding] = []
         self.flagged = np.zeros((self.n, self.k), dtype=bool)  # (row, channel) already named
@@ -359,6 +364,7 @@ class _Finder:
             ranges[self.names[j]] = found
             width = high - low + 1
             beyond = np.flatnonzero((column < low - width) | (column > high + width))
+            beyond = [r for r in beyond if self._alone_beyond(r, j, low, high)]
             for r in beyond:
                 self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
                          f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC of "
@@ -377,6 +383,16 @@ class _Finder:
                                  f"({zr:.1f} robust SD from its neighbours in time; {at.size} such reading(s))")
                         self.flagged[r, j] = True
         return ranges
+
+    def _alone_beyond(self, r: int, j: int, low: float, high: float) -> bool:
+        """Whether none of the ``_SIDE`` readings before and after row ``r`` in its group lies beyond
+        ``low..high`` too: a glitch is alone; a genuine peak past the range the other readings fit in rises and
+        falls through its neighbours (a larger ADC's top, reached by a rare load), and is no impossible reading."""
+        rows = self.groups[int(self._group_index[r])]
+        at = int(np.searchsorted(rows, r))  # a group's rows are increasing (a stable sort of the labels)
+        near = np.concatenate([rows[max(0, at - _SIDE):at], rows[at + 1:at + 1 + _SIDE]])
+        values = self.raw[near, j]
+        return not np.any((values < low) | (values > high))
 
     def load_moves(self, z_both) -> NDArray[np.bool_]:
         """Rows where the load changes abruptly: the reference wrench, or at least two channels at once, stand out
