@@ -307,3 +307,24 @@ def test_a_genuine_peak_past_the_bulk_range_is_not_out_of_range_but_a_lone_jump_
     x[15000] = 4598  # alone beyond twice the range: a glitch
     found = check_readings(np.column_stack([x, quiet]))
     assert [(f.line, f.channel, f.value) for f in found.of_kind("out_of_range")] == [(15001, "s0", 4598.0)]
+
+
+# ---------------------------------------------------------------- 6. a headerless log with a text run column
+def test_a_headerless_log_whose_run_column_is_text_is_read_with_columns(tmp_path, capsys):
+    from ftcal.io import has_header
+
+    raw, wrench = sensor_data(n=120)
+    lines = [f"run_{i // 20:02d}," + ",".join(f"{v:.10g}" for v in row) for i, row in
+             enumerate(np.hstack([raw, wrench]))]
+    (tmp_path / "runs.txt").write_text("\n".join(lines) + "\n")
+    assert not has_header(tmp_path / "runs.txt")  # text where the next line has text too: data, not names
+    (tmp_path / "named.csv").write_text("run,s0\nrun_00,5\n")
+    assert has_header(tmp_path / "named.csv")  # text above a number: a header
+    columns = ["--columns", "run,s0..s5,Fx,Fy,Fz,Tx,Ty,Tz", "--groups", "run"]
+    assert main(["fit", str(tmp_path / "runs.txt"), *columns, "--model", "linear", "--out", str(tmp_path / "m"),
+                 "-q"]) == 0
+    lines[30] = lines[30].replace(",", ",oops,", 1).replace(f",{raw[30, 0]:.10g}", "", 1)  # text in a number column
+    (tmp_path / "runs.txt").write_text("\n".join(lines) + "\n")
+    err = one_error(capsys, main(["fit", str(tmp_path / "runs.txt"), *columns, "--model", "linear", "--out",
+                                  str(tmp_path / "n")]))
+    assert "runs.txt: line 31: 'oops' is not a finite number" in err

@@ -878,21 +878,34 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
         raise DatasetFileError(f"{path}: not UTF-8 text ({exc.reason}); {what} is a text file.") from None
     except OSError as exc:
         raise DatasetFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
-    comments, rows, header = [], [], None
+    comments, rows = [], []
     for no, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
         if not stripped:
             continue
         if stripped.startswith("#"):
-            if not rows and header is None:
+            if not rows:
                 comments.append(stripped)
             continue
-        fields = _text_fields(stripped)
-        if not rows and header is None and any(f and not is_number(f) for f in fields):
-            header = fields
-            continue
-        rows.append((no, fields))
-    return comments, rows, header
+        rows.append((no, _text_fields(stripped)))
+    if rows and _names_columns(rows[0][1], rows[1][1] if len(rows) > 1 else None):
+        return comments, rows[1:], rows[0][1]
+    return comments, rows, None
+
+
+def _names_columns(first: list[str], second: list[str] | None) -> bool:
+    """Whether a text file's first line is a header: it holds text where the next line holds a number (a column
+    named above its numbers). A text column that is data (run names beside numbers: ``run_01,0.5,...``) is text in
+    both lines, so a line whose text fields line up with the next line's is data; without a next line, any text
+    field makes a header."""
+    from ..core._columns import is_number
+
+    text = [bool(f) and not is_number(f) for f in first]
+    if not any(text):
+        return False
+    if second is None or len(second) != len(first):
+        return True
+    return any(t and f and is_number(f) for t, f in zip(text, second))
 
 
 def has_header(path) -> bool:
@@ -999,11 +1012,14 @@ def join_headerless(paths: Sequence, names: Sequence[str]) -> JoinedTable:
         if not rows:
             raise DatasetFileError(f"{path}: no data rows.")
         width = len(rows[0][1])
+        # a column whose first row is text is a text column (run names): its fields stay text; the others numbers
+        textual = [bool(f) and not is_number(f) for f in rows[0][1]]
         for no, fields in rows:
             if len(fields) != width:
                 raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the file's first row has "
                                        f"{width}; repair or remove that line.")
-            bad = next((f for f in fields if not is_number(f) or not np.isfinite(float(f))), None)
+            bad = next((f for f, t in zip(fields, textual) if not t and (not is_number(f)
+                                                                      or not np.isfinite(float(f)))), None)
             if bad is not None:  # said here, in the user's file and line (the joined table is ftcal's own)
                 raise DatasetFileError(f"{path}: line {no}: {bad.strip()[:40]!r} is not a finite number; repair or "
                                        "remove that line.")
