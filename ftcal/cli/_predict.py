@@ -268,9 +268,10 @@ def run(args: argparse.Namespace) -> int:
         total = 0
         chunks = raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
                             channels=channels)
-        # a file's first chunk is read (its columns checked) before anything is written: a wrong file leaves no
-        # header behind; from stdin the header goes at once (a driver waiting for it must not wait for a reading)
-        first = [] if args.input == "-" else list(itertools.islice(chunks, 1))
+        # a regular file's first chunk is read (its columns checked) before anything is written: a wrong file leaves
+        # no header behind; from stdin or a pipe the header goes at once (a driver waiting for it must not wait for
+        # a reading)
+        first = list(itertools.islice(chunks, 1)) if args.input != "-" and Path(args.input).is_file() else []
         if not args.no_header:
             labels = [*axes, *([f"std_{a}" for a in axes] if args.std else [])]
             out.write(",".join(labels) + (",out_of_range" if limits is not None else "") + "\n")
