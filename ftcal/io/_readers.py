@@ -896,14 +896,14 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
 def _names_columns(first: list[str], second: list[str] | None) -> bool:
     """Whether a text file's first line is a header: it holds text where the next line holds a number (a column
     named above its numbers). A text column that is data (run names beside numbers: ``run_01,0.5,...``) is text in
-    both lines, so a line whose text fields line up with the next line's is data; without a next line, any text
-    field makes a header."""
+    both lines, so a line holding numbers whose text fields line up with the next line's is data; a line without
+    a number, or without a next line to compare, is a header when it holds text."""
     from ..core._columns import is_number
 
     text = [bool(f) and not is_number(f) for f in first]
     if not any(text):
         return False
-    if second is None or len(second) != len(first):
+    if second is None or len(second) != len(first) or all(text):  # no number at all: names, not a log's row
         return True
     return any(t and f and is_number(f) for t, f in zip(text, second))
 
