@@ -17,7 +17,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ._base import BaseCalibrator, GroupsFit, declare
 from ..core._exceptions import ModelFileError
-from ..core._memory import check_allocation
+from ..core._memory import check_allocation, rows_within_limit
 from ..core._validation import check_bool, check_finite_output, validate_readings
 from ..core._wrench import scale_torques, unscale_torques
 
@@ -461,9 +461,12 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         m = min(n, int(self.max_samples))
         n_theta = n_channels + 4
         # the optimiser holds K, its Cholesky factor and the gradient dK/dθ (m x m x n_theta) at once
+        fits = rows_within_limit(8.0 * (n_theta + 3))  # the advice names a value that fits (GP's bound: >= 10)
         check_allocation(8.0 * m * m * (n_theta + 3), f"the GP's kernel and its gradient ({m} rows, {n_channels} "
-                         "channels)", "lower max_samples, or use fewer channels (a GP over more than a few dozen "
-                         "channels needs few rows)")
+                         "channels)", ("pass {max_samples} (the most rows within the limit), or use fewer channels"
+                                       if fits >= 10 else "use fewer channels (a GP over this many channels does "
+                                       "not fit the limit on 10 rows)"),
+                         settings={"max_samples": fits} if fits >= 10 else None)
         xc = X - self.zero_reading_
         ys = scale_torques(y, self.alpha_, self.axes_)
         self.input_mean_ = xc.mean(axis=0)

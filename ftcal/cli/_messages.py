@@ -116,7 +116,8 @@ CLI_NAMES: dict[str, Option] = {
     "joint_topic": _option("--joint-topic", "TOPIC"),
     "tf": _option("--tf", "BASE,SENSOR"),
     "stamps": _option("--stamps"),
-    "max_samples": _option("--max-samples"),
+    # a bag's --max-samples where the command reads bags, else the model's parameter (a GP's rows)
+    "max_samples": Option((("max_samples", "--max-samples"), ("param", "--param max_samples=")), metavar="N"),
     "time": _option("--time"),  # a tool re-tare's time (retare of a drifting tool file)
     "temperature": _option("--temperature"),
     "drift": _option("--drift"),
@@ -138,12 +139,13 @@ def cli_spelling(args: argparse.Namespace | None = None):
         if flag is None:
             return name if setting is NO_SETTING else f"{name}={setting!r}"
         if setting is NO_SETTING or setting is True:
-            return flag
+            return f"{flag}{option.metavar or 'VALUE'}" if flag.endswith("=") else flag
         if setting is False or setting is None:
             return f"no {flag}"
+        joint = "" if flag.endswith("=") else " "  # --param KEY=VALUE
         if isinstance(setting, Placeholder):
-            return f"{flag} {option.metavar or setting}"
-        return f"{flag} {setting}"
+            return f"{flag}{joint}{option.metavar or setting}"
+        return f"{flag}{joint}{setting}"
 
     return spell
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
 from pathlib import Path
 
@@ -32,6 +33,8 @@ examples:
 --range FILE (a calibration report .json, or the calibration dataset) adds a column out_of_range:
 1 when a reading lies beyond the calibrated range (a channel below its smallest or above its
 largest calibration reading), else 0; a count of such readings goes to stderr at the end.
+Bad readings of a file (out of the ADC range, spikes, stuck, repeated) are pointed out on stderr by
+file:line:channel and still predicted: the output keeps one wrench per input line (no --drop-bad-readings).
   ftcal predict models/gaussian_process.model.npz readings.csv --std     # + std_Fx..std_Tz columns
 """
 
@@ -72,15 +75,20 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
              "models, also when auto chose one)",
     )
+    # one wrench per input line, in order: predict points bad readings out but drops none (refused with the reason)
+    p.add_argument("--drop-bad-readings", metavar="KIND", help=argparse.SUPPRESS)
     add_run_options(p, seed=False)
     p.set_defaults(handler=run)
 
 
-def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
+                         columns=None) -> tuple[np.ndarray, np.ndarray]:
     """Per-channel (min, max) of the calibration readings, from a report ``.json`` or a dataset file.
 
     The bounds are those recorded at calibration; a re-tared model moves them by its re-tare shift
-    (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used.
+    (:func:`retare_shift`), as it does its own range. Without ``--range`` the model's own range is used. A
+    dataset is read as the model's training data were (``columns``: the mapping the model file keeps, e.g. a
+    ``.mat`` sliced as ``data[:,0:6]``), so that its readings are the channels the model takes.
     """
     import json
 
@@ -113,7 +121,8 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False) 
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")
         try:
-            data = CalibrationDataset.load(file)
+            data = CalibrationDataset.load(file, columns=columns) if columns is not None \
+                else CalibrationDataset.load(file)
         except DatasetFileError as exc:  # a fix naming the column options does not apply: --range reads ftcal's layout
             text = cli_message(exc, fix="" if fix_names(exc, ("channels", "wrench")) else None)
             raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
@@ -200,6 +209,11 @@ def run(args: argparse.Namespace) -> int:
     from ..compose import history_reach, reads_history, spread_flags
     from ..compose import provides_std
 
+    if args.drop_bad_readings is not None:
+        raise CliError(f"--drop-bad-readings {args.drop_bad_readings}: predict writes one wrench per input line, in "
+                       "order, so it drops no reading (dropping would misalign the output with the input); it points "
+                       "the bad readings out on stderr by file:line:channel. Drop --drop-bad-readings, and remove "
+                       "those lines from the input if they must not be predicted")
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     shown = args.input
@@ -226,7 +240,8 @@ def run(args: argparse.Namespace) -> int:
         raise CliError(f"--std: {args.model} holds {chosen}, which gives no standard deviation; only Gaussian-process "
                        "models do (ftcal fit --model gaussian_process). Drop --std")
     # the column needs --range; without it the model's own calibrated range still gives the warning at the end
-    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature)
+    limits = None if args.range_file is None else calibrated_raw_range(args.range_file, n_channels, temperature,
+                                                                      columns=stored)
     if limits is not None:  # the range was recorded before any re-tare: it moves with the zero, as the model's own
         stale = range_of_another_fit(args.range_file, args.model, model, limits)
         if stale:
@@ -251,12 +266,17 @@ def run(args: argparse.Namespace) -> int:
 
     def emit(out) -> int:
         total = 0
-        if not args.no_header:  # at once: a reader waiting for the header must not wait for the first reading
+        chunks = raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
+                            channels=channels)
+        # a regular file's first chunk is read (its columns checked) before anything is written: a wrong file leaves
+        # no header behind; from stdin or a pipe the header goes at once (a driver waiting for it must not wait for
+        # a reading)
+        first = list(itertools.islice(chunks, 1)) if args.input != "-" and Path(args.input).is_file() else []
+        if not args.no_header:
             labels = [*axes, *([f"std_{a}" for a in axes] if args.std else [])]
             out.write(",".join(labels) + (",out_of_range" if limits is not None else "") + "\n")
             out.flush()
-        for raw, lines in raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
-                                     channels=channels):
+        for raw, lines in itertools.chain(first, chunks):
             try:
                 if args.std:
                     wrench, std = model.predict(raw, return_std=True)
@@ -266,7 +286,9 @@ def run(args: argparse.Namespace) -> int:
             except ValueError as exc:  # name the input's line, not the row inside a chunk
                 raise located_error(exc, "stdin" if args.input == "-" else args.input, lines, args) from None
             if limits is not None:
-                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1])))
+                # no tolerance from the readings: a chunk's (a line's) own noise would make the flags depend on the
+                # chunk size; they are the model's own out_of_range (exact edges)
+                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1]), tolerance=0.0))
                 flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
@@ -330,6 +352,20 @@ def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset
     return [replace(f, rows=f.rows + offset) for f in found.findings]
 
 
+def _most_columns(source: str) -> tuple[str, int] | None:
+    """The 2-D array of a ``.npz`` / ``.mat`` with the most columns as ftcal reads it (an array wider than tall is
+    read transposed: :func:`ftcal.io.read_channels`), as ``(name, columns)`` (None if unreadable)."""
+    from ..io._readers import ArrayFile
+
+    try:
+        with ArrayFile(source) as archive:
+            shapes = {name: np.shape(archive.read(name)) for name in archive.names()}
+    except (OSError, ValueError):
+        return None
+    wide = [(name, int(min(shape))) for name, shape in shapes.items() if len(shape) == 2]  # wide: read transposed
+    return max(wide, key=lambda item: item[1]) if wide else None
+
+
 def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
                channels: tuple[str, ...] | None = None):
     """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
@@ -350,9 +386,15 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
             from ..io import read_channels
 
             raw = read_channels(source, channels)
-            if raw.shape[1] != n_channels:
-                raise CliError(f"{source}: {raw.shape[1]} raw channels but the model takes {n_channels}; name the "
-                               "channels with --channels")
+            if raw.shape[1] != n_channels:  # --channels can help only where the file holds enough columns
+                held = _most_columns(source)
+                fix = ("name the model's channels with --channels (e.g. a column slice such as "
+                       f"{held[0]}[:,0:{n_channels}])" if held is not None and held[1] >= n_channels else
+                       f"no array of the file holds {n_channels} columns: give the readings this model was "
+                       "calibrated for, or the model of this sensor")
+                raise CliError(f"{source}: {raw.shape[1]} raw channels read"
+                               f"{' (--channels ' + ','.join(channels) + ')' if channels else ''} but the model takes "
+                               f"{n_channels}; {fix}")
         for start in range(0, len(raw), chunk):
             yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
                 else raw[start:start + chunk]

@@ -119,8 +119,8 @@ def iter_reading_chunks(
         else:
             values = [parse_number(f, where, CliError) for f in fields]
         if len(values) != n_channels:
-            given = f"{len(values)} values" if columns is None else f"{len(values)} columns of s0..s{{N-1}}" + (
-                "[,temperature]" if temperature else "")
+            read = ",".join(names) if names is not None else "s0,s1,..." + (",temperature" if temperature else "")
+            given = f"{len(values)} values" if columns is None else f"{len(values)} channel columns ({read})"
             raise CliError(
                 f"{source}: line {line_no}: {given} but the model takes {expected} per line; check the file is "
                 "for this model"

@@ -129,7 +129,7 @@ def _read_mapping(path: Path, what: str) -> dict:
     return value
 
 
-def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np.ndarray:
+def _axis_values(text_or_map, axes: list[str], option: str, percent: bool, zero_ok: bool = False) -> np.ndarray:
     """Per-axis values from ``Fx=500,Fy=...`` (or a mapping); with ``percent``, ``1%FS`` and a bare default."""
     from ..io import canonical_wrench_name
 
@@ -141,7 +141,7 @@ def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np
             value = float(t)
         except ValueError:
             value = float("nan")
-        if not np.isfinite(value) or value <= 0:
+        if not np.isfinite(value) or value < 0 or (value == 0 and not zero_ok):
             raise CliError(f"{option} {where}: {raw!r} is not a positive number"
                            + (" (write it as 1%FS or 1)" if percent else " (in N or N.m)"))
         return value
@@ -250,10 +250,10 @@ def _reference(value, option: str, axes: list[str]) -> dict:
             relative = float(text[:-1]) / 100
         except ValueError:
             relative = float("nan")
-        if not (np.isfinite(relative) and 0 < relative < 1):
-            raise CliError(f"{option} {text!r}: not a percentage between 0 and 100 (e.g. 0.05%)")
+        if not (np.isfinite(relative) and 0 <= relative < 1):  # 0%: an ideal reference
+            raise CliError(f"{option} {text!r}: not a percentage from 0 up to below 100 (e.g. 0.05%)")
         return {"reference_relative": relative}
-    return {"reference_uncertainty": _axis_values(value, axes, option, percent=False)}
+    return {"reference_uncertainty": _axis_values(value, axes, option, percent=False, zero_ok=True)}
 
 
 def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,

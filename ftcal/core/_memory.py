@@ -12,7 +12,8 @@ import os
 
 from ._exceptions import FtcalError
 
-__all__ = ["MEMORY_LIMIT_BYTES", "MemoryLimitError", "memory_limit_bytes", "check_allocation", "format_bytes"]
+__all__ = ["MEMORY_LIMIT_BYTES", "MemoryLimitError", "memory_limit_bytes", "check_allocation", "format_bytes",
+           "rows_within_limit"]
 
 #: Default largest single allocation ftcal makes for one step [bytes].
 MEMORY_LIMIT_BYTES: int = 4 * 2**30
@@ -52,7 +53,7 @@ def format_bytes(n_bytes: float) -> str:
     return f"{n_bytes:.0f} B"
 
 
-def check_allocation(n_bytes: float, what: str, fix: str) -> None:
+def check_allocation(n_bytes: float, what: str, fix: str, *, settings: dict | None = None) -> None:
     """Raise :class:`MemoryLimitError` if ``n_bytes`` exceeds the limit.
 
     Parameters
@@ -62,7 +63,10 @@ def check_allocation(n_bytes: float, what: str, fix: str) -> None:
     what : str
         What would be allocated, e.g. ``"the GP's kernel matrix (1000000 x 1000 rows)"``.
     fix : str
-        How to stay under the limit, e.g. ``"lower max_samples"``.
+        How to stay under the limit, e.g. ``"lower max_samples"``; with ``settings`` a template whose fields are the
+        arguments it proposes (``"pass {max_samples}"``, :class:`~ftcal.core.FtcalError`).
+    settings : dict, optional
+        The argument values the fix proposes (computed to fit the limit: :func:`rows_within_limit`).
 
     Examples
     --------
@@ -73,7 +77,33 @@ def check_allocation(n_bytes: float, what: str, fix: str) -> None:
     ftcal.core._memory.MemoryLimitError: the kernel matrix would need 9.09 TiB, over ftcal's memory limit of 4.00 GiB; lower max_samples (or raise the limit with FTCAL_MEMORY_LIMIT_GB).
     """
     limit = memory_limit_bytes()
+    if n_bytes > limit and settings:
+        raise MemoryLimitError(f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of "
+                               f"{format_bytes(limit)}.", fix=f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB)",
+                               settings=settings)
     if n_bytes > limit:
         raise MemoryLimitError(
             f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of {format_bytes(limit)}; "
             f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB).")
+
+
+def rows_within_limit(bytes_per_row_pair: float) -> int:
+    """The most rows ``m`` whose ``m x m`` allocation of ``bytes_per_row_pair`` bytes per pair stays within the limit
+    (a kernel matrix and what goes with it): the value a fix proposes, checked before it is given.
+
+    Examples
+    --------
+    >>> import os
+    >>> os.environ["FTCAL_MEMORY_LIMIT_GB"] = "1"
+    >>> m = rows_within_limit(8.0 * 13)
+    >>> m, 8.0 * 13 * m * m <= 2**30 < 8.0 * 13 * (m + 1) ** 2
+    (3213, True)
+    >>> del os.environ["FTCAL_MEMORY_LIMIT_GB"]
+    """
+    limit = memory_limit_bytes()
+    m = int((limit / bytes_per_row_pair) ** 0.5)
+    while m > 0 and bytes_per_row_pair * m * m > limit:
+        m -= 1
+    while bytes_per_row_pair * (m + 1) ** 2 <= limit:
+        m += 1
+    return m

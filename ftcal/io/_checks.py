@@ -4,14 +4,17 @@ A recording can hold readings no sensor gave: a value an ADC cannot produce (``4
 0..1023), a single glitch among steady neighbours, a channel frozen while the others move, a row the logger wrote
 twice. Fitted silently they turn into calibration errors with no pointer to the cause. :func:`check_readings` finds
 them and names each by file, line and channel (:class:`~ftcal.io.RowSources`); ``ftcal fit``, ``report``,
-``evaluate`` and ``predict`` print them and can drop them (``--drop-bad-readings``).
+``evaluate`` and ``predict`` print them; all but ``predict`` can drop them (``--drop-bad-readings``): ``predict``
+writes one wrench per input line, in order, so it points them out and drops none.
 
 The thresholds come from the data's own noise and one false-alarm budget, not from fixed numbers:
 
 * **out of range** -- for an integer-valued channel, the smallest power-of-two range (unsigned ``0..2^b-1`` or
   signed ``-2^(b-1)..2^(b-1)-1``) that holds all but the ``max(1, 0.1 %)`` most extreme readings is the ADC's range
   the other readings fit in; a reading beyond *twice* that range (two more bits) is impossible for it (one more bit
-  could be a larger ADC whose top the other readings never reached). A reading exactly at the range's limit (``0``)
+  could be a larger ADC whose top the other readings never reached) when it is alone there: none of its three
+  neighbours before and after lies beyond the range. A genuine peak of a rare load rises and falls through its
+  neighbours and is never called impossible (nor dropped by ``--drop-bad-readings auto``); a glitch jumps alone. A reading exactly at the range's limit (``0``)
   is flagged too when it is rare and stands out from its neighbours in time (a dropped sample reads 0);
 * **spike** -- a reading that differs from the median of its three neighbours before *and* the median of its three
   neighbours after, in the same direction, by more than ``z`` robust standard deviations (the mean absolute
@@ -23,14 +26,20 @@ The thresholds come from the data's own noise and one false-alarm budget, not fr
   is a change of load, not a glitch of one channel; the first and last rows of a group, having one side only, are
   not tested;
 * **stuck** -- a channel exactly constant over a run of rows of a group while most other channels move there: a
-  live channel gives its commonest value with a chance ``p`` (the larger of its share in the group outside the run
-  and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
+  live channel gives its commonest value with a chance ``p`` (the largest of its share in the group outside the run,
+  its share in the rows next to the run, and the 90th percentile of its share in the other groups), so a run of ``L`` equal readings comes by chance about
   ``n p^L`` times; runs longer than where that falls below ``false_alarm_rate`` (and at
-  least :data:`MIN_STUCK_ROWS`) are stuck;
+  least :data:`MIN_STUCK_ROWS`) are stuck. A channel is stuck too where it holds one value over whole groups whose
+  loads differ (the other channels' group means spread at least half as much there as over the groups where it
+  lives) while elsewhere its group means follow the loads over at least :data:`_FROZEN_STEPS` quantisation steps
+  (a value at the channel's extreme is a pinned, saturated channel, not this);
 * **repeated** -- rows (readings and wrench) that equal an earlier row of their group exactly, when more such pairs
   occur than quantisation explains: the expected number of equal pairs is the product over channels of each
-  channel's chance that two readings of the group are equal; the rows are flagged when the Poisson chance of as
-  many pairs is below ``false_alarm_rate``.
+  channel's chance that two readings of the group under the same reference wrench are equal (one steady load's
+  spread, not that of several poses mixed in one file); the rows are flagged when the Poisson chance of as
+  many pairs is below ``false_alarm_rate`` and, where quantisation alone gives pairs, when the excess is beyond
+  the Gaussian quantile of ``false_alarm_rate`` in standard deviations of the pair count (the pairs share rows:
+  its variance is a U-statistic's, far wider than a Poisson count's).
 
 :func:`range_excess` says, per axis, how many rows lie beyond a calibrated range and how far (x the range): the
 loads of a validation session beyond those a model was calibrated on (``ftcal evaluate``), or readings beyond the
@@ -59,6 +68,12 @@ _RANGE_TRIM = 0.001
 _SIDE = 3
 #: Fewest rows of a group whose own noise scales its spikes; smaller groups use the channel's scale over all groups.
 _MIN_SCALE_ROWS = 20
+#: Rows on each side of a constant run (at least the run's length) whose commonest value's share tells how often a
+#: live channel holds one value there.
+_LOCAL_ROWS = 50
+#: Fewest quantisation steps a channel's group means spread over (standard deviation across the groups where it
+#: lives) for one value held over whole groups of differing loads to be called frozen.
+_FROZEN_STEPS = 5
 #: Most rows at a range limit still called isolated readings (more are a pinned, saturated channel).
 _MAX_RAIL_ROWS = 3
 
@@ -288,6 +303,9 @@ class _Finder:
             RowSources.of_file("dataset", np.arange(1, self.n + 1), "row")
         self.names = list(names) if names is not None else [f"s{j}" for j in range(self.k)]
         self.groups = _group_rows(groups, self.n)
+        self._group_index = np.zeros(self.n, dtype=np.int64)  # row -> its group (rows in time order within each)
+        for g, rows in enumerate(self.groups):
+            self._group_index[rows] = g
         self.alpha = false_alarm_rate
         self.findings: list[ReadingFinding] = []
         self.flagged = np.zeros((self.n, self.k), dtype=bool)  # (row, channel) already named
@@ -346,6 +364,7 @@ class _Finder:
             ranges[self.names[j]] = found
             width = high - low + 1
             beyond = np.flatnonzero((column < low - width) | (column > high + width))
+            beyond = [r for r in beyond if self._alone_beyond(r, j, low, high)]
             for r in beyond:
                 self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
                          f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC of "
@@ -364,6 +383,16 @@ class _Finder:
                                  f"({zr:.1f} robust SD from its neighbours in time; {at.size} such reading(s))")
                         self.flagged[r, j] = True
         return ranges
+
+    def _alone_beyond(self, r: int, j: int, low: float, high: float) -> bool:
+        """Whether none of the ``_SIDE`` readings before and after row ``r`` in its group lies beyond
+        ``low..high`` too: a glitch is alone; a genuine peak past the range the other readings fit in rises and
+        falls through its neighbours (a larger ADC's top, reached by a rare load), and is no impossible reading."""
+        rows = self.groups[int(self._group_index[r])]
+        at = int(np.searchsorted(rows, r))  # a group's rows are increasing (a stable sort of the labels)
+        near = np.concatenate([rows[max(0, at - _SIDE):at], rows[at + 1:at + 1 + _SIDE]])
+        values = self.raw[near, j]
+        return not np.any((values < low) | (values > high))
 
     def load_moves(self, z_both) -> NDArray[np.bool_]:
         """Rows where the load changes abruptly: the reference wrench, or at least two channels at once, stand out
@@ -424,6 +453,12 @@ class _Finder:
                         p = max(p, float(np.quantile(np.delete(peak[:, j], g), 0.9)))
                     elif outside.size < _MIN_SCALE_ROWS:
                         continue  # one short group: nothing tells a quiet channel from a stuck one
+                    # and the share near the run: a group spanning several steady poses (no group column) mixes
+                    # their levels, and its overall share understates how often a quiet channel holds one value
+                    reach = max(_LOCAL_ROWS, stop - start)
+                    for near in (rows[max(0, start - 1 - reach):max(0, start - 1)], rows[stop:stop + reach]):
+                        if near.size >= _MIN_SCALE_ROWS:  # each side alone: the run may sit where the pose changes
+                            p = max(p, _top_share(self.raw[near, j]))
                     needed = MIN_STUCK_ROWS if p <= 0 else max(MIN_STUCK_ROWS,
                                                                np.log(self.alpha / pairs) / np.log(min(p, 0.999)))
                     moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
@@ -435,13 +470,65 @@ class _Finder:
                              f"constant over {span.size} rows ({first} to {last}) while the other channels move "
                              f"(a live reading gives one value with chance {p:.2g} at most: runs of "
                              f"{int(np.ceil(needed))} rows or more are beyond chance)")
+        self.frozen_across_groups(mask)
         return mask
 
+    def frozen_across_groups(self, mask: NDArray[np.bool_]) -> None:
+        """A channel that keeps one value over whole groups whose loads differ (dead for the second half of a
+        steady-pose recording): in the groups where it lives, its group means spread over several quantisation
+        steps with the load, while over the frozen groups the other channels' means spread as much (their loads
+        differ) and it does not move at all. Adds to ``mask`` (row, channel)."""
+        if len(self.groups) < 4 or self.k < 2:
+            return
+        sizes = np.array([rows.size for rows in self.groups])
+        means = np.array([self.raw[rows].mean(axis=0) for rows in self.groups])
+        for j in range(self.k):
+            q = _quantum(self.raw[:, j])
+            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not mask[rows, j].any()
+                                 for rows in self.groups])
+            live = ~constant & (sizes >= 2)
+            if q <= 0 or live.sum() < 2 or constant.sum() < 2:
+                continue
+            live_spread = np.std(means[live], axis=0, ddof=1)
+            if live_spread[j] < _FROZEN_STEPS * q:  # a channel that barely follows the loads may hold one value
+                continue
+            others = [i for i in range(self.k) if i != j and live_spread[i] > 0]
+            extremes = (self.raw[:, j].min(), self.raw[:, j].max())
+            for value in np.unique(means[constant, j]):
+                frozen = np.flatnonzero(constant & (means[:, j] == value))
+                if frozen.size < 2 or not others or value in extremes:  # at its extreme: pinned (saturated)
+                    continue
+                moved = np.std(means[frozen][:, others], axis=0, ddof=1) / live_spread[others]
+                if np.median(moved) < 0.5:  # the frozen groups' loads hardly differ: one value is no surprise
+                    continue
+                rows = np.concatenate([self.groups[g] for g in frozen])
+                mask[rows, j] = True
+                self.add(FindingKind.STUCK, np.sort(rows), j, float(value),
+                         f"holds {value:.6g} over all {rows.size} rows of {frozen.size} groups whose loads differ "
+                         f"(the other channels' means spread {np.median(moved):.2g}x as much as over all groups) while "
+                         f"it follows the loads elsewhere (its group means spread {live_spread[j] / q:.3g} steps)")
+
     # ---------------------------------------------------------------- repeated rows
+    def _same_load(self, groups: list[NDArray[np.int64]]) -> list[tuple[NDArray[np.int64], NDArray[np.int64]]]:
+        """The rows of each group split by their reference wrench, each with the rows whose spread gives the
+        readings' chance to coincide: equal rows have equal wrenches, so that chance is the one under one load (a
+        steady pose's), not that of the group's whole spread (several poses without a group column mix their
+        levels); a load held for fewer than ``_MIN_SCALE_ROWS`` rows takes its group's spread."""
+        if self.wrench is None:
+            return [(rows, rows) for rows in groups]
+        out = []
+        for rows in groups:
+            if rows.size < 2:
+                continue
+            _, inverse = np.unique(self.wrench[rows], axis=0, return_inverse=True)
+            for part in _group_rows(inverse.ravel(), rows.size):  # a load's own spread needs rows enough to tell
+                out.append((rows[part], rows[part] if part.size >= _MIN_SCALE_ROWS else rows))
+        return out
+
     def repeated(self) -> None:
         table = self.raw if self.wrench is None else np.hstack([self.raw, self.wrench])
-        observed, expected, copies = 0, 0.0, []
-        for rows in self.groups:
+        observed, expected, variance, copies = 0, 0.0, 0.0, []
+        for rows, spread in self._same_load(self.groups):
             m = rows.size
             if m < 2:
                 continue
@@ -449,11 +536,15 @@ class _Finder:
                                                   return_counts=True)
             inverse = inverse.ravel()
             observed += int(np.sum(counts * (counts - 1) // 2))
-            chance = 1.0
+            chance, triple = 1.0, 1.0  # two (three) readings of the group equal, channels independent
             for j in range(self.k):
-                _, c = np.unique(self.raw[rows, j], return_counts=True)
-                chance *= float(np.sum((c / m) ** 2))
+                _, c = np.unique(self.raw[spread, j], return_counts=True)
+                chance *= float(np.sum((c / spread.size) ** 2))
+                triple *= float(np.sum((c / spread.size) ** 3))
             expected += m * (m - 1) / 2 * chance
+            # the pairs share rows, so their count varies more than a Poisson count of that mean: its variance
+            # (a U-statistic's) adds the covariance of the pairs that share a row
+            variance += m * (m - 1) / 2 * chance * (1 - chance) + m * (m - 1) * (m - 2) * max(triple - chance**2, 0)
             later = np.flatnonzero(np.arange(m) != first[inverse])
             copies.extend((int(rows[i]), int(rows[first[inverse[i]]])) for i in later)
         if not copies:
@@ -461,6 +552,10 @@ class _Finder:
         from scipy.special import pdtrc
 
         if pdtrc(observed - 1, expected) >= self.alpha:  # the Poisson chance of at least `observed` pairs
+            return
+        # many expected pairs (a quiet channel near one level): the count is near Gaussian with the U-statistic's
+        # variance, far wider than a Poisson count's; rows are repeated only beyond that too
+        if expected >= 1 and observed - expected <= _gaussian_z(self.alpha) * np.sqrt(max(variance, expected)):
             return
         for row, original in copies:
             self.add(FindingKind.REPEATED, row, None, None,
@@ -545,6 +640,12 @@ class AxisExcess:
         reaches (``inf`` for a range of zero; 0 when no row is beyond).
     opposite_sign : int
         Rows beyond of a sign the range never had (a negative load on an axis calibrated from 0 up).
+    largest_excess : float
+        How far the row furthest beyond lies past the edge it crossed (same unit as the range; 0 when none).
+    edge : str or None
+        ``"low"`` or ``"high"``: the edge that row crossed.
+    tolerance : float
+        How far past an edge a value may lie and still count as within (the values' resolution and noise).
     """
 
     name: str
@@ -554,18 +655,26 @@ class AxisExcess:
     n_beyond: int
     largest_factor: float
     opposite_sign: int
+    largest_excess: float = 0.0
+    edge: str | None = None
+    tolerance: float = 0.0
 
     def words(self, unit: str = "") -> str:
-        """One phrase: ``"Fz: 14 of 18 rows beyond -10..10 N, up to 2.23x the range"``."""
+        """One phrase: ``"Fz: 14 of 18 rows beyond -10..10 N, up to 15 N past the high edge (75 % of the calibrated
+        span)"``."""
         u = f" {unit}" if unit else ""
         sign = f", {self.opposite_sign} of the opposite sign" if self.opposite_sign else ""
+        span = self.high - self.low
+        share = f" ({100 * self.largest_excess / span:.3g} % of the calibrated span)" if span > 0 and \
+            np.isfinite(span) else ""
         return (f"{self.name}: {self.n_beyond} of {self.n_rows} rows beyond {self.low:.4g}..{self.high:.4g}{u}, up "
-                f"to {self.largest_factor:.3g}x the range{sign}")
+                f"to {self.largest_excess:.3g}{u} past the {self.edge} edge{share}{sign}")
 
     def to_dict(self) -> dict:
         """Plain JSON."""
         return {"axis": self.name, "low": self.low, "high": self.high, "rows": self.n_rows, "beyond": self.n_beyond,
                 "largest_factor": None if not np.isfinite(self.largest_factor) else self.largest_factor,
+                "largest_excess": self.largest_excess, "edge": self.edge, "tolerance": self.tolerance,
                 "opposite_sign": self.opposite_sign}
 
 
@@ -603,10 +712,13 @@ class RangeExcess:
         axes = []
         for column in zip(*(p.axes for p in parts)):
             first = column[0]
+            furthest = max(column, key=lambda a: a.largest_excess)
             axes.append(AxisExcess(name=first.name, low=first.low, high=first.high,
                                    n_rows=sum(a.n_rows for a in column), n_beyond=sum(a.n_beyond for a in column),
                                    largest_factor=max(a.largest_factor for a in column),
-                                   opposite_sign=sum(a.opposite_sign for a in column)))
+                                   opposite_sign=sum(a.opposite_sign for a in column),
+                                   largest_excess=furthest.largest_excess, edge=furthest.edge,
+                                   tolerance=max(a.tolerance for a in column)))
         return cls(axes=tuple(axes), mask=np.concatenate([p.mask for p in parts]))
 
     def to_dict(self) -> dict:
@@ -615,7 +727,8 @@ class RangeExcess:
                 "axes": [a.to_dict() for a in self.axes]}
 
 
-def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None) -> RangeExcess:
+def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None,
+                 tolerance: ArrayLike | None = None) -> RangeExcess:
     """Per axis, how many rows of ``values`` lie beyond the calibrated range ``low..high`` and by how much.
 
     Used on wrenches (the loads of a validation session against those a model was calibrated on: ``ftcal
@@ -629,6 +742,11 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
         leave a column unchecked.
     names : sequence of str, optional
         The columns' names (default ``0, 1, ...``).
+    tolerance : array-like of shape (k,), optional
+        How far past an edge a value still counts as within. Default: per column, the larger of the values'
+        resolution (their smallest step, an ADC's LSB) and twice their noise (a robust standard deviation of the
+        differences of consecutive rows, over sqrt 2), at most 1 % of the calibrated span: a reading a hair past
+        the edge (the same load read again, one LSB of noise) is not an extrapolation.
 
     Returns
     -------
@@ -640,8 +758,11 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
     >>> found = range_excess(loads, [0.0, -10.0], [10.0, 10.0], names=["Fx", "Fz"])
     >>> found.mask.tolist()
     [False, True, True]
-    >>> print(found.words({"Fx": "N", "Fz": "N"}))
-    Fx: 1 of 3 rows beyond 0..10 N, up to 0.3x the range, 1 of the opposite sign; Fz: 1 of 3 rows beyond -10..10 N, up to 2.2x the range
+    >>> print(found.words({"Fx": "N", "Fz": "N"}))  # doctest: +NORMALIZE_WHITESPACE
+    Fx: 1 of 3 rows beyond 0..10 N, up to 3 N past the low edge (30 % of the calibrated span), 1 of the opposite
+    sign; Fz: 1 of 3 rows beyond -10..10 N, up to 12 N past the high edge (60 % of the calibrated span)
+    >>> range_excess([[10.0005], [3.0]], [0.0], [10.0]).any  # a hair past the edge: within the tolerance
+    False
     """
     v = np.asarray(values, dtype=float)
     if v.ndim == 1:
@@ -651,7 +772,9 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
     names = [str(j) for j in range(v.shape[1])] if names is None else [str(n) for n in names]
     if len(names) != v.shape[1]:
         raise ValueError(f"names gives {len(names)} names for {v.shape[1]} columns.")
-    out_low, out_high = v < lo, v > hi
+    tol = _edge_tolerance(v, lo, hi) if tolerance is None else \
+        np.broadcast_to(np.asarray(tolerance, dtype=float), (v.shape[1],))
+    out_low, out_high = v < lo - tol, v > hi + tol
     outside = out_low | out_high
     axes = []
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -660,9 +783,27 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None)
             finite = [abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)]
             reach = max(finite) if finite else np.inf
             factor = float(np.max(np.abs(v[rows, j]))) / reach if rows.any() else 0.0
+            below = float(np.max(lo[j] - v[out_low[:, j], j], initial=0.0))
+            above = float(np.max(v[out_high[:, j], j] - hi[j], initial=0.0))
             opposite = int(np.sum((out_low[:, j] & (lo[j] >= 0) & (v[:, j] < 0))
                                   | (out_high[:, j] & (hi[j] <= 0) & (v[:, j] > 0))))
             axes.append(AxisExcess(name=name, low=float(lo[j]), high=float(hi[j]), n_rows=int(v.shape[0]),
                                    n_beyond=int(rows.sum()), largest_factor=factor if reach > 0 or not rows.any()
-                                   else float("inf"), opposite_sign=opposite))
+                                   else float("inf"), opposite_sign=opposite, largest_excess=max(below, above),
+                                   edge=None if not rows.any() else "low" if below >= above else "high",
+                                   tolerance=float(tol[j])))
     return RangeExcess(axes=tuple(axes), mask=outside.any(axis=1))
+
+
+def _edge_tolerance(v: NDArray[np.float64], lo: NDArray[np.float64], hi: NDArray[np.float64]) -> NDArray:
+    """Per column: the larger of the values' resolution and twice their noise, at most 1 % of the span
+    (:func:`range_excess`)."""
+    out = np.zeros(v.shape[1])
+    for j in range(v.shape[1]):
+        span = hi[j] - lo[j]
+        column = v[:, j][np.isfinite(v[:, j])]
+        if column.size < 2 or not np.isfinite(span) or span <= 0:
+            continue
+        noise = float(_robust_scale(np.abs(np.diff(column))[:, None])[0]) / np.sqrt(2)
+        out[j] = min(max(_quantum(column), 2 * noise), 0.01 * span)
+    return out

@@ -40,6 +40,7 @@ import csv
 import json
 import re
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -59,6 +60,34 @@ __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channel
 _CSV_LAYOUT = "s0,...,s{N-1},Fx,Fy,Fz,Tx,Ty,Tz[,group][,temperature] (any subset of the wrench axes)"
 #: The suffixes of dataset files (any letter case), and of the files a dataset folder is made of.
 DATASET_SUFFIXES = (".csv", ".npz", ".mat")
+
+
+def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDataset"], labelled: bool) -> None:
+    """Refuse two files of a folder that hold the same readings and wrenches (a recording copied in twice, under
+    another name or in another format): its rows would count twice and its twins fall in different folds, so a
+    model would be judged on its own training rows. The files are compared by what was read from them (a hash of
+    the arrays), so a copy written otherwise is found too; with group labels read from a column (``labelled``),
+    rows labelled as other poses or sessions are told apart by their labels."""
+    import hashlib
+
+    seen: dict[bytes, Path] = {}
+    for path, part in zip(files, parts):
+        digest = hashlib.sha256()
+        for array in (part.raw, part.wrench, part.temperature):
+            if array is not None:
+                a = np.ascontiguousarray(array, dtype=float)
+                digest.update(repr(a.shape).encode())
+                digest.update(a.tobytes())
+        if labelled and part.group is not None:
+            digest.update(np.ascontiguousarray(part.group, dtype=np.int64).tobytes())
+            digest.update(repr(part.meta.get("group_names")).encode())
+        key = digest.digest()
+        if part.n_samples and key in seen:
+            raise DatasetFileError(
+                f"{path} holds the same readings and wrenches as {seen[key]} ({part.n_samples} rows): one recording "
+                "given twice would count its rows twice and judge a model on its own rows. Fix: move one of them "
+                "out of the folder (give each recording once).")
+        seen.setdefault(key, path)
 
 
 def dataset_files(folder: Path) -> list[Path]:
@@ -146,6 +175,29 @@ def _csv_fields(line: str) -> list[str]:
     if '"' not in line:
         return [f.strip() for f in line.split(",")]
     return [f.strip() for f in next(csv.reader([line], skipinitialspace=True))]
+
+
+def _refuse_other_separator(names: list[str], first_rows: list[str], where: str) -> None:
+    """Refuse a CSV whose fields are separated by ``;`` (a spreadsheet's export where the decimal mark is a comma)
+    or tabs, naming the conversion that makes it a comma-separated file with decimal points (checked on its first
+    data row: a comma there is a decimal comma)."""
+    if len(names) != 1:
+        return
+    separator = next((sep for sep in (";", "\t") if sep in names[0]), None)
+    if separator is None:
+        return
+    said = "';'" if separator == ";" else "tabs"
+    decimal_comma = any("," in row for row in first_rows)
+    if decimal_comma and separator == ";":
+        how = "decimal commas to points and ';' to ',', e.g. tr ',;' '.,' < IN.csv > OUT.csv"
+    elif decimal_comma:
+        how = "decimal commas to points and tabs to ',', e.g. tr ',\\t' '.,' < IN.csv > OUT.csv"
+    else:
+        how = f"{said} to ',', e.g. tr '{';' if separator == ';' else chr(92) + 't'}' ',' < IN.csv > OUT.csv"
+    raise DatasetFileError(
+        f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
+        f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal reads "
+        f"comma-separated values with decimal points. Fix: convert the file: {how}.")
 
 
 @dataclass(frozen=True)
@@ -629,6 +681,7 @@ class CalibrationDataset:
         if len({p.axes for p in parts}) > 1 or len({p.n_channels for p in parts}) > 1:
             raise DatasetFileError(f"{folder}: the files hold different channels or wrench axes; every file needs "
                                    "the same columns.")
+        _refuse_twin_files(files, parts, labelled=not by_file)
         temperature = None
         if all(p.temperature is not None for p in parts):
             temperature = np.concatenate([p.temperature for p in parts])
@@ -678,6 +731,7 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         where = f"{path}: line {header_no}"
         names = _csv_fields(lines[header_no - 1].lstrip("\ufeff"))
+        _refuse_other_separator(names, [lines[no - 1] for no in line_nos[:1]], where)
         if all(f and is_number(f) for f in names):
             raise DatasetFileError(
                 f"{where}: the file has no header: its first line holds numbers, not column names.",

@@ -509,7 +509,7 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
     the loads' lever arm max|T|/max|F| is 50 m (alpha = 0.02 1/m), implausible ... the torques look like N.mm...
     >>> problem = lever_arm_problem([[0.002, 0, 0, 0, 0.05, 0]])
     >>> print(problem)  # doctest: +ELLIPSIS
-    the loads' ... the forces look like kN (the largest is 0.002 as N), not N. Fix: pass force_unit='kN'...
+    the loads' ... the forces look like kN (the largest is 0.002 N read as N), not N. Fix: pass force_unit='kN'...
     >>> problem.parameter, problem.settings["force_unit"]
     ('force_unit', 'kN')
     >>> lever_arm_problem([[10.0, 0, 0, 0, 0.5, 0]]) is None
@@ -526,28 +526,70 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
     head = (f"the loads' lever arm max|T|/max|F| is {arm:.3g} m (alpha = {1.0 / arm:.3g} 1/m), implausible for a "
             f"force/torque calibration (expected {low * 1e3:g} mm to {high:g} m) with forces read as {force_unit} "
             f"and torques as {torque_unit}")
-    if arm > high:
-        force_guess = [(u, f) for u, f in (("kN", 1e3), ("MN", 1e6)) if low <= arm / f <= high
-                       and fmax * f <= _PLAUSIBLE_FORCE_N[1]]
-        torque_guess = [(u, f) for u, f in (("N.mm", 1e-3), ("N.cm", 1e-2)) if low <= arm * f <= high]
-        forces_tiny = fmax < _PLAUSIBLE_FORCE_N[0]
-        if force_guess and (forces_tiny or not torque_guess):
-            unit = force_guess[0][0]
-            other = f" (or the torques are in {torque_guess[0][0]}: {{torque_unit}})" if torque_guess else ""
-            return DatasetFileError(
-                f"{head}: the forces look like {unit} (the largest is {fmax:.3g} as {force_unit}), not {force_unit}.",
-                parameter="force_unit", value=force_unit, fix=f"pass {{force_unit}}{other}",
-                settings={"force_unit": unit, **({"torque_unit": torque_guess[0][0]} if torque_guess else {})})
-        unit = torque_guess[0][0] if torque_guess else "N.mm"
-        other = f" (or the forces are in {force_guess[0][0]}: {{force_unit}})" if force_guess else ""
+    found = _unit_proposals(arm, fmax, force_unit, torque_unit)
+    if not found:
         return DatasetFileError(
-            f"{head}: the torques look like {unit}, not {torque_unit}.", parameter="torque_unit", value=torque_unit,
-            fix=f"pass {{torque_unit}} (the lever arm would be {arm * unit_scale(unit, 'torque') * 1e3:.3g} mm){other}",
-            settings={"torque_unit": unit, **({"force_unit": force_guess[0][0]} if force_guess else {})})
-    return DatasetFileError(f"{head}: the torques look too small for the forces (forces in mN or g? torques in "
-                            "kN·m?).", parameter="torque_unit", value=torque_unit,
-                            fix="declare the units with {force_unit} / {torque_unit}",
-                            settings={"force_unit": NO_SETTING})
+            f"{head}, and no common unit of the forces or of the torques makes it plausible (the largest force is "
+            f"{fmax:.3g} N read as {force_unit}).", parameter="torque_unit", value=torque_unit,
+            fix="check which columns hold the wrench ({wrench}) and declare the units with {force_unit} / "
+                "{torque_unit}", settings={"force_unit": NO_SETTING, "wrench": NO_SETTING})
+    best = found[0]
+    other = next((p for p in found if p.kind != best.kind and (p.fmax >= _PLAUSIBLE_FORCE_N[0]
+                                                              or best.fmax < _PLAUSIBLE_FORCE_N[0])), None)
+    settings = {f"{best.kind}_unit": best.unit, **({f"{other.kind}_unit": other.unit} if other else {})}
+    also = f" (or the {other.kind}s are in {other.unit}: {{{other.kind}_unit}})" if other else ""
+    if best.kind == "force":
+        return DatasetFileError(
+            f"{head}: the forces look like {best.unit} (the largest is {fmax:.3g} N read as {force_unit}), not "
+            f"{force_unit}.", parameter="force_unit", value=force_unit,
+            fix=f"pass {{force_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm, the largest force "
+                f"{best.fmax:.3g} N){also}", settings=settings)
+    return DatasetFileError(
+        f"{head}: the torques look like {best.unit}, not {torque_unit}.", parameter="torque_unit", value=torque_unit,
+        fix=f"pass {{torque_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm){also}", settings=settings)
+
+
+@dataclass(frozen=True)
+class _UnitProposal:
+    """A unit that would make the loads plausible: ``kind`` ("force"/"torque"), its spelling, and the lever arm
+    [m] and largest force [N] the loads would then have."""
+
+    kind: str
+    unit: str
+    arm: float
+    fmax: float
+
+
+#: The force units proposed for a wrong one (their spellings as typed on a keyboard).
+_PROPOSED_FORCE_UNITS = ("N", "kN", "mN", "uN", "MN", "g", "kg", "lbf", "kip")
+#: The torque units proposed for a wrong one.
+_PROPOSED_TORQUE_UNITS = ("N.m", "N.mm", "N.cm", "kN.m", "mN.m", "uN.m", "MN.m", "kN.mm", "mN.mm", "lbf.in",
+                          "lbf.ft")
+#: A typical lever arm [m] and largest force [N] of a calibration: of two units that both make the loads plausible,
+#: the one whose loads lie nearer these (in decades) is proposed first.
+_TYPICAL_ARM_M, _TYPICAL_FORCE_N = 0.05, 100.0
+
+
+def _unit_proposals(arm: float, fmax: float, force_unit: str, torque_unit: str) -> list[_UnitProposal]:
+    """The units (of the forces or of the torques, one changed at a time) under which the loads' lever arm is
+    plausible and their largest force no more than :data:`_PLAUSIBLE_FORCE_N` allows, checked by converting the
+    loads: the likeliest first (loads nearest a typical calibration's). A unit whose result would fail the same
+    check, or give absurd forces, is never proposed."""
+    low, high = PLAUSIBLE_LEVER_ARM_M
+    f_now, t_now = unit_scale(force_unit, "force"), unit_scale(torque_unit, "torque")
+    out = []
+    for kind, units, now in (("force", _PROPOSED_FORCE_UNITS, f_now), ("torque", _PROPOSED_TORQUE_UNITS, t_now)):
+        for unit in units:
+            ratio = unit_scale(unit, kind) / now
+            if np.isclose(ratio, 1.0, rtol=1e-9):
+                continue
+            new_arm, new_fmax = (arm / ratio, fmax * ratio) if kind == "force" else (arm * ratio, fmax)
+            if low <= new_arm <= high and new_fmax <= _PLAUSIBLE_FORCE_N[1]:
+                out.append(_UnitProposal(kind, unit, new_arm, new_fmax))
+    fmax_floor = _PLAUSIBLE_FORCE_N[0]
+    out.sort(key=lambda p: (p.fmax < fmax_floor, abs(np.log10(p.arm / _TYPICAL_ARM_M))
+                            + abs(np.log10(max(p.fmax, 1e-300) / _TYPICAL_FORCE_N))))
+    return out
 
 
 def temperature_message(exc: FtcalError, path, line_no: int) -> str:
@@ -836,21 +878,34 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
         raise DatasetFileError(f"{path}: not UTF-8 text ({exc.reason}); {what} is a text file.") from None
     except OSError as exc:
         raise DatasetFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
-    comments, rows, header = [], [], None
+    comments, rows = [], []
     for no, line in enumerate(text.splitlines(), 1):
         stripped = line.strip()
         if not stripped:
             continue
         if stripped.startswith("#"):
-            if not rows and header is None:
+            if not rows:
                 comments.append(stripped)
             continue
-        fields = _text_fields(stripped)
-        if not rows and header is None and any(f and not is_number(f) for f in fields):
-            header = fields
-            continue
-        rows.append((no, fields))
-    return comments, rows, header
+        rows.append((no, _text_fields(stripped)))
+    if rows and _names_columns(rows[0][1], rows[1][1] if len(rows) > 1 else None):
+        return comments, rows[1:], rows[0][1]
+    return comments, rows, None
+
+
+def _names_columns(first: list[str], second: list[str] | None) -> bool:
+    """Whether a text file's first line is a header: it holds text where the next line holds a number (a column
+    named above its numbers). A text column that is data (run names beside numbers: ``run_01,0.5,...``) is text in
+    both lines, so a line holding numbers whose text fields line up with the next line's is data; a line without
+    a number, or without a next line to compare, is a header when it holds text."""
+    from ..core._columns import is_number
+
+    text = [bool(f) and not is_number(f) for f in first]
+    if not any(text):
+        return False
+    if second is None or len(second) != len(first) or all(text):  # no number at all: names, not a log's row
+        return True
+    return any(t and f and is_number(f) for t, f in zip(text, second))
 
 
 def has_header(path) -> bool:
@@ -957,11 +1012,14 @@ def join_headerless(paths: Sequence, names: Sequence[str]) -> JoinedTable:
         if not rows:
             raise DatasetFileError(f"{path}: no data rows.")
         width = len(rows[0][1])
+        # a column whose first row is text is a text column (run names): its fields stay text; the others numbers
+        textual = [bool(f) and not is_number(f) for f in rows[0][1]]
         for no, fields in rows:
             if len(fields) != width:
                 raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the file's first row has "
                                        f"{width}; repair or remove that line.")
-            bad = next((f for f in fields if not is_number(f) or not np.isfinite(float(f))), None)
+            bad = next((f for f, t in zip(fields, textual) if not t and (not is_number(f)
+                                                                      or not np.isfinite(float(f)))), None)
             if bad is not None:  # said here, in the user's file and line (the joined table is ftcal's own)
                 raise DatasetFileError(f"{path}: line {no}: {bad.strip()[:40]!r} is not a finite number; repair or "
                                        "remove that line.")

@@ -332,12 +332,14 @@ def comparison_facts(comp: Comparison) -> dict:
 def _reference_uncertainty(k: int, y: NDArray, absolute: ArrayLike | None, relative: float | None
                            ) -> tuple[NDArray | None, str]:
     """The reference's standard uncertainty per axis (its expanded k = 2 figure halved) and where it comes from."""
-    if absolute is not None:
-        U = _per_axis(absolute, k, "reference_uncertainty")
-        return U / 2, "reference standard's expanded uncertainty (k = 2) as given per axis, halved (Type B)"
+    if absolute is not None:  # 0 is an ideal reference (its uncertainty negligible), not a missing one
+        given = np.asarray(absolute, dtype=float)
+        U = _per_axis(np.where(given == 0, 1.0, given), k, "reference_uncertainty")  # the rest checked positive
+        return (np.where(np.broadcast_to(given, U.shape) == 0, 0.0, U) / 2,
+                "reference standard's expanded uncertainty (k = 2) as given per axis, halved (Type B)")
     if relative is not None:
-        if not (np.isfinite(relative) and 0 < relative < 1):
-            raise CalibrationInputError(f"reference_relative must be a fraction in (0, 1) (0.0005 for 0.05 %); got "
+        if not (np.isfinite(relative) and 0 <= relative < 1):  # 0: an ideal reference
+            raise CalibrationInputError(f"reference_relative must be a fraction in [0, 1) (0.0005 for 0.05 %); got "
                                         f"{relative!r}.")
         top = np.max(np.abs(y), axis=0)
         return relative * top / 2, (f"reference standard's expanded uncertainty {100 * relative:.4g} % (k = 2) of "
