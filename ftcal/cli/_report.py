@@ -179,9 +179,9 @@ def _axis_values(text_or_map, axes: list[str], option: str, percent: bool) -> np
 def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     """Every check of the report's options and files, before any work: the keyword arguments of
     :func:`~ftcal.reporting._calibration_report.calibration_certificate` (tool, rated, spec, conditions...)."""
-    from ..reporting._calibration_report import CONDITION_FIELDS, _axis_names, check_conditions
+    from ..reporting import CONDITION_FIELDS, check_conditions, dataset_axis_names
 
-    axes = _axis_names(data, data.wrench.shape[1])
+    axes = dataset_axis_names(data, data.wrench.shape[1])
     conditions_file = args.conditions
     if conditions_file is None and dataset_path is not None:
         base = Path(dataset_path)

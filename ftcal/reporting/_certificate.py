@@ -41,7 +41,7 @@ from ..core._wrench import alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
 from ..model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus, compare
 from ._budget import COVERAGE_PROBABILITY, AxisBudget, channel_lsb, resolution_uncertainty, uncertainty_budget
-from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, _axis_names, _figures, _held_out, _matrix,
+from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, dataset_axis_names, _figures, _held_out, _matrix,
                                   _per_axis, _round, _warnings, add_interval, axis_units, check_conditions,
                                   file_sha256, load_case_labels, model_inputs, _iso_date)
 
@@ -564,7 +564,7 @@ def calibration_certificate(
     X = model_inputs(model, dataset)
     y = np.asarray(dataset.wrench, dtype=float)
     n, k = y.shape
-    names = _axis_names(dataset, k)
+    names = dataset_axis_names(dataset, k)
     if getattr(model, "n_outputs_", None) is not None and int(model.n_outputs_) != k:
         raise CalibrationInputError(
             f"the model gives {int(model.n_outputs_)} output axis(es) but the dataset has {k} ({', '.join(names)}); a "
