@@ -585,7 +585,8 @@ def calibration_certificate(
     alpha = _alpha(model, y, torque, alpha)
     name = type(model).__name__
     reused = _auto_comparison(model, plan, X, y, groups)
-    label = f"{name}: {model.best_name_} (this calibration)" if reused is not None else f"{name} (this calibration)"
+    chosen = model.best_name_ if reused is not None else getattr(model, "baseline", None)  # a stock model's baseline
+    label = f"{name}: {chosen} (this calibration)" if isinstance(chosen, str) else f"{name} (this calibration)"
     template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs)
     stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
     comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),
