@@ -177,6 +177,11 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
              "(soft or viscoelastic sensors, as 'ftcal fit --history'): needs whole groups held out (--folds group), "
              "each group one recording in time order",
     )
+    from ..calibrators import STOCK_BASELINE_NAMES
+
+    d.add_argument("--stock-baseline", action="append", choices=STOCK_BASELINE_NAMES, metavar="NAME",
+                   help="the stock baseline(s) --model stock scores as a model that may be chosen (repeatable; "
+                   "default: every one, " + ", ".join(STOCK_BASELINE_NAMES) + ")")
     _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
     add_dataset_options(d)
     d.set_defaults(handler=run_dataset)
@@ -213,8 +218,11 @@ def run_dataset(args: argparse.Namespace) -> int:
                        "list at least one of them with --model")
     alpha = ftcal.core.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
-    candidates = []
-    for name in names:
+    if args.stock_baseline and "stock" not in names:
+        raise CliError("--stock-baseline says which baselines --model stock scores; add --model stock")
+    candidates = [(f"stock({b})", StockCalibrator(baseline=b, random_state=args.seed or 0))
+                  for b in dict.fromkeys(args.stock_baseline or STOCK_BASELINE_NAMES) if "stock" in names]
+    for name in (n for n in names if n != "stock"):
         extra = {"phase1_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
             ftcal.compose.training_schedule(schedule, name) else {}
         candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
