@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range,
+from ._common import (Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, int_in_range,
                       write_json)
 from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
@@ -79,7 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
                    help="processes that score --model auto's candidates at once (default: every core; the "
                    "choice is the same for any value)")
-    p.add_argument("--name", help="file name stem of the model (default: the --model name)")
+    add_name_option(p, "the model (default: the --model name)")
     p.add_argument("--report", action="store_true",
                    help="also write the calibration report (NAME.report.html): held-out accuracy per axis by grouped "
                    "cross-validation beside the stock baselines (refits the model --cv times)")
@@ -195,8 +195,6 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     name = args.name or args.model
-    if not name.replace("-", "_").isidentifier():
-        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     from ..reporting import file_sha256
     from ._report import prepare_report, report_file_names, write_report
 

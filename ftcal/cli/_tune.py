@@ -6,7 +6,7 @@ import argparse
 import time
 
 from ..core import CalibrationInputError
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
+from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
 from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
@@ -54,7 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_alpha_option(p)
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
     add_scheduler_option(p)
-    p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
+    add_name_option(p, "the outputs (default: the --model name)")
     add_dataset_options(p)
     add_output_options(p, "ftcal-tuned")
     add_run_options(p)
@@ -97,8 +97,6 @@ def run(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     name = args.name or args.model
-    if not name.replace("-", "_").isidentifier():
-        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
     space = parse_grid(args.grid, randomized=args.n_iter is not None)
     data = load_dataset_from_args(args, args.dataset, "training dataset")
