@@ -326,7 +326,7 @@ def run_real_world(args: argparse.Namespace) -> int:
         kwargs["load_mass"] = args.mass
     console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
     result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
-    markdown = real_world_markdown(result)
+    markdown = ftcal.benchmark.real_world_markdown(result)
     with plan.as_one_set():
         with plan.writing("real_world_results.md") as tmp:
             tmp.write_text(markdown + "\n", encoding="utf-8")
@@ -335,36 +335,6 @@ def run_real_world(args: argparse.Namespace) -> int:
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0
-
-
-def real_world_markdown(result: dict) -> str:
-    """Tables IV-V (per-sample RMSE, relative errors; mean ± std) per split, beside the thesis' values."""
-    ds = result["dataset"]
-    lines = [
-        f"Real-world benchmark (virtual experiment): {ds['n_samples']} samples, {ds['n_configurations']} load "
-        f"configurations, alpha = {ds['alpha']:.4g} 1/m.",
-    ]
-    thesis = result.get("thesis", {})
-    for split, per_model in result["splits"].items():
-        lines += [
-            "",
-            f"### Split `{split}`",
-            "",
-            "| model | schedule | test samples | RMSE [N] | thesis T. IV | rel. force | thesis T. V | rel. torque | thesis T. V |",
-            "|---|---|---|---|---|---|---|---|---|",
-        ]
-        for name, r in per_model.items():
-            t = thesis.get(name)
-
-            def ref(key: str) -> str:
-                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
-
-            lines.append(
-                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
-                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
-                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
-            )
-    return "\n".join(lines)
 
 
 def _print_markdown(result: dict, console: Console, out: Path) -> None:
