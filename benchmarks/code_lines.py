@@ -19,9 +19,8 @@ from pathlib import Path
 _NOT_CODE = {tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT, tokenize.ENDMARKER}
 
 
-def code_lines(path: Path) -> int:
-    """The number of code lines of the Python file at ``path``."""
-    source = path.read_text()
+def code_line_numbers(source: str) -> set[int]:
+    """The numbers of the lines of ``source`` that hold code (a token that is not a comment, outside docstrings)."""
     docstrings = set()
     for node in ast.walk(ast.parse(source)):
         if isinstance(node, (ast.Module, ast.ClassDef, ast.FunctionDef, ast.AsyncFunctionDef)) and node.body:
@@ -33,7 +32,12 @@ def code_lines(path: Path) -> int:
     for token in tokenize.generate_tokens(io.StringIO(source).readline):
         if token.type not in _NOT_CODE:
             lines.update(n for n in range(token.start[0], token.end[0] + 1) if n not in docstrings)
-    return len(lines)
+    return lines
+
+
+def code_lines(path: Path) -> int:
+    """The number of code lines of the Python file at ``path``."""
+    return len(code_line_numbers(path.read_text()))
 
 
 def main(root: Path) -> None:

@@ -145,6 +145,22 @@ def test_benchmark_dataset_through_the_cli(tmp_path, capsys):
     assert results["folds"] == "group" and len(results["axis_rmse"][0]) == 6
 
 
+
+def test_benchmark_dataset_scores_the_stock_model_with_the_baselines_asked(tmp_path, capsys):
+    import json
+
+    raw, w, groups = affine_data(n=150)
+    path = ftcal.CalibrationDataset(raw=raw, wrench=w, group=groups).save(tmp_path / "d.csv")
+    assert main(["benchmark", "dataset", str(path), "--model", "linear", "--model", "stock", "--stock-baseline",
+                 "sk_poly2", "--stock-baseline", "sk_linear", "--out", str(tmp_path / "b"), "-q"]) == 0
+    capsys.readouterr()
+    results = json.loads((tmp_path / "b" / "dataset_results.json").read_text())
+    names = results["name"]
+    assert {"linear", "stock(sk_poly2)", "stock(sk_linear)"} <= set(names) and "stock(sk_gp)" not in names
+    assert main(["benchmark", "dataset", str(path), "--model", "linear", "--stock-baseline", "sk_gp",
+                 "--out", str(tmp_path / "c"), "-q"]) == 2
+    assert "add --model stock" in capsys.readouterr().err
+
 # ------------------------------------------------------------------ Gaussian process
 def smooth_data(n, seed):
     rng = np.random.default_rng(seed)

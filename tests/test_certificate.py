@@ -476,3 +476,17 @@ def test_certificate_of_a_model_of_other_axes_than_the_data_is_refused_by_the_li
     one_axis = LinearCalibrator().fit(data.raw, data.wrench[:, 2:3])
     with pytest.raises(CalibrationInputError, match=r"gives 1 output axis\(es\) but the dataset has 6 \(Fx, Fy"):
         calibration_certificate(one_axis, data, baselines=False, figures=False)
+
+
+def test_a_stock_model_row_names_its_baseline():
+    from ftcal.calibrators import StockCalibrator
+    from ftcal.reporting import calibration_certificate
+
+    rng = np.random.default_rng(0)
+    wrench = rng.normal(size=(60, 6))
+    raw = wrench @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(60, 6))
+    data = CalibrationDataset(raw=raw, wrench=wrench)
+    cert = calibration_certificate(StockCalibrator(baseline="sk_poly2").fit(raw, wrench), data, baselines=False,
+                                   figures=False)
+    rows = json.loads(cert.to_json())["model_choice"]
+    assert rows[0]["model"] == "StockCalibrator: sk_poly2 (this calibration)", rows

@@ -7,7 +7,7 @@ import argparse
 
 import pytest
 
-from ftcal.cli import build_parser
+from ftcal.cli import build_parser, main
 
 #: The commands and the options each must take, by what it reads.
 DATASET = ("--channels", "--wrench", "--axes", "--groups", "--force-unit", "--torque-unit", "--exclude-saturated")
@@ -75,3 +75,14 @@ def test_old_spellings_still_work_and_are_hidden(command, argv, old, dest, value
     assert getattr(build_parser().parse_args(argv + old), dest) == value
     assert getattr(build_parser().parse_args(argv), dest) != value  # the default is another value
     assert _visible(COMMANDS[command], old[0]) is None  # not in --help
+
+
+@pytest.mark.parametrize("argv", [["fit", "d.csv"], ["tune", "d.csv"], ["identify-load", "d.csv"]])
+def test_every_name_option_takes_a_file_stem_only(tmp_path, capsys, argv):
+    # identify-load took any --name: '../x' wrote the tool file outside --out
+    (tmp_path / "d.csv").write_text("s0\n1\n")
+    argv = [str(tmp_path / a) if a == "d.csv" else a for a in argv]
+    assert main(argv + ["--name", "../x", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "argument --name: '../x': use letters, digits, '-' and '_' only" in err, err
+    assert not (tmp_path / "o").exists() and not (tmp_path / "x.tool.json").exists()

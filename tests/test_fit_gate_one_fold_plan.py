@@ -61,3 +61,38 @@ def test_cli_auto_prints_each_candidate_as_it_finishes_and_q_keeps_quiet(one_axi
     assert lines and "scored, RMSE" in lines[0] and lines[0].endswith(" s)")
     assert main(args + ["--out", str(tmp_path / "b"), "-q"]) == 0
     assert capsys.readouterr().err == ""
+
+
+@pytest.fixture
+def memorizer():
+    """A costly model (unknown cost: a user's regressor) that repeats its training rows exactly: perfect on them,
+    worse than the mean wrench on every held-out row of wrenches that the readings do not determine."""
+    from sklearn.neighbors import KNeighborsRegressor
+
+    from ftcal.calibrators import StockCalibrator, calibration_tags
+
+    def factory(random_state=None, **params):
+        return StockCalibrator(baseline=KNeighborsRegressor(n_neighbors=1), random_state=random_state, **params)
+
+    assert calibration_tags(factory()).cost not in ("closed_form", "kernel")
+    ftcal.register_calibrator("memorizer", factory)
+    yield "memorizer"
+    ftcal.compose._registry._FACTORIES.pop("memorizer")
+
+
+def test_fit_judges_a_costly_model_held_out_with_or_without_the_report(memorizer, tmp_path, capsys):
+    rng = np.random.default_rng(0)
+    path = ftcal.CalibrationDataset(raw=rng.normal(size=(60, 6)), wrench=rng.normal(size=(60, 6))).save(
+        tmp_path / "noise.csv")
+    data = ftcal.CalibrationDataset.load(path)
+    model = ftcal.make_calibrator(memorizer).fit(data.raw, data.wrench)
+    np.testing.assert_allclose(model.predict(data.raw), data.wrench)  # looks perfect on its training rows
+    errors = []
+    for out, extra in (("a", []), ("b", ["--report"])):
+        assert main(["fit", str(path), "--model", memorizer, "--out", str(tmp_path / out), "-q", *extra]) == 2
+        errors.append(capsys.readouterr().err.strip())
+        assert not (tmp_path / out).exists() or not any((tmp_path / out).iterdir())
+    assert errors[0] == errors[1], errors
+    assert errors[0].startswith("ftcal: error: ") and "held-out error" in errors[0] \
+        and "no better than predicting the mean wrench" in errors[0], errors
+    assert len(errors[0].splitlines()) == 1

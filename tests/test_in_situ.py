@@ -19,16 +19,17 @@ G = np.array([0.0, 0.0, -9.81])
 FORCE_NOISE, TORQUE_NOISE = 0.05, 0.005  # the issue's noise: [N], [N·m]
 
 
-def tool_wrenches(rotations, mass, com, bias, rng=None):
-    """Reference wrenches written out independently of ftcal: F = m Rᵀ g, τ = c × F, plus bias and noise."""
+def tool_wrenches(rotations, mass, com, bias, rng=None, noise=(FORCE_NOISE, TORQUE_NOISE)):
+    """Reference wrenches written out independently of ftcal: F = m Rᵀ g, τ = c × F, plus bias and noise (the
+    standard deviations of force [N] and torque [N·m])."""
     out = []
     for R in rotations:
         force = mass * (R.T @ G)
         out.append(np.concatenate([force, np.cross(com, force)]) + bias)
     out = np.array(out)
     if rng is not None:
-        out[:, :3] += FORCE_NOISE * rng.normal(size=(len(out), 3))
-        out[:, 3:] += TORQUE_NOISE * rng.normal(size=(len(out), 3))
+        out[:, :3] += noise[0] * rng.normal(size=(len(out), 3))
+        out[:, 3:] += noise[1] * rng.normal(size=(len(out), 3))
     return out
 
 

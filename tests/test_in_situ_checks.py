@@ -14,6 +14,7 @@ from ftcal.cli import main
 from ftcal.core import CalibrationInputError
 from ftcal.experiment import (ToolLoad, check_wrench_frame, drift_in_recording_order, identify_tool_load,
                               tool_load_observability)
+from test_in_situ import tool_wrenches
 
 G = np.array([0.0, 0.0, -9.81])
 MASS, COM, BIAS = 1.24, np.array([0.004, -0.011, 0.062]), np.array([1.5, -0.8, 0.4, 0.06, -0.03, 0.02])
@@ -33,15 +34,7 @@ def plan_q(robot):
 
 def sensor_wrenches(true_rotations, rng=None, bias=BIAS):
     """The tool's weight and the bias in the sensor's true frame, written out independently of ftcal."""
-    out = []
-    for R in true_rotations:
-        force = MASS * (R.T @ G)
-        out.append(np.concatenate([force, np.cross(COM, force)]) + bias)
-    out = np.array(out)
-    if rng is not None:
-        out[:, :3] += FORCE_NOISE * rng.normal(size=(len(out), 3))
-        out[:, 3:] += TORQUE_NOISE * rng.normal(size=(len(out), 3))
-    return out
+    return tool_wrenches(true_rotations, MASS, COM, bias, rng, noise=(FORCE_NOISE, TORQUE_NOISE))
 
 
 def write_pose_file(path, rotations, wrenches, time=None):

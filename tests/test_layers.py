@@ -265,7 +265,7 @@ def _private_cli_imports(source: str) -> list[str]:
 
 
 #: Underscore names the CLI still reaches for (internal details to move out of the CLI, not to publish).
-_KNOWN_PRIVATE = {"_tune.py": 1, "_predict.py": 1, "_report.py": 1, "_prepare.py": 1}
+_KNOWN_PRIVATE: dict[str, int] = {}
 
 
 def test_the_private_import_finder_flags_private_modules_and_unlisted_names():
@@ -280,3 +280,41 @@ def test_the_cli_imports_only_public_names():
     for path in sorted((PACKAGE / "cli").glob("*.py")):
         found = _private_cli_imports(path.read_text())
         assert len(found) <= _KNOWN_PRIVATE.get(path.name, 0), f"cli/{path.name}: {found}"
+
+
+# ------------------------------------------------------------------ no function over 150 code lines
+MAX_FUNCTION_CODE_LINES = 150
+
+
+def _code_line_numbers(source: str) -> set[int]:
+    """The code lines of ``source`` as ``benchmarks/code_lines.py`` counts them (no docstring, comment or blank)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("code_lines", PACKAGE.parent / "benchmarks" / "code_lines.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.code_line_numbers(source)
+
+
+def _long_functions(source: str, limit: int = MAX_FUNCTION_CODE_LINES) -> list[tuple[str, int]]:
+    code = _code_line_numbers(source)
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+            n = len(code & set(range(node.lineno, node.end_lineno + 1)))
+            if n > limit:
+                found.append((node.name, n))
+    return found
+
+
+def test_the_function_length_counter_counts_code_not_docstrings_or_comments():
+    body = "\n".join(f"    x{i} = {i}  # note" for i in range(4))
+    source = f'def f():\n    """Doc\n\n    more doc\n    """\n    # a comment\n\n{body}\n    return (1,\n            2)\n'
+    assert _long_functions(source, limit=6) == [("f", 7)]  # the def line, four assignments, a two-line return
+    assert _long_functions(source, limit=7) == []
+
+
+def test_no_function_of_the_package_is_over_150_code_lines():
+    too_long = [f"{path.relative_to(PACKAGE)}: {name} has {n} code lines"
+                for path in sorted(PACKAGE.rglob("*.py")) for name, n in _long_functions(path.read_text())]
+    assert not too_long, too_long

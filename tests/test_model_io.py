@@ -292,6 +292,17 @@ def test_an_unused_huge_member_is_never_decompressed(tmp_path):
     assert peak < 32 * 2**20  # the bomb would be 256 MiB
 
 
+
+def replace_member(path, member, write, compression=zipfile.ZIP_STORED):
+    """Rewrite the model file ``path`` without its array ``member``, then let ``write(zipfile)`` add what replaces it."""
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {k: data[k] for k in data.files if k != member}
+    with zipfile.ZipFile(path, "w", compression) as zf:
+        for key, value in arrays.items():
+            with zf.open(f"{key}.npy", "w") as f:
+                np.lib.format.write_array(f, value, allow_pickle=False)
+        write(zf)
+
 def test_a_used_member_declaring_more_than_the_memory_limit_is_refused_before_decompressing(tmp_path, monkeypatch):
     from ftcal import LinearCalibrator
 
@@ -301,13 +312,7 @@ def test_a_used_member_declaring_more_than_the_memory_limit_is_refused_before_de
     def bomb(zf):  # the model's own offset_, replaced by 64 MiB of zeros
         _zero_stream_member(zf, "fitted/offset_.npy", 64 * 2**20)
 
-    with np.load(path, allow_pickle=False) as data:
-        arrays = {k: data[k] for k in data.files if k != "fitted/offset_"}
-    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
-        for key, value in arrays.items():
-            with zf.open(f"{key}.npy", "w") as f:
-                np.lib.format.write_array(f, value, allow_pickle=False)
-        bomb(zf)
+    replace_member(path, "fitted/offset_", bomb, zipfile.ZIP_DEFLATED)
     monkeypatch.setenv("FTCAL_MEMORY_LIMIT_GB", "0.01")  # 10 MiB
     with pytest.raises(ModelFileError, match=r"fitted/offset_.*64.00 MiB.*memory limit"):
         load_model(path)
@@ -318,15 +323,12 @@ def test_a_header_declaring_a_huge_shape_is_refused_before_allocating(tmp_path):
 
     model, _ = _fit_on(LinearCalibrator(), 6)
     path = save_model(model, tmp_path / "m.npz")
-    with np.load(path, allow_pickle=False) as data:
-        arrays = {k: data[k] for k in data.files if k != "fitted/offset_"}
-    with zipfile.ZipFile(path, "w") as zf:
-        for key, value in arrays.items():
-            with zf.open(f"{key}.npy", "w") as f:
-                np.lib.format.write_array(f, value, allow_pickle=False)
+    def huge(zf):
         with zf.open("fitted/offset_.npy", "w") as f:  # shape (1e10,) = 80 GB declared, 48 bytes held
             np.lib.format.write_array_header_1_0(f, {"descr": "<f8", "fortran_order": False, "shape": (10**10,)})
             f.write(np.zeros(6).tobytes())
+
+    replace_member(path, "fitted/offset_", huge)
     assert path.stat().st_size < 8000
     with pytest.raises(ModelFileError, match=r"shape \(10000000000,\)") as info:
         load_model(path)

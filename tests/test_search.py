@@ -62,6 +62,18 @@ def test_default_spaces_name_real_parameters():
         assert set(space) <= set(make_calibrator(name).get_params(deep=True)), name
 
 
+
+def test_cli_tune_of_the_stock_model_searches_every_stock_baseline(tmp_path):
+    from ftcal.calibrators import STOCK_BASELINE_NAMES
+
+    assert DEFAULT_SEARCH_SPACES["stock"] == {"baseline": list(STOCK_BASELINE_NAMES)}
+    raw, wrench = _cubic_sensor(n=90)
+    data = CalibrationDataset(raw=raw, wrench=wrench).save(tmp_path / "train.csv")
+    assert main(["tune", str(data), "--model", "stock", "--out", str(tmp_path / "o"), "-q"]) == 0
+    summary = json.loads((tmp_path / "o" / "stock.tune.json").read_text())
+    assert sorted(str(c["params"]["baseline"]) for c in summary["candidates"]) == sorted(STOCK_BASELINE_NAMES)
+    assert summary["best_params"]["baseline"] in ("sk_poly3", "sk_kernel_ridge", "sk_gp")  # a cubic sensor
+
 @pytest.mark.parametrize(
     "kwargs, match",
     [(dict(space={"bogus": [1]}), "no parameter"), (dict(space={}), "empty"), (dict(cv=1), "cv"),

@@ -11,7 +11,7 @@ from ..core._lazy import lazy_namespace
 
 #: Public names of this package -> the private module holding each.
 _PUBLIC = dict(
-    run_artificial_benchmark="_artificial", run_real_world_benchmark="_real_world",
+    run_artificial_benchmark="_artificial", run_real_world_benchmark="_real_world", real_world_markdown="_real_world",
     wilcoxon_pvalue="_artificial", format_mean_std="_artificial", dataset_seeds="_artificial",
     summarize_results="_artificial", THESIS_TABLES="_artificial", make_model="_artificial",
     SPLIT_NAMES="_real_world", THESIS_TABLES_IV_V="_real_world", run_demo="_demo", DemoResult="_demo",

@@ -45,7 +45,7 @@ from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
 from ..core._wrench import alpha_from_wrenches
 
-__all__ = ["run_real_world_benchmark", "SPLIT_NAMES", "THESIS_TABLES_IV_V"]
+__all__ = ["run_real_world_benchmark", "real_world_markdown", "SPLIT_NAMES", "THESIS_TABLES_IV_V"]
 
 #: Splits evaluated by :func:`run_real_world_benchmark`.
 SPLIT_NAMES: tuple[str, ...] = ("random20", "leave-one-config-out")
@@ -232,3 +232,43 @@ def run_real_world_benchmark(
         plot=str(_plot(results, Path(plot_path))) if plot_path is not None else None,
     )
     return results
+
+
+def real_world_markdown(result: dict) -> str:
+    """Tables IV-V of a :func:`run_real_world_benchmark` result as Markdown: per split, each model's per-sample RMSE
+    and relative errors (mean ± std over the test samples) beside the thesis' values.
+
+    Examples
+    --------
+    >>> result = {"dataset": {"n_samples": 60, "n_configurations": 4, "alpha": 10.0}, "splits": {"random20": {
+    ...     "linear": {"schedule": "-", "n_test": 12, "rmse_mean": 0.5, "rmse_std": 0.1, "rel_force_mean": 0.02,
+    ...                "rel_force_std": 0.01, "rel_torque_mean": 0.03, "rel_torque_std": 0.01}}}}
+    >>> print(real_world_markdown(result).splitlines()[-1])
+    | linear | - | 12 | 0.5 ± 0.1 | — | 0.02 ± 0.01 | — | 0.03 ± 0.01 | — |
+    """
+    ds = result["dataset"]
+    lines = [
+        f"Real-world benchmark (virtual experiment): {ds['n_samples']} samples, {ds['n_configurations']} load "
+        f"configurations, alpha = {ds['alpha']:.4g} 1/m.",
+    ]
+    thesis = result.get("thesis", {})
+    for split, per_model in result["splits"].items():
+        lines += [
+            "",
+            f"### Split `{split}`",
+            "",
+            "| model | schedule | test samples | RMSE [N] | thesis T. IV | rel. force | thesis T. V | rel. torque | thesis T. V |",
+            "|---|---|---|---|---|---|---|---|---|",
+        ]
+        for name, r in per_model.items():
+            t = thesis.get(name)
+
+            def ref(key: str) -> str:
+                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
+
+            lines.append(
+                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
+                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
+                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
+            )
+    return "\n".join(lines)

@@ -177,6 +177,11 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
              "(soft or viscoelastic sensors, as 'ftcal fit --history'): needs whole groups held out (--folds group), "
              "each group one recording in time order",
     )
+    from ..calibrators import STOCK_BASELINE_NAMES
+
+    d.add_argument("--stock-baseline", action="append", choices=STOCK_BASELINE_NAMES, metavar="NAME",
+                   help="the stock baseline(s) --model stock scores as a model that may be chosen (repeatable; "
+                   "default: every one, " + ", ".join(STOCK_BASELINE_NAMES) + ")")
     _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
     add_dataset_options(d)
     d.set_defaults(handler=run_dataset)
@@ -213,8 +218,11 @@ def run_dataset(args: argparse.Namespace) -> int:
                        "list at least one of them with --model")
     alpha = ftcal.core.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
-    candidates = []
-    for name in names:
+    if args.stock_baseline and "stock" not in names:
+        raise CliError("--stock-baseline says which baselines --model stock scores; add --model stock")
+    candidates = [(f"stock({b})", StockCalibrator(baseline=b, random_state=args.seed or 0))
+                  for b in dict.fromkeys(args.stock_baseline or STOCK_BASELINE_NAMES) if "stock" in names]
+    for name in (n for n in names if n != "stock"):
         extra = {"phase1_epochs": 5, "plateau_epochs": 2, "max_recover_epochs": 2} if args.quick and \
             ftcal.compose.training_schedule(schedule, name) else {}
         candidates.append((name, ftcal.make_calibrator(name, schedule=schedule, random_state=args.seed, **extra)))
@@ -318,7 +326,7 @@ def run_real_world(args: argparse.Namespace) -> int:
         kwargs["load_mass"] = args.mass
     console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
     result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
-    markdown = real_world_markdown(result)
+    markdown = ftcal.benchmark.real_world_markdown(result)
     with plan.as_one_set():
         with plan.writing("real_world_results.md") as tmp:
             tmp.write_text(markdown + "\n", encoding="utf-8")
@@ -327,36 +335,6 @@ def run_real_world(args: argparse.Namespace) -> int:
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0
-
-
-def real_world_markdown(result: dict) -> str:
-    """Tables IV-V (per-sample RMSE, relative errors; mean ± std) per split, beside the thesis' values."""
-    ds = result["dataset"]
-    lines = [
-        f"Real-world benchmark (virtual experiment): {ds['n_samples']} samples, {ds['n_configurations']} load "
-        f"configurations, alpha = {ds['alpha']:.4g} 1/m.",
-    ]
-    thesis = result.get("thesis", {})
-    for split, per_model in result["splits"].items():
-        lines += [
-            "",
-            f"### Split `{split}`",
-            "",
-            "| model | schedule | test samples | RMSE [N] | thesis T. IV | rel. force | thesis T. V | rel. torque | thesis T. V |",
-            "|---|---|---|---|---|---|---|---|---|",
-        ]
-        for name, r in per_model.items():
-            t = thesis.get(name)
-
-            def ref(key: str) -> str:
-                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
-
-            lines.append(
-                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
-                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
-                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
-            )
-    return "\n".join(lines)
 
 
 def _print_markdown(result: dict, console: Console, out: Path) -> None:

@@ -39,6 +39,8 @@ __all__ = [
     "EXIT_USAGE",
     "EXIT_FAILURE",
     "add_output_options",
+    "add_name_option",
+    "file_stem",
     "add_run_options",
     "add_scheduler_option",
     "add_robot_options",
@@ -338,6 +340,24 @@ def existing_file(text: str) -> Path:
 
 
 # ------------------------------------------------------------------ shared options
+def file_stem(text: str) -> str:
+    """argparse type of ``--name``: a file name stem of letters, digits, '-' and '_' (no path, no dot).
+
+    Examples
+    --------
+    >>> file_stem("tool-2")
+    'tool-2'
+    """
+    if not text.replace("-", "_").isidentifier():
+        raise argparse.ArgumentTypeError(f"{text!r}: use letters, digits, '-' and '_' only")
+    return text
+
+
+def add_name_option(parser: argparse.ArgumentParser, what: str, default: str | None = None) -> None:
+    """``--name``: the file name stem of the command's outputs (``what``), checked by :func:`file_stem`."""
+    parser.add_argument("--name", type=file_stem, default=default, help=f"file name stem of {what}")
+
+
 def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> None:
     """``--out DIR`` and ``--force``."""
     parser.add_argument(

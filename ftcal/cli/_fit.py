@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from ._common import (Console, CliError, OutputPlan, add_output_options, add_run_options, int_in_range,
+from ._common import (Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, int_in_range,
                       write_json)
 from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
@@ -79,7 +79,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
                    help="processes that score --model auto's candidates at once (default: every core; the "
                    "choice is the same for any value)")
-    p.add_argument("--name", help="file name stem of the model (default: the --model name)")
+    add_name_option(p, "the model (default: the --model name)")
     p.add_argument("--report", action="store_true",
                    help="also write the calibration report (NAME.report.html): held-out accuracy per axis by grouped "
                    "cross-validation beside the stock baselines (refits the model --cv times)")
@@ -102,38 +102,6 @@ def _parse_tare(text: str | None) -> np.ndarray | None:
     if values.size == 0 or not np.all(np.isfinite(values)):
         raise CliError(f"--tare {text!r}: give finite comma-separated numbers, one per raw channel")
     return values
-
-
-def _check_before_saving(estimator, X, y, groups, args, predictions, console: Console) -> None:
-    """Refuse (one line, nothing written) a fitted calibration whose held-out predictions are degenerate:
-    constant, all zero, or no better than the mean wrench (:func:`~ftcal.compose._auto.check_calibration`).
-
-    ``predictions`` are the report's held-out predictions (``--report``); without them the held-out check
-    cross-validates the model here when its fits are light (closed form or kernel: ``cost`` tag); a network or a
-    model of unknown cost is checked on its training predictions only (a held-out check would train it ``cv``
-    times more: ``--report`` gives it)."""
-    from ..calibrators import calibration_tags
-    from ..model_selection import FoldPlan
-    from ..model_selection import DegenerateCalibrationError
-    from ..compose import check_calibration
-
-    y = np.asarray(y, dtype=float)
-    held_out = True
-    tags = calibration_tags(estimator)
-    light = tags.cost in ("closed_form", "kernel")
-    if light:  # judged on the one fold plan (the certificate's and auto's), with or without --report: one verdict
-        predictions = None
-    elif predictions is None:
-        predictions = np.asarray(estimator.predict(X), dtype=float).reshape(y.shape)
-        held_out = False
-        console.info("check: training predictions only (a held-out check of this model needs --report)")
-    plan = getattr(estimator, "fold_plan_", None) or FoldPlan.for_data(
-        X, y, groups, cv=getattr(args, "cv", None) or 5, seed=args.seed or 0, ordered=tags.reads_history)
-    try:
-        check_calibration(estimator, X, y, groups=groups, random_state=args.seed, predictions=predictions,
-                          held_out=held_out, plan=plan)
-    except DegenerateCalibrationError as exc:
-        raise cli_error(exc, args, str(args.dataset)) from None
 
 
 def _rmse_text(rmse: float, axes, alpha: float) -> str:
@@ -224,12 +192,9 @@ def comparison_progress(console: Console, label: str, every: float = HEARTBEAT_S
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators import calibration_tags
-    from ftcal.compose import requests_groups
 
     console = Console(args.quiet)
     name = args.name or args.model
-    if not name.replace("-", "_").isidentifier():
-        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     from ..reporting import file_sha256
     from ._report import prepare_report, report_file_names, write_report
 
@@ -289,19 +254,21 @@ def run(args: argparse.Namespace) -> int:
     schedule = f" ({args.schedule} schedule)" if ftcal.compose.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
-    fit_params = {}
-    if data.group is not None and requests_groups(estimator):
-        fit_params["groups"] = data.group  # model choices inside the fit hold out whole groups (poses, loads)
     # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
     # Tx, Ty as well as a 6-axis sensor's)
+    from ..model_selection import DegenerateCalibrationError
     from ..workflow import calibrate
 
     chooses = calibration_tags(estimator).chooses_model or args.history and args.model == "auto"
-    # the library's workflow fits (the gate runs below: with --report on the report's folds of a costly model)
+    # the library's workflow fits and gates (never ship a calibration no better than the mean wrench): every model
+    # judged on its held-out predictions of the one fold plan, with or without --report, before any file is written
     with comparison_progress(console, args.model) if chooses else contextlib.nullcontext():
-        calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0, check=False,
-                  fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(est, X_, y_, console,
-                                                                                      label=args.model, **kw))
+        try:
+            calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
+                      fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(est, X_, y_, console,
+                                                                                          label=args.model, **kw))
+        except DegenerateCalibrationError as exc:
+            raise cli_error(exc, args, str(args.dataset)) from None
     seconds = time.perf_counter() - start
     report = ftcal.core.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
@@ -338,13 +305,6 @@ def run(args: argparse.Namespace) -> int:
         summary["cv_results"] = _json_comparison(estimator.comparison_)
         summary["fold_plan"] = estimator.comparison_.facts
         console.info(f"auto chose {estimator.best_name_}:\n{estimator.summary()}")
-    fit_groups = fit_params.get("groups", data.group)
-
-    def gate(predictions=None) -> None:  # never ship a calibration no better than the mean wrench
-        _check_before_saving(estimator, X, data.wrench, fit_groups, args, predictions, console)
-
-    if not args.report:
-        gate()  # with --report: on the report's held-out predictions, before any file is in place
     # every output of this run is written to its own temporary file and put in place as one set at the end: a
     # failing report (or a full disk) leaves nothing behind, and the hashes are of the bytes this run wrote
     with plan.as_one_set() as files:
@@ -356,7 +316,7 @@ def run(args: argparse.Namespace) -> int:
         if args.report:
             write_report(plan, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
-                         dataset_sha256=dataset_sha256, console=console, check=gate)
+                         dataset_sha256=dataset_sha256, console=console)
         else:
             for stale in report_file_names(name):
                 plan.leaving_out(stale)

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (refuse_twins,
+from ._common import (refuse_twins, add_name_option,
     load_robot_from_args,
     CliError,
     Console,
@@ -90,7 +90,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_robot_options(p)
     _add_recording_options(p)
     p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
-    p.add_argument("--name", default="tool", help="file name stem of the tool file")
+    add_name_option(p, "the tool file", default="tool")
     p.add_argument("--mounting", action="store_true",
                    help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
                    "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")

@@ -16,6 +16,7 @@ from ._data_options import (add_channel_option, channel_names, joined_origin, mo
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
+from ..persistence import is_model_file
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -117,7 +118,7 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
             raise CliError(f"--range {path}: calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = "
                            f"{hi[k]:g}; the report is damaged. Write it again with 'ftcal report'")
     else:
-        if _is_model_file(file):
+        if is_model_file(file):
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")
         try:
@@ -188,19 +189,6 @@ def _range_bound(found, key: str, path: str) -> np.ndarray:
         raise CliError(f"--range {path}: calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite "
                        "number; the report is damaged. Write it again with 'ftcal report'")
     return array
-
-
-def _is_model_file(path: Path) -> bool:
-    """Whether ``path`` is an ftcal model file (a zip holding the model's ``__metadata__``)."""
-    import zipfile
-
-    from ..persistence._model_io import _META_KEY
-
-    try:
-        with zipfile.ZipFile(path) as archive:
-            return f"{_META_KEY}.npy" in archive.namelist()
-    except (OSError, zipfile.BadZipFile):
-        return False
 
 
 def run(args: argparse.Namespace) -> int:

@@ -116,7 +116,7 @@ def log_files(items: list[str]) -> list[Path]:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ..reporting import _plots
+    from ..reporting import plot_wrench_coverage
 
     console = Console(args.quiet)
     args.logs = named_inputs(args, args.logs)  # --columns: headerless logs named, joined side by side
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
                 "meta": dataset.meta,
             })
         with plan.writing("coverage.png") as tmp:
-            _plots.plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha,
+            plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha,
                                         title="Reference wrenches of the prepared dataset")
     console.info(
         f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "

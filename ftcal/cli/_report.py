@@ -179,9 +179,9 @@ def _axis_values(text_or_map, axes: list[str], option: str, percent: bool, zero_
 def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     """Every check of the report's options and files, before any work: the keyword arguments of
     :func:`~ftcal.reporting._calibration_report.calibration_certificate` (tool, rated, spec, conditions...)."""
-    from ..reporting._calibration_report import CONDITION_FIELDS, _axis_names, check_conditions
+    from ..reporting import CONDITION_FIELDS, check_conditions, dataset_axis_names
 
-    axes = _axis_names(data, data.wrench.shape[1])
+    axes = dataset_axis_names(data, data.wrench.shape[1])
     conditions_file = args.conditions
     if conditions_file is None and dataset_path is not None:
         base = Path(dataset_path)
@@ -257,12 +257,9 @@ def _reference(value, option: str, axes: list[str]) -> dict:
 
 
 def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
-                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console,
-                 check=None) -> None:
+                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console) -> None:
     """Compute the report of ``model`` on ``data`` and write its three planned files with ``out`` (within its
-    :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is). ``check``, if given, is
-    called with the report's held-out predictions (shape of ``data.wrench``) before anything is written: it may
-    raise to refuse the calibration."""
+    :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is)."""
     from ..reporting import calibration_certificate
 
     console.info(f"report: cross-validating {type(model).__name__}"
@@ -276,8 +273,6 @@ def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namesp
                                        command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
     except TooFewSamplesError as exc:
         raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
-    if check is not None:
-        check(cert.held_out_predictions)
 
     html_name, json_name, csv_name = report_file_names(label)
     for file_name, text in ((html_name, cert.to_html()), (json_name, cert.to_json()), (csv_name, cert.to_csv())):

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import re
 import time
 
 from ..core import CalibrationInputError
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_output_options, add_run_options, write_json, int_in_range
+from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, write_json, int_in_range
 from ._fit import calibrator_names
-from ._messages import cli_error
 from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
 from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
@@ -56,62 +54,51 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_alpha_option(p)
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
     add_scheduler_option(p)
-    p.add_argument("--name", help="file name stem of the outputs (default: the --model name)")
+    add_name_option(p, "the outputs (default: the --model name)")
     add_dataset_options(p)
     add_output_options(p, "ftcal-tuned")
     add_run_options(p)
     p.set_defaults(handler=run)
 
 
-_DISTRIBUTION = re.compile(r"^\s*([A-Za-z_]\w*)\s*\((.*)\)\s*$")
-
-
-def check_distribution(entry: str, randomized: bool) -> None:
-    """Refuse a ``--grid KEY=dist(a, b)`` whose bounds the distribution cannot take, before any work (scipy would
-    only fail when sampling, with "Domain error in arguments").
+def parse_grid(entries: list[str], randomized: bool) -> dict | None:
+    """The search space of the ``--grid KEY=VALUES`` options (None: the model's default), each entry checked before
+    any work: a distribution's bounds (scipy would only fail when sampling, with "Domain error in arguments") and a
+    distribution without a randomized search.
 
     Examples
     --------
-    >>> check_distribution("lr=loguniform(1e-4, 1e-2)", randomized=True)
-    >>> check_distribution("ridge=loguniform(1, 0)", randomized=True)
+    >>> parse_grid(["ridge=[1e-6, 1e-3]"], randomized=False)
+    {'ridge': [1e-06, 0.001]}
+    >>> parse_grid(["ridge=loguniform(1, 0)"], randomized=True)
     Traceback (most recent call last):
     ...
     ftcal.cli._messages.CliError: --grid 'ridge=loguniform(1, 0)': loguniform(a, b) needs 0 < a < b; got a = 1, b = 0
     """
-    from ..compose._search import _DISTRIBUTIONS, _bounds
+    from ..compose import parse_search_space
 
-    _, _, values = entry.partition("=")
-    match = _DISTRIBUTION.match(values)
-    if match is None or values.lstrip().startswith("["):
-        return
-    name, inner = match.group(1), match.group(2)
-    if name not in _DISTRIBUTIONS:
-        return  # the search space parser names the known ones
-    where = f"--grid {entry!r}"
-    bounds = [b.strip() for b in inner.split(",")]
-    if len(bounds) != 2:
-        raise CliError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)")
-    try:
-        _bounds(name, *bounds, where)
-    except CalibrationInputError as exc:
-        raise cli_error(exc) from None
-    if not randomized:
-        raise CliError(f"{where}: a distribution is sampled by a randomized search; pass --n-iter N (the number of "
-                       f"candidates), or give a JSON list of values")
+    space: dict = {}
+    for entry in entries:
+        where = f"--grid {entry!r}"
+        try:
+            parsed = parse_search_space([entry])
+        except CalibrationInputError as exc:
+            raise CliError(str(exc).replace(f"search entry {entry!r}", where, 1)) from None
+        if not randomized and any(not isinstance(values, list) for values in parsed.values()):
+            raise CliError(f"{where}: a distribution is sampled by a randomized search; pass --n-iter N (the number "
+                           f"of candidates), or give a JSON list of values")
+        space.update(parsed)
+    return space or None
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..compose import parse_search_space, search_calibrator, search_summary
+    from ..compose import search_calibrator, search_summary
     import ftcal
 
     console = Console(args.quiet)
     name = args.name or args.model
-    if not name.replace("-", "_").isidentifier():
-        raise CliError(f"--name {name!r}: use letters, digits, '-' and '_' only")
     plan = OutputPlan(args.out, [model_file_name(name), f"{name}.tune.json"], args.force)
-    for entry in args.grid:
-        check_distribution(entry, randomized=args.n_iter is not None)
-    space = parse_search_space(args.grid) if args.grid else None
+    space = parse_grid(args.grid, randomized=args.n_iter is not None)
     data = load_dataset_from_args(args, args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)
     groups = fold_groups(args, data, args.dataset)

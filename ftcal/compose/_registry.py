@@ -270,7 +270,8 @@ register_calibrator("axis_nonlinear", _Lazy("calibrators._axis_nonlinear", "Axis
 register_calibrator("gaussian_process", _Lazy("calibrators._gaussian_process", "GaussianProcessCalibrator"),
                     candidates=[(50, "gaussian_process", {"random_state": 0})])
 # the stock scikit-learn baselines every table shows, as a model of their own: stock(baseline="sk_gp")
-register_calibrator("stock", _Lazy("calibrators._baselines", "StockCalibrator"))
+register_calibrator("stock", _Lazy("calibrators._baselines", "StockCalibrator"),  # its grid: every stock baseline
+                    search_space={"baseline": ["sk_linear", "sk_poly2", "sk_poly3", "sk_kernel_ridge", "sk_gp"]})
 # ensembles: the schedule and every other parameter go to the members, n_members and n_jobs to the ensemble
 register_calibrator("directional_ensemble", _Lazy("networks._directional", "DirectionalCalibrator", ensemble_of="directional"),
                     schedules=_DIRECTIONAL, search_space=_ENSEMBLE_SPACE)

@@ -723,119 +723,185 @@ def read_bag(
         raise LogFormatError("give the wrench topic or the raw-gauge topic, not both.")
     with _Reader(path) as r:
         topics = r.topics()
-        if raw_topic is not None:
-            sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
-            kind = "raw"
-        else:
-            sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
-            kind = "wrench"
-        if tf is None:
-            if joint_topic is None and not any(typ == JOINT_STATE_TYPE for typ, _ in topics.values()) and \
-                    any(topics.get(t, ("", 0))[0] == TF_TYPE for t in ("/tf", "/tf_static")):
-                _refuse_without_joints(path, r, topics, sensor)
-            pose_topics = [_choose_topic(path, topics, joint_topic, (JOINT_STATE_TYPE,), "joint states",
-                                         "joint_topic")]
-        else:
-            pose_topics = [t for t in ("/tf", "/tf_static") if t in topics]
-            if "/tf" not in pose_topics and "/tf_static" not in pose_topics:
-                raise LogFormatError(f"{path}: no topic /tf or /tf_static ({{tf}} {','.join(tf)}); the bag has "
-                                     f"{_listing(topics)}.", parameter="tf", value=tf)
-            for t in pose_topics:
-                if topics[t][0] != TF_TYPE:
-                    raise LogFormatError(f"{path}: topic {t} holds {topics[t][0]}, not {TF_TYPE}.")
-        streams = {sensor: _Stream(topics[sensor][1], max_samples, average=True)}
-        joint_groups: dict[tuple[str, ...], _Stream] = {}  # the joint-state messages, by the joints they name
-        tree = _TfTree(max_samples)
-        stamped: set[str] = set()
-        frame_id: str | None = None
-        width = None
-        wanted = [c for c in r.reader.connections if c.topic in set(streams) | set(pose_topics)]
-        try:
-            for conn, receive_ns, data in r.reader.messages(connections=wanted):
-                topic = conn.topic
-                msg = r.reader.deserialize(data, conn.msgtype)
-                receive = receive_ns * 1e-9
-                if topic in ("/tf", "/tf_static") and tf is not None:
-                    for tr in msg.transforms:
-                        tree.add(path, topic, tr, _stamp(tr) if stamps == "header" else receive)
-                    continue
-                header = _stamp(msg)
-                if header is not None:
-                    stamped.add(topic)
-                t = header if (stamps == "header" and header is not None) else receive
-                if topic == sensor:
-                    if kind == "wrench":
-                        w = getattr(msg, "wrench", msg)
-                        value = np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
-                        if header is not None and msg.header.frame_id != frame_id:
-                            frame_id = _check_wrench_frame(path, sensor, frame_id, str(msg.header.frame_id), t)
-                    else:
-                        value, width = _raw_value(path, sensor, conn.msgtype, msg, raw_field, width, t)
-                    streams[sensor].add(t, receive, value)
-                else:  # joint states: grouped by the joints each message names (an arm's, a gripper's)
-                    _add_joint_state(path, topic, topics[topic][1], max_samples, joint_groups, msg, t, receive)
-        except LogFormatError:
-            raise
-        except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
-            raise r.damaged(exc) from None
-    frame_id = frame_id or ""
-    t_s, _, reading = streams[sensor].arrays()
-    notes = []
-    if streams[sensor].block > 1:
-        notes.append(LogFormatError(f"{sensor}: {streams[sensor].n_messages} messages averaged in blocks of "
-                                    f"{streams[sensor].block} (at most {max_samples} samples kept)"))
+        sensor, kind, pose_topics = _pick_topics(path, r, topics, wrench_topic, raw_topic, joint_topic, tf)
+        m = _read_messages(path, r, topics, sensor, kind, pose_topics, tf=tf, raw_field=raw_field, stamps=stamps,
+                           max_samples=max_samples)
+    notes: list = []
+    t_s, reading = _sensor_samples(path, topics, sensor, m.streams[sensor], max_samples, notes)
+    offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
+    for topic in m.stamped if stamps == "header" else ():
+        times, receive, _ = m.streams[topic].arrays() if topic in m.streams else ([], [], None)
+        if len(times):
+            offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
+    if tf is None:
+        pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes)
+    else:
+        pose = _tf_poses(path, sensor, m, tf, t_s)
+    t_s, reading = _common_time(path, sensor, pose, t_s, reading, stamps, offsets, notes)
+    joints = rotation = None
+    if tf is None:
+        joints = np.column_stack([np.interp(t_s, pose.t, pose.q[:, j]) for j in range(pose.q.shape[1])])
+    else:
+        rotation = m.tree.rotations(pose.chain, t_s)
+    return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
+                        joint_names=pose.names, rotation=rotation, pose_topic=pose.topic, frame_id=m.frame_id or "",
+                        clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)
+
+
+def _pick_topics(path: Path, r: _Reader, topics: dict, wrench_topic: str | None, raw_topic: str | None,
+                 joint_topic: str | None, tf: tuple[str, str] | None) -> tuple[str, str, list[str]]:
+    """The sensor's topic, its kind (``"wrench"`` or ``"raw"``) and the pose topics :func:`read_bag` reads."""
+    if raw_topic is not None:
+        sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
+        kind = "raw"
+    else:
+        sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
+        kind = "wrench"
+    if tf is None:
+        if joint_topic is None and not any(typ == JOINT_STATE_TYPE for typ, _ in topics.values()) and \
+                any(topics.get(t, ("", 0))[0] == TF_TYPE for t in ("/tf", "/tf_static")):
+            _refuse_without_joints(path, r, topics, sensor)
+        return sensor, kind, [_choose_topic(path, topics, joint_topic, (JOINT_STATE_TYPE,), "joint states",
+                                            "joint_topic")]
+    pose_topics = [t for t in ("/tf", "/tf_static") if t in topics]
+    if not pose_topics:
+        raise LogFormatError(f"{path}: no topic /tf or /tf_static ({{tf}} {','.join(tf)}); the bag has "
+                             f"{_listing(topics)}.", parameter="tf", value=tf)
+    for t in pose_topics:
+        if topics[t][0] != TF_TYPE:
+            raise LogFormatError(f"{path}: topic {t} holds {topics[t][0]}, not {TF_TYPE}.")
+    return sensor, kind, pose_topics
+
+
+@dataclass
+class _Messages:
+    """What :func:`_read_messages` kept of a bag: the sensor's stream, the joint states by the joints each message
+    names, the transforms, the topics with header stamps and the wrench's frame."""
+
+    streams: dict
+    joint_groups: dict
+    tree: "_TfTree"
+    stamped: set = field(default_factory=set)
+    frame_id: str | None = None
+
+
+def _read_messages(path: Path, r: _Reader, topics: dict, sensor: str, kind: str, pose_topics: list[str], *,
+                   tf: tuple[str, str] | None, raw_field: str, stamps: str, max_samples: int) -> _Messages:
+    """One pass over the bag's sensor and pose messages, each reduced on the fly (memory stays bounded)."""
+    m = _Messages(streams={sensor: _Stream(topics[sensor][1], max_samples, average=True)}, joint_groups={},
+                  tree=_TfTree(max_samples))
+    width = None
+    wanted = [c for c in r.reader.connections if c.topic in {sensor, *pose_topics}]
+    try:
+        for conn, receive_ns, data in r.reader.messages(connections=wanted):
+            topic = conn.topic
+            msg = r.reader.deserialize(data, conn.msgtype)
+            receive = receive_ns * 1e-9
+            if topic in ("/tf", "/tf_static") and tf is not None:
+                for tr in msg.transforms:
+                    m.tree.add(path, topic, tr, _stamp(tr) if stamps == "header" else receive)
+                continue
+            header = _stamp(msg)
+            if header is not None:
+                m.stamped.add(topic)
+            t = header if (stamps == "header" and header is not None) else receive
+            if topic == sensor:
+                if kind == "wrench":
+                    w = getattr(msg, "wrench", msg)
+                    value = np.array([w.force.x, w.force.y, w.force.z, w.torque.x, w.torque.y, w.torque.z])
+                    if header is not None and msg.header.frame_id != m.frame_id:
+                        m.frame_id = _check_wrench_frame(path, sensor, m.frame_id, str(msg.header.frame_id), t)
+                else:
+                    value, width = _raw_value(path, sensor, conn.msgtype, msg, raw_field, width, t)
+                m.streams[sensor].add(t, receive, value)
+            else:  # joint states: grouped by the joints each message names (an arm's, a gripper's)
+                _add_joint_state(path, topic, topics[topic][1], max_samples, m.joint_groups, msg, t, receive)
+    except LogFormatError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
+        raise r.damaged(exc) from None
+    return m
+
+
+def _sensor_samples(path: Path, topics: dict, sensor: str, stream: _Stream, max_samples: int,
+                    notes: list) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The sensor's kept samples in time order (times [s], readings), refused when empty or not finite."""
+    t_s, _, reading = stream.arrays()
+    if stream.block > 1:
+        notes.append(LogFormatError(f"{sensor}: {stream.n_messages} messages averaged in blocks of "
+                                    f"{stream.block} (at most {max_samples} samples kept)"))
     if not len(t_s):
         raise LogFormatError(f"{path}: topic {sensor} holds no messages; the bag has {_listing(topics)}.")
     if not np.isfinite(reading).all():
         i = int(np.flatnonzero(~np.isfinite(reading).all(axis=1))[0])
         raise LogFormatError(f"{path}: topic {sensor} has a NaN or inf value at {t_s[i]:.9g} s.")
     order = np.argsort(t_s, kind="stable")
-    t_s, reading = t_s[order], reading[order]
-    offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
-    for topic in stamped if stamps == "header" else ():
-        times, receive, _ = streams[topic].arrays() if topic in streams else ([], [], None)
-        if len(times):
-            offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
-    chain, names = [], ()
-    if tf is None:
-        pose_topic = pose_topics[0]
-        if not joint_groups:
-            raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
-        names, t_p, q = _joint_group(pose_topic, joint_groups, notes)
-        if pose_topic in stamped and stamps == "header":
-            times, receive, _ = joint_groups[names].arrays()
-            offsets[pose_topic] = float(np.median(receive - times))
-        span = (float(t_p.min()), float(t_p.max()))
-        span_words = f"{pose_topic} {span[0]:.6f} to {span[1]:.6f} s"
-    else:
-        pose_topic = "/tf"
-        if not tree.edges and not tree.static:
-            raise LogFormatError(f"{path}: /tf holds no transforms.")
-        _check_tf_frame(path, sensor, frame_id, tf, tree)
-        chain = tree.chain(path, _frame(tf[0]), _frame(tf[1]))
-        covered = tree.span(chain)
-        span = (float(t_s[0]), float(t_s[-1])) if covered is None else covered[:2]
-        span_words = (f"the /tf chain {_frame(tf[0])} to {_frame(tf[1])} {span[0]:.6f} to {span[1]:.6f} s (limited "
-                      f"by {covered[2]})") if covered is not None else ""
-        if covered is not None and span[0] > span[1]:
-            raise LogFormatError(f"{path}: the transforms of the /tf chain {_frame(tf[0])} to {_frame(tf[1])} are "
-                                 f"never recorded at one time together ({covered[2]}); the sensor's orientation is "
-                                 "known at no time.")
-    if stamps == "header" and sensor in offsets and pose_topic in offsets:
-        apart = offsets[sensor] - offsets[pose_topic]
+    return t_s[order], reading[order]
+
+
+@dataclass
+class _PoseStream:
+    """Where the sensor's orientation comes from: the pose topic, the time span it covers [s] (and its words),
+    the joint names, times and angles (joint states) or the /tf chain."""
+
+    topic: str
+    span: tuple[float, float]
+    span_words: str
+    names: tuple = ()
+    t: NDArray[np.float64] | None = None
+    q: NDArray[np.float64] | None = None
+    chain: list = field(default_factory=list)
+
+
+def _joint_poses(path: Path, pose_topic: str, m: _Messages, stamps: str, offsets: dict, notes: list) -> _PoseStream:
+    """The joint states of ``pose_topic`` (one group of joints), with its clock offset added to ``offsets``."""
+    if not m.joint_groups:
+        raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
+    names, t_p, q = _joint_group(pose_topic, m.joint_groups, notes)
+    if pose_topic in m.stamped and stamps == "header":
+        times, receive, _ = m.joint_groups[names].arrays()
+        offsets[pose_topic] = float(np.median(receive - times))
+    span = (float(t_p.min()), float(t_p.max()))
+    return _PoseStream(pose_topic, span, f"{pose_topic} {span[0]:.6f} to {span[1]:.6f} s", names, t_p, q)
+
+
+def _tf_poses(path: Path, sensor: str, m: _Messages, tf: tuple[str, str], t_s: NDArray[np.float64]) -> _PoseStream:
+    """The /tf chain from ``tf``'s base to its sensor frame and the time span all its transforms cover."""
+    if not m.tree.edges and not m.tree.static:
+        raise LogFormatError(f"{path}: /tf holds no transforms.")
+    _check_tf_frame(path, sensor, m.frame_id or "", tf, m.tree)
+    base, tip = _frame(tf[0]), _frame(tf[1])
+    chain = m.tree.chain(path, base, tip)
+    covered = m.tree.span(chain)
+    span = (float(t_s[0]), float(t_s[-1])) if covered is None else covered[:2]
+    span_words = (f"the /tf chain {base} to {tip} {span[0]:.6f} to {span[1]:.6f} s (limited "
+                  f"by {covered[2]})") if covered is not None else ""
+    if covered is not None and span[0] > span[1]:
+        raise LogFormatError(f"{path}: the transforms of the /tf chain {base} to {tip} are "
+                             f"never recorded at one time together ({covered[2]}); the sensor's orientation is "
+                             "known at no time.")
+    return _PoseStream("/tf", span, span_words, chain=chain)
+
+
+def _common_time(path: Path, sensor: str, pose: _PoseStream, t_s: NDArray[np.float64], reading: NDArray[np.float64],
+                 stamps: str, offsets: dict, notes: list) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The sensor samples within the pose stream's span: a clock offset between the two noted, no overlap refused
+    (with the fix the stamps allow), samples outside dropped and noted."""
+    sensor_pose = sensor in offsets and pose.topic in offsets
+    if stamps == "header" and sensor_pose:
+        apart = offsets[sensor] - offsets[pose.topic]
         if abs(apart) > CLOCK_OFFSET_TOLERANCE_S:
             notes.append(LogFormatError(
-                f"clock offset between {sensor} and {pose_topic}: their header stamps differ by {apart:+.3g} s "
+                f"clock offset between {sensor} and {pose.topic}: their header stamps differ by {apart:+.3g} s "
                 f"against the recorder's receive times ({sensor}'s clock {'behind' if apart > 0 else 'ahead'})",
                 parameter="stamps", value=stamps, settings={"stamps": "receive"},
                 fix="if that is the clocks, not transport latency, read the bag with {stamps}"))
-    overlap = (t_s >= span[0]) & (t_s <= span[1])
+    overlap = (t_s >= pose.span[0]) & (t_s <= pose.span[1])
     if not overlap.any():
-        both = sensor in offsets and pose_topic in offsets
-        detail = (f"; against the recorder's receive times their clocks are {offsets[sensor] - offsets[pose_topic]:+.6g}"
-                  " s apart") if both else ""
-        said = f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {span_words}, no " \
-               f"overlap{detail}."
+        detail = (f"; against the recorder's receive times their clocks are "
+                  f"{offsets[sensor] - offsets[pose.topic]:+.6g} s apart") if sensor_pose else ""
+        said = f"{path}: clocks apart: {sensor} is stamped {t_s[0]:.6f} to {t_s[-1]:.6f} s but {pose.span_words}, " \
+               f"no overlap{detail}."
         if stamps == "header":
             raise LogFormatError(said, parameter="stamps", value=stamps, settings={"stamps": "receive"},
                                  fix="{stamps} (the recorder's clock for both), or set the sensor driver's clock")
@@ -844,17 +910,9 @@ def read_bag(
                              "sensor and the pose in one bag run.")
     if not overlap.all():
         notes.append(LogFormatError(f"{int((~overlap).sum())} of {len(t_s)} {sensor} samples lie outside "
-                                    f"{span_words or pose_topic + chr(39) + 's span'} and were dropped"))
+                                    f"{pose.span_words or pose.topic + chr(39) + 's span'} and were dropped"))
         t_s, reading = t_s[overlap], reading[overlap]
-    joints = rotation = None
-    if tf is None:
-        joints = np.column_stack([np.interp(t_s, t_p, q[:, j]) for j in range(q.shape[1])])
-    else:
-        rotation = tree.rotations(chain, t_s)
-    return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
-                        joint_names=names, rotation=rotation, pose_topic=pose_topic, frame_id=frame_id,
-                        clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)
-
+    return t_s, reading
 
 def write_bag(
     path: str | Path,

@@ -14,7 +14,7 @@ _PUBLIC = dict(
     export_onnx="_onnx", exportable_types="_onnx", linear_calibration_matrix="_matrix",
 )
 _PUBLIC.update(  # names the CLI uses
-    matrix_export_dict="_matrix",
+    matrix_export_dict="_matrix", is_model_file="_model_io",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

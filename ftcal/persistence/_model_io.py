@@ -65,7 +65,8 @@ from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes
 
-__all__ = ["save_model", "load_model", "model_data", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION"]
+__all__ = ["save_model", "load_model", "model_data", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION",
+           "is_model_file"]
 
 FORMAT = "ftcal-model"
 #: Version of the model-file layout written by :func:`save_model` (1: before the per-class declarations).
@@ -217,6 +218,20 @@ def _decode(value):
         return [_decode(v) for v in value]
     return value
 
+
+def is_model_file(path: str | Path) -> bool:
+    """Whether ``path`` is an ftcal model file (a zip holding the model's metadata), without reading the model.
+
+    Examples
+    --------
+    >>> is_model_file("no-such-file.npz")
+    False
+    """
+    try:
+        with zipfile.ZipFile(path) as archive:
+            return f"{_META_KEY}.npy" in archive.namelist()
+    except (OSError, zipfile.BadZipFile):
+        return False
 
 def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, data: dict | None = None) -> Path:
     """Write a fitted calibrator to one ``.npz`` model file; returns the path.

@@ -22,7 +22,7 @@ _PUBLIC = dict(
 _PUBLIC.update(  # names the CLI uses
     plot_sphere_coverage="_plots", plot_wrench_coverage="_plots",
     CONDITION_FIELDS="_calibration_report", EVALUATION_PLOTS="_evaluation", bytes_sha256="_calibration_report",
-    check_conditions="_calibration_report", file_sha256="_calibration_report",
+    check_conditions="_calibration_report", file_sha256="_calibration_report", dataset_axis_names="_calibration_report",
     predicted_plot_name="_evaluation",
 )
 __all__ = list(_PUBLIC)

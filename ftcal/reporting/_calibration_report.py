@@ -34,7 +34,7 @@ from ..io._dataset import CalibrationDataset
 from ..compose._auto import provides_std
 
 __all__ = ["model_inputs", "write_calibration_report", "file_sha256", "bytes_sha256", "axis_units",
-           "CONDITION_FIELDS", "COVERAGE_FACTOR", "CASES_IN_JSON", "load_case_labels"]
+           "CONDITION_FIELDS", "COVERAGE_FACTOR", "CASES_IN_JSON", "load_case_labels", "dataset_axis_names"]
 
 #: k of the check of a model's own standard deviation (the coverage of ±2 std); U95 itself has the budget's k.
 COVERAGE_FACTOR = 2.0
@@ -90,8 +90,15 @@ def axis_units(names) -> list[str]:
     return ["N·m" if str(n)[:1].upper() in ("T", "M") else "N" for n in names]
 
 
-def _axis_names(dataset: CalibrationDataset, k: int) -> list[str]:
-    """The dataset's output axis names (``axis_names``, or its meta's), else ``Fx..Tz`` for 6 columns."""
+def dataset_axis_names(dataset: CalibrationDataset, k: int) -> list[str]:
+    """The dataset's output axis names (``axis_names``, or its meta's), else ``Fx..Tz`` for 6 columns.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> dataset_axis_names(CalibrationDataset(raw=np.zeros((2, 6)), wrench=np.zeros((2, 6))), 6)
+    ['Fx', 'Fy', 'Fz', 'Tx', 'Ty', 'Tz']
+    """
     names = getattr(dataset, "axes", None) or dataset.meta.get("axis_names") or dataset.meta.get("axes")
     if names is not None and len(names) == k:
         return [str(n) for n in names]

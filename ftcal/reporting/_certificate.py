@@ -41,7 +41,7 @@ from ..core._wrench import alpha_from_wrenches
 from ..io._dataset import CalibrationDataset
 from ..model_selection import Comparison, ComparisonRow, FoldPlan, RowStatus, compare, model_cost
 from ._budget import COVERAGE_PROBABILITY, AxisBudget, channel_lsb, resolution_uncertainty, uncertainty_budget
-from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, _axis_names, _figures, _held_out, _matrix,
+from ._calibration_report import (CASES_IN_JSON, COVERAGE_FACTOR, dataset_axis_names, _figures, _held_out, _matrix,
                                   _per_axis, _round, _warnings, add_interval, axis_units, check_conditions,
                                   file_sha256, load_case_labels, model_inputs, _iso_date)
 
@@ -569,7 +569,7 @@ def calibration_certificate(
     X = model_inputs(model, dataset)
     y = np.asarray(dataset.wrench, dtype=float)
     n, k = y.shape
-    names = _axis_names(dataset, k)
+    names = dataset_axis_names(dataset, k)
     if getattr(model, "n_outputs_", None) is not None and int(model.n_outputs_) != k:
         raise CalibrationInputError(
             f"the model gives {int(model.n_outputs_)} output axis(es) but the dataset has {k} ({', '.join(names)}); a "
@@ -590,7 +590,8 @@ def calibration_certificate(
     alpha = _alpha(model, y, torque, alpha)
     name = type(model).__name__
     reused = _auto_comparison(model, plan, X, y, groups)
-    label = f"{name}: {model.best_name_} (this calibration)" if reused is not None else f"{name} (this calibration)"
+    chosen = model.best_name_ if reused is not None else getattr(model, "baseline", None)  # a stock model's baseline
+    label = f"{name}: {chosen} (this calibration)" if isinstance(chosen, str) else f"{name} (this calibration)"
     template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs)
     stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
     comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),

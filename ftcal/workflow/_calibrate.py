@@ -58,8 +58,10 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
     unfitted estimator) is fitted on the dataset's readings and wrench (the dataset's groups reach a model that
     requests them: ``auto``'s folds, one offset per group); then judged on the one fold plan
     (:meth:`~ftcal.model_selection.FoldPlan.for_data`, ``auto``'s own when it chose) by
-    :func:`~ftcal.compose.check_calibration`: a degenerate calibration (constant, all zero, no better than the
-    mean wrench) raises :class:`~ftcal.model_selection.DegenerateCalibrationError`. With ``certify`` the
+    :func:`~ftcal.compose.check_calibration`: a calibration whose held-out predictions on that plan are degenerate
+    (constant, all zero, no better than the mean wrench) raises
+    :class:`~ftcal.model_selection.DegenerateCalibrationError`, whatever the model's cost (a network is refitted
+    once per fold: a model can look fine on its training rows and fail held out). With ``certify`` the
     certificate of :func:`ftcal.reporting.calibration_certificate` is made on the same data.
 
     Parameters
@@ -116,10 +118,8 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
     groups = fit_params.get("groups", dataset.group)
     plan = getattr(estimator, "fold_plan_", None) or FoldPlan.for_data(
         X, dataset.wrench, groups, cv=cv, seed=random_state, ordered=tags.reads_history)
-    if check:
-        light = tags.cost in ("closed_form", "kernel")
-        check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan,
-                          predictions=None if light else estimator.predict(X), held_out=light)
+    if check:  # every model on its held-out predictions of the plan: a costly one is refitted per fold
+        check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan)
     summary = getattr(estimator, "comparison_", None) if tags.chooses_model else None
     certificate = None
     if certify:
