@@ -589,15 +589,17 @@ class _ChoosesRidge(LinearCalibrator):
 
 
 @pytest.mark.parametrize("n_jobs", [1, 2])
-def test_a_candidate_that_chooses_its_structure_chooses_once_on_all_rows_and_its_folds_use_it(n_jobs):
+def test_a_candidate_that_chooses_its_structure_chooses_on_the_first_fold_and_keeps_it(n_jobs):
     raw, w = cubic(120)
     _ChoosesRidge.fits = []
     auto = AutoCalibrator(candidates=[("choosing", _ChoosesRidge(ridge="choose"))], cv=4, stack=False,
                           baselines=False, n_jobs=n_jobs, random_state=0).fit(raw, w)
     if n_jobs == 1:  # in this process: every fit is seen
-        assert _ChoosesRidge.fits[0] == ("choose", 120)  # once, on all rows
-        assert sorted(_ChoosesRidge.fits[1:]) == [(120 * 1e-6, 90)] * 4  # each fold with that structure
-    assert auto.best_estimator_.ridge_chosen_ == pytest.approx(120e-6)  # the all-rows fit is the model kept
+        assert _ChoosesRidge.fits[0] == ("choose", 90)  # once, on the first fold's 90 training rows: its model
+        assert sorted(_ChoosesRidge.fits[1:4]) == [(90 * 1e-6, 90)] * 3  # the other folds with that structure
+        assert _ChoosesRidge.fits[4:] == [(90 * 1e-6, 120)]  # the refit on all rows keeps it
+    assert auto.best_estimator_.ridge == pytest.approx(90e-6)  # the structure scored, refitted on all rows
+    assert auto.comparison_.structures == {"choosing": {"ridge": pytest.approx(90e-6)}}
     assert auto.comparison_["status"] == ["scored"]
 
 

@@ -595,10 +595,10 @@ class AutoCalibrator(BaseCalibrator):
        the loads vary, the LTM and the degree-2 polynomial with ridge 1e-2 are
        each followed by a twin with one offset per group, ``group_offsets=True``:
        for poses or sessions whose readings shift as a whole); ``axis_nonlinear`` (the hybrid);
-       ``gaussian_process`` (its mean and kernel chosen once on all rows by
-       marginal likelihood, its hyperparameters refitted on every training
-       fold); ``directional`` and ``comparative`` (the ``schedule``'s epochs;
-       the K fold models trained as one stacked fit, each on at most
+       ``gaussian_process`` (its mean and kernel chosen on the first fold's
+       training rows, by held-out error, and kept for the other folds and the
+       refit; its hyperparameters refitted on every training fold);
+       ``directional`` and ``comparative`` (the ``schedule``'s epochs; the K fold models trained as one stacked fit, each on at most
        ``network_samples`` rows, the same share of every group); then, with
        ``stack``, a non-negative combination of the best three (weights
        fitted on out-of-fold predictions, cross-fitted over the folds so its
@@ -869,7 +869,7 @@ class AutoCalibrator(BaseCalibrator):
             comparison.choose()
             comparison.stability = self._stability(comparison, candidates, X, y, groups, given, axes)
         templates = dict(candidates)
-        fitted = comparison.fitted
+        structures = comparison.structures
         named = named_targets(y, axes)  # the chosen model refitted on the named table, as it was scored
         comparison.training_sha256 = training_data_sha256(X, y, groups)  # what the comparison was scored on
         self.comparison_ = comparison
@@ -878,10 +878,11 @@ class AutoCalibrator(BaseCalibrator):
         self.held_out_predictions_ = comparison.row(self.best_name_).predictions
 
         def refit(name):
-            """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""
-            if name in fitted:  # fitted on all rows already, when it chose its structure
-                return fitted[name]
+            """A candidate on all rows (networks on their grouped subsample), as it was cross-validated (a model
+            that chose its structure on the first fold keeps that structure)."""
             model = with_alpha_and_tare(templates[name], self.alpha_, given)
+            if name in structures:
+                model.set_params(**structures[name])
             rows = grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
                 if _is_network(model) else np.arange(len(X))
             return _fit(model, X[rows], _rows(named, rows), None if groups is None else groups[rows])
