@@ -595,16 +595,35 @@ class _ChoosesRidge(LinearCalibrator):
 
 
 @pytest.mark.parametrize("n_jobs", [1, 2])
-def test_a_candidate_that_chooses_its_structure_chooses_once_on_all_rows_and_its_folds_use_it(n_jobs):
+def test_a_candidate_that_chooses_its_structure_chooses_on_the_first_fold_and_keeps_it(n_jobs):
     raw, w = cubic(120)
     _ChoosesRidge.fits = []
     auto = AutoCalibrator(candidates=[("choosing", _ChoosesRidge(ridge="choose"))], cv=4, stack=False,
                           baselines=False, n_jobs=n_jobs, random_state=0).fit(raw, w)
     if n_jobs == 1:  # in this process: every fit is seen
-        assert _ChoosesRidge.fits[0] == ("choose", 120)  # once, on all rows
-        assert sorted(_ChoosesRidge.fits[1:]) == [(120 * 1e-6, 90)] * 4  # each fold with that structure
-    assert auto.best_estimator_.ridge_chosen_ == pytest.approx(120e-6)  # the all-rows fit is the model kept
+        assert _ChoosesRidge.fits[0] == ("choose", 90)  # once, on the first fold's 90 training rows: its model
+        assert sorted(_ChoosesRidge.fits[1:4]) == [(90 * 1e-6, 90)] * 3  # the other folds with that structure
+        assert _ChoosesRidge.fits[4:] == [(90 * 1e-6, 120)]  # the refit on all rows keeps it
+    assert auto.best_estimator_.ridge == pytest.approx(90e-6)  # the structure scored, refitted on all rows
+    assert auto.comparison_.structures == {"choosing": {"ridge": pytest.approx(90e-6)}}
     assert auto.comparison_["status"] == ["scored"]
+
+
+def test_on_more_rows_than_choice_samples_it_chooses_on_a_grouped_subsample_and_refits_on_all_rows():
+    rng = np.random.default_rng(0)
+    groups = np.repeat(np.arange(30), 100)
+    w = rng.normal(size=(3000, 6))
+    raw = w @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(3000, 6)) + 0.05 * rng.normal(size=(30, 6))[groups]
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("quadratic", PolynomialCalibrator(degree=2))],
+                          baselines=False, stack=False, choice_samples=600, random_state=0, n_jobs=1)
+    auto.fit(raw, w, groups=groups)
+    plan = auto.fold_plan_
+    assert plan.n_rows == 600 and plan.kind == "group"
+    assert np.array_equal(np.unique(plan.units, return_counts=True)[1], np.full(30, 20))  # 20 rows of each group
+    assert "Chosen on 600 of the 3000 rows" in auto.comparison_.why and auto.held_out_predictions_.shape == (600, 6)
+    assert auto.best_name_ == "linear"
+    all_rows = LinearCalibrator(alpha=auto.alpha_).fit(raw, w)  # the winner refitted on every row
+    np.testing.assert_allclose(auto.predict(raw[:50]), all_rows.predict(raw[:50]), rtol=1e-9, atol=1e-12)
 
 
 def test_a_structure_fit_that_fails_is_recorded_as_failed_not_fatal():

@@ -94,6 +94,38 @@ def test_any_regressor_is_a_model_and_a_costly_bad_one_is_raced_out_with_its_rea
     assert full.paired("knn", "ols").verdict == "worse"
 
 
+def test_the_race_stops_by_the_paired_se_of_the_difference_not_by_the_references_own_se():
+    from ftcal.model_selection._comparison import RACE_SIGMAS, race_stop
+    from ftcal.model_selection._selection import TIE_TOLERANCE, mean_and_se
+
+    rng = np.random.default_rng(0)
+    units = np.repeat(np.arange(5), 40)  # 5 folds of 40 rows; the candidate was scored on the first
+    first = units == 0
+
+    def standardised(n):
+        z = rng.normal(size=n)
+        return (z - z.mean()) / z.std(ddof=1)
+
+    def old_rule(candidate, reference):  # the reference's unpaired SE over every unit as the margin
+        excess, se = mean_and_se(candidate - reference[first])
+        margin = max(mean_and_se(reference, units)[1], TIE_TOLERANCE * reference[first].mean())
+        return excess - RACE_SIGMAS * se > margin
+
+    # errors spread widely over the rows (a wide unpaired SE); the candidate worse on every row by 0.05 N²
+    reference = rng.exponential(2.0, 200) * np.repeat(rng.uniform(0.2, 3.0, 5), 40)
+    candidate = reference[first] + 0.05 + 0.001 * standardised(40)
+    stop, excess, se, threshold = race_stop(candidate, reference[first], None, 0.0)
+    assert stop and excess == pytest.approx(0.05) and se == pytest.approx(0.001 / np.sqrt(40))
+    assert not old_rule(candidate, reference)  # its unpaired SE would have kept it
+    # the converse: the reference's errors nearly constant, the difference noisy, its excess 2.5 paired SE
+    reference = 1.0 + 0.001 * rng.normal(size=200)
+    spread = 0.3
+    candidate = reference[first] + 2.5 * spread / np.sqrt(40) + spread * standardised(40)
+    stop, excess, se, threshold = race_stop(candidate, reference[first], None, TIE_TOLERANCE)
+    assert not stop and excess == pytest.approx(2.5 * se) and threshold == pytest.approx(se)
+    assert old_rule(candidate, reference)  # the reference's small unpaired SE would have stopped it
+
+
 def test_too_few_rows_skips_from_the_tags_rule_and_a_failing_model_is_a_failed_row():
     class Broken(LinearRegression):
         def fit(self, X, y):

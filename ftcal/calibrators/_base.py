@@ -81,8 +81,8 @@ class CalibrationTags:
     chooses_model : bool
         Chooses a model by cross-validation inside ``fit`` (``best_estimator_``, ``best_name_``, ``comparison_``).
     chooses_structure : bool
-        Chooses its structure once on all rows (``structure_params()`` gives it): ``auto`` cross-validates clones
-        with that structure.
+        Chooses its structure once (``structure_params()`` gives it): ``auto`` lets it choose on the first training
+        fold and cross-validates clones with that structure.
     min_training_rows : callable
         ``n_channels -> rows``: fewest training rows on which a held-out score says something about the model.
     cost : {"closed_form", "kernel", "network", "heavy"}

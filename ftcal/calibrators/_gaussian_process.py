@@ -601,9 +601,10 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
     def structure_params(self) -> dict:
         """The choices ``fit`` made (mean, kernel family, per output) as parameters.
 
-        :class:`~ftcal.AutoCalibrator` fits the GP on all rows once, then
-        cross-validates clones with these fixed (their hyperparameters are
-        still fitted on each training fold alone), at a fifth of the cost.
+        :class:`~ftcal.AutoCalibrator` lets the GP choose them on its first
+        training fold (that fold's model), then scores the other folds and
+        refits with these fixed (their hyperparameters still fitted on each
+        training fold alone).
         """
         check_is_fitted(self)
         return {"mean": self.mean_, "kernel": self.kernel_, "per_output": bool(self.per_output_),

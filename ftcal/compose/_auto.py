@@ -41,6 +41,9 @@ STACK_SIZE = 3
 STABILITY_ROWS = 5000
 #: Fold seeds of the stability repeats (the plan's own seed is the first repeat).
 STABILITY_SEEDS = (1, 2, 3, 4)
+#: Most rows ``auto`` chooses on by default (a subsample, the same share of every group); the winner is refitted
+#: on all rows. A count of rows, never a time.
+CHOICE_SAMPLES = 20000
 
 
 def default_candidates(schedule: str = "short", grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
@@ -595,10 +598,10 @@ class AutoCalibrator(BaseCalibrator):
        the loads vary, the LTM and the degree-2 polynomial with ridge 1e-2 are
        each followed by a twin with one offset per group, ``group_offsets=True``:
        for poses or sessions whose readings shift as a whole); ``axis_nonlinear`` (the hybrid);
-       ``gaussian_process`` (its mean and kernel chosen once on all rows by
-       marginal likelihood, its hyperparameters refitted on every training
-       fold); ``directional`` and ``comparative`` (the ``schedule``'s epochs;
-       the K fold models trained as one stacked fit, each on at most
+       ``gaussian_process`` (its mean and kernel chosen on the first fold's
+       training rows, by held-out error, and kept for the other folds and the
+       refit; its hyperparameters refitted on every training fold);
+       ``directional`` and ``comparative`` (the ``schedule``'s epochs; the K fold models trained as one stacked fit, each on at most
        ``network_samples`` rows, the same share of every group); then, with
        ``stack``, a non-negative combination of the best three (weights
        fitted on out-of-fold predictions, cross-fitted over the folds so its
@@ -631,7 +634,8 @@ class AutoCalibrator(BaseCalibrator):
        within the groups; between the two the lower score wins). A candidate whose training folds are smaller than
        :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
-    5. refits the winner on all rows (``best_estimator_``).
+    5. refits the winner on all rows (``best_estimator_``). On more than ``choice_samples`` rows, steps 1-4 run
+       on a subsample of that many, the same share of every group, and the winner is refitted on all rows.
 
     Every RMSE is eq. 18: over all 6 n torque-scaled values, in [N].
     ``comparison_`` keeps the whole comparison; it is stored in the model file
@@ -673,6 +677,11 @@ class AutoCalibrator(BaseCalibrator):
     race : bool, default=True
         Race the costly candidates (stop those that cannot come within one SE of the best after their first
         fold); ``False`` scores every candidate on every fold.
+    choice_samples : int or None, default=20000
+        Most rows the comparison is made on: with more, the candidates are compared on a subsample of that many
+        (the same share of every group, so that grouped folds still hold out whole groups) and the winner is
+        refitted on all rows; ``comparison_``, ``fold_plan_`` and ``held_out_predictions_`` are then of the
+        subsample (``comparison_.why`` says so). ``None``: always all rows.
     random_state : int or None, default=None
         Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
@@ -733,12 +742,15 @@ class AutoCalibrator(BaseCalibrator):
         "network_samples": [Interval(Integral, 10, None, closed="left"), None],
         "n_jobs": [Interval(Integral, 1, 1024, closed="both"), Interval(Integral, -1024, -1, closed="both"), None],
         "race": ["boolean"],
+        "choice_samples": [Interval(Integral, 100, None, closed="left"), None],
     }
 
     def __init__(self, *, candidates=None, cv=5, schedule="short", stack=True, baselines=True,
-                 network_samples=2000, n_jobs=-1, race=True, alpha=None, zero_reading=None, random_state=None):
+                 network_samples=2000, n_jobs=-1, race=True, choice_samples=CHOICE_SAMPLES, alpha=None,
+                 zero_reading=None, random_state=None):
         self.candidates = candidates
         self.race = race
+        self.choice_samples = choice_samples
         self.cv = cv
         self.schedule = schedule
         self.stack = stack
@@ -851,14 +863,18 @@ class AutoCalibrator(BaseCalibrator):
         logging.getLogger("ftcal").info(
             "auto: %d candidates on %d rows, scored %s (AutoCalibrator(n_jobs=...) sets it; light work stays in "
             "this process)", len(candidates), len(X), workers)
-        plan = FoldPlan.for_data(X, y, groups, cv=self.cv, seed=seed)
+        # large data: the choice on a subsample of rows, the same share of every group; the winner refitted on all
+        chosen_rows = grouped_subsample(np.arange(len(X)), groups, self.choice_samples, seed)
+        Xc, yc = X[chosen_rows], y[chosen_rows]
+        gc = None if groups is None else groups[chosen_rows]
+        plan = FoldPlan.for_data(Xc, yc, gc, cv=self.cv, seed=seed)
         self.fold_plan_ = plan
         if not plan.n_splits:  # nothing can be judged: the LTM, the simplest model, never a stack
             comparison = _unscored_ltm(plan, self.alpha_)
             candidates = [("linear", make_ltm())]
         else:
             comparison = score_candidates(
-                candidates, X, named_targets(y, axes), groups=groups, cv=self.cv, alpha=self.alpha_,
+                candidates, Xc, named_targets(yc, axes), groups=gc, cv=self.cv, alpha=self.alpha_,
                 zero_reading=given, random_state=seed, network_samples=self.network_samples, stack=self.stack,
                 n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race)
             if not any(r.eligible and r.status is RowStatus.SCORED for r in comparison.rows):
@@ -867,21 +883,25 @@ class AutoCalibrator(BaseCalibrator):
                     f"no candidate could be fitted and judged on these data ({why[:400]}); nothing was saved. "
                     "Record more rows (each axis loaded in more than one group) or lower cv.")
             comparison.choose()
-            comparison.stability = self._stability(comparison, candidates, X, y, groups, given, axes)
+            comparison.stability = self._stability(comparison, candidates, Xc, yc, gc, given, axes)
+            if len(chosen_rows) < len(X):
+                comparison.why += (f" Chosen on {len(chosen_rows)} of the {len(X)} rows (the same share of every "
+                                   "group: AutoCalibrator(choice_samples=...)), refitted on all of them.")
         templates = dict(candidates)
-        fitted = comparison.fitted
+        structures = comparison.structures
         named = named_targets(y, axes)  # the chosen model refitted on the named table, as it was scored
-        comparison.training_sha256 = training_data_sha256(X, y, groups)  # what the comparison was scored on
+        comparison.training_sha256 = training_data_sha256(Xc, yc, gc)  # what the comparison was scored on
         self.comparison_ = comparison
         self.best_name_ = comparison.chosen
         # the winner's out-of-fold predictions, for a report on the same folds
         self.held_out_predictions_ = comparison.row(self.best_name_).predictions
 
         def refit(name):
-            """A candidate on all rows (networks on their grouped subsample), as it was cross-validated."""
-            if name in fitted:  # fitted on all rows already, when it chose its structure
-                return fitted[name]
+            """A candidate on all rows (networks on their grouped subsample), as it was cross-validated (a model
+            that chose its structure on the first fold keeps that structure)."""
             model = with_alpha_and_tare(templates[name], self.alpha_, given)
+            if name in structures:
+                model.set_params(**structures[name])
             rows = grouped_subsample(np.arange(len(X)), groups, self.network_samples, seed) \
                 if _is_network(model) else np.arange(len(X))
             return _fit(model, X[rows], _rows(named, rows), None if groups is None else groups[rows])

@@ -27,7 +27,7 @@ from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_p
                          rmse_and_se, simplest_within_one_se)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
-           "choice_stability", "model_cost", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
+           "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
 
 LOGGER = logging.getLogger("ftcal")
 
@@ -220,8 +220,9 @@ class Comparison:
     plan_facts: dict = field(default_factory=dict)
     tie_mse: float | None = None
     min_training_rows: int | None = None
-    #: name -> the model fitted on all rows when it chose its structure there (reused by a refit; not saved)
-    fitted: dict = field(default_factory=dict, repr=False)
+    #: name -> the structure a model that chooses one chose on the first fold's training rows, with which its other
+    #: folds were scored (a refit on all rows keeps it; not saved)
+    structures: dict = field(default_factory=dict, repr=False)
 
     # ------------------------------------------------------------------ reading
     def row(self, name: str) -> ComparisonRow:
@@ -555,8 +556,10 @@ def _default_out_of_fold(estimator, X, y, folds, groups):
 
 
 def _score_job(estimator, X, y, folds, groups, out_of_fold, structure) -> tuple:
-    """One job: the all-rows structure fit (``structure``: for a model that chooses it), then ``folds``.
-    Returns ``(structured estimator or None, [(test, pred)], error text or None, seconds)``."""
+    """One job: ``folds`` scored with ``out_of_fold``; with ``structure`` (a model that chooses its structure), the
+    first fold's model is instead a clone of ``estimator`` that chooses it on that fold's training rows alone, and
+    the rest use that structure (a subsample of the rows, and inside the race: a model stopped after its first fold
+    has cost one fit). Returns ``(structure parameters or None, [(test, pred)], error text or None, seconds)``."""
     from sklearn.base import clone
 
     from ..core._threads import limit_threads_here
@@ -566,14 +569,19 @@ def _score_job(estimator, X, y, folds, groups, out_of_fold, structure) -> tuple:
         # BLAS on one thread, scoped to this job: the matrices are small and the jobs share the cores
         with warnings.catch_warnings(), limit_threads_here(1, openmp=True):
             warnings.simplefilter("ignore", UserWarning)
-            chosen = None
-            if structure:
+            chosen, pieces = None, []
+            if structure and folds:
                 from ._selection import routed_groups
 
-                fitted = clone(estimator).fit(X, y, **routed_groups(estimator, groups))
-                chosen = (clone(estimator).set_params(**fitted.structure_params()), fitted)
-                estimator = chosen[0]
-            pieces = out_of_fold(estimator, X, y, list(folds), groups) if folds else []
+                train, test = (np.asarray(a) for a in folds[0])
+                y_train = y.iloc[train] if hasattr(y, "iloc") else np.asarray(y)[train]
+                fitted = clone(estimator).fit(X[train], y_train,
+                                              **routed_groups(estimator, None if groups is None else groups[train]))
+                chosen = dict(fitted.structure_params())
+                pieces = [(test, fitted.predict(X[test]))]
+                estimator, folds = clone(estimator).set_params(**chosen), folds[1:]
+            if folds:
+                pieces += out_of_fold(estimator, X, y, list(folds), groups)
         return chosen, [(t, np.asarray(p, dtype=float)) for t, p, *_ in pieces], None, time.perf_counter() - t0
     except Exception as exc:  # a model that cannot fit these data is a FAILED row, not fatal
         return None, None, f"{type(exc).__name__}: {' '.join(str(exc).split())[:200]}", time.perf_counter() - t0
@@ -590,7 +598,7 @@ class _Work:
     seconds: float = 0.0
     error: str | None = None
     structured: Any = None
-    fitted_all: Any = None
+    structure: dict | None = None
     stopped: str | None = None
 
 
@@ -631,11 +639,12 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     2. The cheap models (closed forms, kernel models on at most :data:`LIGHT_KERNEL_ROWS` training rows) are
        scored on every fold, in this process.
     3. The costly ones (networks, kernel models on more rows, unknown cost) are raced (``race=True`` and a
-       cheap row scored): each is first fitted on the plan's first fold, and STOPPED when, on that fold's rows,
-       its excess mean squared error over the best cheap row exceeds :data:`RACE_SIGMAS` standard errors of that
-       excess plus one standard error of the best's error (or the tie margin, the larger): it cannot come within
-       one SE of the best. The rest are scored on every fold. ``n_jobs`` costly jobs run at once (joblib
-       processes); the figures do not depend on it.
+       cheap row scored): each is first fitted on the plan's first fold (a model that chooses its structure
+       chooses it there, on that fold's training rows, and its other folds keep it), and STOPPED when, on that
+       fold's rows, its excess mean squared error over the best cheap row exceeds :data:`RACE_SIGMAS` paired
+       standard errors of that excess plus one paired SE (or the tie margin, the larger): it cannot come within
+       one SE of the best (:func:`race_stop`). The rest are scored on every fold. ``n_jobs`` costly jobs run at
+       once (joblib processes); the figures do not depend on it.
     4. A row whose held-out predictions are degenerate (:func:`degenerate_reason`) stays SCORED but is not
        eligible (``reason`` says why); ``kinds[name] == "baseline"`` rows are never eligible.
 
@@ -741,7 +750,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
             pending.append(w)
 
     def run(batch: list[_Work], first: bool, done: Callable[[_Work], None], workers=n_jobs) -> None:
-        """``batch`` on the first fold (``first``; after the structure fit of a model that chooses one) or on the
+        """``batch`` on the first fold (``first``; a model that chooses its structure chooses it there) or on the
         other folds: a job per fold, a network's folds one job (one stacked fit); ``done(w)`` as each model's
         last job returns."""
         jobs, owner = [], []
@@ -762,7 +771,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
             w = owner[pos]
             w.seconds += seconds
             if chosen is not None:
-                w.structured, w.fitted_all = chosen
+                w.structure, w.structured = chosen, clone(w.estimator).set_params(**chosen)
             if error is not None:
                 w.error = w.error or error
             else:
@@ -801,27 +810,52 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
         run(costly, True, after_first)
     if survivors:
         run(sorted(survivors, key=lambda w: w.index), False, scored_or_failed)
-    comparison.fitted = {w.name: w.fitted_all for w in work if w.fitted_all is not None}
+    comparison.structures = {w.name: w.structure for w in work if w.structure is not None}
     return comparison
+
+
+def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float
+              ) -> tuple[bool, float, float, float]:
+    """Whether a raced candidate is stopped, from its per-row errors and the reference's on the same rows (the
+    folds both were scored on): ``(stop, excess, paired_se, threshold)``.
+
+    ``excess`` is the candidate's mean squared error minus the reference's and ``paired_se`` the standard error of
+    that **paired** difference over ``units`` (groups, or rows: :func:`mean_and_se`). Within one SE of the
+    reference means an excess of at most one paired SE (the one-SE rule's test, :func:`paired_excess`), or the
+    tie margin ``tie_mse``: ``threshold = max(paired_se, tie_mse)``. The candidate is stopped when even
+    :data:`RACE_SIGMAS` paired SE below its excess lies beyond it: ``excess - RACE_SIGMAS * paired_se >
+    threshold``. The reference's own (unpaired) SE plays no part: models that err on the same rows have a
+    difference far less noisy than either's error.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> reference = rng.exponential(1.0, 200)  # its errors spread widely over the rows
+    >>> race_stop(reference + 0.1, reference, None, 0.01)[0]  # worse on every row by 0.1 N²: stopped
+    True
+    >>> race_stop(reference + rng.normal(0.0, 1.0, 200), reference, None, 0.01)[0]  # noise: it races on
+    False
+    """
+    excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
+    threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
+    return bool(np.isfinite(se) and excess - RACE_SIGMAS * se > threshold), float(excess), float(se), threshold
 
 
 def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, axes, plan: FoldPlan,
                   n_folds: int) -> str | None:
-    """Why ``w``, scored on the plan's first fold, is stopped (None: it races on). On that fold's rows its
-    excess mean squared error over ``reference`` (the best cheap row) must exceed :data:`RACE_SIGMAS` standard
-    errors of the excess (over the fold's groups, or rows) plus the larger of one standard error of the
-    reference's mean squared error and the tie margin: then it cannot come within one SE of the best."""
+    """Why ``w``, scored on the plan's first fold, is stopped (None: it races on): :func:`race_stop` on that
+    fold's rows against ``reference`` (the best cheap row), paired over the fold's groups (a plan over groups),
+    else over its rows; the tie margin is :data:`TIE_TOLERANCE` of the reference's mean squared error there."""
     test, pred = w.pieces[0]
     errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
     units = plan.units[test] if plan.kind == "group" else None
-    excess, se = mean_and_se(errors - reference.row_errors[test], units)
-    threshold = max(mean_and_se(reference.row_errors, plan.units)[1], TIE_TOLERANCE * float(
-        np.mean(reference.row_errors)))
-    if np.isfinite(se) and excess - RACE_SIGMAS * se > threshold:
-        ratio = float(np.sqrt(np.mean(errors) / max(np.mean(reference.row_errors[test]), 1e-300)))
+    ref = reference.row_errors[test]
+    stop, excess, se, threshold = race_stop(errors, ref, units, TIE_TOLERANCE * float(np.mean(ref)))
+    if stop:
+        ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "
-                f"{excess:.3g} ± {se:.2g} N², beyond one SE of the best, {threshold:.3g} N², by "
-                f"{RACE_SIGMAS:g} SE)")
+                f"{excess:.3g} ± {se:.2g} N², paired; beyond one paired SE or the tie margin, {threshold:.3g} N², "
+                f"by {RACE_SIGMAS:g} SE)")
     return None
 
 
