@@ -633,3 +633,26 @@ def test_a_structure_fit_that_fails_is_recorded_as_failed_not_fatal():
     status = dict(zip(auto.comparison_["name"], auto.comparison_["status"]))
     assert status["failing"].startswith("failed: ValueError: no structure fits these rows")
     assert auto.best_name_ == "linear"
+
+
+class _SearchCountingGP(GaussianProcessCalibrator):
+    """The real GP; each fit that has its structure to choose (a parameter left "auto") is counted."""
+
+    searches = 0
+
+    def fit(self, X, y, **fit_params):
+        if "auto" in (self.mean, self.kernel, self.per_output, self.kernel_bounds):
+            type(self).searches += 1
+        return super().fit(X, y, **fit_params)
+
+
+def test_the_stability_repeats_keep_the_structure_a_model_chose_and_do_not_search_it_again():
+    rng = np.random.default_rng(0)  # noisy affine data: the GP within one SE of the LTM, so the repeats run
+    w = rng.uniform(-1, 1, size=(90, 6))
+    raw = w @ rng.normal(size=(6, 6)) + 0.3 + 0.3 * rng.normal(size=(90, 6))
+    _SearchCountingGP.searches = 0
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("gp", _SearchCountingGP(max_samples=200))],
+                          alpha=1.0, baselines=False, stack=False).fit(raw, w)
+    stability = auto.comparison_.stability
+    assert stability is not None and stability.repeats == 5  # the repeats ran, the GP among the compared
+    assert _SearchCountingGP.searches == 1  # its structure chosen once, on the plan's first fold
