@@ -160,6 +160,10 @@ def test_benchmark_dataset_scores_the_stock_model_with_the_baselines_asked(tmp_p
     assert main(["benchmark", "dataset", str(path), "--model", "linear", "--stock-baseline", "sk_gp",
                  "--out", str(tmp_path / "c"), "-q"]) == 2
     assert "add --model stock" in capsys.readouterr().err
+    assert main(["benchmark", "dataset", str(path), "--model", "stock", "--stock-baseline", "sk_bogus",
+                 "--out", str(tmp_path / "d"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "'sk_bogus' is no stock baseline" in err and "sk_poly2" in err and not (tmp_path / "d").exists()
 
 # ------------------------------------------------------------------ Gaussian process
 def smooth_data(n, seed):

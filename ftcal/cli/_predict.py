@@ -16,7 +16,6 @@ from ._data_options import (add_channel_option, channel_names, joined_origin, mo
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
-from ..persistence import is_model_file
 
 EXAMPLE = """\
 input: one raw reading per line (comma or space separated; an optional header
@@ -118,6 +117,8 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
             raise CliError(f"--range {path}: calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = "
                            f"{hi[k]:g}; the report is damaged. Write it again with 'ftcal report'")
     else:
+        from ..persistence import is_model_file  # here: the module loads scikit-learn (`ftcal --help` stays light)
+
         if is_model_file(file):
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")

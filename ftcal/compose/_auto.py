@@ -19,7 +19,7 @@ from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, proces
 from ._history import refuse_history_inside
 from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
                                  resolve_alpha, with_settings)
-from ..core._exceptions import CalibrationInputError
+from ..core._exceptions import CalibrationInputError, FtcalError
 from ..model_selection._comparison import (COST_TIERS, LIGHT_KERNEL_ROWS, TIER_STEP, Comparison, ComparisonRow,
                                            RowStatus, choice_stability, compare, model_cost)
 from ..model_selection._plan import FoldPlan
@@ -453,7 +453,12 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
                                      ordered=calibration_tags(estimator).reads_history)
         if not plan.n_splits:
             return
-        _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=list(plan.folds))
+        try:
+            _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=list(plan.folds))
+        except FtcalError as exc:  # the fit took every row; say why the check has fewer
+            smallest = min(len(train) for train, _ in plan.folds)
+            raise exc.located(f"the held-out check before saving (cross-validation, {plan.n_splits} folds) trains "
+                              f"on {smallest} of the {len(X)} rows: ") from exc
     check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out, axes=axes)
 
 
