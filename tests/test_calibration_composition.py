@@ -88,3 +88,26 @@ def test_a_users_regressor_inside_a_wrapper_gets_the_calibration_around_it():
     moved = raw + 0.05  # the zero moved: a re-tare at the new zero brings the training wrenches back
     model.retare(model.zero_reading_[None, :].repeat(4, axis=0) + 0.05 + 1e-4 * np.arange(4)[:, None])
     np.testing.assert_allclose(model.predict(moved), Ridge(alpha=1e-6).fit(raw, w).predict(raw), atol=1e-3 * 50)
+
+
+class _DeclaredRidge(Ridge):
+    """A user's regressor that declares what it is (ftcal tags on a scikit-learn regressor)."""
+
+    def __sklearn_tags__(self):
+        from ftcal.calibrators._base import declare
+
+        return declare(super().__sklearn_tags__(), cost="closed_form", family="linear",
+                       min_training_rows=lambda n_channels: n_channels + 2)
+
+
+def test_a_users_regressor_keeps_the_tags_it_declares_through_the_composition():
+    from ftcal.calibrators import as_calibrator
+    from ftcal.calibrators._base import calibration_tags
+
+    composed = calibration_tags(as_calibrator(_DeclaredRidge()))
+    assert (composed.cost, composed.family, composed.min_training_rows(6), composed.onnx) == \
+        ("closed_form", "linear", 8, False)
+    wrapped = calibration_tags(TemperatureCompensatedCalibrator(_DeclaredRidge()))
+    assert (wrapped.cost, wrapped.min_training_rows(7)) == ("closed_form", 8)  # 6 channels + the temperature
+    plain = calibration_tags(as_calibrator(Ridge()))  # declares nothing: a costly model of unknown kind
+    assert (plain.cost, plain.family) == ("heavy", "")

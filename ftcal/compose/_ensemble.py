@@ -21,10 +21,6 @@ from ._wrapper import CalibratorWrapper
 __all__ = ["EnsembleCalibrator", "ensemble_factory"]
 
 
-def _fit_member(estimator, X, y, fit_params):
-    return estimator.fit(X, y, **fit_params)
-
-
 class EnsembleCalibrator(CalibratorWrapper):
     """Average of ``n_members`` copies of a calibrator trained with different seeds.
 
@@ -128,7 +124,7 @@ class EnsembleCalibrator(CalibratorWrapper):
         if member.stackable and template.device == "cpu" and not routed:
             self.estimators_ = fit_stacked(members, X, y)  # one stacked module: ~1 fit's time, not n_members'
         else:
-            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y, routed) for m in members)
+            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(m.fit)(X, y, **routed) for m in members)
         return self.estimators_[0], None
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
