@@ -454,9 +454,15 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         """
         if "n_features_in_" not in self.__dict__:  # cheap test first: predict sits in control loops
             check_is_fitted(self)
+        return self._calibrated_predict(X, self._predict_wrench)
+
+    def _calibrated_predict(self, X: ArrayLike, predict_wrench: Callable) -> NDArray[np.float64]:
+        """The calibration around a model's prediction, for :meth:`predict` and any other (a stream's): readings
+        ``X`` validated and shifted back by the re-tare, ``predict_wrench`` of them checked finite, the shape of
+        the training targets restored."""
         X = self._retared(validate_readings(self, X))
         with np.errstate(over="ignore", invalid="ignore"):
-            wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)
+            wrench = np.asarray(predict_wrench(X), dtype=np.float64)
         check_finite_output(X, wrench, self)
         return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
 

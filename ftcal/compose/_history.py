@@ -28,7 +28,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..core._exceptions import NO_SETTING, CalibrationInputError, TooFewSamplesError
 from ..core._memory import check_allocation
 from ..model_selection._selection import calibration_folds, simplest_within_one_se
-from ..core._validation import check_bool, check_finite_output, validate_readings
+from ..core._validation import check_bool
 from ..core._wrench import scale_torques
 from ..calibrators._base import BaseCalibrator, GroupsFit, calibration_tags, declare
 from ..calibrators._ridge import ridge_least_squares
@@ -420,16 +420,15 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
         True
         """
         check_is_fitted(self)
-        state = [None]
+        state = [None, None]  # the moving average before the next chunk, and after the one being predicted
 
         def predict(chunk: ArrayLike) -> NDArray[np.float64]:
-            X = self._retared(validate_readings(self, chunk))
-            history = after = None
-            if self.tau_rows_ is not None:
-                history, after = _history(X, self.tau_rows_, state[0])
-            wrench = self._predict_wrench(X, history)
-            check_finite_output(X, wrench, self)
-            state[0] = after  # only a chunk that gave wrenches enters the history: a refused one leaves no trace
-            return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
+            def with_history(X: NDArray[np.float64]) -> NDArray[np.float64]:
+                history, state[1] = (None, None) if self.tau_rows_ is None else _history(X, self.tau_rows_, state[0])
+                return self._predict_wrench(X, history)
+
+            wrench = self._calibrated_predict(chunk, with_history)
+            state[0] = state[1]  # only a chunk that gave wrenches enters the history: a refused one leaves no trace
+            return wrench
 
         return predict
