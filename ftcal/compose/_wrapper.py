@@ -35,8 +35,8 @@ __all__ = ["CalibratorWrapper", "reads_history", "refuse_history_inside"]
 
 
 def reads_history(model) -> bool:
-    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`HistoryCalibrator`), as its
-    tags declare (:class:`~ftcal.calibrators._base.CalibrationTags`)."""
+    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`~ftcal.HistoryCalibrator`),
+    as its tags declare (:class:`~ftcal.calibrators._base.CalibrationTags`)."""
     return calibration_tags(model).reads_history
 
 
