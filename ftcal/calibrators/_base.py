@@ -330,18 +330,16 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         self._check_parameters()
         axes = self._remember_axes(y)
         X, y = validate_training_data(self, X, y)
-        self.alpha_ = resolve_alpha(self.alpha, y, axes)
-        if self.zero_reading is None:
-            self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_, axes)
-        else:
-            self.zero_reading_ = check_zero_reading(self.zero_reading, X.shape[1])
-        self.reading_noise_ = reading_noise(X, y)
-        self.calibrated_range_ = calibrated_range(X)
-        if self.zero_reading is not None:
-            _refuse_far_outside(self.zero_reading_[None, :], self.calibrated_range_, "zero_reading",
+        given = None if self.zero_reading is None else check_zero_reading(self.zero_reading, X.shape[1])
+        if given is not None:
+            _refuse_far_outside(given[None, :], calibrated_range(X), "zero_reading",
                                 "pass the reading taken at zero load (or None to estimate it)")
-        self.__dict__.pop("tare_reading_", None)  # a refit starts from the training tare
+        self._record_calibration(X, y, resolve_alpha(self._given_alpha(), y, axes), given, axes)
         return X, y
+
+    def _given_alpha(self) -> float | None:
+        """The torque scale the parameters give (``alpha``); None: derived from the training targets."""
+        return self.alpha
 
     def _remember_axes(self, y):
         """``axes_`` from the columns of ``y`` (a table of wrench axes), or None (the default axes of its width)."""
@@ -456,9 +454,15 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         """
         if "n_features_in_" not in self.__dict__:  # cheap test first: predict sits in control loops
             check_is_fitted(self)
+        return self._calibrated_predict(X, self._predict_wrench)
+
+    def _calibrated_predict(self, X: ArrayLike, predict_wrench: Callable) -> NDArray[np.float64]:
+        """The calibration around a model's prediction, for :meth:`predict` and any other (a stream's): readings
+        ``X`` validated and shifted back by the re-tare, ``predict_wrench`` of them checked finite, the shape of
+        the training targets restored."""
         X = self._retared(validate_readings(self, X))
         with np.errstate(over="ignore", invalid="ignore"):
-            wrench = np.asarray(self._predict_wrench(X), dtype=np.float64)
+            wrench = np.asarray(predict_wrench(X), dtype=np.float64)
         check_finite_output(X, wrench, self)
         return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
 
@@ -484,24 +488,34 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         tags.input_tags.allow_nan = False
         return tags
 
-    def _adopt_fitted(self, X: NDArray[np.float64], y: NDArray[np.float64], inner, *,
-                      zero_reading: NDArray[np.float64] | None = None) -> None:
-        """The after-fit bookkeeping of a wrapper whose ``inner`` calibrator is fitted: every wrapper calls it.
+    def _record_calibration(self, X: NDArray[np.float64], y: NDArray[np.float64], alpha: float,
+                            zero_reading: ArrayLike | None, axes=None) -> None:
+        """The one place that records the calibration around a model, for a calibrator's own fit
+        (:meth:`_prepare_fit`) and a wrapper's (:meth:`_adopt_fitted`) alike.
 
-        ``alpha_`` (and ``axes_``, when it has them) from ``inner``; ``zero_reading_`` the given one, else ``inner``'s, else estimated from ``X``,
-        ``y``; ``reading_noise_`` and ``calibrated_range_`` of the wrapper's own ``X`` (n, N) (so that
-        :meth:`out_of_range` and :meth:`retare` work on what the wrapper is given); a previous re-tare dropped.
+        ``alpha_`` the torque scale ``alpha``; ``zero_reading_`` the given one, else estimated from ``X``, ``y``
+        (:func:`~ftcal.calibrators._zero_load.estimate_zero_reading` over ``axes``); ``reading_noise_`` and
+        ``calibrated_range_`` of ``X`` (n, N) (what :meth:`retare` and :meth:`out_of_range` check readings
+        against); a previous re-tare dropped (a refit starts from the training tare). :meth:`predict` undoes the
+        re-tare (:meth:`_retared`) before the model sees a reading.
         """
-        self.alpha_ = float(inner.alpha_)
-        if getattr(inner, "axes_", None) is not None:
-            self.axes_ = inner.axes_
-        if zero_reading is None:
-            zero_reading = getattr(inner, "zero_reading_", None)
-        self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_) if zero_reading is None else \
+        self.alpha_ = float(alpha)
+        self.zero_reading_ = estimate_zero_reading(X, y, self.alpha_, axes) if zero_reading is None else \
             np.asarray(zero_reading, dtype=float)
         self.reading_noise_ = reading_noise(X, y)
         self.calibrated_range_ = calibrated_range(X)
         self.__dict__.pop("tare_reading_", None)
+
+    def _adopt_fitted(self, X: NDArray[np.float64], y: NDArray[np.float64], inner, *,
+                      zero_reading: NDArray[np.float64] | None = None) -> None:
+        """The calibration of a wrapper around its fitted ``inner`` calibrator (:meth:`_record_calibration`):
+        ``inner``'s ``alpha_`` (and ``axes_``, when it has them) and, unless ``zero_reading`` is given, its
+        ``zero_reading_``; the noise and the range of the wrapper's own ``X`` (n, N)."""
+        if getattr(inner, "axes_", None) is not None:
+            self.axes_ = inner.axes_
+        if zero_reading is None:
+            zero_reading = getattr(inner, "zero_reading_", None)
+        self._record_calibration(X, y, inner.alpha_, zero_reading)
 
 
 class GroupsFit:

@@ -35,7 +35,7 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from ._base import BaseCalibrator, declare
+from ._base import BaseCalibrator, calibration_tags, declare
 from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
 from ..core._validation import check_arguments
@@ -203,7 +203,8 @@ class StockCalibrator(BaseCalibrator):
     them without pickling scikit-learn objects, and its size is bounded by the kernel subsample.
 
     A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted and
-    predicts as is, but a model file cannot hold it (save the named baselines only).
+    predicts as is, but a model file cannot hold it (save the named baselines only). What it declares of its
+    cost, family and fewest training rows (:func:`~ftcal.calibrators._base.declare`) is the calibrator's too.
 
     Parameters
     ----------
@@ -272,15 +273,12 @@ class StockCalibrator(BaseCalibrator):
         self.random_state = random_state
 
     def _check_params(self) -> None:
-        if isinstance(self.baseline, str) and self.baseline not in _STOCK_KINDS:
-            raise CalibrationInputError(
-                f"baseline must be one of {', '.join(STOCK_BASELINE_NAMES)} or a scikit-learn regressor; got "
-                f"{self.baseline!r}.")
-        if not isinstance(self.baseline, str) and not (hasattr(self.baseline, "fit") and
-                                                         hasattr(self.baseline, "predict")):
+        baseline = self.baseline
+        if not (baseline in _STOCK_KINDS if isinstance(baseline, str) else
+                hasattr(baseline, "fit") and hasattr(baseline, "predict")):
             raise CalibrationInputError(
                 f"baseline must be one of {', '.join(STOCK_BASELINE_NAMES)} or a scikit-learn regressor (with fit "
-                f"and predict); got {self.baseline!r:.80}.")
+                f"and predict); got {baseline!r:.80}.")
 
     def family(self) -> str:
         """The ftcal family this baseline is as flexible as (``"linear"``, ``"polynomial2"``, ``"polynomial3"``,
@@ -290,8 +288,10 @@ class StockCalibrator(BaseCalibrator):
 
     def __sklearn_tags__(self):
         family = self.family()
-        if family == "custom":  # a user's regressor: no graph, no model file
-            return declare(super().__sklearn_tags__(), onnx=False)
+        if family == "custom":  # a user's regressor: no graph, no model file; its declared cost and kind
+            own = calibration_tags(self.baseline)
+            return declare(super().__sklearn_tags__(), onnx=False, cost=own.cost, family=own.family,
+                           min_training_rows=own.min_training_rows)
         return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
                        min_training_rows=lambda n_channels: _family_rows(family, n_channels))
 
@@ -413,7 +413,9 @@ class StockCalibrator(BaseCalibrator):
 def as_calibrator(estimator) -> BaseCalibrator:
     """``estimator`` itself when it is a calibrator, else a user's regressor composed into one: a
     :class:`StockCalibrator` around it, which adds what every calibrator has around its model (the torque scale
-    ``alpha_``, the zero-load reading and its re-tare, the calibrated range, the checks of ``predict``).
+    ``alpha_``, the zero-load reading and its re-tare, the calibrated range, the checks of ``predict``: the one
+    composition of :meth:`~ftcal.calibrators._base.BaseCalibrator._record_calibration`), and keeps the cost and
+    family the regressor declares in its tags.
 
     What a wrapper (:class:`~ftcal.EnsembleCalibrator`, :class:`~ftcal.TemperatureCompensatedCalibrator`) calls
     on its ``estimator``, so that any scikit-learn regressor can be a member.

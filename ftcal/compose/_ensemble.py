@@ -8,28 +8,20 @@ from collections.abc import Callable
 
 import numpy as np
 from joblib import Parallel, delayed
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 from sklearn.base import clone
 from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import HasMethods, Interval
 
-from ._history import refuse_history_inside
-from ..calibrators._base import BaseCalibrator, calibration_tags, declare
-from ..calibrators._baselines import as_calibrator
-from ._routing import routed_fit_params, wrapper_routing
+from ..calibrators._base import calibration_tags, declare
 from ..networks._directional import DirectionalCalibrator
-from ..core._exceptions import CalibrationInputError
 from ..networks._stacked import fit_stacked
-from ..core._validation import validate_training_data
+from ._wrapper import CalibratorWrapper
 
 __all__ = ["EnsembleCalibrator", "ensemble_factory"]
 
 
-def _fit_member(estimator, X, y, fit_params):
-    return estimator.fit(X, y, **fit_params)
-
-
-class EnsembleCalibrator(BaseCalibrator):
+class EnsembleCalibrator(CalibratorWrapper):
     """Average of ``n_members`` copies of a calibrator trained with different seeds.
 
     The thesis (VI-a) notes that the networks' accuracy varies a lot across
@@ -100,8 +92,7 @@ class EnsembleCalibrator(BaseCalibrator):
 
     _fitted_state = ("member_seeds_", "estimators_")
     _fitted_constraints: dict = {"member_seeds_": [Interval(Integral, 0, np.iinfo(np.int32).max, closed="both")]}
-    #: Accepts the groups of the rows and passes them on when the members request them.
-    __metadata_request__fit = {"groups": True}
+    _default = DirectionalCalibrator
     _parameter_constraints: dict = {
         "estimator": [HasMethods(["fit", "predict"]), None],
         "n_members": [Interval(Integral, 1, None, closed="left")],
@@ -115,42 +106,15 @@ class EnsembleCalibrator(BaseCalibrator):
         self.n_jobs = n_jobs
         self.random_state = random_state
 
-    def _template(self) -> BaseCalibrator:
-        # a user's regressor becomes a calibrator (tare, torque scale, range around it): as_calibrator
-        return DirectionalCalibrator() if self.estimator is None else as_calibrator(self.estimator)
-
     def __sklearn_tags__(self):
-        member = calibration_tags(self._template())
         # n_members fits: costly work for auto's scheduling whatever the member (a network's when it is one)
-        return declare(super().__sklearn_tags__(), cost="network" if member.network else "heavy",
-                       uses_groups=member.uses_groups)
+        return declare(super().__sklearn_tags__(), cost="network" if calibration_tags(self._inner()).network
+                       else "heavy")
 
-    def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to the members (see :mod:`ftcal.compose._routing`)."""
-        return wrapper_routing(self, self._template())
-
-    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, sample_weight: ArrayLike | None = None):
-        """Fit every member on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).
-
-        Parameters
-        ----------
-        groups : array-like of shape (n,) or None
-            Group of each row, passed to every member that requests them
-            (metadata routing; e.g. members that choose by cross-validation).
-        sample_weight : array-like of shape (n,) or None
-            Weight of each row, passed to every member (metadata routing); an error when the members do not
-            take weights.
-
-        Returns
-        -------
-        self
-        """
-        self._check_parameters()
+    def _fit_inner(self, X, y, template, routed):
+        """Every member fitted (stacked when they are CPU networks and no metadata is routed): the first gives the
+        torque scale and the tare, which the members share."""
         n = self.n_members
-        template = self._template()
-        X, y = validate_training_data(self, X, y)
-        refuse_history_inside(template, type(self).__name__)
-        routed = routed_fit_params(self, groups, sample_weight=sample_weight, inner=template)
         member = calibration_tags(template)
         if member.network:  # every member's training memory, before building any
             template._check_network_memory(X.shape[1], len(X), members=int(n))
@@ -160,9 +124,8 @@ class EnsembleCalibrator(BaseCalibrator):
         if member.stackable and template.device == "cpu" and not routed:
             self.estimators_ = fit_stacked(members, X, y)  # one stacked module: ~1 fit's time, not n_members'
         else:
-            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(_fit_member)(m, X, y, routed) for m in members)
-        self._adopt_fitted(X, y, self.estimators_[0])  # the members share the torque scale and the tare
-        return self
+            self.estimators_ = Parallel(n_jobs=self.n_jobs)(delayed(m.fit)(X, y, **routed) for m in members)
+        return self.estimators_[0], None
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         return np.mean([member.predict(X) for member in self.estimators_], axis=0)

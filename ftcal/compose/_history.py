@@ -28,12 +28,12 @@ from sklearn.utils.validation import check_is_fitted
 from ..core._exceptions import NO_SETTING, CalibrationInputError, TooFewSamplesError
 from ..core._memory import check_allocation
 from ..model_selection._selection import calibration_folds, simplest_within_one_se
-from ..core._validation import check_bool, check_finite_output, validate_readings
+from ..core._validation import check_bool
 from ..core._wrench import scale_torques
-from ..calibrators._base import BaseCalibrator, GroupsFit, calibration_tags, declare, with_settings
-from ..calibrators._linear import LinearCalibrator
+from ..calibrators._base import BaseCalibrator, GroupsFit, calibration_tags, declare
 from ..calibrators._ridge import ridge_least_squares
-from ._routing import requests_groups, routed_fit_params, wrapper_routing
+from ._routing import requests_groups, routed_fit_params
+from ._wrapper import CalibratorWrapper, reads_history, refuse_history_inside
 
 __all__ = ["HistoryCalibrator", "reading_history", "reads_history", "refuse_history_inside", "spread_flags"]
 
@@ -168,23 +168,6 @@ def spread_flags(flags: ArrayLike, reach: int, since: int | None = None) -> tupl
     return spread, (None if not flags.size or not np.isfinite(last[-1]) else int(flags.size - last[-1]))
 
 
-def reads_history(model) -> bool:
-    """Whether ``model`` reads its rows as a time series (a load-history model: :class:`HistoryCalibrator`), as its
-    tags declare (:class:`~ftcal.calibrators._base.CalibrationTags`)."""
-    return calibration_tags(model).reads_history
-
-
-def refuse_history_inside(estimator, owner: str) -> None:
-    """Refuse a load-history model as the inner calibrator of wrapper ``owner``: its history would restart at every
-    chunk of a stream and its rows be shuffled by the wrapper's resampling; it must be the outermost model."""
-    if reads_history(estimator):
-        fix = ("use one HistoryCalibrator: it chooses the time constant itself" if owner == "HistoryCalibrator" else
-               f"Put the history term outermost, e.g. HistoryCalibrator({owner}(...))")
-        raise CalibrationInputError(
-            f"{owner} cannot wrap {type(estimator).__name__}, a load-history model: it reads its rows as a time "
-            f"series, which {owner} does not keep. {fix}.")
-
-
 def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
     return None if groups is None else groups[index]
 
@@ -194,7 +177,7 @@ def _predicted(model: BaseCalibrator, X: NDArray[np.float64]) -> NDArray[np.floa
     return np.asarray(model.predict(X), dtype=float).reshape(len(X), -1)
 
 
-class HistoryCalibrator(GroupsFit, BaseCalibrator):
+class HistoryCalibrator(GroupsFit, CalibratorWrapper):
     """``estimator`` plus a linear map of the readings' history, its time constant chosen by cross-validation.
 
     ``fit`` takes readings **in time order**. The model is partially linear:
@@ -300,7 +283,7 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         self.random_state = random_state
 
     def __sklearn_tags__(self):
-        return declare(super().__sklearn_tags__(), reads_history=True, cost=calibration_tags(self._inner()).cost)
+        return declare(super().__sklearn_tags__(), reads_history=True)
 
     def _taus(self) -> list:
         """The time constants as a flat list (one number counts as a list of one; a table is checked and refused)."""
@@ -316,13 +299,6 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
             raise CalibrationInputError(
                 f"taus must be a non-empty flat list of at most {MAX_TAUS} time constants >= 1 [rows], e.g. (1, 2, 4, "
                 f"8, 16); got {why}: {self.taus!r:.120}.")
-
-    def _inner(self) -> BaseCalibrator:
-        return LinearCalibrator() if self.estimator is None else self.estimator
-
-    def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.compose._routing`)."""
-        return wrapper_routing(self, self._inner())
 
     def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:
         if groups is None and n < self.cv:
@@ -346,8 +322,6 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
                 settings={"HistoryCalibrator": NO_SETTING, "TemperatureCompensatedCalibrator": NO_SETTING})
         check_allocation(8.0 * X.size * (len(taus) + 1), f"the history columns of {len(taus)} time constants",
                          "try fewer taus")
-        if self.alpha is None and getattr(template, "alpha", None) is not None:
-            self.alpha_ = float(template.alpha)  # the inner calibrator's own torque scale, for every fit
         self.static_choice_ = self.static_cv_results_ = None
         if static.chooses_model:  # AutoCalibrator: choose the static model once, on all rows
             chooser = self._new(template).fit(X, y, **routed_fit_params(self, groups))
@@ -375,11 +349,10 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         kept = [] if chosen == 0 else [histories[chosen - 1]]
         self.estimator_, maps = self._partial_fit(template, X, y, kept, groups)
         self.history_estimator_, self.history_coef_, self.history_intercept_ = maps[0] if maps else (None,) * 3
-        self.zero_reading_ = self.estimator_.zero_reading_
+        self._adopt_fitted(X, y, self.estimator_)
 
     def _new(self, template: BaseCalibrator, **given) -> BaseCalibrator:
-        own = {"alpha": self.alpha_, "zero_reading": self.zero_reading, "random_state": self.random_state}
-        return with_settings(template, **{**own, **given})
+        return self._settled(template, **{"alpha": self.alpha_, **given})
 
     def _partial_fit(self, template, X, y, histories, groups):
         """Robinson's partialling out: the estimator fitted to ``y``, and for each history ``H``: ``(g, c, b)``, ``g``
@@ -447,16 +420,15 @@ class HistoryCalibrator(GroupsFit, BaseCalibrator):
         True
         """
         check_is_fitted(self)
-        state = [None]
+        state = [None, None]  # the moving average before the next chunk, and after the one being predicted
 
         def predict(chunk: ArrayLike) -> NDArray[np.float64]:
-            X = self._retared(validate_readings(self, chunk))
-            history = after = None
-            if self.tau_rows_ is not None:
-                history, after = _history(X, self.tau_rows_, state[0])
-            wrench = self._predict_wrench(X, history)
-            check_finite_output(X, wrench, self)
-            state[0] = after  # only a chunk that gave wrenches enters the history: a refused one leaves no trace
-            return wrench[:, 0] if self.__dict__.get("y_1d_") else wrench
+            def with_history(X: NDArray[np.float64]) -> NDArray[np.float64]:
+                history, state[1] = (None, None) if self.tau_rows_ is None else _history(X, self.tau_rows_, state[0])
+                return self._predict_wrench(X, history)
+
+            wrench = self._calibrated_predict(chunk, with_history)
+            state[0] = state[1]  # only a chunk that gave wrenches enters the history: a refused one leaves no trace
+            return wrench
 
         return predict

@@ -9,21 +9,17 @@ from numpy.typing import ArrayLike, NDArray
 from sklearn.utils._param_validation import HasMethods, Interval
 from sklearn.utils.validation import check_is_fitted
 
-from ..calibrators._base import BaseCalibrator, calibration_tags, declare, with_settings
-from ..calibrators._baselines import as_calibrator
-from ._routing import routed_fit_params, wrapper_routing
+from ..calibrators._base import BaseCalibrator, calibration_tags, declare
 from ..core._exceptions import CalibrationInputError
-from ._history import refuse_history_inside
-from ..calibrators._linear import LinearCalibrator
 from ..core._temperature import REFERENCE_TEMPERATURE, check_temperature
-from ..core._validation import validate_readings, validate_training_data
-from ..core._wrench import named_targets
+from ..core._validation import validate_readings
 from ..calibrators._zero_load import forward_design
+from ._wrapper import CalibratorWrapper
 
 __all__ = ["TemperatureCompensatedCalibrator"]
 
 
-class TemperatureCompensatedCalibrator(BaseCalibrator):
+class TemperatureCompensatedCalibrator(CalibratorWrapper):
     """A calibrator behind per-channel thermal offset and gain compensation (iCub-style temperature coefficients).
 
     ``X`` holds the raw channels **and, as its last column, the sensor
@@ -82,8 +78,6 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
     """
 
     _fitted_state = ("offset_per_deg_", "gain_per_deg_", "estimator_")
-    #: Accepts the groups of the rows and passes them on when the inner calibrator requests them.
-    __metadata_request__fit = {"groups": True}
     _parameter_constraints: dict = {
         **BaseCalibrator._parameter_constraints,
         "estimator": [HasMethods(["fit", "predict"]), None],
@@ -113,44 +107,16 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
         dt = (temperature - self.reference_temperature)[:, None]
         return (raw - dt * self.offset_per_deg_) / (1.0 + dt * self.gain_per_deg_)
 
-    def _inner(self) -> BaseCalibrator:
-        # a user's regressor becomes a calibrator (tare, torque scale, range around it): as_calibrator
-        return LinearCalibrator() if self.estimator is None else as_calibrator(self.estimator)
-
     def __sklearn_tags__(self):
         # its last input column is the temperature, not a channel; otherwise it is what it wraps
         inner = calibration_tags(self._inner())
-        return declare(super().__sklearn_tags__(), temperature_column=True, cost=inner.cost,
-                       uses_groups=inner.uses_groups,
+        return declare(super().__sklearn_tags__(), temperature_column=True,
                        min_training_rows=lambda n_columns: inner.min_training_rows(max(n_columns - 1, 1)))
 
-    def get_metadata_routing(self):
-        """Routing of ``fit``'s ``groups`` to ``estimator`` (see :mod:`ftcal.compose._routing`)."""
-        return wrapper_routing(self, self._inner())
-
-    def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, sample_weight: ArrayLike | None = None):
-        """Learn the thermal coefficients, then fit ``estimator`` on compensated readings.
-
-        Parameters
-        ----------
-        groups : array-like of shape (n,) or None
-            Group of each row (pose, load configuration), passed to
-            ``estimator`` when it requests them (metadata routing), so that
-            an inner model choice (``auto``, the hybrid's ridge) holds out
-            whole groups.
-        sample_weight : array-like of shape (n,) or None
-            Weight of each row, passed to ``estimator`` (metadata routing; an error when it does not take
-            weights). The thermal coefficients are fitted unweighted (a property of the sensor).
-
-        Returns
-        -------
-        self
-        """
-        self._check_parameters()
+    def _fit_inner(self, X, y, inner, routed):
+        """Learn the thermal coefficients (unweighted: a property of the sensor), then fit ``inner`` on
+        compensated readings; the tare of the wrapper's columns is the inner one at ``reference_temperature``."""
         t0 = float(self.reference_temperature)
-        axes = self._remember_axes(y)
-        X, y = validate_training_data(self, X, y)
-        refuse_history_inside(self._inner(), type(self).__name__)
         raw, temperature = self._split(X)
         dt = temperature - t0
         if np.ptp(temperature) < 1.0:
@@ -158,7 +124,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 f"the temperatures span only {np.ptp(temperature):.2g} deg C; a thermal drift can only be learned "
                 "from calibration data recorded over the temperature range of use (several deg C)."
             )
-        design = forward_design(y)  # the forward model of the zero-load estimate, with temperature terms below
+        # the forward model of the zero-load estimate, with temperature terms below
+        design = forward_design(np.asarray(y, dtype=float))
         gain = np.zeros(raw.shape[1])
         offset = np.zeros(raw.shape[1])
         for _ in range(int(self.n_iterations)):
@@ -170,13 +137,8 @@ class TemperatureCompensatedCalibrator(BaseCalibrator):
                 # ... and linear in (g, o) for fixed f
                 (gain[c], offset[c]), *_ = np.linalg.lstsq(np.column_stack([f * dt, dt]), raw[:, c] - f, rcond=None)
         self.gain_per_deg_, self.offset_per_deg_ = gain, offset
-        routed = routed_fit_params(self, groups, sample_weight=sample_weight, inner=self._inner())
-        inner = with_settings(self._inner(), alpha=self.alpha, zero_reading=self.zero_reading,
-                              random_state=self.random_state)
-        self.estimator_ = inner.fit(self._compensate(raw, temperature), named_targets(y, axes), **routed)
-        # the range and noise of what it is given: the raw channels and the temperature column
-        self._adopt_fitted(X, y, self.estimator_, zero_reading=np.append(self.estimator_.zero_reading_, t0))
-        return self
+        self.estimator_ = self._settled(inner).fit(self._compensate(raw, temperature), y, **routed)
+        return self.estimator_, np.append(self.estimator_.zero_reading_, t0)
 
     def retare(self, X_no_load: ArrayLike, *, max_spread: float = 5.0):
         """Re-zero from zero-load readings ``[raw, temperature]`` taken now: compensated first, then passed to
