@@ -344,7 +344,7 @@ def _chunk_findings(raw, lines, source: str, channels, temperature: bool, offset
 def _most_columns(source: str) -> tuple[str, int] | None:
     """The 2-D array of a ``.npz`` / ``.mat`` with the most columns as ftcal reads it (an array wider than tall is
     read transposed: :func:`ftcal.io.read_channels`), as ``(name, columns)`` (None if unreadable)."""
-    from ..io._readers import ArrayFile
+    from ..io import ArrayFile
 
     try:
         with ArrayFile(source) as archive:
