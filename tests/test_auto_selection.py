@@ -656,3 +656,17 @@ def test_the_stability_repeats_keep_the_structure_a_model_chose_and_do_not_searc
     stability = auto.comparison_.stability
     assert stability is not None and stability.repeats == 5  # the repeats ran, the GP among the compared
     assert _SearchCountingGP.searches == 1  # its structure chosen once, on the plan's first fold
+
+
+def test_on_two_groups_a_candidate_with_its_own_grouped_choice_is_scored_on_training_folds_of_one_group():
+    # each training fold holds one group: the candidate's inner choice makes row folds, where it failed with
+    # the Python-API advice "pass groups=None" printed by the command line
+    raw, w, _ = affine(n=60, seed=1)
+    groups = np.repeat([0, 1], 30)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()),
+                                      ("axis_nonlinear", ftcal.make_calibrator("axis_nonlinear"))],
+                          alpha=1.0, baselines=False, stack=False).fit(raw, w, groups=groups)
+    row = auto.comparison_.row("axis_nonlinear")
+    assert row.status.value == "scored" and row.rmse is not None and np.isfinite(row.rmse), row.reason
+    with pytest.raises(CalibrationInputError, match="one group only"):  # a user's one group is still refused
+        ftcal.make_calibrator("axis_nonlinear").fit(raw, w, groups=np.zeros(60, int))

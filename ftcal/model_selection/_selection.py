@@ -114,6 +114,8 @@ def routed_groups(estimator, groups: ArrayLike | None) -> dict:
     """The ``fit`` parameters ``estimator`` gets for these ``groups``: ``{"groups": groups}`` when its metadata
     routing requests them (its default, or ``set_fit_request``), else ``{}``; what every meta-estimator of ftcal
     passes to an inner model (scikit-learn's :func:`~sklearn.utils.metadata_routing.get_routing_for_object`).
+    One group only (a training fold that holds a single group of the caller's) routes none: the inner model's own
+    grouped choice has no groups to hold out and makes row folds, where it would refuse the single group.
 
     Examples
     --------
@@ -121,7 +123,7 @@ def routed_groups(estimator, groups: ArrayLike | None) -> dict:
     >>> routed_groups(LinearRegression(), [0, 1])
     {}
     """
-    if groups is None:
+    if groups is None or np.unique(np.asarray(groups)).size < 2:
         return {}
     from sklearn.utils.metadata_routing import get_routing_for_object
 
@@ -145,8 +147,10 @@ def fold_predictions(estimator, X: NDArray, y: NDArray, folds, *, groups: ArrayL
     """
     from sklearn.model_selection import cross_validate
 
-    params = {**routed_groups(estimator, None if groups is None else np.asarray(groups)), **(fit_params or {})}
     folds = [(np.asarray(train), np.asarray(test)) for train, test in folds]
+    if groups is not None and any(np.unique(np.asarray(groups)[train]).size < 2 for train, _ in folds):
+        groups = None  # a training fold of one group (routed_groups): every fold's inner choice makes row folds
+    params = {**routed_groups(estimator, None if groups is None else np.asarray(groups)), **(fit_params or {})}
     if max_train_rows is not None:  # the same draw for every fold (np.random.default_rng(random_state))
         folds = [(np.sort(np.random.default_rng(random_state).choice(train, size=max_train_rows, replace=False))
                   if len(train) > max_train_rows else train, test) for train, test in folds]
