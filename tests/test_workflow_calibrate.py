@@ -45,3 +45,24 @@ def test_the_gate_is_the_one_fold_plan_s():
     noise = CalibrationDataset(raw=rng.normal(size=(60, 6)), wrench=rng.normal(size=(60, 6)))
     with pytest.raises(DegenerateCalibrationError, match="no better than predicting the mean"):
         calibrate(noise, "linear")
+
+
+def test_auto_choosing_on_a_subsample_returns_a_plan_of_every_row_of_the_dataset():
+    # auto's own plan indexes its choice's subsample; the plan the workflow returns must index the dataset
+    d = data(n=300)
+    result = calibrate(d, "auto", candidates=[("linear", LinearCalibrator())], baselines=False, stack=False,
+                       choice_samples=120)
+    assert result.model.fold_plan_.n_rows == 120 and result.plan.n_rows == 300
+    assert result.plan.same_folds(FoldPlan.for_data(d.raw, d.wrench, d.group))
+    every = np.sort(np.concatenate([test for _, test in result.plan.folds]))
+    assert np.array_equal(every, np.arange(300))
+
+
+def test_a_wrapper_around_auto_says_it_chooses_its_model_as_auto_does():
+    # the held-out check before saving trusts a model that judged itself on held-out folds (auto) instead of
+    # refitting it on every fold; a wrapper around auto (history, temperature, ensemble) is such a model too
+    from ftcal import AutoCalibrator, HistoryCalibrator
+    from ftcal.calibrators import calibration_tags
+
+    assert calibration_tags(HistoryCalibrator(AutoCalibrator())).chooses_model
+    assert not calibration_tags(HistoryCalibrator(LinearCalibrator())).chooses_model

@@ -81,7 +81,10 @@ class CalibratorWrapper(BaseCalibrator):
 
     def __sklearn_tags__(self):
         inner = calibration_tags(self._inner())
-        return declare(super().__sklearn_tags__(), cost=inner.cost, uses_groups=inner.uses_groups)
+        # a model that chose itself by cross-validation (auto) inside: the wrapper is no more refitted per fold by
+        # the held-out check before saving than the model alone (which checked its held-out predictions in fit)
+        return declare(super().__sklearn_tags__(), cost=inner.cost, uses_groups=inner.uses_groups,
+                       chooses_model=inner.chooses_model)
 
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` and ``sample_weight`` to ``estimator`` (:mod:`ftcal.compose._routing`)."""

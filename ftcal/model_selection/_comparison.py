@@ -574,11 +574,13 @@ def _score_job(estimator, X, y, folds, groups, out_of_fold, structure) -> tuple:
                 from ._selection import routed_groups
 
                 train, test = (np.asarray(a) for a in folds[0])
-                y_train = y.iloc[train] if hasattr(y, "iloc") else np.asarray(y)[train]
-                fitted = clone(estimator).fit(X[train], y_train,
-                                              **routed_groups(estimator, None if groups is None else groups[train]))
+                def rows(a, index):  # a table (pandas) by position, anything else as an array
+                    return a.iloc[index] if hasattr(a, "iloc") else np.asarray(a)[index]
+
+                fitted = clone(estimator).fit(rows(X, train), rows(y, train), **routed_groups(
+                    estimator, None if groups is None else np.asarray(groups)[train]))
                 chosen = dict(fitted.structure_params())
-                pieces = [(test, fitted.predict(X[test]))]
+                pieces = [(test, fitted.predict(rows(X, test)))]
                 estimator, folds = clone(estimator).set_params(**chosen), folds[1:]
             if folds:
                 pieces += out_of_fold(estimator, X, y, list(folds), groups)

@@ -249,15 +249,18 @@ def held_out_predictions(
 def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, seed: int) -> NDArray:
     """At most ``size`` of ``rows``, the same share from every group (all rows when they fit).
 
-    Each group gets ``floor(share · its rows)``; the rows this leaves short of
-    ``size`` are drawn at random from the rest, so exactly ``size`` rows come
-    back (a group smaller than ``1 / share`` rows may get none).
+    Each group gets ``floor(share · its rows)``, and at least one row when there are no more groups than
+    ``size`` (taken from the largest quotas); the rows this leaves short of ``size`` are drawn at random from the
+    rest, so exactly ``size`` rows come back.
 
     Examples
     --------
     >>> rows = grouped_subsample(np.arange(100), np.repeat([0, 1], [80, 20]), 10, seed=0)
     >>> len(rows), int((rows >= 80).sum())
     (10, 2)
+    >>> rows = grouped_subsample(np.arange(103), np.repeat([0, 1, 2], [100, 2, 1]), 10, seed=0)
+    >>> len(rows), sorted(set(np.repeat([0, 1, 2], [100, 2, 1])[rows].tolist()))  # every group kept
+    (10, [0, 1, 2])
     """
     if size is None or rows.size <= size:
         return rows
@@ -269,6 +272,13 @@ def grouped_subsample(rows: NDArray, groups: NDArray | None, size: int | None, s
     starts = np.searchsorted(label[order], np.arange(label.max() + 1))
     counts = np.diff(np.append(starts, rows.size))
     quota = np.floor(counts * (size / rows.size)).astype(int)
+    if counts.size <= size:  # every group kept: the share of a small group rounded up to one row
+        quota[quota == 0] = 1
+        for i in np.argsort(-quota, kind="stable"):  # over by at most one row a group: from the largest quotas
+            excess = int(quota.sum()) - size
+            if excess <= 0:
+                break
+            quota[i] -= min(excess, quota[i] - 1)
     chosen = np.zeros(rows.size, dtype=bool)
     for start, count, take in zip(starts, counts, quota):  # one pass over the groups, each sliced once
         if take:

@@ -116,8 +116,9 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
     seconds = time.perf_counter() - start
     tags = calibration_tags(estimator)
     groups = fit_params.get("groups", dataset.group)
-    plan = getattr(estimator, "fold_plan_", None) or FoldPlan.for_data(
-        X, dataset.wrench, groups, cv=cv, seed=random_state, ordered=tags.reads_history)
+    plan = getattr(estimator, "fold_plan_", None)  # auto's own, unless it chose on a subsample of the rows
+    if plan is None or plan.n_rows != len(X):
+        plan = FoldPlan.for_data(X, dataset.wrench, groups, cv=cv, seed=random_state, ordered=tags.reads_history)
     if check:  # every model on its held-out predictions of the plan: a costly one is refitted per fold
         check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan)
     summary = getattr(estimator, "comparison_", None) if tags.chooses_model else None
