@@ -837,6 +837,8 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     True
     >>> race_stop(reference + rng.normal(0.0, 1.0, 200), reference, None, 0.01)[0]  # noise: it races on
     False
+    >>> race_stop(reference + 0.05, reference, None, 0.1)[0]  # worse on every row, but within the tie margin
+    False
     """
     excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
     threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
@@ -856,8 +858,8 @@ def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, 
     if stop:
         ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "
-                f"{excess:.3g} ± {se:.2g} N², paired; beyond one paired SE or the tie margin, {threshold:.3g} N², "
-                f"by {RACE_SIGMAS:g} SE)")
+                f"{excess:.3g} ± {se:.2g} N², paired: more than {RACE_SIGMAS:g} paired SE beyond the one-SE bar, "
+                f"the larger of one paired SE and the tie margin, {threshold:.3g} N²)")
     return None
 
 
