@@ -259,7 +259,7 @@ def run(args: argparse.Namespace) -> int:
     from ..model_selection import DegenerateCalibrationError
     from ..workflow import calibrate
 
-    chooses = calibration_tags(estimator).chooses_model or args.history and args.model == "auto"
+    chooses = calibration_tags(estimator).chooses_model  # auto, or a wrapper (history) around it
     # the library's workflow fits and gates (never ship a calibration no better than the mean wrench): every model
     # judged on its held-out predictions of the one fold plan, with or without --report, before any file is written
     with comparison_progress(console, args.model) if chooses else contextlib.nullcontext():
