@@ -339,3 +339,16 @@ def test_benchmark_dataset_scores_the_closed_forms_with_a_history_term(tmp_path,
         err = capsys.readouterr().err
         assert err.startswith("ftcal: error: --history") and words in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "x").exists()
+
+
+def test_fit_auto_with_a_history_term_through_the_cli_saves_and_says_the_static_choice(tmp_path, capsys):
+    # a history wrapper around auto chooses its model (its tags say so): the command must not read auto's own
+    # comparison off the wrapper (it crashed with an AttributeError)
+    rng = np.random.default_rng(0)
+    w = rng.uniform(-1, 1, (120, 6))
+    raw = w @ rng.normal(size=(6, 6)) + 0.01 * rng.normal(size=(120, 6))
+    path = ftcal.CalibrationDataset(raw=raw, wrench=w, group=np.repeat(np.arange(6), 20)).save(tmp_path / "d.csv")
+    assert main(["fit", str(path), "--model", "auto", "--history", "--out", str(tmp_path / "m"), "-q"]) == 0
+    fit = json.loads((tmp_path / "m" / "auto.fit.json").read_text())
+    assert fit["history"] is True and fit["chosen"] == "linear"  # affine data: the LTM is the static choice
+    assert (tmp_path / "m" / "auto.model.npz").is_file()

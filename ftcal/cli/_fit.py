@@ -300,7 +300,7 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"history: {kept} (cross-validated RMSE (eq. 18) without: {estimator.cv_rmse_[0]:.4g} N, with the "
                      f"best time constant: {estimator.cv_rmse_[1:].min():.4g} N, the best of {len(taus)} tried, so "
                      "slightly optimistic; --report gives a held-out figure)")
-    if calibration_tags(estimator).chooses_model:  # auto: the whole comparison it chose from
+    if getattr(estimator, "comparison_", None) is not None:  # auto itself (not a wrapper): its whole comparison
         summary["chosen"] = estimator.best_name_
         summary["cv_results"] = _json_comparison(estimator.comparison_)
         summary["fold_plan"] = estimator.comparison_.facts
