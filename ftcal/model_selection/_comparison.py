@@ -3,8 +3,8 @@
 
 ``compare`` scores the cheap models (closed forms, kernel models on few rows: their tags' ``cost``) on every
 fold first, then races the costly ones (networks, kernel models on many rows, models of unknown cost): each is
-fitted on the first fold and stopped when it cannot come within one standard error of the best, or cannot win the
-one-standard-error rule against a simpler model; the survivors are scored on every fold. ``AutoCalibrator`` is ``compare`` plus the one-standard-error rule; ``ftcal benchmark``
+fitted on the first fold and stopped when it cannot come within one standard error of the best; the survivors are
+scored on every fold. ``AutoCalibrator`` is ``compare`` plus the one-standard-error rule; ``ftcal benchmark``
 prints the same rows and words.
 """
 
@@ -646,8 +646,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
        chooses it there, on that fold's training rows, and its other folds keep it), and STOPPED when, on that
        fold's rows, its excess mean squared error over the best cheap row exceeds :data:`RACE_SIGMAS` paired
        standard errors of that excess plus one paired SE (or the tie margin, the larger): it cannot come within
-       one SE of the best (:func:`race_stop`), or when it cannot win the one-SE rule against the best cheap row
-       ranked simpler than it (:func:`race_cannot_win`). The rest are scored on every fold. ``n_jobs`` costly jobs run at
+       one SE of the best (:func:`race_stop`). The rest are scored on every fold. ``n_jobs`` costly jobs run at
        once (joblib processes); the figures do not depend on it.
     4. A row whose held-out predictions are degenerate (:func:`degenerate_reason`) stays SCORED but is not
        eligible (``reason`` says why); ``kinds[name] == "baseline"`` rows are never eligible.
