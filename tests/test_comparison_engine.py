@@ -126,40 +126,6 @@ def test_the_race_stops_by_the_paired_se_of_the_difference_not_by_the_references
     assert old_rule(candidate, reference)  # the reference's small unpaired SE would have stopped it
 
 
-def test_a_costly_model_that_cannot_beat_a_simpler_one_by_one_se_is_stopped_and_the_choice_is_the_same():
-    X, y = linear_data(300, noise=0.05)
-    models = [("ols", TaggedOLS()), ("ridge", Ridge(alpha=1e-3))]  # ridge: unknown cost, as good as OLS
-    raced = compare(models, X, y, FoldPlan.for_data(X, y), min_rows=ANY_ROWS)
-    ridge = raced.row("ridge")
-    assert ridge.status is RowStatus.STOPPED and "cannot win the one-SE rule against ols" in ridge.reason
-    full = compare(models, X, y, FoldPlan.for_data(X, y), min_rows=ANY_ROWS, race=False)
-    assert full.row("ridge").status is RowStatus.SCORED and full.paired("ridge", "ols").verdict == "equivalent"
-    assert raced.choose() == full.choose() == "ols"
-
-
-def test_a_costly_model_clearly_better_than_the_simpler_ones_races_on_and_is_chosen():
-    rng = np.random.default_rng(1)
-    X = rng.uniform(-2, 2, size=(400, 2))
-    y = np.column_stack([np.sin(2 * X[:, 0]), np.cos(2 * X[:, 1])]) + 0.02 * rng.normal(size=(400, 2))
-    models = [("ols", TaggedOLS()), ("knn", KNeighborsRegressor(n_neighbors=5))]
-    raced = compare(models, X, y, FoldPlan.for_data(X, y), min_rows=ANY_ROWS)
-    assert raced.row("knn").status is RowStatus.SCORED and raced.choose() == "knn"
-
-
-def test_the_cannot_win_bar_is_the_all_folds_se_so_a_gain_of_a_few_first_fold_se_races_on():
-    from ftcal.model_selection._comparison import race_cannot_win
-
-    rng = np.random.default_rng(2)
-    z = rng.normal(size=100)
-    noise = (z - z.mean()) / z.std(ddof=1)  # exactly unit SD: the paired SE is 0.1 (100 rows)
-    simpler = rng.exponential(1.0, 100) + 5.0
-    for gain_in_se, stopped in [(-1.0, True), (-0.6, True), (-0.4, False), (0.5, False), (3.0, False)]:
-        candidate = simpler - gain_in_se * 0.1 - noise
-        stop, gain, se, bar = race_cannot_win(candidate, simpler, None, 0.0, 0.2)
-        assert se == pytest.approx(0.1) and bar == pytest.approx(0.1 * np.sqrt(0.2))  # the all-folds SE
-        assert gain == pytest.approx(gain_in_se * 0.1) and stop is stopped
-
-
 def test_too_few_rows_skips_from_the_tags_rule_and_a_failing_model_is_a_failed_row():
     class Broken(LinearRegression):
         def fit(self, X, y):

@@ -27,8 +27,7 @@ from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_p
                          rmse_and_se, simplest_within_one_se)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
-           "choice_stability", "model_cost", "race_stop", "race_cannot_win", "LIGHT_KERNEL_ROWS", "COST_TIERS",
-           "TIER_STEP"]
+           "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
 
 LOGGER = logging.getLogger("ftcal")
 
@@ -797,18 +796,11 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     racing = race and reference is not None and len(folds) > 1
     survivors: list[_Work] = []
 
-    def simpler_rows(rank: float) -> list[ComparisonRow]:
-        """The eligible cheap rows that the one-SE rule ranks simpler than a model of complexity ``rank``."""
-        rows = (comparison.rows[w.index] for w in cheap)
-        return [r for r in rows if r.eligible and r.rmse is not None and r.complexity < rank]
-
     def after_first(w: _Work) -> None:
         if w.error:
             finish(w, RowStatus.FAILED, w.error)
             return
         w.stopped = _race_verdict(w, reference, y_arr, alpha, axes, plan, len(folds)) if racing else None
-        if racing and not w.stopped:
-            w.stopped = _cannot_win_verdict(w, simpler_rows(ranks[w.index]), y_arr, alpha, axes, plan, len(folds))
         if w.stopped:
             finish(w, RowStatus.STOPPED, w.stopped)
         elif len(folds) == 1:
@@ -851,61 +843,6 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
     threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
     return bool(np.isfinite(se) and excess - RACE_SIGMAS * se > threshold), float(excess), float(se), threshold
-
-
-def race_cannot_win(errors: NDArray, simpler_errors: NDArray, units: NDArray | None, tie_mse: float,
-                    share: float) -> tuple[bool, float, float, float]:
-    """Whether a raced candidate cannot win the one-SE rule against a model it ranks after, from the per-row
-    errors of both on its first fold: ``(stop, gain, paired_se, bar)``.
-
-    The one-SE rule chooses a model over a simpler one only when its mean squared error is lower by more than one
-    paired SE of the difference on **all** folds (or the tie margin ``tie_mse``, the larger). ``gain`` is the
-    simpler model's mean squared error minus the candidate's on the first fold and ``paired_se`` its SE there
-    (:func:`mean_and_se` over ``units``); the SE on all folds is about ``paired_se * sqrt(share)``, ``share``
-    being the first fold's part of the units (rows or groups) of all folds, so the bar it must clear is
-    ``bar = max(paired_se * sqrt(share), tie_mse)``. The candidate is stopped when even one paired SE in its
-    favour leaves its gain short of that bar, ``gain + paired_se < bar``: one SE, as the one-SE rule itself. A
-    model stopped so is at best equivalent within noise to the simpler one, which the rule would choose anyway.
-
-    Examples
-    --------
-    >>> rng = np.random.default_rng(0)
-    >>> simpler = rng.exponential(1.0, 200)
-    >>> race_cannot_win(simpler + rng.normal(0.05, 0.05, 200), simpler, None, 0.01, 0.2)[0]  # a bit worse
-    True
-    >>> race_cannot_win(simpler - 0.3, simpler, None, 0.01, 0.2)[0]  # better on every row: it races on
-    False
-    >>> race_cannot_win(simpler + rng.normal(0.0, 1.0, 200), simpler, None, 0.01, 0.2)[0]  # too noisy to say
-    False
-    """
-    gain, se = mean_and_se(np.asarray(simpler_errors, dtype=float) - np.asarray(errors, dtype=float), units)
-    if not np.isfinite(se):
-        return False, float(gain), float(se), float("inf")
-    bar = max(se * float(np.sqrt(share)), float(tie_mse))
-    return bool(gain + se < bar), float(gain), float(se), float(bar)
-
-
-def _cannot_win_verdict(w: _Work, simpler: list[ComparisonRow], y: NDArray, alpha: float, axes, plan: FoldPlan,
-                        n_folds: int) -> str | None:
-    """Why ``w``, scored on the plan's first fold, is stopped as unable to win the one-SE rule against the best
-    row ranked simpler than it (None: it races on): :func:`race_cannot_win` on that fold's rows, paired as
-    :func:`_race_verdict`; the tie margin is :data:`TIE_TOLERANCE` of the simpler row's mean squared error."""
-    if not simpler:
-        return None
-    rival = min(simpler, key=lambda r: r.rmse)
-    test, pred = w.pieces[0]
-    errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
-    grouped = plan.kind == "group" and plan.units is not None
-    units = plan.units[test] if grouped else None
-    share = (np.unique(units).size / np.unique(plan.units).size) if grouped else len(test) / plan.n_rows
-    ref = rival.row_errors[test]
-    stop, gain, se, bar = race_cannot_win(errors, ref, units, TIE_TOLERANCE * float(np.mean(ref)), share)
-    if stop:
-        ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
-        return (f"after fold 1 of {n_folds}, it cannot win the one-SE rule against {rival.name}, a simpler model: "
-                f"its RMSE there is {ratio:.2f}x, a gain in MSE of {gain:.3g} ± {se:.2g} N² (paired), short of "
-                f"the {bar:.3g} N² it must clear on all folds even one paired SE in its favour")
-    return None
 
 
 def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, axes, plan: FoldPlan,
