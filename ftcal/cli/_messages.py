@@ -176,6 +176,15 @@ def cli_error(exc: BaseException, args: argparse.Namespace | None = None, where:
     return CliError(f"{where}: {text}" if where else text)
 
 
+def _is_number(word: str) -> bool:
+    """Whether ``word`` is a number, punctuation around it aside (``25``, ``(0.5,``; not a file name ``run2.csv``)."""
+    try:
+        float(word.strip("()[]{},.;:%'\""))
+    except ValueError:
+        return False
+    return True
+
+
 @contextlib.contextmanager
 def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambda: None) -> Iterator[None]:
     """Show each warning the library gives while the command runs as one ``ftcal: warning: ...`` line on stderr (in
@@ -194,9 +203,13 @@ def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambd
     ...     warnings.warn("the drift is extrapolated  beyond the covered span", UserWarning)
     ...     for n in (25, 21, 33):
     ...         warnings.warn(f"lbfgs failed to converge after {n} iteration(s)", UserWarning)
+    ...     for name in ("run1.csv", "run2.csv"):  # other files: other warnings
+    ...         warnings.warn(f"{name} was kept as it is", UserWarning)
     >>> print(err.getvalue(), end="")
     ftcal: warning: the drift is extrapolated beyond the covered span
     ftcal: warning: lbfgs failed to converge after 25 iteration(s)
+    ftcal: warning: run1.csv was kept as it is
+    ftcal: warning: run2.csv was kept as it is
     ftcal: warning: 2 more warnings like 'lbfgs failed to converge after 25 iteration(s)' (other numbers) not shown
     """
     repeats: dict[str, list] = {}
@@ -210,8 +223,7 @@ def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambd
             else " ".join(str(message).split())
         if getattr(category, "__module__", "").startswith("sklearn"):  # whose words these are
             text = f"scikit-learn says: {text}"
-        shape = (category.__name__, " ".join("#" if any(c.isdigit() for c in word) else word
-                                               for word in text.split()))
+        shape = (category.__name__, " ".join("#" if _is_number(word) else word for word in text.split()))
         if shape in repeats:
             repeats[shape][1] += 1
             return
