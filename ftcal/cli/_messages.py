@@ -176,11 +176,24 @@ def cli_error(exc: BaseException, args: argparse.Namespace | None = None, where:
     return CliError(f"{where}: {text}" if where else text)
 
 
+def _is_number(word: str) -> bool:
+    """Whether ``word`` is a number, punctuation around it aside (``25``, ``(0.5,``; not a file name ``run2.csv``)."""
+    try:
+        float(word.strip("()[]{},.;:%'\""))
+    except ValueError:
+        return False
+    return True
+
+
 @contextlib.contextmanager
 def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambda: None) -> Iterator[None]:
     """Show each warning the library gives while the command runs as one ``ftcal: warning: ...`` line on stderr (in
     the command's terms, :func:`cli_message`; ``arguments`` gives the parsed arguments once there are some), not in
     Python's two-line format with a source file and line.
+
+    A warning that only differs from one already shown by its numbers (an optimizer's iteration count, a fold's
+    index: scikit-learn's GP warns once per fit) is counted, not repeated; when the command ends one line says how
+    many were not shown.
 
     Examples
     --------
@@ -188,15 +201,41 @@ def one_line_warnings(arguments: Callable[[], argparse.Namespace | None] = lambd
     >>> err = io.StringIO()
     >>> with contextlib.redirect_stderr(err), one_line_warnings():
     ...     warnings.warn("the drift is extrapolated  beyond the covered span", UserWarning)
-    >>> err.getvalue()
-    'ftcal: warning: the drift is extrapolated beyond the covered span\\n'
+    ...     for n in (25, 21, 33):
+    ...         warnings.warn(f"lbfgs failed to converge after {n} iteration(s)", UserWarning)
+    ...     for name in ("run1.csv", "run2.csv"):  # other files: other warnings
+    ...         warnings.warn(f"{name} was kept as it is", UserWarning)
+    >>> print(err.getvalue(), end="")
+    ftcal: warning: the drift is extrapolated beyond the covered span
+    ftcal: warning: lbfgs failed to converge after 25 iteration(s)
+    ftcal: warning: run1.csv was kept as it is
+    ftcal: warning: run2.csv was kept as it is
+    ftcal: warning: 2 more warnings like 'lbfgs failed to converge after 25 iteration(s)' (other numbers) not shown
     """
-    def show(message, category, filename, lineno, file=None, line=None) -> None:
-        text = " ".join(cli_message(message, arguments()).split()) if isinstance(message, BaseException) \
-            else " ".join(str(message).split())
+    repeats: dict[str, list] = {}
+
+    def say(text: str, file) -> None:
         with contextlib.suppress(OSError, ValueError):  # a closed stderr loses the warning, not the command
             print(f"ftcal: warning: {text}", file=sys.stderr if file is None else file)
 
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        text = " ".join(cli_message(message, arguments()).split()) if isinstance(message, BaseException) \
+            else " ".join(str(message).split())
+        if getattr(category, "__module__", "").startswith("sklearn"):  # whose words these are
+            text = f"scikit-learn says: {text}"
+        shape = (category.__name__, " ".join("#" if _is_number(word) else word for word in text.split()))
+        if shape in repeats:
+            repeats[shape][1] += 1
+            return
+        repeats[shape] = [text, 0, file]
+        say(text, file)
+
     with warnings.catch_warnings():
         warnings.showwarning = show
-        yield
+        try:
+            yield
+        finally:
+            for text, more, file in repeats.values():
+                if more:
+                    say(f"{more} more warning{'s' if more > 1 else ''} like {text!r:.160} (other numbers) not "
+                        "shown", file)
