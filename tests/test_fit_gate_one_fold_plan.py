@@ -96,30 +96,3 @@ def test_fit_judges_a_costly_model_held_out_with_or_without_the_report(memorizer
     assert errors[0].startswith("ftcal: error: ") and "held-out error" in errors[0] \
         and "no better than predicting the mean wrench" in errors[0], errors
     assert len(errors[0].splitlines()) == 1
-
-
-class CountingLinear(ftcal.LinearCalibrator):
-    """The linear calibration, counting its fits (clones share the class' counter)."""
-
-    fits = 0
-
-    def fit(self, X, y, **fit_params):
-        type(self).fits += 1
-        return super().fit(X, y, **fit_params)
-
-
-@pytest.mark.parametrize("certify", [False, True])
-def test_the_certificate_takes_the_gates_held_out_predictions_so_the_model_is_fitted_cv_plus_one_times(certify):
-    from ftcal.workflow import calibrate
-
-    calibration, _ = make_dead_weight_dataset(60, n_channels=6, random_state=1)
-    CountingLinear.fits = 0
-    result = calibrate(calibration, CountingLinear(), certify=certify, cv=5,
-                       certificate_options={"baselines": False, "figures": False})
-    assert CountingLinear.fits == 1 + result.plan.n_splits  # the fit, then one per fold: the gate's, shared
-    assert result.held_out_predictions.shape == calibration.wrench.shape
-    if certify:  # the certificate's figures are of those very predictions
-        assert result.certificate.held_out_predictions == pytest.approx(result.held_out_predictions)
-        CountingLinear.fits = 0  # a certificate on its own (no gate's predictions) refits once per fold
-        ftcal.reporting.calibration_certificate(result.model, calibration, baselines=False, figures=False)
-        assert CountingLinear.fits == result.plan.n_splits

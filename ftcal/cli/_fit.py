@@ -264,9 +264,9 @@ def run(args: argparse.Namespace) -> int:
     # judged on its held-out predictions of the one fold plan, with or without --report, before any file is written
     with comparison_progress(console, args.model) if chooses else contextlib.nullcontext():
         try:
-            result = calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
-                               fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(
-                                   est, X_, y_, console, label=args.model, **kw))
+            calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
+                      fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(est, X_, y_, console,
+                                                                                          label=args.model, **kw))
         except DegenerateCalibrationError as exc:
             raise cli_error(exc, args, str(args.dataset)) from None
     seconds = time.perf_counter() - start
@@ -313,9 +313,7 @@ def run(args: argparse.Namespace) -> int:
         summary["model_sha256"] = files.sha256(plan.path(model_file_name(name)))
         with plan.writing(f"{name}.fit.json") as tmp:
             write_json(tmp, summary)
-        if args.report:  # the certificate takes the gate's held-out predictions on the same plan: no refit per fold
-            settings = {**settings, "held_out_predictions": result.held_out_predictions,
-                        "held_out_plan": result.plan}
+        if args.report:
             write_report(plan, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], dataset_path=args.dataset,
                          dataset_sha256=dataset_sha256, console=console)

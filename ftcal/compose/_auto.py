@@ -414,7 +414,7 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = 
 
 def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,
                       random_state: int = 0, predictions: ArrayLike | None = None, held_out: bool = True,
-                      plan: FoldPlan | None = None) -> NDArray | None:
+                      plan: FoldPlan | None = None) -> None:
     """Refuse a fitted calibration that must not be saved: what ``ftcal fit`` calls before it writes a model file.
 
     Raises :class:`~ftcal.model_selection._selection.DegenerateCalibrationError` (one line, the reason) when the
@@ -427,19 +427,12 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
     readings (a network fitted without a report: a held-out check would train it ``cv`` more times); the refusal
     then says so.
 
-    Returns
-    -------
-    ndarray of shape (n, k) or None
-        The predictions judged (the held-out ones made on ``plan``, or the given ones); None for a model that chose
-        itself (its own check) or a plan without folds. A certificate on the same plan can reuse them.
-
     Examples
     --------
     >>> from ftcal import LinearCalibrator
     >>> rng = np.random.default_rng(0)
     >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
-    >>> check_calibration(LinearCalibrator().fit(raw, w), raw, w).shape  # nothing to refuse: what it judged
-    (60, 6)
+    >>> check_calibration(LinearCalibrator().fit(raw, w), raw, w)  # nothing to refuse
     """
     from ..model_selection._selection import check_not_degenerate, held_out_predictions
 
@@ -453,13 +446,13 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
                                          "was saved. Fix: check the data (a constant channel, wrong columns).")
     if predictions is None:
         if calibration_tags(estimator).chooses_model:
-            return None
+            return
         groups = check_groups(groups, len(X))
         if plan is None:
             plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=random_state,
                                      ordered=calibration_tags(estimator).reads_history)
         if not plan.n_splits:
-            return None
+            return
         try:
             _, predictions = held_out_predictions(clone(estimator), X, y, groups=groups, folds=list(plan.folds))
         except FtcalError as exc:  # the fit took every row; say why the check has fewer
@@ -467,7 +460,6 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
             raise exc.located(f"the held-out check before saving (cross-validation, {plan.n_splits} folds) trains "
                               f"on {smallest} of the {len(X)} rows: ") from exc
     check_not_degenerate(y, predictions, what=f"the {name}", alpha=alpha, held_out=held_out, axes=axes)
-    return np.asarray(predictions, dtype=float)
 
 
 class StackedCalibrator(BaseCalibrator):

@@ -469,17 +469,15 @@ def _plan_for(model: Any, X: NDArray, y: NDArray, groups, cv: int, seed: int) ->
     return plan
 
 
-def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: FoldPlan, seed: int, n_jobs,
-                 known: NDArray | None = None) -> tuple[Any, NDArray, NDArray | None]:
-    """``(the estimator refitted per fold, its out-of-fold predictions, their std or None)``: ``known`` (the save
-    gate's, on this plan) or an auto model's own predictions of its choice when its comparison is reused (refitted
-    only for a std), else a refit per fold."""
+def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: FoldPlan, seed: int, n_jobs
+                 ) -> tuple[Any, NDArray, NDArray | None]:
+    """``(the estimator refitted per fold, its out-of-fold predictions, their std or None)``: an auto model's own
+    predictions of its choice when its comparison is reused (refitted only for a std), else a refit per fold."""
     from sklearn.base import clone
 
     template = clone(model) if reused is None else clone(model.best_estimator_)
-    if known is None and reused is not None:
-        known = getattr(model, "held_out_predictions_", None)
-    if not provides_std(template) and known is not None and np.shape(known) == y.shape:
+    known = getattr(model, "held_out_predictions_", None)
+    if reused is not None and not provides_std(template) and known is not None and np.shape(known) == y.shape:
         return template, np.asarray(known, dtype=float), None
     # light work (a closed form, a kernel model on few rows) in this process, as the comparison engine scores it:
     # starting worker processes (each importing ftcal) costs more than the fits
@@ -503,8 +501,7 @@ def calibration_certificate(
     tool: Any = None, alpha: float | None = None, random_state: int = 0, figures: bool = True,
     n_jobs: int | None = None, command: str | None = None, reference_uncertainty: ArrayLike | None = None,
     reference_relative: float | None = None, temperature_coefficient: ArrayLike | None = None,
-    temperature_deviation: float | None = None, held_out_predictions: ArrayLike | None = None,
-    held_out_plan: FoldPlan | None = None,
+    temperature_deviation: float | None = None,
 ) -> CalibrationCertificate:
     """The calibration certificate of a fitted model on its data: held-out accuracy, uncertainty budget, verdict.
 
@@ -526,10 +523,6 @@ def calibration_certificate(
         Folds asked of the fold plan.
     baselines : bool
         Also score :func:`ftcal.calibrators.stock_baselines` on the same folds (:func:`ftcal.model_selection.compare`).
-    held_out_predictions, held_out_plan : ndarray of shape (n, k) and FoldPlan, optional
-        Out-of-fold predictions of ``model`` already made on ``held_out_plan`` (the save gate's:
-        :attr:`ftcal.workflow.Calibration.held_out_predictions`): used instead of refitting the model per fold when
-        that plan is the certificate's (the same fingerprint) and no predictive std is asked of the model.
     rated : array-like of shape (k,), optional
         Rated capacity per axis [N, N·m]: the full scale of every % FS figure (default the largest absolute load
         per axis). ``full_scale`` is its older name.
@@ -599,10 +592,7 @@ def calibration_certificate(
     reused = _auto_comparison(model, plan, X, y, groups)
     chosen = model.best_name_ if reused is not None else getattr(model, "baseline", None)  # a stock model's baseline
     label = f"{name}: {chosen} (this calibration)" if isinstance(chosen, str) else f"{name} (this calibration)"
-    known = None
-    if held_out_predictions is not None and held_out_plan is not None and held_out_plan.same_folds(plan):
-        known = np.asarray(held_out_predictions, dtype=float).reshape(y.shape)
-    template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs, known)
+    template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs)
     stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
     comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),
                                              stock=stock, baselines=baselines, seed=random_state, n_jobs=n_jobs))

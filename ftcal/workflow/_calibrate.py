@@ -35,9 +35,6 @@ class Calibration:
         The calibration certificate (:func:`ftcal.reporting.calibration_certificate`), with ``certify=True``.
     seconds : float
         Wall time of the fit [s].
-    held_out_predictions : ndarray of shape (n, k) or None
-        The out-of-fold predictions on ``plan`` the save gate judged (None: not checked, or a model that chose
-        itself); a certificate on the same plan reuses them instead of refitting the model per fold.
     """
 
     model: Any
@@ -45,7 +42,6 @@ class Calibration:
     plan: FoldPlan
     certificate: Any = None
     seconds: float = 0.0
-    held_out_predictions: np.ndarray | None = None
 
 
 def _inputs(estimator, dataset: CalibrationDataset) -> np.ndarray:
@@ -123,17 +119,13 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
     plan = getattr(estimator, "fold_plan_", None)  # auto's own, unless it chose on a subsample of the rows
     if plan is None or plan.n_rows != len(X):
         plan = FoldPlan.for_data(X, dataset.wrench, groups, cv=cv, seed=random_state, ordered=tags.reads_history)
-    held_out = None
     if check:  # every model on its held-out predictions of the plan: a costly one is refitted per fold
-        held_out = check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state,
-                                     plan=plan)
+        check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan)
     summary = getattr(estimator, "comparison_", None) if tags.chooses_model else None
     certificate = None
-    if certify:  # on the same plan the certificate takes the gate's held-out predictions: no second refit per fold
+    if certify:
         from ..reporting import calibration_certificate
 
         certificate = calibration_certificate(estimator, dataset, cv=cv, random_state=random_state,
-                                              held_out_predictions=held_out, held_out_plan=plan,
                                               **(certificate_options or {}))
-    return Calibration(model=estimator, summary=summary, plan=plan, certificate=certificate, seconds=seconds,
-                       held_out_predictions=held_out)
+    return Calibration(model=estimator, summary=summary, plan=plan, certificate=certificate, seconds=seconds)
