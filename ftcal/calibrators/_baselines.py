@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import Interval
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils.validation import check_is_fitted, has_fit_parameter, validate_data
 
 from ._base import BaseCalibrator, calibration_tags, declare
 from ..core._exceptions import CalibrationInputError, ModelFileError
@@ -272,6 +272,25 @@ class StockCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    #: Takes ``sample_weight`` (for a regressor of the user's, handed to its ``fit`` as calling it directly would)
+    #: and asks for it through metadata routing, so that a wrapper or ``auto`` given weights passes them on.
+    __metadata_request__fit = {"sample_weight": True}
+
+    def fit(self, X, y, sample_weight=None):
+        """Fit the baseline on raw readings ``X`` (n, N) and wrenches ``y`` (n, k).
+
+        Parameters
+        ----------
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row, given to a user's regressor's ``fit`` (one that takes ``sample_weight``); the
+            named stock baselines are fitted unweighted and refuse weights.
+
+        Returns
+        -------
+        self
+        """
+        return self._checked_fit(X, y, sample_weight=sample_weight)
+
     def _check_params(self) -> None:
         baseline = self.baseline
         if not (baseline in _STOCK_KINDS if isinstance(baseline, str) else
@@ -295,14 +314,24 @@ class StockCalibrator(BaseCalibrator):
         return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
                        min_training_rows=lambda n_channels: _family_rows(family, n_channels))
 
-    def _fit(self, X, y) -> None:
+    def _fit(self, X, y, sample_weight=None) -> None:
         for name in self._fitted_state[2:]:
             self.__dict__.pop(name, None)
         self.input_mean_, self.input_scale_ = np.zeros(X.shape[1]), np.ones(X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
         if not isinstance(self.baseline, str):
-            self.estimator_ = clone(self.baseline).fit(X, y)
+            weighted = {} if sample_weight is None else {"sample_weight": sample_weight}
+            if weighted and not has_fit_parameter(self.baseline, "sample_weight"):
+                raise CalibrationInputError(
+                    f"sample_weight was given but {type(self.baseline).__name__}.fit takes no sample_weight; use a "
+                    "regressor that weighs its rows (e.g. Ridge) or fit without sample_weight.")
+            self.estimator_ = clone(self.baseline).fit(X, y, **weighted)
             return
+        if sample_weight is not None:
+            raise CalibrationInputError(
+                f"sample_weight was given but the stock baseline {self.baseline!r} is fitted unweighted (as the "
+                "tables show it); fit it without sample_weight, or weigh the rows with LinearCalibrator, "
+                "PolynomialCalibrator or a regressor of your own (StockCalibrator(baseline=Ridge())).")
         if _STOCK_KINDS[self.baseline][1] == "kernel":  # the kernel matrix and the GP's gradient, before fitting
             m = len(X) if self.max_kernel_samples is None else min(len(X), int(self.max_kernel_samples))
             check_allocation(8.0 * m * m * (X.shape[1] + 4), f"the stock {self.baseline}'s kernel and its "
