@@ -97,6 +97,10 @@ class CalibrationTags:
         What the model is, for ``auto``'s complexity order: ``"linear"`` (the LTM and its equals),
         ``"polynomial2"``, ``"polynomial3"``, ..., ``"axis_nonlinear"``, ``"kernel"``, ``"network"``; ``""``
         unknown. A stock baseline of a family is as simple as ftcal's model of that family.
+    stock_baseline : bool
+        One of the named stock scikit-learn baselines (:func:`~ftcal.calibrators.stock_baselines`), fitted as a
+        user would: ``auto`` shows it as a free model beside its candidates. A user's own regressor (composed by
+        :func:`~ftcal.calibrators.as_calibrator`) is not one: it is a candidate like any calibrator.
     """
 
     temperature_column: bool = False
@@ -111,6 +115,7 @@ class CalibrationTags:
     onnx: bool = False
     provides_std: bool = False
     family: str = ""
+    stock_baseline: bool = False
 
 
 @dataclass

@@ -312,7 +312,7 @@ class StockCalibrator(BaseCalibrator):
             return declare(super().__sklearn_tags__(), onnx=False, cost=own.cost, family=own.family,
                            min_training_rows=own.min_training_rows)
         return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
-                       min_training_rows=lambda n_channels: _family_rows(family, n_channels))
+                       min_training_rows=lambda n_channels: _family_rows(family, n_channels), stock_baseline=True)
 
     def _fit(self, X, y, sample_weight=None) -> None:
         for name in self._fitted_state[2:]:
