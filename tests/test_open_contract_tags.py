@@ -46,3 +46,29 @@ def test_a_users_regressor_is_a_candidate_of_auto_and_a_member_of_an_ensemble():
     ensemble = EnsembleCalibrator(Ridge(alpha=1e-6), n_members=2, random_state=0).fit(raw, w)
     np.testing.assert_allclose(ensemble.predict(raw), Ridge(alpha=1e-6).fit(raw, w).predict(raw),
                                rtol=0, atol=1e-9 * np.abs(w).max())
+
+
+def test_a_users_regressor_is_fitted_on_the_torque_scaled_wrench_once():
+    from sklearn.linear_model import LinearRegression
+    from ftcal.calibrators import declare
+
+    raw, w = _data()
+    model = as_calibrator(LinearRegression()).fit(raw, w)
+    direct = LinearRegression().fit(raw, w)
+    alpha = model.alpha_
+    assert alpha != 1.0
+    scale = np.array([1, 1, 1, alpha, alpha, alpha])
+    # the regressor saw the torques times alpha_ (eq. 6): its torque rows are alpha_ times the direct fit's
+    np.testing.assert_allclose(model.estimator_.coef_, direct.coef_ * scale[:, None], rtol=1e-9)
+    # and the composition scales its predictions back: a per-axis fit predicts what it predicts unscaled
+    np.testing.assert_allclose(model.predict(raw), direct.predict(raw), rtol=1e-9, atol=1e-9 * np.abs(w).max())
+
+    class OwnScale(LinearRegression):  # declares that it handles the torque scale itself
+        def __sklearn_tags__(self):
+            return declare(super().__sklearn_tags__(), scales_torques=True)
+
+    own = as_calibrator(OwnScale()).fit(raw, w)
+    np.testing.assert_allclose(own.estimator_.coef_, direct.coef_, rtol=1e-12)
+    # ftcal's calibrators and the named stock baselines handle (or deliberately skip) the scale themselves
+    assert calibration_tags(LinearCalibrator()).scales_torques
+    assert calibration_tags(StockCalibrator(baseline="sk_linear")).scales_torques

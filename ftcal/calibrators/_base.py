@@ -97,6 +97,12 @@ class CalibrationTags:
         What the model is, for ``auto``'s complexity order: ``"linear"`` (the LTM and its equals),
         ``"polynomial2"``, ``"polynomial3"``, ..., ``"axis_nonlinear"``, ``"kernel"``, ``"network"``; ``""``
         unknown. A stock baseline of a family is as simple as ftcal's model of that family.
+    scales_torques : bool
+        The model weighs the torques by the torque scale ``alpha_`` itself (ftcal's models, in their losses or
+        per-axis fits) or must see the wrench as given (a stock baseline, fitted as a user would). A user's
+        regressor without it (:func:`~ftcal.calibrators.as_calibrator`) is fitted on the torque-scaled wrench
+        (torques times ``alpha_``, eq. 6) and its predictions are scaled back, so its loss weighs forces and
+        torques as ftcal's models do.
     stock_baseline : bool
         One of the named stock scikit-learn baselines (:func:`~ftcal.calibrators.stock_baselines`), fitted as a
         user would: ``auto`` shows it as a free model beside its candidates. A user's own regressor (composed by
@@ -115,6 +121,7 @@ class CalibrationTags:
     onnx: bool = False
     provides_std: bool = False
     family: str = ""
+    scales_torques: bool = False
     stock_baseline: bool = False
 
 
@@ -485,7 +492,8 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         # a subclass declares what it can do; the defaults describe a costly model of unknown kind. Tags are
         # inherited (each class chains super().__sklearn_tags__()): a subclass of an exportable calibrator is
         # exportable, unless it declares ``onnx=False`` (it computes something its parent's graph does not)
-        tags = declare(super().__sklearn_tags__(), onnx=callable(getattr(type(self), "_emit_onnx", None)))
+        tags = declare(super().__sklearn_tags__(), onnx=callable(getattr(type(self), "_emit_onnx", None)),
+                       scales_torques=True)  # a calibrator handles alpha_ itself (or wraps one that does)
         tags.target_tags.required = True
         tags.target_tags.multi_output = True
         tags.target_tags.single_output = False

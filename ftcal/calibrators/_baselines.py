@@ -39,6 +39,7 @@ from ._base import BaseCalibrator, calibration_tags, declare
 from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
 from ..core._validation import check_arguments
+from ..core._wrench import scale_torques, unscale_torques
 
 __all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator",
            "as_calibrator"]
@@ -202,9 +203,11 @@ class StockCalibrator(BaseCalibrator):
     memory (:data:`PREDICT_BLOCK_BYTES`), so a model file stores
     them without pickling scikit-learn objects, and its size is bounded by the kernel subsample.
 
-    A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted and
-    predicts as is, but a model file cannot hold it (save the named baselines only). What it declares of its
-    cost, family and fewest training rows (:func:`~ftcal.calibrators._base.declare`) is the calibrator's too.
+    A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted on the
+    torque-scaled wrench (torques times ``alpha_``, so its loss weighs forces and torques as ftcal's models do;
+    not when its tags declare ``scales_torques``) and its predictions are scaled back; ``sample_weight`` reaches
+    its ``fit``. A model file cannot hold it (save the named baselines only). What it declares of its cost,
+    family and fewest training rows (:func:`~ftcal.calibrators._base.declare`) is the calibrator's too.
 
     Parameters
     ----------
@@ -325,6 +328,8 @@ class StockCalibrator(BaseCalibrator):
                 raise CalibrationInputError(
                     f"sample_weight was given but {type(self.baseline).__name__}.fit takes no sample_weight; use a "
                     "regressor that weighs its rows (e.g. Ridge) or fit without sample_weight.")
+            if not calibration_tags(self.baseline).scales_torques:  # fitted on the torque-scaled wrench (eq. 6)
+                y = scale_torques(y, self.alpha_, getattr(self, "axes_", None))
             self.estimator_ = clone(self.baseline).fit(X, y, **weighted)
             return
         if sample_weight is not None:
@@ -370,7 +375,9 @@ class StockCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X):
         if self.estimator_ is not None:
-            return np.asarray(self.estimator_.predict(X), dtype=float).reshape(len(X), -1)
+            out = np.asarray(self.estimator_.predict(X), dtype=float).reshape(len(X), -1)
+            return out if calibration_tags(self.baseline).scales_torques else \
+                unscale_torques(out, self.alpha_, getattr(self, "axes_", None))
         if self.coef_ is None and self.train_inputs_ is None:
             raise CalibrationInputError(
                 "this StockCalibrator wrapped a regressor of the user's, which a model file cannot hold; refit it, "
