@@ -96,3 +96,48 @@ def test_fit_judges_a_costly_model_held_out_with_or_without_the_report(memorizer
     assert errors[0].startswith("ftcal: error: ") and "held-out error" in errors[0] \
         and "no better than predicting the mean wrench" in errors[0], errors
     assert len(errors[0].splitlines()) == 1
+
+
+_FITS = []
+
+
+def _counting_regressor():
+    from sklearn.linear_model import LinearRegression
+
+    class CountingLinearRegression(LinearRegression):
+        """A user's regressor of unknown cost that counts its fits (in this process: no worker processes)."""
+
+        def fit(self, X, y, sample_weight=None):
+            _FITS.append(len(X))
+            return super().fit(X, y, sample_weight=sample_weight)
+
+    return CountingLinearRegression()
+
+
+def test_calibrate_with_the_certificate_fits_a_costly_model_once_per_fold_plus_once():
+    """``ftcal fit --report``'s workflow: the gate judges the certificate's held-out predictions instead of
+    refitting the folds again; the verdict is the same with and without the certificate."""
+    from ftcal.calibrators import StockCalibrator
+    from ftcal.model_selection import DegenerateCalibrationError
+    from ftcal.workflow import calibrate
+
+    rng = np.random.default_rng(1)
+    wrench = rng.normal(size=(60, 6))
+    good = ftcal.CalibrationDataset(raw=wrench @ rng.normal(size=(6, 6)) + 1e-3 * rng.normal(size=(60, 6)),
+                                    wrench=wrench)
+    noise = ftcal.CalibrationDataset(raw=rng.normal(size=(60, 6)), wrench=wrench)  # nothing to learn
+    options = {"baselines": False, "figures": False}
+    for data, refused in ((good, False), (noise, True)):
+        outcomes = []
+        for certify in (False, True):
+            _FITS.clear()
+            try:
+                result = calibrate(data, StockCalibrator(baseline=_counting_regressor()), cv=4, certify=certify,
+                                   certificate_options=options)
+                outcomes.append(("saved", list(_FITS)))
+                assert (result.certificate is not None) == certify
+            except DegenerateCalibrationError as exc:
+                outcomes.append((str(exc), list(_FITS)))
+        # all 60 rows once, then once per fold of 4 (45 training rows each), with or without the certificate
+        assert outcomes[0] == outcomes[1] and outcomes[0][1] == [60, 45, 45, 45, 45], outcomes
+        assert (outcomes[0][0] != "saved") == refused and (not refused or "held-out" in outcomes[0][0]), outcomes

@@ -98,6 +98,37 @@ def test_onnx_of_a_retared_model_includes_the_new_tare(fitted_models, tmp_path):
         del model.tare_reading_
 
 
+def test_onnx_predict_and_retare_agree_on_a_retared_model_file(tmp_path, capsys):
+    """The one re-tare shift: what 'ftcal retare' reports, what 'ftcal predict' and predict subtract, and what
+    the ONNX graph subtracts."""
+    from ftcal.calibrators import retare_shift
+
+    raw, w = _sensor(200, seed=4)
+    model = LinearCalibrator(zero_reading=np.full(6, 0.3)).fit(raw, w)
+    save_model(model, tmp_path / "lin.model.npz")
+    moved = np.array([0.01, -0.02, 0.005, 0.0, 0.015, -0.01])
+    zero = 0.3 + moved + 1e-4 * np.random.default_rng(5).normal(size=(30, 6))
+    np.savetxt(tmp_path / "zero.csv", zero, delimiter=",")
+    assert main(["retare", str(tmp_path / "lin.model.npz"), str(tmp_path / "zero.csv"),
+                 "--output", str(tmp_path / "re.model.npz")]) == 0
+    reported = capsys.readouterr().err.split("moved by [")[1].split("]")[0]
+    retared = load_model(tmp_path / "re.model.npz")
+    shift = retare_shift(retared)
+    np.testing.assert_allclose(shift, zero.mean(axis=0) - 0.3, rtol=0, atol=1e-12)
+    assert reported == ", ".join(f"{v:.4g}" for v in shift)
+    new = raw[:20] + shift  # the same loads, read after the zero moved
+    np.savetxt(tmp_path / "new.csv", new, delimiter=",")
+    assert main(["predict", str(tmp_path / "re.model.npz"), str(tmp_path / "new.csv"),
+                 "--output", str(tmp_path / "w.csv")]) == 0
+    written = np.loadtxt(tmp_path / "w.csv", delimiter=",", skiprows=1)
+    onnx = _onnx_predict(export_onnx(retared, tmp_path / "re.onnx"), new)
+    before = model.predict(raw[:20])  # the model before the re-tare, on the readings before the zero moved
+    scale = np.abs(w).max(axis=0)
+    np.testing.assert_allclose(retared.predict(new), before, rtol=0, atol=1e-9 * scale.max())
+    assert np.all(np.abs(onnx - before) <= RTOL * scale)
+    assert np.all(np.abs(written - before) <= RTOL * scale)  # the CLI writes a few significant digits
+
+
 def test_onnx_of_a_temperature_compensated_model_takes_the_temperature_last(tmp_path):
     raw, w = _sensor()
     temperature = np.random.default_rng(3).uniform(15, 35, size=(len(raw), 1))

@@ -16,7 +16,7 @@ _PUBLIC = dict(
     GaussianProcessCalibrator="_gaussian_process", StockCalibrator="_baselines",
     BaseCalibrator="_base", GroupsFit="_base", CalibrationTags="_base", calibration_tags="_base", declare="_base",
     stock_baselines="_baselines", STOCK_BASELINE_NAMES="_baselines", SubsampledRegressor="_baselines",
-    as_calibrator="_baselines",
+    as_calibrator="_baselines", retare_shift="_base",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -44,7 +44,7 @@ from ..core._validation import (check_finite_output, check_quiet, check_zero_rea
 from ..core._wrench import ALPHA_RANGE_PER_M, alpha_from_wrenches, target_axes
 from ._zero_load import estimate_zero_reading, reading_noise
 
-__all__ = ["BaseCalibrator", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare",
+__all__ = ["BaseCalibrator", "retare_shift", "GroupsFit", "with_settings", "CalibrationTags", "FtcalTags", "calibration_tags", "declare",
            "check_sample_weight"]
 
 
@@ -97,6 +97,16 @@ class CalibrationTags:
         What the model is, for ``auto``'s complexity order: ``"linear"`` (the LTM and its equals),
         ``"polynomial2"``, ``"polynomial3"``, ..., ``"axis_nonlinear"``, ``"kernel"``, ``"network"``; ``""``
         unknown. A stock baseline of a family is as simple as ftcal's model of that family.
+    scales_torques : bool
+        The model weighs the torques by the torque scale ``alpha_`` itself (ftcal's models, in their losses or
+        per-axis fits) or must see the wrench as given (a stock baseline, fitted as a user would). A user's
+        regressor without it (:func:`~ftcal.calibrators.as_calibrator`) is fitted on the torque-scaled wrench
+        (torques times ``alpha_``, eq. 6) and its predictions are scaled back, so its loss weighs forces and
+        torques as ftcal's models do.
+    stock_baseline : bool
+        One of the named stock scikit-learn baselines (:func:`~ftcal.calibrators.stock_baselines`), fitted as a
+        user would: ``auto`` shows it as a free model beside its candidates. A user's own regressor (composed by
+        :func:`~ftcal.calibrators.as_calibrator`) is not one: it is a candidate like any calibrator.
     """
 
     temperature_column: bool = False
@@ -111,6 +121,8 @@ class CalibrationTags:
     onnx: bool = False
     provides_std: bool = False
     family: str = ""
+    scales_torques: bool = False
+    stock_baseline: bool = False
 
 
 @dataclass
@@ -468,8 +480,7 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
 
     def _retared(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         """``X`` shifted by the re-tare (:meth:`retare`), if any."""
-        tare = getattr(self, "tare_reading_", None)
-        return X if tare is None else X - (tare - self.zero_reading_)
+        return X if getattr(self, "tare_reading_", None) is None else X - retare_shift(self, X.shape[1])
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64]) -> None:  # pragma: no cover
         raise NotImplementedError
@@ -481,7 +492,8 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         # a subclass declares what it can do; the defaults describe a costly model of unknown kind. Tags are
         # inherited (each class chains super().__sklearn_tags__()): a subclass of an exportable calibrator is
         # exportable, unless it declares ``onnx=False`` (it computes something its parent's graph does not)
-        tags = declare(super().__sklearn_tags__(), onnx=callable(getattr(type(self), "_emit_onnx", None)))
+        tags = declare(super().__sklearn_tags__(), onnx=callable(getattr(type(self), "_emit_onnx", None)),
+                       scales_torques=True)  # a calibrator handles alpha_ itself (or wraps one that does)
         tags.target_tags.required = True
         tags.target_tags.multi_output = True
         tags.target_tags.single_output = False
@@ -553,3 +565,43 @@ class GroupsFit:
         uses, (purpose, fix) = self._uses_groups(), self._groups_purpose
         groups = check_groups(groups, n_samples, labels=uses, purpose=purpose, fix=fix)
         return {**super()._fit_metadata(n_samples, None, sample_weight), "groups": groups if uses else None}
+
+
+def retare_shift(model, n_columns: int | None = None) -> NDArray[np.float64]:
+    """How far a re-tare moved the model's zero-load reading [raw units]: ``tare_reading_ - zero_reading_``.
+
+    What :meth:`BaseCalibrator.retare` shifts every reading by before the calibration sees it (``predict``, the
+    ONNX graph), and how far the model's calibrated range moves with it. Zero without a re-tare; zero for a column
+    past the re-tared ones (a temperature column).
+
+    Parameters
+    ----------
+    model : fitted calibrator
+    n_columns : int, optional
+        Width of the result; default the model's ``n_features_in_``.
+
+    Returns
+    -------
+    ndarray of shape (n_columns,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from ftcal import LinearCalibrator
+    >>> rng = np.random.default_rng(0)
+    >>> w = rng.normal(size=(100, 6)); raw = w @ rng.normal(size=(6, 6)) + 1.0
+    >>> model = LinearCalibrator(zero_reading=np.ones(6)).fit(raw, w)
+    >>> retare_shift(model).tolist() == [0.0] * 6
+    True
+    >>> np.round(retare_shift(model.retare(np.full((5, 6), 1.001))), 6).tolist()
+    [0.001, 0.001, 0.001, 0.001, 0.001, 0.001]
+    """
+    tare, zero = getattr(model, "tare_reading_", None), getattr(model, "zero_reading_", None)
+    moved = np.zeros(0) if tare is None or zero is None else \
+        np.asarray(tare, dtype=float).ravel() - np.asarray(zero, dtype=float).ravel()
+    n_columns = int(getattr(model, "n_features_in_", moved.size)) if n_columns is None else int(n_columns)
+    if moved.size == n_columns:
+        return moved
+    shift = np.zeros(n_columns)
+    shift[:min(n_columns, moved.size)] = moved[:n_columns]
+    return shift

@@ -33,12 +33,13 @@ from typing import Any
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils._param_validation import Interval
-from sklearn.utils.validation import check_is_fitted, validate_data
+from sklearn.utils.validation import check_is_fitted, has_fit_parameter, validate_data
 
 from ._base import BaseCalibrator, calibration_tags, declare
 from ..core._exceptions import CalibrationInputError, ModelFileError
 from ..core._memory import check_allocation
 from ..core._validation import check_arguments
+from ..core._wrench import scale_torques, unscale_torques
 
 __all__ = ["STOCK_BASELINE_NAMES", "stock_baselines", "SubsampledRegressor", "KERNEL_SAMPLES", "StockCalibrator",
            "as_calibrator"]
@@ -202,9 +203,11 @@ class StockCalibrator(BaseCalibrator):
     memory (:data:`PREDICT_BLOCK_BYTES`), so a model file stores
     them without pickling scikit-learn objects, and its size is bounded by the kernel subsample.
 
-    A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted and
-    predicts as is, but a model file cannot hold it (save the named baselines only). What it declares of its
-    cost, family and fewest training rows (:func:`~ftcal.calibrators._base.declare`) is the calibrator's too.
+    A regressor of the user's (any scikit-learn regressor) may be given instead of a name: it is fitted on the
+    torque-scaled wrench (torques times ``alpha_``, so its loss weighs forces and torques as ftcal's models do;
+    not when its tags declare ``scales_torques``) and its predictions are scaled back; ``sample_weight`` reaches
+    its ``fit``. A model file cannot hold it (save the named baselines only). What it declares of its cost,
+    family and fewest training rows (:func:`~ftcal.calibrators._base.declare`) is the calibrator's too.
 
     Parameters
     ----------
@@ -272,6 +275,25 @@ class StockCalibrator(BaseCalibrator):
         self.zero_reading = zero_reading
         self.random_state = random_state
 
+    #: Takes ``sample_weight`` (for a regressor of the user's, handed to its ``fit`` as calling it directly would)
+    #: and asks for it through metadata routing, so that a wrapper or ``auto`` given weights passes them on.
+    __metadata_request__fit = {"sample_weight": True}
+
+    def fit(self, X, y, sample_weight=None):
+        """Fit the baseline on raw readings ``X`` (n, N) and wrenches ``y`` (n, k).
+
+        Parameters
+        ----------
+        sample_weight : array-like of shape (n,) or None
+            Weight of each row, given to a user's regressor's ``fit`` (one that takes ``sample_weight``); the
+            named stock baselines are fitted unweighted and refuse weights.
+
+        Returns
+        -------
+        self
+        """
+        return self._checked_fit(X, y, sample_weight=sample_weight)
+
     def _check_params(self) -> None:
         baseline = self.baseline
         if not (baseline in _STOCK_KINDS if isinstance(baseline, str) else
@@ -293,16 +315,28 @@ class StockCalibrator(BaseCalibrator):
             return declare(super().__sklearn_tags__(), onnx=False, cost=own.cost, family=own.family,
                            min_training_rows=own.min_training_rows)
         return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
-                       min_training_rows=lambda n_channels: _family_rows(family, n_channels))
+                       min_training_rows=lambda n_channels: _family_rows(family, n_channels), stock_baseline=True)
 
-    def _fit(self, X, y) -> None:
+    def _fit(self, X, y, sample_weight=None) -> None:
         for name in self._fitted_state[2:]:
             self.__dict__.pop(name, None)
         self.input_mean_, self.input_scale_ = np.zeros(X.shape[1]), np.ones(X.shape[1])
         seed = 0 if self.random_state is None else int(self.random_state)
         if not isinstance(self.baseline, str):
-            self.estimator_ = clone(self.baseline).fit(X, y)
+            weighted = {} if sample_weight is None else {"sample_weight": sample_weight}
+            if weighted and not has_fit_parameter(self.baseline, "sample_weight"):
+                raise CalibrationInputError(
+                    f"sample_weight was given but {type(self.baseline).__name__}.fit takes no sample_weight; use a "
+                    "regressor that weighs its rows (e.g. Ridge) or fit without sample_weight.")
+            if not calibration_tags(self.baseline).scales_torques:  # fitted on the torque-scaled wrench (eq. 6)
+                y = scale_torques(y, self.alpha_, getattr(self, "axes_", None))
+            self.estimator_ = clone(self.baseline).fit(X, y, **weighted)
             return
+        if sample_weight is not None:
+            raise CalibrationInputError(
+                f"sample_weight was given but the stock baseline {self.baseline!r} is fitted unweighted (as the "
+                "tables show it); fit it without sample_weight, or weigh the rows with LinearCalibrator, "
+                "PolynomialCalibrator or a regressor of your own (StockCalibrator(baseline=Ridge())).")
         if _STOCK_KINDS[self.baseline][1] == "kernel":  # the kernel matrix and the GP's gradient, before fitting
             m = len(X) if self.max_kernel_samples is None else min(len(X), int(self.max_kernel_samples))
             check_allocation(8.0 * m * m * (X.shape[1] + 4), f"the stock {self.baseline}'s kernel and its "
@@ -341,7 +375,9 @@ class StockCalibrator(BaseCalibrator):
 
     def _predict_wrench(self, X):
         if self.estimator_ is not None:
-            return np.asarray(self.estimator_.predict(X), dtype=float).reshape(len(X), -1)
+            out = np.asarray(self.estimator_.predict(X), dtype=float).reshape(len(X), -1)
+            return out if calibration_tags(self.baseline).scales_torques else \
+                unscale_torques(out, self.alpha_, getattr(self, "axes_", None))
         if self.coef_ is None and self.train_inputs_ is None:
             raise CalibrationInputError(
                 "this StockCalibrator wrapped a regressor of the user's, which a model file cannot hold; refit it, "

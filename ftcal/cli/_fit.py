@@ -196,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     name = args.name or args.model
     from ..reporting import file_sha256
-    from ._report import prepare_report, report_file_names, write_report
+    from ._report import _fold_too_small, prepare_report, report_file_names, report_options, write_report
 
     # the report files are planned without --report too: a forced refit removes an earlier fit's report with the
     # set (it would certify the replaced model, and 'predict --range' would read its range), never keeps it beside
@@ -256,6 +256,7 @@ def run(args: argparse.Namespace) -> int:
     start = time.perf_counter()
     # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
     # Tx, Ty as well as a 6-axis sensor's)
+    from ..core import TooFewSamplesError
     from ..model_selection import DegenerateCalibrationError
     from ..workflow import calibrate
 
@@ -264,11 +265,18 @@ def run(args: argparse.Namespace) -> int:
     # judged on its held-out predictions of the one fold plan, with or without --report, before any file is written
     with comparison_progress(console, args.model) if chooses else contextlib.nullcontext():
         try:
-            calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
-                      fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(est, X_, y_, console,
-                                                                                          label=args.model, **kw))
+            # with --report the certificate is made here and the gate judges its held-out predictions (one refit
+            # per fold); its model file and hash are filled in when the model is written
+            result = calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
+                               certify=bool(args.report), certificate_options=report_options(
+                                   args, settings, dataset_path=args.dataset, dataset_sha256=dataset_sha256,
+                                   console=console) if args.report else None,
+                               fit=None if chooses else lambda est, X_, y_, **kw: fit_with_progress(
+                                   est, X_, y_, console, label=args.model, **kw))
         except DegenerateCalibrationError as exc:
             raise cli_error(exc, args, str(args.dataset)) from None
+        except TooFewSamplesError as exc:
+            raise _fold_too_small(exc, data.n_samples, args.cv, args.dataset) or exc
     seconds = time.perf_counter() - start
     report = ftcal.core.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
     summary = {
@@ -314,9 +322,8 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(f"{name}.fit.json") as tmp:
             write_json(tmp, summary)
         if args.report:
-            write_report(plan, name, estimator, data, args, settings, model_path=plan.out_dir / model_file_name(name),
-                         model_sha256=summary["model_sha256"], dataset_path=args.dataset,
-                         dataset_sha256=dataset_sha256, console=console)
+            write_report(plan, name, result.certificate, model_path=plan.out_dir / model_file_name(name),
+                         model_sha256=summary["model_sha256"], console=console)
         else:
             for stale in report_file_names(name):
                 plan.leaving_out(stale)

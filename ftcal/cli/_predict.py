@@ -14,6 +14,7 @@ from ._common import CliError, Console, OutputPlan, add_run_options, existing_fi
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
                             print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
+from ..calibrators import retare_shift  # noqa: F401 (also used by 'evaluate')
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
 
@@ -158,18 +159,6 @@ def range_of_another_fit(range_file: str, model_path: str, model, limits) -> str
     return (f"--range {range_file} certifies another model file (SHA-256 {certified[:12]}...) calibrated on other "
             f"readings than {model_path}: its range is not this model's; run 'ftcal report' for this model, or "
             "drop --range to check against the model's own training readings")
-
-
-def retare_shift(model, n_columns: int) -> np.ndarray:
-    """How far the model's re-tare moved the zero-load reading (``tare_reading_ - zero_reading_``, raw units; zero
-    without a re-tare and for a temperature column): the calibrated range of a re-tared model lies that far away
-    from where it was recorded, as :meth:`~ftcal.calibrators._base.BaseCalibrator.out_of_range` counts it."""
-    shift = np.zeros(n_columns)
-    tare, zero = getattr(model, "tare_reading_", None), getattr(model, "zero_reading_", None)
-    if tare is not None and zero is not None:
-        moved = np.asarray(tare, dtype=float).ravel() - np.asarray(zero, dtype=float).ravel()
-        shift[:min(n_columns, moved.size)] = moved[:n_columns]
-    return shift
 
 
 def _range_bound(found, key: str, path: str) -> np.ndarray:

@@ -256,24 +256,21 @@ def _reference(value, option: str, axes: list[str]) -> dict:
     return {"reference_uncertainty": _axis_values(value, axes, option, percent=False, zero_ok=True)}
 
 
-def write_report(out: OutputPlan, label: str, model, data, args: argparse.Namespace, settings: dict, *, model_path,
-                 model_sha256: str, dataset_path, dataset_sha256: str | None, console: Console) -> None:
-    """Compute the report of ``model`` on ``data`` and write its three planned files with ``out`` (within its
-    :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is)."""
-    from ..reporting import calibration_certificate
+def report_options(args: argparse.Namespace, settings: dict, *, dataset_path, dataset_sha256: str | None,
+                   console: Console) -> dict:
+    """The keyword arguments of :func:`~ftcal.reporting.calibration_certificate` these options ask for (the
+    model's file and hash are filled in by :func:`write_report`); says that the cross-validation starts."""
+    console.info(f"report: cross-validating ({args.cv} folds"
+                 f"{'' if args.no_baselines else ', with the stock baselines'}) ...")
+    return dict(dataset_path=dataset_path, dataset_sha256=dataset_sha256, baselines=not args.no_baselines,
+                n_jobs=getattr(args, "jobs", None) or -1, command=" ".join(shlex.quote(a) for a in sys.argv),
+                **settings)
 
-    console.info(f"report: cross-validating {type(model).__name__}"
-                 f"{'' if args.no_baselines else ' and the stock baselines'} ({args.cv} folds) ...")
-    jobs = getattr(args, "jobs", None)
-    try:
-        cert = calibration_certificate(model, data, model_path=model_path, model_sha256=model_sha256,
-                                       dataset_path=dataset_path, dataset_sha256=dataset_sha256,
-                                       cv=args.cv, baselines=not args.no_baselines,
-                                       random_state=getattr(args, "seed", 0), n_jobs=jobs or -1,
-                                       command=" ".join(shlex.quote(a) for a in sys.argv), **settings)
-    except TooFewSamplesError as exc:
-        raise _fold_too_small(exc, data.n_samples, args.cv, dataset_path) or exc
 
+def write_report(out: OutputPlan, label: str, cert, *, model_path, model_sha256: str, console: Console) -> None:
+    """Write the three planned files of the certificate ``cert`` of the model at ``model_path`` with ``out``
+    (within its :meth:`~ftcal.cli._common.OutputPlan.as_one_set`: nothing is in place before the set is)."""
+    cert.identity["model"].update(file=Path(model_path).name, path=str(model_path), sha256=model_sha256)
     html_name, json_name, csv_name = report_file_names(label)
     for file_name, text in ((html_name, cert.to_html()), (json_name, cert.to_json()), (csv_name, cert.to_csv())):
         with out.writing(file_name) as tmp:
@@ -326,8 +323,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
               "another range); the report's held-out figures are of the model refitted on this dataset by "
               "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
+    from ..reporting import calibration_certificate
+
+    options = report_options(args, settings, dataset_path=args.dataset, dataset_sha256=dataset_sha256, console=console)
+    try:
+        cert = calibration_certificate(model, data, cv=args.cv, random_state=getattr(args, "seed", 0), **options)
+    except TooFewSamplesError as exc:
+        raise _fold_too_small(exc, data.n_samples, args.cv, args.dataset) or exc
     with plan.as_one_set():
-        write_report(plan, label, model, data, args, settings, model_path=args.model,
-                     model_sha256=bytes_sha256(model_bytes), dataset_path=args.dataset, dataset_sha256=dataset_sha256,
+        write_report(plan, label, cert, model_path=args.model, model_sha256=bytes_sha256(model_bytes),
                      console=console)
     return 0

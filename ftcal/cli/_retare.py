@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     model.retare(readings, max_spread=args.max_spread)
     with plan.writing(output.name) as tmp:
         ftcal.save_model(model, tmp, overwrite=True, data=_kept_data(args.model))
-    shift = model.tare_reading_ - model.zero_reading_
+    shift = ftcal.calibrators.retare_shift(model)
     console.info(
         f"re-tared from {len(readings)} readings: zero-load reading moved by "
         f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}"

@@ -308,14 +308,13 @@ def score_candidates(
         Rows in the candidates' order, then the stack, then the baselines; not yet chosen
         (:meth:`~ftcal.model_selection.Comparison.choose`).
     """
-    from ..calibrators._baselines import StockCalibrator
 
     seed = 0 if random_state is None else int(random_state)
     y_arr = np.asarray(y, dtype=float)
     if plan is None:
         plan = FoldPlan.for_data(X, y_arr, groups, cv=cv, seed=seed)
     models = [(name, with_alpha_and_tare(t, alpha, zero_reading)) for name, t in candidates]
-    kinds = {name: "stock" if isinstance(t, StockCalibrator) else "candidate" for name, t in candidates}
+    kinds = {name: "stock" if calibration_tags(t).stock_baseline else "candidate" for name, t in candidates}
     complexity = complexity_of(candidates, plan.n_rows)
     for name, regressor in (baselines or {}).items():
         models.append((name, regressor))

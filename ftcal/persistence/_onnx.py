@@ -30,7 +30,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
-from ..calibrators._base import calibration_tags
+from ..calibrators._base import calibration_tags, retare_shift
 from ..compose._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
 from ..core._files import atomic_output
@@ -120,9 +120,8 @@ class _Graph:
                 "else). Export one of those, or call predict from Python."
             )
         check_is_fitted(model)
-        tare = getattr(model, "tare_reading_", None)
-        if tare is not None:
-            x = self.op("Sub", x, self.const(tare - model.zero_reading_))
+        if getattr(model, "tare_reading_", None) is not None:
+            x = self.op("Sub", x, self.const(retare_shift(model)))
         return self.calibration(static, x) if static is not None else emit(model, self, x)
 
 

@@ -32,7 +32,9 @@ class Calibration:
     plan : FoldPlan
         The folds the model was judged on (the save gate; ``auto``'s own folds when it chose).
     certificate : object or None
-        The calibration certificate (:func:`ftcal.reporting.calibration_certificate`), with ``certify=True``.
+        The calibration certificate (:func:`ftcal.reporting.calibration_certificate`), with ``certify=True``; the
+        save gate then judges the certificate's held-out predictions (the model is refitted once per fold, not
+        twice).
     seconds : float
         Wall time of the fit [s].
     """
@@ -119,13 +121,15 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
     plan = getattr(estimator, "fold_plan_", None)  # auto's own, unless it chose on a subsample of the rows
     if plan is None or plan.n_rows != len(X):
         plan = FoldPlan.for_data(X, dataset.wrench, groups, cv=cv, seed=random_state, ordered=tags.reads_history)
-    if check:  # every model on its held-out predictions of the plan: a costly one is refitted per fold
-        check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan)
     summary = getattr(estimator, "comparison_", None) if tags.chooses_model else None
     certificate = None
-    if certify:
+    if certify:  # the certificate refits the model once per fold of the plan: the gate judges those predictions
         from ..reporting import calibration_certificate
 
         certificate = calibration_certificate(estimator, dataset, cv=cv, random_state=random_state,
                                               **(certificate_options or {}))
+    if check:  # every model on its held-out predictions of the plan: a costly one is refitted per fold (once)
+        held_out = None if certificate is None or tags.chooses_model else certificate.held_out_predictions
+        check_calibration(estimator, X, dataset.wrench, groups=groups, random_state=random_state, plan=plan,
+                          predictions=held_out)
     return Calibration(model=estimator, summary=summary, plan=plan, certificate=certificate, seconds=seconds)
