@@ -156,3 +156,16 @@ def test_choice_stability_counts_the_repeats_that_choose_the_same():
     models = [("ols", LinearRegression()), ("ridge", Ridge(alpha=500.0))]
     stab = choice_stability(models, X, y, FoldPlan.for_data(X, y), chosen="ols", min_rows=ANY_ROWS)
     assert (stab.count, stab.repeats) == (5, 5) and stab.words().startswith("chosen in 5 of 5 repeats")
+
+
+def test_the_race_and_the_one_se_rule_share_one_tie_margin_averaged_per_group():
+    from ftcal.model_selection._comparison import race_stop
+    from ftcal.model_selection._selection import paired_excess, tie_margin
+
+    # a reference whose rows are uneven over its groups: the per-row mean (2.0) and the per-group mean (3.0) differ
+    reference = np.array([1.0, 1.0, 1.0, 5.0])
+    units = np.array([0, 0, 0, 1])
+    _, _, tie = paired_excess(np.vstack([reference, reference + 0.025]), best=0, units=units)
+    assert tie == pytest.approx(tie_margin(reference, units)) == pytest.approx(0.03)
+    # worse by 0.025 on every row: beyond a per-row margin (0.02), within the per-group one the race is given
+    assert race_stop(reference + 0.025, reference, units, tie_margin(reference, units))[3] == pytest.approx(0.03)

@@ -24,7 +24,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._wrench import scale_torques
 from ._plan import FoldPlan
 from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
-                         rmse_and_se, simplest_within_one_se)
+                         rmse_and_se, simplest_within_one_se, tie_margin)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
            "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
@@ -849,12 +849,12 @@ def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, 
                   n_folds: int) -> str | None:
     """Why ``w``, scored on the plan's first fold, is stopped (None: it races on): :func:`race_stop` on that
     fold's rows against ``reference`` (the best cheap row), paired over the fold's groups (a plan over groups),
-    else over its rows; the tie margin is :data:`TIE_TOLERANCE` of the reference's mean squared error there."""
+    else over its rows; the tie margin is the one-SE rule's (:func:`tie_margin`) on those rows and units."""
     test, pred = w.pieces[0]
     errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
     units = plan.units[test] if plan.kind == "group" else None
     ref = reference.row_errors[test]
-    stop, excess, se, threshold = race_stop(errors, ref, units, TIE_TOLERANCE * float(np.mean(ref)))
+    stop, excess, se, threshold = race_stop(errors, ref, units, tie_margin(ref, units))
     if stop:
         ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "
