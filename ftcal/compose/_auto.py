@@ -289,7 +289,7 @@ def score_candidates(
     candidates, X: NDArray[np.float64], y, *, groups=None, cv: int = 5, alpha: float, zero_reading=None,
     random_state: int | None = 0, network_samples: int | None = 2000, baselines: dict | None = None,
     stack: bool = False, n_jobs: int | None = None, plan: FoldPlan | None = None, axes=None, race: bool = True,
-    progress=None,
+    progress=None, race_ties: bool = False,
 ) -> Comparison:
     """Score every candidate on one fold plan with :func:`~ftcal.model_selection.compare`; the engine of ``auto``
     and ``ftcal benchmark dataset``.
@@ -297,7 +297,7 @@ def score_candidates(
     Every figure is eq. 18's RMSE (over the torque-scaled values, [N]). The candidates get the shared torque
     scale and tare (:func:`with_alpha_and_tare`); a candidate needs :func:`minimum_training_rows` in its training
     folds (else SKIPPED); the costly ones are raced (``race``: STOPPED when they cannot come within one SE of
-    the best); networks' folds train as one stacked fit on at most ``network_samples`` rows each. ``baselines``
+    the best; with ``race_ties``, also when they cannot come better than it beyond one SE); networks' folds train as one stacked fit on at most ``network_samples`` rows each. ``baselines``
     (name -> regressor) are scored on the same folds, never eligible. With ``stack``, a non-negative combination
     of the best (up to :data:`STACK_SIZE`) eligible candidates is scored too, its weights cross-fitted over the
     folds (:func:`add_stack`). ``plan`` defaults to :meth:`FoldPlan.for_data` with ``cv`` and the seed.
@@ -322,7 +322,7 @@ def score_candidates(
         kinds[name] = "baseline"
         complexity.append(COST_TIERS[model_cost(regressor)] * TIER_STEP + len(complexity))
     comparison = compare(models, X, named_targets(y, axes) if not hasattr(y, "iloc") else y, plan, alpha=alpha,
-                         groups=groups, n_jobs=n_jobs, race=race, kinds=kinds, progress=progress, axes=axes,
+                         groups=groups, n_jobs=n_jobs, race=race, race_ties=race_ties, kinds=kinds, progress=progress, axes=axes,
                          complexity=complexity, out_of_fold=_auto_out_of_fold(network_samples, seed),
                          min_rows=minimum_training_rows)
     if stack:
@@ -686,7 +686,9 @@ class AutoCalibrator(BaseCalibrator):
         Most rows the comparison is made on: with more, the candidates are compared on a subsample of that many
         (the same share of every group, so that grouped folds still hold out whole groups) and the winner is
         refitted on all rows; ``comparison_``, ``fold_plan_`` and ``held_out_predictions_`` are then of the
-        subsample (``comparison_.why`` says so). ``None``: always all rows.
+        subsample (``comparison_.why`` says so), and a raced model that cannot come better than the best cheap
+        one beyond one SE on its first fold is stopped there (``race_ties`` of
+        :func:`~ftcal.model_selection.compare`: the one-SE rule would not choose it). ``None``: always all rows.
     random_state : int or None, default=None
         Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
@@ -881,7 +883,8 @@ class AutoCalibrator(BaseCalibrator):
             comparison = score_candidates(
                 candidates, Xc, named_targets(yc, axes), groups=gc, cv=self.cv, alpha=self.alpha_,
                 zero_reading=given, random_state=seed, network_samples=self.network_samples, stack=self.stack,
-                n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race)
+                n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race,
+                race_ties=len(chosen_rows) < len(X))  # large data: a costly model that cannot win is not raced on
             if not any(r.eligible and r.status is RowStatus.SCORED for r in comparison.rows):
                 why = "; ".join(f"{r.name}: {r.status_text}" for r in comparison.rows)
                 raise DegenerateCalibrationError(

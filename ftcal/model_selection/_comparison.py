@@ -626,7 +626,7 @@ def _runner(n_jobs, jobs: list):
 
 
 def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan: FoldPlan, *, alpha: float = 1.0,
-            groups: ArrayLike | None = None, n_jobs: int | None = None, race: bool = True,
+            groups: ArrayLike | None = None, n_jobs: int | None = None, race: bool = True, race_ties: bool = False,
             kinds: dict | None = None, progress: Callable[[ComparisonRow], None] | None = None, axes=None,
             complexity: Sequence[float] | None = None, out_of_fold: Callable | None = None,
             min_rows: Callable | None = None, refuse_degenerate: bool = True) -> Comparison:
@@ -663,6 +663,9 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
         Routed to the models that request them (their own inner choices).
     n_jobs : int or None
     race : bool, default=True
+    race_ties : bool, default=False
+        Also stop a raced model that cannot come better than the best cheap row beyond one SE on its first fold
+        (:func:`race_stop`'s ``ties``: ``auto`` on large data, where a costly fold is dear).
     kinds : dict name -> kind, optional
         ``"candidate"`` (default), ``"stock"``, ``"baseline"`` (reported only), ``"calibration"``.
     progress : callable, optional
@@ -800,7 +803,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
         if w.error:
             finish(w, RowStatus.FAILED, w.error)
             return
-        w.stopped = _race_verdict(w, reference, y_arr, alpha, axes, plan, len(folds)) if racing else None
+        w.stopped = _race_verdict(w, reference, y_arr, alpha, axes, plan, len(folds), race_ties) if racing else None
         if w.stopped:
             finish(w, RowStatus.STOPPED, w.stopped)
         elif len(folds) == 1:
@@ -816,8 +819,8 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     return comparison
 
 
-def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float
-              ) -> tuple[bool, float, float, float]:
+def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float, *,
+              ties: bool = False) -> tuple[bool, float, float, float]:
     """Whether a raced candidate is stopped, from its per-row errors and the reference's on the same rows (the
     folds both were scored on): ``(stop, excess, paired_se, threshold)``.
 
@@ -829,6 +832,11 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     threshold``. The reference's own (unpaired) SE plays no part: models that err on the same rows have a
     difference far less noisy than either's error.
 
+    With ``ties`` (large data, where a costly fold is dear) a candidate is also stopped when it cannot come
+    **better** than the reference by more than that bar: even :data:`RACE_SIGMAS` paired SE above its gain,
+    ``-excess + RACE_SIGMAS * paired_se <= threshold``. The reference, simpler, is then within one SE of it, so
+    the one-SE rule would not choose it (it could only join a stack).
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -839,14 +847,20 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     False
     >>> race_stop(reference + 0.05, reference, None, 0.1)[0]  # worse on every row, but within the tie margin
     False
+    >>> race_stop(reference + 0.05, reference, None, 0.1, ties=True)[0]  # ... and it cannot win: stopped
+    True
+    >>> race_stop(reference - 0.5, reference, None, 0.1, ties=True)[0]  # better on every row: it races on
+    False
     """
     excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
     threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
-    return bool(np.isfinite(se) and excess - RACE_SIGMAS * se > threshold), float(excess), float(se), threshold
+    worse = excess - RACE_SIGMAS * se > threshold
+    tied = ties and -excess + RACE_SIGMAS * se <= threshold
+    return bool(np.isfinite(se) and (worse or tied)), float(excess), float(se), threshold
 
 
 def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, axes, plan: FoldPlan,
-                  n_folds: int) -> str | None:
+                  n_folds: int, ties: bool = False) -> str | None:
     """Why ``w``, scored on the plan's first fold, is stopped (None: it races on): :func:`race_stop` on that
     fold's rows against ``reference`` (the best cheap row), paired over the fold's groups (a plan over groups),
     else over its rows; the tie margin is the one-SE rule's (:func:`tie_margin`) on those rows and units."""
@@ -854,7 +868,11 @@ def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, 
     errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
     units = plan.units[test] if plan.kind == "group" else None
     ref = reference.row_errors[test]
-    stop, excess, se, threshold = race_stop(errors, ref, units, tie_margin(ref, units))
+    stop, excess, se, threshold = race_stop(errors, ref, units, tie_margin(ref, units), ties=ties)
+    if stop and excess - RACE_SIGMAS * se <= threshold:  # stopped as a tie (``ties``): it cannot win
+        return (f"after fold 1 of {n_folds}, it cannot come better than {reference.name} beyond one SE (excess "
+                f"MSE {excess:.3g} ± {se:.2g} N², paired; the bar {threshold:.3g} N²): on large data a tie is not "
+                "raced on (the simpler model would be chosen)")
     if stop:
         ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "
