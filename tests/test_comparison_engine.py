@@ -169,3 +169,17 @@ def test_the_race_and_the_one_se_rule_share_one_tie_margin_averaged_per_group():
     assert tie == pytest.approx(tie_margin(reference, units)) == pytest.approx(0.03)
     # worse by 0.025 on every row: beyond a per-row margin (0.02), within the per-group one the race is given
     assert race_stop(reference + 0.025, reference, units, tie_margin(reference, units))[3] == pytest.approx(0.03)
+
+
+def test_on_large_data_a_raced_model_that_cannot_win_is_stopped_and_one_that_wins_races_on():
+    rng = np.random.default_rng(1)
+    X = rng.uniform(-1, 1, size=(300, 2))
+    y = np.column_stack([3 * np.sin(3 * X[:, 0]), 3 * np.cos(3 * X[:, 1])]) + 0.05 * rng.normal(size=(300, 2))
+    plan = FoldPlan.for_data(X, y)
+    # the same least squares, untagged (a costly model: raced), and a neighbours model far better on the sine
+    models = [("ols", TaggedOLS()), ("ols_again", LinearRegression()), ("knn", KNeighborsRegressor(5))]
+    tied = compare(models, X, y, plan, min_rows=ANY_ROWS, race_ties=True)
+    assert tied.row("ols_again").status is RowStatus.STOPPED and "cannot come better" in tied.row("ols_again").reason
+    assert tied.row("knn").status is RowStatus.SCORED
+    full = compare(models, X, y, plan, min_rows=ANY_ROWS)  # without: the tie races on, and the choice is the same
+    assert full.row("ols_again").status is RowStatus.SCORED and full.choose() == tied.choose() == "knn"
