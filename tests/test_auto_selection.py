@@ -651,7 +651,9 @@ def test_the_stability_repeats_keep_the_structure_a_model_chose_and_do_not_searc
     w = rng.uniform(-1, 1, size=(90, 6))
     raw = w @ rng.normal(size=(6, 6)) + 0.3 + 0.3 * rng.normal(size=(90, 6))
     _SearchCountingGP.searches = 0
-    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("gp", _SearchCountingGP(max_samples=200))],
+    # one structure choice left to the GP (its bounds: two shared fits), the rest given: each fit is one regressor
+    gp = _SearchCountingGP(mean="none", kernel="rbf+linear", per_output=False, kernel_bounds="auto", max_samples=200)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("gp", gp)],
                           alpha=1.0, baselines=False, stack=False).fit(raw, w)
     stability = auto.comparison_.stability
     assert stability is not None and stability.repeats == 5  # the repeats ran, the GP among the compared
