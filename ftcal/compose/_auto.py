@@ -975,16 +975,17 @@ class AutoCalibrator(BaseCalibrator):
         """How often the choice is made again on folds with other seeds, when that is cheap: at most
         :data:`STABILITY_ROWS` rows and every model within one SE of the best light work (a closed form, a kernel
         model on few rows, or a stack of them); the models within one SE (and the stack's members) are compared
-        again, the stack rebuilt, a model that chose its structure keeping it. None otherwise."""
+        again, the stack rebuilt, a model that chooses its structure choosing it on each repeat's own first
+        training fold (never on rows that repeat tests). None otherwise."""
         plan = self.fold_plan_
         within = [r for r in comparison.rows if r.verdict == "chosen" or r.verdict.startswith("within")]
         names = {r.name for r in within if r.kind != "stack"}
         if any(r.kind == "stack" for r in within):
             names |= set(comparison.stack_members)
-        # a model that chose its structure keeps it in the repeats (the repeats ask whether the choice among the
-        # models holds on other folds, not the model's own structure choice again, which costs a search each)
-        pairs = [(n, clone(t).set_params(**comparison.structures[n]) if n in comparison.structures else t)
-                 for n, t in candidates if n in names]
+        # a model that chooses its structure chooses it again in each repeat, on that repeat's first training fold
+        # (compare does): the structure chosen on the plan's first fold saw the rows the repeats test on, a bias
+        # toward that model; the repeats run only when every model compared is light work, so the search is cheap
+        pairs = [(n, t) for n, t in candidates if n in names]
         smallest = comparison.min_training_rows or 0
         if plan.n_rows > STABILITY_ROWS or len(within) < 2 or \
                 not all(model_cost(t, smallest) == "closed_form" for _, t in pairs):
