@@ -635,27 +635,36 @@ def test_a_structure_fit_that_fails_is_recorded_as_failed_not_fatal():
     assert auto.best_name_ == "linear"
 
 
-class _SearchCountingGP(GaussianProcessCalibrator):
-    """The real GP; each fit that has its structure to choose (a parameter left "auto") is counted."""
+class _SearchRecordingGP(GaussianProcessCalibrator):
+    """The real GP; the rows of each fit that has its structure to choose (a parameter left "auto") are kept."""
 
-    searches = 0
+    searched_on: list = []
 
     def fit(self, X, y, **fit_params):
         if "auto" in (self.mean, self.kernel, self.per_output, self.kernel_bounds):
-            type(self).searches += 1
+            type(self).searched_on.append(frozenset(np.asarray(X, dtype=float).tobytes(order="C")[i * 32:(i + 1) * 32]
+                                                    for i in range(len(X))))
         return super().fit(X, y, **fit_params)
 
 
-def test_the_stability_repeats_keep_the_structure_a_model_chose_and_do_not_search_it_again():
+def test_each_stability_repeat_chooses_the_structure_on_its_own_training_rows_never_on_its_test_rows():
     rng = np.random.default_rng(0)  # noisy affine data: the GP within one SE of the LTM, so the repeats run
-    w = rng.uniform(-1, 1, size=(90, 6))
-    raw = w @ rng.normal(size=(6, 6)) + 0.3 + 0.3 * rng.normal(size=(90, 6))
-    _SearchCountingGP.searches = 0
-    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("gp", _SearchCountingGP(max_samples=200))],
+    w = rng.uniform(-1, 1, size=(60, 4))  # 4 channels, 4 outputs: the GP needs 40 training rows
+    raw = w @ rng.normal(size=(4, 4)) + 0.3 + 0.3 * rng.normal(size=(60, 4))
+    _SearchRecordingGP.searched_on = []
+    # one structure choice left to the GP (its bounds: two shared fits on 48 rows), the rest given
+    gp = _SearchRecordingGP(mean="none", kernel="rbf+linear", per_output=False, kernel_bounds="auto", max_samples=60)
+    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator()), ("gp", gp)],
                           alpha=1.0, baselines=False, stack=False).fit(raw, w)
     stability = auto.comparison_.stability
     assert stability is not None and stability.repeats == 5  # the repeats ran, the GP among the compared
-    assert _SearchCountingGP.searches == 1  # its structure chosen once, on the plan's first fold
+    row = lambda i: raw[i].astype(float).tobytes()  # noqa: E731
+    for seed in stability.seeds:  # each repeat's structure was chosen on its own first training fold, and only there
+        plan = auto.fold_plan_ if seed == auto.fold_plan_.seed else auto.fold_plan_.with_seed(seed, raw, w, None)
+        train, test = plan.folds[0]
+        assert frozenset(row(i) for i in train) in _SearchRecordingGP.searched_on
+    # one search per repeat and no other (a structure chosen once on seed 0's first fold saw the repeats' test rows)
+    assert len(_SearchRecordingGP.searched_on) == stability.repeats
 
 
 def test_on_two_groups_a_candidate_with_its_own_grouped_choice_is_scored_on_training_folds_of_one_group():

@@ -156,3 +156,30 @@ def test_choice_stability_counts_the_repeats_that_choose_the_same():
     models = [("ols", LinearRegression()), ("ridge", Ridge(alpha=500.0))]
     stab = choice_stability(models, X, y, FoldPlan.for_data(X, y), chosen="ols", min_rows=ANY_ROWS)
     assert (stab.count, stab.repeats) == (5, 5) and stab.words().startswith("chosen in 5 of 5 repeats")
+
+
+def test_the_race_and_the_one_se_rule_share_one_tie_margin_averaged_per_group():
+    from ftcal.model_selection._comparison import race_stop
+    from ftcal.model_selection._selection import paired_excess, tie_margin
+
+    # a reference whose rows are uneven over its groups: the per-row mean (2.0) and the per-group mean (3.0) differ
+    reference = np.array([1.0, 1.0, 1.0, 5.0])
+    units = np.array([0, 0, 0, 1])
+    _, _, tie = paired_excess(np.vstack([reference, reference + 0.025]), best=0, units=units)
+    assert tie == pytest.approx(tie_margin(reference, units)) == pytest.approx(0.03)
+    # worse by 0.025 on every row: beyond a per-row margin (0.02), within the per-group one the race is given
+    assert race_stop(reference + 0.025, reference, units, tie_margin(reference, units))[3] == pytest.approx(0.03)
+
+
+def test_on_large_data_a_raced_model_that_cannot_win_is_stopped_and_one_that_wins_races_on():
+    rng = np.random.default_rng(1)
+    X = rng.uniform(-1, 1, size=(300, 2))
+    y = np.column_stack([3 * np.sin(3 * X[:, 0]), 3 * np.cos(3 * X[:, 1])]) + 0.05 * rng.normal(size=(300, 2))
+    plan = FoldPlan.for_data(X, y)
+    # the same least squares, untagged (a costly model: raced), and a neighbours model far better on the sine
+    models = [("ols", TaggedOLS()), ("ols_again", LinearRegression()), ("knn", KNeighborsRegressor(5))]
+    tied = compare(models, X, y, plan, min_rows=ANY_ROWS, race_ties=True)
+    assert tied.row("ols_again").status is RowStatus.STOPPED and "cannot come better" in tied.row("ols_again").reason
+    assert tied.row("knn").status is RowStatus.SCORED
+    full = compare(models, X, y, plan, min_rows=ANY_ROWS)  # without: the tie races on, and the choice is the same
+    assert full.row("ols_again").status is RowStatus.SCORED and full.choose() == tied.choose() == "knn"

@@ -289,7 +289,7 @@ def score_candidates(
     candidates, X: NDArray[np.float64], y, *, groups=None, cv: int = 5, alpha: float, zero_reading=None,
     random_state: int | None = 0, network_samples: int | None = 2000, baselines: dict | None = None,
     stack: bool = False, n_jobs: int | None = None, plan: FoldPlan | None = None, axes=None, race: bool = True,
-    progress=None,
+    progress=None, race_ties: bool = False,
 ) -> Comparison:
     """Score every candidate on one fold plan with :func:`~ftcal.model_selection.compare`; the engine of ``auto``
     and ``ftcal benchmark dataset``.
@@ -297,7 +297,7 @@ def score_candidates(
     Every figure is eq. 18's RMSE (over the torque-scaled values, [N]). The candidates get the shared torque
     scale and tare (:func:`with_alpha_and_tare`); a candidate needs :func:`minimum_training_rows` in its training
     folds (else SKIPPED); the costly ones are raced (``race``: STOPPED when they cannot come within one SE of
-    the best); networks' folds train as one stacked fit on at most ``network_samples`` rows each. ``baselines``
+    the best; with ``race_ties``, also when they cannot come better than it beyond one SE); networks' folds train as one stacked fit on at most ``network_samples`` rows each. ``baselines``
     (name -> regressor) are scored on the same folds, never eligible. With ``stack``, a non-negative combination
     of the best (up to :data:`STACK_SIZE`) eligible candidates is scored too, its weights cross-fitted over the
     folds (:func:`add_stack`). ``plan`` defaults to :meth:`FoldPlan.for_data` with ``cv`` and the seed.
@@ -321,7 +321,7 @@ def score_candidates(
         kinds[name] = "baseline"
         complexity.append(COST_TIERS[model_cost(regressor)] * TIER_STEP + len(complexity))
     comparison = compare(models, X, named_targets(y, axes) if not hasattr(y, "iloc") else y, plan, alpha=alpha,
-                         groups=groups, n_jobs=n_jobs, race=race, kinds=kinds, progress=progress, axes=axes,
+                         groups=groups, n_jobs=n_jobs, race=race, race_ties=race_ties, kinds=kinds, progress=progress, axes=axes,
                          complexity=complexity, out_of_fold=_auto_out_of_fold(network_samples, seed),
                          min_rows=minimum_training_rows)
     if stack:
@@ -685,7 +685,9 @@ class AutoCalibrator(BaseCalibrator):
         Most rows the comparison is made on: with more, the candidates are compared on a subsample of that many
         (the same share of every group, so that grouped folds still hold out whole groups) and the winner is
         refitted on all rows; ``comparison_``, ``fold_plan_`` and ``held_out_predictions_`` are then of the
-        subsample (``comparison_.why`` says so). ``None``: always all rows.
+        subsample (``comparison_.why`` says so), and a raced model that cannot come better than the best cheap
+        one beyond one SE on its first fold is stopped there (``race_ties`` of
+        :func:`~ftcal.model_selection.compare`: the one-SE rule would not choose it). ``None``: always all rows.
     random_state : int or None, default=None
         Seed of the folds and subsamples (``None`` = 0, so a fit is reproducible).
 
@@ -880,7 +882,8 @@ class AutoCalibrator(BaseCalibrator):
             comparison = score_candidates(
                 candidates, Xc, named_targets(yc, axes), groups=gc, cv=self.cv, alpha=self.alpha_,
                 zero_reading=given, random_state=seed, network_samples=self.network_samples, stack=self.stack,
-                n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race)
+                n_jobs=self.n_jobs, plan=plan, axes=axes, race=self.race,
+                race_ties=len(chosen_rows) < len(X))  # large data: a costly model that cannot win is not raced on
             if not any(r.eligible and r.status is RowStatus.SCORED for r in comparison.rows):
                 why = "; ".join(f"{r.name}: {r.status_text}" for r in comparison.rows)
                 raise DegenerateCalibrationError(
@@ -971,16 +974,17 @@ class AutoCalibrator(BaseCalibrator):
         """How often the choice is made again on folds with other seeds, when that is cheap: at most
         :data:`STABILITY_ROWS` rows and every model within one SE of the best light work (a closed form, a kernel
         model on few rows, or a stack of them); the models within one SE (and the stack's members) are compared
-        again, the stack rebuilt, a model that chose its structure keeping it. None otherwise."""
+        again, the stack rebuilt, a model that chooses its structure choosing it on each repeat's own first
+        training fold (never on rows that repeat tests). None otherwise."""
         plan = self.fold_plan_
         within = [r for r in comparison.rows if r.verdict == "chosen" or r.verdict.startswith("within")]
         names = {r.name for r in within if r.kind != "stack"}
         if any(r.kind == "stack" for r in within):
             names |= set(comparison.stack_members)
-        # a model that chose its structure keeps it in the repeats (the repeats ask whether the choice among the
-        # models holds on other folds, not the model's own structure choice again, which costs a search each)
-        pairs = [(n, clone(t).set_params(**comparison.structures[n]) if n in comparison.structures else t)
-                 for n, t in candidates if n in names]
+        # a model that chooses its structure chooses it again in each repeat, on that repeat's first training fold
+        # (compare does): the structure chosen on the plan's first fold saw the rows the repeats test on, a bias
+        # toward that model; the repeats run only when every model compared is light work, so the search is cheap
+        pairs = [(n, t) for n, t in candidates if n in names]
         smallest = comparison.min_training_rows or 0
         if plan.n_rows > STABILITY_ROWS or len(within) < 2 or \
                 not all(model_cost(t, smallest) == "closed_form" for _, t in pairs):

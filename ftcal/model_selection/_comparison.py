@@ -24,7 +24,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._wrench import scale_torques
 from ._plan import FoldPlan
 from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
-                         rmse_and_se, simplest_within_one_se)
+                         rmse_and_se, simplest_within_one_se, tie_margin)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
            "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
@@ -626,7 +626,7 @@ def _runner(n_jobs, jobs: list):
 
 
 def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan: FoldPlan, *, alpha: float = 1.0,
-            groups: ArrayLike | None = None, n_jobs: int | None = None, race: bool = True,
+            groups: ArrayLike | None = None, n_jobs: int | None = None, race: bool = True, race_ties: bool = False,
             kinds: dict | None = None, progress: Callable[[ComparisonRow], None] | None = None, axes=None,
             complexity: Sequence[float] | None = None, out_of_fold: Callable | None = None,
             min_rows: Callable | None = None, refuse_degenerate: bool = True) -> Comparison:
@@ -663,6 +663,9 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
         Routed to the models that request them (their own inner choices).
     n_jobs : int or None
     race : bool, default=True
+    race_ties : bool, default=False
+        Also stop a raced model that cannot come better than the best cheap row beyond one SE on its first fold
+        (:func:`race_stop`'s ``ties``: ``auto`` on large data, where a costly fold is dear).
     kinds : dict name -> kind, optional
         ``"candidate"`` (default), ``"stock"``, ``"baseline"`` (reported only), ``"calibration"``.
     progress : callable, optional
@@ -694,12 +697,36 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     >>> c.choose(), [r.status.name for r in c.rows]
     ('ols', ['SCORED', 'SCORED'])
     """
-    from sklearn.base import clone
-
     X = np.asarray(X, dtype=float)
-    y_fit = y
+    _check_models(models, X, plan)
     y_arr = np.asarray(y, dtype=float).reshape(len(X), -1)
-    groups = None if groups is None else np.asarray(groups)
+    folds = list(plan.folds)
+    smallest = min(len(np.unique(np.column_stack([X[tr], y_arr[tr]]), axis=0)) for tr, _ in folds) if folds else 0
+    kinds = dict(kinds or {})
+    work = [_Work(i, name, est, kinds.get(name, "candidate"), model_cost(est, smallest))
+            for i, (name, est) in enumerate(models)]
+    ranks = list(complexity) if complexity is not None else \
+        [COST_TIERS[w.cost if w.cost in COST_TIERS else "heavy"] * TIER_STEP + w.index for w in work]
+    comparison = Comparison(rows=[None] * len(work), plan=plan, alpha=float(alpha), min_training_rows=smallest)
+    LOGGER.info("compare: %d models on %d rows, %s", len(work), len(X), plan.note)
+    race_ = _Race(comparison, X, y, y_arr, folds, None if groups is None else np.asarray(groups), ranks, axes,
+                  out_of_fold or _default_out_of_fold, progress, refuse_degenerate, n_jobs)
+    pending = race_.skip_too_few_rows(work, min_rows or _min_rows, smallest)
+    cheap = [w for w in pending if w.cost == "closed_form"]
+    for w in cheap:  # light work: in this process, one after another, each row said as it finishes
+        race_.run([w], True, lambda w: None, workers=1)
+        race_.run([w], False, race_.scored_or_failed, workers=1)
+    reference = min((comparison.rows[w.index] for w in cheap
+                     if comparison.rows[w.index].eligible and comparison.rows[w.index].rmse is not None),
+                    key=lambda r: r.rmse, default=None)
+    costly = sorted((w for w in pending if w.cost != "closed_form"), key=lambda w: -COST_TIERS[w.cost])
+    race_.race_costly(costly, reference if race and len(folds) > 1 else None, race_ties)
+    comparison.structures = {w.name: w.structure for w in work if w.structure is not None}
+    return comparison
+
+
+def _check_models(models, X: NDArray, plan: FoldPlan) -> None:
+    """Distinct non-empty names, regressors, and a plan of ``X``'s rows (else :class:`CalibrationInputError`)."""
     names = [name for name, _ in models]
     if len(set(names)) != len(names) or not all(isinstance(n, str) and n for n in names):
         raise CalibrationInputError(f"compare needs distinct non-empty names; got {names!r:.200}.")
@@ -709,67 +736,80 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     if plan.n_rows != len(X):
         raise CalibrationInputError(f"the fold plan is of {plan.n_rows} rows but X has {len(X)}; build the plan "
                                     "with FoldPlan.for_data on these data.")
-    kinds = dict(kinds or {})
-    n, n_channels = X.shape
-    out_of_fold = out_of_fold or _default_out_of_fold
-    need = min_rows or _min_rows
-    folds = list(plan.folds)
-    smallest = min(len(np.unique(np.column_stack([X[tr], y_arr[tr]]), axis=0)) for tr, _ in folds) if folds else 0
-    work = [_Work(i, name, est, kinds.get(name, "candidate"), model_cost(est, smallest))
-            for i, (name, est) in enumerate(models)]
-    ranks = list(complexity) if complexity is not None else \
-        [COST_TIERS[w.cost if w.cost in COST_TIERS else "heavy"] * TIER_STEP + w.index for w in work]
-    comparison = Comparison(rows=[None] * len(work), plan=plan, alpha=float(alpha), min_training_rows=smallest)
-    LOGGER.info("compare: %d models on %d rows, %s", len(work), n, plan.note)
 
-    def finish(w: _Work, status: RowStatus, reason: str | None = None) -> ComparisonRow:
+
+@dataclass
+class _Race:
+    """The steps of one :func:`compare`: skip, run jobs on the first or the other folds, race, finish rows."""
+
+    comparison: Comparison
+    X: NDArray
+    y_fit: Any  # y as given (a table of named axes stays one for the fits)
+    y: NDArray
+    folds: list
+    groups: NDArray | None
+    ranks: list
+    axes: Any
+    out_of_fold: Callable
+    progress: Callable | None
+    refuse_degenerate: bool
+    n_jobs: int | None
+
+    def finish(self, w: _Work, status: RowStatus, reason: str | None = None) -> ComparisonRow:
+        """``w``'s row, scored from its pieces (SCORED) or not; said to the log and ``progress``."""
         row = ComparisonRow(name=w.name, kind=w.kind, status=status, reason=reason, seconds=float(w.seconds),
-                            complexity=float(ranks[w.index]), eligible=w.kind != "baseline")
+                            complexity=float(self.ranks[w.index]), eligible=w.kind != "baseline")
+        plan = self.comparison.plan
         if status is RowStatus.SCORED:
-            pred = np.full(y_arr.shape, np.nan)
+            pred = np.full(self.y.shape, np.nan)
             for test, values in w.pieces:
                 pred[test] = values.reshape(len(test), -1)
             row.predictions = pred
-            _score_row(row, pred, y_arr, alpha, axes, plan.units, refuse_degenerate)
+            _score_row(row, pred, self.y, self.comparison.alpha, self.axes, plan.units, self.refuse_degenerate)
         if status is not RowStatus.SCORED:
             row.eligible = False
-        comparison.rows[w.index] = row
+        self.comparison.rows[w.index] = row
         LOGGER.info("compare: %s %s%s (%.1f s)", w.name, status.value,
                     f", RMSE {row.rmse:.4g} ± {row.rmse_se:.2g} N" if row.rmse is not None else
                     f": {reason}" if reason else "", row.seconds)
-        if progress is not None:
-            progress(row)
+        if self.progress is not None:
+            self.progress(row)
         return row
 
-    pending = []
-    for w in work:
-        needed = need(w.estimator, n_channels)
-        if not folds:
-            finish(w, RowStatus.SKIPPED, "no folds can judge a model")
-        elif smallest < needed and w.kind != "baseline":  # (a baseline is reported only, never chosen)
-            finish(w, RowStatus.SKIPPED, f"training folds of {smallest} rows < the {needed} it needs")
-        else:
-            pending.append(w)
+    def skip_too_few_rows(self, work: list, need: Callable, smallest: int) -> list:
+        """SKIPPED rows for the models no fold can judge (none, or too few training rows); the others."""
+        pending, n_channels = [], self.X.shape[1]
+        for w in work:
+            needed = need(w.estimator, n_channels)
+            if not self.folds:
+                self.finish(w, RowStatus.SKIPPED, "no folds can judge a model")
+            elif smallest < needed and w.kind != "baseline":  # (a baseline is reported only, never chosen)
+                self.finish(w, RowStatus.SKIPPED, f"training folds of {smallest} rows < the {needed} it needs")
+            else:
+                pending.append(w)
+        return pending
 
-    def run(batch: list[_Work], first: bool, done: Callable[[_Work], None], workers=n_jobs) -> None:
+    def run(self, batch: list, first: bool, done: Callable, workers=None) -> None:
         """``batch`` on the first fold (``first``; a model that chooses its structure chooses it there) or on the
         other folds: a job per fold, a network's folds one job (one stacked fit); ``done(w)`` as each model's
         last job returns."""
-        jobs, owner = [], []
+        from sklearn.base import clone
+
+        folds, jobs, owner = self.folds, [], []
         for w in batch:
             structure = first and _chooses_structure(w.estimator)
             idx = [0] if first else list(range(1, len(folds)))
             parts = [idx] if _stacked(w.estimator) or structure or not idx else [[i] for i in idx]
             for part in parts:
                 jobs.append(lambda w=w, part=part, structure=structure: _score_job(
-                    w.structured if w.structured is not None else w.estimator, X, y_fit, [folds[i] for i in part],
-                    groups, out_of_fold, structure))
+                    w.structured if w.structured is not None else w.estimator, self.X, self.y_fit,
+                    [folds[i] for i in part], self.groups, self.out_of_fold, structure))
                 owner.append(w)
         left = {w.index: sum(o is w for o in owner) for w in batch}
         for w in batch:
             if not left[w.index]:
                 done(w)
-        for pos, (chosen, pieces, error, seconds) in _runner(workers, jobs):
+        for pos, (chosen, pieces, error, seconds) in _runner(self.n_jobs if workers is None else workers, jobs):
             w = owner[pos]
             w.seconds += seconds
             if chosen is not None:
@@ -782,42 +822,36 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
             if not left[w.index]:
                 done(w)
 
-    def scored_or_failed(w: _Work) -> None:
-        finish(w, RowStatus.FAILED, w.error) if w.error else finish(w, RowStatus.SCORED)
+    def scored_or_failed(self, w: _Work) -> None:
+        self.finish(w, RowStatus.FAILED, w.error) if w.error else self.finish(w, RowStatus.SCORED)
 
-    cheap = [w for w in pending if w.cost == "closed_form"]
-    costly = sorted((w for w in pending if w.cost != "closed_form"), key=lambda w: -COST_TIERS[w.cost])
-    for w in cheap:  # light work: in this process, one after another, each row said as it finishes
-        run([w], True, lambda w: None, workers=1)
-        run([w], False, scored_or_failed, workers=1)
-    reference = min((comparison.rows[w.index] for w in cheap
-                     if comparison.rows[w.index].eligible and comparison.rows[w.index].rmse is not None),
-                    key=lambda r: r.rmse, default=None)
-    racing = race and reference is not None and len(folds) > 1
-    survivors: list[_Work] = []
+    def race_costly(self, costly: list, reference: ComparisonRow | None, ties: bool) -> None:
+        """``costly`` on the first fold, each STOPPED there against ``reference`` (None: no race) or scored on the
+        other folds."""
+        survivors: list[_Work] = []
+        n_folds, plan = len(self.folds), self.comparison.plan
 
-    def after_first(w: _Work) -> None:
-        if w.error:
-            finish(w, RowStatus.FAILED, w.error)
-            return
-        w.stopped = _race_verdict(w, reference, y_arr, alpha, axes, plan, len(folds)) if racing else None
-        if w.stopped:
-            finish(w, RowStatus.STOPPED, w.stopped)
-        elif len(folds) == 1:
-            finish(w, RowStatus.SCORED)
-        else:
-            survivors.append(w)
+        def after_first(w: _Work) -> None:
+            if w.error:
+                self.finish(w, RowStatus.FAILED, w.error)
+                return
+            w.stopped = None if reference is None else _race_verdict(
+                w, reference, self.y, self.comparison.alpha, self.axes, plan, n_folds, ties)
+            if w.stopped:
+                self.finish(w, RowStatus.STOPPED, w.stopped)
+            elif n_folds == 1:
+                self.finish(w, RowStatus.SCORED)
+            else:
+                survivors.append(w)
 
-    if costly:
-        run(costly, True, after_first)
-    if survivors:
-        run(sorted(survivors, key=lambda w: w.index), False, scored_or_failed)
-    comparison.structures = {w.name: w.structure for w in work if w.structure is not None}
-    return comparison
+        if costly:
+            self.run(costly, True, after_first)
+        if survivors:
+            self.run(sorted(survivors, key=lambda w: w.index), False, self.scored_or_failed)
 
 
-def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float
-              ) -> tuple[bool, float, float, float]:
+def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float, *,
+              ties: bool = False) -> tuple[bool, float, float, float]:
     """Whether a raced candidate is stopped, from its per-row errors and the reference's on the same rows (the
     folds both were scored on): ``(stop, excess, paired_se, threshold)``.
 
@@ -829,6 +863,11 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     threshold``. The reference's own (unpaired) SE plays no part: models that err on the same rows have a
     difference far less noisy than either's error.
 
+    With ``ties`` (large data, where a costly fold is dear) a candidate is also stopped when it cannot come
+    **better** than the reference by more than that bar: even :data:`RACE_SIGMAS` paired SE above its gain,
+    ``-excess + RACE_SIGMAS * paired_se <= threshold``. The reference, simpler, is then within one SE of it, so
+    the one-SE rule would not choose it (it could only join a stack).
+
     Examples
     --------
     >>> rng = np.random.default_rng(0)
@@ -839,22 +878,32 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     False
     >>> race_stop(reference + 0.05, reference, None, 0.1)[0]  # worse on every row, but within the tie margin
     False
+    >>> race_stop(reference + 0.05, reference, None, 0.1, ties=True)[0]  # ... and it cannot win: stopped
+    True
+    >>> race_stop(reference - 0.5, reference, None, 0.1, ties=True)[0]  # better on every row: it races on
+    False
     """
     excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
     threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
-    return bool(np.isfinite(se) and excess - RACE_SIGMAS * se > threshold), float(excess), float(se), threshold
+    worse = excess - RACE_SIGMAS * se > threshold
+    tied = ties and -excess + RACE_SIGMAS * se <= threshold
+    return bool(np.isfinite(se) and (worse or tied)), float(excess), float(se), threshold
 
 
 def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, axes, plan: FoldPlan,
-                  n_folds: int) -> str | None:
+                  n_folds: int, ties: bool = False) -> str | None:
     """Why ``w``, scored on the plan's first fold, is stopped (None: it races on): :func:`race_stop` on that
     fold's rows against ``reference`` (the best cheap row), paired over the fold's groups (a plan over groups),
-    else over its rows; the tie margin is :data:`TIE_TOLERANCE` of the reference's mean squared error there."""
+    else over its rows; the tie margin is the one-SE rule's (:func:`tie_margin`) on those rows and units."""
     test, pred = w.pieces[0]
     errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
     units = plan.units[test] if plan.kind == "group" else None
     ref = reference.row_errors[test]
-    stop, excess, se, threshold = race_stop(errors, ref, units, TIE_TOLERANCE * float(np.mean(ref)))
+    stop, excess, se, threshold = race_stop(errors, ref, units, tie_margin(ref, units), ties=ties)
+    if stop and excess - RACE_SIGMAS * se <= threshold:  # stopped as a tie (``ties``): it cannot win
+        return (f"after fold 1 of {n_folds}, it cannot come better than {reference.name} beyond one SE (excess "
+                f"MSE {excess:.3g} ± {se:.2g} N², paired; the bar {threshold:.3g} N²): on large data a tie is not "
+                "raced on (the simpler model would be chosen)")
     if stop:
         ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "

@@ -22,7 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ..core._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
-           "paired_excess", "mean_and_se", "se_units_name",
+           "paired_excess", "mean_and_se", "tie_margin", "se_units_name",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -345,6 +345,22 @@ def rmse_and_se(row_errors: ArrayLike, units: ArrayLike | None = None) -> tuple[
 TIE_TOLERANCE = 0.01
 
 
+def tie_margin(reference_errors: ArrayLike, units: ArrayLike | None = None) -> float:
+    """The tie margin of ftcal's comparisons [the errors' units, N² for eq. 18's]: :data:`TIE_TOLERANCE` of the
+    reference's mean error, averaged per unit like the paired differences it is set beside (:func:`mean_and_se`).
+    The one helper of the one-SE rule (:func:`paired_excess`, the best row) and of the race
+    (:func:`~ftcal.model_selection.race_stop`, the best cheap row on the first fold): a gain below it is a tie.
+
+    Examples
+    --------
+    >>> tie_margin([1.0, 1.0, 1.0, 5.0])  # per row: 1 % of the mean 2.0
+    0.02
+    >>> tie_margin([1.0, 1.0, 1.0, 5.0], units=[0, 0, 0, 1])  # per group: 1 % of the mean of 1.0 and 5.0
+    0.03
+    """
+    return TIE_TOLERANCE * mean_and_se(reference_errors, units)[0]
+
+
 def one_se_qualified(errors: NDArray, units: NDArray | None = None, *, eligible: ArrayLike | None = None
                      ) -> tuple[int, NDArray[np.bool_]]:
     """The best candidate (lowest mean error among the eligible scored ones) and which are within one paired
@@ -384,7 +400,7 @@ def paired_excess(errors: NDArray, best: int, units: NDArray | None = None) -> t
     """
     errors = np.asarray(errors, dtype=float)
     units = None if units is None else np.asarray(units)
-    tie = TIE_TOLERANCE * mean_and_se(errors[best], units)[0]  # averaged like the differences
+    tie = tie_margin(errors[best], units)
     excess, se = np.full(errors.shape[0], np.nan), np.full(errors.shape[0], np.nan)
     for k in np.flatnonzero(~np.isnan(errors).any(axis=1)):
         excess[k], se[k] = mean_and_se(errors[k] - errors[best], units)
