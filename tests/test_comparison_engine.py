@@ -183,3 +183,18 @@ def test_on_large_data_a_raced_model_that_cannot_win_is_stopped_and_one_that_win
     assert tied.row("knn").status is RowStatus.SCORED
     full = compare(models, X, y, plan, min_rows=ANY_ROWS)  # without: the tie races on, and the choice is the same
     assert full.row("ols_again").status is RowStatus.SCORED and full.choose() == tied.choose() == "knn"
+
+
+def test_the_tie_stop_asks_a_gain_beyond_the_all_folds_se_so_a_gain_of_a_few_first_fold_se_races_on():
+    from ftcal.model_selection._comparison import race_stop
+
+    rng = np.random.default_rng(2)
+    z = rng.normal(size=100)
+    noise = (z - z.mean()) / z.std(ddof=1)  # exactly unit SD: the paired SE on these 100 rows is 0.1
+    reference = rng.exponential(1.0, 100) + 5.0
+    # the all-folds bar: 0.1 * sqrt(0.2) = 0.045 N²; stopped when gain + one SE falls short of it
+    for gain_in_se, stopped in [(-1.0, True), (-0.6, True), (-0.4, False), (0.5, False), (3.0, False)]:
+        candidate = reference - gain_in_se * 0.1 - noise
+        stop, excess, se, _ = race_stop(candidate, reference, None, 0.0, ties=True, share=0.2)
+        assert se == pytest.approx(0.1) and -excess == pytest.approx(gain_in_se * 0.1) and stop is stopped
+        assert not race_stop(candidate, reference, None, 0.0, share=0.2)[0]  # without ties: never stopped here

@@ -851,7 +851,7 @@ class _Race:
 
 
 def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None, tie_mse: float, *,
-              ties: bool = False) -> tuple[bool, float, float, float]:
+              ties: bool = False, share: float = 1.0) -> tuple[bool, float, float, float]:
     """Whether a raced candidate is stopped, from its per-row errors and the reference's on the same rows (the
     folds both were scored on): ``(stop, excess, paired_se, threshold)``.
 
@@ -863,10 +863,13 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     threshold``. The reference's own (unpaired) SE plays no part: models that err on the same rows have a
     difference far less noisy than either's error.
 
-    With ``ties`` (large data, where a costly fold is dear) a candidate is also stopped when it cannot come
-    **better** than the reference by more than that bar: even :data:`RACE_SIGMAS` paired SE above its gain,
-    ``-excess + RACE_SIGMAS * paired_se <= threshold``. The reference, simpler, is then within one SE of it, so
-    the one-SE rule would not choose it (it could only join a stack).
+    With ``ties`` (large data, where a costly fold is dear) a candidate is also stopped when it cannot **win**
+    the one-SE rule against the reference (a cheap model, ranked simpler): that needs a gain ``-excess`` beyond
+    one paired SE of the difference on *all* folds (or the tie margin). That SE is about ``paired_se *
+    sqrt(share)``, ``share`` being the scored folds' part of all the units (rows or groups); the candidate is
+    stopped when even one paired SE in its favour leaves its gain short of that bar, ``-excess + paired_se <
+    max(paired_se * sqrt(share), tie_mse)``: one SE, the one-SE rule's own level. The reference would then be
+    chosen over it (it could only have joined a stack).
 
     Examples
     --------
@@ -882,11 +885,13 @@ def race_stop(errors: NDArray, reference_errors: NDArray, units: NDArray | None,
     True
     >>> race_stop(reference - 0.5, reference, None, 0.1, ties=True)[0]  # better on every row: it races on
     False
+    >>> race_stop(reference + rng.normal(0.0, 1.0, 200), reference, None, 0.01, ties=True, share=0.2)[0]
+    False
     """
     excess, se = mean_and_se(np.asarray(errors, dtype=float) - np.asarray(reference_errors, dtype=float), units)
     threshold = max(se, float(tie_mse)) if np.isfinite(se) else float("inf")
     worse = excess - RACE_SIGMAS * se > threshold
-    tied = ties and -excess + RACE_SIGMAS * se <= threshold
+    tied = ties and -excess + se < max(se * float(np.sqrt(share)), float(tie_mse))
     return bool(np.isfinite(se) and (worse or tied)), float(excess), float(se), threshold
 
 
@@ -897,13 +902,18 @@ def _race_verdict(w: _Work, reference: ComparisonRow, y: NDArray, alpha: float, 
     else over its rows; the tie margin is the one-SE rule's (:func:`tie_margin`) on those rows and units."""
     test, pred = w.pieces[0]
     errors = _row_errors(np.asarray(pred).reshape(len(test), -1), y[test], alpha, axes)
-    units = plan.units[test] if plan.kind == "group" else None
+    grouped = plan.kind == "group" and plan.units is not None
+    units = plan.units[test] if grouped else None
+    share = np.unique(units).size / np.unique(plan.units).size if grouped else len(test) / plan.n_rows
     ref = reference.row_errors[test]
-    stop, excess, se, threshold = race_stop(errors, ref, units, tie_margin(ref, units), ties=ties)
+    tie = tie_margin(ref, units)
+    stop, excess, se, threshold = race_stop(errors, ref, units, tie, ties=ties, share=share)
     if stop and excess - RACE_SIGMAS * se <= threshold:  # stopped as a tie (``ties``): it cannot win
+        bar = max(se * float(np.sqrt(share)), tie)
         return (f"after fold 1 of {n_folds}, it cannot come better than {reference.name} beyond one SE (excess "
-                f"MSE {excess:.3g} ± {se:.2g} N², paired; the bar {threshold:.3g} N²): on large data a tie is not "
-                "raced on (the simpler model would be chosen)")
+                f"MSE {excess:.3g} ± {se:.2g} N², paired; even one SE in its favour short of the {bar:.3g} N² a "
+                "gain must clear on all folds): on large data a tie is not raced on (the simpler model would be "
+                "chosen)")
     if stop:
         ratio = float(np.sqrt(np.mean(errors) / max(np.mean(ref), 1e-300)))
         return (f"after fold 1 of {n_folds}, its RMSE there is {ratio:.2f}x {reference.name}'s (excess MSE "
