@@ -56,7 +56,9 @@ def test_auto_picks_the_ltm_on_affine_data():
 
 def test_auto_picks_a_nonlinear_model_on_nonlinear_data():
     raw, w = nonlinear_data()
-    auto = AutoCalibrator(candidates=CLOSED_FORM, alpha=1.0, baselines=False).fit(raw, w)
+    given_gp = CLOSED_FORM[:3] + [("gaussian_process", GaussianProcessCalibrator(
+        mean="linear", kernel="rbf", per_output=False, kernel_bounds="ftcal"))]  # the structure given: all rows
+    auto = AutoCalibrator(candidates=given_gp, alpha=1.0, baselines=False).fit(raw, w)
     assert auto.best_name_ != "linear"
     r = auto.comparison_
     chosen = r["name"].index(auto.best_name_)
