@@ -72,3 +72,21 @@ def test_a_users_regressor_is_fitted_on_the_torque_scaled_wrench_once():
     # ftcal's calibrators and the named stock baselines handle (or deliberately skip) the scale themselves
     assert calibration_tags(LinearCalibrator()).scales_torques
     assert calibration_tags(StockCalibrator(baseline="sk_linear")).scales_torques
+
+
+def test_a_users_regressor_of_a_family_keeps_its_own_rank_only_a_stock_baseline_takes_its_familys():
+    from sklearn.linear_model import LinearRegression
+
+    from ftcal import LinearCalibrator, PolynomialCalibrator
+    from ftcal.calibrators import StockCalibrator, as_calibrator, declare
+    from ftcal.compose._auto import complexity_of
+
+    class LinearFamily(LinearRegression):
+        def __sklearn_tags__(self):
+            return declare(super().__sklearn_tags__(), cost="closed_form", family="linear")
+
+    candidates = [("linear", LinearCalibrator()), ("poly2", PolynomialCalibrator(degree=2)),
+                  ("mine", as_calibrator(LinearFamily())), ("sk_linear", StockCalibrator(baseline="sk_linear"))]
+    ranks = complexity_of(candidates, 100)
+    assert ranks[3] == ranks[0]  # the named stock baseline: as simple as ftcal's LTM
+    assert ranks[2] > ranks[1]  # a user's regressor: its own place, after the candidates before it

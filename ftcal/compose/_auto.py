@@ -103,13 +103,11 @@ def complexity_ranks(candidates: list[tuple[str, BaseCalibrator]], n_rows: int) 
             ranks[k] = ranks[plain] = min(ranks[k], ranks[plain])
     # a stock baseline is as simple as the first of ftcal's candidates of its family (sk_linear the LTM, sk_gp
     # the GP): between the two the lower score decides, an earlier one winning a tie
-    from ..calibrators._baselines import StockCalibrator
-
-    families = [calibration_tags(est).family for _, est in candidates]
-    for k, (_, est) in enumerate(candidates):
-        if isinstance(est, StockCalibrator) and families[k]:
-            first = next((j for j in range(k) if families[j] == families[k]
-                          and not isinstance(candidates[j][1], StockCalibrator)), None)
+    tags = [calibration_tags(est) for _, est in candidates]
+    for k in range(len(candidates)):
+        if tags[k].stock_baseline and tags[k].family:
+            first = next((j for j in range(k) if tags[j].family == tags[k].family
+                          and not tags[j].stock_baseline), None)
             if first is not None:
                 ranks[k] = ranks[first]
     return ranks
