@@ -20,8 +20,8 @@ import warnings
 import numpy as np
 
 import ftcal
-from ftcal.core._wrench import scale_torques
-from ftcal.model_selection._selection import calibration_folds, mean_and_se
+from ftcal.core import scale_torques
+from ftcal.model_selection import calibration_folds, mean_and_se
 
 
 def main() -> None:

@@ -58,7 +58,18 @@ _MEMBERS_WITHOUT_WEIGHTS = (
     "member, as StackingRegressor refuses weights its estimators cannot take (an ensemble of weighted "
     "calibrators routes them: test_routing.py)"
 )
+_STOCK_UNWEIGHTED = (
+    "the checks' StockCalibrator is the named stock baseline sk_poly2, fitted unweighted as the tables show it: it "
+    "refuses sample_weight naming the fix (a user's regressor composed by as_calibrator takes weights: "
+    "test_weighted_user_regressor.py)"
+)
 _EXPECTED_FAILURES = {
+    "StockCalibrator": {
+        name: (CalibrationInputError, _STOCK_UNWEIGHTED)
+        for name in ("check_sample_weights_not_an_array", "check_sample_weights_list", "check_sample_weights_shape",
+                     "check_sample_weights_not_overwritten")
+    } | {"check_sample_weights_pandas_series": (ValueError, _STOCK_UNWEIGHTED),  # scikit-learn re-raises it
+         "check_sample_weight_equivalence_on_dense_data": (CalibrationInputError, _WEIGHTS_TOO_FEW_ROWS)},
     "ComparativeCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
     "DirectionalCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)},
     "EnsembleCalibrator": {"check_regressors_train": (AssertionError, _UNDERTRAINED)} | {

@@ -129,7 +129,7 @@ def extrapolation(model, model_path, data) -> dict:
     readings beyond the calibration's readings per channel (``"readings"``, as ``predict --range`` counts them)."""
     from ..io import range_excess
     from ._data_options import channel_names, model_wrench_range
-    from ._predict import retare_shift
+    from ..calibrators import retare_shift
 
     found = {}
     loads = model_wrench_range(model_path, data.axes)

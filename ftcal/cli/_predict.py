@@ -14,7 +14,6 @@ from ._common import CliError, Console, OutputPlan, add_run_options, existing_fi
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
                             print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
-from ..calibrators import retare_shift  # noqa: F401 (also used by 'evaluate')
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
 
@@ -224,6 +223,8 @@ def run(args: argparse.Namespace) -> int:
         stale = range_of_another_fit(args.range_file, args.model, model, limits)
         if stale:
             print(f"ftcal: warning: {stale}", file=sys.stderr, flush=True)
+        from ..calibrators import retare_shift
+
         limits = tuple(bound + retare_shift(model, n_channels) for bound in limits)
     # the model's own range (its training readings, re-tare shift applied); files of older versions have none
     own_range = model.out_of_range if getattr(model, "calibrated_range_", None) is not None else None
