@@ -64,11 +64,9 @@ class DriftExtrapolationWarning(UserWarning):
     """A tool's bias drift is evaluated outside the span it was identified (and re-tared) over."""
 
 
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``[v]×`` for each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    z = np.zeros(len(v))
-    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
-                     np.stack([-v[:, 1], v[:, 0], z], -1)], axis=1)
+def _skew(v: ArrayLike) -> NDArray[np.float64]:
+    """``[v]×`` of a vector (3,) -> (3, 3), or of each row of ``v`` (n, 3) -> (n, 3, 3)."""
+    return np.cross(np.eye(3), np.asarray(v, dtype=float)[..., None, :])
 
 
 def _spline_matrix(knots: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -547,7 +545,7 @@ def tool_onnx_model(tool):
 
     m, c, g = tool.mass, np.asarray(tool.center_of_mass), np.asarray(tool.gravity, dtype=float)
     # gravity wrench = g_s @ M, g_s = Rᵀ g: force m g_s, torque c × (m g_s) = m g_s @ [c]×ᵀ
-    M = np.hstack([m * np.eye(3), m * _skew(c[None])[0].T])
+    M = np.hstack([m * np.eye(3), m * _skew(c).T])
     if np.any(tool.mounting_rotation):  # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M
         from scipy.spatial.transform import Rotation
 

@@ -316,6 +316,42 @@ def _check_limits(robot: RobotModel, q: NDArray[np.float64], sources: list[str],
                              "wrong robot, wrong joint order or wrong unit?")
 
 
+def _load_masses(logs: list[RunLog], load_mass: float | None, load_configurations) -> tuple[float, dict[int, float]]:
+    """The load mass [kg] (given, else the one the logs declare, else the fixture's median) and each
+    configuration's mass the fixture states (every one, else none used); refuses masses that disagree."""
+    masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
+    fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
+                    if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
+    if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
+        # the fixture states every configuration's mass (the logs' per-file masses then need not agree with each
+        # other, but each must agree with the configurations it records)
+        for lg in logs:
+            if lg.load_mass is None:
+                continue
+            for cid in sorted(set(int(c) for c in lg.config)):
+                stated = fixture_mass.get(cid)
+                if stated is not None and abs(stated - lg.load_mass) > 1e-6 * max(stated, 1.0):
+                    raise LogFormatError(
+                        f"{lg.path}: the log declares load_mass_kg {lg.load_mass:g} but the fixture gives "
+                        f"configuration {cid} a mass of {stated:g} kg; which one is right? Fix the fixture file "
+                        "or the '# load_mass_kg' comment.")
+        load_mass = float(np.median(list(fixture_mass.values())))
+        masses = set()
+    if load_mass is None:
+        if len(masses) != 1:
+            raise LogFormatError(f"{{load_mass}} not given and the logs declare {sorted(masses) or 'none'}.",
+                                 parameter="load_mass", fix="pass {load_mass} or write '# load_mass_kg: <kg>' in "
+                                 "the logs", settings={"load_mass": Placeholder("<kg>")})
+        load_mass = masses.pop()
+    elif masses and any(abs(m - load_mass) > 1e-9 for m in masses):
+        raise LogFormatError(f"{{load_mass}} {load_mass:g} kg but the logs declare {sorted(masses)} kg; which one "
+                             "is right?", parameter="load_mass", value=load_mass,
+                             fix="correct {load_mass} or the '# load_mass_kg' comments")
+    if not np.isfinite(load_mass) or load_mass <= 0:
+        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    return load_mass, fixture_mass
+
+
 def prepare_dataset(
     log_paths: Sequence[str | Path] | str | Path,
     robot: RobotModel | str | Path = "kuka_iiwa14",
@@ -383,36 +419,7 @@ def prepare_dataset(
             raise LogFormatError(
                 f"{lg.path}: the log was recorded with sensor frame {lg.sensor_frame!r} but the robot model's is "
                 f"{robot.sensor_frame!r}; give the same sensor frame (or the same sensor mounting) as the recording.")
-    masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
-    fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
-                    if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
-    if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
-        # the fixture states every configuration's mass (the logs' per-file masses then need not agree with each
-        # other, but each must agree with the configurations it records)
-        for lg in logs:
-            if lg.load_mass is None:
-                continue
-            for cid in sorted(set(int(c) for c in lg.config)):
-                stated = fixture_mass.get(cid)
-                if stated is not None and abs(stated - lg.load_mass) > 1e-6 * max(stated, 1.0):
-                    raise LogFormatError(
-                        f"{lg.path}: the log declares load_mass_kg {lg.load_mass:g} but the fixture gives "
-                        f"configuration {cid} a mass of {stated:g} kg; which one is right? Fix the fixture file "
-                        "or the '# load_mass_kg' comment.")
-        load_mass = float(np.median(list(fixture_mass.values())))
-        masses = set()
-    if load_mass is None:
-        if len(masses) != 1:
-            raise LogFormatError(f"{{load_mass}} not given and the logs declare {sorted(masses) or 'none'}.",
-                                 parameter="load_mass", fix="pass {load_mass} or write '# load_mass_kg: <kg>' in "
-                                 "the logs", settings={"load_mass": Placeholder("<kg>")})
-        load_mass = masses.pop()
-    elif masses and any(abs(m - load_mass) > 1e-9 for m in masses):
-        raise LogFormatError(f"{{load_mass}} {load_mass:g} kg but the logs declare {sorted(masses)} kg; which one "
-                             "is right?", parameter="load_mass", value=load_mass,
-                             fix="correct {load_mass} or the '# load_mass_kg' comments")
-    if not np.isfinite(load_mass) or load_mass <= 0:
-        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    load_mass, fixture_mass = _load_masses(logs, load_mass, load_configurations)
     positions = _config_positions(load_configurations)
     pairs = pair_runs(logs)
     unknown = sorted(set(pairs.config.tolist()) - set(positions))
