@@ -33,8 +33,6 @@ from ._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG, Stil
 __all__ = ["StaticPoses", "static_poses", "RecordingRows", "recording_rows", "recording_kind", "bag_run_log",
            "RecordingOptions"]
 
-KINDS = ("run log", "pose file", "ROS bag")
-
 
 @dataclass(frozen=True)
 class RecordingOptions:
