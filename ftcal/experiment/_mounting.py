@@ -205,6 +205,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
 
     ``g_robot`` (n, 3): gravity in the robot's sensor frame per pose; ``start``: the closed-form fit
     (:func:`ftcal.experiment._drift.fit_gravity_blocks`); ``scale``: force and torque residual RMS weights."""
+    import pinocchio as pin
     from scipy.optimize import least_squares
     from scipy.spatial.transform import Rotation
 
@@ -233,20 +234,10 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     dof = max(J.shape[0] - J.shape[1], 1)
     s2 = float(np.sum(residual(sol.x) ** 2)) / dof
     cov = s2 * np.linalg.pinv(J.T @ J)
-    Jr = _right_jacobian(r)
     T = np.eye(cov.shape[0])
-    T[:3, :3] = np.linalg.inv(Jr)
+    T[:3, :3] = np.linalg.inv(pin.Jexp3(r))  # the right Jacobian of SO(3): exp(r + dr) ≈ exp(r) exp(J_r dr)
     cov = T @ cov @ T.T
     return r, cov[:3, :3], cov[:13, :13]
-
-
-def _right_jacobian(r: NDArray) -> NDArray:
-    """The right Jacobian of SO(3) at the rotation vector ``r``: ``exp(r + dr) ≈ exp(r) exp(J_r dr)``."""
-    theta = float(np.linalg.norm(r))
-    K = _skew(r)
-    if theta < 1e-8:
-        return np.eye(3) - 0.5 * K
-    return (np.eye(3) - (1 - np.cos(theta)) / theta**2 * K + (theta - np.sin(theta)) / theta**3 * K @ K)
 
 
 def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, groups: NDArray | None = None

@@ -802,7 +802,7 @@ def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, too
     def norms(residual: NDArray) -> dict:
         return {"force_N": np.linalg.norm(residual[:, :3], axis=1).tolist() if listed else None,
                 "torque_Nm": np.linalg.norm(residual[:, 3:], axis=1).tolist() if listed else None,
-                "rms": [float(np.sqrt(np.mean(residual[:, :3] ** 2))), float(np.sqrt(np.mean(residual[:, 3:] ** 2)))]}
+                "rms": residual_rms_of(residual).tolist()}
 
     return {"format": "ftcal-tool-identification", "format_version": 1, "n_poses": int(len(W)),
             "drift_model": "constant" if d is None else d.description, "axis": axis,

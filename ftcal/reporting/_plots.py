@@ -360,6 +360,11 @@ def plot_predicted_vs_reference(y_true: ArrayLike, y_pred: ArrayLike, path: str 
 
 
 # ------------------------------------------------------------------ coverage
+def _azimuth_elevation(d: NDArray) -> tuple[NDArray, NDArray]:
+    """Azimuth ``atan2(y, x)`` and elevation ``asin(z)`` [deg] of unit directions (n, 3)."""
+    return np.degrees(np.arctan2(d[:, 1], d[:, 0])), np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+
+
 def sphere_coverage_figure(
     directions: ArrayLike,
     *,
@@ -402,8 +407,7 @@ def sphere_coverage_figure(
     ax3.set_box_aspect((1, 1, 1))
     ax3.legend(fontsize=8, loc="upper left")
     ax2 = fig.add_subplot(1, 2, 2)
-    lon = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
-    lat = np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+    lon, lat = _azimuth_elevation(d)
     ax2.scatter(lon[ok], lat[ok], s=12, color="#1f77b4")
     if (~ok).any():
         ax2.scatter(lon[~ok], lat[~ok], s=14, marker="x", color="0.5")
@@ -625,8 +629,7 @@ def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_p
     if loaded.size:
         d = force[loaded] / mag[loaded, None]
         order = _draw_order(err[loaded], max_points)
-        lon = np.degrees(np.arctan2(d[order, 1], d[order, 0]))
-        lat = np.degrees(np.arcsin(np.clip(d[order, 2], -1, 1)))
+        lon, lat = _azimuth_elevation(d[order])
         sc = ax.scatter(lon, lat, c=err[loaded][order], s=12, cmap="viridis", linewidths=0)
         fig.colorbar(sc, ax=ax, label="held-out |ΔF| [N]")
     ax.set_xlim(-180, 180)
