@@ -513,11 +513,17 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     return candidates[best], table
 
 
+def per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
+    """The mean of ``values`` (n,) over the rows of each pose (``groups``; ``None``: every row is a pose)."""
+    if groups is None:
+        return values
+    _, inverse = np.unique(groups, return_inverse=True)
+    return np.bincount(inverse, weights=values) / np.bincount(inverse)
+
+
 def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:
     """Standard error of the mean of ``values`` over the units (groups, else rows)."""
-    if groups is not None:
-        _, inverse = np.unique(groups, return_inverse=True)
-        values = np.bincount(inverse, weights=values) / np.bincount(inverse)
+    values = per_pose_mean(values, groups)
     return float(values.std(ddof=1) / np.sqrt(values.size)) if values.size > 1 else None
 
 

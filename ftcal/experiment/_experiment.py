@@ -194,13 +194,13 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
         q = np.array([lg.q[i] for lg, i in members])
         raw = np.array([lg.raw[i] for lg, i in members])
         spread = float(np.max(np.ptp(q, axis=0), initial=0.0))  # no joints when the orientation was recorded
-        first = f"{members[0][0].path}:line {members[0][0].line[members[0][1]]}"
+        at = [f"{lg.path}:line {lg.line[i]}" for lg, i in members]
+        first = at[0]
         if spread > same_pose_tol:
             j = int(np.argmax(np.ptp(q, axis=0)))
             k = int(np.argmax(np.abs(q[:, j] - q[0, j])))
-            other = f"{members[k][0].path}:line {members[k][0].line[members[k][1]]}"
             raise LogFormatError(
-                f"{first} and {other}: {key[0]} rows of config {key[1]}, pose {key[2]} differ by {spread:.4f} rad "
+                f"{first} and {at[k]}: {key[0]} rows of config {key[1]}, pose {key[2]} differ by {spread:.4f} rad "
                 f"in q{j + 1}; one pose index was used for two different poses. Give each pose its own index."
             )
         temps = [lg.temperature[i] for lg, i in members if lg.temperature is not None]
@@ -212,9 +212,9 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
             if apart.max() > same_pose_tol:
                 k = int(np.argmax(apart))
                 raise LogFormatError(
-                    f"{first} and {members[k][0].path}:line {members[k][0].line[members[k][1]]}: {key[0]} rows of "
-                    f"config {key[1]}, pose {key[2]} are {apart[k]:.4f} rad apart in orientation; one pose index was "
-                    "used for two different poses. Give each pose its own index.")
+                    f"{first} and {at[k]}: {key[0]} rows of config {key[1]}, pose {key[2]} are {apart[k]:.4f} rad "
+                    "apart in orientation; one pose index was used for two different poses. Give each pose its own "
+                    "index.")
             rotation = turns.mean().as_matrix()
         out[key] = (q.mean(axis=0), raw.mean(axis=0), first, temperature, rotation)
     return out
@@ -291,7 +291,7 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
         raw_load=np.array([s[1] for s in loads]), raw_no_load=np.array([s[1] for s in no_loads]),
         no_load_run=np.array([k[1] for k in partners], dtype=np.int64), source=[s[2] for s in loads],
         no_load={k: (np.array(v[0]), np.array(v[1])) for k, v in no_load.items()},
-        temperature_load=(np.array([s[3] for s in loads]) if all(s[3] is not None for s in loads) else None),
+        temperature_load=np.array([s[3] for s in loads]) if all(with_temperature) else None,
         rotation_load=np.array([s[4] for s in loads]) if recorded else None,
         rotation_no_load=np.array([s[4] for s in no_loads]) if recorded else None,
         no_load_rotations={k: np.array(v) for k, v in no_load_rotations.items()},
