@@ -92,7 +92,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
 from ..core._exceptions import NO_SETTING, KinematicsError, PlanningError
-from ._ik import DEFAULT_LIMIT_MARGIN_RAD, _rotation_between, anchor_configuration, solve_gravity_direction_ik
+from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_direction_ik
 from ._loads import thesis_load_configurations
 from ._robot import RobotModel, sensor_pose_in_base
 
@@ -167,6 +167,17 @@ def icosphere(subdivisions: int = THESIS_SUBDIVISIONS) -> NDArray[np.float64]:
     return np.array(pts)
 
 
+def _rotation_onto(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Smallest rotation matrix turning unit vector ``a`` onto unit vector ``b``."""
+    v, c = np.cross(a, b), float(np.dot(a, b))
+    if c < -1 + 1e-12:
+        perp = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
+        perp /= np.linalg.norm(perp)
+        return 2 * np.outer(perp, perp) - np.eye(3)
+    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    return np.eye(3) + K + K @ K / (1 + c)
+
+
 def gravity_directions_in_sensor(
     subdivisions: int = THESIS_SUBDIVISIONS,
     *,
@@ -199,7 +210,7 @@ def gravity_directions_in_sensor(
         raise KinematicsError(f"excluded_cap_deg must be in [0, 180) degrees; got {excluded_cap_deg!r}.")
     ex = ex / np.linalg.norm(ex)
     pivot = pts[12] if len(pts) > 12 else pts[0]  # a six-valent vertex once subdivided
-    pts = pts @ Rotation.from_rotvec(_rotation_between(pivot, ex)).as_matrix().T
+    pts = pts @ _rotation_onto(pivot, ex).T
     keep = np.degrees(np.arccos(np.clip(pts @ ex, -1, 1))) >= excluded_cap_deg
     return pts[keep]
 
