@@ -66,7 +66,12 @@ class DriftExtrapolationWarning(UserWarning):
 
 def _skew(v: ArrayLike) -> NDArray[np.float64]:
     """``[v]×`` of a vector (3,) -> (3, 3), or of each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    return np.cross(np.eye(3), np.asarray(v, dtype=float)[..., None, :])
+    a = np.asarray(v, dtype=float)
+    m = np.atleast_2d(a)
+    z = np.zeros(len(m))
+    out = np.stack([np.stack([z, -m[:, 2], m[:, 1]], -1), np.stack([m[:, 2], z, -m[:, 0]], -1),
+                    np.stack([-m[:, 1], m[:, 0], z], -1)], axis=1)
+    return out[0] if a.ndim == 1 else out
 
 
 def _spline_matrix(knots: NDArray[np.float64]) -> NDArray[np.float64]:
