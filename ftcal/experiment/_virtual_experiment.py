@@ -222,14 +222,19 @@ def simulate_experiment(
         "joint_error_max_rad": joint_error_max, "load_pose_jitter_deg": load_pose_jitter_deg,
         "sensor_errors": sensor.errors_.to_dict() if hasattr(sensor.errors_, "to_dict") else repr(sensor.errors_),
         "zero_offset": np.asarray(sensor.zero_offset).tolist(), "random_state": random_state,
-        "thermal_drift": None if thermal_drift is None else {
-            "offset_per_deg": thermal_drift.offset_per_deg.tolist(), "gain_per_deg": thermal_drift.gain_per_deg.tolist(),
-            "reference_temperature": thermal_drift.reference_temperature,
-            "temperature_range_deg": list(temperature_range_deg)},
-        "plan": plan.settings,
+        "thermal_drift": _drift_facts(thermal_drift, temperature_range_deg), "plan": plan.settings,
     }
     (out / "virtual_experiment.json").write_text(json.dumps(truth, indent=2, default=str), encoding="utf-8")
     return paths
+
+
+def _drift_facts(thermal_drift: ThermalDrift | None, temperature_range_deg: tuple[float, float]) -> dict | None:
+    """The simulated thermal drift as the truth file records it (None: no drift)."""
+    if thermal_drift is None:
+        return None
+    return {"offset_per_deg": thermal_drift.offset_per_deg.tolist(),
+            "gain_per_deg": thermal_drift.gain_per_deg.tolist(), "reference_temperature": thermal_drift.reference_temperature,
+            "temperature_range_deg": list(temperature_range_deg)}
 
 
 def _check_arguments(load_mass: float, samples_per_pose: int, joint_error_max: float, load_pose_jitter_deg: float,
