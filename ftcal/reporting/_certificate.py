@@ -20,7 +20,6 @@ specification
 
 from __future__ import annotations
 
-import dataclasses
 import datetime as _dt
 import json
 import math
