@@ -461,6 +461,25 @@ def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
     return record if same else None
 
 
+def _plot_presets(outputs: OutputFiles, summary: dict, presets: Sequence[str], models: Sequence[str]) -> dict:
+    """Fig. 5 of each preset with results (``artificial_rmse_<preset>.png``): ``{"png_<preset>": path}``."""
+    from ..reporting._plots import plot_error_distributions
+
+    files = {}
+    for preset in presets:
+        per_model = {m: list(summary[preset]["models"][m]["rmse_per_dataset"].values()) for m in models}
+        per_model = {m: v for m, v in per_model.items() if v}
+        if per_model:
+            name = f"artificial_rmse_{preset}.png"
+            with outputs.write(name) as tmp:
+                plot_error_distributions(
+                    per_model, tmp, noise_floor=summary[preset]["noise_floor"]["mean"],
+                    title=f"RMSE across artificial datasets, preset '{preset}' (thesis Fig. 5)",
+                )
+            files[f"png_{preset}"] = str(outputs.out_dir / name)
+    return files
+
+
 def run_artificial_benchmark(
     n_datasets: int = 30,
     presets: Sequence[str] | Mapping[str, ErrorModel] = ("thesis",),
@@ -583,21 +602,7 @@ def run_artificial_benchmark(
         "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
         "wall_seconds": None,
     }
-    files = {}
-    if plot:
-        from ..reporting._plots import plot_error_distributions
-
-        for preset in presets:
-            per_model = {m: list(summary[preset]["models"][m]["rmse_per_dataset"].values()) for m in models}
-            per_model = {m: v for m, v in per_model.items() if v}
-            if per_model:
-                name = f"artificial_rmse_{preset}.png"
-                with outputs.write(name) as tmp:
-                    plot_error_distributions(
-                        per_model, tmp, noise_floor=summary[preset]["noise_floor"]["mean"],
-                        title=f"RMSE across artificial datasets, preset '{preset}' (thesis Fig. 5)",
-                    )
-                files[f"png_{preset}"] = str(out_dir / name)
+    files = _plot_presets(outputs, summary, presets, models) if plot else {}
     meta["wall_seconds"] = time.perf_counter() - t0
     files["markdown"] = str(outputs.write_text("artificial_results.md", markdown_tables(summary, meta)))
     files["json"] = str(out_dir / "artificial_results.json")

@@ -86,10 +86,6 @@ def demo_files(models: tuple[str, ...] = DEMO_MODELS) -> list[str]:
     )
 
 
-def _plain_fit(estimator: Any, X: np.ndarray, y: np.ndarray, label: str) -> Any:
-    return estimator.fit(X, y)
-
-
 def run_demo(
     out_dir: str | Path | None = None,
     *,
@@ -138,7 +134,7 @@ def run_demo(
 
     from ..reporting._evaluation import comparison_table
 
-    fit = fit or _plain_fit
+    fit = fit or (lambda estimator, X, y, name: estimator.fit(X, y))
     log = log or (lambda message: None)
     out = None if out_dir is None else Path(out_dir)
     if out is not None and not overwrite:
@@ -173,8 +169,7 @@ def _write(out: Path, result: DemoResult, alpha: float) -> list[Path]:
     import ftcal
 
     from ..reporting import _plots
-    from ..core._files import write_json
-    from ..core._files import model_file_name
+    from ..core._files import model_file_name, write_json
     from ..reporting._evaluation import axis_table, predicted_plot_name, write_evaluation_plots, EVALUATION_PLOTS
 
     (out / "models").mkdir(parents=True, exist_ok=True)

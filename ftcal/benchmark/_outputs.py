@@ -81,11 +81,8 @@ class OutputFiles:
 
     @property
     def manifest(self) -> dict:
-        """File name -> SHA-256 of what a benchmark wrote, read anew each time (two benchmarks may share a folder)."""
-        return self._read_manifest()
-
-    def _read_manifest(self) -> dict:
-        """The manifest's entries; missing or unreadable: none (nothing here is known to be the benchmark's)."""
+        """File name -> SHA-256 of what a benchmark wrote, read anew each time (two benchmarks may share a folder);
+        missing or unreadable: none (nothing here is known to be the benchmark's)."""
         self.manifest_note = ""
         if not os.path.lexists(self.manifest_path):
             return {}

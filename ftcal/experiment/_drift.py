@@ -64,11 +64,14 @@ class DriftExtrapolationWarning(UserWarning):
     """A tool's bias drift is evaluated outside the span it was identified (and re-tared) over."""
 
 
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``[v]×`` for each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    z = np.zeros(len(v))
-    return np.stack([np.stack([z, -v[:, 2], v[:, 1]], -1), np.stack([v[:, 2], z, -v[:, 0]], -1),
-                     np.stack([-v[:, 1], v[:, 0], z], -1)], axis=1)
+def _skew(v: ArrayLike) -> NDArray[np.float64]:
+    """``[v]×`` of a vector (3,) -> (3, 3), or of each row of ``v`` (n, 3) -> (n, 3, 3)."""
+    a = np.asarray(v, dtype=float)
+    m = np.atleast_2d(a)
+    z = np.zeros(len(m))
+    out = np.stack([np.stack([z, -m[:, 2], m[:, 1]], -1), np.stack([m[:, 2], z, -m[:, 0]], -1),
+                    np.stack([-m[:, 1], m[:, 0], z], -1)], axis=1)
+    return out[0] if a.ndim == 1 else out
 
 
 def _spline_matrix(knots: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -515,11 +518,17 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     return candidates[best], table
 
 
+def per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
+    """The mean of ``values`` (n,) over the rows of each pose (``groups``; ``None``: every row is a pose)."""
+    if groups is None:
+        return values
+    _, inverse = np.unique(groups, return_inverse=True)
+    return np.bincount(inverse, weights=values) / np.bincount(inverse)
+
+
 def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:
     """Standard error of the mean of ``values`` over the units (groups, else rows)."""
-    if groups is not None:
-        _, inverse = np.unique(groups, return_inverse=True)
-        values = np.bincount(inverse, weights=values) / np.bincount(inverse)
+    values = per_pose_mean(values, groups)
     return float(values.std(ddof=1) / np.sqrt(values.size)) if values.size > 1 else None
 
 
@@ -547,7 +556,7 @@ def tool_onnx_model(tool):
 
     m, c, g = tool.mass, np.asarray(tool.center_of_mass), np.asarray(tool.gravity, dtype=float)
     # gravity wrench = g_s @ M, g_s = Rᵀ g: force m g_s, torque c × (m g_s) = m g_s @ [c]×ᵀ
-    M = np.hstack([m * np.eye(3), m * _skew(c[None])[0].T])
+    M = np.hstack([m * np.eye(3), m * _skew(c).T])
     if np.any(tool.mounting_rotation):  # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M
         from scipy.spatial.transform import Rotation
 

@@ -194,13 +194,13 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
         q = np.array([lg.q[i] for lg, i in members])
         raw = np.array([lg.raw[i] for lg, i in members])
         spread = float(np.max(np.ptp(q, axis=0), initial=0.0))  # no joints when the orientation was recorded
-        first = f"{members[0][0].path}:line {members[0][0].line[members[0][1]]}"
+        at = [f"{lg.path}:line {lg.line[i]}" for lg, i in members]
+        first = at[0]
         if spread > same_pose_tol:
             j = int(np.argmax(np.ptp(q, axis=0)))
             k = int(np.argmax(np.abs(q[:, j] - q[0, j])))
-            other = f"{members[k][0].path}:line {members[k][0].line[members[k][1]]}"
             raise LogFormatError(
-                f"{first} and {other}: {key[0]} rows of config {key[1]}, pose {key[2]} differ by {spread:.4f} rad "
+                f"{first} and {at[k]}: {key[0]} rows of config {key[1]}, pose {key[2]} differ by {spread:.4f} rad "
                 f"in q{j + 1}; one pose index was used for two different poses. Give each pose its own index."
             )
         temps = [lg.temperature[i] for lg, i in members if lg.temperature is not None]
@@ -212,9 +212,9 @@ def _average_samples(logs: Sequence[RunLog], same_pose_tol: float):
             if apart.max() > same_pose_tol:
                 k = int(np.argmax(apart))
                 raise LogFormatError(
-                    f"{first} and {members[k][0].path}:line {members[k][0].line[members[k][1]]}: {key[0]} rows of "
-                    f"config {key[1]}, pose {key[2]} are {apart[k]:.4f} rad apart in orientation; one pose index was "
-                    "used for two different poses. Give each pose its own index.")
+                    f"{first} and {at[k]}: {key[0]} rows of config {key[1]}, pose {key[2]} are {apart[k]:.4f} rad "
+                    "apart in orientation; one pose index was used for two different poses. Give each pose its own "
+                    "index.")
             rotation = turns.mean().as_matrix()
         out[key] = (q.mean(axis=0), raw.mean(axis=0), first, temperature, rotation)
     return out
@@ -291,7 +291,7 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
         raw_load=np.array([s[1] for s in loads]), raw_no_load=np.array([s[1] for s in no_loads]),
         no_load_run=np.array([k[1] for k in partners], dtype=np.int64), source=[s[2] for s in loads],
         no_load={k: (np.array(v[0]), np.array(v[1])) for k, v in no_load.items()},
-        temperature_load=(np.array([s[3] for s in loads]) if all(s[3] is not None for s in loads) else None),
+        temperature_load=np.array([s[3] for s in loads]) if all(with_temperature) else None,
         rotation_load=np.array([s[4] for s in loads]) if recorded else None,
         rotation_no_load=np.array([s[4] for s in no_loads]) if recorded else None,
         no_load_rotations={k: np.array(v) for k, v in no_load_rotations.items()},
@@ -314,6 +314,42 @@ def _check_limits(robot: RobotModel, q: NDArray[np.float64], sources: list[str],
         raise LogFormatError(f"{sources[r]}: q{j + 1} = {q[r, j]:.4f} rad lies outside the limits "
                              f"[{robot.lower_limits[j]:.4f}, {robot.upper_limits[j]:.4f}] of {robot.name!r}; "
                              "wrong robot, wrong joint order or wrong unit?")
+
+
+def _load_masses(logs: list[RunLog], load_mass: float | None, load_configurations) -> tuple[float, dict[int, float]]:
+    """The load mass [kg] (given, else the one the logs declare, else the fixture's median) and each
+    configuration's mass the fixture states (every one, else none used); refuses masses that disagree."""
+    masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
+    fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
+                    if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
+    if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
+        # the fixture states every configuration's mass (the logs' per-file masses then need not agree with each
+        # other, but each must agree with the configurations it records)
+        for lg in logs:
+            if lg.load_mass is None:
+                continue
+            for cid in sorted(set(int(c) for c in lg.config)):
+                stated = fixture_mass.get(cid)
+                if stated is not None and abs(stated - lg.load_mass) > 1e-6 * max(stated, 1.0):
+                    raise LogFormatError(
+                        f"{lg.path}: the log declares load_mass_kg {lg.load_mass:g} but the fixture gives "
+                        f"configuration {cid} a mass of {stated:g} kg; which one is right? Fix the fixture file "
+                        "or the '# load_mass_kg' comment.")
+        load_mass = float(np.median(list(fixture_mass.values())))
+        masses = set()
+    if load_mass is None:
+        if len(masses) != 1:
+            raise LogFormatError(f"{{load_mass}} not given and the logs declare {sorted(masses) or 'none'}.",
+                                 parameter="load_mass", fix="pass {load_mass} or write '# load_mass_kg: <kg>' in "
+                                 "the logs", settings={"load_mass": Placeholder("<kg>")})
+        load_mass = masses.pop()
+    elif masses and any(abs(m - load_mass) > 1e-9 for m in masses):
+        raise LogFormatError(f"{{load_mass}} {load_mass:g} kg but the logs declare {sorted(masses)} kg; which one "
+                             "is right?", parameter="load_mass", value=load_mass,
+                             fix="correct {load_mass} or the '# load_mass_kg' comments")
+    if not np.isfinite(load_mass) or load_mass <= 0:
+        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    return load_mass, fixture_mass
 
 
 def prepare_dataset(
@@ -383,36 +419,7 @@ def prepare_dataset(
             raise LogFormatError(
                 f"{lg.path}: the log was recorded with sensor frame {lg.sensor_frame!r} but the robot model's is "
                 f"{robot.sensor_frame!r}; give the same sensor frame (or the same sensor mounting) as the recording.")
-    masses = {lg.load_mass for lg in logs if lg.load_mass is not None}
-    fixture_mass = {c.config_id: c.mass_kg for c in (load_configurations or ())
-                    if isinstance(c, LoadConfiguration) and c.mass_kg is not None}
-    if fixture_mass and load_mass is None and len(fixture_mass) == len(load_configurations):
-        # the fixture states every configuration's mass (the logs' per-file masses then need not agree with each
-        # other, but each must agree with the configurations it records)
-        for lg in logs:
-            if lg.load_mass is None:
-                continue
-            for cid in sorted(set(int(c) for c in lg.config)):
-                stated = fixture_mass.get(cid)
-                if stated is not None and abs(stated - lg.load_mass) > 1e-6 * max(stated, 1.0):
-                    raise LogFormatError(
-                        f"{lg.path}: the log declares load_mass_kg {lg.load_mass:g} but the fixture gives "
-                        f"configuration {cid} a mass of {stated:g} kg; which one is right? Fix the fixture file "
-                        "or the '# load_mass_kg' comment.")
-        load_mass = float(np.median(list(fixture_mass.values())))
-        masses = set()
-    if load_mass is None:
-        if len(masses) != 1:
-            raise LogFormatError(f"{{load_mass}} not given and the logs declare {sorted(masses) or 'none'}.",
-                                 parameter="load_mass", fix="pass {load_mass} or write '# load_mass_kg: <kg>' in "
-                                 "the logs", settings={"load_mass": Placeholder("<kg>")})
-        load_mass = masses.pop()
-    elif masses and any(abs(m - load_mass) > 1e-9 for m in masses):
-        raise LogFormatError(f"{{load_mass}} {load_mass:g} kg but the logs declare {sorted(masses)} kg; which one "
-                             "is right?", parameter="load_mass", value=load_mass,
-                             fix="correct {load_mass} or the '# load_mass_kg' comments")
-    if not np.isfinite(load_mass) or load_mass <= 0:
-        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    load_mass, fixture_mass = _load_masses(logs, load_mass, load_configurations)
     positions = _config_positions(load_configurations)
     pairs = pair_runs(logs)
     unknown = sorted(set(pairs.config.tolist()) - set(positions))

@@ -30,6 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ._drift import _skew
+
 __all__ = ["ParameterBlock", "Observability", "fit_mounting_rotation", "identify_mounting", "block_observability",
            "UNIDENTIFIABLE", "MAX_MOUNTING_SE_DEG"]
 
@@ -137,12 +139,6 @@ def axis_text(v: NDArray[np.float64]) -> str:
     return "[" + ", ".join(f"{c:.2f}" for c in np.sign(v[k]) * v) + "]"
 
 
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    from ._drift import _skew as skew
-
-    return skew(np.atleast_2d(v))
-
-
 def _jacobian(g_s: NDArray, mass: float, p: NDArray, basis: NDArray, scale: NDArray, mounting: bool
               ) -> tuple[NDArray, dict[str, slice]]:
     """The weighted Jacobian (6n, n_params) of the predicted wrenches at ``g_s`` (the mounted frame's gravity) with
@@ -155,7 +151,7 @@ def _jacobian(g_s: NDArray, mass: float, p: NDArray, basis: NDArray, scale: NDAr
     cols = {"mass": (g_s[:, :, None], np.zeros((n, 3, 1))), "centre of mass": (zeros, -S),
             "force bias": (eye, zeros), "torque bias": (zeros, eye)}
     if mounting:
-        cols["mounting rotation"] = (mass * S, _skew(p)[0] @ S)
+        cols["mounting rotation"] = (mass * S, _skew(p) @ S)
     if k:
         drift = np.einsum("nk,ab->nakb", basis, np.eye(3)).reshape(n, 3, 3 * k)
         cols["drift"] = (np.concatenate([drift, np.zeros_like(drift)], axis=2),
@@ -209,6 +205,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
 
     ``g_robot`` (n, 3): gravity in the robot's sensor frame per pose; ``start``: the closed-form fit
     (:func:`ftcal.experiment._drift.fit_gravity_blocks`); ``scale``: force and torque residual RMS weights."""
+    import pinocchio as pin
     from scipy.optimize import least_squares
     from scipy.spatial.transform import Rotation
 
@@ -237,20 +234,10 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     dof = max(J.shape[0] - J.shape[1], 1)
     s2 = float(np.sum(residual(sol.x) ** 2)) / dof
     cov = s2 * np.linalg.pinv(J.T @ J)
-    Jr = _right_jacobian(r)
     T = np.eye(cov.shape[0])
-    T[:3, :3] = np.linalg.inv(Jr)
+    T[:3, :3] = np.linalg.inv(pin.Jexp3(r))  # the right Jacobian of SO(3): exp(r + dr) ≈ exp(r) exp(J_r dr)
     cov = T @ cov @ T.T
     return r, cov[:3, :3], cov[:13, :13]
-
-
-def _right_jacobian(r: NDArray) -> NDArray:
-    """The right Jacobian of SO(3) at the rotation vector ``r``: ``exp(r + dr) ≈ exp(r) exp(J_r dr)``."""
-    theta = float(np.linalg.norm(r))
-    K = _skew(r)[0]
-    if theta < 1e-8:
-        return np.eye(3) - 0.5 * K
-    return (np.eye(3) - (1 - np.cos(theta)) / theta**2 * K + (theta - np.sin(theta)) / theta**3 * K @ K)
 
 
 def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, groups: NDArray | None = None

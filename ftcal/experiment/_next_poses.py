@@ -181,42 +181,10 @@ def propose_next_poses(
     """
     if not isinstance(dataset, CalibrationDataset):
         raise PlanningError(f"dataset must be a CalibrationDataset; got {type(dataset).__name__}.")
-    n_in = getattr(model, "n_features_in_", None)
-    if n_in is None:
-        raise PlanningError(f"model must be a fitted calibrator (no n_features_in_ on {type(model).__name__}); "
-                            "fit it on the dataset first (ftcal fit).")
-    # its last input is the temperature: read from the model's own tags (no calibrator import in this layer)
-    tags = model.__sklearn_tags__() if hasattr(model, "__sklearn_tags__") else None
-    takes_temperature = bool(getattr(getattr(tags, "ftcal", None), "temperature_column", False))
-    n_raw = int(n_in) - int(takes_temperature)
-    if n_raw != dataset.n_channels:
-        also = " and the temperature" if takes_temperature else ""
-        raise PlanningError(f"the model reads {n_raw} raw channels{also} but the dataset has {dataset.n_channels} "
-                            f"raw channels (raw shape {dataset.raw.shape}).", parameter="model",
-                            fix="pass the model trained on this dataset's sensor")
-    meta = dataset.meta or {}
-    if load_positions_in_sensor is None:
-        positions = meta.get("load_positions_in_sensor_m")
-        if not positions:
-            raise PlanningError("the dataset's metadata holds no load_positions_in_sensor_m (it was not made by "
-                                "prepare_dataset from run logs, which records them).",
-                                parameter="load_positions_in_sensor",
-                                fix="prepare the dataset from the run logs, or pass {load_positions_in_sensor}",
-                                settings={"load_positions_in_sensor": Placeholder("<(n_configurations, 3) array [m]>")})
-        load_positions_in_sensor = [positions[k] for k in sorted(positions, key=lambda k: int(k))]
-    r = np.asarray(load_positions_in_sensor, dtype=float)
-    if r.ndim != 2 or r.shape[1] != 3 or not len(r) or not np.isfinite(r).all():
-        raise PlanningError(f"load_positions_in_sensor must be a finite (n_configurations, 3) array [m]; "
-                            f"got shape {r.shape}.")
-    if load_mass is None:
-        load_mass = meta.get("load_mass_kg")
-        if load_mass is None:
-            raise PlanningError("the dataset's metadata holds no load_mass_kg.", parameter="load_mass",
-                                fix="pass {load_mass}", settings={"load_mass": Placeholder("<mass [kg]>")})
-    if not np.isfinite(load_mass) or load_mass <= 0:
-        raise PlanningError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    _check_model_channels(model, dataset)
+    r, load_mass = _load_of(dataset, load_positions_in_sensor, load_mass)
     g = np.asarray(gravity_in_base if gravity_in_base is not None
-                   else meta.get("gravity_in_base_m_s2", (0.0, 0.0, -STANDARD_GRAVITY)), dtype=float)
+                   else (dataset.meta or {}).get("gravity_in_base_m_s2", (0.0, 0.0, -STANDARD_GRAVITY)), dtype=float)
     if dataset.n_samples <= 7:
         raise PlanningError(f"the dataset has {dataset.n_samples} rows; at least 8 are needed to predict the raw "
                             "reading of a new pose (an affine map from the 6 wrench components).")
@@ -249,24 +217,8 @@ def propose_next_poses(
         kind = "gaussian_process"
     noise = max(noise, 1e-12 * max(float(diag.max()), 1e-300))
 
-    var = diag.copy()
-    total_before = float(var.sum())
-    updates = np.zeros((len(var), 0))
-    chosen, stds, gains = [], [], []
-    for _ in range(int(n_poses)):
-        per_pose = var.reshape(m, n_cfg).sum(axis=1)
-        per_pose[chosen] = -np.inf
-        k = int(np.argmax(per_pose))
-        idx = np.arange(k * n_cfg, (k + 1) * n_cfg)
-        stds.append(float(np.sqrt(np.mean(var[idx] + noise))))
-        cols = columns(idx) - updates @ updates[idx].T  # current posterior covariance with the pose's points
-        L = np.linalg.cholesky(cols[idx] + noise * np.eye(n_cfg))
-        new = np.linalg.solve(L, cols.T).T
-        reduction = np.sum(new * new, axis=1)
-        gains.append(float(reduction.sum() / total_before) if total_before > 0 else 0.0)
-        var = np.maximum(var - reduction, 0.0)
-        updates = np.hstack([updates, new])
-        chosen.append(k)
+    total_before = float(diag.sum())
+    chosen, stds, gains, var = _greedy_poses(diag, columns, noise, m, n_cfg, int(n_poses))
 
     pick = np.array(chosen, dtype=int)
     gsens = candidates.gravity_in_sensor[pick]
@@ -282,3 +234,74 @@ def propose_next_poses(
                   "n_reachable_candidates": m, "load_mass_kg": float(load_mass),
                   "load_positions_in_sensor_m": r.tolist(), "dataset_rows": dataset.n_samples},
     )
+
+
+def _check_model_channels(model, dataset: CalibrationDataset) -> None:
+    """Refuse a model that is not fitted, or reads another number of raw channels than the dataset holds."""
+    n_in = getattr(model, "n_features_in_", None)
+    if n_in is None:
+        raise PlanningError(f"model must be a fitted calibrator (no n_features_in_ on {type(model).__name__}); "
+                            "fit it on the dataset first (ftcal fit).")
+    # its last input is the temperature: read from the model's own tags (no calibrator import in this layer)
+    tags = model.__sklearn_tags__() if hasattr(model, "__sklearn_tags__") else None
+    takes_temperature = bool(getattr(getattr(tags, "ftcal", None), "temperature_column", False))
+    n_raw = int(n_in) - int(takes_temperature)
+    if n_raw != dataset.n_channels:
+        also = " and the temperature" if takes_temperature else ""
+        raise PlanningError(f"the model reads {n_raw} raw channels{also} but the dataset has {dataset.n_channels} "
+                            f"raw channels (raw shape {dataset.raw.shape}).", parameter="model",
+                            fix="pass the model trained on this dataset's sensor")
+
+
+def _load_of(dataset: CalibrationDataset, load_positions_in_sensor: ArrayLike | None, load_mass: float | None
+             ) -> tuple[NDArray[np.float64], float]:
+    """The load positions (n_configurations, 3) [m] and the load mass [kg]: as given, else from the dataset's
+    metadata (what :func:`prepare_dataset` records)."""
+    meta = dataset.meta or {}
+    if load_positions_in_sensor is None:
+        positions = meta.get("load_positions_in_sensor_m")
+        if not positions:
+            raise PlanningError("the dataset's metadata holds no load_positions_in_sensor_m (it was not made by "
+                                "prepare_dataset from run logs, which records them).",
+                                parameter="load_positions_in_sensor",
+                                fix="prepare the dataset from the run logs, or pass {load_positions_in_sensor}",
+                                settings={"load_positions_in_sensor": Placeholder("<(n_configurations, 3) array [m]>")})
+        load_positions_in_sensor = [positions[k] for k in sorted(positions, key=lambda k: int(k))]
+    r = np.asarray(load_positions_in_sensor, dtype=float)
+    if r.ndim != 2 or r.shape[1] != 3 or not len(r) or not np.isfinite(r).all():
+        raise PlanningError(f"load_positions_in_sensor must be a finite (n_configurations, 3) array [m]; "
+                            f"got shape {r.shape}.")
+    if load_mass is None:
+        load_mass = meta.get("load_mass_kg")
+        if load_mass is None:
+            raise PlanningError("the dataset's metadata holds no load_mass_kg.", parameter="load_mass",
+                                fix="pass {load_mass}", settings={"load_mass": Placeholder("<mass [kg]>")})
+    if not np.isfinite(load_mass) or load_mass <= 0:
+        raise PlanningError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    return r, load_mass
+
+
+def _greedy_poses(diag: NDArray, columns, noise: float, m: int, n_cfg: int, n_poses: int
+                  ) -> tuple[list[int], list[float], list[float], NDArray]:
+    """Greedy choice of ``n_poses`` of ``m`` candidates (``n_cfg`` predicted points each): each step takes the pose
+    of largest remaining predictive variance and conditions on it. The chosen poses, their predicted std before
+    being chosen, each one's share of the total variance removed, and the variance left (m * n_cfg,)."""
+    var = diag.copy()
+    total_before = float(var.sum())
+    updates = np.zeros((len(var), 0))
+    chosen, stds, gains = [], [], []
+    for _ in range(n_poses):
+        per_pose = var.reshape(m, n_cfg).sum(axis=1)
+        per_pose[chosen] = -np.inf
+        k = int(np.argmax(per_pose))
+        idx = np.arange(k * n_cfg, (k + 1) * n_cfg)
+        stds.append(float(np.sqrt(np.mean(var[idx] + noise))))
+        cols = columns(idx) - updates @ updates[idx].T  # current posterior covariance with the pose's points
+        L = np.linalg.cholesky(cols[idx] + noise * np.eye(n_cfg))
+        new = np.linalg.solve(L, cols.T).T
+        reduction = np.sum(new * new, axis=1)
+        gains.append(float(reduction.sum() / total_before) if total_before > 0 else 0.0)
+        var = np.maximum(var - reduction, 0.0)
+        updates = np.hstack([updates, new])
+        chosen.append(k)
+    return chosen, stds, gains, var

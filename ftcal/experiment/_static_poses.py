@@ -20,7 +20,7 @@ A wrench written in the base frame (``wrench_frame="base"``) is turned into the 
 from __future__ import annotations
 
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -32,8 +32,6 @@ from ._still_poses import DEFAULT_MIN_STILL_S, DEFAULT_STILL_TOLERANCE_DEG, Stil
 
 __all__ = ["StaticPoses", "static_poses", "RecordingRows", "recording_rows", "recording_kind", "bag_run_log",
            "RecordingOptions"]
-
-KINDS = ("run log", "pose file", "ROS bag")
 
 
 @dataclass(frozen=True)
@@ -147,14 +145,16 @@ def recording_kind(path: str | Path) -> str:
     return "run log"
 
 
-def _one_kind(paths: Sequence[Path]) -> str:
+def _one_kind(recording) -> tuple[list[Path], str]:
+    """The recording's paths and their one kind (:func:`recording_kind`); a mix of kinds is refused."""
+    paths = [Path(recording)] if isinstance(recording, (str, Path)) else [Path(p) for p in recording]
     kinds = {str(p): recording_kind(p) for p in paths}
     if not kinds:
         raise CalibrationInputError("no recordings given; pass run logs, pose files or ROS bags.")
     if len(set(kinds.values())) > 1:
         shown = ", ".join(f"{k} ({v})" for k, v in list(kinds.items())[:4])
         raise CalibrationInputError(f"the inputs mix kinds: {shown}; give run logs, pose files or ROS bags, one kind.")
-    return next(iter(kinds.values()))
+    return paths, next(iter(kinds.values()))
 
 
 def _need_model(model, what: str):
@@ -370,8 +370,7 @@ def static_poses(recording, *, model=None, robot=None, options: RecordingOptions
     True
     """
     options = options or RecordingOptions()
-    paths = [Path(recording)] if isinstance(recording, (str, Path)) else [Path(p) for p in recording]
-    kind = _one_kind(paths)
+    paths, kind = _one_kind(recording)
     if kind == "ROS bag":
         return _bag_poses(paths, model, robot, options, check_wrench)
     if kind == "pose file":
@@ -402,8 +401,7 @@ def recording_rows(recording, *, model=None, robot=None, options: RecordingOptio
     from ..robot import sensor_pose_in_base
 
     options = options or RecordingOptions()
-    paths = [Path(recording)] if isinstance(recording, (str, Path)) else [Path(p) for p in recording]
-    kind = _one_kind(paths)
+    paths, kind = _one_kind(recording)
     if kind == "run log":
         logs, rotations, wrenches = _run_logs(paths, model, robot)
         lead = [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)]

@@ -166,13 +166,6 @@ class OrderDrift:
                 f"{1e3 * np.linalg.norm(self.center_of_mass_shift):.1f} mm; use it with {option}")
 
 
-def _per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
-    if groups is None:
-        return values
-    _, inverse = np.unique(groups, return_inverse=True)
-    return np.bincount(inverse, weights=values) / np.bincount(inverse)
-
-
 def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = (0.0, 0.0, -9.81),
                              *, groups: ArrayLike | None = None, cv: int = 20, random_state: int | None = 0
                              ) -> OrderDrift | None:
@@ -197,7 +190,7 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
     >>> found.description, bool(found.held_out_drift[0] < found.held_out_constant[0] - found.paired_se[0])
     ('linear in time', True)
     """
-    from ._drift import held_out_residual, spline_basis
+    from ._drift import held_out_residual, per_pose_mean, spline_basis
     from ._tool_load import _check_inputs, _gravity_in_sensor, identify_tool_load
 
     R, W = _check_inputs(sensor_rotations, wrenches)
@@ -220,8 +213,8 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
         return None
     rms_c, rms_d, se = np.zeros(2), np.zeros(2), np.zeros(2)
     for block, sl in enumerate((slice(0, 3), slice(3, 6))):
-        f_c = _per_pose_mean(np.mean(e_c[:, sl] ** 2, axis=1), groups)
-        f_d = _per_pose_mean(np.mean(e_d[:, sl] ** 2, axis=1), groups)
+        f_c = per_pose_mean(np.mean(e_c[:, sl] ** 2, axis=1), groups)
+        f_d = per_pose_mean(np.mean(e_d[:, sl] ** 2, axis=1), groups)
         rms_c[block], rms_d[block] = np.sqrt(f_c.mean()), np.sqrt(f_d.mean())
         u = f_c / (2 * max(rms_c[block], 1e-300)) - f_d / (2 * max(rms_d[block], 1e-300))  # delta method
         se[block] = u.std(ddof=1) / np.sqrt(u.size) if u.size > 1 else np.inf

@@ -451,6 +451,38 @@ def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayL
     return np.hstack([np.einsum("nji,nj->ni", R, W[:, :3]), np.einsum("nji,nj->ni", R, W[:, 3:])])
 
 
+def _check_poses(g_s: NDArray[np.float64], groups: ArrayLike | None) -> NDArray | None:
+    """The pose labels (``groups`` as an array, or None), after refusing fewer than 4 poses and poses whose
+    gravity directions ``g_s`` (n, 3) do not tilt the tool by :data:`MIN_TILT_DEG` in two directions."""
+    n = len(g_s)
+    if groups is not None:
+        groups = np.asarray(groups)
+        if groups.shape != (n,):
+            raise CalibrationInputError(f"groups must have shape ({n},) (one pose label per row); got "
+                                        f"{groups.shape}.", parameter="groups", value=groups.shape)
+    # the poses are the groups (one group is a bad groups argument, refused by the drift selection)
+    n_poses = n if groups is None or np.unique(groups).size < 2 else int(np.unique(groups).size)
+    if n_poses < 4:
+        raise CalibrationInputError(
+            f"{n_poses} poses; at least 4 are needed (each tilting the tool differently) to identify the mass, "
+            "centre of mass and bias.", parameter="rotations", value=n_poses,
+            fix="record at least 4 poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
+            settings={"subdivisions": 0})
+    directions = g_s / np.linalg.norm(g_s, axis=1, keepdims=True)
+    spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False) / np.sqrt(max(n, 1))
+    tilt_deg = np.degrees(np.arcsin(np.clip(spread, 0.0, 1.0)))
+    if tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
+        second = float(tilt_deg[1]) if tilt_deg.size > 1 else 0.0
+        raise CalibrationInputError(
+            f"the {n_poses} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
+            f"frame) varies by about {second:.1f} deg in its second direction, but mass, centre of mass and bias "
+            f"need at least {MIN_TILT_DEG:g} deg in two independent directions.", parameter="rotations",
+            value=n_poses, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
+            settings={"subdivisions": 0},
+        )
+    return groups
+
+
 def identify_tool_load(
     sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
     times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
@@ -526,31 +558,7 @@ def identify_tool_load(
     temperatures = _check_drift_values("temperatures", temperatures, n)
     if time_unit not in ("s", "pose"):
         raise CalibrationInputError(f"time_unit must be 's' (seconds) or 'pose' (recording order); got {time_unit!r}.")
-    if groups is not None:
-        groups = np.asarray(groups)
-        if groups.shape != (n,):
-            raise CalibrationInputError(f"groups must have shape ({n},) (one pose label per row); got "
-                                        f"{groups.shape}.", parameter="groups", value=groups.shape)
-    # the poses are the groups (one group is a bad groups argument, refused by the drift selection)
-    n_poses = n if groups is None or np.unique(groups).size < 2 else int(np.unique(groups).size)
-    if n_poses < 4:
-        raise CalibrationInputError(
-            f"{n_poses} poses; at least 4 are needed (each tilting the tool differently) to identify the mass, "
-            "centre of mass and bias.", parameter="rotations", value=n_poses,
-            fix="record at least 4 poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
-            settings={"subdivisions": 0})
-    directions = g_s / np.linalg.norm(g_s, axis=1, keepdims=True)
-    spread = np.linalg.svd(directions - directions.mean(axis=0), compute_uv=False) / np.sqrt(max(n, 1))
-    tilt_deg = np.degrees(np.arcsin(np.clip(spread, 0.0, 1.0)))
-    if tilt_deg.size < 2 or tilt_deg[1] < MIN_TILT_DEG:
-        second = float(tilt_deg[1]) if tilt_deg.size > 1 else 0.0
-        raise CalibrationInputError(
-            f"the {n_poses} poses do not excite the tool load{_missing_tilt(directions, tilt_deg)}: gravity (in the sensor "
-            f"frame) varies by about {second:.1f} deg in its second direction, but mass, centre of mass and bias "
-            f"need at least {MIN_TILT_DEG:g} deg in two independent directions.", parameter="rotations",
-            value=n_poses, fix="add poses tilted about two axes, e.g. the 11 of a plan with {subdivisions}",
-            settings={"subdivisions": 0},
-        )
+    groups = _check_poses(g_s, groups)
     candidate, table = select_drift(g_s, W, times, temperatures, choice=drift, cv=cv, random_state=random_state,
                                     groups=groups)
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
@@ -794,7 +802,7 @@ def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, too
     def norms(residual: NDArray) -> dict:
         return {"force_N": np.linalg.norm(residual[:, :3], axis=1).tolist() if listed else None,
                 "torque_Nm": np.linalg.norm(residual[:, 3:], axis=1).tolist() if listed else None,
-                "rms": [float(np.sqrt(np.mean(residual[:, :3] ** 2))), float(np.sqrt(np.mean(residual[:, 3:] ** 2)))]}
+                "rms": residual_rms_of(residual).tolist()}
 
     return {"format": "ftcal-tool-identification", "format_version": 1, "n_poses": int(len(W)),
             "drift_model": "constant" if d is None else d.description, "axis": axis,

@@ -176,14 +176,7 @@ def simulate_experiment(
     """
     if isinstance(robot, (str, Path)):
         robot = load_robot(robot)
-    if not np.isfinite(load_mass) or load_mass <= 0:
-        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
-    if int(samples_per_pose) != samples_per_pose or samples_per_pose < 1:
-        raise LogFormatError(f"samples_per_pose must be a positive integer; got {samples_per_pose!r}.")
-    if not (np.isfinite(joint_error_max) and joint_error_max >= 0 and np.isfinite(load_pose_jitter_deg)
-            and load_pose_jitter_deg >= 0):
-        raise LogFormatError(f"joint_error_max ({joint_error_max!r} rad) and load_pose_jitter_deg "
-                             f"({load_pose_jitter_deg!r} deg) must be finite and >= 0.")
+    _check_arguments(load_mass, samples_per_pose, joint_error_max, load_pose_jitter_deg, thermal_drift)
     configs = tuple(load_configurations) if load_configurations is not None else thesis_load_configurations()
     out = Path(out_dir)
     paths = [out / f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
@@ -200,63 +193,84 @@ def simulate_experiment(
         plan = plan_calibration_poses(robot, subdivisions=subdivisions, excluded_cap_deg=excluded_cap_deg,
                                       gravity_in_base=gravity_in_base)
     g = np.asarray(gravity_in_base, dtype=float)
-    per_joint = joint_error_max / robot.n_joints
-    lo, hi = robot.lower_limits, robot.upper_limits
-    reps = int(samples_per_pose)
-    n = plan.n_poses
-    clock = 0.0
-    for c in configs:
-        for kind, path in (("no-load", out / f"config{c.config_id}_no-load.csv"),
-                           ("load", out / f"config{c.config_id}_load.csv")):
-            q_logged = plan.q.copy()
-            if kind == "load":
-                sigma = np.deg2rad(load_pose_jitter_deg)
-                jitter = np.clip(rng.normal(0, sigma, q_logged.shape), -JITTER_TRUNCATION * sigma,
-                                 JITTER_TRUNCATION * sigma)
-                q_logged = np.clip(q_logged + jitter, lo, hi)
-            q_true = q_logged + rng.uniform(-per_joint, per_joint, q_logged.shape)
-            R_true = sensor_pose_in_base(robot, q_true)[:, :3, :3]
-            wrench = reference_wrench(R_true, mounting.mass, mounting.center_of_mass_in_sensor, g)
-            if kind == "load":
-                wrench += reference_wrench(R_true, load_mass if c.mass_kg is None else c.mass_kg, c.position_in_sensor, g)
-            rows_w = np.repeat(wrench, reps, axis=0)
-            t = clock + np.repeat(np.arange(n) * _POSE_PERIOD_S, reps) + np.tile(np.arange(reps) * _SAMPLE_PERIOD_S, n)
-            if bias_drift is not None:
-                rows_w = rows_w + _drift_values("bias_drift", bias_drift, t, (len(t), 6))
-            raw = sensor.read(rows_w)
-            temperature = None
-            if isinstance(thermal_drift, str):
-                if thermal_drift != "typical":
-                    raise LogFormatError(f"thermal_drift must be a ThermalDrift, 'typical' or None; got {thermal_drift!r}.")
-                full_scale = np.abs(sensor.profile.reading_from_wrench(np.diag(sensor.profile.full_scale))).sum(axis=0)
-                thermal_drift = ThermalDrift.typical(full_scale, random_state=rng)
-            if thermal_drift is not None:
-                start, end = rng.uniform(*temperature_range_deg, size=2)
-                temperature = (np.linspace(start, end, len(raw)) if temperature_profile is None
-                               else _drift_values("temperature_profile", temperature_profile, t, (len(t),)))
-                raw = thermal_drift.apply(raw, temperature)
-            clock = float(t[-1]) + _POSE_PERIOD_S
-            write_run_log(path, timestamp=t, run_kind=[kind] * (n * reps), config=[c.config_id] * (n * reps),
-                          pose=np.repeat(np.arange(n), reps), q=np.repeat(q_logged, reps, axis=0), raw=raw,
-                          raw_unit=sensor.profile.raw_unit,
-                          load_mass=(load_mass if c.mass_kg is None else c.mass_kg) if kind == "load" else None,
-                          robot=robot.name, sensor_frame=robot.sensor_frame,
-                          meta={"simulated": True, "load_configuration": c.name}, overwrite=overwrite,
-                          temperature=temperature)
+    reps, n, clock = int(samples_per_pose), plan.n_poses, 0.0
+    for (c, kind), path in zip([(c, kind) for c in configs for kind in ("no-load", "load")], paths):
+        mass = (load_mass if c.mass_kg is None else c.mass_kg) if kind == "load" else None
+        q_logged, t, rows_w = _run_wrenches(rng, robot, plan.q, mounting, g, c.position_in_sensor, mass,
+                                            joint_error_max / robot.n_joints, load_pose_jitter_deg, reps, clock)
+        if bias_drift is not None:
+            rows_w = rows_w + _drift_values("bias_drift", bias_drift, t, (len(t), 6))
+        raw = sensor.read(rows_w)
+        temperature = None
+        if isinstance(thermal_drift, str):  # "typical": drawn here, after the first run's readings
+            full_scale = np.abs(sensor.profile.reading_from_wrench(np.diag(sensor.profile.full_scale))).sum(axis=0)
+            thermal_drift = ThermalDrift.typical(full_scale, random_state=rng)
+        if thermal_drift is not None:
+            start, end = rng.uniform(*temperature_range_deg, size=2)
+            temperature = (np.linspace(start, end, len(raw)) if temperature_profile is None
+                           else _drift_values("temperature_profile", temperature_profile, t, (len(t),)))
+            raw = thermal_drift.apply(raw, temperature)
+        clock = float(t[-1]) + _POSE_PERIOD_S
+        write_run_log(path, timestamp=t, run_kind=[kind] * (n * reps), config=[c.config_id] * (n * reps),
+                      pose=np.repeat(np.arange(n), reps), q=np.repeat(q_logged, reps, axis=0), raw=raw,
+                      raw_unit=sensor.profile.raw_unit, load_mass=mass, robot=robot.name,
+                      sensor_frame=robot.sensor_frame, meta={"simulated": True, "load_configuration": c.name},
+                      overwrite=overwrite, temperature=temperature)
     truth = {
         "robot": robot.name, "load_mass_kg": load_mass, "mounting_device": asdict(mounting),
         "load_configurations": [asdict(c) for c in configs], "n_poses": n, "samples_per_pose": reps,
         "joint_error_max_rad": joint_error_max, "load_pose_jitter_deg": load_pose_jitter_deg,
         "sensor_errors": sensor.errors_.to_dict() if hasattr(sensor.errors_, "to_dict") else repr(sensor.errors_),
         "zero_offset": np.asarray(sensor.zero_offset).tolist(), "random_state": random_state,
-        "thermal_drift": None if thermal_drift is None else {
-            "offset_per_deg": thermal_drift.offset_per_deg.tolist(), "gain_per_deg": thermal_drift.gain_per_deg.tolist(),
-            "reference_temperature": thermal_drift.reference_temperature,
-            "temperature_range_deg": list(temperature_range_deg)},
-        "plan": plan.settings,
+        "thermal_drift": _drift_facts(thermal_drift, temperature_range_deg), "plan": plan.settings,
     }
     (out / "virtual_experiment.json").write_text(json.dumps(truth, indent=2, default=str), encoding="utf-8")
     return paths
+
+
+def _drift_facts(thermal_drift: ThermalDrift | None, temperature_range_deg: tuple[float, float]) -> dict | None:
+    """The simulated thermal drift as the truth file records it (None: no drift)."""
+    if thermal_drift is None:
+        return None
+    return {"offset_per_deg": thermal_drift.offset_per_deg.tolist(),
+            "gain_per_deg": thermal_drift.gain_per_deg.tolist(), "reference_temperature": thermal_drift.reference_temperature,
+            "temperature_range_deg": list(temperature_range_deg)}
+
+
+def _check_arguments(load_mass: float, samples_per_pose: int, joint_error_max: float, load_pose_jitter_deg: float,
+                     thermal_drift) -> None:
+    """Refuse a load mass <= 0, a fractional or zero sample count, negative errors and an unknown drift name."""
+    if not np.isfinite(load_mass) or load_mass <= 0:
+        raise LogFormatError(f"load_mass must be a positive mass in kg; got {load_mass!r}.")
+    if int(samples_per_pose) != samples_per_pose or samples_per_pose < 1:
+        raise LogFormatError(f"samples_per_pose must be a positive integer; got {samples_per_pose!r}.")
+    if not (np.isfinite(joint_error_max) and joint_error_max >= 0 and np.isfinite(load_pose_jitter_deg)
+            and load_pose_jitter_deg >= 0):
+        raise LogFormatError(f"joint_error_max ({joint_error_max!r} rad) and load_pose_jitter_deg "
+                             f"({load_pose_jitter_deg!r} deg) must be finite and >= 0.")
+    if isinstance(thermal_drift, str) and thermal_drift != "typical":
+        raise LogFormatError(f"thermal_drift must be a ThermalDrift, 'typical' or None; got {thermal_drift!r}.")
+
+
+def _run_wrenches(rng: np.random.Generator, robot: RobotModel, q_planned: NDArray, mounting: MountingDevice,
+                  g: NDArray, load_position: ArrayLike, load_mass: float | None, per_joint: float, jitter_deg: float,
+                  reps: int, clock: float) -> tuple[NDArray, NDArray, NDArray]:
+    """One run's logged joints (n, n_joints) [rad], sample times (n * reps,) [s] from ``clock`` and true wrenches
+    (n * reps, 6) [N, N·m]: the mounting device's weight, and the load's (``load_mass`` [kg]; ``None`` for a
+    no-load run, which also reaches the planned poses without jitter)."""
+    q_logged = q_planned.copy()
+    if load_mass is not None:
+        sigma = np.deg2rad(jitter_deg)
+        jitter = np.clip(rng.normal(0, sigma, q_logged.shape), -JITTER_TRUNCATION * sigma, JITTER_TRUNCATION * sigma)
+        q_logged = np.clip(q_logged + jitter, robot.lower_limits, robot.upper_limits)
+    q_true = q_logged + rng.uniform(-per_joint, per_joint, q_logged.shape)
+    R_true = sensor_pose_in_base(robot, q_true)[:, :3, :3]
+    wrench = reference_wrench(R_true, mounting.mass, mounting.center_of_mass_in_sensor, g)
+    if load_mass is not None:
+        wrench += reference_wrench(R_true, load_mass, load_position, g)
+    n = len(q_logged)
+    t = clock + np.repeat(np.arange(n) * _POSE_PERIOD_S, reps) + np.tile(np.arange(reps) * _SAMPLE_PERIOD_S, n)
+    return q_logged, t, np.repeat(wrench, reps, axis=0)
 
 
 def _drift_values(name: str, function: Callable, t: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray:

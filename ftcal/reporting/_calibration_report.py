@@ -233,12 +233,13 @@ def _round(a: NDArray, digits: int = 6) -> list:
     return out.tolist()
 
 
-def _parse_interval(text: str) -> tuple[int, str] | None:
+def _parse_interval(text: str) -> tuple[int, str]:
     """``"12 months"``, ``"1 year"``, ``"90 days"``, ``"6 weeks"``, or a bare whole number (months) -> ``(count,
-    "months" | "days")``; None for anything else (fractions included: a due date is a calendar date)."""
+    "months" | "days")``; anything else is refused (fractions included: a due date is a calendar date)."""
     found = re.fullmatch(r"\s*(\d+)\s*(?:(day|week|month|year)s?)?\s*", str(text).lower())
     if not found:
-        return None
+        raise CalibrationInputError(f"recalibration_interval {text!r}: give a number and a unit (a "
+                                    "whole number), e.g. '12 months', '1 year', '90 days'.")
     count, unit = int(found.group(1)), found.group(2) or "month"
     return {"day": (count, "days"), "week": (7 * count, "days"), "month": (count, "months"),
             "year": (12 * count, "months")}[unit]
@@ -259,11 +260,7 @@ def add_interval(start: _dt.date, interval: str) -> _dt.date:
     """
     import calendar
 
-    parsed = _parse_interval(interval)
-    if parsed is None:
-        raise CalibrationInputError(f"recalibration_interval {interval!r}: give a number and a unit (a "
-                                    "whole number), e.g. '12 months', '1 year', '90 days'.")
-    count, unit = parsed
+    count, unit = _parse_interval(interval)
     if unit == "days":
         return start + _dt.timedelta(days=count)
     months = start.year * 12 + (start.month - 1) + count
@@ -278,11 +275,6 @@ def _iso_date(text: str) -> _dt.date | None:
         return _dt.date.fromisoformat(str(text).strip()[:10])
     except ValueError:
         return None
-
-
-def _unit_temperature(text: str) -> str:
-    """An ambient temperature with its unit: a bare number is in °C (``"22.5"`` -> ``"22.5 °C"``)."""
-    return f"{text} °C" if re.fullmatch(r"[+-]?\d+(\.\d+)?", text) else text
 
 
 def check_conditions(conditions: dict | None) -> dict[str, str | None]:
@@ -315,9 +307,8 @@ def check_conditions(conditions: dict | None) -> dict[str, str | None]:
             number_field(value, f"conditions field {key!r}")
         out[key] = None if value is None or str(value).strip() == "" else str(value).strip()
     interval = out["recalibration_interval"]
-    if interval is not None and _parse_interval(interval) is None:
-        raise CalibrationInputError(f"recalibration_interval {interval!r}: give a number and a unit (a "
-                                    "whole number), e.g. '12 months', '1 year', '90 days'.")
+    if interval is not None:
+        _parse_interval(interval)
     when = out["calibration_date"]
     if interval is not None and out["recalibration_due"] is None and when is not None and _iso_date(when) is None:
         raise CalibrationInputError(f"calibration_date {when!r}: give the date as YYYY-MM-DD (the recalibration "

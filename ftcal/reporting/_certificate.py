@@ -20,7 +20,6 @@ specification
 
 from __future__ import annotations
 
-import dataclasses
 import datetime as _dt
 import json
 import math
@@ -470,20 +469,20 @@ def _plan_for(model: Any, X: NDArray, y: NDArray, groups, cv: int, seed: int) ->
 
 
 def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: FoldPlan, seed: int, n_jobs
-                 ) -> tuple[Any, NDArray, NDArray | None]:
-    """``(the estimator refitted per fold, its out-of-fold predictions, their std or None)``: an auto model's own
+                 ) -> tuple[NDArray, NDArray | None]:
+    """``(the out-of-fold predictions, their std or None)``: an auto model's own
     predictions of its choice when its comparison is reused (refitted only for a std), else a refit per fold."""
     from sklearn.base import clone
 
     template = clone(model) if reused is None else clone(model.best_estimator_)
     known = getattr(model, "held_out_predictions_", None)
     if reused is not None and not provides_std(template) and known is not None and np.shape(known) == y.shape:
-        return template, np.asarray(known, dtype=float), None
+        return np.asarray(known, dtype=float), None
     # light work (a closed form, a kernel model on few rows) in this process, as the comparison engine scores it:
     # starting worker processes (each importing ftcal) costs more than the fits
     light = model_cost(template, min((len(train) for train, _ in plan.folds), default=0)) == "closed_form"
     out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
-    return template, out["pred"], out["std"]
+    return out["pred"], out["std"]
 
 
 def _alpha(model: Any, y: NDArray, torque: NDArray, alpha: float | None) -> float | None:
@@ -491,6 +490,21 @@ def _alpha(model: Any, y: NDArray, torque: NDArray, alpha: float | None) -> floa
     if not (torque.any() and (~torque).any()):
         return None
     return float(alpha or getattr(model, "alpha_", None) or alpha_from_wrenches(y))
+
+
+def _held_out_and_comparison(model: Any, plan: FoldPlan, X: NDArray, y: NDArray, groups, names: list[str],
+                             alpha: float | None, baselines: bool, seed: int, n_jobs: int | None) -> tuple:
+    """``(the reused auto comparison or None, the reused stock rows or None, the out-of-fold predictions, their
+    std or None, the comparison's facts)`` of the model on ``plan`` (:func:`_held_out_of`, :func:`comparison_facts`)."""
+    name = type(model).__name__
+    reused = _auto_comparison(model, plan, X, y, groups)
+    chosen = model.best_name_ if reused is not None else getattr(model, "baseline", None)  # a stock model's baseline
+    label = f"{name}: {chosen} (this calibration)" if isinstance(chosen, str) else f"{name} (this calibration)"
+    pred, std = _held_out_of(model, reused, X, y, groups, plan, seed, n_jobs)
+    stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
+    comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),
+                                             stock=stock, baselines=baselines, seed=seed, n_jobs=n_jobs))
+    return reused, stock, pred, std, comp
 
 
 def calibration_certificate(
@@ -588,14 +602,8 @@ def calibration_certificate(
     data_max = np.max(np.abs(y), axis=0)
     fs = rated_fs if rated_fs is not None else np.where(data_max > 0, data_max, np.nan)
     alpha = _alpha(model, y, torque, alpha)
-    name = type(model).__name__
-    reused = _auto_comparison(model, plan, X, y, groups)
-    chosen = model.best_name_ if reused is not None else getattr(model, "baseline", None)  # a stock model's baseline
-    label = f"{name}: {chosen} (this calibration)" if isinstance(chosen, str) else f"{name} (this calibration)"
-    template, pred, std = _held_out_of(model, reused, X, y, groups, plan, random_state, n_jobs)
-    stock = _reusable_stock(reused, getattr(model, "best_name_", None)) if baselines else None
-    comp = comparison_facts(_comparison_rows(label, pred, X, y, plan, alpha=alpha or 1.0, axes=tuple(names),
-                                             stock=stock, baselines=baselines, seed=random_state, n_jobs=n_jobs))
+    reused, stock, pred, std, comp = _held_out_and_comparison(model, plan, X, y, groups, names, alpha, baselines,
+                                                              random_state, n_jobs)
     gnames = group_names(dataset)
     channels = channel_names(dataset, X.shape[1])
     case_of, table = load_case_labels(y, pred, groups, fs)
@@ -607,9 +615,8 @@ def calibration_certificate(
     verdict = None if spec_pct is None else ("PASS" if all(a["verdict"] == "PASS" for a in accuracy) else "FAIL")
     date = _dt.datetime.now(_dt.timezone.utc)
     overdue, overdue_warning = _due_date(conditions, date.date())
-    warn = _warnings(accuracy, comp, X, y, list(plan.folds), groups, rated_fs, n, X.shape[1], dataset)
-    if overdue_warning:
-        warn.insert(0, overdue_warning)
+    warn = ([overdue_warning] if overdue_warning else []) + _warnings(
+        accuracy, comp, X, y, list(plan.folds), groups, rated_fs, n, X.shape[1], dataset)
     if reference[0] is None:
         warn.append({"kind": "no reference uncertainty", "text": (
             "The reference standard's uncertainty was not given: the budget leaves it out. State it (reference "
@@ -620,7 +627,8 @@ def calibration_certificate(
                 "date_utc": date.strftime("%Y-%m-%d %H:%M:%S UTC"),
                 "ftcal_version": getattr(ftcal, "__version__", "unknown"), "command": command,
                 "sensor": _sensor_name(sensor, dataset.meta),
-                "model": _model_facts(model, name, model_path, model_sha256, alpha, names, units, channels)}
+                "model": _model_facts(model, type(model).__name__, model_path, model_sha256, alpha, names, units,
+                                      channels)}
     cert = CalibrationCertificate(
         identity=identity, data=_data_facts(dataset, y, torque, dataset_path, dataset_sha256, gnames, channels),
         accuracy=accuracy, comparison=comp, budget=budget, warnings=warn, conditions=conditions,

@@ -204,8 +204,7 @@ def error_distributions_figure(
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="lower right", fontsize=8)
     ax.set_yticks(positions, names)
-    ax.set_xlabel(xlabel)
-    ax.set_title(title)
+    ax.set(xlabel=xlabel, title=title)
     ax.grid(axis="x", alpha=0.3)
     return fig
 
@@ -258,11 +257,10 @@ def axis_errors_figure(
             ax.bar(x + (i - (len(data) - 1) / 2) * width, values[part], width, label=name, color=colors[name])
         _label_bars(ax, x, width, [values[part] for values in data.values()])
         ax.set_xticks(x, labels)
-        ax.set_ylabel(f"RMSE [{unit}]")
-        ax.set_title({"N": "forces", "N·m": "torques"}.get(unit, "outputs"))
-        ax.grid(axis="y", alpha=0.3)
         top = max(float(np.nanmax(values[part])) for values in data.values())
-        ax.set_ylim(0, (top if top > 0 else 1.0) * 1.25)
+        ax.set(ylabel=f"RMSE [{unit}]", title={"N": "forces", "N·m": "torques"}.get(unit, "outputs"),
+               ylim=(0, (top if top > 0 else 1.0) * 1.25))
+        ax.grid(axis="y", alpha=0.3)
     # the legend goes below the panels, where it cannot hide a bar or its value
     fig.legend(*panels[0].get_legend_handles_labels(), loc="outside lower center", ncols=min(len(data), 5), fontsize=8)
     fig.suptitle(title)
@@ -360,6 +358,11 @@ def plot_predicted_vs_reference(y_true: ArrayLike, y_pred: ArrayLike, path: str 
 
 
 # ------------------------------------------------------------------ coverage
+def _azimuth_elevation(d: NDArray) -> tuple[NDArray, NDArray]:
+    """Azimuth ``atan2(y, x)`` and elevation ``asin(z)`` [deg] of unit directions (n, 3)."""
+    return np.degrees(np.arctan2(d[:, 1], d[:, 0])), np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+
+
 def sphere_coverage_figure(
     directions: ArrayLike,
     *,
@@ -402,17 +405,12 @@ def sphere_coverage_figure(
     ax3.set_box_aspect((1, 1, 1))
     ax3.legend(fontsize=8, loc="upper left")
     ax2 = fig.add_subplot(1, 2, 2)
-    lon = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
-    lat = np.degrees(np.arcsin(np.clip(d[:, 2], -1, 1)))
+    lon, lat = _azimuth_elevation(d)
     ax2.scatter(lon[ok], lat[ok], s=12, color="#1f77b4")
     if (~ok).any():
         ax2.scatter(lon[~ok], lat[~ok], s=14, marker="x", color="0.5")
-    ax2.set_xlim(-180, 180)
-    ax2.set_ylim(-90, 90)
-    ax2.set_xticks(np.arange(-180, 181, 60))
-    ax2.set_yticks(np.arange(-90, 91, 30))
-    ax2.set_xlabel("azimuth atan2(y, x) [deg]")
-    ax2.set_ylabel("elevation asin(z) [deg]")
+    ax2.set(xlim=(-180, 180), ylim=(-90, 90), xticks=np.arange(-180, 181, 60), yticks=np.arange(-90, 91, 30),
+            xlabel="azimuth atan2(y, x) [deg]", ylabel="elevation asin(z) [deg]")
     ax2.grid(alpha=0.3)
     ax2.set_title(f"{len(d)} directions, map view", fontsize=10)
     fig.suptitle(title)
@@ -625,14 +623,11 @@ def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_p
     if loaded.size:
         d = force[loaded] / mag[loaded, None]
         order = _draw_order(err[loaded], max_points)
-        lon = np.degrees(np.arctan2(d[order, 1], d[order, 0]))
-        lat = np.degrees(np.arcsin(np.clip(d[order, 2], -1, 1)))
+        lon, lat = _azimuth_elevation(d[order])
         sc = ax.scatter(lon, lat, c=err[loaded][order], s=12, cmap="viridis", linewidths=0)
         fig.colorbar(sc, ax=ax, label="held-out |ΔF| [N]")
-    ax.set_xlim(-180, 180)
-    ax.set_ylim(-90, 90)
-    ax.set_xlabel("load direction: azimuth atan2(Fy, Fx) [deg]")
-    ax.set_ylabel("elevation asin(Fz/|F|) [deg]")
+    ax.set(xlim=(-180, 180), ylim=(-90, 90), xlabel="load direction: azimuth atan2(Fy, Fx) [deg]",
+           ylabel="elevation asin(Fz/|F|) [deg]",
+           title="Force error by load direction (sensor frame; largest errors on top)")
     ax.grid(alpha=0.3)
-    ax.set_title("Force error by load direction (sensor frame; largest errors on top)")
     return fig

@@ -89,6 +89,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.spatial.transform import Rotation
 
 from ..core._exceptions import NO_SETTING, KinematicsError, PlanningError
 from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_direction_ik
@@ -238,14 +239,7 @@ def gravity_in_sensor_from_pitch_yaw(pitch: ArrayLike, yaw: ArrayLike) -> NDArra
 
 def sensor_rotation_from_pitch_yaw(pitch: float, yaw: float, heading: float = 0.0) -> NDArray[np.float64]:
     """Sensor rotation in the base frame ``Rz(heading) Ry(pitch) Rz(yaw)`` (3, 3), angles [rad]."""
-
-    def rz(a: float) -> NDArray[np.float64]:
-        c, s = np.cos(a), np.sin(a)
-        return np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
-
-    c, s = np.cos(pitch), np.sin(pitch)
-    ry = np.array([[c, 0, s], [0, 1.0, 0], [-s, 0, c]])
-    return rz(heading) @ ry @ rz(yaw)
+    return Rotation.from_euler("ZYZ", [heading, pitch, yaw]).as_matrix()
 
 
 @dataclass
@@ -351,16 +345,17 @@ def _solve_in_order(robot: RobotModel, dirs: NDArray[np.float64], order: list[in
     return qs, reached, dropped
 
 
-def _ik_settings(robot, anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin, max_iterations,
-                 n_random_seeds) -> dict:
-    return dict(anchor_position_in_base=anchor_configuration(robot, anchor_position_in_base),
-                gravity_in_base=np.asarray(gravity_in_base, dtype=float), orientation_tol=orientation_tol,
-                limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
-
-
-def _start_direction(robot: RobotModel, g_base: NDArray[np.float64]) -> NDArray[np.float64]:
+def _solve_directions(robot: RobotModel, dirs: NDArray[np.float64], anchor_position_in_base, gravity_in_base,
+                      orientation_tol, limit_margin, max_iterations, n_random_seeds,
+                      fallback_q: NDArray[np.float64] | None = None) -> tuple[dict, list, list[int], list[int]]:
+    """IK of ``dirs`` along a nearest-neighbour tour from the home posture's gravity direction: the IK settings,
+    the joint configurations and the indices of the directions reached and dropped (:func:`_solve_in_order`)."""
+    ik = dict(anchor_position_in_base=anchor_configuration(robot, anchor_position_in_base),
+              gravity_in_base=np.asarray(gravity_in_base, dtype=float), orientation_tol=orientation_tol,
+              limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
     R_home = sensor_pose_in_base(robot, robot.home_configuration)[:3, :3]
-    return R_home.T @ (g_base / np.linalg.norm(g_base))
+    start = R_home.T @ (ik["gravity_in_base"] / np.linalg.norm(ik["gravity_in_base"]))
+    return ik, *_solve_in_order(robot, dirs, _travel_order(dirs, start), ik, fallback_q)
 
 
 def reachable_candidates(
@@ -391,10 +386,8 @@ def reachable_candidates(
     """
     dirs = gravity_directions_in_sensor(subdivisions, excluded_direction=excluded_direction,
                                         excluded_cap_deg=excluded_cap_deg)
-    ik = _ik_settings(robot, anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin,
-                      max_iterations, n_random_seeds)
-    order = _travel_order(dirs, _start_direction(robot, ik["gravity_in_base"]))
-    qs, reached, dropped = _solve_in_order(robot, dirs, order, ik)
+    ik, qs, reached, dropped = _solve_directions(robot, dirs, anchor_position_in_base, gravity_in_base,
+                                                 orientation_tol, limit_margin, max_iterations, n_random_seeds)
     keep = np.sort(np.array(reached, dtype=int))  # candidate order: the sphere's, not the tour's
     q_by_index = dict(zip(reached, qs))
     return CandidatePoses(
@@ -640,6 +633,32 @@ def select_poses(
     return np.array(chosen, dtype=np.int64)
 
 
+def _chosen_directions(candidates: CandidatePoses, strategy: str, n_poses: int, load_positions_in_sensor,
+                       space_filling: float, n_load_configurations: int | None, random_state
+                       ) -> tuple[NDArray[np.int64], dict]:
+    """The candidates a random or D-optimal plan chooses (their indices) and the plan's settings."""
+    positions = _load_positions(load_positions_in_sensor)
+    configs = np.arange(len(positions))
+    if n_load_configurations is not None:
+        if strategy != "d-optimal":
+            raise PlanningError("n_load_configurations (which load configurations) needs strategy 'd-optimal'.")
+        configs = select_load_configurations(candidates.gravity_in_sensor, n_load_configurations, positions)
+    load_positions_in_sensor = positions[configs]
+    picked = select_poses(candidates.gravity_in_sensor, n_poses, strategy=strategy,
+                          load_positions_in_sensor=load_positions_in_sensor, space_filling=space_filling,
+                          random_state=random_state)
+    settings = {"strategy": strategy, "n_poses": int(n_poses), **candidates.settings,
+                "candidate_subdivisions": candidates.settings.get("subdivisions"),
+                "n_reachable_candidates": len(candidates),
+                "space_filling": float(space_filling) if strategy == "d-optimal" else None,
+                "random_state": random_state if isinstance(random_state, (int, np.integer)) else None,
+                "d_criterion": d_criterion(candidates.gravity_in_sensor[picked], load_positions_in_sensor),
+                "load_configurations": configs.tolist(),
+                "load_positions_in_sensor_m": load_positions_in_sensor.tolist()}
+    settings.pop("subdivisions", None)
+    return picked, settings
+
+
 def plan_calibration_poses(
     robot: RobotModel,
     *,
@@ -733,10 +752,8 @@ def plan_calibration_poses(
                                 "'d-optimal' or 'random' for a given number of poses.")
         dirs = gravity_directions_in_sensor(subdivisions, excluded_direction=excluded_direction,
                                             excluded_cap_deg=excluded_cap_deg)
-        ik = _ik_settings(robot, anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin,
-                          max_iterations, n_random_seeds)
-        order = _travel_order(dirs, _start_direction(robot, ik["gravity_in_base"]))
-        qs, reached, dropped = _solve_in_order(robot, dirs, order, ik)
+        ik, qs, reached, dropped = _solve_directions(robot, dirs, anchor_position_in_base, gravity_in_base,
+                                                     orientation_tol, limit_margin, max_iterations, n_random_seeds)
         n_candidates, unreachable = len(dirs), dirs[dropped]
         settings = {"strategy": "geodesic", "subdivisions": int(subdivisions),
                     "excluded_cap_deg": float(excluded_cap_deg),
@@ -750,31 +767,13 @@ def plan_calibration_poses(
                 excluded_cap_deg=excluded_cap_deg, gravity_in_base=gravity_in_base,
                 anchor_position_in_base=anchor_position_in_base, orientation_tol=orientation_tol,
                 limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
-        positions = _load_positions(load_positions_in_sensor)
-        configs = np.arange(len(positions))
-        if n_load_configurations is not None:
-            if strategy != "d-optimal":
-                raise PlanningError("n_load_configurations (which load configurations) needs strategy 'd-optimal'.")
-            configs = select_load_configurations(candidates.gravity_in_sensor, n_load_configurations, positions)
-        load_positions_in_sensor = positions[configs]
-        picked = select_poses(candidates.gravity_in_sensor, n_poses, strategy=strategy,
-                              load_positions_in_sensor=load_positions_in_sensor, space_filling=space_filling,
-                              random_state=random_state)
-        dirs, known_q = candidates.gravity_in_sensor[picked], candidates.q[picked]
-        ik = _ik_settings(robot, candidates.anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin,
-                          max_iterations, n_random_seeds)
-        order = _travel_order(dirs, _start_direction(robot, ik["gravity_in_base"]))
-        qs, reached, dropped = _solve_in_order(robot, dirs, order, ik, fallback_q=known_q)
+        picked, settings = _chosen_directions(candidates, strategy, n_poses, load_positions_in_sensor,
+                                              space_filling, n_load_configurations, random_state)
+        dirs = candidates.gravity_in_sensor[picked]
+        ik, qs, reached, dropped = _solve_directions(
+            robot, dirs, candidates.anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin,
+            max_iterations, n_random_seeds, fallback_q=candidates.q[picked])
         n_candidates, unreachable = candidates.n_candidates, candidates.unreachable
-        settings = {"strategy": strategy, "n_poses": int(n_poses), **candidates.settings,
-                    "candidate_subdivisions": candidates.settings.get("subdivisions"),
-                    "n_reachable_candidates": len(candidates),
-                    "space_filling": float(space_filling) if strategy == "d-optimal" else None,
-                    "random_state": random_state if isinstance(random_state, (int, np.integer)) else None,
-                    "d_criterion": d_criterion(dirs, load_positions_in_sensor),
-                    "load_configurations": configs.tolist(),
-                    "load_positions_in_sensor_m": load_positions_in_sensor.tolist()}
-        settings.pop("subdivisions", None)
     g = dirs[reached].reshape(-1, 3)
     pitch, yaw = pitch_yaw_from_gravity_in_sensor(g)
     settings.update({"gravity_in_base": ik["gravity_in_base"].tolist(), "limit_margin_rad": float(limit_margin)})

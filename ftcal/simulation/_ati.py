@@ -40,6 +40,7 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial.transform import Rotation
 
 from ..core._exceptions import CalFileError
 from ._sensor import SensorProfile
@@ -120,14 +121,6 @@ def _axis_rows(path: Path, cal: ET.Element, tag: str, n_gauges: int | None) -> t
     return np.array(rows), np.array(maxima), [elements[n] for n in WRENCH_LABELS]
 
 
-def _rotation(rx: float, ry: float, rz: float) -> NDArray[np.float64]:
-    cx, sx, cy, sy, cz, sz = np.cos(rx), np.sin(rx), np.cos(ry), np.sin(ry), np.cos(rz), np.sin(rz)
-    r_x = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
-    r_y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
-    r_z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
-    return r_x @ r_y @ r_z
-
-
 def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
 
@@ -139,7 +132,7 @@ def _basic_transform(path: Path, cal: ET.Element, dist_factor: float) -> NDArray
         return np.eye(6)
     d = np.array([_number(path, el, k) if el.get(k) is not None else 0.0 for k in ("Dx", "Dy", "Dz")]) * dist_factor
     angles = [np.deg2rad(_number(path, el, k)) if el.get(k) is not None else 0.0 for k in ("Rx", "Ry", "Rz")]
-    rt = _rotation(*angles).T
+    rt = Rotation.from_euler("XYZ", angles).as_matrix().T  # Rx Ry Rz
     out = np.zeros((6, 6))
     out[:3, :3] = rt
     out[3:, 3:] = rt

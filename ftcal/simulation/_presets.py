@@ -52,17 +52,8 @@ from ..core._exceptions import CalibrationInputError
 
 __all__ = ["ERROR_PRESETS", "PRESET_TEST_DISTRIBUTIONS", "MAX_DATASETS", "error_preset", "default_test_distribution"]
 
-_THESIS = ErrorModel(
-    creep=0.003,
-    creep_axes=3,
-    noise=0.01,
-    crosstalk=0.05,
-    crosstalk_pairs=3,
-    nonlinearity=0.01,
-    nonlinearity_exponent=2.5,
-    nonlinearity_axes=3,
-    spread=0.10,
-)
+# the counts (3 axes or pairs of each error), the exponent 2.5 and the spread 0.10 are ErrorModel's defaults
+_THESIS = ErrorModel(creep=0.003, noise=0.01, crosstalk=0.05, nonlinearity=0.01)
 
 #: Most datasets of one preset a benchmark run or ``ftcal simulate dataset`` makes (the thesis has 30).
 MAX_DATASETS = 1000

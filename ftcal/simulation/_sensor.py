@@ -48,8 +48,6 @@ __all__ = ["SensorProfile", "default_calibration_matrix"]
 
 #: Beam angles of the 3-beam layout [rad].
 _BEAM_ANGLES = np.deg2rad([0.0, 120.0, 240.0])
-#: Hub radius of the default sensor [m] (alpha = 1 / r = 50 m⁻¹).
-_HUB_RADIUS = 0.02
 #: Fixed bridge gain deviations of the default sensor (channel order V0, H0, V1, H1, V2, H2).
 _BRIDGE_GAINS = np.array([1.012, 0.987, 1.021, 0.994, 1.006, 0.979])
 #: Share of the horizontal shear a vertical bridge picks up (gauge misalignment), and vice versa.
