@@ -298,3 +298,24 @@ def test_a_base_frame_wrench_identified_as_a_sensor_frame_one_is_refused_not_a_m
     wrenches = np.hstack([force, np.cross(COM, force)]) + BIAS + 0.02 * rng.normal(size=(len(rotations), 6))
     with pytest.raises(CalibrationInputError, match="not distinguishable from zero.*base frame"):
         identify_tool_load(rotations, wrenches, gravity=G)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_a_mass_within_its_noise_of_zero_is_named_as_such_whatever_its_sign(robot, plan_q, seed):
+    """A base-frame wrench gives a mass within a few SE of 0 kg, slightly above or below zero by the noise drawn: both
+    signs get the same advice (the base frame), never "not positive" for one draw and the base frame for another."""
+    rng = np.random.default_rng(seed)
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    force = np.tile(MASS * G, (len(rotations), 1))
+    wrenches = np.hstack([force, np.cross(COM, force)]) + BIAS + 0.02 * rng.normal(size=(len(rotations), 6))
+    with pytest.raises(CalibrationInputError, match="not distinguishable from zero.*base frame"):
+        identify_tool_load(rotations, wrenches, gravity=G)
+
+
+def test_gravity_declared_the_wrong_way_gives_a_negative_mass_refused_as_not_positive(robot, plan_q):
+    """The tool's weight with gravity declared upwards: a mass far below zero (many SE), which says the gravity
+    direction is wrong, not that the tool weighs nothing."""
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(0))
+    with pytest.raises(CalibrationInputError, match=r"mass is -1\.2\d* kg \(not positive\).*gravity direction"):
+        identify_tool_load(rotations, wrenches, gravity=-G)

@@ -564,12 +564,14 @@ def identify_tool_load(
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
     basis = candidate.basis({"time": np.zeros(n)} if values is None else {candidate.variable: values})
     fit = fit_gravity_blocks(g_s, W, basis, groups)
-    if not fit["mass"] > 0:
+    mass_se = float(np.sqrt(max(fit["force_cov"][0, 0], 0.0)))
+    # a mass below zero by more than its noise: gravity points the other way; within 3 SE of zero (either sign):
+    # no weight that turns with the poses at all
+    if not np.isfinite(fit["mass"]) or fit["mass"] <= -3.0 * mass_se or (fit["mass"] <= 0 and mass_se == 0):
         raise CalibrationInputError(
             f"the identified mass is {fit['mass']:.4g} kg (not positive): the wrenches do not show a tool's weight. "
             "Check the gravity direction and that the wrenches are in the sensor frame."
         )
-    mass_se = float(np.sqrt(max(fit["force_cov"][0, 0], 0.0)))
     if fit["mass"] < 3.0 * mass_se:  # not told apart from no weight at all: the force does not turn with the poses
         raise CalibrationInputError(
             f"the identified mass, {fit['mass']:.4g} ± {mass_se:.2g} kg, is not distinguishable from zero: the force "
