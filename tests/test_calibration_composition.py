@@ -27,7 +27,10 @@ def test_re_tared_wrapper_files_written_before_the_shared_composition_still_load
     """Files written by tests/data/model_files_v3/make_files.py (main at c026f98), each re-tared."""
     model = load_model(V3 / f"{name}.model.npz")
     X = np.load(V3 / f"{name}.readings.npy")
-    np.testing.assert_array_equal(model.predict(X), np.load(V3 / f"{name}.expected.npy"))
+    expected = np.load(V3 / f"{name}.expected.npy")
+    # equal to the last few bits, not bit for bit: another machine's BLAS kernel sums in another order and moves the
+    # last bit of a ~50 N wrench (~1e-14 N, seen on a fresh machine); a model read wrongly is off by ~0.1 N and more
+    np.testing.assert_allclose(model.predict(X), expected, rtol=0, atol=1e-12 * np.abs(expected).max())
     # the re-tare was saved and is applied: the reading it was taken at gives what the training tare gave
     tared = model.estimator_ if name == "temperature" else model  # compensation re-tares the model inside
     at_tare = tared.predict(tared.tare_reading_[None, :])
