@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from ..core._columns import check_plain_fields, csv_rows, is_number
 from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileError, Placeholder
-from ..core._files import atomic_output
+from ..core._files import atomic_output, values_sha256
 from ..core._temperature import TemperatureValueError, check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
@@ -68,20 +68,10 @@ def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDatase
     model would be judged on its own training rows. The files are compared by what was read from them (a hash of
     the arrays), so a copy written otherwise is found too; with group labels read from a column (``labelled``),
     rows labelled as other poses or sessions are told apart by their labels."""
-    import hashlib
-
-    seen: dict[bytes, Path] = {}
+    seen: dict[str, Path] = {}
     for path, part in zip(files, parts):
-        digest = hashlib.sha256()
-        for array in (part.raw, part.wrench, part.temperature):
-            if array is not None:
-                a = np.ascontiguousarray(array, dtype=float)
-                digest.update(repr(a.shape).encode())
-                digest.update(a.tobytes())
-        if labelled and part.group is not None:
-            digest.update(np.ascontiguousarray(part.group, dtype=np.int64).tobytes())
-            digest.update(repr(part.meta.get("group_names")).encode())
-        key = digest.digest()
+        labels = (part.group, repr(part.meta.get("group_names"))) if labelled and part.group is not None else ()
+        key = values_sha256([part.raw, part.wrench, part.temperature, *labels])
         if part.n_samples and key in seen:
             raise DatasetFileError(
                 f"{path} holds the same readings and wrenches as {seen[key]} ({part.n_samples} rows): one recording "
