@@ -1005,8 +1005,6 @@ def write_bag(
     pathlib.Path
     """
     check_rosbags()
-    from scipy.spatial.transform import Rotation
-
     if storage not in BAG_STORAGES:
         raise LogFormatError(f"storage must be one of {', '.join(BAG_STORAGES)}; got {storage!r}.")
     path = Path(path)
@@ -1016,28 +1014,64 @@ def write_bag(
     values = np.asarray(reading, dtype=float)
     t_p = np.asarray(pose_time, dtype=float)
     sensor_topic = sensor_topic or ("/ft_sensor/raw" if raw else "/ft_sensor/wrench")
-    from rosbags.typesys import Stores, get_typestore
+    out = _Serializer(storage == "ros1")
+    T = out.store.types
+    if raw:
+        Multi, Layout = T["std_msgs/msg/Float64MultiArray"], T["std_msgs/msg/MultiArrayLayout"]
+        template = Multi(layout=Layout(dim=[], data_offset=0), data=_SENTINELS[:values.shape[1]].copy())
+        out.add(sensor_topic, template, t_s, values, latency_s)
+    else:
+        Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
+            T["geometry_msgs/msg/WrenchStamped"]
+        v = _SENTINELS
+        template = Stamped(header=out.header(None, frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
+                                                                           torque=Vector3(x=v[3], y=v[4], z=v[5])))
+        out.add(sensor_topic, template, t_s, values, latency_s, stamped=True, offset_s=sensor_clock_offset_s)
+    if joints is not None:
+        q = np.asarray(joints, dtype=float)
+        empty = np.zeros(0)
+        template = T["sensor_msgs/msg/JointState"](header=out.header(None, ""), name=list(joint_names),
+                                                   position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
+                                                   effort=empty)
+        out.add(joint_topic, template, t_p, q, latency_s, stamped=True)
+    if rotations is not None:
+        _add_tf(out, np.asarray(rotations, dtype=float), t_p, tf_frames, latency_s)
+    out.write(path, storage, ros1_chunk_bytes)
+    return path
 
-    ros1 = storage == "ros1"
-    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
-    if "tf2_msgs/msg/TFMessage" not in store.types:  # rosbags' ROS 1 store lacks it
-        from rosbags.typesys import get_types_from_msg
 
-        store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
-    T = store.types
-    Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
-    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+class _Serializer:
+    """The messages :func:`write_bag` writes, serialized for ROS 1 or ROS 2: each stream's template (sentinel
+    numbers and stamp) serialized once, then the stamps and values written into copies of its bytes (the layout is
+    fixed: same names, same counts)."""
 
-    def header(t: float, frame: str):
-        sec = math.floor(t)
-        kwargs = {"seq": 0} if ros1 else {}
-        return Header(stamp=Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000), frame_id=frame,
-                      **kwargs)
+    def __init__(self, ros1: bool) -> None:
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-    def stream(template, typ: str, times: NDArray, values: NDArray, stamped: bool, offset_s: float = 0.0):
-        """The serialized messages of a stream: ``template`` serialized once with sentinel numbers, then the
-        stamps and values written into copies of its bytes (the layout is fixed: same names, same counts)."""
-        data = np.frombuffer(bytes(serialize(template, typ)), dtype=np.uint8)
+        self.ros1 = ros1
+        self.store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+        if TF_TYPE not in self.store.types:  # rosbags' ROS 1 store lacks it
+            self.store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", TF_TYPE))
+        self.serialize = self.store.serialize_ros1 if ros1 else self.store.serialize_cdr
+        self.streams: list = []  # (topic, type, receive times, serialized rows)
+        self.statics: list = []  # (topic, type, time, serialized message)
+
+    def header(self, t: float | None, frame: str):
+        """A header stamped ``t`` [s] (None: the sentinel stamp) in ``frame``."""
+        Header, Time = self.store.types["std_msgs/msg/Header"], self.store.types["builtin_interfaces/msg/Time"]
+        if t is None:
+            stamp = Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC)
+        else:
+            sec = math.floor(t)
+            stamp = Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
+        return Header(stamp=stamp, frame_id=frame, **({"seq": 0} if self.ros1 else {}))
+
+    def add(self, topic: str, template, times: NDArray, values: NDArray, latency_s: float, stamped: bool = False,
+            offset_s: float = 0.0) -> None:
+        """The stream of ``template``'s messages with ``values`` (one row a message) at ``times`` [s], received
+        ``latency_s`` later, their header stamps ``offset_s`` ahead."""
+        typ = template.__msgtype__
+        data = np.frombuffer(bytes(self.serialize(template, typ)), dtype=np.uint8)
         width = values.shape[1]
         at = bytes(data).find(_SENTINELS[:width].astype("<f8").tobytes())
         out = np.tile(data, (len(times), 1))
@@ -1046,81 +1080,60 @@ def write_bag(
             st = bytes(data).find(_STAMP_SENTINEL)
             stamp = times + offset_s
             sec = np.floor(stamp)
-            nsec = np.clip(np.round((stamp - sec) * 1e9), 0, 999_999_999)
             both = np.empty(len(times), dtype=[("sec", "<i4"), ("nsec", "<u4")])
-            both["sec"], both["nsec"] = sec, nsec
+            both["sec"], both["nsec"] = sec, np.clip(np.round((stamp - sec) * 1e9), 0, 999_999_999)
             out[:, st:st + 8] = both.view(np.uint8).reshape(len(times), 8)
-        return out
+        self.streams.append((topic, typ, times + latency_s, out))
 
-    sentinel_header = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=frame_id,
-                             **({"seq": 0} if ros1 else {}))
-    streams = []  # (topic, type, receive times, serialized rows)
-    if raw:
-        Multi, Layout = T["std_msgs/msg/Float64MultiArray"], T["std_msgs/msg/MultiArrayLayout"]
-        m = values.shape[1]
-        template = Multi(layout=Layout(dim=[], data_offset=0), data=_SENTINELS[:m].copy())
-        streams.append((sensor_topic, "std_msgs/msg/Float64MultiArray", t_s + latency_s,
-                        stream(template, "std_msgs/msg/Float64MultiArray", t_s, values, False)))
-    else:
-        Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
-            T["geometry_msgs/msg/WrenchStamped"]
-        v = _SENTINELS
-        template = Stamped(header=sentinel_header, wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
-                                                                torque=Vector3(x=v[3], y=v[4], z=v[5])))
-        streams.append((sensor_topic, "geometry_msgs/msg/WrenchStamped", t_s + latency_s,
-                        stream(template, "geometry_msgs/msg/WrenchStamped", t_s, values, True, sensor_clock_offset_s)))
-    if joints is not None:
-        q = np.asarray(joints, dtype=float)
-        JointState = T["sensor_msgs/msg/JointState"]
-        empty = np.zeros(0)
-        template = JointState(header=Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id="",
-                                            **({"seq": 0} if ros1 else {})),
-                              name=list(joint_names), position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
-                              effort=empty)
-        streams.append((joint_topic, "sensor_msgs/msg/JointState", t_p + latency_s,
-                        stream(template, "sensor_msgs/msg/JointState", t_p, q, True)))
-    statics = []
-    if rotations is not None:
-        TF, TS, Tr = T["tf2_msgs/msg/TFMessage"], T["geometry_msgs/msg/TransformStamped"], T["geometry_msgs/msg/Transform"]
-        Q, V = T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Vector3"]
-        flange_to_sensor = Rotation.from_euler("z", 90, degrees=True)  # a fixed adapter in /tf_static
-        base, sensor_frame = tf_frames
-        to_flange = Rotation.from_matrix(np.asarray(rotations, dtype=float)) * flange_to_sensor.inv()
+    def write(self, path: Path, storage: str, ros1_chunk_bytes: int | None) -> None:
+        """Every message in the order of receipt (the static ones first) into a new bag at ``path``."""
+        if self.ros1:
+            from rosbags.rosbag1 import Writer as Writer1
 
-        def transform(head, parent_child: tuple[str, str], quat) -> object:
-            x, y, z, w = (float(c) for c in quat)
-            return TS(header=head, child_frame_id=parent_child[1],
-                      transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
-        head = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=base, **({"seq": 0} if ros1 else {}))
-        template = TF(transforms=[transform(head, (base, "flange"), _SENTINELS[:4])])
-        streams.append(("/tf", "tf2_msgs/msg/TFMessage", t_p + latency_s,
-                        stream(template, "tf2_msgs/msg/TFMessage", t_p, to_flange.as_quat(), True)))
-        static = TF(transforms=[transform(header(float(t_p[0]), "flange"), ("flange", sensor_frame),
-                                          flange_to_sensor.as_quat())])
-        statics.append(("/tf_static", "tf2_msgs/msg/TFMessage", float(t_p[0]),
-                        np.frombuffer(bytes(serialize(static, "tf2_msgs/msg/TFMessage")), dtype=np.uint8)))
-    if ros1:
-        from rosbags.rosbag1 import Writer as Writer1
+            writer = Writer1(path)
+            if ros1_chunk_bytes is not None:
+                writer.chunk_threshold = int(ros1_chunk_bytes)
+        else:
+            from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
 
-        writer = Writer1(path)
-        if ros1_chunk_bytes is not None:
-            writer.chunk_threshold = int(ros1_chunk_bytes)
-    else:
-        from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
+            writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap"
+                             else StoragePlugin.SQLITE3)
+        streams = self.streams
+        receive = np.concatenate([r for _, _, r, _ in streams])
+        which = np.concatenate([np.full(len(r), k) for k, (_, _, r, _) in enumerate(streams)])
+        row = np.concatenate([np.arange(len(r)) for _, _, r, _ in streams])
+        order = np.argsort(receive, kind="stable")
+        with writer:
+            connections = [writer.add_connection(topic, typ, typestore=self.store)
+                           for topic, typ, _, _ in self.statics + streams]
+            for k, (_, _, t, data) in enumerate(self.statics):
+                writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
+            base_k = len(self.statics)
+            ns = np.round(receive * 1e9).astype(np.int64)
+            for i in order:
+                k = int(which[i])
+                writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
 
-        writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap"
-                         else StoragePlugin.SQLITE3)
-    receive = np.concatenate([r for _, _, r, _ in streams])
-    which = np.concatenate([np.full(len(r), k) for k, (_, _, r, _) in enumerate(streams)])
-    row = np.concatenate([np.arange(len(r)) for _, _, r, _ in streams])
-    order = np.argsort(receive, kind="stable")
-    with writer:
-        connections = [writer.add_connection(topic, typ, typestore=store) for topic, typ, _, _ in statics + streams]
-        for k, (_, _, t, data) in enumerate(statics):
-            writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
-        base_k = len(statics)
-        ns = np.round(receive * 1e9).astype(np.int64)
-        for i in order:
-            k = int(which[i])
-            writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
-    return path
+
+def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple[str, str], latency_s: float) -> None:
+    """The sensor's orientation on ``/tf`` (base to an intermediate ``flange`` frame) and a static transform from
+    the flange to the sensor frame on ``/tf_static``."""
+    from scipy.spatial.transform import Rotation
+
+    T = out.store.types
+    TF, TS, Tr = T[TF_TYPE], T["geometry_msgs/msg/TransformStamped"], T["geometry_msgs/msg/Transform"]
+    Q, V = T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Vector3"]
+    flange_to_sensor = Rotation.from_euler("z", 90, degrees=True)  # a fixed adapter in /tf_static
+    base, sensor_frame = tf_frames
+    to_flange = Rotation.from_matrix(rotations) * flange_to_sensor.inv()
+
+    def transform(head, child: str, quat) -> object:
+        x, y, z, w = (float(c) for c in quat)
+        return TS(header=head, child_frame_id=child,
+                  transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
+
+    template = TF(transforms=[transform(out.header(None, base), "flange", _SENTINELS[:4])])
+    out.add("/tf", template, t_p, to_flange.as_quat(), latency_s, stamped=True)
+    static = TF(transforms=[transform(out.header(float(t_p[0]), "flange"), sensor_frame, flange_to_sensor.as_quat())])
+    out.statics.append(("/tf_static", TF_TYPE, float(t_p[0]),
+                        np.frombuffer(bytes(out.serialize(static, TF_TYPE)), dtype=np.uint8)))
