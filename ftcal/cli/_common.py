@@ -602,7 +602,8 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     def text_values(path: Path):
         if what == "run log":
             log = read_run_log(path)
-            return [log.timestamp, log.run_kind, log.config, log.pose, log.q, log.raw, log.temperature]
+            return [log.timestamp, log.run_kind, log.config, log.pose, log.q, log.raw, log.temperature,
+                    log.load_mass]  # the declared load makes the reference wrenches: another mass, another run
         rec = read_pose_file(path, orientation_required=False)
         return [rec.rotation, rec.wrench, rec.raw, rec.time, rec.temperature]
 
