@@ -356,21 +356,8 @@ def _second_name(path: Path) -> Path | None:
     or is not a regular file; a file system without hard links gets a copy)."""
     if not path.is_file():
         return None
-    for k in itertools.count(1):
-        backup = path.with_name(f".{path.name}.{os.getpid()}.{k}.previous")
-        try:
-            os.link(path, backup)
-            return backup
-        except FileExistsError:
-            continue
-        except OSError:  # a file system without hard links
-            try:
-                with open(backup, "xb") as f:
-                    f.write(path.read_bytes())
-                return backup
-            except FileExistsError:
-                continue
-    raise AssertionError("unreachable")
+    names = (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous") for k in itertools.count(1))
+    return _fresh_link(path, names)
 
 
 @contextlib.contextmanager
@@ -422,38 +409,36 @@ def keep_aside(pending: list[tuple[Path, Path]]) -> Path:
             break
         except FileExistsError:
             continue
-    for path, tmp in pending:
+    for path, tmp in pending:  # two files of one name in different folders of the set: the second beside
         target = folder / path.name
-        if target.exists():  # two files of one name in different folders of the set
-            link_beside(tmp, target)
-        else:
-            _link_or_copy(tmp, target)
+        _fresh_link(tmp, itertools.chain([target], _names_beside(target)))
     return folder
-
-
-def _link_or_copy(tmp: Path, target: Path) -> None:
-    try:
-        os.link(tmp, target)
-    except OSError:  # a file system without hard links
-        with open(target, "xb") as f:
-            f.write(Path(tmp).read_bytes())
 
 
 def link_beside(tmp: Path, path: Path) -> Path:
     """Give ``tmp``'s content a fresh name beside ``path`` (``stem.1.suffix``, ``stem.2.suffix``, ...), never one
-    that exists: a hard link, which fails where the name is taken (or, without hard links, an exclusive create)."""
-    for k in itertools.count(1):
-        kept = path.with_name(f"{path.stem}.{k}{path.suffix}")
+    that exists."""
+    return _fresh_link(tmp, _names_beside(path))
+
+
+def _names_beside(path: Path) -> Iterator[Path]:
+    return (path.with_name(f"{path.stem}.{k}{path.suffix}") for k in itertools.count(1))
+
+
+def _fresh_link(source: Path, names: Iterable[Path]) -> Path:
+    """The first of ``names`` that does not exist, made a hard link to ``source`` (which fails where the name is
+    taken; without hard links, an exclusive create of a copy)."""
+    for name in names:
         try:
-            os.link(tmp, kept)
-            return kept
+            os.link(source, name)
+            return name
         except FileExistsError:
             continue
         except OSError:  # a file system without hard links
             try:
-                with open(kept, "xb") as f:
-                    f.write(Path(tmp).read_bytes())
-                return kept
+                with open(name, "xb") as f:
+                    f.write(Path(source).read_bytes())
+                return name
             except FileExistsError:
                 continue
     raise AssertionError("unreachable")

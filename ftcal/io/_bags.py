@@ -289,7 +289,8 @@ def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str,
 
 
 class _Stream:
-    """A topic's samples, reduced on the fly to at most ``2 * max_samples`` (block means, or every k-th).
+    """A topic's (or a /tf edge's) samples, reduced on the fly to at most ``2 * max_samples`` (block means, or
+    every k-th).
 
     The bag's declared message count only sets the first block size: when the buffer fills (a bag whose index or
     ``metadata.yaml`` under-counts), neighbouring stored samples are merged in pairs in place and the block doubles,
@@ -563,40 +564,6 @@ def _joint_group(topic: str, groups: dict, notes: list) -> tuple[tuple[str, ...]
     return names, t_p[keep], q[keep]
 
 
-class _EdgeSamples:
-    """One /tf edge's stamps and quaternions, in arrays (40 bytes a sample) that grow up to ``2 * max_samples``
-    and, when full, keep every other sample and from then on every other message of *this* edge: memory stays
-    bounded whatever the bag's length or declared counts, and an edge keeps evenly spaced samples however many
-    other edges (or publishers) share /tf."""
-
-    def __init__(self, max_samples: int) -> None:
-        self.capacity = 2 * int(max_samples)
-        self.times, self.quats = np.empty(min(16, self.capacity)), np.empty((min(16, self.capacity), 4))
-        self.n = self.seen = 0
-        self.step = 1
-
-    def add(self, t: float, quat: NDArray[np.float64]) -> None:
-        self.seen += 1
-        if (self.seen - 1) % self.step:
-            return
-        if self.n == len(self.times):
-            if self.n < self.capacity:  # grow
-                size = min(2 * self.n, self.capacity)
-                self.times = np.resize(self.times, size)
-                self.quats = np.resize(self.quats, (size, 4))
-            else:  # full: every other sample, every other message from now on
-                half = self.n // 2 + self.n % 2
-                self.times[:half], self.quats[:half] = self.times[:self.n:2], self.quats[:self.n:2]
-                self.n, self.step = half, 2 * self.step
-                if (self.seen - 1) % self.step:
-                    return
-        self.times[self.n], self.quats[self.n] = t, quat
-        self.n += 1
-
-    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return self.times[:self.n].copy(), self.quats[:self.n].copy()
-
-
 def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], quat: NDArray[np.float64]) -> str:
     """'' for a quaternion that is a rotation, else the sentence saying why not (naming the bag, topic, edge, time)."""
     norm = float(np.sqrt(np.sum(quat * quat))) if np.isfinite(quat).all() else float("nan")
@@ -615,7 +582,7 @@ class _TfTree:
 
     max_samples: int
     parents: dict[str, dict[str, str]] = field(default_factory=dict)
-    edges: dict[tuple[str, str], _EdgeSamples] = field(default_factory=dict)
+    edges: dict[tuple[str, str], _Stream] = field(default_factory=dict)
     static: dict[tuple[str, str], NDArray[np.float64]] = field(default_factory=dict)
     invalid: dict[tuple[str, str], str] = field(default_factory=dict)
 
@@ -632,9 +599,9 @@ class _TfTree:
         elif topic == "/tf_static":
             self.static[key] = quat
         else:
-            if key not in self.edges:
-                self.edges[key] = _EdgeSamples(self.max_samples)
-            self.edges[key].add(t, quat)
+            if key not in self.edges:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
+                self.edges[key] = _Stream(0, self.max_samples, average=False)
+            self.edges[key].add(t, t, quat)
 
     def chain(self, path: Path, base: str, sensor: str) -> list[tuple[str, str]]:
         """The edges from ``base`` down to ``sensor`` (base first). Refused: no chain, a frame of the chain with two
@@ -686,7 +653,7 @@ class _TfTree:
             if edge in self.static:
                 Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
             else:
-                times, quats = self.edges[edge].arrays()
+                times, _, quats = self.edges[edge].arrays()
                 order = np.argsort(times, kind="stable")
                 times, quats = times[order], quats[order]
                 keep = np.concatenate([[True], np.diff(times) > 0])
@@ -699,17 +666,9 @@ class _TfTree:
         return R
 
 
-def read_bag(
-    path: str | Path,
-    *,
-    wrench_topic: str | None = None,
-    raw_topic: str | None = None,
-    raw_field: str = "data",
-    joint_topic: str | None = None,
-    tf: tuple[str, str] | None = None,
-    stamps: str = "header",
-    max_samples: int = DEFAULT_MAX_SAMPLES,
-) -> BagRecording:
+def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: str | None = None,
+             raw_field: str = "data", joint_topic: str | None = None, tf: tuple[str, str] | None = None,
+             stamps: str = "header", max_samples: int = DEFAULT_MAX_SAMPLES) -> BagRecording:
     """Read the sensor stream of a bag and the pose at each sensor stamp (see the module docstring).
 
     Parameters
@@ -955,25 +914,12 @@ def _common_time(path: Path, sensor: str, pose: _PoseStream, t_s: NDArray[np.flo
         t_s, reading = t_s[overlap], reading[overlap]
     return t_s, reading
 
-def write_bag(
-    path: str | Path,
-    storage: str,
-    *,
-    sensor_time: ArrayLike,
-    reading: ArrayLike,
-    pose_time: ArrayLike,
-    joints: ArrayLike | None = None,
-    joint_names: tuple[str, ...] | list[str] = (),
-    rotations: ArrayLike | None = None,
-    tf_frames: tuple[str, str] = ("base_link", "ft_sensor"),
-    raw: bool = False,
-    sensor_topic: str | None = None,
-    joint_topic: str = "/joint_states",
-    frame_id: str = "ft_sensor",
-    sensor_clock_offset_s: float = 0.0,
-    latency_s: float = 0.001,
-    ros1_chunk_bytes: int | None = None,
-) -> Path:
+def write_bag(path: str | Path, storage: str, *, sensor_time: ArrayLike, reading: ArrayLike, pose_time: ArrayLike,
+              joints: ArrayLike | None = None, joint_names: tuple[str, ...] | list[str] = (),
+              rotations: ArrayLike | None = None, tf_frames: tuple[str, str] = ("base_link", "ft_sensor"),
+              raw: bool = False, sensor_topic: str | None = None, joint_topic: str = "/joint_states",
+              frame_id: str = "ft_sensor", sensor_clock_offset_s: float = 0.0, latency_s: float = 0.001,
+              ros1_chunk_bytes: int | None = None) -> Path:
     """Write a recording as a ROS bag, as a robot would record it (for tests, examples and the README).
 
     Parameters

@@ -397,23 +397,10 @@ def _log_mass_and_meta(path: Path, info: dict[str, str], info_line: dict[str, in
     return mass, meta
 
 
-def write_run_log(
-    path: str | Path,
-    *,
-    timestamp: ArrayLike,
-    run_kind: ArrayLike,
-    config: ArrayLike,
-    pose: ArrayLike,
-    q: ArrayLike,
-    raw: ArrayLike,
-    raw_unit: str = "counts",
-    load_mass: float | None = None,
-    robot: str | None = None,
-    sensor_frame: str | None = None,
-    meta: dict | None = None,
-    overwrite: bool = False,
-    temperature: ArrayLike | None = None,
-) -> Path:
+def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike, config: ArrayLike, pose: ArrayLike,
+                  q: ArrayLike, raw: ArrayLike, raw_unit: str = "counts", load_mass: float | None = None,
+                  robot: str | None = None, sensor_frame: str | None = None, meta: dict | None = None,
+                  overwrite: bool = False, temperature: ArrayLike | None = None) -> Path:
     """Write samples as a run log (timestamps [s], joint angles [rad]) and return the path.
 
     Parameters

@@ -41,24 +41,9 @@ from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeho
 from ..core._memory import MemoryLimitError, check_allocation
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
-__all__ = [
-    "FORCE_UNITS",
-    "TORQUE_UNITS",
-    "STANDARD_GRAVITY",
-    "ColumnMap",
-    "unit_scale",
-    "canonical_wrench_name",
-    "expand_names",
-    "parse_column_slice",
-    "lever_arm_m",
-    "lever_arm_problem",
-    "ArrayFile",
-    "read_npy_member",
-    "check_real_array",
-    "has_header",
-    "join_headerless",
-    "JoinedTable",
-]
+__all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
+           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile", "read_npy_member",
+           "check_real_array", "has_header", "join_headerless", "JoinedTable"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
 STANDARD_GRAVITY = 9.80665
