@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import re
 import zipfile
-import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -38,11 +37,11 @@ from numpy.typing import ArrayLike
 
 from ..core._columns import DTYPE_KIND_NAMES, is_number, repeated_names
 from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
-from ..core._memory import MemoryLimitError, check_allocation
+from ..core._memory import check_allocation, read_npy_member
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
 __all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
-           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile", "read_npy_member",
+           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
            "check_real_array", "has_header", "join_headerless", "JoinedTable"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
@@ -584,42 +583,6 @@ def temperature_message(exc: FtcalError, path, line_no: int) -> str:
 
 
 # ------------------------------------------------------------------ bounded reading of .npz and .mat
-def read_npy_member(archive: zipfile.ZipFile, member: str, where: str, error: type[Exception] = DatasetFileError,
-                    *, header_only: bool = False):
-    """The array of the ``.npy`` member of a zip (an ``.npz``), its declared shape and size checked against
-    the member's stored size and ftcal's memory limit *before* anything is decompressed; at most the declared
-    bytes are read, and an object (pickle) array is refused unread. With ``header_only``, ``(shape, dtype)``.
-    """
-    info = archive.getinfo(member)
-    name = member[:-4] if member.endswith(".npy") else member
-    try:
-        with archive.open(info) as fh:
-            version = np.lib.format.read_magic(fh)
-            shape, fortran, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
-                                     else np.lib.format.read_array_header_2_0(fh))
-            if dtype.hasobject:
-                raise error(f"{where}: array {name!r} holds Python objects (a pickle), which ftcal never loads; save "
-                            "numeric arrays (numpy.savez(path, raw=..., wrench=...)).")
-            n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
-            if n_bytes > info.file_size:
-                raise error(f"{where}: array {name!r} declares shape {shape} ({n_bytes:.0f} bytes) but holds only "
-                            f"{info.file_size} bytes; the file is damaged or not written by numpy.")
-            check_allocation(n_bytes, f"{where}: array {name!r} of shape {shape}",
-                             "split the data into smaller files")
-            if header_only:
-                return tuple(shape), dtype
-            data = fh.read(int(n_bytes))
-    except (error, MemoryLimitError):
-        raise
-    except (OSError, ValueError, EOFError, SyntaxError, zipfile.BadZipFile, zlib.error) as exc:
-        raise error(f"{where}: array {name!r} is not a readable numpy array "
-                    f"({' '.join(str(exc).split())[:120]}).") from None
-    if len(data) != int(n_bytes):
-        raise error(f"{where}: array {name!r} is truncated ({len(data)} of {int(n_bytes)} bytes).")
-    array = np.frombuffer(data, dtype=dtype)
-    return np.array(array.reshape(shape[::-1]).T if fortran else array.reshape(shape))
-
-
 #: The item size [bytes] of MATLAB's numeric classes (as :func:`scipy.io.whosmat` names them).
 _MAT_ITEM_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
                    "uint32": 4, "int64": 8, "uint64": 8}
@@ -702,7 +665,9 @@ class ArrayFile:
         """The array ``name`` (its size checked before it is read); a non-numeric one is refused by
         :func:`check_real_array` when it is used."""
         if self.is_npz:
-            return read_npy_member(self._zip, f"{name}.npy", self.where)
+            return read_npy_member(self._zip, f"{name}.npy", f"{self.where}: array {name!r}", DatasetFileError,
+                                   "save numeric arrays (numpy.savez(path, raw=..., wrench=...))",
+                                   "split the data into smaller files")
         shape, cls = self.entries[name]
         check_allocation(float(np.prod([float(d) for d in shape])) * _MAT_ITEM_BYTES.get(cls, 8),
                          f"{self.where}: variable {name!r} of shape {shape}", "split the data into smaller files")
