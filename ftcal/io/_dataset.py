@@ -89,15 +89,16 @@ def dataset_files(folder: Path) -> list[Path]:
 MAX_FOLDER_FILES = 100_000
 
 
-def _parse_meta(text: str, where: str) -> dict:
-    """The JSON object of a ``# meta:`` comment (an object, not a list or a number)."""
+def _parse_meta(text: str, where: str, what: str = "the meta comment") -> dict:
+    """The JSON object of a ``# meta:`` comment or an ``.npz``'s ``meta_json`` (an object, not a list or a
+    number)."""
     try:
         meta = json.loads(text)
     except (json.JSONDecodeError, RecursionError) as exc:
-        raise DatasetFileError(f"{where}: bad JSON in the meta comment ({str(exc)[:80]}).") from None
+        raise DatasetFileError(f"{where}: bad JSON in {what} ({str(exc)[:80]}).") from None
     if not isinstance(meta, dict):
         raise DatasetFileError(
-            f"{where}: the meta comment holds a JSON {type(meta).__name__}; it must be a JSON object "
+            f"{where}: {what} holds a JSON {type(meta).__name__}; it must be a JSON object "
             "such as {\"alpha\": 50}."
         )
     return meta
@@ -816,13 +817,7 @@ def _npz_meta(value: np.ndarray, path: Path) -> dict:
     if value.dtype.kind not in "US" or value.size != 1:
         raise DatasetFileError(f"{path}: meta_json is not a JSON text (dtype {value.dtype}); save it as "
                                "numpy.array(json.dumps(meta)).")
-    try:
-        meta = json.loads(str(value.reshape(())))
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
-    if not isinstance(meta, dict):
-        raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
-    return meta
+    return _parse_meta(str(value.reshape(())), str(path), "meta_json")
 
 
 def _rows_first(a: np.ndarray) -> np.ndarray:
