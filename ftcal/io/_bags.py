@@ -107,39 +107,20 @@ def _streaming_ros1_reader():
     import os
     from io import BytesIO
 
-    from rosbags.rosbag1.reader import Header, Reader, ReaderError, RecordType, read_bytes, read_uint32
+    from rosbags.rosbag1.reader import Header, Reader, RecordType, read_bytes, read_uint32
 
     class StreamingReader(Reader):
-        def open(self) -> None:
-            import re
+        def read_index_data(self, pos, indexes) -> None:  # skipped, never kept: messages() reads chunk by chunk
+            buf = self.bio.read(55)  # the index record's header (47 bytes, as rosbags reads it), its data's size
+            self.bio.seek(int.from_bytes(buf[51:55], "little"), os.SEEK_CUR)
 
-            self.bio = self.path.open("rb")
-            try:
-                matches = re.match(r"#ROSBAG V(\d+).(\d+)\n", self.bio.readline().decode(errors="replace"))
-                if not matches or matches.groups() != ("2", "0"):
-                    raise ReaderError("not a ROS 1 bag of version 2.0 (file magic)")
-                header = Header.read(self.bio, RecordType.BAGHEADER)
-                index_pos = header.get_uint64("index_pos")
-                conn_count, chunk_count = header.get_uint32("conn_count"), header.get_uint32("chunk_count")
-                if index_pos == 0:
-                    raise ReaderError("Bag is not indexed, reindex before reading.")
-                if chunk_count == 0:
-                    return
-                self.bio.seek(index_pos)
-                try:
-                    connections = [self.read_connection() for _ in range(conn_count)]
-                    self.chunk_infos = [self.read_chunk_info() for _ in range(chunk_count)]
-                except ReaderError as err:
-                    raise ReaderError(f"Bag index looks damaged: {err.args}") from None
-                counts: dict[int, int] = {}
-                for info in self.chunk_infos:
-                    for conn, n in info.connection_counts.items():
-                        counts[conn] = counts.get(conn, 0) + n
-                self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in connections]
-            except BaseException:
-                self.bio.close()
-                self.bio = None
-                raise
+        def open(self) -> None:
+            super().open()
+            counts: dict[int, int] = {}
+            for info in getattr(self, "chunk_infos", None) or ():
+                for conn, n in info.connection_counts.items():
+                    counts[conn] = counts.get(conn, 0) + n
+            self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
 
         def messages(self, connections=(), start=None, stop=None):
             self._check_open()
