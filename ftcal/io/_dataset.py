@@ -50,10 +50,10 @@ from numpy.typing import NDArray
 from ..core._columns import check_plain_fields, csv_rows, is_number
 from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileError, Placeholder
 from ..core._files import atomic_output, values_sha256
-from ..core._temperature import TemperatureValueError, check_temperature
+from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       temperature_message, _slice_columns)
+                       checked_temperature, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -774,12 +774,7 @@ class CalibrationDataset:
                 meta = {**meta, "group_labels": labels, "group_names": labels}
         temperature = None
         if used.temperature is not None:
-            try:
-                temperature = check_temperature(data[:, -1], len(line_nos))
-            except TemperatureValueError as exc:
-                if exc.row is None:
-                    raise DatasetFileError(f"{path}: {exc}") from None
-                raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
+            temperature = checked_temperature(data[:, -1], path, line_nos, DatasetFileError)
         try:
             ds = cls(raw=data[:, :n_ch], wrench=data[:, n_ch:n_ch + n_w], group=group, meta=meta,
                      temperature=temperature, axes=used.axes, sources=RowSources.of_file(path.name, line_nos))

@@ -53,9 +53,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
-from ..core._temperature import TemperatureValueError, check_temperature
+from ..core._temperature import check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import temperature_message
+from ._readers import checked_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -246,12 +246,7 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         info.get("sensor_frame")
     log.load_mass, log.meta = _log_mass_and_meta(path, info, info_line)
     if log.temperature is not None:
-        try:
-            check_temperature(log.temperature, log.n_rows)
-        except TemperatureValueError as exc:
-            if exc.row is None:
-                raise LogFormatError(f"{path}: {exc}") from None
-            raise LogFormatError(temperature_message(exc, path, int(log.line[exc.row]))) from None
+        checked_temperature(log.temperature, path, log.line, LogFormatError)
     return log
 
 

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core._columns import DTYPE_KIND_NAMES, is_number, repeated_names
-from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
+from ..core._exceptions import NO_SETTING, DatasetFileError, Placeholder, api_spelling
 from ..core._memory import check_allocation, read_npy_member
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
@@ -576,10 +576,19 @@ def _unit_proposals(arm: float, fmax: float, force_unit: str, torque_unit: str) 
     return out
 
 
-def temperature_message(exc: FtcalError, path, line_no: int) -> str:
-    """The library's "temperature row 5 is NaN ..." (an error about a row of the array) at the text file's line and
-    column: the error's ``{row}`` is said as the column."""
-    return f"{path}: line {line_no}, column temperature: {exc.render(api_spelling, row='temperature')}"
+def checked_temperature(values, path, lines, error: type[Exception]):
+    """``values`` checked as the temperatures [deg C] of a text file's rows (:func:`check_temperature`), else
+    ``error`` naming the file and, for a row, its ``lines`` entry and the column (the library's "{row}" said as
+    the column)."""
+    from ..core._temperature import TemperatureValueError, check_temperature
+
+    try:
+        return check_temperature(values, len(lines))
+    except TemperatureValueError as exc:
+        if exc.row is None:
+            raise error(f"{path}: {exc}") from None
+        raise error(f"{path}: line {int(lines[exc.row])}, column temperature: "
+                    f"{exc.render(api_spelling, row='temperature')}") from None
 
 
 # ------------------------------------------------------------------ bounded reading of .npz and .mat
