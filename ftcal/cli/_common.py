@@ -591,13 +591,14 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     two formats or with other number formatting): it would count its poses twice, and its twins would fall in
     different folds, so a model would be judged on its own training rows. ``what`` says what the inputs are
     (``"ROS bag"``, ``"run log"``, ``"pose file"``); they are compared by what their reader reads (a bag's topics
-    first, a text file's row count first: only inputs alike in those are read)."""
-    from ..core import content_twins
-    from ..io import bag_topics, bag_values, read_pose_file, read_run_log
+    and first messages' times first, a text file's row count first: only inputs alike in those are read)."""
+    from ..core import content_twins, values_sha256
+    from ..io import bag_values, read_pose_file, read_run_log
 
     def rows(path: Path) -> int:
         with open(path, "rb") as fh:
-            return sum(1 for line in fh if line.strip() and not line.startswith(b"#"))
+            lines = (line.strip().removeprefix(b"\xef\xbb\xbf") for line in fh)
+            return sum(1 for line in lines if line and not line.startswith(b"#"))
 
     def text_values(path: Path):
         if what == "run log":
@@ -608,7 +609,7 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
         return [rec.rotation, rec.wrench, rec.raw, rec.time, rec.temperature]
 
     if what == "ROS bag":
-        twins = content_twins(paths, bag_values, key=lambda p: tuple(sorted(bag_topics(p).items())))
+        twins = content_twins(paths, bag_values, key=lambda p: values_sha256(bag_values(p, head=100)))
     else:
         twins = content_twins(paths, text_values, key=rows)
     if twins:

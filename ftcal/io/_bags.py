@@ -202,11 +202,12 @@ def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
         return r.topics()
 
 
-def bag_values(path: str | Path):
+def bag_values(path: str | Path, head: int | None = None):
     """What the bag reader yields of a bag, array by array (for :func:`ftcal.core.values_sha256`): its topics (name,
     type, count), then each message's topic, receive time [ns] and the values of its fields in order (a ROS 1
     header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1 yields the same values. A
-    generator: the bag is streamed message by message.
+    generator: the bag is streamed message by message. With ``head``, only the topic and receive time of the
+    first ``head`` messages (none deserialized): a cheap key that tells most different recordings apart.
 
     Examples
     --------
@@ -218,6 +219,8 @@ def bag_values(path: str | Path):
     >>> a, b = write_bag(d / "a", "sqlite3", **kw), write_bag(d / "b.bag", "ros1", **kw)
     >>> values_sha256(bag_values(a)) == values_sha256(bag_values(b))
     True
+    >>> len(list(bag_values(a, head=1)))  # the topics, then the first message's topic and receive time
+    3
     """
 
     def flat(value, out: list) -> list:
@@ -235,10 +238,13 @@ def bag_values(path: str | Path):
     with _Reader(Path(path)) as r:
         yield np.array(sorted(f"{t} {typ} {n}" for t, (typ, n) in r.topics().items()))
         try:
-            for conn, receive_ns, data in r.reader.messages():
+            for k, (conn, receive_ns, data) in enumerate(r.reader.messages()):
+                if head is not None and k >= head:
+                    break
                 yield np.array(conn.topic)
                 yield np.array(receive_ns, dtype=np.int64)
-                yield np.array(flat(r.reader.deserialize(data, conn.msgtype), []), dtype=object)
+                if head is None:
+                    yield np.array(flat(r.reader.deserialize(data, conn.msgtype), []), dtype=object)
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
             raise r.damaged(exc) from None
 
