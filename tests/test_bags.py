@@ -363,13 +363,13 @@ def test_wrenches_stamped_in_another_frame_than_the_tf_sensor_frame_are_refused_
 
 
 def test_a_tf_edge_keeps_evenly_spaced_samples_within_its_bound_whatever_other_edges_carry():
-    from ftcal.io._bags import _EdgeSamples
+    from ftcal.io._bags import _Stream
 
-    a, b = _EdgeSamples(max_samples=10), _EdgeSamples(max_samples=10)
+    a, b = _Stream(0, max_samples=10, average=False), _Stream(0, max_samples=10, average=False)
     for k in range(10_000):  # two publishers alternating on /tf: each edge counts its own messages
-        (a if k % 2 == 0 else b).add(float(k), np.array([0.0, 0.0, 0.0, 1.0]))
+        (a if k % 2 == 0 else b).add(float(k), float(k), np.array([0.0, 0.0, 0.0, 1.0]))
     for edge, first in ((a, 0.0), (b, 1.0)):
-        times, quats = edge.arrays()
+        times, _, quats = edge.arrays()
         assert 10 <= len(times) <= 20 and quats.shape == (len(times), 4)
         steps = np.diff(times)
         assert times[0] == first and np.all(steps == steps[0])  # evenly spaced over the whole recording

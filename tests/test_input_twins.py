@@ -6,10 +6,12 @@ from __future__ import annotations
 import shutil
 
 import numpy as np
+import pytest
 from scipy.spatial.transform import Rotation
 
 from ftcal.cli import main
 from ftcal.experiment import ToolLoad
+from ftcal.io import CalibrationDataset, write_run_log
 from ftcal.io._bags import write_bag
 
 
@@ -30,7 +32,7 @@ def test_a_pose_file_given_twice_is_refused_and_two_recordings_are_read(tmp_path
     out = tmp_path / "t"
     assert main(["identify-load", str(a), str(twin), "--out", str(out), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and f"{twin} holds the same pose file as {a} (identical content)" in err[0], err
+    assert len(err) == 1 and f"{twin} holds the same pose file as {a} (the same values read from both)" in err[0], err
     assert not out.exists()
     b = _pose_file(tmp_path / "b.csv", 2)
     assert main(["identify-load", str(a), str(b), "--out", str(out), "-q"]) == 0
@@ -46,3 +48,67 @@ def test_a_folder_holding_the_same_bag_twice_is_refused(tmp_path, capsys):
     assert main(["identify-load", str(folder), "--out", str(tmp_path / "t"), "-q"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "run1_copy holds the same ROS bag as" in err[0], err
+
+
+def _refused(argv, capsys, twin, first, what):
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("ftcal: error: "), err
+    assert f"{twin} holds the same {what} as {first} (the same values read from both)" in err[0], err
+
+
+def test_a_pose_file_written_again_with_other_number_formatting_is_refused(tmp_path, capsys):
+    a = _pose_file(tmp_path / "a.csv", 3)
+    lines = a.read_text().splitlines()
+    rewritten = [lines[0]] + [",".join(f"{float(v):.17e}" for v in line.split(",")) for line in lines[1:]]
+    twin = tmp_path / "reformatted.csv"
+    twin.write_text("# the same recording, exported again\n" + "\r\n".join(rewritten) + "\r\n")
+    assert twin.read_bytes() != a.read_bytes()
+    _refused(["identify-load", str(a), str(twin), "--out", str(tmp_path / "t"), "-q"], capsys, twin, a, "pose file")
+
+
+def test_a_run_log_saved_again_in_other_units_is_refused(tmp_path, capsys):
+    rng = np.random.default_rng(4)
+    n = 8
+    kw = dict(run_kind=["load"] * n, config=[0] * n, pose=list(range(n)), raw=rng.normal(size=(n, 6)), load_mass=1.0)
+    q = rng.uniform(-1, 1, size=(n, 6))
+    a = write_run_log(tmp_path / "logs" / "a.csv", timestamp=np.arange(n) * 0.5, q=q, **kw)
+    text = a.read_text().replace("# time_unit: s", "# time_unit: ms")
+    head, *rows = [line for line in text.splitlines() if not line.startswith("#")]
+    ms = [",".join([f"{float(r.split(',')[0]) * 1000:g}"] + r.split(",")[1:]) for r in rows]
+    twin = tmp_path / "logs" / "b_in_ms.csv"
+    twin.write_text("\n".join([line for line in text.splitlines() if line.startswith("#")] + [head] + ms) + "\n")
+    other = write_run_log(tmp_path / "other.csv", timestamp=np.arange(n) * 0.5, q=q + 0.1, **kw)
+    _refused(["prepare", str(tmp_path / "logs"), "--out", str(tmp_path / "d"), "-q"], capsys, twin, a, "run log")
+    assert not (tmp_path / "d").exists()
+    main(["prepare", str(a), str(other), "--out", str(tmp_path / "d2"), "-q"])  # two recordings: no twins
+    assert "holds the same" not in capsys.readouterr().err
+
+
+def test_one_recording_stored_as_sqlite3_mcap_and_ros1_bags_is_refused(tmp_path, capsys):
+    t = np.arange(0.0, 1.0, 0.01)
+    kw = dict(sensor_time=t, reading=np.random.default_rng(5).normal(size=(100, 6)), pose_time=t,
+              joints=np.c_[t, -t], joint_names=["j1", "j2"])
+    sqlite = write_bag(tmp_path / "run_sqlite", "sqlite3", **kw)
+    mcap = write_bag(tmp_path / "run_mcap", "mcap", **kw)
+    ros1 = write_bag(tmp_path / "run.bag", "ros1", **kw)
+    for first, twin in ((sqlite, mcap), (sqlite, ros1), (mcap, ros1)):
+        _refused(["identify-load", str(first), str(twin), "--out", str(tmp_path / "t"), "-q"], capsys, twin, first,
+                 "ROS bag")
+    kw["reading"] = kw["reading"] + 1e-9  # another recording of the same length and topics: not a twin
+    other = write_bag(tmp_path / "other", "mcap", **kw)
+    main(["identify-load", str(sqlite), str(other), "--out", str(tmp_path / "t"), "-q"])
+    assert "holds the same" not in capsys.readouterr().err
+
+
+def test_a_dataset_folder_holding_one_recording_written_twice_otherwise_is_refused(tmp_path):
+    rng = np.random.default_rng(6)
+    ds = CalibrationDataset(raw=rng.normal(size=(20, 6)).astype(np.float32), wrench=rng.normal(size=(20, 6)))
+    folder = tmp_path / "data"
+    folder.mkdir()
+    a = ds.save(folder / "a.csv")
+    header = a.read_text().splitlines()[1]
+    rows = [",".join(f"{v:.17e}" for v in row) for row in np.column_stack([ds.raw, ds.wrench])]
+    (folder / "b.csv").write_text("\n".join([header.replace(",", ", ")] + rows) + "\n")
+    with pytest.raises(ValueError, match=r"b\.csv holds the same readings and wrenches as .*a\.csv \(20 rows\)"):
+        CalibrationDataset.load(folder)

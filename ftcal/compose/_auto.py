@@ -383,8 +383,8 @@ def provides_std(model) -> bool:
 
 def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None) -> str:
     """SHA-256 (hex) of training arrays' shapes and float64 values (and of the group labels, which make the
-    folds): the identity of the data a comparison was scored on (a report reuses ``auto``'s comparison only on
-    the very same rows, grouped the same way).
+    folds; :func:`ftcal.core.values_sha256`): the identity of the data a comparison was scored on (a report
+    reuses ``auto``'s comparison only on the very same rows, grouped the same way).
 
     Examples
     --------
@@ -394,19 +394,10 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = 
     >>> training_data_sha256(a, a, [0, 0, 1]) == training_data_sha256(a, a, [0, 1, 1])
     False
     """
-    import hashlib
+    from ..core import values_sha256
 
-    digest = hashlib.sha256()
-    for a in (X, y):
-        a = np.ascontiguousarray(a, dtype=np.float64)
-        digest.update(repr(a.shape).encode("ascii"))
-        digest.update(a.tobytes())
-    if groups is not None:  # the labels themselves: the group folds depend on them, not only on the partition
-        labels = np.asarray(groups)
-        digest.update(b"groups" + repr((labels.shape, labels.dtype.str)).encode("ascii"))
-        digest.update(np.ascontiguousarray(labels).tobytes() if labels.dtype.kind in "biuf"
-                      else "\x00".join(map(str, labels.reshape(-1))).encode("utf-8"))
-    return digest.hexdigest()
+    # the labels themselves: the group folds depend on them, not only on the partition
+    return values_sha256([np.asarray(X, dtype=np.float64), np.asarray(y, dtype=np.float64), groups])
 
 
 def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLike | None = None, cv: int = 5,

@@ -23,7 +23,7 @@ _PUBLIC = dict(
     check_allocation="_memory", MemoryLimitError="_memory", memory_limit_bytes="_memory",
 )
 _PUBLIC.update(  # names the CLI uses
-    content_twins="_files", limit_threads_here="_threads", MAX_TRAINING_MAGNITUDE="_validation", MODEL_SUFFIX="_files",
+    content_twins="_files", values_sha256="_files", limit_threads_here="_threads", MAX_TRAINING_MAGNITUDE="_validation", MODEL_SUFFIX="_files",
     NO_SETTING="_exceptions", OutputSet="_files", Placeholder="_exceptions", TooFewSamplesError="_exceptions",
     atomic_output_set="_files", axis_unit="_wrench", check_writable_dir="_files", csv_rows="_columns",
     default_axes="_wrench", force_columns="_wrench", is_number="_columns", model_file_name="_files",

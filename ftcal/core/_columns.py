@@ -137,17 +137,9 @@ class Header:
         return name in self.index
 
 
-def read_header(
-    fields: Sequence[str],
-    *,
-    where: str,
-    error: type[Exception],
-    required: Sequence[str] = (),
-    numbered: Sequence[tuple[str, int, str]] = (("s", 0, "raw channel"),),
-    optional: Sequence[str] = (),
-    allow_other: bool = False,
-    expected: str = "",
-) -> Header:
+def read_header(fields: Sequence[str], *, where: str, error: type[Exception], required: Sequence[str] = (),
+                numbered: Sequence[tuple[str, int, str]] = (("s", 0, "raw channel"),), optional: Sequence[str] = (),
+                allow_other: bool = False, expected: str = "") -> Header:
     """Validate a header's column names and return their positions.
 
     Parameters

@@ -42,21 +42,9 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping
 from typing import Any
 
-__all__ = [
-    "NO_SETTING",
-    "Placeholder",
-    "FtcalError",
-    "CalibrationInputError",
-    "TooFewSamplesError",
-    "ModelFileError",
-    "LogFormatError",
-    "CalFileError",
-    "KinematicsError",
-    "DatasetFileError",
-    "BenchmarkOutputExistsError",
-    "ExportError",
-    "PlanningError",
-]
+__all__ = ["NO_SETTING", "Placeholder", "FtcalError", "CalibrationInputError", "TooFewSamplesError", "ModelFileError",
+           "LogFormatError", "CalFileError", "KinematicsError", "DatasetFileError", "BenchmarkOutputExistsError",
+           "ExportError", "PlanningError"]
 
 
 class _NoSetting:

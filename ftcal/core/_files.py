@@ -48,7 +48,7 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
-__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "content_twins", "plain_json", "write_json", "MODEL_SUFFIX",
+__all__ = ["atomic_output", "atomic_output_set", "OutputSet", "check_writable_dir", "same_file", "content_twins", "values_sha256", "plain_json", "write_json", "MODEL_SUFFIX",
            "model_file_name", "is_finite_number", "describe_file_start"]
 
 
@@ -356,21 +356,8 @@ def _second_name(path: Path) -> Path | None:
     or is not a regular file; a file system without hard links gets a copy)."""
     if not path.is_file():
         return None
-    for k in itertools.count(1):
-        backup = path.with_name(f".{path.name}.{os.getpid()}.{k}.previous")
-        try:
-            os.link(path, backup)
-            return backup
-        except FileExistsError:
-            continue
-        except OSError:  # a file system without hard links
-            try:
-                with open(backup, "xb") as f:
-                    f.write(path.read_bytes())
-                return backup
-            except FileExistsError:
-                continue
-    raise AssertionError("unreachable")
+    names = (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous") for k in itertools.count(1))
+    return _fresh_link(path, names)
 
 
 @contextlib.contextmanager
@@ -422,38 +409,36 @@ def keep_aside(pending: list[tuple[Path, Path]]) -> Path:
             break
         except FileExistsError:
             continue
-    for path, tmp in pending:
+    for path, tmp in pending:  # two files of one name in different folders of the set: the second beside
         target = folder / path.name
-        if target.exists():  # two files of one name in different folders of the set
-            link_beside(tmp, target)
-        else:
-            _link_or_copy(tmp, target)
+        _fresh_link(tmp, itertools.chain([target], _names_beside(target)))
     return folder
-
-
-def _link_or_copy(tmp: Path, target: Path) -> None:
-    try:
-        os.link(tmp, target)
-    except OSError:  # a file system without hard links
-        with open(target, "xb") as f:
-            f.write(Path(tmp).read_bytes())
 
 
 def link_beside(tmp: Path, path: Path) -> Path:
     """Give ``tmp``'s content a fresh name beside ``path`` (``stem.1.suffix``, ``stem.2.suffix``, ...), never one
-    that exists: a hard link, which fails where the name is taken (or, without hard links, an exclusive create)."""
-    for k in itertools.count(1):
-        kept = path.with_name(f"{path.stem}.{k}{path.suffix}")
+    that exists."""
+    return _fresh_link(tmp, _names_beside(path))
+
+
+def _names_beside(path: Path) -> Iterator[Path]:
+    return (path.with_name(f"{path.stem}.{k}{path.suffix}") for k in itertools.count(1))
+
+
+def _fresh_link(source: Path, names: Iterable[Path]) -> Path:
+    """The first of ``names`` that does not exist, made a hard link to ``source`` (which fails where the name is
+    taken; without hard links, an exclusive create of a copy)."""
+    for name in names:
         try:
-            os.link(tmp, kept)
-            return kept
+            os.link(source, name)
+            return name
         except FileExistsError:
             continue
         except OSError:  # a file system without hard links
             try:
-                with open(kept, "xb") as f:
-                    f.write(Path(tmp).read_bytes())
-                return kept
+                with open(name, "xb") as f:
+                    f.write(Path(source).read_bytes())
+                return name
             except FileExistsError:
                 continue
     raise AssertionError("unreachable")
@@ -482,59 +467,79 @@ def check_writable_dir(directory: str | os.PathLike, error: type[Exception], wha
     os.unlink(probe)
 
 
-def _content_digest(path: Path) -> str:
-    """SHA-256 of a file's bytes, or of a folder's files (their names relative to it and their bytes, in order)."""
+def values_sha256(arrays: Iterable) -> str:
+    """SHA-256 (hex) of the values of ``arrays`` (array-likes, or None for one that is absent), in order, each
+    with its shape: the identity of data as read, whatever held it. Memory layout (order, strides, byte order)
+    and the width of a dtype do not count: equal integers (``int32``, ``int64``, ``bool``) hash alike, equal
+    floats (``float32`` widened exactly, ``float64``; ``-0.0`` as ``0.0``) alike, text by its characters.
+    Integers and floats are kept apart (labels are not readings); ``arrays`` may be a generator (it is read
+    once, array by array).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a = np.arange(6.0).reshape(2, 3)
+    >>> values_sha256([a, [1, 2]]) == values_sha256([np.asfortranarray(a).astype(">f4"), np.int8([1, 2])])
+    True
+    >>> values_sha256([a]) == values_sha256([a.reshape(3, 2)]), values_sha256([a, None]) == values_sha256([a])
+    (False, False)
+    """
+    import numpy as np
+
     digest = hashlib.sha256()
-    files = sorted(p for p in path.rglob("*") if p.is_file()) if path.is_dir() else [path]
-    for f in files:
-        if path.is_dir():
-            digest.update(str(f.relative_to(path)).encode("utf-8", "surrogateescape") + b"\0")
-        with open(f, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(block)
+    for array in arrays:
+        if array is None:
+            digest.update(b"none;")
+            continue
+        a = np.asarray(array)
+        if a.dtype.kind in "biu" and (a.dtype.kind != "u" or not a.size or a.max() <= np.iinfo(np.int64).max):
+            kind, data = b"i", np.ascontiguousarray(a, dtype="<i8").tobytes()
+        elif a.dtype.kind in "fc":
+            wide = "<c16" if a.dtype.kind == "c" else "<f8"
+            kind, data = b"f", (np.ascontiguousarray(a, dtype=wide) + 0.0).tobytes()
+        else:  # text, objects, integers beyond int64: their characters
+            kind, data = b"t", "\0".join(map(str, a.reshape(-1).tolist())).encode("utf-8", "surrogatepass")
+        digest.update(kind + repr(a.shape).encode("ascii") + b";" + len(data).to_bytes(8, "little"))
+        digest.update(data)
     return digest.hexdigest()
 
 
-def _content_size(path: Path) -> int:
-    if path.is_dir():
-        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
-    return path.stat().st_size
-
-
-def content_twins(paths: Iterable[str | os.PathLike]) -> list[tuple[Path, Path]]:
-    """Pairs of ``paths`` (files, or folders such as a rosbag2 bag) that hold the same content (byte for byte, for a
-    folder also its file names), the later one second: one recording given twice (two names, a copy in a folder).
-    Only inputs of equal size are read (hashed), so distinct inputs cost a ``stat``.
+def content_twins(paths: Iterable[str | os.PathLike], values, key=None) -> list[tuple[Path, Path]]:
+    """Pairs of ``paths`` whose values are equal (:func:`values_sha256` of ``values(path)``: the arrays a reader
+    reads from it, None for one it cannot read), the later one second: one recording given twice, under two names,
+    in two formats or written with other number formatting. With ``key`` (a cheap ``key(path)``, e.g. a row
+    count), only paths of equal keys are read; a path whose key or values cannot be had is passed over (its
+    reader names the problem).
 
     Examples
     --------
     >>> import tempfile, pathlib
     >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> for name, text in (("a.csv", "1,2\\n"), ("b.csv", "3,4\\n"), ("copy.csv", "1,2\\n")):
+    >>> for name, text in (("a.csv", "1,2\\n"), ("b.csv", "3,4\\n"), ("c.csv", "1.0, 2e0\\n")):
     ...     _ = (d / name).write_text(text)
-    >>> [(a.name, b.name) for a, b in content_twins([d / "a.csv", d / "b.csv", d / "copy.csv"])]
-    [('a.csv', 'copy.csv')]
+    >>> numbers = lambda p: [[float(v) for v in p.read_text().split(",")]]
+    >>> [(a.name, b.name) for a, b in content_twins([d / "a.csv", d / "b.csv", d / "c.csv"], numbers)]
+    [('a.csv', 'c.csv')]
     """
     paths = [Path(p) for p in paths]
-    by_size: dict[int, list[Path]] = {}
+    by_key: dict = {}
     for p in paths:
         try:
-            by_size.setdefault(_content_size(p), []).append(p)
-        except OSError:
+            by_key.setdefault(key(p) if key is not None else None, []).append(p)
+        except (OSError, ValueError):
             continue
     twins, first = [], {}
-    for group in by_size.values():
-        if len(group) < 2:
-            continue
-        for p in group:
+    for group in by_key.values():
+        for p in group if len(group) > 1 else ():
             try:
-                key = _content_digest(p)
-            except OSError:
+                arrays = values(p)
+                digest = None if arrays is None else values_sha256(arrays)
+            except (OSError, ValueError):
                 continue
-            if key in first:
-                twins.append((first[key], p))
-            else:
-                first[key] = p
+            if digest in first:
+                twins.append((first[digest], p))
+            elif digest is not None:
+                first[digest] = p
     return sorted(twins, key=lambda pair: paths.index(pair[1]))
 
 

@@ -13,7 +13,7 @@ import os
 from ._exceptions import FtcalError
 
 __all__ = ["MEMORY_LIMIT_BYTES", "MemoryLimitError", "memory_limit_bytes", "check_allocation", "format_bytes",
-           "rows_within_limit"]
+           "rows_within_limit", "read_npy_member"]
 
 #: Default largest single allocation ftcal makes for one step [bytes].
 MEMORY_LIMIT_BYTES: int = 4 * 2**30
@@ -107,3 +107,47 @@ def rows_within_limit(bytes_per_row_pair: float) -> int:
     while bytes_per_row_pair * (m + 1) ** 2 <= limit:
         m += 1
     return m
+
+
+def read_npy_member(archive, member: str, what: str, error: type[Exception], fix: str, memory_fix: str, *,
+                    max_empty_dim: float = float("inf")):
+    """The array of the ``.npy`` member ``member`` of the zip ``archive`` (an ``.npz``; ``what`` names it in the
+    errors, raised as ``error`` ending with ``fix``), bounded: its declared shape and size are checked against the
+    member's stored size and the memory limit (``memory_fix`` says how to stay within) *before* anything is
+    decompressed, at most the declared bytes are read, and an object (pickle) array is refused unread; a dimension
+    longer than both the values the array holds and ``max_empty_dim`` (a shape ``(1e10, 0)``) is refused too.
+    Returns an owned, writable array."""
+    import zipfile
+    import zlib
+
+    import numpy as np
+
+    info = archive.getinfo(member)
+    headers = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+    try:
+        with archive.open(info) as fh:
+            version = np.lib.format.read_magic(fh)
+            if version not in headers:
+                raise ValueError(f"unsupported .npy version {version}")
+            shape, fortran, dtype = headers[version](fh)
+            if dtype.hasobject:
+                raise error(f"{what} holds Python objects (a pickle), which ftcal never loads. Fix: {fix}.")
+            n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
+            n_items = n_bytes / max(dtype.itemsize, 1)
+            if any(d > max(n_items, max_empty_dim) for d in shape):  # (1e10, 0): no bytes, an absurd length
+                raise error(f"{what} declares shape {shape}, a dimension longer than the {int(n_items)} values it "
+                            f"holds; the file is damaged. Fix: {fix}.")
+            if n_bytes > info.file_size:  # checked before any allocation
+                raise error(f"{what} declares shape {shape} ({format_bytes(n_bytes)}) but holds only "
+                            f"{format_bytes(info.file_size)}; the file is damaged. Fix: {fix}.")
+            check_allocation(n_bytes, f"{what} of shape {shape} ({dtype})", memory_fix)
+            data = fh.read(int(n_bytes))
+    except (error, MemoryLimitError):
+        raise
+    except (OSError, ValueError, EOFError, SyntaxError, zipfile.BadZipFile, zlib.error) as exc:
+        raise error(f"{what} is not a readable numpy array ({' '.join(str(exc).split())[:120]}); the file is "
+                    f"truncated or damaged. Fix: {fix}.") from None
+    if len(data) != int(n_bytes):
+        raise error(f"{what} is truncated ({len(data)} of {int(n_bytes)} bytes). Fix: {fix}.")
+    array = np.frombuffer(data, dtype=dtype)
+    return np.array(array.reshape(shape[::-1]).T if fortran else array.reshape(shape))

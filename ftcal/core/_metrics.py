@@ -26,16 +26,8 @@ from numpy.typing import ArrayLike, NDArray
 from ._exceptions import CalibrationInputError
 from ._wrench import WRENCH_LABELS, default_axes, force_columns, torque_columns
 
-__all__ = [
-    "wrench_rmse",
-    "per_sample_rmse",
-    "axis_rmse",
-    "relative_errors",
-    "CalibrationMetrics",
-    "calibration_metrics",
-    "neg_scaled_rmse",
-    "mean_std",
-]
+__all__ = ["wrench_rmse", "per_sample_rmse", "axis_rmse", "relative_errors", "CalibrationMetrics",
+           "calibration_metrics", "neg_scaled_rmse", "mean_std"]
 
 
 def _pair(y_true: ArrayLike, y_pred: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

@@ -19,21 +19,9 @@ from sklearn.utils.validation import check_array, check_consistent_length, valid
 from ._columns import DTYPE_KIND_NAMES
 from ._exceptions import CalibrationInputError, TooFewSamplesError
 
-__all__ = [
-    "check_all_finite",
-    "check_zero_reading",
-    "validate_training_data",
-    "validate_readings",
-    "min_training_samples",
-    "check_identifiable",
-    "check_finite_output",
-    "check_magnitude",
-    "check_bool",
-    "check_arguments",
-    "refuse_bool_numbers",
-    "check_quiet",
-    "FLOAT64_OVERFLOW",
-]
+__all__ = ["check_all_finite", "check_zero_reading", "validate_training_data", "validate_readings",
+           "min_training_samples", "check_identifiable", "check_finite_output", "check_magnitude", "check_bool",
+           "check_arguments", "refuse_bool_numbers", "check_quiet", "FLOAT64_OVERFLOW"]
 
 
 

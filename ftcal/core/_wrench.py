@@ -15,24 +15,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
 
-__all__ = [
-    "WRENCH_LABELS",
-    "FORCE",
-    "TORQUE",
-    "alpha_from_wrenches",
-    "check_alpha",
-    "ALPHA_RANGE_PER_M",
-    "MAX_LOAD_MASS_KG",
-    "scale_torques",
-    "unscale_torques",
-    "force_columns",
-    "torque_columns",
-    "axis_unit",
-    "default_axes",
-    "target_axes",
-    "torque_slice",
-    "named_targets",
-]
+__all__ = ["WRENCH_LABELS", "FORCE", "TORQUE", "alpha_from_wrenches", "check_alpha", "ALPHA_RANGE_PER_M",
+           "MAX_LOAD_MASS_KG", "scale_torques", "unscale_torques", "force_columns", "torque_columns", "axis_unit",
+           "default_axes", "target_axes", "torque_slice", "named_targets"]
 
 #: Column names of a wrench, in order.
 WRENCH_LABELS: tuple[str, ...] = ("Fx", "Fy", "Fz", "Tx", "Ty", "Tz")

@@ -19,7 +19,7 @@ _PUBLIC = dict(
 )
 _PUBLIC.update(  # names the CLI uses
     DEFAULT_MAX_SAMPLES="_bags", PLAUSIBLE_LEVER_ARM_M="_readers", canonical_wrench_name="_readers",
-    check_rosbags="_bags", expand_names="_readers", is_bag="_bags", is_pose_file="_poses",
+    check_rosbags="_bags", bag_values="_bags", expand_names="_readers", is_bag="_bags", is_pose_file="_poses",
     lever_arm_m="_readers", lever_arm_problem="_readers", parse_column_slice="_readers",
     read_channels="_dataset", unit_scale="_readers", ArrayFile="_readers",
 )

@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import LogFormatError, Placeholder
 
-__all__ = ["BagRecording", "read_bag", "write_bag", "is_bag", "bag_topics", "WRENCH_TYPES", "JOINT_STATE_TYPE",
+__all__ = ["BagRecording", "read_bag", "write_bag", "is_bag", "bag_topics", "bag_values", "WRENCH_TYPES", "JOINT_STATE_TYPE",
            "TF_TYPE", "CLOCK_OFFSET_TOLERANCE_S", "DEFAULT_MAX_SAMPLES", "BAG_STORAGES"]
 
 WRENCH_TYPES = ("geometry_msgs/msg/WrenchStamped", "geometry_msgs/msg/Wrench")
@@ -107,39 +107,20 @@ def _streaming_ros1_reader():
     import os
     from io import BytesIO
 
-    from rosbags.rosbag1.reader import Header, Reader, ReaderError, RecordType, read_bytes, read_uint32
+    from rosbags.rosbag1.reader import Header, Reader, RecordType, read_bytes, read_uint32
 
     class StreamingReader(Reader):
-        def open(self) -> None:
-            import re
+        def read_index_data(self, pos, indexes) -> None:  # skipped, never kept: messages() reads chunk by chunk
+            buf = self.bio.read(55)  # the index record's header (47 bytes, as rosbags reads it), its data's size
+            self.bio.seek(int.from_bytes(buf[51:55], "little"), os.SEEK_CUR)
 
-            self.bio = self.path.open("rb")
-            try:
-                matches = re.match(r"#ROSBAG V(\d+).(\d+)\n", self.bio.readline().decode(errors="replace"))
-                if not matches or matches.groups() != ("2", "0"):
-                    raise ReaderError("not a ROS 1 bag of version 2.0 (file magic)")
-                header = Header.read(self.bio, RecordType.BAGHEADER)
-                index_pos = header.get_uint64("index_pos")
-                conn_count, chunk_count = header.get_uint32("conn_count"), header.get_uint32("chunk_count")
-                if index_pos == 0:
-                    raise ReaderError("Bag is not indexed, reindex before reading.")
-                if chunk_count == 0:
-                    return
-                self.bio.seek(index_pos)
-                try:
-                    connections = [self.read_connection() for _ in range(conn_count)]
-                    self.chunk_infos = [self.read_chunk_info() for _ in range(chunk_count)]
-                except ReaderError as err:
-                    raise ReaderError(f"Bag index looks damaged: {err.args}") from None
-                counts: dict[int, int] = {}
-                for info in self.chunk_infos:
-                    for conn, n in info.connection_counts.items():
-                        counts[conn] = counts.get(conn, 0) + n
-                self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in connections]
-            except BaseException:
-                self.bio.close()
-                self.bio = None
-                raise
+        def open(self) -> None:
+            super().open()
+            counts: dict[int, int] = {}
+            for info in getattr(self, "chunk_infos", None) or ():
+                for conn, n in info.connection_counts.items():
+                    counts[conn] = counts.get(conn, 0) + n
+            self.connections = [c._replace(msgcount=counts.get(c.id, 0)) for c in self.connections]
 
         def messages(self, connections=(), start=None, stop=None):
             self._check_open()
@@ -221,6 +202,53 @@ def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
         return r.topics()
 
 
+def bag_values(path: str | Path, head: int | None = None):
+    """What the bag reader yields of a bag, array by array (for :func:`ftcal.core.values_sha256`): its topics (name,
+    type, count), then each message's topic, receive time [ns] and the values of its fields in order (a ROS 1
+    header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1 yields the same values. A
+    generator: the bag is streamed message by message. With ``head``, only the topic and receive time of the
+    first ``head`` messages (none deserialized): a cheap key that tells most different recordings apart.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, numpy as np
+    >>> from ftcal.core import values_sha256
+    >>> d = pathlib.Path(tempfile.mkdtemp())
+    >>> kw = dict(sensor_time=[0.0, 0.1], reading=np.zeros((2, 6)), pose_time=[0.0, 0.1], joints=np.zeros((2, 2)),
+    ...           joint_names=["a", "b"])
+    >>> a, b = write_bag(d / "a", "sqlite3", **kw), write_bag(d / "b.bag", "ros1", **kw)
+    >>> values_sha256(bag_values(a)) == values_sha256(bag_values(b))
+    True
+    >>> len(list(bag_values(a, head=1)))  # the topics, then the first message's topic and receive time
+    3
+    """
+
+    def flat(value, out: list) -> list:
+        if hasattr(value, "__dataclass_fields__"):
+            for name in value.__dataclass_fields__:
+                if name != "seq" and not name.startswith("__"):
+                    flat(getattr(value, name), out)
+        elif isinstance(value, (list, tuple)):
+            for item in value:
+                flat(item, out)
+        else:
+            out.extend(value.tolist() if isinstance(value, np.ndarray) else [value])
+        return out
+
+    with _Reader(Path(path)) as r:
+        yield np.array(sorted(f"{t} {typ} {n}" for t, (typ, n) in r.topics().items()))
+        try:
+            for k, (conn, receive_ns, data) in enumerate(r.reader.messages()):
+                if head is not None and k >= head:
+                    break
+                yield np.array(conn.topic)
+                yield np.array(receive_ns, dtype=np.int64)
+                if head is None:
+                    yield np.array(flat(r.reader.deserialize(data, conn.msgtype), []), dtype=object)
+        except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
+            raise r.damaged(exc) from None
+
+
 def _listing(topics: dict[str, tuple[str, int]]) -> str:
     return ", ".join(f"{t} ({typ}, {n} messages)" for t, (typ, n) in sorted(topics.items())) or "no topics"
 
@@ -248,7 +276,8 @@ def _choose_topic(path: Path, topics: dict, given: str | None, types: tuple[str,
 
 
 class _Stream:
-    """A topic's samples, reduced on the fly to at most ``2 * max_samples`` (block means, or every k-th).
+    """A topic's (or a /tf edge's) samples, reduced on the fly to at most ``2 * max_samples`` (block means, or
+    every k-th).
 
     The bag's declared message count only sets the first block size: when the buffer fills (a bag whose index or
     ``metadata.yaml`` under-counts), neighbouring stored samples are merged in pairs in place and the block doubles,
@@ -522,40 +551,6 @@ def _joint_group(topic: str, groups: dict, notes: list) -> tuple[tuple[str, ...]
     return names, t_p[keep], q[keep]
 
 
-class _EdgeSamples:
-    """One /tf edge's stamps and quaternions, in arrays (40 bytes a sample) that grow up to ``2 * max_samples``
-    and, when full, keep every other sample and from then on every other message of *this* edge: memory stays
-    bounded whatever the bag's length or declared counts, and an edge keeps evenly spaced samples however many
-    other edges (or publishers) share /tf."""
-
-    def __init__(self, max_samples: int) -> None:
-        self.capacity = 2 * int(max_samples)
-        self.times, self.quats = np.empty(min(16, self.capacity)), np.empty((min(16, self.capacity), 4))
-        self.n = self.seen = 0
-        self.step = 1
-
-    def add(self, t: float, quat: NDArray[np.float64]) -> None:
-        self.seen += 1
-        if (self.seen - 1) % self.step:
-            return
-        if self.n == len(self.times):
-            if self.n < self.capacity:  # grow
-                size = min(2 * self.n, self.capacity)
-                self.times = np.resize(self.times, size)
-                self.quats = np.resize(self.quats, (size, 4))
-            else:  # full: every other sample, every other message from now on
-                half = self.n // 2 + self.n % 2
-                self.times[:half], self.quats[:half] = self.times[:self.n:2], self.quats[:self.n:2]
-                self.n, self.step = half, 2 * self.step
-                if (self.seen - 1) % self.step:
-                    return
-        self.times[self.n], self.quats[self.n] = t, quat
-        self.n += 1
-
-    def arrays(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        return self.times[:self.n].copy(), self.quats[:self.n].copy()
-
-
 def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], quat: NDArray[np.float64]) -> str:
     """'' for a quaternion that is a rotation, else the sentence saying why not (naming the bag, topic, edge, time)."""
     norm = float(np.sqrt(np.sum(quat * quat))) if np.isfinite(quat).all() else float("nan")
@@ -574,7 +569,7 @@ class _TfTree:
 
     max_samples: int
     parents: dict[str, dict[str, str]] = field(default_factory=dict)
-    edges: dict[tuple[str, str], _EdgeSamples] = field(default_factory=dict)
+    edges: dict[tuple[str, str], _Stream] = field(default_factory=dict)
     static: dict[tuple[str, str], NDArray[np.float64]] = field(default_factory=dict)
     invalid: dict[tuple[str, str], str] = field(default_factory=dict)
 
@@ -591,9 +586,9 @@ class _TfTree:
         elif topic == "/tf_static":
             self.static[key] = quat
         else:
-            if key not in self.edges:
-                self.edges[key] = _EdgeSamples(self.max_samples)
-            self.edges[key].add(t, quat)
+            if key not in self.edges:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
+                self.edges[key] = _Stream(0, self.max_samples, average=False)
+            self.edges[key].add(t, t, quat)
 
     def chain(self, path: Path, base: str, sensor: str) -> list[tuple[str, str]]:
         """The edges from ``base`` down to ``sensor`` (base first). Refused: no chain, a frame of the chain with two
@@ -645,7 +640,7 @@ class _TfTree:
             if edge in self.static:
                 Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
             else:
-                times, quats = self.edges[edge].arrays()
+                times, _, quats = self.edges[edge].arrays()
                 order = np.argsort(times, kind="stable")
                 times, quats = times[order], quats[order]
                 keep = np.concatenate([[True], np.diff(times) > 0])
@@ -658,17 +653,9 @@ class _TfTree:
         return R
 
 
-def read_bag(
-    path: str | Path,
-    *,
-    wrench_topic: str | None = None,
-    raw_topic: str | None = None,
-    raw_field: str = "data",
-    joint_topic: str | None = None,
-    tf: tuple[str, str] | None = None,
-    stamps: str = "header",
-    max_samples: int = DEFAULT_MAX_SAMPLES,
-) -> BagRecording:
+def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: str | None = None,
+             raw_field: str = "data", joint_topic: str | None = None, tf: tuple[str, str] | None = None,
+             stamps: str = "header", max_samples: int = DEFAULT_MAX_SAMPLES) -> BagRecording:
     """Read the sensor stream of a bag and the pose at each sensor stamp (see the module docstring).
 
     Parameters
@@ -914,25 +901,12 @@ def _common_time(path: Path, sensor: str, pose: _PoseStream, t_s: NDArray[np.flo
         t_s, reading = t_s[overlap], reading[overlap]
     return t_s, reading
 
-def write_bag(
-    path: str | Path,
-    storage: str,
-    *,
-    sensor_time: ArrayLike,
-    reading: ArrayLike,
-    pose_time: ArrayLike,
-    joints: ArrayLike | None = None,
-    joint_names: tuple[str, ...] | list[str] = (),
-    rotations: ArrayLike | None = None,
-    tf_frames: tuple[str, str] = ("base_link", "ft_sensor"),
-    raw: bool = False,
-    sensor_topic: str | None = None,
-    joint_topic: str = "/joint_states",
-    frame_id: str = "ft_sensor",
-    sensor_clock_offset_s: float = 0.0,
-    latency_s: float = 0.001,
-    ros1_chunk_bytes: int | None = None,
-) -> Path:
+def write_bag(path: str | Path, storage: str, *, sensor_time: ArrayLike, reading: ArrayLike, pose_time: ArrayLike,
+              joints: ArrayLike | None = None, joint_names: tuple[str, ...] | list[str] = (),
+              rotations: ArrayLike | None = None, tf_frames: tuple[str, str] = ("base_link", "ft_sensor"),
+              raw: bool = False, sensor_topic: str | None = None, joint_topic: str = "/joint_states",
+              frame_id: str = "ft_sensor", sensor_clock_offset_s: float = 0.0, latency_s: float = 0.001,
+              ros1_chunk_bytes: int | None = None) -> Path:
     """Write a recording as a ROS bag, as a robot would record it (for tests, examples and the README).
 
     Parameters
@@ -964,8 +938,6 @@ def write_bag(
     pathlib.Path
     """
     check_rosbags()
-    from scipy.spatial.transform import Rotation
-
     if storage not in BAG_STORAGES:
         raise LogFormatError(f"storage must be one of {', '.join(BAG_STORAGES)}; got {storage!r}.")
     path = Path(path)
@@ -975,28 +947,64 @@ def write_bag(
     values = np.asarray(reading, dtype=float)
     t_p = np.asarray(pose_time, dtype=float)
     sensor_topic = sensor_topic or ("/ft_sensor/raw" if raw else "/ft_sensor/wrench")
-    from rosbags.typesys import Stores, get_typestore
+    out = _Serializer(storage == "ros1")
+    T = out.store.types
+    if raw:
+        Multi, Layout = T["std_msgs/msg/Float64MultiArray"], T["std_msgs/msg/MultiArrayLayout"]
+        template = Multi(layout=Layout(dim=[], data_offset=0), data=_SENTINELS[:values.shape[1]].copy())
+        out.add(sensor_topic, template, t_s, values, latency_s)
+    else:
+        Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
+            T["geometry_msgs/msg/WrenchStamped"]
+        v = _SENTINELS
+        template = Stamped(header=out.header(None, frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
+                                                                           torque=Vector3(x=v[3], y=v[4], z=v[5])))
+        out.add(sensor_topic, template, t_s, values, latency_s, stamped=True, offset_s=sensor_clock_offset_s)
+    if joints is not None:
+        q = np.asarray(joints, dtype=float)
+        empty = np.zeros(0)
+        template = T["sensor_msgs/msg/JointState"](header=out.header(None, ""), name=list(joint_names),
+                                                   position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
+                                                   effort=empty)
+        out.add(joint_topic, template, t_p, q, latency_s, stamped=True)
+    if rotations is not None:
+        _add_tf(out, np.asarray(rotations, dtype=float), t_p, tf_frames, latency_s)
+    out.write(path, storage, ros1_chunk_bytes)
+    return path
 
-    ros1 = storage == "ros1"
-    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
-    if "tf2_msgs/msg/TFMessage" not in store.types:  # rosbags' ROS 1 store lacks it
-        from rosbags.typesys import get_types_from_msg
 
-        store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", "tf2_msgs/msg/TFMessage"))
-    T = store.types
-    Header, Time = T["std_msgs/msg/Header"], T["builtin_interfaces/msg/Time"]
-    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+class _Serializer:
+    """The messages :func:`write_bag` writes, serialized for ROS 1 or ROS 2: each stream's template (sentinel
+    numbers and stamp) serialized once, then the stamps and values written into copies of its bytes (the layout is
+    fixed: same names, same counts)."""
 
-    def header(t: float, frame: str):
-        sec = math.floor(t)
-        kwargs = {"seq": 0} if ros1 else {}
-        return Header(stamp=Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000), frame_id=frame,
-                      **kwargs)
+    def __init__(self, ros1: bool) -> None:
+        from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
-    def stream(template, typ: str, times: NDArray, values: NDArray, stamped: bool, offset_s: float = 0.0):
-        """The serialized messages of a stream: ``template`` serialized once with sentinel numbers, then the
-        stamps and values written into copies of its bytes (the layout is fixed: same names, same counts)."""
-        data = np.frombuffer(bytes(serialize(template, typ)), dtype=np.uint8)
+        self.ros1 = ros1
+        self.store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+        if TF_TYPE not in self.store.types:  # rosbags' ROS 1 store lacks it
+            self.store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", TF_TYPE))
+        self.serialize = self.store.serialize_ros1 if ros1 else self.store.serialize_cdr
+        self.streams: list = []  # (topic, type, receive times, serialized rows)
+        self.statics: list = []  # (topic, type, time, serialized message)
+
+    def header(self, t: float | None, frame: str):
+        """A header stamped ``t`` [s] (None: the sentinel stamp) in ``frame``."""
+        Header, Time = self.store.types["std_msgs/msg/Header"], self.store.types["builtin_interfaces/msg/Time"]
+        if t is None:
+            stamp = Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC)
+        else:
+            sec = math.floor(t)
+            stamp = Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
+        return Header(stamp=stamp, frame_id=frame, **({"seq": 0} if self.ros1 else {}))
+
+    def add(self, topic: str, template, times: NDArray, values: NDArray, latency_s: float, stamped: bool = False,
+            offset_s: float = 0.0) -> None:
+        """The stream of ``template``'s messages with ``values`` (one row a message) at ``times`` [s], received
+        ``latency_s`` later, their header stamps ``offset_s`` ahead."""
+        typ = template.__msgtype__
+        data = np.frombuffer(bytes(self.serialize(template, typ)), dtype=np.uint8)
         width = values.shape[1]
         at = bytes(data).find(_SENTINELS[:width].astype("<f8").tobytes())
         out = np.tile(data, (len(times), 1))
@@ -1005,81 +1013,60 @@ def write_bag(
             st = bytes(data).find(_STAMP_SENTINEL)
             stamp = times + offset_s
             sec = np.floor(stamp)
-            nsec = np.clip(np.round((stamp - sec) * 1e9), 0, 999_999_999)
             both = np.empty(len(times), dtype=[("sec", "<i4"), ("nsec", "<u4")])
-            both["sec"], both["nsec"] = sec, nsec
+            both["sec"], both["nsec"] = sec, np.clip(np.round((stamp - sec) * 1e9), 0, 999_999_999)
             out[:, st:st + 8] = both.view(np.uint8).reshape(len(times), 8)
-        return out
+        self.streams.append((topic, typ, times + latency_s, out))
 
-    sentinel_header = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=frame_id,
-                             **({"seq": 0} if ros1 else {}))
-    streams = []  # (topic, type, receive times, serialized rows)
-    if raw:
-        Multi, Layout = T["std_msgs/msg/Float64MultiArray"], T["std_msgs/msg/MultiArrayLayout"]
-        m = values.shape[1]
-        template = Multi(layout=Layout(dim=[], data_offset=0), data=_SENTINELS[:m].copy())
-        streams.append((sensor_topic, "std_msgs/msg/Float64MultiArray", t_s + latency_s,
-                        stream(template, "std_msgs/msg/Float64MultiArray", t_s, values, False)))
-    else:
-        Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
-            T["geometry_msgs/msg/WrenchStamped"]
-        v = _SENTINELS
-        template = Stamped(header=sentinel_header, wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
-                                                                torque=Vector3(x=v[3], y=v[4], z=v[5])))
-        streams.append((sensor_topic, "geometry_msgs/msg/WrenchStamped", t_s + latency_s,
-                        stream(template, "geometry_msgs/msg/WrenchStamped", t_s, values, True, sensor_clock_offset_s)))
-    if joints is not None:
-        q = np.asarray(joints, dtype=float)
-        JointState = T["sensor_msgs/msg/JointState"]
-        empty = np.zeros(0)
-        template = JointState(header=Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id="",
-                                            **({"seq": 0} if ros1 else {})),
-                              name=list(joint_names), position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
-                              effort=empty)
-        streams.append((joint_topic, "sensor_msgs/msg/JointState", t_p + latency_s,
-                        stream(template, "sensor_msgs/msg/JointState", t_p, q, True)))
-    statics = []
-    if rotations is not None:
-        TF, TS, Tr = T["tf2_msgs/msg/TFMessage"], T["geometry_msgs/msg/TransformStamped"], T["geometry_msgs/msg/Transform"]
-        Q, V = T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Vector3"]
-        flange_to_sensor = Rotation.from_euler("z", 90, degrees=True)  # a fixed adapter in /tf_static
-        base, sensor_frame = tf_frames
-        to_flange = Rotation.from_matrix(np.asarray(rotations, dtype=float)) * flange_to_sensor.inv()
+    def write(self, path: Path, storage: str, ros1_chunk_bytes: int | None) -> None:
+        """Every message in the order of receipt (the static ones first) into a new bag at ``path``."""
+        if self.ros1:
+            from rosbags.rosbag1 import Writer as Writer1
 
-        def transform(head, parent_child: tuple[str, str], quat) -> object:
-            x, y, z, w = (float(c) for c in quat)
-            return TS(header=head, child_frame_id=parent_child[1],
-                      transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
-        head = Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=base, **({"seq": 0} if ros1 else {}))
-        template = TF(transforms=[transform(head, (base, "flange"), _SENTINELS[:4])])
-        streams.append(("/tf", "tf2_msgs/msg/TFMessage", t_p + latency_s,
-                        stream(template, "tf2_msgs/msg/TFMessage", t_p, to_flange.as_quat(), True)))
-        static = TF(transforms=[transform(header(float(t_p[0]), "flange"), ("flange", sensor_frame),
-                                          flange_to_sensor.as_quat())])
-        statics.append(("/tf_static", "tf2_msgs/msg/TFMessage", float(t_p[0]),
-                        np.frombuffer(bytes(serialize(static, "tf2_msgs/msg/TFMessage")), dtype=np.uint8)))
-    if ros1:
-        from rosbags.rosbag1 import Writer as Writer1
+            writer = Writer1(path)
+            if ros1_chunk_bytes is not None:
+                writer.chunk_threshold = int(ros1_chunk_bytes)
+        else:
+            from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
 
-        writer = Writer1(path)
-        if ros1_chunk_bytes is not None:
-            writer.chunk_threshold = int(ros1_chunk_bytes)
-    else:
-        from rosbags.rosbag2 import StoragePlugin, Writer as Writer2
+            writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap"
+                             else StoragePlugin.SQLITE3)
+        streams = self.streams
+        receive = np.concatenate([r for _, _, r, _ in streams])
+        which = np.concatenate([np.full(len(r), k) for k, (_, _, r, _) in enumerate(streams)])
+        row = np.concatenate([np.arange(len(r)) for _, _, r, _ in streams])
+        order = np.argsort(receive, kind="stable")
+        with writer:
+            connections = [writer.add_connection(topic, typ, typestore=self.store)
+                           for topic, typ, _, _ in self.statics + streams]
+            for k, (_, _, t, data) in enumerate(self.statics):
+                writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
+            base_k = len(self.statics)
+            ns = np.round(receive * 1e9).astype(np.int64)
+            for i in order:
+                k = int(which[i])
+                writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
 
-        writer = Writer2(path, version=9, storage_plugin=StoragePlugin.MCAP if storage == "mcap"
-                         else StoragePlugin.SQLITE3)
-    receive = np.concatenate([r for _, _, r, _ in streams])
-    which = np.concatenate([np.full(len(r), k) for k, (_, _, r, _) in enumerate(streams)])
-    row = np.concatenate([np.arange(len(r)) for _, _, r, _ in streams])
-    order = np.argsort(receive, kind="stable")
-    with writer:
-        connections = [writer.add_connection(topic, typ, typestore=store) for topic, typ, _, _ in statics + streams]
-        for k, (_, _, t, data) in enumerate(statics):
-            writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
-        base_k = len(statics)
-        ns = np.round(receive * 1e9).astype(np.int64)
-        for i in order:
-            k = int(which[i])
-            writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
-    return path
+
+def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple[str, str], latency_s: float) -> None:
+    """The sensor's orientation on ``/tf`` (base to an intermediate ``flange`` frame) and a static transform from
+    the flange to the sensor frame on ``/tf_static``."""
+    from scipy.spatial.transform import Rotation
+
+    T = out.store.types
+    TF, TS, Tr = T[TF_TYPE], T["geometry_msgs/msg/TransformStamped"], T["geometry_msgs/msg/Transform"]
+    Q, V = T["geometry_msgs/msg/Quaternion"], T["geometry_msgs/msg/Vector3"]
+    flange_to_sensor = Rotation.from_euler("z", 90, degrees=True)  # a fixed adapter in /tf_static
+    base, sensor_frame = tf_frames
+    to_flange = Rotation.from_matrix(rotations) * flange_to_sensor.inv()
+
+    def transform(head, child: str, quat) -> object:
+        x, y, z, w = (float(c) for c in quat)
+        return TS(header=head, child_frame_id=child,
+                  transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
+
+    template = TF(transforms=[transform(out.header(None, base), "flange", _SENTINELS[:4])])
+    out.add("/tf", template, t_p, to_flange.as_quat(), latency_s, stamped=True)
+    static = TF(transforms=[transform(out.header(float(t_p[0]), "flange"), sensor_frame, flange_to_sensor.as_quat())])
+    out.statics.append(("/tf_static", TF_TYPE, float(t_p[0]),
+                        np.frombuffer(bytes(out.serialize(static, TF_TYPE)), dtype=np.uint8)))

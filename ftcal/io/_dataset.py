@@ -49,11 +49,11 @@ from numpy.typing import NDArray
 
 from ..core._columns import check_plain_fields, csv_rows, is_number
 from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileError, Placeholder
-from ..core._files import atomic_output
-from ..core._temperature import TemperatureValueError, check_temperature
+from ..core._files import atomic_output, values_sha256
+from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       temperature_message, _slice_columns)
+                       checked_temperature, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -68,20 +68,10 @@ def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDatase
     model would be judged on its own training rows. The files are compared by what was read from them (a hash of
     the arrays), so a copy written otherwise is found too; with group labels read from a column (``labelled``),
     rows labelled as other poses or sessions are told apart by their labels."""
-    import hashlib
-
-    seen: dict[bytes, Path] = {}
+    seen: dict[str, Path] = {}
     for path, part in zip(files, parts):
-        digest = hashlib.sha256()
-        for array in (part.raw, part.wrench, part.temperature):
-            if array is not None:
-                a = np.ascontiguousarray(array, dtype=float)
-                digest.update(repr(a.shape).encode())
-                digest.update(a.tobytes())
-        if labelled and part.group is not None:
-            digest.update(np.ascontiguousarray(part.group, dtype=np.int64).tobytes())
-            digest.update(repr(part.meta.get("group_names")).encode())
-        key = digest.digest()
+        labels = (part.group, repr(part.meta.get("group_names"))) if labelled and part.group is not None else ()
+        key = values_sha256([part.raw, part.wrench, part.temperature, *labels])
         if part.n_samples and key in seen:
             raise DatasetFileError(
                 f"{path} holds the same readings and wrenches as {seen[key]} ({part.n_samples} rows): one recording "
@@ -99,15 +89,16 @@ def dataset_files(folder: Path) -> list[Path]:
 MAX_FOLDER_FILES = 100_000
 
 
-def _parse_meta(text: str, where: str) -> dict:
-    """The JSON object of a ``# meta:`` comment (an object, not a list or a number)."""
+def _parse_meta(text: str, where: str, what: str = "the meta comment") -> dict:
+    """The JSON object of a ``# meta:`` comment or an ``.npz``'s ``meta_json`` (an object, not a list or a
+    number)."""
     try:
         meta = json.loads(text)
     except (json.JSONDecodeError, RecursionError) as exc:
-        raise DatasetFileError(f"{where}: bad JSON in the meta comment ({str(exc)[:80]}).") from None
+        raise DatasetFileError(f"{where}: bad JSON in {what} ({str(exc)[:80]}).") from None
     if not isinstance(meta, dict):
         raise DatasetFileError(
-            f"{where}: the meta comment holds a JSON {type(meta).__name__}; it must be a JSON object "
+            f"{where}: {what} holds a JSON {type(meta).__name__}; it must be a JSON object "
             "such as {\"alpha\": 50}."
         )
     return meta
@@ -783,12 +774,7 @@ class CalibrationDataset:
                 meta = {**meta, "group_labels": labels, "group_names": labels}
         temperature = None
         if used.temperature is not None:
-            try:
-                temperature = check_temperature(data[:, -1], len(line_nos))
-            except TemperatureValueError as exc:
-                if exc.row is None:
-                    raise DatasetFileError(f"{path}: {exc}") from None
-                raise DatasetFileError(temperature_message(exc, path, line_nos[exc.row])) from None
+            temperature = checked_temperature(data[:, -1], path, line_nos, DatasetFileError)
         try:
             ds = cls(raw=data[:, :n_ch], wrench=data[:, n_ch:n_ch + n_w], group=group, meta=meta,
                      temperature=temperature, axes=used.axes, sources=RowSources.of_file(path.name, line_nos))
@@ -826,13 +812,7 @@ def _npz_meta(value: np.ndarray, path: Path) -> dict:
     if value.dtype.kind not in "US" or value.size != 1:
         raise DatasetFileError(f"{path}: meta_json is not a JSON text (dtype {value.dtype}); save it as "
                                "numpy.array(json.dumps(meta)).")
-    try:
-        meta = json.loads(str(value.reshape(())))
-    except (json.JSONDecodeError, RecursionError) as exc:
-        raise DatasetFileError(f"{path}: bad JSON in meta_json ({str(exc)[:80]}).") from None
-    if not isinstance(meta, dict):
-        raise DatasetFileError(f"{path}: meta_json holds a JSON {type(meta).__name__}; it must be an object.")
-    return meta
+    return _parse_meta(str(value.reshape(())), str(path), "meta_json")
 
 
 def _rows_first(a: np.ndarray) -> np.ndarray:

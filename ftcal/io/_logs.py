@@ -53,9 +53,9 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
-from ..core._temperature import TemperatureValueError, check_temperature
+from ..core._temperature import check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import temperature_message
+from ._readers import checked_temperature
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -226,14 +226,40 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     path = Path(path)
     text_lines = read_text_lines(path, "log file", "split the log into several files (one per run or configuration)")
     info, n_comment, info_line = _parse_comments(path, text_lines)
+    units = _log_units(path, info, info_line, text_lines, n_comment)
+    head_line = n_comment + 1
+    header, q_cols, s_cols = _log_columns(path, text_lines[n_comment], head_line, n_channels, n_joints)
+    rows = []
+    for offset, fields in enumerate(csv.reader(text_lines[head_line:])):
+        lineno = head_line + 1 + offset
+        if not fields or all(not f.strip() for f in fields):
+            continue
+        if len(fields) != len(header):
+            raise LogFormatError(f"{path}: line {lineno}: {len(fields)} fields but the header names {len(header)}.")
+        rows.append((lineno, [f.strip() for f in fields]))
+    if not rows:
+        raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
+    log = _log_rows(path, rows, {c: i for i, c in enumerate(header)}, q_cols, s_cols, units)
+    _check_log_values(log, q_cols, s_cols, radians=units["joint_unit"] == 1.0)
+    log.q *= units["joint_unit"]
+    log.raw_unit, log.robot, log.sensor_frame = info.get("raw_unit", "counts"), info.get("robot"), \
+        info.get("sensor_frame")
+    log.load_mass, log.meta = _log_mass_and_meta(path, info, info_line)
+    if log.temperature is not None:
+        checked_temperature(log.temperature, path, log.line, LogFormatError)
+    return log
+
+
+def _log_units(path: Path, info: dict[str, str], info_line: dict[str, int], text_lines: list[str],
+               n_comment: int) -> dict[str, float]:
+    """The format version checked, a header line after the comments, and the scale of the time and joint units."""
     version = info.get("ftcal-run-log")
     if version is not None and version != str(LOG_FORMAT_VERSION):
         raise LogFormatError(f"{path}: line {info_line['ftcal-run-log']}: run-log format version {version!r}; this "
                              f"ftcal reads version {LOG_FORMAT_VERSION} (was the log written by a newer ftcal? "
                              "update ftcal).")
-    head_line = n_comment + 1
     if n_comment >= len(text_lines) or not text_lines[n_comment].strip():
-        raise LogFormatError(f"{path}: line {head_line}: no header line; expected "
+        raise LogFormatError(f"{path}: line {n_comment + 1}: no header line; expected "
                              "timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}.")
     units = {}
     for key, table in (("time_unit", _TIME_UNITS), ("joint_unit", _JOINT_UNITS)):
@@ -243,8 +269,14 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         if info[key] not in table:
             raise LogFormatError(f"{path}: unknown {key} {info[key]!r}; use one of {', '.join(table)}.")
         units[key] = table[info[key]]
+    return units
+
+
+def _log_columns(path: Path, line: str, head_line: int, n_channels: int | None,
+                 n_joints: int | None) -> tuple[list[str], list[str], list[str]]:
+    """The header's names, joint columns and raw channel columns, their counts checked."""
     head = read_header(
-        text_lines[n_comment].split(","), where=f"{path}: line {head_line}", error=LogFormatError,
+        line.split(","), where=f"{path}: line {head_line}", error=LogFormatError,
         required=_FIXED_COLUMNS, numbered=(("q", 1, "joint"), ("s", 0, "raw channel")), allow_other=True,
         expected="timestamp,run,config,pose,q1,...,qJ,s0,...,s{N-1}",
     )
@@ -259,17 +291,13 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     if n_joints is not None and len(q_cols) != n_joints:
         raise LogFormatError(f"{path}: line {head_line}: {len(q_cols)} joint columns but the robot has "
                              f"{n_joints} joints.")
-    col = {c: i for i, c in enumerate(header)}
-    rows = []
-    for offset, fields in enumerate(csv.reader(text_lines[head_line:])):
-        lineno = head_line + 1 + offset
-        if not fields or all(not f.strip() for f in fields):
-            continue
-        if len(fields) != len(header):
-            raise LogFormatError(f"{path}: line {lineno}: {len(fields)} fields but the header names {len(header)}.")
-        rows.append((lineno, [f.strip() for f in fields]))
-    if not rows:
-        raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
+    return header, q_cols, s_cols
+
+
+def _log_rows(path: Path, rows: list[tuple[int, list[str]]], col: dict[str, int], q_cols: list[str],
+              s_cols: list[str], units: dict[str, float]) -> RunLog:
+    """The rows' values (every field checked, named by its line and column), the time in [s], the joints as
+    written."""
 
     def number(lineno: int, fields: list[str], name: str) -> float:
         text = fields[col[name]]
@@ -316,7 +344,15 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         raw[i] = [number(lineno, fields, c) for c in s_cols]
         if temp is not None:
             temp[i] = number(lineno, fields, "temperature")
-    if units["joint_unit"] == 1.0:
+    return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
+                  line=line, temperature=temp)
+
+
+def _check_log_values(log: RunLog, q_cols: list[str], s_cols: list[str], radians: bool) -> None:
+    """Refused: joint angles beyond 2*pi in a log in radians (degrees?), raw values a calibration cannot square;
+    each named by its line."""
+    path, line, q, raw = log.path, log.line, log.q, log.raw
+    if radians:
         bad = np.argwhere(np.abs(q) > _MAX_PLAUSIBLE_RAD)
         if bad.size:
             r, c = bad[0]
@@ -331,7 +367,10 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
         raise LogFormatError(f"{path}: line {line[r]}: column {s_cols[c]} is {raw[r, c]:g}, beyond the "
                              f"{MAX_TRAINING_MAGNITUDE:g} a calibration can square without overflow; check the units "
                              "and that line.")
-    q *= units["joint_unit"]
+
+
+def _log_mass_and_meta(path: Path, info: dict[str, str], info_line: dict[str, int]) -> tuple[float | None, dict]:
+    """The ``load_mass_kg`` [kg] and ``meta`` comments, checked."""
     mass = None
     if "load_mass_kg" in info:
         try:
@@ -350,35 +389,13 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
             meta = json.loads(info["meta"])
         except json.JSONDecodeError as exc:
             raise LogFormatError(f"{path}: the '# meta:' comment is not valid JSON ({exc}).") from exc
-    if temp is not None:
-        try:
-            check_temperature(temp, n)
-        except TemperatureValueError as exc:
-            if exc.row is None:
-                raise LogFormatError(f"{path}: {exc}") from None
-            raise LogFormatError(temperature_message(exc, path, int(line[exc.row]))) from None
-    return RunLog(path=path, timestamp=ts, run_kind=kind.astype(str), config=config, pose=pose, q=q, raw=raw,
-                  line=line, raw_unit=info.get("raw_unit", "counts"), load_mass=mass, robot=info.get("robot"),
-                  sensor_frame=info.get("sensor_frame"), meta=meta, temperature=temp)
+    return mass, meta
 
 
-def write_run_log(
-    path: str | Path,
-    *,
-    timestamp: ArrayLike,
-    run_kind: ArrayLike,
-    config: ArrayLike,
-    pose: ArrayLike,
-    q: ArrayLike,
-    raw: ArrayLike,
-    raw_unit: str = "counts",
-    load_mass: float | None = None,
-    robot: str | None = None,
-    sensor_frame: str | None = None,
-    meta: dict | None = None,
-    overwrite: bool = False,
-    temperature: ArrayLike | None = None,
-) -> Path:
+def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike, config: ArrayLike, pose: ArrayLike,
+                  q: ArrayLike, raw: ArrayLike, raw_unit: str = "counts", load_mass: float | None = None,
+                  robot: str | None = None, sensor_frame: str | None = None, meta: dict | None = None,
+                  overwrite: bool = False, temperature: ArrayLike | None = None) -> Path:
     """Write samples as a run log (timestamps [s], joint angles [rad]) and return the path.
 
     Parameters

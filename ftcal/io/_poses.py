@@ -175,8 +175,6 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     >>> rec.n_rows, rec.orientation, rec.rotation[1].round(6).tolist()[2]
     (2, 'quaternion (x, y, z, w)', [0.0, 0.0, -1.0])
     """
-    from scipy.spatial.transform import Rotation
-
     path = Path(path)
     fields, head_line, rows = _header_and_rows(path)
     where = f"{path}: line {head_line}"
@@ -231,36 +229,7 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
                                      "or remove that row.")
             values[i, k] = v
     k = len(orientation_cols)
-    o = values[:, :k]
-    if not layout:
-        rotation = None
-    elif layout.startswith("quaternion"):
-        norm = np.linalg.norm(o, axis=1)
-        bad = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE)
-        if bad.size:
-            i = int(bad[0])
-            raise LogFormatError(f"{path}: line {line[i]}: the quaternion (qx,qy,qz,qw) has norm {norm[i]:.4g}, not 1; "
-                                 "is a column swapped or missing?")
-        rotation = Rotation.from_quat(o).as_matrix()  # scalar last (x, y, z, w), as ROS writes it
-    elif layout == "rotation matrix":
-        R = o.reshape(n, 3, 3)
-        err = np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)).max(axis=(1, 2))
-        det = np.linalg.det(R)
-        bad = np.flatnonzero((err > MATRIX_TOLERANCE) | (det < 0))
-        if bad.size:
-            i = int(bad[0])
-            what = f"a reflection (determinant {det[i]:.3g})" if det[i] < 0 else \
-                f"not orthonormal (RᵀR differs from the identity by {err[i]:.2g})"
-            raise LogFormatError(f"{path}: line {line[i]}: R00..R22 is {what}, not a rotation matrix; check the "
-                                 "column order (Rij = row i, column j).")
-        rotation = Rotation.from_matrix(R).as_matrix()  # the nearest rotation of a rounded one
-    else:
-        big = np.argwhere(np.abs(o) > 2 * np.pi + 1e-6)
-        if big.size:
-            i, j = (int(v) for v in big[0])
-            raise LogFormatError(f"{path}: line {line[i]}, column {orientation_cols[j]}: {o[i, j]:g} exceeds 2*pi; "
-                                 "roll, pitch and yaw are in radians (were they written in degrees?).")
-        rotation = Rotation.from_euler("xyz", o).as_matrix()  # extrinsic x, y, z: Rz(yaw) Ry(pitch) Rx(roll)
+    rotation = _rotations(path, layout, values[:, :k], line, orientation_cols) if layout else None
     reading = values[:, k:k + (6 if wrench_cols else len(channels))]
     wrench = raw = None
     if wrench_cols:
@@ -280,3 +249,38 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
                                  f"{time[i - 1]:g} s on line {line[i - 1]}; {rule}.")
     return PoseRecording(path=path, rotation=rotation, wrench=wrench, raw=raw, time=time,
                          temperature=extra.get("temperature"), line=line, orientation=layout)
+
+
+def _rotations(path: Path, layout: str, o: NDArray[np.float64], line: NDArray[np.int64],
+               columns: tuple[str, ...]) -> NDArray[np.float64]:
+    """The rotations (sensor to base) of the orientation columns ``o`` in ``layout``, checked row by row (a
+    quaternion of unit norm, a proper rotation matrix, angles in radians), errors naming the row's line."""
+    from scipy.spatial.transform import Rotation
+
+    n = len(o)
+    if layout.startswith("quaternion"):
+        norm = np.linalg.norm(o, axis=1)
+        bad = np.flatnonzero(np.abs(norm - 1.0) > QUATERNION_NORM_TOLERANCE)
+        if bad.size:
+            i = int(bad[0])
+            raise LogFormatError(f"{path}: line {line[i]}: the quaternion (qx,qy,qz,qw) has norm {norm[i]:.4g}, not 1; "
+                                 "is a column swapped or missing?")
+        return Rotation.from_quat(o).as_matrix()  # scalar last (x, y, z, w), as ROS writes it
+    if layout == "rotation matrix":
+        R = o.reshape(n, 3, 3)
+        err = np.abs(np.einsum("nki,nkj->nij", R, R) - np.eye(3)).max(axis=(1, 2))
+        det = np.linalg.det(R)
+        bad = np.flatnonzero((err > MATRIX_TOLERANCE) | (det < 0))
+        if bad.size:
+            i = int(bad[0])
+            what = f"a reflection (determinant {det[i]:.3g})" if det[i] < 0 else \
+                f"not orthonormal (RᵀR differs from the identity by {err[i]:.2g})"
+            raise LogFormatError(f"{path}: line {line[i]}: R00..R22 is {what}, not a rotation matrix; check the "
+                                 "column order (Rij = row i, column j).")
+        return Rotation.from_matrix(R).as_matrix()  # the nearest rotation of a rounded one
+    big = np.argwhere(np.abs(o) > 2 * np.pi + 1e-6)
+    if big.size:
+        i, j = (int(v) for v in big[0])
+        raise LogFormatError(f"{path}: line {line[i]}, column {columns[j]}: {o[i, j]:g} exceeds 2*pi; "
+                             "roll, pitch and yaw are in radians (were they written in degrees?).")
+    return Rotation.from_euler("xyz", o).as_matrix()  # extrinsic x, y, z: Rz(yaw) Ry(pitch) Rx(roll)

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import re
 import zipfile
-import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -37,28 +36,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from ..core._columns import DTYPE_KIND_NAMES, is_number, repeated_names
-from ..core._exceptions import NO_SETTING, DatasetFileError, FtcalError, Placeholder, api_spelling
-from ..core._memory import MemoryLimitError, check_allocation
+from ..core._exceptions import NO_SETTING, DatasetFileError, Placeholder, api_spelling
+from ..core._memory import check_allocation, read_npy_member
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
-__all__ = [
-    "FORCE_UNITS",
-    "TORQUE_UNITS",
-    "STANDARD_GRAVITY",
-    "ColumnMap",
-    "unit_scale",
-    "canonical_wrench_name",
-    "expand_names",
-    "parse_column_slice",
-    "lever_arm_m",
-    "lever_arm_problem",
-    "ArrayFile",
-    "read_npy_member",
-    "check_real_array",
-    "has_header",
-    "join_headerless",
-    "JoinedTable",
-]
+__all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
+           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
+           "check_real_array", "has_header", "join_headerless", "JoinedTable"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
 STANDARD_GRAVITY = 9.80665
@@ -592,53 +576,23 @@ def _unit_proposals(arm: float, fmax: float, force_unit: str, torque_unit: str) 
     return out
 
 
-def temperature_message(exc: FtcalError, path, line_no: int) -> str:
-    """The library's "temperature row 5 is NaN ..." (an error about a row of the array) at the text file's line and
-    column: the error's ``{row}`` is said as the column."""
-    return f"{path}: line {line_no}, column temperature: {exc.render(api_spelling, row='temperature')}"
+def checked_temperature(values, path, lines, error: type[Exception]):
+    """``values`` checked as the temperatures [deg C] of a text file's rows (:func:`check_temperature`), else
+    ``error`` naming the file and, for a row, its ``lines`` entry and the column (the library's "{row}" said as
+    the column)."""
+    from ..core._temperature import TemperatureValueError, check_temperature
+
+    try:
+        return check_temperature(values, len(lines))
+    except TemperatureValueError as exc:
+        if exc.row is None:
+            raise error(f"{path}: {exc}") from None
+        raise error(f"{path}: line {int(lines[exc.row])}, column temperature: "
+                    f"{exc.render(api_spelling, row='temperature')}") from None
 
 
 # ------------------------------------------------------------------ bounded reading of .npz and .mat
-def read_npy_member(archive: zipfile.ZipFile, member: str, where: str, error: type[Exception] = DatasetFileError,
-                    *, header_only: bool = False):
-    """The array of the ``.npy`` member of a zip (an ``.npz``), its declared shape and size checked against
-    the member's stored size and ftcal's memory limit *before* anything is decompressed; at most the declared
-    bytes are read, and an object (pickle) array is refused unread. With ``header_only``, ``(shape, dtype)``.
-    """
-    info = archive.getinfo(member)
-    name = member[:-4] if member.endswith(".npy") else member
-    try:
-        with archive.open(info) as fh:
-            version = np.lib.format.read_magic(fh)
-            shape, fortran, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
-                                     else np.lib.format.read_array_header_2_0(fh))
-            if dtype.hasobject:
-                raise error(f"{where}: array {name!r} holds Python objects (a pickle), which ftcal never loads; save "
-                            "numeric arrays (numpy.savez(path, raw=..., wrench=...)).")
-            n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
-            if n_bytes > info.file_size:
-                raise error(f"{where}: array {name!r} declares shape {shape} ({n_bytes:.0f} bytes) but holds only "
-                            f"{info.file_size} bytes; the file is damaged or not written by numpy.")
-            check_allocation(n_bytes, f"{where}: array {name!r} of shape {shape}",
-                             "split the data into smaller files")
-            if header_only:
-                return tuple(shape), dtype
-            data = fh.read(int(n_bytes))
-    except (error, MemoryLimitError):
-        raise
-    except (OSError, ValueError, EOFError, SyntaxError, zipfile.BadZipFile, zlib.error) as exc:
-        raise error(f"{where}: array {name!r} is not a readable numpy array "
-                    f"({' '.join(str(exc).split())[:120]}).") from None
-    if len(data) != int(n_bytes):
-        raise error(f"{where}: array {name!r} is truncated ({len(data)} of {int(n_bytes)} bytes).")
-    array = np.frombuffer(data, dtype=dtype)
-    return np.array(array.reshape(shape[::-1]).T if fortran else array.reshape(shape))
-
-
-#: MATLAB classes of the v5 format (``mxCLASS``) by number, and the item size of the numeric ones.
-_MAT_CLASSES = {1: "cell", 2: "struct", 3: "object", 4: "char", 5: "sparse", 6: "double", 7: "single", 8: "int8",
-                9: "uint8", 10: "int16", 11: "uint16", 12: "int32", 13: "uint32", 14: "int64", 15: "uint64",
-                16: "function_handle", 17: "opaque"}
+#: The item size [bytes] of MATLAB's numeric classes (as :func:`scipy.io.whosmat` names them).
 _MAT_ITEM_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, "uint16": 2, "int32": 4,
                    "uint32": 4, "int64": 8, "uint64": 8}
 
@@ -664,8 +618,6 @@ class ArrayFile:
         self.is_npz = self.path.suffix.lower() == ".npz"
         self.kind = "array" if self.is_npz else "variable"
         self._zip: zipfile.ZipFile | None = None
-        self._mat_elements: dict[str, tuple[int, int]] = {}
-        self._mat_header = b""
         #: name -> (shape, dtype kind letter or MATLAB class)
         self.entries: dict[str, tuple[tuple[int, ...], str]] = {}
         if self.is_npz:
@@ -691,102 +643,27 @@ class ArrayFile:
 
     # -- .mat
     def _list_mat(self) -> None:
-        with open(self.path, "rb") as fh:
-            head = fh.read(128)
-            if len(head) < 128 or head[:4] == b"\x00\x00\x00\x00" or head[124:126] not in (b"\x00\x01", b"\x01\x00"):
-                self._mat_v4_or_foreign(head)
-                return
-            if head[124:126] in (b"\x00\x02", b"\x02\x00") or b"7.3" in head[:20]:
-                self._refuse_hdf5()
-            order = "<" if head[126:128] == b"IM" else ">"
-            self._mat_header = head
-            self._scan_v5(fh, order)
-
-    def _refuse_hdf5(self) -> None:
-        raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
-                               "package. Fix: save it in MATLAB with save(FILE, ..., '-v7') and retry.")
-
-    def _mat_v4_or_foreign(self, head: bytes) -> None:
-        """A v4 file (no compression: scipy lists and skips its variables without reading them) or no .mat."""
-        if b"MATLAB 7.3" in head or (len(head) >= 126 and head[124:126] in (b"\x00\x02", b"\x02\x00")):
-            self._refuse_hdf5()
+        """Each variable's name, shape and class from its header (:func:`scipy.io.whosmat` reads no variable's data:
+        a compressed one is inflated only as far as its header, so a crafted or huge unused variable costs nothing);
+        a v7.3 (HDF5) file is refused with the fix."""
         from scipy.io import whosmat
 
+        with open(self.path, "rb") as fh:
+            head = fh.read(128)
+        if b"7.3" in head[:20] or head[124:126] in (b"\x00\x02", b"\x02\x00"):
+            self._refuse_hdf5()
         try:
             found = whosmat(self.path)
         except NotImplementedError:
             self._refuse_hdf5()
-        except Exception as exc:  # scipy raises ValueError/TypeError/OSError on foreign files
+        except Exception as exc:  # scipy raises ValueError/TypeError/OSError/zlib.error on foreign or damaged files
             raise DatasetFileError(f"{self.where}: not a readable .mat file ({str(exc)[:100]}).") from None
         for name, shape, cls in found:
             self.entries[name] = (tuple(shape), cls)
 
-    def _scan_v5(self, fh, order: str) -> None:
-        """Each variable's name, shape and class from its header: a compressed variable is inflated only as far as
-        its header (a few hundred bytes), so a crafted or huge unused variable is never decompressed."""
-        import struct
-
-        size = self.path.stat().st_size
-        pos = 128
-        while pos + 8 <= size:
-            fh.seek(pos)
-            mdtype, nbytes = struct.unpack(order + "II", fh.read(8))
-            start = pos + 8
-            if mdtype == 15:  # miCOMPRESSED
-                inflater = zlib.decompressobj()
-                head = b""
-                fh.seek(start)
-                remaining = nbytes
-                while len(head) < 1024 and remaining > 0:
-                    block = fh.read(min(4096, remaining))
-                    if not block:
-                        break
-                    remaining -= len(block)
-                    try:
-                        head += inflater.decompress(block, 1024 - len(head))
-                    except zlib.error as exc:
-                        raise DatasetFileError(f"{self.where}: a damaged compressed variable at byte {pos} "
-                                               f"({exc}).") from None
-                    while inflater.unconsumed_tail and len(head) < 1024:
-                        head += inflater.decompress(inflater.unconsumed_tail, 1024 - len(head))
-                name, shape, cls = self._matrix_header(head, order, pos)
-            elif mdtype == 14:  # miMATRIX, uncompressed
-                fh.seek(start - 8)
-                name, shape, cls = self._matrix_header(fh.read(min(nbytes + 8, 1024)), order, pos)
-            else:
-                raise DatasetFileError(f"{self.where}: not a MATLAB v5 variable at byte {pos} (data type {mdtype}); "
-                                       "the file is damaged or not a .mat file.")
-            if name:
-                self.entries[name] = (shape, cls)
-                self._mat_elements[name] = (pos, 8 + nbytes)
-            pos = start + nbytes + ((-nbytes) % 8 if mdtype != 15 else 0)
-
-    def _matrix_header(self, data: bytes, order: str, pos: int) -> tuple[str, tuple[int, ...], str]:
-        import struct
-
-        def element(offset: int) -> tuple[int, bytes, int]:
-            word = struct.unpack(order + "I", data[offset:offset + 4])[0]
-            if word >> 16:  # the small data element format: type and size in one word, data in the next
-                return word & 0xFFFF, data[offset + 4:offset + 4 + (word >> 16)], offset + 8
-            n = struct.unpack(order + "I", data[offset + 4:offset + 8])[0]
-            return word, data[offset + 8:offset + 8 + n], offset + 8 + n + ((-n) % 8)
-
-        try:
-            mdtype, _, _ = struct.unpack(order + "II", data[:8]) + (0,)
-            if mdtype != 14:
-                raise ValueError(f"data type {mdtype}")
-            _, flags, offset = element(8)
-            word0 = struct.unpack(order + "I", flags[:4])[0]
-            cls = "logical" if word0 & 0x0200 else _MAT_CLASSES.get(word0 & 0xFF, "unknown")
-            if word0 & 0x0800:
-                cls = f"complex {cls}"
-            _, dims, offset = element(offset)
-            shape = struct.unpack(order + f"{len(dims) // 4}i", dims)
-            _, name, _ = element(offset)
-        except (struct.error, ValueError, IndexError) as exc:
-            raise DatasetFileError(f"{self.where}: the variable at byte {pos} has a damaged header ({exc}); the file "
-                                   "is damaged or not a .mat file.") from None
-        return name.decode("latin1"), tuple(int(d) for d in shape), cls
+    def _refuse_hdf5(self) -> None:
+        raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
+                               "package. Fix: save it in MATLAB with save(FILE, ..., '-v7') and retry.")
 
     # -- both
     def names(self) -> list[str]:
@@ -797,26 +674,19 @@ class ArrayFile:
         """The array ``name`` (its size checked before it is read); a non-numeric one is refused by
         :func:`check_real_array` when it is used."""
         if self.is_npz:
-            return read_npy_member(self._zip, f"{name}.npy", self.where)
+            return read_npy_member(self._zip, f"{name}.npy", f"{self.where}: array {name!r}", DatasetFileError,
+                                   "save numeric arrays (numpy.savez(path, raw=..., wrench=...))",
+                                   "split the data into smaller files")
         shape, cls = self.entries[name]
-        base = cls.split()[-1]
-        item = _MAT_ITEM_BYTES.get(base, 8) * (2 if cls.startswith("complex") else 1)
-        check_allocation(float(np.prod([float(d) for d in shape])) * item,
+        check_allocation(float(np.prod([float(d) for d in shape])) * _MAT_ITEM_BYTES.get(cls, 8),
                          f"{self.where}: variable {name!r} of shape {shape}", "split the data into smaller files")
         if cls == "logical":  # scipy reads it as uint8: refused here, not fitted as 0/1 numbers
             raise DatasetFileError(f"{self.where}: variable {name!r} is a MATLAB logical array (booleans); it must "
                                    "hold real numbers (double, single or integer).")
         from scipy.io import loadmat
-        import io
 
-        try:
-            if name in self._mat_elements:  # only that variable's bytes, behind the file's header
-                pos, length = self._mat_elements[name]
-                with open(self.path, "rb") as fh:
-                    fh.seek(pos)
-                    found = loadmat(io.BytesIO(self._mat_header + fh.read(length)), squeeze_me=False)
-            else:
-                found = loadmat(self.path, variable_names=[name], squeeze_me=False)
+        try:  # scipy skips the other variables unread (a compressed one inflated only as far as its header)
+            found = loadmat(self.path, variable_names=[name], squeeze_me=False)
         except Exception as exc:  # scipy raises ValueError/TypeError/OSError/zlib.error on damaged files
             raise DatasetFileError(f"{self.where}: variable {name!r} cannot be read ({str(exc)[:100]}).") from None
         if name not in found:

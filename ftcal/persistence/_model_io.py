@@ -53,7 +53,6 @@ import os
 import stat
 import warnings
 import zipfile
-import zlib
 from numbers import Integral
 from pathlib import Path
 
@@ -63,7 +62,7 @@ from sklearn.utils.validation import check_is_fitted
 from ..calibrators._base import BaseCalibrator
 from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
-from ..core._memory import MemoryLimitError, check_allocation, format_bytes
+from ..core._memory import MemoryLimitError, check_allocation, format_bytes, read_npy_member
 
 __all__ = ["save_model", "load_model", "model_data", "fitted_state_names", "fitted_constraints", "FORMAT_VERSION",
            "is_model_file"]
@@ -399,41 +398,7 @@ class _Archive:
         if limit is not None and info.file_size > limit:
             raise ModelFileError(f"{what} declares {format_bytes(info.file_size)}, more than an ftcal model's "
                                  f"{format_bytes(limit)}; {fix}.")
-        try:
-            with self.zip.open(info) as f:
-                version = np.lib.format.read_magic(f)
-                if version == (1, 0):
-                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(f)
-                elif version == (2, 0):
-                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(f)
-                else:
-                    raise ValueError(f"unsupported .npy version {version}")
-                if dtype.hasobject:
-                    raise ModelFileError(f"{what} holds Python objects (a pickle); ftcal model files never do, and "
-                                         "ftcal does not unpickle. The file is not an ftcal model.")
-                n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
-                n_items = n_bytes / max(dtype.itemsize, 1)
-                if any(d > max(n_items, _MAX_EMPTY_DIM) for d in shape):  # (1e10, 0): no bytes, an absurd length
-                    raise ModelFileError(f"{what} declares shape {shape}, a dimension longer than the "
-                                         f"{int(n_items)} values it holds; the file is damaged or not ftcal's. "
-                                         "Fit and save the model again.")
-                if n_bytes > info.file_size:  # checked before any allocation
-                    raise ModelFileError(f"{what} declares shape {shape} ({format_bytes(n_bytes)}) but holds only "
-                                         f"{format_bytes(info.file_size)}; the file is damaged. Fit and save the "
-                                         "model again.")
-                check_allocation(n_bytes, f"{what} (declared shape {shape}, {dtype})", fix)
-                data = f.read(int(n_bytes))
-        except (zipfile.BadZipFile, EOFError, OSError, ValueError, zlib.error) as exc:
-            if isinstance(exc, (ModelFileError, MemoryLimitError)):
-                raise
-            raise ModelFileError(f"{self.path} is not a readable ftcal model file (truncated or not an .npz "
-                                 f"archive: member {key!r}: {str(exc)[:120]}). Save the model again with "
-                                 "ftcal.save_model.") from None
-        if len(data) != int(n_bytes):
-            raise ModelFileError(f"{what} is truncated ({len(data)} of {int(n_bytes)} bytes); the file is damaged.")
-        array = np.frombuffer(data, dtype=dtype)
-        array = array.reshape(shape[::-1]).T if fortran else array.reshape(shape)
-        return np.array(array)  # an owned, writable copy
+        return read_npy_member(self.zip, info.filename, what, ModelFileError, fix, fix, max_empty_dim=_MAX_EMPTY_DIM)
 
 
 #: Longest dimension of an empty model array (shape (n, 0)); any longer one is a damaged or crafted header.
