@@ -5,17 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (
-    add_scheduler_option,
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_run_options,
-    positive_float,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_output_options, add_run_options, add_scheduler_option,
+                      int_in_range, positive_float, write_json)
 
 ARTIFICIAL_EXAMPLE = """\
 examples:

@@ -29,36 +29,11 @@ from ..core import FtcalError
 from ..core import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
 from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
-__all__ = [
-    "CliError",
-    "UsageError",
-    "Interrupted",
-    "signals_interrupt",
-    "standard_streams",
-    "Parser",
-    "EXIT_USAGE",
-    "EXIT_FAILURE",
-    "add_output_options",
-    "add_name_option",
-    "file_stem",
-    "add_run_options",
-    "add_scheduler_option",
-    "add_robot_options",
-    "load_robot_from_args",
-    "OutputPlan",
-    "note_inputs",
-    "note_dataset",
-    "name_the_dataset",
-    "check_not_an_input",
-    "Console",
-    "write_json",
-    "positive_int",
-    "nonnegative_int",
-    "positive_float",
-    "int_in_range",
-    "existing_file",
-    "path_problem",
-]
+__all__ = ["CliError", "UsageError", "Interrupted", "signals_interrupt", "standard_streams", "Parser", "EXIT_USAGE",
+           "EXIT_FAILURE", "add_output_options", "add_name_option", "file_stem", "add_run_options", "finish_command",
+           "add_jobs_option", "add_scheduler_option", "add_robot_options", "load_robot_from_args", "OutputPlan",
+           "note_inputs", "note_dataset", "name_the_dataset", "check_not_an_input", "Console", "write_json",
+           "positive_int", "nonnegative_int", "positive_float", "int_in_range", "existing_file", "path_problem"]
 
 #: Exit status of a run refused because of the user's arguments or files.
 EXIT_USAGE = 2
@@ -360,27 +335,21 @@ def add_name_option(parser: argparse.ArgumentParser, what: str, default: str | N
 
 def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> None:
     """``--out DIR`` and ``--force``."""
-    parser.add_argument(
-        "-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
-        help="directory for the output files (created if missing)",
-    )
-    parser.add_argument(
-        "-f", "--force", action="store_true",
-        help="overwrite output files that already exist (without it, the run stops before any work)",
-    )
+    parser.add_argument("-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
+                        help="directory for the output files (created if missing)")
+    parser.add_argument("-f", "--force", action="store_true",
+                        help="overwrite output files that already exist (without it, the run stops before any work)")
 
 
 def add_robot_options(parser: argparse.ArgumentParser) -> None:
     """``--robot`` and ``--sensor-frame``."""
-    parser.add_argument(
-        "--robot", default="kuka_iiwa14", help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path",
-    )
+    parser.add_argument("--robot", default="kuka_iiwa14",
+                        help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path")
     parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
-    parser.add_argument(
-        "--sensor-mounting", metavar="RX,RY,RZ,X,Y,Z", type=_mounting,
-        help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation vector [deg] "
-        "and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z on a 12 mm adapter)",
-    )
+    parser.add_argument("--sensor-mounting", metavar="RX,RY,RZ,X,Y,Z", type=_mounting,
+                        help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation "
+                        "vector [deg] and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z "
+                        "on a 12 mm adapter)")
 
 
 def load_robot_from_args(args: argparse.Namespace):
@@ -464,23 +433,31 @@ def _scheduler(text: str) -> str:
 
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
     """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal.cli._scale_out`)."""
-    parser.add_argument(
-        "--scheduler", metavar="ADDRESS|local", type=_scheduler,
-        help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "
-        "tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs",
-    )
+    parser.add_argument("--scheduler", metavar="ADDRESS|local", type=_scheduler,
+                        help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler "
+                        "address such as tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs")
+
+
+def add_jobs_option(parser, help: str, default: int | None = None) -> None:
+    """``--jobs N``: how many processes (or joblib workers) work at once, 1 to 256."""
+    parser.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=default, help=help)
 
 
 def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
     """``--quiet`` and (optionally) ``--seed``."""
-    parser.add_argument(
-        "-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr",
-    )
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr")
     if seed:
-        parser.add_argument(
-            "--seed", type=nonnegative_int, default=0,
-            help="random seed: the same seed and arguments give the same files",
-        )
+        parser.add_argument("--seed", type=nonnegative_int, default=0,
+                            help="random seed: the same seed and arguments give the same files")
+
+
+def finish_command(parser: argparse.ArgumentParser, handler, out: str | None = None, seed: bool = True) -> None:
+    """The options every command ends with, then its handler: ``--out DIR`` / ``--force`` (a command writing to a
+    folder, ``out`` its default), ``--quiet`` and, with ``seed``, ``--seed``."""
+    if out is not None:
+        add_output_options(parser, out)
+    add_run_options(parser, seed)
+    parser.set_defaults(handler=handler)
 
 
 # ------------------------------------------------------------------ output files

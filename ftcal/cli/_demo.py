@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ._common import Console, OutputPlan, add_output_options, add_run_options
+from ._common import Console, OutputPlan, finish_command
 from ._training import fit_with_progress
 
 EXAMPLE = """\
@@ -32,9 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the sensor")
     p.add_argument("--quick", action="store_true", help="tiny data and a few epochs (seconds; numbers meaningless)")
-    add_output_options(p, "ftcal-demo")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-demo")
 
 
 def run(args: argparse.Namespace) -> int:

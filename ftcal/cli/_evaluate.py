@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, write_json
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
 from ._data_options import add_dataset_options, load_dataset_for_models
 from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
 from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
@@ -46,9 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_alpha_option(p)
     p.add_argument("--no-plots", action="store_true", help="write the metrics only")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-eval")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-eval", seed=False)
 
 
 def run(args: argparse.Namespace) -> int:

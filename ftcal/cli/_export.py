@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command
 from ._models import model_label
 
 EXAMPLE = """\
@@ -59,8 +59,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--output", metavar="FILE",
                    help="the exported file (default: MODEL with the suffix .onnx, or .matrix.csv for --format matrix)")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def run(args: argparse.Namespace) -> int:

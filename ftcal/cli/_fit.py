@@ -10,8 +10,7 @@ import time
 
 import numpy as np
 
-from ._common import (Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, int_in_range,
-                      write_json)
+from ._common import CliError, Console, OutputPlan, add_name_option, finish_command, int_in_range, write_json
 from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import dataset_alpha, model_file_name, parse_param
 from ._messages import cli_error
@@ -87,9 +86,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     add_report_options(p)
     add_dataset_options(p)
-    add_output_options(p, "ftcal-models")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-models")
 
 
 def _parse_tare(text: str | None) -> np.ndarray | None:

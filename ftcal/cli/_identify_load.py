@@ -6,18 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (refuse_twins, add_name_option,
-    load_robot_from_args,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    path_problem,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_name_option, add_robot_options, existing_file, finish_command,
+                      load_robot_from_args, path_problem, refuse_twins, write_json)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
@@ -95,9 +85,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
                    "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
     add_drift_options(p)
-    add_output_options(p, "ftcal-tool")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run_identify)
+    finish_command(p, run_identify, "ftcal-tool", seed=False)
 
     c = sub.add_parser(
         "compensate",
@@ -118,8 +106,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
     c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
     add_drift_options(c, identify=False)
-    add_run_options(c, seed=False)
-    c.set_defaults(handler=run_compensate)
+    finish_command(c, run_compensate, seed=False)
 
 
 def existing_input(text: str) -> str:

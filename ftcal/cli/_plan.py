@@ -7,20 +7,8 @@ import sys
 
 import numpy as np
 
-from ._common import (
-    load_robot_from_args,
-    int_in_range,
-    finite_float,
-    positive_float,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    positive_int,
-    write_json,
-)
+from ._common import (Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
+                      int_in_range, load_robot_from_args, positive_float, positive_int, write_json)
 
 EXAMPLE = """\
 examples:
@@ -82,9 +70,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ._data_options import add_dataset_options
 
     add_dataset_options(p)  # how --next reads --dataset (default: as the model was fitted)
-    add_output_options(p, "ftcal-plan")
-    add_run_options(p, seed=True)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-plan")
 
 
 def _check_arguments(args: argparse.Namespace) -> None:

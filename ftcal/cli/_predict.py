@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, int_in_range, path_problem
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
                             print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
@@ -77,8 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     # one wrench per input line, in order: predict points bad readings out but drops none (refused with the reason)
     p.add_argument("--drop-bad-readings", metavar="KIND", help=argparse.SUPPRESS)
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,

@@ -6,19 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (refuse_twins,
-    load_robot_from_args,
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    positive_float,
-    path_problem,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_robot_options, finish_command, int_in_range,
+                      load_robot_from_args, path_problem, positive_float, refuse_twins, write_json)
 from ..io import run_log_files
 from ._data_options import add_columns_option, named_inputs
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
@@ -91,9 +80,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_columns_option(p)
     add_bag_options(p, wrench=False)
     add_recording_options(p.add_argument_group("still poses in ROS bags"))
-    add_output_options(p, "ftcal-data")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-data", seed=False)
 
 
 def log_files(items: list[str]) -> list[Path]:

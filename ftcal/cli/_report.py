@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import CalibrationInputError, TooFewSamplesError
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, int_in_range
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
 
@@ -60,9 +60,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
                    help="processes that fit the stock baselines' folds at once (default: every core)")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-report")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-report")
 
 
 def add_report_options(p: argparse.ArgumentParser) -> None:

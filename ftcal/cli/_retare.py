@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, path_problem, positive_float
 from ..core import check_allocation
 from ._models import MODEL_SUFFIX, model_label
 from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
@@ -45,8 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     from ._data_options import add_channel_option
 
     add_channel_option(p)
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def _kept_data(model_path) -> dict | None:

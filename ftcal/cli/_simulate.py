@@ -5,20 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    load_robot_from_args,
-    finite_float,
-    positive_float,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
+                      int_in_range, load_robot_from_args, positive_float, write_json)
 
 DATASET_EXAMPLE = """\
 examples:
@@ -87,9 +75,7 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
         "sensor's raw full scale in magnitude",
     )
     d.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
-    add_output_options(d, "ftcal-data")
-    add_run_options(d)
-    d.set_defaults(handler=run_dataset)
+    finish_command(d, run_dataset, "ftcal-data")
 
 
 def _dataset_files(n_datasets: int, fmt: str) -> list[str]:
@@ -223,9 +209,7 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
                    help="also write each run as the robot's continuous recording, a ROS bag in DIR/bags/ (raw gauges "
                    "on /ft_sensor/raw, joints on /joint_states; moves, settling, noise): input for 'ftcal prepare "
                    "DIR/bags --raw-topic /ft_sensor/raw' (needs: pip install \"ftcal[ros]\")")
-    add_output_options(e, "ftcal-logs")
-    add_run_options(e)
-    e.set_defaults(handler=run_experiment)
+    finish_command(e, run_experiment, "ftcal-logs")
 
 
 def run_experiment(args: argparse.Namespace) -> int:

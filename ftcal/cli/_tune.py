@@ -6,7 +6,8 @@ import argparse
 import time
 
 from ..core import CalibrationInputError
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, write_json, int_in_range
+from ._common import (CliError, Console, OutputPlan, add_name_option, add_scheduler_option, finish_command,
+                      int_in_range, write_json)
 from ._fit import calibrator_names
 from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
@@ -56,9 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_scheduler_option(p)
     add_name_option(p, "the outputs (default: the --model name)")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-tuned")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-tuned")
 
 
 def parse_grid(entries: list[str], randomized: bool) -> dict | None:
