@@ -155,7 +155,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     from ..calibrators import STOCK_BASELINE_NAMES, StockCalibrator
     from ..reporting import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
-    from ._models import check_fold_count, dataset_alpha
+    from ._models import check_fold_count, evaluation_alpha
     from ..core import WRENCH_LABELS
 
     console = Console(args.quiet)
@@ -176,7 +176,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     if args.history and not set(names) & set(HISTORY_MODELS):
         raise CliError(f"--history scores the closed-form models with a history term ({', '.join(HISTORY_MODELS)}); "
                        "list at least one of them with --model")
-    alpha = ftcal.core.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
+    alpha = evaluation_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
     if args.stock_baseline and "stock" not in names:
         raise CliError("--stock-baseline says which baselines --model stock scores; add --model stock")

@@ -30,10 +30,11 @@ from ..core import OutputSet, atomic_output, atomic_output_set, check_writable_d
 from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
 __all__ = ["CliError", "UsageError", "Interrupted", "signals_interrupt", "standard_streams", "Parser", "EXIT_USAGE",
-           "EXIT_FAILURE", "add_output_options", "add_name_option", "file_stem", "add_run_options", "finish_command",
-           "add_jobs_option", "add_scheduler_option", "add_robot_options", "load_robot_from_args", "OutputPlan",
-           "note_inputs", "note_dataset", "name_the_dataset", "check_not_an_input", "Console", "write_json",
-           "positive_int", "nonnegative_int", "positive_float", "int_in_range", "existing_file", "path_problem"]
+           "EXIT_FAILURE", "add_output_options", "add_output_file_options", "add_name_option", "file_stem",
+           "add_run_options", "finish_command", "add_jobs_option", "add_scheduler_option", "add_robot_options",
+           "load_robot_from_args", "OutputPlan", "note_inputs", "note_dataset", "name_the_dataset",
+           "check_not_an_input", "Console", "write_json", "positive_int", "nonnegative_int", "positive_float",
+           "int_in_range", "existing_file", "path_problem"]
 
 #: Exit status of a run refused because of the user's arguments or files.
 EXIT_USAGE = 2
@@ -339,6 +340,12 @@ def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> Non
                         help="directory for the output files (created if missing)")
     parser.add_argument("-f", "--force", action="store_true",
                         help="overwrite output files that already exist (without it, the run stops before any work)")
+
+
+def add_output_file_options(parser: argparse.ArgumentParser) -> None:
+    """``--output FILE`` (``-``: standard output, the default) and ``--force``: a command writing one stream of rows."""
+    parser.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
+    parser.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
 
 
 def add_robot_options(parser: argparse.ArgumentParser) -> None:

@@ -6,8 +6,8 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (CliError, Console, OutputPlan, add_name_option, add_robot_options, existing_file, finish_command,
-                      load_robot_from_args, path_problem, refuse_twins, write_json)
+from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
+                      existing_file, finish_command, load_robot_from_args, path_problem, refuse_twins, write_json)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
@@ -103,8 +103,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     _add_wrench_options(g)
     add_bag_options(c)
     c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
-    c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
-    c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
+    add_output_file_options(c)
     add_drift_options(c, identify=False)
     finish_command(c, run_compensate, seed=False)
 

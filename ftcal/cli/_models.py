@@ -14,18 +14,8 @@ from ..core import alpha_from_wrenches
 from ..core import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
-__all__ = [
-    "MODEL_SUFFIX",
-    "model_file_name",
-    "model_label",
-    "load_model_file",
-    "load_dataset",
-    "model_inputs",
-    "parse_param",
-    "dataset_alpha",
-    "evaluation_alpha",
-    "check_fold_count",
-]
+__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_model_file", "load_dataset", "model_inputs",
+           "parse_param", "dataset_alpha", "evaluation_alpha", "calibrator_params", "check_fold_count"]
 
 def model_label(path: Path) -> str:
     """Short name of a model file for tables and plots (its name without the suffix)."""
@@ -119,6 +109,16 @@ def dataset_alpha(dataset: CalibrationDataset, alpha: float | None) -> float | N
     if not (value > 0 and value != float("inf")):
         raise CliError(f"dataset meta 'alpha' is {meta_alpha!r}, not a positive number; pass --alpha")
     return value
+
+
+def calibrator_params(args: argparse.Namespace, dataset: CalibrationDataset) -> dict:
+    """The calibrator's parameters of ``--param KEY=VALUE``, with the torque scale of :func:`dataset_alpha` unless a
+    ``--param alpha=...`` gives one."""
+    params = dict(args.param)
+    alpha = dataset_alpha(dataset, args.alpha)
+    if alpha is not None and "alpha" not in params:
+        params["alpha"] = alpha
+    return params
 
 
 def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:

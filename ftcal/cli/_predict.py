@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from ._models import load_model_file
-from ._common import CliError, Console, OutputPlan, existing_file, finish_command, int_in_range, path_problem
+from ._common import (CliError, Console, OutputPlan, add_output_file_options, existing_file, finish_command,
+                      int_in_range, path_problem)
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
                             print_reading_findings)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
@@ -40,41 +41,28 @@ file:line:channel and still predicted: the output keeps one wrench per input lin
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "predict",
-        help="apply a saved model to raw readings (file or stdin) -> wrenches (file or stdout)",
-        description="Apply a saved calibration model to raw readings. Nothing but the wrenches goes to stdout.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("predict", epilog=EXAMPLE,
+                       help="apply a saved model to raw readings (file or stdin) -> wrenches (file or stdout)",
+                       description="Apply a saved calibration model to raw readings. Nothing but the wrenches goes to "
+                       "stdout.")
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
-    p.add_argument(
-        "input", nargs="?", default="-",
-        help="raw readings: a CSV / whitespace text file, a .npz or .mat with array 'raw' (or the --channels "
-        "arrays), or '-' for stdin",
-    )
+    p.add_argument("input", nargs="?", default="-",
+                   help="raw readings: a CSV / whitespace text file, a .npz or .mat with array 'raw' (or the "
+                   "--channels arrays), or '-' for stdin")
     add_channel_option(p)
-    p.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
-    p.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
+    add_output_file_options(p)
     p.add_argument("--no-header", action="store_true", help="do not write the Fx,...,Tz header line")
-    p.add_argument(
-        "--chunk-size", type=int_in_range(1, 1_000_000, "rows per chunk"), default=4096,
-        help="readings predicted together (memory vs. latency)",
-    )
-    p.add_argument(
-        "--line-buffered", action="store_true",
-        help="answer each input line at once and flush (live streams; same as --chunk-size 1)",
-    )
-    p.add_argument(
-        "--range", metavar="FILE", dest="range_file",
-        help="the calibrated range: a calibration report .json ('ftcal report') or the calibration dataset; adds "
-        "an out_of_range column (1 = a reading beyond it); without it, readings beyond the model's own training "
-        "readings are counted in a warning",
-    )
-    p.add_argument(
-        "--std", action="store_true",
-        help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
-             "models, also when auto chose one)",
-    )
+    p.add_argument("--chunk-size", type=int_in_range(1, 1_000_000, "rows per chunk"), default=4096,
+                   help="readings predicted together (memory vs. latency)")
+    p.add_argument("--line-buffered", action="store_true",
+                   help="answer each input line at once and flush (live streams; same as --chunk-size 1)")
+    p.add_argument("--range", metavar="FILE", dest="range_file",
+                   help="the calibrated range: a calibration report .json ('ftcal report') or the calibration "
+                   "dataset; adds an out_of_range column (1 = a reading beyond it); without it, readings beyond the "
+                   "model's own training readings are counted in a warning")
+    p.add_argument("--std", action="store_true",
+                   help="also write each component's predictive standard deviation (std_Fx..std_Tz; "
+                   "Gaussian-process models, also when auto chose one)")
     # one wrench per input line, in order: predict points bad readings out but drops none (refused with the reason)
     p.add_argument("--drop-bad-readings", metavar="KIND", help=argparse.SUPPRESS)
     finish_command(p, run, seed=False)
@@ -108,13 +96,11 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
         except (ValueError, KeyError, TypeError, UnicodeDecodeError):
             raise CliError(f"--range {path}: not a calibration report .json (written by 'ftcal report')") from None
         if lo.shape != hi.shape:
-            raise CliError(f"--range {path}: calibrated_range.raw_min has {lo.size} entries but raw_max has {hi.size}; "
-                           "the report is damaged. Write it again with 'ftcal report'")
+            raise _damaged(path, f"calibrated_range.raw_min has {lo.size} entries but raw_max has {hi.size}")
         swapped = np.flatnonzero(lo > hi)
         if swapped.size:
             k = int(swapped[0])
-            raise CliError(f"--range {path}: calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = "
-                           f"{hi[k]:g}; the report is damaged. Write it again with 'ftcal report'")
+            raise _damaged(path, f"calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = {hi[k]:g}")
     else:
         from ..persistence import is_model_file  # here: the module loads scikit-learn (`ftcal --help` stays light)
 
@@ -122,8 +108,7 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")
         try:
-            data = CalibrationDataset.load(file, columns=columns) if columns is not None \
-                else CalibrationDataset.load(file)
+            data = CalibrationDataset.load(file, columns=columns)
         except DatasetFileError as exc:  # a fix naming the column options does not apply: --range reads ftcal's layout
             text = cli_message(exc, fix="" if fix_names(exc, ("channels", "wrench")) else None)
             raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
@@ -159,23 +144,22 @@ def range_of_another_fit(range_file: str, model_path: str, model, limits) -> str
             "drop --range to check against the model's own training readings")
 
 
+def _damaged(path: str, what: str) -> CliError:
+    return CliError(f"--range {path}: {what}; the report is damaged. Write it again with 'ftcal report'")
+
+
 def _range_bound(found, key: str, path: str) -> np.ndarray:
     """``calibrated_range[key]`` of a report: a list of finite numbers (KeyError/TypeError: not a report)."""
     values = found[key]
-    if not isinstance(values, list) or not values:
-        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
-                       "the report is damaged. Write it again with 'ftcal report'")
     try:
-        array = np.array(values, dtype=float)
+        array = np.array(values, dtype=float) if isinstance(values, list) and values else None
     except (TypeError, ValueError):
         array = None
     if array is None or array.ndim != 1 or any(isinstance(v, bool) for v in values):
-        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
-                       "the report is damaged. Write it again with 'ftcal report'")
+        raise _damaged(path, f"calibrated_range.{key} is not a list of numbers (one per raw channel)")
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
-        raise CliError(f"--range {path}: calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite "
-                       "number; the report is damaged. Write it again with 'ftcal report'")
+        raise _damaged(path, f"calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite number")
     return array
 
 

@@ -11,7 +11,7 @@ from ._common import (CliError, Console, OutputPlan, add_name_option, add_schedu
 from ._fit import calibrator_names
 from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
-from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
+from ._models import calibrator_params, check_fold_count, model_file_name, parse_param
 
 EXAMPLE = """\
 examples:
@@ -101,10 +101,7 @@ def run(args: argparse.Namespace) -> int:
     data = load_dataset_from_args(args, args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)
     groups = fold_groups(args, data, args.dataset)
-    params = dict(args.param)
-    alpha = dataset_alpha(data, args.alpha)
-    if alpha is not None and "alpha" not in params:
-        params["alpha"] = alpha
+    params = calibrator_params(args, data)
     start = time.perf_counter()
     from ._scale_out import dask_backend
 
