@@ -24,12 +24,9 @@ model files, metrics.json/.md and PNG plots to DIR.
 def register(sub: argparse._SubParsersAction) -> None:
     from ..simulation import ERROR_PRESETS
 
-    p = sub.add_parser(
-        "demo",
-        help="simulate, fit the three calibrators, print the comparison, write plots",
-        description="The whole calibration job on built-in defaults: no input files needed.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("demo", help="simulate, fit the three calibrators, print the comparison, write plots",
+                       description="The whole calibration job on built-in defaults: no input files needed.",
+                       epilog=EXAMPLE)
     p.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the sensor")
     p.add_argument("--quick", action="store_true", help="tiny data and a few epochs (seconds; numbers meaningless)")
     finish_command(p, run, "ftcal-demo")

@@ -11,8 +11,8 @@ from pathlib import Path
 import numpy as np
 
 from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
-from ._data_options import add_dataset_options, load_dataset_for_models
-from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
+from ._data_options import add_alpha_option, add_dataset_options, load_dataset_for_models
+from ._models import evaluation_alpha, load_model_file, model_inputs, model_label
 from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
@@ -33,16 +33,11 @@ grouped cross-validation instead.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "evaluate",
-        help="metrics and plots of one or more models on a dataset",
-        description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis RMSE, plots.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("evaluate", help="metrics and plots of one or more models on a dataset", epilog=EXAMPLE,
+                       description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis "
+                       "RMSE, plots.")
     p.add_argument("dataset", help="evaluation dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("models", nargs="+", metavar="MODEL", type=existing_file, help="model files written by 'ftcal fit'")
-    from ._data_options import add_alpha_option
-
     add_alpha_option(p)
     p.add_argument("--no-plots", action="store_true", help="write the metrics only")
     add_dataset_options(p)

@@ -43,12 +43,9 @@ it covers (metadata 'drift_span'); re-tare and export again.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "export",
-        help="write a saved model as an ONNX file (raw readings -> wrench) for deployment",
-        description="Export a saved calibration model to ONNX, pre- and post-processing included.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("export", help="write a saved model as an ONNX file (raw readings -> wrench) for deployment",
+                       description="Export a saved calibration model to ONNX, pre- and post-processing included.",
+                       epilog=EXAMPLE)
     p.add_argument("model", type=existing_file,
                    help="model file written by 'ftcal fit' (a tool file of 'ftcal identify-load' for --format ros)")
     p.add_argument("--format", choices=("onnx", "matrix", "ros"), default="onnx",

@@ -10,8 +10,11 @@ from ._common import (CliError, Console, OutputPlan, add_name_option, add_output
                       existing_file, finish_command, load_robot_from_args, path_problem, refuse_twins, write_json)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
-from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
+from ._messages import cli_error
+from ._recordings import (add_bag_options, add_recording_options, bag_files, recording_options, refuse_bag_options,
+                          say_notes)
 from ._tool_drift import add_drift_options
+from ..core import FtcalError
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -67,64 +70,11 @@ frame [N, N·m].
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "identify-load",
-        help="identify a tool's mass, centre of mass and the sensor bias from static poses",
-        description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of static poses.",
-        epilog=IDENTIFY_EXAMPLE,
-    )
-    p.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
-                   help="run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
-    p.add_argument("--model", type=existing_file,
-                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
-    add_robot_options(p)
-    _add_recording_options(p)
-    p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
-    add_name_option(p, "the tool file", default="tool")
-    p.add_argument("--mounting", action="store_true",
-                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
-                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
-    add_drift_options(p)
-    finish_command(p, run_identify, "ftcal-tool", seed=False)
-
-    c = sub.add_parser(
-        "compensate",
-        help="external wrench: remove the tool's weight and the bias from run logs, pose files or ROS bags",
-        description="Subtract the identified tool load (and the bias, with its drift) at each row's pose and time.",
-        epilog=COMPENSATE_EXAMPLE,
-    )
-    c.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
-                   help="run log files or directories of *.csv logs, pose files (CSV) or ROS bags, as identify-load "
-                   "reads them")
-    c.add_argument("--model", type=existing_file,
-                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
-    add_robot_options(c)
-    g = c.add_argument_group("pose files and ROS bags")
-    _add_wrench_options(g)
-    add_bag_options(c)
-    c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
-    add_output_file_options(c)
-    add_drift_options(c, identify=False)
-    finish_command(c, run_compensate, seed=False)
-
-
-def existing_input(text: str) -> str:
-    """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
-    import os
-
-    path = Path(text)
-    if path.is_dir():
-        if not os.access(path, os.R_OK | os.X_OK):
-            raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
-        return text
-    problem = path_problem(text)
-    if problem is not None:
-        raise argparse.ArgumentTypeError(problem)
-    return text
-
-
-def _add_recording_options(p: argparse.ArgumentParser) -> None:
-    """How a pose file or a recording is read: the wrench's frame and units, the bag's topics, the still poses."""
+    p = sub.add_parser("identify-load", epilog=IDENTIFY_EXAMPLE,
+                       help="identify a tool's mass, centre of mass and the sensor bias from static poses",
+                       description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of "
+                       "static poses.")
+    _add_inputs(p, "run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
     g = p.add_argument_group("pose files and continuous recordings")
     _add_wrench_options(g)
     g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
@@ -133,6 +83,46 @@ def _add_recording_options(p: argparse.ArgumentParser) -> None:
                    "is always continuous)")
     add_recording_options(g)
     add_bag_options(p)
+    p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
+    add_name_option(p, "the tool file", default="tool")
+    p.add_argument("--mounting", action="store_true",
+                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
+                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
+    add_drift_options(p)
+    finish_command(p, run_identify, "ftcal-tool", seed=False)
+
+    c = sub.add_parser("compensate", epilog=COMPENSATE_EXAMPLE,
+                       help="external wrench: remove the tool's weight and the bias from run logs, pose files or ROS "
+                       "bags", description="Subtract the identified tool load (and the bias, with its drift) at each "
+                       "row's pose and time.")
+    _add_inputs(c, "run log files or directories of *.csv logs, pose files (CSV) or ROS bags, as identify-load reads "
+                "them")
+    _add_wrench_options(c.add_argument_group("pose files and ROS bags"))
+    add_bag_options(c)
+    c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
+    add_output_file_options(c)
+    add_drift_options(c, identify=False)
+    finish_command(c, run_compensate, seed=False)
+
+
+def _add_inputs(p: argparse.ArgumentParser, what: str) -> None:
+    """The inputs (``what`` they may be), the ``--model`` that turns raw channels into a wrench, and the robot."""
+    p.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input, help=what)
+    p.add_argument("--model", type=existing_file,
+                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
+    add_robot_options(p)
+
+
+def existing_input(text: str) -> str:
+    """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
+    import os
+
+    if Path(text).is_dir() and not os.access(text, os.R_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
+    problem = None if Path(text).is_dir() else path_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
+    return text
 
 
 def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
@@ -153,18 +143,6 @@ def _gravity(text: str):
     return values
 
 
-def _recording_options(args):
-    """The library's :class:`RecordingOptions` from the command's options."""
-    from ftcal.experiment import RecordingOptions
-
-    return RecordingOptions(
-        wrench_frame=args.wrench_frame, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m",
-        poses=getattr(args, "poses", "static"), tolerance_deg=getattr(args, "still_tolerance", 0.5),
-        min_duration_s=getattr(args, "min_still", 1.0), settle_s=getattr(args, "settle", None),
-        wrench_topic=args.wrench_topic, raw_topic=args.raw_topic, raw_field=args.raw_field,
-        joint_topic=args.joint_topic, tf=args.tf, stamps=args.stamps, max_samples=args.max_samples)
-
-
 def _inputs_kind(args) -> str:
     """The one kind of the command's inputs (run log, pose file, ROS bag); a mix is refused."""
     from ftcal.experiment import recording_kind
@@ -181,9 +159,6 @@ def _read_inputs(args, console: Console, reader):
     paths, model and robot they need, the options mapped, the lever-arm check; its notes on stderr and its errors
     as one line."""
     import ftcal
-    from ftcal.core import FtcalError
-
-    from ._messages import cli_message
 
     kind = _inputs_kind(args)
     if kind == "ROS bag":
@@ -201,12 +176,12 @@ def _read_inputs(args, console: Console, reader):
     def check_wrench(wrench, where: str) -> None:
         check_lever_arm(args, wrench, where, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
 
+    options = recording_options(args, poses=getattr(args, "poses", "static"))  # compensate: every row a pose
     try:
-        result = reader(paths, model=model, robot=robot, options=_recording_options(args), check_wrench=check_wrench)
+        result = reader(paths, model=model, robot=robot, options=options, check_wrench=check_wrench)
     except FtcalError as exc:
-        raise CliError(" ".join(cli_message(exc, args).split())) from None
-    for source, note in result.notes:
-        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
+        raise cli_error(exc, args) from None
+    say_notes(console, result.notes, args)
     return result
 
 

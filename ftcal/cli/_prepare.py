@@ -10,6 +10,7 @@ from ._common import (CliError, Console, OutputPlan, add_robot_options, finish_c
                       load_robot_from_args, path_problem, positive_float, refuse_twins, write_json)
 from ..io import run_log_files
 from ._data_options import add_columns_option, named_inputs
+from ._messages import cli_spelling
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
 
 EXAMPLE = """\
@@ -58,12 +59,9 @@ class _DeprecatedChannelCount(argparse.Action):
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "prepare",
-        help="recorded load / no-load logs -> calibration dataset",
-        description="Turn the run logs of a robot-held calibration experiment into a calibration dataset.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("prepare", help="recorded load / no-load logs -> calibration dataset", epilog=EXAMPLE,
+                       description="Turn the run logs of a robot-held calibration experiment into a calibration "
+                       "dataset.")
     p.add_argument("logs", nargs="+", metavar="LOG",
                    help="run log files, or directories holding *.csv logs; or ROS bags of the runs (or their folder)")
     add_robot_options(p)
@@ -104,6 +102,7 @@ def log_files(items: list[str]) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ..reporting import plot_wrench_coverage
+    from ..robot import load_fixture
 
     console = Console(args.quiet)
     args.logs = named_inputs(args, args.logs)  # --columns: headerless logs named, joined side by side
@@ -124,44 +123,29 @@ def run(args: argparse.Namespace) -> int:
             raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
     else:
         inputs = logs
-    from ..robot import load_fixture
-
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
         dataset = ftcal.experiment.prepare_dataset(inputs, robot, args.mass, n_channels=args.n_channels,
-                                        load_configurations=configurations)
+                                                   load_configurations=configurations)
     except ftcal.core.LogFormatError as exc:
         if exc.parameter != "load_configurations":
             raise
-        from ._messages import cli_spelling
-
         raise CliError(exc.render(cli_spelling(args), fix=f"the fixture used was {fixture}: describe yours in a file "
                                   "and pass --fixture FILE (see 'ftcal prepare --help')")) from None
     dataset.meta["fixture"] = fixture
-    groups = {} if dataset.group is None else {
-        str(g): int((dataset.group == g).sum()) for g in sorted(set(dataset.group.tolist()))
-    }
+    groups = {} if dataset.group is None else {str(g): int((dataset.group == g).sum())
+                                               for g in sorted(set(dataset.group.tolist()))}
     alpha = ftcal.core.alpha_from_wrenches(dataset.wrench)
     with plan.as_one_set():  # the dataset, its summary and its figure: all or none
         with plan.writing(name) as tmp:
             dataset.save(tmp, overwrite=True)
         with plan.writing("prepare.json") as tmp:
-            write_json(tmp, {
-                "logs": [str(p) for p in logs],
-                "robot": robot.name,
-                "sensor_frame": robot.sensor_frame,
-                "n_samples": dataset.n_samples,
-                "n_channels": dataset.n_channels,
-                "samples_per_configuration": groups,
-                "fixture": fixture,
-                "meta": dataset.meta,
-            })
+            write_json(tmp, {"logs": [str(p) for p in logs], "robot": robot.name, "sensor_frame": robot.sensor_frame,
+                             "n_samples": dataset.n_samples, "n_channels": dataset.n_channels,
+                             "samples_per_configuration": groups, "fixture": fixture, "meta": dataset.meta})
         with plan.writing("coverage.png") as tmp:
-            plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha,
-                                        title="Reference wrenches of the prepared dataset")
-    console.info(
-        f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
-        f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)"
-    )
+            plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
+    console.info(f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
+                 f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)")
     return 0

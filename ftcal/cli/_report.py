@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from ..core import CalibrationInputError, TooFewSamplesError
-from ._common import CliError, Console, OutputPlan, existing_file, finish_command, int_in_range
+from ._common import CliError, Console, OutputPlan, add_jobs_option, existing_file, finish_command
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
 
@@ -46,19 +46,16 @@ CONDITION_OPTIONS = {"--reference-standard": "reference_standard", "--procedure"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "report",
-        help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per axis",
-        description="Write the calibration report of a model: a first-page summary with U95 per axis in % of "
-        "full scale and PASS/FAIL against a specification, the calibration matrix or model identity, the held-out "
-        "applied-vs-indicated table, model choice beside the stock scikit-learn baselines, calibrated range.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("report", epilog=EXAMPLE,
+                       help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per "
+                       "axis", description="Write the calibration report of a model: a first-page summary with U95 "
+                       "per axis in % of full scale and PASS/FAIL against a specification, the calibration matrix or "
+                       "model identity, the held-out applied-vs-indicated table, model choice beside the stock "
+                       "scikit-learn baselines, calibrated range.")
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
     p.add_argument("dataset", help="the calibration dataset the model was fitted on (.csv, .npz or .mat)")
     add_report_options(p)
-    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
-                   help="processes that fit the stock baselines' folds at once (default: every core)")
+    add_jobs_option(p, "processes that fit the stock baselines' folds at once (default: every core)")
     add_dataset_options(p)
     finish_command(p, run, "ftcal-report")
 

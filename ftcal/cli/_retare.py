@@ -9,6 +9,7 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, existing_file, finish_command, path_problem, positive_float
 from ..core import check_allocation
+from ._data_options import add_channel_option, model_reading, named_inputs
 from ._models import MODEL_SUFFIX, model_label
 from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
 
@@ -27,12 +28,9 @@ readings (within half their span beyond them), else the run stops.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "retare",
-        help="re-zero a model from zero-load readings (no refit) -> a new model file",
-        description="Replace a model's zero-load reading by the mean of new zero-load readings.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("retare", help="re-zero a model from zero-load readings (no refit) -> a new model file",
+                       description="Replace a model's zero-load reading by the mean of new zero-load readings.",
+                       epilog=EXAMPLE)
     p.add_argument("model", type=existing_file,
                    help="model file written by 'ftcal fit', or a tool file (NAME.tool.json) of 'ftcal identify-load'")
     p.add_argument("readings", help="zero-load raw readings: a text file, a .npz with array 'raw', or '-' (stdin)")
@@ -42,8 +40,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest per-channel std of the readings, in units of the training noise (a tool file: of its "
                    "identification's residual RMS)")
     add_retare_tool_options(p)
-    from ._data_options import add_channel_option
-
     add_channel_option(p)
     finish_command(p, run, seed=False)
 
@@ -57,7 +53,6 @@ def _kept_data(model_path) -> dict | None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ._data_options import named_inputs
     from ._predict import raw_chunks
 
     console = Console(args.quiet)
@@ -75,8 +70,6 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--time, --temperature, --orientation, --tool-off, --force-unit and --torque-unit re-tare a "
                        f"tool file (NAME.tool.json); {args.model} is a model file (its readings are raw)")
     plan = OutputPlan.single_file(output, args.force)
-    from ._data_options import model_reading
-
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
     stored, _, _ = model_reading(args.model)  # the channel mapping the model was fitted with
@@ -94,8 +87,6 @@ def run(args: argparse.Namespace) -> int:
     with plan.writing(output.name) as tmp:
         ftcal.save_model(model, tmp, overwrite=True, data=_kept_data(args.model))
     shift = ftcal.calibrators.retare_shift(model)
-    console.info(
-        f"re-tared from {len(readings)} readings: zero-load reading moved by "
-        f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}"
-    )
+    console.info(f"re-tared from {len(readings)} readings: zero-load reading moved by "
+                 f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}")
     return 0
