@@ -177,28 +177,24 @@ class _CheckedStdout:
     def __init__(self, stream: Any) -> None:
         self._stream = stream
 
-    def _failed(self, exc: OSError) -> CliError:
-        return CliError(f"could not write to standard output ({exc.strerror or exc}); the output is incomplete")
-
-    def write(self, text: str) -> int:
+    def _checked(self, method: str, *args: Any) -> Any:
         try:
-            return self._stream.write(text)
+            return getattr(self._stream, method)(*args)
         except BrokenPipeError:
             raise
         except OSError as exc:
-            raise self._failed(exc) from None
+            raise CliError(f"could not write to standard output ({exc.strerror or exc}); the output is "
+                           "incomplete") from None
+
+    def write(self, text: str) -> int:
+        return self._checked("write", text)
 
     def writelines(self, lines: Iterable[str]) -> None:
         for line in lines:
             self.write(line)
 
     def flush(self) -> None:
-        try:
-            self._stream.flush()
-        except BrokenPipeError:
-            raise
-        except OSError as exc:
-            raise self._failed(exc) from None
+        self._checked("flush")
 
     def __getattr__(self, attr: str) -> Any:
         return getattr(self._stream, attr)
@@ -428,9 +424,8 @@ def _mounting(text: str) -> tuple[float, ...]:
 
 def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
-    from ._scale_out import SchedulerError, check_scheduler
-
     from ._messages import cli_message
+    from ._scale_out import SchedulerError, check_scheduler
 
     try:
         return check_scheduler(text)
@@ -509,14 +504,15 @@ def name_the_dataset(message: str, exc: BaseException) -> str:
     return message
 
 
-def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
+def _file_id(path: str | os.PathLike, regular: bool = True) -> tuple[int, int] | None:
+    """``(device, inode)`` of the file at ``path`` (with ``regular``, of a regular file only), or None."""
     import stat
 
     try:
         st = os.stat(path)
     except (OSError, ValueError):
         return None
-    return (st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+    return (st.st_dev, st.st_ino) if not regular or stat.S_ISREG(st.st_mode) else None
 
 
 def _choice_arguments(parser: argparse.ArgumentParser, handler) -> set[str]:
@@ -557,15 +553,10 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
             except OSError:
                 continue
             role = dest.replace("_", " ")
-            if path.is_dir():
-                try:
-                    st = path.stat()
-                    _input_dirs.setdefault((st.st_dev, st.st_ino), f"the {role} folder {path}")
-                except OSError:
-                    pass
+            if path.is_dir() and (dir_id := _file_id(path, regular=False)) is not None:
+                _input_dirs.setdefault(dir_id, f"the {role} folder {path}")
             for child in children[:100_000]:
-                file_id = _regular_file_id(child)
-                if file_id is not None:
+                if (file_id := _file_id(child)) is not None:
                     _input_files.setdefault(
                         file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
 
@@ -586,12 +577,10 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
 
 def check_not_an_input(output: str | os.PathLike) -> None:
     """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
-    file_id = _regular_file_id(output)
+    file_id = _file_id(output)
     if file_id is not None and file_id in _input_files:
-        raise CliError(
-            f"{output} is {_input_files[file_id]}, an input of this command; writing there would destroy it, "
-            "--force or not. Choose another output name or directory"
-        )
+        raise CliError(f"{output} is {_input_files[file_id]}, an input of this command; writing there would destroy "
+                       "it, --force or not. Choose another output name or directory")
 
 
 def _check_regular_target(path: Path) -> None:
@@ -644,12 +633,9 @@ class OutputPlan:
         self._set: OutputSet | None = None  # the set being written (as_one_set)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"{option} {self.out_dir} is a file, not a directory; choose another {option}")
-        try:
-            st = self.out_dir.stat()
-        except OSError:
-            st = None
-        if st is not None and (st.st_dev, st.st_ino) in _input_dirs:
-            raise CliError(f"{option} {self.out_dir} is {_input_dirs[(st.st_dev, st.st_ino)]}, an input of this "
+        dir_id = _file_id(self.out_dir, regular=False)
+        if dir_id is not None and dir_id in _input_dirs:
+            raise CliError(f"{option} {self.out_dir} is {_input_dirs[dir_id]}, an input of this "
                            f"command: its outputs would mix with (and be read as) its inputs. Choose another {option}")
         check_writable_dir(self.out_dir, CliError, option)
         for n in self.names:
@@ -664,10 +650,8 @@ class OutputPlan:
             if taken:
                 listed = ", ".join(str(self.out_dir / n) for n in taken[:3])
                 more = f" (and {len(taken) - 3} more)" if len(taken) > 3 else ""
-                raise CliError(
-                    f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; "
-                    f"pass --force to overwrite or choose another {option}"
-                )
+                raise CliError(f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; pass --force to "
+                               f"overwrite or choose another {option}")
 
     @classmethod
     def single_file(cls, output: str | Path, force: bool) -> "OutputPlan | None":
