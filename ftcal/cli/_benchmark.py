@@ -151,12 +151,12 @@ def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..compose import score_candidates
     from ..calibrators import STOCK_BASELINE_NAMES, StockCalibrator
+    from ..compose import score_candidates
+    from ..core import WRENCH_LABELS
     from ..reporting import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
     from ._models import check_fold_count, evaluation_alpha
-    from ..core import WRENCH_LABELS
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -202,8 +202,7 @@ def run_dataset(args: argparse.Namespace) -> int:
         baselines={name: StockCalibrator(baseline=name, random_state=args.seed or 0) for name in STOCK_BASELINE_NAMES},
         axes=tuple(data.axes) if len(data.axes) == data.wrench.shape[1] and set(data.axes) <= set(WRENCH_LABELS)
         else None,  # eq. 18 scales the torques of the axes the data have (a plate's Tx, Ty)
-        race=False,  # a benchmark scores every model on every fold
-    )
+        race=False)  # a benchmark scores every model on every fold
     comparison.choose()  # the one-SE rule; each row against the choice in symmetric words (paired SE)
     results = comparison.to_dict()
     results.update(dataset=str(args.dataset), alpha=alpha, cv=args.cv, n_samples=data.n_samples,
@@ -219,8 +218,7 @@ def run_dataset(args: argparse.Namespace) -> int:
             plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({comparison.facts['kind']} folds)")
     print(table)
     console.info(f"choose {results['chosen']} (the simplest within one standard error of the best, or within 0.5 % "
-                 "of its RMSE); "
-                 f"files in {args.out}")
+                 f"of its RMSE); files in {args.out}")
     return 0
 
 
@@ -248,7 +246,6 @@ def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
 
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
-
     from ._scale_out import dask_backend
 
     console = Console(args.quiet)
@@ -263,10 +260,8 @@ def run_artificial(args: argparse.Namespace) -> int:
 
         result = ftcal.benchmark.run_artificial_benchmark(
             n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
-            test_distribution=args.test_distribution,
-            seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
-            force=args.force, stack=args.stack,
-        )
+            test_distribution=args.test_distribution, seed=args.seed, n_jobs=n_jobs, out_dir=args.out,
+            quick=args.quick, progress=progress, force=args.force, stack=args.stack)
     _print_markdown(result, console, args.out)
     return 0
 
@@ -280,16 +275,13 @@ def run_real_world(args: argparse.Namespace) -> int:
     log_dir = plan.out_dir / "logs"
     if log_dir.exists() and any(log_dir.iterdir()) and not args.force:
         raise CliError(f"{log_dir} holds files already; pass --force to overwrite or choose another --out")
-    kwargs = dict(
+    mass = {} if args.mass is None else {"load_mass": args.mass}
+    console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
+    result = ftcal.benchmark.run_real_world_benchmark(
         models=_models(args), splits=tuple(dict.fromkeys(args.splits or ("random20", "leave-one-config-out"))),
         schedule="short" if args.quick else args.schedule, grouped_schedule="short",
         subdivisions=0 if args.quick else args.subdivisions, errors=args.preset, random_state=args.seed,
-        log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"),
-    )
-    if args.mass is not None:
-        kwargs["load_mass"] = args.mass
-    console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
-    result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
+        log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"), **mass)
     markdown = ftcal.benchmark.real_world_markdown(result)
     with plan.as_one_set():
         with plan.writing("real_world_results.md") as tmp:
