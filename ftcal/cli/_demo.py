@@ -38,15 +38,10 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     plan = OutputPlan(args.out, demo_files(), args.force)  # refuse before any work
     with plan.as_one_set(), plan.staging() as stage:  # the demo's files as one set
-        result = run_demo(
-            stage, preset=args.preset, quick=args.quick, random_state=args.seed, overwrite=True,
-            fit=lambda est, X, y, name: fit_with_progress(est, X, y, console, label=name),
-            log=console.info,
-        )
+        result = run_demo(stage, preset=args.preset, quick=args.quick, random_state=args.seed, overwrite=True,
+                          fit=lambda est, X, y, name: fit_with_progress(est, X, y, console, label=name),
+                          log=console.info)
     print(f"ftcal demo: '{args.preset}' preset, seed {args.seed}, test set of {result.test.n_samples} samples, "
-          f"alpha = {result.info['alpha']:.3g} 1/m")
-    print()
-    print(result.table)
-    print()
+          f"alpha = {result.info['alpha']:.3g} 1/m\n\n{result.table}\n")
     console.info(f"plots, models and metrics in {args.out}/ (rmse_distribution.png, axis_rmse.png, errors_*.png)")
     return 0

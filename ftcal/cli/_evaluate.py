@@ -86,13 +86,10 @@ def run(args: argparse.Namespace) -> int:
     with plan.as_one_set(), contextlib.ExitStack() as stack:
         tmps = {name: stack.enter_context(plan.writing(name)) for name in plan.names}
         write_json(tmps["metrics.json"], {
-            "dataset": str(args.dataset),
-            "alpha": alpha,
-            "noise_floor": noise_floor,
+            "dataset": str(args.dataset), "alpha": alpha, "noise_floor": noise_floor,
             "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict(),
                                "extrapolation": {what.split()[0]: e.to_dict() for what, e in beyond[label].items()}}
-                       for label, path in zip(labels, args.models)},
-        })
+                       for label, path in zip(labels, args.models)}})
         note = (f"\n**Training data of {', '.join(trained_on)}**: these are training errors, not held-out ones.\n"
                 if trained_on else "")
         outside = "".join(f"\n**Beyond the {what} {label} was calibrated on**: {e.words(AXIS_UNITS)}.\n"
@@ -105,9 +102,7 @@ def run(args: argparse.Namespace) -> int:
             paths.update({label: tmps[predicted_plot_name(label)] for label in labels})
             write_evaluation_plots(paths, data.wrench, predictions, alpha, noise_floor, dataset_name=str(args.dataset),
                                    axes=data.axes)
-    print(table)
-    print()
-    print(axes)
+    print(f"{table}\n\n{axes}")
     console.info(f"results in {args.out}/")
     return 0
 
@@ -120,9 +115,9 @@ def extrapolation(model, model_path, data) -> dict:
     """How far the dataset goes beyond what the model was calibrated on (:func:`ftcal.io.range_excess`): its loads
     beyond the calibration's wrench range per axis (``"loads"``, when the model file keeps that range), and its
     readings beyond the calibration's readings per channel (``"readings"``, as ``predict --range`` counts them)."""
+    from ..calibrators import retare_shift
     from ..io import range_excess
     from ._data_options import channel_names, model_wrench_range
-    from ..calibrators import retare_shift
 
     found = {}
     loads = model_wrench_range(model_path, data.axes)

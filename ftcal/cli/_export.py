@@ -73,10 +73,11 @@ def run(args: argparse.Namespace) -> int:
     suffixes = {"onnx": (".onnx",), "ros": (".yaml", ".yml")}.get(args.format)
     if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
+    tool = ftcal.experiment.ToolLoad.load(args.model) if args.format == "ros" or (is_tool and args.format == "onnx") \
+        else None
     if args.format == "ros":
         from ..experiment import tool_gravity_compensation_yaml
 
-        tool = ftcal.experiment.ToolLoad.load(args.model)
         text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
         with plan.writing(output.name) as tmp:
             tmp.write_text(text, encoding="utf-8")
@@ -85,7 +86,6 @@ def run(args: argparse.Namespace) -> int:
     if is_tool and args.format == "onnx":
         from ..experiment import tool_onnx_model
 
-        tool = ftcal.experiment.ToolLoad.load(args.model)
         with plan.writing(output.name) as tmp:
             tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
         console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")
@@ -102,12 +102,11 @@ def run(args: argparse.Namespace) -> int:
 def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
     import json
 
+    from ..io import parse_column_slice
     from ..persistence import matrix_export_dict
     from ._data_options import model_reading
 
     stored, axes, _ = model_reading(model_path)  # the axes and channel names the model was fitted with
-    from ..io import parse_column_slice
-
     inputs = None if stored is None or stored.channels is None or parse_column_slice(stored.channels[0]) \
         else stored.channels
     facts = matrix_export_dict(model, axes=axes, inputs=inputs)
@@ -121,6 +120,6 @@ def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, mode
             for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
                 lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
             tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of {type(model).__name__} "
-                 f"to {output}")
+    console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of "
+                 f"{type(model).__name__} to {output}")
     return 0

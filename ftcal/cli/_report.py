@@ -178,13 +178,10 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
 
     axes = dataset_axis_names(data, data.wrench.shape[1])
     conditions_file = args.conditions
-    if conditions_file is None and dataset_path is not None:
+    if conditions_file is None and dataset_path is not None:  # DATA.conditions.yaml / .yml / .json beside it
         base = Path(dataset_path)
-        for suffix in (".conditions.yaml", ".conditions.yml", ".conditions.json"):
-            candidate = base.with_name(base.stem + suffix)
-            if candidate.is_file():
-                conditions_file = candidate
-                break
+        conditions_file = next((c for c in (base.with_name(base.stem + suffix) for suffix in (
+            ".conditions.yaml", ".conditions.yml", ".conditions.json")) if c.is_file()), None)
     fields = {} if conditions_file is None else _read_mapping(Path(conditions_file), "--conditions")
     sensor = args.sensor or fields.pop("sensor", None)
     rated_field, spec_field = fields.pop("rated", None), fields.pop("spec", None)
@@ -193,10 +190,8 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     if unknown:
         raise CliError(f"--conditions {conditions_file}: field {unknown[0]!r} is not known; the fields are "
                        f"{', '.join(CONDITION_FIELDS)}, sensor, rated, spec, reference_uncertainty")
-    for option, field in CONDITION_OPTIONS.items():
-        value = getattr(args, field)
-        if value is not None:
-            fields[field] = value
+    fields.update({field: getattr(args, field) for field in CONDITION_OPTIONS.values()
+                   if getattr(args, field) is not None})
     try:
         conditions = check_conditions(fields)
     except CalibrationInputError as exc:
@@ -214,12 +209,9 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
             rated = _axis_values(args.rated, axes, "--rated", percent=False)
     elif rated_field is not None:
         rated = _axis_values(rated_field, axes, f"--conditions {conditions_file}: rated", percent=False)
-    spec = None
-    if args.spec is not None:
-        spec = _axis_values(args.spec, axes, "--spec", percent=True)
-    elif spec_field is not None:
-        spec = _axis_values(spec_field if isinstance(spec_field, dict) else str(spec_field), axes,
-                            f"--conditions {conditions_file}: spec", percent=True)
+    spec = _axis_values(args.spec, axes, "--spec", percent=True) if args.spec is not None else None \
+        if spec_field is None else _axis_values(spec_field if isinstance(spec_field, dict) else str(spec_field), axes,
+                                                f"--conditions {conditions_file}: spec", percent=True)
     tool = None
     if args.tool is not None:
         from ..experiment import ToolLoad
