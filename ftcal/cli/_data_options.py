@@ -28,10 +28,10 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import CliError, int_in_range, positive_float
+from ._common import CliError, int_in_range, path_problem, positive_float
 from ._messages import cli_error, cli_spelling
 
-__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "joined_origin",
+__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "readings_input", "joined_origin",
            "bad_readings_handled", "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options",
            "fold_groups", "DATASET_OPTIONS", "add_alpha_option", "training_targets", "check_lever_arm",
            "dataset_columns", "load_dataset_from_args", "fit_data_facts", "model_wrench_range", "model_reading",
@@ -60,12 +60,9 @@ _CHECKED_KINDS = ("out_of_range", "spike", "stuck", "repeated")
 def _bad_readings(text: str) -> tuple[str, ...]:
     """``--drop-bad-readings``: none, auto, all, or a comma-separated list of kinds."""
     word = text.strip()
-    if word == "none":
-        return ()
-    if word == "auto":
-        return AUTO_DROPPED
-    if word == "all":
-        return _CHECKED_KINDS
+    named = {"none": (), "auto": AUTO_DROPPED, "all": _CHECKED_KINDS}
+    if word in named:
+        return named[word]
     kinds = tuple(k.strip() for k in word.split(","))
     unknown = [k for k in kinds if k not in _CHECKED_KINDS]
     if unknown or not kinds:
@@ -77,9 +74,8 @@ def _bad_readings(text: str) -> tuple[str, ...]:
 def _saturation(text: str):
     if text.strip() == "auto":
         return "auto"
-    parts = text.split(",")
     try:
-        low, high = (float(v) for v in parts)
+        low, high = (float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: give LOW,HIGH (the ADC's limits, e.g. 0,4095 or "
                                          "-32768,32767), or auto") from None
@@ -171,6 +167,17 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
     table.write(joined)
     _JOINED[str(joined)] = table
     return [str(joined)]
+
+
+def readings_input(args: argparse.Namespace, item: str, what: str) -> str:
+    """The raw-readings input ``item`` as the commands read it (:func:`named_inputs`, no header needed): a file, a
+    stream (``-``, a pipe) or the join of headerless files; one that cannot be read is refused, saying ``what`` it
+    holds."""
+    read = named_inputs(args, [item], header_needed=False)[0]
+    problem = None if read == "-" else path_problem(read, streams=True)
+    if problem is not None:
+        raise CliError(f"{problem} ({what})")
+    return read
 
 
 def joined_origin(path: str, lines):

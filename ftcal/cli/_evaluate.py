@@ -12,7 +12,7 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
 from ._data_options import add_alpha_option, add_dataset_options, load_dataset_for_models
-from ._models import evaluation_alpha, load_model_file, model_inputs, model_label
+from ._models import evaluation_alpha, model_inputs, model_label
 from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
@@ -66,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     predictions, reports, beyond = {}, {}, {}
     with console.progress(total=len(labels), desc="evaluating", unit="model") as bar:
         for label, path in zip(labels, args.models):
-            model = load_model_file(path)
+            model = ftcal.load_model(path)
             predictions[label] = np.asarray(model.predict(model_inputs(model, data)), dtype=float)
             if predictions[label].shape != data.wrench.shape:
                 raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "

@@ -14,20 +14,13 @@ from ..core import alpha_from_wrenches
 from ..core import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
-__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_model_file", "load_dataset", "model_inputs",
+__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_dataset", "model_inputs",
            "parse_param", "dataset_alpha", "evaluation_alpha", "calibrator_params", "check_fold_count"]
 
 def model_label(path: Path) -> str:
     """Short name of a model file for tables and plots (its name without the suffix)."""
     name = Path(path).name
     return name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else Path(path).stem
-
-
-def load_model_file(path: str | Path):
-    """A fitted calibrator from a model file written by :func:`ftcal.save_model`."""
-    import ftcal
-
-    return ftcal.load_model(path)
 
 
 def model_inputs(model, dataset: CalibrationDataset):

@@ -102,11 +102,9 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot_from_args(args)
     extra: dict = {}
     if args.next_poses is not None:
-        from ._models import load_model_file
-
         # read as the model was fitted (its stored columns and units), each option given overriding
         dataset = load_dataset_for_models(args, args.dataset, "dataset", [args.model])
-        model = load_model_file(args.model)
+        model = ftcal.load_model(args.model)
         console.info(f"ranking the reachable poses of {robot.name} by the predicted uncertainty of {args.model} ...")
         candidates = ftcal.robot.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,
                                                       excluded_cap_deg=args.excluded_cap_deg)

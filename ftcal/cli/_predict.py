@@ -9,11 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ._models import load_model_file
 from ._common import (CliError, Console, OutputPlan, add_output_file_options, existing_file, finish_command,
                       int_in_range, path_problem)
-from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
-                            print_reading_findings)
+from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, print_reading_findings,
+                            readings_input)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
@@ -166,6 +165,7 @@ def _range_bound(found, key: str, path: str) -> np.ndarray:
 def run(args: argparse.Namespace) -> int:
     from functools import partial
 
+    import ftcal
     from ..compose import history_reach, reads_history, spread_flags
     from ..compose import provides_std
 
@@ -177,11 +177,8 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     shown = args.input
-    args.input = named_inputs(args, [args.input], header_needed=False)[0]  # --columns: a headerless file named
-    problem = None if args.input == "-" else path_problem(args.input, streams=True)
-    if problem is not None:
-        raise CliError(f"{problem} (the raw readings to predict)")
-    model = load_model_file(args.model)
+    args.input = readings_input(args, args.input, "the raw readings to predict")  # --columns: a headerless file
+    model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size

@@ -291,13 +291,14 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 def run(args: argparse.Namespace) -> int:
     from ..reporting import bytes_sha256, file_sha256
-    from ._models import load_model_file, model_inputs, model_label
+    import ftcal
+    from ._models import model_inputs, model_label
 
     console = Console(args.quiet)
     label = model_label(args.model)
     plan = OutputPlan(args.out, report_file_names(label), args.force)
     model_bytes = Path(args.model).read_bytes()  # hashed as read, before it is loaded (not re-read later)
-    model = load_model_file(args.model)
+    model = ftcal.load_model(args.model)
     if bytes_sha256(Path(args.model).read_bytes()) != bytes_sha256(model_bytes):
         raise CliError(f"{args.model} changed while it was being read; run the report again")
     dataset_sha256 = file_sha256(args.dataset)

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, existing_file, finish_command, path_problem, positive_float
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, positive_float
 from ..core import check_allocation
-from ._data_options import add_channel_option, model_reading, named_inputs
+from ._data_options import add_channel_option, model_reading, readings_input
 from ._models import MODEL_SUFFIX, model_label
 from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
 
@@ -56,11 +56,8 @@ def run(args: argparse.Namespace) -> int:
     from ._predict import raw_chunks
 
     console = Console(args.quiet)
-    args.readings = named_inputs(args, [args.readings], header_needed=False)[0]  # --columns: a headerless file named
+    args.readings = readings_input(args, args.readings, "the zero-load readings")  # --columns: a headerless file
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
-    problem = None if args.readings == "-" else path_problem(args.readings, streams=True)
-    if problem is not None:
-        raise CliError(f"{problem} (the zero-load readings)")
     if args.model.name.endswith(TOOL_SUFFIX):
         from ._tool_drift import run_retare_tool
 

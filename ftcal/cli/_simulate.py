@@ -70,10 +70,9 @@ def _register_dataset(kinds: argparse._SubParsersAction) -> None:
 
 
 def _dataset_files(n_datasets: int, fmt: str) -> list[str]:
-    stems = ["train", "test"]
-    if n_datasets == 1:
-        return [f"{s}.{fmt}" for s in stems]
-    return [f"dataset_{k:02d}/{s}.{fmt}" for k in range(n_datasets) for s in stems]
+    stems = ("train", "test")
+    return [f"{s}.{fmt}" for s in stems] if n_datasets == 1 else [
+        f"dataset_{k:02d}/{s}.{fmt}" for k in range(n_datasets) for s in stems]
 
 
 def run_dataset(args: argparse.Namespace) -> int:
@@ -89,7 +88,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     offset = None if args.zero_offset == 0 else np.full(profile.n_channels, _zero_offset(args.zero_offset, profile))
     rng = np.random.default_rng(args.seed)
     thermal = temperature_range(args.temperature_range)
-    infos, first_train = [], None
+    infos, first_train = [], None  # the coverage plot shows the first dataset's training wrenches
     with plan.as_one_set(), console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
         for k in range(args.n_datasets):
             train, test, info = ftcal.make_artificial_dataset(
@@ -102,7 +101,7 @@ def run_dataset(args: argparse.Namespace) -> int:
                 with plan.writing(name) as tmp:
                     ds.save(tmp, overwrite=True)
             infos.append(info)
-            first_train = train if first_train is None else first_train
+            first_train = first_train or train
             bar.update(1)
         with plan.writing("info.json") as tmp:
             write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
@@ -193,12 +192,10 @@ def _register_experiment(kinds: argparse._SubParsersAction) -> None:
 def run_experiment(args: argparse.Namespace) -> int:
     """Plan the poses, simulate the load / no-load runs, write the logs and a coverage plot."""
     import ftcal
-
     from ..robot import load_fixture
     from ._plan import write_plan_coverage
 
     console = Console(args.quiet)
-
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
