@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_jobs_option, add_scheduler_option, finish_command,
-                      int_in_range, positive_float, write_json)
+                      int_in_range, positive_float)
 
 ARTIFICIAL_EXAMPLE = """\
 examples:
@@ -210,10 +210,8 @@ def run_dataset(args: argparse.Namespace) -> int:
     table = _dataset_table(comparison, data.axes)
     axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
     with plan.as_one_set():  # the results, their table and their figure: all or none
-        with plan.writing("dataset_results.json") as tmp:
-            write_json(tmp, results)
-        with plan.writing("dataset_results.md") as tmp:
-            tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
+        plan.write_json("dataset_results.json", results)
+        plan.write_text("dataset_results.md", f"# Calibrators on {args.dataset}\n\n{table}\n")
         with plan.writing("dataset_rmse.png") as tmp:
             plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({comparison.facts['kind']} folds)")
     print(table)
@@ -284,10 +282,8 @@ def run_real_world(args: argparse.Namespace) -> int:
         log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"), **mass)
     markdown = ftcal.benchmark.real_world_markdown(result)
     with plan.as_one_set():
-        with plan.writing("real_world_results.md") as tmp:
-            tmp.write_text(markdown + "\n", encoding="utf-8")
-        with plan.writing("real_world_results.json") as tmp:
-            write_json(tmp, result)
+        plan.write_text("real_world_results.md", markdown + "\n")
+        plan.write_json("real_world_results.json", result)
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0

@@ -97,14 +97,6 @@ class Interrupted(BaseException):
         return 128 + self.signum
 
 
-def _terminating_signals() -> tuple:
-    """The signals that end a run cleanly: Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session
-    (SIGHUP, whose default would kill the process mid-write and leave its ``.partial`` file behind)."""
-    import signal
-
-    return tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
 @contextlib.contextmanager
 def signals_interrupt() -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` in the main thread (the CLI only: the
@@ -127,7 +119,9 @@ def signals_interrupt() -> Iterator[None]:
             os.kill(os.getpid(), signum)
 
     previous = {}
-    for sig in _terminating_signals():
+    # Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session (SIGHUP, whose default would kill the
+    # process mid-write and leave its ``.partial`` file behind)
+    for sig in (getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)):
         old = signal.getsignal(sig)
         if old is signal.SIG_IGN:
             continue
@@ -686,6 +680,17 @@ class OutputPlan:
             return
         with atomic_output(target, overwrite=self.force, error=CliError) as tmp:
             yield tmp
+
+    def write_text(self, name: str, text: str) -> None:
+        """Write the planned file ``name`` holding ``text`` (UTF-8) through :meth:`writing`."""
+        with self.writing(name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+
+    def write_json(self, name: str, obj: Any) -> None:
+        """Write the planned file ``name`` holding ``obj`` as JSON (:func:`ftcal.core.write_json`) through
+        :meth:`writing`."""
+        with self.writing(name) as tmp:
+            write_json(tmp, obj)
 
     @contextlib.contextmanager
     def staging(self) -> Iterator[Path]:

@@ -79,8 +79,7 @@ def run(args: argparse.Namespace) -> int:
         from ..experiment import tool_gravity_compensation_yaml
 
         text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
-        with plan.writing(output.name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        plan.write_text(output.name, text)
         console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
         return 0
     if is_tool and args.format == "onnx":

@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_jobs_option, add_name_option, finish_command, write_json
+from ._common import CliError, Console, OutputPlan, add_jobs_option, add_name_option, finish_command
 from ._data_options import add_alpha_option, add_dataset_options, fit_data_facts, load_dataset_from_args
 from ._models import calibrator_params, model_file_name, parse_param
 from ._messages import cli_error
@@ -284,8 +284,7 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(model_file_name(name)) as tmp:
             ftcal.save_model(estimator, tmp, overwrite=True, data=fit_data_facts(args, data))
         summary["model_sha256"] = files.sha256(plan.path(model_file_name(name)))
-        with plan.writing(f"{name}.fit.json") as tmp:
-            write_json(tmp, summary)
+        plan.write_json(f"{name}.fit.json", summary)
         if args.report:
             write_report(plan, name, result.certificate, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], console=console)

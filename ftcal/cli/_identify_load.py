@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
-                      existing_file, finish_command, load_robot_from_args, path_problem, refuse_twins, write_json)
+                      existing_file, finish_command, load_robot_from_args, path_problem, refuse_twins)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._messages import cli_error
@@ -215,15 +215,13 @@ def run_identify(args: argparse.Namespace) -> int:
     if poses.still:
         info["still_poses"] = poses.still_summary()
     with plan.as_one_set():  # the tool file and the report describing it: all or none, never another run's report
-        with plan.writing(poses_name) as tmp:
-            tmp.write_text(poses.to_csv(), encoding="utf-8")
+        plan.write_text(poses_name, poses.to_csv())
         if report is not None:
             write_report(plan, args.name, report)
         else:
             for stale in report_names(args.name):
                 plan.leaving_out(stale)
-        with plan.writing(name) as tmp:
-            write_json(tmp, {**tool.to_dict(), **info})
+        plan.write_json(name, {**tool.to_dict(), **info})
     console.info(f"{tool_line(tool, len(poses.rotations))} -> {plan.path(name)}")
     _say_drift(args, poses, gravity)
     return 0
@@ -309,7 +307,6 @@ def run_compensate(args: argparse.Namespace) -> int:
     if plan is None:
         sys.stdout.write(text)
         return 0
-    with plan.writing(Path(args.output).name) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+    plan.write_text(Path(args.output).name, text)
     console.info(f"wrote {len(external)} compensated wrenches to {args.output}")
     return 0

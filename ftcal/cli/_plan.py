@@ -8,7 +8,7 @@ import sys
 import numpy as np
 
 from ._common import (CliError, Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
-                      int_in_range, load_robot_from_args, positive_float, positive_int, write_json)
+                      int_in_range, load_robot_from_args, positive_float, positive_int)
 from ._data_options import DATASET_OPTIONS, add_dataset_options, load_dataset_for_models
 
 EXAMPLE = """\
@@ -130,12 +130,12 @@ def run(args: argparse.Namespace) -> int:
         with plan_files.writing("poses.csv") as tmp:
             np.savetxt(tmp, table, delimiter=",", header=",".join(columns), comments="",
                        fmt=["%d"] + ["%.8f"] * (table.shape[1] - 1))
-        with plan_files.writing("plan.json") as tmp:
-            write_json(tmp, {"robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": plan.sensor_frame,
-                             "anchor_frame": plan.anchor_frame, "anchor_position_in_base_m": plan.anchor_position_in_base,
-                             "joint_names": list(robot.joint_names), "angle_unit": unit,
-                             "n_candidates": plan.n_candidates, "n_poses": plan.n_poses,
-                             "unreachable_gravity_in_sensor": plan.unreachable, "settings": plan.settings, **extra})
+        plan_files.write_json("plan.json", {
+            "robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": plan.sensor_frame,
+            "anchor_frame": plan.anchor_frame, "anchor_position_in_base_m": plan.anchor_position_in_base,
+            "joint_names": list(robot.joint_names), "angle_unit": unit, "n_candidates": plan.n_candidates,
+            "n_poses": plan.n_poses, "unreachable_gravity_in_sensor": plan.unreachable, "settings": plan.settings,
+            **extra})
         write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
     if args.next_poses is not None:
         console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "

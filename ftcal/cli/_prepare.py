@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_robot_options, finish_command, int_in_range,
-                      load_robot_from_args, path_problem, positive_float, refuse_twins, write_json)
+                      load_robot_from_args, path_problem, positive_float, refuse_twins)
 from ..io import run_log_files
 from ._data_options import add_columns_option, named_inputs
 from ._messages import cli_spelling
@@ -140,10 +140,10 @@ def run(args: argparse.Namespace) -> int:
     with plan.as_one_set():  # the dataset, its summary and its figure: all or none
         with plan.writing(name) as tmp:
             dataset.save(tmp, overwrite=True)
-        with plan.writing("prepare.json") as tmp:
-            write_json(tmp, {"logs": [str(p) for p in logs], "robot": robot.name, "sensor_frame": robot.sensor_frame,
-                             "n_samples": dataset.n_samples, "n_channels": dataset.n_channels,
-                             "samples_per_configuration": groups, "fixture": fixture, "meta": dataset.meta})
+        plan.write_json("prepare.json", {
+            "logs": [str(p) for p in logs], "robot": robot.name, "sensor_frame": robot.sensor_frame,
+            "n_samples": dataset.n_samples, "n_channels": dataset.n_channels, "samples_per_configuration": groups,
+            "fixture": fixture, "meta": dataset.meta})
         with plan.writing("coverage.png") as tmp:
             plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
     console.info(f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "

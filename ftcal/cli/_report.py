@@ -260,8 +260,7 @@ def write_report(out: OutputPlan, label: str, cert, *, model_path, model_sha256:
     cert.identity["model"].update(file=Path(model_path).name, path=str(model_path), sha256=model_sha256)
     html_name, json_name, csv_name = report_file_names(label)
     for file_name, text in ((html_name, cert.to_html()), (json_name, cert.to_json()), (csv_name, cert.to_csv())):
-        with out.writing(file_name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        out.write_text(file_name, text)
     verdict = cert.verdict
     console.info(f"report -> {out.path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 

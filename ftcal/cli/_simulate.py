@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
-                      int_in_range, load_robot_from_args, positive_float, write_json)
+                      int_in_range, load_robot_from_args, positive_float)
 
 DATASET_EXAMPLE = """\
 examples:
@@ -103,8 +103,7 @@ def run_dataset(args: argparse.Namespace) -> int:
             infos.append(info)
             first_train = first_train or train
             bar.update(1)
-        with plan.writing("info.json") as tmp:
-            write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
+        plan.write_json("info.json", {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
         with plan.writing("coverage.png") as tmp:
             plot_wrench_coverage(first_train.wrench, tmp, alpha=profile.alpha,
                                  title=f"Training wrenches ({args.preset} preset)")

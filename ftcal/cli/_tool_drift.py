@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, finite_float, int_in_range, write_json
+from ._common import CliError, Console, OutputPlan, finite_float, int_in_range
 from ._data_options import add_fold_options, add_unit_options, check_lever_arm
 from ._messages import cli_message
 
@@ -76,8 +76,7 @@ def write_report(plan: OutputPlan, stem: str, report: dict) -> None:
     from ftcal.reporting import plot_drift_residuals
 
     json_name, png_name = report_names(stem)
-    with plan.writing(json_name) as tmp:
-        write_json(tmp, report)
+    plan.write_json(json_name, report)
     with plan.writing(png_name) as tmp:
         plot_drift_residuals(report, tmp)
 

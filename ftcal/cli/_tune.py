@@ -7,7 +7,7 @@ import time
 
 from ..core import CalibrationInputError
 from ._common import (CliError, Console, OutputPlan, add_jobs_option, add_name_option, add_scheduler_option,
-                      finish_command, int_in_range, write_json)
+                      finish_command, int_in_range)
 from ._fit import calibrator_names
 from ._data_options import (add_alpha_option, add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
@@ -106,8 +106,7 @@ def run(args: argparse.Namespace) -> int:
     with plan.as_one_set():  # the model and its search summary: all or none, never another run's file replaced
         with plan.writing(model_file_name(name)) as tmp:
             ftcal.save_model(search.best_estimator_, tmp, overwrite=True, data=fit_data_facts(args, data))
-        with plan.writing(f"{name}.tune.json") as tmp:
-            write_json(tmp, summary)
+        plan.write_json(f"{name}.tune.json", summary)
     console.info(f"done in {seconds:.1f} s: best {summary['best_params']} with cross-validated RMSE "
                  f"{summary['best_rmse']:.4g} N; model -> {plan.path(model_file_name(name))}")
     return 0
