@@ -713,19 +713,19 @@ class OutputPlan:
         finally:
             shutil.rmtree(stage, ignore_errors=True)
 
-    def leaving_out(self, name: str) -> None:
-        """A planned file this run does not write after all (a report it has no data for). An output set replaces
-        only the files it writes: a file of that name is never removed (ftcal cannot tell an earlier run's report
+    def leaving_out(self, *names: str) -> None:
+        """Planned files this run does not write after all (a report it has no data for). An output set replaces
+        only the files it writes: a file of such a name is never removed (ftcal cannot tell an earlier run's report
         from a user's own file of that name), and a warning names it, since it does not describe this run."""
+        import warnings
+
         if self._set is None:
             raise AssertionError("leaving_out() outside as_one_set()")
-        path = self.out_dir / name
-        if path.exists() or path.is_symlink():
-            import warnings
-
-            warnings.warn(f"{path} was kept as it is: this run does not write it, so it does not describe this run "
-                          "(an earlier run's, or your own file); remove it if it is an earlier run's", UserWarning,
-                          stacklevel=2)
+        for path in (self.out_dir / name for name in names):
+            if path.exists() or path.is_symlink():
+                warnings.warn(f"{path} was kept as it is: this run does not write it, so it does not describe this "
+                              "run (an earlier run's, or your own file); remove it if it is an earlier run's",
+                              UserWarning, stacklevel=2)
 
     @contextlib.contextmanager
     def as_one_set(self) -> Iterator[OutputSet]:

@@ -289,8 +289,7 @@ def run(args: argparse.Namespace) -> int:
             write_report(plan, name, result.certificate, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], console=console)
         else:
-            for stale in report_file_names(name):
-                plan.leaving_out(stale)
+            plan.leaving_out(*report_file_names(name))
     console.info(f"done in {seconds:.1f} s: training RMSE {_rmse_text(report.rmse, data.axes, estimator.alpha_)}; "
                  f"model -> {plan.path(model_file_name(name))}")
     return 0

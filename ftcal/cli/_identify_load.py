@@ -219,8 +219,7 @@ def run_identify(args: argparse.Namespace) -> int:
         if report is not None:
             write_report(plan, args.name, report)
         else:
-            for stale in report_names(args.name):
-                plan.leaving_out(stale)
+            plan.leaving_out(*report_names(args.name))
         plan.write_json(name, {**tool.to_dict(), **info})
     console.info(f"{tool_line(tool, len(poses.rotations))} -> {plan.path(name)}")
     _say_drift(args, poses, gravity)

@@ -257,12 +257,8 @@ def run(args: argparse.Namespace) -> int:
                 beyond[0] += int(flags.sum())
             if checking:
                 findings.extend(_chunk_findings(raw, lines, args.input, channels, temperature, total))
-            if limits is None:
-                write_wrench_rows(out, values, False)
-            else:
-                out.write("".join(",".join(f"{v:.9g}" for v in row) + f",{int(f)}\n" for row, f in zip(values, flags)))
-            wrench = values
-            total += len(wrench)
+            write_wrench_rows(out, values, None if limits is None else flags)
+            total += len(values)
             if chunk == 1 or out is sys.stdout:
                 out.flush()
         return total

@@ -25,7 +25,6 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import WRENCH_LABELS
 from ..core import is_number, parse_number, read_header
 from ._common import CliError
 
@@ -238,8 +237,8 @@ def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> Cli
     return cli_error(exc, args, f"{source}: {where}")
 
 
-def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], header: bool) -> None:
-    """Write wrenches as CSV lines (``%.9g``), with the ``Fx,...,Tz`` header when asked."""
-    if header:
-        out.write(",".join(WRENCH_LABELS) + "\n")
-    out.write("".join(",".join(f"{v:.9g}" for v in row) + "\n" for row in wrench))
+def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], flags: NDArray[np.bool_] | None = None) -> None:
+    """Write wrenches as CSV lines (``%.9g``), each followed by its ``out_of_range`` flag (0 or 1) when ``flags``
+    are given."""
+    ends = ["\n"] * len(wrench) if flags is None else [f",{int(f)}\n" for f in flags]
+    out.write("".join(",".join(f"{v:.9g}" for v in row) + end for row, end in zip(wrench, ends)))
