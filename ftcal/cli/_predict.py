@@ -225,8 +225,7 @@ def run(args: argparse.Namespace) -> int:
 
     def emit(out) -> int:
         total = 0
-        chunks = raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
-                            channels=channels)
+        chunks = raw_chunks(args.input, n_channels, chunk, temperature=temperature, channels=channels)
         # a regular file's first chunk is read (its columns checked) before anything is written: a wrong file leaves
         # no header behind; from stdin or a pipe the header goes at once (a driver waiting for it must not wait for
         # a reading)
@@ -321,10 +320,10 @@ def _most_columns(source: str) -> tuple[str, int] | None:
     return max(wide, key=lambda item: item[1]) if wide else None
 
 
-def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
+def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = False,
                channels: tuple[str, ...] | None = None):
-    """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
-    rows of a ``.npz`` / ``.mat`` are numbered from 0). ``channels``: the channel columns (or arrays, or a column
+    """Arrays of at most ``chunk`` readings of ``source``, each with its line numbers (the rows of a ``.npz`` /
+    ``.mat`` are numbered from 0): ``(array, line numbers)``. ``channels``: the channel columns (or arrays, or a column
     slice) to read, as ``--channels`` or the model's stored mapping name them."""
     from ..io import expand_names, parse_column_slice
 
@@ -332,8 +331,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
-        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, with_lines=with_lines,
-                                       temperature=temperature, names=names)
+        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, temperature=temperature, names=names)
     elif Path(source).suffix.lower() in (".npz", ".mat"):
         if channels is None and Path(source).suffix.lower() == ".npz":
             raw = read_readings_npz(source, n_channels)
@@ -351,9 +349,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
                                f"{' (--channels ' + ','.join(channels) + ')' if channels else ''} but the model takes "
                                f"{n_channels}; {fix}")
         for start in range(0, len(raw), chunk):
-            yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
-                else raw[start:start + chunk]
+            yield raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))
     else:
         with open(source, encoding="utf-8") as fh:
-            yield from iter_reading_chunks(fh, source, n_channels, chunk, with_lines=with_lines,
-                                           temperature=temperature, names=names)
+            yield from iter_reading_chunks(fh, source, n_channels, chunk, temperature=temperature, names=names)

@@ -58,11 +58,10 @@ def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int
     return channels
 
 
-def iter_reading_chunks(
-    stream: IO[str], source: str, n_channels: int, chunk_size: int, *, with_lines: bool = False,
-    temperature: bool = False, names: tuple[str, ...] | None = None,
-) -> Iterator[NDArray[np.float64]]:
-    """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows.
+def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_size: int, *, temperature: bool = False,
+                        names: tuple[str, ...] | None = None) -> Iterator[tuple[NDArray[np.float64], NDArray]]:
+    """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows, each with the line of the
+    input each of its rows came from (for messages): ``(array, line_numbers)``.
 
     Parameters
     ----------
@@ -74,8 +73,6 @@ def iter_reading_chunks(
         The channel count the model expects; a row with another count is an error.
     chunk_size : int
         Rows per yielded array; 1 gives one answer per input line (live streams).
-    with_lines : bool
-        Yield ``(array, line_numbers)``: the line of the input each row came from (for messages).
     temperature : bool
         Whether the model's last input is the temperature [deg C] (a temperature-compensated model): the
         messages then count ``n_channels - 1`` raw channels plus the temperature.
@@ -129,10 +126,10 @@ def iter_reading_chunks(
         rows.append(values)
         lines.append(line_no)
         if len(rows) >= chunk_size:
-            yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+            yield np.asarray(rows, dtype=float), np.asarray(lines)
             rows, lines = [], []
     if rows:
-        yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+        yield np.asarray(rows, dtype=float), np.asarray(lines)
 
 
 #: Largest chunk of text readings held at once [bytes].

@@ -72,7 +72,8 @@ def run(args: argparse.Namespace) -> int:
     stored, _, _ = model_reading(args.model)  # the channel mapping the model was fitted with
     channels = args.channels if args.channels is not None else (stored.channels if stored is not None else None)
     chunks, n_bytes = [], 0.0
-    for chunk in raw_chunks(args.readings, n_channels, 4096, channels=channels):  # a stream of readings may be endless
+    # a stream of readings may be endless: bounded as they come
+    for chunk, _ in raw_chunks(args.readings, n_channels, 4096, channels=channels):
         n_bytes += chunk.nbytes
         check_allocation(2 * n_bytes, f"the zero-load readings of {args.readings} ({n_bytes / chunk.itemsize / n_channels:.0f}"
                          " so far)", "a few hundred readings are enough; pass fewer")
