@@ -168,8 +168,10 @@ def _read_inputs(args, console: Console, reader):
         if kind == "pose file":
             refuse_twins(args.inputs, "pose file")
         paths = log_files(args.inputs) if kind == "run log" else [Path(p) for p in args.inputs]
-    if kind == "run log":
-        _log_poses_model_needed(args)
+    if kind == "run log" and args.model is None:
+        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
+                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
+                       "file (see 'ftcal identify-load --help')")
     robot = load_robot_from_args(args) if kind == "run log" or (kind == "ROS bag" and args.tf is None) else None
     model = None if args.model is None else ftcal.load_model(args.model)
 
@@ -185,14 +187,8 @@ def _read_inputs(args, console: Console, reader):
     return result
 
 
-def identification_poses(args, console: Console):
-    """The static poses of the command's inputs (:func:`ftcal.experiment.static_poses`)."""
-    from ftcal.experiment import static_poses
-
-    return _read_inputs(args, console, static_poses)
-
-
 def run_identify(args: argparse.Namespace) -> int:
+    from ftcal.experiment import static_poses
     from ._tool_drift import identify, report_names, write_report
 
     console = Console(args.quiet)
@@ -201,7 +197,7 @@ def run_identify(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     given = list(args.inputs)
     args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
-    poses = identification_poses(args, console)
+    poses = _read_inputs(args, console, static_poses)  # the static poses of the inputs
     sources = poses.sources if args.inputs == given else [str(p) for p in given]  # the user's files, not the join
     _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
@@ -272,13 +268,6 @@ def _say_drift(args, poses, gravity) -> None:
             found = None
         if found is not None:
             print(f"ftcal: note: {', '.join(poses.sources[:3])}: {found.words('--time-from-order')}", file=sys.stderr)
-
-
-def _log_poses_model_needed(args) -> None:
-    if args.model is None:
-        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
-                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
-                       "file (see 'ftcal identify-load --help')")
 
 
 def run_compensate(args: argparse.Namespace) -> int:
