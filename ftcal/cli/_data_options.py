@@ -439,11 +439,8 @@ def _saturated_entries(data, mask, said: str) -> list[dict]:
     import numpy as np
 
     sources = data.row_sources()
-    out = []
-    for row in np.flatnonzero(mask):
-        file, line = sources.where(int(row))
-        out.append({"kind": "saturated", "file": file, "line": line, "channel": None, "value": None, "reason": said})
-    return out
+    return [{"kind": "saturated", "file": file, "line": line, "channel": None, "value": None, "reason": said}
+            for file, line in (sources.where(int(row)) for row in np.flatnonzero(mask))]
 
 
 def training_targets(data):

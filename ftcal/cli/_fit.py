@@ -16,7 +16,7 @@ from ._models import calibrator_params, model_file_name, parse_param
 from ._messages import cli_error
 from ._report import (_fold_too_small, add_report_options, prepare_report, report_file_names, report_options,
                       write_report)
-from ._training import fit_with_progress
+from ._training import fit_with_progress, ticking
 
 EXAMPLE = """\
 examples:
@@ -148,24 +148,19 @@ def comparison_progress(console: Console, label: str, every: float = HEARTBEAT_S
     logger.addHandler(handler)
     if logger.getEffectiveLevel() > logging.INFO:
         logger.setLevel(logging.INFO)
-    done = threading.Event()
 
     def beat() -> None:
-        while not done.wait(0.5):
-            now = time.perf_counter()
-            with lock:
-                quiet_for = now - last[0]
-            if quiet_for >= every:
-                console.info(f"  ... {label} still fitting ({now - start:.0f} s so far)")
-                said()
+        now = time.perf_counter()
+        with lock:
+            quiet_for = now - last[0]
+        if quiet_for >= every:
+            console.info(f"  ... {label} still fitting ({now - start:.0f} s so far)")
+            said()
 
-    beater = threading.Thread(target=beat, daemon=True, name="ftcal-heartbeat")
-    beater.start()
     try:
-        yield
+        with ticking(beat, "ftcal-heartbeat"):
+            yield
     finally:
-        done.set()
-        beater.join()
         logger.removeHandler(handler)
         logger.setLevel(level)
 

@@ -265,7 +265,7 @@ def _say_drift(args, poses, gravity) -> None:
             found = drift_in_recording_order(poses.rotations, poses.wrenches, gravity, groups=poses.groups,
                                              cv=args.cv, random_state=0)
         except ValueError:  # too few poses for a drift: nothing to say
-            found = None
+            return
         if found is not None:
             print(f"ftcal: note: {', '.join(poses.sources[:3])}: {found.words('--time-from-order')}", file=sys.stderr)
 
