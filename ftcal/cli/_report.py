@@ -15,6 +15,7 @@ from ..core import CalibrationInputError, TooFewSamplesError
 from ._common import CliError, Console, OutputPlan, add_jobs_option, existing_file, finish_command
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
+from ._models import model_inputs, model_label
 
 EXAMPLE = """\
 examples:
@@ -289,9 +290,8 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..reporting import bytes_sha256, file_sha256
     import ftcal
-    from ._models import model_inputs, model_label
+    from ..reporting import bytes_sha256, calibration_certificate, file_sha256
 
     console = Console(args.quiet)
     label = model_label(args.model)
@@ -310,8 +310,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
               "another range); the report's held-out figures are of the model refitted on this dataset by "
               "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
-    from ..reporting import calibration_certificate
-
     options = report_options(args, settings, dataset_path=args.dataset, dataset_sha256=dataset_sha256, console=console)
     try:
         cert = calibration_certificate(model, data, cv=args.cv, random_state=getattr(args, "seed", 0), **options)
