@@ -284,8 +284,8 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     rows = _read_inputs(args, console, recording_rows)
     head, lead, rotations, wrenches = rows.lead_names, rows.lead, rows.rotations, rows.wrenches
-    external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, given)
     values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, given)
+    external = compensate_rows(args, tool, rotations, wrenches, values)
     frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool, **values)
     if frame.other_fits_better:
         print(f"ftcal: warning: {given}: {frame.words('--wrench-frame')}", file=sys.stderr)

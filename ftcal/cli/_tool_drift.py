@@ -93,16 +93,15 @@ def drift_summary(tool) -> str:
             f"{per}")
 
 
-def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, times, temperatures, source: str):
+def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, values: dict):
     """The external wrenches of the inputs' rows (:meth:`ToolLoad.compensate` with each row's time [s] or
-    temperature [deg C], ``None`` when the inputs have none); a drift evaluated beyond the span it covers is one
-    ``ftcal: warning:`` line naming the tool file. ``source`` names the inputs in errors."""
+    temperature [deg C] of :func:`compensation_values`); a drift evaluated beyond the span it covers is one
+    ``ftcal: warning:`` line naming the tool file."""
     import sys
     import warnings
 
     from ftcal.experiment import DriftExtrapolationWarning
 
-    values = compensation_values(args, tool, len(wrenches), times, temperatures, source)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DriftExtrapolationWarning)
         external = tool.compensate(rotations, wrenches, **values)
