@@ -137,13 +137,10 @@ def run(args: argparse.Namespace) -> int:
             "n_poses": plan.n_poses, "unreachable_gravity_in_sensor": plan.unreachable, "settings": plan.settings,
             **extra})
         write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
-    if args.next_poses is not None:
-        console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
-                     f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance; poses -> "
-                     f"{plan_files.path('poses.csv')}")
-    else:
-        console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
-                     f"{plan_files.path('poses.csv')}")
+    said = (f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
+            f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance" if args.next_poses is not None
+            else f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions")
+    console.info(f"{said}; poses -> {plan_files.path('poses.csv')}")
     from ..robot import LINEAR_MODEL_PARAMETERS
 
     if args.next_poses is None and plan.n_poses < LINEAR_MODEL_PARAMETERS:

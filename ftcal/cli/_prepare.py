@@ -117,12 +117,9 @@ def run(args: argparse.Namespace) -> int:
     pose = f"the sensor's orientation from /tf ({', '.join(args.tf)})" if bags is not None and args.tf else \
         f"{robot.name} (sensor frame {robot.sensor_frame})"
     console.info(f"preparing {len(logs)} {what} with {pose} ...")
-    if bags is not None:
-        inputs = [bag_run_log(args, path, robot, console) for path in bags]
-        if args.n_channels is not None and inputs[0].n_channels != args.n_channels:
-            raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
-    else:
-        inputs = logs
+    inputs = logs if bags is None else [bag_run_log(args, path, robot, console) for path in bags]
+    if bags is not None and args.n_channels is not None and inputs[0].n_channels != args.n_channels:
+        raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
