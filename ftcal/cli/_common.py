@@ -33,8 +33,8 @@ __all__ = ["CliError", "UsageError", "Interrupted", "signals_interrupt", "standa
            "EXIT_FAILURE", "add_output_options", "add_output_file_options", "add_name_option", "file_stem",
            "add_run_options", "finish_command", "add_jobs_option", "add_scheduler_option", "add_robot_options",
            "load_robot_from_args", "OutputPlan", "note_inputs", "note_dataset", "name_the_dataset",
-           "check_not_an_input", "Console", "write_json", "positive_int", "nonnegative_int", "positive_float",
-           "int_in_range", "existing_file", "path_problem"]
+           "check_not_an_input", "Console", "write_json", "numbers", "positive_int", "nonnegative_int",
+           "positive_float", "int_in_range", "existing_file", "path_problem"]
 
 #: Exit status of a run refused because of the user's arguments or files.
 EXIT_USAGE = 2
@@ -405,15 +405,27 @@ def _captured_stderr_fd() -> Iterator[Any]:
             os.close(saved)
 
 
+def numbers(text: str, count: int) -> list[float] | None:
+    """The ``count`` comma-separated numbers of ``text``, or None when it holds another count or a non-number.
+
+    Examples
+    --------
+    >>> numbers("0,0,-9.81", 3), numbers("0,0", 3), numbers("0,x,1", 3)
+    ([0.0, 0.0, -9.81], None, None)
+    """
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        return None
+    return values if len(values) == count else None
+
+
 def _mounting(text: str) -> tuple[float, ...]:
     """argparse type of ``--sensor-mounting``: six numbers."""
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 6 or not all(v == v and abs(v) != float("inf") for v in values):
+    values = numbers(text, 6)
+    if values is None or not all(v == v and abs(v) != float("inf") for v in values):
         raise argparse.ArgumentTypeError(f"{text!r}: give six numbers rx,ry,rz [deg],x,y,z [m], e.g. 0,0,45,0,0,0.012")
-    return values
+    return tuple(values)
 
 
 def _scheduler(text: str) -> str:

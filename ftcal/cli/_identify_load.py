@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
-                      existing_file, finish_command, load_robot_from_args, path_problem, refuse_twins)
+                      existing_file, finish_command, load_robot_from_args, numbers, path_problem, refuse_twins)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._messages import cli_error
@@ -134,11 +134,8 @@ def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
 
 
 def _gravity(text: str):
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) != 3:
+    values = numbers(text, 3)
+    if values is None:
         raise CliError(f"--gravity {text!r}: give three comma-separated numbers in m/s², e.g. 0,0,-9.81")
     return values
 

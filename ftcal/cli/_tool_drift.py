@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, finite_float, int_in_range
+from ._common import CliError, Console, OutputPlan, finite_float, int_in_range, numbers
 from ._data_options import add_fold_options, add_unit_options, check_lever_arm
 from ._messages import cli_message
 
@@ -234,11 +234,8 @@ def run_retare_tool(args: argparse.Namespace) -> int:
                        "columns to hold the sensor at --orientation)")
     rotations = None
     if args.orientation:
-        try:
-            quat = [float(v) for v in args.orientation.split(",")]
-        except ValueError:
-            quat = []
-        if len(quat) != 4:
+        quat = numbers(args.orientation, 4)
+        if quat is None:
             raise CliError(f"--orientation {args.orientation!r}: give qx,qy,qz,qw, four comma-separated numbers")
         rotations = _rotations(quat, "--orientation")[0]
     elif "rotation" in data:
