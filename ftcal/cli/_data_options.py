@@ -387,15 +387,13 @@ def bad_readings_handled(args: argparse.Namespace, data, path, names=None):
                        "data (ftcal names each bad reading without the option)")
     print_reading_findings(type(found)(findings=tuple(f for f in found.findings if f.kind in kept_kinds),
                                        n_rows=found.n_rows), path)
-    dropped = found.to_json(dropping)
-    flagged = found.to_json(kept_kinds)
     if drop.any():
         if not getattr(args, "quiet", False):
             print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with bad readings ("
                   f"{', '.join(f'{len(found.of_kind(k))} {k.value}' for k in dropping)})", file=sys.stderr)
         data = data.subset(~drop)
-    _record(data, "readings_dropped", dropped)
-    _record(data, "readings_flagged", flagged)
+    _record(data, "readings_dropped", found.to_json(dropping))
+    _record(data, "readings_flagged", found.to_json(kept_kinds))
     return data
 
 
