@@ -40,9 +40,7 @@ from collections.abc import Sequence
 from ..core import FtcalError
 from ._common import (EXIT_FAILURE, EXIT_USAGE, Interrupted, Parser, name_the_dataset, note_inputs, signals_interrupt,
                       standard_streams)
-from ._messages import one_line_warnings
-
-from ._messages import cli_message
+from ._messages import cli_message, one_line_warnings
 
 __all__ = ["main", "build_parser", "cli_message"]
 
@@ -53,25 +51,20 @@ _SUBCOMMANDS = ("simulate", "plan", "prepare", "fit", "tune", "evaluate", "predi
 
 def build_parser() -> Parser:
     """The top-level argument parser with every subcommand registered."""
-    from importlib import metadata
-    from importlib import import_module
+    from importlib import import_module, metadata
 
     try:
         version = metadata.version("ftcal")
     except metadata.PackageNotFoundError:  # running from a source tree
         version = "unknown"
-    parser = Parser(
-        prog="ftcal",
-        description="Calibrate multi-axis force/torque sensors: raw channels -> wrench [N, N·m].",
-        epilog=(
-            "workflow (artificial data):\n"
-            "  ftcal simulate dataset --preset thesis --out data\n"
-            "  ftcal fit data/train.csv --model directional --out models\n"
-            "  ftcal evaluate data/test.csv models/directional.model.npz --out eval\n"
-            "  cat raw.csv | ftcal predict models/directional.model.npz > wrench.csv\n\n"
-            "start here:  ftcal demo"
-        ),
-    )
+    parser = Parser(prog="ftcal",
+                    description="Calibrate multi-axis force/torque sensors: raw channels -> wrench [N, N·m].",
+                    epilog="workflow (artificial data):\n"
+                    "  ftcal simulate dataset --preset thesis --out data\n"
+                    "  ftcal fit data/train.csv --model directional --out models\n"
+                    "  ftcal evaluate data/test.csv models/directional.model.npz --out eval\n"
+                    "  cat raw.csv | ftcal predict models/directional.model.npz > wrench.csv\n\n"
+                    "start here:  ftcal demo")
     parser.add_argument("--version", action="version", version=f"ftcal {version}")
     sub = parser.add_subparsers(dest="command", metavar="SUBCOMMAND", parser_class=Parser)
     sub.required = True
@@ -130,11 +123,8 @@ def main(argv: Sequence[str] | None = None) -> int:
               "or fewer samples (--param max_samples=... where the model has it)", file=sys.stderr)
         return EXIT_USAGE
     except Exception as exc:  # a bug: still one line, with a pointer to where to report it
-        print(
-            f"ftcal: error: unexpected {type(exc).__name__}: {_one_line(exc)} "
-            "(this is a bug in ftcal; please report it with the command you ran)",
-            file=sys.stderr,
-        )
+        print(f"ftcal: error: unexpected {type(exc).__name__}: {_one_line(exc)} (this is a bug in ftcal; please report "
+              "it with the command you ran)", file=sys.stderr)
         return EXIT_FAILURE
 
 
@@ -159,8 +149,6 @@ _FULL = frozenset(getattr(errno, name) for name in ("ENOSPC", "EDQUOT") if hasat
 def _one_line(exc: BaseException, args=None) -> str:
     """The message of ``exc`` folded onto one line (OSError gets its file name), a library error's fields (the
     arguments it names, its fix) spelled as the options of the command that ran (:mod:`ftcal.cli._messages`)."""
-    from ._messages import cli_message
-
     if isinstance(exc, OSError) and exc.filename is not None and exc.strerror:
         text = f"{exc.filename}: {exc.strerror}"
         if exc.errno in _FULL:

@@ -5,17 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (
-    add_scheduler_option,
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_run_options,
-    positive_float,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_jobs_option, add_scheduler_option, finish_command,
+                      int_in_range, positive_float)
 
 ARTIFICIAL_EXAMPLE = """\
 examples:
@@ -46,14 +37,10 @@ real_world_rmse.png and the run logs in DIR/logs/.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "benchmark",
-        help="the artificial and the real-world benchmarks",
-        description="Compare calibrators the way the thesis does: on 30 artificial datasets, or on the "
-        "virtual robot experiment.",
-        epilog="examples:\n  ftcal benchmark artificial --quick --out bench\n"
-        "  ftcal benchmark real-world --quick --out bench_rw",
-    )
+    p = sub.add_parser("benchmark", help="the artificial and the real-world benchmarks",
+                       description="Compare calibrators the way the thesis does: on 30 artificial datasets, or on the "
+                       "virtual robot experiment.", epilog="examples:\n  ftcal benchmark artificial --quick --out bench\n"
+                       "  ftcal benchmark real-world --quick --out bench_rw")
     kinds = p.add_subparsers(dest="kind", metavar="KIND", parser_class=type(p))
     kinds.required = True
     _register_artificial(kinds)
@@ -61,75 +48,55 @@ def register(sub: argparse._SubParsersAction) -> None:
     _register_dataset(kinds)
 
 
-def _add_common(p: argparse.ArgumentParser, default_out: str, jobs: bool = True,
+def _add_common(p: argparse.ArgumentParser, handler, default_out: str, jobs: bool = True,
                 default_models: tuple[str, ...] = ("linear", "comparative", "directional")) -> None:
     import ftcal
 
-    p.add_argument(
-        "--model", dest="models", action="append", choices=tuple(ftcal.compose.CALIBRATOR_NAMES), metavar="NAME",
-        help=f"calibrator to include (repeatable; default: {', '.join(default_models)}; "
-        f"known: {', '.join(ftcal.compose.CALIBRATOR_NAMES)})",
-    )
+    p.add_argument("--model", dest="models", action="append", choices=tuple(ftcal.compose.CALIBRATOR_NAMES),
+                   metavar="NAME", help=f"calibrator to include (repeatable; default: {', '.join(default_models)}; "
+                   f"known: {', '.join(ftcal.compose.CALIBRATOR_NAMES)})")
     p.add_argument("--schedule", default="thesis", choices=("thesis", "short"), help="training schedule")
     p.add_argument("--quick", action="store_true", help="smoke mode: small data, few epochs")
     if jobs:
-        p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers")
-    add_output_options(p, default_out)
-    add_run_options(p)
+        add_jobs_option(p, "parallel joblib workers", default=1)
+    finish_command(p, handler, default_out)
 
 
 def _register_artificial(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation import ERROR_PRESETS, MAX_DATASETS
-    from ..simulation import TEST_DISTRIBUTIONS
+    from ..simulation import ERROR_PRESETS, MAX_DATASETS, TEST_DISTRIBUTIONS
 
-    a = kinds.add_parser(
-        "artificial",
-        help="N artificial datasets, every calibrator (thesis Tables II-III, Fig. 5)",
-        description="The artificial-data benchmark (thesis IV-A / V-A).",
-        epilog=ARTIFICIAL_EXAMPLE,
-    )
-    a.add_argument(
-        "--preset", dest="presets", action="append", choices=sorted(ERROR_PRESETS),
-        help="error preset (repeatable; default: thesis)",
-    )
-    a.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=30, help="datasets per preset")
-    a.add_argument(
-        "--test-distribution", choices=TEST_DISTRIBUTIONS, default=None,
-        help="test-load sampling (default: the preset's own, 'ball' for reconstructed, else 'radial')",
-    )
-    a.add_argument(
-        "--baselines", action=argparse.BooleanOptionalAction, default=None,
-        help="also fit the stock scikit-learn baselines (sk_linear ... sk_gp) on the same data "
-             "(default: yes unless --model is given)",
-    )
-    a.add_argument(
-        "--stack", type=int_in_range(1, 1000, "stack"), default=1,
-        help="train up to this many network fits (one preset and model, several datasets) together as one "
-             "stacked module: same results up to float32 rounding, ~10x less CPU with 30 (default 1)",
-    )
+    a = kinds.add_parser("artificial", help="N artificial datasets, every calibrator (thesis Tables II-III, Fig. 5)",
+                         description="The artificial-data benchmark (thesis IV-A / V-A).", epilog=ARTIFICIAL_EXAMPLE)
+    a.add_argument("--preset", dest="presets", action="append", choices=sorted(ERROR_PRESETS),
+                   help="error preset (repeatable; default: thesis)")
+    a.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=30,
+                   help="datasets per preset")
+    a.add_argument("--test-distribution", choices=TEST_DISTRIBUTIONS, default=None,
+                   help="test-load sampling (default: the preset's own, 'ball' for reconstructed, else 'radial')")
+    a.add_argument("--baselines", action=argparse.BooleanOptionalAction, default=None,
+                   help="also fit the stock scikit-learn baselines (sk_linear ... sk_gp) on the same data "
+                   "(default: yes unless --model is given)")
+    a.add_argument("--stack", type=int_in_range(1, 1000, "stack"), default=1,
+                   help="train up to this many network fits (one preset and model, several datasets) together as "
+                   "one stacked module: same results up to float32 rounding, ~10x less CPU with 30 (default 1)")
     add_scheduler_option(a)
-    _add_common(a, "ftcal-benchmark")
-    a.set_defaults(handler=run_artificial)
+    _add_common(a, run_artificial, "ftcal-benchmark")
 
 
 def _register_real_world(kinds: argparse._SubParsersAction) -> None:
     from ..simulation import ERROR_PRESETS
 
-    r = kinds.add_parser(
-        "real-world",
-        help="the virtual robot experiment through the real pipeline (thesis Tables IV-V, Fig. 6)",
-        description="The real-world benchmark (thesis IV-B / V-B) on a virtual experiment with the KUKA iiwa 14.",
-        epilog=REAL_WORLD_EXAMPLE,
-    )
+    r = kinds.add_parser("real-world", epilog=REAL_WORLD_EXAMPLE,
+                         help="the virtual robot experiment through the real pipeline (thesis Tables IV-V, Fig. 6)",
+                         description="The real-world benchmark (thesis IV-B / V-B) on a virtual experiment with the "
+                         "KUKA iiwa 14.")
     r.add_argument("--mass", type=positive_float, help="load mass [kg] (default: the thesis' load)")
-    r.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2, help="icosphere level (2: 155 poses)")
+    r.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2,
+                   help="icosphere level (2: 155 poses)")
     r.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
-    r.add_argument(
-        "--split", dest="splits", action="append", choices=("random20", "leave-one-config-out"),
-        help="train/test split (repeatable; default: both)",
-    )
-    _add_common(r, "ftcal-benchmark-real-world", jobs=False)
-    r.set_defaults(handler=run_real_world)
+    r.add_argument("--split", dest="splits", action="append", choices=("random20", "leave-one-config-out"),
+                   help="train/test split (repeatable; default: both)")
+    _add_common(r, run_real_world, "ftcal-benchmark-real-world", jobs=False)
 
 
 DATASET_EXAMPLE = """\
@@ -156,47 +123,40 @@ HISTORY_MODELS = ("linear", "polynomial", "axis_nonlinear")
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
-    from ._data_options import add_dataset_options, add_fold_options
+    from ._data_options import add_alpha_option, add_dataset_options, add_fold_options
 
-    d = kinds.add_parser(
-        "dataset",
-        help="every calibrator on YOUR dataset, cross-validated: which one to use for your sensor",
-        description="Cross-validate calibrators on your own calibration dataset (.csv, .npz, .mat or a folder of "
-        "them).",
-        epilog=DATASET_EXAMPLE,
-    )
+    d = kinds.add_parser("dataset", epilog=DATASET_EXAMPLE,
+                         help="every calibrator on YOUR dataset, cross-validated: which one to use for your sensor",
+                         description="Cross-validate calibrators on your own calibration dataset (.csv, .npz, .mat or "
+                         "a folder of them).")
     d.add_argument("dataset", help="calibration dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
                    "session), e.g. as written by 'ftcal prepare'")
     add_fold_options(d.add_argument_group("cross-validation"), cv_default=5)
-    from ._data_options import add_alpha_option
-
     add_alpha_option(d)
-    d.add_argument(
-        "--history", action="store_true",
-        help="also score each closed-form model (" + ", ".join(HISTORY_MODELS) + ") with a load-history term "
-             "(soft or viscoelastic sensors, as 'ftcal fit --history'): needs whole groups held out (--folds group), "
-             "each group one recording in time order",
-    )
+    d.add_argument("--history", action="store_true",
+                   help="also score each closed-form model (" + ", ".join(HISTORY_MODELS) + ") with a load-history "
+                   "term (soft or viscoelastic sensors, as 'ftcal fit --history'): needs whole groups held out "
+                   "(--folds group), each group one recording in time order")
     # the names are checked when the command runs: importing the calibrators here would load scikit-learn for
     # every `ftcal --help`
     d.add_argument("--stock-baseline", action="append", metavar="NAME",
                    help="the stock baseline(s) --model stock scores as a model that may be chosen (repeatable; "
                    "default: every one; an unknown name is answered with the list)")
-    _add_common(d, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
+    # the dataset options after --out/--quiet/--seed, as --help has always listed them
+    _add_common(d, run_dataset, "ftcal-benchmark-dataset", jobs=False, default_models=DATASET_DEFAULT_MODELS)
     add_dataset_options(d)
-    d.set_defaults(handler=run_dataset)
 
 
 def run_dataset(args: argparse.Namespace) -> int:
     import numpy as np
 
     import ftcal
-    from ..compose import score_candidates
     from ..calibrators import STOCK_BASELINE_NAMES, StockCalibrator
+    from ..compose import score_candidates
+    from ..core import WRENCH_LABELS
     from ..reporting import plot_axis_errors
     from ._data_options import fold_groups, load_dataset_from_args
-    from ._models import check_fold_count, dataset_alpha
-    from ..core import WRENCH_LABELS
+    from ._models import check_fold_count, evaluation_alpha
 
     console = Console(args.quiet)
     names = tuple(dict.fromkeys(args.models or DATASET_DEFAULT_MODELS))
@@ -216,7 +176,7 @@ def run_dataset(args: argparse.Namespace) -> int:
     if args.history and not set(names) & set(HISTORY_MODELS):
         raise CliError(f"--history scores the closed-form models with a history term ({', '.join(HISTORY_MODELS)}); "
                        "list at least one of them with --model")
-    alpha = ftcal.core.alpha_from_wrenches(data.wrench, data.axes) if dataset_alpha(data, args.alpha) is None else dataset_alpha(data, args.alpha)
+    alpha = evaluation_alpha(data, args.alpha)
     schedule = "short" if args.quick else args.schedule
     if args.stock_baseline and "stock" not in names:
         raise CliError("--stock-baseline says which baselines --model stock scores; add --model stock")
@@ -242,8 +202,7 @@ def run_dataset(args: argparse.Namespace) -> int:
         baselines={name: StockCalibrator(baseline=name, random_state=args.seed or 0) for name in STOCK_BASELINE_NAMES},
         axes=tuple(data.axes) if len(data.axes) == data.wrench.shape[1] and set(data.axes) <= set(WRENCH_LABELS)
         else None,  # eq. 18 scales the torques of the axes the data have (a plate's Tx, Ty)
-        race=False,  # a benchmark scores every model on every fold
-    )
+        race=False)  # a benchmark scores every model on every fold
     comparison.choose()  # the one-SE rule; each row against the choice in symmetric words (paired SE)
     results = comparison.to_dict()
     results.update(dataset=str(args.dataset), alpha=alpha, cv=args.cv, n_samples=data.n_samples,
@@ -251,16 +210,13 @@ def run_dataset(args: argparse.Namespace) -> int:
     table = _dataset_table(comparison, data.axes)
     axis = {n: a for n, a in zip(results["name"], results["axis_rmse"]) if a is not None}
     with plan.as_one_set():  # the results, their table and their figure: all or none
-        with plan.writing("dataset_results.json") as tmp:
-            write_json(tmp, results)
-        with plan.writing("dataset_results.md") as tmp:
-            tmp.write_text(f"# Calibrators on {args.dataset}\n\n{table}\n", encoding="utf-8")
+        plan.write_json("dataset_results.json", results)
+        plan.write_text("dataset_results.md", f"# Calibrators on {args.dataset}\n\n{table}\n")
         with plan.writing("dataset_rmse.png") as tmp:
             plot_axis_errors(axis, tmp, title=f"Held-out RMSE per axis ({comparison.facts['kind']} folds)")
     print(table)
     console.info(f"choose {results['chosen']} (the simplest within one standard error of the best, or within 0.5 % "
-                 "of its RMSE); "
-                 f"files in {args.out}")
+                 f"of its RMSE); files in {args.out}")
     return 0
 
 
@@ -288,7 +244,6 @@ def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
 
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
-
     from ._scale_out import dask_backend
 
     console = Console(args.quiet)
@@ -303,10 +258,8 @@ def run_artificial(args: argparse.Namespace) -> int:
 
         result = ftcal.benchmark.run_artificial_benchmark(
             n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
-            test_distribution=args.test_distribution,
-            seed=args.seed, n_jobs=n_jobs, out_dir=args.out, quick=args.quick, progress=progress,
-            force=args.force, stack=args.stack,
-        )
+            test_distribution=args.test_distribution, seed=args.seed, n_jobs=n_jobs, out_dir=args.out,
+            quick=args.quick, progress=progress, force=args.force, stack=args.stack)
     _print_markdown(result, console, args.out)
     return 0
 
@@ -320,22 +273,17 @@ def run_real_world(args: argparse.Namespace) -> int:
     log_dir = plan.out_dir / "logs"
     if log_dir.exists() and any(log_dir.iterdir()) and not args.force:
         raise CliError(f"{log_dir} holds files already; pass --force to overwrite or choose another --out")
-    kwargs = dict(
+    mass = {} if args.mass is None else {"load_mass": args.mass}
+    console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
+    result = ftcal.benchmark.run_real_world_benchmark(
         models=_models(args), splits=tuple(dict.fromkeys(args.splits or ("random20", "leave-one-config-out"))),
         schedule="short" if args.quick else args.schedule, grouped_schedule="short",
         subdivisions=0 if args.quick else args.subdivisions, errors=args.preset, random_state=args.seed,
-        log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"),
-    )
-    if args.mass is not None:
-        kwargs["load_mass"] = args.mass
-    console.info("simulating the robot experiment, preparing the dataset, fitting every model on every split ...")
-    result = ftcal.benchmark.run_real_world_benchmark(**kwargs)
+        log_dir=log_dir, plot_path=plan.path("real_world_rmse.png"), **mass)
     markdown = ftcal.benchmark.real_world_markdown(result)
     with plan.as_one_set():
-        with plan.writing("real_world_results.md") as tmp:
-            tmp.write_text(markdown + "\n", encoding="utf-8")
-        with plan.writing("real_world_results.json") as tmp:
-            write_json(tmp, result)
+        plan.write_text("real_world_results.md", markdown + "\n")
+        plan.write_json("real_world_results.json", result)
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0

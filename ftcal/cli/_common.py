@@ -29,36 +29,12 @@ from ..core import FtcalError
 from ..core import OutputSet, atomic_output, atomic_output_set, check_writable_dir, write_json
 from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
-__all__ = [
-    "CliError",
-    "UsageError",
-    "Interrupted",
-    "signals_interrupt",
-    "standard_streams",
-    "Parser",
-    "EXIT_USAGE",
-    "EXIT_FAILURE",
-    "add_output_options",
-    "add_name_option",
-    "file_stem",
-    "add_run_options",
-    "add_scheduler_option",
-    "add_robot_options",
-    "load_robot_from_args",
-    "OutputPlan",
-    "note_inputs",
-    "note_dataset",
-    "name_the_dataset",
-    "check_not_an_input",
-    "Console",
-    "write_json",
-    "positive_int",
-    "nonnegative_int",
-    "positive_float",
-    "int_in_range",
-    "existing_file",
-    "path_problem",
-]
+__all__ = ["CliError", "UsageError", "Interrupted", "signals_interrupt", "standard_streams", "Parser", "EXIT_USAGE",
+           "EXIT_FAILURE", "add_output_options", "add_output_file_options", "add_name_option", "file_stem",
+           "add_run_options", "finish_command", "add_jobs_option", "add_scheduler_option", "add_robot_options",
+           "load_robot_from_args", "OutputPlan", "note_inputs", "note_dataset", "name_the_dataset",
+           "check_not_an_input", "Console", "write_json", "numbers", "positive_int", "nonnegative_int",
+           "positive_float", "int_in_range", "existing_file", "path_problem"]
 
 #: Exit status of a run refused because of the user's arguments or files.
 EXIT_USAGE = 2
@@ -121,14 +97,6 @@ class Interrupted(BaseException):
         return 128 + self.signum
 
 
-def _terminating_signals() -> tuple:
-    """The signals that end a run cleanly: Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session
-    (SIGHUP, whose default would kill the process mid-write and leave its ``.partial`` file behind)."""
-    import signal
-
-    return tuple(getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name))
-
-
 @contextlib.contextmanager
 def signals_interrupt() -> Iterator[None]:
     """Within the block, SIGINT, SIGTERM and SIGHUP raise :class:`Interrupted` in the main thread (the CLI only: the
@@ -151,7 +119,9 @@ def signals_interrupt() -> Iterator[None]:
             os.kill(os.getpid(), signum)
 
     previous = {}
-    for sig in _terminating_signals():
+    # Ctrl-C, ``kill``, and the hang-up of a closed terminal or SSH session (SIGHUP, whose default would kill the
+    # process mid-write and leave its ``.partial`` file behind)
+    for sig in (getattr(signal, name) for name in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, name)):
         old = signal.getsignal(sig)
         if old is signal.SIG_IGN:
             continue
@@ -201,28 +171,24 @@ class _CheckedStdout:
     def __init__(self, stream: Any) -> None:
         self._stream = stream
 
-    def _failed(self, exc: OSError) -> CliError:
-        return CliError(f"could not write to standard output ({exc.strerror or exc}); the output is incomplete")
-
-    def write(self, text: str) -> int:
+    def _checked(self, method: str, *args: Any) -> Any:
         try:
-            return self._stream.write(text)
+            return getattr(self._stream, method)(*args)
         except BrokenPipeError:
             raise
         except OSError as exc:
-            raise self._failed(exc) from None
+            raise CliError(f"could not write to standard output ({exc.strerror or exc}); the output is "
+                           "incomplete") from None
+
+    def write(self, text: str) -> int:
+        return self._checked("write", text)
 
     def writelines(self, lines: Iterable[str]) -> None:
         for line in lines:
             self.write(line)
 
     def flush(self) -> None:
-        try:
-            self._stream.flush()
-        except BrokenPipeError:
-            raise
-        except OSError as exc:
-            raise self._failed(exc) from None
+        self._checked("flush")
 
     def __getattr__(self, attr: str) -> Any:
         return getattr(self._stream, attr)
@@ -360,27 +326,27 @@ def add_name_option(parser: argparse.ArgumentParser, what: str, default: str | N
 
 def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> None:
     """``--out DIR`` and ``--force``."""
-    parser.add_argument(
-        "-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
-        help="directory for the output files (created if missing)",
-    )
-    parser.add_argument(
-        "-f", "--force", action="store_true",
-        help="overwrite output files that already exist (without it, the run stops before any work)",
-    )
+    parser.add_argument("-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
+                        help="directory for the output files (created if missing)")
+    parser.add_argument("-f", "--force", action="store_true",
+                        help="overwrite output files that already exist (without it, the run stops before any work)")
+
+
+def add_output_file_options(parser: argparse.ArgumentParser) -> None:
+    """``--output FILE`` (``-``: standard output, the default) and ``--force``: a command writing one stream of rows."""
+    parser.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
+    parser.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
 
 
 def add_robot_options(parser: argparse.ArgumentParser) -> None:
     """``--robot`` and ``--sensor-frame``."""
-    parser.add_argument(
-        "--robot", default="kuka_iiwa14", help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path",
-    )
+    parser.add_argument("--robot", default="kuka_iiwa14",
+                        help="built-in robot (kuka_iiwa14, panda, ur3, ur5, ur10) or a .urdf path")
     parser.add_argument("--sensor-frame", help="frame at the sensing origin (required for a .urdf path)")
-    parser.add_argument(
-        "--sensor-mounting", metavar="RX,RY,RZ,X,Y,Z", type=_mounting,
-        help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation vector [deg] "
-        "and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z on a 12 mm adapter)",
-    )
+    parser.add_argument("--sensor-mounting", metavar="RX,RY,RZ,X,Y,Z", type=_mounting,
+                        help="how the sensor sits relative to --sensor-frame, without editing the URDF: a rotation "
+                        "vector [deg] and an offset [m] in that frame, e.g. 0,0,45,0,0,0.012 (turned 45 deg about z "
+                        "on a 12 mm adapter)")
 
 
 def load_robot_from_args(args: argparse.Namespace):
@@ -439,22 +405,33 @@ def _captured_stderr_fd() -> Iterator[Any]:
             os.close(saved)
 
 
+def numbers(text: str, count: int) -> list[float] | None:
+    """The ``count`` comma-separated numbers of ``text``, or None when it holds another count or a non-number.
+
+    Examples
+    --------
+    >>> numbers("0,0,-9.81", 3), numbers("0,0", 3), numbers("0,x,1", 3)
+    ([0.0, 0.0, -9.81], None, None)
+    """
+    try:
+        values = [float(v) for v in text.split(",")]
+    except ValueError:
+        return None
+    return values if len(values) == count else None
+
+
 def _mounting(text: str) -> tuple[float, ...]:
     """argparse type of ``--sensor-mounting``: six numbers."""
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        values = ()
-    if len(values) != 6 or not all(v == v and abs(v) != float("inf") for v in values):
+    values = numbers(text, 6)
+    if values is None or not all(v == v and abs(v) != float("inf") for v in values):
         raise argparse.ArgumentTypeError(f"{text!r}: give six numbers rx,ry,rz [deg],x,y,z [m], e.g. 0,0,45,0,0,0.012")
-    return values
+    return tuple(values)
 
 
 def _scheduler(text: str) -> str:
     """argparse type of ``--scheduler``: checked before any work starts (Dask is imported only to use it)."""
-    from ._scale_out import SchedulerError, check_scheduler
-
     from ._messages import cli_message
+    from ._scale_out import SchedulerError, check_scheduler
 
     try:
         return check_scheduler(text)
@@ -464,23 +441,31 @@ def _scheduler(text: str) -> str:
 
 def add_scheduler_option(parser: argparse.ArgumentParser) -> None:
     """``--scheduler``: run the fits on a Dask cluster (see :mod:`ftcal.cli._scale_out`)."""
-    parser.add_argument(
-        "--scheduler", metavar="ADDRESS|local", type=_scheduler,
-        help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler address such as "
-        "tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs",
-    )
+    parser.add_argument("--scheduler", metavar="ADDRESS|local", type=_scheduler,
+                        help="run the fits on a Dask cluster: 'local' starts one on this machine, or a scheduler "
+                        "address such as tcp://host:8786 (needs: pip install \"dask[distributed]\"); overrides --jobs")
+
+
+def add_jobs_option(parser, help: str, default: int | None = None) -> None:
+    """``--jobs N``: how many processes (or joblib workers) work at once, 1 to 256."""
+    parser.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=default, help=help)
 
 
 def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
     """``--quiet`` and (optionally) ``--seed``."""
-    parser.add_argument(
-        "-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr",
-    )
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr")
     if seed:
-        parser.add_argument(
-            "--seed", type=nonnegative_int, default=0,
-            help="random seed: the same seed and arguments give the same files",
-        )
+        parser.add_argument("--seed", type=nonnegative_int, default=0,
+                            help="random seed: the same seed and arguments give the same files")
+
+
+def finish_command(parser: argparse.ArgumentParser, handler, out: str | None = None, seed: bool = True) -> None:
+    """The options every command ends with, then its handler: ``--out DIR`` / ``--force`` (a command writing to a
+    folder, ``out`` its default), ``--quiet`` and, with ``seed``, ``--seed``."""
+    if out is not None:
+        add_output_options(parser, out)
+    add_run_options(parser, seed)
+    parser.set_defaults(handler=handler)
 
 
 # ------------------------------------------------------------------ output files
@@ -525,14 +510,15 @@ def name_the_dataset(message: str, exc: BaseException) -> str:
     return message
 
 
-def _regular_file_id(path: str | os.PathLike) -> tuple[int, int] | None:
+def _file_id(path: str | os.PathLike, regular: bool = True) -> tuple[int, int] | None:
+    """``(device, inode)`` of the file at ``path`` (with ``regular``, of a regular file only), or None."""
     import stat
 
     try:
         st = os.stat(path)
     except (OSError, ValueError):
         return None
-    return (st.st_dev, st.st_ino) if stat.S_ISREG(st.st_mode) else None
+    return (st.st_dev, st.st_ino) if not regular or stat.S_ISREG(st.st_mode) else None
 
 
 def _choice_arguments(parser: argparse.ArgumentParser, handler) -> set[str]:
@@ -573,15 +559,10 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
             except OSError:
                 continue
             role = dest.replace("_", " ")
-            if path.is_dir():
-                try:
-                    st = path.stat()
-                    _input_dirs.setdefault((st.st_dev, st.st_ino), f"the {role} folder {path}")
-                except OSError:
-                    pass
+            if path.is_dir() and (dir_id := _file_id(path, regular=False)) is not None:
+                _input_dirs.setdefault(dir_id, f"the {role} folder {path}")
             for child in children[:100_000]:
-                file_id = _regular_file_id(child)
-                if file_id is not None:
+                if (file_id := _file_id(child)) is not None:
                     _input_files.setdefault(
                         file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
 
@@ -622,12 +603,10 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
 
 def check_not_an_input(output: str | os.PathLike) -> None:
     """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
-    file_id = _regular_file_id(output)
+    file_id = _file_id(output)
     if file_id is not None and file_id in _input_files:
-        raise CliError(
-            f"{output} is {_input_files[file_id]}, an input of this command; writing there would destroy it, "
-            "--force or not. Choose another output name or directory"
-        )
+        raise CliError(f"{output} is {_input_files[file_id]}, an input of this command; writing there would destroy "
+                       "it, --force or not. Choose another output name or directory")
 
 
 def _check_regular_target(path: Path) -> None:
@@ -680,12 +659,9 @@ class OutputPlan:
         self._set: OutputSet | None = None  # the set being written (as_one_set)
         if self.out_dir.exists() and not self.out_dir.is_dir():
             raise CliError(f"{option} {self.out_dir} is a file, not a directory; choose another {option}")
-        try:
-            st = self.out_dir.stat()
-        except OSError:
-            st = None
-        if st is not None and (st.st_dev, st.st_ino) in _input_dirs:
-            raise CliError(f"{option} {self.out_dir} is {_input_dirs[(st.st_dev, st.st_ino)]}, an input of this "
+        dir_id = _file_id(self.out_dir, regular=False)
+        if dir_id is not None and dir_id in _input_dirs:
+            raise CliError(f"{option} {self.out_dir} is {_input_dirs[dir_id]}, an input of this "
                            f"command: its outputs would mix with (and be read as) its inputs. Choose another {option}")
         check_writable_dir(self.out_dir, CliError, option)
         for n in self.names:
@@ -700,10 +676,8 @@ class OutputPlan:
             if taken:
                 listed = ", ".join(str(self.out_dir / n) for n in taken[:3])
                 more = f" (and {len(taken) - 3} more)" if len(taken) > 3 else ""
-                raise CliError(
-                    f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; "
-                    f"pass --force to overwrite or choose another {option}"
-                )
+                raise CliError(f"{listed}{more} already exist{'s' if len(taken) == 1 else ''}; pass --force to "
+                               f"overwrite or choose another {option}")
 
     @classmethod
     def single_file(cls, output: str | Path, force: bool) -> "OutputPlan | None":
@@ -739,6 +713,17 @@ class OutputPlan:
         with atomic_output(target, overwrite=self.force, error=CliError) as tmp:
             yield tmp
 
+    def write_text(self, name: str, text: str) -> None:
+        """Write the planned file ``name`` holding ``text`` (UTF-8) through :meth:`writing`."""
+        with self.writing(name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
+
+    def write_json(self, name: str, obj: Any) -> None:
+        """Write the planned file ``name`` holding ``obj`` as JSON (:func:`ftcal.core.write_json`) through
+        :meth:`writing`."""
+        with self.writing(name) as tmp:
+            write_json(tmp, obj)
+
     @contextlib.contextmanager
     def staging(self) -> Iterator[Path]:
         """Within :meth:`as_one_set`: a private folder inside ``out_dir`` for a library function that writes its
@@ -760,19 +745,19 @@ class OutputPlan:
         finally:
             shutil.rmtree(stage, ignore_errors=True)
 
-    def leaving_out(self, name: str) -> None:
-        """A planned file this run does not write after all (a report it has no data for). An output set replaces
-        only the files it writes: a file of that name is never removed (ftcal cannot tell an earlier run's report
+    def leaving_out(self, *names: str) -> None:
+        """Planned files this run does not write after all (a report it has no data for). An output set replaces
+        only the files it writes: a file of such a name is never removed (ftcal cannot tell an earlier run's report
         from a user's own file of that name), and a warning names it, since it does not describe this run."""
+        import warnings
+
         if self._set is None:
             raise AssertionError("leaving_out() outside as_one_set()")
-        path = self.out_dir / name
-        if path.exists() or path.is_symlink():
-            import warnings
-
-            warnings.warn(f"{path} was kept as it is: this run does not write it, so it does not describe this run "
-                          "(an earlier run's, or your own file); remove it if it is an earlier run's", UserWarning,
-                          stacklevel=2)
+        for path in (self.out_dir / name for name in names):
+            if path.exists() or path.is_symlink():
+                warnings.warn(f"{path} was kept as it is: this run does not write it, so it does not describe this "
+                              "run (an earlier run's, or your own file); remove it if it is an earlier run's",
+                              UserWarning, stacklevel=2)
 
     @contextlib.contextmanager
     def as_one_set(self) -> Iterator[OutputSet]:

@@ -28,13 +28,14 @@ from __future__ import annotations
 import argparse
 import sys
 
-from ._common import CliError, int_in_range
+from ._common import CliError, int_in_range, path_problem, positive_float
 from ._messages import cli_error, cli_spelling
 
-__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "joined_origin", "add_bad_readings_option", "bad_readings_handled",
-           "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options", "fold_groups", "DATASET_OPTIONS",
-           "add_alpha_option", "training_targets",
-           "check_lever_arm", "dataset_columns", "load_dataset_from_args", "stored_columns", "fit_data_facts", "model_wrench_range", "model_reading", "load_dataset_for_models"]
+__all__ = ["add_dataset_options", "add_channel_option", "add_columns_option", "named_inputs", "readings_input", "joined_origin",
+           "bad_readings_handled", "print_reading_findings", "channel_names", "add_unit_options", "add_fold_options",
+           "fold_groups", "DATASET_OPTIONS", "add_alpha_option", "training_targets", "check_lever_arm",
+           "dataset_columns", "load_dataset_from_args", "fit_data_facts", "model_wrench_range", "model_reading",
+           "load_dataset_for_models"]
 
 _SPEC_HELP = ("a list of names (g1,g2,g3), a range (s0..s7) or a column slice of one array of a .mat/.npz "
               "(data[:,0:8])")
@@ -59,12 +60,9 @@ _CHECKED_KINDS = ("out_of_range", "spike", "stuck", "repeated")
 def _bad_readings(text: str) -> tuple[str, ...]:
     """``--drop-bad-readings``: none, auto, all, or a comma-separated list of kinds."""
     word = text.strip()
-    if word == "none":
-        return ()
-    if word == "auto":
-        return AUTO_DROPPED
-    if word == "all":
-        return _CHECKED_KINDS
+    named = {"none": (), "auto": AUTO_DROPPED, "all": _CHECKED_KINDS}
+    if word in named:
+        return named[word]
     kinds = tuple(k.strip() for k in word.split(","))
     unknown = [k for k in kinds if k not in _CHECKED_KINDS]
     if unknown or not kinds:
@@ -76,9 +74,8 @@ def _bad_readings(text: str) -> tuple[str, ...]:
 def _saturation(text: str):
     if text.strip() == "auto":
         return "auto"
-    parts = text.split(",")
     try:
-        low, high = (float(v) for v in parts)
+        low, high = (float(v) for v in text.split(","))
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r}: give LOW,HIGH (the ADC's limits, e.g. 0,4095 or "
                                          "-32768,32767), or auto") from None
@@ -172,6 +169,17 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
     return [str(joined)]
 
 
+def readings_input(args: argparse.Namespace, item: str, what: str) -> str:
+    """The raw-readings input ``item`` as the commands read it (:func:`named_inputs`, no header needed): a file, a
+    stream (``-``, a pipe) or the join of headerless files; one that cannot be read is refused, saying ``what`` it
+    holds."""
+    read = named_inputs(args, [item], header_needed=False)[0]
+    problem = None if read == "-" else path_problem(read, streams=True)
+    if problem is not None:
+        raise CliError(f"{problem} ({what})")
+    return read
+
+
 def joined_origin(path: str, lines):
     """``(name, lines)``: the user's file(s) and lines of rows read from ``path`` at the 1-based ``lines``, when
     :func:`named_inputs` joined ``path`` (its line 1 the header ``--columns`` gave); else ``(file name, lines)``."""
@@ -206,8 +214,6 @@ def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
 
 def add_alpha_option(p) -> None:
     """``--alpha``: the torque scale of eq. 18, the same on every command that fits or scores on a dataset."""
-    from ._common import positive_float
-
     p.add_argument("--alpha", type=positive_float, metavar="1/m",
                    help="torque scale Fmax/Tmax [1/m] that weighs torques against forces (eq. 18) (default: the "
                    "dataset's meta 'alpha', else from its wrenches over the axes that exist)")
@@ -286,48 +292,24 @@ def add_dataset_options(p: argparse.ArgumentParser) -> None:
                    help="drop the rows where a raw channel reaches LOW or HIGH (the ADC's limits), or, with auto, "
                    "where a channel sits at its extreme value in several rows (pinned: saturated); without it such "
                    "rows are pointed out")
-    add_bad_readings_option(g)
-
-
-#: The one help text of ``--drop-bad-readings``.
-BAD_READINGS_HELP = ("the readings are checked before use for values beyond the channel's ADC range, spikes, stuck "
-                     "channels and repeated rows, each pointed out by file:line:channel; this option drops them: "
-                     f"auto ({','.join(AUTO_DROPPED)}), all (stuck channels' rows too), a list of those kinds, or none "
-                     "(default: none, they are pointed out)")
-
-
-def add_bad_readings_option(g) -> None:
-    """``--drop-bad-readings``: which of the flagged readings (:func:`ftcal.io.check_readings`) are dropped."""
+    # which of the flagged readings (:func:`ftcal.io.check_readings`) are dropped
     g.add_argument("--drop-bad-readings", type=_bad_readings, metavar="none|auto|all|KIND,...",
-                   help=BAD_READINGS_HELP)
-
-
-def stored_columns(facts: dict | None, where: str):
-    """The :class:`~ftcal.io.ColumnMap` a model file stored (``None`` for a file without one)."""
-    from ..core import DatasetFileError
-    from ..io import ColumnMap
-
-    if not facts or not isinstance(facts, dict) or "columns" not in facts:
-        return None
-    try:
-        return ColumnMap.from_dict(facts["columns"], where)
-    except DatasetFileError as exc:
-        raise cli_error(exc) from None
+                   help="the readings are checked before use for values beyond the channel's ADC range, spikes, "
+                   "stuck channels and repeated rows, each pointed out by file:line:channel; this option drops them: "
+                   f"auto ({','.join(AUTO_DROPPED)}), all (stuck channels' rows too), a list of those kinds, or none "
+                   "(default: none, they are pointed out)")
 
 
 def dataset_columns(args: argparse.Namespace, stored=None):
     """The :class:`~ftcal.io.ColumnMap` of the options, each unset one taken from ``stored`` (a model's)."""
     from ..io import ColumnMap
 
-    def pick(option: str, default):
-        value = getattr(args, option, None)
-        if value is not None:
-            return value
-        return getattr(stored, option) if stored is not None else default
+    def pick(option: str, default=None):
+        given = getattr(args, option, None)
+        return given if given is not None else getattr(stored, option) if stored is not None else default
 
-    return ColumnMap(channels=pick("channels", None), wrench=pick("wrench", None), axes=pick("axes", None),
-                     groups=pick("groups", None), force_unit=pick("force_unit", "N"),
-                     torque_unit=pick("torque_unit", "N.m"))
+    return ColumnMap(**{option: pick(option) for option in ("channels", "wrench", "axes", "groups")},
+                     force_unit=pick("force_unit", "N"), torque_unit=pick("torque_unit", "N.m"))
 
 
 def load_dataset_from_args(args: argparse.Namespace, path, role: str = "dataset", stored=None,
@@ -405,15 +387,13 @@ def bad_readings_handled(args: argparse.Namespace, data, path, names=None):
                        "data (ftcal names each bad reading without the option)")
     print_reading_findings(type(found)(findings=tuple(f for f in found.findings if f.kind in kept_kinds),
                                        n_rows=found.n_rows), path)
-    dropped = found.to_json(dropping)
-    flagged = found.to_json(kept_kinds)
     if drop.any():
         if not getattr(args, "quiet", False):
             print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with bad readings ("
                   f"{', '.join(f'{len(found.of_kind(k))} {k.value}' for k in dropping)})", file=sys.stderr)
         data = data.subset(~drop)
-    _record(data, "readings_dropped", dropped)
-    _record(data, "readings_flagged", flagged)
+    _record(data, "readings_dropped", found.to_json(dropping))
+    _record(data, "readings_flagged", found.to_json(kept_kinds))
     return data
 
 
@@ -457,11 +437,8 @@ def _saturated_entries(data, mask, said: str) -> list[dict]:
     import numpy as np
 
     sources = data.row_sources()
-    out = []
-    for row in np.flatnonzero(mask):
-        file, line = sources.where(int(row))
-        out.append({"kind": "saturated", "file": file, "line": line, "channel": None, "value": None, "reason": said})
-    return out
+    return [{"kind": "saturated", "file": file, "line": line, "channel": None, "value": None, "reason": said}
+            for file, line in (sources.where(int(row)) for row in np.flatnonzero(mask))]
 
 
 def training_targets(data):
@@ -484,18 +461,23 @@ def fit_data_facts(args: argparse.Namespace, data) -> dict:
             "wrench_range": [data.wrench.min(axis=0).tolist(), data.wrench.max(axis=0).tolist()]}
 
 
+def _model_facts(model_path) -> dict:
+    """What the model file keeps of its training data (:func:`ftcal.persistence.model_data`), its errors in one line."""
+    from ..core import ModelFileError
+    from ..persistence import model_data
+
+    try:
+        return model_data(model_path)
+    except ModelFileError as exc:
+        raise cli_error(exc) from None
+
+
 def model_wrench_range(model_path, axes):
     """The calibrated range of each of ``axes`` (the loads the model was fitted on, [N, N·m]) as ``(low, high)``
     arrays, or None for a model file that does not keep it (fitted by an older ftcal, or in Python)."""
     import numpy as np
 
-    from ..core import ModelFileError
-    from ..persistence import model_data
-
-    try:
-        facts = model_data(model_path)
-    except ModelFileError as exc:
-        raise cli_error(exc) from None
+    facts = _model_facts(model_path)
     found, fitted_axes = facts.get("wrench_range"), facts.get("axes")
     try:
         low, high = (np.asarray(b, dtype=float) for b in found)
@@ -509,18 +491,18 @@ def model_wrench_range(model_path, axes):
 
 def model_reading(model_path) -> tuple:
     """``(ColumnMap or None, axes or None, units confirmed)`` a model file keeps of its training data."""
-    from ..core import ModelFileError
-    from ..persistence import model_data
+    from ..core import DatasetFileError
+    from ..io import ColumnMap
 
-    try:
-        facts = model_data(model_path)
-    except ModelFileError as exc:
-        raise cli_error(exc) from None
+    facts = _model_facts(model_path)
     axes = facts.get("axes")
     if axes is not None and not (isinstance(axes, list) and all(isinstance(a, str) for a in axes) and len(axes) <= 6):
         raise CliError(f"{model_path}: the stored wrench axes are damaged; fit the model again")
-    return (stored_columns(facts, str(model_path)), None if axes is None else tuple(axes),
-            bool(facts.get("units_confirmed", False)))
+    try:  # None for a file without a mapping
+        stored = ColumnMap.from_dict(facts["columns"], str(model_path)) if "columns" in facts else None
+    except DatasetFileError as exc:
+        raise cli_error(exc) from None
+    return stored, None if axes is None else tuple(axes), bool(facts.get("units_confirmed", False))
 
 
 def load_dataset_for_models(args: argparse.Namespace, path, role: str, model_paths):

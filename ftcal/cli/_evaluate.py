@@ -10,9 +10,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, write_json
-from ._data_options import add_dataset_options, load_dataset_for_models
-from ._models import evaluation_alpha, load_model_file, model_label, model_inputs
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
+from ._data_options import add_alpha_option, add_dataset_options, load_dataset_for_models
+from ._models import evaluation_alpha, model_inputs, model_label
 from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
@@ -33,22 +33,15 @@ grouped cross-validation instead.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "evaluate",
-        help="metrics and plots of one or more models on a dataset",
-        description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis RMSE, plots.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("evaluate", help="metrics and plots of one or more models on a dataset", epilog=EXAMPLE,
+                       description="Evaluate fitted models on a calibration dataset: RMSE, relative errors, per-axis "
+                       "RMSE, plots.")
     p.add_argument("dataset", help="evaluation dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("models", nargs="+", metavar="MODEL", type=existing_file, help="model files written by 'ftcal fit'")
-    from ._data_options import add_alpha_option
-
     add_alpha_option(p)
     p.add_argument("--no-plots", action="store_true", help="write the metrics only")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-eval")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-eval", seed=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -73,7 +66,7 @@ def run(args: argparse.Namespace) -> int:
     predictions, reports, beyond = {}, {}, {}
     with console.progress(total=len(labels), desc="evaluating", unit="model") as bar:
         for label, path in zip(labels, args.models):
-            model = load_model_file(path)
+            model = ftcal.load_model(path)
             predictions[label] = np.asarray(model.predict(model_inputs(model, data)), dtype=float)
             if predictions[label].shape != data.wrench.shape:
                 raise CliError(f"{path} predicts {predictions[label].shape[1]} wrench axes but {args.dataset} has "
@@ -93,13 +86,10 @@ def run(args: argparse.Namespace) -> int:
     with plan.as_one_set(), contextlib.ExitStack() as stack:
         tmps = {name: stack.enter_context(plan.writing(name)) for name in plan.names}
         write_json(tmps["metrics.json"], {
-            "dataset": str(args.dataset),
-            "alpha": alpha,
-            "noise_floor": noise_floor,
+            "dataset": str(args.dataset), "alpha": alpha, "noise_floor": noise_floor,
             "models": {label: {"file": str(path), "training_data": label in trained_on, **reports[label].to_dict(),
                                "extrapolation": {what.split()[0]: e.to_dict() for what, e in beyond[label].items()}}
-                       for label, path in zip(labels, args.models)},
-        })
+                       for label, path in zip(labels, args.models)}})
         note = (f"\n**Training data of {', '.join(trained_on)}**: these are training errors, not held-out ones.\n"
                 if trained_on else "")
         outside = "".join(f"\n**Beyond the {what} {label} was calibrated on**: {e.words(AXIS_UNITS)}.\n"
@@ -112,9 +102,7 @@ def run(args: argparse.Namespace) -> int:
             paths.update({label: tmps[predicted_plot_name(label)] for label in labels})
             write_evaluation_plots(paths, data.wrench, predictions, alpha, noise_floor, dataset_name=str(args.dataset),
                                    axes=data.axes)
-    print(table)
-    print()
-    print(axes)
+    print(f"{table}\n\n{axes}")
     console.info(f"results in {args.out}/")
     return 0
 
@@ -127,9 +115,9 @@ def extrapolation(model, model_path, data) -> dict:
     """How far the dataset goes beyond what the model was calibrated on (:func:`ftcal.io.range_excess`): its loads
     beyond the calibration's wrench range per axis (``"loads"``, when the model file keeps that range), and its
     readings beyond the calibration's readings per channel (``"readings"``, as ``predict --range`` counts them)."""
+    from ..calibrators import retare_shift
     from ..io import range_excess
     from ._data_options import channel_names, model_wrench_range
-    from ..calibrators import retare_shift
 
     found = {}
     loads = model_wrench_range(model_path, data.axes)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command
 from ._models import model_label
 
 EXAMPLE = """\
@@ -43,12 +43,9 @@ it covers (metadata 'drift_span'); re-tare and export again.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "export",
-        help="write a saved model as an ONNX file (raw readings -> wrench) for deployment",
-        description="Export a saved calibration model to ONNX, pre- and post-processing included.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("export", help="write a saved model as an ONNX file (raw readings -> wrench) for deployment",
+                       description="Export a saved calibration model to ONNX, pre- and post-processing included.",
+                       epilog=EXAMPLE)
     p.add_argument("model", type=existing_file,
                    help="model file written by 'ftcal fit' (a tool file of 'ftcal identify-load' for --format ros)")
     p.add_argument("--format", choices=("onnx", "matrix", "ros"), default="onnx",
@@ -59,8 +56,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--output", metavar="FILE",
                    help="the exported file (default: MODEL with the suffix .onnx, or .matrix.csv for --format matrix)")
     p.add_argument("-f", "--force", action="store_true", help="overwrite --output if it exists")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -77,19 +73,18 @@ def run(args: argparse.Namespace) -> int:
     suffixes = {"onnx": (".onnx",), "ros": (".yaml", ".yml")}.get(args.format)
     if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
+    tool = ftcal.experiment.ToolLoad.load(args.model) if args.format == "ros" or (is_tool and args.format == "onnx") \
+        else None
     if args.format == "ros":
         from ..experiment import tool_gravity_compensation_yaml
 
-        tool = ftcal.experiment.ToolLoad.load(args.model)
         text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
-        with plan.writing(output.name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        plan.write_text(output.name, text)
         console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
         return 0
     if is_tool and args.format == "onnx":
         from ..experiment import tool_onnx_model
 
-        tool = ftcal.experiment.ToolLoad.load(args.model)
         with plan.writing(output.name) as tmp:
             tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
         console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")
@@ -106,12 +101,11 @@ def run(args: argparse.Namespace) -> int:
 def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
     import json
 
+    from ..io import parse_column_slice
     from ..persistence import matrix_export_dict
     from ._data_options import model_reading
 
     stored, axes, _ = model_reading(model_path)  # the axes and channel names the model was fitted with
-    from ..io import parse_column_slice
-
     inputs = None if stored is None or stored.channels is None or parse_column_slice(stored.channels[0]) \
         else stored.channels
     facts = matrix_export_dict(model, axes=axes, inputs=inputs)
@@ -125,6 +119,6 @@ def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, mode
             for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
                 lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
             tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
-    console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of {type(model).__name__} "
-                 f"to {output}")
+    console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of "
+                 f"{type(model).__name__} to {output}")
     return 0

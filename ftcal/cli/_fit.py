@@ -10,12 +10,13 @@ import time
 
 import numpy as np
 
-from ._common import (Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, int_in_range,
-                      write_json)
-from ._data_options import add_dataset_options, fit_data_facts, load_dataset_from_args
-from ._models import dataset_alpha, model_file_name, parse_param
+from ._common import CliError, Console, OutputPlan, add_jobs_option, add_name_option, finish_command
+from ._data_options import add_alpha_option, add_dataset_options, fit_data_facts, load_dataset_from_args
+from ._models import calibrator_params, model_file_name, parse_param
 from ._messages import cli_error
-from ._training import fit_with_progress
+from ._report import (_fold_too_small, add_report_options, prepare_report, report_file_names, report_options,
+                      write_report)
+from ._training import fit_with_progress, ticking
 
 EXAMPLE = """\
 examples:
@@ -38,58 +39,38 @@ def calibrator_names() -> tuple[str, ...]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "fit",
-        help="train a calibrator on a dataset and save the model file",
-        description="Train a calibrator on a calibration dataset (.csv, .npz, .mat, or a folder of them) and save it as a "
-        "model file.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("fit", help="train a calibrator on a dataset and save the model file", epilog=EXAMPLE,
+                       description="Train a calibrator on a calibration dataset (.csv, .npz, .mat, or a folder of "
+                       "them) and save it as a model file.")
     p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
                    "session), e.g. as written by 'ftcal simulate' / 'prepare'")
     p.add_argument("-m", "--model", default="directional", choices=calibrator_names(), help="calibrator")
-    p.add_argument(
-        "--schedule", choices=("thesis", "short"),
-        help="training schedule of the networks: the thesis' (1700+ epochs; the default for a network model) or "
-        "a short one (minutes; the default for --model auto, whose networks are candidates trained once per fold)",
-    )
-    p.add_argument(
-        "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
-        help="a calibrator parameter, value read as JSON (repeatable), e.g. phase1_epochs=200",
-    )
-    from ._data_options import add_alpha_option
-
+    p.add_argument("--schedule", choices=("thesis", "short"),
+                   help="training schedule of the networks: the thesis' (1700+ epochs; the default for a network "
+                   "model) or a short one (minutes; the default for --model auto, whose networks are candidates "
+                   "trained once per fold)")
+    p.add_argument("--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
+                   help="a calibrator parameter, value read as JSON (repeatable), e.g. phase1_epochs=200")
     add_alpha_option(p)
-    p.add_argument(
-        "--tare", metavar="V0,V1,...",
-        help="known zero-load raw reading, one value per channel (default: estimated from the data)",
-    )
-    p.add_argument(
-        "--temperature", action="store_true",
-        help="compensate thermal drift: learn per-channel offset and gain coefficients from the dataset's "
-        "temperature column [deg C] in front of the calibrator",
-    )
-    p.add_argument(
-        "--history", action="store_true",
-        help="add a load-history term (soft or viscoelastic sensors that creep or show hysteresis): the rows must be "
-        "in time order, at the sampling rate of use (the time constant is counted in rows); it is chosen by "
-        "cross-validation, or no term when it does not pay (see HistoryCalibrator); 'ftcal predict' then reads its "
-        "input as one stream in time order",
-    )
-    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
-                   help="processes that score --model auto's candidates at once (default: every core; the "
-                   "choice is the same for any value)")
+    p.add_argument("--tare", metavar="V0,V1,...",
+                   help="known zero-load raw reading, one value per channel (default: estimated from the data)")
+    p.add_argument("--temperature", action="store_true",
+                   help="compensate thermal drift: learn per-channel offset and gain coefficients from the dataset's "
+                   "temperature column [deg C] in front of the calibrator")
+    p.add_argument("--history", action="store_true",
+                   help="add a load-history term (soft or viscoelastic sensors that creep or show hysteresis): the "
+                   "rows must be in time order, at the sampling rate of use (the time constant is counted in rows); "
+                   "it is chosen by cross-validation, or no term when it does not pay (see HistoryCalibrator); "
+                   "'ftcal predict' then reads its input as one stream in time order")
+    add_jobs_option(p, "processes that score --model auto's candidates at once (default: every core; the choice is "
+                    "the same for any value)")
     add_name_option(p, "the model (default: the --model name)")
     p.add_argument("--report", action="store_true",
                    help="also write the calibration report (NAME.report.html): held-out accuracy per axis by grouped "
                    "cross-validation beside the stock baselines (refits the model --cv times)")
-    from ._report import add_report_options
-
     add_report_options(p)
     add_dataset_options(p)
-    add_output_options(p, "ftcal-models")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-models")
 
 
 def _parse_tare(text: str | None) -> np.ndarray | None:
@@ -167,24 +148,19 @@ def comparison_progress(console: Console, label: str, every: float = HEARTBEAT_S
     logger.addHandler(handler)
     if logger.getEffectiveLevel() > logging.INFO:
         logger.setLevel(logging.INFO)
-    done = threading.Event()
 
     def beat() -> None:
-        while not done.wait(0.5):
-            now = time.perf_counter()
-            with lock:
-                quiet_for = now - last[0]
-            if quiet_for >= every:
-                console.info(f"  ... {label} still fitting ({now - start:.0f} s so far)")
-                said()
+        now = time.perf_counter()
+        with lock:
+            quiet_for = now - last[0]
+        if quiet_for >= every:
+            console.info(f"  ... {label} still fitting ({now - start:.0f} s so far)")
+            said()
 
-    beater = threading.Thread(target=beat, daemon=True, name="ftcal-heartbeat")
-    beater.start()
     try:
-        yield
+        with ticking(beat, "ftcal-heartbeat"):
+            yield
     finally:
-        done.set()
-        beater.join()
         logger.removeHandler(handler)
         logger.setLevel(level)
 
@@ -193,10 +169,13 @@ def run(args: argparse.Namespace) -> int:
     import ftcal
     from ftcal.calibrators import calibration_tags
 
+    from ..core import TooFewSamplesError
+    from ..model_selection import DegenerateCalibrationError
+    from ..reporting import file_sha256
+    from ..workflow import calibrate
+
     console = Console(args.quiet)
     name = args.name or args.model
-    from ..reporting import file_sha256
-    from ._report import _fold_too_small, prepare_report, report_file_names, report_options, write_report
 
     # the report files are planned without --report too: a forced refit removes an earlier fit's report with the
     # set (it would certify the replaced model, and 'predict --range' would read its range), never keeps it beside
@@ -213,10 +192,7 @@ def run(args: argparse.Namespace) -> int:
     settings = prepare_report(args, data, args.dataset) if args.report else None  # every check before any work
     if tare is not None and tare.size != data.n_channels:
         raise CliError(f"--tare has {tare.size} values but {args.dataset} has {data.n_channels} raw channels")
-    params = dict(args.param)
-    alpha = dataset_alpha(data, args.alpha)
-    if alpha is not None and "alpha" not in params:
-        params["alpha"] = alpha
+    params = calibrator_params(args, data)
     if tare is not None:
         params["zero_reading"] = tare
     known = ftcal.compose.calibrator_parameters(args.model)
@@ -244,22 +220,15 @@ def run(args: argparse.Namespace) -> int:
         if data.temperature is None:
             raise CliError(f"--temperature: {args.dataset} has no temperature column; record the sensor "
                            "temperature (deg C) with the data, or drop the option")
-        # the wrapper hands its own alpha / tare / seed to the inner calibrator: give them to the wrapper
-        estimator = ftcal.TemperatureCompensatedCalibrator(
-            estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
         X = data.features(temperature=True)
-    if args.history:
-        estimator = ftcal.HistoryCalibrator(
-            estimator, alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
+    # a wrapper hands its own alpha / tare / seed to the inner calibrator: give them to the wrapper
+    wrapped = dict(alpha=params.get("alpha"), zero_reading=params.get("zero_reading"), random_state=args.seed)
+    for given, wrapper in ((args.temperature, ftcal.TemperatureCompensatedCalibrator),
+                           (args.history, ftcal.HistoryCalibrator)):
+        estimator = wrapper(estimator, **wrapped) if given else estimator
     schedule = f" ({args.schedule} schedule)" if ftcal.compose.training_schedule(args.schedule, args.model) else ""
     console.info(f"fitting {args.model}{schedule} on {data.n_samples} samples x {data.n_channels} channels")
     start = time.perf_counter()
-    # the wrench as a table of its axes: the calibrator scales the torques of the axes that exist (a plate's Fz,
-    # Tx, Ty as well as a 6-axis sensor's)
-    from ..core import TooFewSamplesError
-    from ..model_selection import DegenerateCalibrationError
-    from ..workflow import calibrate
-
     chooses = calibration_tags(estimator).chooses_model  # auto, or a wrapper (history) around it
     # the library's workflow fits and gates (never ship a calibration no better than the mean wrench): every model
     # judged on its held-out predictions of the one fold plan, with or without --report, before any file is written
@@ -279,22 +248,13 @@ def run(args: argparse.Namespace) -> int:
             raise _fold_too_small(exc, data.n_samples, args.cv, args.dataset) or exc
     seconds = time.perf_counter() - start
     report = ftcal.core.calibration_metrics(data.wrench, estimator.predict(X), alpha=estimator.alpha_, axes=data.axes)
-    summary = {
-        "model": args.model,
-        "schedule": args.schedule,
-        "temperature_compensation": bool(args.temperature),
-        "history": bool(args.history),
-        "seed": args.seed,
-        "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
-        "dataset": str(args.dataset),
-        "dataset_sha256": dataset_sha256,  # lets 'ftcal evaluate' tell training data from held-out data
-        "n_samples": data.n_samples,
-        "n_channels": data.n_channels,
-        "alpha": estimator.alpha_,
-        "fit_seconds": round(seconds, 3),
-        "training_rmse": report.rmse,
-        "training_report": report.to_dict(),
-    }
+    summary = {"model": args.model, "schedule": args.schedule, "temperature_compensation": bool(args.temperature),
+               "history": bool(args.history), "seed": args.seed,
+               "params": {k: (v.tolist() if isinstance(v, np.ndarray) else v) for k, v in params.items()},
+               "dataset": str(args.dataset),
+               "dataset_sha256": dataset_sha256,  # lets 'ftcal evaluate' tell training data from held-out data
+               "n_samples": data.n_samples, "n_channels": data.n_channels, "alpha": estimator.alpha_,
+               "fit_seconds": round(seconds, 3), "training_rmse": report.rmse, "training_report": report.to_dict()}
     if args.history:
         taus = [float(t) for t in np.ravel(estimator.taus)]
         summary["history_tau_rows"] = estimator.tau_rows_
@@ -319,14 +279,12 @@ def run(args: argparse.Namespace) -> int:
         with plan.writing(model_file_name(name)) as tmp:
             ftcal.save_model(estimator, tmp, overwrite=True, data=fit_data_facts(args, data))
         summary["model_sha256"] = files.sha256(plan.path(model_file_name(name)))
-        with plan.writing(f"{name}.fit.json") as tmp:
-            write_json(tmp, summary)
+        plan.write_json(f"{name}.fit.json", summary)
         if args.report:
             write_report(plan, name, result.certificate, model_path=plan.out_dir / model_file_name(name),
                          model_sha256=summary["model_sha256"], console=console)
         else:
-            for stale in report_file_names(name):
-                plan.leaving_out(stale)
+            plan.leaving_out(*report_file_names(name))
     console.info(f"done in {seconds:.1f} s: training RMSE {_rmse_text(report.rmse, data.axes, estimator.alpha_)}; "
                  f"model -> {plan.path(model_file_name(name))}")
     return 0

@@ -6,22 +6,15 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (refuse_twins, add_name_option,
-    load_robot_from_args,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    path_problem,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
+                      existing_file, finish_command, load_robot_from_args, numbers, path_problem, refuse_twins)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
-from ._recordings import add_bag_options, add_recording_options, bag_files, refuse_bag_options
+from ._messages import cli_error
+from ._recordings import (add_bag_options, add_recording_options, bag_files, recording_options, refuse_bag_options,
+                          say_notes)
 from ._tool_drift import add_drift_options
+from ..core import FtcalError
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -77,68 +70,11 @@ frame [N, N·m].
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "identify-load",
-        help="identify a tool's mass, centre of mass and the sensor bias from static poses",
-        description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of static poses.",
-        epilog=IDENTIFY_EXAMPLE,
-    )
-    p.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
-                   help="run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
-    p.add_argument("--model", type=existing_file,
-                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
-    add_robot_options(p)
-    _add_recording_options(p)
-    p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
-    add_name_option(p, "the tool file", default="tool")
-    p.add_argument("--mounting", action="store_true",
-                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
-                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
-    add_drift_options(p)
-    add_output_options(p, "ftcal-tool")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run_identify)
-
-    c = sub.add_parser(
-        "compensate",
-        help="external wrench: remove the tool's weight and the bias from run logs, pose files or ROS bags",
-        description="Subtract the identified tool load (and the bias, with its drift) at each row's pose and time.",
-        epilog=COMPENSATE_EXAMPLE,
-    )
-    c.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input,
-                   help="run log files or directories of *.csv logs, pose files (CSV) or ROS bags, as identify-load "
-                   "reads them")
-    c.add_argument("--model", type=existing_file,
-                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
-    add_robot_options(c)
-    g = c.add_argument_group("pose files and ROS bags")
-    _add_wrench_options(g)
-    add_bag_options(c)
-    c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
-    c.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
-    c.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
-    add_drift_options(c, identify=False)
-    add_run_options(c, seed=False)
-    c.set_defaults(handler=run_compensate)
-
-
-def existing_input(text: str) -> str:
-    """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
-    import os
-
-    path = Path(text)
-    if path.is_dir():
-        if not os.access(path, os.R_OK | os.X_OK):
-            raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
-        return text
-    problem = path_problem(text)
-    if problem is not None:
-        raise argparse.ArgumentTypeError(problem)
-    return text
-
-
-def _add_recording_options(p: argparse.ArgumentParser) -> None:
-    """How a pose file or a recording is read: the wrench's frame and units, the bag's topics, the still poses."""
+    p = sub.add_parser("identify-load", epilog=IDENTIFY_EXAMPLE,
+                       help="identify a tool's mass, centre of mass and the sensor bias from static poses",
+                       description="Identify the tool load (mass, centre of mass) and the sensor bias from run logs of "
+                       "static poses.")
+    _add_inputs(p, "run log files or directories of *.csv logs, pose files (CSV, see below), or ROS bags")
     g = p.add_argument_group("pose files and continuous recordings")
     _add_wrench_options(g)
     g.add_argument("--poses", choices=("auto", "static", "continuous"), default="auto",
@@ -147,6 +83,46 @@ def _add_recording_options(p: argparse.ArgumentParser) -> None:
                    "is always continuous)")
     add_recording_options(g)
     add_bag_options(p)
+    p.add_argument("--gravity", default="0,0,-9.81", metavar="GX,GY,GZ", help="gravity in the base frame [m/s²]")
+    add_name_option(p, "the tool file", default="tool")
+    p.add_argument("--mounting", action="store_true",
+                   help="also identify the sensor's small mounting rotation relative to the robot's sensor frame (a "
+                   "few degrees) with its standard error; refused, naming the axis, when the poses cannot tell it")
+    add_drift_options(p)
+    finish_command(p, run_identify, "ftcal-tool", seed=False)
+
+    c = sub.add_parser("compensate", epilog=COMPENSATE_EXAMPLE,
+                       help="external wrench: remove the tool's weight and the bias from run logs, pose files or ROS "
+                       "bags", description="Subtract the identified tool load (and the bias, with its drift) at each "
+                       "row's pose and time.")
+    _add_inputs(c, "run log files or directories of *.csv logs, pose files (CSV) or ROS bags, as identify-load reads "
+                "them")
+    _add_wrench_options(c.add_argument_group("pose files and ROS bags"))
+    add_bag_options(c)
+    c.add_argument("--tool", type=existing_file, required=True, help="tool file (ftcal identify-load)")
+    add_output_file_options(c)
+    add_drift_options(c, identify=False)
+    finish_command(c, run_compensate, seed=False)
+
+
+def _add_inputs(p: argparse.ArgumentParser, what: str) -> None:
+    """The inputs (``what`` they may be), the ``--model`` that turns raw channels into a wrench, and the robot."""
+    p.add_argument("inputs", nargs="+", metavar="INPUT", type=existing_input, help=what)
+    p.add_argument("--model", type=existing_file,
+                   help="calibration model file (ftcal fit); needed for raw channels, not for a wrench")
+    add_robot_options(p)
+
+
+def existing_input(text: str) -> str:
+    """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
+    import os
+
+    if Path(text).is_dir() and not os.access(text, os.R_OK | os.X_OK):
+        raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
+    problem = None if Path(text).is_dir() else path_problem(text)
+    if problem is not None:
+        raise argparse.ArgumentTypeError(problem)
+    return text
 
 
 def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
@@ -158,25 +134,10 @@ def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
 
 
 def _gravity(text: str):
-    try:
-        values = [float(v) for v in text.split(",")]
-    except ValueError:
-        values = []
-    if len(values) != 3:
+    values = numbers(text, 3)
+    if values is None:
         raise CliError(f"--gravity {text!r}: give three comma-separated numbers in m/s², e.g. 0,0,-9.81")
     return values
-
-
-def _recording_options(args):
-    """The library's :class:`RecordingOptions` from the command's options."""
-    from ftcal.experiment import RecordingOptions
-
-    return RecordingOptions(
-        wrench_frame=args.wrench_frame, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m",
-        poses=getattr(args, "poses", "static"), tolerance_deg=getattr(args, "still_tolerance", 0.5),
-        min_duration_s=getattr(args, "min_still", 1.0), settle_s=getattr(args, "settle", None),
-        wrench_topic=args.wrench_topic, raw_topic=args.raw_topic, raw_field=args.raw_field,
-        joint_topic=args.joint_topic, tf=args.tf, stamps=args.stamps, max_samples=args.max_samples)
 
 
 def _inputs_kind(args) -> str:
@@ -195,9 +156,6 @@ def _read_inputs(args, console: Console, reader):
     paths, model and robot they need, the options mapped, the lever-arm check; its notes on stderr and its errors
     as one line."""
     import ftcal
-    from ftcal.core import FtcalError
-
-    from ._messages import cli_message
 
     kind = _inputs_kind(args)
     if kind == "ROS bag":
@@ -207,31 +165,27 @@ def _read_inputs(args, console: Console, reader):
         if kind == "pose file":
             refuse_twins(args.inputs, "pose file")
         paths = log_files(args.inputs) if kind == "run log" else [Path(p) for p in args.inputs]
-    if kind == "run log":
-        _log_poses_model_needed(args)
+    if kind == "run log" and args.model is None:
+        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
+                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
+                       "file (see 'ftcal identify-load --help')")
     robot = load_robot_from_args(args) if kind == "run log" or (kind == "ROS bag" and args.tf is None) else None
     model = None if args.model is None else ftcal.load_model(args.model)
 
     def check_wrench(wrench, where: str) -> None:
         check_lever_arm(args, wrench, where, force_unit=args.force_unit or "N", torque_unit=args.torque_unit or "N.m")
 
+    options = recording_options(args, poses=getattr(args, "poses", "static"))  # compensate: every row a pose
     try:
-        result = reader(paths, model=model, robot=robot, options=_recording_options(args), check_wrench=check_wrench)
+        result = reader(paths, model=model, robot=robot, options=options, check_wrench=check_wrench)
     except FtcalError as exc:
-        raise CliError(" ".join(cli_message(exc, args).split())) from None
-    for source, note in result.notes:
-        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
+        raise cli_error(exc, args) from None
+    say_notes(console, result.notes, args)
     return result
 
 
-def identification_poses(args, console: Console):
-    """The static poses of the command's inputs (:func:`ftcal.experiment.static_poses`)."""
-    from ftcal.experiment import static_poses
-
-    return _read_inputs(args, console, static_poses)
-
-
 def run_identify(args: argparse.Namespace) -> int:
+    from ftcal.experiment import static_poses
     from ._tool_drift import identify, report_names, write_report
 
     console = Console(args.quiet)
@@ -240,7 +194,7 @@ def run_identify(args: argparse.Namespace) -> int:
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     given = list(args.inputs)
     args.inputs = named_inputs(args, args.inputs)  # --columns: headerless files named, joined side by side
-    poses = identification_poses(args, console)
+    poses = _read_inputs(args, console, static_poses)  # the static poses of the inputs
     sources = poses.sources if args.inputs == given else [str(p) for p in given]  # the user's files, not the join
     _check_frame(args, poses, gravity)  # before the identification, which a wrong frame can make fail
     tool, report = identify(args, poses.rotations, poses.wrenches, gravity, poses.time, poses.temperature,
@@ -254,15 +208,12 @@ def run_identify(args: argparse.Namespace) -> int:
     if poses.still:
         info["still_poses"] = poses.still_summary()
     with plan.as_one_set():  # the tool file and the report describing it: all or none, never another run's report
-        with plan.writing(poses_name) as tmp:
-            tmp.write_text(poses.to_csv(), encoding="utf-8")
+        plan.write_text(poses_name, poses.to_csv())
         if report is not None:
             write_report(plan, args.name, report)
         else:
-            for stale in report_names(args.name):
-                plan.leaving_out(stale)
-        with plan.writing(name) as tmp:
-            write_json(tmp, {**tool.to_dict(), **info})
+            plan.leaving_out(*report_names(args.name))
+        plan.write_json(name, {**tool.to_dict(), **info})
     console.info(f"{tool_line(tool, len(poses.rotations))} -> {plan.path(name)}")
     _say_drift(args, poses, gravity)
     return 0
@@ -311,16 +262,9 @@ def _say_drift(args, poses, gravity) -> None:
             found = drift_in_recording_order(poses.rotations, poses.wrenches, gravity, groups=poses.groups,
                                              cv=args.cv, random_state=0)
         except ValueError:  # too few poses for a drift: nothing to say
-            found = None
+            return
         if found is not None:
             print(f"ftcal: note: {', '.join(poses.sources[:3])}: {found.words('--time-from-order')}", file=sys.stderr)
-
-
-def _log_poses_model_needed(args) -> None:
-    if args.model is None:
-        raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "
-                       "--model MODEL.model.npz (ftcal fit); a factory-calibrated sensor's wrench goes in a pose "
-                       "file (see 'ftcal identify-load --help')")
 
 
 def run_compensate(args: argparse.Namespace) -> int:
@@ -337,8 +281,8 @@ def run_compensate(args: argparse.Namespace) -> int:
 
     rows = _read_inputs(args, console, recording_rows)
     head, lead, rotations, wrenches = rows.lead_names, rows.lead, rows.rotations, rows.wrenches
-    external = compensate_rows(args, tool, rotations, wrenches, rows.time, rows.temperature, given)
     values = compensation_values(args, tool, len(wrenches), rows.time, rows.temperature, given)
+    external = compensate_rows(args, tool, rotations, wrenches, values)
     frame = ftcal.experiment.check_wrench_frame(rotations, wrenches, args.wrench_frame, tool=tool, **values)
     if frame.other_fits_better:
         print(f"ftcal: warning: {given}: {frame.words('--wrench-frame')}", file=sys.stderr)
@@ -348,7 +292,6 @@ def run_compensate(args: argparse.Namespace) -> int:
     if plan is None:
         sys.stdout.write(text)
         return 0
-    with plan.writing(Path(args.output).name) as tmp:
-        tmp.write_text(text, encoding="utf-8")
+    plan.write_text(Path(args.output).name, text)
     console.info(f"wrote {len(external)} compensated wrenches to {args.output}")
     return 0

@@ -78,16 +78,19 @@ def _option(flag: str, metavar: str | None = None) -> Option:
     return Option(((flag.lstrip("-").replace("-", "_"), flag),), metavar=metavar)
 
 
+#: The library's arguments that an option of the same name sets (``force_unit``: ``--force-unit``), with the metavar
+#: the option's value is written as where there is one.
+_SAME_NAMES = {"force": None, "sensor_frame": "NAME", "world_frame": None, "subdivisions": None,
+               "candidate_subdivisions": None, "cv": "K", "model": None, "output": None, "scheduler": None,
+               "channels": None, "wrench": None, "axes": None, "force_unit": None, "torque_unit": None, "sensor": None,
+               "wrench_topic": "TOPIC", "raw_topic": "TOPIC", "raw_field": "FIELD", "joint_topic": "TOPIC",
+               "tf": "BASE,SENSOR", "stamps": None, "time": None, "temperature": None, "drift": None, "mounting": None}
+
 #: The library's argument names and the command line's options for them: the one table of the mapping.
 CLI_NAMES: dict[str, Option] = {
+    **{name: _option("--" + name.replace("_", "-"), metavar) for name, metavar in _SAME_NAMES.items()},
     "overwrite": _option("--force"),
-    "force": _option("--force"),
     "n_poses": Option((("next_poses", "--next"), ("poses", "--poses"))),
-    "sensor_frame": _option("--sensor-frame", "NAME"),
-    "world_frame": _option("--world-frame"),
-    "subdivisions": _option("--subdivisions"),
-    "candidate_subdivisions": _option("--candidate-subdivisions"),
-    "cv": _option("--cv", "K"),
     "load_mass": Option((("mass", "--mass"), ("load_mass", "--load-mass")), metavar="KG"),
     "load_positions_in_sensor": Option(advice="prepare the dataset from the run logs with 'ftcal prepare', which "
                                               "records the load positions, or measure with the thesis fixture"),
@@ -96,32 +99,13 @@ CLI_NAMES: dict[str, Option] = {
                             "for random folds"),
     "HistoryCalibrator": _option("--history"),
     "TemperatureCompensatedCalibrator": _option("--temperature"),
-    "model": _option("--model"),
     "export_onnx": Option((("format", "--format onnx"),)),
-    "output": _option("--output"),
-    "scheduler": _option("--scheduler"),
-    "channels": _option("--channels"),
-    "wrench": _option("--wrench"),
-    "axes": _option("--axes"),
     "columns.groups": _option("--groups"),  # the dataset's group column (``groups`` alone: a fit's group labels)
-    "force_unit": _option("--force-unit"),
-    "torque_unit": _option("--torque-unit"),
-    "sensor": _option("--sensor"),
     "tolerance_deg": _option("--still-tolerance"),
     "min_duration_s": _option("--min-still"),
     "settle_s": _option("--settle"),
-    "wrench_topic": _option("--wrench-topic", "TOPIC"),
-    "raw_topic": _option("--raw-topic", "TOPIC"),
-    "raw_field": _option("--raw-field", "FIELD"),
-    "joint_topic": _option("--joint-topic", "TOPIC"),
-    "tf": _option("--tf", "BASE,SENSOR"),
-    "stamps": _option("--stamps"),
     # a bag's --max-samples where the command reads bags, else the model's parameter (a GP's rows)
     "max_samples": Option((("max_samples", "--max-samples"), ("param", "--param max_samples=")), metavar="N"),
-    "time": _option("--time"),  # a tool re-tare's time (retare of a drifting tool file)
-    "temperature": _option("--temperature"),
-    "drift": _option("--drift"),
-    "mounting": _option("--mounting"),
     "temperatures": Option(words="a 'temperature' column (the sensor's temperature at each pose)"),
     "times": Option(words="a 'time' column (each pose's time [s])"),
 }

@@ -14,30 +14,13 @@ from ..core import alpha_from_wrenches
 from ..core import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
-__all__ = [
-    "MODEL_SUFFIX",
-    "model_file_name",
-    "model_label",
-    "load_model_file",
-    "load_dataset",
-    "model_inputs",
-    "parse_param",
-    "dataset_alpha",
-    "evaluation_alpha",
-    "check_fold_count",
-]
+__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_dataset", "model_inputs",
+           "parse_param", "dataset_alpha", "evaluation_alpha", "calibrator_params", "check_fold_count"]
 
 def model_label(path: Path) -> str:
     """Short name of a model file for tables and plots (its name without the suffix)."""
     name = Path(path).name
     return name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else Path(path).stem
-
-
-def load_model_file(path: str | Path):
-    """A fitted calibrator from a model file written by :func:`ftcal.save_model`."""
-    import ftcal
-
-    return ftcal.load_model(path)
 
 
 def model_inputs(model, dataset: CalibrationDataset):
@@ -119,6 +102,16 @@ def dataset_alpha(dataset: CalibrationDataset, alpha: float | None) -> float | N
     if not (value > 0 and value != float("inf")):
         raise CliError(f"dataset meta 'alpha' is {meta_alpha!r}, not a positive number; pass --alpha")
     return value
+
+
+def calibrator_params(args: argparse.Namespace, dataset: CalibrationDataset) -> dict:
+    """The calibrator's parameters of ``--param KEY=VALUE``, with the torque scale of :func:`dataset_alpha` unless a
+    ``--param alpha=...`` gives one."""
+    params = dict(args.param)
+    alpha = dataset_alpha(dataset, args.alpha)
+    if alpha is not None and "alpha" not in params:
+        params["alpha"] = alpha
+    return params
 
 
 def evaluation_alpha(dataset: CalibrationDataset, alpha: float | None) -> float:

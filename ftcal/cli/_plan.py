@@ -7,20 +7,9 @@ import sys
 
 import numpy as np
 
-from ._common import (
-    load_robot_from_args,
-    int_in_range,
-    finite_float,
-    positive_float,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    positive_int,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
+                      int_in_range, load_robot_from_args, positive_float, positive_int)
+from ._data_options import DATASET_OPTIONS, add_dataset_options, load_dataset_for_models
 
 EXAMPLE = """\
 examples:
@@ -46,19 +35,16 @@ most informative first.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "plan",
-        help="calibration poses (joint configurations) for a robot, to a CSV a robot program can read",
-        description="Plan the calibration poses of one sphere (thesis IV-B-c): icosphere gravity directions in "
-        "the sensor frame -> pitch/yaw -> joint configurations by inverse kinematics, within joint limits.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("plan", epilog=EXAMPLE,
+                       help="calibration poses (joint configurations) for a robot, to a CSV a robot program can read",
+                       description="Plan the calibration poses of one sphere (thesis IV-B-c): icosphere gravity "
+                       "directions in the sensor frame -> pitch/yaw -> joint configurations by inverse kinematics, "
+                       "within joint limits.")
     add_robot_options(p)
-    p.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2, help="icosphere subdivisions (2: 162 vertices)")
-    p.add_argument(
-        "--excluded-cap-deg", type=finite_float, default=20.0,
-        help="leave out directions within this angle of 'tool face up' [deg] (20: 162 -> 155 poses)",
-    )
+    p.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=2,
+                   help="icosphere subdivisions (2: 162 vertices)")
+    p.add_argument("--excluded-cap-deg", type=finite_float, default=20.0,
+                   help="leave out directions within this angle of 'tool face up' [deg] (20: 162 -> 155 poses)")
     p.add_argument("--strategy", choices=("geodesic", "random", "d-optimal"), default="geodesic",
                    help="geodesic: every direction of the --subdivisions sphere (the thesis); random / d-optimal: "
                    "--poses of the reachable directions of a dense sphere")
@@ -79,17 +65,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--load-mass", type=positive_float, default=None,
                    help="with --next: load mass [kg] if the dataset's metadata lacks it")
     p.add_argument("--degrees", action="store_true", help="write joint angles, pitch and yaw in degrees")
-    from ._data_options import add_dataset_options
-
     add_dataset_options(p)  # how --next reads --dataset (default: as the model was fitted)
-    add_output_options(p, "ftcal-plan")
-    add_run_options(p, seed=True)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-plan")
 
 
 def _check_arguments(args: argparse.Namespace) -> None:
-    from ._common import CliError
-
     if args.next_poses is not None:
         missing = [flag for flag, value in (("--dataset", args.dataset), ("--model", args.model)) if value is None]
         if missing:
@@ -99,8 +79,6 @@ def _check_arguments(args: argparse.Namespace) -> None:
         return
     if args.dataset is not None or args.model is not None:
         raise CliError("--dataset and --model are for --next K (which poses to measure next)")
-    from ._data_options import DATASET_OPTIONS
-
     given = [f"--{k.replace('_', '-')}" for k in DATASET_OPTIONS if getattr(args, k, None) is not None]
     if given:
         raise CliError(f"{', '.join(given)} say how --next reads its --dataset; give them with --next K")
@@ -124,17 +102,14 @@ def run(args: argparse.Namespace) -> int:
     robot = load_robot_from_args(args)
     extra: dict = {}
     if args.next_poses is not None:
-        from ._data_options import load_dataset_for_models
-        from ._models import load_model_file
-
         # read as the model was fitted (its stored columns and units), each option given overriding
         dataset = load_dataset_for_models(args, args.dataset, "dataset", [args.model])
-        model = load_model_file(args.model)
+        model = ftcal.load_model(args.model)
         console.info(f"ranking the reachable poses of {robot.name} by the predicted uncertainty of {args.model} ...")
         candidates = ftcal.robot.reachable_candidates(robot, subdivisions=args.candidate_subdivisions,
-                                                excluded_cap_deg=args.excluded_cap_deg)
+                                                      excluded_cap_deg=args.excluded_cap_deg)
         plan = ftcal.experiment.propose_next_poses(robot, dataset, model, args.next_poses, candidates=candidates,
-                                        load_mass=args.load_mass)
+                                                   load_mass=args.load_mass)
         extra = {"uncertainty": plan.uncertainty, "predicted_std_N": plan.predicted_std,
                  "expected_gain": plan.expected_gain, "total_variance_before_N2": plan.total_variance_before,
                  "total_variance_after_N2": plan.total_variance_after, "dataset": str(args.dataset),
@@ -143,44 +118,29 @@ def run(args: argparse.Namespace) -> int:
         console.info(f"planning poses for {robot.name} (sensor frame {robot.sensor_frame}) ...")
         plan = ftcal.robot.plan_calibration_poses(
             robot, subdivisions=args.subdivisions, excluded_cap_deg=args.excluded_cap_deg, strategy=args.strategy,
-            n_poses=args.poses, candidate_subdivisions=args.candidate_subdivisions,
-            space_filling=args.space_filling, n_load_configurations=args.load_configurations,
-            random_state=args.seed,
-        )
+            n_poses=args.poses, candidate_subdivisions=args.candidate_subdivisions, space_filling=args.space_filling,
+            n_load_configurations=args.load_configurations, random_state=args.seed)
     unit = "deg" if args.degrees else "rad"
     to_unit = np.degrees if args.degrees else (lambda a: np.asarray(a, dtype=float))
     columns = ["pose", *(f"{j}_{unit}" for j in robot.joint_names), "g_x", "g_y", "g_z", f"pitch_{unit}", f"yaw_{unit}"]
-    table = np.column_stack([
-        np.arange(plan.n_poses), to_unit(plan.q), plan.gravity_in_sensor, to_unit(plan.pitch), to_unit(plan.yaw),
-    ])
+    table = np.column_stack([np.arange(plan.n_poses), to_unit(plan.q), plan.gravity_in_sensor, to_unit(plan.pitch),
+                             to_unit(plan.yaw)])
     table = np.round(table, 8) + 0.0  # no "-0.00000000" cells
     with plan_files.as_one_set():  # poses, summary and figure: all or none
         with plan_files.writing("poses.csv") as tmp:
             np.savetxt(tmp, table, delimiter=",", header=",".join(columns), comments="",
                        fmt=["%d"] + ["%.8f"] * (table.shape[1] - 1))
-        with plan_files.writing("plan.json") as tmp:
-            write_json(tmp, {
-                "robot": robot.name,
-                "urdf": str(robot.urdf_path),
-                "sensor_frame": plan.sensor_frame,
-                "anchor_frame": plan.anchor_frame,
-                "anchor_position_in_base_m": plan.anchor_position_in_base,
-                "joint_names": list(robot.joint_names),
-                "angle_unit": unit,
-                "n_candidates": plan.n_candidates,
-                "n_poses": plan.n_poses,
-                "unreachable_gravity_in_sensor": plan.unreachable,
-                "settings": plan.settings,
-                **extra,
-            })
+        plan_files.write_json("plan.json", {
+            "robot": robot.name, "urdf": str(robot.urdf_path), "sensor_frame": plan.sensor_frame,
+            "anchor_frame": plan.anchor_frame, "anchor_position_in_base_m": plan.anchor_position_in_base,
+            "joint_names": list(robot.joint_names), "angle_unit": unit, "n_candidates": plan.n_candidates,
+            "n_poses": plan.n_poses, "unreachable_gravity_in_sensor": plan.unreachable, "settings": plan.settings,
+            **extra})
         write_plan_coverage(plan_files, plan, f"Calibration poses of {robot.name}: gravity directions in the sensor frame")
-    if args.next_poses is not None:
-        console.info(f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
-                     f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance; poses -> "
-                     f"{plan_files.path('poses.csv')}")
-    else:
-        console.info(f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions; poses -> "
-                     f"{plan_files.path('poses.csv')}")
+    said = (f"{plan.n_poses} poses proposed ({plan.uncertainty} uncertainty); they remove "
+            f"{100 * plan.expected_gain.sum():.1f} % of the predicted variance" if args.next_poses is not None
+            else f"{plan.n_poses} poses ({args.strategy}) of {plan.n_candidates} directions")
+    console.info(f"{said}; poses -> {plan_files.path('poses.csv')}")
     from ..robot import LINEAR_MODEL_PARAMETERS
 
     if args.next_poses is None and plan.n_poses < LINEAR_MODEL_PARAMETERS:

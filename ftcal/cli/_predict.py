@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ._models import load_model_file
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, int_in_range, path_problem
-from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, named_inputs,
-                            print_reading_findings)
+from ._common import (CliError, Console, OutputPlan, add_output_file_options, existing_file, finish_command,
+                      int_in_range, path_problem)
+from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, print_reading_findings,
+                            readings_input)
 from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
@@ -40,45 +40,31 @@ file:line:channel and still predicted: the output keeps one wrench per input lin
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "predict",
-        help="apply a saved model to raw readings (file or stdin) -> wrenches (file or stdout)",
-        description="Apply a saved calibration model to raw readings. Nothing but the wrenches goes to stdout.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("predict", epilog=EXAMPLE,
+                       help="apply a saved model to raw readings (file or stdin) -> wrenches (file or stdout)",
+                       description="Apply a saved calibration model to raw readings. Nothing but the wrenches goes to "
+                       "stdout.")
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
-    p.add_argument(
-        "input", nargs="?", default="-",
-        help="raw readings: a CSV / whitespace text file, a .npz or .mat with array 'raw' (or the --channels "
-        "arrays), or '-' for stdin",
-    )
+    p.add_argument("input", nargs="?", default="-",
+                   help="raw readings: a CSV / whitespace text file, a .npz or .mat with array 'raw' (or the "
+                   "--channels arrays), or '-' for stdin")
     add_channel_option(p)
-    p.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
-    p.add_argument("-f", "--force", action="store_true", help="overwrite --output FILE if it exists")
+    add_output_file_options(p)
     p.add_argument("--no-header", action="store_true", help="do not write the Fx,...,Tz header line")
-    p.add_argument(
-        "--chunk-size", type=int_in_range(1, 1_000_000, "rows per chunk"), default=4096,
-        help="readings predicted together (memory vs. latency)",
-    )
-    p.add_argument(
-        "--line-buffered", action="store_true",
-        help="answer each input line at once and flush (live streams; same as --chunk-size 1)",
-    )
-    p.add_argument(
-        "--range", metavar="FILE", dest="range_file",
-        help="the calibrated range: a calibration report .json ('ftcal report') or the calibration dataset; adds "
-        "an out_of_range column (1 = a reading beyond it); without it, readings beyond the model's own training "
-        "readings are counted in a warning",
-    )
-    p.add_argument(
-        "--std", action="store_true",
-        help="also write each component's predictive standard deviation (std_Fx..std_Tz; Gaussian-process "
-             "models, also when auto chose one)",
-    )
+    p.add_argument("--chunk-size", type=int_in_range(1, 1_000_000, "rows per chunk"), default=4096,
+                   help="readings predicted together (memory vs. latency)")
+    p.add_argument("--line-buffered", action="store_true",
+                   help="answer each input line at once and flush (live streams; same as --chunk-size 1)")
+    p.add_argument("--range", metavar="FILE", dest="range_file",
+                   help="the calibrated range: a calibration report .json ('ftcal report') or the calibration "
+                   "dataset; adds an out_of_range column (1 = a reading beyond it); without it, readings beyond the "
+                   "model's own training readings are counted in a warning")
+    p.add_argument("--std", action="store_true",
+                   help="also write each component's predictive standard deviation (std_Fx..std_Tz; "
+                   "Gaussian-process models, also when auto chose one)")
     # one wrench per input line, in order: predict points bad readings out but drops none (refused with the reason)
     p.add_argument("--drop-bad-readings", metavar="KIND", help=argparse.SUPPRESS)
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
@@ -109,13 +95,11 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
         except (ValueError, KeyError, TypeError, UnicodeDecodeError):
             raise CliError(f"--range {path}: not a calibration report .json (written by 'ftcal report')") from None
         if lo.shape != hi.shape:
-            raise CliError(f"--range {path}: calibrated_range.raw_min has {lo.size} entries but raw_max has {hi.size}; "
-                           "the report is damaged. Write it again with 'ftcal report'")
+            raise _damaged(path, f"calibrated_range.raw_min has {lo.size} entries but raw_max has {hi.size}")
         swapped = np.flatnonzero(lo > hi)
         if swapped.size:
             k = int(swapped[0])
-            raise CliError(f"--range {path}: calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = "
-                           f"{hi[k]:g}; the report is damaged. Write it again with 'ftcal report'")
+            raise _damaged(path, f"calibrated_range.raw_min[{k}] = {lo[k]:g} is above raw_max[{k}] = {hi[k]:g}")
     else:
         from ..persistence import is_model_file  # here: the module loads scikit-learn (`ftcal --help` stays light)
 
@@ -123,8 +107,7 @@ def calibrated_raw_range(path: str, n_channels: int, temperature: bool = False,
             raise CliError(f"--range {path} is a model file; {takes} (e.g. 'ftcal report MODEL DATASET' writes "
                            "the report)")
         try:
-            data = CalibrationDataset.load(file, columns=columns) if columns is not None \
-                else CalibrationDataset.load(file)
+            data = CalibrationDataset.load(file, columns=columns)
         except DatasetFileError as exc:  # a fix naming the column options does not apply: --range reads ftcal's layout
             text = cli_message(exc, fix="" if fix_names(exc, ("channels", "wrench")) else None)
             raise CliError(f"--range {text.rstrip('. ')}. {takes} in ftcal's layout") from None
@@ -160,29 +143,29 @@ def range_of_another_fit(range_file: str, model_path: str, model, limits) -> str
             "drop --range to check against the model's own training readings")
 
 
+def _damaged(path: str, what: str) -> CliError:
+    return CliError(f"--range {path}: {what}; the report is damaged. Write it again with 'ftcal report'")
+
+
 def _range_bound(found, key: str, path: str) -> np.ndarray:
     """``calibrated_range[key]`` of a report: a list of finite numbers (KeyError/TypeError: not a report)."""
     values = found[key]
-    if not isinstance(values, list) or not values:
-        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
-                       "the report is damaged. Write it again with 'ftcal report'")
     try:
-        array = np.array(values, dtype=float)
+        array = np.array(values, dtype=float) if isinstance(values, list) and values else None
     except (TypeError, ValueError):
         array = None
     if array is None or array.ndim != 1 or any(isinstance(v, bool) for v in values):
-        raise CliError(f"--range {path}: calibrated_range.{key} is not a list of numbers (one per raw channel); "
-                       "the report is damaged. Write it again with 'ftcal report'")
+        raise _damaged(path, f"calibrated_range.{key} is not a list of numbers (one per raw channel)")
     bad = np.flatnonzero(~np.isfinite(array))
     if bad.size:
-        raise CliError(f"--range {path}: calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite "
-                       "number; the report is damaged. Write it again with 'ftcal report'")
+        raise _damaged(path, f"calibrated_range.{key}[{int(bad[0])}] is {values[int(bad[0])]}, not a finite number")
     return array
 
 
 def run(args: argparse.Namespace) -> int:
     from functools import partial
 
+    import ftcal
     from ..compose import history_reach, reads_history, spread_flags
     from ..compose import provides_std
 
@@ -194,11 +177,8 @@ def run(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     plan = OutputPlan.single_file(args.output, args.force)
     shown = args.input
-    args.input = named_inputs(args, [args.input], header_needed=False)[0]  # --columns: a headerless file named
-    problem = None if args.input == "-" else path_problem(args.input, streams=True)
-    if problem is not None:
-        raise CliError(f"{problem} (the raw readings to predict)")
-    model = load_model_file(args.model)
+    args.input = readings_input(args, args.input, "the raw readings to predict")  # --columns: a headerless file
+    model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
     temperature = takes_temperature(model)
     chunk = 1 if args.line_buffered else args.chunk_size
@@ -245,8 +225,7 @@ def run(args: argparse.Namespace) -> int:
 
     def emit(out) -> int:
         total = 0
-        chunks = raw_chunks(args.input, n_channels, chunk, with_lines=True, temperature=temperature,
-                            channels=channels)
+        chunks = raw_chunks(args.input, n_channels, chunk, temperature=temperature, channels=channels)
         # a regular file's first chunk is read (its columns checked) before anything is written: a wrong file leaves
         # no header behind; from stdin or a pipe the header goes at once (a driver waiting for it must not wait for
         # a reading)
@@ -277,12 +256,8 @@ def run(args: argparse.Namespace) -> int:
                 beyond[0] += int(flags.sum())
             if checking:
                 findings.extend(_chunk_findings(raw, lines, args.input, channels, temperature, total))
-            if limits is None:
-                write_wrench_rows(out, values, False)
-            else:
-                out.write("".join(",".join(f"{v:.9g}" for v in row) + f",{int(f)}\n" for row, f in zip(values, flags)))
-            wrench = values
-            total += len(wrench)
+            write_wrench_rows(out, values, None if limits is None else flags)
+            total += len(values)
             if chunk == 1 or out is sys.stdout:
                 out.flush()
         return total
@@ -345,10 +320,10 @@ def _most_columns(source: str) -> tuple[str, int] | None:
     return max(wide, key=lambda item: item[1]) if wide else None
 
 
-def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = False, temperature: bool = False,
+def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = False,
                channels: tuple[str, ...] | None = None):
-    """Arrays of at most ``chunk`` readings of ``source`` (``(array, line numbers)`` with ``with_lines``; the
-    rows of a ``.npz`` / ``.mat`` are numbered from 0). ``channels``: the channel columns (or arrays, or a column
+    """Arrays of at most ``chunk`` readings of ``source``, each with its line numbers (the rows of a ``.npz`` /
+    ``.mat`` are numbered from 0): ``(array, line numbers)``. ``channels``: the channel columns (or arrays, or a column
     slice) to read, as ``--channels`` or the model's stored mapping name them."""
     from ..io import expand_names, parse_column_slice
 
@@ -356,8 +331,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
-        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, with_lines=with_lines,
-                                       temperature=temperature, names=names)
+        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, temperature=temperature, names=names)
     elif Path(source).suffix.lower() in (".npz", ".mat"):
         if channels is None and Path(source).suffix.lower() == ".npz":
             raw = read_readings_npz(source, n_channels)
@@ -375,9 +349,7 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, with_lines: bool = F
                                f"{' (--channels ' + ','.join(channels) + ')' if channels else ''} but the model takes "
                                f"{n_channels}; {fix}")
         for start in range(0, len(raw), chunk):
-            yield (raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))) if with_lines \
-                else raw[start:start + chunk]
+            yield raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))
     else:
         with open(source, encoding="utf-8") as fh:
-            yield from iter_reading_chunks(fh, source, n_channels, chunk, with_lines=with_lines,
-                                           temperature=temperature, names=names)
+            yield from iter_reading_chunks(fh, source, n_channels, chunk, temperature=temperature, names=names)

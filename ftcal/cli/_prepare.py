@@ -6,21 +6,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from ._common import (refuse_twins,
-    load_robot_from_args,
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    positive_float,
-    path_problem,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_robot_options, finish_command, int_in_range,
+                      load_robot_from_args, path_problem, positive_float, refuse_twins)
 from ..io import run_log_files
 from ._data_options import add_columns_option, named_inputs
+from ._messages import cli_spelling
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
 
 EXAMPLE = """\
@@ -69,12 +59,9 @@ class _DeprecatedChannelCount(argparse.Action):
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "prepare",
-        help="recorded load / no-load logs -> calibration dataset",
-        description="Turn the run logs of a robot-held calibration experiment into a calibration dataset.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("prepare", help="recorded load / no-load logs -> calibration dataset", epilog=EXAMPLE,
+                       description="Turn the run logs of a robot-held calibration experiment into a calibration "
+                       "dataset.")
     p.add_argument("logs", nargs="+", metavar="LOG",
                    help="run log files, or directories holding *.csv logs; or ROS bags of the runs (or their folder)")
     add_robot_options(p)
@@ -91,9 +78,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_columns_option(p)
     add_bag_options(p, wrench=False)
     add_recording_options(p.add_argument_group("still poses in ROS bags"))
-    add_output_options(p, "ftcal-data")
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-data", seed=False)
 
 
 def log_files(items: list[str]) -> list[Path]:
@@ -117,6 +102,7 @@ def log_files(items: list[str]) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     import ftcal
     from ..reporting import plot_wrench_coverage
+    from ..robot import load_fixture
 
     console = Console(args.quiet)
     args.logs = named_inputs(args, args.logs)  # --columns: headerless logs named, joined side by side
@@ -131,50 +117,32 @@ def run(args: argparse.Namespace) -> int:
     pose = f"the sensor's orientation from /tf ({', '.join(args.tf)})" if bags is not None and args.tf else \
         f"{robot.name} (sensor frame {robot.sensor_frame})"
     console.info(f"preparing {len(logs)} {what} with {pose} ...")
-    if bags is not None:
-        inputs = [bag_run_log(args, path, robot, console) for path in bags]
-        if args.n_channels is not None and inputs[0].n_channels != args.n_channels:
-            raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
-    else:
-        inputs = logs
-    from ..robot import load_fixture
-
+    inputs = logs if bags is None else [bag_run_log(args, path, robot, console) for path in bags]
+    if bags is not None and args.n_channels is not None and inputs[0].n_channels != args.n_channels:
+        raise CliError(f"{bags[0]}: {inputs[0].n_channels} raw channels but --n-channels {args.n_channels}")
     fixture, configurations = load_fixture(args.fixture)
     console.info(f"fixture: {fixture}")  # never silent (and kept in prepare.json): the reference wrenches rest on it
     try:
         dataset = ftcal.experiment.prepare_dataset(inputs, robot, args.mass, n_channels=args.n_channels,
-                                        load_configurations=configurations)
+                                                   load_configurations=configurations)
     except ftcal.core.LogFormatError as exc:
         if exc.parameter != "load_configurations":
             raise
-        from ._messages import cli_spelling
-
         raise CliError(exc.render(cli_spelling(args), fix=f"the fixture used was {fixture}: describe yours in a file "
                                   "and pass --fixture FILE (see 'ftcal prepare --help')")) from None
     dataset.meta["fixture"] = fixture
-    groups = {} if dataset.group is None else {
-        str(g): int((dataset.group == g).sum()) for g in sorted(set(dataset.group.tolist()))
-    }
+    groups = {} if dataset.group is None else {str(g): int((dataset.group == g).sum())
+                                               for g in sorted(set(dataset.group.tolist()))}
     alpha = ftcal.core.alpha_from_wrenches(dataset.wrench)
     with plan.as_one_set():  # the dataset, its summary and its figure: all or none
         with plan.writing(name) as tmp:
             dataset.save(tmp, overwrite=True)
-        with plan.writing("prepare.json") as tmp:
-            write_json(tmp, {
-                "logs": [str(p) for p in logs],
-                "robot": robot.name,
-                "sensor_frame": robot.sensor_frame,
-                "n_samples": dataset.n_samples,
-                "n_channels": dataset.n_channels,
-                "samples_per_configuration": groups,
-                "fixture": fixture,
-                "meta": dataset.meta,
-            })
+        plan.write_json("prepare.json", {
+            "logs": [str(p) for p in logs], "robot": robot.name, "sensor_frame": robot.sensor_frame,
+            "n_samples": dataset.n_samples, "n_channels": dataset.n_channels, "samples_per_configuration": groups,
+            "fixture": fixture, "meta": dataset.meta})
         with plan.writing("coverage.png") as tmp:
-            plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha,
-                                        title="Reference wrenches of the prepared dataset")
-    console.info(
-        f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
-        f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)"
-    )
+            plot_wrench_coverage(dataset.wrench, tmp, alpha=alpha, title="Reference wrenches of the prepared dataset")
+    console.info(f"{dataset.n_samples} samples x {dataset.n_channels} channels from {len(groups)} load configurations "
+                 f"-> {plan.path(name)} (next: ftcal fit {plan.path(name)} --out DIR)")
     return 0

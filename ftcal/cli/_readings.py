@@ -25,7 +25,6 @@ from typing import IO
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core import WRENCH_LABELS
 from ..core import is_number, parse_number, read_header
 from ._common import CliError
 
@@ -59,11 +58,10 @@ def _channel_columns(fields: list[str], source: str, line_no: int, n_inputs: int
     return channels
 
 
-def iter_reading_chunks(
-    stream: IO[str], source: str, n_channels: int, chunk_size: int, *, with_lines: bool = False,
-    temperature: bool = False, names: tuple[str, ...] | None = None,
-) -> Iterator[NDArray[np.float64]]:
-    """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows.
+def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_size: int, *, temperature: bool = False,
+                        names: tuple[str, ...] | None = None) -> Iterator[tuple[NDArray[np.float64], NDArray]]:
+    """Yield the raw readings of a text stream in arrays of at most ``chunk_size`` rows, each with the line of the
+    input each of its rows came from (for messages): ``(array, line_numbers)``.
 
     Parameters
     ----------
@@ -75,8 +73,6 @@ def iter_reading_chunks(
         The channel count the model expects; a row with another count is an error.
     chunk_size : int
         Rows per yielded array; 1 gives one answer per input line (live streams).
-    with_lines : bool
-        Yield ``(array, line_numbers)``: the line of the input each row came from (for messages).
     temperature : bool
         Whether the model's last input is the temperature [deg C] (a temperature-compensated model): the
         messages then count ``n_channels - 1`` raw channels plus the temperature.
@@ -130,10 +126,10 @@ def iter_reading_chunks(
         rows.append(values)
         lines.append(line_no)
         if len(rows) >= chunk_size:
-            yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+            yield np.asarray(rows, dtype=float), np.asarray(lines)
             rows, lines = [], []
     if rows:
-        yield (np.asarray(rows, dtype=float), np.asarray(lines)) if with_lines else np.asarray(rows, dtype=float)
+        yield np.asarray(rows, dtype=float), np.asarray(lines)
 
 
 #: Largest chunk of text readings held at once [bytes].
@@ -238,8 +234,8 @@ def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> Cli
     return cli_error(exc, args, f"{source}: {where}")
 
 
-def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], header: bool) -> None:
-    """Write wrenches as CSV lines (``%.9g``), with the ``Fx,...,Tz`` header when asked."""
-    if header:
-        out.write(",".join(WRENCH_LABELS) + "\n")
-    out.write("".join(",".join(f"{v:.9g}" for v in row) + "\n" for row in wrench))
+def write_wrench_rows(out: IO[str], wrench: NDArray[np.float64], flags: NDArray[np.bool_] | None = None) -> None:
+    """Write wrenches as CSV lines (``%.9g``), each followed by its ``out_of_range`` flag (0 or 1) when ``flags``
+    are given."""
+    ends = ["\n"] * len(wrench) if flags is None else [f",{int(f)}\n" for f in flags]
+    out.write("".join(",".join(f"{v:.9g}" for v in row) + end for row, end in zip(wrench, ends)))

@@ -12,7 +12,8 @@ from pathlib import Path
 
 from ._common import CliError, Console, finite_float, positive_float, refuse_twins
 
-__all__ = ["add_recording_options", "add_bag_options", "bag_files", "bag_run_log", "refuse_bag_options"]
+__all__ = ["add_recording_options", "add_bag_options", "bag_files", "bag_run_log", "refuse_bag_options",
+           "recording_options", "say_notes"]
 
 
 def nonnegative_float(text: str) -> float:
@@ -116,23 +117,45 @@ def bag_files(items: list[str]) -> list[Path] | None:
     return found or None
 
 
+#: The field of :class:`ftcal.experiment.RecordingOptions` each option sets (destination -> field).
+_RECORDING_FIELDS = {"wrench_frame": "wrench_frame", "still_tolerance": "tolerance_deg", "min_still": "min_duration_s",
+                     "settle": "settle_s", "wrench_topic": "wrench_topic", "raw_topic": "raw_topic",
+                     "raw_field": "raw_field", "joint_topic": "joint_topic", "tf": "tf", "stamps": "stamps",
+                     "max_samples": "max_samples"}
+
+
+def recording_options(args: argparse.Namespace, **fields):
+    """The library's :class:`~ftcal.experiment.RecordingOptions` from the options the command has (its units
+    unset: N and N·m), ``fields`` given as they are."""
+    from ftcal.experiment import RecordingOptions
+
+    given = {field: getattr(args, dest) for dest, field in _RECORDING_FIELDS.items() if hasattr(args, dest)}
+    units = {"force_unit": getattr(args, "force_unit", None) or "N",
+             "torque_unit": getattr(args, "torque_unit", None) or "N.m"}
+    return RecordingOptions(**given, **units, **fields)
+
+
+def say_notes(console: Console, notes, args: argparse.Namespace) -> None:
+    """The library's notes on a recording (``(source, note)``: a text, or a warning to say in the options' terms),
+    one status line each."""
+    from ._messages import cli_message
+
+    for source, note in notes:
+        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
+
+
 def bag_run_log(args, path: Path, robot, console: Console):
     """A bag of one run (raw gauges + joints, or /tf) as a run log of its still poses
     (:func:`ftcal.experiment.bag_run_log` with the options); its notes on stderr, its errors as one line."""
     from ftcal.core import FtcalError
-    from ftcal.experiment import RecordingOptions, bag_run_log as read_run
+    from ftcal.experiment import bag_run_log as read_run
 
-    from ._messages import cli_message
+    from ._messages import cli_error
 
-    options = RecordingOptions(tolerance_deg=args.still_tolerance, min_duration_s=args.min_still,
-                               settle_s=args.settle, raw_topic=args.raw_topic, raw_field=args.raw_field,
-                               joint_topic=args.joint_topic, tf=args.tf, stamps=args.stamps,
-                               max_samples=args.max_samples)
     try:
-        log, still, notes = read_run(path, robot, options=options)
+        log, still, notes = read_run(path, robot, options=recording_options(args))
     except FtcalError as exc:
-        raise CliError(" ".join(cli_message(exc, args).split())) from None
-    for source, note in notes:
-        console.info(f"{source}: {note if isinstance(note, str) else cli_message(note, args)}")
+        raise cli_error(exc, args) from None
+    say_notes(console, notes, args)
     console.info(f"{path}: {still.summary()}")
     return log

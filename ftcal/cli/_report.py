@@ -12,9 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from ..core import CalibrationInputError, TooFewSamplesError
-from ._common import CliError, Console, OutputPlan, add_output_options, add_run_options, existing_file, int_in_range
+from ._common import CliError, Console, OutputPlan, add_jobs_option, existing_file, finish_command
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
+from ._models import model_inputs, model_label
 
 EXAMPLE = """\
 examples:
@@ -46,23 +47,18 @@ CONDITION_OPTIONS = {"--reference-standard": "reference_standard", "--procedure"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "report",
-        help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per axis",
-        description="Write the calibration report of a model: a first-page summary with U95 per axis in % of "
-        "full scale and PASS/FAIL against a specification, the calibration matrix or model identity, the held-out "
-        "applied-vs-indicated table, model choice beside the stock scikit-learn baselines, calibrated range.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("report", epilog=EXAMPLE,
+                       help="the calibration report (HTML) of a model on its calibration data: held-out accuracy per "
+                       "axis", description="Write the calibration report of a model: a first-page summary with U95 "
+                       "per axis in % of full scale and PASS/FAIL against a specification, the calibration matrix or "
+                       "model identity, the held-out applied-vs-indicated table, model choice beside the stock "
+                       "scikit-learn baselines, calibrated range.")
     p.add_argument("model", type=existing_file, help="model file written by 'ftcal fit'")
     p.add_argument("dataset", help="the calibration dataset the model was fitted on (.csv, .npz or .mat)")
     add_report_options(p)
-    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"),
-                   help="processes that fit the stock baselines' folds at once (default: every core)")
+    add_jobs_option(p, "processes that fit the stock baselines' folds at once (default: every core)")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-report")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-report")
 
 
 def add_report_options(p: argparse.ArgumentParser) -> None:
@@ -183,13 +179,10 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
 
     axes = dataset_axis_names(data, data.wrench.shape[1])
     conditions_file = args.conditions
-    if conditions_file is None and dataset_path is not None:
+    if conditions_file is None and dataset_path is not None:  # DATA.conditions.yaml / .yml / .json beside it
         base = Path(dataset_path)
-        for suffix in (".conditions.yaml", ".conditions.yml", ".conditions.json"):
-            candidate = base.with_name(base.stem + suffix)
-            if candidate.is_file():
-                conditions_file = candidate
-                break
+        conditions_file = next((c for c in (base.with_name(base.stem + suffix) for suffix in (
+            ".conditions.yaml", ".conditions.yml", ".conditions.json")) if c.is_file()), None)
     fields = {} if conditions_file is None else _read_mapping(Path(conditions_file), "--conditions")
     sensor = args.sensor or fields.pop("sensor", None)
     rated_field, spec_field = fields.pop("rated", None), fields.pop("spec", None)
@@ -198,10 +191,8 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
     if unknown:
         raise CliError(f"--conditions {conditions_file}: field {unknown[0]!r} is not known; the fields are "
                        f"{', '.join(CONDITION_FIELDS)}, sensor, rated, spec, reference_uncertainty")
-    for option, field in CONDITION_OPTIONS.items():
-        value = getattr(args, field)
-        if value is not None:
-            fields[field] = value
+    fields.update({field: getattr(args, field) for field in CONDITION_OPTIONS.values()
+                   if getattr(args, field) is not None})
     try:
         conditions = check_conditions(fields)
     except CalibrationInputError as exc:
@@ -219,12 +210,9 @@ def prepare_report(args: argparse.Namespace, data, dataset_path) -> dict:
             rated = _axis_values(args.rated, axes, "--rated", percent=False)
     elif rated_field is not None:
         rated = _axis_values(rated_field, axes, f"--conditions {conditions_file}: rated", percent=False)
-    spec = None
-    if args.spec is not None:
-        spec = _axis_values(args.spec, axes, "--spec", percent=True)
-    elif spec_field is not None:
-        spec = _axis_values(spec_field if isinstance(spec_field, dict) else str(spec_field), axes,
-                            f"--conditions {conditions_file}: spec", percent=True)
+    spec = _axis_values(args.spec, axes, "--spec", percent=True) if args.spec is not None else None \
+        if spec_field is None else _axis_values(spec_field if isinstance(spec_field, dict) else str(spec_field), axes,
+                                                f"--conditions {conditions_file}: spec", percent=True)
     tool = None
     if args.tool is not None:
         from ..experiment import ToolLoad
@@ -273,8 +261,7 @@ def write_report(out: OutputPlan, label: str, cert, *, model_path, model_sha256:
     cert.identity["model"].update(file=Path(model_path).name, path=str(model_path), sha256=model_sha256)
     html_name, json_name, csv_name = report_file_names(label)
     for file_name, text in ((html_name, cert.to_html()), (json_name, cert.to_json()), (csv_name, cert.to_csv())):
-        with out.writing(file_name) as tmp:
-            tmp.write_text(text, encoding="utf-8")
+        out.write_text(file_name, text)
     verdict = cert.verdict
     console.info(f"report -> {out.path(html_name)}" + (f" ({verdict} against --spec)" if verdict else ""))
 
@@ -303,14 +290,14 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..reporting import bytes_sha256, file_sha256
-    from ._models import load_model_file, model_inputs, model_label
+    import ftcal
+    from ..reporting import bytes_sha256, calibration_certificate, file_sha256
 
     console = Console(args.quiet)
     label = model_label(args.model)
     plan = OutputPlan(args.out, report_file_names(label), args.force)
     model_bytes = Path(args.model).read_bytes()  # hashed as read, before it is loaded (not re-read later)
-    model = load_model_file(args.model)
+    model = ftcal.load_model(args.model)
     if bytes_sha256(Path(args.model).read_bytes()) != bytes_sha256(model_bytes):
         raise CliError(f"{args.model} changed while it was being read; run the report again")
     dataset_sha256 = file_sha256(args.dataset)
@@ -323,8 +310,6 @@ def run(args: argparse.Namespace) -> int:
         print(f"ftcal: warning: {args.dataset} is not the data {args.model} was fitted on (its readings span "
               "another range); the report's held-out figures are of the model refitted on this dataset by "
               "cross-validation, and its calibrated range is this dataset's", file=sys.stderr)
-    from ..reporting import calibration_certificate
-
     options = report_options(args, settings, dataset_path=args.dataset, dataset_sha256=dataset_sha256, console=console)
     try:
         cert = calibration_certificate(model, data, cv=args.cv, random_state=getattr(args, "seed", 0), **options)

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import CliError, Console, OutputPlan, add_run_options, existing_file, path_problem, positive_float
+from ._common import CliError, Console, OutputPlan, existing_file, finish_command, positive_float
 from ..core import check_allocation
+from ._data_options import add_channel_option, model_reading, readings_input
 from ._models import MODEL_SUFFIX, model_label
 from ._tool_drift import RETARE_EXAMPLE, TOOL_SUFFIX, add_retare_tool_options
 
@@ -27,12 +28,9 @@ readings (within half their span beyond them), else the run stops.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "retare",
-        help="re-zero a model from zero-load readings (no refit) -> a new model file",
-        description="Replace a model's zero-load reading by the mean of new zero-load readings.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("retare", help="re-zero a model from zero-load readings (no refit) -> a new model file",
+                       description="Replace a model's zero-load reading by the mean of new zero-load readings.",
+                       epilog=EXAMPLE)
     p.add_argument("model", type=existing_file,
                    help="model file written by 'ftcal fit', or a tool file (NAME.tool.json) of 'ftcal identify-load'")
     p.add_argument("readings", help="zero-load raw readings: a text file, a .npz with array 'raw', or '-' (stdin)")
@@ -42,11 +40,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="largest per-channel std of the readings, in units of the training noise (a tool file: of its "
                    "identification's residual RMS)")
     add_retare_tool_options(p)
-    from ._data_options import add_channel_option
-
     add_channel_option(p)
-    add_run_options(p, seed=False)
-    p.set_defaults(handler=run)
+    finish_command(p, run, seed=False)
 
 
 def _kept_data(model_path) -> dict | None:
@@ -58,15 +53,11 @@ def _kept_data(model_path) -> dict | None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ._data_options import named_inputs
     from ._predict import raw_chunks
 
     console = Console(args.quiet)
-    args.readings = named_inputs(args, [args.readings], header_needed=False)[0]  # --columns: a headerless file named
+    args.readings = readings_input(args, args.readings, "the zero-load readings")  # --columns: a headerless file
     output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
-    problem = None if args.readings == "-" else path_problem(args.readings, streams=True)
-    if problem is not None:
-        raise CliError(f"{problem} (the zero-load readings)")
     if args.model.name.endswith(TOOL_SUFFIX):
         from ._tool_drift import run_retare_tool
 
@@ -76,14 +67,13 @@ def run(args: argparse.Namespace) -> int:
         raise CliError("--time, --temperature, --orientation, --tool-off, --force-unit and --torque-unit re-tare a "
                        f"tool file (NAME.tool.json); {args.model} is a model file (its readings are raw)")
     plan = OutputPlan.single_file(output, args.force)
-    from ._data_options import model_reading
-
     model = ftcal.load_model(args.model)
     n_channels = int(model.n_features_in_)
     stored, _, _ = model_reading(args.model)  # the channel mapping the model was fitted with
     channels = args.channels if args.channels is not None else (stored.channels if stored is not None else None)
     chunks, n_bytes = [], 0.0
-    for chunk in raw_chunks(args.readings, n_channels, 4096, channels=channels):  # a stream of readings may be endless
+    # a stream of readings may be endless: bounded as they come
+    for chunk, _ in raw_chunks(args.readings, n_channels, 4096, channels=channels):
         n_bytes += chunk.nbytes
         check_allocation(2 * n_bytes, f"the zero-load readings of {args.readings} ({n_bytes / chunk.itemsize / n_channels:.0f}"
                          " so far)", "a few hundred readings are enough; pass fewer")
@@ -95,8 +85,6 @@ def run(args: argparse.Namespace) -> int:
     with plan.writing(output.name) as tmp:
         ftcal.save_model(model, tmp, overwrite=True, data=_kept_data(args.model))
     shift = ftcal.calibrators.retare_shift(model)
-    console.info(
-        f"re-tared from {len(readings)} readings: zero-load reading moved by "
-        f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}"
-    )
+    console.info(f"re-tared from {len(readings)} readings: zero-load reading moved by "
+                 f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}")
     return 0

@@ -105,17 +105,15 @@ def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> Non
         try:
             (n_bytes,) = struct.unpack("<Q", read_exactly(8))
             if not 0 < n_bytes <= _MAX_HANDSHAKE_BYTES:
-                raise SchedulerError(
-                    f"{scheduler} answered, but not as a Dask scheduler does (its first message announces "
-                    f"{n_bytes} bytes; is it a web server or another service?); {hint}")
+                raise SchedulerError(f"{scheduler} answered, but not as a Dask scheduler does (its first message "
+                                     f"announces {n_bytes} bytes; is it a web server or another service?); {hint}")
             read_exactly(n_bytes)
         except socket.timeout:
-            raise SchedulerError(
-                f"{scheduler} accepted the connection but sent no Dask handshake within {timeout_s:g} s (a web "
-                f"server or another service?); {hint}") from None
+            raise SchedulerError(f"{scheduler} accepted the connection but sent no Dask handshake within "
+                                 f"{timeout_s:g} s (a web server or another service?); {hint}") from None
         except OSError as exc:
-            raise SchedulerError(
-                f"{scheduler} closed the connection before a Dask handshake ({exc.strerror or exc}); {hint}") from None
+            raise SchedulerError(f"{scheduler} closed the connection before a Dask handshake ({exc.strerror or exc}); "
+                                 f"{hint}") from None
 
 
 @contextlib.contextmanager
@@ -154,8 +152,7 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None)
             client = Client(cluster)
         else:
             probe_scheduler(scheduler, timeout_s)
@@ -166,10 +163,8 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
         if cluster is not None:
             cluster.close()
         what = "start a local Dask cluster" if scheduler == "local" else f"connect to the Dask scheduler at {scheduler}"
-        raise SchedulerError(
-            f"cannot {what} within {timeout_s:g} s ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}); "
-            "is it running, and is the address right?"
-        ) from None
+        raise SchedulerError(f"cannot {what} within {timeout_s:g} s ({type(exc).__name__}: "
+                             f"{' '.join(str(exc).split())[:200]}); is it running, and is the address right?") from None
     try:
         with joblib.parallel_config(backend="dask"):
             yield client

@@ -5,20 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import (
-    int_in_range,
-    CliError,
-    Console,
-    OutputPlan,
-    add_output_options,
-    add_robot_options,
-    add_run_options,
-    existing_file,
-    load_robot_from_args,
-    finite_float,
-    positive_float,
-    write_json,
-)
+from ._common import (CliError, Console, OutputPlan, add_robot_options, existing_file, finish_command, finite_float,
+                      int_in_range, load_robot_from_args, positive_float)
 
 DATASET_EXAMPLE = """\
 examples:
@@ -43,12 +31,9 @@ recording), so the whole real-world pipeline can be tried without hardware.
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "simulate",
-        help="artificial datasets or virtual-experiment logs, to files",
-        description="Simulate calibration data: 'dataset' (thesis IV-A) or 'experiment' logs (thesis IV-B).",
-        epilog="examples:\n  ftcal simulate dataset --out data\n  ftcal simulate experiment --out logs",
-    )
+    p = sub.add_parser("simulate", help="artificial datasets or virtual-experiment logs, to files",
+                       description="Simulate calibration data: 'dataset' (thesis IV-A) or 'experiment' logs (thesis "
+                       "IV-B).", epilog="examples:\n  ftcal simulate dataset --out data\n  ftcal simulate experiment --out logs")
     kinds = p.add_subparsers(dest="kind", metavar="KIND", parser_class=type(p))
     kinds.required = True
     _register_dataset(kinds)
@@ -56,47 +41,38 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def _register_dataset(kinds: argparse._SubParsersAction) -> None:
-    from ..simulation import ERROR_PRESETS, MAX_DATASETS
-    from ..simulation import MAX_POINTS, TEST_DISTRIBUTIONS
+    from ..simulation import ERROR_PRESETS, MAX_DATASETS, MAX_POINTS, TEST_DISTRIBUTIONS
 
-    d = kinds.add_parser(
-        "dataset",
-        help="artificial train/test datasets of the thesis (four spheres, continuous test set)",
-        description="Artificial calibration datasets: 4 training spheres in the torque-scaled wrench space, "
-        "a continuous test set, errors from a preset (creep, noise, crosstalk, nonlinearity, ...).",
-        epilog=DATASET_EXAMPLE,
-    )
+    d = kinds.add_parser("dataset", epilog=DATASET_EXAMPLE,
+                         help="artificial train/test datasets of the thesis (four spheres, continuous test set)",
+                         description="Artificial calibration datasets: 4 training spheres in the torque-scaled wrench "
+                         "space, a continuous test set, errors from a preset (creep, noise, crosstalk, nonlinearity, "
+                         "...).")
     d.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset")
-    d.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=1, help="independent datasets (each its own errors)")
-    d.add_argument("--n-per-sphere", type=int_in_range(1, MAX_POINTS, "points per sphere"), default=1250, help="training points per sphere (4 spheres)")
+    d.add_argument("--n-datasets", type=int_in_range(1, MAX_DATASETS, "datasets"), default=1,
+                   help="independent datasets (each its own errors)")
+    d.add_argument("--n-per-sphere", type=int_in_range(1, MAX_POINTS, "points per sphere"), default=1250,
+                   help="training points per sphere (4 spheres)")
     d.add_argument("--n-test", type=int_in_range(1, MAX_POINTS, "test points"), default=1250, help="test points")
-    d.add_argument(
-        "--test-distribution", default=None, choices=TEST_DISTRIBUTIONS,
-        help="how test wrenches fill the operating range (default: the preset's own, 'ball' for "
-             "reconstructed, else 'radial')",
-    )
+    d.add_argument("--test-distribution", default=None, choices=TEST_DISTRIBUTIONS,
+                   help="how test wrenches fill the operating range (default: the preset's own, 'ball' for "
+                   "reconstructed, else 'radial')")
     d.add_argument("--sensor", type=existing_file, metavar="CAL", help="vendor calibration file (ATI .cal)")
-    d.add_argument(
-        "--temperature-range", metavar="LOW,HIGH",
-        help="simulate thermal drift: each sample at a random temperature in LOW..HIGH deg C, the sensor's zero "
-        "and span drifting by data-sheet magnitudes (ftcal.core.ThermalDrift.typical); adds a temperature column",
-    )
-    d.add_argument(
-        "--zero-offset", type=finite_float, default=0.0, metavar="RAW",
-        help="raw zero-load offset added to every channel (a sensor that is not tared); at most 10^6 times the "
-        "sensor's raw full scale in magnitude",
-    )
+    d.add_argument("--temperature-range", metavar="LOW,HIGH",
+                   help="simulate thermal drift: each sample at a random temperature in LOW..HIGH deg C, the sensor's "
+                   "zero and span drifting by data-sheet magnitudes (ftcal.core.ThermalDrift.typical); adds a "
+                   "temperature column")
+    d.add_argument("--zero-offset", type=finite_float, default=0.0, metavar="RAW",
+                   help="raw zero-load offset added to every channel (a sensor that is not tared); at most 10^6 times "
+                   "the sensor's raw full scale in magnitude")
     d.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
-    add_output_options(d, "ftcal-data")
-    add_run_options(d)
-    d.set_defaults(handler=run_dataset)
+    finish_command(d, run_dataset, "ftcal-data")
 
 
 def _dataset_files(n_datasets: int, fmt: str) -> list[str]:
-    stems = ["train", "test"]
-    if n_datasets == 1:
-        return [f"{s}.{fmt}" for s in stems]
-    return [f"dataset_{k:02d}/{s}.{fmt}" for k in range(n_datasets) for s in stems]
+    stems = ("train", "test")
+    return [f"{s}.{fmt}" for s in stems] if n_datasets == 1 else [
+        f"dataset_{k:02d}/{s}.{fmt}" for k in range(n_datasets) for s in stems]
 
 
 def run_dataset(args: argparse.Namespace) -> int:
@@ -112,36 +88,28 @@ def run_dataset(args: argparse.Namespace) -> int:
     offset = None if args.zero_offset == 0 else np.full(profile.n_channels, _zero_offset(args.zero_offset, profile))
     rng = np.random.default_rng(args.seed)
     thermal = temperature_range(args.temperature_range)
-    infos = []
-    first_train = None
+    infos, first_train = [], None  # the coverage plot shows the first dataset's training wrenches
     with plan.as_one_set(), console.progress(total=args.n_datasets, desc="simulating", unit="dataset") as bar:
         for k in range(args.n_datasets):
             train, test, info = ftcal.make_artificial_dataset(
-                args.preset, random_state=rng, profile=profile, n_per_sphere=args.n_per_sphere,
-                n_test=args.n_test, test_distribution=args.test_distribution, zero_offset=offset,
-            )
+                args.preset, random_state=rng, profile=profile, n_per_sphere=args.n_per_sphere, n_test=args.n_test,
+                test_distribution=args.test_distribution, zero_offset=offset)
             if thermal is not None:
                 train, test, info["thermal_drift"] = _with_thermal_drift(train, test, thermal, rng)
             for ds, name in zip((train, test), files[2 * k: 2 * k + 2]):
-                ds.meta["seed"] = args.seed
-                ds.meta["dataset_index"] = k
+                ds.meta.update(seed=args.seed, dataset_index=k)
                 with plan.writing(name) as tmp:
                     ds.save(tmp, overwrite=True)
             infos.append(info)
-            first_train = train if first_train is None else first_train
+            first_train = first_train or train
             bar.update(1)
-        with plan.writing("info.json") as tmp:
-            write_json(tmp, {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
+        plan.write_json("info.json", {"seed": args.seed, "sensor": profile.to_dict(), "datasets": infos})
         with plan.writing("coverage.png") as tmp:
-            plot_wrench_coverage(
-                first_train.wrench, tmp, alpha=profile.alpha,
-                title=f"Training wrenches ({args.preset} preset)",
-            )
+            plot_wrench_coverage(first_train.wrench, tmp, alpha=profile.alpha,
+                                 title=f"Training wrenches ({args.preset} preset)")
     floors = [i["noise_floor"] for i in infos]
-    console.info(
-        f"wrote {args.n_datasets} dataset(s) to {args.out}/ ({first_train.n_samples} train, {args.n_test} test "
-        f"samples each, {profile.n_channels} channels); noise floor {np.mean(floors):.3g} N"
-    )
+    console.info(f"wrote {args.n_datasets} dataset(s) to {args.out}/ ({first_train.n_samples} train, {args.n_test} "
+                 f"test samples each, {profile.n_channels} channels); noise floor {np.mean(floors):.3g} N")
     return 0
 
 
@@ -198,45 +166,35 @@ def _profile(cal_path: Path | None):
 def _register_experiment(kinds: argparse._SubParsersAction) -> None:
     from ..simulation import ERROR_PRESETS
 
-    e = kinds.add_parser(
-        "experiment",
-        help="virtual robot experiment: load / no-load run logs as a real recording would give",
-        description="Simulate the robot-held calibration experiment (thesis IV-B) and write its run logs.",
-        epilog=EXPERIMENT_EXAMPLE,
-    )
+    e = kinds.add_parser("experiment", epilog=EXPERIMENT_EXAMPLE,
+                         help="virtual robot experiment: load / no-load run logs as a real recording would give",
+                         description="Simulate the robot-held calibration experiment (thesis IV-B) and write its run "
+                         "logs.")
     add_robot_options(e)
     e.add_argument("--mass", type=positive_float, default=None, help="load mass [kg] (default: the thesis' load)")
     e.add_argument("--fixture", default="thesis", metavar="FILE|thesis",
                    help="load configurations (id, mass, centre of mass [m], optional inertia) from a .json/.csv file; "
                    "'thesis' is the thesis' seven")
-    e.add_argument(
-        "--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=None,
-        help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)",
-    )
+    e.add_argument("--subdivisions", type=int_in_range(0, 6, "icosphere subdivisions"), default=None,
+                   help="icosphere subdivisions of the pose sphere (default: 2, the thesis' 155 poses)")
     e.add_argument("--preset", default="thesis", choices=sorted(ERROR_PRESETS), help="error preset of the virtual sensor")
-    e.add_argument(
-        "--temperature-range", metavar="LOW,HIGH",
-        help="simulate thermal drift: each run's temperature ramps within LOW..HIGH deg C and the sensor's zero and "
-        "span drift by data-sheet magnitudes; the logs get a temperature column",
-    )
+    e.add_argument("--temperature-range", metavar="LOW,HIGH",
+                   help="simulate thermal drift: each run's temperature ramps within LOW..HIGH deg C and the sensor's "
+                   "zero and span drift by data-sheet magnitudes; the logs get a temperature column")
     e.add_argument("--bag", choices=("sqlite3", "mcap", "ros1"),
                    help="also write each run as the robot's continuous recording, a ROS bag in DIR/bags/ (raw gauges "
                    "on /ft_sensor/raw, joints on /joint_states; moves, settling, noise): input for 'ftcal prepare "
                    "DIR/bags --raw-topic /ft_sensor/raw' (needs: pip install \"ftcal[ros]\")")
-    add_output_options(e, "ftcal-logs")
-    add_run_options(e)
-    e.set_defaults(handler=run_experiment)
+    finish_command(e, run_experiment, "ftcal-logs")
 
 
 def run_experiment(args: argparse.Namespace) -> int:
     """Plan the poses, simulate the load / no-load runs, write the logs and a coverage plot."""
     import ftcal
-
+    from ..robot import load_fixture
     from ._plan import write_plan_coverage
 
     console = Console(args.quiet)
-    from ..robot import load_fixture
-
     fixture, configs = load_fixture(getattr(args, "fixture", None))
     names = [f"config{c.config_id}_{kind}.csv" for c in configs for kind in ("no-load", "load")]
     plan_files = OutputPlan(args.out, names + ["virtual_experiment.json", "coverage.png"], args.force)
@@ -264,10 +222,9 @@ def run_experiment(args: argparse.Namespace) -> int:
     # the logs, the truths and the figure as one set: simulated into a private folder, put in place together
     with plan_files.as_one_set():
         with plan_files.staging() as stage:
-            staged = ftcal.experiment.simulate_experiment(
-                stage, robot=robot, plan=plan, errors=args.preset, random_state=args.seed, overwrite=True,
-                load_configurations=configs, **mass,
-            )
+            staged = ftcal.experiment.simulate_experiment(stage, robot=robot, plan=plan, errors=args.preset,
+                                                          random_state=args.seed, overwrite=True,
+                                                          load_configurations=configs, **mass)
         write_plan_coverage(plan_files, plan, f"Virtual experiment on {robot.name}: gravity in the sensor frame")
     paths = [plan_files.path(file.name) for file in staged]
     console.info(f"wrote {len(paths)} run logs to {args.out}/ (next: ftcal prepare {args.out} --out DIR)")

@@ -6,7 +6,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, OutputPlan, finite_float, int_in_range
+from ._common import CliError, Console, OutputPlan, finite_float, int_in_range, numbers
+from ._data_options import add_fold_options, add_unit_options, check_lever_arm
+from ._messages import cli_message
 
 #: The choices of ``--drift`` (the library's ``DRIFT_CHOICES``; repeated here so that ``--help`` imports nothing).
 DRIFT_CHOICES = ("auto", "none", "linear", "spline", "temperature")
@@ -24,8 +26,6 @@ def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> N
                        help="auto: add a bias drift (linear or a spline in time, or in temperature when the inputs "
                        "carry one) when it lowers the held-out error (leave-poses-out CV, one-SE rule); none: a "
                        "constant bias; linear, spline, temperature: force that drift")
-        from ._data_options import add_fold_options
-
         add_fold_options(g, cv_default=20, folds=False)  # the poses are the groups the folds keep whole
         g.add_argument("--drift-cv", dest="cv", type=int_in_range(2, 1000, "folds"), help=argparse.SUPPRESS)
     g.add_argument("--time-from-order", action="store_true",
@@ -50,7 +50,6 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     import ftcal
     from ftcal.core import CalibrationInputError
     from ftcal.experiment import identification_summary
-    from ._messages import cli_message
 
     times, unit = pose_times(args, len(rotations), times)
     if args.drift in ("linear", "spline") and times is None:
@@ -58,12 +57,11 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
                        "--time-from-order to use the recording order")
     settings = dict(drift=args.drift, cv=args.cv, random_state=0, groups=groups)
     try:
-        tool = ftcal.experiment.identify_tool_load(rotations, wrenches, gravity=gravity, times=times, temperatures=temperatures,
-                                        time_unit=unit, mounting=getattr(args, "mounting", False), **settings)
-        report = None
-        if times is not None or temperatures is not None:
-            report = identification_summary(rotations, wrenches, tool, times=times, temperatures=temperatures,
-                                           **settings)
+        tool = ftcal.experiment.identify_tool_load(rotations, wrenches, gravity=gravity, times=times,
+                                                   temperatures=temperatures, time_unit=unit,
+                                                   mounting=getattr(args, "mounting", False), **settings)
+        report = None if times is None and temperatures is None else identification_summary(
+            rotations, wrenches, tool, times=times, temperatures=temperatures, **settings)
     except CalibrationInputError as exc:
         raise CliError(f"{', '.join(sources[:3])}: {cli_message(exc, args)}") from None
     return tool, report
@@ -76,11 +74,9 @@ def report_names(stem: str) -> list[str]:
 
 def write_report(plan: OutputPlan, stem: str, report: dict) -> None:
     from ftcal.reporting import plot_drift_residuals
-    from ._common import write_json
 
     json_name, png_name = report_names(stem)
-    with plan.writing(json_name) as tmp:
-        write_json(tmp, report)
+    plan.write_json(json_name, report)
     with plan.writing(png_name) as tmp:
         plot_drift_residuals(report, tmp)
 
@@ -91,26 +87,21 @@ def drift_summary(tool) -> str:
     if d is None:
         return ""
     rate = d.rate_per_hour()
-    if rate is not None:
-        f, se = rate[0][:3], rate[1][:3]
-        per = "N/h"
-    else:
-        f, se = d.mean_rate[:3], d.mean_rate_std_error[:3]
-        per = "N/pose" if d.unit == "pose" else "N/deg C"
+    f, se = (rate[0][:3], rate[1][:3]) if rate is not None else (d.mean_rate[:3], d.mean_rate_std_error[:3])
+    per = "N/h" if rate is not None else "N/pose" if d.unit == "pose" else "N/deg C"
     return (f"; bias drift {d.description}, mean force rate [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in zip(f, se))}] "
             f"{per}")
 
 
-def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, times, temperatures, source: str):
+def compensate_rows(args: argparse.Namespace, tool, rotations, wrenches, values: dict):
     """The external wrenches of the inputs' rows (:meth:`ToolLoad.compensate` with each row's time [s] or
-    temperature [deg C], ``None`` when the inputs have none); a drift evaluated beyond the span it covers is one
-    ``ftcal: warning:`` line naming the tool file. ``source`` names the inputs in errors."""
+    temperature [deg C] of :func:`compensation_values`); a drift evaluated beyond the span it covers is one
+    ``ftcal: warning:`` line naming the tool file."""
     import sys
     import warnings
 
     from ftcal.experiment import DriftExtrapolationWarning
 
-    values = compensation_values(args, tool, len(wrenches), times, temperatures, source)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DriftExtrapolationWarning)
         external = tool.compensate(rotations, wrenches, **values)
@@ -175,8 +166,6 @@ def add_retare_tool_options(p: argparse.ArgumentParser) -> None:
     g.add_argument("--orientation", metavar="QX,QY,QZ,QW",
                    help="the sensor's orientation (sensor to base, scalar last) while the readings were taken")
     g.add_argument("--tool-off", action="store_true", help="the tool was taken off: the readings are the bias")
-    from ._data_options import add_unit_options
-
     add_unit_options(g)
 
 
@@ -186,8 +175,6 @@ def _read_wrench_readings(args: argparse.Namespace):
     ``rotation`` (n, 3, 3)."""
     from ftcal.core import LogFormatError
     from ftcal.io import read_pose_file
-    from ._data_options import check_lever_arm
-    from ._messages import cli_message
 
     force_unit, torque_unit = args.force_unit or "N", args.torque_unit or "N.m"
     try:
@@ -228,7 +215,6 @@ def run_retare_tool(args: argparse.Namespace) -> int:
 
     import ftcal
     from ftcal.core import CalibrationInputError
-    from ._messages import cli_message
 
     console = Console(args.quiet)
     model = Path(args.model)
@@ -248,11 +234,8 @@ def run_retare_tool(args: argparse.Namespace) -> int:
                        "columns to hold the sensor at --orientation)")
     rotations = None
     if args.orientation:
-        try:
-            quat = [float(v) for v in args.orientation.split(",")]
-        except ValueError:
-            quat = []
-        if len(quat) != 4:
+        quat = numbers(args.orientation, 4)
+        if quat is None:
             raise CliError(f"--orientation {args.orientation!r}: give qx,qy,qz,qw, four comma-separated numbers")
         rotations = _rotations(quat, "--orientation")[0]
     elif "rotation" in data:
@@ -261,9 +244,8 @@ def run_retare_tool(args: argparse.Namespace) -> int:
         raise CliError(f"{args.readings}: with the tool mounted its weight must be removed, which needs the sensor's "
                        "orientation: add qx,qy,qz,qw columns (or R00..R22, or roll,pitch,yaw) or --orientation "
                        "QX,QY,QZ,QW; or, if the tool was taken off, pass --tool-off")
-    time = args.time if args.time is not None else (float(np.mean(data["time"])) if "time" in data else None)
-    temperature = args.temperature if args.temperature is not None else (
-        float(np.mean(data["temperature"])) if "temperature" in data else None)
+    time, temperature = (given if given is not None else float(np.mean(data[key])) if key in data else None
+                         for given, key in ((args.time, "time"), (args.temperature, "temperature")))
     try:
         new = tool.retare(data["wrench"], sensor_rotations=rotations, time=time, temperature=temperature,
                           max_spread=args.max_spread)

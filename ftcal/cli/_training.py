@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import contextlib
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from ._common import Console
 
-__all__ = ["fit_with_progress"]
+__all__ = ["fit_with_progress", "ticking"]
 
 _PROGRESS = "cli_progress"
 
@@ -80,19 +80,28 @@ def _progress_callback_installed(estimator: Any, callbacks: Any, callback: Any) 
             net.callbacks = [c for c in (net.callbacks or []) if not (isinstance(c, tuple) and c[0] == _PROGRESS)]
 
 
-def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str, **fit_params: Any) -> Any:
-    bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
+@contextlib.contextmanager
+def ticking(tick: Callable[[], None], name: str = "ftcal-progress") -> Iterator[None]:
+    """Within the block, ``tick()`` runs every half second on a daemon thread (a timer bar's redraw, a heartbeat)."""
     done = threading.Event()
 
-    def tick() -> None:
+    def run() -> None:
         while not done.wait(0.5):
-            bar.refresh()
+            tick()
 
-    ticker = threading.Thread(target=tick, daemon=True, name="ftcal-progress")
-    ticker.start()
+    thread = threading.Thread(target=run, daemon=True, name=name)
+    thread.start()
     try:
-        return estimator.fit(X, y, **fit_params)
+        yield
     finally:
         done.set()
-        ticker.join()
+        thread.join()
+
+
+def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str, **fit_params: Any) -> Any:
+    bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
+    try:
+        with ticking(bar.refresh):
+            return estimator.fit(X, y, **fit_params)
+    finally:
         bar.close()

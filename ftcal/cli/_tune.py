@@ -6,11 +6,12 @@ import argparse
 import time
 
 from ..core import CalibrationInputError
-from ._common import add_scheduler_option, Console, CliError, OutputPlan, add_name_option, add_output_options, add_run_options, write_json, int_in_range
+from ._common import (CliError, Console, OutputPlan, add_jobs_option, add_name_option, add_scheduler_option,
+                      finish_command, int_in_range)
 from ._fit import calibrator_names
-from ._data_options import (add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
+from ._data_options import (add_alpha_option, add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
-from ._models import check_fold_count, dataset_alpha, model_file_name, parse_param
+from ._models import calibrator_params, check_fold_count, model_file_name, parse_param
 
 EXAMPLE = """\
 examples:
@@ -28,37 +29,26 @@ DIR/NAME.tune.json (every candidate, ranked) and DIR/NAME.model.npz (the best mo
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "tune",
-        help="search a calibrator's hyperparameters by cross-validation",
-        description="Hyperparameter search (scikit-learn GridSearchCV / RandomizedSearchCV) of a calibrator, "
-        "scored by the cross-validated torque-scaled RMSE.",
-        epilog=EXAMPLE,
-    )
+    p = sub.add_parser("tune", help="search a calibrator's hyperparameters by cross-validation", epilog=EXAMPLE,
+                       description="Hyperparameter search (scikit-learn GridSearchCV / RandomizedSearchCV) of a "
+                       "calibrator, scored by the cross-validated torque-scaled RMSE.")
     p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them)")
     p.add_argument("-m", "--model", default="axis_nonlinear", choices=calibrator_names(), help="calibrator")
-    p.add_argument(
-        "--grid", action="append", default=[], metavar="KEY=VALUES",
-        help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
-        "default: the model's documented search space, ftcal.compose._search.DEFAULT_SEARCH_SPACES)",
-    )
-    p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"), help="randomized search with this many candidates")
+    p.add_argument("--grid", action="append", default=[], metavar="KEY=VALUES",
+                   help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
+                   "default: the model's documented search space, ftcal.compose._search.DEFAULT_SEARCH_SPACES)")
+    p.add_argument("--n-iter", type=int_in_range(1, 10_000, "candidates"),
+                   help="randomized search with this many candidates")
     add_fold_options(p.add_argument_group("cross-validation"), cv_default=3)
     p.add_argument("--schedule", default="short", choices=("thesis", "short"), help="starting training schedule")
-    p.add_argument(
-        "--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
-        help="a fixed calibrator parameter, value read as JSON (repeatable)",
-    )
-    from ._data_options import add_alpha_option
-
+    p.add_argument("--param", action="append", type=parse_param, default=[], metavar="KEY=VALUE",
+                   help="a fixed calibrator parameter, value read as JSON (repeatable)")
     add_alpha_option(p)
-    p.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=1, help="parallel joblib workers of the search")
+    add_jobs_option(p, "parallel joblib workers of the search", default=1)
     add_scheduler_option(p)
     add_name_option(p, "the outputs (default: the --model name)")
     add_dataset_options(p)
-    add_output_options(p, "ftcal-tuned")
-    add_run_options(p)
-    p.set_defaults(handler=run)
+    finish_command(p, run, "ftcal-tuned")
 
 
 def parse_grid(entries: list[str], randomized: bool) -> dict | None:
@@ -92,8 +82,9 @@ def parse_grid(entries: list[str], randomized: bool) -> dict | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..compose import search_calibrator, search_summary
     import ftcal
+    from ..compose import search_calibrator, search_summary
+    from ._scale_out import dask_backend
 
     console = Console(args.quiet)
     name = args.name or args.model
@@ -102,29 +93,20 @@ def run(args: argparse.Namespace) -> int:
     data = load_dataset_from_args(args, args.dataset, "training dataset")
     check_fold_count(data, args.cv, args.dataset)
     groups = fold_groups(args, data, args.dataset)
-    params = dict(args.param)
-    alpha = dataset_alpha(data, args.alpha)
-    if alpha is not None and "alpha" not in params:
-        params["alpha"] = alpha
+    params = calibrator_params(args, data)
     start = time.perf_counter()
-    from ._scale_out import dask_backend
-
     with dask_backend(args.scheduler):  # a scheduler that cannot be used fails here, before any status line
         console.info(f"searching {args.model} on {data.n_samples} samples x {data.n_channels} channels, {args.cv}-fold")
-        search = search_calibrator(
-            args.model, data.raw, training_targets(data), space=space, n_iter=args.n_iter, cv=args.cv, groups=groups,
-            schedule=args.schedule, random_state=args.seed, n_jobs=-1 if args.scheduler else args.jobs, **params,
-        )
+        search = search_calibrator(args.model, data.raw, training_targets(data), space=space, n_iter=args.n_iter,
+                                   cv=args.cv, groups=groups, schedule=args.schedule, random_state=args.seed,
+                                   n_jobs=-1 if args.scheduler else args.jobs, **params)
     seconds = time.perf_counter() - start
     summary = {"model": args.model, "dataset": str(args.dataset), "schedule": args.schedule, "seed": args.seed,
                "search_seconds": round(seconds, 3), **search_summary(search)}
     with plan.as_one_set():  # the model and its search summary: all or none, never another run's file replaced
         with plan.writing(model_file_name(name)) as tmp:
             ftcal.save_model(search.best_estimator_, tmp, overwrite=True, data=fit_data_facts(args, data))
-        with plan.writing(f"{name}.tune.json") as tmp:
-            write_json(tmp, summary)
-    console.info(
-        f"done in {seconds:.1f} s: best {summary['best_params']} with cross-validated RMSE "
-        f"{summary['best_rmse']:.4g} N; model -> {plan.path(model_file_name(name))}"
-    )
+        plan.write_json(f"{name}.tune.json", summary)
+    console.info(f"done in {seconds:.1f} s: best {summary['best_params']} with cross-validated RMSE "
+                 f"{summary['best_rmse']:.4g} N; model -> {plan.path(model_file_name(name))}")
     return 0
