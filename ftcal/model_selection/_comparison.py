@@ -24,7 +24,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._wrench import scale_torques
 from ._plan import FoldPlan
 from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
-                         rmse_and_se, simplest_within_one_se, tie_margin)
+                         rmse_and_se, simplest_within_one_se, tie_margin, choice_beats_simplest)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
            "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
@@ -320,6 +320,14 @@ class Comparison:
         units = self._units()
         ranks = np.array([r.complexity for r in rows], dtype=float)
         chosen = simplest_within_one_se(errors, units, complexity=ranks, eligible=eligible)
+        simplest = np.array(eligible) & (ranks == ranks[eligible].min())
+        overruled = None  # a more complex choice is kept only if choosing by the rule beats the simplest
+        if not simplest[chosen] and self.plan is not None and self.plan.n_splits > 1:
+            beats, gain, gain_se = choice_beats_simplest(errors, units, self.plan.folds, complexity=ranks,
+                                                         eligible=eligible)
+            if not beats:
+                overruled, chosen = (chosen, gain, gain_se), simplest_within_one_se(
+                    errors, units, complexity=ranks, eligible=simplest)
         best = int(np.nanargmin([np.mean(errors[k]) if eligible[k] else np.nan for k in range(len(rows))]))
         excess, excess_se, tie = paired_excess(errors, best, units)
         self.tie_mse = float(tie)
@@ -328,6 +336,8 @@ class Comparison:
                                                                                      float(excess_se[k]))
             if k == chosen:
                 r.verdict = "chosen"
+            elif overruled and k == overruled[0]:
+                r.verdict = "not kept: choosing it did not beat the simplest on the folds it was not chosen on"
             elif not eligible[k]:
                 r.verdict = r.status_text if r.status is not RowStatus.SCORED else (r.reason or "reported only")
             elif k == best or excess[k] <= max(excess_se[k], tie):
@@ -339,7 +349,13 @@ class Comparison:
         for r in rows:
             r.against = self.paired(r.name, self.chosen).words() if r is not rows[chosen] and \
                 r.row_errors is not None and r.rmse is not None and r.status is RowStatus.SCORED else ""
-        self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1))
+        self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1)) \
+            if not overruled else (
+            f"{rows[chosen].name} won, the simplest model: the one-SE rule's choice, {rows[overruled[0]].name}, was "
+            f"not kept, as the choice made again without each fold and scored on it is not better than "
+            f"{rows[chosen].name} beyond one paired SE (excess {overruled[1]:.3g} ± {overruled[2]:.2g} N²; standard "
+            f"errors over the {self.se_units}): the best of many on the folds it was chosen on is flattered by the "
+            "choice.")
         return self.chosen
 
     def _why(self, chosen: int, best: int, n_within: int) -> str:
