@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from math import comb
-import os
 from numbers import Integral
-import time
 import warnings
 
 import numpy as np
@@ -17,8 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
 
 from ._history import refuse_history_inside
-from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
-                                 resolve_alpha, with_settings)
+from ..calibrators._base import COSTS, BaseCalibrator, calibration_tags, declare, resolve_alpha, with_settings
 from ..core._exceptions import CalibrationInputError, FtcalError
 from ..model_selection._comparison import (COST_TIERS, LIGHT_KERNEL_ROWS, TIER_STEP, Comparison, ComparisonRow,
                                            RowStatus, choice_stability, compare, model_cost)
@@ -28,7 +24,6 @@ from ..model_selection._selection import (DegenerateCalibrationError, check_grou
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
 from ..core._wrench import named_targets, scale_torques, unscale_torques
-from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates",
            "score_candidates", "add_stack", "complexity_of", "with_alpha_and_tare", "minimum_training_rows",
@@ -399,8 +394,7 @@ def training_data_sha256(X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = 
     digest = hashlib.sha256()
     for a in (X, y):
         a = np.ascontiguousarray(a, dtype=np.float64)
-        digest.update(repr(a.shape).encode("ascii"))
-        digest.update(a.tobytes())
+        digest.update(repr(a.shape).encode("ascii") + a.tobytes())
     if groups is not None:  # the labels themselves: the group folds depend on them, not only on the partition
         labels = np.asarray(groups)
         digest.update(b"groups" + repr((labels.shape, labels.dtype.str)).encode("ascii"))

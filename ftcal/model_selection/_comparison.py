@@ -320,14 +320,11 @@ class Comparison:
         units = self._units()
         ranks = np.array([r.complexity for r in rows], dtype=float)
         chosen = simplest_within_one_se(errors, units, complexity=ranks, eligible=eligible)
-        simplest = np.array(eligible) & (ranks == ranks[eligible].min())
         overruled = None  # a more complex choice is kept only if choosing by the rule beats the simplest
-        if not simplest[chosen] and self.plan is not None and self.plan.n_splits > 1:
-            beats, gain, gain_se = choice_beats_simplest(errors, units, self.plan.folds, complexity=ranks,
-                                                         eligible=eligible)
-            if not beats:
-                overruled, chosen = (chosen, gain, gain_se), simplest_within_one_se(
-                    errors, units, complexity=ranks, eligible=simplest)
+        if ranks[chosen] > ranks[eligible].min() and self.plan is not None and self.plan.n_splits > 1:
+            beats, simplest, gain, gain_se = choice_beats_simplest(errors, units, self.plan.folds, complexity=ranks,
+                                                                   eligible=eligible)
+            overruled, chosen = (None, chosen) if beats else ((chosen, gain, gain_se), simplest)
         best = int(np.nanargmin([np.mean(errors[k]) if eligible[k] else np.nan for k in range(len(rows))]))
         excess, excess_se, tie = paired_excess(errors, best, units)
         self.tie_mse = float(tie)
@@ -350,12 +347,10 @@ class Comparison:
             r.against = self.paired(r.name, self.chosen).words() if r is not rows[chosen] and \
                 r.row_errors is not None and r.rmse is not None and r.status is RowStatus.SCORED else ""
         self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1)) \
-            if not overruled else (
-            f"{rows[chosen].name} won, the simplest model: the one-SE rule's choice, {rows[overruled[0]].name}, was "
-            f"not kept, as the choice made again without each fold and scored on it is not better than "
-            f"{rows[chosen].name} beyond one paired SE (excess {overruled[1]:.3g} ± {overruled[2]:.2g} N²; standard "
-            f"errors over the {self.se_units}): the best of many on the folds it was chosen on is flattered by the "
-            "choice.")
+            if not overruled else (f"{rows[chosen].name} won, the simplest model: the one-SE rule's choice, "
+                                   f"{rows[overruled[0]].name}, is not better than it beyond one paired SE when the "
+                                   f"choice is cross-validated (made again without each fold and scored on it: excess "
+                                   f"{overruled[1]:.3g} ± {overruled[2]:.2g} N² over the {self.se_units}).")
         return self.chosen
 
     def _why(self, chosen: int, best: int, n_within: int) -> str:
@@ -718,8 +713,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     y_arr = np.asarray(y, dtype=float).reshape(len(X), -1)
     folds = list(plan.folds)
     smallest = min(len(np.unique(np.column_stack([X[tr], y_arr[tr]]), axis=0)) for tr, _ in folds) if folds else 0
-    kinds = dict(kinds or {})
-    work = [_Work(i, name, est, kinds.get(name, "candidate"), model_cost(est, smallest))
+    work = [_Work(i, name, est, (kinds or {}).get(name, "candidate"), model_cost(est, smallest))
             for i, (name, est) in enumerate(models)]
     ranks = list(complexity) if complexity is not None else \
         [COST_TIERS[w.cost if w.cost in COST_TIERS else "heavy"] * TIER_STEP + w.index for w in work]
@@ -774,7 +768,8 @@ class _Race:
     def finish(self, w: _Work, status: RowStatus, reason: str | None = None) -> ComparisonRow:
         """``w``'s row, scored from its pieces (SCORED) or not; said to the log and ``progress``."""
         row = ComparisonRow(name=w.name, kind=w.kind, status=status, reason=reason, seconds=float(w.seconds),
-                            complexity=float(self.ranks[w.index]), eligible=w.kind != "baseline")
+                            complexity=float(self.ranks[w.index]),
+                            eligible=w.kind != "baseline" and status is RowStatus.SCORED)
         plan = self.comparison.plan
         if status is RowStatus.SCORED:
             pred = np.full(self.y.shape, np.nan)
@@ -782,8 +777,6 @@ class _Race:
                 pred[test] = values.reshape(len(test), -1)
             row.predictions = pred
             _score_row(row, pred, self.y, self.comparison.alpha, self.axes, plan.units, self.refuse_degenerate)
-        if status is not RowStatus.SCORED:
-            row.eligible = False
         self.comparison.rows[w.index] = row
         LOGGER.info("compare: %s %s%s (%.1f s)", w.name, status.value,
                     f", RMSE {row.rmse:.4g} ± {row.rmse_se:.2g} N" if row.rmse is not None else

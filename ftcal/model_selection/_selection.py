@@ -460,7 +460,7 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
 
 
 def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, complexity: ArrayLike,
-                          eligible: ArrayLike) -> tuple[bool, float, float]:
+                          eligible: ArrayLike) -> tuple[bool, int, float, float]:
     """Whether choosing by :func:`simplest_within_one_se` beats the simplest eligible candidate **on rows it did
     not choose on**: the choice made again without each fold's test rows and scored on them (no model refitted:
     the rows' held-out errors are reused), against the simplest candidate's errors (the lowest of those of least
@@ -471,6 +471,8 @@ def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, comp
     Returns
     -------
     beats : bool
+    simplest : int
+        The simplest candidate's row.
     gain, gain_se : float
         The simplest's excess mean error over the cross-validated choice, and its paired SE.
 
@@ -478,22 +480,19 @@ def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, comp
     --------
     >>> errors = np.array([[1.0] * 6, [0.2, 0.2, 1.1, 1.1, 1.1, 1.1]])  # 1 wins on fold 0 only
     >>> folds = [(np.arange(2, 6), np.arange(0, 2)), (np.r_[0:2, 4:6], np.arange(2, 4)), (np.arange(4), np.arange(4, 6))]
-    >>> simplest_within_one_se(errors), choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[0]
-    (1, False)
+    >>> simplest_within_one_se(errors), choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[:2]
+    (1, (False, 0))
     """
-    errors = np.asarray(errors, dtype=float)
-    rank = np.asarray(complexity, dtype=float)
+    errors, rank = np.asarray(errors, dtype=float), np.asarray(complexity, dtype=float)
     ok = np.asarray(eligible, dtype=bool) & ~np.isnan(errors).any(axis=1)
     simplest = simplest_within_one_se(errors, units, complexity=rank, eligible=ok & (rank == rank[ok].min()))
     honest = errors[simplest].copy()
     for _, test in folds:
-        keep = np.ones(errors.shape[1], dtype=bool)
-        keep[test] = False
-        k = simplest_within_one_se(errors[:, keep], None if units is None else np.asarray(units)[keep],
-                                   complexity=rank, eligible=ok)
-        honest[test] = errors[k, test]
+        keep = ~np.isin(np.arange(errors.shape[1]), test)
+        honest[test] = errors[simplest_within_one_se(errors[:, keep], None if units is None else np.asarray(units)[
+            keep], complexity=rank, eligible=ok), test]
     gain, gain_se = mean_and_se(errors[simplest] - honest, units)
-    return bool(gain > max(gain_se, tie_margin(errors[simplest], units))), float(gain), float(gain_se)
+    return bool(gain > max(gain_se, tie_margin(errors[simplest], units))), simplest, float(gain), float(gain_se)
 
 
 class DegenerateCalibrationError(CalibrationInputError):
