@@ -627,7 +627,12 @@ class AutoCalibrator(BaseCalibrator):
        ``TIE_TOLERANCE``, 1 % of the mean squared error), qualify, and the
        simplest in the order above wins (a twin with group offsets counts as
        simple as its model without: the same map and one intercept, estimated
-       within the groups; between the two the lower score wins). A candidate whose training folds are smaller than
+       within the groups; between the two the lower score wins). **The choice is cross-validated against the
+       simplest model** (the LTM; :func:`~ftcal.model_selection._selection.choice_beats_simplest`): a choice more
+       complex than it is kept only when the rule, applied again without each fold and scored on that fold (the
+       held-out errors reused, nothing refitted), beats the simplest beyond one paired SE; else the simplest
+       wins (the best of many on the folds it was chosen on is flattered by the choice: on unseen poses a model
+       that won on a few lucky ones does worse than the LTM). A candidate whose training folds are smaller than
        :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``). On more than ``choice_samples`` rows, steps 1-4 run
