@@ -309,8 +309,8 @@ class Comparison:
     def choose(self) -> str:
         """Apply the one-standard-error rule (:func:`simplest_within_one_se`) over the eligible scored rows, by
         ``complexity``, cross-validated against the simplest row (:func:`choice_beats_simplest`: a more complex
-        choice that does not beat it on the folds it was not chosen on gives way to it); set ``chosen``, ``best_name``, every row's ``verdict``, ``excess_mse``, ``excess_se`` and
-        ``why``. Returns the chosen name."""
+        choice that does not beat it on the folds it was not chosen on gives way to it); set ``chosen``,
+        ``best_name``, every row's ``verdict``, ``excess_mse``, ``excess_se`` and ``why``. Returns the chosen name."""
         rows = self.rows
         n = self.plan.n_rows if self.plan is not None else 0
         errors = np.vstack([r.row_errors if r.status is RowStatus.SCORED and r.row_errors is not None

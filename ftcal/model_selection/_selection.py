@@ -479,18 +479,23 @@ def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, comp
     Examples
     --------
     >>> errors = np.array([[1.0] * 6, [0.2, 0.2, 1.1, 1.1, 1.1, 1.1]])  # 1 wins on fold 0 only
-    >>> folds = [(np.arange(2, 6), np.arange(0, 2)), (np.r_[0:2, 4:6], np.arange(2, 4)), (np.arange(4), np.arange(4, 6))]
-    >>> simplest_within_one_se(errors), choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[:2]
-    (1, (False, 0))
+    >>> tests = [np.arange(0, 2), np.arange(2, 4), np.arange(4, 6)]
+    >>> folds = [(np.setdiff1d(np.arange(6), test), test) for test in tests]
+    >>> simplest_within_one_se(errors)  # the one-SE rule alone chooses 1
+    1
+    >>> choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[:2]  # chosen again: 0
+    (False, 0)
     """
     errors, rank = np.asarray(errors, dtype=float), np.asarray(complexity, dtype=float)
     ok = np.asarray(eligible, dtype=bool) & ~np.isnan(errors).any(axis=1)
     simplest = simplest_within_one_se(errors, units, complexity=rank, eligible=ok & (rank == rank[ok].min()))
     honest = errors[simplest].copy()
+    units = None if units is None else np.asarray(units)
     for _, test in folds:
         keep = ~np.isin(np.arange(errors.shape[1]), test)
-        honest[test] = errors[simplest_within_one_se(errors[:, keep], None if units is None else np.asarray(units)[
-            keep], complexity=rank, eligible=ok), test]
+        k = simplest_within_one_se(errors[:, keep], None if units is None else units[keep], complexity=rank,
+                                   eligible=ok)
+        honest[test] = errors[k, test]
     gain, gain_se = mean_and_se(errors[simplest] - honest, units)
     return bool(gain > max(gain_se, tie_margin(errors[simplest], units))), simplest, float(gain), float(gain_se)
 
