@@ -7,6 +7,11 @@ Usage::
 Each outer fold holds out whole poses; ``make_calibrator("auto")`` (given the training poses as groups) and the
 LTM are fitted on the rest and scored on the held-out poses (eq. 18's torque-scaled RMSE [N]); the paired SE of
 the RMSE difference is over the held-out poses (delta method). Written after every fold.
+
+``--closed-forms`` (a diagnosis, seconds a fold): auto over the closed-form candidates only (no stock models, no
+GP, no networks), and for every candidate its inner (comparison) RMSE beside its outer RMSE on the held-out poses
+when refitted on all training poses (``candidates`` of each fold in the JSON): whether the inner estimate
+predicts the outer error.
 """
 
 from __future__ import annotations
@@ -18,10 +23,12 @@ import time
 import warnings
 
 import numpy as np
+from sklearn.base import clone
 
 import ftcal
 from ftcal.core import scale_torques
-from ftcal.model_selection import calibration_folds, mean_and_se
+from ftcal.compose import default_candidates
+from ftcal.model_selection import calibration_folds, mean_and_se, model_cost
 
 
 def main() -> None:
@@ -31,6 +38,7 @@ def main() -> None:
     parser.add_argument("--folds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", required=True)
+    parser.add_argument("--closed-forms", action="store_true", help="auto over the closed forms; inner vs outer")
     args = parser.parse_args()
     warnings.simplefilter("ignore")
     d = ftcal.simulation.make_robot_held_dataset(args.rows, n_poses=args.poses, random_state=0)
@@ -41,7 +49,12 @@ def main() -> None:
     for k in args.folds:
         train, test = folds[k]
         t0 = time.perf_counter()
-        auto = ftcal.make_calibrator("auto", n_jobs=args.jobs, random_state=0).fit(X[train], y[train], groups=g[train])
+        if args.closed_forms:
+            closed = [(n, c) for n, c in default_candidates(grouped=True) if model_cost(c) == "closed_form"]
+            auto = ftcal.AutoCalibrator(candidates=closed, baselines=False, n_jobs=1, random_state=0)
+        else:
+            auto = ftcal.make_calibrator("auto", n_jobs=args.jobs, random_state=0)
+        auto.fit(X[train], y[train], groups=g[train])
         seconds = time.perf_counter() - t0
         ltm = ftcal.make_calibrator("linear").fit(X[train], y[train])
         alpha = auto.alpha_
@@ -51,7 +64,13 @@ def main() -> None:
         d_se = mean_and_se(ea - el, g[test])[1] / (ra + rl)
         result["folds"].append({"fold": k, "auto_rmse": ra, "ltm_rmse": rl, "ratio": ra / rl,
                                 "paired_se_of_difference": d_se, "chosen": auto.best_name_, "fit_s": seconds,
-                                "load": os.getloadavg()})
+                                "why": auto.comparison_.why, "load": os.getloadavg()})
+        if args.closed_forms:
+            outer = {n: float(np.sqrt(e(clone(c).set_params(alpha=alpha).fit(X[train], y[train], **(
+                {"groups": g[train]} if c.get_params().get("group_offsets") else {}))).mean()))
+                for n, c in closed}
+            result["folds"][-1]["candidates"] = [{"name": r.name, "inner_rmse": r.rmse, "outer_rmse": outer.get(r.name),
+                                                  "verdict": r.verdict} for r in auto.comparison_.rows]
         errs_auto.append(ea), errs_ltm.append(el), units.append(g[test])
         ea_all, el_all = np.concatenate(errs_auto), np.concatenate(errs_ltm)
         result["pooled_ratio"] = float(np.sqrt(ea_all.mean() / el_all.mean()))

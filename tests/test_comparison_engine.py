@@ -198,3 +198,37 @@ def test_the_tie_stop_asks_a_gain_beyond_the_all_folds_se_so_a_gain_of_a_few_fir
         stop, excess, se, _ = race_stop(candidate, reference, None, 0.0, ties=True, share=0.2)
         assert se == pytest.approx(0.1) and -excess == pytest.approx(gain_in_se * 0.1) and stop is stopped
         assert not race_stop(candidate, reference, None, 0.0, share=0.2)[0]  # without ties: never stopped here
+
+
+def _lucky_comparison(flexible_gain_everywhere: bool) -> tuple[Comparison, FoldPlan]:
+    """The LTM (every row off by 0.1) and a flexible model far better on the first fold's groups only and a little
+    worse on all others (a win by luck on 6 of 30 poses), or a little better on every fold."""
+    rng = np.random.default_rng(0)
+    y = rng.normal(size=(300, 6))
+    groups = np.repeat(np.arange(30), 10)
+    plan = FoldPlan.for_data(rng.normal(size=(300, 4)), y, groups)
+    off = np.full(300, 0.09 if flexible_gain_everywhere else 0.105)
+    if not flexible_gain_everywhere:
+        off[plan.folds[0][1]] = 0.03
+    c = Comparison(rows=[], plan=plan)
+    c.add_scored("ltm", "candidate", y + 0.1, y, complexity=0.0)
+    c.add_scored("flexible", "candidate", y + off[:, None], y, complexity=1.0)
+    return c, plan
+
+
+def test_a_flexible_winner_that_does_not_beat_the_ltm_when_the_choice_is_cross_validated_is_not_kept():
+    from ftcal.model_selection._selection import choice_beats_simplest, simplest_within_one_se
+
+    c, plan = _lucky_comparison(False)
+    errors = np.vstack([r.row_errors for r in c.rows])
+    # the one-SE rule alone keeps it: on all folds together it is better than the LTM beyond one paired SE
+    assert simplest_within_one_se(errors, plan.units, complexity=[0, 1]) == 1
+    # the choice made again without each fold picks the LTM without the lucky fold and the flexible model elsewhere,
+    # where it is worse: the cross-validated choice loses to the LTM
+    beats, simplest, gain, _ = choice_beats_simplest(errors, plan.units, plan.folds, complexity=[0, 1], eligible=[1, 1])
+    assert not beats and simplest == 0 and gain < 0
+    assert c.choose() == "ltm"
+    assert c.row("flexible").verdict.startswith("not kept") and "cross-validated" in c.why and "flexible" in c.why
+    # a model better on every fold is kept
+    c, plan = _lucky_comparison(True)
+    assert c.choose() == "flexible" and c.row("ltm").verdict == "beyond one SE"

@@ -94,19 +94,15 @@ class _Regressor(GaussianProcessRegressor):
         from scipy.linalg.lapack import dpotri
         from scipy.spatial.distance import cdist
 
-        if clone_kernel:
-            kernel = self.kernel_.clone_with_theta(theta)
-        else:
-            kernel = self.kernel_
-            kernel.theta = theta
+        kernel = self.kernel_.clone_with_theta(theta) if clone_kernel else self.kernel_
+        kernel.theta = theta
         constant, stationary, linear_constant, dot, white = _kernel_parts(kernel)
         X = self.X_train_
         m, n_channels = X.shape
         scaled = X / np.broadcast_to(np.asarray(stationary.length_scale, dtype=float), (n_channels,))
         squared = cdist(scaled, scaled, "sqeuclidean")
         if type(stationary) is RBF:  # (Matern is a subclass of RBF)
-            shape = np.exp(-0.5 * squared)
-            slope = shape
+            shape = slope = np.exp(-0.5 * squared)
         else:  # Matérn 5/2 (_kernel_parts admits no other)
             t = np.sqrt(5.0 * squared)
             decay = np.exp(-t)
@@ -480,9 +476,8 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         residual = ys_sub - ltm.predict(xc_sub)
         targets = {"none": ys_sub, "linear": residual}
         seed = rng.randint(np.iinfo(np.int32).max)
-        sel = np.arange(m)
-        if m > self.selection_samples:
-            sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False))
+        sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False)) \
+            if m > self.selection_samples else np.arange(m)
         group_rows = None if groups is None else groups[rows]
         bases = {mean: _mean_basis(mean, u) for mean in GP_MEANS}
         mean, family, bounds, per_output, theta = self._choose(
@@ -504,10 +499,9 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.held_out_rmse_["final"] = float(np.sqrt(sum(errors) / target.shape[1]))
         self.kernel_bounds_ = bounds
         self.mean_, self.kernel_, self.per_output_ = mean, family, len(regressors) > 1
-        if mean == "linear":
-            self.linear_matrix_, self.linear_offset_ = np.asarray(ltm.coef_), np.asarray(ltm.intercept_)
-        else:
-            self.linear_matrix_, self.linear_offset_ = np.zeros((ys.shape[1], n_channels)), np.zeros(ys.shape[1])
+        linear = mean == "linear"
+        self.linear_matrix_ = np.asarray(ltm.coef_) if linear else np.zeros((ys.shape[1], n_channels))
+        self.linear_offset_ = np.asarray(ltm.intercept_) if linear else np.zeros(ys.shape[1])
         self.train_inputs_ = u
         self.theta_ = np.stack([g.kernel_.theta for g in regressors])
         self.dual_coef_ = np.column_stack([np.asarray(g.alpha_).reshape(m, -1) for g in regressors])
@@ -542,8 +536,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         k = targets["none"].shape[1]  # outputs (6 for a wrench)
         combos = [(mean, family) for mean, family in _AUTO_COMBINATIONS
                   if self.mean in ("auto", mean) and self.kernel in ("auto", family)]
-        if not combos:  # a combination outside the automatic list, asked for explicitly
-            combos = [(self.mean, self.kernel)]
+        combos = combos or [(self.mean, self.kernel)]  # a combination outside the automatic list, asked for explicitly
         combos = [(mean, family, bounds) for mean, family in combos for bounds in GP_BOUNDS
                   if self.kernel_bounds in ("auto", bounds)]
         self.log_marginal_likelihood_, self.held_out_rmse_ = {}, {}
@@ -662,13 +655,9 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         for i in range(k):
             gp = _regressor(make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]), None, 0)
             cols = slice(None) if k == 1 else slice(i, i + 1)
-            gp.kernel_ = gp.kernel
-            gp.X_train_ = self.train_inputs_
-            gp.alpha_ = self.dual_coef_[:, cols]
-            gp.L_ = self.cholesky_[i]
-            gp._y_train_mean = self.target_mean_[cols]
-            gp._y_train_std = self.target_scale_[cols]
-            gp.n_features_in_ = n_channels
+            gp.kernel_, gp.X_train_, gp.L_ = gp.kernel, self.train_inputs_, self.cholesky_[i]
+            gp.alpha_, gp._y_train_mean = self.dual_coef_[:, cols], self.target_mean_[cols]
+            gp._y_train_std, gp.n_features_in_ = self.target_scale_[cols], n_channels
             regressors.append(gp)
         return regressors
 

@@ -2,10 +2,7 @@
 
 from __future__ import annotations
 
-from math import comb
-import os
 from numbers import Integral
-import time
 import warnings
 
 import numpy as np
@@ -17,8 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
 
 from ._history import refuse_history_inside
-from ..calibrators._base import (COSTS, BaseCalibrator, GroupsFit, calibrated_range, calibration_tags, declare,
-                                 resolve_alpha, with_settings)
+from ..calibrators._base import COSTS, BaseCalibrator, calibration_tags, declare, resolve_alpha, with_settings
 from ..core._exceptions import CalibrationInputError, FtcalError
 from ..model_selection._comparison import (COST_TIERS, LIGHT_KERNEL_ROWS, TIER_STEP, Comparison, ComparisonRow,
                                            RowStatus, choice_stability, compare, model_cost)
@@ -28,7 +24,6 @@ from ..model_selection._selection import (DegenerateCalibrationError, check_grou
 from ..core._threads import limit_threads_here
 from ..core._validation import check_zero_reading, validate_training_data
 from ..core._wrench import named_targets, scale_torques, unscale_torques
-from ..calibrators._zero_load import estimate_zero_reading, reading_noise
 
 __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates",
            "score_candidates", "add_stack", "complexity_of", "with_alpha_and_tare", "minimum_training_rows",
@@ -624,7 +619,12 @@ class AutoCalibrator(BaseCalibrator):
        ``TIE_TOLERANCE``, 1 % of the mean squared error), qualify, and the
        simplest in the order above wins (a twin with group offsets counts as
        simple as its model without: the same map and one intercept, estimated
-       within the groups; between the two the lower score wins). A candidate whose training folds are smaller than
+       within the groups; between the two the lower score wins). **The choice is cross-validated against the
+       simplest model** (the LTM; :func:`~ftcal.model_selection._selection.choice_beats_simplest`): a choice more
+       complex than it is kept only when the rule, applied again without each fold and scored on that fold (the
+       held-out errors reused, nothing refitted), beats the simplest beyond one paired SE; else the simplest
+       wins (the best of many on the folds it was chosen on is flattered by the choice: on unseen poses a model
+       that won on a few lucky ones does worse than the LTM). A candidate whose training folds are smaller than
        :func:`minimum_training_rows` is not fitted and never chosen (on 15-50
        dead-weight rows that leaves the LTM and the mildest models);
     5. refits the winner on all rows (``best_estimator_``). On more than ``choice_samples`` rows, steps 1-4 run

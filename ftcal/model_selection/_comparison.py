@@ -24,7 +24,7 @@ from ..core._exceptions import CalibrationInputError
 from ..core._wrench import scale_torques
 from ._plan import FoldPlan
 from ._selection import (MIN_SE_GROUPS, TIE_TOLERANCE, degenerate_reason, fold_predictions, mean_and_se, paired_excess,
-                         rmse_and_se, simplest_within_one_se, tie_margin)
+                         rmse_and_se, simplest_within_one_se, tie_margin, choice_beats_simplest)
 
 __all__ = ["RowStatus", "ComparisonRow", "Comparison", "PairedDifference", "ChoiceStability", "compare",
            "choice_stability", "model_cost", "race_stop", "LIGHT_KERNEL_ROWS", "COST_TIERS", "TIER_STEP"]
@@ -308,8 +308,9 @@ class Comparison:
     # ------------------------------------------------------------------ the one-SE rule
     def choose(self) -> str:
         """Apply the one-standard-error rule (:func:`simplest_within_one_se`) over the eligible scored rows, by
-        ``complexity``; set ``chosen``, ``best_name``, every row's ``verdict``, ``excess_mse``, ``excess_se`` and
-        ``why``. Returns the chosen name."""
+        ``complexity``, cross-validated against the simplest row (:func:`choice_beats_simplest`: a more complex
+        choice that does not beat it on the folds it was not chosen on gives way to it); set ``chosen``,
+        ``best_name``, every row's ``verdict``, ``excess_mse``, ``excess_se`` and ``why``. Returns the chosen name."""
         rows = self.rows
         n = self.plan.n_rows if self.plan is not None else 0
         errors = np.vstack([r.row_errors if r.status is RowStatus.SCORED and r.row_errors is not None
@@ -320,6 +321,11 @@ class Comparison:
         units = self._units()
         ranks = np.array([r.complexity for r in rows], dtype=float)
         chosen = simplest_within_one_se(errors, units, complexity=ranks, eligible=eligible)
+        overruled = None  # a more complex choice is kept only if choosing by the rule beats the simplest
+        if ranks[chosen] > ranks[eligible].min() and self.plan is not None and self.plan.n_splits > 1:
+            beats, simplest, gain, gain_se = choice_beats_simplest(errors, units, self.plan.folds, complexity=ranks,
+                                                                   eligible=eligible)
+            overruled, chosen = (None, chosen) if beats else ((chosen, gain, gain_se), simplest)
         best = int(np.nanargmin([np.mean(errors[k]) if eligible[k] else np.nan for k in range(len(rows))]))
         excess, excess_se, tie = paired_excess(errors, best, units)
         self.tie_mse = float(tie)
@@ -328,6 +334,8 @@ class Comparison:
                                                                                      float(excess_se[k]))
             if k == chosen:
                 r.verdict = "chosen"
+            elif overruled and k == overruled[0]:
+                r.verdict = "not kept: choosing it did not beat the simplest on the folds it was not chosen on"
             elif not eligible[k]:
                 r.verdict = r.status_text if r.status is not RowStatus.SCORED else (r.reason or "reported only")
             elif k == best or excess[k] <= max(excess_se[k], tie):
@@ -339,7 +347,11 @@ class Comparison:
         for r in rows:
             r.against = self.paired(r.name, self.chosen).words() if r is not rows[chosen] and \
                 r.row_errors is not None and r.rmse is not None and r.status is RowStatus.SCORED else ""
-        self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1))
+        self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1)) \
+            if not overruled else (f"{rows[chosen].name} won, the simplest model: the one-SE rule's choice, "
+                                   f"{rows[overruled[0]].name}, is not better than it beyond one paired SE when the "
+                                   f"choice is cross-validated (made again without each fold and scored on it: excess "
+                                   f"{overruled[1]:.3g} ± {overruled[2]:.2g} N² over the {self.se_units}).")
         return self.chosen
 
     def _why(self, chosen: int, best: int, n_within: int) -> str:
@@ -702,8 +714,7 @@ def compare(models: Sequence[tuple[str, Any]], X: ArrayLike, y: ArrayLike, plan:
     y_arr = np.asarray(y, dtype=float).reshape(len(X), -1)
     folds = list(plan.folds)
     smallest = min(len(np.unique(np.column_stack([X[tr], y_arr[tr]]), axis=0)) for tr, _ in folds) if folds else 0
-    kinds = dict(kinds or {})
-    work = [_Work(i, name, est, kinds.get(name, "candidate"), model_cost(est, smallest))
+    work = [_Work(i, name, est, (kinds or {}).get(name, "candidate"), model_cost(est, smallest))
             for i, (name, est) in enumerate(models)]
     ranks = list(complexity) if complexity is not None else \
         [COST_TIERS[w.cost if w.cost in COST_TIERS else "heavy"] * TIER_STEP + w.index for w in work]
@@ -758,7 +769,8 @@ class _Race:
     def finish(self, w: _Work, status: RowStatus, reason: str | None = None) -> ComparisonRow:
         """``w``'s row, scored from its pieces (SCORED) or not; said to the log and ``progress``."""
         row = ComparisonRow(name=w.name, kind=w.kind, status=status, reason=reason, seconds=float(w.seconds),
-                            complexity=float(self.ranks[w.index]), eligible=w.kind != "baseline")
+                            complexity=float(self.ranks[w.index]),
+                            eligible=w.kind != "baseline" and status is RowStatus.SCORED)
         plan = self.comparison.plan
         if status is RowStatus.SCORED:
             pred = np.full(self.y.shape, np.nan)
@@ -766,8 +778,6 @@ class _Race:
                 pred[test] = values.reshape(len(test), -1)
             row.predictions = pred
             _score_row(row, pred, self.y, self.comparison.alpha, self.axes, plan.units, self.refuse_degenerate)
-        if status is not RowStatus.SCORED:
-            row.eligible = False
         self.comparison.rows[w.index] = row
         LOGGER.info("compare: %s %s%s (%.1f s)", w.name, status.value,
                     f", RMSE {row.rmse:.4g} ± {row.rmse_se:.2g} N" if row.rmse is not None else

@@ -22,7 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ..core._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
-           "paired_excess", "mean_and_se", "tie_margin", "se_units_name",
+           "choice_beats_simplest", "paired_excess", "mean_and_se", "tie_margin", "se_units_name",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -457,6 +457,47 @@ def simplest_within_one_se(errors: NDArray, units: NDArray | None = None, *, com
     # among the equally simple: the lowest error, unless an earlier one ties with it (within TIE_TOLERANCE of its
     # mean squared error: the same model estimated twice, e.g. the LTM and the stock least squares)
     return int(next(k for k in simplest if means[k] <= lowest * (1.0 + TIE_TOLERANCE)))
+
+
+def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, complexity: ArrayLike,
+                          eligible: ArrayLike) -> tuple[bool, int, float, float]:
+    """Whether choosing by :func:`simplest_within_one_se` beats the simplest eligible candidate **on rows it did
+    not choose on**: the choice made again without each fold's test rows and scored on them (no model refitted:
+    the rows' held-out errors are reused), against the simplest candidate's errors (the lowest of those of least
+    ``complexity``, e.g. the LTM). The best of many candidates on the folds it was chosen on is flattered by the
+    choice (a winner's curse); a model more complex than the simplest is kept only when the cross-validated choice
+    is better than the simplest beyond one paired SE (or the tie margin).
+
+    Returns
+    -------
+    beats : bool
+    simplest : int
+        The simplest candidate's row.
+    gain, gain_se : float
+        The simplest's excess mean error over the cross-validated choice, and its paired SE.
+
+    Examples
+    --------
+    >>> errors = np.array([[1.0] * 6, [0.2, 0.2, 1.1, 1.1, 1.1, 1.1]])  # 1 wins on fold 0 only
+    >>> tests = [np.arange(0, 2), np.arange(2, 4), np.arange(4, 6)]
+    >>> folds = [(np.setdiff1d(np.arange(6), test), test) for test in tests]
+    >>> simplest_within_one_se(errors)  # the one-SE rule alone chooses 1
+    1
+    >>> choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[:2]  # chosen again: 0
+    (False, 0)
+    """
+    errors, rank = np.asarray(errors, dtype=float), np.asarray(complexity, dtype=float)
+    ok = np.asarray(eligible, dtype=bool) & ~np.isnan(errors).any(axis=1)
+    simplest = simplest_within_one_se(errors, units, complexity=rank, eligible=ok & (rank == rank[ok].min()))
+    honest = errors[simplest].copy()
+    units = None if units is None else np.asarray(units)
+    for _, test in folds:
+        keep = ~np.isin(np.arange(errors.shape[1]), test)
+        k = simplest_within_one_se(errors[:, keep], None if units is None else units[keep], complexity=rank,
+                                   eligible=ok)
+        honest[test] = errors[k, test]
+    gain, gain_se = mean_and_se(errors[simplest] - honest, units)
+    return bool(gain > max(gain_se, tie_margin(errors[simplest], units))), simplest, float(gain), float(gain_se)
 
 
 class DegenerateCalibrationError(CalibrationInputError):
