@@ -41,3 +41,12 @@ def pytest_cmdline_main(config):
     if getattr(config.option, "numprocesses", None) and getattr(config.option, "dist", None) == "no":
         config.option.dist = "worksteal"
 
+
+
+def pytest_configure(config):
+    """An xdist worker runs torch on one thread: ``-n 2`` on 2 cores is one worker a core (torch's default, a thread
+    a core in each worker, oversubscribes them: a network test took 30-60x its time alone)."""
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        import torch
+
+        torch.set_num_threads(1)
