@@ -194,7 +194,7 @@ def test_engine_trains_like_skorchs_own_loop():
     from ftcal.networks._modules import ComparativeNet, WeightedSquaredError
 
     rng = np.random.default_rng(0)
-    X = rng.normal(size=(1000, 6)).astype(np.float32)
+    X = rng.normal(size=(400, 6)).astype(np.float32)
     y = (X @ rng.normal(size=(6, 6))).astype(np.float32)
     common = dict(module__n_inputs=6, module__hidden_layer_sizes=(32,), optimizer=torch.optim.Adam, lr=3e-3,
                   batch_size=32, max_epochs=30, train_split=None, verbose=0)

@@ -3,6 +3,7 @@ limit: while a fit runs, the process' BLAS runs one thread (as in scikit-learn's
 are alive, and the count is back after it; another thread keeps its OpenMP (torch) threads; torch's global random
 generator is left as it was."""
 
+import os
 import threading
 from pathlib import Path
 
@@ -15,6 +16,16 @@ from ftcal import (DirectionalCalibrator, GaussianProcessCalibrator, LinearCalib
                    PolynomialCalibrator, load_model, save_model)
 
 V2 = Path(__file__).parent / "data" / "model_files_v2"
+
+@pytest.fixture(autouse=True)
+def _torch_on_its_default_threads():
+    """These tests look at a limit to one thread, which cannot show on a pool at one already: an xdist worker runs
+    torch on one thread (the root conftest), so here torch gets its default back, a thread a core."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(max(before, os.cpu_count() or 1))
+    yield
+    torch.set_num_threads(before)
+
 
 def _pools() -> dict:
     return {pool["filepath"]: pool["num_threads"] for pool in threadpool_info()}
