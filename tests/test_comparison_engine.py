@@ -232,3 +232,24 @@ def test_a_flexible_winner_that_does_not_beat_the_ltm_when_the_choice_is_cross_v
     # a model better on every fold is kept
     c, plan = _lucky_comparison(True)
     assert c.choose() == "flexible" and c.row("ltm").verdict == "beyond one SE"
+
+
+@pytest.mark.parametrize("grouping", ["cv=2", "2 groups"])
+def test_with_two_folds_a_clearly_better_model_is_still_chosen_over_the_ltm(grouping):
+    """With two folds the choice cannot be made again without a fold (one fold left has no SE: every candidate would
+    be within it and the LTM always chosen again), so the cross-validated check does not judge and a quadratic
+    twenty times better than the LTM on quadratic data is chosen, as with 3 or 5 folds."""
+    from sklearn.linear_model import LinearRegression
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import PolynomialFeatures
+
+    rng = np.random.default_rng(0)
+    X = rng.normal(size=(200, 3))
+    y = np.column_stack([X[:, 0] ** 2 + X[:, 1], X[:, 2]]) + 0.05 * rng.normal(size=(200, 2))
+    models = [("lin", LinearRegression()), ("quad", make_pipeline(PolynomialFeatures(2), LinearRegression()))]
+    groups = None if grouping == "cv=2" else np.arange(200) % 2
+    plan = FoldPlan.for_data(X, y, groups, cv=2 if groups is None else 5)
+    assert plan.n_splits == 2
+    c = compare(models, X, y, plan, groups=groups, min_rows=lambda e, n: 5, complexity=[0, 1])
+    assert c.row("quad").rmse < 0.1 * c.row("lin").rmse
+    assert c.choose() == "quad"

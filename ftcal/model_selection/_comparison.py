@@ -350,8 +350,9 @@ class Comparison:
         self.why = self._why(chosen, best, int(sum(1 for r in rows if r.verdict.startswith("within")) + 1)) \
             if not overruled else (f"{rows[chosen].name} won, the simplest model: the one-SE rule's choice, "
                                    f"{rows[overruled[0]].name}, is not better than it beyond one paired SE when the "
-                                   f"choice is cross-validated (made again without each fold and scored on it: excess "
-                                   f"{overruled[1]:.3g} ± {overruled[2]:.2g} N² over the {self.se_units}).")
+                                   f"choice is cross-validated (made again without each fold and scored on it: "
+                                   f"{rows[chosen].name}'s excess mean squared error over that choice "
+                                   f"{overruled[1]:.3g} ± {overruled[2]:.2g} N², SE over the {self.se_units}).")
         return self.chosen
 
     def _why(self, chosen: int, best: int, n_within: int) -> str:

@@ -468,6 +468,26 @@ def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, comp
     choice (a winner's curse); a model more complex than the simplest is kept only when the cross-validated choice
     is better than the simplest beyond one paired SE (or the tie margin).
 
+    With fewer than 3 folds the choice cannot be made again without a fold (one fold left has no standard error:
+    every candidate would be within it, and the simplest always chosen again), so the check does not judge:
+    ``beats`` is True and the one-SE choice stands. What it is not: a full nested cross-validation (the errors on a
+    fold come from models fitted on the other folds, the fold left out of the choice included), and the simplest
+    among equally simple rows is taken on all rows. It costs power: a model a little better than the simplest is
+    kept less often than by the one-SE rule alone.
+
+    Parameters
+    ----------
+    errors : ndarray of shape (n_candidates, n_rows)
+        Each candidate's held-out squared error per row (NaN rows: not scored).
+    units : ndarray of shape (n_rows,) or None
+        The rows' SE units (groups, or folds); None: each row its own.
+    folds : list of (train, test) index arrays
+        The folds that made ``errors``.
+    complexity : array-like of shape (n_candidates,)
+        Lower is simpler.
+    eligible : array-like of bool, shape (n_candidates,)
+        The candidates that may be chosen.
+
     Returns
     -------
     beats : bool
@@ -485,10 +505,14 @@ def choice_beats_simplest(errors: NDArray, units: NDArray | None, folds, *, comp
     1
     >>> choice_beats_simplest(errors, None, folds, complexity=[0, 1], eligible=[1, 1])[:2]  # chosen again: 0
     (False, 0)
+    >>> choice_beats_simplest(errors, None, folds[:2], complexity=[0, 1], eligible=[1, 1])[:2]  # 2 folds: no judge
+    (True, 0)
     """
     errors, rank = np.asarray(errors, dtype=float), np.asarray(complexity, dtype=float)
     ok = np.asarray(eligible, dtype=bool) & ~np.isnan(errors).any(axis=1)
     simplest = simplest_within_one_se(errors, units, complexity=rank, eligible=ok & (rank == rank[ok].min()))
+    if len(folds) < 3:  # one fold left out of each choice: nothing to choose again on
+        return True, simplest, float("nan"), float("nan")
     honest = errors[simplest].copy()
     units = None if units is None else np.asarray(units)
     for _, test in folds:
