@@ -319,3 +319,49 @@ def test_gravity_declared_the_wrong_way_gives_a_negative_mass_refused_as_not_pos
     wrenches = sensor_wrenches(rotations, np.random.default_rng(0))
     with pytest.raises(CalibrationInputError, match=r"mass is -1\.2\d* kg \(not positive\).*gravity direction"):
         identify_tool_load(rotations, wrenches, gravity=-G)
+
+
+@pytest.mark.parametrize("gravity, slip", [((0, 0, -981.0), r"cm/s² \(divide by 100\)"),
+                                           ((0, 0, -0.00981), r"km/s² \(multiply by 1000\)"),
+                                           ((0, 0, -1.0), r"in g \(multiply by 9\.81\)"),
+                                           ((0, 0, -9810.0), r"mm/s² \(divide by 1000\)")])
+def test_a_gravity_in_another_unit_is_refused_naming_its_magnitude_and_the_slip(robot, plan_q, gravity, slip):
+    """A gravity of 981 (cm/s²) would give a tool 100 times too light, without a word: its magnitude is not the
+    Earth's surface gravity (9.78-9.84 m/s²), so it is refused, its magnitude and the likely unit named."""
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(0))
+    magnitude = f"{np.linalg.norm(gravity):.4g}".replace(".", r"\.")
+    with pytest.raises(CalibrationInputError, match=rf"gravity has magnitude {magnitude} m/s².*{slip}"):
+        identify_tool_load(rotations, wrenches, gravity=gravity)
+
+
+@pytest.mark.parametrize("gravity", [(0, 0, -9.8), (0, 0, -9.78), (0, 0, -9.84), (-9.80665, 0, 0)])
+def test_every_surface_gravity_in_m_s2_is_accepted_and_the_mass_follows_it(robot, plan_q, gravity):
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    g = np.asarray(gravity, dtype=float)
+    force = MASS * np.einsum("nji,j->ni", rotations, g)  # Rᵀ g, written out for this gravity
+    wrenches = np.hstack([force, np.cross(COM, force)]) + BIAS
+    assert identify_tool_load(rotations, wrenches, gravity=gravity).mass == pytest.approx(MASS, rel=1e-9)
+
+
+def test_the_zero_mass_advice_follows_the_declared_frame_and_names_the_gravity_direction(tmp_path, capsys, robot,
+                                                                                         plan_q):
+    """Wrenches declared in the base frame but recorded in the sensor frame: the advice is the sensor frame (as the
+    warning says), never the base frame the user declared; gravity along a wrong axis is named as the other cause."""
+    rotations = ftcal.robot.sensor_pose_in_base(robot, plan_q)[:, :3, :3]
+    wrenches = sensor_wrenches(rotations, np.random.default_rng(3))
+    with pytest.raises(CalibrationInputError, match=r"not distinguishable from zero.*declared in the robot's base "
+                       r"frame.*gravity is not along \[0\.0, 0\.0, -9\.81\].*declared_frame='sensor'"):
+        identify_tool_load(rotations, ftcal.experiment.wrench_in_sensor_frame(rotations, wrenches), gravity=G,
+                           declared_frame="base")
+    path = write_pose_file(tmp_path / "poses.csv", rotations, wrenches)
+    assert main(["identify-load", str(path), "--wrench-frame", "base", "--out", str(tmp_path / "a"), "-q"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert "use --wrench-frame sensor" in err[0]
+    assert "not distinguishable from zero" in err[1] and "(--wrench-frame sensor)" in err[1]
+    assert "--wrench-frame base" not in err[1] and "declare its frame as the base frame" not in err[1]
+    # gravity along another axis than the tool's weight: the gravity direction named, with the base-frame advice
+    assert main(["identify-load", str(path), "--gravity", "0,9.81,0", "--out", str(tmp_path / "b"), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "not distinguishable from zero" in err and "gravity is not along [0.0, 9.81, 0.0] m/s²" in err
+    assert "(--wrench-frame base)" in err and "check the gravity's axis and sign" in err

@@ -95,7 +95,8 @@ def test_one_recording_stored_as_sqlite3_mcap_and_ros1_bags_is_refused(tmp_path,
     for first, twin in ((sqlite, mcap), (sqlite, ros1), (mcap, ros1)):
         _refused(["identify-load", str(first), str(twin), "--out", str(tmp_path / "t"), "-q"], capsys, twin, first,
                  "ROS bag")
-    kw["reading"] = kw["reading"] + 1e-9  # another recording of the same length and topics: not a twin
+    # another recording of the same length and topics (noise at a sensor's resolution, 1e-3): not a twin
+    kw["reading"] = kw["reading"] + 1e-3 * np.random.default_rng(6).normal(size=(100, 6))
     other = write_bag(tmp_path / "other", "mcap", **kw)
     main(["identify-load", str(sqlite), str(other), "--out", str(tmp_path / "t"), "-q"])
     assert "holds the same" not in capsys.readouterr().err
@@ -112,3 +113,91 @@ def test_a_dataset_folder_holding_one_recording_written_twice_otherwise_is_refus
     (folder / "b.csv").write_text("\n".join([header.replace(",", ", ")] + rows) + "\n")
     with pytest.raises(ValueError, match=r"b\.csv holds the same readings and wrenches as .*a\.csv \(20 rows\)"):
         CalibrationDataset.load(folder)
+
+
+# ------------------------------------------------------------------ the same data written in another form
+def _rows(path):
+    lines = path.read_text().splitlines()
+    return lines[0], [np.array([float(v) for v in line.split(",")]) for line in lines[1:]]
+
+
+def test_a_pose_file_with_its_rows_reordered_or_its_orientation_as_a_matrix_is_refused(tmp_path, capsys):
+    a = _pose_file(tmp_path / "a.csv", 7)
+    header, rows = _rows(a)
+    reordered = tmp_path / "reordered.csv"
+    reordered.write_text("\n".join([header] + [",".join(repr(float(v)) for v in r) for r in rows[::-1]]) + "\n")
+    _refused(["identify-load", str(a), str(reordered), "--out", str(tmp_path / "t"), "-q"], capsys, reordered, a,
+             "pose file")
+    # the orientation written as its rotation matrix: the values read differ by round-off (~1e-16)
+    matrix = tmp_path / "matrix.csv"
+    names = ",".join(f"R{i}{j}" for i in range(3) for j in range(3)) + ",Fx,Fy,Fz,Tx,Ty,Tz"
+    lines = [",".join(repr(float(v)) for v in np.r_[Rotation.from_quat(r[:4]).as_matrix().ravel(), r[4:]])
+             for r in rows]
+    matrix.write_text("\n".join([names] + lines) + "\n")
+    _refused(["identify-load", str(a), str(matrix), "--out", str(tmp_path / "t"), "-q"], capsys, matrix, a,
+             "pose file")
+
+
+def test_two_recordings_sharing_most_rows_are_read_and_a_truncated_copy_is_not_a_twin(tmp_path, capsys):
+    """A low-resolution ADC reading the same loads twice: most rows equal, one row 0.01 N apart (a count of the
+    ADC). Not one recording given twice: both are read. A copy missing its last row holds fewer rows: accepted."""
+    a = _pose_file(tmp_path / "a.csv", 8)
+    header, rows = _rows(a)
+    rows[5][6] += 0.01
+    again = tmp_path / "again.csv"
+    again.write_text("\n".join([header] + [",".join(repr(float(v)) for v in r) for r in rows]) + "\n")
+    assert main(["identify-load", str(a), str(again), "--out", str(tmp_path / "t"), "-q"]) == 0
+    assert "holds the same" not in capsys.readouterr().err
+    truncated = tmp_path / "truncated.csv"
+    truncated.write_text("\n".join(a.read_text().splitlines()[:-1]) + "\n")
+    assert main(["identify-load", str(a), str(truncated), "--out", str(tmp_path / "t2"), "-q"]) == 0
+    assert "holds the same" not in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("form", ["reversed rows", "%.8g"])
+def test_a_dataset_file_with_its_rows_reversed_or_saved_with_fewer_digits_is_refused(tmp_path, form):
+    rng = np.random.default_rng(9)
+    ds = CalibrationDataset(raw=rng.normal(size=(20, 6)), wrench=rng.normal(size=(20, 6)))
+    folder = tmp_path / "data"
+    folder.mkdir()
+    a = ds.save(folder / "a.csv")
+    header = a.read_text().splitlines()[1]
+    table = np.column_stack([ds.raw, ds.wrench])
+    rows = ([",".join(repr(float(v)) for v in row) for row in table[::-1]] if form == "reversed rows"
+            else [",".join(f"{v:.8g}" for v in row) for row in table])
+    (folder / "b.csv").write_text("\n".join([header] + rows) + "\n")
+    with pytest.raises(ValueError, match=r"b\.csv holds the same readings and wrenches as .*a\.csv \(20 rows\)"):
+        CalibrationDataset.load(folder)
+    table[3, 2] += 1e-3  # another recording: one reading a count apart
+    (folder / "b.csv").write_text("\n".join([header] + [",".join(repr(float(v)) for v in r) for r in table]) + "\n")
+    assert CalibrationDataset.load(folder).n_samples == 40
+
+
+def _copy_bag(source, target, *, shift_ns=0, extra_topic=False):
+    """``source`` copied message by message (rosbags), receive times shifted by ``shift_ns``, optionally with an
+    unrelated topic of log text added."""
+    from rosbags.rosbag2 import Reader, Writer
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_HUMBLE)
+    with Reader(source) as r, Writer(target, version=8) as w:
+        conns = {c.id: w.add_connection(c.topic, c.msgtype, typestore=store) for c in r.connections}
+        last = 0
+        for conn, t, data in r.messages():
+            w.write(conns[conn.id], t + shift_ns, data)
+            last = t + shift_ns
+        if extra_topic:
+            log = w.add_connection("/rosout_text", "std_msgs/msg/String", typestore=store)
+            String = store.types["std_msgs/msg/String"]
+            w.write(log, last + 1, store.serialize_cdr(String(data="hello"), "std_msgs/msg/String"))
+    return target
+
+
+@pytest.mark.parametrize("change", ["receive times shifted", "an unrelated topic added"])
+def test_a_bag_copied_with_other_receive_times_or_an_extra_topic_is_refused(tmp_path, capsys, change):
+    t = np.arange(0.0, 1.0, 0.01)
+    bag = write_bag(tmp_path / "run", "sqlite3", sensor_time=t, reading=np.random.default_rng(10).normal(size=(100, 6)),
+                    pose_time=t, joints=np.c_[t, -t], joint_names=["j1", "j2"])
+    twin = _copy_bag(bag, tmp_path / "copy", shift_ns=10**9 if change == "receive times shifted" else 0,
+                     extra_topic=change == "an unrelated topic added")
+    _refused(["identify-load", str(bag), str(twin), "--out", str(tmp_path / "t"), "-q"], capsys, twin, bag, "ROS bag")

@@ -569,10 +569,13 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
 
 def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     """Refuse inputs that hold the same values (one recording given twice: under two names, twice in a folder, in
-    two formats or with other number formatting): it would count its poses twice, and its twins would fall in
-    different folds, so a model would be judged on its own training rows. ``what`` says what the inputs are
-    (``"ROS bag"``, ``"run log"``, ``"pose file"``); they are compared by what their reader reads (a bag's topics
-    and first messages' times first, a text file's row count first: only inputs alike in those are read)."""
+    two formats, with other number formatting, its rows in another order, a bag with its receive times shifted or
+    a log topic added): it would count its poses twice, and its twins would fall in different folds, so a model
+    would be judged on its own training rows. ``what`` says what the inputs are (``"ROS bag"``, ``"run log"``,
+    ``"pose file"``); they are compared by what their reader reads, as sets of rows within a relative 1e-6
+    (:func:`ftcal.core.content_twins`: a truncated copy or another recording sharing most rows is not a twin),
+    after a cheap key (a bag's usable topics and first messages, a text file's row count: only inputs alike in
+    it are read)."""
     from ..core import content_twins, values_sha256
     from ..io import bag_values, read_pose_file, read_run_log
 
@@ -590,7 +593,7 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
         return [rec.rotation, rec.wrench, rec.raw, rec.time, rec.temperature]
 
     if what == "ROS bag":
-        twins = content_twins(paths, bag_values, key=lambda p: values_sha256(bag_values(p, head=100)))
+        twins = content_twins(paths, bag_values, key=lambda p: values_sha256(bag_values(p, head=20)))
     else:
         twins = content_twins(paths, text_values, key=rows)
     if twins:

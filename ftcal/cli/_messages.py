@@ -90,6 +90,7 @@ _SAME_NAMES = {"force": None, "sensor_frame": "NAME", "world_frame": None, "subd
 CLI_NAMES: dict[str, Option] = {
     **{name: _option("--" + name.replace("_", "-"), metavar) for name, metavar in _SAME_NAMES.items()},
     "overwrite": _option("--force"),
+    "declared_frame": Option((("wrench_frame", "--wrench-frame"),)),
     "n_poses": Option((("next_poses", "--next"), ("poses", "--poses"))),
     "load_mass": Option((("mass", "--mass"), ("load_mass", "--load-mass")), metavar="KG"),
     "load_positions_in_sensor": Option(advice="prepare the dataset from the run logs with 'ftcal prepare', which "

@@ -59,7 +59,8 @@ def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temp
     try:
         tool = ftcal.experiment.identify_tool_load(rotations, wrenches, gravity=gravity, times=times,
                                                    temperatures=temperatures, time_unit=unit,
-                                                   mounting=getattr(args, "mounting", False), **settings)
+                                                   mounting=getattr(args, "mounting", False),
+                                                   declared_frame=getattr(args, "wrench_frame", "sensor"), **settings)
         report = None if times is None and temperatures is None else identification_summary(
             rotations, wrenches, tool, times=times, temperatures=temperatures, **settings)
     except CalibrationInputError as exc:

@@ -504,20 +504,81 @@ def values_sha256(arrays: Iterable) -> str:
     return digest.hexdigest()
 
 
-def content_twins(paths: Iterable[str | os.PathLike], values, key=None) -> list[tuple[Path, Path]]:
-    """Pairs of ``paths`` whose values are equal (:func:`values_sha256` of ``values(path)``: the arrays a reader
-    reads from it, None for one it cannot read), the later one second: one recording given twice, under two names,
-    in two formats or written with other number formatting. With ``key`` (a cheap ``key(path)``, e.g. a row
-    count), only paths of equal keys are read; a path whose key or values cannot be had is passed over (its
-    reader names the problem).
+#: Two inputs are twins when their values agree to this relative tolerance (of each column's largest value): far
+#: below any sensor's resolution (a 24-bit ADC resolves 6e-8 of its span only in its noise-free bits; real readings
+#: differ by 1e-4 or more), far above float round-off (1e-16) and re-formatting (``%.8g``: 5e-9).
+_TWIN_RTOL = 1e-6
+
+
+def _row_tables(arrays) -> tuple[list, list] | None:
+    """The values of ``arrays`` as row tables: arrays of one leading length are the columns of one table (its
+    numbers as floats, its text apart), each table's rows sorted canonically (text first, then the numbers
+    coarsely quantized, so round-off does not reorder them); 0-d values and None are kept as they are."""
+    import numpy as np
+
+    if arrays is None:
+        return None
+    columns: dict[int, list] = {}
+    scalars = []
+    for array in arrays:
+        a = None if array is None else np.asarray(array)
+        if a is None or a.ndim == 0:
+            scalars.append(None if a is None else a.tolist())
+            continue
+        columns.setdefault(len(a), []).append(a.reshape(len(a), -1))
+        scalars.append(("column", len(a), a.reshape(len(a), -1).shape[1], a.dtype.kind in "biufc"))
+    tables = []
+    for n, parts in columns.items():
+        numeric = [p.astype(np.float64) for p in parts if p.dtype.kind in "biufc"]
+        numbers = np.hstack(numeric) if numeric else np.zeros((n, 0))
+        text_parts = [p.astype(str) for p in parts if p.dtype.kind not in "biufc"]
+        text = np.hstack(text_parts) if text_parts else np.zeros((n, 0), dtype=str)
+        scale = np.nanmax(np.abs(numbers), axis=0, initial=0.0) if n else np.zeros(numbers.shape[1])
+        step = np.where(np.isfinite(scale) & (scale > 0), scale * 1e-4, 1.0)
+        coarse = np.nan_to_num(np.round(numbers / step), nan=np.inf)
+        keys = [coarse[:, j] for j in range(coarse.shape[1])][::-1] + [text[:, j] for j in range(text.shape[1])][::-1]
+        order = np.lexsort(keys) if keys else np.arange(n)
+        tables.append((numbers[order], text[order]))
+    return scalars, tables
+
+
+def _same_rows(a, b, rtol: float) -> bool:
+    """Whether two :func:`_row_tables` hold the same values: text equal, numbers within ``rtol`` of each column's
+    largest value."""
+    import numpy as np
+
+    if a[0] != b[0] or len(a[1]) != len(b[1]):
+        return False
+    for (num_a, text_a), (num_b, text_b) in zip(a[1], b[1]):
+        if num_a.shape != num_b.shape or text_a.shape != text_b.shape or not np.array_equal(text_a, text_b):
+            return False
+        scale = np.maximum(np.nanmax(np.abs(num_a), axis=0, initial=0.0), np.nanmax(np.abs(num_b), axis=0, initial=0.0))
+        with np.errstate(invalid="ignore"):  # inf - inf: equal infinities are caught by ==
+            close = (num_a == num_b) | (np.isnan(num_a) & np.isnan(num_b)) | (np.abs(num_a - num_b) <= rtol * scale)
+        if not close.all():
+            return False
+    return True
+
+
+def content_twins(paths: Iterable[str | os.PathLike], values, key=None, *, rtol: float = _TWIN_RTOL
+                  ) -> list[tuple[Path, Path]]:
+    """Pairs of ``paths`` that hold the same values, the later one second: one recording given twice, under two
+    names, in two formats, with other number formatting or with its rows in another order. ``values(path)`` gives
+    the arrays a reader reads from a path (None for one it cannot read); arrays of one length are the columns of a
+    table whose rows are compared as a set (sorted canonically), numbers within ``rtol`` of each column's largest
+    value (default 1e-6: above round-off and re-formatting, far below any sensor's resolution), text exactly.
+    Only a whole input equal to another is a twin: two recordings sharing most rows (a low-resolution ADC reading
+    the same loads) are not, and neither is a truncated copy (it holds fewer rows). With ``key`` (a cheap
+    ``key(path)``, e.g. a row count), only paths of equal keys are read; a path whose key or values cannot be had
+    is passed over (its reader names the problem).
 
     Examples
     --------
     >>> import tempfile, pathlib
     >>> d = pathlib.Path(tempfile.mkdtemp())
-    >>> for name, text in (("a.csv", "1,2\\n"), ("b.csv", "3,4\\n"), ("c.csv", "1.0, 2e0\\n")):
+    >>> for name, text in (("a.csv", "1,2\\n3,4\\n"), ("b.csv", "3,4\\n1,2.5\\n"), ("c.csv", "3.0, 4\\n1.0, 2e0\\n")):
     ...     _ = (d / name).write_text(text)
-    >>> numbers = lambda p: [[float(v) for v in p.read_text().split(",")]]
+    >>> numbers = lambda p: [[[float(v) for v in line.split(",")] for line in p.read_text().splitlines()]]
     >>> [(a.name, b.name) for a, b in content_twins([d / "a.csv", d / "b.csv", d / "c.csv"], numbers)]
     [('a.csv', 'c.csv')]
     """
@@ -528,18 +589,21 @@ def content_twins(paths: Iterable[str | os.PathLike], values, key=None) -> list[
             by_key.setdefault(key(p) if key is not None else None, []).append(p)
         except (OSError, ValueError):
             continue
-    twins, first = [], {}
+    twins = []
     for group in by_key.values():
+        seen: list = []  # (path, tables) of the group's inputs read so far, each the first of its values
         for p in group if len(group) > 1 else ():
             try:
-                arrays = values(p)
-                digest = None if arrays is None else values_sha256(arrays)
+                tables = _row_tables(values(p))
             except (OSError, ValueError):
                 continue
-            if digest in first:
-                twins.append((first[digest], p))
-            elif digest is not None:
-                first[digest] = p
+            if tables is None:
+                continue
+            first = next((q for q, other in seen if _same_rows(other, tables, rtol)), None)
+            if first is not None:
+                twins.append((first, p))
+            else:
+                seen.append((p, tables))
     return sorted(twins, key=lambda pair: paths.index(pair[1]))
 
 

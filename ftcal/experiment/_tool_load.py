@@ -136,6 +136,49 @@ def _check_limit(name: str, a: NDArray[np.float64], owner: str = "ToolLoad ") ->
         )
 
 
+#: The magnitudes [m/s²] of gravity :func:`identify_tool_load` accepts: the Earth's surface spans 9.78 (equator)
+#: to 9.84 (poles, and altitude lowers it); the margin allows a rounded value (9.8) and local surveys. Beyond it
+#: a gravity is in another unit (cm/s², mm/s², g), and the mass would come out scaled by its inverse.
+GRAVITY_MAGNITUDE_RANGE = (9.7, 9.9)
+
+
+def _check_gravity_magnitude(gravity: ArrayLike) -> None:
+    """Refuse a gravity whose magnitude is not the Earth's surface gravity, naming the likely unit slip."""
+    g = np.asarray(gravity, dtype=float)
+    if g.shape != (3,) or not np.isfinite(g).all() or not np.abs(g).max() > 0:
+        return  # not a vector at all: _gravity_in_sensor says so
+    size = float(np.abs(g).max() * np.linalg.norm(g / np.abs(g).max()))  # the norm, without overflowing its squares
+    low, high = GRAVITY_MAGNITUDE_RANGE
+    if low <= size <= high:
+        return
+    slips = [(980.665, "in cm/s² (divide by 100)"), (9806.65, "in mm/s² (divide by 1000)"),
+             (1.0, "in g (multiply by 9.81)"), (0.00980665, "in km/s² (multiply by 1000)")]
+    near, words = min(slips, key=lambda item: abs(np.log(size / item[0])))
+    slip = words if abs(np.log(size / near)) < np.log(1.5) else f"scaled by {size / 9.81:.3g}"
+    raise CalibrationInputError(
+        f"gravity has magnitude {size:.4g} m/s² ({g.tolist()}), not the Earth's surface gravity (9.78-9.84 m/s²; "
+        f"{low:g}-{high:g} accepted): a gravity in another unit scales the identified mass by its inverse. It "
+        f"looks to be {slip}; give gravity in m/s² (e.g. 0,0,-9.81 with z up).")
+
+
+def _zero_mass_error(mass: float, mass_se: float, declared_frame: str, gravity: ArrayLike) -> CalibrationInputError:
+    """The error of a mass not distinguishable from zero, its advice following the frame the wrenches were
+    declared in (the other frame is the likely slip) and naming the gravity direction as the other cause."""
+    g = np.asarray(gravity, dtype=float)
+    if declared_frame == "base":
+        cause = ("the wrenches were declared in the robot's base frame and turned into the sensor frame: wrenches recorded "
+                 "in the sensor frame already look like this once turned")
+    else:
+        cause = "a wrench recorded in the robot's base frame, not turned into the sensor frame, looks like this"
+    other = "sensor" if declared_frame == "base" else "base"
+    return CalibrationInputError(
+        f"the identified mass, {mass:.4g} ± {mass_se:.2g} kg, is not distinguishable from zero: the force does not "
+        f"turn with the sensor's orientation as a tool's weight does (the bias took it). Either {cause}; or gravity "
+        f"is not along {g.tolist()} m/s² (base frame) in these poses; or the tool is too light for these readings' "
+        "noise.", fix=f"if the wrenches are in the {other} frame, declare it ({{declared_frame}}); else check the "
+        "gravity's axis and sign", settings={"declared_frame": other})
+
+
 def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np.float64]:
     g = np.asarray(gravity, dtype=float)
     if g.shape != (3,) or not np.isfinite(g).all() or not np.abs(g).max() > 0:
@@ -487,7 +530,7 @@ def identify_tool_load(
     sensor_rotations: ArrayLike, wrenches: ArrayLike, gravity: ArrayLike = DEFAULT_GRAVITY, *,
     times: ArrayLike | None = None, temperatures: ArrayLike | None = None, drift: str = "auto",
     time_unit: str = "s", cv: int = 20, random_state: int | None = 0, groups: ArrayLike | None = None,
-    mounting: bool = False,
+    mounting: bool = False, declared_frame: str = "sensor",
 ) -> ToolLoad:
     """Identify a tool's mass, centre of mass and the sensor bias (and its drift) from static poses.
 
@@ -504,7 +547,8 @@ def identify_tool_load(
     wrenches : array-like of shape (n, 6)
         Calibrated readings at those poses [N, N·m] (the tool mounted, nothing else touching it).
     gravity : array-like of shape (3,), default=(0, 0, -9.81)
-        Gravity in the base frame [m/s²].
+        Gravity in the base frame [m/s²]; its magnitude must be the Earth's surface gravity,
+        :data:`GRAVITY_MAGNITUDE_RANGE` (9.7-9.9 m/s²): a gravity in cm/s², mm/s² or g is refused, naming the slip.
     times : array-like of shape (n,), optional
         When each pose was recorded, in ``time_unit`` (seconds, e.g. the log's timestamps or bag stamps; or
         ``0, 1, 2, ...`` for the recording order with ``time_unit="pose"``).
@@ -526,6 +570,10 @@ def identify_tool_load(
         jointly with mass, centre of mass and bias, with its standard error (:mod:`ftcal.experiment._mounting`).
         The poses are checked first: a rotation they cannot tell (the tilt axis missing, too few or too similar
         poses) is refused, naming the axis and the parameter that absorbs it.
+    declared_frame : {"sensor", "base"}, default="sensor"
+        The frame the wrenches were recorded in, as their source declared it (``"base"``: they were turned into
+        the sensor frame with :func:`wrench_in_sensor_frame` before this call). Only the advice of a mass not
+        told apart from zero depends on it: it names the other frame as a cause.
 
     Returns
     -------
@@ -552,7 +600,10 @@ def identify_tool_load(
     (1.2, [0.01, -0.02, 0.08])
     """
     R, W = _check_inputs(sensor_rotations, wrenches)
+    _check_gravity_magnitude(gravity)
     g_s = _gravity_in_sensor(R, gravity)
+    if declared_frame not in ("sensor", "base"):
+        raise CalibrationInputError(f"declared_frame must be 'sensor' or 'base'; got {declared_frame!r}.")
     n = len(R)
     times = _check_drift_values("times", times, n)
     temperatures = _check_drift_values("temperatures", temperatures, n)
@@ -573,11 +624,7 @@ def identify_tool_load(
             "Check the gravity direction and that the wrenches are in the sensor frame."
         )
     if fit["mass"] < 3.0 * mass_se:  # not told apart from no weight at all: the force does not turn with the poses
-        raise CalibrationInputError(
-            f"the identified mass, {fit['mass']:.4g} ± {mass_se:.2g} kg, is not distinguishable from zero: the force "
-            "does not turn with the sensor's orientation as a tool's weight does (the bias took it). A wrench "
-            "recorded in the robot's base frame, not turned into the sensor frame, looks like this: declare its "
-            "frame as the base frame; or the tool is too light for these readings' noise.")
+        raise _zero_mass_error(fit["mass"], mass_se, declared_frame, gravity)
     rotation, rotation_cov, joint_cov, g_robot = np.zeros(3), np.zeros((3, 3)), None, g_s
     if mounting:
         from ._mounting import identify_mounting

@@ -203,11 +203,14 @@ def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
 
 
 def bag_values(path: str | Path, head: int | None = None):
-    """What the bag reader yields of a bag, array by array (for :func:`ftcal.core.values_sha256`): its topics (name,
-    type, count), then each message's topic, receive time [ns] and the values of its fields in order (a ROS 1
-    header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1 yields the same values. A
-    generator: the bag is streamed message by message. With ``head``, only the topic and receive time of the
-    first ``head`` messages (none deserialized): a cheap key that tells most different recordings apart.
+    """The values a bag's reader can use, array by array (for :func:`ftcal.core.content_twins`): the listing of
+    the topics it can read (name, type, count: wrenches, joint states, ``/tf``, and topics holding an array of
+    numbers, the raw readings), then per topic the values of its messages' fields in order, one row a message
+    (numbers, then text; a ROS 1 header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1
+    yields the same values. Receive times and topics of anything else (log text, strings) are left out: a copy
+    of a bag with its receive times shifted, or with a topic of log messages added, yields the same values as the
+    bag (its header stamps, which the reader uses, are the same). A generator. With ``head``, only the first
+    ``head`` messages of each topic: a cheap key that tells most different recordings apart.
 
     Examples
     --------
@@ -219,8 +222,9 @@ def bag_values(path: str | Path, head: int | None = None):
     >>> a, b = write_bag(d / "a", "sqlite3", **kw), write_bag(d / "b.bag", "ros1", **kw)
     >>> values_sha256(bag_values(a)) == values_sha256(bag_values(b))
     True
-    >>> len(list(bag_values(a, head=1)))  # the topics, then the first message's topic and receive time
-    3
+    >>> # the listing, then the wrench topic's name, numbers (stamp s and ns, 6 axes) and text (its frame id)
+    >>> [v.shape for v in bag_values(a, head=1)][:4]
+    [(2,), (), (1, 8), (1, 1)]
     """
 
     def flat(value, out: list) -> list:
@@ -235,18 +239,43 @@ def bag_values(path: str | Path, head: int | None = None):
             out.extend(value.tolist() if isinstance(value, np.ndarray) else [value])
         return out
 
+    def has_numbers(value) -> bool:  # an array of numbers somewhere in a message: a raw topic's kind
+        if isinstance(value, np.ndarray):
+            return value.dtype.kind in "biuf" and value.size > 0
+        if hasattr(value, "__dataclass_fields__"):
+            return any(has_numbers(getattr(value, n)) for n in value.__dataclass_fields__ if not n.startswith("__"))
+        return False
+
+    known = (*WRENCH_TYPES, JOINT_STATE_TYPE, TF_TYPE)
     with _Reader(Path(path)) as r:
-        yield np.array(sorted(f"{t} {typ} {n}" for t, (typ, n) in r.topics().items()))
+        rows: dict[str, list] = {}
         try:
-            for k, (conn, receive_ns, data) in enumerate(r.reader.messages()):
-                if head is not None and k >= head:
-                    break
-                yield np.array(conn.topic)
-                yield np.array(receive_ns, dtype=np.int64)
-                if head is None:
-                    yield np.array(flat(r.reader.deserialize(data, conn.msgtype), []), dtype=object)
+            for conn, _receive_ns, data in r.reader.messages():
+                kept = rows.get(conn.topic)
+                if kept is None and conn.topic in rows or head is not None and kept is not None and len(kept) >= head:
+                    continue
+                msg = r.reader.deserialize(data, conn.msgtype)
+                if kept is None:
+                    if not (conn.msgtype in known or has_numbers(msg)):
+                        rows[conn.topic] = None  # a topic the reader cannot use
+                        continue
+                    kept = rows[conn.topic] = []
+                kept.append(flat(msg, []))
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
             raise r.damaged(exc) from None
+        topics = r.topics()
+    used = sorted(t for t, kept in rows.items() if kept is not None)
+    yield np.array([f"{t} {topics[t][0]} {topics[t][1]}" for t in used])
+    for topic in used:
+        by_length: dict[int, list] = {}
+        for row in rows[topic]:
+            by_length.setdefault(len(row), []).append(row)
+        for length, group in sorted(by_length.items()):
+            numbers = [[v for v in row if isinstance(v, (int, float, np.number))] for row in group]
+            text = [[str(v) for v in row if not isinstance(v, (int, float, np.number))] for row in group]
+            yield np.array(f"{topic} {length}")
+            yield np.array(numbers, dtype=np.float64).reshape(len(group), -1)
+            yield np.array(text, dtype=str).reshape(len(group), -1)
 
 
 def _listing(topics: dict[str, tuple[str, int]]) -> str:

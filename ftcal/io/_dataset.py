@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from ..core._columns import check_plain_fields, csv_rows, is_number
 from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileError, Placeholder
-from ..core._files import atomic_output, values_sha256
+from ..core._files import atomic_output, content_twins
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
@@ -64,20 +64,26 @@ DATASET_SUFFIXES = (".csv", ".npz", ".mat")
 
 def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDataset"], labelled: bool) -> None:
     """Refuse two files of a folder that hold the same readings and wrenches (a recording copied in twice, under
-    another name or in another format): its rows would count twice and its twins fall in different folds, so a
-    model would be judged on its own training rows. The files are compared by what was read from them (a hash of
-    the arrays), so a copy written otherwise is found too; with group labels read from a column (``labelled``),
-    rows labelled as other poses or sessions are told apart by their labels."""
-    seen: dict[str, Path] = {}
-    for path, part in zip(files, parts):
+    another name, in another format, re-saved with fewer digits or with its rows in another order): its rows would
+    count twice and its twins fall in different folds, so a model would be judged on its own training rows. The
+    files are compared by what was read from them, as sets of rows within a relative 1e-6
+    (:func:`ftcal.core.content_twins`; a truncated copy is not a twin); with group labels read from a column
+    (``labelled``), rows labelled as other poses or sessions are told apart by their labels."""
+    by_path = dict(zip(files, parts))
+
+    def values(path: Path) -> list:
+        part = by_path[path]
         labels = (part.group, repr(part.meta.get("group_names"))) if labelled and part.group is not None else ()
-        key = values_sha256([part.raw, part.wrench, part.temperature, *labels])
-        if part.n_samples and key in seen:
-            raise DatasetFileError(
-                f"{path} holds the same readings and wrenches as {seen[key]} ({part.n_samples} rows): one recording "
-                "given twice would count its rows twice and judge a model on its own rows. Fix: move one of them "
-                "out of the folder (give each recording once).")
-        seen.setdefault(key, path)
+        return [part.raw, part.wrench, part.temperature, *labels]
+
+    twins = content_twins([f for f, part in by_path.items() if part.n_samples], values,
+                          key=lambda path: by_path[path].n_samples)
+    if twins:
+        first, second = twins[0]
+        raise DatasetFileError(
+            f"{second} holds the same readings and wrenches as {first} ({by_path[second].n_samples} rows): one "
+            "recording given twice would count its rows twice and judge a model on its own rows. Fix: move one of "
+            "them out of the folder (give each recording once).")
 
 
 def dataset_files(folder: Path) -> list[Path]:
