@@ -573,7 +573,8 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     a log topic added): it would count its poses twice, and its twins would fall in different folds, so a model
     would be judged on its own training rows. ``what`` says what the inputs are (``"ROS bag"``, ``"run log"``,
     ``"pose file"``); they are compared by what their reader reads, as sets of rows within a relative 1e-6
-    (:func:`ftcal.core.content_twins`: a truncated copy or another recording sharing most rows is not a twin),
+    (:func:`ftcal.core.content_twins`: a truncated copy or another recording sharing most rows is not a twin; a
+    bag by a streamed digest of each usable topic's values, :func:`ftcal.io.bag_values`),
     after a cheap key (a bag's usable topics and first messages, a text file's row count: only inputs alike in
     it are read)."""
     from ..core import content_twins, values_sha256

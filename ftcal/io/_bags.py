@@ -203,41 +203,46 @@ def bag_topics(path: str | Path) -> dict[str, tuple[str, int]]:
 
 
 def bag_values(path: str | Path, head: int | None = None):
-    """The values a bag's reader can use, array by array (for :func:`ftcal.core.content_twins`): the listing of
-    the topics it can read (name, type, count: wrenches, joint states, ``/tf``, and topics holding an array of
-    numbers, the raw readings), then per topic the values of its messages' fields in order, one row a message
-    (numbers, then text; a ROS 1 header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1
-    yields the same values. Receive times and topics of anything else (log text, strings) are left out: a copy
-    of a bag with its receive times shifted, or with a topic of log messages added, yields the same values as the
-    bag (its header stamps, which the reader uses, are the same). A generator. With ``head``, only the first
-    ``head`` messages of each topic: a cheap key that tells most different recordings apart.
+    """The values a bag's reader can use, as digests (for :func:`ftcal.core.content_twins`): the listing of the
+    topics it can read (name, type, count: wrenches, joint states, ``/tf``, and topics holding an array of
+    numbers, the raw readings), then per topic one SHA-256 of its messages' field values in their order (numbers
+    as float64, then text; a ROS 1 header's ``seq`` left out), so one recording stored as sqlite3, MCAP or ROS 1
+    gives the same values. Receive times and topics of anything else (log text, strings) are left out: a copy of
+    a bag with its receive times shifted, or with a topic of log messages added, gives the same values (its header
+    stamps, which the reader uses, are the same). The messages are streamed: memory does not grow with the bag.
+    A list of arrays. With ``head``, only the first ``head`` messages of each topic: a cheap key that tells most
+    different recordings apart.
 
     Examples
     --------
     >>> import tempfile, pathlib, numpy as np
-    >>> from ftcal.core import values_sha256
     >>> d = pathlib.Path(tempfile.mkdtemp())
     >>> kw = dict(sensor_time=[0.0, 0.1], reading=np.zeros((2, 6)), pose_time=[0.0, 0.1], joints=np.zeros((2, 2)),
     ...           joint_names=["a", "b"])
     >>> a, b = write_bag(d / "a", "sqlite3", **kw), write_bag(d / "b.bag", "ros1", **kw)
-    >>> values_sha256(bag_values(a)) == values_sha256(bag_values(b))
+    >>> [v.tolist() for v in bag_values(a)] == [v.tolist() for v in bag_values(b)]
     True
-    >>> # the listing, then the wrench topic's name, numbers (stamp s and ns, 6 axes) and text (its frame id)
-    >>> [v.shape for v in bag_values(a, head=1)][:4]
-    [(2,), (), (1, 8), (1, 1)]
+    >>> bag_values(a)[0].tolist()  # the listing, then a digest per topic
+    ['/ft_sensor/wrench geometry_msgs/msg/WrenchStamped 2', '/joint_states sensor_msgs/msg/JointState 2']
     """
+    import hashlib
 
-    def flat(value, out: list) -> list:
+    def flat(value, numbers: list, text: list) -> None:
         if hasattr(value, "__dataclass_fields__"):
             for name in value.__dataclass_fields__:
                 if name != "seq" and not name.startswith("__"):
-                    flat(getattr(value, name), out)
+                    flat(getattr(value, name), numbers, text)
         elif isinstance(value, (list, tuple)):
+            text.append(f"[{len(value)}")  # the length: [1, 2], [] and [1], [2] differ
             for item in value:
-                flat(item, out)
+                flat(item, numbers, text)
+        elif isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            text.append(f"<{value.size}")
+            numbers.extend(value.astype(np.float64).ravel().tolist())
+        elif isinstance(value, (bool, int, float, np.number)):
+            numbers.append(float(value))
         else:
-            out.extend(value.tolist() if isinstance(value, np.ndarray) else [value])
-        return out
+            text.append(str(value))
 
     def has_numbers(value) -> bool:  # an array of numbers somewhere in a message: a raw topic's kind
         if isinstance(value, np.ndarray):
@@ -247,35 +252,31 @@ def bag_values(path: str | Path, head: int | None = None):
         return False
 
     known = (*WRENCH_TYPES, JOINT_STATE_TYPE, TF_TYPE)
+    digests: dict[str, object] = {}  # topic -> its running digest (None: a topic the reader cannot use)
+    counts: dict[str, int] = {}
     with _Reader(Path(path)) as r:
-        rows: dict[str, list] = {}
         try:
             for conn, _receive_ns, data in r.reader.messages():
-                kept = rows.get(conn.topic)
-                if kept is None and conn.topic in rows or head is not None and kept is not None and len(kept) >= head:
+                digest = digests.get(conn.topic)
+                if digest is None and conn.topic in digests or head is not None and counts.get(conn.topic, 0) >= head:
                     continue
                 msg = r.reader.deserialize(data, conn.msgtype)
-                if kept is None:
+                if digest is None:
                     if not (conn.msgtype in known or has_numbers(msg)):
-                        rows[conn.topic] = None  # a topic the reader cannot use
+                        digests[conn.topic] = None
                         continue
-                    kept = rows[conn.topic] = []
-                kept.append(flat(msg, []))
+                    digest = digests[conn.topic] = hashlib.sha256()
+                numbers, text = [], []
+                flat(msg, numbers, text)
+                digest.update(np.asarray(numbers, dtype=np.float64).tobytes())
+                digest.update("\x00".join(text).encode("utf-8") + b"\x01")
+                counts[conn.topic] = counts.get(conn.topic, 0) + 1
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
             raise r.damaged(exc) from None
         topics = r.topics()
-    used = sorted(t for t, kept in rows.items() if kept is not None)
-    yield np.array([f"{t} {topics[t][0]} {topics[t][1]}" for t in used])
-    for topic in used:
-        by_length: dict[int, list] = {}
-        for row in rows[topic]:
-            by_length.setdefault(len(row), []).append(row)
-        for length, group in sorted(by_length.items()):
-            numbers = [[v for v in row if isinstance(v, (int, float, np.number))] for row in group]
-            text = [[str(v) for v in row if not isinstance(v, (int, float, np.number))] for row in group]
-            yield np.array(f"{topic} {length}")
-            yield np.array(numbers, dtype=np.float64).reshape(len(group), -1)
-            yield np.array(text, dtype=str).reshape(len(group), -1)
+    used = sorted(t for t, digest in digests.items() if digest is not None)
+    return [np.array([f"{t} {topics[t][0]} {topics[t][1]}" for t in used]),
+            *(np.array([digests[t].hexdigest()]) for t in used)]
 
 
 def _listing(topics: dict[str, tuple[str, int]]) -> str:
