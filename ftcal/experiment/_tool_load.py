@@ -615,7 +615,8 @@ def identify_tool_load(
     values = {"time": times, "temperature": temperatures}.get(candidate.variable)
     basis = candidate.basis({"time": np.zeros(n)} if values is None else {candidate.variable: values})
     fit = fit_gravity_blocks(g_s, W, basis, groups)
-    mass_se = float(np.sqrt(max(fit["force_cov"][0, 0], 0.0)))
+    variance = float(fit["force_cov"][0, 0])
+    mass_se = float(np.sqrt(variance)) if variance > 0 else 0.0  # NaN (no residual degrees of freedom): 0
     # a mass below zero by more than its noise: gravity points the other way; within 3 SE of zero (either sign):
     # no weight that turns with the poses at all
     if not np.isfinite(fit["mass"]) or fit["mass"] <= -3.0 * mass_se or (fit["mass"] <= 0 and mass_se == 0):
