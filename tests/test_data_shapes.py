@@ -329,3 +329,34 @@ def test_the_report_states_the_units_of_the_axes_that_exist(tmp_path, capsys, ax
     html = (tmp_path / "m" / "linear.report.html").read_text()
     section = html[html.index("Frames and units"):][:600]
     assert says in section and not_says not in section, section
+
+
+def test_folder_files_with_the_same_columns_in_another_order_are_read_by_name(tmp_path):
+    raw, wrench = _sensor(n_channels=6, n=80)
+    halves = [slice(0, 40), slice(40, 80)]
+    for suffix in ("npz", "mat", "csv"):
+        folder = tmp_path / suffix
+        folder.mkdir()
+        for k, rows in enumerate(halves):
+            first, last = ("raw", "wrench") if k == 0 else ("wrench", "raw")
+            arrays = {first: raw[rows] if first == "raw" else wrench[rows],
+                      last: raw[rows] if last == "raw" else wrench[rows]}
+            if suffix == "npz":
+                np.savez(folder / f"p{k}.npz", **arrays)
+            elif suffix == "mat":
+                scipy.io.savemat(folder / f"p{k}.mat", arrays)
+            else:
+                names = [f"s{i}" for i in range(6)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
+                order = list(range(12)) if k == 0 else list(range(6, 12)) + list(range(6))[::-1]
+                table = np.column_stack([raw[rows], wrench[rows]])[:, order]
+                _csv(folder / f"p{k}.csv", [names[i] for i in order], table)
+        ds = CalibrationDataset.load(folder)
+        np.testing.assert_array_equal(ds.raw, raw)
+        np.testing.assert_array_equal(ds.wrench, wrench)
+        np.testing.assert_array_equal(ds.group, np.repeat([0, 1], 40))
+    extra = tmp_path / "extra"
+    extra.mkdir()
+    np.savez(extra / "p0.npz", raw=raw[:40], wrench=wrench[:40])
+    np.savez(extra / "p1.npz", wrench=wrench[40:], raw=raw[40:], temperature=np.full(40, 25.0))
+    with pytest.raises(DatasetFileError, match=r"p1.npz: its columns .* differ from those of .*temperature differs"):
+        CalibrationDataset.load(extra)

@@ -659,7 +659,7 @@ class CalibrationDataset:
             ds, names = cls._load_file(path, columns)
             if first_names is None:
                 first_names = names
-            elif names != first_names:
+            elif sorted(names) != sorted(first_names):  # read by name: the order of columns/members means nothing
                 extra = sorted(set(names) - set(first_names)) or sorted(set(first_names) - set(names))
                 raise DatasetFileError(
                     f"{path}: its columns ({', '.join(names)}) differ from those of {files[0]} "
