@@ -264,3 +264,30 @@ def test_wrench_columns_given_as_channels_are_refused_not_read_as_a_smaller_wren
     # a raw channel that happens to be named like an axis is read when the wrench is named
     d = CalibrationDataset.load(tmp_path / "d.csv", columns=ColumnMap(channels=["s0", "s1", "Fx"], wrench=["Fy", "Fz"]))
     np.testing.assert_array_equal(d.raw[:, 2], w[:, 0])
+
+
+def _npz_of_version_3(path, members, descr="<f8"):
+    """An .npz whose members are .npy files of format 3.0, written by numpy itself."""
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, value in members.items():
+            buffer = io.BytesIO()
+            np.lib.format.write_array(buffer, np.asarray(value), version=(3, 0), allow_pickle=True)
+            archive.writestr(f"{name}.npy", buffer.getvalue())
+    return path
+
+
+def test_npz_members_of_npy_format_3_are_read_and_pickles_in_them_still_refused(tmp_path):
+    raw = np.arange(60.0).reshape(10, 6)
+    wrench = 2.0 * raw + 1.0
+    path = _npz_of_version_3(tmp_path / "v3.npz", {"raw": raw, "wrench": wrench})
+    with np.load(path) as check:  # numpy itself reads this file
+        np.testing.assert_array_equal(check["raw"], raw)
+    ds = CalibrationDataset.load(path)
+    np.testing.assert_array_equal(ds.raw, raw)
+    np.testing.assert_array_equal(ds.wrench, wrench)
+    pickled = _npz_of_version_3(tmp_path / "obj.npz", {"raw": np.array([raw, "x"], dtype=object), "wrench": wrench})
+    with pytest.raises(DatasetFileError, match=r"array 'raw' holds Python objects \(a pickle\)"):
+        CalibrationDataset.load(pickled)
