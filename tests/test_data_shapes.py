@@ -360,3 +360,20 @@ def test_folder_files_with_the_same_columns_in_another_order_are_read_by_name(tm
     np.savez(extra / "p1.npz", wrench=wrench[40:], raw=raw[40:], temperature=np.full(40, 25.0))
     with pytest.raises(DatasetFileError, match=r"p1.npz: its columns .* differ from those of .*temperature differs"):
         CalibrationDataset.load(extra)
+
+
+def test_a_truncated_mat_file_is_said_to_be_truncated_not_to_lack_the_wrench(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6, n=60)
+    variables = {f"s{i}": raw[:, i] for i in range(6)} | {a: wrench[:, i] for i, a in enumerate(["Fx", "Fy", "Fz",
+                                                                                                  "Tx", "Ty", "Tz"])}
+    whole = tmp_path / "whole.mat"
+    scipy.io.savemat(whole, variables)
+    data = whole.read_bytes()
+    cut = tmp_path / "cut.mat"
+    cut.write_bytes(data[:len(data) // 2])  # s0..s5 whole, the wrench variables lost
+    assert [name for name, *_ in scipy.io.whosmat(cut)] == [f"s{i}" for i in range(6)]
+    for options, sought in (([], "variable 'wrench'"), (["--wrench", "Fx,Fy,Fz,Tx,Ty,Tz"], "variable 'Fx'")):
+        err = one_line_error(capsys, main(["fit", str(cut), *options, "--out", str(tmp_path / "m"), "-q"]))
+        assert f"cut.mat: the file is truncated or damaged: it ends at byte {len(data) // 2}, inside a variable" in err
+        assert sought in err and "lacks" not in err and "copy or save the whole file again" in err
+    assert CalibrationDataset.load(whole).n_samples == 60

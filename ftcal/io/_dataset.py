@@ -875,6 +875,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
             names = tuple(vectors)
         else:
             _refuse_containers_only(source, available)
+            source.refuse_if_cut(f"{kind} {default!r} (or the {what} vectors)")
             raise DatasetFileError(
                 f"{where}: no {kind} {default!r} holding the {what}; the file has "
                 f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}.", parameter=option,
@@ -884,6 +885,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     base = spec[0] if spec is not None else None
     missing = [n for n in ([base] if spec is not None else names) if n not in available]
     if missing:
+        source.refuse_if_cut(f"{kind} {missing[0]!r}")
         raise DatasetFileError(f"{where}: {{{option}}} names {kind} {missing[0]!r}, which the file lacks; the file "
                                f"has {', '.join(n for n in available if n != 'meta_json')}.", parameter=option,
                                value=missing[0])
@@ -952,6 +954,7 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
+        source.refuse_if_cut(f"{source.kind} {group_name!r}")
         raise DatasetFileError(f"{where}: {{{GROUPS}}} names {source.kind} {group_name!r}, which the file lacks; the "
                                f"file has {', '.join(n for n in available if n != 'meta_json')}.", parameter=GROUPS,
                                value=group_name)

@@ -597,6 +597,32 @@ _MAT_ITEM_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, 
                    "uint32": 4, "int64": 8, "uint64": 8}
 
 
+def _mat_cut(path) -> tuple[int, int] | None:
+    """``(the file's size, the size its variables declare)`` [bytes] when a MATLAB v5-v7 file ends before its last
+    variable does (a truncated copy or download), else ``None``: the variables' tags are walked, none is read."""
+    import struct
+
+    from scipy.io.matlab import matfile_version
+
+    with open(path, "rb") as fh:
+        try:
+            if matfile_version(fh)[0] != 1:  # v4 files have no tags to walk
+                return None
+        except Exception:  # scipy raises ValueError/TypeError on foreign files
+            return None
+        size = fh.seek(0, 2)
+        fh.seek(126)
+        order = "<" if fh.read(2) == b"IM" else ">"
+        pos = 128
+        while pos + 8 <= size:
+            fh.seek(pos)
+            kind, n_bytes = struct.unpack(order + "II", fh.read(8))
+            pos += 8 + n_bytes
+            if kind == 14 and pos % 8:  # an uncompressed matrix is padded to 8 bytes
+                pos += 8 - pos % 8
+    return (size, pos) if pos > size else None
+
+
 class ArrayFile:
     """The named arrays of an ``.npz`` or ``.mat`` file: listed without reading them, read one at a time.
 
@@ -618,6 +644,8 @@ class ArrayFile:
         self.is_npz = self.path.suffix.lower() == ".npz"
         self.kind = "array" if self.is_npz else "variable"
         self._zip: zipfile.ZipFile | None = None
+        #: for a .mat file cut short: (the bytes it holds, the bytes its variables declare)
+        self.cut: tuple[int, int] | None = None
         #: name -> (shape, dtype kind letter or MATLAB class)
         self.entries: dict[str, tuple[tuple[int, ...], str]] = {}
         if self.is_npz:
@@ -660,6 +688,18 @@ class ArrayFile:
             raise DatasetFileError(f"{self.where}: not a readable .mat file ({str(exc)[:100]}).") from None
         for name, shape, cls in found:
             self.entries[name] = (tuple(shape), cls)
+        self.cut = _mat_cut(self.path)
+
+    def refuse_if_cut(self, sought: str) -> None:
+        """A file cut short lists only the variables before the cut: a variable ``sought`` (e.g. ``"variable
+        'wrench'"``) missing from it is said to be lost to the cut, not absent."""
+        if self.cut is None:
+            return
+        ends, declared = self.cut
+        listed = ", ".join(self.entries) or "no variable"
+        raise DatasetFileError(f"{self.where}: the file is truncated or damaged: it ends at byte {ends}, inside a "
+                               f"variable that runs to byte {declared}, so only {listed} can be read and {sought} is not "
+                               "among them. Fix: copy or save the whole file again.")
 
     def _refuse_hdf5(self) -> None:
         raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
