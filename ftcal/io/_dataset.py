@@ -53,7 +53,7 @@ from ..core._files import atomic_output, values_sha256
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       checked_temperature, _slice_columns)
+                       checked_temperature, read_utf8_text, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -710,14 +710,13 @@ class CalibrationDataset:
 
     @classmethod
     def _load_csv(cls, path: Path, columns: ColumnMap) -> tuple["CalibrationDataset", tuple[str, ...]]:
-        try:
-            # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
-            lines = path.read_text(encoding="utf-8-sig").splitlines()
-        except UnicodeDecodeError as exc:
-            line = path.read_bytes()[:exc.start].count(b"\n") + 1
-            raise DatasetFileError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a dataset CSV is a text "
-                                   "file.") from None
+        # a byte-order mark (spreadsheet exports) is not part of the first column's name
+        lines = read_utf8_text(path, "a dataset CSV is a text file").splitlines()
         meta, header_no, line_nos = _csv_layout(lines, path)
+        if header_no is None and not lines:
+            raise DatasetFileError(f"{path}: the file is empty (no text); expected a header line {_CSV_LAYOUT} and "
+                                   "data rows. Fix: give the file that holds the recording (the copy or export may "
+                                   "have failed).")
         if header_no is None:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         where = f"{path}: line {header_no}"

@@ -769,6 +769,47 @@ def check_real_array(value, name: str, where: str, kind: str = "variable") -> np
     return value
 
 
+# ------------------------------------------------------------------ text files
+def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -> str:
+    """The text of the UTF-8 file ``path`` (a byte-order mark dropped: spreadsheet exports write one), newlines
+    as ``\\n``; a file in another encoding raises ``error`` naming the line and byte where it stops being UTF-8 and
+    the conversion that fixes it (UTF-16, told by its byte-order mark, said as such). ``what`` ends the message
+    (e.g. ``"a dataset CSV is a text file"``).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "d.csv"
+    >>> _ = path.write_bytes("s0,Fx\\n1,2\\n".encode("utf-16"))
+    >>> read_utf8_text(path, "a dataset CSV is a text file")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; a dataset CSV is a text file in UTF-8. Fix: save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 d.csv > d-utf8.csv.
+    >>> _ = path.write_bytes(b"# temp\\xe9rature\\ns0,Fx\\n")
+    >>> read_utf8_text(path, "a dataset CSV is a text file")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...: line 1 (byte 6): not UTF-8 text (invalid continuation byte); a dataset CSV is a text file in UTF-8. Fix: save it as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 d.csv > d-utf8.csv if it is Latin-1 (Windows-1252: -f CP1252).
+    """
+    import codecs
+    from pathlib import Path
+
+    path = Path(path)
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
+    except UnicodeDecodeError as exc:
+        fixed = f"{path.stem}-utf8{path.suffix}"
+        if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+            raise error(f"{path}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what} in UTF-8. "
+                        f"Fix: save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 {path.name} > {fixed}.") from None
+        at = exc.start + (3 if data.startswith(codecs.BOM_UTF8) else 0)  # counted after the mark
+        line = data[:at].count(b"\n") + 1
+        raise error(f"{path}: line {line} (byte {at}): not UTF-8 text ({exc.reason}); {what} in UTF-8. Fix: save it "
+                    f"as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 {path.name} > {fixed} if it is Latin-1 (Windows-1252: "
+                    "-f CP1252).") from None
+
+
 # ------------------------------------------------------------------ headerless text files named by the user
 def _text_fields(line: str) -> list[str]:
     """A text line's fields: comma-separated, or separated by spaces / tabs when the line holds no comma."""
@@ -783,9 +824,7 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
     from ..core._columns import is_number
 
     try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DatasetFileError(f"{path}: not UTF-8 text ({exc.reason}); {what} is a text file.") from None
+        text = read_utf8_text(path, f"{what} is a text file")
     except OSError as exc:
         raise DatasetFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
     comments, rows = [], []
@@ -828,8 +867,28 @@ def has_header(path) -> bool:
     >>> _ = (folder / "a.txt").write_text("0.1 0.2 0.3\\n"); _ = (folder / "b.csv").write_text("# x\\nFx,Fy\\n1,2\\n")
     >>> has_header(folder / "a.txt"), has_header(folder / "b.csv")
     (False, True)
+    >>> _ = (folder / "empty.csv").write_text("")
+    >>> has_header(folder / "empty.csv")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...empty.csv: the file is empty (0 bytes). Fix: give the file that holds the recording (the copy or export may have failed).
+
+    Raises
+    ------
+    DatasetFileError
+        When the file holds no line at all (empty, or only blank and ``#`` comment lines): neither a header nor
+        numbers.
     """
-    return _data_lines(path, "the file")[2] is not None
+    from pathlib import Path
+
+    comments, rows, header = _data_lines(path, "the file")
+    if not rows and header is None:
+        size = Path(path).stat().st_size
+        said = "is empty (0 bytes)" if size == 0 else f"holds no header and no data ({size} bytes of " + \
+            ("# comments" if comments else "blank lines") + ")"
+        raise DatasetFileError(f"{path}: the file {said}. Fix: give the file that holds the recording (the copy or "
+                               "export may have failed).")
+    return header is not None
 
 
 @dataclass(frozen=True)
