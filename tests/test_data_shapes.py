@@ -377,3 +377,25 @@ def test_a_truncated_mat_file_is_said_to_be_truncated_not_to_lack_the_wrench(tmp
         assert f"cut.mat: the file is truncated or damaged: it ends at byte {len(data) // 2}, inside a variable" in err
         assert sought in err and "lacks" not in err and "copy or save the whole file again" in err
     assert CalibrationDataset.load(whole).n_samples == 60
+
+
+def test_nan_in_a_column_slice_names_the_variable_the_user_named(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6, n=40)
+    data = np.column_stack([raw, wrench])
+    data[5, 2] = np.nan  # a raw channel: column 2 of 'data'
+    data[3, 8] = np.inf  # the wrench: column 8 of 'data', in an earlier row
+    path = tmp_path / "one.mat"
+    scipy.io.savemat(path, {"data": data})
+    err = one_line_error(capsys, main(["fit", str(path), "--channels", "data[:,0:6]", "--wrench", "data[:,6:12]",
+                                       "--out", str(tmp_path / "m"), "-q"]))
+    assert "one.mat: array 'data[:,2]', row 5 (rows counted from 0): NaN or inf" in err and "'raw'" not in err
+    data[5, 2] = 1.0
+    scipy.io.savemat(path, {"data": data})
+    err = one_line_error(capsys, main(["fit", str(path), "--channels", "data[:,0:6]", "--wrench", "data[:,6:12]",
+                                       "--out", str(tmp_path / "m"), "-q"]))
+    assert "one.mat: array 'data[:,8]', row 3 (rows counted from 0): NaN or inf" in err
+    vectors = tmp_path / "vectors.npz"
+    raw[7, 4] = np.nan
+    np.savez(vectors, **{f"s{i}": raw[:, i] for i in range(6)}, wrench=wrench)
+    with pytest.raises(DatasetFileError, match=r"vectors.npz: array 's4', row 7 \(rows counted from 0\): NaN or inf"):
+        CalibrationDataset.load(vectors)

@@ -704,7 +704,6 @@ class CalibrationDataset:
                 meta = _npz_meta(source.read("meta_json"), path)
             names = tuple(n for n in source.names() if n != "meta_json")
             ds = _dataset_from_arrays(cls, source, columns, meta)
-        ds._check_finite(path)
         ds.sources = RowSources.of_file(path.name, np.arange(1, ds.n_samples + 1), "row")
         return ds, names
 
@@ -780,15 +779,6 @@ class CalibrationDataset:
         except DatasetFileError as exc:
             raise exc.located(f"{path}: ") from None
         return ds, tuple(names)
-
-    def _check_finite(self, path: Path) -> None:
-        """NaN or inf in the arrays of a ``.npz`` / ``.mat`` file, named by array and row (counted from 0)."""
-        for name, arr in (("raw", self.raw), ("wrench", self.wrench)):
-            bad = np.argwhere(~np.isfinite(arr))
-            if bad.size:
-                row = int(bad[0, 0])
-                raise DatasetFileError(f"{path}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
-                                       "remove or repair that row.")
 
 
 def _check_groups(ds: CalibrationDataset, where: str, column: str) -> None:
@@ -905,6 +895,19 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     return np.column_stack(cols).astype(float), list(names), None
 
 
+def _refuse_non_finite(where: str, arrays: list[tuple[np.ndarray, list[str]]]) -> None:
+    """NaN or inf in the arrays read from a ``.npz`` / ``.mat`` file, named by the array the user named (a whole
+    array, a vector, or a column slice such as ``data[:,3]``; ``labels``: one per column, or one for them all) and
+    the row (counted from 0)."""
+    for values, labels in arrays:
+        bad = np.argwhere(~np.isfinite(values))
+        if bad.size:
+            row, col = int(bad[0, 0]), int(bad[0, 1])
+            name = labels[col] if len(labels) == values.shape[1] else labels[0]
+            raise DatasetFileError(f"{where}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
+                                   "remove or repair that row.")
+
+
 def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict) -> CalibrationDataset:
     """The dataset the mapped arrays of ``source`` make (only those arrays are read)."""
     where = source.where
@@ -950,6 +953,7 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     if raw.shape[0] != wrench.shape[0]:
         raise DatasetFileError(f"{where}: the raw channels have {raw.shape[0]} rows but the wrench has "
                                f"{wrench.shape[0]}; they must match (one row per sample).")
+    _refuse_non_finite(where, [(raw, raw_labels), (wrench, wrench_labels)])
     extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
