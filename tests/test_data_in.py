@@ -15,6 +15,7 @@ import scipy.io
 from ftcal import CalibrationDataset, LinearCalibrator, load_model
 from ftcal.core import DatasetFileError
 from ftcal.cli import main
+from ftcal.io import has_header
 from ftcal.io._readers import ColumnMap, lever_arm_problem
 
 from test_calibration_report import sensor_dataset
@@ -264,3 +265,63 @@ def test_wrench_columns_given_as_channels_are_refused_not_read_as_a_smaller_wren
     # a raw channel that happens to be named like an axis is read when the wrench is named
     d = CalibrationDataset.load(tmp_path / "d.csv", columns=ColumnMap(channels=["s0", "s1", "Fx"], wrench=["Fy", "Fz"]))
     np.testing.assert_array_equal(d.raw[:, 2], w[:, 0])
+
+
+def _npz_of_version_3(path, members, descr="<f8"):
+    """An .npz whose members are .npy files of format 3.0, written by numpy itself."""
+    import io
+    import zipfile
+
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, value in members.items():
+            buffer = io.BytesIO()
+            np.lib.format.write_array(buffer, np.asarray(value), version=(3, 0), allow_pickle=True)
+            archive.writestr(f"{name}.npy", buffer.getvalue())
+    return path
+
+
+def test_npz_members_of_npy_format_3_are_read_and_pickles_in_them_still_refused(tmp_path):
+    raw = np.arange(60.0).reshape(10, 6)
+    wrench = 2.0 * raw + 1.0
+    path = _npz_of_version_3(tmp_path / "v3.npz", {"raw": raw, "wrench": wrench})
+    with np.load(path) as check:  # numpy itself reads this file
+        np.testing.assert_array_equal(check["raw"], raw)
+    ds = CalibrationDataset.load(path)
+    np.testing.assert_array_equal(ds.raw, raw)
+    np.testing.assert_array_equal(ds.wrench, wrench)
+    pickled = _npz_of_version_3(tmp_path / "obj.npz", {"raw": np.array([raw, "x"], dtype=object), "wrench": wrench})
+    with pytest.raises(DatasetFileError, match=r"array 'raw' holds Python objects \(a pickle\)"):
+        CalibrationDataset.load(pickled)
+
+
+def test_a_csv_in_another_encoding_names_where_and_the_conversion(tmp_path, capsys):
+    text = "# temp\u00e9rature en \u00b0C\ns0,s1,Fx\n1,2,3\n4,5,6\n"
+    utf16 = tmp_path / "u16.csv"
+    utf16.write_bytes(text.encode("utf-16"))  # with its byte-order mark, as Windows tools write it
+    err = one_line_error(capsys, main(["fit", str(utf16), "--out", str(tmp_path / "m"), "-q"]))
+    assert "u16.csv: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8" in err
+    assert "iconv -f UTF-16 -t UTF-8 u16.csv > u16-utf8.csv" in err
+    latin1 = tmp_path / "latin1.csv"
+    logged = "s0,s1,Fx\n1,2,3\n# temp\u00e9rature\n4,5,6\n"  # the first non-ASCII byte: 9 + 6 + 6 = byte 21, line 3
+    latin1.write_bytes(logged.encode("latin-1"))
+    for load in (lambda: CalibrationDataset.load(latin1), lambda: has_header(latin1)):
+        with pytest.raises(DatasetFileError, match=r"latin1.csv: line 3 \(byte 21\): not UTF-8 text .* Fix: save it as "
+                           r"UTF-8, e.g. iconv -f LATIN1 -t UTF-8 latin1.csv > latin1-utf8.csv"):
+            load()
+    converted = tmp_path / "converted.csv"  # the advised conversion reads
+    converted.write_text(logged, encoding="utf-8")
+    np.testing.assert_array_equal(CalibrationDataset.load(converted).raw, [[1, 2], [4, 5]])
+
+
+def test_empty_files_are_said_to_be_empty(tmp_path, capsys):
+    empty = tmp_path / "a.csv"
+    empty.write_bytes(b"")
+    err = one_line_error(capsys, main(["fit", str(empty), "--out", str(tmp_path / "m"), "-q"]))
+    assert err == f"ftcal: error: {empty}: the file is empty (0 bytes). Fix: give the file that holds the recording " \
+                  "(the copy or export may have failed)."
+    with pytest.raises(DatasetFileError, match=r"a.csv: the file is empty \(no text\)"):
+        CalibrationDataset.load(empty)
+    comments = tmp_path / "b.csv"
+    comments.write_text("# exported\n\n")
+    err = one_line_error(capsys, main(["fit", str(comments), "--out", str(tmp_path / "m"), "-q"]))
+    assert "b.csv: the file holds no header and no data (12 bytes of # comments)" in err

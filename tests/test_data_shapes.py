@@ -329,3 +329,73 @@ def test_the_report_states_the_units_of_the_axes_that_exist(tmp_path, capsys, ax
     html = (tmp_path / "m" / "linear.report.html").read_text()
     section = html[html.index("Frames and units"):][:600]
     assert says in section and not_says not in section, section
+
+
+def test_folder_files_with_the_same_columns_in_another_order_are_read_by_name(tmp_path):
+    raw, wrench = _sensor(n_channels=6, n=80)
+    halves = [slice(0, 40), slice(40, 80)]
+    for suffix in ("npz", "mat", "csv"):
+        folder = tmp_path / suffix
+        folder.mkdir()
+        for k, rows in enumerate(halves):
+            first, last = ("raw", "wrench") if k == 0 else ("wrench", "raw")
+            arrays = {first: raw[rows] if first == "raw" else wrench[rows],
+                      last: raw[rows] if last == "raw" else wrench[rows]}
+            if suffix == "npz":
+                np.savez(folder / f"p{k}.npz", **arrays)
+            elif suffix == "mat":
+                scipy.io.savemat(folder / f"p{k}.mat", arrays)
+            else:
+                names = [f"s{i}" for i in range(6)] + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]
+                order = list(range(12)) if k == 0 else list(range(6, 12)) + list(range(6))[::-1]
+                table = np.column_stack([raw[rows], wrench[rows]])[:, order]
+                _csv(folder / f"p{k}.csv", [names[i] for i in order], table)
+        ds = CalibrationDataset.load(folder)
+        np.testing.assert_array_equal(ds.raw, raw)
+        np.testing.assert_array_equal(ds.wrench, wrench)
+        np.testing.assert_array_equal(ds.group, np.repeat([0, 1], 40))
+    extra = tmp_path / "extra"
+    extra.mkdir()
+    np.savez(extra / "p0.npz", raw=raw[:40], wrench=wrench[:40])
+    np.savez(extra / "p1.npz", wrench=wrench[40:], raw=raw[40:], temperature=np.full(40, 25.0))
+    with pytest.raises(DatasetFileError, match=r"p1.npz: its columns .* differ from those of .*temperature differs"):
+        CalibrationDataset.load(extra)
+
+
+def test_a_truncated_mat_file_is_said_to_be_truncated_not_to_lack_the_wrench(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6, n=60)
+    variables = {f"s{i}": raw[:, i] for i in range(6)} | {a: wrench[:, i] for i, a in enumerate(["Fx", "Fy", "Fz",
+                                                                                                  "Tx", "Ty", "Tz"])}
+    whole = tmp_path / "whole.mat"
+    scipy.io.savemat(whole, variables)
+    data = whole.read_bytes()
+    cut = tmp_path / "cut.mat"
+    cut.write_bytes(data[:len(data) // 2])  # s0..s5 whole, the wrench variables lost
+    assert [name for name, *_ in scipy.io.whosmat(cut)] == [f"s{i}" for i in range(6)]
+    for options, sought in (([], "variable 'wrench'"), (["--wrench", "Fx,Fy,Fz,Tx,Ty,Tz"], "variable 'Fx'")):
+        err = one_line_error(capsys, main(["fit", str(cut), *options, "--out", str(tmp_path / "m"), "-q"]))
+        assert f"cut.mat: the file is truncated or damaged: it ends at byte {len(data) // 2}, inside a variable" in err
+        assert sought in err and "lacks" not in err and "copy or save the whole file again" in err
+    assert CalibrationDataset.load(whole).n_samples == 60
+
+
+def test_nan_in_a_column_slice_names_the_variable_the_user_named(tmp_path, capsys):
+    raw, wrench = _sensor(n_channels=6, n=40)
+    data = np.column_stack([raw, wrench])
+    data[5, 2] = np.nan  # a raw channel: column 2 of 'data'
+    data[3, 8] = np.inf  # the wrench: column 8 of 'data', in an earlier row
+    path = tmp_path / "one.mat"
+    scipy.io.savemat(path, {"data": data})
+    err = one_line_error(capsys, main(["fit", str(path), "--channels", "data[:,0:6]", "--wrench", "data[:,6:12]",
+                                       "--out", str(tmp_path / "m"), "-q"]))
+    assert "one.mat: array 'data[:,2]', row 5 (rows counted from 0): NaN or inf" in err and "'raw'" not in err
+    data[5, 2] = 1.0
+    scipy.io.savemat(path, {"data": data})
+    err = one_line_error(capsys, main(["fit", str(path), "--channels", "data[:,0:6]", "--wrench", "data[:,6:12]",
+                                       "--out", str(tmp_path / "m"), "-q"]))
+    assert "one.mat: array 'data[:,8]', row 3 (rows counted from 0): NaN or inf" in err
+    vectors = tmp_path / "vectors.npz"
+    raw[7, 4] = np.nan
+    np.savez(vectors, **{f"s{i}": raw[:, i] for i in range(6)}, wrench=wrench)
+    with pytest.raises(DatasetFileError, match=r"vectors.npz: array 's4', row 7 \(rows counted from 0\): NaN or inf"):
+        CalibrationDataset.load(vectors)

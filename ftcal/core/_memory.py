@@ -109,6 +109,50 @@ def rows_within_limit(bytes_per_row_pair: float) -> int:
     return m
 
 
+def _read_npy_header_3_0(fh, max_header_size: int = 10000):
+    """The ``(shape, fortran_order, dtype)`` of a ``.npy`` header of format 3.0 (numpy writes it when a field name
+    is not Latin-1): format 2.0's layout, a 4-byte length then a Python dict literal, in UTF-8. Read as numpy reads
+    it, with numpy's header-size bound; raises :class:`ValueError` on a damaged header.
+
+    Examples
+    --------
+    >>> import io, numpy as np
+    >>> buffer = io.BytesIO()
+    >>> np.lib.format.write_array(buffer, np.zeros(2, dtype=[("\u00b5N", "<f8")]), version=(3, 0))
+    >>> _ = buffer.seek(0)
+    >>> np.lib.format.read_magic(buffer)
+    (3, 0)
+    >>> _read_npy_header_3_0(buffer)
+    ((2,), False, dtype([('µN', '<f8')]))
+    """
+    import ast
+    import struct
+
+    import numpy as np
+
+    length = fh.read(4)
+    if len(length) != 4:
+        raise EOFError("the array header length is cut short")
+    n = struct.unpack("<I", length)[0]
+    if n > max_header_size:
+        raise ValueError(f"header of {n} bytes, larger than numpy reads safely ({max_header_size})")
+    raw = fh.read(n)
+    if len(raw) != n:
+        raise EOFError(f"the array header is cut short ({len(raw)} of {n} bytes)")
+    header = ast.literal_eval(raw.decode("utf-8"))
+    if not isinstance(header, dict) or header.keys() != {"descr", "fortran_order", "shape"}:
+        raise ValueError("the header is not a dictionary of descr, fortran_order and shape")
+    shape, fortran = header["shape"], header["fortran_order"]
+    if not isinstance(shape, tuple) or not all(isinstance(d, int) and d >= 0 for d in shape):
+        raise ValueError(f"shape is not valid: {shape!r}")
+    if not isinstance(fortran, bool):
+        raise ValueError(f"fortran_order is not a valid bool: {fortran!r}")
+    try:
+        return shape, fortran, np.lib.format.descr_to_dtype(header["descr"])
+    except TypeError as exc:
+        raise ValueError(f"descr is not a valid dtype descriptor: {header['descr']!r}") from exc
+
+
 def read_npy_member(archive, member: str, what: str, error: type[Exception], fix: str, memory_fix: str, *,
                     max_empty_dim: float = float("inf")):
     """The array of the ``.npy`` member ``member`` of the zip ``archive`` (an ``.npz``; ``what`` names it in the
@@ -123,7 +167,8 @@ def read_npy_member(archive, member: str, what: str, error: type[Exception], fix
     import numpy as np
 
     info = archive.getinfo(member)
-    headers = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+    headers = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0,
+               (3, 0): _read_npy_header_3_0}
     try:
         with archive.open(info) as fh:
             version = np.lib.format.read_magic(fh)

@@ -53,7 +53,7 @@ from ..core._files import atomic_output, content_twins
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       checked_temperature, _slice_columns)
+                       checked_temperature, read_utf8_text, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -665,7 +665,7 @@ class CalibrationDataset:
             ds, names = cls._load_file(path, columns)
             if first_names is None:
                 first_names = names
-            elif names != first_names:
+            elif sorted(names) != sorted(first_names):  # read by name: the order of columns/members means nothing
                 extra = sorted(set(names) - set(first_names)) or sorted(set(first_names) - set(names))
                 raise DatasetFileError(
                     f"{path}: its columns ({', '.join(names)}) differ from those of {files[0]} "
@@ -710,20 +710,18 @@ class CalibrationDataset:
                 meta = _npz_meta(source.read("meta_json"), path)
             names = tuple(n for n in source.names() if n != "meta_json")
             ds = _dataset_from_arrays(cls, source, columns, meta)
-        ds._check_finite(path)
         ds.sources = RowSources.of_file(path.name, np.arange(1, ds.n_samples + 1), "row")
         return ds, names
 
     @classmethod
     def _load_csv(cls, path: Path, columns: ColumnMap) -> tuple["CalibrationDataset", tuple[str, ...]]:
-        try:
-            # utf-8-sig: a byte-order mark (spreadsheet exports) is not part of the first column's name
-            lines = path.read_text(encoding="utf-8-sig").splitlines()
-        except UnicodeDecodeError as exc:
-            line = path.read_bytes()[:exc.start].count(b"\n") + 1
-            raise DatasetFileError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a dataset CSV is a text "
-                                   "file.") from None
+        # a byte-order mark (spreadsheet exports) is not part of the first column's name
+        lines = read_utf8_text(path, "a dataset CSV is a text file").splitlines()
         meta, header_no, line_nos = _csv_layout(lines, path)
+        if header_no is None and not lines:
+            raise DatasetFileError(f"{path}: the file is empty (no text); expected a header line {_CSV_LAYOUT} and "
+                                   "data rows. Fix: give the file that holds the recording (the copy or export may "
+                                   "have failed).")
         if header_no is None:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         where = f"{path}: line {header_no}"
@@ -787,15 +785,6 @@ class CalibrationDataset:
         except DatasetFileError as exc:
             raise exc.located(f"{path}: ") from None
         return ds, tuple(names)
-
-    def _check_finite(self, path: Path) -> None:
-        """NaN or inf in the arrays of a ``.npz`` / ``.mat`` file, named by array and row (counted from 0)."""
-        for name, arr in (("raw", self.raw), ("wrench", self.wrench)):
-            bad = np.argwhere(~np.isfinite(arr))
-            if bad.size:
-                row = int(bad[0, 0])
-                raise DatasetFileError(f"{path}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
-                                       "remove or repair that row.")
 
 
 def _check_groups(ds: CalibrationDataset, where: str, column: str) -> None:
@@ -881,6 +870,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
             names = tuple(vectors)
         else:
             _refuse_containers_only(source, available)
+            source.refuse_if_cut(f"{kind} {default!r} (or the {what} vectors)")
             raise DatasetFileError(
                 f"{where}: no {kind} {default!r} holding the {what}; the file has "
                 f"{', '.join(n for n in available if n != 'meta_json') or f'no {kind}s'}.", parameter=option,
@@ -890,6 +880,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     base = spec[0] if spec is not None else None
     missing = [n for n in ([base] if spec is not None else names) if n not in available]
     if missing:
+        source.refuse_if_cut(f"{kind} {missing[0]!r}")
         raise DatasetFileError(f"{where}: {{{option}}} names {kind} {missing[0]!r}, which the file lacks; the file "
                                f"has {', '.join(n for n in available if n != 'meta_json')}.", parameter=option,
                                value=missing[0])
@@ -908,6 +899,19 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
                                f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
     return np.column_stack(cols).astype(float), list(names), None
+
+
+def _refuse_non_finite(where: str, arrays: list[tuple[np.ndarray, list[str]]]) -> None:
+    """NaN or inf in the arrays read from a ``.npz`` / ``.mat`` file, named by the array the user named (a whole
+    array, a vector, or a column slice such as ``data[:,3]``; ``labels``: one per column, or one for them all) and
+    the row (counted from 0)."""
+    for values, labels in arrays:
+        bad = np.argwhere(~np.isfinite(values))
+        if bad.size:
+            row, col = int(bad[0, 0]), int(bad[0, 1])
+            name = labels[col] if len(labels) == values.shape[1] else labels[0]
+            raise DatasetFileError(f"{where}: array {name!r}, row {row} (rows counted from 0): NaN or inf; "
+                                   "remove or repair that row.")
 
 
 def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict) -> CalibrationDataset:
@@ -955,9 +959,11 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     if raw.shape[0] != wrench.shape[0]:
         raise DatasetFileError(f"{where}: the raw channels have {raw.shape[0]} rows but the wrench has "
                                f"{wrench.shape[0]}; they must match (one row per sample).")
+    _refuse_non_finite(where, [(raw, raw_labels), (wrench, wrench_labels)])
     extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
+        source.refuse_if_cut(f"{source.kind} {group_name!r}")
         raise DatasetFileError(f"{where}: {{{GROUPS}}} names {source.kind} {group_name!r}, which the file lacks; the "
                                f"file has {', '.join(n for n in available if n != 'meta_json')}.", parameter=GROUPS,
                                value=group_name)

@@ -55,7 +55,7 @@ from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import checked_temperature
+from ._readers import checked_temperature, read_utf8_text
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -180,12 +180,7 @@ def read_text_lines(path: Path, what: str, fix: str) -> list[str]:
         raise LogFormatError(f"{path}: no such {what}.")
     # the text, its lines and each row's fields as Python strings take several times the file's size
     check_allocation(_TEXT_MEMORY_FACTOR * path.stat().st_size, f"reading the {what} {path}", fix)
-    try:
-        return path.read_text(encoding="utf-8-sig").splitlines()
-    except UnicodeDecodeError as exc:
-        line = path.read_bytes()[:exc.start].count(b"\n") + 1
-        raise LogFormatError(f"{path}: line {line}: not UTF-8 text ({exc.reason}); a {what} is a CSV text file.") \
-            from None
+    return read_utf8_text(path, f"a {what} is a CSV text file", LogFormatError).splitlines()
 
 
 def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:

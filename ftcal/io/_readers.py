@@ -597,6 +597,32 @@ _MAT_ITEM_BYTES = {"double": 8, "single": 4, "int8": 1, "uint8": 1, "int16": 2, 
                    "uint32": 4, "int64": 8, "uint64": 8}
 
 
+def _mat_cut(path) -> tuple[int, int] | None:
+    """``(the file's size, the size its variables declare)`` [bytes] when a MATLAB v5-v7 file ends before its last
+    variable does (a truncated copy or download), else ``None``: the variables' tags are walked, none is read."""
+    import struct
+
+    from scipy.io.matlab import matfile_version
+
+    with open(path, "rb") as fh:
+        try:
+            if matfile_version(fh)[0] != 1:  # v4 files have no tags to walk
+                return None
+        except Exception:  # scipy raises ValueError/TypeError on foreign files
+            return None
+        size = fh.seek(0, 2)
+        fh.seek(126)
+        order = "<" if fh.read(2) == b"IM" else ">"
+        pos = 128
+        while pos + 8 <= size:
+            fh.seek(pos)
+            kind, n_bytes = struct.unpack(order + "II", fh.read(8))
+            pos += 8 + n_bytes
+            if kind == 14 and pos % 8:  # an uncompressed matrix is padded to 8 bytes
+                pos += 8 - pos % 8
+    return (size, pos) if pos > size else None
+
+
 class ArrayFile:
     """The named arrays of an ``.npz`` or ``.mat`` file: listed without reading them, read one at a time.
 
@@ -618,6 +644,8 @@ class ArrayFile:
         self.is_npz = self.path.suffix.lower() == ".npz"
         self.kind = "array" if self.is_npz else "variable"
         self._zip: zipfile.ZipFile | None = None
+        #: for a .mat file cut short: (the bytes it holds, the bytes its variables declare)
+        self.cut: tuple[int, int] | None = None
         #: name -> (shape, dtype kind letter or MATLAB class)
         self.entries: dict[str, tuple[tuple[int, ...], str]] = {}
         if self.is_npz:
@@ -660,6 +688,18 @@ class ArrayFile:
             raise DatasetFileError(f"{self.where}: not a readable .mat file ({str(exc)[:100]}).") from None
         for name, shape, cls in found:
             self.entries[name] = (tuple(shape), cls)
+        self.cut = _mat_cut(self.path)
+
+    def refuse_if_cut(self, sought: str) -> None:
+        """A file cut short lists only the variables before the cut: a variable ``sought`` (e.g. ``"variable
+        'wrench'"``) missing from it is said to be lost to the cut, not absent."""
+        if self.cut is None:
+            return
+        ends, declared = self.cut
+        listed = ", ".join(self.entries) or "no variable"
+        raise DatasetFileError(f"{self.where}: the file is truncated or damaged: it ends at byte {ends}, inside a "
+                               f"variable that runs to byte {declared}, so only {listed} can be read and {sought} is not "
+                               "among them. Fix: copy or save the whole file again.")
 
     def _refuse_hdf5(self) -> None:
         raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
@@ -729,6 +769,47 @@ def check_real_array(value, name: str, where: str, kind: str = "variable") -> np
     return value
 
 
+# ------------------------------------------------------------------ text files
+def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -> str:
+    """The text of the UTF-8 file ``path`` (a byte-order mark dropped: spreadsheet exports write one), newlines
+    as ``\\n``; a file in another encoding raises ``error`` naming the line and byte where it stops being UTF-8 and
+    the conversion that fixes it (UTF-16, told by its byte-order mark, said as such). ``what`` ends the message
+    (e.g. ``"a dataset CSV is a text file"``).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "d.csv"
+    >>> _ = path.write_bytes("s0,Fx\\n1,2\\n".encode("utf-16"))
+    >>> read_utf8_text(path, "a dataset CSV is a text file")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; a dataset CSV is a text file in UTF-8. Fix: save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 d.csv > d-utf8.csv.
+    >>> _ = path.write_bytes(b"# temp\\xe9rature\\ns0,Fx\\n")
+    >>> read_utf8_text(path, "a dataset CSV is a text file")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...: line 1 (byte 6): not UTF-8 text (invalid continuation byte); a dataset CSV is a text file in UTF-8. Fix: save it as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 d.csv > d-utf8.csv if it is Latin-1 (Windows-1252: -f CP1252).
+    """
+    import codecs
+    from pathlib import Path
+
+    path = Path(path)
+    data = path.read_bytes()
+    try:
+        return data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
+    except UnicodeDecodeError as exc:
+        fixed = f"{path.stem}-utf8{path.suffix}"
+        if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+            raise error(f"{path}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what} in UTF-8. "
+                        f"Fix: save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 {path.name} > {fixed}.") from None
+        at = exc.start + (3 if data.startswith(codecs.BOM_UTF8) else 0)  # counted after the mark
+        line = data[:at].count(b"\n") + 1
+        raise error(f"{path}: line {line} (byte {at}): not UTF-8 text ({exc.reason}); {what} in UTF-8. Fix: save it "
+                    f"as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 {path.name} > {fixed} if it is Latin-1 (Windows-1252: "
+                    "-f CP1252).") from None
+
+
 # ------------------------------------------------------------------ headerless text files named by the user
 def _text_fields(line: str) -> list[str]:
     """A text line's fields: comma-separated, or separated by spaces / tabs when the line holds no comma."""
@@ -743,9 +824,7 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
     from ..core._columns import is_number
 
     try:
-        text = Path(path).read_text(encoding="utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise DatasetFileError(f"{path}: not UTF-8 text ({exc.reason}); {what} is a text file.") from None
+        text = read_utf8_text(path, f"{what} is a text file")
     except OSError as exc:
         raise DatasetFileError(f"{path}: cannot be read ({exc.strerror or exc}).") from None
     comments, rows = [], []
@@ -788,8 +867,28 @@ def has_header(path) -> bool:
     >>> _ = (folder / "a.txt").write_text("0.1 0.2 0.3\\n"); _ = (folder / "b.csv").write_text("# x\\nFx,Fy\\n1,2\\n")
     >>> has_header(folder / "a.txt"), has_header(folder / "b.csv")
     (False, True)
+    >>> _ = (folder / "empty.csv").write_text("")
+    >>> has_header(folder / "empty.csv")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: ...empty.csv: the file is empty (0 bytes). Fix: give the file that holds the recording (the copy or export may have failed).
+
+    Raises
+    ------
+    DatasetFileError
+        When the file holds no line at all (empty, or only blank and ``#`` comment lines): neither a header nor
+        numbers.
     """
-    return _data_lines(path, "the file")[2] is not None
+    from pathlib import Path
+
+    comments, rows, header = _data_lines(path, "the file")
+    if not rows and header is None:
+        size = Path(path).stat().st_size
+        said = "is empty (0 bytes)" if size == 0 else f"holds no header and no data ({size} bytes of " + \
+            ("# comments" if comments else "blank lines") + ")"
+        raise DatasetFileError(f"{path}: the file {said}. Fix: give the file that holds the recording (the copy or "
+                               "export may have failed).")
+    return header is not None
 
 
 @dataclass(frozen=True)
