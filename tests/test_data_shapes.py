@@ -399,3 +399,30 @@ def test_nan_in_a_column_slice_names_the_variable_the_user_named(tmp_path, capsy
     np.savez(vectors, **{f"s{i}": raw[:, i] for i in range(6)}, wrench=wrench)
     with pytest.raises(DatasetFileError, match=r"vectors.npz: array 's4', row 7 \(rows counted from 0\): NaN or inf"):
         CalibrationDataset.load(vectors)
+
+
+def _npy_with_header(shape: str) -> bytes:
+    """A .npy member whose header declares ``shape`` as written (a damaged or hand-made header)."""
+    header = "{'descr': '<f8', 'fortran_order': False, 'shape': %s, }" % shape
+    header += " " * (63 - len(header) % 64) + "\n"
+    return b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + b"\0" * 96
+
+
+@pytest.mark.parametrize("shape", ["(-2, -6)", "(2, -6)", "(True, 6)", "(2, 6"])
+def test_a_damaged_npy_header_in_a_dataset_or_a_model_file_is_one_clear_error(tmp_path, capsys, shape):
+    """Negative or bool dimensions and an unclosed header (a tokenizer error inside numpy's parser) are refused as a
+    damaged member of that file, for a dataset and a model file alike: exit 2 and one line, never 'a bug in
+    ftcal'."""
+    dataset = tmp_path / "ds.npz"
+    with zipfile.ZipFile(dataset, "w") as z:
+        z.writestr("raw.npy", _npy_with_header(shape))
+        z.writestr("wrench.npy", _npy_with_header("(2, 6)"))
+    assert main(["fit", str(dataset), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "ds.npz" in err[0] and "'raw'" in err[0] and "damaged" in err[0], err
+    assert "bug" not in err[0]
+    model = tmp_path / "bad.model.npz"
+    with zipfile.ZipFile(model, "w") as z:
+        z.writestr("__metadata__.npy", _npy_with_header(shape))
+    with pytest.raises(ValueError, match=r"bad\.model\.npz: member '__metadata__'.*damaged"):
+        load_model(model)

@@ -161,6 +161,7 @@ def read_npy_member(archive, member: str, what: str, error: type[Exception], fix
     decompressed, at most the declared bytes are read, and an object (pickle) array is refused unread; a dimension
     longer than both the values the array holds and ``max_empty_dim`` (a shape ``(1e10, 0)``) is refused too.
     Returns an owned, writable array."""
+    import tokenize
     import zipfile
     import zlib
 
@@ -175,6 +176,8 @@ def read_npy_member(archive, member: str, what: str, error: type[Exception], fix
             if version not in headers:
                 raise ValueError(f"unsupported .npy version {version}")
             shape, fortran, dtype = headers[version](fh)
+            if not isinstance(shape, tuple) or not all(type(d) is int and d >= 0 for d in shape):
+                raise ValueError(f"shape is not valid: {shape!r}")  # negative or bool dimensions: numpy lets them by
             if dtype.hasobject:
                 raise error(f"{what} holds Python objects (a pickle), which ftcal never loads. Fix: {fix}.")
             n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
@@ -189,7 +192,8 @@ def read_npy_member(archive, member: str, what: str, error: type[Exception], fix
             data = fh.read(int(n_bytes))
     except (error, MemoryLimitError):
         raise
-    except (OSError, ValueError, EOFError, SyntaxError, zipfile.BadZipFile, zlib.error) as exc:
+    except (OSError, ValueError, TypeError, EOFError, SyntaxError, tokenize.TokenError, zipfile.BadZipFile,
+            zlib.error) as exc:  # a damaged header fails in numpy's parser its own ways
         raise error(f"{what} is not a readable numpy array ({' '.join(str(exc).split())[:120]}); the file is "
                     f"truncated or damaged. Fix: {fix}.") from None
     if len(data) != int(n_bytes):

@@ -393,7 +393,8 @@ class _Archive:
         """The array of member ``key``: sizes checked before decompressing, at most the declared bytes read."""
         info = self.members[key]
         what = f"{self.path}: member {key!r}"
-        fix = "this is not a model file ftcal wrote; fit and save the model again"
+        fix = ("the file is damaged (cut short or changed since it was written) or was not written by ftcal: copy it "
+               "again from where it was saved, or fit and save the model again with ftcal.save_model")
         check_allocation(float(info.file_size), f"{what} (declared {format_bytes(info.file_size)} uncompressed)", fix)
         if limit is not None and info.file_size > limit:
             raise ModelFileError(f"{what} declares {format_bytes(info.file_size)}, more than an ftcal model's "
