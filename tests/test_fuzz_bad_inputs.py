@@ -1462,7 +1462,7 @@ def test_a_second_meta_comment_is_refused_naming_both_lines(workdir, tmp_path, c
     (".npz", lambda raw: raw.astype(object), "array 'raw' holds Python objects (a pickle), which ftcal never loads"),
     (".mat", lambda raw: raw.astype(complex), "variable 'raw' has dtype complex128 (complex numbers)"),
     (".mat", lambda raw: np.array([raw], dtype=object), "variable 'raw' has dtype object (objects (a MATLAB cell"),
-    (".mat", lambda raw: {"a": raw}, "variable 'raw' has dtype [('a', 'O')] (records (a MATLAB struct))"),
+    (".mat", lambda raw: {"a": raw}, "variable 'raw' is a MATLAB struct (fields, not an array of numbers)"),
     (".mat", lambda raw: __import__("scipy.sparse").sparse.csr_matrix(raw), "variable 'raw' is a sparse matrix"),
     (".mat", lambda raw: "text", "variable 'raw' has dtype <U4 (text)"),
 ])

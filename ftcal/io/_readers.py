@@ -720,6 +720,11 @@ class ArrayFile:
         shape, cls = self.entries[name]
         check_allocation(float(np.prod([float(d) for d in shape])) * _MAT_ITEM_BYTES.get(cls, 8),
                          f"{self.where}: variable {name!r} of shape {shape}", "split the data into smaller files")
+        if cls == "cell":  # refused unread: a 1x1 cell can hold a compressed bomb its listing does not show
+            check_real_array(np.empty(0, dtype=object), name, self.where)
+        if cls in ("struct", "object", "function_handle", "opaque"):
+            raise DatasetFileError(f"{self.where}: variable {name!r} is a MATLAB {cls} (fields, not an array of "
+                                   "numbers); it must be an array of real numbers (double, single or integer).")
         if cls == "logical":  # scipy reads it as uint8: refused here, not fitted as 0/1 numbers
             raise DatasetFileError(f"{self.where}: variable {name!r} is a MATLAB logical array (booleans); it must "
                                    "hold real numbers (double, single or integer).")
