@@ -4,6 +4,7 @@ twice and put its twins in different folds, so a drift or a model would be judge
 from __future__ import annotations
 
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -201,3 +202,43 @@ def test_a_bag_copied_with_other_receive_times_or_an_extra_topic_is_refused(tmp_
     twin = _copy_bag(bag, tmp_path / "copy", shift_ns=10**9 if change == "receive times shifted" else 0,
                      extra_topic=change == "an unrelated topic added")
     _refused(["identify-load", str(bag), str(twin), "--out", str(tmp_path / "t"), "-q"], capsys, twin, bag, "ROS bag")
+
+
+def _folder_of(tmp_path, tables):
+    folder = tmp_path / "data"
+    folder.mkdir()
+    for k, (raw, wrench) in enumerate(tables):
+        CalibrationDataset(raw=raw, wrench=wrench).save(folder / f"run{k}.csv")
+    return folder
+
+
+def test_a_repeatability_run_a_microvolt_apart_on_a_biased_bridge_is_not_a_twin(tmp_path):
+    """The same dead-weight loads recorded twice by bridges biased at 2.5 V (a 10 mV signal, 0.1 µV resolution):
+    every reading of the second run is 1-2 µV from the first, 4e-7 of the reading, far above re-formatting and
+    round-off. Two recordings, both read: a tolerance on the column's largest value (the 2.5 V offset) called them
+    twins in most such draws."""
+    rng = np.random.default_rng(0)
+    wrench = rng.integers(-5, 6, size=(30, 6)) * np.array([10.0, 10, 20, 0.5, 0.5, 0.5])
+    signal = wrench @ rng.normal(size=(6, 6))
+    first = np.round((2.5 + signal / np.abs(signal).max() * 0.010) * 1e7) / 1e7
+    second = first + rng.choice([-2e-6, -1e-6, 1e-6, 2e-6], size=first.shape)
+    assert CalibrationDataset.load(_folder_of(tmp_path, [(first, wrench), (second, wrench)])).n_samples == 60
+
+
+def test_samples_of_static_poses_written_in_reverse_order_are_a_twin(tmp_path):
+    """Several samples a pose (the reference wrench the same within a pose, the readings apart by their noise), the
+    file written again with its rows reversed: the samples of one pose tie on the wrench, and are ordered by their
+    readings, so the copy is found."""
+    rng = np.random.default_rng(1)
+    wrench = np.repeat(rng.normal(size=(20, 6)) * 10, 10, axis=0)
+    raw = wrench @ rng.normal(size=(6, 6)) / 10 + 1e-4 * rng.normal(size=wrench.shape)
+    with pytest.raises(ValueError, match=r"run1\.csv holds the same readings and wrenches as .*run0\.csv"):
+        CalibrationDataset.load(_folder_of(tmp_path, [(raw, wrench), (raw[::-1], wrench[::-1])]))
+
+
+def test_infinities_must_stand_in_the_same_places_with_the_same_values_around_them(tmp_path):
+    from ftcal.core import content_twins
+
+    values = {"a": [np.array([1.0, 2.0, np.inf])], "b": [np.array([5.0, 7.0, np.inf])],
+              "c": [np.array([2.0, np.inf, 1.0])]}
+    assert content_twins(list(values), lambda p: values[str(p)]) == [(Path("a"), Path("c"))]

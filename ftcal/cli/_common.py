@@ -572,7 +572,7 @@ def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
     two formats, with other number formatting, its rows in another order, a bag with its receive times shifted or
     a log topic added): it would count its poses twice, and its twins would fall in different folds, so a model
     would be judged on its own training rows. ``what`` says what the inputs are (``"ROS bag"``, ``"run log"``,
-    ``"pose file"``); they are compared by what their reader reads, as sets of rows within a relative 1e-6
+    ``"pose file"``); they are compared by what their reader reads, as sets of rows, each number within 1e-7 of itself
     (:func:`ftcal.core.content_twins`: a truncated copy or another recording sharing most rows is not a twin; a
     bag by a streamed digest of each usable topic's values, :func:`ftcal.io.bag_values`),
     after a cheap key (a bag's usable topics and first messages, a text file's row count: only inputs alike in

@@ -504,16 +504,18 @@ def values_sha256(arrays: Iterable) -> str:
     return digest.hexdigest()
 
 
-#: Two inputs are twins when their values agree to this relative tolerance (of each column's largest value): far
-#: below any sensor's resolution (a 24-bit ADC resolves 6e-8 of its span only in its noise-free bits; real readings
-#: differ by 1e-4 or more), far above float round-off (1e-16) and re-formatting (``%.8g``: 5e-9).
-_TWIN_RTOL = 1e-6
+#: Two inputs are twins when each of their numbers agrees to this relative tolerance of its own magnitude: far below
+#: any sensor's resolution relative to its reading (a bridge biased at 2.5 V resolving 0.1 µV is 4e-8 of its reading;
+#: two real recordings differ by their noise, 1e-6 of the reading and more), far above float round-off (1e-16) and
+#: re-formatting (``%.8g``: 5e-9). Relative to each number, not to a column's span or largest value: one large value
+#: in a column, or a large offset under a small span, must not make two different recordings equal.
+_TWIN_RTOL = 1e-7
 
 
 def _row_tables(arrays) -> tuple[list, list] | None:
     """The values of ``arrays`` as row tables: arrays of one leading length are the columns of one table (its
-    numbers as floats, its text apart), each table's rows sorted canonically (text first, then the numbers
-    coarsely quantized, so round-off does not reorder them); 0-d values and None are kept as they are."""
+    numbers as floats, its text apart), each table's rows sorted canonically (text, then the numbers on a grid
+    of 1e-9 of their column's largest value); 0-d values and None are kept as they are."""
     import numpy as np
 
     if arrays is None:
@@ -533,18 +535,39 @@ def _row_tables(arrays) -> tuple[list, list] | None:
         numbers = np.hstack(numeric) if numeric else np.zeros((n, 0))
         text_parts = [p.astype(str) for p in parts if p.dtype.kind not in "biufc"]
         text = np.hstack(text_parts) if text_parts else np.zeros((n, 0), dtype=str)
-        scale = np.nanmax(np.abs(numbers), axis=0, initial=0.0) if n else np.zeros(numbers.shape[1])
-        step = np.where(np.isfinite(scale) & (scale > 0), scale * 1e-4, 1.0)
-        coarse = np.nan_to_num(np.round(numbers / step), nan=np.inf)
-        keys = [coarse[:, j] for j in range(coarse.shape[1])][::-1] + [text[:, j] for j in range(text.shape[1])][::-1]
+        # sorted on a grid of 1e-9 of each column's largest value: finer than any reading's noise (the samples of one
+        # pose, equal in their reference wrench, are ordered by their readings), coarser than round-off (a rotation
+        # matrix's zeros written as a quaternion, -1e-17 and 1e-17, must not reorder the poses that share them)
+        scale = np.abs(np.where(np.isfinite(numbers), numbers, 0.0)).max(axis=0, initial=0.0)
+        step = np.where(scale > 0, scale * 1e-9, 1.0)
+        sortable = np.nan_to_num(np.round(numbers / step), nan=np.inf)
+        keys = [sortable[:, j] for j in range(sortable.shape[1])][::-1] + [text[:, j] for j in range(text.shape[1])][::-1]
         order = np.lexsort(keys) if keys else np.arange(n)
         tables.append((numbers[order], text[order]))
     return scalars, tables
 
 
+def _row_signature(tables) -> tuple:
+    """A cheap signature of :func:`_row_tables` that twins share (bar a rounding boundary, rarely): the shapes,
+    the text, and each numeric column's mean on a grid of 1e-4 of the column's largest finite value; only inputs of
+    one signature are compared value by value, so a folder of many files is not compared pair by pair."""
+    import numpy as np
+
+    signature = [repr(tables[0])]
+    for numbers, text in tables[1]:
+        finite = np.where(np.isfinite(numbers), numbers, 0.0)
+        scale = np.abs(finite).max(axis=0, initial=0.0)
+        step = np.where(scale > 0, scale * 1e-4, 1.0)
+        means = np.round(finite.mean(axis=0) / step) if len(numbers) else np.zeros(numbers.shape[1])
+        signature.append((numbers.shape, text.shape, hash(text.tobytes()), tuple(means.tolist()),
+                          tuple(np.isnan(numbers).sum(axis=0).tolist()), tuple(np.isinf(numbers).sum(axis=0).tolist())))
+    return tuple(signature)
+
+
 def _same_rows(a, b, rtol: float) -> bool:
-    """Whether two :func:`_row_tables` hold the same values: text equal, numbers within ``rtol`` of each column's
-    largest value."""
+    """Whether two :func:`_row_tables` hold the same values: text equal, infinities and NaN in the same places,
+    every other number within ``rtol`` of its own magnitude (and 1e-12 of its column's largest finite value, for
+    numbers that are round-off around zero, e.g. a rotation matrix's zeros written as a quaternion)."""
     import numpy as np
 
     if a[0] != b[0] or len(a[1]) != len(b[1]):
@@ -552,10 +575,13 @@ def _same_rows(a, b, rtol: float) -> bool:
     for (num_a, text_a), (num_b, text_b) in zip(a[1], b[1]):
         if num_a.shape != num_b.shape or text_a.shape != text_b.shape or not np.array_equal(text_a, text_b):
             return False
-        scale = np.maximum(np.nanmax(np.abs(num_a), axis=0, initial=0.0), np.nanmax(np.abs(num_b), axis=0, initial=0.0))
-        with np.errstate(invalid="ignore"):  # inf - inf: equal infinities are caught by ==
-            close = (num_a == num_b) | (np.isnan(num_a) & np.isnan(num_b)) | (np.abs(num_a - num_b) <= rtol * scale)
-        if not close.all():
+        finite_a, finite_b = np.isfinite(num_a), np.isfinite(num_b)
+        if not (np.array_equal(finite_a, finite_b) and np.array_equal(num_a[~finite_a], num_b[~finite_b], equal_nan=True)):
+            return False
+        x, y = num_a[finite_a], num_b[finite_b]  # the same places: the finite numbers, flattened alike
+        scale = np.abs(np.where(finite_a, num_a, 0.0)).max(axis=0, initial=0.0)
+        floor = np.broadcast_to(1e-12 * scale, num_a.shape)[finite_a]
+        if not (np.abs(x - y) <= rtol * np.maximum(np.abs(x), np.abs(y)) + floor).all():
             return False
     return True
 
@@ -565,8 +591,9 @@ def content_twins(paths: Iterable[str | os.PathLike], values, key=None, *, rtol:
     """Pairs of ``paths`` that hold the same values, the later one second: one recording given twice, under two
     names, in two formats, with other number formatting or with its rows in another order. ``values(path)`` gives
     the arrays a reader reads from a path (None for one it cannot read); arrays of one length are the columns of a
-    table whose rows are compared as a set (sorted canonically), numbers within ``rtol`` of each column's largest
-    value (default 1e-6: above round-off and re-formatting, far below any sensor's resolution), text exactly.
+    table whose rows are compared as a set (sorted canonically), each number within ``rtol`` of its own magnitude
+    (default 1e-7: above round-off and re-formatting to 8 digits, below the noise of any sensor's reading), text
+    exactly; only inputs of one cheap signature (shapes, text, column means) are compared value by value.
     Only a whole input equal to another is a twin: two recordings sharing most rows (a low-resolution ADC reading
     the same loads) are not, and neither is a truncated copy (it holds fewer rows). With ``key`` (a cheap
     ``key(path)``, e.g. a row count), only paths of equal keys are read; a path whose key or values cannot be had
@@ -591,7 +618,7 @@ def content_twins(paths: Iterable[str | os.PathLike], values, key=None, *, rtol:
             continue
     twins = []
     for group in by_key.values():
-        seen: list = []  # (path, tables) of the group's inputs read so far, each the first of its values
+        seen: dict = {}  # signature -> (path, tables) of the group's inputs read so far, each the first of its values
         for p in group if len(group) > 1 else ():
             try:
                 tables = _row_tables(values(p))
@@ -599,11 +626,12 @@ def content_twins(paths: Iterable[str | os.PathLike], values, key=None, *, rtol:
                 continue
             if tables is None:
                 continue
-            first = next((q for q, other in seen if _same_rows(other, tables, rtol)), None)
+            alike = seen.setdefault(_row_signature(tables), [])
+            first = next((q for q, other in alike if _same_rows(other, tables, rtol)), None)
             if first is not None:
                 twins.append((first, p))
             else:
-                seen.append((p, tables))
+                alike.append((p, tables))
     return sorted(twins, key=lambda pair: paths.index(pair[1]))
 
 

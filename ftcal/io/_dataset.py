@@ -66,7 +66,7 @@ def _refuse_twin_files(files: Sequence[Path], parts: Sequence["CalibrationDatase
     """Refuse two files of a folder that hold the same readings and wrenches (a recording copied in twice, under
     another name, in another format, re-saved with fewer digits or with its rows in another order): its rows would
     count twice and its twins fall in different folds, so a model would be judged on its own training rows. The
-    files are compared by what was read from them, as sets of rows within a relative 1e-6
+    files are compared by what was read from them, as sets of rows, each number within 1e-7 of itself
     (:func:`ftcal.core.content_twins`; a truncated copy is not a twin); with group labels read from a column
     (``labelled``), rows labelled as other poses or sessions are told apart by their labels."""
     by_path = dict(zip(files, parts))
