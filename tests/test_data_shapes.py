@@ -426,3 +426,16 @@ def test_a_damaged_npy_header_in_a_dataset_or_a_model_file_is_one_clear_error(tm
         z.writestr("__metadata__.npy", _npy_with_header(shape))
     with pytest.raises(ValueError, match=r"bad\.model\.npz: member '__metadata__'.*damaged"):
         load_model(model)
+
+
+@pytest.mark.parametrize("raw, wrench, said", [
+    (np.float64(3.0), np.ones((60, 6)), "array 'raw' has shape ()"),
+    (np.ones((60, 6)), np.float64(1.0), "array 'wrench' has shape ()"),
+    (np.zeros((0, 6)), np.zeros((0, 6)), "has no values"),
+])
+def test_a_scalar_or_an_empty_array_in_an_npz_is_one_clear_error(tmp_path, capsys, raw, wrench, said):
+    path = tmp_path / "d.npz"
+    np.savez(path, raw=raw, wrench=wrench)
+    assert main(["fit", str(path), "--model", "linear", "--out", str(tmp_path / "m"), "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{path}: " in err[0] and said in err[0] and "bug" not in err[0], err

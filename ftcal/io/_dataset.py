@@ -887,8 +887,10 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     if spec is not None or len(names) == 1:
         name = base if spec is not None else names[0]
         a = check_real_array(source.read(name), name, where, kind)
-        if a.ndim > 2:
-            raise DatasetFileError(f"{where}: {kind} {name!r} has shape {a.shape}; expected (n_samples, k).")
+        if a.ndim > 2 or a.ndim == 0 or a.size == 0:
+            what = "no values" if a.ndim and a.size == 0 else f"shape {a.shape}"
+            raise DatasetFileError(f"{where}: {kind} {name!r} has {what}; expected (n_samples, k) with at least one "
+                                   "sample. Fix: save the whole recording's array.")
         if spec is None:  # a whole variable: oriented beside the other array (_oriented)
             return (a[:, None] if a.ndim == 1 else a).astype(float), [name], None
         a = _rows_first(a).astype(float)
