@@ -244,9 +244,9 @@ def bag_values(path: str | Path, head: int | None = None):
         else:
             text.append(str(value))
 
-    def has_numbers(value) -> bool:  # an array of numbers somewhere in a message: a raw topic's kind
-        if isinstance(value, np.ndarray):
-            return value.dtype.kind in "biuf" and value.size > 0
+    def has_numbers(value) -> bool:  # an array of numbers somewhere in a message: a raw topic's kind (a byte blob,
+        if isinstance(value, np.ndarray):  # a camera's or a point cloud's, is not: no reader takes its readings)
+            return value.dtype.kind in "biuf" and value.dtype.itemsize > 1 and value.size > 0
         if hasattr(value, "__dataclass_fields__"):
             return any(has_numbers(getattr(value, n)) for n in value.__dataclass_fields__ if not n.startswith("__"))
         return False
