@@ -362,6 +362,21 @@ def test_folder_files_with_the_same_columns_in_another_order_are_read_by_name(tm
         CalibrationDataset.load(extra)
 
 
+@pytest.mark.parametrize("torques", [["Mx", "My", "Mz"], ["tx", "ty", "tz"]])
+def test_folder_files_naming_the_wrench_by_an_alias_are_read_as_the_same_columns(tmp_path, torques):
+    """One file of a folder names its torques Mx..Mz (or in lower case) where the others write Tx..Tz: the reader
+    takes both as the same axes, so the folder is one dataset (it was refused as 'columns differ')."""
+    raw, wrench = _sensor(n_channels=6, n=80)
+    folder = tmp_path / "data"
+    folder.mkdir()
+    channels = [f"s{i}" for i in range(6)]
+    _csv(folder / "p0.csv", channels + ["Fx", "Fy", "Fz", "Tx", "Ty", "Tz"], np.column_stack([raw, wrench])[:40])
+    _csv(folder / "p1.csv", channels + ["Fx", "Fy", "Fz", *torques], np.column_stack([raw, wrench])[40:])
+    ds = CalibrationDataset.load(folder)
+    np.testing.assert_array_equal(ds.raw, raw)
+    np.testing.assert_array_equal(ds.wrench, wrench)
+
+
 def test_a_truncated_mat_file_is_said_to_be_truncated_not_to_lack_the_wrench(tmp_path, capsys):
     raw, wrench = _sensor(n_channels=6, n=60)
     variables = {f"s{i}": raw[:, i] for i in range(6)} | {a: wrench[:, i] for i, a in enumerate(["Fx", "Fy", "Fz",

@@ -665,8 +665,9 @@ class CalibrationDataset:
             ds, names = cls._load_file(path, columns)
             if first_names is None:
                 first_names = names
-            elif sorted(names) != sorted(first_names):  # read by name: the order of columns/members means nothing
-                extra = sorted(set(names) - set(first_names)) or sorted(set(first_names) - set(names))
+            elif _canonical(names) != _canonical(first_names):  # read by name: order and aliases mean nothing
+                extra = sorted(set(_canonical(names)) - set(_canonical(first_names))) or \
+                    sorted(set(_canonical(first_names)) - set(_canonical(names)))
                 raise DatasetFileError(
                     f"{path}: its columns ({', '.join(names)}) differ from those of {files[0]} "
                     f"({', '.join(first_names)}{'; ' + extra[0] + ' differs' if extra else ''}); every file of a "
@@ -818,6 +819,12 @@ def _rows_first(a: np.ndarray) -> np.ndarray:
     if a.ndim == 2 and a.shape[0] < a.shape[1]:
         return a.T
     return a
+
+
+def _canonical(names) -> list[str]:
+    """A file's column or member names as the reader takes them: a wrench alias as its axis (``Mx`` and ``tx``
+    are ``Tx``), in sorted order (a folder's files may list them in any order)."""
+    return sorted(canonical_wrench_name(n) or n for n in names)
 
 
 def _oriented(raw: np.ndarray, wrench: np.ndarray, raw_whole: bool, wrench_whole: bool):
