@@ -255,6 +255,9 @@ def bag_values(path: str | Path, head: int | None = None):
     digests: dict[str, object] = {}  # topic -> its running digest (None: a topic the reader cannot use)
     counts: dict[str, int] = {}
     with _Reader(Path(path)) as r:
+        # with head: the topics still short of their first messages; the bag is read no further once none is
+        listed = r.topics()
+        pending = {t for t, (_, n) in listed.items() if n > 0} if head is not None else None
         try:
             for conn, _receive_ns, data in r.reader.messages():
                 digest = digests.get(conn.topic)
@@ -264,6 +267,10 @@ def bag_values(path: str | Path, head: int | None = None):
                 if digest is None:
                     if not (conn.msgtype in known or has_numbers(msg)):
                         digests[conn.topic] = None
+                        if pending is not None:
+                            pending.discard(conn.topic)
+                            if not pending:
+                                break
                         continue
                     digest = digests[conn.topic] = hashlib.sha256()
                 numbers, text = [], []
@@ -271,11 +278,14 @@ def bag_values(path: str | Path, head: int | None = None):
                 digest.update(np.asarray(numbers, dtype=np.float64).tobytes())
                 digest.update("\x00".join(text).encode("utf-8") + b"\x01")
                 counts[conn.topic] = counts.get(conn.topic, 0) + 1
+                if pending is not None and counts[conn.topic] >= min(head, listed[conn.topic][1]):
+                    pending.discard(conn.topic)
+                    if not pending:
+                        break
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
             raise r.damaged(exc) from None
-        topics = r.topics()
     used = sorted(t for t, digest in digests.items() if digest is not None)
-    return [np.array([f"{t} {topics[t][0]} {topics[t][1]}" for t in used]),
+    return [np.array([f"{t} {listed[t][0]} {listed[t][1]}" for t in used]),
             *(np.array([digests[t].hexdigest()]) for t in used)]
 
 
