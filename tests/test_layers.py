@@ -3,7 +3,9 @@
 The allowed imports are the table of ``docs/architecture.md``; every ``from .x import`` and
 ``import ftcal.x`` in every module is checked, including imports inside functions. Beyond the table: no
 library module imports the CLI, the module import graph has no cycle, the CLI holds no estimator logic,
-each package states its layer, and every public subpackage lists names (``__all__``) that resolve.
+each package states its layer, every public subpackage lists names (``__all__``) that resolve, the CLI imports only
+public names, no function is over 150 code lines, and there is one fold plan: folds are made only in
+``model_selection``, and auto, the save gate and the certificate take theirs from a ``FoldPlan``.
 """
 
 from __future__ import annotations
@@ -318,3 +320,70 @@ def test_no_function_of_the_package_is_over_150_code_lines():
     too_long = [f"{path.relative_to(PACKAGE)}: {name} has {n} code lines"
                 for path in sorted(PACKAGE.rglob("*.py")) for name, n in _long_functions(path.read_text())]
     assert not too_long, too_long
+
+
+# ------------------------------------------------------------------ one fold plan
+#: Modules outside ``model_selection`` allowed to build a scikit-learn splitter, each with its reason.
+_OWN_SPLITS = {
+    # the thesis' own protocols of Tables IV-V (a random 20 % of the poses, one pose out), reproduced as published
+    "benchmark/_real_world.py",
+}
+#: The modules that judge a model (auto's choice, the save gate, the certificate and its report): they take their
+#: folds from one :class:`~ftcal.model_selection.FoldPlan` and make none of their own.
+_JUDGES = ("compose/_auto.py", "workflow/_calibrate.py", "reporting/_certificate.py", "reporting/_calibration_report.py")
+
+
+def _splitters_and_fold_calls(source: str) -> tuple[set[str], set[str]]:
+    """The scikit-learn splitters ``source`` imports, and the names of the fold makers it calls."""
+    import sklearn.model_selection
+
+    splitters = {n for n in dir(sklearn.model_selection)
+                 if n.endswith(("Fold", "Split", "Out")) and isinstance(getattr(sklearn.model_selection, n), type)}
+    imported, called = set(), set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("sklearn"):
+            imported |= {a.name for a in node.names} & splitters
+        elif isinstance(node, ast.Attribute) and node.attr in splitters:
+            imported.add(node.attr)
+        elif isinstance(node, ast.Call):
+            name = ast.unparse(node.func).rsplit(".", 1)[-1]
+            if name in {"calibration_folds", "_shuffled_group_folds"} | splitters:
+                called.add(name)
+    return imported, called
+
+
+def test_the_fold_finder_finds_splitters_and_fold_calls():
+    imported, called = _splitters_and_fold_calls(
+        "from sklearn.model_selection import GroupKFold, cross_val_score\nimport sklearn\n"
+        "s = sklearn.model_selection.LeaveOneGroupOut()\nf = calibration_folds(6, g, 3)\n")
+    assert imported == {"GroupKFold", "LeaveOneGroupOut"}
+    assert called == {"calibration_folds", "LeaveOneGroupOut"}
+    assert _splitters_and_fold_calls("plan = FoldPlan.for_data(X, y, groups)\n") == (set(), set())
+
+
+def test_folds_are_made_only_in_model_selection():
+    """One fold rule: every scikit-learn splitter is built in ``model_selection`` (the thesis' benchmark excepted)."""
+    for path in sorted(PACKAGE.rglob("*.py")):
+        relative = path.relative_to(PACKAGE).as_posix()
+        if relative.startswith("model_selection/") or relative in _OWN_SPLITS:
+            continue
+        imported, _ = _splitters_and_fold_calls(path.read_text())
+        assert not imported, f"{relative} builds its own folds with {sorted(imported)}: use ftcal.model_selection"
+    for relative in _OWN_SPLITS:
+        assert _splitters_and_fold_calls((PACKAGE / relative).read_text())[0], f"{relative} needs no exception"
+
+
+@pytest.mark.parametrize("relative", _JUDGES)
+def test_the_judges_take_their_folds_from_the_one_fold_plan(relative):
+    """Auto, the save gate and the certificate judge on a FoldPlan and make no folds of their own."""
+    source = (PACKAGE / relative).read_text()
+    _, called = _splitters_and_fold_calls(source)
+    assert not called, f"{relative} makes folds itself ({sorted(called)}): take them from a FoldPlan"
+    assert "FoldPlan" in source or relative == "reporting/_calibration_report.py", f"{relative} names no FoldPlan"
+
+
+def test_the_cli_makes_no_folds():
+    for path in sorted((PACKAGE / "cli").glob("*.py")):
+        source = path.read_text()
+        assert _splitters_and_fold_calls(source) == (set(), set()), f"cli/{path.name} makes folds"
+        assert "FoldPlan.for_data" not in source, f"cli/{path.name} builds a fold plan: the library's calls do"
