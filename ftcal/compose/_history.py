@@ -168,10 +168,6 @@ def spread_flags(flags: ArrayLike, reach: int, since: int | None = None) -> tupl
     return spread, (None if not flags.size or not np.isfinite(last[-1]) else int(flags.size - last[-1]))
 
 
-def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
-    return None if groups is None else groups[index]
-
-
 def _predicted(model: BaseCalibrator, X: NDArray[np.float64]) -> NDArray[np.float64]:
     """``model.predict(X)`` as (n, k), whatever the target's width."""
     return np.asarray(model.predict(X), dtype=float).reshape(len(X), -1)
@@ -278,9 +274,7 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
         self.estimator = estimator
         self.taus = taus
         self.cv = cv
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     def __sklearn_tags__(self):
         return declare(super().__sklearn_tags__(), reads_history=True)
@@ -332,7 +326,7 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
         for train, test in folds:
             try:
                 static, maps = self._partial_fit(template, X[train], y[train], [h[train] for h in histories],
-                                                 _rows(groups, train))
+                                                 None if groups is None else groups[train])
             except CalibrationInputError as exc:  # said of the fold, the error's class and fields kept
                 hint = " (fewer folds, cv, make it larger)" if isinstance(exc, TooFewSamplesError) else ""
                 raise exc.located(f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds "
