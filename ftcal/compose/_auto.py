@@ -11,9 +11,10 @@ from scipy.optimize import nnls
 from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
-from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
+from sklearn.utils.metadata_routing import process_routing
 
 from ._history import refuse_history_inside
+from ._routing import wrapper_routing
 from ._registry import make_calibrator, registered_candidates
 from ..calibrators._base import COSTS, BaseCalibrator, calibration_tags, declare, resolve_alpha, with_settings
 from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
@@ -487,10 +488,7 @@ class StackedCalibrator(BaseCalibrator):
 
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` to each member (``member0``, ``member1``, ...)."""
-        router = MetadataRouter(owner=self).add_self_request(self)
-        for i, member in enumerate(self.estimators or []):
-            router.add(**{f"member{i}": member}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
-        return router
+        return wrapper_routing(self, **{f"member{i}": member for i, member in enumerate(self.estimators or [])})
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, *, fitted_estimators=None):
         """Fit the members on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6) (or take them fitted).
@@ -792,14 +790,11 @@ class AutoCalibrator(BaseCalibrator):
     def get_metadata_routing(self):
         """``groups`` make this calibrator's folds and reach each candidate whose routing requests them (its
         default, or ``set_fit_request(groups=...)``): a router with one child per candidate, by name."""
-        router = MetadataRouter(owner=self).add_self_request(self)
         try:
             pairs = self._candidates(grouped=True)
         except CalibrationInputError:  # said by fit, with the data
             pairs = []
-        for name, candidate in pairs:
-            router.add(**{name: candidate}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
-        return router
+        return wrapper_routing(self, **dict(pairs))
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Cross-validate the candidates on ``X`` (n, N), ``y`` (n, 6), refit the best on all rows.
