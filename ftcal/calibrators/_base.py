@@ -448,10 +448,9 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         X = validate_readings(self, X_no_load)
         if len(X) == 0:
             raise CalibrationInputError("X_no_load holds no readings; pass at least one zero-load reading.")
-        reading_range = getattr(self, "calibrated_range_", None)
-        span = None
-        if reading_range is not None:
-            span = _refuse_far_outside(X, reading_range, "X_no_load", "fit the calibration again")
+        reading_range = getattr(self, "calibrated_range_", None)  # the spans of the channels' training readings
+        span = None if reading_range is None else _refuse_far_outside(X, reading_range, "X_no_load",
+                                                                       "fit the calibration again")
         noise = getattr(self, "reading_noise_", None)
         if noise is not None:
             # floor: noise-free or averaged training data (noise ~ 1e-13) must not refuse every real reading
