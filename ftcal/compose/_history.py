@@ -334,7 +334,8 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
             held_out[0][test] = _predicted(static, X[test])
             for k, (history, fitted) in enumerate(zip(histories, maps), start=1):
                 held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])
-        errors = np.array([self._row_errors(y - p) for p in held_out])  # per row: eq. 18 over rows
+        # per row: the mean squared torque-scaled error (eq. 18 over the rows)
+        errors = np.array([np.mean(scale_torques(y - p, self.alpha_, self.axes_) ** 2, axis=1) for p in held_out])
         units = groups if groups is not None else np.arange(n) * _TIME_BLOCKS // n
         shortest_first = np.argsort(np.argsort(taus, kind="stable"), kind="stable")  # among the qualified: the shortest
         chosen = simplest_within_one_se(errors, units, complexity=[0, *(1 + shortest_first)])
@@ -366,10 +367,6 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
     def _history_term(fitted, X, history):
         g, coef, intercept = fitted
         return (history - _predicted(g, X)) @ coef + intercept
-
-    def _row_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
-        scaled = scale_torques(error, self.alpha_, self.axes_)
-        return np.mean(scaled ** 2, axis=1)
 
     def _predict_wrench(self, X: NDArray[np.float64], history: NDArray | None = None) -> NDArray[np.float64]:
         wrench = _predicted(self.estimator_, X)
