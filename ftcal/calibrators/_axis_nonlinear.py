@@ -208,9 +208,7 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         self.powers = powers
         self.ridge = ridge
         self.n_refinements = n_refinements
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     def _check_params(self) -> None:
         for p in self.powers:  # the table checks that powers is array-like; its entries here
@@ -245,15 +243,11 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         """Coefficients and intercepts of the ``n_ref + 1`` gated passes (6 ridge fits each)."""
         previous, coefs, intercepts = z, [], []
         for _ in range(n_ref + 1):
-            pass_coefs, pass_intercepts = [], []
-            for j in range(ys.shape[1]):
-                features = self._gated(block, (previous[:, j] > 0).astype(float))
-                c, b = ridge_least_squares(features, ys[:, [j]], ridge * len(ys), n_unpenalised=z.shape[1])
-                pass_coefs.append(c[:, 0])
-                pass_intercepts.append(b[0])
-            coefs.append(pass_coefs)
-            intercepts.append(pass_intercepts)
-            previous = self._apply(block, previous, np.array(pass_coefs), np.array(pass_intercepts))
+            fits = [ridge_least_squares(self._gated(block, (previous[:, j] > 0).astype(float)), ys[:, [j]],
+                                        ridge * len(ys), n_unpenalised=z.shape[1]) for j in range(ys.shape[1])]
+            coefs.append(np.array([c[:, 0] for c, _ in fits]))
+            intercepts.append(np.array([b[0] for _, b in fits]))
+            previous = self._apply(block, previous, coefs[-1], intercepts[-1])
         return np.array(coefs), np.array(intercepts)
 
     def _cross_validated_ridge(self, block, z, ys, n_ref: int, groups: NDArray | None) -> float:
@@ -274,11 +268,8 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         errors = np.zeros((len(RIDGE_GRID), len(ys)))
         for k, ridge in enumerate(RIDGE_GRID):
             for train, valid in folds:
-                coefs, intercepts = self._fit_passes(block[train], z[train], ys[train], ridge, n_ref)
-                previous = z[valid]
-                for c, b in zip(coefs, intercepts):
-                    previous = self._apply(block[valid], previous, c, b)
-                errors[k, valid] = np.sum((previous - ys[valid]) ** 2, axis=1)
+                passes = self._fit_passes(block[train], z[train], ys[train], ridge, n_ref)
+                errors[k, valid] = np.sum((self._passes(block[valid], z[valid], *passes) - ys[valid]) ** 2, axis=1)
         # the one 1-SE rule (over groups when given); a larger penalty is simpler, inf (the LTM) simplest
         return RIDGE_GRID[simplest_within_one_se(errors, groups, complexity=np.arange(len(RIDGE_GRID))[::-1])]
 
@@ -287,13 +278,16 @@ class AxisNonlinearCalibrator(GroupsFit, BaseCalibrator):
         columns = [self._gated(block, (previous[:, j] > 0).astype(float)) @ coefs[j] for j in range(len(coefs))]
         return np.stack(columns, axis=1) + intercepts
 
+    def _passes(self, block, z, coefs, intercepts) -> NDArray[np.float64]:
+        """Every pass in turn from the linear base ``z`` (the first pass' gates): the model's torque-scaled output."""
+        for pass_coefs, pass_intercepts in zip(coefs, intercepts):
+            z = self._apply(block, z, pass_coefs, pass_intercepts)
+        return z
+
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         z = (X - self.zero_reading_) @ self.base_matrix_.T + self.base_offset_
-        block = self._block(z / self.axis_scale_)
-        previous = z
-        for coefs, intercepts in zip(self.coefs_, self.intercepts_):
-            previous = self._apply(block, previous, coefs, intercepts)
-        return unscale_torques(previous, self.alpha_, self.axes_)
+        passes = self._passes(self._block(z / self.axis_scale_), z, self.coefs_, self.intercepts_)
+        return unscale_torques(passes, self.alpha_, self.axes_)
 
     def _emit_onnx(self, g, x: str) -> str:
         z = g.affine(g.op("Sub", x, g.const(self.zero_reading_)), self.base_matrix_.T, self.base_offset_)

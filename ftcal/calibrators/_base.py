@@ -48,10 +48,6 @@ __all__ = ["BaseCalibrator", "retare_shift", "GroupsFit", "with_settings", "Cali
            "check_sample_weight"]
 
 
-def _rows_per_channel(rows_per_channel: int) -> Callable[[int], int]:
-    return lambda n_channels: rows_per_channel * int(n_channels)
-
-
 #: Kinds of fit by cost, cheapest last: the order ``auto`` schedules its jobs in (the costliest first).
 COSTS: tuple[str, ...] = ("kernel", "network", "heavy", "closed_form")
 
@@ -116,7 +112,7 @@ class CalibrationTags:
     reads_history: bool = False
     chooses_model: bool = False
     chooses_structure: bool = False
-    min_training_rows: Callable[[int], int] = field(default_factory=lambda: _rows_per_channel(25))
+    min_training_rows: Callable[[int], int] = field(default_factory=lambda: lambda n_channels: 25 * int(n_channels))
     cost: str = "heavy"
     onnx: bool = False
     provides_std: bool = False
@@ -276,7 +272,12 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
     bad value raises :class:`~ftcal.core.CalibrationInputError` naming the
     parameter, the allowed values and the value given. Checks a table cannot
     express (the entries of ``hidden_layer_sizes``) follow it in
-    ``_check_params`` of the subclass.
+    ``_check_params`` of the subclass. The parameters every calibrator has
+    (``alpha``, ``zero_reading``, ``random_state``) are set by its
+    ``__init__``: a subclass lists them in its own signature and passes them
+    on (``super().__init__(alpha=alpha, zero_reading=zero_reading,
+    random_state=random_state)``); one without parameters of its own needs
+    no ``__init__``.
     """
 
     #: Fitted attributes a model file stores (:func:`ftcal.save_model`); each subclass declares its own
@@ -295,6 +296,12 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         "zero_reading": ["array-like", None],
         "random_state": ["random_state"],
     }
+
+    def __init__(self, *, alpha=None, zero_reading=None, random_state=None):
+        # the parameters every calibrator shares; a subclass lists them in its own signature and passes them here
+        self.alpha = alpha
+        self.zero_reading = zero_reading
+        self.random_state = random_state
 
     def _check_parameters(self) -> None:
         """Check every parameter against ``_parameter_constraints`` (and the subclass' ``_check_params``)."""
@@ -441,10 +448,9 @@ class BaseCalibrator(RegressorMixin, BaseEstimator):
         X = validate_readings(self, X_no_load)
         if len(X) == 0:
             raise CalibrationInputError("X_no_load holds no readings; pass at least one zero-load reading.")
-        reading_range = getattr(self, "calibrated_range_", None)
-        span = None
-        if reading_range is not None:
-            span = _refuse_far_outside(X, reading_range, "X_no_load", "fit the calibration again")
+        reading_range = getattr(self, "calibrated_range_", None)  # the spans of the channels' training readings
+        span = None if reading_range is None else _refuse_far_outside(X, reading_range, "X_no_load",
+                                                                       "fit the calibration again")
         noise = getattr(self, "reading_noise_", None)
         if noise is not None:
             # floor: noise-free or averaged training data (noise ~ 1e-13) must not refuse every real reading
@@ -599,9 +605,6 @@ def retare_shift(model, n_columns: int | None = None) -> NDArray[np.float64]:
     tare, zero = getattr(model, "tare_reading_", None), getattr(model, "zero_reading_", None)
     moved = np.zeros(0) if tare is None or zero is None else \
         np.asarray(tare, dtype=float).ravel() - np.asarray(zero, dtype=float).ravel()
-    n_columns = int(getattr(model, "n_features_in_", moved.size)) if n_columns is None else int(n_columns)
-    if moved.size == n_columns:
-        return moved
-    shift = np.zeros(n_columns)
-    shift[:min(n_columns, moved.size)] = moved[:n_columns]
+    shift = np.zeros(int(getattr(model, "n_features_in_", moved.size)) if n_columns is None else int(n_columns))
+    shift[:moved.size] = moved[:shift.size]
     return shift

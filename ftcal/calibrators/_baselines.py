@@ -26,6 +26,7 @@ prediction needs (no pickle, bounded by the kernel models' subsample).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from math import comb
 from numbers import Integral, Real
 from typing import Any
@@ -174,22 +175,13 @@ def stock_baselines(n_channels: int, *, max_kernel_samples: int | None = KERNEL_
 
 #: What each stock baseline is, for ``auto``'s complexity order and its scheduling: the ftcal family it is as
 #: flexible as, its cost, and the fewest training rows that judge it (as for that family).
-_STOCK_KINDS: dict[str, tuple[str, str]] = {
-    "sk_linear": ("linear", "closed_form"),
-    "sk_poly2": ("polynomial2", "closed_form"),
-    "sk_poly3": ("polynomial3", "closed_form"),
-    "sk_kernel_ridge": ("kernel", "kernel"),
-    "sk_gp": ("kernel", "kernel"),
+_STOCK_KINDS: dict[str, tuple[str, str, Callable[[int], int]]] = {
+    "sk_linear": ("linear", "closed_form", lambda n_channels: n_channels + 2),
+    "sk_poly2": ("polynomial2", "closed_form", lambda n_channels: comb(n_channels + 2, 2)),
+    "sk_poly3": ("polynomial3", "closed_form", lambda n_channels: comb(n_channels + 3, 3)),
+    "sk_kernel_ridge": ("kernel", "kernel", lambda n_channels: 10 * n_channels),
+    "sk_gp": ("kernel", "kernel", lambda n_channels: 10 * n_channels),
 }
-
-
-def _family_rows(family: str, n_channels: int) -> int:
-    if family == "linear":
-        return n_channels + 2
-    if family.startswith("polynomial"):
-        degree = int(family[-1])
-        return comb(n_channels + degree, degree)
-    return 10 * n_channels
 
 
 class StockCalibrator(BaseCalibrator):
@@ -271,9 +263,7 @@ class StockCalibrator(BaseCalibrator):
                  random_state=None):
         self.baseline = baseline
         self.max_kernel_samples = max_kernel_samples
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     #: Takes ``sample_weight`` (for a regressor of the user's, handed to its ``fit`` as calling it directly would)
     #: and asks for it through metadata routing, so that a wrapper or ``auto`` given weights passes them on.
@@ -314,8 +304,9 @@ class StockCalibrator(BaseCalibrator):
             own = calibration_tags(self.baseline)
             return declare(super().__sklearn_tags__(), onnx=False, cost=own.cost, family=own.family,
                            min_training_rows=own.min_training_rows)
-        return declare(super().__sklearn_tags__(), cost=_STOCK_KINDS[self.baseline][1], family=family,
-                       min_training_rows=lambda n_channels: _family_rows(family, n_channels), stock_baseline=True)
+        _, cost, rows = _STOCK_KINDS[self.baseline]
+        return declare(super().__sklearn_tags__(), cost=cost, family=family, min_training_rows=rows,
+                       stock_baseline=True)
 
     def _fit(self, X, y, sample_weight=None) -> None:
         for name in self._fitted_state[2:]:
@@ -395,12 +386,11 @@ class StockCalibrator(BaseCalibrator):
 
     def _check_arrays(self) -> None:
         """The stored arrays are those of ``baseline`` (a model file may have been edited): else ModelFileError."""
-        kind = _STOCK_KINDS.get(self.baseline) if isinstance(self.baseline, str) else None
-        degree = {"sk_poly2": 2, "sk_poly3": 3}.get(self.baseline)
+        family = self.family()
         polynomial = self.powers_ is not None and self.coef_ is not None and self.train_inputs_ is None
-        wanted = (kind is not None and kind[1] == "kernel" and self.train_inputs_ is not None) or (
-            degree is not None and polynomial and int(np.max(self.powers_)) <= degree) or (
-            self.baseline == "sk_linear" and self.powers_ is None and self.train_inputs_ is None)
+        wanted = (family == "kernel" and self.train_inputs_ is not None) or (
+            family.startswith("polynomial") and polynomial and int(np.max(self.powers_)) <= int(family[-1])) or (
+            family == "linear" and self.powers_ is None and self.train_inputs_ is None)
         if not wanted:
             raise ModelFileError(f"the arrays of this StockCalibrator are not those of baseline={self.baseline!r} "
                                  "(one of " + ", ".join(STOCK_BASELINE_NAMES) + "); the model file is damaged or "
@@ -412,17 +402,13 @@ class StockCalibrator(BaseCalibrator):
         self._check_arrays()
         z = g.op("Div", g.op("Sub", x, g.const(self.input_mean_)), g.const(self.input_scale_))
         if self.train_inputs_ is None:
-            if self.powers_ is not None:
-                expanded = g.op("Unsqueeze", z, g.const([1], np.int64))  # (n, 1, N) ** (n_monomials, N)
-                z = g.op("ReduceProd", g.op("Pow", expanded, g.const(self.powers_.astype(np.float64))), axes=[2],
-                         keepdims=0)
-            return g.affine(z, self.coef_.T, self.intercept_)
-        train = self.train_inputs_ / self.length_scale_
-        scaled = g.op("Div", z, g.const(self.length_scale_))
-        squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1), g.const((train * train).sum(axis=1)))
-        d2 = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), g.op("MatMul", scaled, g.const(train.T)))),
-                  g.const(0.0))
-        kernel = g.op("Mul", g.const(float(self.amplitude_)), g.op("Exp", g.op("Mul", g.const(-0.5), d2)))
+            from ._polynomial import onnx_monomials
+
+            return g.affine(z if self.powers_ is None else onnx_monomials(g, z, self.powers_), self.coef_.T,
+                            self.intercept_)
+        from ._gaussian_process import onnx_kernel
+
+        kernel = onnx_kernel(g, z, self.train_inputs_, self.length_scale_, self.amplitude_)
         return g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_)), g.const(self.target_scale_)),
                     g.const(self.target_mean_))
 

@@ -73,6 +73,26 @@ def make_kernel(family: str, n_channels: int, bounds: str = "ftcal"):
     return kernel + WhiteKernel(1e-2, (1e-8, 1.0))
 
 
+def onnx_kernel(g, u: str, train: NDArray[np.float64], length_scale: NDArray[np.float64], amplitude: float,
+                matern: bool = False) -> str:
+    """The ONNX graph of ``amplitude * k(u, train)`` (n, m), ``k`` the RBF kernel (with ``matern`` the Matérn 5/2)
+    of these length scales, from the squared scaled distances (rounding below 0 clipped): the kernel term of the
+    GP's graph and of the stock kernel baselines'."""
+    train = train / length_scale
+    scaled = g.op("Div", u, g.const(length_scale))
+    squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1), g.const((train * train).sum(axis=1)))
+    d2 = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), g.op("MatMul", scaled, g.const(train.T)))),
+              g.const(0.0))
+    if matern:  # (1 + sqrt(5) d + 5/3 d^2) exp(-sqrt(5) d)
+        d = g.op("Sqrt", d2)
+        poly = g.op("Add", g.op("Add", g.const(1.0), g.op("Mul", g.const(np.sqrt(5.0)), d)),
+                    g.op("Mul", g.const(5.0 / 3.0), d2))
+        shape = g.op("Mul", poly, g.op("Exp", g.op("Mul", g.const(-np.sqrt(5.0)), d)))
+    else:
+        shape = g.op("Exp", g.op("Mul", g.const(-0.5), d2))
+    return g.op("Mul", g.const(float(amplitude)), shape)
+
+
 class _Regressor(GaussianProcessRegressor):
     """:class:`~sklearn.gaussian_process.GaussianProcessRegressor` whose log-marginal-likelihood gradient, for the
     kernels of :func:`make_kernel`, is computed from ``m x m`` matrices and matrix products.
@@ -87,8 +107,7 @@ class _Regressor(GaussianProcessRegressor):
     """
 
     def log_marginal_likelihood(self, theta=None, eval_gradient=False, clone_kernel=True):
-        parts = _kernel_parts(self.kernel_) if eval_gradient and theta is not None else None
-        if parts is None:
+        if not eval_gradient or theta is None or _kernel_parts(self.kernel_) is None:
             return super().log_marginal_likelihood(theta, eval_gradient, clone_kernel)
         from scipy.linalg import cho_solve, cholesky
         from scipy.linalg.lapack import dpotri
@@ -448,9 +467,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.max_samples = max_samples
         self.selection_samples = selection_samples
         self.n_restarts_optimizer = n_restarts_optimizer
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
         n, n_channels = X.shape
@@ -468,13 +485,11 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         self.input_mean_ = xc.mean(axis=0)
         scale = xc.std(axis=0)
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
-        u_all = (xc - self.input_mean_) / self.input_scale_
         ltm = LinearRegression().fit(xc, ys)
         rng = check_random_state(self.random_state)
         rows = np.sort(rng.choice(n, size=m, replace=False)) if n > m else np.arange(n)
-        u, ys_sub, xc_sub = u_all[rows], ys[rows], xc[rows]
-        residual = ys_sub - ltm.predict(xc_sub)
-        targets = {"none": ys_sub, "linear": residual}
+        u = (xc[rows] - self.input_mean_) / self.input_scale_
+        targets = {"none": ys[rows], "linear": ys[rows] - ltm.predict(xc[rows])}
         seed = rng.randint(np.iinfo(np.int32).max)
         sel = np.sort(check_random_state(seed).choice(m, size=int(self.selection_samples), replace=False)) \
             if m > self.selection_samples else np.arange(m)
@@ -544,15 +559,15 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
             mean, family, bounds = combos[0]
             return mean, family, bounds, False, make_kernel(family, n_channels, bounds).theta[None, :]
         errors, fitted = {}, {}
-        for mean, family, bounds in combos:
-            gp = _fit_quietly(_regressor(make_kernel(family, n_channels, bounds), seed, 0), u, targets[mean])
-            name = f"{mean}/{family}/{bounds}"
-            self.log_marginal_likelihood_[name] = _log_evidence(gp, targets[mean])
-            errors[(mean, family, bounds)] = _held_out_mse(gp, bases[mean], groups)
-            self.held_out_rmse_[name] = float(np.sqrt(errors[(mean, family, bounds)]))
-            fitted[(mean, family, bounds)] = gp
-        mean, family, bounds = min(errors, key=errors.get)
-        shared = fitted[(mean, family, bounds)]
+        for combo in combos:
+            mean, family, bounds = combo
+            fitted[combo] = gp = _fit_quietly(_regressor(make_kernel(family, n_channels, bounds), seed, 0), u,
+                                              targets[mean])
+            errors[combo] = _held_out_mse(gp, bases[mean], groups)
+            self.log_marginal_likelihood_["/".join(combo)] = _log_evidence(gp, targets[mean])
+            self.held_out_rmse_["/".join(combo)] = float(np.sqrt(errors[combo]))
+        mean, family, bounds = best = min(errors, key=errors.get)
+        shared = fitted[best]
         if self.per_output is False or k == 1:
             return mean, family, bounds, False, shared.kernel_.theta[None, :]
         # per-output fits from the shared optimum on at most _PER_OUTPUT_ROWS rows (six fits: kept cheap)
@@ -676,8 +691,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
     def _predict_scaled(self, X: NDArray[np.float64], return_std: bool):
         xc = X - self.zero_reading_
         u = (xc - self.input_mean_) / self.input_scale_
-        m = self.train_inputs_.shape[0]
-        chunk = max(1, _CHUNK_BYTES // (8 * m))
+        chunk = max(1, _CHUNK_BYTES // (8 * len(self.train_inputs_)))  # rows whose cross-kernel fits the bytes
         mean = xc @ self.linear_matrix_.T + self.linear_offset_
         std = np.empty_like(mean) if return_std else None
         scale = self._std_factors() if return_std else None
@@ -704,34 +718,20 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         noise term is zero between distinct points), de-normalised as ``normalize_y`` does."""
         xc = g.op("Sub", x, g.const(self.zero_reading_))
         u = g.op("Div", g.op("Sub", xc, g.const(self.input_mean_)), g.const(self.input_scale_))
-        n_channels, k = self.train_inputs_.shape[1], self.theta_.shape[0]
         columns = []
-        for i in range(k):
-            body = make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]).k1  # less the noise
+        for gp in self.regressors():  # each from its kernel less the noise, de-normalised by its own scale
+            body = gp.kernel_.k1
             stationary, linear = (body.k1, body.k2) if self.kernel_.endswith("+linear") else (body, None)
-            ell = np.asarray(stationary.k2.length_scale, dtype=float) * np.ones(n_channels)
-            train = self.train_inputs_ / ell
-            scaled = g.op("Div", u, g.const(ell))
-            squared = g.op("Add", g.op("ReduceSumSquare", scaled, axes=[1], keepdims=1),
-                           g.const((train * train).sum(axis=1)))
-            d2 = g.op("Max", g.op("Sub", squared, g.op("Mul", g.const(2.0), g.op("MatMul", scaled, g.const(train.T)))),
-                      g.const(0.0))
-            if self.kernel_.startswith("rbf"):
-                shape = g.op("Exp", g.op("Mul", g.const(-0.5), d2))
-            else:  # Matern 5/2: (1 + sqrt(5) d + 5/3 d^2) exp(-sqrt(5) d)
-                d = g.op("Sqrt", d2)
-                poly = g.op("Add", g.op("Add", g.const(1.0), g.op("Mul", g.const(np.sqrt(5.0)), d)),
-                            g.op("Mul", g.const(5.0 / 3.0), d2))
-                shape = g.op("Mul", poly, g.op("Exp", g.op("Mul", g.const(-np.sqrt(5.0)), d)))
-            kernel = g.op("Mul", g.const(float(stationary.k1.constant_value)), shape)
+            ell = np.asarray(stationary.k2.length_scale, dtype=float) * np.ones(self.train_inputs_.shape[1])
+            kernel = onnx_kernel(g, u, self.train_inputs_, ell, float(stationary.k1.constant_value),
+                                 matern=self.kernel_.startswith("matern52"))
             if linear is not None:
                 dot = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)),
                            g.const(float(linear.k2.sigma_0) ** 2))
                 kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear.k1.constant_value)), dot))
-            cols = slice(None) if k == 1 else slice(i, i + 1)
-            columns.append(g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(self.dual_coef_[:, cols])),
-                                             g.const(self.target_scale_[cols])), g.const(self.target_mean_[cols])))
-        residual = columns[0] if k == 1 else g.op("Concat", *columns, axis=1)
+            columns.append(g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(gp.alpha_)),
+                                             g.const(gp._y_train_std)), g.const(gp._y_train_mean)))
+        residual = columns[0] if len(columns) == 1 else g.op("Concat", *columns, axis=1)
         mean = g.op("Add", g.affine(xc, self.linear_matrix_.T, self.linear_offset_), residual)
         return g.unscale_torques(mean, self.alpha_, int(getattr(self, "n_outputs_", 6)), self.axes_)
 

@@ -91,9 +91,7 @@ class LinearCalibrator(BaseCalibrator):
 
     def __init__(self, *, ridge=0.0, alpha=None, zero_reading=None, random_state=None):
         self.ridge = ridge
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     #: Takes ``sample_weight`` and asks for it through metadata routing by default (like ``groups``).
     __metadata_request__fit = {"sample_weight": True}

@@ -51,6 +51,14 @@ def within_group_load_fraction(y: NDArray[np.float64], groups: NDArray) -> float
     return float(np.sqrt(max(np.linalg.eigvalsh(within.T @ within).min(), 0.0)))
 
 
+def onnx_monomials(g, u: str, powers: NDArray[np.integer]) -> str:
+    """The ONNX graph of the monomials ``prod_c u[:, c] ** powers[j, c]`` (n, n_monomials) of the rows ``u`` (n, N):
+    the features of this model's graph and of the stock polynomial baselines'."""
+    expanded = g.op("Unsqueeze", u, g.const([1], np.int64))  # (n, 1, N) ** (n_monomials, N)
+    return g.op("ReduceProd", g.op("Pow", expanded, g.const(np.asarray(powers, dtype=np.float64))), axes=[2],
+                keepdims=0)
+
+
 class PolynomialCalibrator(GroupsFit, BaseCalibrator):
     """Wrench as a polynomial of the zero-corrected raw channels, fitted by ridge least squares.
 
@@ -146,9 +154,7 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         self.degree = degree
         self.ridge = ridge
         self.group_offsets = group_offsets
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     _groups_purpose = ("one offset per group", "fit without group_offsets")
     #: Takes ``sample_weight`` and asks for it through metadata routing by default (``groups`` too: GroupsFit).
@@ -185,14 +191,10 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         # Fitted on one row only to learn the channel count: the monomials depend on nothing else.
         return PolynomialFeatures(int(self.degree), include_bias=False).fit(np.zeros((1, self.n_features_in_)))
 
-    def _n_monomials(self, n_channels: int) -> int:
-        """Monomials of degree 1..``degree`` of ``n_channels`` variables: ``C(N + d, d) - 1``."""
-        return math.comb(n_channels + int(self.degree), int(self.degree)) - 1
-
     def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None,
              sample_weight: NDArray[np.float64] | None = None) -> None:
         n, n_channels = X.shape
-        n_features = self._n_monomials(n_channels)
+        n_features = self._monomials().n_output_features_  # degree 1..d of N variables: C(N + d, d) - 1
         penalised = n_features - n_channels
         # the features, their centred copy and the ridge-augmented system lstsq copies, plus its identity block
         check_allocation(
@@ -201,7 +203,6 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
             f"({n_features} monomials)",
             "lower degree (degree=1 is the LTM), use fewer channels, or try AxisNonlinearCalibrator",
         )
-        ridge = float(self.ridge)
         if self.group_offsets and groups is None:
             warnings.warn("PolynomialCalibrator: group_offsets=True but fit() got no groups, so the fit has one "
                           "offset for all rows. Pass fit(X, y, groups=...) (a pose or session per row).",
@@ -221,8 +222,9 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
         self.input_scale_ = np.where(scale > 0, scale, 1.0)
         features = self._monomials().transform(xc / self.input_scale_)
         total = len(y) if sample_weight is None else float(sample_weight.sum())  # the penalty per unit of weight
-        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(ridge) * total, n_unpenalised=X.shape[1],
-                                                          groups=groups, sample_weight=sample_weight)
+        self.coef_, self.intercept_ = ridge_least_squares(features, y, float(self.ridge) * total,
+                                                          n_unpenalised=X.shape[1], groups=groups,
+                                                          sample_weight=sample_weight)
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
         monomials = self._monomials()
@@ -234,7 +236,4 @@ class PolynomialCalibrator(GroupsFit, BaseCalibrator):
 
     def _emit_onnx(self, g, x: str) -> str:
         u = g.op("Div", g.op("Sub", x, g.const(self.zero_reading_)), g.const(self.input_scale_))
-        powers = self._monomials().powers_.astype(np.float64)  # (n_monomials, N)
-        expanded = g.op("Unsqueeze", u, g.const([1], np.int64))  # (n, 1, N)
-        monomials = g.op("ReduceProd", g.op("Pow", expanded, g.const(powers)), axes=[2], keepdims=0)
-        return g.affine(monomials, self.coef_, self.intercept_)
+        return g.affine(onnx_monomials(g, u, self._monomials().powers_), self.coef_, self.intercept_)

@@ -11,18 +11,24 @@ from scipy.optimize import nnls
 from sklearn.base import clone
 from sklearn.utils._param_validation import Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
-from sklearn.utils.metadata_routing import MetadataRouter, MethodMapping, process_routing
+from sklearn.utils.metadata_routing import process_routing
 
 from ._history import refuse_history_inside
+from ._routing import wrapper_routing
+from ._registry import make_calibrator, registered_candidates
 from ..calibrators._base import COSTS, BaseCalibrator, calibration_tags, declare, resolve_alpha, with_settings
+from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
+from ..calibrators._linear import LinearCalibrator
+from ..calibrators._polynomial import MIN_WITHIN_FRACTION, PolynomialCalibrator, within_group_load_fraction
 from ..core._exceptions import CalibrationInputError, FtcalError
 from ..model_selection._comparison import (COST_TIERS, LIGHT_KERNEL_ROWS, TIER_STEP, Comparison, ComparisonRow,
                                            RowStatus, choice_stability, compare, model_cost)
 from ..model_selection._plan import FoldPlan
-from ..model_selection._selection import (DegenerateCalibrationError, check_groups, degenerate_reason,
-                                          fold_predictions, grouped_subsample, routed_groups)
+from ..model_selection._selection import (DegenerateCalibrationError, check_groups, check_not_degenerate,
+                                          degenerate_reason, fold_predictions, grouped_subsample,
+                                          held_out_predictions, routed_groups)
 from ..core._threads import limit_threads_here
-from ..core._validation import check_zero_reading, validate_training_data
+from ..core._validation import check_bool, check_zero_reading, validate_readings, validate_training_data
 from ..core._wrench import named_targets, scale_torques, unscale_torques
 
 __all__ = ["AutoCalibrator", "StackedCalibrator", "provides_std", "comparison_table", "default_candidates",
@@ -56,8 +62,6 @@ def default_candidates(schedule: str = "short", grouped: bool = False) -> list[t
     >>> [name for name, _ in default_candidates(grouped=True)][:3]
     ['linear', 'linear(group offsets)', 'polynomial(degree=2, ridge=0.01)']
     """
-    from ._registry import make_calibrator, registered_candidates
-
     return [(label, make_calibrator(name, schedule=schedule, **params))
             for name, label, params in registered_candidates(grouped)]
 
@@ -129,13 +133,6 @@ def with_stock_candidates(candidates: list[tuple[str, BaseCalibrator]], stock: l
     return pairs
 
 
-def make_ltm() -> BaseCalibrator:
-    """The LTM (``make_calibrator("linear")``): ``auto``'s fallback when no folds can judge a model."""
-    from ._registry import make_calibrator
-
-    return make_calibrator("linear")
-
-
 def _unscored_ltm(plan: FoldPlan, alpha: float) -> Comparison:
     """The comparison of a fit that no folds could judge: the LTM alone, chosen unscored."""
     row = ComparisonRow(name="linear", kind="candidate", status=RowStatus.SKIPPED,
@@ -171,9 +168,6 @@ def _has_offsets(estimator: BaseCalibrator) -> bool:
 def _model_without_offsets(estimator: BaseCalibrator) -> tuple[type, dict]:
     """``estimator``'s class and the parameters that make its flexibility (``group_offsets``, the seed, ``alpha`` and
     ``zero_reading`` left out); a degree-1 polynomial is the LTM (its ridge penalises no linear term)."""
-    from ..calibrators._linear import LinearCalibrator
-    from ..calibrators._polynomial import PolynomialCalibrator
-
     ignored = ("group_offsets", "random_state", "alpha", "zero_reading")
     params = {k: v for k, v in estimator.get_params(deep=False).items() if k not in ignored}
     if type(estimator) is PolynomialCalibrator and params.get("degree") == 1:
@@ -190,8 +184,6 @@ def _same_model(a: tuple[type, dict], b: tuple[type, dict]) -> bool:
 def _offsets_identifiable(y: NDArray[np.float64], groups: NDArray | None) -> bool:
     """Whether one offset per group can be told from the loads: at least 3 groups (a grouped CV's training folds
     then hold two) within which the loads vary (:func:`~ftcal.calibrators._polynomial.within_group_load_fraction`)."""
-    from ..calibrators._polynomial import MIN_WITHIN_FRACTION, within_group_load_fraction
-
     return groups is not None and np.unique(groups).size >= 3 and \
         within_group_load_fraction(y, groups) >= MIN_WITHIN_FRACTION
 
@@ -417,8 +409,6 @@ def check_calibration(estimator, X: ArrayLike, y: ArrayLike, *, groups: ArrayLik
     >>> w = rng.normal(size=(60, 6)); raw = w @ rng.normal(size=(6, 6))
     >>> check_calibration(LinearCalibrator().fit(raw, w), raw, w)  # nothing to refuse
     """
-    from ..model_selection._selection import check_not_degenerate, held_out_predictions
-
     X, y = np.asarray(X, dtype=float), np.asarray(y, dtype=float)
     alpha, axes = float(getattr(estimator, "alpha_", 1.0)), getattr(estimator, "axes_", None)
     name = type(estimator).__name__
@@ -491,19 +481,14 @@ class StackedCalibrator(BaseCalibrator):
     def __init__(self, *, estimators=None, weights=(), alpha=None, zero_reading=None, random_state=None):
         self.estimators = estimators
         self.weights = weights
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     #: Accepts the groups of the rows and passes them on to the members that request them.
     __metadata_request__fit = {"groups": True}
 
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` to each member (``member0``, ``member1``, ...)."""
-        router = MetadataRouter(owner=self).add_self_request(self)
-        for i, member in enumerate(self.estimators or []):
-            router.add(**{f"member{i}": member}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
-        return router
+        return wrapper_routing(self, **{f"member{i}": member for i, member in enumerate(self.estimators or [])})
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, *, fitted_estimators=None):
         """Fit the members on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6) (or take them fitted).
@@ -752,11 +737,9 @@ class AutoCalibrator(BaseCalibrator):
         self.baselines = baselines
         self.network_samples = network_samples
         self.n_jobs = n_jobs
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
-    def _candidates(self, grouped: bool = False, n_channels: int | None = None) -> list[tuple[str, BaseCalibrator]]:
+    def _candidates(self, grouped: bool = False) -> list[tuple[str, BaseCalibrator]]:
         """The candidates in their complexity order, the choosable stock baselines placed among them."""
         if self.candidates is None:
             pairs = default_candidates(self.schedule, grouped)
@@ -769,7 +752,7 @@ class AutoCalibrator(BaseCalibrator):
                     "ftcal's tags optional), e.g. [('linear', LinearCalibrator()), ('ridge', Ridge())]; got "
                     f"{self.candidates!r:.120}."
                 )
-        pairs = with_stock_candidates(pairs, self._stock(n_channels))
+        pairs = with_stock_candidates(pairs, self._stock())
         names = [name for name, _ in pairs]
         repeated = sorted({repr(n) for n in names if names.count(n) > 1})
         if repeated or not all(isinstance(n, str) and n for n in names):
@@ -787,10 +770,8 @@ class AutoCalibrator(BaseCalibrator):
                 raise CalibrationInputError(f"candidate {name!r}: {exc}") from None
         return pairs
 
-    def _stock(self, n_channels: int | None) -> list[tuple[str, BaseCalibrator]]:
+    def _stock(self) -> list[tuple[str, BaseCalibrator]]:
         """The choosable free models: the stock baselines (``baselines=True``), a user's own, or none."""
-        from ..calibrators._baselines import STOCK_BASELINE_NAMES, StockCalibrator
-
         seed = 0 if self.random_state is None else int(self.random_state)
         if self.baselines is True:
             return [(name, StockCalibrator(baseline=name, random_state=seed)) for name in STOCK_BASELINE_NAMES]
@@ -809,14 +790,11 @@ class AutoCalibrator(BaseCalibrator):
     def get_metadata_routing(self):
         """``groups`` make this calibrator's folds and reach each candidate whose routing requests them (its
         default, or ``set_fit_request(groups=...)``): a router with one child per candidate, by name."""
-        router = MetadataRouter(owner=self).add_self_request(self)
         try:
             pairs = self._candidates(grouped=True)
         except CalibrationInputError:  # said by fit, with the data
             pairs = []
-        for name, candidate in pairs:
-            router.add(**{name: candidate}, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
-        return router
+        return wrapper_routing(self, **dict(pairs))
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None):
         """Cross-validate the candidates on ``X`` (n, N), ``y`` (n, 6), refit the best on all rows.
@@ -846,7 +824,7 @@ class AutoCalibrator(BaseCalibrator):
         groups = check_groups(groups, len(X))
         if groups is not None:  # the candidates' requests (set_fit_request) are validated here
             process_routing(self, "fit", groups=groups)
-        candidates = self._candidates(grouped=_offsets_identifiable(y, groups), n_channels=X.shape[1])
+        candidates = self._candidates(grouped=_offsets_identifiable(y, groups))
         if groups is None and len(X) < self.cv:
             raise CalibrationInputError(
                 f"X has {len(X)} rows, fewer than the cv={self.cv} folds; record more rows or lower cv "
@@ -866,7 +844,7 @@ class AutoCalibrator(BaseCalibrator):
         self.fold_plan_ = plan
         if not plan.n_splits:  # nothing can be judged: the LTM, the simplest model, never a stack
             comparison = _unscored_ltm(plan, self.alpha_)
-            candidates = [("linear", make_ltm())]
+            candidates = [("linear", make_calibrator("linear"))]
         else:
             comparison = score_candidates(
                 candidates, Xc, named_targets(yc, axes), groups=gc, cv=self.cv, alpha=self.alpha_,
@@ -938,8 +916,6 @@ class AutoCalibrator(BaseCalibrator):
         ``return_std=True`` needs a chosen model that gives one (the Gaussian
         process); otherwise a :class:`~ftcal.core.CalibrationInputError` says which was chosen.
         """
-        from ..core._validation import check_bool
-
         if not check_bool(return_std, "return_std"):
             return super().predict(X)
         check_is_fitted(self)
@@ -948,8 +924,6 @@ class AutoCalibrator(BaseCalibrator):
                 f"return_std=True: the chosen model {self.best_name_!r} gives no standard deviation; only the "
                 "Gaussian process does (use AutoCalibrator(candidates=[('gaussian_process', "
                 "GaussianProcessCalibrator())]) or a GaussianProcessCalibrator for uncertainties).")
-        from ..core._validation import validate_readings
-
         return self.best_estimator_.predict(self._retared(validate_readings(self, X)), return_std=True)
 
     def summary(self) -> str:

@@ -168,10 +168,6 @@ def spread_flags(flags: ArrayLike, reach: int, since: int | None = None) -> tupl
     return spread, (None if not flags.size or not np.isfinite(last[-1]) else int(flags.size - last[-1]))
 
 
-def _rows(groups: NDArray | None, index: NDArray) -> NDArray | None:
-    return None if groups is None else groups[index]
-
-
 def _predicted(model: BaseCalibrator, X: NDArray[np.float64]) -> NDArray[np.float64]:
     """``model.predict(X)`` as (n, k), whatever the target's width."""
     return np.asarray(model.predict(X), dtype=float).reshape(len(X), -1)
@@ -278,9 +274,7 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
         self.estimator = estimator
         self.taus = taus
         self.cv = cv
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     def __sklearn_tags__(self):
         return declare(super().__sklearn_tags__(), reads_history=True)
@@ -332,7 +326,7 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
         for train, test in folds:
             try:
                 static, maps = self._partial_fit(template, X[train], y[train], [h[train] for h in histories],
-                                                 _rows(groups, train))
+                                                 None if groups is None else groups[train])
             except CalibrationInputError as exc:  # said of the fold, the error's class and fields kept
                 hint = " (fewer folds, cv, make it larger)" if isinstance(exc, TooFewSamplesError) else ""
                 raise exc.located(f"HistoryCalibrator cross-validates over {len(folds)} folds: a training fold holds "
@@ -340,7 +334,8 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
             held_out[0][test] = _predicted(static, X[test])
             for k, (history, fitted) in enumerate(zip(histories, maps), start=1):
                 held_out[k][test] = held_out[0][test] + self._history_term(fitted, X[test], history[test])
-        errors = np.array([self._row_errors(y - p) for p in held_out])  # per row: eq. 18 over rows
+        # per row: the mean squared torque-scaled error (eq. 18 over the rows)
+        errors = np.array([np.mean(scale_torques(y - p, self.alpha_, self.axes_) ** 2, axis=1) for p in held_out])
         units = groups if groups is not None else np.arange(n) * _TIME_BLOCKS // n
         shortest_first = np.argsort(np.argsort(taus, kind="stable"), kind="stable")  # among the qualified: the shortest
         chosen = simplest_within_one_se(errors, units, complexity=[0, *(1 + shortest_first)])
@@ -372,10 +367,6 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
     def _history_term(fitted, X, history):
         g, coef, intercept = fitted
         return (history - _predicted(g, X)) @ coef + intercept
-
-    def _row_errors(self, error: NDArray[np.float64]) -> NDArray[np.float64]:
-        scaled = scale_torques(error, self.alpha_, self.axes_)
-        return np.mean(scaled ** 2, axis=1)
 
     def _predict_wrench(self, X: NDArray[np.float64], history: NDArray | None = None) -> NDArray[np.float64]:
         wrench = _predicted(self.estimator_, X)

@@ -29,7 +29,7 @@ The linear model has no schedule (``{}``).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 import inspect
 from typing import Any
 
@@ -57,8 +57,12 @@ class _Lazy:
     def __init__(self, module: str, attribute: str, ensemble_of: str | None = None):
         self.module, self.attribute, self.ensemble_of = module, attribute, ensemble_of
 
+    def target(self) -> Any:
+        """The attribute itself (a class), imported now."""
+        return getattr(import_module(f"ftcal.{self.module}"), self.attribute)
+
     def resolve(self) -> Callable[..., Any]:
-        target = getattr(import_module(f"ftcal.{self.module}"), self.attribute)
+        target = self.target()
         if self.ensemble_of is not None:
             from ._ensemble import ensemble_factory
 
@@ -89,9 +93,6 @@ class _RegisteredNames(Sequence):
 
     def __len__(self) -> int:
         return len(_FACTORIES)
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(tuple(_FACTORIES))
 
     def __eq__(self, other) -> bool:
         return tuple(self) == (tuple(other) if isinstance(other, (tuple, _RegisteredNames)) else other)
@@ -282,11 +283,11 @@ register_calibrator("auto", _Lazy("compose._auto", "AutoCalibrator"), schedules=
 
 
 #: Meta-estimators that wrap registered calibrators without being registry names themselves.
-_WRAPPERS: tuple[tuple[str, str], ...] = (
-    ("compose._ensemble", "EnsembleCalibrator"),
-    ("compose._temperature_compensation", "TemperatureCompensatedCalibrator"),
-    ("compose._history", "HistoryCalibrator"),
-    ("compose._auto", "StackedCalibrator"),
+_WRAPPERS: tuple[_Lazy, ...] = (
+    _Lazy("compose._ensemble", "EnsembleCalibrator"),
+    _Lazy("compose._temperature_compensation", "TemperatureCompensatedCalibrator"),
+    _Lazy("compose._history", "HistoryCalibrator"),
+    _Lazy("compose._auto", "StackedCalibrator"),
 )
 
 
@@ -308,12 +309,10 @@ def model_class(name: str) -> type | None:
 
 def _class_places() -> list[tuple[str, Callable[[], Any]]]:
     """``(class name, loader)`` of every class :func:`model_classes` lists, wrappers first; nothing imported."""
-    places = [(attribute, lambda m=module, a=attribute: getattr(import_module(f"ftcal.{m}"), a))
-              for module, attribute in _WRAPPERS]
+    places = [(lazy.attribute, lazy.target) for lazy in _WRAPPERS]
     for factory in list(_FACTORIES.values()):
         if isinstance(factory, _Lazy):
-            places.append((factory.attribute, lambda f=factory: getattr(import_module(f"ftcal.{f.module}"),
-                                                                         f.attribute)))
+            places.append((factory.attribute, factory.target))
         elif isinstance(factory, type):
             places.append((factory.__name__, lambda f=factory: f))
     return places

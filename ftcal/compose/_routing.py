@@ -38,11 +38,11 @@ from ..core._exceptions import CalibrationInputError
 __all__ = ["wrapper_routing", "routed_fit_params", "requests_groups", "requests"]
 
 
-def wrapper_routing(owner, estimator) -> MetadataRouter:
-    """The routing of a wrapper: it accepts ``groups`` (and ``sample_weight``) itself and routes ``fit`` metadata to
-    ``estimator``."""
+def wrapper_routing(owner, **children) -> MetadataRouter:
+    """The routing of a wrapper (its ``estimator``) or a calibrator of several models (``children``: name ->
+    model): it accepts ``groups`` (and ``sample_weight``) itself and routes ``fit`` metadata to each child."""
     return MetadataRouter(owner=owner).add_self_request(owner).add(
-        estimator=estimator, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
+        **children, method_mapping=MethodMapping().add(caller="fit", callee="fit"))
 
 
 def routed_fit_params(owner, groups=None, *, sample_weight=None, inner=None) -> dict:

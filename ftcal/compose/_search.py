@@ -47,17 +47,15 @@ __all__ = ["DEFAULT_SEARCH_SPACES", "search_calibrator", "parse_search_space", "
 #: :func:`~ftcal.compose._registry.registered_search_spaces` for the live one.
 DEFAULT_SEARCH_SPACES: dict[str, dict[str, list]] = registered_search_spaces()
 
+#: Each distribution of the randomized search by name: the scipy distribution of its bounds (a, b), and what the
+#: bounds must satisfy (scipy only fails when sampling, with "Domain error").
 _DISTRIBUTIONS = {
-    "loguniform": lambda a, b: stats.loguniform(a, b),
-    "uniform": lambda a, b: stats.uniform(a, b - a),
-    "randint": lambda a, b: stats.randint(int(a), int(b) + 1),
+    "loguniform": (stats.loguniform, lambda a, b: 0 < a < b, "0 < a < b"),
+    "uniform": (lambda a, b: stats.uniform(a, b - a), lambda a, b: a < b, "a < b"),
+    "randint": (lambda a, b: stats.randint(int(a), int(b) + 1),
+                lambda a, b: a == int(a) and b == int(b) and a <= b, "integers a <= b"),
 }
 _DISTRIBUTION = re.compile(r"^\s*(\w+)\s*\(\s*([^,]+?)\s*,\s*([^,]+?)\s*\)\s*$")
-
-
-#: What each distribution's bounds (a, b) must satisfy (scipy only fails when sampling, with "Domain error").
-_BOUND_RULES = {"loguniform": (lambda a, b: 0 < a < b, "0 < a < b"), "uniform": (lambda a, b: a < b, "a < b"),
-                "randint": (lambda a, b: a == int(a) and b == int(b) and a <= b, "integers a <= b")}
 
 
 def _bounds(name: str, low: str, high: str, where: str) -> tuple[float, float]:
@@ -76,7 +74,7 @@ def _bounds(name: str, low: str, high: str, where: str) -> tuple[float, float]:
         raise CalibrationInputError(f"{where}: {name}(a, b) takes two numbers, e.g. {name}(1e-4, 1e-2)") from None
     if not (math.isfinite(a) and math.isfinite(b)):
         raise CalibrationInputError(f"{where}: {name}(a, b) needs finite bounds; got a = {low}, b = {high}")
-    rule, text = _BOUND_RULES[name]
+    _, rule, text = _DISTRIBUTIONS[name]
     if not rule(a, b):
         raise CalibrationInputError(f"{where}: {name}(a, b) needs {text}; got a = {low}, b = {high}")
     return a, b
@@ -110,7 +108,7 @@ def parse_search_space(entries: Iterable[str]) -> dict[str, Any]:
                 raise CalibrationInputError(
                     f"search entry {text!r}: unknown distribution {name!r}; use one of {sorted(_DISTRIBUTIONS)}."
                 )
-            space[key] = _DISTRIBUTIONS[name](*_bounds(name, low, high, f"search entry {text!r}"))
+            space[key] = _DISTRIBUTIONS[name][0](*_bounds(name, low, high, f"search entry {text!r}"))
             continue
         try:
             parsed = json.loads(values)
@@ -135,20 +133,9 @@ def _check_space(estimator, space: Mapping[str, Any]) -> None:
         )
 
 
-def search_calibrator(
-    model: str,
-    X: ArrayLike,
-    y: ArrayLike,
-    *,
-    space: Mapping[str, Any] | None = None,
-    n_iter: int | None = None,
-    cv: int = 3,
-    groups: ArrayLike | None = None,
-    schedule: str = "short",
-    random_state: int | None = 0,
-    n_jobs: int | None = None,
-    **params,
-):
+def search_calibrator(model: str, X: ArrayLike, y: ArrayLike, *, space: Mapping[str, Any] | None = None,
+                      n_iter: int | None = None, cv: int = 3, groups: ArrayLike | None = None, schedule: str = "short",
+                      random_state: int | None = 0, n_jobs: int | None = None, **params):
     """Search a registry model's hyperparameters; returns the fitted scikit-learn search object.
 
     Parameters
@@ -238,9 +225,7 @@ def search_calibrator(
     # own cross-validation inside each fit then hold out whole groups too), and only then: the precomputed folds
     # consume nothing, so passing groups nobody requests would be refused by the routing
     fit_params = routed_groups(estimator, groups)
-    if not fit_params:
-        return search.fit(X, y)
-    with config_context(enable_metadata_routing=True):
+    with config_context(enable_metadata_routing=True if fit_params else None):  # None: the user's setting stays
         return search.fit(X, y, **fit_params)
 
 

@@ -90,9 +90,7 @@ class TemperatureCompensatedCalibrator(CalibratorWrapper):
         self.estimator = estimator
         self.reference_temperature = reference_temperature
         self.n_iterations = n_iterations
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
 
     def _split(self, X: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         if X.shape[1] < 2:  # like every calibrator, a regressor of any channel count (the wrench rule is the data's)
@@ -149,13 +147,12 @@ class TemperatureCompensatedCalibrator(CalibratorWrapper):
         self
         """
         check_is_fitted(self)
-        raw, temperature = self._split(validate_readings(self, X_no_load))
-        self.estimator_.retare(self._compensate(raw, temperature), max_spread=max_spread)
+        compensated = self._compensate(*self._split(validate_readings(self, X_no_load)))
+        self.estimator_.retare(compensated, max_spread=max_spread)
         return self
 
     def _predict_wrench(self, X: NDArray[np.float64]) -> NDArray[np.float64]:
-        raw, temperature = self._split(X)
-        return self.estimator_.predict(self._compensate(raw, temperature))
+        return self.estimator_.predict(self._compensate(*self._split(X)))
 
     def _emit_onnx(self, g, x: str) -> str:
         n = int(self.n_features_in_)

@@ -88,7 +88,7 @@ class CalibratorWrapper(BaseCalibrator):
 
     def get_metadata_routing(self):
         """Routing of ``fit``'s ``groups`` and ``sample_weight`` to ``estimator`` (:mod:`ftcal.compose._routing`)."""
-        return wrapper_routing(self, self._inner())
+        return wrapper_routing(self, estimator=self._inner())
 
     def fit(self, X: ArrayLike, y: ArrayLike, groups: ArrayLike | None = None, sample_weight: ArrayLike | None = None):
         """Fit on raw readings ``X`` (n, N) and wrenches ``y`` (n, 6).

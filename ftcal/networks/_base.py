@@ -117,9 +117,7 @@ class NetworkCalibrator(BaseCalibrator):
         self.recover_tolerance = recover_tolerance
         self.max_recover_epochs = max_recover_epochs
         self.validation_fraction = validation_fraction
-        self.alpha = alpha
-        self.zero_reading = zero_reading
-        self.random_state = random_state
+        super().__init__(alpha=alpha, zero_reading=zero_reading, random_state=random_state)
         self.verbose = verbose
         self.callbacks = callbacks
         self.device = device

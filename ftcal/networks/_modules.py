@@ -9,7 +9,7 @@ from torch import nn
 
 from ..core._exceptions import CalibrationInputError
 
-__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "StackedMLP", "mlp_layers", "activate",
+__all__ = ["DirectionalNet", "ComparativeNet", "WeightedSquaredError", "StackedMLP", "mlp_layers",
            "weighted_squared_error"]
 
 _ACTIVATIONS = {nn.ReLU: "relu", nn.Tanh: "tanh"}
@@ -34,15 +34,10 @@ def mlp_layers(module: nn.Module, what: str = "the module") -> list[tuple[nn.Lin
     return [(linear, _ACTIVATIONS.get(a, "identity")) for linear, a in zip(linears, [*following, None])]
 
 
-def activate(h: torch.Tensor, activation: str) -> torch.Tensor:
-    """``h`` through ``"relu"``, ``"tanh"`` or ``"identity"``."""
-    return torch.relu(h) if activation == "relu" else torch.tanh(h) if activation == "tanh" else h
-
-
 def activate_(h: torch.Tensor, activation: str) -> torch.Tensor:
-    """:func:`activate` in place, for a layer's fresh output that nothing else holds (a linear layer's backward
-    needs its inputs, not its output; ReLU's and tanh's backward use their result): the same values, one
-    allocation and one pass over memory fewer per layer (~6 % of a stacked 5-member step)."""
+    """``h`` through ``"relu"``, ``"tanh"`` or ``"identity"``, in place, for a layer's fresh output that nothing else
+    holds (a linear layer's backward needs its inputs, not its output; ReLU's and tanh's backward use their result):
+    the same values, one allocation and one pass over memory fewer per layer (~6 % of a stacked 5-member step)."""
     return h.relu_() if activation == "relu" else h.tanh_() if activation == "tanh" else h
 
 

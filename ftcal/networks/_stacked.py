@@ -16,10 +16,9 @@ __all__ = ["StackedMLP", "fit_stacked"]
 
 def _stacking_key(estimator) -> tuple:
     """What stacked members must share: class and every training parameter (not seed, tare or scale)."""
-    params = estimator.get_params(deep=False)
-    for name in ("random_state", "alpha", "zero_reading", "verbose"):
-        params.pop(name, None)
-    return type(estimator), tuple(sorted((k, repr(v)) for k, v in params.items()))
+    may_differ = ("random_state", "alpha", "zero_reading", "verbose")
+    return type(estimator), tuple(sorted((k, repr(v)) for k, v in estimator.get_params(deep=False).items()
+                                         if k not in may_differ))
 
 
 def _datasets(X, y, K: int) -> list[tuple]:
