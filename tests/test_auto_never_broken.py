@@ -173,15 +173,6 @@ def test_auto_uses_the_cores_by_default_and_its_first_log_line_says_so(caplog):
     assert first.startswith("auto: 1 candidates on 40 rows, scored all cores")
 
 
-def test_cv_results_is_a_deprecated_alias_of_comparison():
-    rng = np.random.default_rng(0)
-    w = rng.uniform(-1, 1, size=(40, 6))
-    auto = AutoCalibrator(candidates=[("linear", LinearCalibrator())], baselines=False).fit(
-        w @ rng.normal(size=(6, 6)), w)
-    with pytest.warns(FutureWarning, match="renamed comparison_"):
-        assert auto.cv_results_ is auto.comparison_
-
-
 def test_check_calibration_refuses_what_must_not_be_saved_and_passes_the_rest():
     from ftcal.compose._auto import check_calibration
 

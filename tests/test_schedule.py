@@ -118,15 +118,12 @@ def test_max_epochs_caps_the_whole_training_when_phase1_epochs_is_given():
     assert [row["phase"] for row in into_phase_two.net_.history] == [1, 1, 2, 2]
 
 
-def test_max_epochs_alone_keeps_its_former_meaning_with_a_future_warning():
-    with pytest.warns(FutureWarning, match=r"max_epochs=2\) sets phase 1's length, as before: training runs up to "
-                                           r"7 epochs.*phase1_epochs=2"):
-        model = fit_with(max_epochs=2, plateau_epochs=2, recover_tolerance=0.0, max_recover_epochs=3)
-    phases = [row["phase"] for row in model.net_.history]
-    assert phases[:5] == [1, 1, 2, 2, 3] and len(phases) <= 7  # phase 1 is 2 epochs; the cap is 2 + 2 + 3
+def test_max_epochs_alone_caps_the_whole_training_as_in_skorch():
+    # phase 1 would be 1700 epochs: max_epochs=2 stops the training after two, with no warning
     with warnings.catch_warnings():
-        warnings.simplefilter("error", FutureWarning)  # the new parameters: no warning
-        fit_with(phase1_epochs=2, plateau_epochs=0, max_recover_epochs=0)
+        warnings.simplefilter("error", FutureWarning)
+        model = fit_with(max_epochs=2, plateau_epochs=2, recover_tolerance=0.0, max_recover_epochs=3)
+    assert model.n_epochs_ == 2 and [row["phase"] for row in model.net_.history] == [1, 1]
 
 
 @pytest.mark.parametrize("cls", [DirectionalCalibrator, ComparativeCalibrator])

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from numbers import Integral
-import warnings
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -676,8 +675,7 @@ class AutoCalibrator(BaseCalibrator):
         :class:`~ftcal.model_selection.RowStatus` (scored, skipped, failed, stopped) and reason, held-out RMSE ±
         SE, seconds, complexity, verdict (chosen / within one SE but more complex / beyond one SE / ...) and
         the row against the choice in symmetric words; ``chosen``, ``why``, ``stability`` (the choice repeated
-        on folds with other seeds, where cheap). ``to_dict()`` gives JSON columns. (``cv_results_``, its name
-        before, still answers, with a ``FutureWarning``.)
+        on folds with other seeds, where cheap). ``to_dict()`` gives JSON columns.
     fold_plan_ : FoldPlan
         The folds the comparison was scored on.
     held_out_predictions_ : ndarray of shape (n_samples, n_outputs) or None
@@ -889,13 +887,6 @@ class AutoCalibrator(BaseCalibrator):
             self.best_estimator_ = refit(self.best_name_)
         self._adopt_fitted(X, y, self.best_estimator_)
         return self
-
-    @property
-    def cv_results_(self) -> dict:
-        """Deprecated name of :attr:`comparison_` (scikit-learn's ``cv_results_`` has another schema)."""
-        warnings.warn("AutoCalibrator.cv_results_ is renamed comparison_ (scikit-learn's cv_results_ has another "
-                      "schema); cv_results_ will be removed in a future release.", FutureWarning, stacklevel=2)
-        return self.comparison_
 
     def __sklearn_tags__(self):
         # chooses a model by cross-validation: a wrapper that refits its estimator many times (the history term)

@@ -4,7 +4,6 @@ numpy inference."""
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Sequence
 from numbers import Integral, Real
 
@@ -124,16 +123,9 @@ class NetworkCalibrator(BaseCalibrator):
         self.n_threads = n_threads
 
     def _schedule_epochs(self) -> tuple[int, int]:
-        """``(phase 1's length, the cap on all epochs)`` from ``phase1_epochs`` and ``max_epochs``.
-
-        ``max_epochs`` alone (``phase1_epochs=None``) keeps its former meaning, phase 1's length (the whole
-        schedule then runs up to ``max_epochs + plateau_epochs + max_recover_epochs`` epochs), with a
-        ``FutureWarning`` (see :meth:`_check_params`)."""
-        full = self.plateau_epochs + self.max_recover_epochs
-        if self.phase1_epochs is None and self.max_epochs is not None:  # the former meaning
-            return int(self.max_epochs), int(self.max_epochs) + full
+        """``(phase 1's length, the cap on all epochs)`` from ``phase1_epochs`` and ``max_epochs``."""
         phase1 = self._default_phase1_epochs if self.phase1_epochs is None else int(self.phase1_epochs)
-        cap = phase1 + full if self.max_epochs is None else int(self.max_epochs)
+        cap = phase1 + self.plateau_epochs + self.max_recover_epochs if self.max_epochs is None else int(self.max_epochs)
         return phase1, cap
 
     _parameter_constraints: dict = {
@@ -165,14 +157,6 @@ class NetworkCalibrator(BaseCalibrator):
         odd = [c for c in self.callbacks or () if not isinstance(c[1] if pair(c) else c, Callback)]
         if odd:
             raise CalibrationInputError(f"callbacks must hold skorch callbacks or (name, callback) pairs; got {odd[0]!r}.")
-        if self.phase1_epochs is None and self.max_epochs is not None:
-            phase1, cap = self._schedule_epochs()
-            warnings.warn(
-                f"{type(self).__name__}(max_epochs={self.max_epochs}) sets phase 1's length, as before: training runs "
-                f"up to {cap} epochs (phases 2 and 3: plateau_epochs={self.plateau_epochs}, max_recover_epochs="
-                f"{self.max_recover_epochs}). In a future ftcal max_epochs will cap the whole training. Pass "
-                f"phase1_epochs={phase1} for phase 1's length (this behaviour), and max_epochs with it only to cap "
-                "all epochs.", FutureWarning, stacklevel=4)
 
     def _thread_limit(self):
         """A context limiting torch's threads (OpenMP, per thread) to ``n_threads`` in the calling thread, and BLAS

@@ -46,9 +46,8 @@ class DirectionalCalibrator(NetworkCalibrator):
         Phase 1's length (constant ``lr``) [epochs]; None: 1700 (the thesis; 3000 for the comparative DNN).
     max_epochs : int or None, default=None
         Cap on the epochs of the whole training (all three phases); None: no cap beyond the schedule's
-        ``phase1_epochs + plateau_epochs + max_recover_epochs``. **Deprecated meaning**: given without
-        ``phase1_epochs``, ``max_epochs`` is still phase 1's length, as in ftcal 0.1 (``max_epochs=2``
-        then trains up to 602 epochs), with a ``FutureWarning``; pass ``phase1_epochs`` for that.
+        ``phase1_epochs + plateau_epochs + max_recover_epochs`` (skorch's meaning: ``max_epochs=2`` trains 2
+        epochs).
     plateau_epochs : int, default=100
         Phase 2 length (``ReduceLROnPlateau``).
     plateau_patience : int, default=30
