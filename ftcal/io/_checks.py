@@ -157,26 +157,27 @@ class ReadingChecks:
 
     def of_kind(self, kind: FindingKind | str) -> tuple[ReadingFinding, ...]:
         """The findings of one kind."""
-        kind = FindingKind(kind)
-        return tuple(f for f in self.findings if f.kind is kind)
+        return tuple(self._of_kinds([kind]))
 
     def kinds(self) -> list[FindingKind]:
         """The kinds found, in :class:`FindingKind` order."""
         return [k for k in FindingKind if self.of_kind(k)]
 
+    def _of_kinds(self, kinds) -> list[ReadingFinding]:
+        """The findings of ``kinds`` (None: all)."""
+        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
+        return [f for f in self.findings if f.kind in wanted]
+
     def mask(self, kinds=None) -> NDArray[np.bool_]:
         """The rows the findings of ``kinds`` (default: all) cover, as a mask over the checked rows."""
-        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
         out = np.zeros(self.n_rows, dtype=bool)
-        for f in self.findings:
-            if f.kind in wanted:
-                out[f.rows] = True
+        for f in self._of_kinds(kinds):
+            out[f.rows] = True
         return out
 
     def to_json(self, kinds=None) -> list[dict]:
         """The findings of ``kinds`` (default: all) as plain JSON (:meth:`ReadingFinding.to_dict`)."""
-        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
-        return [f.to_dict() for f in self.findings if f.kind in wanted]
+        return [f.to_dict() for f in self._of_kinds(kinds)]
 
     def summary(self, shown: int = 3) -> list[str]:
         """One line per kind found: how many, the rows they cover and the first ``shown`` as ``file:line:channel``.
@@ -276,19 +277,15 @@ def _runs(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
 
 def _side_medians(x: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
     """The median of the ``_SIDE`` readings before and after each row (NaN where a side is empty)."""
+    import warnings
+
     m, k = x.shape
     pad = np.full((_SIDE, k), np.nan)
     padded = np.vstack([pad, x, pad])
-    before = np.sort(np.stack([padded[_SIDE - j:_SIDE - j + m] for j in range(1, _SIDE + 1)]), axis=0)
-    after = np.sort(np.stack([padded[_SIDE + j:_SIDE + j + m] for j in range(1, _SIDE + 1)]), axis=0)
-    return _median_of_sorted(before), _median_of_sorted(after)
-
-
-def _median_of_sorted(side: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The median over the first axis of up to three values sorted with the NaNs (missing neighbours) last."""
-    count = np.isfinite(side).sum(axis=0)
-    out = np.where(count == 3, side[1], np.where(count == 2, (side[0] + side[1]) / 2, side[0]))
-    return np.where(count == 0, np.nan, out)
+    with warnings.catch_warnings():  # a row without neighbours on one side (a group's edge): NaN, no warning
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return tuple(np.nanmedian(np.stack([padded[_SIDE + s * j:_SIDE + s * j + m] for j in range(1, _SIDE + 1)]),
+                                  axis=0) for s in (-1, 1))
 
 
 class _Finder:
@@ -311,7 +308,10 @@ class _Finder:
         self.flagged = np.zeros((self.n, self.k), dtype=bool)  # (row, channel) already named
 
     def add(self, kind, rows, channel, value, reason) -> None:
+        """Note a finding; a channel's readings it names are :attr:`flagged` (not named again by a later check)."""
         rows = np.atleast_1d(np.asarray(rows, dtype=np.int64))
+        if channel is not None:
+            self.flagged[rows, channel] = True
         file, line = self.sources.where(int(rows[0]))
         self.findings.append(ReadingFinding(kind=kind, rows=rows, file=file, line=line,
                                             channel=None if channel is None else self.names[channel],
@@ -363,13 +363,11 @@ class _Finder:
             low, high = found
             ranges[self.names[j]] = found
             width = high - low + 1
-            beyond = np.flatnonzero((column < low - width) | (column > high + width))
-            beyond = [r for r in beyond if self._alone_beyond(r, j, low, high)]
-            for r in beyond:
-                self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
-                         f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC of "
-                         "that range gives it")
-                self.flagged[r, j] = True
+            for r in np.flatnonzero((column < low - width) | (column > high + width)):
+                if self._alone_beyond(r, j, low, high):
+                    self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
+                             f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC "
+                             "of that range gives it")
             for rail in (low, high):
                 at = np.flatnonzero(column == rail)
                 if not 0 < at.size <= _MAX_RAIL_ROWS:
@@ -381,7 +379,6 @@ class _Finder:
                         self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
                                  f"at the limit {int(rail)} of the channel's {int(low)}..{int(high)} range, alone "
                                  f"({zr:.1f} robust SD from its neighbours in time; {at.size} such reading(s))")
-                        self.flagged[r, j] = True
         return ranges
 
     def _alone_beyond(self, r: int, j: int, low: float, high: float) -> bool:
@@ -421,7 +418,6 @@ class _Finder:
             self.add(FindingKind.SPIKE, r, j, float(self.raw[r, j]),
                      f"differs from its neighbours in time on both sides by more than {limit:.1f} robust SD (the "
                      f"threshold that keeps false alarms below {self.alpha:g} per dataset over {tested} readings)")
-            self.flagged[r, j] = True
         return limit
 
     # ---------------------------------------------------------------- stuck channels
@@ -610,8 +606,7 @@ def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: A
     finder = _Finder(x, w, groups, sources, channel_names, false_alarm_rate)
     if x.shape[0] == 0:
         return ReadingChecks(findings=(), n_rows=0)
-    stuck = finder.stuck()
-    finder.flagged |= stuck
+    stuck = finder.stuck()  # its runs are flagged: not named again as spikes
     z_both, z_one = finder.side_statistics(exclude=stuck)
     ranges = finder.out_of_range(z_both, z_one)
     z = finder.spikes(z_both)
