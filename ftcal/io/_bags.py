@@ -32,6 +32,7 @@ the topics the bag holds.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -177,10 +178,10 @@ class _Reader:
         return self
 
     def __exit__(self, *exc) -> None:
-        try:
+        import contextlib
+
+        with contextlib.suppress(Exception):  # closing a damaged bag may fail too; the first error is the one to show
             self.reader.close()
-        except Exception:  # noqa: BLE001 - closing a damaged bag may fail too; the first error is the one to show
-            pass
 
     def topics(self) -> dict[str, tuple[str, int]]:
         return {name: (info.msgtype or "?", int(info.msgcount)) for name, info in self.reader.topics.items()}
@@ -260,26 +261,20 @@ def bag_values(path: str | Path, head: int | None = None):
         pending = {t for t, (_, n) in listed.items() if n > 0} if head is not None else None
         try:
             for conn, _receive_ns, data in r.reader.messages():
-                digest = digests.get(conn.topic)
-                if digest is None and conn.topic in digests or head is not None and counts.get(conn.topic, 0) >= head:
+                topic = conn.topic
+                if topic in digests and digests[topic] is None or head is not None and counts.get(topic, 0) >= head:
                     continue
                 msg = r.reader.deserialize(data, conn.msgtype)
-                if digest is None:
-                    if not (conn.msgtype in known or has_numbers(msg)):
-                        digests[conn.topic] = None
-                        if pending is not None:
-                            pending.discard(conn.topic)
-                            if not pending:
-                                break
-                        continue
-                    digest = digests[conn.topic] = hashlib.sha256()
-                numbers, text = [], []
-                flat(msg, numbers, text)
-                digest.update(np.asarray(numbers, dtype=np.float64).tobytes())
-                digest.update("\x00".join(text).encode("utf-8") + b"\x01")
-                counts[conn.topic] = counts.get(conn.topic, 0) + 1
-                if pending is not None and counts[conn.topic] >= min(head, listed[conn.topic][1]):
-                    pending.discard(conn.topic)
+                if topic not in digests:
+                    digests[topic] = hashlib.sha256() if conn.msgtype in known or has_numbers(msg) else None
+                if digests[topic] is not None:
+                    numbers, text = [], []
+                    flat(msg, numbers, text)
+                    digests[topic].update(np.asarray(numbers, dtype=np.float64).tobytes())
+                    digests[topic].update("\x00".join(text).encode("utf-8") + b"\x01")
+                    counts[topic] = counts.get(topic, 0) + 1
+                if pending is not None and (digests[topic] is None or counts[topic] >= min(head, listed[topic][1])):
+                    pending.discard(topic)
                     if not pending:
                         break
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
@@ -440,13 +435,6 @@ def _stamp(msg) -> float | None:
     return float(header.stamp.sec) + 1e-9 * float(header.stamp.nanosec)
 
 
-def _field(msg, dotted: str):
-    value = msg
-    for part in dotted.split("."):
-        value = getattr(value, part)
-    return value
-
-
 def _frame(name: str) -> str:
     return name.strip().lstrip("/")
 
@@ -533,7 +521,7 @@ def _raw_value(path: Path, sensor: str, msgtype: str, msg, raw_field: str, width
     """A raw-gauge message's values and the channel count (refused: no such field, not numbers, fewer than 3
     values, a count that changes)."""
     try:
-        value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
+        value = np.asarray(functools.reduce(getattr, raw_field.split("."), msg), dtype=float).ravel()
     except AttributeError:
         fields = [f for f in getattr(msg, "__dataclass_fields__", {}) if not f.startswith("__")]
         raise LogFormatError(f"{path}: topic {sensor} ({msgtype}) has no field {raw_field!r}; its fields are "
@@ -584,11 +572,22 @@ def _joint_group(topic: str, groups: dict, notes: list) -> tuple[tuple[str, ...]
         notes.append(LogFormatError(f"{topic}: {skipped} messages naming other joints ("
                                     f"{'; '.join(', '.join(g) for g in others[:3])}) were set aside; the arm's are "
                                     f"the {groups[names].n_messages} naming {', '.join(names)}"))
-    t_p, _, q = groups[names].arrays()
-    o = np.argsort(t_p, kind="stable")
-    t_p, q = t_p[o], q[o]
-    keep = np.concatenate([[True], np.diff(t_p) > 0])
-    return names, t_p[keep], q[keep]
+    return (names, *_distinct_times(groups[names]))
+
+
+def _clock_offset(stream: "_Stream") -> float:
+    """The median of (receive time - header stamp) [s] over a stream's kept samples: its clock's offset."""
+    times, receive, _ = stream.arrays()
+    return float(np.median(receive - times))
+
+
+def _distinct_times(stream: "_Stream") -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A pose stream's times, sorted (stable), each kept once (its first sample), and its values at them."""
+    times, _, values = stream.arrays()
+    order = np.argsort(times, kind="stable")
+    times, values = times[order], values[order]
+    keep = np.concatenate([[True], np.diff(times) > 0])
+    return times[keep], values[keep]
 
 
 def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], quat: NDArray[np.float64]) -> str:
@@ -680,11 +679,7 @@ class _TfTree:
             if edge in self.static:
                 Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
             else:
-                times, _, quats = self.edges[edge].arrays()
-                order = np.argsort(times, kind="stable")
-                times, quats = times[order], quats[order]
-                keep = np.concatenate([[True], np.diff(times) > 0])
-                times, quats = times[keep], quats[keep]
+                times, quats = _distinct_times(self.edges[edge])
                 if len(times) == 1:
                     Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
                 else:
@@ -756,10 +751,8 @@ def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: st
     notes: list = []
     t_s, reading = _sensor_samples(path, topics, sensor, m.streams[sensor], max_samples, notes)
     offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
-    for topic in m.stamped if stamps == "header" else ():
-        times, receive, _ = m.streams[topic].arrays() if topic in m.streams else ([], [], None)
-        if len(times):
-            offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
+    if stamps == "header" and sensor in m.stamped:  # (the pose topic's: _joint_poses)
+        offsets[sensor] = _clock_offset(m.streams[sensor])
     if tf is None:
         pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes)
     else:
@@ -886,8 +879,7 @@ def _joint_poses(path: Path, pose_topic: str, m: _Messages, stamps: str, offsets
         raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
     names, t_p, q = _joint_group(pose_topic, m.joint_groups, notes)
     if pose_topic in m.stamped and stamps == "header":
-        times, receive, _ = m.joint_groups[names].arrays()
-        offsets[pose_topic] = float(np.median(receive - times))
+        offsets[pose_topic] = _clock_offset(m.joint_groups[names])
     span = (float(t_p.min()), float(t_p.max()))
     return _PoseStream(pose_topic, span, f"{pose_topic} {span[0]:.6f} to {span[1]:.6f} s", names, t_p, q)
 
