@@ -137,11 +137,15 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
 def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> tuple[NDArray, list[str] | None]:
     """A CSV group column as int64 labels: integers exactly (float64 would merge labels above 2^53), or text labels
     (``pose_a``) numbered in order of appearance (returned too, to name the groups)."""
+    if not all(is_number(t) for t in texts):  # text labels
+        names: dict[str, int] = {}
+        for no, text in zip(line_nos, texts):
+            if not text:
+                raise DatasetFileError(f"{path}: line {no}, column {column}: empty group label; every row needs one.")
+            names.setdefault(text, len(names))
+        return np.array([names[t] for t in texts], dtype=np.int64), list(names)
     labels: list[int] = []
-    textual = not all(is_number(t) for t in texts)
     for no, text in zip(line_nos, texts):
-        if textual:
-            break
         if _INTEGER.fullmatch(text):
             value = int(text)
         else:
@@ -154,14 +158,7 @@ def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> t
             raise DatasetFileError(f"{path}: line {no}: {column} {text} is beyond the 64-bit integer labels ftcal "
                                    "stores. Fix: number the groups 0, 1, 2, ...")
         labels.append(value)
-    else:
-        return np.array(labels, dtype=np.int64), None
-    names: dict[str, int] = {}
-    for no, text in zip(line_nos, texts):
-        if not text:
-            raise DatasetFileError(f"{path}: line {no}, column {column}: empty group label; every row needs one.")
-        names.setdefault(text, len(names))
-    return np.array([names[t] for t in texts], dtype=np.int64), list(names)
+    return np.array(labels, dtype=np.int64), None
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
@@ -583,27 +580,21 @@ class CalibrationDataset:
         meta_json = self._checked_for_saving(path)
         with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
             if path.suffix == ".npz":
-                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json)}
-                if self.axes != WRENCH_LABELS:
-                    arrays["axes"] = np.array(self.axes)
-                if self.group is not None:
-                    arrays["group"] = self.group
-                if self.temperature is not None:
-                    arrays["temperature"] = self.temperature
+                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json),
+                          "axes": None if self.axes == WRENCH_LABELS else np.array(self.axes), "group": self.group,
+                          "temperature": self.temperature}
+                arrays = {name: values for name, values in arrays.items() if values is not None}
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                cols = [f"s{i}" for i in range(self.n_channels)] + list(self.axes)
-                columns = [self.raw, self.wrench]
-                if self.group is not None:  # exact integer labels (Python ints, never through float64)
-                    cols.append("group")
-                    columns.append(self.group[:, None].astype(object))
-                if self.temperature is not None:
-                    cols.append("temperature")
-                    columns.append(self.temperature[:, None])
+                extra = {"group": self.group, "temperature": self.temperature}
+                extra = {name: values[:, None] for name, values in extra.items() if values is not None}
+                if "group" in extra:  # exact integer labels (Python ints, never through float64)
+                    extra["group"] = extra["group"].astype(object)
+                cols = [f"s{i}" for i in range(self.n_channels)] + list(self.axes) + list(extra)
                 with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
                     fh.write(f"# meta: {meta_json}\n" + ",".join(cols) + "\n")
-                    fh.writelines(csv_rows(*columns))
+                    fh.writelines(csv_rows(self.raw, self.wrench, *extra.values()))
         return path
 
     @classmethod
@@ -684,9 +675,8 @@ class CalibrationDataset:
         if all(p.temperature is not None for p in parts):
             temperature = np.concatenate([p.temperature for p in parts])
         groups = None if any(p.group is None for p in parts) else np.concatenate([p.group for p in parts])
-        meta = {**parts[0].meta, "source_files": [p.name for p in files]}
-        meta.pop("group_names", None)
-        meta.pop("group_labels", None)
+        meta = {k: v for k, v in parts[0].meta.items() if k not in ("group_names", "group_labels")}
+        meta["source_files"] = [p.name for p in files]
         if not by_file and groups is not None and all(isinstance(p.meta.get("group_names"), list) for p in parts):
             names: dict[str, int] = {}  # text labels, numbered per file: one numbering for the folder
             groups = np.concatenate([np.array([names.setdefault(p.meta["group_names"][g], len(names))
@@ -887,10 +877,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     base = spec[0] if spec is not None else None
     missing = [n for n in ([base] if spec is not None else names) if n not in available]
     if missing:
-        source.refuse_if_cut(f"{kind} {missing[0]!r}")
-        raise DatasetFileError(f"{where}: {{{option}}} names {kind} {missing[0]!r}, which the file lacks; the file "
-                               f"has {', '.join(n for n in available if n != 'meta_json')}.", parameter=option,
-                               value=missing[0])
+        source.refuse_missing(missing[0], option)
     if spec is not None or len(names) == 1:
         name = base if spec is not None else names[0]
         a = check_real_array(source.read(name), name, where, kind)
@@ -908,6 +895,11 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
                                f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
     return np.column_stack(cols).astype(float), list(names), None
+
+
+def _channel_vectors(source: ArrayFile) -> list[str]:
+    """The vectors ``s0, s1, ...`` of an array file, in number order (the raw channels when no ``raw`` array)."""
+    return sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
 
 
 def _refuse_non_finite(where: str, arrays: list[tuple[np.ndarray, list[str]]]) -> None:
@@ -936,9 +928,9 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
                                        f"axis {axis}; name the wrench with {{wrench}}.", parameter="wrench")
             found[axis] = n
     vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
-    channel_vectors = sorted((n for n in available if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
     wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench", "wrench")
-    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", channel_vectors, "raw channels", "channels")
+    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", _channel_vectors(source), "raw channels",
+                                        "channels")
     raw, wrench = _oriented(raw, wrench, len(raw_labels) == 1 and raw_base is None,
                             len(wrench_labels) == 1 and wrench_base is None)
     if len(wrench_labels) == 1 and wrench_base is None and wrench.shape[1] > 1:
@@ -972,10 +964,7 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
-        source.refuse_if_cut(f"{source.kind} {group_name!r}")
-        raise DatasetFileError(f"{where}: {{{GROUPS}}} names {source.kind} {group_name!r}, which the file lacks; the "
-                               f"file has {', '.join(n for n in available if n != 'meta_json')}.", parameter=GROUPS,
-                               value=group_name)
+        source.refuse_missing(group_name, GROUPS)
     for key, name in (("group", group_name), ("temperature", "temperature")):
         if name in available:
             extra[key] = _vector(source, name, key)
@@ -1033,8 +1022,7 @@ def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> 
     if channels is not None:
         channels = ColumnMap(channels=channels).channels
     with ArrayFile(path) as source:
-        vectors = sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
-        raw, labels, base = _select(source, channels, "raw", vectors, "raw channels", "channels")
+        raw, labels, base = _select(source, channels, "raw", _channel_vectors(source), "raw channels", "channels")
     if len(labels) == 1 and base is None and raw.shape[0] < raw.shape[1]:
         raw = raw.T  # one row per channel (MATLAB)
     bad = np.argwhere(~np.isfinite(raw))

@@ -433,12 +433,8 @@ def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike
             raise LogFormatError(f"{path}: load_mass {load_mass!r}: give the positive mass of the load in kg (at most "
                                  f"{MAX_LOAD_MASS_KG:g}), or None for a log without load.")
         header.append(f"# load_mass_kg: {float(load_mass)!r}")
-    if robot is not None:
-        header.append(f"# robot: {robot}")
-    if sensor_frame is not None:
-        header.append(f"# sensor_frame: {sensor_frame}")
-    if meta:
-        header.append(f"# meta: {json.dumps(meta)}")
+    comments = {"robot": robot, "sensor_frame": sensor_frame, "meta": json.dumps(meta) if meta else None}
+    header += [f"# {key}: {value}" for key, value in comments.items() if value is not None]
     names = list(_FIXED_COLUMNS) + [f"q{j + 1}" for j in range(q_arr.shape[1])] + [f"s{k}" for k in range(raw_arr.shape[1])]
     temp = None
     if temperature is not None:
