@@ -89,16 +89,6 @@ def is_bag(path: str | Path) -> bool:
     return p.suffix in (".db3", ".mcap") and (p.parent / "metadata.yaml").is_file()
 
 
-def _bag_paths(path: Path) -> list[Path]:
-    if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
-        path = path.parent
-    if not path.exists():
-        raise LogFormatError(f"{path}: no such bag.")
-    if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
-        raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with metadata.yaml).")
-    return [path]
-
-
 def _streaming_ros1_reader():
     """rosbags' ROS 1 reader without its per-message index: the chunks are read in file order, one at a time.
 
@@ -158,14 +148,17 @@ class _Reader:
         from rosbags.typesys import Stores, get_typestore
 
         self.path = path
+        if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
+            path = path.parent  # the storage file of a rosbag2 folder: the folder
+        if not path.exists():
+            raise LogFormatError(f"{path}: no such bag.")
+        if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
+            raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with metadata.yaml).")
         try:
-            paths = _bag_paths(path)
-            self.reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+            self.reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             if not self.reader.is2:  # streamed chunk by chunk (rosbags' reader indexes every message first)
-                self.reader.readers = [_streaming_ros1_reader()(p) for p in paths]
+                self.reader.readers = [_streaming_ros1_reader()(path)]
             self.reader.open()
-        except LogFormatError:
-            raise
         except Exception as exc:  # rosbags raises its own errors, sqlite3's, struct's, KeyError on damaged data
             raise self.damaged(exc) from None
 

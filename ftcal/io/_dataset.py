@@ -180,14 +180,10 @@ def _refuse_other_separator(names: list[str], first_rows: list[str], where: str)
     separator = next((sep for sep in (";", "\t") if sep in names[0]), None)
     if separator is None:
         return
-    said = "';'" if separator == ";" else "tabs"
+    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")  # as said, and as typed for tr
     decimal_comma = any("," in row for row in first_rows)
-    if decimal_comma and separator == ";":
-        how = "decimal commas to points and ';' to ',', e.g. tr ',;' '.,' < IN.csv > OUT.csv"
-    elif decimal_comma:
-        how = "decimal commas to points and tabs to ',', e.g. tr ',\\t' '.,' < IN.csv > OUT.csv"
-    else:
-        how = f"{said} to ',', e.g. tr '{';' if separator == ';' else chr(92) + 't'}' ',' < IN.csv > OUT.csv"
+    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma else
+           f"{said} to ',', e.g. tr '{typed}' ','") + " < IN.csv > OUT.csv"
     raise DatasetFileError(
         f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
         f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal reads "

@@ -183,6 +183,12 @@ def read_text_lines(path: Path, what: str, fix: str) -> list[str]:
     return read_utf8_text(path, f"a {what} is a CSV text file", LogFormatError).splitlines()
 
 
+def text_rows(lines: list[str], first: int) -> list[tuple[int, list[str]]]:
+    """The CSV rows of ``lines[first:]`` as ``(1-based line, fields without their spaces)``, blank rows skipped."""
+    return [(first + 1 + k, [f.strip() for f in fields]) for k, fields in enumerate(csv.reader(lines[first:]))
+            if any(f.strip() for f in fields)]
+
+
 def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:
     """Read and validate one run log (layout in the module docstring).
 
@@ -224,14 +230,10 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     units = _log_units(path, info, info_line, text_lines, n_comment)
     head_line = n_comment + 1
     header, q_cols, s_cols = _log_columns(path, text_lines[n_comment], head_line, n_channels, n_joints)
-    rows = []
-    for offset, fields in enumerate(csv.reader(text_lines[head_line:])):
-        lineno = head_line + 1 + offset
-        if not fields or all(not f.strip() for f in fields):
-            continue
+    rows = text_rows(text_lines, head_line)
+    for lineno, fields in rows:
         if len(fields) != len(header):
             raise LogFormatError(f"{path}: line {lineno}: {len(fields)} fields but the header names {len(header)}.")
-        rows.append((lineno, [f.strip() for f in fields]))
     if not rows:
         raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
     log = _log_rows(path, rows, {c: i for i, c in enumerate(header)}, q_cols, s_cols, units)

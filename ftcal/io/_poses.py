@@ -40,7 +40,7 @@ from numpy.typing import NDArray
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
-from ._logs import read_text_lines
+from ._logs import _parse_comments, read_text_lines, text_rows
 from ._readers import canonical_wrench_name, unit_scale
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
@@ -104,16 +104,10 @@ class PoseRecording:
 
 def _header_and_rows(path: Path) -> tuple[list[str], int, list[tuple[int, list[str]]]]:
     lines = read_text_lines(path, "pose file", "split the recording into several files")
-    n_comment = 0
-    while n_comment < len(lines) and lines[n_comment].startswith("#"):
-        n_comment += 1
+    n_comment = _parse_comments(path, lines)[1]
     if n_comment >= len(lines) or not lines[n_comment].strip():
         raise LogFormatError(f"{path}: line {n_comment + 1}: no header line; expected {_EXPECTED}.")
-    rows = []
-    for offset, fields in enumerate(csv.reader(lines[n_comment + 1:])):
-        if fields and any(f.strip() for f in fields):
-            rows.append((n_comment + 2 + offset, [f.strip() for f in fields]))
-    return next(csv.reader([lines[n_comment]])), n_comment + 1, rows
+    return next(csv.reader([lines[n_comment]])), n_comment + 1, text_rows(lines, n_comment + 1)
 
 
 def is_pose_file(path: str | Path) -> bool:
