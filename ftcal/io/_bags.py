@@ -319,26 +319,19 @@ class _Stream:
         self._rows = min(self.capacity, max(1, math.ceil(count / self.block)) + 1)
         self.data: NDArray[np.float64] | None = None  # columns: header time, receive time, value...
         self.n = 0
-        self._seen = 0
+        self.n_messages = 0  # how many messages were added
         self._sum: NDArray[np.float64] | None = None
         self._in_block = 0
-
-    @property
-    def n_messages(self) -> int:
-        """How many messages were added."""
-        return self._seen
 
     def add(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
         row = np.concatenate([[t, receive], value])
         if self.data is None:
-            self.data = np.empty((self._rows, len(row)))
-        self._seen += 1
+            self.data, self._sum = np.empty((self._rows, len(row))), np.zeros(len(row))
+        self.n_messages += 1
         if not self.average:
-            if (self._seen - 1) % self.block == 0:
+            if (self.n_messages - 1) % self.block == 0:
                 self._store(row)
             return
-        if self._sum is None:
-            self._sum = np.zeros(len(row))
         self._sum += row
         self._in_block += 1
         if self._in_block == self.block:
@@ -359,10 +352,8 @@ class _Stream:
                 self.data[:half] = self.data[0:2 * half:2]
             self.n = half
             self.block *= 2
-        if self.n >= len(self.data):
-            grown = np.empty((min(self.capacity, 2 * len(self.data)), self.data.shape[1]))
-            grown[:self.n] = self.data[:self.n]
-            self.data = grown
+        if self.n >= len(self.data):  # grown: the first rows kept (np.resize fills the rest with copies)
+            self.data = np.resize(self.data, (min(self.capacity, 2 * len(self.data)), self.data.shape[1]))
         self.data[self.n] = row
         self.n += 1
 
@@ -617,10 +608,8 @@ class _TfTree:
             self.invalid.setdefault(key, bad)
         elif topic == "/tf_static":
             self.static[key] = quat
-        else:
-            if key not in self.edges:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
-                self.edges[key] = _Stream(0, self.max_samples, average=False)
-            self.edges[key].add(t, t, quat)
+        else:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
+            self.edges.setdefault(key, _Stream(0, self.max_samples, average=False)).add(t, t, quat)
 
     def chain(self, path: Path, base: str, sensor: str) -> list[tuple[str, str]]:
         """The edges from ``base`` down to ``sensor`` (base first). Refused: no chain, a frame of the chain with two

@@ -422,8 +422,8 @@ class _Finder:
 
     # ---------------------------------------------------------------- stuck channels
     def stuck(self) -> NDArray[np.bool_]:
-        """Runs of a channel exactly constant while most other channels move; returns the (row, channel) mask."""
-        mask = np.zeros((self.n, self.k), dtype=bool)
+        """Runs of a channel exactly constant while most other channels move; returns the (row, channel) mask (the
+        first check: what it flags is all that is :attr:`flagged` yet)."""
         same = np.zeros((self.n, self.k), dtype=bool)  # the reading equals the previous one of its group
         for rows in self.groups:
             if rows.size > 1:
@@ -460,27 +460,26 @@ class _Finder:
                     moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
                     if span.size < needed or moving.size == 0 or moving.mean() <= 0.5:
                         continue
-                    mask[span, j] = True
                     first, last = self.place(int(span[0])), self.place(int(span[-1]))
                     self.add(FindingKind.STUCK, span, j, float(self.raw[span[0], j]),
                              f"constant over {span.size} rows ({first} to {last}) while the other channels move "
                              f"(a live reading gives one value with chance {p:.2g} at most: runs of "
                              f"{int(np.ceil(needed))} rows or more are beyond chance)")
-        self.frozen_across_groups(mask)
-        return mask
+        self.frozen_across_groups()
+        return self.flagged.copy()
 
-    def frozen_across_groups(self, mask: NDArray[np.bool_]) -> None:
+    def frozen_across_groups(self) -> None:
         """A channel that keeps one value over whole groups whose loads differ (dead for the second half of a
         steady-pose recording): in the groups where it lives, its group means spread over several quantisation
         steps with the load, while over the frozen groups the other channels' means spread as much (their loads
-        differ) and it does not move at all. Adds to ``mask`` (row, channel)."""
+        differ) and it does not move at all (a run already found stuck within a group is left to that finding)."""
         if len(self.groups) < 4 or self.k < 2:
             return
         sizes = np.array([rows.size for rows in self.groups])
         means = np.array([self.raw[rows].mean(axis=0) for rows in self.groups])
         for j in range(self.k):
             q = _quantum(self.raw[:, j])
-            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not mask[rows, j].any()
+            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not self.flagged[rows, j].any()
                                  for rows in self.groups])
             live = ~constant & (sizes >= 2)
             if q <= 0 or live.sum() < 2 or constant.sum() < 2:
@@ -498,7 +497,6 @@ class _Finder:
                 if np.median(moved) < 0.5:  # the frozen groups' loads hardly differ: one value is no surprise
                     continue
                 rows = np.concatenate([self.groups[g] for g in frozen])
-                mask[rows, j] = True
                 self.add(FindingKind.STUCK, np.sort(rows), j, float(value),
                          f"holds {value:.6g} over all {rows.size} rows of {frozen.size} groups whose loads differ "
                          f"(the other channels' means spread {np.median(moved):.2g}x as much as over all groups) while "
@@ -775,8 +773,7 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None,
     with np.errstate(divide="ignore", invalid="ignore"):
         for j, name in enumerate(names):
             rows = outside[:, j]
-            finite = [abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)]
-            reach = max(finite) if finite else np.inf
+            reach = max((abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)), default=np.inf)
             factor = float(np.max(np.abs(v[rows, j]))) / reach if rows.any() else 0.0
             below = float(np.max(lo[j] - v[out_low[:, j], j], initial=0.0))
             above = float(np.max(v[out_high[:, j], j] - hi[j], initial=0.0))

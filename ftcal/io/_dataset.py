@@ -308,18 +308,17 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     if both:
         raise DatasetFileError(f"{where}: column {names[both[0]]!r} is mapped both as a channel and as a wrench "
                                "component; map it once.")
-    group_name = columns.groups if columns.groups not in (None, "file") else "group"
+    used = channels + wrench
     group = None
     if columns.groups not in (None, "file"):
         group = _find(names, columns.groups, GROUPS, where)
-    elif "group" in names and names.count("group") == 1 and names.index("group") not in channels + wrench:
+        if group in used:
+            raise DatasetFileError(f"{where}: {{{GROUPS}}} {columns.groups!r} is also mapped as a channel or wrench "
+                                   "column.", parameter=GROUPS, value=columns.groups)
+    elif names.count("group") == 1 and names.index("group") not in used:
         group = names.index("group")
-    if group is not None and group in channels + wrench:
-        raise DatasetFileError(f"{where}: {{{GROUPS}}} {group_name!r} is also mapped as a channel or wrench column.",
-                               parameter=GROUPS, value=group_name)
     temperature = names.index("temperature") if names.count("temperature") == 1 else None
-    if temperature in channels + wrench:
-        temperature = None
+    temperature = None if temperature in used else temperature
     order = np.argsort([WRENCH_LABELS.index(a) for a in axes], kind="stable")  # the wrench in Fx..Tz order
     return _CsvColumns(channels=channels, wrench=[wrench[k] for k in order], axes=tuple(axes[k] for k in order),
                        group=group, temperature=temperature)
@@ -373,9 +372,8 @@ class RowSources:
 
     def describe(self, row: int) -> str:
         """``"file:line"`` of ``row`` (``"file:row N"`` for an array file)."""
-        f = int(self.file_index[row])
-        n = int(self.number[row])
-        return f"{self.files[f]}:{n}" if self.counted[f] == "line" else f"{self.files[f]}:row {n}"
+        name, n = self.where(row)
+        return f"{name}:{n}" if self.counted[int(self.file_index[row])] == "line" else f"{name}:row {n}"
 
 
 @dataclass
@@ -840,7 +838,7 @@ def _vector(source: ArrayFile, name: str, what: str) -> np.ndarray:
 def _refuse_containers_only(source: ArrayFile, available: list[str]) -> None:
     """A .mat file holding only structs or cells (no numeric array): said as such, with the MATLAB fix; a column
     slice of a struct, the generic advice, would fail the same way."""
-    classes = {n: getattr(source, "entries", {}).get(n, ((), "double"))[1] for n in available if n != "meta_json"}
+    classes = {n: source.entries[n][1] for n in available if n != "meta_json"}
     containers = {n: c for n, c in classes.items() if c in ("struct", "cell", "object")}
     if classes and len(containers) == len(classes):
         name, cls = next(iter(containers.items()))
@@ -957,13 +955,11 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
         raise DatasetFileError(f"{where}: the raw channels have {raw.shape[0]} rows but the wrench has "
                                f"{wrench.shape[0]}; they must match (one row per sample).")
     _refuse_non_finite(where, [(raw, raw_labels), (wrench, wrench_labels)])
-    extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
         source.refuse_missing(group_name, GROUPS)
-    for key, name in (("group", group_name), ("temperature", "temperature")):
-        if name in available:
-            extra[key] = _vector(source, name, key)
+    extra = {key: _vector(source, name, key) for key, name in (("group", group_name), ("temperature", "temperature"))
+             if name in available}
     try:
         return cls(raw=raw, wrench=wrench, meta=meta, axes=axes, **extra)
     except DatasetFileError as exc:

@@ -41,7 +41,7 @@ from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
 from ._logs import _parse_comments, read_text_lines, text_rows
-from ._readers import canonical_wrench_name, unit_scale
+from ._readers import ColumnMap, canonical_wrench_name
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
 
@@ -225,13 +225,8 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     k = len(orientation_cols)
     rotation = _rotations(path, layout, values[:, :k], line, orientation_cols) if layout else None
     reading = values[:, k:k + (6 if wrench_cols else len(channels))]
-    wrench = raw = None
-    if wrench_cols:
-        wrench = reading.copy()
-        wrench[:, :3] *= unit_scale(force_unit, "force")
-        wrench[:, 3:] *= unit_scale(torque_unit, "torque")
-    else:
-        raw = reading.copy()
+    wrench = ColumnMap(force_unit=force_unit, torque_unit=torque_unit).to_si(reading) if wrench_cols else None
+    raw = None if wrench_cols else reading.copy()
     extra = {c: values[:, value_cols.index(c)].copy() for c in ("time", "temperature") if c in head}
     time = extra.get("time")
     if time is not None:
