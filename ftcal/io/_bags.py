@@ -735,16 +735,11 @@ def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: st
     offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
     if stamps == "header" and sensor in m.stamped:  # (the pose topic's: _joint_poses)
         offsets[sensor] = _clock_offset(m.streams[sensor])
-    if tf is None:
-        pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes)
-    else:
-        pose = _tf_poses(path, sensor, m, tf, t_s)
+    pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes) if tf is None else \
+        _tf_poses(path, sensor, m, tf, t_s)
     t_s, reading = _common_time(path, sensor, pose, t_s, reading, stamps, offsets, notes)
-    joints = rotation = None
-    if tf is None:
-        joints = np.column_stack([np.interp(t_s, pose.t, pose.q[:, j]) for j in range(pose.q.shape[1])])
-    else:
-        rotation = m.tree.rotations(pose.chain, t_s)
+    joints = np.column_stack([np.interp(t_s, pose.t, q) for q in pose.q.T]) if tf is None else None
+    rotation = m.tree.rotations(pose.chain, t_s) if tf is not None else None
     return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
                         joint_names=pose.names, rotation=rotation, pose_topic=pose.topic, frame_id=m.frame_id or "",
                         clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)
@@ -971,13 +966,13 @@ def write_bag(path: str | Path, storage: str, *, sensor_time: ArrayLike, reading
         Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
             T["geometry_msgs/msg/WrenchStamped"]
         v = _SENTINELS
-        template = Stamped(header=out.header(None, frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
+        template = Stamped(header=out.header(frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
                                                                            torque=Vector3(x=v[3], y=v[4], z=v[5])))
         out.add(sensor_topic, template, t_s, values, latency_s, stamped=True, offset_s=sensor_clock_offset_s)
     if joints is not None:
         q = np.asarray(joints, dtype=float)
         empty = np.zeros(0)
-        template = T["sensor_msgs/msg/JointState"](header=out.header(None, ""), name=list(joint_names),
+        template = T["sensor_msgs/msg/JointState"](header=out.header(""), name=list(joint_names),
                                                    position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
                                                    effort=empty)
         out.add(joint_topic, template, t_p, q, latency_s, stamped=True)
@@ -1001,17 +996,12 @@ class _Serializer:
             self.store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", TF_TYPE))
         self.serialize = self.store.serialize_ros1 if ros1 else self.store.serialize_cdr
         self.streams: list = []  # (topic, type, receive times, serialized rows)
-        self.statics: list = []  # (topic, type, time, serialized message)
 
-    def header(self, t: float | None, frame: str):
-        """A header stamped ``t`` [s] (None: the sentinel stamp) in ``frame``."""
+    def header(self, frame: str):
+        """A header in ``frame`` with the sentinel stamp (each message's stamp is written in by :meth:`add`)."""
         Header, Time = self.store.types["std_msgs/msg/Header"], self.store.types["builtin_interfaces/msg/Time"]
-        if t is None:
-            stamp = Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC)
-        else:
-            sec = math.floor(t)
-            stamp = Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
-        return Header(stamp=stamp, frame_id=frame, **({"seq": 0} if self.ros1 else {}))
+        return Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=frame,
+                      **({"seq": 0} if self.ros1 else {}))
 
     def add(self, topic: str, template, times: NDArray, values: NDArray, latency_s: float, stamped: bool = False,
             offset_s: float = 0.0) -> None:
@@ -1033,7 +1023,7 @@ class _Serializer:
         self.streams.append((topic, typ, times + latency_s, out))
 
     def write(self, path: Path, storage: str, ros1_chunk_bytes: int | None) -> None:
-        """Every message in the order of receipt (the static ones first) into a new bag at ``path``."""
+        """Every message in the order of receipt into a new bag at ``path``."""
         if self.ros1:
             from rosbags.rosbag1 import Writer as Writer1
 
@@ -1052,14 +1042,11 @@ class _Serializer:
         order = np.argsort(receive, kind="stable")
         with writer:
             connections = [writer.add_connection(topic, typ, typestore=self.store)
-                           for topic, typ, _, _ in self.statics + streams]
-            for k, (_, _, t, data) in enumerate(self.statics):
-                writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
-            base_k = len(self.statics)
+                           for topic, typ, _, _ in streams]
             ns = np.round(receive * 1e9).astype(np.int64)
             for i in order:
                 k = int(which[i])
-                writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
+                writer.write(connections[k], int(ns[i]), streams[k][3][row[i]].tobytes())
 
 
 def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple[str, str], latency_s: float) -> None:
@@ -1079,8 +1066,7 @@ def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple
         return TS(header=head, child_frame_id=child,
                   transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
 
-    template = TF(transforms=[transform(out.header(None, base), "flange", _SENTINELS[:4])])
+    template = TF(transforms=[transform(out.header(base), "flange", _SENTINELS[:4])])
     out.add("/tf", template, t_p, to_flange.as_quat(), latency_s, stamped=True)
-    static = TF(transforms=[transform(out.header(float(t_p[0]), "flange"), sensor_frame, flange_to_sensor.as_quat())])
-    out.statics.append(("/tf_static", TF_TYPE, float(t_p[0]),
-                        np.frombuffer(bytes(out.serialize(static, TF_TYPE)), dtype=np.uint8)))
+    static = TF(transforms=[transform(out.header("flange"), sensor_frame, _SENTINELS[:4])])
+    out.add("/tf_static", static, t_p[:1], flange_to_sensor.as_quat()[None], latency_s, stamped=True)

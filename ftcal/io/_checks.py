@@ -702,16 +702,15 @@ class RangeExcess:
     @classmethod
     def combined(cls, parts: list["RangeExcess"]) -> "RangeExcess":
         """The excess of the rows of ``parts`` (chunks of one input, same columns and range) taken together."""
+        from dataclasses import replace
+
         axes = []
-        for column in zip(*(p.axes for p in parts)):
-            first = column[0]
-            furthest = max(column, key=lambda a: a.largest_excess)
-            axes.append(AxisExcess(name=first.name, low=first.low, high=first.high,
-                                   n_rows=sum(a.n_rows for a in column), n_beyond=sum(a.n_beyond for a in column),
-                                   largest_factor=max(a.largest_factor for a in column),
-                                   opposite_sign=sum(a.opposite_sign for a in column),
-                                   largest_excess=furthest.largest_excess, edge=furthest.edge,
-                                   tolerance=max(a.tolerance for a in column)))
+        for column in zip(*(p.axes for p in parts)):  # the furthest row's excess and edge, the counts summed
+            axes.append(replace(max(column, key=lambda a: a.largest_excess), n_rows=sum(a.n_rows for a in column),
+                                n_beyond=sum(a.n_beyond for a in column),
+                                opposite_sign=sum(a.opposite_sign for a in column),
+                                largest_factor=max(a.largest_factor for a in column),
+                                tolerance=max(a.tolerance for a in column)))
         return cls(axes=tuple(axes), mask=np.concatenate([p.mask for p in parts]))
 
     def to_dict(self) -> dict:

@@ -269,10 +269,8 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     positions: dict[str, list[int]] = {}
     for i, n in enumerate(names):
         positions.setdefault(n, []).append(i)
-    if columns.channels is not None:
-        channels = [_find(names, n, "channels", where, positions) for n in columns.channels]
-    else:
-        channels = _channel_positions(names, where)
+    channels = _channel_positions(names, where) if columns.channels is None else \
+        [_find(names, n, "channels", where, positions) for n in columns.channels]
     if columns.wrench is not None:
         wrench = [_find(names, n, "wrench", where) for n in columns.wrench]
         axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
@@ -665,9 +663,8 @@ class CalibrationDataset:
             raise DatasetFileError(f"{folder}: the files hold different channels or wrench axes; every file needs "
                                    "the same columns.")
         _refuse_twin_files(files, parts, labelled=not by_file)
-        temperature = None
-        if all(p.temperature is not None for p in parts):
-            temperature = np.concatenate([p.temperature for p in parts])
+        temperature = np.concatenate([p.temperature for p in parts]) if all(p.temperature is not None for p in parts) \
+            else None
         groups = None if any(p.group is None for p in parts) else np.concatenate([p.group for p in parts])
         meta = {k: v for k, v in parts[0].meta.items() if k not in ("group_names", "group_labels")}
         meta["source_files"] = [p.name for p in files]
@@ -681,9 +678,8 @@ class CalibrationDataset:
         sources = RowSources.joined([p.row_sources() for p in parts])
         ds = cls(raw=np.vstack([p.raw for p in parts]), wrench=np.vstack([p.wrench for p in parts]), group=groups,
                  meta=meta, temperature=temperature, axes=parts[0].axes, sources=sources)
-        if columns.groups is not None or by_file:
-            _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
-                          columns.groups or "file")
+        _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
+                      columns.groups or "file")  # a named column, or the files: each a group
         return ds
 
     @classmethod
@@ -724,8 +720,7 @@ class CalibrationDataset:
         width = len(names)
         numeric = used.channels + used.wrench + ([used.temperature] if used.temperature is not None else [])
         shown = [n or f"{i + 1} (unnamed)" for i, n in enumerate(names)]
-        rows = []
-        group_texts = []
+        rows, group_texts = [], []
         for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
             fields = _csv_fields(line)
             if len(fields) != width:
@@ -1015,8 +1010,8 @@ def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> 
         channels = ColumnMap(channels=channels).channels
     with ArrayFile(path) as source:
         raw, labels, base = _select(source, channels, "raw", _channel_vectors(source), "raw channels", "channels")
-    if len(labels) == 1 and base is None and raw.shape[0] < raw.shape[1]:
-        raw = raw.T  # one row per channel (MATLAB)
+    if len(labels) == 1 and base is None:
+        raw = _rows_first(raw)  # one row per channel (MATLAB)
     bad = np.argwhere(~np.isfinite(raw))
     if bad.size:
         raise DatasetFileError(f"{path}: raw row {int(bad[0, 0])} (rows counted from 0) holds NaN or inf; repair or "

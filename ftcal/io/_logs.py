@@ -321,11 +321,11 @@ def _log_rows(path: Path, rows: list[tuple[int, list[str]]], col: dict[str, int]
 
     n = len(rows)
     ts, kind = np.empty(n), np.empty(n, dtype=object)
-    config, pose, line = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    config, pose = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    line = np.array([lineno for lineno, _ in rows], dtype=np.int64)
     q, raw = np.empty((n, len(q_cols))), np.empty((n, len(s_cols)))
     temp = np.empty(n) if "temperature" in col else None
     for i, (lineno, fields) in enumerate(rows):
-        line[i] = lineno
         kind[i] = fields[col["run"]].lower()
         if kind[i] not in RUN_KINDS:
             raise LogFormatError(f"{path}: line {lineno}: run is {fields[col['run']]!r}; use 'load' or 'no-load'.")

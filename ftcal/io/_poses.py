@@ -208,11 +208,9 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     orientation_cols = ORIENTATION_LAYOUTS[layout] if layout else ()
     value_cols = list(orientation_cols) + ([wrench_cols[c] for c in WRENCH_LABELS] if wrench_cols else channels)
     value_cols += [c for c in ("time", "temperature") if c in head]
-    n = len(rows)
-    values = np.empty((n, len(value_cols)))
-    line = np.empty(n, dtype=np.int64)
+    values = np.empty((len(rows), len(value_cols)))
+    line = np.array([lineno for lineno, _ in rows], dtype=np.int64)
     for i, (lineno, row) in enumerate(rows):
-        line[i] = lineno
         if len(row) != len(names):
             raise LogFormatError(f"{path}: line {lineno}: {len(row)} fields but the header names {len(names)}.")
         for k, c in enumerate(value_cols):
