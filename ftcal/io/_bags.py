@@ -748,12 +748,9 @@ def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: st
 def _pick_topics(path: Path, r: _Reader, topics: dict, wrench_topic: str | None, raw_topic: str | None,
                  joint_topic: str | None, tf: tuple[str, str] | None) -> tuple[str, str, list[str]]:
     """The sensor's topic, its kind (``"wrench"`` or ``"raw"``) and the pose topics :func:`read_bag` reads."""
-    if raw_topic is not None:
-        sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
-        kind = "raw"
-    else:
-        sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
-        kind = "wrench"
+    kind = "wrench" if raw_topic is None else "raw"
+    sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic") \
+        if raw_topic is None else _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
     if tf is None:
         if joint_topic is None and not any(typ == JOINT_STATE_TYPE for typ, _ in topics.values()) and \
                 any(topics.get(t, ("", 0))[0] == TF_TYPE for t in ("/tf", "/tf_static")):

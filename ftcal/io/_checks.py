@@ -325,8 +325,7 @@ class _Finder:
         """Per row and channel: the same-direction distance to both sides' medians over the robust scale (0 where
         the directions differ, NaN where a side is missing), and the distance to the one side there is. The
         readings ``exclude`` (n, N) marks (a stuck run) do not set the scale."""
-        z_both = np.full((self.n, self.k), np.nan)
-        z_one = np.full((self.n, self.k), np.nan)
+        z_both, z_one = np.full((2, self.n, self.k), np.nan)
         quanta = np.array([_quantum(self.raw[:, j]) for j in range(self.k)])
         parts = []
         for rows in self.groups:
@@ -609,8 +608,7 @@ def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: A
     ranges = finder.out_of_range(z_both, z_one)
     z = finder.spikes(z_both)
     finder.repeated()
-    order = {k: i for i, k in enumerate(FindingKind)}
-    findings = sorted(finder.findings, key=lambda f: (order[f.kind], int(f.rows[0])))
+    findings = sorted(finder.findings, key=lambda f: (list(FindingKind).index(f.kind), int(f.rows[0])))
     return ReadingChecks(findings=tuple(findings), n_rows=x.shape[0], adc_ranges=ranges, spike_z=z)
 
 

@@ -351,14 +351,10 @@ class RowSources:
     @classmethod
     def joined(cls, parts: list["RowSources"]) -> "RowSources":
         """The sources of datasets stacked in the order given."""
-        files, counted, index, number = [], [], [], []
-        for part in parts:
-            index.append(part.file_index + len(files))
-            files.extend(part.files)
-            counted.extend(part.counted)
-            number.append(part.number)
-        return cls(files=tuple(files), counted=tuple(counted), file_index=np.concatenate(index),
-                   number=np.concatenate(number))
+        first = np.cumsum([0] + [len(p.files) for p in parts[:-1]])  # each part's first file in the joined list
+        return cls(files=tuple(f for p in parts for f in p.files), counted=tuple(c for p in parts for c in p.counted),
+                   file_index=np.concatenate([p.file_index + k for p, k in zip(parts, first)]),
+                   number=np.concatenate([p.number for p in parts]))
 
     def subset(self, index) -> "RowSources":
         """The sources of the rows ``index`` (a mask or integer indices)."""
@@ -484,15 +480,10 @@ class CalibrationDataset:
 
     def subset(self, index: NDArray) -> "CalibrationDataset":
         """The rows selected by ``index`` (a boolean mask or integer indices), as a new dataset."""
-        return CalibrationDataset(
-            raw=self.raw[index],
-            wrench=self.wrench[index],
-            group=None if self.group is None else self.group[index],
-            meta=dict(self.meta),
-            temperature=None if self.temperature is None else self.temperature[index],
-            axes=self.axes,
-            sources=None if self.sources is None else self.sources.subset(index),
-        )
+        rows = {name: None if getattr(self, name) is None else getattr(self, name)[index]
+                for name in ("raw", "wrench", "group", "temperature")}
+        return CalibrationDataset(**rows, meta=dict(self.meta), axes=self.axes,
+                                  sources=None if self.sources is None else self.sources.subset(index))
 
     def features(self, temperature: bool = False) -> NDArray[np.float64]:
         """The calibrators' ``X``: the raw channels, with the temperature [deg C] as a last column if asked."""

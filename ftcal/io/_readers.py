@@ -525,15 +525,13 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
                                                               or best.fmax < _PLAUSIBLE_FORCE_N[0])), None)
     settings = {f"{best.kind}_unit": best.unit, **({f"{other.kind}_unit": other.unit} if other else {})}
     also = f" (or the {other.kind}s are in {other.unit}: {{{other.kind}_unit}})" if other else ""
-    if best.kind == "force":
-        return DatasetFileError(
-            f"{head}: the forces look like {best.unit} (the largest is {fmax:.3g} N read as {force_unit}), not "
-            f"{force_unit}.", parameter="force_unit", value=force_unit,
-            fix=f"pass {{force_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm, the largest force "
-                f"{best.fmax:.3g} N){also}", settings=settings)
+    read_as = force_unit if best.kind == "force" else torque_unit
+    largest = (f" (the largest is {fmax:.3g} N read as {force_unit})", f", the largest force {best.fmax:.3g} N") \
+        if best.kind == "force" else ("", "")  # the forces' size tells a force unit
     return DatasetFileError(
-        f"{head}: the torques look like {best.unit}, not {torque_unit}.", parameter="torque_unit", value=torque_unit,
-        fix=f"pass {{torque_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm){also}", settings=settings)
+        f"{head}: the {best.kind}s look like {best.unit}{largest[0]}, not {read_as}.", parameter=f"{best.kind}_unit",
+        value=read_as, fix=f"pass {{{best.kind}_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm{largest[1]})"
+        f"{also}", settings=settings)
 
 
 @dataclass(frozen=True)
