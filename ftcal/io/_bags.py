@@ -451,8 +451,7 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
         raise r.damaged(exc) from None
     parents, children = {p for p, _ in edges}, {c for _, c in edges}
     frames = sorted(parents | children)
-    roots = sorted(parents - children)
-    base = roots[0] if roots else (frames[0] if frames else "BASE")
+    base = (sorted(parents - children) or frames or ["BASE"])[0]  # a root of the tree, else any frame
     sensor_guess = sensor_frame if sensor_frame in children else (sorted(children - parents) or ["SENSOR"])[-1]
     proposal = _FramePair((base, sensor_guess)) if base != sensor_guess else Placeholder("BASE,SENSOR")
     raise LogFormatError(

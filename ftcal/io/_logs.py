@@ -446,11 +446,10 @@ def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike
             raise LogFormatError(f"{path}: {exc}") from None
         names.append("temperature")
     out = header + [",".join(names)]
+    numbers = np.column_stack([q_arr, raw_arr] + ([] if temp is None else [temp]))
     for i in range(n):
         vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
-        vals += [repr(v) for v in q_arr[i].tolist() + raw_arr[i].tolist()]  # exact: reads back bit for bit
-        if temp is not None:
-            vals.append(repr(float(temp[i])))  # exact, like the joints and channels
+        vals += [repr(v) for v in numbers[i].tolist()]  # exact: reads back bit for bit
         out.append(",".join(vals))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(out) + "\n", encoding="utf-8")

@@ -365,7 +365,7 @@ class ColumnMap:
                 settings=_slice_settings(common[0], 0, 8, 14))
         a, b = parse_column_slice(self.channels[0]), parse_column_slice(self.wrench[0])
         whole = {n for n in self.channels + self.wrench if parse_column_slice(n) is None}
-        for spec, other in ((a, b), (b, a)):
+        for spec in (a, b):
             if spec is not None and spec[0] in whole:
                 raise DatasetFileError(f"{spec[0]!r} is mapped whole and as a column slice.", parameter="channels",
                                        value=spec[0], fix="map its columns once, each as a slice, e.g. {channels} "
