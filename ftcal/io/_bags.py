@@ -148,17 +148,20 @@ class _Reader:
         from rosbags.typesys import Stores, get_typestore
 
         self.path = path
-        if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
-            path = path.parent  # the storage file of a rosbag2 folder: the folder
-        if not path.exists():
-            raise LogFormatError(f"{path}: no such bag.")
-        if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
-            raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with metadata.yaml).")
-        try:
+        try:  # a path the file system refuses to look at is named as the bag's failure too
+            if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
+                path = path.parent  # the storage file of a rosbag2 folder: the folder
+            if not path.exists():
+                raise LogFormatError(f"{path}: no such bag.")
+            if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
+                raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with "
+                                     "metadata.yaml).")
             self.reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             if not self.reader.is2:  # streamed chunk by chunk (rosbags' reader indexes every message first)
                 self.reader.readers = [_streaming_ros1_reader()(path)]
             self.reader.open()
+        except LogFormatError:
+            raise
         except Exception as exc:  # rosbags raises its own errors, sqlite3's, struct's, KeyError on damaged data
             raise self.damaged(exc) from None
 

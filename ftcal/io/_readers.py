@@ -120,7 +120,7 @@ def unit_scale(unit: str, kind: str) -> float:
         raise DatasetFileError(f"the {kind} unit must be text such as 'N' or 'N.m'; got {unit!r}.", parameter=field,
                                value=unit)
     text = unit.strip()
-    table, parse, more = _UNIT_KINDS[kind]
+    table, parse, more = _UNIT_KINDS["force" if kind == "force" else "torque"]
     factor = parse(text)
     if factor is not None:
         return factor
