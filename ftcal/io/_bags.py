@@ -32,6 +32,7 @@ the topics the bag holds.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -86,16 +87,6 @@ def is_bag(path: str | Path) -> bool:
     if p.is_dir():
         return (p / "metadata.yaml").is_file()
     return p.suffix in (".db3", ".mcap") and (p.parent / "metadata.yaml").is_file()
-
-
-def _bag_paths(path: Path) -> list[Path]:
-    if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
-        path = path.parent
-    if not path.exists():
-        raise LogFormatError(f"{path}: no such bag.")
-    if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
-        raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with metadata.yaml).")
-    return [path]
 
 
 def _streaming_ros1_reader():
@@ -157,11 +148,17 @@ class _Reader:
         from rosbags.typesys import Stores, get_typestore
 
         self.path = path
-        try:
-            paths = _bag_paths(path)
-            self.reader = AnyReader(paths, default_typestore=get_typestore(Stores.ROS2_HUMBLE))
+        try:  # a path the file system refuses to look at is named as the bag's failure too
+            if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
+                path = path.parent  # the storage file of a rosbag2 folder: the folder
+            if not path.exists():
+                raise LogFormatError(f"{path}: no such bag.")
+            if path.suffix != ".bag" and not (path / "metadata.yaml").is_file():
+                raise LogFormatError(f"{path}: not a ROS bag (a ROS 1 .bag file, or a rosbag2 folder with "
+                                     "metadata.yaml).")
+            self.reader = AnyReader([path], default_typestore=get_typestore(Stores.ROS2_HUMBLE))
             if not self.reader.is2:  # streamed chunk by chunk (rosbags' reader indexes every message first)
-                self.reader.readers = [_streaming_ros1_reader()(p) for p in paths]
+                self.reader.readers = [_streaming_ros1_reader()(path)]
             self.reader.open()
         except LogFormatError:
             raise
@@ -177,10 +174,10 @@ class _Reader:
         return self
 
     def __exit__(self, *exc) -> None:
-        try:
+        import contextlib
+
+        with contextlib.suppress(Exception):  # closing a damaged bag may fail too; the first error is the one to show
             self.reader.close()
-        except Exception:  # noqa: BLE001 - closing a damaged bag may fail too; the first error is the one to show
-            pass
 
     def topics(self) -> dict[str, tuple[str, int]]:
         return {name: (info.msgtype or "?", int(info.msgcount)) for name, info in self.reader.topics.items()}
@@ -260,26 +257,20 @@ def bag_values(path: str | Path, head: int | None = None):
         pending = {t for t, (_, n) in listed.items() if n > 0} if head is not None else None
         try:
             for conn, _receive_ns, data in r.reader.messages():
-                digest = digests.get(conn.topic)
-                if digest is None and conn.topic in digests or head is not None and counts.get(conn.topic, 0) >= head:
+                topic = conn.topic
+                if topic in digests and digests[topic] is None or head is not None and counts.get(topic, 0) >= head:
                     continue
                 msg = r.reader.deserialize(data, conn.msgtype)
-                if digest is None:
-                    if not (conn.msgtype in known or has_numbers(msg)):
-                        digests[conn.topic] = None
-                        if pending is not None:
-                            pending.discard(conn.topic)
-                            if not pending:
-                                break
-                        continue
-                    digest = digests[conn.topic] = hashlib.sha256()
-                numbers, text = [], []
-                flat(msg, numbers, text)
-                digest.update(np.asarray(numbers, dtype=np.float64).tobytes())
-                digest.update("\x00".join(text).encode("utf-8") + b"\x01")
-                counts[conn.topic] = counts.get(conn.topic, 0) + 1
-                if pending is not None and counts[conn.topic] >= min(head, listed[conn.topic][1]):
-                    pending.discard(conn.topic)
+                if topic not in digests:
+                    digests[topic] = hashlib.sha256() if conn.msgtype in known or has_numbers(msg) else None
+                if digests[topic] is not None:
+                    numbers, text = [], []
+                    flat(msg, numbers, text)
+                    digests[topic].update(np.asarray(numbers, dtype=np.float64).tobytes())
+                    digests[topic].update("\x00".join(text).encode("utf-8") + b"\x01")
+                    counts[topic] = counts.get(topic, 0) + 1
+                if pending is not None and (digests[topic] is None or counts[topic] >= min(head, listed[topic][1])):
+                    pending.discard(topic)
                     if not pending:
                         break
         except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
@@ -331,26 +322,19 @@ class _Stream:
         self._rows = min(self.capacity, max(1, math.ceil(count / self.block)) + 1)
         self.data: NDArray[np.float64] | None = None  # columns: header time, receive time, value...
         self.n = 0
-        self._seen = 0
+        self.n_messages = 0  # how many messages were added
         self._sum: NDArray[np.float64] | None = None
         self._in_block = 0
-
-    @property
-    def n_messages(self) -> int:
-        """How many messages were added."""
-        return self._seen
 
     def add(self, t: float, receive: float, value: NDArray[np.float64]) -> None:
         row = np.concatenate([[t, receive], value])
         if self.data is None:
-            self.data = np.empty((self._rows, len(row)))
-        self._seen += 1
+            self.data, self._sum = np.empty((self._rows, len(row))), np.zeros(len(row))
+        self.n_messages += 1
         if not self.average:
-            if (self._seen - 1) % self.block == 0:
+            if (self.n_messages - 1) % self.block == 0:
                 self._store(row)
             return
-        if self._sum is None:
-            self._sum = np.zeros(len(row))
         self._sum += row
         self._in_block += 1
         if self._in_block == self.block:
@@ -371,10 +355,8 @@ class _Stream:
                 self.data[:half] = self.data[0:2 * half:2]
             self.n = half
             self.block *= 2
-        if self.n >= len(self.data):
-            grown = np.empty((min(self.capacity, 2 * len(self.data)), self.data.shape[1]))
-            grown[:self.n] = self.data[:self.n]
-            self.data = grown
+        if self.n >= len(self.data):  # grown: the first rows kept (np.resize fills the rest with copies)
+            self.data = np.resize(self.data, (min(self.capacity, 2 * len(self.data)), self.data.shape[1]))
         self.data[self.n] = row
         self.n += 1
 
@@ -440,13 +422,6 @@ def _stamp(msg) -> float | None:
     return float(header.stamp.sec) + 1e-9 * float(header.stamp.nanosec)
 
 
-def _field(msg, dotted: str):
-    value = msg
-    for part in dotted.split("."):
-        value = getattr(value, part)
-    return value
-
-
 def _frame(name: str) -> str:
     return name.strip().lstrip("/")
 
@@ -479,8 +454,7 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
         raise r.damaged(exc) from None
     parents, children = {p for p, _ in edges}, {c for _, c in edges}
     frames = sorted(parents | children)
-    roots = sorted(parents - children)
-    base = roots[0] if roots else (frames[0] if frames else "BASE")
+    base = (sorted(parents - children) or frames or ["BASE"])[0]  # a root of the tree, else any frame
     sensor_guess = sensor_frame if sensor_frame in children else (sorted(children - parents) or ["SENSOR"])[-1]
     proposal = _FramePair((base, sensor_guess)) if base != sensor_guess else Placeholder("BASE,SENSOR")
     raise LogFormatError(
@@ -533,7 +507,7 @@ def _raw_value(path: Path, sensor: str, msgtype: str, msg, raw_field: str, width
     """A raw-gauge message's values and the channel count (refused: no such field, not numbers, fewer than 3
     values, a count that changes)."""
     try:
-        value = np.asarray(_field(msg, raw_field), dtype=float).ravel()
+        value = np.asarray(functools.reduce(getattr, raw_field.split("."), msg), dtype=float).ravel()
     except AttributeError:
         fields = [f for f in getattr(msg, "__dataclass_fields__", {}) if not f.startswith("__")]
         raise LogFormatError(f"{path}: topic {sensor} ({msgtype}) has no field {raw_field!r}; its fields are "
@@ -584,11 +558,22 @@ def _joint_group(topic: str, groups: dict, notes: list) -> tuple[tuple[str, ...]
         notes.append(LogFormatError(f"{topic}: {skipped} messages naming other joints ("
                                     f"{'; '.join(', '.join(g) for g in others[:3])}) were set aside; the arm's are "
                                     f"the {groups[names].n_messages} naming {', '.join(names)}"))
-    t_p, _, q = groups[names].arrays()
-    o = np.argsort(t_p, kind="stable")
-    t_p, q = t_p[o], q[o]
-    keep = np.concatenate([[True], np.diff(t_p) > 0])
-    return names, t_p[keep], q[keep]
+    return (names, *_distinct_times(groups[names]))
+
+
+def _clock_offset(stream: "_Stream") -> float:
+    """The median of (receive time - header stamp) [s] over a stream's kept samples: its clock's offset."""
+    times, receive, _ = stream.arrays()
+    return float(np.median(receive - times))
+
+
+def _distinct_times(stream: "_Stream") -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A pose stream's times, sorted (stable), each kept once (its first sample), and its values at them."""
+    times, _, values = stream.arrays()
+    order = np.argsort(times, kind="stable")
+    times, values = times[order], values[order]
+    keep = np.concatenate([[True], np.diff(times) > 0])
+    return times[keep], values[keep]
 
 
 def _check_quaternion(path: Path, topic: str, t: float, edge: tuple[str, str], quat: NDArray[np.float64]) -> str:
@@ -625,10 +610,8 @@ class _TfTree:
             self.invalid.setdefault(key, bad)
         elif topic == "/tf_static":
             self.static[key] = quat
-        else:
-            if key not in self.edges:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
-                self.edges[key] = _Stream(0, self.max_samples, average=False)
-            self.edges[key].add(t, t, quat)
+        else:  # every k-th message of *this* edge: evenly spaced whoever shares /tf
+            self.edges.setdefault(key, _Stream(0, self.max_samples, average=False)).add(t, t, quat)
 
     def chain(self, path: Path, base: str, sensor: str) -> list[tuple[str, str]]:
         """The edges from ``base`` down to ``sensor`` (base first). Refused: no chain, a frame of the chain with two
@@ -680,11 +663,7 @@ class _TfTree:
             if edge in self.static:
                 Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
             else:
-                times, _, quats = self.edges[edge].arrays()
-                order = np.argsort(times, kind="stable")
-                times, quats = times[order], quats[order]
-                keep = np.concatenate([[True], np.diff(times) > 0])
-                times, quats = times[keep], quats[keep]
+                times, quats = _distinct_times(self.edges[edge])
                 if len(times) == 1:
                     Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
                 else:
@@ -756,20 +735,13 @@ def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: st
     notes: list = []
     t_s, reading = _sensor_samples(path, topics, sensor, m.streams[sensor], max_samples, notes)
     offsets = {}  # per stamped topic, the median of (receive time - header stamp) over its kept samples
-    for topic in m.stamped if stamps == "header" else ():
-        times, receive, _ = m.streams[topic].arrays() if topic in m.streams else ([], [], None)
-        if len(times):
-            offsets[topic] = float(np.median(np.asarray(receive) - np.asarray(times)))
-    if tf is None:
-        pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes)
-    else:
-        pose = _tf_poses(path, sensor, m, tf, t_s)
+    if stamps == "header" and sensor in m.stamped:  # (the pose topic's: _joint_poses)
+        offsets[sensor] = _clock_offset(m.streams[sensor])
+    pose = _joint_poses(path, pose_topics[0], m, stamps, offsets, notes) if tf is None else \
+        _tf_poses(path, sensor, m, tf, t_s)
     t_s, reading = _common_time(path, sensor, pose, t_s, reading, stamps, offsets, notes)
-    joints = rotation = None
-    if tf is None:
-        joints = np.column_stack([np.interp(t_s, pose.t, pose.q[:, j]) for j in range(pose.q.shape[1])])
-    else:
-        rotation = m.tree.rotations(pose.chain, t_s)
+    joints = np.column_stack([np.interp(t_s, pose.t, q) for q in pose.q.T]) if tf is None else None
+    rotation = m.tree.rotations(pose.chain, t_s) if tf is not None else None
     return BagRecording(path=path, sensor_topic=sensor, kind=kind, time=t_s, reading=reading, joints=joints,
                         joint_names=pose.names, rotation=rotation, pose_topic=pose.topic, frame_id=m.frame_id or "",
                         clock_offset_s=offsets, stamps=stamps, notes=notes, topics=topics)
@@ -778,12 +750,9 @@ def read_bag(path: str | Path, *, wrench_topic: str | None = None, raw_topic: st
 def _pick_topics(path: Path, r: _Reader, topics: dict, wrench_topic: str | None, raw_topic: str | None,
                  joint_topic: str | None, tf: tuple[str, str] | None) -> tuple[str, str, list[str]]:
     """The sensor's topic, its kind (``"wrench"`` or ``"raw"``) and the pose topics :func:`read_bag` reads."""
-    if raw_topic is not None:
-        sensor = _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
-        kind = "raw"
-    else:
-        sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic")
-        kind = "wrench"
+    kind = "wrench" if raw_topic is None else "raw"
+    sensor = _choose_topic(path, topics, wrench_topic, WRENCH_TYPES, "the sensor's wrench", "wrench_topic") \
+        if raw_topic is None else _choose_topic(path, topics, raw_topic, (), "raw gauges", "raw_topic")
     if tf is None:
         if joint_topic is None and not any(typ == JOINT_STATE_TYPE for typ, _ in topics.values()) and \
                 any(topics.get(t, ("", 0))[0] == TF_TYPE for t in ("/tf", "/tf_static")):
@@ -886,8 +855,7 @@ def _joint_poses(path: Path, pose_topic: str, m: _Messages, stamps: str, offsets
         raise LogFormatError(f"{path}: topic {pose_topic} holds no joint states.")
     names, t_p, q = _joint_group(pose_topic, m.joint_groups, notes)
     if pose_topic in m.stamped and stamps == "header":
-        times, receive, _ = m.joint_groups[names].arrays()
-        offsets[pose_topic] = float(np.median(receive - times))
+        offsets[pose_topic] = _clock_offset(m.joint_groups[names])
     span = (float(t_p.min()), float(t_p.max()))
     return _PoseStream(pose_topic, span, f"{pose_topic} {span[0]:.6f} to {span[1]:.6f} s", names, t_p, q)
 
@@ -997,13 +965,13 @@ def write_bag(path: str | Path, storage: str, *, sensor_time: ArrayLike, reading
         Wrench, Vector3, Stamped = T["geometry_msgs/msg/Wrench"], T["geometry_msgs/msg/Vector3"], \
             T["geometry_msgs/msg/WrenchStamped"]
         v = _SENTINELS
-        template = Stamped(header=out.header(None, frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
+        template = Stamped(header=out.header(frame_id), wrench=Wrench(force=Vector3(x=v[0], y=v[1], z=v[2]),
                                                                            torque=Vector3(x=v[3], y=v[4], z=v[5])))
         out.add(sensor_topic, template, t_s, values, latency_s, stamped=True, offset_s=sensor_clock_offset_s)
     if joints is not None:
         q = np.asarray(joints, dtype=float)
         empty = np.zeros(0)
-        template = T["sensor_msgs/msg/JointState"](header=out.header(None, ""), name=list(joint_names),
+        template = T["sensor_msgs/msg/JointState"](header=out.header(""), name=list(joint_names),
                                                    position=_SENTINELS[:q.shape[1]].copy(), velocity=empty,
                                                    effort=empty)
         out.add(joint_topic, template, t_p, q, latency_s, stamped=True)
@@ -1027,17 +995,12 @@ class _Serializer:
             self.store.register(get_types_from_msg("geometry_msgs/TransformStamped[] transforms", TF_TYPE))
         self.serialize = self.store.serialize_ros1 if ros1 else self.store.serialize_cdr
         self.streams: list = []  # (topic, type, receive times, serialized rows)
-        self.statics: list = []  # (topic, type, time, serialized message)
 
-    def header(self, t: float | None, frame: str):
-        """A header stamped ``t`` [s] (None: the sentinel stamp) in ``frame``."""
+    def header(self, frame: str):
+        """A header in ``frame`` with the sentinel stamp (each message's stamp is written in by :meth:`add`)."""
         Header, Time = self.store.types["std_msgs/msg/Header"], self.store.types["builtin_interfaces/msg/Time"]
-        if t is None:
-            stamp = Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC)
-        else:
-            sec = math.floor(t)
-            stamp = Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
-        return Header(stamp=stamp, frame_id=frame, **({"seq": 0} if self.ros1 else {}))
+        return Header(stamp=Time(sec=_STAMP_SEC, nanosec=_STAMP_NSEC), frame_id=frame,
+                      **({"seq": 0} if self.ros1 else {}))
 
     def add(self, topic: str, template, times: NDArray, values: NDArray, latency_s: float, stamped: bool = False,
             offset_s: float = 0.0) -> None:
@@ -1059,7 +1022,7 @@ class _Serializer:
         self.streams.append((topic, typ, times + latency_s, out))
 
     def write(self, path: Path, storage: str, ros1_chunk_bytes: int | None) -> None:
-        """Every message in the order of receipt (the static ones first) into a new bag at ``path``."""
+        """Every message in the order of receipt into a new bag at ``path``."""
         if self.ros1:
             from rosbags.rosbag1 import Writer as Writer1
 
@@ -1078,14 +1041,11 @@ class _Serializer:
         order = np.argsort(receive, kind="stable")
         with writer:
             connections = [writer.add_connection(topic, typ, typestore=self.store)
-                           for topic, typ, _, _ in self.statics + streams]
-            for k, (_, _, t, data) in enumerate(self.statics):
-                writer.write(connections[k], int(round(t * 1e9)), data.tobytes())
-            base_k = len(self.statics)
+                           for topic, typ, _, _ in streams]
             ns = np.round(receive * 1e9).astype(np.int64)
             for i in order:
                 k = int(which[i])
-                writer.write(connections[base_k + k], int(ns[i]), streams[k][3][row[i]].tobytes())
+                writer.write(connections[k], int(ns[i]), streams[k][3][row[i]].tobytes())
 
 
 def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple[str, str], latency_s: float) -> None:
@@ -1105,8 +1065,7 @@ def _add_tf(out: _Serializer, rotations: NDArray, t_p: NDArray, tf_frames: tuple
         return TS(header=head, child_frame_id=child,
                   transform=Tr(translation=V(x=0.0, y=0.0, z=0.0), rotation=Q(x=x, y=y, z=z, w=w)))
 
-    template = TF(transforms=[transform(out.header(None, base), "flange", _SENTINELS[:4])])
+    template = TF(transforms=[transform(out.header(base), "flange", _SENTINELS[:4])])
     out.add("/tf", template, t_p, to_flange.as_quat(), latency_s, stamped=True)
-    static = TF(transforms=[transform(out.header(float(t_p[0]), "flange"), sensor_frame, flange_to_sensor.as_quat())])
-    out.statics.append(("/tf_static", TF_TYPE, float(t_p[0]),
-                        np.frombuffer(bytes(out.serialize(static, TF_TYPE)), dtype=np.uint8)))
+    static = TF(transforms=[transform(out.header("flange"), sensor_frame, _SENTINELS[:4])])
+    out.add("/tf_static", static, t_p[:1], flange_to_sensor.as_quat()[None], latency_s, stamped=True)

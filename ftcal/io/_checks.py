@@ -157,26 +157,27 @@ class ReadingChecks:
 
     def of_kind(self, kind: FindingKind | str) -> tuple[ReadingFinding, ...]:
         """The findings of one kind."""
-        kind = FindingKind(kind)
-        return tuple(f for f in self.findings if f.kind is kind)
+        return tuple(self._of_kinds([kind]))
 
     def kinds(self) -> list[FindingKind]:
         """The kinds found, in :class:`FindingKind` order."""
         return [k for k in FindingKind if self.of_kind(k)]
 
+    def _of_kinds(self, kinds) -> list[ReadingFinding]:
+        """The findings of ``kinds`` (None: all)."""
+        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
+        return [f for f in self.findings if f.kind in wanted]
+
     def mask(self, kinds=None) -> NDArray[np.bool_]:
         """The rows the findings of ``kinds`` (default: all) cover, as a mask over the checked rows."""
-        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
         out = np.zeros(self.n_rows, dtype=bool)
-        for f in self.findings:
-            if f.kind in wanted:
-                out[f.rows] = True
+        for f in self._of_kinds(kinds):
+            out[f.rows] = True
         return out
 
     def to_json(self, kinds=None) -> list[dict]:
         """The findings of ``kinds`` (default: all) as plain JSON (:meth:`ReadingFinding.to_dict`)."""
-        wanted = set(FindingKind) if kinds is None else {FindingKind(k) for k in kinds}
-        return [f.to_dict() for f in self.findings if f.kind in wanted]
+        return [f.to_dict() for f in self._of_kinds(kinds)]
 
     def summary(self, shown: int = 3) -> list[str]:
         """One line per kind found: how many, the rows they cover and the first ``shown`` as ``file:line:channel``.
@@ -276,19 +277,15 @@ def _runs(flags: NDArray[np.bool_]) -> list[tuple[int, int]]:
 
 def _side_medians(x: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
     """The median of the ``_SIDE`` readings before and after each row (NaN where a side is empty)."""
+    import warnings
+
     m, k = x.shape
     pad = np.full((_SIDE, k), np.nan)
     padded = np.vstack([pad, x, pad])
-    before = np.sort(np.stack([padded[_SIDE - j:_SIDE - j + m] for j in range(1, _SIDE + 1)]), axis=0)
-    after = np.sort(np.stack([padded[_SIDE + j:_SIDE + j + m] for j in range(1, _SIDE + 1)]), axis=0)
-    return _median_of_sorted(before), _median_of_sorted(after)
-
-
-def _median_of_sorted(side: NDArray[np.float64]) -> NDArray[np.float64]:
-    """The median over the first axis of up to three values sorted with the NaNs (missing neighbours) last."""
-    count = np.isfinite(side).sum(axis=0)
-    out = np.where(count == 3, side[1], np.where(count == 2, (side[0] + side[1]) / 2, side[0]))
-    return np.where(count == 0, np.nan, out)
+    with warnings.catch_warnings():  # a row without neighbours on one side (a group's edge): NaN, no warning
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return tuple(np.nanmedian(np.stack([padded[_SIDE + s * j:_SIDE + s * j + m] for j in range(1, _SIDE + 1)]),
+                                  axis=0) for s in (-1, 1))
 
 
 class _Finder:
@@ -311,7 +308,10 @@ class _Finder:
         self.flagged = np.zeros((self.n, self.k), dtype=bool)  # (row, channel) already named
 
     def add(self, kind, rows, channel, value, reason) -> None:
+        """Note a finding; a channel's readings it names are :attr:`flagged` (not named again by a later check)."""
         rows = np.atleast_1d(np.asarray(rows, dtype=np.int64))
+        if channel is not None:
+            self.flagged[rows, channel] = True
         file, line = self.sources.where(int(rows[0]))
         self.findings.append(ReadingFinding(kind=kind, rows=rows, file=file, line=line,
                                             channel=None if channel is None else self.names[channel],
@@ -325,8 +325,7 @@ class _Finder:
         """Per row and channel: the same-direction distance to both sides' medians over the robust scale (0 where
         the directions differ, NaN where a side is missing), and the distance to the one side there is. The
         readings ``exclude`` (n, N) marks (a stuck run) do not set the scale."""
-        z_both = np.full((self.n, self.k), np.nan)
-        z_one = np.full((self.n, self.k), np.nan)
+        z_both, z_one = np.full((2, self.n, self.k), np.nan)
         quanta = np.array([_quantum(self.raw[:, j]) for j in range(self.k)])
         parts = []
         for rows in self.groups:
@@ -363,13 +362,11 @@ class _Finder:
             low, high = found
             ranges[self.names[j]] = found
             width = high - low + 1
-            beyond = np.flatnonzero((column < low - width) | (column > high + width))
-            beyond = [r for r in beyond if self._alone_beyond(r, j, low, high)]
-            for r in beyond:
-                self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
-                         f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC of "
-                         "that range gives it")
-                self.flagged[r, j] = True
+            for r in np.flatnonzero((column < low - width) | (column > high + width)):
+                if self._alone_beyond(r, j, low, high):
+                    self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
+                             f"beyond twice the {int(low)}..{int(high)} range of the channel's other readings: no ADC "
+                             "of that range gives it")
             for rail in (low, high):
                 at = np.flatnonzero(column == rail)
                 if not 0 < at.size <= _MAX_RAIL_ROWS:
@@ -381,7 +378,6 @@ class _Finder:
                         self.add(FindingKind.OUT_OF_RANGE, r, j, float(column[r]),
                                  f"at the limit {int(rail)} of the channel's {int(low)}..{int(high)} range, alone "
                                  f"({zr:.1f} robust SD from its neighbours in time; {at.size} such reading(s))")
-                        self.flagged[r, j] = True
         return ranges
 
     def _alone_beyond(self, r: int, j: int, low: float, high: float) -> bool:
@@ -421,13 +417,12 @@ class _Finder:
             self.add(FindingKind.SPIKE, r, j, float(self.raw[r, j]),
                      f"differs from its neighbours in time on both sides by more than {limit:.1f} robust SD (the "
                      f"threshold that keeps false alarms below {self.alpha:g} per dataset over {tested} readings)")
-            self.flagged[r, j] = True
         return limit
 
     # ---------------------------------------------------------------- stuck channels
     def stuck(self) -> NDArray[np.bool_]:
-        """Runs of a channel exactly constant while most other channels move; returns the (row, channel) mask."""
-        mask = np.zeros((self.n, self.k), dtype=bool)
+        """Runs of a channel exactly constant while most other channels move; returns the (row, channel) mask (the
+        first check: what it flags is all that is :attr:`flagged` yet)."""
         same = np.zeros((self.n, self.k), dtype=bool)  # the reading equals the previous one of its group
         for rows in self.groups:
             if rows.size > 1:
@@ -464,27 +459,26 @@ class _Finder:
                     moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
                     if span.size < needed or moving.size == 0 or moving.mean() <= 0.5:
                         continue
-                    mask[span, j] = True
                     first, last = self.place(int(span[0])), self.place(int(span[-1]))
                     self.add(FindingKind.STUCK, span, j, float(self.raw[span[0], j]),
                              f"constant over {span.size} rows ({first} to {last}) while the other channels move "
                              f"(a live reading gives one value with chance {p:.2g} at most: runs of "
                              f"{int(np.ceil(needed))} rows or more are beyond chance)")
-        self.frozen_across_groups(mask)
-        return mask
+        self.frozen_across_groups()
+        return self.flagged.copy()
 
-    def frozen_across_groups(self, mask: NDArray[np.bool_]) -> None:
+    def frozen_across_groups(self) -> None:
         """A channel that keeps one value over whole groups whose loads differ (dead for the second half of a
         steady-pose recording): in the groups where it lives, its group means spread over several quantisation
         steps with the load, while over the frozen groups the other channels' means spread as much (their loads
-        differ) and it does not move at all. Adds to ``mask`` (row, channel)."""
+        differ) and it does not move at all (a run already found stuck within a group is left to that finding)."""
         if len(self.groups) < 4 or self.k < 2:
             return
         sizes = np.array([rows.size for rows in self.groups])
         means = np.array([self.raw[rows].mean(axis=0) for rows in self.groups])
         for j in range(self.k):
             q = _quantum(self.raw[:, j])
-            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not mask[rows, j].any()
+            constant = np.array([rows.size >= 2 and np.ptp(self.raw[rows, j]) == 0 and not self.flagged[rows, j].any()
                                  for rows in self.groups])
             live = ~constant & (sizes >= 2)
             if q <= 0 or live.sum() < 2 or constant.sum() < 2:
@@ -502,7 +496,6 @@ class _Finder:
                 if np.median(moved) < 0.5:  # the frozen groups' loads hardly differ: one value is no surprise
                     continue
                 rows = np.concatenate([self.groups[g] for g in frozen])
-                mask[rows, j] = True
                 self.add(FindingKind.STUCK, np.sort(rows), j, float(value),
                          f"holds {value:.6g} over all {rows.size} rows of {frozen.size} groups whose loads differ "
                          f"(the other channels' means spread {np.median(moved):.2g}x as much as over all groups) while "
@@ -610,14 +603,12 @@ def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: A
     finder = _Finder(x, w, groups, sources, channel_names, false_alarm_rate)
     if x.shape[0] == 0:
         return ReadingChecks(findings=(), n_rows=0)
-    stuck = finder.stuck()
-    finder.flagged |= stuck
+    stuck = finder.stuck()  # its runs are flagged: not named again as spikes
     z_both, z_one = finder.side_statistics(exclude=stuck)
     ranges = finder.out_of_range(z_both, z_one)
     z = finder.spikes(z_both)
     finder.repeated()
-    order = {k: i for i, k in enumerate(FindingKind)}
-    findings = sorted(finder.findings, key=lambda f: (order[f.kind], int(f.rows[0])))
+    findings = sorted(finder.findings, key=lambda f: (list(FindingKind).index(f.kind), int(f.rows[0])))
     return ReadingChecks(findings=tuple(findings), n_rows=x.shape[0], adc_ranges=ranges, spike_z=z)
 
 
@@ -709,16 +700,15 @@ class RangeExcess:
     @classmethod
     def combined(cls, parts: list["RangeExcess"]) -> "RangeExcess":
         """The excess of the rows of ``parts`` (chunks of one input, same columns and range) taken together."""
+        from dataclasses import replace
+
         axes = []
-        for column in zip(*(p.axes for p in parts)):
-            first = column[0]
-            furthest = max(column, key=lambda a: a.largest_excess)
-            axes.append(AxisExcess(name=first.name, low=first.low, high=first.high,
-                                   n_rows=sum(a.n_rows for a in column), n_beyond=sum(a.n_beyond for a in column),
-                                   largest_factor=max(a.largest_factor for a in column),
-                                   opposite_sign=sum(a.opposite_sign for a in column),
-                                   largest_excess=furthest.largest_excess, edge=furthest.edge,
-                                   tolerance=max(a.tolerance for a in column)))
+        for column in zip(*(p.axes for p in parts)):  # the furthest row's excess and edge, the counts summed
+            axes.append(replace(max(column, key=lambda a: a.largest_excess), n_rows=sum(a.n_rows for a in column),
+                                n_beyond=sum(a.n_beyond for a in column),
+                                opposite_sign=sum(a.opposite_sign for a in column),
+                                largest_factor=max(a.largest_factor for a in column),
+                                tolerance=max(a.tolerance for a in column)))
         return cls(axes=tuple(axes), mask=np.concatenate([p.mask for p in parts]))
 
     def to_dict(self) -> dict:
@@ -780,8 +770,7 @@ def range_excess(values: ArrayLike, low: ArrayLike, high: ArrayLike, names=None,
     with np.errstate(divide="ignore", invalid="ignore"):
         for j, name in enumerate(names):
             rows = outside[:, j]
-            finite = [abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)]
-            reach = max(finite) if finite else np.inf
+            reach = max((abs(x) for x in (lo[j], hi[j]) if np.isfinite(x)), default=np.inf)
             factor = float(np.max(np.abs(v[rows, j]))) / reach if rows.any() else 0.0
             below = float(np.max(lo[j] - v[out_low[:, j], j], initial=0.0))
             above = float(np.max(v[out_high[:, j], j] - hi[j], initial=0.0))

@@ -137,11 +137,15 @@ def _integer_labels(group, n_rows: int) -> NDArray[np.int64]:
 def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> tuple[NDArray, list[str] | None]:
     """A CSV group column as int64 labels: integers exactly (float64 would merge labels above 2^53), or text labels
     (``pose_a``) numbered in order of appearance (returned too, to name the groups)."""
+    if not all(is_number(t) for t in texts):  # text labels
+        names: dict[str, int] = {}
+        for no, text in zip(line_nos, texts):
+            if not text:
+                raise DatasetFileError(f"{path}: line {no}, column {column}: empty group label; every row needs one.")
+            names.setdefault(text, len(names))
+        return np.array([names[t] for t in texts], dtype=np.int64), list(names)
     labels: list[int] = []
-    textual = not all(is_number(t) for t in texts)
     for no, text in zip(line_nos, texts):
-        if textual:
-            break
         if _INTEGER.fullmatch(text):
             value = int(text)
         else:
@@ -154,14 +158,7 @@ def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> t
             raise DatasetFileError(f"{path}: line {no}: {column} {text} is beyond the 64-bit integer labels ftcal "
                                    "stores. Fix: number the groups 0, 1, 2, ...")
         labels.append(value)
-    else:
-        return np.array(labels, dtype=np.int64), None
-    names: dict[str, int] = {}
-    for no, text in zip(line_nos, texts):
-        if not text:
-            raise DatasetFileError(f"{path}: line {no}, column {column}: empty group label; every row needs one.")
-        names.setdefault(text, len(names))
-    return np.array([names[t] for t in texts], dtype=np.int64), list(names)
+    return np.array(labels, dtype=np.int64), None
 
 
 _INTEGER = re.compile(r"[+-]?[0-9]+")
@@ -183,14 +180,10 @@ def _refuse_other_separator(names: list[str], first_rows: list[str], where: str)
     separator = next((sep for sep in (";", "\t") if sep in names[0]), None)
     if separator is None:
         return
-    said = "';'" if separator == ";" else "tabs"
+    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")  # as said, and as typed for tr
     decimal_comma = any("," in row for row in first_rows)
-    if decimal_comma and separator == ";":
-        how = "decimal commas to points and ';' to ',', e.g. tr ',;' '.,' < IN.csv > OUT.csv"
-    elif decimal_comma:
-        how = "decimal commas to points and tabs to ',', e.g. tr ',\\t' '.,' < IN.csv > OUT.csv"
-    else:
-        how = f"{said} to ',', e.g. tr '{';' if separator == ';' else chr(92) + 't'}' ',' < IN.csv > OUT.csv"
+    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma else
+           f"{said} to ',', e.g. tr '{typed}' ','") + " < IN.csv > OUT.csv"
     raise DatasetFileError(
         f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
         f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal reads "
@@ -276,10 +269,8 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     positions: dict[str, list[int]] = {}
     for i, n in enumerate(names):
         positions.setdefault(n, []).append(i)
-    if columns.channels is not None:
-        channels = [_find(names, n, "channels", where, positions) for n in columns.channels]
-    else:
-        channels = _channel_positions(names, where)
+    channels = _channel_positions(names, where) if columns.channels is None else \
+        [_find(names, n, "channels", where, positions) for n in columns.channels]
     if columns.wrench is not None:
         wrench = [_find(names, n, "wrench", where) for n in columns.wrench]
         axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
@@ -315,18 +306,17 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     if both:
         raise DatasetFileError(f"{where}: column {names[both[0]]!r} is mapped both as a channel and as a wrench "
                                "component; map it once.")
-    group_name = columns.groups if columns.groups not in (None, "file") else "group"
+    used = channels + wrench
     group = None
     if columns.groups not in (None, "file"):
         group = _find(names, columns.groups, GROUPS, where)
-    elif "group" in names and names.count("group") == 1 and names.index("group") not in channels + wrench:
+        if group in used:
+            raise DatasetFileError(f"{where}: {{{GROUPS}}} {columns.groups!r} is also mapped as a channel or wrench "
+                                   "column.", parameter=GROUPS, value=columns.groups)
+    elif names.count("group") == 1 and names.index("group") not in used:
         group = names.index("group")
-    if group is not None and group in channels + wrench:
-        raise DatasetFileError(f"{where}: {{{GROUPS}}} {group_name!r} is also mapped as a channel or wrench column.",
-                               parameter=GROUPS, value=group_name)
     temperature = names.index("temperature") if names.count("temperature") == 1 else None
-    if temperature in channels + wrench:
-        temperature = None
+    temperature = None if temperature in used else temperature
     order = np.argsort([WRENCH_LABELS.index(a) for a in axes], kind="stable")  # the wrench in Fx..Tz order
     return _CsvColumns(channels=channels, wrench=[wrench[k] for k in order], axes=tuple(axes[k] for k in order),
                        group=group, temperature=temperature)
@@ -361,14 +351,10 @@ class RowSources:
     @classmethod
     def joined(cls, parts: list["RowSources"]) -> "RowSources":
         """The sources of datasets stacked in the order given."""
-        files, counted, index, number = [], [], [], []
-        for part in parts:
-            index.append(part.file_index + len(files))
-            files.extend(part.files)
-            counted.extend(part.counted)
-            number.append(part.number)
-        return cls(files=tuple(files), counted=tuple(counted), file_index=np.concatenate(index),
-                   number=np.concatenate(number))
+        first = np.cumsum([0] + [len(p.files) for p in parts[:-1]])  # each part's first file in the joined list
+        return cls(files=tuple(f for p in parts for f in p.files), counted=tuple(c for p in parts for c in p.counted),
+                   file_index=np.concatenate([p.file_index + k for p, k in zip(parts, first)]),
+                   number=np.concatenate([p.number for p in parts]))
 
     def subset(self, index) -> "RowSources":
         """The sources of the rows ``index`` (a mask or integer indices)."""
@@ -380,9 +366,8 @@ class RowSources:
 
     def describe(self, row: int) -> str:
         """``"file:line"`` of ``row`` (``"file:row N"`` for an array file)."""
-        f = int(self.file_index[row])
-        n = int(self.number[row])
-        return f"{self.files[f]}:{n}" if self.counted[f] == "line" else f"{self.files[f]}:row {n}"
+        name, n = self.where(row)
+        return f"{name}:{n}" if self.counted[int(self.file_index[row])] == "line" else f"{name}:row {n}"
 
 
 @dataclass
@@ -495,15 +480,10 @@ class CalibrationDataset:
 
     def subset(self, index: NDArray) -> "CalibrationDataset":
         """The rows selected by ``index`` (a boolean mask or integer indices), as a new dataset."""
-        return CalibrationDataset(
-            raw=self.raw[index],
-            wrench=self.wrench[index],
-            group=None if self.group is None else self.group[index],
-            meta=dict(self.meta),
-            temperature=None if self.temperature is None else self.temperature[index],
-            axes=self.axes,
-            sources=None if self.sources is None else self.sources.subset(index),
-        )
+        rows = {name: None if getattr(self, name) is None else getattr(self, name)[index]
+                for name in ("raw", "wrench", "group", "temperature")}
+        return CalibrationDataset(**rows, meta=dict(self.meta), axes=self.axes,
+                                  sources=None if self.sources is None else self.sources.subset(index))
 
     def features(self, temperature: bool = False) -> NDArray[np.float64]:
         """The calibrators' ``X``: the raw channels, with the temperature [deg C] as a last column if asked."""
@@ -583,27 +563,21 @@ class CalibrationDataset:
         meta_json = self._checked_for_saving(path)
         with atomic_output(path, overwrite=overwrite, error=DatasetFileError) as tmp:
             if path.suffix == ".npz":
-                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json)}
-                if self.axes != WRENCH_LABELS:
-                    arrays["axes"] = np.array(self.axes)
-                if self.group is not None:
-                    arrays["group"] = self.group
-                if self.temperature is not None:
-                    arrays["temperature"] = self.temperature
+                arrays = {"raw": self.raw, "wrench": self.wrench, "meta_json": np.array(meta_json),
+                          "axes": None if self.axes == WRENCH_LABELS else np.array(self.axes), "group": self.group,
+                          "temperature": self.temperature}
+                arrays = {name: values for name, values in arrays.items() if values is not None}
                 with open(tmp, "wb") as fh:
                     np.savez(fh, **arrays)
             else:
-                cols = [f"s{i}" for i in range(self.n_channels)] + list(self.axes)
-                columns = [self.raw, self.wrench]
-                if self.group is not None:  # exact integer labels (Python ints, never through float64)
-                    cols.append("group")
-                    columns.append(self.group[:, None].astype(object))
-                if self.temperature is not None:
-                    cols.append("temperature")
-                    columns.append(self.temperature[:, None])
+                extra = {"group": self.group, "temperature": self.temperature}
+                extra = {name: values[:, None] for name, values in extra.items() if values is not None}
+                if "group" in extra:  # exact integer labels (Python ints, never through float64)
+                    extra["group"] = extra["group"].astype(object)
+                cols = [f"s{i}" for i in range(self.n_channels)] + list(self.axes) + list(extra)
                 with open(tmp, "w", encoding="utf-8", newline="\n") as fh:
                     fh.write(f"# meta: {meta_json}\n" + ",".join(cols) + "\n")
-                    fh.writelines(csv_rows(*columns))
+                    fh.writelines(csv_rows(self.raw, self.wrench, *extra.values()))
         return path
 
     @classmethod
@@ -680,13 +654,11 @@ class CalibrationDataset:
             raise DatasetFileError(f"{folder}: the files hold different channels or wrench axes; every file needs "
                                    "the same columns.")
         _refuse_twin_files(files, parts, labelled=not by_file)
-        temperature = None
-        if all(p.temperature is not None for p in parts):
-            temperature = np.concatenate([p.temperature for p in parts])
+        temperature = np.concatenate([p.temperature for p in parts]) if all(p.temperature is not None for p in parts) \
+            else None
         groups = None if any(p.group is None for p in parts) else np.concatenate([p.group for p in parts])
-        meta = {**parts[0].meta, "source_files": [p.name for p in files]}
-        meta.pop("group_names", None)
-        meta.pop("group_labels", None)
+        meta = {k: v for k, v in parts[0].meta.items() if k not in ("group_names", "group_labels")}
+        meta["source_files"] = [p.name for p in files]
         if not by_file and groups is not None and all(isinstance(p.meta.get("group_names"), list) for p in parts):
             names: dict[str, int] = {}  # text labels, numbered per file: one numbering for the folder
             groups = np.concatenate([np.array([names.setdefault(p.meta["group_names"][g], len(names))
@@ -697,9 +669,8 @@ class CalibrationDataset:
         sources = RowSources.joined([p.row_sources() for p in parts])
         ds = cls(raw=np.vstack([p.raw for p in parts]), wrench=np.vstack([p.wrench for p in parts]), group=groups,
                  meta=meta, temperature=temperature, axes=parts[0].axes, sources=sources)
-        if columns.groups is not None or by_file:
-            _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
-                          columns.groups or "file")
+        _check_groups(ds, f"{folder}: {f'{{{GROUPS}}} ' + columns.groups if columns.groups else 'its files'}",
+                      columns.groups or "file")  # a named column, or the files: each a group
         return ds
 
     @classmethod
@@ -740,8 +711,7 @@ class CalibrationDataset:
         width = len(names)
         numeric = used.channels + used.wrench + ([used.temperature] if used.temperature is not None else [])
         shown = [n or f"{i + 1} (unnamed)" for i, n in enumerate(names)]
-        rows = []
-        group_texts = []
+        rows, group_texts = [], []
         for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
             fields = _csv_fields(line)
             if len(fields) != width:
@@ -854,7 +824,7 @@ def _vector(source: ArrayFile, name: str, what: str) -> np.ndarray:
 def _refuse_containers_only(source: ArrayFile, available: list[str]) -> None:
     """A .mat file holding only structs or cells (no numeric array): said as such, with the MATLAB fix; a column
     slice of a struct, the generic advice, would fail the same way."""
-    classes = {n: getattr(source, "entries", {}).get(n, ((), "double"))[1] for n in available if n != "meta_json"}
+    classes = {n: source.entries[n][1] for n in available if n != "meta_json"}
     containers = {n: c for n, c in classes.items() if c in ("struct", "cell", "object")}
     if classes and len(containers) == len(classes):
         name, cls = next(iter(containers.items()))
@@ -887,10 +857,7 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
     base = spec[0] if spec is not None else None
     missing = [n for n in ([base] if spec is not None else names) if n not in available]
     if missing:
-        source.refuse_if_cut(f"{kind} {missing[0]!r}")
-        raise DatasetFileError(f"{where}: {{{option}}} names {kind} {missing[0]!r}, which the file lacks; the file "
-                               f"has {', '.join(n for n in available if n != 'meta_json')}.", parameter=option,
-                               value=missing[0])
+        source.refuse_missing(missing[0], option)
     if spec is not None or len(names) == 1:
         name = base if spec is not None else names[0]
         a = check_real_array(source.read(name), name, where, kind)
@@ -908,6 +875,11 @@ def _select(source: ArrayFile, names: tuple[str, ...] | None, default: str, vect
         raise DatasetFileError(f"{where}: the {what} {kind}s have different lengths "
                                f"({', '.join(f'{n}: {c.size}' for n, c in zip(names, cols))}).")
     return np.column_stack(cols).astype(float), list(names), None
+
+
+def _channel_vectors(source: ArrayFile) -> list[str]:
+    """The vectors ``s0, s1, ...`` of an array file, in number order (the raw channels when no ``raw`` array)."""
+    return sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
 
 
 def _refuse_non_finite(where: str, arrays: list[tuple[np.ndarray, list[str]]]) -> None:
@@ -936,9 +908,9 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
                                        f"axis {axis}; name the wrench with {{wrench}}.", parameter="wrench")
             found[axis] = n
     vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
-    channel_vectors = sorted((n for n in available if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
     wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench", "wrench")
-    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", channel_vectors, "raw channels", "channels")
+    raw, raw_labels, raw_base = _select(source, columns.channels, "raw", _channel_vectors(source), "raw channels",
+                                        "channels")
     raw, wrench = _oriented(raw, wrench, len(raw_labels) == 1 and raw_base is None,
                             len(wrench_labels) == 1 and wrench_base is None)
     if len(wrench_labels) == 1 and wrench_base is None and wrench.shape[1] > 1:
@@ -969,16 +941,11 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
         raise DatasetFileError(f"{where}: the raw channels have {raw.shape[0]} rows but the wrench has "
                                f"{wrench.shape[0]}; they must match (one row per sample).")
     _refuse_non_finite(where, [(raw, raw_labels), (wrench, wrench_labels)])
-    extra = {}
     group_name = columns.groups if columns.groups not in (None, "file") else "group"
     if columns.groups not in (None, "file") and group_name not in available:
-        source.refuse_if_cut(f"{source.kind} {group_name!r}")
-        raise DatasetFileError(f"{where}: {{{GROUPS}}} names {source.kind} {group_name!r}, which the file lacks; the "
-                               f"file has {', '.join(n for n in available if n != 'meta_json')}.", parameter=GROUPS,
-                               value=group_name)
-    for key, name in (("group", group_name), ("temperature", "temperature")):
-        if name in available:
-            extra[key] = _vector(source, name, key)
+        source.refuse_missing(group_name, GROUPS)
+    extra = {key: _vector(source, name, key) for key, name in (("group", group_name), ("temperature", "temperature"))
+             if name in available}
     try:
         return cls(raw=raw, wrench=wrench, meta=meta, axes=axes, **extra)
     except DatasetFileError as exc:
@@ -1033,10 +1000,9 @@ def read_channels(path: str | Path, channels: tuple[str, ...] | None = None) -> 
     if channels is not None:
         channels = ColumnMap(channels=channels).channels
     with ArrayFile(path) as source:
-        vectors = sorted((n for n in source.names() if re.fullmatch(r"s[0-9]+", n)), key=lambda n: int(n[1:]))
-        raw, labels, base = _select(source, channels, "raw", vectors, "raw channels", "channels")
-    if len(labels) == 1 and base is None and raw.shape[0] < raw.shape[1]:
-        raw = raw.T  # one row per channel (MATLAB)
+        raw, labels, base = _select(source, channels, "raw", _channel_vectors(source), "raw channels", "channels")
+    if len(labels) == 1 and base is None:
+        raw = _rows_first(raw)  # one row per channel (MATLAB)
     bad = np.argwhere(~np.isfinite(raw))
     if bad.size:
         raise DatasetFileError(f"{path}: raw row {int(bad[0, 0])} (rows counted from 0) holds NaN or inf; repair or "

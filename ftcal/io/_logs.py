@@ -183,6 +183,12 @@ def read_text_lines(path: Path, what: str, fix: str) -> list[str]:
     return read_utf8_text(path, f"a {what} is a CSV text file", LogFormatError).splitlines()
 
 
+def text_rows(lines: list[str], first: int) -> list[tuple[int, list[str]]]:
+    """The CSV rows of ``lines[first:]`` as ``(1-based line, fields without their spaces)``, blank rows skipped."""
+    return [(first + 1 + k, [f.strip() for f in fields]) for k, fields in enumerate(csv.reader(lines[first:]))
+            if any(f.strip() for f in fields)]
+
+
 def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: int | None = None) -> RunLog:
     """Read and validate one run log (layout in the module docstring).
 
@@ -224,14 +230,10 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     units = _log_units(path, info, info_line, text_lines, n_comment)
     head_line = n_comment + 1
     header, q_cols, s_cols = _log_columns(path, text_lines[n_comment], head_line, n_channels, n_joints)
-    rows = []
-    for offset, fields in enumerate(csv.reader(text_lines[head_line:])):
-        lineno = head_line + 1 + offset
-        if not fields or all(not f.strip() for f in fields):
-            continue
+    rows = text_rows(text_lines, head_line)
+    for lineno, fields in rows:
         if len(fields) != len(header):
             raise LogFormatError(f"{path}: line {lineno}: {len(fields)} fields but the header names {len(header)}.")
-        rows.append((lineno, [f.strip() for f in fields]))
     if not rows:
         raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
     log = _log_rows(path, rows, {c: i for i, c in enumerate(header)}, q_cols, s_cols, units)
@@ -319,11 +321,11 @@ def _log_rows(path: Path, rows: list[tuple[int, list[str]]], col: dict[str, int]
 
     n = len(rows)
     ts, kind = np.empty(n), np.empty(n, dtype=object)
-    config, pose, line = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    config, pose = np.empty(n, dtype=np.int64), np.empty(n, dtype=np.int64)
+    line = np.array([lineno for lineno, _ in rows], dtype=np.int64)
     q, raw = np.empty((n, len(q_cols))), np.empty((n, len(s_cols)))
     temp = np.empty(n) if "temperature" in col else None
     for i, (lineno, fields) in enumerate(rows):
-        line[i] = lineno
         kind[i] = fields[col["run"]].lower()
         if kind[i] not in RUN_KINDS:
             raise LogFormatError(f"{path}: line {lineno}: run is {fields[col['run']]!r}; use 'load' or 'no-load'.")
@@ -433,12 +435,8 @@ def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike
             raise LogFormatError(f"{path}: load_mass {load_mass!r}: give the positive mass of the load in kg (at most "
                                  f"{MAX_LOAD_MASS_KG:g}), or None for a log without load.")
         header.append(f"# load_mass_kg: {float(load_mass)!r}")
-    if robot is not None:
-        header.append(f"# robot: {robot}")
-    if sensor_frame is not None:
-        header.append(f"# sensor_frame: {sensor_frame}")
-    if meta:
-        header.append(f"# meta: {json.dumps(meta)}")
+    comments = {"robot": robot, "sensor_frame": sensor_frame, "meta": json.dumps(meta) if meta else None}
+    header += [f"# {key}: {value}" for key, value in comments.items() if value is not None]
     names = list(_FIXED_COLUMNS) + [f"q{j + 1}" for j in range(q_arr.shape[1])] + [f"s{k}" for k in range(raw_arr.shape[1])]
     temp = None
     if temperature is not None:
@@ -448,11 +446,10 @@ def write_run_log(path: str | Path, *, timestamp: ArrayLike, run_kind: ArrayLike
             raise LogFormatError(f"{path}: {exc}") from None
         names.append("temperature")
     out = header + [",".join(names)]
+    numbers = np.column_stack([q_arr, raw_arr] + ([] if temp is None else [temp]))
     for i in range(n):
         vals = [f"{cols['timestamp'][i]:.6f}", cols["run"][i], str(int(cols["config"][i])), str(int(cols["pose"][i]))]
-        vals += [repr(v) for v in q_arr[i].tolist() + raw_arr[i].tolist()]  # exact: reads back bit for bit
-        if temp is not None:
-            vals.append(repr(float(temp[i])))  # exact, like the joints and channels
+        vals += [repr(v) for v in numbers[i].tolist()]  # exact: reads back bit for bit
         out.append(",".join(vals))
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(out) + "\n", encoding="utf-8")

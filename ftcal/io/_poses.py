@@ -40,8 +40,8 @@ from numpy.typing import NDArray
 from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
-from ._logs import read_text_lines
-from ._readers import canonical_wrench_name, unit_scale
+from ._logs import _parse_comments, read_text_lines, text_rows
+from ._readers import ColumnMap, canonical_wrench_name
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
 
@@ -104,16 +104,10 @@ class PoseRecording:
 
 def _header_and_rows(path: Path) -> tuple[list[str], int, list[tuple[int, list[str]]]]:
     lines = read_text_lines(path, "pose file", "split the recording into several files")
-    n_comment = 0
-    while n_comment < len(lines) and lines[n_comment].startswith("#"):
-        n_comment += 1
+    n_comment = _parse_comments(path, lines)[1]
     if n_comment >= len(lines) or not lines[n_comment].strip():
         raise LogFormatError(f"{path}: line {n_comment + 1}: no header line; expected {_EXPECTED}.")
-    rows = []
-    for offset, fields in enumerate(csv.reader(lines[n_comment + 1:])):
-        if fields and any(f.strip() for f in fields):
-            rows.append((n_comment + 2 + offset, [f.strip() for f in fields]))
-    return next(csv.reader([lines[n_comment]])), n_comment + 1, rows
+    return next(csv.reader([lines[n_comment]])), n_comment + 1, text_rows(lines, n_comment + 1)
 
 
 def is_pose_file(path: str | Path) -> bool:
@@ -214,11 +208,9 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     orientation_cols = ORIENTATION_LAYOUTS[layout] if layout else ()
     value_cols = list(orientation_cols) + ([wrench_cols[c] for c in WRENCH_LABELS] if wrench_cols else channels)
     value_cols += [c for c in ("time", "temperature") if c in head]
-    n = len(rows)
-    values = np.empty((n, len(value_cols)))
-    line = np.empty(n, dtype=np.int64)
+    values = np.empty((len(rows), len(value_cols)))
+    line = np.array([lineno for lineno, _ in rows], dtype=np.int64)
     for i, (lineno, row) in enumerate(rows):
-        line[i] = lineno
         if len(row) != len(names):
             raise LogFormatError(f"{path}: line {lineno}: {len(row)} fields but the header names {len(names)}.")
         for k, c in enumerate(value_cols):
@@ -231,13 +223,8 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     k = len(orientation_cols)
     rotation = _rotations(path, layout, values[:, :k], line, orientation_cols) if layout else None
     reading = values[:, k:k + (6 if wrench_cols else len(channels))]
-    wrench = raw = None
-    if wrench_cols:
-        wrench = reading.copy()
-        wrench[:, :3] *= unit_scale(force_unit, "force")
-        wrench[:, 3:] *= unit_scale(torque_unit, "torque")
-    else:
-        raw = reading.copy()
+    wrench = ColumnMap(force_unit=force_unit, torque_unit=torque_unit).to_si(reading) if wrench_cols else None
+    raw = None if wrench_cols else reading.copy()
     extra = {c: values[:, value_cols.index(c)].copy() for c in ("time", "temperature") if c in head}
     time = extra.get("time")
     if time is not None:

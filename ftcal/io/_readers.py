@@ -31,6 +31,7 @@ import re
 import zipfile
 from collections.abc import Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -119,7 +120,8 @@ def unit_scale(unit: str, kind: str) -> float:
         raise DatasetFileError(f"the {kind} unit must be text such as 'N' or 'N.m'; got {unit!r}.", parameter=field,
                                value=unit)
     text = unit.strip()
-    factor = _force_factor(text) if kind == "force" else _torque_factor(text)
+    table, parse, more = _UNIT_KINDS["force" if kind == "force" else "torque"]
+    factor = parse(text)
     if factor is not None:
         return factor
     if kind == "torque" and _force_factor(text) is not None:
@@ -129,13 +131,15 @@ def unit_scale(unit: str, kind: str) -> float:
         raise DatasetFileError(f"{unit!r} is a torque unit, not a force unit: give it as {{torque_unit}}, and the "
                                "forces' unit (e.g. N) as {force_unit}.", parameter="force_unit", value=unit,
                                settings={"torque_unit": NO_SETTING})
-    table = FORCE_UNITS if kind == "force" else TORQUE_UNITS
-    parse = _force_factor if kind == "force" else _torque_factor
     guesses = sorted({name for name in _spellings(kind) if name.lower() == text.lower() and parse(name) is not None})
     hint = (f" (units are case-sensitive: did you mean {' or '.join(repr(g) for g in guesses)}?)" if guesses else "")
-    more = "any SI prefix of N or g" if kind == "force" else "any force unit times m, mm, cm, in or ft"
     raise DatasetFileError(f"unknown {kind} unit {unit!r}{hint}; known: {', '.join(table)} ({more}).",
                            parameter=field, value=unit)
+
+
+#: Per kind of unit: the common units, the parser, and what else it reads (said in an error).
+_UNIT_KINDS = {"force": (FORCE_UNITS, _force_factor, "any SI prefix of N or g"),
+               "torque": (TORQUE_UNITS, _torque_factor, "any force unit times m, mm, cm, in or ft")}
 
 
 def _spellings(kind: str) -> list[str]:
@@ -253,11 +257,15 @@ def _axis_list(value, what: str) -> tuple[str, ...]:
         raise DatasetFileError(f"{{{what}}} {','.join(names)!r}: name each output axis as one of "
                                f"{', '.join(WRENCH_LABELS)} (e.g. {{{what}}} Fx,Fy,Fz for a 3-axis load cell).",
                                parameter=what, value=names)
-    dups = sorted({n for n in names if names.count(n) > 1})
-    if dups:
-        raise DatasetFileError(f"{{{what}}} names the axis {dups[0]!r} twice; each axis once.", parameter=what,
-                               value=names)
+    _refuse_repeated(names, f"{{{what}}} names the axis", what, "each axis once")
     return names
+
+
+def _refuse_repeated(names: tuple[str, ...], said: str, parameter: str, fix: str = "each column once") -> None:
+    """Refuse a name given twice (the first in sorted order): ``said`` begins the message."""
+    dups = repeated_names(names)
+    if dups:
+        raise DatasetFileError(f"{said} {dups[0][0]!r} twice; {fix}.", parameter=parameter, value=names)
 
 
 #: The field of an error about the group column of a :class:`ColumnMap` (``columns.groups``; ``groups`` alone are
@@ -324,10 +332,7 @@ class ColumnMap:
                 raise DatasetFileError(f"{{{field}}} mapping {','.join(value)!r} holds an empty name; give "
                                        "comma-separated names, e.g. s0,s1,s2 or s0..s7.", parameter=field,
                                        value=tuple(value))
-            dups = [n for n, _ in repeated_names(names)]
-            if dups:
-                raise DatasetFileError(f"{{{field}}} mapping names {dups[0]!r} twice; each column once.",
-                                       parameter=field, value=names)
+            _refuse_repeated(names, f"{{{field}}} mapping names", field)
             slices = [n for n in names if parse_column_slice(n) is not None]
             if slices and len(names) > 1:
                 raise DatasetFileError(f"{{{field}}} {','.join(names)!r}: a column slice such as {slices[0]} stands "
@@ -360,7 +365,7 @@ class ColumnMap:
                 settings=_slice_settings(common[0], 0, 8, 14))
         a, b = parse_column_slice(self.channels[0]), parse_column_slice(self.wrench[0])
         whole = {n for n in self.channels + self.wrench if parse_column_slice(n) is None}
-        for spec, other in ((a, b), (b, a)):
+        for spec in (a, b):
             if spec is not None and spec[0] in whole:
                 raise DatasetFileError(f"{spec[0]!r} is mapped whole and as a column slice.", parameter="channels",
                                        value=spec[0], fix="map its columns once, each as a slice, e.g. {channels} "
@@ -403,10 +408,9 @@ class ColumnMap:
 
     def to_dict(self) -> dict:
         """The mapping as plain JSON (stored in a model file, so that a model reads its data as it was fitted)."""
-        return {"channels": None if self.channels is None else list(self.channels),
-                "wrench": None if self.wrench is None else list(self.wrench),
-                "axes": None if self.axes is None else list(self.axes), "groups": self.groups,
-                "force_unit": self.force_unit, "torque_unit": self.torque_unit}
+        names = {key: None if getattr(self, key) is None else list(getattr(self, key))
+                 for key in ("channels", "wrench", "axes")}
+        return {**names, "groups": self.groups, "force_unit": self.force_unit, "torque_unit": self.torque_unit}
 
     @classmethod
     def from_dict(cls, facts: dict, where: str = "the model file") -> "ColumnMap":
@@ -463,8 +467,7 @@ def lever_arm_m(wrench: ArrayLike, axes: Sequence[str] = WRENCH_LABELS) -> float
     fc, tc = force_columns(axes), torque_columns(axes)
     if not fc or not tc or w.shape[0] == 0:
         return None
-    f = float(np.max(np.linalg.norm(w[:, fc], axis=1), initial=0.0))
-    t = float(np.max(np.linalg.norm(w[:, tc], axis=1), initial=0.0))
+    f, t = (float(np.max(np.linalg.norm(w[:, c], axis=1), initial=0.0)) for c in (fc, tc))
     if not (f > 0 and t > 0 and np.isfinite(f) and np.isfinite(t)):
         return None
     return t / f
@@ -522,15 +525,13 @@ def lever_arm_problem(wrench: ArrayLike, torque_unit: str = "N.m", axes: Sequenc
                                                               or best.fmax < _PLAUSIBLE_FORCE_N[0])), None)
     settings = {f"{best.kind}_unit": best.unit, **({f"{other.kind}_unit": other.unit} if other else {})}
     also = f" (or the {other.kind}s are in {other.unit}: {{{other.kind}_unit}})" if other else ""
-    if best.kind == "force":
-        return DatasetFileError(
-            f"{head}: the forces look like {best.unit} (the largest is {fmax:.3g} N read as {force_unit}), not "
-            f"{force_unit}.", parameter="force_unit", value=force_unit,
-            fix=f"pass {{force_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm, the largest force "
-                f"{best.fmax:.3g} N){also}", settings=settings)
+    read_as = force_unit if best.kind == "force" else torque_unit
+    largest = (f" (the largest is {fmax:.3g} N read as {force_unit})", f", the largest force {best.fmax:.3g} N") \
+        if best.kind == "force" else ("", "")  # the forces' size tells a force unit
     return DatasetFileError(
-        f"{head}: the torques look like {best.unit}, not {torque_unit}.", parameter="torque_unit", value=torque_unit,
-        fix=f"pass {{torque_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm){also}", settings=settings)
+        f"{head}: the {best.kind}s look like {best.unit}{largest[0]}, not {read_as}.", parameter=f"{best.kind}_unit",
+        value=read_as, fix=f"pass {{{best.kind}_unit}} (the lever arm would be {best.arm * 1e3:.3g} mm{largest[1]})"
+        f"{also}", settings=settings)
 
 
 @dataclass(frozen=True)
@@ -637,8 +638,6 @@ class ArrayFile:
     """
 
     def __init__(self, path) -> None:
-        from pathlib import Path
-
         self.path = Path(path)
         self.where = str(path)
         self.is_npz = self.path.suffix.lower() == ".npz"
@@ -700,6 +699,13 @@ class ArrayFile:
         raise DatasetFileError(f"{self.where}: the file is truncated or damaged: it ends at byte {ends}, inside a "
                                f"variable that runs to byte {declared}, so only {listed} can be read and {sought} is not "
                                "among them. Fix: copy or save the whole file again.")
+
+    def refuse_missing(self, name: str, option: str) -> None:
+        """Refuse the array ``name`` that the argument ``option`` names and the file lacks (or lost to a cut)."""
+        self.refuse_if_cut(f"{self.kind} {name!r}")
+        raise DatasetFileError(f"{self.where}: {{{option}}} names {self.kind} {name!r}, which the file lacks; the file "
+                               f"has {', '.join(n for n in self.entries if n != 'meta_json')}.", parameter=option,
+                               value=name)
 
     def _refuse_hdf5(self) -> None:
         raise DatasetFileError(f"{self.where}: a MATLAB v7.3 (HDF5) file, which ftcal cannot read without the h5py "
@@ -797,8 +803,6 @@ def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -
     ftcal.core._exceptions.DatasetFileError: ...: line 1 (byte 6): not UTF-8 text (invalid continuation byte); a dataset CSV is a text file in UTF-8. Fix: save it as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 d.csv > d-utf8.csv if it is Latin-1 (Windows-1252: -f CP1252).
     """
     import codecs
-    from pathlib import Path
-
     path = Path(path)
     data = path.read_bytes()
     try:
@@ -824,10 +828,6 @@ def _text_fields(line: str) -> list[str]:
 def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]], list[str] | None]:
     """A text file's leading ``#`` comment lines, its data rows ``(1-based line, fields)`` and its header's fields
     (None without one: a header is a first line holding a field that is not a number)."""
-    from pathlib import Path
-
-    from ..core._columns import is_number
-
     try:
         text = read_utf8_text(path, f"{what} is a text file")
     except OSError as exc:
@@ -852,8 +852,6 @@ def _names_columns(first: list[str], second: list[str] | None) -> bool:
     named above its numbers). A text column that is data (run names beside numbers: ``run_01,0.5,...``) is text in
     both lines, so a line holding numbers whose text fields line up with the next line's is data; a line without
     a number, or without a next line to compare, is a header when it holds text."""
-    from ..core._columns import is_number
-
     text = [bool(f) and not is_number(f) for f in first]
     if not any(text):
         return False
@@ -884,8 +882,6 @@ def has_header(path) -> bool:
         When the file holds no line at all (empty, or only blank and ``#`` comment lines): neither a header nor
         numbers.
     """
-    from pathlib import Path
-
     comments, rows, header = _data_lines(path, "the file")
     if not rows and header is None:
         size = Path(path).stat().st_size
@@ -923,8 +919,6 @@ class JoinedTable:
     @property
     def name(self) -> str:
         """The files' names joined by ``+`` (``pose.txt+wrench.txt``)."""
-        from pathlib import Path
-
         return "+".join(Path(f).name for f in self.files)
 
     def to_csv(self) -> str:
@@ -934,8 +928,6 @@ class JoinedTable:
 
     def write(self, path) -> None:
         """Write :meth:`to_csv` to ``path`` (a new file)."""
-        from pathlib import Path
-
         with open(Path(path), "x", encoding="utf-8", newline="\n") as fh:
             fh.write(self.to_csv())
 
@@ -972,10 +964,7 @@ def join_headerless(paths: Sequence, names: Sequence[str]) -> JoinedTable:
     if not names or any(not n for n in names):
         raise DatasetFileError(f"{{columns}} {','.join(names)!r} holds an empty name; give comma-separated names, "
                                "e.g. x,y,z,qx,qy,qz,qw,Fx,Fy,Fz,Tx,Ty,Tz.", parameter="columns", value=names)
-    dups = sorted({n for n in names if names.count(n) > 1})
-    if dups:
-        raise DatasetFileError(f"{{columns}} names {dups[0]!r} twice; each column once.", parameter="columns",
-                               value=names)
+    _refuse_repeated(names, "{columns} names", "columns")
     parts, widths = [], []
     for path in paths:
         comments, rows, header = _data_lines(path, "a headerless input")
