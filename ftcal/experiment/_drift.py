@@ -66,12 +66,7 @@ class DriftExtrapolationWarning(UserWarning):
 
 def _skew(v: ArrayLike) -> NDArray[np.float64]:
     """``[v]×`` of a vector (3,) -> (3, 3), or of each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    a = np.asarray(v, dtype=float)
-    m = np.atleast_2d(a)
-    z = np.zeros(len(m))
-    out = np.stack([np.stack([z, -m[:, 2], m[:, 1]], -1), np.stack([m[:, 2], z, -m[:, 0]], -1),
-                    np.stack([-m[:, 1], m[:, 0], z], -1)], axis=1)
-    return out[0] if a.ndim == 1 else out
+    return np.cross(np.asarray(v, dtype=float)[..., None, :], np.eye(3)).swapaxes(-1, -2)  # column j: v × e_j
 
 
 def _spline_matrix(knots: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -294,12 +289,8 @@ def _least_squares(A: NDArray, b: NDArray, clusters: NDArray | None = None) -> t
     if clusters is None:
         design, res, weight = A, residual, np.ones(len(b))
     else:
-        _, inverse = np.unique(clusters, return_inverse=True)
-        weight = np.bincount(inverse).astype(float)
-        design = np.zeros((weight.size, A.shape[1]))
-        np.add.at(design, inverse, A)
-        design /= weight[:, None]
-        res = np.bincount(inverse, weights=residual) / weight
+        design, res = per_pose_mean(A, clusters), per_pose_mean(residual, clusters)
+        weight = np.unique(clusters, return_counts=True)[1].astype(float)
     dof = max(len(res) - A.shape[1], 1)
     sigma2 = float(weight @ res**2) / dof
     cov = sigma2 * np.linalg.pinv(design.T @ (design * weight[:, None]))
@@ -519,11 +510,14 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
 
 
 def per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
-    """The mean of ``values`` (n,) over the rows of each pose (``groups``; ``None``: every row is a pose)."""
+    """The mean of ``values`` (n,) or (n, k) over the rows of each pose (``groups``, in the order of their sorted
+    labels; ``None``: every row is a pose)."""
     if groups is None:
         return values
-    _, inverse = np.unique(groups, return_inverse=True)
-    return np.bincount(inverse, weights=values) / np.bincount(inverse)
+    _, inverse, count = np.unique(groups, return_inverse=True, return_counts=True)
+    out = np.zeros((count.size, *np.shape(values)[1:]))
+    np.add.at(out, inverse.ravel(), values)
+    return out / count.reshape(-1, *[1] * (out.ndim - 1))
 
 
 def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:

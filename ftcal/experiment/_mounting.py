@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._drift import _skew
+from ._drift import _skew, per_pose_mean
 
 __all__ = ["ParameterBlock", "Observability", "fit_mounting_rotation", "identify_mounting", "block_observability",
            "UNIDENTIFIABLE", "MAX_MOUNTING_SE_DEG"]
@@ -255,16 +255,7 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
 
     scale = np.maximum(np.asarray(fit["residual_rms"], dtype=float),
                        1e-9 * np.array([1.0, 0.1]) * max(abs(fit["mass"]), 1e-3) * np.linalg.norm(g_s[0]))
-    gp, Wp, bp = g_s, W, basis
-    if groups is not None:
-        _, inverse = np.unique(groups, return_inverse=True)
-        count = np.bincount(inverse).astype(float)[:, None]
-
-        def mean(a):
-            out = np.zeros((count.size, a.shape[1]))
-            np.add.at(out, inverse, a)
-            return out / count
-        gp, Wp, bp = mean(g_s), mean(W), mean(basis) if basis.shape[1] else np.zeros((count.size, 0))
+    gp, Wp, bp = (per_pose_mean(a, groups) for a in (g_s, W, basis))
     J, blocks = _jacobian(gp, fit["mass"], fit["p"], bp, scale, mounting=True)
     dof = max(J.shape[0] - J.shape[1], 1)
     observability = Observability(blocks=tuple(block_observability(J, blocks, noise=float(
