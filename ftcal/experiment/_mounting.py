@@ -168,8 +168,9 @@ def _jacobian(g_s: NDArray, mass: float, p: NDArray, basis: NDArray, scale: NDAr
 def block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> list[ParameterBlock]:
     out = []
     for name, sl in blocks.items():
-        Jk = J[:, sl]
-        others = np.delete(J, np.arange(J.shape[1])[sl], axis=1)
+        Jk, keep = J[:, sl], np.ones(J.shape[1], dtype=bool)
+        keep[sl] = False
+        others = J[:, keep]
         coef, *_ = np.linalg.lstsq(others, Jk, rcond=None)
         rest = Jk - others @ coef
         own = np.linalg.norm(Jk, axis=0)
@@ -183,15 +184,10 @@ def block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> l
         unit, factor = _BLOCK_UNITS[name]
         se = float("inf") if size <= 0 else noise / size * factor
         # which other block imitates Jk v best
-        best, best_norm, start = "other parameters", -1.0, 0
-        for other, osl in blocks.items():
-            if other == name:
-                continue
-            width = osl.stop - osl.start
-            part = others[:, start:start + width] @ (coef @ direction)[start:start + width]
-            start += width
-            if np.linalg.norm(part) > best_norm:
-                best, best_norm = other, float(np.linalg.norm(part))
+        imitation = np.zeros(J.shape[1])
+        imitation[keep] = coef @ direction
+        parts = {other: np.linalg.norm(J[:, osl] @ imitation[osl]) for other, osl in blocks.items() if other != name}
+        best = max(parts, key=parts.get) if parts else "other parameters"
         rank = int(np.sum(sv >= UNIDENTIFIABLE))
         out.append(ParameterBlock(name=name, n_parameters=sl.stop - sl.start, rank=rank, identifiability=ratio,
                                   weakest_direction=direction, expected_std_error=se, unit=unit, confused_with=best))

@@ -60,8 +60,8 @@ class FrameCheck:
 def _other_frame_wrench(R: NDArray, W: NDArray, declared: str) -> NDArray:
     """The wrench (sensor frame under ``declared``) as it would be in the sensor frame had the input been written
     in the other frame."""
-    turn = "nji,nj->ni" if declared == "sensor" else "nij,nj->ni"  # Rᵀ (the input was in base) or R (in sensor)
-    return np.hstack([np.einsum(turn, R, W[:, :3]), np.einsum(turn, R, W[:, 3:])])
+    turn = "nji,nkj->nki" if declared == "sensor" else "nij,nkj->nki"  # Rᵀ (the input was in base) or R (in sensor)
+    return np.einsum(turn, R, W.reshape(-1, 2, 3)).reshape(-1, 6)  # force and torque turned alike
 
 
 def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declared: str = "sensor", *,
@@ -211,13 +211,11 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
                             random_state=random_state)
     if e_c is None or e_d is None:
         return None
-    rms_c, rms_d, se = np.zeros(2), np.zeros(2), np.zeros(2)
-    for block, sl in enumerate((slice(0, 3), slice(3, 6))):
-        f_c = per_pose_mean(np.mean(e_c[:, sl] ** 2, axis=1), groups)
-        f_d = per_pose_mean(np.mean(e_d[:, sl] ** 2, axis=1), groups)
-        rms_c[block], rms_d[block] = np.sqrt(f_c.mean()), np.sqrt(f_d.mean())
-        u = f_c / (2 * max(rms_c[block], 1e-300)) - f_d / (2 * max(rms_d[block], 1e-300))  # delta method
-        se[block] = u.std(ddof=1) / np.sqrt(u.size) if u.size > 1 else np.inf
+    # each pose's mean squared force and torque error (poses, 2), with a constant bias and with the drift
+    f_c, f_d = (per_pose_mean(np.mean(e.reshape(-1, 2, 3) ** 2, axis=2), groups) for e in (e_c, e_d))
+    rms_c, rms_d = np.sqrt(f_c.mean(axis=0)), np.sqrt(f_d.mean(axis=0))
+    u = f_c / (2 * np.maximum(rms_c, 1e-300)) - f_d / (2 * np.maximum(rms_d, 1e-300))  # delta method
+    se = u.std(axis=0, ddof=1) / np.sqrt(len(u)) if len(u) > 1 else np.full(2, np.inf)
     if not ((rms_c - rms_d) > se).any():
         return None
     return OrderDrift(description=drifting.drift.description, held_out_constant=rms_c, held_out_drift=rms_d,

@@ -467,7 +467,7 @@ def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayL
     [[0.0, 0.0, 9.81, 1.0, 0.0, 0.0]]
     """
     R, W = _check_inputs(sensor_rotations, wrenches_in_base)
-    return np.hstack([np.einsum("nji,nj->ni", R, W[:, :3]), np.einsum("nji,nj->ni", R, W[:, 3:])])
+    return np.einsum("nji,nkj->nki", R, W.reshape(-1, 2, 3)).reshape(-1, 6)  # Rᵀ F and Rᵀ τ
 
 
 def _check_poses(g_s: NDArray[np.float64], groups: ArrayLike | None) -> NDArray | None:
@@ -818,11 +818,11 @@ def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, too
     rate = None
     if d is not None:
         per = {"s": (_SECONDS_PER_HOUR, "h"), "pose": (1.0, "pose"), "degC": (1.0, "deg C")}[d.unit]
-        rate = {"force": (d.mean_rate[:3] * per[0]).tolist(), "force_std_error": (d.mean_rate_std_error[:3] * per[0]).tolist(),
-                "torque": (d.mean_rate[3:] * per[0]).tolist(),
-                "torque_std_error": (d.mean_rate_std_error[3:] * per[0]).tolist(),
-                "unit_force": f"N/{per[1]}", "unit_torque": f"N·m/{per[1]}",
-                "meaning": "the drift's mean rate over the span (end minus start over the span's length)"}
+        halves = (("force", slice(3)), ("torque", slice(3, 6)))
+        rate = {f"{part}{what}": (v[sl] * per[0]).tolist() for part, sl in halves
+                for what, v in (("", d.mean_rate), ("_std_error", d.mean_rate_std_error))}
+        rate.update(unit_force=f"N/{per[1]}", unit_torque=f"N·m/{per[1]}",
+                    meaning="the drift's mean rate over the span (end minus start over the span's length)")
     listed = len(W) <= MAX_LISTED_POSES
 
     def norms(residual: NDArray) -> dict:
