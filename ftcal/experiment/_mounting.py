@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._drift import _skew, per_pose_mean
+from ._drift import _skew, mounting_matrix, per_pose_mean
 
 __all__ = ["ParameterBlock", "Observability", "fit_mounting_rotation", "identify_mounting", "block_observability",
            "UNIDENTIFIABLE", "MAX_MOUNTING_SE_DEG"]
@@ -203,7 +203,6 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     (:func:`ftcal.experiment._drift.fit_gravity_blocks`); ``scale``: force and torque residual RMS weights."""
     import pinocchio as pin
     from scipy.optimize import least_squares
-    from scipy.spatial.transform import Rotation
 
     n, k = basis.shape
 
@@ -212,7 +211,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
 
     def residual(x):
         r, m, p, b, D = unpack(x)
-        g_s = g_robot @ Rotation.from_rotvec(r).as_matrix()  # Qᵀ g per pose, as rows: g Q
+        g_s = g_robot @ mounting_matrix(r)  # Qᵀ g per pose, as rows: g Q
         pred = np.hstack([m * g_s, np.cross(p, g_s)]) + b + basis @ D
         res = W - pred
         return np.concatenate([res[:, :3] / scale[0], res[:, 3:] / scale[1]], axis=1).ravel()
@@ -220,7 +219,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     x0 = np.concatenate([np.zeros(3), [start["mass"]], start["p"], start["bias"], start["drift"].reshape(-1)])
     sol = least_squares(residual, x0, method="lm", x_scale="jac")
     r, m, p, _, _ = unpack(sol.x)
-    g_s = g_robot @ Rotation.from_rotvec(r).as_matrix()
+    g_s = g_robot @ mounting_matrix(r)
     J, blocks = _jacobian(g_s, m, p, basis, scale, mounting=True)
     # the analytic Jacobian is in the local rotation δ (Q exp δ); r's Jacobian differs by the right Jacobian of
     # SO(3), negligible at a few degrees but applied: dr = J_r(r)⁻¹ δ
@@ -245,8 +244,6 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
 
     Returns ``g_s`` in the mounted sensor frame, the rotation vector [rad], its covariance (3, 3) and the joint
     covariance (13, 13) of ``[r, m, p, b_F, b_τ]``."""
-    from scipy.spatial.transform import Rotation
-
     from ..core._exceptions import CalibrationInputError
 
     scale = np.maximum(np.asarray(fit["residual_rms"], dtype=float),
@@ -264,4 +261,4 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
             "11 of a plan with {subdivisions}), or identify with {mounting}",
             settings={"subdivisions": 0, "mounting": False})
     r, r_cov, joint_cov = fit_mounting_rotation(gp, Wp, bp, fit, scale)
-    return g_s @ Rotation.from_rotvec(r).as_matrix(), r, r_cov, joint_cov
+    return g_s @ mounting_matrix(r), r, r_cov, joint_cov

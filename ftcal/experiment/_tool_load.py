@@ -44,7 +44,7 @@ from ..core._validation import check_quiet
 from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
 from ._mounting import axis_text
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
-                     functional_se, held_out_residual, select_drift)
+                     functional_se, held_out_residual, mounting_matrix, select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "identification_summary", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
@@ -64,13 +64,6 @@ MIN_TILT_DEG = 10.0
 #: Largest mounting rotation a tool holds [rad] (20 deg): a mounting error is a few degrees; a larger turn belongs
 #: in the robot model (``load_robot(sensor_mounting=...)``).
 MAX_MOUNTING_ROTATION_RAD = float(np.radians(20.0))
-
-
-def mounting_matrix(rotation_vector: ArrayLike) -> NDArray[np.float64]:
-    """The rotation matrix (3, 3) of a mounting rotation vector [rad] (the sensor's frame in the robot's)."""
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_rotvec(np.asarray(rotation_vector, dtype=float)).as_matrix()
 
 
 def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None):
@@ -636,8 +629,6 @@ def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups
     """Each row's leave-poses-out residual (n, 6) with the mounting rotation fitted again on every fold's training
     poses (a rotation fitted on all poses would see the held-out ones); a fold whose poses cannot tell the
     rotation apart keeps the all-poses rotation. ``None`` when a fold cannot be fitted."""
-    from scipy.spatial.transform import Rotation
-
     from ._drift import held_out_predictions, pose_folds
     from ._mounting import identify_mounting
 
@@ -650,7 +641,7 @@ def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups
             r = identify_mounting(g_robot[train], W[train], basis[train], start, sub)[1]
         except (CalibrationInputError, np.linalg.LinAlgError):
             pass
-        pred = held_out_predictions(g_robot @ Rotation.from_rotvec(r).as_matrix(), W, basis, [(train, test)])
+        pred = held_out_predictions(g_robot @ mounting_matrix(r), W, basis, [(train, test)])
         if pred is None:
             return None
         residual[test] = W[test] - pred[test]
