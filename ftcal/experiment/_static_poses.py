@@ -301,22 +301,22 @@ def _need_robot(robot):
 
 
 def _run_logs(paths, model, robot):
+    """The run logs read, and their rows' orientations, wrenches (through the model), times and temperatures."""
     from ..io._logs import read_run_log
     from ..robot import sensor_pose_in_base
 
     model, robot = _need_model(model, "run logs"), _need_robot(robot)
     logs = [read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints) for p in paths]
     rotations = sensor_pose_in_base(robot, np.vstack([lg.q for lg in logs]))[:, :3, :3]
-    return logs, rotations, model.predict(np.vstack([lg.raw for lg in logs]))
+    return (logs, rotations, model.predict(np.vstack([lg.raw for lg in logs])),
+            np.concatenate([lg.timestamp for lg in logs]), _joined([lg.temperature for lg in logs]))
 
 
 def _log_poses(paths, model, robot) -> StaticPoses:
-    logs, rotations, wrenches = _run_logs(paths, model, robot)
-    temperature = _joined([lg.temperature for lg in logs])
+    logs, rotations, wrenches, time, temperature = _run_logs(paths, model, robot)
     # the rows of one pose of one log are samples of one static pose: held out together
     groups = np.concatenate([[f"{i}:{p}" for p in lg.pose] for i, lg in enumerate(logs)])
-    return StaticPoses([str(lg.path) for lg in logs], "run log", rotations, wrenches,
-                       np.concatenate([lg.timestamp for lg in logs]), temperature,
+    return StaticPoses([str(lg.path) for lg in logs], "run log", rotations, wrenches, time, temperature,
                        groups if np.unique(groups).size > 1 else None)
 
 
@@ -391,10 +391,9 @@ def recording_rows(recording, *, model=None, robot=None, options: RecordingOptio
     options = options or RecordingOptions()
     paths, kind = _one_kind(recording)
     if kind == "run log":
-        logs, rotations, wrenches = _run_logs(paths, model, robot)
-        lead = [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)]
-        return RecordingRows("timestamp,pose", lead, rotations, wrenches,
-                             np.concatenate([lg.timestamp for lg in logs]), _joined([lg.temperature for lg in logs]))
+        logs, *rows = _run_logs(paths, model, robot)
+        return RecordingRows("timestamp,pose", [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)],
+                             *rows)
     parts, notes = [], []
     for path in paths:
         if kind == "pose file":
