@@ -348,17 +348,11 @@ def _load_masses(logs: list[RunLog], load_mass: float | None, load_configuration
     return load_mass, fixture_mass
 
 
-def prepare_dataset(
-    log_paths: Sequence[str | Path] | str | Path,
-    robot: RobotModel | str | Path = "kuka_iiwa14",
-    load_mass: float | None = None,
-    *,
-    load_configurations: Sequence[LoadConfiguration] | Mapping[int, ArrayLike] | None = None,
-    gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
-    n_channels: int | None = None,
-    max_pair_rotation_deg: float = 3.0,
-    limit_tolerance_rad: float = 0.01,
-) -> CalibrationDataset:
+def prepare_dataset(log_paths: Sequence[str | Path] | str | Path, robot: RobotModel | str | Path = "kuka_iiwa14",
+                    load_mass: float | None = None, *,
+                    load_configurations: Sequence[LoadConfiguration] | Mapping[int, ArrayLike] | None = None,
+                    gravity_in_base: ArrayLike = GRAVITY_IN_BASE, n_channels: int | None = None,
+                    max_pair_rotation_deg: float = 3.0, limit_tolerance_rad: float = 0.01) -> CalibrationDataset:
     """Turn load / no-load run logs into a :class:`ftcal.CalibrationDataset` (method in the module docstring).
 
     Parameters
