@@ -496,12 +496,12 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
     for c, cand in enumerate(candidates):
         row = {"model": cand.name, "n_parameters": 6 * cand.n_parameters}
         if scorable[c]:
-            diff = score[c] - score[best]
+            excess = per_pose_mean(score[c] - score[best], groups)  # over the units (groups, else rows)
             row.update(status="chosen" if c == best else "scored",
                        held_out_rms_force_N=float(np.sqrt(np.mean(errors[c, :, 0]) / 3)),
                        held_out_rms_torque_Nm=float(np.sqrt(np.mean(errors[c, :, 1]) / 3)),
                        score=float(np.mean(score[c])),
-                       score_excess_se=_mean_se(diff, groups))
+                       score_excess_se=float(excess.std(ddof=1) / np.sqrt(excess.size)) if excess.size > 1 else None)
         else:
             row["status"] = "not enough poses for its parameters"
         table.append(row)
@@ -517,12 +517,6 @@ def per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
     out = np.zeros((count.size, *np.shape(values)[1:]))
     np.add.at(out, inverse.ravel(), values)
     return out / count.reshape(-1, *[1] * (out.ndim - 1))
-
-
-def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:
-    """Standard error of the mean of ``values`` over the units (groups, else rows)."""
-    values = per_pose_mean(values, groups)
-    return float(values.std(ddof=1) / np.sqrt(values.size)) if values.size > 1 else None
 
 
 def build_drift(candidate: _Candidate, fit: dict, values: NDArray, unit: str, table: list[dict]) -> BiasDrift:
