@@ -19,6 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core._exceptions import CalibrationInputError
+from ._drift import fit_gravity_blocks, held_out_residual, per_pose_mean, spline_basis
+from ._mounting import Observability, _jacobian, block_observability
+from ._tool_load import _check_inputs, _gravity_in_sensor, identify_tool_load
+
 __all__ = ["FrameCheck", "check_wrench_frame", "OrderDrift", "drift_in_recording_order", "FRAME_RATIO",
            "tool_load_observability"]
 
@@ -101,10 +106,6 @@ def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declare
     >>> check.other_fits_better, check.other, check.residual_other.round(9).tolist()
     (True, 'sensor', [0.0, 0.0])
     """
-    from ._drift import fit_gravity_blocks
-    from ._tool_load import _check_inputs, _gravity_in_sensor
-    from ..core._exceptions import CalibrationInputError
-
     if declared not in _FRAMES:
         raise CalibrationInputError(f"declared must be 'sensor' or 'base'; got {declared!r}.", parameter="declared",
                                     value=declared)
@@ -190,9 +191,6 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
     >>> found.description, bool(found.held_out_drift[0] < found.held_out_constant[0] - found.paired_se[0])
     ('linear in time', True)
     """
-    from ._drift import held_out_residual, per_pose_mean, spline_basis
-    from ._tool_load import _check_inputs, _gravity_in_sensor, identify_tool_load
-
     R, W = _check_inputs(sensor_rotations, wrenches)
     if groups is not None:
         groups = np.asarray(groups)
@@ -261,9 +259,6 @@ def tool_load_observability(sensor_rotations: ArrayLike, gravity: ArrayLike = (0
     >>> obs.problems(), obs.block("mounting rotation").rank
     ([], 3)
     """
-    from ._mounting import Observability, _jacobian, block_observability
-    from ._tool_load import _check_inputs, _gravity_in_sensor
-
     R, _ = _check_inputs(sensor_rotations)
     g_s = _gravity_in_sensor(R, gravity)
     b = np.zeros((len(R), 0)) if basis is None else np.asarray(basis, dtype=float)

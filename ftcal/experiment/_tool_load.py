@@ -42,9 +42,9 @@ from ..core._fields import numbers_field
 from ..core._files import atomic_output
 from ..core._validation import check_quiet
 from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
-from ._mounting import axis_text
+from ._mounting import axis_text, identify_mounting
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
-                     functional_se, held_out_residual, mounting_matrix, select_drift)
+                     functional_se, held_out_predictions, held_out_residual, mounting_matrix, pose_folds, select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "identification_summary", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
@@ -597,8 +597,6 @@ def identify_tool_load(
         raise _zero_mass_error(fit["mass"], mass_se, declared_frame, gravity)
     rotation, rotation_cov, joint_cov, g_robot = np.zeros(3), np.zeros((3, 3)), None, g_s
     if mounting:
-        from ._mounting import identify_mounting
-
         g_s, rotation, rotation_cov, joint_cov = identify_mounting(g_s, W, basis, fit, groups)
         fit = fit_gravity_blocks(g_s, W, basis, groups)  # the tool given the rotation (the optimum's linear part)
     f_se = np.sqrt(np.maximum(np.diag(fit["force_cov"]), 0.0))
@@ -629,9 +627,6 @@ def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups
     """Each row's leave-poses-out residual (n, 6) with the mounting rotation fitted again on every fold's training
     poses (a rotation fitted on all poses would see the held-out ones); a fold whose poses cannot tell the
     rotation apart keeps the all-poses rotation. ``None`` when a fold cannot be fitted."""
-    from ._drift import held_out_predictions, pose_folds
-    from ._mounting import identify_mounting
-
     residual = np.empty_like(W)
     for train, test in pose_folds(len(W), groups, cv, random_state):
         sub = None if groups is None else groups[train]
