@@ -25,11 +25,7 @@ _PUBLIC = dict(
     ContinuousRecording="_virtual_recording", StaticPoses="_static_poses", static_poses="_static_poses",
     RecordingRows="_static_poses", recording_rows="_static_poses", RecordingOptions="_static_poses",
     recording_kind="_static_poses", bag_run_log="_static_poses", DEFAULT_STILL_TOLERANCE_DEG="_still_poses",
-    DEFAULT_MIN_STILL_S="_still_poses",
-)
-_PUBLIC.update(  # names the CLI uses
-    DEFAULT_MIN_STILL_S="_still_poses", DEFAULT_STILL_TOLERANCE_DEG="_still_poses", tool_onnx_model="_drift",
-    write_run_bags="_virtual_recording",
+    DEFAULT_MIN_STILL_S="_still_poses", tool_onnx_model="_drift", write_run_bags="_virtual_recording",  # the CLI's
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

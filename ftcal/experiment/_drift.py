@@ -66,12 +66,14 @@ class DriftExtrapolationWarning(UserWarning):
 
 def _skew(v: ArrayLike) -> NDArray[np.float64]:
     """``[v]×`` of a vector (3,) -> (3, 3), or of each row of ``v`` (n, 3) -> (n, 3, 3)."""
-    a = np.asarray(v, dtype=float)
-    m = np.atleast_2d(a)
-    z = np.zeros(len(m))
-    out = np.stack([np.stack([z, -m[:, 2], m[:, 1]], -1), np.stack([m[:, 2], z, -m[:, 0]], -1),
-                    np.stack([-m[:, 1], m[:, 0], z], -1)], axis=1)
-    return out[0] if a.ndim == 1 else out
+    return np.cross(np.asarray(v, dtype=float)[..., None, :], np.eye(3)).swapaxes(-1, -2)  # column j: v × e_j
+
+
+def mounting_matrix(rotation_vector: ArrayLike) -> NDArray[np.float64]:
+    """The rotation matrix (3, 3) of a mounting rotation vector [rad] (the sensor's frame in the robot's)."""
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_rotvec(np.asarray(rotation_vector, dtype=float)).as_matrix()
 
 
 def _spline_matrix(knots: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -104,10 +106,8 @@ def spline_basis(values: ArrayLike, knots: ArrayLike) -> NDArray[np.float64]:
     knots = np.asarray(knots, dtype=float)
     k = (knots - knots[0]) / (knots[-1] - knots[0])
     u = (v - knots[0]) / (knots[-1] - knots[0])
-    if knots.size == 2:
-        return u[:, None]
     cubes = np.maximum(u[:, None] - k[None, :], 0.0) ** 3
-    return np.hstack([u[:, None], cubes @ _spline_matrix(knots)])
+    return np.hstack([u[:, None], cubes @ _spline_matrix(knots)])  # two knots: no cubic term, a straight line
 
 
 @dataclass(frozen=True)
@@ -294,12 +294,8 @@ def _least_squares(A: NDArray, b: NDArray, clusters: NDArray | None = None) -> t
     if clusters is None:
         design, res, weight = A, residual, np.ones(len(b))
     else:
-        _, inverse = np.unique(clusters, return_inverse=True)
-        weight = np.bincount(inverse).astype(float)
-        design = np.zeros((weight.size, A.shape[1]))
-        np.add.at(design, inverse, A)
-        design /= weight[:, None]
-        res = np.bincount(inverse, weights=residual) / weight
+        design, res = per_pose_mean(A, clusters), per_pose_mean(residual, clusters)
+        weight = np.unique(clusters, return_counts=True)[1].astype(float)
     dof = max(len(res) - A.shape[1], 1)
     sigma2 = float(weight @ res**2) / dof
     cov = sigma2 * np.linalg.pinv(design.T @ (design * weight[:, None]))
@@ -455,18 +451,14 @@ def held_out_residual(g_s: NDArray, W: NDArray, basis: NDArray, *, groups: NDArr
     return None if pred is None else W - pred
 
 
-def _held_out_errors(g_s: NDArray, W: NDArray, values: dict, candidates: list[_Candidate],
-                     folds) -> tuple[NDArray, NDArray]:
-    """Held-out squared force and torque errors (n_candidates, n_poses) per pose (NaN: not scorable)."""
-    n = len(W)
-    force = np.full((len(candidates), n), np.nan)
-    torque = np.full((len(candidates), n), np.nan)
+def _held_out_errors(g_s: NDArray, W: NDArray, values: dict, candidates: list[_Candidate], folds) -> NDArray:
+    """Held-out squared force and torque errors (n_candidates, n_poses, 2) per pose (NaN: not scorable)."""
+    errors = np.full((len(candidates), len(W), 2), np.nan)
     for c, cand in enumerate(candidates):
         pred = held_out_predictions(g_s, W, cand.basis(values), folds)
         if pred is not None:
-            err = (pred - W) ** 2
-            force[c], torque[c] = err[:, :3].sum(axis=1), err[:, 3:].sum(axis=1)
-    return force, torque
+            errors[c] = ((pred - W) ** 2).reshape(-1, 2, 3).sum(axis=2)
+    return errors
 
 
 def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: NDArray | None, *,
@@ -493,25 +485,23 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
         groups = check_groups(groups, len(W), purpose="leave-poses-out cross-validation of the drift",
                               fix="pass groups=None when every row is a pose")
     folds = pose_folds(len(W), groups, cv, random_state)
-    force, torque = _held_out_errors(g_s, W, values or {"time": np.zeros(len(W))}, candidates, folds)
-    scorable = ~np.isnan(force).any(axis=1)
+    errors = _held_out_errors(g_s, W, values or {"time": np.zeros(len(W))}, candidates, folds)
+    scorable = ~np.isnan(errors).any(axis=(1, 2))
     if not scorable.any():
         raise CalibrationInputError(f"none of the drift models could be cross-validated on {len(W)} poses; add poses.")
     reference = int(np.argmax(scorable))  # the simplest scorable candidate sets the units
-    unit_f = max(float(np.mean(force[reference])), 1e-300)
-    unit_t = max(float(np.mean(torque[reference])), 1e-300)
-    score = force / unit_f + torque / unit_t
+    score = (errors / np.maximum(errors[reference].mean(axis=0), 1e-300)).sum(axis=2)  # force and torque in its units
     best = simplest_within_one_se(score, groups, complexity=[c.n_parameters for c in candidates])
     table = []
     for c, cand in enumerate(candidates):
         row = {"model": cand.name, "n_parameters": 6 * cand.n_parameters}
         if scorable[c]:
-            diff = score[c] - score[best]
+            excess = per_pose_mean(score[c] - score[best], groups)  # over the units (groups, else rows)
             row.update(status="chosen" if c == best else "scored",
-                       held_out_rms_force_N=float(np.sqrt(np.mean(force[c]) / 3)),
-                       held_out_rms_torque_Nm=float(np.sqrt(np.mean(torque[c]) / 3)),
+                       held_out_rms_force_N=float(np.sqrt(np.mean(errors[c, :, 0]) / 3)),
+                       held_out_rms_torque_Nm=float(np.sqrt(np.mean(errors[c, :, 1]) / 3)),
                        score=float(np.mean(score[c])),
-                       score_excess_se=_mean_se(diff, groups))
+                       score_excess_se=float(excess.std(ddof=1) / np.sqrt(excess.size)) if excess.size > 1 else None)
         else:
             row["status"] = "not enough poses for its parameters"
         table.append(row)
@@ -519,17 +509,14 @@ def select_drift(g_s: NDArray, W: NDArray, times: NDArray | None, temperatures: 
 
 
 def per_pose_mean(values: NDArray, groups: NDArray | None) -> NDArray:
-    """The mean of ``values`` (n,) over the rows of each pose (``groups``; ``None``: every row is a pose)."""
+    """The mean of ``values`` (n,) or (n, k) over the rows of each pose (``groups``, in the order of their sorted
+    labels; ``None``: every row is a pose)."""
     if groups is None:
         return values
-    _, inverse = np.unique(groups, return_inverse=True)
-    return np.bincount(inverse, weights=values) / np.bincount(inverse)
-
-
-def _mean_se(values: NDArray, groups: NDArray | None) -> float | None:
-    """Standard error of the mean of ``values`` over the units (groups, else rows)."""
-    values = per_pose_mean(values, groups)
-    return float(values.std(ddof=1) / np.sqrt(values.size)) if values.size > 1 else None
+    _, inverse, count = np.unique(groups, return_inverse=True, return_counts=True)
+    out = np.zeros((count.size, *np.shape(values)[1:]))
+    np.add.at(out, inverse.ravel(), values)
+    return out / count.reshape(-1, *[1] * (out.ndim - 1))
 
 
 def build_drift(candidate: _Candidate, fit: dict, values: NDArray, unit: str, table: list[dict]) -> BiasDrift:
@@ -556,11 +543,8 @@ def tool_onnx_model(tool):
 
     m, c, g = tool.mass, np.asarray(tool.center_of_mass), np.asarray(tool.gravity, dtype=float)
     # gravity wrench = g_s @ M, g_s = Rᵀ g: force m g_s, torque c × (m g_s) = m g_s @ [c]×ᵀ
-    M = np.hstack([m * np.eye(3), m * _skew(c).T])
-    if np.any(tool.mounting_rotation):  # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M
-        from scipy.spatial.transform import Rotation
-
-        M = Rotation.from_rotvec(np.asarray(tool.mounting_rotation, dtype=float)).as_matrix() @ M
+    # gravity in the mounted sensor frame: (Rᵀ g)ᵀ Q, so Q M (Q = I without a mounting rotation)
+    M = mounting_matrix(tool.mounting_rotation) @ np.hstack([m * np.eye(3), m * _skew(c).T])
     drift = tool.drift
     bias = np.asarray(tool.bias, dtype=float)
     inits = {"g": g.reshape(3, 1), "M": M, "flat": np.array([-1, 3], dtype=np.int64)}

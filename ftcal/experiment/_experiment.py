@@ -271,18 +271,14 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
             "column from all of them.")
     no_loads = [samples[k] for k in partners]
     load_set = {(c, p) for _, c, p in load_keys}
-    no_load: dict[int, tuple[list, list]] = defaultdict(lambda: ([], []))
-    no_load_rotations: dict[int, list] = defaultdict(list)
-    for (kind, c, p), (q, raw, where, _, rotation) in sorted(samples.items()):
+    runs: dict[int, list] = defaultdict(list)  # no-load run id -> the samples of its poses, in pose order
+    for (kind, c, p), sample in sorted(samples.items()):
         if kind != "no-load":
             continue
         if c != SHARED_NO_LOAD_CONFIG and (c, p) not in load_set:
-            raise LogFormatError(f"{where}: no-load pose {p} of config {c} has no load partner (no 'load' row with "
-                                 f"config {c} and pose {p}); was the load run cut short?")
-        no_load[c][0].append(q)
-        no_load[c][1].append(raw)
-        if rotation is not None:
-            no_load_rotations[c].append(rotation)
+            raise LogFormatError(f"{sample[2]}: no-load pose {p} of config {c} has no load partner (no 'load' row "
+                                 f"with config {c} and pose {p}); was the load run cut short?")
+        runs[c].append(sample)
     recorded = ref.rotation is not None
     return PairedRuns(
         config=np.array([k[1] for k in load_keys], dtype=np.int64),
@@ -290,11 +286,11 @@ def pair_runs(logs: Sequence[RunLog], *, same_pose_tol: float = 0.01) -> PairedR
         q_load=np.array([s[0] for s in loads]), q_no_load=np.array([s[0] for s in no_loads]),
         raw_load=np.array([s[1] for s in loads]), raw_no_load=np.array([s[1] for s in no_loads]),
         no_load_run=np.array([k[1] for k in partners], dtype=np.int64), source=[s[2] for s in loads],
-        no_load={k: (np.array(v[0]), np.array(v[1])) for k, v in no_load.items()},
+        no_load={c: (np.array([s[0] for s in v]), np.array([s[1] for s in v])) for c, v in runs.items()},
         temperature_load=np.array([s[3] for s in loads]) if all(with_temperature) else None,
         rotation_load=np.array([s[4] for s in loads]) if recorded else None,
         rotation_no_load=np.array([s[4] for s in no_loads]) if recorded else None,
-        no_load_rotations={k: np.array(v) for k, v in no_load_rotations.items()},
+        no_load_rotations={c: np.array([s[4] for s in v]) for c, v in runs.items()} if recorded else {},
     )
 
 
@@ -352,17 +348,11 @@ def _load_masses(logs: list[RunLog], load_mass: float | None, load_configuration
     return load_mass, fixture_mass
 
 
-def prepare_dataset(
-    log_paths: Sequence[str | Path] | str | Path,
-    robot: RobotModel | str | Path = "kuka_iiwa14",
-    load_mass: float | None = None,
-    *,
-    load_configurations: Sequence[LoadConfiguration] | Mapping[int, ArrayLike] | None = None,
-    gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
-    n_channels: int | None = None,
-    max_pair_rotation_deg: float = 3.0,
-    limit_tolerance_rad: float = 0.01,
-) -> CalibrationDataset:
+def prepare_dataset(log_paths: Sequence[str | Path] | str | Path, robot: RobotModel | str | Path = "kuka_iiwa14",
+                    load_mass: float | None = None, *,
+                    load_configurations: Sequence[LoadConfiguration] | Mapping[int, ArrayLike] | None = None,
+                    gravity_in_base: ArrayLike = GRAVITY_IN_BASE, n_channels: int | None = None,
+                    max_pair_rotation_deg: float = 3.0, limit_tolerance_rad: float = 0.01) -> CalibrationDataset:
     """Turn load / no-load run logs into a :class:`ftcal.CalibrationDataset` (method in the module docstring).
 
     Parameters
@@ -434,8 +424,8 @@ def prepare_dataset(
     if recorded:
         R_load, R_no_load = pairs.rotation_load, pairs.rotation_no_load
     else:
-        _check_limits(robot, pairs.q_load, pairs.source, limit_tolerance_rad)
-        _check_limits(robot, pairs.q_no_load, pairs.source, limit_tolerance_rad)
+        for q in (pairs.q_load, pairs.q_no_load):
+            _check_limits(robot, q, pairs.source, limit_tolerance_rad)
         R_load = sensor_pose_in_base(robot, pairs.q_load)[:, :3, :3]
         R_no_load = sensor_pose_in_base(robot, pairs.q_no_load)[:, :3, :3]
     R_delta = rotation_delta(R_no_load, R_load)
@@ -445,17 +435,14 @@ def prepare_dataset(
         raise LogFormatError(f"{pairs.source[i]}: load and no-load poses {pairs.pose[i]} of config {pairs.config[i]} "
                              f"differ by {angle[i]:.2f} deg (> {max_pair_rotation_deg}); the pose indices of the two "
                              "runs do not refer to the same commanded pose.")
-    fits = {}
-    for run, (q_nl, raw_nl) in pairs.no_load.items():
-        R_run = pairs.no_load_rotations[run] if recorded else sensor_pose_in_base(robot, q_nl)[:, :3, :3]
-        u = np.einsum("nji,j->ni", R_run, g_hat)
-        fits[run] = fit_no_load_model(u, raw_nl)
     u_no_load = np.einsum("nji,j->ni", R_no_load, g_hat)
     du = np.einsum("nji,nj->ni", R_delta, u_no_load) - u_no_load  # (R_delta^T - I) u_no-load
-    aligned = pairs.raw_no_load.copy()
-    for run, fit in fits.items():
+    aligned, fits = pairs.raw_no_load.copy(), {}
+    for run, (q_nl, raw_nl) in pairs.no_load.items():
+        R_run = pairs.no_load_rotations[run] if recorded else sensor_pose_in_base(robot, q_nl)[:, :3, :3]
+        fits[run] = fit_no_load_model(np.einsum("nji,j->ni", R_run, g_hat), raw_nl)
         sel = pairs.no_load_run == run
-        aligned[sel] += du[sel] @ fit.matrix.T
+        aligned[sel] += du[sel] @ fits[run].matrix.T
     raw = pairs.raw_load - aligned
     r = np.array([positions[c] for c in pairs.config])
     row_mass = np.array([fixture_mass.get(int(c), load_mass) for c in pairs.config])

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ._drift import _skew
+from ._drift import _skew, mounting_matrix, per_pose_mean
 
 __all__ = ["ParameterBlock", "Observability", "fit_mounting_rotation", "identify_mounting", "block_observability",
            "UNIDENTIFIABLE", "MAX_MOUNTING_SE_DEG"]
@@ -168,8 +168,9 @@ def _jacobian(g_s: NDArray, mass: float, p: NDArray, basis: NDArray, scale: NDAr
 def block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> list[ParameterBlock]:
     out = []
     for name, sl in blocks.items():
-        Jk = J[:, sl]
-        others = np.delete(J, np.arange(J.shape[1])[sl], axis=1)
+        Jk, keep = J[:, sl], np.ones(J.shape[1], dtype=bool)
+        keep[sl] = False
+        others = J[:, keep]
         coef, *_ = np.linalg.lstsq(others, Jk, rcond=None)
         rest = Jk - others @ coef
         own = np.linalg.norm(Jk, axis=0)
@@ -183,15 +184,10 @@ def block_observability(J: NDArray, blocks: dict[str, slice], noise: float) -> l
         unit, factor = _BLOCK_UNITS[name]
         se = float("inf") if size <= 0 else noise / size * factor
         # which other block imitates Jk v best
-        best, best_norm, start = "other parameters", -1.0, 0
-        for other, osl in blocks.items():
-            if other == name:
-                continue
-            width = osl.stop - osl.start
-            part = others[:, start:start + width] @ (coef @ direction)[start:start + width]
-            start += width
-            if np.linalg.norm(part) > best_norm:
-                best, best_norm = other, float(np.linalg.norm(part))
+        imitation = np.zeros(J.shape[1])
+        imitation[keep] = coef @ direction
+        parts = {other: np.linalg.norm(J[:, osl] @ imitation[osl]) for other, osl in blocks.items() if other != name}
+        best = max(parts, key=parts.get) if parts else "other parameters"
         rank = int(np.sum(sv >= UNIDENTIFIABLE))
         out.append(ParameterBlock(name=name, n_parameters=sl.stop - sl.start, rank=rank, identifiability=ratio,
                                   weakest_direction=direction, expected_std_error=se, unit=unit, confused_with=best))
@@ -207,7 +203,6 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     (:func:`ftcal.experiment._drift.fit_gravity_blocks`); ``scale``: force and torque residual RMS weights."""
     import pinocchio as pin
     from scipy.optimize import least_squares
-    from scipy.spatial.transform import Rotation
 
     n, k = basis.shape
 
@@ -216,7 +211,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
 
     def residual(x):
         r, m, p, b, D = unpack(x)
-        g_s = g_robot @ Rotation.from_rotvec(r).as_matrix()  # Qᵀ g per pose, as rows: g Q
+        g_s = g_robot @ mounting_matrix(r)  # Qᵀ g per pose, as rows: g Q
         pred = np.hstack([m * g_s, np.cross(p, g_s)]) + b + basis @ D
         res = W - pred
         return np.concatenate([res[:, :3] / scale[0], res[:, 3:] / scale[1]], axis=1).ravel()
@@ -224,7 +219,7 @@ def fit_mounting_rotation(g_robot: NDArray, W: NDArray, basis: NDArray, start: d
     x0 = np.concatenate([np.zeros(3), [start["mass"]], start["p"], start["bias"], start["drift"].reshape(-1)])
     sol = least_squares(residual, x0, method="lm", x_scale="jac")
     r, m, p, _, _ = unpack(sol.x)
-    g_s = g_robot @ Rotation.from_rotvec(r).as_matrix()
+    g_s = g_robot @ mounting_matrix(r)
     J, blocks = _jacobian(g_s, m, p, basis, scale, mounting=True)
     # the analytic Jacobian is in the local rotation δ (Q exp δ); r's Jacobian differs by the right Jacobian of
     # SO(3), negligible at a few degrees but applied: dr = J_r(r)⁻¹ δ
@@ -249,22 +244,11 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
 
     Returns ``g_s`` in the mounted sensor frame, the rotation vector [rad], its covariance (3, 3) and the joint
     covariance (13, 13) of ``[r, m, p, b_F, b_τ]``."""
-    from scipy.spatial.transform import Rotation
-
     from ..core._exceptions import CalibrationInputError
 
     scale = np.maximum(np.asarray(fit["residual_rms"], dtype=float),
                        1e-9 * np.array([1.0, 0.1]) * max(abs(fit["mass"]), 1e-3) * np.linalg.norm(g_s[0]))
-    gp, Wp, bp = g_s, W, basis
-    if groups is not None:
-        _, inverse = np.unique(groups, return_inverse=True)
-        count = np.bincount(inverse).astype(float)[:, None]
-
-        def mean(a):
-            out = np.zeros((count.size, a.shape[1]))
-            np.add.at(out, inverse, a)
-            return out / count
-        gp, Wp, bp = mean(g_s), mean(W), mean(basis) if basis.shape[1] else np.zeros((count.size, 0))
+    gp, Wp, bp = (per_pose_mean(a, groups) for a in (g_s, W, basis))
     J, blocks = _jacobian(gp, fit["mass"], fit["p"], bp, scale, mounting=True)
     dof = max(J.shape[0] - J.shape[1], 1)
     observability = Observability(blocks=tuple(block_observability(J, blocks, noise=float(
@@ -277,4 +261,4 @@ def identify_mounting(g_s: NDArray, W: NDArray, basis: NDArray, fit: dict, group
             "11 of a plan with {subdivisions}), or identify with {mounting}",
             settings={"subdivisions": 0, "mounting": False})
     r, r_cov, joint_cov = fit_mounting_rotation(gp, Wp, bp, fit, scale)
-    return g_s @ Rotation.from_rotvec(r).as_matrix(), r, r_cov, joint_cov
+    return g_s @ mounting_matrix(r), r, r_cov, joint_cov

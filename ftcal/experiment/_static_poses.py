@@ -209,37 +209,11 @@ def _still(options: RecordingOptions, source: str, time, reading, **pose) -> Sti
         return find_still_poses(time, reading, tolerance_deg=options.tolerance_deg, settle_s=options.settle_s,
                                 min_duration_s=options.min_duration_s, **pose)
     except CalibrationInputError as exc:
-        raise CalibrationInputError(f"{source}: {exc.template}", parameter=exc.parameter, value=exc.value,
-                                    fix=exc.fix, settings=exc.settings) from None
+        raise exc.located(f"{source}: ") from None
 
 
 def _joined(parts: list) -> NDArray | None:
     return None if not parts or any(p is None for p in parts) else np.concatenate(parts)
-
-
-def _pose_file_poses(paths, model, options, check_wrench) -> StaticPoses:
-    rotations, wrenches, times, temperatures, still_list, notes = [], [], [], [], [], []
-    for path in paths:
-        rec, wrench = _pose_file_rows(path, model, options, check_wrench, notes)
-        wrench = _to_sensor_frame(rec.rotation, wrench, options)
-        if options.poses == "continuous" and rec.time is None:
-            raise CalibrationInputError(f"{path}: continuous poses need a 'time' column [s] to find the still "
-                                        "poses in.", parameter="poses", value="continuous")
-        if _is_continuous(options, rec.time, rec.rotation):
-            still = _still(options, str(path), rec.time, wrench, rotations=rec.rotation)
-            notes.append((str(path), still.summary()))
-            still_list.append(still)
-            rotations.append(still.rotation)
-            wrenches.append(still.reading)
-            times.append(still.time)
-            temperatures.append(None if rec.temperature is None else np.interp(still.time, rec.time, rec.temperature))
-        else:
-            rotations.append(rec.rotation)
-            wrenches.append(wrench)
-            times.append(rec.time)
-            temperatures.append(rec.temperature)
-    return StaticPoses([str(p) for p in paths], "pose file", np.concatenate(rotations), np.concatenate(wrenches),
-                       _joined(times), _joined(temperatures), None, still_list, notes)
 
 
 def _read_bag(path: Path, options: RecordingOptions, notes: list, *, wrench: bool = True):
@@ -281,25 +255,41 @@ def bag_joints(rec, robot) -> NDArray[np.float64]:
         settings={"tf": Placeholder("(<base frame>, <sensor frame>)")})
 
 
-def _bag_poses(paths, model, robot, options, check_wrench) -> StaticPoses:
+def _bag_still(options: RecordingOptions, path: Path, rec, reading: NDArray, robot) -> StillPoses:
+    """The still poses of a bag's reading, by its /tf orientations or its joint states (through the robot)."""
+    if rec.rotation is not None:
+        return _still(options, str(path), rec.time, reading, rotations=rec.rotation)
+    return _still(options, str(path), rec.time, reading, joints=bag_joints(rec, _need_robot(robot)))
+
+
+def _file_poses(paths, kind: str, model, robot, options, check_wrench) -> StaticPoses:
+    """The static poses of pose files or bags: a static pose file's rows, or the still poses of each recording."""
     from ..robot import sensor_pose_in_base
 
-    rotations, wrenches, times, still_list, notes = [], [], [], [], []
+    parts, still_list, notes = [], [], []
     for path in paths:
-        rec, reading = _bag_rows(path, model, options, check_wrench, notes)
-        if options.tf is not None:
-            still = _still(options, str(path), rec.time, reading, rotations=rec.rotation)
-            R = still.rotation
+        if kind == "ROS bag":
+            rec, reading = _bag_rows(path, model, options, check_wrench, notes)
+            still = _bag_still(options, path, rec, reading, robot)
+            R = still.rotation if still.rotation is not None else sensor_pose_in_base(robot, still.joints)[:, :3, :3]
+            parts.append((R, _to_sensor_frame(R, still.reading, options), still.time, None))
         else:
-            still = _still(options, str(path), rec.time, reading, joints=bag_joints(rec, _need_robot(robot)))
-            R = sensor_pose_in_base(robot, still.joints)[:, :3, :3]
+            rec, wrench = _pose_file_rows(path, model, options, check_wrench, notes)
+            wrench = _to_sensor_frame(rec.rotation, wrench, options)
+            if options.poses == "continuous" and rec.time is None:
+                raise CalibrationInputError(f"{path}: continuous poses need a 'time' column [s] to find the still "
+                                            "poses in.", parameter="poses", value="continuous")
+            if not _is_continuous(options, rec.time, rec.rotation):
+                parts.append((rec.rotation, wrench, rec.time, rec.temperature))
+                continue
+            still = _still(options, str(path), rec.time, wrench, rotations=rec.rotation)
+            parts.append((still.rotation, still.reading, still.time,
+                          None if rec.temperature is None else np.interp(still.time, rec.time, rec.temperature)))
         notes.append((str(path), still.summary()))
-        rotations.append(R)
-        wrenches.append(_to_sensor_frame(R, still.reading, options))
-        times.append(still.time)
         still_list.append(still)
-    return StaticPoses([str(p) for p in paths], "ROS bag", np.concatenate(rotations), np.concatenate(wrenches),
-                       np.concatenate(times), None, None, still_list, notes)
+    rotations, wrenches, times, temperatures = zip(*parts)
+    return StaticPoses([str(p) for p in paths], kind, np.concatenate(rotations), np.concatenate(wrenches),
+                       _joined(times), _joined(temperatures), None, still_list, notes)
 
 
 def _need_robot(robot):
@@ -311,22 +301,22 @@ def _need_robot(robot):
 
 
 def _run_logs(paths, model, robot):
+    """The run logs read, and their rows' orientations, wrenches (through the model), times and temperatures."""
     from ..io._logs import read_run_log
     from ..robot import sensor_pose_in_base
 
     model, robot = _need_model(model, "run logs"), _need_robot(robot)
     logs = [read_run_log(p, n_channels=int(model.n_features_in_), n_joints=robot.n_joints) for p in paths]
     rotations = sensor_pose_in_base(robot, np.vstack([lg.q for lg in logs]))[:, :3, :3]
-    return logs, rotations, model.predict(np.vstack([lg.raw for lg in logs]))
+    return (logs, rotations, model.predict(np.vstack([lg.raw for lg in logs])),
+            np.concatenate([lg.timestamp for lg in logs]), _joined([lg.temperature for lg in logs]))
 
 
 def _log_poses(paths, model, robot) -> StaticPoses:
-    logs, rotations, wrenches = _run_logs(paths, model, robot)
-    temperature = _joined([lg.temperature for lg in logs])
+    logs, rotations, wrenches, time, temperature = _run_logs(paths, model, robot)
     # the rows of one pose of one log are samples of one static pose: held out together
     groups = np.concatenate([[f"{i}:{p}" for p in lg.pose] for i, lg in enumerate(logs)])
-    return StaticPoses([str(lg.path) for lg in logs], "run log", rotations, wrenches,
-                       np.concatenate([lg.timestamp for lg in logs]), temperature,
+    return StaticPoses([str(lg.path) for lg in logs], "run log", rotations, wrenches, time, temperature,
                        groups if np.unique(groups).size > 1 else None)
 
 
@@ -371,11 +361,9 @@ def static_poses(recording, *, model=None, robot=None, options: RecordingOptions
     """
     options = options or RecordingOptions()
     paths, kind = _one_kind(recording)
-    if kind == "ROS bag":
-        return _bag_poses(paths, model, robot, options, check_wrench)
-    if kind == "pose file":
-        return _pose_file_poses(paths, model, options, check_wrench)
-    return _log_poses(paths, model, robot)
+    if kind == "run log":
+        return _log_poses(paths, model, robot)
+    return _file_poses(paths, kind, model, robot, options, check_wrench)
 
 
 @dataclass
@@ -403,24 +391,21 @@ def recording_rows(recording, *, model=None, robot=None, options: RecordingOptio
     options = options or RecordingOptions()
     paths, kind = _one_kind(recording)
     if kind == "run log":
-        logs, rotations, wrenches = _run_logs(paths, model, robot)
-        lead = [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)]
-        return RecordingRows("timestamp,pose", lead, rotations, wrenches,
-                             np.concatenate([lg.timestamp for lg in logs]), _joined([lg.temperature for lg in logs]))
-    rotations, wrenches, times, temperatures, notes = [], [], [], [], []
+        logs, *rows = _run_logs(paths, model, robot)
+        return RecordingRows("timestamp,pose", [f"{t:.9g},{p}" for lg in logs for t, p in zip(lg.timestamp, lg.pose)],
+                             *rows)
+    parts, notes = [], []
     for path in paths:
         if kind == "pose file":
             rec, wrench = _pose_file_rows(path, model, options, check_wrench, notes)
             R, temperature = rec.rotation, rec.temperature
         else:
             rec, wrench = _bag_rows(path, model, options, check_wrench, notes)
-            R = rec.rotation if options.tf is not None else \
+            R = rec.rotation if rec.rotation is not None else \
                 sensor_pose_in_base(_need_robot(robot), bag_joints(rec, robot))[:, :3, :3]
             temperature = None
-        rotations.append(R)
-        wrenches.append(_to_sensor_frame(R, wrench, options))
-        times.append(rec.time)
-        temperatures.append(temperature)
+        parts.append((R, _to_sensor_frame(R, wrench, options), rec.time, temperature))
+    rotations, wrenches, times, temperatures = zip(*parts)
     time = _joined(times)
     n = sum(len(w) for w in wrenches)
     lead = [repr(float(t)) for t in time] if time is not None else [str(i) for i in range(1, n + 1)]
@@ -454,12 +439,10 @@ def bag_run_log(path, robot=None, *, options: RecordingOptions | None = None):
                                     settings={"raw_topic": NO_SETTING, "raw_field": NO_SETTING})
     notes: list = []
     rec = _read_bag(path, options, notes, wrench=False)
+    still = _bag_still(options, path, rec, rec.reading, robot)
     if rec.rotation is not None:  # tf: the orientation recorded, no joints and no robot model needed
-        still = _still(options, str(path), rec.time, rec.reading, rotations=rec.rotation)
         q, rotation, frame, name = np.empty((still.n_kept, 0)), still.rotation, None, getattr(robot, "name", None)
     else:
-        robot = _need_robot(robot)
-        still = _still(options, str(path), rec.time, rec.reading, joints=bag_joints(rec, robot))
         q, rotation, frame, name = still.joints, None, robot.sensor_frame, robot.name
     k = still.n_kept
     log = RunLog(path=path, timestamp=still.time, run_kind=np.array([match.group(2)] * k),

@@ -19,6 +19,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ..core._exceptions import CalibrationInputError
+from ._drift import fit_gravity_blocks, held_out_residual, per_pose_mean, spline_basis
+from ._mounting import Observability, _jacobian, block_observability
+from ._tool_load import _check_inputs, _gravity_in_sensor, identify_tool_load
+
 __all__ = ["FrameCheck", "check_wrench_frame", "OrderDrift", "drift_in_recording_order", "FRAME_RATIO",
            "tool_load_observability"]
 
@@ -60,8 +65,8 @@ class FrameCheck:
 def _other_frame_wrench(R: NDArray, W: NDArray, declared: str) -> NDArray:
     """The wrench (sensor frame under ``declared``) as it would be in the sensor frame had the input been written
     in the other frame."""
-    turn = "nji,nj->ni" if declared == "sensor" else "nij,nj->ni"  # Rᵀ (the input was in base) or R (in sensor)
-    return np.hstack([np.einsum(turn, R, W[:, :3]), np.einsum(turn, R, W[:, 3:])])
+    turn = "nji,nkj->nki" if declared == "sensor" else "nij,nkj->nki"  # Rᵀ (the input was in base) or R (in sensor)
+    return np.einsum(turn, R, W.reshape(-1, 2, 3)).reshape(-1, 6)  # force and torque turned alike
 
 
 def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declared: str = "sensor", *,
@@ -101,10 +106,6 @@ def check_wrench_frame(sensor_rotations: ArrayLike, wrenches: ArrayLike, declare
     >>> check.other_fits_better, check.other, check.residual_other.round(9).tolist()
     (True, 'sensor', [0.0, 0.0])
     """
-    from ._drift import fit_gravity_blocks
-    from ._tool_load import _check_inputs, _gravity_in_sensor
-    from ..core._exceptions import CalibrationInputError
-
     if declared not in _FRAMES:
         raise CalibrationInputError(f"declared must be 'sensor' or 'base'; got {declared!r}.", parameter="declared",
                                     value=declared)
@@ -190,9 +191,6 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
     >>> found.description, bool(found.held_out_drift[0] < found.held_out_constant[0] - found.paired_se[0])
     ('linear in time', True)
     """
-    from ._drift import held_out_residual, per_pose_mean, spline_basis
-    from ._tool_load import _check_inputs, _gravity_in_sensor, identify_tool_load
-
     R, W = _check_inputs(sensor_rotations, wrenches)
     if groups is not None:
         groups = np.asarray(groups)
@@ -211,13 +209,11 @@ def drift_in_recording_order(sensor_rotations: ArrayLike, wrenches: ArrayLike, g
                             random_state=random_state)
     if e_c is None or e_d is None:
         return None
-    rms_c, rms_d, se = np.zeros(2), np.zeros(2), np.zeros(2)
-    for block, sl in enumerate((slice(0, 3), slice(3, 6))):
-        f_c = per_pose_mean(np.mean(e_c[:, sl] ** 2, axis=1), groups)
-        f_d = per_pose_mean(np.mean(e_d[:, sl] ** 2, axis=1), groups)
-        rms_c[block], rms_d[block] = np.sqrt(f_c.mean()), np.sqrt(f_d.mean())
-        u = f_c / (2 * max(rms_c[block], 1e-300)) - f_d / (2 * max(rms_d[block], 1e-300))  # delta method
-        se[block] = u.std(ddof=1) / np.sqrt(u.size) if u.size > 1 else np.inf
+    # each pose's mean squared force and torque error (poses, 2), with a constant bias and with the drift
+    f_c, f_d = (per_pose_mean(np.mean(e.reshape(-1, 2, 3) ** 2, axis=2), groups) for e in (e_c, e_d))
+    rms_c, rms_d = np.sqrt(f_c.mean(axis=0)), np.sqrt(f_d.mean(axis=0))
+    u = f_c / (2 * np.maximum(rms_c, 1e-300)) - f_d / (2 * np.maximum(rms_d, 1e-300))  # delta method
+    se = u.std(axis=0, ddof=1) / np.sqrt(len(u)) if len(u) > 1 else np.full(2, np.inf)
     if not ((rms_c - rms_d) > se).any():
         return None
     return OrderDrift(description=drifting.drift.description, held_out_constant=rms_c, held_out_drift=rms_d,
@@ -263,9 +259,6 @@ def tool_load_observability(sensor_rotations: ArrayLike, gravity: ArrayLike = (0
     >>> obs.problems(), obs.block("mounting rotation").rank
     ([], 3)
     """
-    from ._mounting import Observability, _jacobian, block_observability
-    from ._tool_load import _check_inputs, _gravity_in_sensor
-
     R, _ = _check_inputs(sensor_rotations)
     g_s = _gravity_in_sensor(R, gravity)
     b = np.zeros((len(R), 0)) if basis is None else np.asarray(basis, dtype=float)

@@ -38,13 +38,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import CalibrationInputError
-from ..core._fields import number_field, numbers_field
+from ..core._fields import numbers_field
 from ..core._files import atomic_output
 from ..core._validation import check_quiet
 from ..core._wrench import MAX_LOAD_MASS_KG, WRENCH_LABELS
-from ._mounting import axis_text
+from ._mounting import axis_text, identify_mounting
 from ._drift import (_SECONDS_PER_HOUR, BiasDrift, DriftExtrapolationWarning, build_drift, fit_gravity_blocks,
-                     functional_se, held_out_residual, select_drift)
+                     functional_se, held_out_predictions, held_out_residual, mounting_matrix, pose_folds, select_drift)
 
 __all__ = ["ToolLoad", "identify_tool_load", "identification_summary", "MIN_TILT_DEG", "DEFAULT_GRAVITY", "ROTATION_TOLERANCE",
            "tool_gravity_compensation_yaml", "BiasDrift", "DriftExtrapolationWarning", "TOOL_FORMAT_VERSION",
@@ -64,13 +64,6 @@ MIN_TILT_DEG = 10.0
 #: Largest mounting rotation a tool holds [rad] (20 deg): a mounting error is a few degrees; a larger turn belongs
 #: in the robot model (``load_robot(sensor_mounting=...)``).
 MAX_MOUNTING_ROTATION_RAD = float(np.radians(20.0))
-
-
-def mounting_matrix(rotation_vector: ArrayLike) -> NDArray[np.float64]:
-    """The rotation matrix (3, 3) of a mounting rotation vector [rad] (the sensor's frame in the robot's)."""
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_rotvec(np.asarray(rotation_vector, dtype=float)).as_matrix()
 
 
 def _check_inputs(sensor_rotations: ArrayLike, wrenches: ArrayLike | None = None):
@@ -187,13 +180,17 @@ def _gravity_in_sensor(R: NDArray[np.float64], gravity: ArrayLike) -> NDArray[np
     return np.einsum("nji,j->ni", R, g)  # Rᵀ g per pose
 
 
-#: The tool file's key of each ToolLoad field.
-_FILE_KEYS = {"mass_std_error": "mass_std_error_kg", "mass": "mass_kg",
-              "center_of_mass_std_error": "center_of_mass_std_error_m", "center_of_mass": "center_of_mass_m",
-              "bias_std_error": "bias_std_error", "bias": "bias", "gravity": "gravity_m_s2",
-              "residual_rms": "residual_rms", "held_out_residual_rms": "held_out_residual_rms",
-              "mounting_rotation_std_error": "mounting_rotation_std_error_rad",
-              "mounting_rotation": "mounting_rotation_rad"}
+#: Each array field of a ToolLoad: its shape, whether it must be >= 0, and its key in the tool file (in the order
+#: of the checks and of the file's keys).
+_FIELDS = {"mass": ((), True, "mass_kg"), "center_of_mass": ((3,), False, "center_of_mass_m"),
+           "bias": ((6,), False, "bias"), "mass_std_error": ((), True, "mass_std_error_kg"),
+           "center_of_mass_std_error": ((3,), True, "center_of_mass_std_error_m"),
+           "bias_std_error": ((6,), True, "bias_std_error"), "gravity": ((3,), False, "gravity_m_s2"),
+           "residual_rms": ((2,), True, "residual_rms"), "held_out_residual_rms": ((2,), True, "held_out_residual_rms"),
+           "mounting_rotation": ((3,), False, "mounting_rotation_rad"),
+           "mounting_rotation_std_error": ((3,), True, "mounting_rotation_std_error_rad")}
+#: The fields a tool file must hold (the others have their defaults).
+_REQUIRED = ("mass", "center_of_mass", "bias")
 
 
 @dataclass(frozen=True)
@@ -258,18 +255,9 @@ class ToolLoad:
                     f"got {value!r}.")
             object.__setattr__(self, name, float(a) if shape == () else a)
 
-        array("mass", (), nonnegative=True)
-        array("center_of_mass", (3,))
-        array("bias", (6,))
-        array("mass_std_error", (), nonnegative=True)
-        array("center_of_mass_std_error", (3,), nonnegative=True)
-        array("bias_std_error", (6,), nonnegative=True)
-        array("gravity", (3,))
-        array("residual_rms", (2,), nonnegative=True)
-        if self.held_out_residual_rms is not None:
-            array("held_out_residual_rms", (2,), nonnegative=True)
-        array("mounting_rotation", (3,))
-        array("mounting_rotation_std_error", (3,), nonnegative=True)
+        for name, (shape, nonnegative, _) in _FIELDS.items():
+            if getattr(self, name) is not None or name != "held_out_residual_rms":
+                array(name, shape, nonnegative)
         if np.linalg.norm(self.mounting_rotation) > MAX_MOUNTING_ROTATION_RAD:
             raise CalibrationInputError(
                 f"ToolLoad mounting_rotation turns by {np.degrees(np.linalg.norm(self.mounting_rotation)):.3g} deg, "
@@ -391,21 +379,14 @@ class ToolLoad:
 
     def to_dict(self) -> dict:
         """JSON-able form (what :meth:`save` writes)."""
-        extra = {} if self.drift is None else {"drift": self.drift.to_dict()}
-        return {
-            "format": "ftcal-tool-load", "format_version": 1 if self.drift is None else TOOL_FORMAT_VERSION,
-            "mass_kg": self.mass, "center_of_mass_m": np.asarray(self.center_of_mass).tolist(),
-            "bias": np.asarray(self.bias).tolist(), "mass_std_error_kg": self.mass_std_error,
-            "center_of_mass_std_error_m": np.asarray(self.center_of_mass_std_error).tolist(),
-            "bias_std_error": np.asarray(self.bias_std_error).tolist(),
-            "gravity_m_s2": np.asarray(self.gravity).tolist(), "residual_rms": np.asarray(self.residual_rms).tolist(),
-            "held_out_residual_rms": None if self.held_out_residual_rms is None else
-            np.asarray(self.held_out_residual_rms).tolist(),
-            **({} if not np.any(self.mounting_rotation) else {
-                "mounting_rotation_rad": np.asarray(self.mounting_rotation).tolist(),
-                "mounting_rotation_std_error_rad": np.asarray(self.mounting_rotation_std_error).tolist()}),
-            **extra,
-        }
+        out = {"format": "ftcal-tool-load", "format_version": 1 if self.drift is None else TOOL_FORMAT_VERSION}
+        for name, (_, _, key) in _FIELDS.items():
+            out[key] = None if getattr(self, name) is None else np.asarray(getattr(self, name)).tolist()
+        if not np.any(self.mounting_rotation):
+            del out["mounting_rotation_rad"], out["mounting_rotation_std_error_rad"]
+        if self.drift is not None:
+            out["drift"] = self.drift.to_dict()
+        return out
 
     def save(self, path: str | os.PathLike, *, overwrite: bool = False) -> Path:
         """Write the tool file (JSON); an existing file is only replaced with ``overwrite=True``."""
@@ -433,28 +414,16 @@ class ToolLoad:
             raise CalibrationInputError(f"{path}: tool file format_version {str(version)[:20]} is not one this ftcal "
                                         f"reads (1, {TOOL_FORMAT_VERSION}); upgrade ftcal.")
         try:
-            def vector(key: str, n: int, default=None):  # typed: a bool or text is no number (core._fields)
-                return numbers_field(d[key] if default is None else d.get(key, default), key, (n,), where=str(path))
-
-            tool = cls(
-                mass=number_field(d["mass_kg"], "mass_kg", where=str(path)), center_of_mass=vector("center_of_mass_m", 3),
-                bias=vector("bias", 6),
-                mass_std_error=number_field(d.get("mass_std_error_kg", 0.0), "mass_std_error_kg", where=str(path)),
-                center_of_mass_std_error=vector("center_of_mass_std_error_m", 3, [0.0] * 3),
-                bias_std_error=vector("bias_std_error", 6, [0.0] * 6),
-                gravity=vector("gravity_m_s2", 3, list(DEFAULT_GRAVITY)),
-                residual_rms=vector("residual_rms", 2, [0.0, 0.0]),
-                held_out_residual_rms=None if d.get("held_out_residual_rms") is None else
-                vector("held_out_residual_rms", 2),
-                mounting_rotation=vector("mounting_rotation_rad", 3, [0.0] * 3),
-                mounting_rotation_std_error=vector("mounting_rotation_std_error_rad", 3, [0.0] * 3),
-                drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]),
-            )
+            # typed: a bool or text is no number (core._fields); a field not written keeps its default
+            fields = {name: numbers_field(d[key], key, shape, where=str(path)) for name, (shape, _, key) in
+                      _FIELDS.items() if name in _REQUIRED
+                      or (key in d and (d[key] is not None or name != "held_out_residual_rms"))}
+            tool = cls(**fields, drift=None if d.get("drift") is None else BiasDrift.from_dict(d["drift"]))
         except CalibrationInputError as exc:  # a field out of range (ToolLoad checks them all): name its JSON key
             if str(exc).startswith(f"{path}: "):  # a field's type, said by core._fields with the file's name
                 raise
             text = str(exc)
-            for field_name, key in _FILE_KEYS.items():
+            for field_name, (_, _, key) in _FIELDS.items():
                 text = text.replace(f"ToolLoad {field_name} ", f"{key} ", 1)
             raise CalibrationInputError(f"{path}: {text}") from None
         except KeyError as exc:
@@ -491,7 +460,7 @@ def wrench_in_sensor_frame(sensor_rotations: ArrayLike, wrenches_in_base: ArrayL
     [[0.0, 0.0, 9.81, 1.0, 0.0, 0.0]]
     """
     R, W = _check_inputs(sensor_rotations, wrenches_in_base)
-    return np.hstack([np.einsum("nji,nj->ni", R, W[:, :3]), np.einsum("nji,nj->ni", R, W[:, 3:])])
+    return np.einsum("nji,nkj->nki", R, W.reshape(-1, 2, 3)).reshape(-1, 6)  # Rᵀ F and Rᵀ τ
 
 
 def _check_poses(g_s: NDArray[np.float64], groups: ArrayLike | None) -> NDArray | None:
@@ -628,8 +597,6 @@ def identify_tool_load(
         raise _zero_mass_error(fit["mass"], mass_se, declared_frame, gravity)
     rotation, rotation_cov, joint_cov, g_robot = np.zeros(3), np.zeros((3, 3)), None, g_s
     if mounting:
-        from ._mounting import identify_mounting
-
         g_s, rotation, rotation_cov, joint_cov = identify_mounting(g_s, W, basis, fit, groups)
         fit = fit_gravity_blocks(g_s, W, basis, groups)  # the tool given the rotation (the optimum's linear part)
     f_se = np.sqrt(np.maximum(np.diag(fit["force_cov"]), 0.0))
@@ -660,11 +627,6 @@ def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups
     """Each row's leave-poses-out residual (n, 6) with the mounting rotation fitted again on every fold's training
     poses (a rotation fitted on all poses would see the held-out ones); a fold whose poses cannot tell the
     rotation apart keeps the all-poses rotation. ``None`` when a fold cannot be fitted."""
-    from scipy.spatial.transform import Rotation
-
-    from ._drift import held_out_predictions, pose_folds
-    from ._mounting import identify_mounting
-
     residual = np.empty_like(W)
     for train, test in pose_folds(len(W), groups, cv, random_state):
         sub = None if groups is None else groups[train]
@@ -674,7 +636,7 @@ def _held_out_with_mounting(g_robot: NDArray, W: NDArray, basis: NDArray, groups
             r = identify_mounting(g_robot[train], W[train], basis[train], start, sub)[1]
         except (CalibrationInputError, np.linalg.LinAlgError):
             pass
-        pred = held_out_predictions(g_robot @ Rotation.from_rotvec(r).as_matrix(), W, basis, [(train, test)])
+        pred = held_out_predictions(g_robot @ mounting_matrix(r), W, basis, [(train, test)])
         if pred is None:
             return None
         residual[test] = W[test] - pred[test]
@@ -842,11 +804,11 @@ def identification_summary(sensor_rotations: ArrayLike, wrenches: ArrayLike, too
     rate = None
     if d is not None:
         per = {"s": (_SECONDS_PER_HOUR, "h"), "pose": (1.0, "pose"), "degC": (1.0, "deg C")}[d.unit]
-        rate = {"force": (d.mean_rate[:3] * per[0]).tolist(), "force_std_error": (d.mean_rate_std_error[:3] * per[0]).tolist(),
-                "torque": (d.mean_rate[3:] * per[0]).tolist(),
-                "torque_std_error": (d.mean_rate_std_error[3:] * per[0]).tolist(),
-                "unit_force": f"N/{per[1]}", "unit_torque": f"N·m/{per[1]}",
-                "meaning": "the drift's mean rate over the span (end minus start over the span's length)"}
+        halves = (("force", slice(3)), ("torque", slice(3, 6)))
+        rate = {f"{part}{what}": (v[sl] * per[0]).tolist() for part, sl in halves
+                for what, v in (("", d.mean_rate), ("_std_error", d.mean_rate_std_error))}
+        rate.update(unit_force=f"N/{per[1]}", unit_torque=f"N·m/{per[1]}",
+                    meaning="the drift's mean rate over the span (end minus start over the span's length)")
     listed = len(W) <= MAX_LISTED_POSES
 
     def norms(residual: NDArray) -> dict:

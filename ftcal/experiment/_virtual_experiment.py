@@ -75,33 +75,14 @@ class MountingDevice:
     center_of_mass_in_sensor: tuple[float, float, float] = (0.09, 0.0, 0.045)
 
 
-def _default_zero_offset(sensor_profile, rng: np.random.Generator) -> NDArray[np.float64]:
-    """Raw image of a random tare wrench of 0.5 % of the full scale per axis."""
-    fs = np.array([sensor_profile.fmax] * 3 + [sensor_profile.tmax] * 3)
-    tare = rng.normal(0.0, 0.005, 6) * fs
-    return sensor_profile.reading_from_wrench(tare[None])[0]
-
-
 def simulate_experiment(
-    out_dir: str | Path,
-    *,
-    robot: RobotModel | str | Path = "kuka_iiwa14",
-    load_mass: float = DEFAULT_LOAD_MASS_KG,
-    load_configurations: Sequence[LoadConfiguration] | None = None,
-    sensor: VirtualSensor | None = None,
-    errors: str = "thesis",
-    mounting: MountingDevice = MountingDevice(),
-    plan: CalibrationPlan | None = None,
-    subdivisions: int = THESIS_SUBDIVISIONS,
-    excluded_cap_deg: float = THESIS_EXCLUDED_CAP_DEG,
-    joint_error_max: float = THESIS_JOINT_ERROR_RAD,
-    load_pose_jitter_deg: float = 0.1,
-    samples_per_pose: int = 1,
-    gravity_in_base: ArrayLike = GRAVITY_IN_BASE,
-    random_state: int | None = None,
-    overwrite: bool = False,
-    thermal_drift: ThermalDrift | str | None = None,
-    temperature_range_deg: tuple[float, float] = (20.0, 30.0),
+    out_dir: str | Path, *, robot: RobotModel | str | Path = "kuka_iiwa14", load_mass: float = DEFAULT_LOAD_MASS_KG,
+    load_configurations: Sequence[LoadConfiguration] | None = None, sensor: VirtualSensor | None = None,
+    errors: str = "thesis", mounting: MountingDevice = MountingDevice(), plan: CalibrationPlan | None = None,
+    subdivisions: int = THESIS_SUBDIVISIONS, excluded_cap_deg: float = THESIS_EXCLUDED_CAP_DEG,
+    joint_error_max: float = THESIS_JOINT_ERROR_RAD, load_pose_jitter_deg: float = 0.1, samples_per_pose: int = 1,
+    gravity_in_base: ArrayLike = GRAVITY_IN_BASE, random_state: int | None = None, overwrite: bool = False,
+    thermal_drift: ThermalDrift | str | None = None, temperature_range_deg: tuple[float, float] = (20.0, 30.0),
     temperature_profile: Callable[[NDArray[np.float64]], ArrayLike] | None = None,
     bias_drift: Callable[[NDArray[np.float64]], ArrayLike] | None = None,
 ) -> list[Path]:
@@ -188,7 +169,8 @@ def simulate_experiment(
     rng = np.random.default_rng(random_state)
     if sensor is None:
         sensor = VirtualSensor(errors=errors, random_state=rng)
-        sensor.zero_offset = _default_zero_offset(sensor.profile, rng)
+        tare = rng.normal(0.0, 0.005, 6) * np.array([sensor.profile.fmax] * 3 + [sensor.profile.tmax] * 3)
+        sensor.zero_offset = sensor.profile.reading_from_wrench(tare[None])[0]  # a tare of 0.5 % of the full scale
     if plan is None:
         plan = plan_calibration_poses(robot, subdivisions=subdivisions, excluded_cap_deg=excluded_cap_deg,
                                       gravity_in_base=gravity_in_base)
@@ -222,19 +204,14 @@ def simulate_experiment(
         "joint_error_max_rad": joint_error_max, "load_pose_jitter_deg": load_pose_jitter_deg,
         "sensor_errors": sensor.errors_.to_dict() if hasattr(sensor.errors_, "to_dict") else repr(sensor.errors_),
         "zero_offset": np.asarray(sensor.zero_offset).tolist(), "random_state": random_state,
-        "thermal_drift": _drift_facts(thermal_drift, temperature_range_deg), "plan": plan.settings,
+        "thermal_drift": None if thermal_drift is None else {
+            "offset_per_deg": thermal_drift.offset_per_deg.tolist(),
+            "gain_per_deg": thermal_drift.gain_per_deg.tolist(),
+            "reference_temperature": thermal_drift.reference_temperature,
+            "temperature_range_deg": list(temperature_range_deg)}, "plan": plan.settings,
     }
     (out / "virtual_experiment.json").write_text(json.dumps(truth, indent=2, default=str), encoding="utf-8")
     return paths
-
-
-def _drift_facts(thermal_drift: ThermalDrift | None, temperature_range_deg: tuple[float, float]) -> dict | None:
-    """The simulated thermal drift as the truth file records it (None: no drift)."""
-    if thermal_drift is None:
-        return None
-    return {"offset_per_deg": thermal_drift.offset_per_deg.tolist(),
-            "gain_per_deg": thermal_drift.gain_per_deg.tolist(), "reference_temperature": thermal_drift.reference_temperature,
-            "temperature_range_deg": list(temperature_range_deg)}
 
 
 def _check_arguments(load_mass: float, samples_per_pose: int, joint_error_max: float, load_pose_jitter_deg: float,

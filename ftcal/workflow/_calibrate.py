@@ -6,8 +6,6 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable
 
-import numpy as np
-
 from ..calibrators._base import calibration_tags
 from ..compose._auto import check_calibration
 from ..compose._registry import make_calibrator
@@ -44,11 +42,6 @@ class Calibration:
     plan: FoldPlan
     certificate: Any = None
     seconds: float = 0.0
-
-
-def _inputs(estimator, dataset: CalibrationDataset) -> np.ndarray:
-    """The raw channels, plus the temperature column for a model that reads it (its tags)."""
-    return dataset.features(temperature=True) if calibration_tags(estimator).temperature_column else dataset.raw
 
 
 def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool = False, cv: int = 5,
@@ -109,7 +102,8 @@ def calibrate(dataset: CalibrationDataset, model: Any = "auto", *, certify: bool
                         "estimator instead.")
     else:
         estimator = model
-    X = _inputs(estimator, dataset)
+    # the raw channels, plus the temperature column for a model that reads it (its tags)
+    X = dataset.features(temperature=True) if calibration_tags(estimator).temperature_column else dataset.raw
     axes = tuple(dataset.axes)
     y = named_targets(dataset.wrench, None if axes == default_axes(len(axes)) else axes)
     fit_params = {"groups": dataset.group} if dataset.group is not None and requests_groups(estimator) else {}
