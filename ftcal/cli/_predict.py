@@ -13,7 +13,8 @@ from ._common import (CliError, Console, OutputPlan, add_output_file_options, ex
                       int_in_range, path_problem)
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, print_reading_findings,
                             readings_input)
-from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
+from ._readings import (iter_reading_chunks, located_error, read_readings_npz, takes_temperature, utf8_lines,
+                        write_wrench_rows)
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
 
@@ -331,7 +332,12 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = 
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
-        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, temperature=temperature, names=names)
+        stream = utf8_lines(sys.stdin)
+        try:
+            yield from iter_reading_chunks(stream, "stdin", n_channels, chunk, temperature=temperature, names=names)
+        finally:
+            if stream is not sys.stdin:
+                stream.detach()  # standard input stays open for the caller
     elif Path(source).suffix.lower() in (".npz", ".mat"):
         if channels is None and Path(source).suffix.lower() == ".npz":
             raw = read_readings_npz(source, n_channels)
@@ -351,5 +357,5 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = 
         for start in range(0, len(raw), chunk):
             yield raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))
     else:
-        with open(source, encoding="utf-8") as fh:
+        with open(source, encoding="utf-8", errors="surrogateescape", newline="") as fh:
             yield from iter_reading_chunks(fh, source, n_channels, chunk, temperature=temperature, names=names)
