@@ -138,12 +138,6 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
     columns = getattr(args, "columns", None)
     texts = [i for i in items if i != "-" and Path(i).is_file()
              and Path(i).suffix.lower() not in (".npz", ".mat", ".bag", ".mcap", ".db3", ".json")]
-    spell = cli_spelling(args)
-
-    def said(exc) -> str:
-        return " ".join(exc.render(lambda name, setting: "--columns" if name == "columns" else
-                                   spell(name, setting)).split())
-
     try:
         if columns is None:
             if header_needed:
@@ -160,7 +154,7 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
                            "text files only, or drop --columns)")
         table = join_headerless(texts, columns)
     except DatasetFileError as exc:
-        raise CliError(said(exc)) from None
+        raise cli_error(exc, args) from None
     folder = Path(tempfile.mkdtemp(prefix="ftcal-columns-"))
     atexit.register(shutil.rmtree, folder, True)
     joined = folder / f"{table.name}.csv"

@@ -73,21 +73,19 @@ def run(args: argparse.Namespace) -> int:
     suffixes = {"onnx": (".onnx",), "ros": (".yaml", ".yml")}.get(args.format)
     if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
-    tool = ftcal.experiment.ToolLoad.load(args.model) if args.format == "ros" or (is_tool and args.format == "onnx") \
-        else None
-    if args.format == "ros":
-        from ..experiment import tool_gravity_compensation_yaml
+    if args.format == "ros" or (is_tool and args.format == "onnx"):
+        from ..experiment import tool_gravity_compensation_yaml, tool_onnx_model
 
-        text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
-        plan.write_text(output.name, text)
-        console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
-        return 0
-    if is_tool and args.format == "onnx":
-        from ..experiment import tool_onnx_model
-
+        tool = ftcal.experiment.ToolLoad.load(args.model)
+        if args.format == "ros":
+            text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
+            plan.write_text(output.name, text)
+            console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
+            return 0
         with plan.writing(output.name) as tmp:
             tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
-        console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")
+        drift = "" if tool.drift is None else f" with its {tool.drift.description} bias drift"
+        console.info(f"exported the tool's compensation{drift} (ONNX) to {output}")
         return 0
     model = ftcal.load_model(args.model)
     if args.format == "matrix":

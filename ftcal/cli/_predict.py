@@ -167,8 +167,7 @@ def run(args: argparse.Namespace) -> int:
     from functools import partial
 
     import ftcal
-    from ..compose import history_reach, reads_history, spread_flags
-    from ..compose import provides_std
+    from ..compose import history_reach, provides_std, reads_history, spread_flags
 
     if args.drop_bad_readings is not None:
         raise CliError(f"--drop-bad-readings {args.drop_bad_readings}: predict writes one wrench per input line, in "
@@ -222,7 +221,6 @@ def run(args: argparse.Namespace) -> int:
     checking = args.input != "-" and chunk > 1
     findings: list = []
     excess: list = []  # per chunk, the readings beyond --range
-    range_names = partial(_range_names, channels, temperature)
 
     def emit(out) -> int:
         total = 0
@@ -247,7 +245,8 @@ def run(args: argparse.Namespace) -> int:
             if limits is not None:
                 # no tolerance from the readings: a chunk's (a line's) own noise would make the flags depend on the
                 # chunk size; they are the model's own out_of_range (exact edges)
-                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1]), tolerance=0.0))
+                names = _range_names(channels, temperature, raw.shape[1])
+                excess.append(range_excess(raw, limits[0], limits[1], names, tolerance=0.0))
                 flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
@@ -264,8 +263,7 @@ def run(args: argparse.Namespace) -> int:
         return total
 
     if plan is None:
-        total = emit(sys.stdout)
-        sys.stdout.flush()
+        total = emit(sys.stdout)  # flushed line by line
     else:
         with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
             total = emit(fh)

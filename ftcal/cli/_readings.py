@@ -180,16 +180,14 @@ def _not_utf8(source: str, line_no: int, line: str, offset: int) -> CliError:
     import codecs
 
     data = line.encode("utf-8", "surrogateescape")
-    name = Path(source).name
-    fixed = f"{Path(source).stem}-utf8{Path(source).suffix}"
+    utf16 = line_no == 1 and data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+    iconv, path = f"iconv -f {'UTF-16' if utf16 else 'LATIN1'} -t UTF-8", Path(source)
+    fix = f"pipe it through {iconv}" if source == "stdin" else \
+        f"save it as UTF-8, e.g. {iconv} {path.name} > {path.stem}-utf8{path.suffix}"
     what = "raw readings are a text file in UTF-8 (or a .npz with array 'raw')"
-    if line_no == 1 and data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
-        fix = "pipe it through iconv -f UTF-16 -t UTF-8" if source == "stdin" else \
-            f"save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 {name} > {fixed}"
+    if utf16:
         return CliError(f"{source}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what}. Fix: "
                         f"{fix}.")
-    fix = "pipe it through iconv -f LATIN1 -t UTF-8" if source == "stdin" else \
-        f"save it as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 {name} > {fixed}"
     try:
         data.decode("utf-8")
     except UnicodeDecodeError as exc:  # always: the surrogates stand for bytes that are not UTF-8
