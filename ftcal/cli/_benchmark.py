@@ -242,7 +242,7 @@ def run_artificial(args: argparse.Namespace) -> int:
 
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))
-    baselines = not args.models if args.baselines is None else args.baselines
+    baselines = STOCK_BASELINE_NAMES if (not args.models if args.baselines is None else args.baselines) else ()
     n_jobs = -1 if args.scheduler else args.jobs  # on a cluster: as many tasks at once as it has workers
     with dask_backend(args.scheduler), console.progress(total=None, desc="fits", unit="fit") as bar:
 
@@ -252,7 +252,7 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
         result = ftcal.benchmark.run_artificial_benchmark(
-            n_datasets=args.n_datasets, presets=presets, models=_models(args) + (STOCK_BASELINE_NAMES if baselines else ()), schedule=args.schedule,
+            n_datasets=args.n_datasets, presets=presets, models=_models(args) + baselines, schedule=args.schedule,
             test_distribution=args.test_distribution, seed=args.seed, n_jobs=n_jobs, out_dir=args.out,
             quick=args.quick, progress=progress, force=args.force, stack=args.stack)
     md = result.get("files", {}).get("markdown")  # the benchmark's markdown tables (its .md file) on stdout

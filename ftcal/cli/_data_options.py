@@ -415,12 +415,11 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
         if not quiet:
             print(f"ftcal: {path}: no rows with {said.split(' (')[0]}; none dropped", file=sys.stderr)
         return data
-    entries = _saturated_entries(data, drop, said)
     if drop.all():
         raise CliError(f"{path}: --exclude-saturated would drop every one of the {data.n_samples} rows ({said}); "
                        "check the limits")
     kept = data.subset(~drop)
-    _record(kept, "readings_dropped", entries)
+    _record(kept, "readings_dropped", _saturated_entries(data, drop, said))
     if not quiet:
         print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
     return kept

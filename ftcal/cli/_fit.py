@@ -195,10 +195,8 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is not None and "n_jobs" not in known and not args.report:
         raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does, and the "
                        "report's stock baselines with --report); drop --jobs")
-    if "n_jobs" in known and "n_jobs" not in params:
-        params["n_jobs"] = args.jobs or -1
-    if "cv" in known and "cv" not in params:
-        params["cv"] = args.cv  # auto chooses on the folds its report shows
+    # auto scores its candidates on every core unless --jobs says, on the folds its report shows
+    params.update({k: v for k, v in (("n_jobs", args.jobs or -1), ("cv", args.cv)) if k in known and k not in params})
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")

@@ -163,7 +163,8 @@ def _refuse_other_separator(text: str, rest, where: str) -> None:
            else f"{said} to ',', e.g. tr '{typed}' ','")
     raise CliError(f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
                    f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal "
-                   f"reads comma-separated values with decimal points. Fix: convert the file: {how} < IN.csv > OUT.csv.")
+                   "reads comma-separated values with decimal points. Fix: convert the file: "
+                   f"{how} < IN.csv > OUT.csv.")
 
 
 def utf8_lines(stream: IO[str]) -> IO[str]:

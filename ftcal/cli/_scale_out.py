@@ -107,16 +107,13 @@ def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> Non
 
 
 @contextlib.contextmanager
-def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
-                 timeout_s: float = CONNECT_TIMEOUT_S) -> Iterator[object | None]:
+def dask_backend(scheduler: str | None, *, timeout_s: float = CONNECT_TIMEOUT_S) -> Iterator[object | None]:
     """Within the block, joblib runs its tasks on the Dask cluster ``scheduler`` (``None``: unchanged).
 
     Parameters
     ----------
     scheduler : str or None
-        ``"local"`` for a ``LocalCluster`` on this machine, or a scheduler address.
-    n_workers : int or None
-        Workers of the local cluster (default: one per core).
+        ``"local"`` for a ``LocalCluster`` on this machine (one worker per core), or a scheduler address.
     timeout_s : float
         How long to try to reach a remote scheduler [s].
 
@@ -142,7 +139,7 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None)
             client = Client(cluster)
         else:
             probe_scheduler(scheduler, timeout_s)
