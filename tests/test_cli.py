@@ -221,6 +221,57 @@ def test_predict_line_buffered_and_headed_input(affine_dir, capsys, monkeypatch)
     np.testing.assert_allclose(np.loadtxt(io.StringIO(out), delimiter=",", ndmin=2), w, atol=1e-5)
 
 
+@pytest.mark.parametrize("sep, decimal", [("\t", "."), ("\t", ","), (";", ".")])
+def test_predict_refuses_tab_or_semicolon_readings_in_the_words_fit_refuses_them(tmp_path, affine_dir, capsys,
+                                                                                 monkeypatch, sep, decimal):
+    import subprocess
+
+    text = (affine_dir / "test.csv").read_text()
+    other = "".join(line.replace(",", "\0").replace(".", decimal).replace("\0", sep) + "\n"
+                    for line in text.splitlines() if not line.startswith("#"))
+    (tmp_path / "IN.csv").write_text(other)
+    assert main(["fit", str(tmp_path / "IN.csv"), "--model", "linear", "--out", str(tmp_path / "m")]) == 2
+    refused = one_error_line(capsys)
+    model = str(affine_dir / "models" / "linear.model.npz")
+    assert main(["predict", model, str(tmp_path / "IN.csv")]) == 2
+    assert one_error_line(capsys) == refused  # the same words
+    monkeypatch.setattr("sys.stdin", io.StringIO(other))
+    assert main(["predict", model]) == 2
+    assert one_error_line(capsys) == refused.replace(str(tmp_path / "IN.csv"), "stdin")
+    command = refused.split(", e.g. ", 1)[1].rstrip(".")  # the advice followed, as written
+    subprocess.run(command, shell=True, cwd=tmp_path, check=True)
+    assert main(["predict", model, str(tmp_path / "OUT.csv"), "--output", str(tmp_path / "w.csv"), "-q"]) == 0
+    assert len((tmp_path / "w.csv").read_text().splitlines()) == 1 + 25
+
+
+def test_predict_names_the_line_byte_and_conversion_of_a_file_that_is_not_utf8(tmp_path, affine_dir, capsys):
+    src = tmp_path / "raw.csv"
+    lines = [b"# reading at 20 \xb0C", b"1,2,3,4,5,6"]  # a Latin-1 degree sign in a comment
+    src.write_bytes(b"\n".join(lines) + b"\n")
+    model = str(affine_dir / "models" / "linear.model.npz")
+    assert main(["predict", model, str(src)]) == 2
+    line = one_error_line(capsys)
+    assert f"{src}: line 1 (byte 16): not UTF-8 text (invalid start byte)" in line
+    assert "Fix: save it as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 raw.csv > raw-utf8.csv" in line
+    src.write_bytes(b"1,2,3,4,5,6\r\n" * 3 + b"1,2,3,4,5,6 \xe9\n")  # byte 3 * 13 + 12: CR LF counted
+    assert main(["predict", model, str(src)]) == 2
+    assert f"{src}: line 4 (byte 51): not UTF-8 text" in one_error_line(capsys)
+    src.write_bytes("s0,s1,s2,s3,s4,s5\n1,2,3,4,5,6\n".encode("utf-16"))
+    assert main(["predict", model, str(src)]) == 2
+    assert "UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8" in one_error_line(capsys)
+
+
+def test_predict_names_the_byte_of_standard_input_that_is_not_utf8(affine_dir):
+    import subprocess
+    import sys
+
+    proc = subprocess.run([sys.executable, "-m", "ftcal", "predict", str(affine_dir / "models" / "linear.model.npz")],
+                          input=b"1,2,3,4,5,6\n1,2,3,\xff,5,6\n", capture_output=True)
+    assert proc.returncode == 2
+    assert "stdin: line 2 (byte 18): not UTF-8 text (invalid start byte)" in proc.stderr.decode()
+    assert "iconv -f LATIN1 -t UTF-8" in proc.stderr.decode()
+
+
 def test_predict_bad_line_names_source_and_line(tmp_path, affine_dir, capsys):
     src = tmp_path / "raw.txt"
     src.write_text("1,2,3,4,5,6\n1,2,3,4,5,6\n1,2,x,4,5,6\n")

@@ -235,19 +235,14 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(dict.fromkeys(args.models or ("linear", "comparative", "directional")))
 
 
-def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
-    from ..calibrators import STOCK_BASELINE_NAMES
-
-    baselines = not args.models if args.baselines is None else args.baselines
-    return _models(args) + (STOCK_BASELINE_NAMES if baselines else ())
-
-
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
+    from ..calibrators import STOCK_BASELINE_NAMES
     from ._scale_out import dask_backend
 
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))
+    baselines = STOCK_BASELINE_NAMES if (not args.models if args.baselines is None else args.baselines) else ()
     n_jobs = -1 if args.scheduler else args.jobs  # on a cluster: as many tasks at once as it has workers
     with dask_backend(args.scheduler), console.progress(total=None, desc="fits", unit="fit") as bar:
 
@@ -257,10 +252,13 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
         result = ftcal.benchmark.run_artificial_benchmark(
-            n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
+            n_datasets=args.n_datasets, presets=presets, models=_models(args) + baselines, schedule=args.schedule,
             test_distribution=args.test_distribution, seed=args.seed, n_jobs=n_jobs, out_dir=args.out,
             quick=args.quick, progress=progress, force=args.force, stack=args.stack)
-    _print_markdown(result, console, args.out)
+    md = result.get("files", {}).get("markdown")  # the benchmark's markdown tables (its .md file) on stdout
+    if md and Path(md).is_file():
+        print(Path(md).read_text(encoding="utf-8").rstrip())
+    console.info(f"results in {args.out}/: " + ", ".join(Path(p).name for p in result.get("files", {}).values()))
     return 0
 
 
@@ -287,11 +285,3 @@ def run_real_world(args: argparse.Namespace) -> int:
     print(markdown)
     console.info(f"results in {args.out}/: " + ", ".join(files) + " and the run logs in logs/")
     return 0
-
-
-def _print_markdown(result: dict, console: Console, out: Path) -> None:
-    """Print the benchmark's markdown tables (its .md file) on stdout."""
-    md = result.get("files", {}).get("markdown")
-    if md and Path(md).is_file():
-        print(Path(md).read_text(encoding="utf-8").rstrip())
-    console.info(f"results in {out}/: " + ", ".join(Path(p).name for p in result.get("files", {}).values()))

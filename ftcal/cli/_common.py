@@ -30,8 +30,8 @@ from ..core import OutputSet, atomic_output, atomic_output_set, check_writable_d
 from ._messages import CliError, UsageError  # noqa: F401  (defined beside the messages; re-exported for every command)
 
 __all__ = ["CliError", "UsageError", "Interrupted", "signals_interrupt", "standard_streams", "Parser", "EXIT_USAGE",
-           "EXIT_FAILURE", "add_output_options", "add_output_file_options", "add_name_option", "file_stem",
-           "add_run_options", "finish_command", "add_jobs_option", "add_scheduler_option", "add_robot_options",
+           "EXIT_FAILURE", "add_output_file_options", "add_name_option", "file_stem", "finish_command",
+           "add_jobs_option", "add_scheduler_option", "add_robot_options",
            "load_robot_from_args", "OutputPlan", "note_inputs", "note_dataset", "name_the_dataset",
            "check_not_an_input", "Console", "write_json", "numbers", "positive_int", "nonnegative_int",
            "positive_float", "int_in_range", "existing_file", "path_problem"]
@@ -184,8 +184,7 @@ class _CheckedStdout:
         return self._checked("write", text)
 
     def writelines(self, lines: Iterable[str]) -> None:
-        for line in lines:
-            self.write(line)
+        self._checked("writelines", lines)
 
     def flush(self) -> None:
         self._checked("flush")
@@ -324,14 +323,6 @@ def add_name_option(parser: argparse.ArgumentParser, what: str, default: str | N
     parser.add_argument("--name", type=file_stem, default=default, help=f"file name stem of {what}")
 
 
-def add_output_options(parser: argparse.ArgumentParser, default_out: str) -> None:
-    """``--out DIR`` and ``--force``."""
-    parser.add_argument("-o", "--out", type=Path, default=Path(default_out), metavar="DIR",
-                        help="directory for the output files (created if missing)")
-    parser.add_argument("-f", "--force", action="store_true",
-                        help="overwrite output files that already exist (without it, the run stops before any work)")
-
-
 def add_output_file_options(parser: argparse.ArgumentParser) -> None:
     """``--output FILE`` (``-``: standard output, the default) and ``--force``: a command writing one stream of rows."""
     parser.add_argument("--output", default="-", metavar="FILE", help="where the wrenches go; '-' is stdout")
@@ -359,13 +350,14 @@ def load_robot_from_args(args: argparse.Namespace):
     """
     import ftcal
 
+    failure = None
     with _captured_stderr_fd() as captured:
         try:
-            model = ftcal.robot.load_robot(args.robot, sensor_frame=args.sensor_frame, sensor_mounting=args.sensor_mounting)
+            model = ftcal.robot.load_robot(args.robot, sensor_frame=args.sensor_frame,
+                                           sensor_mounting=args.sensor_mounting)
         except (FtcalError, ValueError) as exc:
-            failure, text = exc, captured()
-        else:
-            failure, text = None, captured()
+            failure = exc
+        text = captured()
     if failure is not None:
         errors = [line.split("Error:", 1)[1].strip() for line in text.splitlines() if line.strip().startswith("Error:")]
         if not errors:
@@ -451,20 +443,19 @@ def add_jobs_option(parser, help: str, default: int | None = None) -> None:
     parser.add_argument("--jobs", type=int_in_range(1, 256, "jobs"), default=default, help=help)
 
 
-def add_run_options(parser: argparse.ArgumentParser, seed: bool = True) -> None:
-    """``--quiet`` and (optionally) ``--seed``."""
-    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr")
-    if seed:
-        parser.add_argument("--seed", type=nonnegative_int, default=0,
-                            help="random seed: the same seed and arguments give the same files")
-
-
 def finish_command(parser: argparse.ArgumentParser, handler, out: str | None = None, seed: bool = True) -> None:
     """The options every command ends with, then its handler: ``--out DIR`` / ``--force`` (a command writing to a
     folder, ``out`` its default), ``--quiet`` and, with ``seed``, ``--seed``."""
     if out is not None:
-        add_output_options(parser, out)
-    add_run_options(parser, seed)
+        parser.add_argument("-o", "--out", type=Path, default=Path(out), metavar="DIR",
+                            help="directory for the output files (created if missing)")
+        parser.add_argument("-f", "--force", action="store_true",
+                            help="overwrite output files that already exist (without it, the run stops before any "
+                            "work)")
+    parser.add_argument("-q", "--quiet", action="store_true", help="no progress bars and no status messages on stderr")
+    if seed:
+        parser.add_argument("--seed", type=nonnegative_int, default=0,
+                            help="random seed: the same seed and arguments give the same files")
     parser.set_defaults(handler=handler)
 
 

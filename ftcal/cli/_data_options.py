@@ -138,12 +138,6 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
     columns = getattr(args, "columns", None)
     texts = [i for i in items if i != "-" and Path(i).is_file()
              and Path(i).suffix.lower() not in (".npz", ".mat", ".bag", ".mcap", ".db3", ".json")]
-    spell = cli_spelling(args)
-
-    def said(exc) -> str:
-        return " ".join(exc.render(lambda name, setting: "--columns" if name == "columns" else
-                                   spell(name, setting)).split())
-
     try:
         if columns is None:
             if header_needed:
@@ -160,7 +154,7 @@ def named_inputs(args: argparse.Namespace, items: list[str], *, header_needed: b
                            "text files only, or drop --columns)")
         table = join_headerless(texts, columns)
     except DatasetFileError as exc:
-        raise CliError(said(exc)) from None
+        raise cli_error(exc, args) from None
     folder = Path(tempfile.mkdtemp(prefix="ftcal-columns-"))
     atexit.register(shutil.rmtree, folder, True)
     joined = folder / f"{table.name}.csv"
@@ -421,12 +415,11 @@ def _saturated_rows_handled(args: argparse.Namespace, data, path):
         if not quiet:
             print(f"ftcal: {path}: no rows with {said.split(' (')[0]}; none dropped", file=sys.stderr)
         return data
-    entries = _saturated_entries(data, drop, said)
     if drop.all():
         raise CliError(f"{path}: --exclude-saturated would drop every one of the {data.n_samples} rows ({said}); "
                        "check the limits")
     kept = data.subset(~drop)
-    _record(kept, "readings_dropped", entries)
+    _record(kept, "readings_dropped", _saturated_entries(data, drop, said))
     if not quiet:
         print(f"ftcal: {path}: dropped {int(drop.sum())} of {data.n_samples} rows with {said}", file=sys.stderr)
     return kept

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import sys
 from pathlib import Path
 
@@ -134,18 +133,15 @@ def extrapolation(model, model_path, data) -> dict:
 
 def training_data_of(dataset, model_paths) -> list[str]:
     """Labels of the models whose ``NAME.fit.json`` (beside the model file) says they were fitted on ``dataset``."""
+    from ..benchmark import read_json_record
     from ..core import same_file
     from ..reporting import file_sha256
 
     found, digest = [], None
     for path in model_paths:
         label = model_label(path)
-        fit_json = Path(path).with_name(f"{label}.fit.json")
-        try:
-            facts = json.loads(fit_json.read_text(encoding="utf-8"))
-        except (OSError, ValueError, UnicodeDecodeError):
-            continue
-        if not isinstance(facts, dict):
+        facts = read_json_record(Path(path).with_name(f"{label}.fit.json"))  # None: no fit.json to read
+        if facts is None:
             continue
         if facts.get("dataset_sha256"):
             digest = digest or file_sha256(dataset)

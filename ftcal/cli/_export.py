@@ -73,21 +73,19 @@ def run(args: argparse.Namespace) -> int:
     suffixes = {"onnx": (".onnx",), "ros": (".yaml", ".yml")}.get(args.format)
     if suffixes and output.suffix.lower() not in suffixes:
         raise CliError(f"--output {output} should end in {' or '.join(suffixes)} for --format {args.format}")
-    tool = ftcal.experiment.ToolLoad.load(args.model) if args.format == "ros" or (is_tool and args.format == "onnx") \
-        else None
-    if args.format == "ros":
-        from ..experiment import tool_gravity_compensation_yaml
+    if args.format == "ros" or (is_tool and args.format == "onnx"):
+        from ..experiment import tool_gravity_compensation_yaml, tool_onnx_model
 
-        text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
-        plan.write_text(output.name, text)
-        console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
-        return 0
-    if is_tool and args.format == "onnx":
-        from ..experiment import tool_onnx_model
-
+        tool = ftcal.experiment.ToolLoad.load(args.model)
+        if args.format == "ros":
+            text = tool_gravity_compensation_yaml(tool, sensor_frame=args.sensor_frame, world_frame=args.world_frame)
+            plan.write_text(output.name, text)
+            console.info(f"wrote the tool's gravity-compensation parameters (ROS YAML) to {output}")
+            return 0
         with plan.writing(output.name) as tmp:
             tmp.write_bytes(tool_onnx_model(tool).SerializeToString())
-        console.info(f"exported the tool's compensation{'' if tool.drift is None else ' with its ' + tool.drift.description + ' bias drift'} (ONNX) to {output}")
+        drift = "" if tool.drift is None else f" with its {tool.drift.description} bias drift"
+        console.info(f"exported the tool's compensation{drift} (ONNX) to {output}")
         return 0
     model = ftcal.load_model(args.model)
     if args.format == "matrix":
@@ -99,8 +97,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, model_path) -> int:
-    import json
-
     from ..io import parse_column_slice
     from ..persistence import matrix_export_dict
     from ._data_options import model_reading
@@ -109,16 +105,15 @@ def _export_matrix(model, output: Path, plan: OutputPlan, console: Console, mode
     inputs = None if stored is None or stored.channels is None or parse_column_slice(stored.channels[0]) \
         else stored.channels
     facts = matrix_export_dict(model, axes=axes, inputs=inputs)
-    with plan.writing(output.name) as tmp:
-        if output.suffix.lower() == ".json":
-            tmp.write_text(json.dumps(facts, indent=2) + "\n", encoding="utf-8")
-        else:
-            # no comment line: numpy.loadtxt(path, delimiter=",", skiprows=1, usecols=...) and pandas.read_csv(path,
-            # index_col=0) read it as it is; the formula and units are in the help and the .json form
-            lines = [",".join(["axis", *facts["inputs"], "offset"])]
-            for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
-                lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
-            tmp.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    if output.suffix.lower() == ".json":
+        plan.write_json(output.name, facts)
+    else:
+        # no comment line: numpy.loadtxt(path, delimiter=",", skiprows=1, usecols=...) and pandas.read_csv(path,
+        # index_col=0) read it as it is; the formula and units are in the help and the .json form
+        lines = [",".join(["axis", *facts["inputs"], "offset"])]
+        for label, row, b in zip(facts["outputs"], facts["matrix"], facts["offset"]):
+            lines.append(",".join([label, *(repr(float(v)) for v in row), repr(float(b))]))
+        plan.write_text(output.name, "\n".join(lines) + "\n")
     console.info(f"exported the {len(facts['outputs'])}x{len(facts['inputs'])} calibration matrix and offset of "
                  f"{type(model).__name__} to {output}")
     return 0

@@ -32,19 +32,15 @@ with --report also DIR/NAME.report.html / .json, the calibration report (see 'ft
 """
 
 
-def calibrator_names() -> tuple[str, ...]:
-    import ftcal
-
-    return tuple(ftcal.compose.CALIBRATOR_NAMES)
-
-
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..compose import CALIBRATOR_NAMES
+
     p = sub.add_parser("fit", help="train a calibrator on a dataset and save the model file", epilog=EXAMPLE,
                        description="Train a calibrator on a calibration dataset (.csv, .npz, .mat, or a folder of "
                        "them) and save it as a model file.")
     p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them: one file per pose or "
                    "session), e.g. as written by 'ftcal simulate' / 'prepare'")
-    p.add_argument("-m", "--model", default="directional", choices=calibrator_names(), help="calibrator")
+    p.add_argument("-m", "--model", default="directional", choices=tuple(CALIBRATOR_NAMES), help="calibrator")
     p.add_argument("--schedule", choices=("thesis", "short"),
                    help="training schedule of the networks: the thesis' (1700+ epochs; the default for a network "
                    "model) or a short one (minutes; the default for --model auto, whose networks are candidates "
@@ -199,10 +195,8 @@ def run(args: argparse.Namespace) -> int:
     if args.jobs is not None and "n_jobs" not in known and not args.report:
         raise CliError(f"--jobs: {args.model} scores no candidates in parallel (only --model auto does, and the "
                        "report's stock baselines with --report); drop --jobs")
-    if "n_jobs" in known and "n_jobs" not in params:
-        params["n_jobs"] = args.jobs or -1
-    if "cv" in known and "cv" not in params and getattr(args, "cv", None) is not None:
-        params["cv"] = args.cv  # auto chooses on the folds its report shows
+    # auto scores its candidates on every core unless --jobs says, on the folds its report shows
+    params.update({k: v for k, v in (("n_jobs", args.jobs or -1), ("cv", args.cv)) if k in known and k not in params})
     unknown = sorted(set(params) - set(known))
     if unknown:
         raise CliError(f"--param {unknown[0]}: {args.model} has no such parameter; known: {', '.join(sorted(known))}")
@@ -236,7 +230,7 @@ def run(args: argparse.Namespace) -> int:
         try:
             # with --report the certificate is made here and the gate judges its held-out predictions (one refit
             # per fold); its model file and hash are filled in when the model is written
-            result = calibrate(data, estimator, cv=getattr(args, "cv", None) or 5, random_state=args.seed or 0,
+            result = calibrate(data, estimator, cv=args.cv, random_state=args.seed,
                                certify=bool(args.report), certificate_options=report_options(
                                    args, settings, dataset_path=args.dataset, dataset_sha256=dataset_sha256,
                                    console=console) if args.report else None,

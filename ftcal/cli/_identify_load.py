@@ -133,13 +133,6 @@ def _add_wrench_options(g: argparse._ArgumentGroup) -> None:
     add_unit_options(g)
 
 
-def _gravity(text: str):
-    values = numbers(text, 3)
-    if values is None:
-        raise CliError(f"--gravity {text!r}: give three comma-separated numbers in m/s², e.g. 0,0,-9.81")
-    return values
-
-
 def _inputs_kind(args) -> str:
     """The one kind of the command's inputs (run log, pose file, ROS bag); a mix is refused."""
     from ftcal.experiment import recording_kind
@@ -189,7 +182,9 @@ def run_identify(args: argparse.Namespace) -> int:
     from ._tool_drift import identify, report_names, write_report
 
     console = Console(args.quiet)
-    gravity = _gravity(args.gravity)
+    gravity = numbers(args.gravity, 3)
+    if gravity is None:
+        raise CliError(f"--gravity {args.gravity!r}: give three comma-separated numbers in m/s², e.g. 0,0,-9.81")
     name, poses_name = f"{args.name}.tool.json", f"{args.name}.poses.csv"
     plan = OutputPlan(args.out, [name, poses_name, *report_names(args.name)], args.force)
     given = list(args.inputs)

@@ -82,8 +82,9 @@ def _option(flag: str, metavar: str | None = None) -> Option:
 #: the option's value is written as where there is one.
 _SAME_NAMES = {"force": None, "sensor_frame": "NAME", "world_frame": None, "subdivisions": None,
                "candidate_subdivisions": None, "cv": "K", "model": None, "output": None, "scheduler": None,
-               "channels": None, "wrench": None, "axes": None, "force_unit": None, "torque_unit": None, "sensor": None,
-               "wrench_topic": "TOPIC", "raw_topic": "TOPIC", "raw_field": "FIELD", "joint_topic": "TOPIC",
+               "channels": None, "columns": None, "wrench": None, "axes": None, "force_unit": None,
+               "torque_unit": None, "sensor": None, "wrench_topic": "TOPIC", "raw_topic": "TOPIC", "raw_field": "FIELD",
+               "joint_topic": "TOPIC",
                "tf": "BASE,SENSOR", "stamps": None, "time": None, "temperature": None, "drift": None, "mounting": None}
 
 #: The library's argument names and the command line's options for them: the one table of the mapping.

@@ -47,26 +47,12 @@ def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> Calib
         big = np.abs(array) > MAX_TRAINING_MAGNITUDE
         if big.any():
             row, col = (int(v) for v in np.argwhere(big)[0])
-            raise CliError(f"{path}: {data_row_location(path, row)}: a {name} of {array[row, col]:.6g} (column "
+            where = f"line {dataset.row_sources().where(row)[1]}" if path.suffix == ".csv" else \
+                f"row {row} (rows counted from 0)"  # a .csv's rows are named by their lines
+            raise CliError(f"{path}: {where}: a {name} of {array[row, col]:.6g} (column "
                            f"{labels[col]}), beyond the {MAX_TRAINING_MAGNITUDE:g} a calibration can square without "
                            "overflow; check the units and that line")
     return dataset
-
-
-def data_row_location(path: str | Path, row: int) -> str:
-    """``"line N"`` of data row ``row`` (from 0) of a CSV file (comments, the header and blank lines skipped), or
-    ``"row N"`` of an ``.npz``."""
-    path = Path(path)
-    if path.suffix != ".csv":
-        return f"row {row} (rows counted from 0)"
-    seen = -2  # the header line comes first
-    with open(path, encoding="utf-8-sig") as fh:
-        for line_no, line in enumerate(fh, start=1):
-            if line.strip() and not line.lstrip().startswith("#"):
-                seen += 1
-                if seen == row:
-                    return f"line {line_no}"
-    return f"row {row} (rows counted from 0)"
 
 
 def parse_param(text: str) -> tuple[str, Any]:

@@ -13,7 +13,8 @@ from ._common import (CliError, Console, OutputPlan, add_output_file_options, ex
                       int_in_range, path_problem)
 from ._data_options import (add_channel_option, channel_names, joined_origin, model_reading, print_reading_findings,
                             readings_input)
-from ._readings import iter_reading_chunks, located_error, read_readings_npz, takes_temperature, write_wrench_rows
+from ._readings import (iter_reading_chunks, located_error, read_readings_npz, takes_temperature, utf8_lines,
+                        write_wrench_rows)
 from ..core import default_axes
 from ..io import RangeExcess, range_excess
 
@@ -166,8 +167,7 @@ def run(args: argparse.Namespace) -> int:
     from functools import partial
 
     import ftcal
-    from ..compose import history_reach, reads_history, spread_flags
-    from ..compose import provides_std
+    from ..compose import history_reach, provides_std, reads_history, spread_flags
 
     if args.drop_bad_readings is not None:
         raise CliError(f"--drop-bad-readings {args.drop_bad_readings}: predict writes one wrench per input line, in "
@@ -221,7 +221,6 @@ def run(args: argparse.Namespace) -> int:
     checking = args.input != "-" and chunk > 1
     findings: list = []
     excess: list = []  # per chunk, the readings beyond --range
-    range_names = partial(_range_names, channels, temperature)
 
     def emit(out) -> int:
         total = 0
@@ -246,7 +245,8 @@ def run(args: argparse.Namespace) -> int:
             if limits is not None:
                 # no tolerance from the readings: a chunk's (a line's) own noise would make the flags depend on the
                 # chunk size; they are the model's own out_of_range (exact edges)
-                excess.append(range_excess(raw, limits[0], limits[1], range_names(raw.shape[1]), tolerance=0.0))
+                names = _range_names(channels, temperature, raw.shape[1])
+                excess.append(range_excess(raw, limits[0], limits[1], names, tolerance=0.0))
                 flags = excess[-1].mask
             else:
                 flags = None if own_range is None else np.asarray(own_range(raw), dtype=bool)
@@ -263,8 +263,7 @@ def run(args: argparse.Namespace) -> int:
         return total
 
     if plan is None:
-        total = emit(sys.stdout)
-        sys.stdout.flush()
+        total = emit(sys.stdout)  # flushed line by line
     else:
         with plan.writing(Path(args.output).name) as tmp, open(tmp, "w", encoding="utf-8") as fh:
             total = emit(fh)
@@ -331,7 +330,12 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = 
     if source == "-":
         if sys.stdin.isatty():
             print("ftcal predict: reading raw readings from the terminal; end with Ctrl-D", file=sys.stderr)
-        yield from iter_reading_chunks(sys.stdin, "stdin", n_channels, chunk, temperature=temperature, names=names)
+        stream = utf8_lines(sys.stdin)
+        try:
+            yield from iter_reading_chunks(stream, "stdin", n_channels, chunk, temperature=temperature, names=names)
+        finally:
+            if stream is not sys.stdin:
+                stream.detach()  # standard input stays open for the caller
     elif Path(source).suffix.lower() in (".npz", ".mat"):
         if channels is None and Path(source).suffix.lower() == ".npz":
             raw = read_readings_npz(source, n_channels)
@@ -351,5 +355,5 @@ def raw_chunks(source: str, n_channels: int, chunk: int, *, temperature: bool = 
         for start in range(0, len(raw), chunk):
             yield raw[start:start + chunk], np.arange(start, min(start + chunk, len(raw)))
     else:
-        with open(source, encoding="utf-8") as fh:
+        with open(source, encoding="utf-8", errors="surrogateescape", newline="") as fh:
             yield from iter_reading_chunks(fh, source, n_channels, chunk, temperature=temperature, names=names)

@@ -2,8 +2,10 @@
 
 Input (a file or standard input)
 --------------------------------
-* One sample per line, values separated by commas, or by spaces / tabs when a
-  line has no comma. Blank lines and lines starting with ``#`` are skipped.
+* One sample per line, values separated by commas, or by spaces when a line
+  has no comma. Fields separated by tabs or ``;`` are refused with the conversion
+  to commas, in the words of ``ftcal fit`` (a spreadsheet export, maybe with
+  decimal commas). Blank lines and lines starting with ``#`` are skipped.
 * An optional header line (any line holding a non-number). When present, the
   columns named ``s0, s1, ...`` are the raw channels (then ``temperature`` [deg C]
   if present, for temperature-compensated models) and every other column is
@@ -19,7 +21,9 @@ input sample in the same order: forces in [N], torques in [N·m].
 
 from __future__ import annotations
 
+import io
 from collections.abc import Iterator
+from pathlib import Path
 from typing import IO
 
 import numpy as np
@@ -96,10 +100,13 @@ def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_siz
     seen_data = False
     n_raw = n_channels - 1 if temperature else n_channels
     expected = f"{n_raw} raw channels and the temperature" if temperature else f"{n_raw} raw channels"
-    for line_no, line in enumerate(_bounded_lines(stream, source), start=1):
+    numbered = enumerate(_bounded_lines(stream, source), start=1)
+    for line_no, line in numbered:
         text = line.lstrip("\ufeff").strip() if line_no == 1 else line.strip()
         if not text or text.startswith("#"):
             continue
+        if columns is None and not seen_data:  # the first line read: its separator
+            _refuse_other_separator(text, numbered, f"{source}: line {line_no}")
         fields = _split(text)
         first_word = next((f for f in fields if f and not is_number(f)), None)
         if not seen_data and columns is None and first_word is not None and first_word[:1].isalpha():
@@ -138,19 +145,75 @@ _CHUNK_BYTES = 256 * 2**20
 MAX_LINE_CHARS = 1 << 20
 
 
+def _refuse_other_separator(text: str, rest, where: str) -> None:
+    """Refuse a first line whose fields are separated by tabs or ``;`` (``rest``: the numbered lines after it, where
+    the first data row tells decimal commas after a header), in the words of ``ftcal fit``'s dataset reader: the
+    conversion that makes it comma-separated with decimal points."""
+    fields = [f.strip() for f in text.split(",")]
+    separator = next((sep for sep in (";", "\t") if any(sep in f for f in fields)), None)
+    if separator is None:
+        return
+    if text[:1].isalpha():  # a header: refused as one field (fit's rule); its first data row says the decimal mark
+        if len(fields) > 1:
+            return
+        text = next((t for t in (line.strip() for _, line in rest) if t and not t.startswith("#")), "")
+    decimal_comma = "," in text
+    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")
+    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma
+           else f"{said} to ',', e.g. tr '{typed}' ','")
+    raise CliError(f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
+                   f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal "
+                   "reads comma-separated values with decimal points. Fix: convert the file: "
+                   f"{how} < IN.csv > OUT.csv.")
+
+
+def utf8_lines(stream: IO[str]) -> IO[str]:
+    """A text stream reading the bytes under ``stream`` (standard input) as :func:`_bounded_lines` reads a file:
+    UTF-8, undecodable bytes kept (``surrogateescape``) to be named by their byte offset, line endings as written."""
+    buffer = getattr(stream, "buffer", None)  # none: a stream of text already (a test's StringIO, a closed stdin)
+    return stream if buffer is None else io.TextIOWrapper(buffer, encoding="utf-8", errors="surrogateescape",
+                                                          newline="")
+
+
+def _not_utf8(source: str, line_no: int, line: str, offset: int) -> CliError:
+    """The refusal of a line holding bytes that are not UTF-8 (``line`` decoded with ``surrogateescape``, starting at
+    byte ``offset``), in the words of the library's dataset reader: the line, the byte and the conversion."""
+    import codecs
+
+    data = line.encode("utf-8", "surrogateescape")
+    utf16 = line_no == 1 and data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+    iconv, path = f"iconv -f {'UTF-16' if utf16 else 'LATIN1'} -t UTF-8", Path(source)
+    fix = f"pipe it through {iconv}" if source == "stdin" else \
+        f"save it as UTF-8, e.g. {iconv} {path.name} > {path.stem}-utf8{path.suffix}"
+    what = "raw readings are a text file in UTF-8 (or a .npz with array 'raw')"
+    if utf16:
+        return CliError(f"{source}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what}. Fix: "
+                        f"{fix}.")
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError as exc:  # always: the surrogates stand for bytes that are not UTF-8
+        return CliError(f"{source}: line {line_no} (byte {offset + exc.start}): not UTF-8 text ({exc.reason}); "
+                        f"{what}. Fix: {fix} if it is Latin-1 (Windows-1252: -f CP1252).")
+    raise AssertionError("a line with a lone surrogate decoded as UTF-8")
+
+
 def _bounded_lines(stream: IO[str], source: str) -> Iterator[str]:
     """The lines of ``stream``, refusing one longer than :data:`MAX_LINE_CHARS` (a binary file or a file without
-    line breaks would otherwise be read whole into memory); undecodable bytes are named with their line."""
-    line_no = 0
+    line breaks would otherwise be read whole into memory); bytes that are not UTF-8 (read with
+    ``surrogateescape``: :func:`utf8_lines`) are named with their line and byte offset."""
+    line_no, offset = 0, 0
     while True:
         line_no += 1
-        try:
-            line = stream.readline(MAX_LINE_CHARS + 1)
-        except UnicodeDecodeError as exc:
-            raise CliError(f"{source}: around line {line_no}: not UTF-8 text ({exc.reason}); raw readings are "
-                           "a text file of numbers, or a .npz with array 'raw'") from None
+        line = stream.readline(MAX_LINE_CHARS + 1)
         if not line:
             return
+        if not line.isascii():
+            try:
+                size = len(line.encode("utf-8"))
+            except UnicodeEncodeError:  # an undecodable byte, kept as a lone surrogate
+                raise _not_utf8(source, line_no, line, offset) from None
+            offset += size - len(line)
+        offset += len(line)
         if len(line) > MAX_LINE_CHARS:
             raise CliError(f"{source}: line {line_no} is longer than {MAX_LINE_CHARS} characters; raw readings are "
                            "one reading per line (is it a binary file?)")

@@ -44,24 +44,21 @@ def register(sub: argparse._SubParsersAction) -> None:
     finish_command(p, run, seed=False)
 
 
-def _kept_data(model_path) -> dict | None:
-    """The data description of the model file, kept in the re-tared one (same mapping, units, axes)."""
-    from ..persistence import model_data
-
-    return model_data(model_path) or None
-
-
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ..persistence import model_data
     from ._predict import raw_chunks
 
     console = Console(args.quiet)
     args.readings = readings_input(args, args.readings, "the zero-load readings")  # --columns: a headerless file
-    output = Path(args.output) if args.output else args.model.with_name(f"{model_label(args.model)}-retared{MODEL_SUFFIX}")
-    if args.model.name.endswith(TOOL_SUFFIX):
+    tool = args.model.name.endswith(TOOL_SUFFIX)
+    stem, suffix = (args.model.name.removesuffix(TOOL_SUFFIX), TOOL_SUFFIX) if tool else \
+        (model_label(args.model), MODEL_SUFFIX)
+    output = Path(args.output) if args.output else args.model.with_name(f"{stem}-retared{suffix}")
+    if tool:
         from ._tool_drift import run_retare_tool
 
-        return run_retare_tool(args)
+        return run_retare_tool(args, output)
     if args.time is not None or args.temperature is not None or args.orientation or args.tool_off or \
             args.force_unit is not None or args.torque_unit is not None:
         raise CliError("--time, --temperature, --orientation, --tool-off, --force-unit and --torque-unit re-tare a "
@@ -83,7 +80,8 @@ def run(args: argparse.Namespace) -> int:
     readings = np.vstack(chunks)
     model.retare(readings, max_spread=args.max_spread)
     with plan.writing(output.name) as tmp:
-        ftcal.save_model(model, tmp, overwrite=True, data=_kept_data(args.model))
+        # the data description of the model file (its mapping, units, axes) is kept in the re-tared one
+        ftcal.save_model(model, tmp, overwrite=True, data=model_data(args.model) or None)
     shift = ftcal.calibrators.retare_shift(model)
     console.info(f"re-tared from {len(readings)} readings: zero-load reading moved by "
                  f"[{', '.join(f'{v:.4g}' for v in shift)}] (raw units) -> {output}")

@@ -51,17 +51,6 @@ def check_scheduler(scheduler: str) -> str:
 _MAX_HANDSHAKE_BYTES = 1 << 20
 
 
-def _tcp_host_port(scheduler: str) -> tuple[str, int] | None:
-    """``(host, port)`` of a ``tcp://`` or ``host:port`` address; ``None`` for other protocols."""
-    rest = scheduler[len("tcp://"):] if scheduler.startswith("tcp://") else scheduler
-    if "://" in rest:
-        return None
-    host, sep, port = rest.rpartition(":")
-    if not sep or not port.isdigit():
-        return None
-    return host.strip("[]"), int(port)
-
-
 def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> None:
     """Check, within ``timeout_s``, that a Dask scheduler answers at a ``tcp://`` address; else
     :class:`SchedulerError`.
@@ -75,10 +64,11 @@ def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> Non
     import struct
     import time
 
-    target = _tcp_host_port(scheduler)
-    if target is None:  # tls://, inproc://, ucx://: Dask's own timeout applies
+    rest = scheduler.removeprefix("tcp://")  # a tcp:// or host:port address
+    host, sep, port = rest.rpartition(":")
+    if "://" in rest or not sep or not port.isdigit():  # tls://, inproc://, ucx://: Dask's own timeout applies
         return
-    host, port = target
+    host, port = host.strip("[]"), int(port)
     deadline = time.monotonic() + timeout_s
     hint = "is a Dask scheduler (dask scheduler) running there, and is the address right?"
     if not 0 < port < 65536:
@@ -117,16 +107,13 @@ def probe_scheduler(scheduler: str, timeout_s: float = CONNECT_TIMEOUT_S) -> Non
 
 
 @contextlib.contextmanager
-def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
-                 timeout_s: float = CONNECT_TIMEOUT_S) -> Iterator[object | None]:
+def dask_backend(scheduler: str | None, *, timeout_s: float = CONNECT_TIMEOUT_S) -> Iterator[object | None]:
     """Within the block, joblib runs its tasks on the Dask cluster ``scheduler`` (``None``: unchanged).
 
     Parameters
     ----------
     scheduler : str or None
-        ``"local"`` for a ``LocalCluster`` on this machine, or a scheduler address.
-    n_workers : int or None
-        Workers of the local cluster (default: one per core).
+        ``"local"`` for a ``LocalCluster`` on this machine (one worker per core), or a scheduler address.
     timeout_s : float
         How long to try to reach a remote scheduler [s].
 
@@ -152,7 +139,7 @@ def dask_backend(scheduler: str | None, *, n_workers: int | None = None,
     cluster = None
     try:
         if scheduler == "local":
-            cluster = LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True, dashboard_address=None)
+            cluster = LocalCluster(threads_per_worker=1, processes=True, dashboard_address=None)
             client = Client(cluster)
         else:
             probe_scheduler(scheduler, timeout_s)

@@ -84,7 +84,8 @@ def run_dataset(args: argparse.Namespace) -> int:
     console = Console(args.quiet)
     files = _dataset_files(args.n_datasets, args.format)
     plan = OutputPlan(args.out, files + ["info.json", "coverage.png"], args.force)
-    profile = _profile(args.sensor)
+    profile = ftcal.simulation.SensorProfile.default() if args.sensor is None else \
+        ftcal.simulation.read_ati_calibration(args.sensor)
     offset = None if args.zero_offset == 0 else np.full(profile.n_channels, _zero_offset(args.zero_offset, profile))
     rng = np.random.default_rng(args.seed)
     thermal = temperature_range(args.temperature_range)
@@ -153,14 +154,6 @@ def _with_thermal_drift(train, test, bounds, rng):
     info = {"offset_per_deg": drift.offset_per_deg.tolist(), "gain_per_deg": drift.gain_per_deg.tolist(),
             "reference_temperature": drift.reference_temperature, "range_deg_c": list(bounds)}
     return out[0], out[1], info
-
-
-def _profile(cal_path: Path | None):
-    import ftcal
-
-    if cal_path is None:
-        return ftcal.simulation.SensorProfile.default()
-    return ftcal.simulation.read_ati_calibration(cal_path)
 
 
 def _register_experiment(kinds: argparse._SubParsersAction) -> None:

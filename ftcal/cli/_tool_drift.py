@@ -33,25 +33,18 @@ def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> N
                    "as its time (the drift is then per pose, not per second)")
 
 
-def pose_times(args: argparse.Namespace, n: int, times):
-    """The drift's time of each of ``n`` poses and its unit: the row order with ``--time-from-order``, else the
-    inputs' times [s] (or None)."""
-    import numpy as np
-
-    if getattr(args, "time_from_order", False):
-        return np.arange(n, dtype=float), "pose"
-    return times, "s"
-
-
 def identify(args: argparse.Namespace, rotations, wrenches, gravity, times, temperatures, sources: list[str],
              groups=None):
     """``identify_tool_load`` with the drift options, and the report of the identification (None without a time
     or temperature). Library errors name the inputs."""
+    import numpy as np
+
     import ftcal
     from ftcal.core import CalibrationInputError
     from ftcal.experiment import identification_summary
 
-    times, unit = pose_times(args, len(rotations), times)
+    # the drift's time of each pose and its unit: the row order with --time-from-order, else the inputs' times [s]
+    times, unit = (np.arange(len(rotations), dtype=float), "pose") if args.time_from_order else (times, "s")
     if args.drift in ("linear", "spline") and times is None:
         raise CliError(f"--drift {args.drift} needs the time of each pose: the inputs carry none; pass "
                        "--time-from-order to use the recording order")
@@ -191,40 +184,24 @@ def _read_wrench_readings(args: argparse.Namespace):
                        "enough for a re-tare, pass fewer")
     if not args.tool_off:  # the tool's weight and the bias: a lever arm of a tool's size, unless the units are off
         check_lever_arm(args, rec.wrench, args.readings, force_unit=force_unit, torque_unit=torque_unit)
-    out = {"wrench": rec.wrench}
-    out.update({k: v for k, v in (("time", rec.time), ("temperature", rec.temperature), ("rotation", rec.rotation))
-                if v is not None})
-    return out
+    return {k: v for k, v in (("wrench", rec.wrench), ("time", rec.time), ("temperature", rec.temperature),
+                              ("rotation", rec.rotation)) if v is not None}
 
 
-def _rotations(quaternions, where: str):
+def run_retare_tool(args: argparse.Namespace, output: Path) -> int:
+    """``ftcal retare TOOL.tool.json READINGS``: a new tool file (``output``) whose bias is reset at the readings'
+    time."""
     import numpy as np
     from scipy.spatial.transform import Rotation
-
-    q = np.atleast_2d(np.asarray(quaternions, dtype=float))
-    norm = np.linalg.norm(q, axis=1)
-    if not np.isfinite(q).all() or (np.abs(norm - 1.0) > 1e-2).any():
-        bad = int(np.argmax(~np.isfinite(norm) | (np.abs(norm - 1.0) > 1e-2)))
-        raise CliError(f"{where}: quaternion {q[bad].tolist()} is not a unit quaternion (norm {norm[bad]:.4g}); give "
-                       "qx,qy,qz,qw of the sensor's orientation, scalar last")
-    return Rotation.from_quat(q).as_matrix()
-
-
-def run_retare_tool(args: argparse.Namespace) -> int:
-    """``ftcal retare TOOL.tool.json READINGS``: a new tool file whose bias is reset at the readings' time."""
-    import numpy as np
 
     import ftcal
     from ftcal.core import CalibrationInputError
 
     console = Console(args.quiet)
-    model = Path(args.model)
-    output = Path(args.output) if args.output else model.with_name(
-        f"{model.name.removesuffix(TOOL_SUFFIX)}-retared{TOOL_SUFFIX}")
     plan = OutputPlan.single_file(output, args.force)
     if args.readings == "-":
         raise CliError("a tool re-tare reads its readings from a file, not stdin")
-    tool = ftcal.experiment.ToolLoad.load(model)
+    tool = ftcal.experiment.ToolLoad.load(args.model)
     data = _read_wrench_readings(args)
     if args.tool_off and (args.orientation or "rotation" in data):
         raise CliError("--tool-off: the readings were taken without the tool, so no orientation is needed; drop "
@@ -233,15 +210,17 @@ def run_retare_tool(args: argparse.Namespace) -> int:
         raise CliError(f"--orientation: {args.readings} has its own orientation columns, one orientation per row; "
                        "give one or the other (drop --orientation to use the file's, or the file's orientation "
                        "columns to hold the sensor at --orientation)")
-    rotations = None
+    rotations = data.get("rotation")  # none with --orientation (refused above)
     if args.orientation:
         quat = numbers(args.orientation, 4)
         if quat is None:
             raise CliError(f"--orientation {args.orientation!r}: give qx,qy,qz,qw, four comma-separated numbers")
-        rotations = _rotations(quat, "--orientation")[0]
-    elif "rotation" in data:
-        rotations = data["rotation"]
-    elif not args.tool_off:
+        norm = float(np.linalg.norm(quat))
+        if not np.isfinite(quat).all() or abs(norm - 1.0) > 1e-2:
+            raise CliError(f"--orientation: quaternion {[float(v) for v in quat]} is not a unit quaternion (norm "
+                           f"{norm:.4g}); give qx,qy,qz,qw of the sensor's orientation, scalar last")
+        rotations = Rotation.from_quat(quat).as_matrix()
+    elif rotations is None and not args.tool_off:
         raise CliError(f"{args.readings}: with the tool mounted its weight must be removed, which needs the sensor's "
                        "orientation: add qx,qy,qz,qw columns (or R00..R22, or roll,pitch,yaw) or --orientation "
                        "QX,QY,QZ,QW; or, if the tool was taken off, pass --tool-off")

@@ -14,12 +14,6 @@ __all__ = ["fit_with_progress", "ticking"]
 _PROGRESS = "cli_progress"
 
 
-def _epoch_budget(estimator: Any) -> int | None:
-    """Upper bound of the epochs of a network's three-phase schedule (None when the estimator has no schedule)."""
-    schedule = getattr(estimator, "_schedule_epochs", None)
-    return int(schedule()[1]) if callable(schedule) else None
-
-
 def _callback_class():
     """The skorch callback class (built on first use, so importing the CLI does not import torch)."""
     from skorch.callbacks import Callback
@@ -52,13 +46,18 @@ def fit_with_progress(estimator: Any, X: Any, y: Any, console: Console, label: s
     if console.quiet:
         return estimator.fit(X, y, **fit_params)
     if "callbacks" in params:
-        bar = console.progress(total=_epoch_budget(estimator), desc=f"{label} epochs", unit="epoch")
-        try:
-            with _progress_callback_installed(estimator, params["callbacks"], _callback_class()(bar)):
-                return estimator.fit(X, y, **fit_params)
-        finally:
-            bar.close()
-    return _fit_with_timer(estimator, X, y, console, label, **fit_params)
+        schedule = getattr(estimator, "_schedule_epochs", None)  # the epochs of a three-phase schedule, at most
+        bar = console.progress(total=int(schedule()[1]) if callable(schedule) else None, desc=f"{label} epochs",
+                               unit="epoch")
+        installed = _progress_callback_installed(estimator, params["callbacks"], _callback_class()(bar))
+    else:
+        bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
+        installed = ticking(bar.refresh)
+    try:
+        with installed:
+            return estimator.fit(X, y, **fit_params)
+    finally:
+        bar.close()
 
 
 @contextlib.contextmanager
@@ -96,12 +95,3 @@ def ticking(tick: Callable[[], None], name: str = "ftcal-progress") -> Iterator[
     finally:
         done.set()
         thread.join()
-
-
-def _fit_with_timer(estimator: Any, X: Any, y: Any, console: Console, label: str, **fit_params: Any) -> Any:
-    bar = console.progress(total=None, desc=f"{label}", bar_format="{desc}: {elapsed} elapsed")
-    try:
-        with ticking(bar.refresh):
-            return estimator.fit(X, y, **fit_params)
-    finally:
-        bar.close()

@@ -8,7 +8,6 @@ import time
 from ..core import CalibrationInputError
 from ._common import (CliError, Console, OutputPlan, add_jobs_option, add_name_option, add_scheduler_option,
                       finish_command, int_in_range)
-from ._fit import calibrator_names
 from ._data_options import (add_alpha_option, add_dataset_options, add_fold_options, fit_data_facts, fold_groups,
                             load_dataset_from_args, training_targets)
 from ._models import calibrator_params, check_fold_count, model_file_name, parse_param
@@ -29,11 +28,13 @@ DIR/NAME.tune.json (every candidate, ranked) and DIR/NAME.model.npz (the best mo
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from ..compose import CALIBRATOR_NAMES
+
     p = sub.add_parser("tune", help="search a calibrator's hyperparameters by cross-validation", epilog=EXAMPLE,
                        description="Hyperparameter search (scikit-learn GridSearchCV / RandomizedSearchCV) of a "
                        "calibrator, scored by the cross-validated torque-scaled RMSE.")
     p.add_argument("dataset", help="training dataset (.csv, .npz, .mat, or a folder of them)")
-    p.add_argument("-m", "--model", default="axis_nonlinear", choices=calibrator_names(), help="calibrator")
+    p.add_argument("-m", "--model", default="axis_nonlinear", choices=tuple(CALIBRATOR_NAMES), help="calibrator")
     p.add_argument("--grid", action="append", default=[], metavar="KEY=VALUES",
                    help="values of one parameter: a JSON list, or a distribution with --n-iter (repeatable; "
                    "default: the model's documented search space, ftcal.compose._search.DEFAULT_SEARCH_SPACES)")
