@@ -68,15 +68,20 @@ class LoadCases:
             return "row"
         return f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
 
+    @staticmethod
+    def columns(axes: list[dict], sep: str = "_", pct_fs: str = "%FS") -> list[str]:
+        """The applied, indicated and error column names of ``axes`` (``{"name", "unit"}`` each) in the table."""
+        return [f"{a['name']}{sep}{what} [{pct_fs if what == 'error' else a['unit']}]"
+                for what in ("applied", "indicated", "error") for a in axes]
+
     def to_dict(self, axes: list[str], limit: int = CASES_IN_JSON) -> dict:
         """JSON-able (rounded lists), at most ``limit`` cases (the worst)."""
-        total = len(self.applied)
-        keep = slice(0, min(total, limit))
-        return {"by": self.by, "count": total, "in_json": min(total, limit), "order": "worst first", "axes": axes,
-                "applied": _round(self.applied[keep]), "indicated": _round(self.indicated[keep]),
-                "error_pct_fs": _round(self.error_pct_fs[keep], 4), "rows": self.rows[keep].tolist(),
-                "first_row": self.first_row[keep].tolist(),
-                "group": None if self.group is None else list(self.group[keep])}
+        shown = min(len(self.applied), limit)
+        return {"by": self.by, "count": len(self.applied), "in_json": shown, "order": "worst first", "axes": axes,
+                "applied": _round(self.applied[:shown]), "indicated": _round(self.indicated[:shown]),
+                "error_pct_fs": _round(self.error_pct_fs[:shown], 4), "rows": self.rows[:shown].tolist(),
+                "first_row": self.first_row[:shown].tolist(),
+                "group": None if self.group is None else list(self.group[:shown])}
 
 
 @dataclass
@@ -156,13 +161,11 @@ class CalibrationCertificate:
 
     def to_json(self) -> str:
         """The facts as JSON text (the pictures left out; the cases written compactly at the end)."""
-        facts = self.to_dict(cases=False)
-        text = json.dumps(facts, indent=1, default=str, allow_nan=False)
+        text = json.dumps(self.to_dict(cases=False), indent=1, default=str, allow_nan=False)
         if self.cases is None:
             return text + "\n"
         # plain already (rounded lists) and large: compact, by the C encoder (indentation takes the slow one)
-        cases = json.dumps(self.cases.to_dict([a["name"] for a in self.axes]), separators=(",", ":"),
-                           allow_nan=False)
+        cases = json.dumps(self.cases.to_dict([a["name"] for a in self.axes]), separators=(",", ":"), allow_nan=False)
         return text[:-1].rstrip() + f',\n "cases": {cases}\n}}\n'
 
     def to_csv(self) -> str:
@@ -170,11 +173,9 @@ class CalibrationCertificate:
         import csv
         import io
 
-        names, units = [a["name"] for a in self.axes], [a["unit"] for a in self.axes]
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
-        writer.writerow(["rank", "group", "first_row", "rows"] + [f"{a}_applied [{u}]" for a, u in zip(names, units)]
-                        + [f"{a}_indicated [{u}]" for a, u in zip(names, units)] + [f"{a}_error [%FS]" for a in names])
+        writer.writerow(["rank", "group", "first_row", "rows"] + LoadCases.columns(self.axes))
         c = self.cases
         if c is None:
             return out.getvalue()
@@ -356,14 +357,14 @@ def _budget(model: Any, X: NDArray, y: NDArray, pred: NDArray, names: list[str],
         res = None
     grouped = plan.kind == "group"
     n_units = int(np.unique(plan.units).size) if grouped else int(np.unique(cases).size)
-    ref, ref_note = reference
     coef, deviation = temperature
     temp = None if coef is None or deviation is None else np.abs(coef) * float(deviation) / math.sqrt(3)
     return uncertainty_budget(
         pred - y, axes=names, cases=cases, n_units=n_units, units_name="groups" if grouped else "load cases",
         resolution=None if res is None else np.broadcast_to(res, (y.shape[1],)),
         resolution_note="" if res is None else "channel LSB " + ", ".join(f"{v:.3g}" for v in lsb)
-        + " (the quantisation step of each channel's values; 0: continuous), LSB/√12", reference=ref, reference_note=ref_note, temperature=temp,
+        + " (the quantisation step of each channel's values; 0: continuous), LSB/√12", reference=reference[0],
+        reference_note=reference[1], temperature=temp,
         temperature_note=f"coefficient × ±{deviation} °C, rectangular (Type B)")
 
 
@@ -442,9 +443,8 @@ def _due_date(conditions: dict, today: _dt.date) -> tuple[bool | None, dict | No
     return overdue, warning
 
 
-def _model_facts(model: Any, name: str, model_path, model_sha256, alpha: float | None, names, units,
-                 channels: list[str]) -> dict:
-    return {"type": name, "file": None if model_path is None else Path(model_path).name,
+def _model_facts(model: Any, model_path, model_sha256, alpha: float | None, names, units, channels: list[str]) -> dict:
+    return {"type": type(model).__name__, "file": None if model_path is None else Path(model_path).name,
             "path": None if model_path is None else str(model_path),
             "sha256": model_sha256 or (None if model_path is None else file_sha256(model_path)),
             "params": {p: v for p, v in model.get_params(deep=False).items() if not hasattr(v, "fit")},
@@ -461,13 +461,6 @@ def _temperature_coefficients(model: Any) -> dict | None:
 
 
 # -------------------------------------------------------------------------------------------- the entry point
-def _plan_for(model: Any, X: NDArray, y: NDArray, groups, cv: int, seed: int) -> FoldPlan:
-    plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=seed, ordered=reads_history(model))
-    if plan.kind == "none":
-        raise CalibrationInputError(f"no held-out figure can be made on these data: {plan.note}.")
-    return plan
-
-
 def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: FoldPlan, seed: int, n_jobs
                  ) -> tuple[NDArray, NDArray | None]:
     """``(the out-of-fold predictions, their std or None)``: an auto model's own
@@ -481,8 +474,7 @@ def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: Fold
     # light work (a closed form, a kernel model on few rows) in this process, as the comparison engine scores it:
     # starting worker processes (each importing ftcal) costs more than the fits
     light = model_cost(template, min((len(train) for train, _ in plan.folds), default=0)) == "closed_form"
-    out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
-    return out["pred"], out["std"]
+    return _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
 
 
 def _alpha(model: Any, y: NDArray, torque: NDArray, alpha: float | None) -> float | None:
@@ -592,7 +584,9 @@ def calibration_certificate(
     units = axis_units(names)
     torque = np.array([u != "N" for u in units])
     groups = dataset.group if dataset.group is not None and np.unique(dataset.group).size >= 2 else None
-    plan = _plan_for(model, X, y, groups, cv, random_state)
+    plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=random_state, ordered=reads_history(model))
+    if plan.kind == "none":
+        raise CalibrationInputError(f"no held-out figure can be made on these data: {plan.note}.")
     rated_fs = _per_axis(full_scale if rated is None else rated, k, "rated")
     spec_pct = _per_axis(spec, k, "spec")
     conditions = check_conditions(conditions)
@@ -627,8 +621,7 @@ def calibration_certificate(
                 "date_utc": date.strftime("%Y-%m-%d %H:%M:%S UTC"),
                 "ftcal_version": getattr(ftcal, "__version__", "unknown"), "command": command,
                 "sensor": _sensor_name(sensor, dataset.meta),
-                "model": _model_facts(model, type(model).__name__, model_path, model_sha256, alpha, names, units,
-                                      channels)}
+                "model": _model_facts(model, model_path, model_sha256, alpha, names, units, channels)}
     cert = CalibrationCertificate(
         identity=identity, data=_data_facts(dataset, y, torque, dataset_path, dataset_sha256, gnames, channels),
         accuracy=accuracy, comparison=comp, budget=budget, warnings=warn, conditions=conditions,

@@ -251,10 +251,8 @@ def _cases(c) -> str:
     cases = c.cases
     if cases is None or not len(cases.applied):
         return ""
-    names, units = [a["name"] for a in c.axes], [a["unit"] for a in c.axes]
     shown = min(CASES_ON_PAGE, len(cases.applied))
-    head = ["#", "group" if cases.group is not None else "row"] + [f"{a} applied [{u}]" for a, u in zip(names, units)] \
-        + [f"{a} indicated [{u}]" for a, u in zip(names, units)] + [f"{a} error [% FS]" for a in names]
+    head = ["#", "group" if cases.group is not None else "row"] + cases.columns(c.axes, " ", "% FS")
     rows = [[str(i + 1), _fmt(cases.group[i] if cases.group is not None else int(cases.first_row[i]))]
             + [_fmt(float(x), 4) for x in cases.applied[i]] + [_fmt(float(x), 4) for x in cases.indicated[i]]
             + [_fmt(float(x), 3) for x in cases.error_pct_fs[i]] for i in range(shown)]
