@@ -7,9 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-from ._plots import _DPI
+from ._plots import _save
 
 __all__ = ["drift_residuals_figure", "plot_drift_residuals"]
 
@@ -59,7 +57,4 @@ def drift_residuals_figure(report: dict) -> Figure:
 def plot_drift_residuals(report: dict, path: str | Path) -> Path:
     """Write :func:`drift_residuals_figure` as a PNG to ``path`` (PNG whatever its suffix: a temporary file of an
     atomic output); returns the path."""
-    fig = drift_residuals_figure(report)
-    FigureCanvasAgg(fig)
-    fig.savefig(path, dpi=_DPI, format="png")
-    return Path(path)
+    return _save(drift_residuals_figure(report), path, png_suffix=False)
