@@ -163,12 +163,14 @@ def error_distributions_figure(errors: Mapping[str, ArrayLike], *, noise_floor: 
                 body.set_facecolor(color)
                 body.set_edgecolor(color)
                 body.set_alpha(0.35)
-        ax.boxplot(values, positions=[pos], widths=0.25, showfliers=False, **_HORIZONTAL, medianprops={"color": "black"},
-                   boxprops={"color": color}, whiskerprops={"color": color}, capprops={"color": color})
+        ax.boxplot(values, positions=[pos], widths=0.25, showfliers=False, **_HORIZONTAL,
+                   medianprops={"color": "black"}, boxprops={"color": color}, whiskerprops={"color": color},
+                   capprops={"color": color})
         if values.size <= 200:  # few values (e.g. one per dataset): show each one
             ax.scatter(values, pos + rng.uniform(-0.12, 0.12, values.size), s=10, color=color, alpha=0.7, zorder=3)
-        ax.annotate(f"mean {values.mean():.3g} ± {values.std():.2g}", xy=(1.0, pos), xycoords=("axes fraction", "data"),
-                    xytext=(-4, 10), textcoords="offset points", ha="right", fontsize=8, color=color)
+        ax.annotate(f"mean {values.mean():.3g} ± {values.std():.2g}", xy=(1.0, pos), color=color,
+                    xycoords=("axes fraction", "data"), xytext=(-4, 10), textcoords="offset points", ha="right",
+                    fontsize=8)
         if overall is not None and name in overall:  # zorder 4: above every model's violin, box and points
             ax.scatter([overall[name]], [pos], marker="D", s=36, color="black", zorder=4,
                        label="RMSE over the set" if i == 0 else None)
