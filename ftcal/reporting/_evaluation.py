@@ -77,7 +77,8 @@ def write_evaluation_plots(paths: Mapping[str, Path], y_true: np.ndarray, predic
 
     _plots.plot_error_distributions(
         {name: per_sample_rmse(y_true, p, alpha, named) for name, p in predictions.items()}, paths["distribution"],
-        overall={name: wrench_rmse(y_true, p, alpha, named) for name, p in predictions.items()}, noise_floor=noise_floor,
+        overall={name: wrench_rmse(y_true, p, alpha, named) for name, p in predictions.items()},
+        noise_floor=noise_floor,
         title=f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples"
               + (f", α = {alpha:.3g} m⁻¹)" if scaled else ")"),
         xlabel="RMSE of the torque-scaled wrench [N]" if scaled else f"RMSE of {', '.join(named)} [{unit}]")
