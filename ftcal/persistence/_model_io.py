@@ -60,6 +60,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from ..calibrators._base import BaseCalibrator
+from ..compose._registry import model_class, model_classes
 from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes, read_npy_member
@@ -139,33 +140,17 @@ def _check_fitted_constraints(estimator) -> None:
             if not bad.size:
                 continue
             values = [values[bad[0]].item()]
-        offending = next((v for v in values if not any(c.is_satisfied_by(v) for c in constraints)), _NONE)
-        if offending is _NONE:
-            continue
-        where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
-        raise ModelFileError(
-            f"the {name}'s stored {key}{where} is {offending!r:.80}, outside its allowed values: "
-            f"{' or '.join(str(c) for c in constraints)}. The file is damaged or was edited; fit and save the "
-            "model again.")
-
-
-_NONE = object()
-
-
-def _known_types() -> dict[str, type]:
-    from ..compose._registry import model_classes
-
-    return model_classes()
-
-
-def _known_type(name: str) -> type | None:
-    from ..compose._registry import model_class
-
-    return model_class(name)
+        for offending in values:
+            if not any(c.is_satisfied_by(offending) for c in constraints):
+                where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
+                raise ModelFileError(
+                    f"the {name}'s stored {key}{where} is {offending!r:.80}, outside its allowed values: "
+                    f"{' or '.join(str(c) for c in constraints)}. The file is damaged or was edited; fit and save "
+                    "the model again.")
 
 
 def _is_known(estimator) -> bool:
-    return _known_type(type(estimator).__name__) is type(estimator)
+    return model_class(type(estimator).__name__) is type(estimator)
 
 
 def _encode(value):
@@ -209,7 +194,7 @@ def _decode(value):
         return np.asarray(value["array"], dtype=float)
     if isinstance(value, dict) and set(value) == {"estimator"}:
         name = value["estimator"]["model_type"]
-        cls = _known_type(name)
+        cls = model_class(name)
         if cls is None:
             raise ModelFileError(f"a parameter names an unknown model type {name!r}.")
         return cls(**_known_params(cls, {k: _decode(v) for k, v in value["estimator"]["params"].items()}))
@@ -309,13 +294,13 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
     name = type(estimator).__name__
     if not _is_known(estimator):
         raise ModelFileError(
-            f"cannot save a {name}: model files hold the registry's calibrator classes ({sorted(_known_types())}); "
+            f"cannot save a {name}: model files hold the registry's calibrator classes ({sorted(model_classes())}); "
             "register the class with ftcal.register_calibrator to save it.")
     check_is_fitted(estimator)
-    meta: dict = {"model_type": name, "params": _stored_params(estimator), "fitted": {}}
+    # "state": what is stored, so that a reader can tell a missing entry from an absent attribute
+    meta: dict = {"model_type": name, "params": _stored_params(estimator), "fitted": {}, "state": []}
     arrays: dict[str, np.ndarray] = {}
     children: list[tuple[str, bool, object]] = []
-    meta["state"] = []  # what is stored, so that a reader can tell a missing entry from an absent attribute
     encoded = getattr(type(estimator), "_encoded_state", ())  # stored by the class' own _state_to_arrays
     for key in fitted_state_names(type(estimator)):
         value = estimator.__dict__.get(key)
@@ -423,7 +408,10 @@ def _read_metadata(archive: _Archive) -> dict:
     path = archive.path
     if not archive.has(_META_KEY):
         raise ModelFileError(f"{path} is an .npz file but not an ftcal model file (no {_META_KEY!r} entry).")
-    raw = archive.read(_META_KEY, limit=_MAX_METADATA_BYTES)
+    try:
+        raw = archive.read(_META_KEY, limit=_MAX_METADATA_BYTES)
+    except MemoryLimitError as exc:
+        raise ModelFileError(str(exc)) from None
     if raw.dtype.kind != "U" or raw.ndim != 0:
         raise ModelFileError(f"{path} is not an ftcal model file ({_META_KEY!r} is not a text entry).")
     try:
@@ -442,10 +430,7 @@ def model_data(path: str | os.PathLike) -> dict:
     Only the metadata is read (bounded like :func:`load_model`).
     """
     with _Archive(Path(path)) as archive:
-        try:
-            meta = _read_metadata(archive)
-        except MemoryLimitError as exc:
-            raise ModelFileError(str(exc)) from None
+        meta = _read_metadata(archive)
     data = meta.get("data", {})
     if not isinstance(data, dict):
         raise ModelFileError(f"{path}: the stored data description is not a JSON object; fit the model again.")
@@ -472,10 +457,7 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
     path = Path(path)
     with _Archive(path) as archive:
-        try:
-            meta = _read_metadata(archive)
-        except MemoryLimitError as exc:
-            raise ModelFileError(str(exc)) from None
+        meta = _read_metadata(archive)
         version = meta.get("format_version")
         if version not in _READABLE_VERSIONS:
             raise ModelFileError(
@@ -486,9 +468,9 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         expected = model_type.__name__ if isinstance(model_type, type) else model_type
         if expected is not None and name != expected:
             raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
-        if not isinstance(name, str) or _known_type(name) is None:
+        if not isinstance(name, str) or model_class(name) is None:
             raise ModelFileError(
-                f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_known_types())}.")
+                f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(model_classes())}.")
         try:
             estimator = _from_state(meta, archive, "")
         except MemoryLimitError as exc:
@@ -555,7 +537,7 @@ def _check_scalar(name: str, key: str, value) -> None:
 def _from_state(meta: dict, archive: _Archive, prefix: str):
     """The fitted model of :func:`_state`'s output, reading only the members its declarations name."""
     name = meta["model_type"]
-    cls = _known_type(name)
+    cls = model_class(name)
     if cls is None:
         raise ModelFileError(f"a sub-model has an unknown model type {name!r}.")
     params = {k: _decode(v) for k, v in meta["params"].items()}
@@ -599,7 +581,6 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
     if meta.get("format_version", FORMAT_VERSION) == 1 and children:  # version 1: one attribute, named nowhere
         attribute = _V1_CHILDREN[name]
         children = [{**c, "attribute": attribute, "single": bool(meta.get("single_child"))} for c in children]
-    lists: dict[str, list] = {}
     for i, child_meta in enumerate(children):
         key = child_meta["attribute"]
         if key not in declared:
@@ -608,10 +589,8 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
                             f"{prefix}children/{i}/")
         if child_meta.get("single"):
             setattr(estimator, key, child)
-        else:
-            lists.setdefault(key, []).append(child)
-    for key, value in lists.items():
-        setattr(estimator, key, value)
+        else:  # a list of sub-models, in the stored order
+            vars(estimator).setdefault(key, []).append(child)
     _check_fitted_constraints(estimator)
     required = [renamed.get(k, k) for k in meta.get("state") or []] or \
         [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]

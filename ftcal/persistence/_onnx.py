@@ -87,10 +87,8 @@ class _Graph:
         h = self.op("Cast", x, to=self.onnx.TensorProto.FLOAT)
         for weight_t, bias, activation in layers:
             h = self.op("Gemm", h, self.const(weight_t, np.float32), self.const(bias, np.float32))
-            if activation == "relu":
-                h = self.op("Relu", h)
-            elif activation == "tanh":
-                h = self.op("Tanh", h)
+            if activation in ("relu", "tanh"):  # the ONNX ops Relu and Tanh
+                h = self.op(activation.title(), h)
         return self.op("Cast", h, to=self.onnx.TensorProto.DOUBLE)
 
 
@@ -123,11 +121,6 @@ class _Graph:
         if getattr(model, "tare_reading_", None) is not None:
             x = self.op("Sub", x, self.const(retare_shift(model)))
         return self.calibration(static, x) if static is not None else emit(model, self, x)
-
-
-def _n_outputs(model) -> int:
-    """Output width: 6 for a wrench calibrator (and for model files written before ``n_outputs_`` existed)."""
-    return int(getattr(model, "n_outputs_", 6))
 
 
 def _emitter(model) -> Callable | None:
@@ -199,7 +192,8 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     graph = onnx.helper.make_graph(
         g.nodes, f"ftcal_{type(model).__name__}",
         [onnx.helper.make_tensor_value_info("readings", double, ["n", n_inputs])],
-        [onnx.helper.make_tensor_value_info("wrench", double, ["n", _n_outputs(model)])],
+        # 6 outputs for a model file written before n_outputs_ existed
+        [onnx.helper.make_tensor_value_info("wrench", double, ["n", int(getattr(model, "n_outputs_", 6))])],
         initializer=g.initializers,
         doc_string=("readings: raw channels (n, N) in the training order"
                     + (", temperature [deg C] last" if calibration_tags(model).temperature_column else "")
