@@ -199,8 +199,7 @@ def resolution_uncertainty(model: Any, X: NDArray, lsb: NDArray, *, rows: int = 
 
 def _type_a(errors: NDArray, cases: NDArray, n_units: int) -> tuple[NDArray, NDArray, int, int]:
     """``(reproducibility u, repeatability s_r, dof of the first (per axis), dof of the second)`` per axis."""
-    _, case = np.unique(cases, return_inverse=True)
-    count = np.bincount(case)
+    _, case, count = np.unique(cases, return_inverse=True, return_counts=True)
     means = np.zeros((count.size, errors.shape[1]))
     np.add.at(means, case, errors)
     means /= count[:, None]

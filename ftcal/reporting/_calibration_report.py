@@ -185,19 +185,17 @@ def load_case_labels(y: NDArray, pred: NDArray, groups: NDArray | None, fs: NDAr
     >>> case.tolist(), table["rows"].tolist(), np.round(table["indicated"].ravel(), 3).tolist()
     ([0, 0, 1], [2, 1], [1.2, 2.0])
     """
-    n, k = y.shape
+    k = y.shape[1]
     grid = np.where(np.isfinite(fs), fs, np.nanmax(np.abs(y), axis=0) + 1.0) * 1e-6
     key = np.round(y / np.where(grid > 0, grid, 1.0))
     if groups is not None:
         _, glabel = np.unique(groups, return_inverse=True)
         key = np.column_stack([glabel.ravel(), key])
-    _, case, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    _, first, case, count = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
     case = case.ravel()
     sums = np.zeros((count.size, 2 * k))
     np.add.at(sums, case, np.hstack([y, pred]))
     applied, indicated = np.hsplit(sums / count[:, None], 2)
-    first = np.full(count.size, n)
-    np.minimum.at(first, case, np.arange(n))
     err_pct = 100 * (indicated - applied) / fs
     worst = np.nanmax(np.abs(err_pct), axis=1)
     order = np.lexsort((first, -worst))

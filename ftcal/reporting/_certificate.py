@@ -231,10 +231,9 @@ def _named_groups(groups: NDArray | None, names: list[str] | None) -> list | Non
 def channel_names(dataset: CalibrationDataset, n: int) -> list[str]:
     """The data's channel names (``meta["channel_names"]``), else ``s0..``; a temperature input last."""
     names = dataset.meta.get("channel_names") or dataset.meta.get("channels")
-    names = [str(c) for c in names] if isinstance(names, (list, tuple)) else [f"s{i}" for i in range(dataset.n_channels)]
-    if len(names) != dataset.n_channels:
+    if not isinstance(names, (list, tuple)) or len(names) != dataset.n_channels:
         names = [f"s{i}" for i in range(dataset.n_channels)]
-    return names + ["temperature"] * (n - len(names))
+    return [str(c) for c in names] + ["temperature"] * (n - dataset.n_channels)
 
 
 # ------------------------------------------------------------------------------------------------ the comparison
@@ -375,18 +374,16 @@ def _accuracy(y: NDArray, pred: NDArray, std: NDArray | None, names: list[str], 
     data_max = np.max(np.abs(y), axis=0)
     out = []
     for j, b in enumerate(budget):
-        rms, top, U = float(np.sqrt(np.mean(err[:, j] ** 2))), float(np.max(np.abs(err[:, j]))), \
-            b.expanded_uncertainty
-        a = {"axis": names[j], "unit": units[j], "full_scale": fs[j], "rated": None if rated is None else rated[j],
-             "data_max": data_max[j], "rms": rms, "max": top, "rms_pct_fs": 100 * rms / fs[j],
-             "max_pct_fs": 100 * top / fs[j], "coverage_factor": b.coverage_factor, "u95": U,
-             "u95_pct_fs": 100 * U / fs[j], "coverage_u95": float(np.mean(np.abs(err[:, j]) <= U)),
-             "coverage_std": (None if std is None
-                              else float(np.mean(np.abs(err[:, j]) <= COVERAGE_FACTOR * std[:, j]))),
-             "spec_pct_fs": None if spec is None else spec[j], "verdict": None}
-        if spec is not None:
-            a["verdict"] = "PASS" if np.isfinite(a["u95_pct_fs"]) and a["u95_pct_fs"] <= spec[j] else "FAIL"
-        out.append(a)
+        rms, top, U = float(np.sqrt(np.mean(err[:, j] ** 2))), float(np.max(np.abs(err[:, j]))), b.expanded_uncertainty
+        out.append({
+            "axis": names[j], "unit": units[j], "full_scale": fs[j], "rated": None if rated is None else rated[j],
+            "data_max": data_max[j], "rms": rms, "max": top, "rms_pct_fs": 100 * rms / fs[j],
+            "max_pct_fs": 100 * top / fs[j], "coverage_factor": b.coverage_factor, "u95": U,
+            "u95_pct_fs": 100 * U / fs[j], "coverage_u95": float(np.mean(np.abs(err[:, j]) <= U)),
+            "coverage_std": None if std is None else float(np.mean(np.abs(err[:, j]) <= COVERAGE_FACTOR * std[:, j])),
+            "spec_pct_fs": None if spec is None else spec[j],
+            "verdict": None if spec is None else "PASS" if np.isfinite(100 * U / fs[j]) and 100 * U / fs[j] <= spec[j]
+            else "FAIL"})
     return out
 
 

@@ -150,17 +150,16 @@ def _verdict(c) -> str:
 
 def _budget_table(c) -> str:
     """The uncertainty budget: one row per axis, one column per component (standard uncertainties)."""
-    names = []
-    for b in c.budget:
-        names += [x.name for x in b.components if x.name not in names]
+    names = list(dict.fromkeys(x.name for b in c.budget for x in b.components))  # each component once, in order
     units = {a["name"]: a["unit"] for a in c.axes}
     rows = []
     for b in c.budget:
         comp = {x.name: x for x in b.components}
         rows.append([f"{b.axis} [{units[b.axis]}]"] + [
             "–" if n not in comp else "0" if comp[n].standard_uncertainty == 0 else
-            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" for n in names] + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof),
-                                        _fmt(b.coverage_factor), _fmt(b.expanded_uncertainty)])
+            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" for n in names]
+            + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof), _fmt(b.coverage_factor),
+               _fmt(b.expanded_uncertainty)])
     return ("<h3>Uncertainty budget (standard uncertainties, degrees of freedom in brackets)</h3>"
             + _table(["axis"] + [_fmt(n) for n in names] + ["u<sub>c</sub>", "ν<sub>eff</sub>", "k", "U95"], rows)
             + "<p class=\"note\">GUM (JCGM 100), EURAMET cg-4: uncorrelated components, u<sub>c</sub> their root "
@@ -267,18 +266,16 @@ def _choice(c) -> str:
     comp = c.comparison
     plan = comp.get("plan", {})
     units = plan.get("units_name", "fold")
+    best = min((r["rmse"] for r in comp.get("rows", []) if r["rmse"] is not None), default=None)
     rows, classes = [], []
-    scored = [r for r in comp.get("rows", []) if r["rmse"] is not None]
-    best = min((r["rmse"] for r in scored), default=None)
     for r in comp.get("rows", []):
         if r["rmse"] is None:
             rows.append([_fmt(r["model"]), _fmt(r["status"] + (f": {r['reason']}" if r.get("reason") else ""))]
                         + [""] * (len(c.axes) + 2))
-            classes.append("")
-            continue
-        rows.append([_fmt(r["model"]), _fmt(r["rmse"], 4), _fmt(r["rmse_se"], 2), _fmt(r.get("against"))]
-                    + [_fmt(x) for x in r["axis_rmse"]])
-        classes.append("best" if r["rmse"] == best else "")
+        else:
+            rows.append([_fmt(r["model"]), _fmt(r["rmse"], 4), _fmt(r["rmse_se"], 2), _fmt(r.get("against"))]
+                        + [_fmt(x) for x in r["axis_rmse"]])
+        classes.append("best" if r["rmse"] is not None and r["rmse"] == best else "")
     head = ["model", "RMSE [N]", "± SE", "against this calibration (paired SE)"] + \
         [f"{a['name']} [{a['unit']}]" for a in c.axes]
     return (f"<p class=\"note\">This calibration beside the stock scikit-learn models a user would try first "
@@ -354,13 +351,12 @@ def _conditions(c) -> str:
         names = d.get("group_names")
         data.append(["groups (poses / load configurations)", _fmt(d["groups"]) + (
             ": " + _fmt(", ".join(names[:60])) + (" ..." if len(names) > 60 else "") if names else "")])
-    data.append(["largest |F|", f"{_fmt(d['max_force_norm'])} N"] if d.get("max_force_norm") is not None else None)
-    data.append(["largest |T|", f"{_fmt(d['max_torque_norm'])} N·m"] if d.get("max_torque_norm") is not None
-                else None)
+    data += [[label, f"{_fmt(d[key])} {unit}"] for key, label, unit in (
+        ("max_force_norm", "largest |F|", "N"), ("max_torque_norm", "largest |T|", "N·m")) if d.get(key) is not None]
     data.append(["command", f"<code>{_fmt(c.identity.get('command'))}</code>"])
     return ("<p class=\"note\">From the conditions file beside the data (<code>DATA.conditions.yaml</code> or "
             "<code>.json</code>), a conditions file named on the command line, or the options of the same names.</p>"
-            + _table(["", ""], rows) + "<h3>Data</h3>" + _table(["", ""], [r for r in data if r is not None]))
+            + _table(["", ""], rows) + "<h3>Data</h3>" + _table(["", ""], data))
 
 
 def _extras(c) -> str:
