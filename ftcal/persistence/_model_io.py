@@ -59,6 +59,7 @@ from pathlib import Path
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
+from .. import __version__
 from ..calibrators._base import BaseCalibrator
 from ..compose._registry import model_class, model_classes
 from ..core._exceptions import ModelFileError
@@ -248,7 +249,7 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, d
     """
     meta, arrays = _state(estimator)
     _refuse_non_finite(type(estimator).__name__, meta, arrays)
-    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": _ftcal_version()}
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": __version__}
     if data is not None:
         meta["data"] = data
     arrays[_META_KEY] = np.array(json.dumps(meta))
@@ -339,12 +340,6 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
             meta["children"].append({**child_meta, "attribute": key, "single": single})
             arrays.update({f"children/{i}/{k}": v for k, v in child_arrays.items()})
     return meta, arrays
-
-
-def _ftcal_version() -> str:
-    from .. import __version__
-
-    return __version__
 
 
 class _Archive:
@@ -461,7 +456,7 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         version = meta.get("format_version")
         if version not in _READABLE_VERSIONS:
             raise ModelFileError(
-                f"{path} has model-file format version {version!r}; this ftcal (version {_ftcal_version()}) "
+                f"{path} has model-file format version {version!r}; this ftcal (version {__version__}) "
                 f"reads versions {', '.join(map(str, _READABLE_VERSIONS))}. Re-fit and save the model with this "
                 "ftcal version.")
         name = meta.get("model_type")

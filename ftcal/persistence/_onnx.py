@@ -24,12 +24,12 @@ exporter.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
+from .. import __version__
 from ..calibrators._base import calibration_tags, retare_shift
 from ..compose._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
@@ -99,7 +99,10 @@ class _Graph:
         The model's own part is the ``_emit_onnx(graph, x)`` its class declares next to itself; a wrapper's
         calls this again for its inner calibrators.
         """
-        emit = _emitter(model)
+        # the _emit_onnx of its class (its own or inherited) when its tags say it is exportable: a subclass of an
+        # exportable calibrator keeps its parent's graph unless it declares onnx=False
+        emit = getattr(type(model), "_emit_onnx", None)
+        emit = emit if callable(emit) and calibration_tags(model).onnx else None
         static = None
         if reads_history(model):
             if getattr(model, "tau_rows_", None) is not None or getattr(model, "estimator_", None) is None:
@@ -121,13 +124,6 @@ class _Graph:
         if getattr(model, "tare_reading_", None) is not None:
             x = self.op("Sub", x, self.const(retare_shift(model)))
         return self.calibration(static, x) if static is not None else emit(model, self, x)
-
-
-def _emitter(model) -> Callable | None:
-    """The ``_emit_onnx`` of ``model``'s class (its own or inherited) when its tags say it is exportable: a
-    subclass of an exportable calibrator keeps its parent's graph unless it declares ``onnx=False``."""
-    emit = getattr(type(model), "_emit_onnx", None)
-    return emit if callable(emit) and calibration_tags(model).onnx else None
 
 
 def exportable_types() -> tuple[type, ...]:
@@ -199,8 +195,6 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
                     + (", temperature [deg C] last" if calibration_tags(model).temperature_column else "")
                     + "; wrench: Fx, Fy, Fz [N], Tx, Ty, Tz [N m]"),
     )
-    from .. import __version__
-
     onnx_model = onnx.helper.make_model(
         graph, producer_name="ftcal", producer_version=__version__,
         opset_imports=[onnx.helper.make_opsetid("", OPSET)],

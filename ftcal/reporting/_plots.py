@@ -27,10 +27,24 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import WRENCH_LABELS, axis_unit, default_axes, force_columns, torque_columns
 
-__all__ = ["MODEL_COLORS", "model_color", "model_colors", "error_distributions_figure", "plot_error_distributions",
-           "axis_errors_figure", "plot_axis_errors", "predicted_vs_reference_figure", "plot_predicted_vs_reference",
-           "sphere_coverage_figure", "plot_sphere_coverage", "wrench_coverage_figure", "plot_wrench_coverage",
-           "error_vs_load_figure", "residual_magnitude_figure", "residual_direction_figure"]
+__all__ = [
+    "MODEL_COLORS",
+    "model_color",
+    "model_colors",
+    "error_distributions_figure",
+    "plot_error_distributions",
+    "axis_errors_figure",
+    "plot_axis_errors",
+    "predicted_vs_reference_figure",
+    "plot_predicted_vs_reference",
+    "sphere_coverage_figure",
+    "plot_sphere_coverage",
+    "wrench_coverage_figure",
+    "plot_wrench_coverage",
+    "error_vs_load_figure",
+    "residual_magnitude_figure",
+    "residual_direction_figure",
+]
 
 #: The one colour table: model name -> colour, pairwise distinct (a label containing a name, e.g.
 #: ``"linear (this calibration)"``, takes the colour of the longest name it contains).
@@ -508,8 +522,7 @@ def error_vs_load_figure(
     rows = int(np.ceil(k / cols))
     fig = Figure(figsize=(10, 3.0 * rows + 0.4), layout="constrained")
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
-    for j in range(k):
-        ax = axes[j]
+    for j, ax in enumerate(axes[:k]):
         e = err[:, j]
         order = _draw_order(np.abs(np.nan_to_num(e)), max_points, seed=j)
         outside = np.abs(e[order]) > band[j] if np.isfinite(band[j]) else np.zeros(order.size, bool)
