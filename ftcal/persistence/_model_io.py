@@ -249,9 +249,8 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, d
     """
     meta, arrays = _state(estimator)
     _refuse_non_finite(type(estimator).__name__, meta, arrays)
-    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": __version__}
-    if data is not None:
-        meta["data"] = data
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": __version__,
+            **({} if data is None else {"data": data})}
     arrays[_META_KEY] = np.array(json.dumps(meta))
     if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
         raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
@@ -280,10 +279,8 @@ def _refuse_non_finite(name: str, meta: dict, arrays: dict[str, np.ndarray]) -> 
         rule = _SCALAR_RULES.get(key.rsplit(".", 1)[-1])
         return not rule(value) if rule is not None else isinstance(value, float) and np.isnan(value)
 
-    bad = next((k for k, v in scalars(meta, "") if refused(k, v)), None)
-    if bad is None:
-        bad = next((k.replace("fitted/", "") for k, a in arrays.items()
-                    if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
+    bad = next((k for k, v in scalars(meta, "") if refused(k, v)), None) or next(
+        (k.replace("fitted/", "") for k, a in arrays.items() if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
     if bad is not None:
         raise ModelFileError(
             f"cannot save the {name}: its fitted {bad} holds NaN or inf (the model diverged or was changed after "
@@ -491,8 +488,7 @@ def _check_consistent(estimator, path: Path) -> None:
             f"{path}: the stored arrays do not fit together ({type(exc).__name__}: {str(exc)[:120]}); "
             "the file is damaged or was edited. Fit and save the model again."
         ) from None
-    width = int(getattr(estimator, "n_outputs_", 6))
-    expected = (1,) if getattr(estimator, "y_1d_", False) else (1, width)
+    expected = (1,) if getattr(estimator, "y_1d_", False) else (1, int(getattr(estimator, "n_outputs_", 6)))
     if out.shape != expected:
         raise ModelFileError(f"{path}: the model gives output of shape {out.shape[1:]} instead of "
                              f"{expected[1:]}; the file is damaged.")
@@ -610,8 +606,7 @@ def _restore_encoded(estimator, meta: dict, archive: _Archive, prefix: str) -> N
     got = {k: tuple(v.shape) for k, v in arrays.items()}
     extra = sorted(set(got_names) - set(expected))
     if got != expected or extra:
-        diff = extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
-        k = diff[0]
+        k = (extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]])[0]
         raise ModelFileError(
             f"the network weights do not match the declared layers (hidden_layer_sizes="
             f"{estimator.hidden_layer_sizes}, {meta['fitted']['n_features_in_']} inputs): {k} is "

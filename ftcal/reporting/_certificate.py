@@ -368,10 +368,9 @@ def _budget(model: Any, X: NDArray, y: NDArray, pred: NDArray, names: list[str],
 
 
 def _accuracy(y: NDArray, pred: NDArray, std: NDArray | None, names: list[str], units: list[str], fs: NDArray,
-              rated: NDArray | None, spec: NDArray | None, budget: list[AxisBudget]) -> list[dict]:
+              data_max: NDArray, rated: NDArray | None, spec: NDArray | None, budget: list[AxisBudget]) -> list[dict]:
     """Per axis: held-out RMS and max error, U95 of the budget, coverage, spec and verdict."""
     err = pred - y
-    data_max = np.max(np.abs(y), axis=0)
     out = []
     for j, b in enumerate(budget):
         rms, top, U = float(np.sqrt(np.mean(err[:, j] ** 2))), float(np.max(np.abs(err[:, j]))), b.expanded_uncertainty
@@ -602,7 +601,7 @@ def calibration_certificate(
                                                    gnames))
     budget = _budget(model, X, y, pred, names, case_of, plan,
                      reference=reference, temperature=(coef, temperature_deviation))
-    accuracy = _accuracy(y, pred, std, names, units, fs, rated_fs, spec_pct, budget)
+    accuracy = _accuracy(y, pred, std, names, units, fs, data_max, rated_fs, spec_pct, budget)
     verdict = None if spec_pct is None else ("PASS" if all(a["verdict"] == "PASS" for a in accuracy) else "FAIL")
     date = _dt.datetime.now(_dt.timezone.utc)
     overdue, overdue_warning = _due_date(conditions, date.date())

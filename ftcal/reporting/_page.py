@@ -110,9 +110,8 @@ def _dof(value) -> str:
 # ------------------------------------------------------------------------------------------------- first page
 def _summary(c) -> str:
     m, d, acc, cond = c.identity["model"], c.data, c.accuracy, c.conditions
-    groups = ""
-    if d.get("groups"):
-        groups = f", {_fmt(d['groups'])} groups" + (" (named by their files)" if d.get("group_names") else "")
+    groups = (f", {_fmt(d['groups'])} groups" + (" (named by their files)" if d.get("group_names") else "")
+              if d.get("groups") else "")
     parts = [
         f"<p class=\"note\">Issued {_fmt(c.identity['date_utc'])} by ftcal {_fmt(c.identity['ftcal_version'])}. Every "
         "accuracy figure is <b>held out</b>: errors on data the fitted calibration did not see.</p>",
@@ -336,8 +335,7 @@ def _conditions(c) -> str:
     rows = []
     for key, label in CONDITION_FIELDS.items():
         if key == "ambient_temperature":
-            value = temp_data if ambient is None and temp_data is not None else ambient
-            rows.append([label, _not_stated(value, how_temp if value is None else "")])
+            rows.append([label, _not_stated(ambient if ambient is not None else temp_data, how_temp)])
         elif key in ("location", "notes") and cond.get(key) is None:
             continue
         elif key == "calibration_date" and cond.get(key) is None:
