@@ -253,10 +253,8 @@ def add_interval(start: _dt.date, interval: str) -> _dt.date:
     count, unit = _parse_interval(interval)
     if unit == "days":
         return start + _dt.timedelta(days=count)
-    months = start.year * 12 + (start.month - 1) + count
-    year, month = divmod(months, 12)
-    month += 1
-    return _dt.date(year, month, min(start.day, calendar.monthrange(year, month)[1]))
+    year, month = divmod(start.year * 12 + start.month - 1 + count, 12)  # month counted from 0
+    return _dt.date(year, month + 1, min(start.day, calendar.monthrange(year, month + 1)[1]))
 
 
 def _iso_date(text: str) -> _dt.date | None:

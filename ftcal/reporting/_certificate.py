@@ -177,12 +177,10 @@ class CalibrationCertificate:
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(["rank", "group", "first_row", "rows"] + LoadCases.columns(self.axes))
         c = self.cases
-        if c is None:
-            return out.getvalue()
-        block = np.column_stack([c.applied, c.indicated, c.error_pct_fs])
-        for i in range(block.shape[0]):
-            writer.writerow([i + 1, "" if c.group is None else c.group[i], int(c.first_row[i]), int(c.rows[i])]
-                            + [f"{x:.7g}" for x in block[i]])
+        if c is not None:
+            block = np.column_stack([c.applied, c.indicated, c.error_pct_fs])
+            writer.writerows([i + 1, "" if c.group is None else c.group[i], int(c.first_row[i]), int(c.rows[i])]
+                             + [f"{x:.7g}" for x in block[i]] for i in range(len(block)))
         return out.getvalue()
 
     def to_html(self) -> str:

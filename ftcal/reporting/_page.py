@@ -312,16 +312,13 @@ def _readings(c) -> str:
 def _range(c) -> str:
     d, r = c.data, c.calibrated_range
     rated = any(a.get("rated") is not None for a in c.accuracy)
+    axes = [[f"{ax['name']} [{ax['unit']}]", _fmt(lo), _fmt(hi), _fmt(mm)] + ([_fmt(a["rated"])] if rated else [])
+            for ax, lo, hi, mm, a in zip(c.axes, d["wrench_min"], d["wrench_max"], r["wrench_abs_max"], c.accuracy)]
+    raw = [[_fmt(n), _fmt(lo), _fmt(hi)] for n, lo, hi in zip(d.get("channel_names") or [], r["raw_min"], r["raw_max"])]
     return ("<p class=\"note\">Readings or loads beyond these were not calibrated (the range check of "
             "<code>ftcal predict</code> flags them).</p>"
-            + _table(["axis", "min", "max", "|max|"] + (["rated capacity"] if rated else []),
-                     [[f"{ax['name']} [{ax['unit']}]", _fmt(lo), _fmt(hi), _fmt(mm)] + ([_fmt(a["rated"])] if rated
-                                                                                       else [])
-                      for ax, lo, hi, mm, a in zip(c.axes, d["wrench_min"], d["wrench_max"], r["wrench_abs_max"],
-                                                   c.accuracy)])
-            + _table(["raw channel", "min", "max"], [[_fmt(n), _fmt(lo), _fmt(hi)] for n, lo, hi in
-                                                     zip(d.get("channel_names") or [], r["raw_min"], r["raw_max"])],
-                     long=True))
+            + _table(["axis", "min", "max", "|max|"] + (["rated capacity"] if rated else []), axes)
+            + _table(["raw channel", "min", "max"], raw, long=True))
 
 
 def _conditions(c) -> str:
