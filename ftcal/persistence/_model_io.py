@@ -57,6 +57,7 @@ from numbers import Integral
 from pathlib import Path
 
 import numpy as np
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from .. import __version__
@@ -137,10 +138,7 @@ def _check_fitted_constraints(estimator) -> None:
             below = values < low if c.closed in ("left", "both") else values <= low
             above = values > high if c.closed in ("right", "both") else values >= high
             wrong_kind = (values != np.floor(values)) if c.type is Integral and value.dtype.kind == "f" else False
-            bad = np.flatnonzero(below | above | wrong_kind)
-            if not bad.size:
-                continue
-            values = [values[bad[0]].item()]
+            values = [values[i].item() for i in np.flatnonzero(below | above | wrong_kind)[:1]]  # the first bad one
         for offending in values:
             if not any(c.is_satisfied_by(offending) for c in constraints):
                 where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
@@ -315,17 +313,14 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
             arrays[f"fitted/{key}"] = value
         elif isinstance(value, np.ndarray) and all(isinstance(v, str) for v in value.ravel()):
             meta["fitted"][key] = {"strings": [str(v) for v in value.ravel()]}
-        else:
-            from sklearn.base import BaseEstimator
-
-            if isinstance(value, BaseEstimator):  # the fitted model itself: a file would load as another model
-                raise ModelFileError(
-                    f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
-                    "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
-                    "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
-            typed = getattr(type(estimator), "_typed_state", {})
-            # a typed result (a Comparison, a FoldPlan) stores its own JSON-able state, read back by its class
-            meta["fitted"][key] = value.to_state() if key in typed else _encode(value)
+        elif isinstance(value, BaseEstimator):  # the fitted model itself: a file would load as another model
+            raise ModelFileError(
+                f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
+                "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
+                "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
+        else:  # a typed result (a Comparison, a FoldPlan) stores its own JSON-able state, read back by its class
+            typed = key in getattr(type(estimator), "_typed_state", {})
+            meta["fitted"][key] = value.to_state() if typed else _encode(value)
     if any(key in encoded for key in meta["state"]):
         own_arrays, own_meta = estimator._state_to_arrays()
         arrays.update({f"module/{k}": v for k, v in own_arrays.items()})
