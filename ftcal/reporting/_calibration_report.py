@@ -333,9 +333,9 @@ def _matrix(model: Any, names: list[str], units: list[str], channels: list[str])
             "equation": "wrench = matrix @ raw + offset (raw in the sensor's own unit, in the data file's channel order)"}
 
 
-def _warnings(accuracy: list[dict], comparison: dict, X: NDArray, y: NDArray, folds: list, groups, rated_fs,
-              n: int, n_channels: int, dataset: CalibrationDataset) -> list[dict]:
+def _warnings(accuracy: list[dict], comparison: dict, X: NDArray, folds: list, groups, rated_fs) -> list[dict]:
     """What a reader must know before trusting the figures, each ``{"kind", "text"}``."""
+    n, n_channels = X.shape
     out: list[dict] = []
     for a in accuracy:
         if a["rated"] is not None and a["data_max"] > a["rated"]:

@@ -568,7 +568,7 @@ def calibration_certificate(
     """
     X = model_inputs(model, dataset)
     y = np.asarray(dataset.wrench, dtype=float)
-    n, k = y.shape
+    k = y.shape[1]
     names = dataset_axis_names(dataset, k)
     if getattr(model, "n_outputs_", None) is not None and int(model.n_outputs_) != k:
         raise CalibrationInputError(
@@ -603,8 +603,7 @@ def calibration_certificate(
     verdict = None if spec_pct is None else ("PASS" if all(a["verdict"] == "PASS" for a in accuracy) else "FAIL")
     date = _dt.datetime.now(_dt.timezone.utc)
     overdue, overdue_warning = _due_date(conditions, date.date())
-    warn = ([overdue_warning] if overdue_warning else []) + _warnings(
-        accuracy, comp, X, y, list(plan.folds), groups, rated_fs, n, X.shape[1], dataset)
+    warn = [w for w in [overdue_warning] if w] + _warnings(accuracy, comp, X, list(plan.folds), groups, rated_fs)
     if reference[0] is None:
         warn.append({"kind": "no reference uncertainty", "text": (
             "The reference standard's uncertainty was not given: the budget leaves it out. State it (reference "
