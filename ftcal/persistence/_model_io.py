@@ -92,12 +92,9 @@ def fitted_state_names(cls: type) -> tuple[str, ...]:
     >>> "calibration_matrix_" in names and "zero_reading_" in names and "feature_names_in_" in names
     True
     """
-    names: list[str] = []
-    for klass in reversed(cls.__mro__):
-        for name in klass.__dict__.get("_fitted_state", ()):
-            if name not in names:
-                names.append(name)
-    return tuple(names)
+    # each name once, where it is first declared (the base classes' first)
+    return tuple(dict.fromkeys(name for klass in reversed(cls.__mro__)
+                               for name in vars(klass).get("_fitted_state", ())))
 
 
 def fitted_constraints(cls: type) -> dict[str, list]:
@@ -113,10 +110,8 @@ def fitted_constraints(cls: type) -> dict[str, list]:
     >>> str(fitted_constraints(GaussianProcessCalibrator)["std_scale_"][0])
     'a float in the range [1.0, inf)'
     """
-    out: dict[str, list] = {}
-    for klass in reversed(cls.__mro__):
-        out.update(klass.__dict__.get("_fitted_constraints", {}))
-    return out
+    # a subclass' declaration replaces its base's
+    return {k: v for klass in reversed(cls.__mro__) for k, v in vars(klass).get("_fitted_constraints", {}).items()}
 
 
 def _check_fitted_constraints(estimator) -> None:

@@ -64,9 +64,8 @@ class LoadCases:
 
     @property
     def by(self) -> str:
-        if self.rows.max() <= 1:
-            return "row"
-        return f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
+        return "row" if self.rows.max() <= 1 else \
+            f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
 
     @staticmethod
     def columns(axes: list[dict], sep: str = "_", pct_fs: str = "%FS") -> list[str]:
