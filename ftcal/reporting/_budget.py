@@ -127,9 +127,7 @@ def welch_satterthwaite(u: NDArray, dof: NDArray) -> float:
     u, dof = np.asarray(u, dtype=float), np.asarray(dof, dtype=float)
     finite = np.isfinite(dof) & (u > 0)
     denominator = float(np.sum(u[finite] ** 4 / np.maximum(dof[finite], 1.0)))
-    if denominator <= 0:
-        return math.inf
-    return float(np.sum(u**2) ** 2 / denominator)
+    return math.inf if denominator <= 0 else float(np.sum(u**2) ** 2 / denominator)
 
 
 def coverage_factor(dof: float, probability: float = COVERAGE_PROBABILITY) -> float:

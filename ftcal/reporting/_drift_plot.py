@@ -46,9 +46,8 @@ def drift_residuals_figure(report: dict) -> Figure:
     rate = report.get("drift_rate")
     title = f"tool identification: residual against {axis['name']}"
     if rate:
-        f = np.asarray(rate["force"])
-        fse = np.asarray(rate["force_std_error"])
-        title += (f"\ndrift rate F = [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in zip(f, fse))}] {rate['unit_force']}")
+        pairs = zip(np.asarray(rate["force"]), np.asarray(rate["force_std_error"]))
+        title += f"\ndrift rate F = [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in pairs)}] {rate['unit_force']}"
     axes[0].set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
