@@ -310,9 +310,8 @@ def comparison_facts(comp: Comparison) -> dict:
     facts = {"plan": comp.plan.to_dict(), "rows": rows, "best_stock": None}
     stock = [r for r in comp.scored()[1:] if r.rmse is not None and r.row_errors is not None]
     if not stock:
-        facts["sentence"] = ("No stock model was compared (the stock models were left out or could not be scored on "
-                             "these folds).")
-        return facts
+        return {**facts, "sentence": "No stock model was compared (the stock models were left out or could not be "
+                                     "scored on these folds)."}
     best = min(stock, key=lambda r: r.rmse)
     d = comp.paired(this.name, best.name)
     outcome = {"better": "better", "worse": "stock better", "equivalent": "equivalent"}[d.verdict]

@@ -304,9 +304,7 @@ def _readings(c) -> str:
                      + _table(["channel", "rows beyond", "largest (x the half-range)"],
                               [[_fmt(e["channel"]), f"{e['rows_beyond']} of {e['rows']}",
                                 f"{e['largest_x_range']:.2f}x"] for e in c.extrapolation]))
-    if not parts:
-        return ""
-    return "<section id=\"readings\"><h2>Readings checked</h2>" + "".join(parts) + "</section>"
+    return "<section id=\"readings\"><h2>Readings checked</h2>" + "".join(parts) + "</section>" if parts else ""
 
 
 def _range(c) -> str:
