@@ -54,8 +54,7 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
         center = np.zeros(n)
     scale = max(1.0, float(np.max(np.abs(center), initial=0.0)))
     points = np.vstack([center, center + scale * np.eye(n)])
-    rng = np.random.default_rng(0)
-    probes = center + scale * rng.normal(size=(4 * n + 4, n))
+    probes = center + scale * np.random.default_rng(0).normal(size=(4 * n + 4, n))
     try:
         out = np.asarray(model.predict(np.vstack([points, probes])), dtype=float)
     except Exception as exc:
@@ -63,12 +62,10 @@ def linear_calibration_matrix(model: Any) -> tuple[NDArray[np.float64], NDArray[
                           f"({type(exc).__name__}: {exc}).") from None
     if out.ndim != 2 or not 1 <= out.shape[1] <= 6:
         raise ExportError(f"{type(model).__name__} does not predict 1 to 6 wrench components; got shape {out.shape}.")
-    offset_at_center = out[0]
-    matrix = ((out[1:n + 1] - offset_at_center) / scale).T
-    offset = offset_at_center - matrix @ center
-    expected = probes @ matrix.T + offset
+    matrix = ((out[1:n + 1] - out[0]) / scale).T  # out[0]: the prediction at the centre
+    offset = out[0] - matrix @ center
     got = out[n + 1:]
-    gap = float(np.max(np.abs(got - expected)))
+    gap = float(np.max(np.abs(got - (probes @ matrix.T + offset))))
     if not gap <= 1e-7 * (1.0 + float(np.max(np.abs(got)))):
         from ..calibrators._base import calibration_tags
 

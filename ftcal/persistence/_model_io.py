@@ -57,9 +57,12 @@ from numbers import Integral
 from pathlib import Path
 
 import numpy as np
+from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from .. import __version__
 from ..calibrators._base import BaseCalibrator
+from ..compose._registry import model_class, model_classes
 from ..core._exceptions import ModelFileError
 from ..core._files import atomic_output, describe_file_start
 from ..core._memory import MemoryLimitError, check_allocation, format_bytes, read_npy_member
@@ -89,12 +92,9 @@ def fitted_state_names(cls: type) -> tuple[str, ...]:
     >>> "calibration_matrix_" in names and "zero_reading_" in names and "feature_names_in_" in names
     True
     """
-    names: list[str] = []
-    for klass in reversed(cls.__mro__):
-        for name in klass.__dict__.get("_fitted_state", ()):
-            if name not in names:
-                names.append(name)
-    return tuple(names)
+    # each name once, where it is first declared (the base classes' first)
+    return tuple(dict.fromkeys(name for klass in reversed(cls.__mro__)
+                               for name in vars(klass).get("_fitted_state", ())))
 
 
 def fitted_constraints(cls: type) -> dict[str, list]:
@@ -110,10 +110,8 @@ def fitted_constraints(cls: type) -> dict[str, list]:
     >>> str(fitted_constraints(GaussianProcessCalibrator)["std_scale_"][0])
     'a float in the range [1.0, inf)'
     """
-    out: dict[str, list] = {}
-    for klass in reversed(cls.__mro__):
-        out.update(klass.__dict__.get("_fitted_constraints", {}))
-    return out
+    # a subclass' declaration replaces its base's
+    return {k: v for klass in reversed(cls.__mro__) for k, v in vars(klass).get("_fitted_constraints", {}).items()}
 
 
 def _check_fitted_constraints(estimator) -> None:
@@ -135,37 +133,18 @@ def _check_fitted_constraints(estimator) -> None:
             below = values < low if c.closed in ("left", "both") else values <= low
             above = values > high if c.closed in ("right", "both") else values >= high
             wrong_kind = (values != np.floor(values)) if c.type is Integral and value.dtype.kind == "f" else False
-            bad = np.flatnonzero(below | above | wrong_kind)
-            if not bad.size:
-                continue
-            values = [values[bad[0]].item()]
-        offending = next((v for v in values if not any(c.is_satisfied_by(v) for c in constraints)), _NONE)
-        if offending is _NONE:
-            continue
-        where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
-        raise ModelFileError(
-            f"the {name}'s stored {key}{where} is {offending!r:.80}, outside its allowed values: "
-            f"{' or '.join(str(c) for c in constraints)}. The file is damaged or was edited; fit and save the "
-            "model again.")
-
-
-_NONE = object()
-
-
-def _known_types() -> dict[str, type]:
-    from ..compose._registry import model_classes
-
-    return model_classes()
-
-
-def _known_type(name: str) -> type | None:
-    from ..compose._registry import model_class
-
-    return model_class(name)
+            values = [values[i].item() for i in np.flatnonzero(below | above | wrong_kind)[:1]]  # the first bad one
+        for offending in values:
+            if not any(c.is_satisfied_by(offending) for c in constraints):
+                where = " (an entry of it)" if isinstance(value, np.ndarray) else ""
+                raise ModelFileError(
+                    f"the {name}'s stored {key}{where} is {offending!r:.80}, outside its allowed values: "
+                    f"{' or '.join(str(c) for c in constraints)}. The file is damaged or was edited; fit and save "
+                    "the model again.")
 
 
 def _is_known(estimator) -> bool:
-    return _known_type(type(estimator).__name__) is type(estimator)
+    return model_class(type(estimator).__name__) is type(estimator)
 
 
 def _encode(value):
@@ -209,7 +188,7 @@ def _decode(value):
         return np.asarray(value["array"], dtype=float)
     if isinstance(value, dict) and set(value) == {"estimator"}:
         name = value["estimator"]["model_type"]
-        cls = _known_type(name)
+        cls = model_class(name)
         if cls is None:
             raise ModelFileError(f"a parameter names an unknown model type {name!r}.")
         return cls(**_known_params(cls, {k: _decode(v) for k, v in value["estimator"]["params"].items()}))
@@ -263,9 +242,8 @@ def save_model(estimator, path: str | os.PathLike, *, overwrite: bool = False, d
     """
     meta, arrays = _state(estimator)
     _refuse_non_finite(type(estimator).__name__, meta, arrays)
-    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": _ftcal_version()}
-    if data is not None:
-        meta["data"] = data
+    meta = {"format": FORMAT, "format_version": FORMAT_VERSION, **meta, "ftcal_version": __version__,
+            **({} if data is None else {"data": data})}
     arrays[_META_KEY] = np.array(json.dumps(meta))
     if not isinstance(path, (str, os.PathLike)) or isinstance(os.fspath(path), bytes):
         raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
@@ -294,10 +272,8 @@ def _refuse_non_finite(name: str, meta: dict, arrays: dict[str, np.ndarray]) -> 
         rule = _SCALAR_RULES.get(key.rsplit(".", 1)[-1])
         return not rule(value) if rule is not None else isinstance(value, float) and np.isnan(value)
 
-    bad = next((k for k, v in scalars(meta, "") if refused(k, v)), None)
-    if bad is None:
-        bad = next((k.replace("fitted/", "") for k, a in arrays.items()
-                    if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
+    bad = next((k for k, v in scalars(meta, "") if refused(k, v)), None) or next(
+        (k.replace("fitted/", "") for k, a in arrays.items() if a.dtype.kind == "f" and not np.isfinite(a).all()), None)
     if bad is not None:
         raise ModelFileError(
             f"cannot save the {name}: its fitted {bad} holds NaN or inf (the model diverged or was changed after "
@@ -309,13 +285,13 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
     name = type(estimator).__name__
     if not _is_known(estimator):
         raise ModelFileError(
-            f"cannot save a {name}: model files hold the registry's calibrator classes ({sorted(_known_types())}); "
+            f"cannot save a {name}: model files hold the registry's calibrator classes ({sorted(model_classes())}); "
             "register the class with ftcal.register_calibrator to save it.")
     check_is_fitted(estimator)
-    meta: dict = {"model_type": name, "params": _stored_params(estimator), "fitted": {}}
+    # "state": what is stored, so that a reader can tell a missing entry from an absent attribute
+    meta: dict = {"model_type": name, "params": _stored_params(estimator), "fitted": {}, "state": []}
     arrays: dict[str, np.ndarray] = {}
     children: list[tuple[str, bool, object]] = []
-    meta["state"] = []  # what is stored, so that a reader can tell a missing entry from an absent attribute
     encoded = getattr(type(estimator), "_encoded_state", ())  # stored by the class' own _state_to_arrays
     for key in fitted_state_names(type(estimator)):
         value = estimator.__dict__.get(key)
@@ -332,17 +308,14 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
             arrays[f"fitted/{key}"] = value
         elif isinstance(value, np.ndarray) and all(isinstance(v, str) for v in value.ravel()):
             meta["fitted"][key] = {"strings": [str(v) for v in value.ravel()]}
-        else:
-            from sklearn.base import BaseEstimator
-
-            if isinstance(value, BaseEstimator):  # the fitted model itself: a file would load as another model
-                raise ModelFileError(
-                    f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
-                    "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
-                    "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
-            typed = getattr(type(estimator), "_typed_state", {})
-            # a typed result (a Comparison, a FoldPlan) stores its own JSON-able state, read back by its class
-            meta["fitted"][key] = value.to_state() if key in typed else _encode(value)
+        elif isinstance(value, BaseEstimator):  # the fitted model itself: a file would load as another model
+            raise ModelFileError(
+                f"cannot save a {name} that holds a {type(value).__name__} of the user's ({key}): a model file "
+                "holds ftcal's registered calibrators and plain values only, never code to run. Keep this model "
+                "in Python, or build it from names (e.g. StockCalibrator(baseline='sk_poly2')) to save it.")
+        else:  # a typed result (a Comparison, a FoldPlan) stores its own JSON-able state, read back by its class
+            typed = key in getattr(type(estimator), "_typed_state", {})
+            meta["fitted"][key] = value.to_state() if typed else _encode(value)
     if any(key in encoded for key in meta["state"]):
         own_arrays, own_meta = estimator._state_to_arrays()
         arrays.update({f"module/{k}": v for k, v in own_arrays.items()})
@@ -354,12 +327,6 @@ def _state(estimator) -> tuple[dict, dict[str, np.ndarray]]:
             meta["children"].append({**child_meta, "attribute": key, "single": single})
             arrays.update({f"children/{i}/{k}": v for k, v in child_arrays.items()})
     return meta, arrays
-
-
-def _ftcal_version() -> str:
-    from .. import __version__
-
-    return __version__
 
 
 class _Archive:
@@ -423,7 +390,10 @@ def _read_metadata(archive: _Archive) -> dict:
     path = archive.path
     if not archive.has(_META_KEY):
         raise ModelFileError(f"{path} is an .npz file but not an ftcal model file (no {_META_KEY!r} entry).")
-    raw = archive.read(_META_KEY, limit=_MAX_METADATA_BYTES)
+    try:
+        raw = archive.read(_META_KEY, limit=_MAX_METADATA_BYTES)
+    except MemoryLimitError as exc:
+        raise ModelFileError(str(exc)) from None
     if raw.dtype.kind != "U" or raw.ndim != 0:
         raise ModelFileError(f"{path} is not an ftcal model file ({_META_KEY!r} is not a text entry).")
     try:
@@ -442,10 +412,7 @@ def model_data(path: str | os.PathLike) -> dict:
     Only the metadata is read (bounded like :func:`load_model`).
     """
     with _Archive(Path(path)) as archive:
-        try:
-            meta = _read_metadata(archive)
-        except MemoryLimitError as exc:
-            raise ModelFileError(str(exc)) from None
+        meta = _read_metadata(archive)
     data = meta.get("data", {})
     if not isinstance(data, dict):
         raise ModelFileError(f"{path}: the stored data description is not a JSON object; fit the model again.")
@@ -472,23 +439,20 @@ def load_model(path: str | os.PathLike, *, model_type: str | type | None = None)
         raise ModelFileError(f"path must be a str or a pathlib.Path naming the model file; got {path!r:.80}.")
     path = Path(path)
     with _Archive(path) as archive:
-        try:
-            meta = _read_metadata(archive)
-        except MemoryLimitError as exc:
-            raise ModelFileError(str(exc)) from None
+        meta = _read_metadata(archive)
         version = meta.get("format_version")
         if version not in _READABLE_VERSIONS:
             raise ModelFileError(
-                f"{path} has model-file format version {version!r}; this ftcal (version {_ftcal_version()}) "
+                f"{path} has model-file format version {version!r}; this ftcal (version {__version__}) "
                 f"reads versions {', '.join(map(str, _READABLE_VERSIONS))}. Re-fit and save the model with this "
                 "ftcal version.")
         name = meta.get("model_type")
         expected = model_type.__name__ if isinstance(model_type, type) else model_type
         if expected is not None and name != expected:
             raise ModelFileError(f"{path} holds a {name}, not the expected {expected}.")
-        if not isinstance(name, str) or _known_type(name) is None:
+        if not isinstance(name, str) or model_class(name) is None:
             raise ModelFileError(
-                f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(_known_types())}.")
+                f"{path} holds an unknown model type {name!r}; this ftcal reads {sorted(model_classes())}.")
         try:
             estimator = _from_state(meta, archive, "")
         except MemoryLimitError as exc:
@@ -514,8 +478,7 @@ def _check_consistent(estimator, path: Path) -> None:
             f"{path}: the stored arrays do not fit together ({type(exc).__name__}: {str(exc)[:120]}); "
             "the file is damaged or was edited. Fit and save the model again."
         ) from None
-    width = int(getattr(estimator, "n_outputs_", 6))
-    expected = (1,) if getattr(estimator, "y_1d_", False) else (1, width)
+    expected = (1,) if getattr(estimator, "y_1d_", False) else (1, int(getattr(estimator, "n_outputs_", 6)))
     if out.shape != expected:
         raise ModelFileError(f"{path}: the model gives output of shape {out.shape[1:]} instead of "
                              f"{expected[1:]}; the file is damaged.")
@@ -555,7 +518,7 @@ def _check_scalar(name: str, key: str, value) -> None:
 def _from_state(meta: dict, archive: _Archive, prefix: str):
     """The fitted model of :func:`_state`'s output, reading only the members its declarations name."""
     name = meta["model_type"]
-    cls = _known_type(name)
+    cls = model_class(name)
     if cls is None:
         raise ModelFileError(f"a sub-model has an unknown model type {name!r}.")
     params = {k: _decode(v) for k, v in meta["params"].items()}
@@ -599,7 +562,6 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
     if meta.get("format_version", FORMAT_VERSION) == 1 and children:  # version 1: one attribute, named nowhere
         attribute = _V1_CHILDREN[name]
         children = [{**c, "attribute": attribute, "single": bool(meta.get("single_child"))} for c in children]
-    lists: dict[str, list] = {}
     for i, child_meta in enumerate(children):
         key = child_meta["attribute"]
         if key not in declared:
@@ -608,10 +570,8 @@ def _from_state(meta: dict, archive: _Archive, prefix: str):
                             f"{prefix}children/{i}/")
         if child_meta.get("single"):
             setattr(estimator, key, child)
-        else:
-            lists.setdefault(key, []).append(child)
-    for key, value in lists.items():
-        setattr(estimator, key, value)
+        else:  # a list of sub-models, in the stored order
+            vars(estimator).setdefault(key, []).append(child)
     _check_fitted_constraints(estimator)
     required = [renamed.get(k, k) for k in meta.get("state") or []] or \
         [k for k in ("alpha_", "n_features_in_", "zero_reading_") if k in declared]
@@ -636,8 +596,7 @@ def _restore_encoded(estimator, meta: dict, archive: _Archive, prefix: str) -> N
     got = {k: tuple(v.shape) for k, v in arrays.items()}
     extra = sorted(set(got_names) - set(expected))
     if got != expected or extra:
-        diff = extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]]
-        k = diff[0]
+        k = (extra or sorted(set(expected) ^ set(got)) or [k for k in expected if expected[k] != got[k]])[0]
         raise ModelFileError(
             f"the network weights do not match the declared layers (hidden_layer_sizes="
             f"{estimator.hidden_layer_sizes}, {meta['fitted']['n_features_in_']} inputs): {k} is "

@@ -24,12 +24,12 @@ exporter.
 from __future__ import annotations
 
 import os
-from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
+from .. import __version__
 from ..calibrators._base import calibration_tags, retare_shift
 from ..compose._history import reads_history
 from ..core._exceptions import NO_SETTING, ExportError, ExportExistsError
@@ -87,10 +87,8 @@ class _Graph:
         h = self.op("Cast", x, to=self.onnx.TensorProto.FLOAT)
         for weight_t, bias, activation in layers:
             h = self.op("Gemm", h, self.const(weight_t, np.float32), self.const(bias, np.float32))
-            if activation == "relu":
-                h = self.op("Relu", h)
-            elif activation == "tanh":
-                h = self.op("Tanh", h)
+            if activation in ("relu", "tanh"):  # the ONNX ops Relu and Tanh
+                h = self.op(activation.title(), h)
         return self.op("Cast", h, to=self.onnx.TensorProto.DOUBLE)
 
 
@@ -101,7 +99,10 @@ class _Graph:
         The model's own part is the ``_emit_onnx(graph, x)`` its class declares next to itself; a wrapper's
         calls this again for its inner calibrators.
         """
-        emit = _emitter(model)
+        # the _emit_onnx of its class (its own or inherited) when its tags say it is exportable: a subclass of an
+        # exportable calibrator keeps its parent's graph unless it declares onnx=False
+        emit = getattr(type(model), "_emit_onnx", None)
+        emit = emit if callable(emit) and calibration_tags(model).onnx else None
         static = None
         if reads_history(model):
             if getattr(model, "tau_rows_", None) is not None or getattr(model, "estimator_", None) is None:
@@ -123,18 +124,6 @@ class _Graph:
         if getattr(model, "tare_reading_", None) is not None:
             x = self.op("Sub", x, self.const(retare_shift(model)))
         return self.calibration(static, x) if static is not None else emit(model, self, x)
-
-
-def _n_outputs(model) -> int:
-    """Output width: 6 for a wrench calibrator (and for model files written before ``n_outputs_`` existed)."""
-    return int(getattr(model, "n_outputs_", 6))
-
-
-def _emitter(model) -> Callable | None:
-    """The ``_emit_onnx`` of ``model``'s class (its own or inherited) when its tags say it is exportable: a
-    subclass of an exportable calibrator keeps its parent's graph unless it declares ``onnx=False``."""
-    emit = getattr(type(model), "_emit_onnx", None)
-    return emit if callable(emit) and calibration_tags(model).onnx else None
 
 
 def exportable_types() -> tuple[type, ...]:
@@ -199,14 +188,13 @@ def export_onnx(model, path: str | os.PathLike, *, overwrite: bool = False) -> P
     graph = onnx.helper.make_graph(
         g.nodes, f"ftcal_{type(model).__name__}",
         [onnx.helper.make_tensor_value_info("readings", double, ["n", n_inputs])],
-        [onnx.helper.make_tensor_value_info("wrench", double, ["n", _n_outputs(model)])],
+        # 6 outputs for a model file written before n_outputs_ existed
+        [onnx.helper.make_tensor_value_info("wrench", double, ["n", int(getattr(model, "n_outputs_", 6))])],
         initializer=g.initializers,
         doc_string=("readings: raw channels (n, N) in the training order"
                     + (", temperature [deg C] last" if calibration_tags(model).temperature_column else "")
                     + "; wrench: Fx, Fy, Fz [N], Tx, Ty, Tz [N m]"),
     )
-    from .. import __version__
-
     onnx_model = onnx.helper.make_model(
         graph, producer_name="ftcal", producer_version=__version__,
         opset_imports=[onnx.helper.make_opsetid("", OPSET)],

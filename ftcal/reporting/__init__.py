@@ -19,8 +19,7 @@ _PUBLIC = dict(
     plot_error_distributions="_plots", plot_axis_errors="_plots", plot_predicted_vs_reference="_plots",
     plot_sphere_coverage="_plots", plot_wrench_coverage="_plots", plot_drift_residuals="_drift_plot",
 )
-_PUBLIC.update(  # names the CLI uses
-    plot_sphere_coverage="_plots", plot_wrench_coverage="_plots",
+_PUBLIC.update(  # names the CLI uses (and plot_sphere_coverage, plot_wrench_coverage above)
     CONDITION_FIELDS="_calibration_report", EVALUATION_PLOTS="_evaluation", bytes_sha256="_calibration_report",
     check_conditions="_calibration_report", file_sha256="_calibration_report", dataset_axis_names="_calibration_report",
     predicted_plot_name="_evaluation",

@@ -127,9 +127,7 @@ def welch_satterthwaite(u: NDArray, dof: NDArray) -> float:
     u, dof = np.asarray(u, dtype=float), np.asarray(dof, dtype=float)
     finite = np.isfinite(dof) & (u > 0)
     denominator = float(np.sum(u[finite] ** 4 / np.maximum(dof[finite], 1.0)))
-    if denominator <= 0:
-        return math.inf
-    return float(np.sum(u**2) ** 2 / denominator)
+    return math.inf if denominator <= 0 else float(np.sum(u**2) ** 2 / denominator)
 
 
 def coverage_factor(dof: float, probability: float = COVERAGE_PROBABILITY) -> float:
@@ -199,8 +197,7 @@ def resolution_uncertainty(model: Any, X: NDArray, lsb: NDArray, *, rows: int = 
 
 def _type_a(errors: NDArray, cases: NDArray, n_units: int) -> tuple[NDArray, NDArray, int, int]:
     """``(reproducibility u, repeatability s_r, dof of the first (per axis), dof of the second)`` per axis."""
-    _, case = np.unique(cases, return_inverse=True)
-    count = np.bincount(case)
+    _, case, count = np.unique(cases, return_inverse=True, return_counts=True)
     means = np.zeros((count.size, errors.shape[1]))
     np.add.at(means, case, errors)
     means /= count[:, None]

@@ -67,11 +67,8 @@ def file_sha256(path: str | Path) -> str:
     if path.is_dir():
         listing = "".join(f"{p.name}\t{file_sha256(p)}\n" for p in dataset_files(path))
         return hashlib.sha256(listing.encode("utf-8")).hexdigest()
-    digest = hashlib.sha256()
     with open(path, "rb") as fh:
-        for block in iter(lambda: fh.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
+        return hashlib.file_digest(fh, "sha256").hexdigest()
 
 
 def bytes_sha256(data: bytes) -> str:
@@ -134,22 +131,20 @@ def model_inputs(model: Any, data: CalibrationDataset) -> NDArray[np.float64]:
                                 "calibrated on (same sensor, same channel order).")
 
 
-def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, want_std: bool = True,
-              max_rows: int | None = None, seed: int = 0, n_jobs: int | None = None) -> dict:
-    """Out-of-fold predictions (and std where the model gives one in every fold) on ``folds``, from ftcal's one
-    held-out engine (:func:`~ftcal.model_selection._selection.held_out_predictions`): ``groups`` reach the model through
-    its metadata routing; each training fold capped at ``max_rows`` rows; the test folds predicted in blocks (one
-    stream for a model that reads the load history); the fits' BLAS on one thread where no other thread sees it."""
+def _held_out(template: Any, X: NDArray, y: NDArray, groups: NDArray | None, folds: list, *, seed: int = 0,
+              n_jobs: int | None = None) -> tuple[NDArray, NDArray | None]:
+    """``(out-of-fold predictions, their std or None)`` on ``folds`` (the std where the model gives one in every
+    fold), from ftcal's one held-out engine (:func:`~ftcal.model_selection._selection.held_out_predictions`):
+    ``groups`` reach the model through its metadata routing; the test folds predicted in blocks (one stream for a
+    model that reads the load history); the fits' BLAS on one thread where no other thread sees it."""
     from ..core._threads import limit_threads_here
 
-    history = reads_history(template)
     with limit_threads_here(1), warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)
         _, pred, std = held_out_predictions(
-            template, X, y, groups=groups, folds=folds, max_train_rows=max_rows, random_state=seed,
-            chunk_rows=None if history else PREDICT_CHUNK_ROWS, n_jobs=n_jobs,
-            has_std=provides_std if want_std else (lambda model: False))
-    return {"pred": pred.reshape(y.shape), "std": None if not want_std or std is None else std.reshape(y.shape)}
+            template, X, y, groups=groups, folds=folds, random_state=seed, n_jobs=n_jobs, has_std=provides_std,
+            chunk_rows=None if reads_history(template) else PREDICT_CHUNK_ROWS)
+    return pred.reshape(y.shape), None if std is None else std.reshape(y.shape)
 
 
 def _png(fig) -> str:
@@ -168,11 +163,10 @@ def _figures(y: NDArray, pred: NDArray, names: list[str], units: list[str], fs: 
 
     err = pred - y
     force = [i for i, u in enumerate(units) if u == "N"]
-    torque = [i for i, u in enumerate(units) if u != "N"]
     out = {"error_vs_load": _png(error_vs_load_figure(y, 100 * err / fs, axis_names=names, units=units,
                                                       band_pct_fs=band, band_label=band_label)),
-           "residuals_vs_magnitude": _png(residual_magnitude_figure(y, err, force_columns=force,
-                                                                    torque_columns=torque))}
+           "residuals_vs_magnitude": _png(residual_magnitude_figure(
+               y, err, force_columns=force, torque_columns=[i for i in range(len(units)) if i not in force]))}
     xyz = [names.index(a) for a in ("Fx", "Fy", "Fz") if a in names]
     if len(xyz) == 3:
         out["residuals_vs_direction"] = _png(residual_direction_figure(y[:, xyz], err[:, xyz]))
@@ -191,21 +185,17 @@ def load_case_labels(y: NDArray, pred: NDArray, groups: NDArray | None, fs: NDAr
     >>> case.tolist(), table["rows"].tolist(), np.round(table["indicated"].ravel(), 3).tolist()
     ([0, 0, 1], [2, 1], [1.2, 2.0])
     """
-    n, k = y.shape
+    k = y.shape[1]
     grid = np.where(np.isfinite(fs), fs, np.nanmax(np.abs(y), axis=0) + 1.0) * 1e-6
     key = np.round(y / np.where(grid > 0, grid, 1.0))
     if groups is not None:
         _, glabel = np.unique(groups, return_inverse=True)
         key = np.column_stack([glabel.ravel(), key])
-    _, case, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    _, first, case, count = np.unique(key, axis=0, return_index=True, return_inverse=True, return_counts=True)
     case = case.ravel()
-    applied, indicated = np.zeros((count.size, k)), np.zeros((count.size, k))
-    np.add.at(applied, case, y)
-    np.add.at(indicated, case, pred)
-    applied /= count[:, None]
-    indicated /= count[:, None]
-    first = np.full(count.size, n)
-    np.minimum.at(first, case, np.arange(n))
+    sums = np.zeros((count.size, 2 * k))
+    np.add.at(sums, case, np.hstack([y, pred]))
+    applied, indicated = np.hsplit(sums / count[:, None], 2)
     err_pct = 100 * (indicated - applied) / fs
     worst = np.nanmax(np.abs(err_pct), axis=1)
     order = np.lexsort((first, -worst))
@@ -263,10 +253,8 @@ def add_interval(start: _dt.date, interval: str) -> _dt.date:
     count, unit = _parse_interval(interval)
     if unit == "days":
         return start + _dt.timedelta(days=count)
-    months = start.year * 12 + (start.month - 1) + count
-    year, month = divmod(months, 12)
-    month += 1
-    return _dt.date(year, month, min(start.day, calendar.monthrange(year, month)[1]))
+    year, month = divmod(start.year * 12 + start.month - 1 + count, 12)  # month counted from 0
+    return _dt.date(year, month + 1, min(start.day, calendar.monthrange(year, month + 1)[1]))
 
 
 def _iso_date(text: str) -> _dt.date | None:
@@ -345,9 +333,9 @@ def _matrix(model: Any, names: list[str], units: list[str], channels: list[str])
             "equation": "wrench = matrix @ raw + offset (raw in the sensor's own unit, in the data file's channel order)"}
 
 
-def _warnings(accuracy: list[dict], comparison: dict, X: NDArray, y: NDArray, folds: list, groups, rated_fs,
-              n: int, n_channels: int, dataset: CalibrationDataset) -> list[dict]:
+def _warnings(accuracy: list[dict], comparison: dict, X: NDArray, folds: list, groups, rated_fs) -> list[dict]:
     """What a reader must know before trusting the figures, each ``{"kind", "text"}``."""
+    n, n_channels = X.shape
     out: list[dict] = []
     for a in accuracy:
         if a["rated"] is not None and a["data_max"] > a["rated"]:

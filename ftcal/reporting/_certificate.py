@@ -64,19 +64,23 @@ class LoadCases:
 
     @property
     def by(self) -> str:
-        if self.rows.max() <= 1:
-            return "row"
-        return f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
+        return "row" if self.rows.max() <= 1 else \
+            f"load case (rows{' of one group' if self.group is not None else ''} under one applied load, averaged)"
+
+    @staticmethod
+    def columns(axes: list[dict], sep: str = "_", pct_fs: str = "%FS") -> list[str]:
+        """The applied, indicated and error column names of ``axes`` (``{"name", "unit"}`` each) in the table."""
+        return [f"{a['name']}{sep}{what} [{pct_fs if what == 'error' else a['unit']}]"
+                for what in ("applied", "indicated", "error") for a in axes]
 
     def to_dict(self, axes: list[str], limit: int = CASES_IN_JSON) -> dict:
         """JSON-able (rounded lists), at most ``limit`` cases (the worst)."""
-        total = len(self.applied)
-        keep = slice(0, min(total, limit))
-        return {"by": self.by, "count": total, "in_json": min(total, limit), "order": "worst first", "axes": axes,
-                "applied": _round(self.applied[keep]), "indicated": _round(self.indicated[keep]),
-                "error_pct_fs": _round(self.error_pct_fs[keep], 4), "rows": self.rows[keep].tolist(),
-                "first_row": self.first_row[keep].tolist(),
-                "group": None if self.group is None else list(self.group[keep])}
+        shown = min(len(self.applied), limit)
+        return {"by": self.by, "count": len(self.applied), "in_json": shown, "order": "worst first", "axes": axes,
+                "applied": _round(self.applied[:shown]), "indicated": _round(self.indicated[:shown]),
+                "error_pct_fs": _round(self.error_pct_fs[:shown], 4), "rows": self.rows[:shown].tolist(),
+                "first_row": self.first_row[:shown].tolist(),
+                "group": None if self.group is None else list(self.group[:shown])}
 
 
 @dataclass
@@ -156,13 +160,11 @@ class CalibrationCertificate:
 
     def to_json(self) -> str:
         """The facts as JSON text (the pictures left out; the cases written compactly at the end)."""
-        facts = self.to_dict(cases=False)
-        text = json.dumps(facts, indent=1, default=str, allow_nan=False)
+        text = json.dumps(self.to_dict(cases=False), indent=1, default=str, allow_nan=False)
         if self.cases is None:
             return text + "\n"
         # plain already (rounded lists) and large: compact, by the C encoder (indentation takes the slow one)
-        cases = json.dumps(self.cases.to_dict([a["name"] for a in self.axes]), separators=(",", ":"),
-                           allow_nan=False)
+        cases = json.dumps(self.cases.to_dict([a["name"] for a in self.axes]), separators=(",", ":"), allow_nan=False)
         return text[:-1].rstrip() + f',\n "cases": {cases}\n}}\n'
 
     def to_csv(self) -> str:
@@ -170,18 +172,14 @@ class CalibrationCertificate:
         import csv
         import io
 
-        names, units = [a["name"] for a in self.axes], [a["unit"] for a in self.axes]
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
-        writer.writerow(["rank", "group", "first_row", "rows"] + [f"{a}_applied [{u}]" for a, u in zip(names, units)]
-                        + [f"{a}_indicated [{u}]" for a, u in zip(names, units)] + [f"{a}_error [%FS]" for a in names])
+        writer.writerow(["rank", "group", "first_row", "rows"] + LoadCases.columns(self.axes))
         c = self.cases
-        if c is None:
-            return out.getvalue()
-        block = np.column_stack([c.applied, c.indicated, c.error_pct_fs])
-        for i in range(block.shape[0]):
-            writer.writerow([i + 1, "" if c.group is None else c.group[i], int(c.first_row[i]), int(c.rows[i])]
-                            + [f"{x:.7g}" for x in block[i]])
+        if c is not None:
+            block = np.column_stack([c.applied, c.indicated, c.error_pct_fs])
+            writer.writerows([i + 1, "" if c.group is None else c.group[i], int(c.first_row[i]), int(c.rows[i])]
+                             + [f"{x:.7g}" for x in block[i]] for i in range(len(block)))
         return out.getvalue()
 
     def to_html(self) -> str:
@@ -230,10 +228,9 @@ def _named_groups(groups: NDArray | None, names: list[str] | None) -> list | Non
 def channel_names(dataset: CalibrationDataset, n: int) -> list[str]:
     """The data's channel names (``meta["channel_names"]``), else ``s0..``; a temperature input last."""
     names = dataset.meta.get("channel_names") or dataset.meta.get("channels")
-    names = [str(c) for c in names] if isinstance(names, (list, tuple)) else [f"s{i}" for i in range(dataset.n_channels)]
-    if len(names) != dataset.n_channels:
+    if not isinstance(names, (list, tuple)) or len(names) != dataset.n_channels:
         names = [f"s{i}" for i in range(dataset.n_channels)]
-    return names + ["temperature"] * (n - len(names))
+    return [str(c) for c in names] + ["temperature"] * (n - dataset.n_channels)
 
 
 # ------------------------------------------------------------------------------------------------ the comparison
@@ -313,9 +310,8 @@ def comparison_facts(comp: Comparison) -> dict:
     facts = {"plan": comp.plan.to_dict(), "rows": rows, "best_stock": None}
     stock = [r for r in comp.scored()[1:] if r.rmse is not None and r.row_errors is not None]
     if not stock:
-        facts["sentence"] = ("No stock model was compared (the stock models were left out or could not be scored on "
-                             "these folds).")
-        return facts
+        return {**facts, "sentence": "No stock model was compared (the stock models were left out or could not be "
+                                     "scored on these folds)."}
     best = min(stock, key=lambda r: r.rmse)
     d = comp.paired(this.name, best.name)
     outcome = {"better": "better", "worse": "stock better", "equivalent": "equivalent"}[d.verdict]
@@ -356,36 +352,33 @@ def _budget(model: Any, X: NDArray, y: NDArray, pred: NDArray, names: list[str],
         res = None
     grouped = plan.kind == "group"
     n_units = int(np.unique(plan.units).size) if grouped else int(np.unique(cases).size)
-    ref, ref_note = reference
     coef, deviation = temperature
     temp = None if coef is None or deviation is None else np.abs(coef) * float(deviation) / math.sqrt(3)
     return uncertainty_budget(
         pred - y, axes=names, cases=cases, n_units=n_units, units_name="groups" if grouped else "load cases",
         resolution=None if res is None else np.broadcast_to(res, (y.shape[1],)),
         resolution_note="" if res is None else "channel LSB " + ", ".join(f"{v:.3g}" for v in lsb)
-        + " (the quantisation step of each channel's values; 0: continuous), LSB/√12", reference=ref, reference_note=ref_note, temperature=temp,
+        + " (the quantisation step of each channel's values; 0: continuous), LSB/√12", reference=reference[0],
+        reference_note=reference[1], temperature=temp,
         temperature_note=f"coefficient × ±{deviation} °C, rectangular (Type B)")
 
 
 def _accuracy(y: NDArray, pred: NDArray, std: NDArray | None, names: list[str], units: list[str], fs: NDArray,
-              rated: NDArray | None, spec: NDArray | None, budget: list[AxisBudget]) -> list[dict]:
+              data_max: NDArray, rated: NDArray | None, spec: NDArray | None, budget: list[AxisBudget]) -> list[dict]:
     """Per axis: held-out RMS and max error, U95 of the budget, coverage, spec and verdict."""
     err = pred - y
-    data_max = np.max(np.abs(y), axis=0)
     out = []
     for j, b in enumerate(budget):
-        rms, top, U = float(np.sqrt(np.mean(err[:, j] ** 2))), float(np.max(np.abs(err[:, j]))), \
-            b.expanded_uncertainty
-        a = {"axis": names[j], "unit": units[j], "full_scale": fs[j], "rated": None if rated is None else rated[j],
-             "data_max": data_max[j], "rms": rms, "max": top, "rms_pct_fs": 100 * rms / fs[j],
-             "max_pct_fs": 100 * top / fs[j], "coverage_factor": b.coverage_factor, "u95": U,
-             "u95_pct_fs": 100 * U / fs[j], "coverage_u95": float(np.mean(np.abs(err[:, j]) <= U)),
-             "coverage_std": (None if std is None
-                              else float(np.mean(np.abs(err[:, j]) <= COVERAGE_FACTOR * std[:, j]))),
-             "spec_pct_fs": None if spec is None else spec[j], "verdict": None}
-        if spec is not None:
-            a["verdict"] = "PASS" if np.isfinite(a["u95_pct_fs"]) and a["u95_pct_fs"] <= spec[j] else "FAIL"
-        out.append(a)
+        rms, top, U = float(np.sqrt(np.mean(err[:, j] ** 2))), float(np.max(np.abs(err[:, j]))), b.expanded_uncertainty
+        out.append({
+            "axis": names[j], "unit": units[j], "full_scale": fs[j], "rated": None if rated is None else rated[j],
+            "data_max": data_max[j], "rms": rms, "max": top, "rms_pct_fs": 100 * rms / fs[j],
+            "max_pct_fs": 100 * top / fs[j], "coverage_factor": b.coverage_factor, "u95": U,
+            "u95_pct_fs": 100 * U / fs[j], "coverage_u95": float(np.mean(np.abs(err[:, j]) <= U)),
+            "coverage_std": None if std is None else float(np.mean(np.abs(err[:, j]) <= COVERAGE_FACTOR * std[:, j])),
+            "spec_pct_fs": None if spec is None else spec[j],
+            "verdict": None if spec is None else "PASS" if np.isfinite(100 * U / fs[j]) and 100 * U / fs[j] <= spec[j]
+            else "FAIL"})
     return out
 
 
@@ -442,9 +435,8 @@ def _due_date(conditions: dict, today: _dt.date) -> tuple[bool | None, dict | No
     return overdue, warning
 
 
-def _model_facts(model: Any, name: str, model_path, model_sha256, alpha: float | None, names, units,
-                 channels: list[str]) -> dict:
-    return {"type": name, "file": None if model_path is None else Path(model_path).name,
+def _model_facts(model: Any, model_path, model_sha256, alpha: float | None, names, units, channels: list[str]) -> dict:
+    return {"type": type(model).__name__, "file": None if model_path is None else Path(model_path).name,
             "path": None if model_path is None else str(model_path),
             "sha256": model_sha256 or (None if model_path is None else file_sha256(model_path)),
             "params": {p: v for p, v in model.get_params(deep=False).items() if not hasattr(v, "fit")},
@@ -461,13 +453,6 @@ def _temperature_coefficients(model: Any) -> dict | None:
 
 
 # -------------------------------------------------------------------------------------------- the entry point
-def _plan_for(model: Any, X: NDArray, y: NDArray, groups, cv: int, seed: int) -> FoldPlan:
-    plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=seed, ordered=reads_history(model))
-    if plan.kind == "none":
-        raise CalibrationInputError(f"no held-out figure can be made on these data: {plan.note}.")
-    return plan
-
-
 def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: FoldPlan, seed: int, n_jobs
                  ) -> tuple[NDArray, NDArray | None]:
     """``(the out-of-fold predictions, their std or None)``: an auto model's own
@@ -481,8 +466,7 @@ def _held_out_of(model: Any, reused: Comparison | None, X, y, groups, plan: Fold
     # light work (a closed form, a kernel model on few rows) in this process, as the comparison engine scores it:
     # starting worker processes (each importing ftcal) costs more than the fits
     light = model_cost(template, min((len(train) for train, _ in plan.folds), default=0)) == "closed_form"
-    out = _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
-    return out["pred"], out["std"]
+    return _held_out(template, X, y, groups, list(plan.folds), seed=seed, n_jobs=None if light else n_jobs)
 
 
 def _alpha(model: Any, y: NDArray, torque: NDArray, alpha: float | None) -> float | None:
@@ -582,7 +566,7 @@ def calibration_certificate(
     """
     X = model_inputs(model, dataset)
     y = np.asarray(dataset.wrench, dtype=float)
-    n, k = y.shape
+    k = y.shape[1]
     names = dataset_axis_names(dataset, k)
     if getattr(model, "n_outputs_", None) is not None and int(model.n_outputs_) != k:
         raise CalibrationInputError(
@@ -592,7 +576,9 @@ def calibration_certificate(
     units = axis_units(names)
     torque = np.array([u != "N" for u in units])
     groups = dataset.group if dataset.group is not None and np.unique(dataset.group).size >= 2 else None
-    plan = _plan_for(model, X, y, groups, cv, random_state)
+    plan = FoldPlan.for_data(X, y, groups, cv=cv, seed=random_state, ordered=reads_history(model))
+    if plan.kind == "none":
+        raise CalibrationInputError(f"no held-out figure can be made on these data: {plan.note}.")
     rated_fs = _per_axis(full_scale if rated is None else rated, k, "rated")
     spec_pct = _per_axis(spec, k, "spec")
     conditions = check_conditions(conditions)
@@ -611,12 +597,11 @@ def calibration_certificate(
                                                    gnames))
     budget = _budget(model, X, y, pred, names, case_of, plan,
                      reference=reference, temperature=(coef, temperature_deviation))
-    accuracy = _accuracy(y, pred, std, names, units, fs, rated_fs, spec_pct, budget)
+    accuracy = _accuracy(y, pred, std, names, units, fs, data_max, rated_fs, spec_pct, budget)
     verdict = None if spec_pct is None else ("PASS" if all(a["verdict"] == "PASS" for a in accuracy) else "FAIL")
     date = _dt.datetime.now(_dt.timezone.utc)
     overdue, overdue_warning = _due_date(conditions, date.date())
-    warn = ([overdue_warning] if overdue_warning else []) + _warnings(
-        accuracy, comp, X, y, list(plan.folds), groups, rated_fs, n, X.shape[1], dataset)
+    warn = [w for w in [overdue_warning] if w] + _warnings(accuracy, comp, X, list(plan.folds), groups, rated_fs)
     if reference[0] is None:
         warn.append({"kind": "no reference uncertainty", "text": (
             "The reference standard's uncertainty was not given: the budget leaves it out. State it (reference "
@@ -627,8 +612,7 @@ def calibration_certificate(
                 "date_utc": date.strftime("%Y-%m-%d %H:%M:%S UTC"),
                 "ftcal_version": getattr(ftcal, "__version__", "unknown"), "command": command,
                 "sensor": _sensor_name(sensor, dataset.meta),
-                "model": _model_facts(model, type(model).__name__, model_path, model_sha256, alpha, names, units,
-                                      channels)}
+                "model": _model_facts(model, model_path, model_sha256, alpha, names, units, channels)}
     cert = CalibrationCertificate(
         identity=identity, data=_data_facts(dataset, y, torque, dataset_path, dataset_sha256, gnames, channels),
         accuracy=accuracy, comparison=comp, budget=budget, warnings=warn, conditions=conditions,

@@ -7,9 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-
-from ._plots import _DPI
+from ._plots import _save
 
 __all__ = ["drift_residuals_figure", "plot_drift_residuals"]
 
@@ -48,9 +46,8 @@ def drift_residuals_figure(report: dict) -> Figure:
     rate = report.get("drift_rate")
     title = f"tool identification: residual against {axis['name']}"
     if rate:
-        f = np.asarray(rate["force"])
-        fse = np.asarray(rate["force_std_error"])
-        title += (f"\ndrift rate F = [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in zip(f, fse))}] {rate['unit_force']}")
+        pairs = zip(np.asarray(rate["force"]), np.asarray(rate["force_std_error"]))
+        title += f"\ndrift rate F = [{', '.join(f'{v:.3g}±{s:.2g}' for v, s in pairs)}] {rate['unit_force']}"
     axes[0].set_title(title, fontsize=9)
     fig.tight_layout()
     return fig
@@ -59,7 +56,4 @@ def drift_residuals_figure(report: dict) -> Figure:
 def plot_drift_residuals(report: dict, path: str | Path) -> Path:
     """Write :func:`drift_residuals_figure` as a PNG to ``path`` (PNG whatever its suffix: a temporary file of an
     atomic output); returns the path."""
-    fig = drift_residuals_figure(report)
-    FigureCanvasAgg(fig)
-    fig.savefig(path, dpi=_DPI, format="png")
-    return Path(path)
+    return _save(drift_residuals_figure(report), path, png_suffix=False)

@@ -31,15 +31,11 @@ def comparison_table(reports: Mapping[str, CalibrationMetrics], noise_floor: flo
     |---|---|---|---|---|
     | linear | 0.408 | 0.408 ± 0 | 10 ± 0 | 0 ± 0 |
     """
-    lines = [
-        "| model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |",
-        "|---|---|---|---|---|",
-    ]
-    for name, r in reports.items():
-        lines.append(
-            f"| {name} | {r.rmse:.3g} | {_pm(r.rmse_per_sample_mean, r.rmse_per_sample_std)} | "
-            f"{_pm(r.rel_force_mean, r.rel_force_std, 100)} | {_pm(r.rel_torque_mean, r.rel_torque_std, 100)} |"
-        )
+    lines = ["| model | RMSE [N] | per-sample RMSE [N] | rel. force error [%] | rel. torque error [%] |",
+             "|---|---|---|---|---|"]
+    lines += [f"| {name} | {r.rmse:.3g} | {_pm(r.rmse_per_sample_mean, r.rmse_per_sample_std)} | "
+              f"{_pm(r.rel_force_mean, r.rel_force_std, 100)} | {_pm(r.rel_torque_mean, r.rel_torque_std, 100)} |"
+              for name, r in reports.items()]
     if noise_floor is not None and np.isfinite(noise_floor):
         lines.append(f"| noise floor | {noise_floor:.3g} | | | |")
     return "\n".join(lines)
@@ -49,10 +45,8 @@ def axis_table(reports: Mapping[str, CalibrationMetrics]) -> str:
     """Markdown table of the RMSE per axis: forces [N], torques [N·m]."""
     axes = list(next(iter(reports.values())).axis_rmse) if reports else list(WRENCH_LABELS)  # the axes that exist
     head = " | ".join(f"{k} [{'N' if k.startswith('F') else 'N·m'}]" for k in axes)
-    lines = [f"| model | {head} |", "|---" * (len(axes) + 1) + "|"]
-    for name, r in reports.items():
-        lines.append(f"| {name} | " + " | ".join(f"{r.axis_rmse[k]:.3g}" for k in axes) + " |")
-    return "\n".join(lines)
+    rows = [f"| {name} | " + " | ".join(f"{r.axis_rmse[k]:.3g}" for k in axes) + " |" for name, r in reports.items()]
+    return "\n".join([f"| model | {head} |", "|---" * (len(axes) + 1) + "|", *rows])
 
 
 #: File names of the evaluation plots (the per-model one takes the model label).
@@ -64,15 +58,9 @@ def predicted_plot_name(label: str) -> str:
     return f"errors_{label}.png"
 
 
-def write_evaluation_plots(
-    paths: Mapping[str, Path],
-    y_true: np.ndarray,
-    predictions: Mapping[str, np.ndarray],
-    alpha: float,
-    noise_floor: float | None = None,
-    dataset_name: str = "test set",
-    axes=None,
-) -> None:
+def write_evaluation_plots(paths: Mapping[str, Path], y_true: np.ndarray, predictions: Mapping[str, np.ndarray],
+                           alpha: float, noise_floor: float | None = None, dataset_name: str = "test set",
+                           axes=None) -> None:
     """The three evaluation plots: per-sample RMSE distributions, per-axis RMSE, errors vs reference.
 
     ``paths`` maps ``"distribution"``, ``"axis"`` and each model label to a PNG path; ``axes`` names the wrench
@@ -88,19 +76,13 @@ def write_evaluation_plots(
     unit = units.pop() if len(units) == 1 else "N"
 
     _plots.plot_error_distributions(
-        {name: per_sample_rmse(y_true, p, alpha, named) for name, p in predictions.items()},
-        paths["distribution"],
-        noise_floor=noise_floor,
+        {name: per_sample_rmse(y_true, p, alpha, named) for name, p in predictions.items()}, paths["distribution"],
         overall={name: wrench_rmse(y_true, p, alpha, named) for name, p in predictions.items()},
-        title=(f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples, α = {alpha:.3g} m⁻¹)"
-               if scaled else f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples)"),
-        xlabel="RMSE of the torque-scaled wrench [N]" if scaled else f"RMSE of {', '.join(named)} [{unit}]",
-    )
-    _plots.plot_axis_errors(
-        {name: axis_rmse(y_true, p) for name, p in predictions.items()},
-        paths["axis"],
-        title=f"RMSE per axis on the {dataset_name}",
-        axes=named,
-    )
+        noise_floor=noise_floor,
+        title=f"Per-sample RMSE on the {dataset_name} ({len(y_true)} samples"
+              + (f", α = {alpha:.3g} m⁻¹)" if scaled else ")"),
+        xlabel="RMSE of the torque-scaled wrench [N]" if scaled else f"RMSE of {', '.join(named)} [{unit}]")
+    _plots.plot_axis_errors({name: axis_rmse(y_true, p) for name, p in predictions.items()}, paths["axis"],
+                            title=f"RMSE per axis on the {dataset_name}", axes=named)
     for name, p in predictions.items():
         _plots.plot_predicted_vs_reference(y_true, p, paths[name], model_name=name, axes=named)

@@ -110,9 +110,8 @@ def _dof(value) -> str:
 # ------------------------------------------------------------------------------------------------- first page
 def _summary(c) -> str:
     m, d, acc, cond = c.identity["model"], c.data, c.accuracy, c.conditions
-    groups = ""
-    if d.get("groups"):
-        groups = f", {_fmt(d['groups'])} groups" + (" (named by their files)" if d.get("group_names") else "")
+    groups = (f", {_fmt(d['groups'])} groups" + (" (named by their files)" if d.get("group_names") else "")
+              if d.get("groups") else "")
     parts = [
         f"<p class=\"note\">Issued {_fmt(c.identity['date_utc'])} by ftcal {_fmt(c.identity['ftcal_version'])}. Every "
         "accuracy figure is <b>held out</b>: errors on data the fitted calibration did not see.</p>",
@@ -150,17 +149,16 @@ def _verdict(c) -> str:
 
 def _budget_table(c) -> str:
     """The uncertainty budget: one row per axis, one column per component (standard uncertainties)."""
-    names = []
-    for b in c.budget:
-        names += [x.name for x in b.components if x.name not in names]
+    names = list(dict.fromkeys(x.name for b in c.budget for x in b.components))  # each component once, in order
     units = {a["name"]: a["unit"] for a in c.axes}
     rows = []
     for b in c.budget:
         comp = {x.name: x for x in b.components}
         rows.append([f"{b.axis} [{units[b.axis]}]"] + [
             "–" if n not in comp else "0" if comp[n].standard_uncertainty == 0 else
-            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" for n in names] + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof),
-                                        _fmt(b.coverage_factor), _fmt(b.expanded_uncertainty)])
+            f"{_fmt(comp[n].standard_uncertainty)} <span class=\"note\">({_dof(comp[n].dof)})</span>" for n in names]
+            + [_fmt(b.combined_standard_uncertainty), _dof(b.effective_dof), _fmt(b.coverage_factor),
+               _fmt(b.expanded_uncertainty)])
     return ("<h3>Uncertainty budget (standard uncertainties, degrees of freedom in brackets)</h3>"
             + _table(["axis"] + [_fmt(n) for n in names] + ["u<sub>c</sub>", "ν<sub>eff</sub>", "k", "U95"], rows)
             + "<p class=\"note\">GUM (JCGM 100), EURAMET cg-4: uncorrelated components, u<sub>c</sub> their root "
@@ -251,10 +249,8 @@ def _cases(c) -> str:
     cases = c.cases
     if cases is None or not len(cases.applied):
         return ""
-    names, units = [a["name"] for a in c.axes], [a["unit"] for a in c.axes]
     shown = min(CASES_ON_PAGE, len(cases.applied))
-    head = ["#", "group" if cases.group is not None else "row"] + [f"{a} applied [{u}]" for a, u in zip(names, units)] \
-        + [f"{a} indicated [{u}]" for a, u in zip(names, units)] + [f"{a} error [% FS]" for a in names]
+    head = ["#", "group" if cases.group is not None else "row"] + cases.columns(c.axes, " ", "% FS")
     rows = [[str(i + 1), _fmt(cases.group[i] if cases.group is not None else int(cases.first_row[i]))]
             + [_fmt(float(x), 4) for x in cases.applied[i]] + [_fmt(float(x), 4) for x in cases.indicated[i]]
             + [_fmt(float(x), 3) for x in cases.error_pct_fs[i]] for i in range(shown)]
@@ -269,18 +265,16 @@ def _choice(c) -> str:
     comp = c.comparison
     plan = comp.get("plan", {})
     units = plan.get("units_name", "fold")
+    best = min((r["rmse"] for r in comp.get("rows", []) if r["rmse"] is not None), default=None)
     rows, classes = [], []
-    scored = [r for r in comp.get("rows", []) if r["rmse"] is not None]
-    best = min((r["rmse"] for r in scored), default=None)
     for r in comp.get("rows", []):
         if r["rmse"] is None:
             rows.append([_fmt(r["model"]), _fmt(r["status"] + (f": {r['reason']}" if r.get("reason") else ""))]
                         + [""] * (len(c.axes) + 2))
-            classes.append("")
-            continue
-        rows.append([_fmt(r["model"]), _fmt(r["rmse"], 4), _fmt(r["rmse_se"], 2), _fmt(r.get("against"))]
-                    + [_fmt(x) for x in r["axis_rmse"]])
-        classes.append("best" if r["rmse"] == best else "")
+        else:
+            rows.append([_fmt(r["model"]), _fmt(r["rmse"], 4), _fmt(r["rmse_se"], 2), _fmt(r.get("against"))]
+                        + [_fmt(x) for x in r["axis_rmse"]])
+        classes.append("best" if r["rmse"] is not None and r["rmse"] == best else "")
     head = ["model", "RMSE [N]", "± SE", "against this calibration (paired SE)"] + \
         [f"{a['name']} [{a['unit']}]" for a in c.axes]
     return (f"<p class=\"note\">This calibration beside the stock scikit-learn models a user would try first "
@@ -310,24 +304,19 @@ def _readings(c) -> str:
                      + _table(["channel", "rows beyond", "largest (x the half-range)"],
                               [[_fmt(e["channel"]), f"{e['rows_beyond']} of {e['rows']}",
                                 f"{e['largest_x_range']:.2f}x"] for e in c.extrapolation]))
-    if not parts:
-        return ""
-    return "<section id=\"readings\"><h2>Readings checked</h2>" + "".join(parts) + "</section>"
+    return "<section id=\"readings\"><h2>Readings checked</h2>" + "".join(parts) + "</section>" if parts else ""
 
 
 def _range(c) -> str:
     d, r = c.data, c.calibrated_range
     rated = any(a.get("rated") is not None for a in c.accuracy)
+    axes = [[f"{ax['name']} [{ax['unit']}]", _fmt(lo), _fmt(hi), _fmt(mm)] + ([_fmt(a["rated"])] if rated else [])
+            for ax, lo, hi, mm, a in zip(c.axes, d["wrench_min"], d["wrench_max"], r["wrench_abs_max"], c.accuracy)]
+    raw = [[_fmt(n), _fmt(lo), _fmt(hi)] for n, lo, hi in zip(d.get("channel_names") or [], r["raw_min"], r["raw_max"])]
     return ("<p class=\"note\">Readings or loads beyond these were not calibrated (the range check of "
             "<code>ftcal predict</code> flags them).</p>"
-            + _table(["axis", "min", "max", "|max|"] + (["rated capacity"] if rated else []),
-                     [[f"{ax['name']} [{ax['unit']}]", _fmt(lo), _fmt(hi), _fmt(mm)] + ([_fmt(a["rated"])] if rated
-                                                                                       else [])
-                      for ax, lo, hi, mm, a in zip(c.axes, d["wrench_min"], d["wrench_max"], r["wrench_abs_max"],
-                                                   c.accuracy)])
-            + _table(["raw channel", "min", "max"], [[_fmt(n), _fmt(lo), _fmt(hi)] for n, lo, hi in
-                                                     zip(d.get("channel_names") or [], r["raw_min"], r["raw_max"])],
-                     long=True))
+            + _table(["axis", "min", "max", "|max|"] + (["rated capacity"] if rated else []), axes)
+            + _table(["raw channel", "min", "max"], raw, long=True))
 
 
 def _conditions(c) -> str:
@@ -341,8 +330,7 @@ def _conditions(c) -> str:
     rows = []
     for key, label in CONDITION_FIELDS.items():
         if key == "ambient_temperature":
-            value = temp_data if ambient is None and temp_data is not None else ambient
-            rows.append([label, _not_stated(value, how_temp if value is None else "")])
+            rows.append([label, _not_stated(ambient if ambient is not None else temp_data, how_temp)])
         elif key in ("location", "notes") and cond.get(key) is None:
             continue
         elif key == "calibration_date" and cond.get(key) is None:
@@ -356,13 +344,12 @@ def _conditions(c) -> str:
         names = d.get("group_names")
         data.append(["groups (poses / load configurations)", _fmt(d["groups"]) + (
             ": " + _fmt(", ".join(names[:60])) + (" ..." if len(names) > 60 else "") if names else "")])
-    data.append(["largest |F|", f"{_fmt(d['max_force_norm'])} N"] if d.get("max_force_norm") is not None else None)
-    data.append(["largest |T|", f"{_fmt(d['max_torque_norm'])} N·m"] if d.get("max_torque_norm") is not None
-                else None)
+    data += [[label, f"{_fmt(d[key])} {unit}"] for key, label, unit in (
+        ("max_force_norm", "largest |F|", "N"), ("max_torque_norm", "largest |T|", "N·m")) if d.get(key) is not None]
     data.append(["command", f"<code>{_fmt(c.identity.get('command'))}</code>"])
     return ("<p class=\"note\">From the conditions file beside the data (<code>DATA.conditions.yaml</code> or "
             "<code>.json</code>), a conditions file named on the command line, or the options of the same names.</p>"
-            + _table(["", ""], rows) + "<h3>Data</h3>" + _table(["", ""], [r for r in data if r is not None]))
+            + _table(["", ""], rows) + "<h3>Data</h3>" + _table(["", ""], data))
 
 
 def _extras(c) -> str:

@@ -92,18 +92,17 @@ def model_colors(names) -> dict[str, str]:
     out: dict[str, str] = {}
     for name in names:
         color = model_color(name)
-        if color in out.values() and color in _OTHER_COLORS:
-            free = [c for c in _OTHER_COLORS if c not in out.values()]
+        if color in out.values() and color in _OTHER_COLORS:  # the next free colour after it, cyclically
             start = _OTHER_COLORS.index(color)
-            ordered = _OTHER_COLORS[start:] + _OTHER_COLORS[:start]
-            color = next((c for c in ordered if c in free), color)
+            color = next((c for c in _OTHER_COLORS[start:] + _OTHER_COLORS[:start] if c not in out.values()), color)
         out[name] = color
     return out
 
 
-def _save(fig: Figure, path: str | Path) -> Path:
+def _save(fig: Figure, path: str | Path, *, png_suffix: bool = True) -> Path:
+    """Write ``fig`` as a PNG to ``path`` (which must end in ``.png`` unless ``png_suffix`` is False)."""
     path = Path(path)
-    if path.suffix.lower() != ".png":
+    if png_suffix and path.suffix.lower() != ".png":
         raise CalibrationInputError(f"plot path {path} must end in .png")
     FigureCanvasAgg(fig)
     fig.savefig(path, dpi=_DPI, format="png")
@@ -145,14 +144,9 @@ def _model_arrays(name: str, data: Mapping[str, ArrayLike], width: int | None) -
 
 
 # ------------------------------------------------------------------ error distributions
-def error_distributions_figure(
-    errors: Mapping[str, ArrayLike],
-    *,
-    noise_floor: float | None = None,
-    overall: Mapping[str, float] | None = None,
-    title: str = "Error distribution per model",
-    xlabel: str = "RMSE of the torque-scaled wrench [N]",
-) -> Figure:
+def error_distributions_figure(errors: Mapping[str, ArrayLike], *, noise_floor: float | None = None,
+                               overall: Mapping[str, float] | None = None, title: str = "Error distribution per model",
+                               xlabel: str = "RMSE of the torque-scaled wrench [N]") -> Figure:
     """Violin + box plot of each model's errors, one row per model (the thesis' Fig. 5 and 6).
 
     Parameters
@@ -176,27 +170,22 @@ def error_distributions_figure(
     rng = np.random.default_rng(0)
     colors = model_colors(names)
     for i, (name, pos) in enumerate(zip(names, positions)):
-        values = data[name]
-        color = colors[name]
+        values, color = data[name], colors[name]
         if values.size > 1 and np.ptp(values) > 0:
             parts = ax.violinplot(values, positions=[pos], showextrema=False, widths=0.8, **_HORIZONTAL)
             for body in parts["bodies"]:
                 body.set_facecolor(color)
                 body.set_edgecolor(color)
                 body.set_alpha(0.35)
-        ax.boxplot(
-            values, positions=[pos], widths=0.25, showfliers=False, **_HORIZONTAL,
-            medianprops={"color": "black"}, boxprops={"color": color}, whiskerprops={"color": color},
-            capprops={"color": color},
-        )
+        ax.boxplot(values, positions=[pos], widths=0.25, showfliers=False, **_HORIZONTAL,
+                   medianprops={"color": "black"}, boxprops={"color": color}, whiskerprops={"color": color},
+                   capprops={"color": color})
         if values.size <= 200:  # few values (e.g. one per dataset): show each one
             ax.scatter(values, pos + rng.uniform(-0.12, 0.12, values.size), s=10, color=color, alpha=0.7, zorder=3)
-        ax.annotate(
-            f"mean {values.mean():.3g} ± {values.std():.2g}", xy=(1.0, pos), xycoords=("axes fraction", "data"),
-            xytext=(-4, 10), textcoords="offset points", ha="right", fontsize=8, color=color,
-        )
-    for i, (name, pos) in enumerate(zip(names, positions)):
-        if overall is not None and name in overall:
+        ax.annotate(f"mean {values.mean():.3g} ± {values.std():.2g}", xy=(1.0, pos), color=color,
+                    xycoords=("axes fraction", "data"), xytext=(-4, 10), textcoords="offset points", ha="right",
+                    fontsize=8)
+        if overall is not None and name in overall:  # zorder 4: above every model's violin, box and points
             ax.scatter([overall[name]], [pos], marker="D", s=36, color="black", zorder=4,
                        label="RMSE over the set" if i == 0 else None)
     if noise_floor is not None and np.isfinite(noise_floor):
@@ -283,15 +272,8 @@ def plot_axis_errors(axis_errors: Mapping[str, ArrayLike], path: str | Path, **k
 
 
 # ------------------------------------------------------------------ predicted vs reference
-def predicted_vs_reference_figure(
-    y_true: ArrayLike,
-    y_pred: ArrayLike,
-    *,
-    model_name: str = "model",
-    kind: str = "error",
-    max_points: int = 5000,
-    axes=None,
-) -> Figure:
+def predicted_vs_reference_figure(y_true: ArrayLike, y_pred: ArrayLike, *, model_name: str = "model",
+                                  kind: str = "error", max_points: int = 5000, axes=None) -> Figure:
     """Predictions against the reference wrench, one panel per axis.
 
     Parameters
@@ -331,18 +313,16 @@ def predicted_vs_reference_figure(
         unit = axis_unit(names[k])
         err = p[:, k] - t[:, k]
         rmse = float(np.sqrt(np.mean(err**2)))
-        lo, hi = float(t[:, k].min()), float(t[:, k].max())
-        pad = 0.05 * (hi - lo or 1.0)
-        line_x = [lo - pad, hi + pad]
         if kind == "error":
             ax.axhline(0.0, color="black", linewidth=0.8, label="ideal")
             ax.axhspan(-rmse, rmse, color=color, alpha=0.12, label="± RMSE")
-            ax.scatter(t[shown, k], err[shown], s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
-            ax.set_ylabel(f"predicted - reference [{unit}]")
         else:
-            ax.plot(line_x, line_x, color="black", linewidth=0.8, label="ideal")
-            ax.scatter(t[shown, k], p[shown, k], s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
-            ax.set_ylabel(f"predicted [{unit}]")
+            lo, hi = float(t[:, k].min()), float(t[:, k].max())
+            pad = 0.05 * (hi - lo or 1.0)
+            ax.plot([lo - pad, hi + pad], [lo - pad, hi + pad], color="black", linewidth=0.8, label="ideal")
+        shown_y = err[shown] if kind == "error" else p[shown, k]
+        ax.scatter(t[shown, k], shown_y, s=4, alpha=0.4, color=color, linewidths=0, label=model_name)
+        ax.set_ylabel(f"predicted - reference [{unit}]" if kind == "error" else f"predicted [{unit}]")
         ax.set_title(f"{names[k]}   RMSE {rmse:.3g} {unit}", fontsize=10)
         ax.set_xlabel(f"reference {names[k]} [{unit}]")
         ax.grid(alpha=0.3)
@@ -541,10 +521,8 @@ def error_vs_load_figure(
     cols = 3 if k >= 3 else k
     rows = int(np.ceil(k / cols))
     fig = Figure(figsize=(10, 3.0 * rows + 0.4), layout="constrained")
-    FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(rows, cols, squeeze=False)).ravel()
-    for j in range(k):
-        ax = axes[j]
+    for j, ax in enumerate(axes[:k]):
         e = err[:, j]
         order = _draw_order(np.abs(np.nan_to_num(e)), max_points, seed=j)
         outside = np.abs(e[order]) > band[j] if np.isfinite(band[j]) else np.zeros(order.size, bool)
@@ -586,7 +564,6 @@ def residual_magnitude_figure(applied: ArrayLike, error: ArrayLike, *, force_col
     error = np.asarray(error, dtype=float)
     panels = [(list(c), q, u) for c, q, u in ((force_columns, "F", "N"), (torque_columns, "T", "N·m")) if len(c)]
     fig = Figure(figsize=(10, 3.4), layout="constrained")
-    FigureCanvasAgg(fig)
     for i, (cols, q, unit) in enumerate(panels):
         ax = fig.add_subplot(1, len(panels), i + 1)
         load = np.linalg.norm(applied[:, cols], axis=1)
@@ -617,7 +594,6 @@ def residual_direction_figure(force: ArrayLike, force_error: ArrayLike, *, max_p
     err = np.linalg.norm(np.asarray(force_error, dtype=float), axis=1)
     mag = np.linalg.norm(force, axis=1)
     fig = Figure(figsize=(10, 3.8), layout="constrained")
-    FigureCanvasAgg(fig)
     ax = fig.add_subplot()
     loaded = np.flatnonzero(mag > 1e-9)
     if loaded.size:
