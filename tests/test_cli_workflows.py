@@ -197,14 +197,9 @@ def test_prepare_channel_count_is_n_channels_and_the_old_spelling_warns(tmp_path
     assert wrong.returncode == 2 and f"{n} raw channels (s0..s{n - 1}) but {n - 1} expected" in wrong.stderr
     assert not (tmp_path / "x" / "dataset.csv").exists()
     assert ftcal_cli("prepare", logs, "--n-channels", n, "--out", tmp_path / "a", "--force", "-q").returncode == 0
-    old = ftcal_cli("prepare", logs, "--channels", n, "--out", tmp_path / "b", "-q")  # the old spelling, one release
-    assert old.returncode == 0 and old.stderr.strip() == (
-        f"ftcal: warning: 'prepare --channels {n}' is deprecated and will be removed in the next release; "
-        f"write --n-channels {n} (--channels names columns on the other commands)")
-    assert (tmp_path / "a" / "dataset.csv").read_bytes() == (tmp_path / "b" / "dataset.csv").read_bytes()
     spec = ftcal_cli("prepare", logs, "--channels", "g1..g4", "--out", tmp_path / "c")  # a column spec: not here
     err = spec.stderr.strip().splitlines()
-    assert spec.returncode == 2 and len(err) == 1 and "--n-channels N" in err[0] and "'g1..g4'" in err[0]
+    assert spec.returncode == 2 and len(err) == 1 and "--channels" in err[0] and not (tmp_path / "c").exists()
 
 
 def test_benchmark_real_world_quick(tmp_path, capsys):

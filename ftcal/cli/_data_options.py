@@ -11,8 +11,7 @@ Every command that reads data takes the same options, defined here once (one nam
   (:func:`add_unit_options`);
 * cross-validation (``fit --report``, ``report``, ``tune``, ``benchmark dataset``, ``identify-load``'s drift):
   :func:`add_fold_options` -- ``--cv K`` and, where the split can be chosen, ``--folds auto|group|kfold``; the
-  seed is ``--seed`` everywhere. Old spellings (``tune --group-folds``/``--random-folds``, ``identify-load
-  --drift-cv``, ``prepare --channels N``) still work, hidden from ``--help``.
+  seed is ``--seed`` everywhere.
 
 A model file keeps the mapping and units it was fitted with, and the commands that read data for a model
 (``evaluate``, ``report``, ``predict``, ``retare``, ``plan --next``) apply them unless the options say otherwise.
@@ -197,13 +196,10 @@ def _sources_of_joined(data, path: str):
 
 
 def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
-    """``--cv K`` (default ``cv_default``) and, with ``folds``, ``--folds auto|group|kfold`` (with the hidden old
-    spellings ``--group-folds`` / ``--random-folds``): the same options on every command that cross-validates."""
+    """``--cv K`` (default ``cv_default``) and, with ``folds``, ``--folds auto|group|kfold``: the same options on every command that cross-validates."""
     g.add_argument("--cv", type=int_in_range(2, 1000, "folds"), default=cv_default, metavar="K", help=CV_HELP)
     if folds:
         g.add_argument("--folds", choices=("auto", "group", "kfold"), default="auto", help=FOLDS_HELP)
-        g.add_argument("--group-folds", dest="folds", action="store_const", const="group", help=argparse.SUPPRESS)
-        g.add_argument("--random-folds", dest="folds", action="store_const", const="kfold", help=argparse.SUPPRESS)
 
 
 def add_alpha_option(p) -> None:

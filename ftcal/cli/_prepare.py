@@ -41,23 +41,6 @@ writes DIR/dataset.<fmt> (group = load configuration id), prepare.json and cover
 """
 
 
-class _DeprecatedChannelCount(argparse.Action):
-    """``prepare --channels N``: the channel count under its old name, kept for one release with a warning line
-    (``--channels`` on fit, evaluate, report, ... names columns; the count is ``--n-channels``)."""
-
-    def __call__(self, parser, namespace, values, option_string=None) -> None:
-        if not values.strip().isdigit():
-            raise argparse.ArgumentError(self, f"{values!r}: prepare takes a raw channel COUNT, as --n-channels N "
-                                         "(its logs' columns are fixed; --channels names columns on the other commands)")
-        try:
-            setattr(namespace, self.dest, int_in_range(3, 1024, "channels")(values))
-        except argparse.ArgumentTypeError as exc:
-            raise argparse.ArgumentError(self, str(exc)) from None
-        print(f"ftcal: warning: 'prepare --channels {values}' is deprecated and will be removed in the next release; "
-              f"write --n-channels {values.strip()} (--channels names columns on the other commands)",
-              file=sys.stderr)
-
-
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("prepare", help="recorded load / no-load logs -> calibration dataset", epilog=EXAMPLE,
                        description="Turn the run logs of a robot-held calibration experiment into a calibration "
@@ -72,8 +55,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "from a .json or .csv file; 'thesis' is the thesis' seven (see 'ftcal prepare --help')")
     p.add_argument("--n-channels", type=int_in_range(3, 1024, "channels"), metavar="N",
                    help="expected raw channel count (checked in every log)")
-    p.add_argument("--channels", dest="n_channels", action=_DeprecatedChannelCount, metavar="N",
-                   help=argparse.SUPPRESS)  # the old spelling, hidden: --channels names columns everywhere else
     p.add_argument("--format", default="csv", choices=("csv", "npz"), help="dataset file format")
     add_columns_option(p)
     add_bag_options(p, wrench=False)

@@ -19,7 +19,7 @@ TOOL_SUFFIX = ".tool.json"
 
 def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> None:
     """``--time-from-order`` (both commands), ``--drift`` and ``--cv`` (identify-load: the leave-poses-out folds
-    that choose the drift; ``--drift-cv`` is its old spelling)."""
+    that choose the drift)."""
     g = p.add_argument_group("bias drift")
     if identify:
         g.add_argument("--drift", choices=DRIFT_CHOICES, default="auto",
@@ -27,7 +27,6 @@ def add_drift_options(p: argparse.ArgumentParser, *, identify: bool = True) -> N
                        "carry one) when it lowers the held-out error (leave-poses-out CV, one-SE rule); none: a "
                        "constant bias; linear, spline, temperature: force that drift")
         add_fold_options(g, cv_default=20, folds=False)  # the poses are the groups the folds keep whole
-        g.add_argument("--drift-cv", dest="cv", type=int_in_range(2, 1000, "folds"), help=argparse.SUPPRESS)
     g.add_argument("--time-from-order", action="store_true",
                    help="the inputs carry no usable time: take each pose's position in the recording (row order) "
                    "as its time (the drift is then per pose, not per second)")
