@@ -103,11 +103,9 @@ def thesis_load_configurations() -> tuple[LoadConfiguration, ...]:
     (0.347, 0.093, 0.079)
     """
     centre = np.array(THESIS_LOAD_CENTER_MM)
-    out = [LoadConfiguration(0, "centre", tuple(float(v) for v in np.round(centre / 1000.0, 9)))]
-    for i, (name, shift) in enumerate(TABLE_I_TRANSLATIONS_MM.items(), start=1):
-        pos = np.round((centre + np.array(shift)) / 1000.0, 9)
-        out.append(LoadConfiguration(i, name, tuple(float(v) for v in pos)))
-    return tuple(out)
+    shifts = {"centre": (0.0, 0.0, 0.0), **TABLE_I_TRANSLATIONS_MM}
+    return tuple(LoadConfiguration(i, name, tuple(float(v) for v in np.round((centre + np.array(shift)) / 1000.0, 9)))
+                 for i, (name, shift) in enumerate(shifts.items()))
 
 
 def _vector3(v: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
@@ -198,9 +196,8 @@ def _configuration(entry: dict, where: str) -> LoadConfiguration:
     try:
         cid = entry["id"]
         com = [float(v) for v in entry["center_of_mass_m"]]
-        mass = entry.get("mass_kg")
+        mass, inertia = entry.get("mass_kg"), entry.get("inertia_kg_m2")
         mass = None if mass is None else float(mass)
-        inertia = entry.get("inertia_kg_m2")
         inertia = None if inertia is None else tuple(float(v) for v in np.ravel(inertia))
     except (KeyError, TypeError, ValueError) as exc:
         raise CalibrationInputError(f"{where}: each configuration needs 'id' and 'center_of_mass_m' (3 numbers, m), "
