@@ -97,25 +97,11 @@ from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_d
 from ._loads import thesis_load_configurations
 from ._robot import RobotModel, sensor_pose_in_base
 
-__all__ = [
-    "icosphere",
-    "gravity_directions_in_sensor",
-    "pitch_yaw_from_gravity_in_sensor",
-    "gravity_in_sensor_from_pitch_yaw",
-    "sensor_rotation_from_pitch_yaw",
-    "CalibrationPlan",
-    "CandidatePoses",
-    "plan_calibration_poses",
-    "reachable_candidates",
-    "select_poses",
-    "select_load_configurations",
-    "d_criterion",
-    "linear_design_rows",
-    "PLAN_STRATEGIES",
-    "LINEAR_MODEL_PARAMETERS",
-    "THESIS_SUBDIVISIONS",
-    "THESIS_EXCLUDED_CAP_DEG",
-]
+__all__ = ["icosphere", "gravity_directions_in_sensor", "pitch_yaw_from_gravity_in_sensor",
+           "gravity_in_sensor_from_pitch_yaw", "sensor_rotation_from_pitch_yaw", "CalibrationPlan", "CandidatePoses",
+           "plan_calibration_poses", "reachable_candidates", "select_poses", "select_load_configurations",
+           "d_criterion", "linear_design_rows", "PLAN_STRATEGIES", "LINEAR_MODEL_PARAMETERS", "THESIS_SUBDIVISIONS",
+           "THESIS_EXCLUDED_CAP_DEG"]
 
 #: Icosphere subdivision level of the thesis' spheres (162 vertices).
 THESIS_SUBDIVISIONS: int = 2
@@ -227,9 +213,7 @@ def pitch_yaw_from_gravity_in_sensor(gravity_in_sensor: ArrayLike) -> tuple[NDAr
     """
     g = np.asarray(gravity_in_sensor, dtype=float).reshape(-1, 3)
     g = g / np.linalg.norm(g, axis=1, keepdims=True)
-    pitch = np.arccos(np.clip(-g[:, 2], -1.0, 1.0))
-    yaw = np.arctan2(-g[:, 1], g[:, 0])
-    return pitch, yaw
+    return np.arccos(np.clip(-g[:, 2], -1.0, 1.0)), np.arctan2(-g[:, 1], g[:, 0])
 
 
 def gravity_in_sensor_from_pitch_yaw(pitch: ArrayLike, yaw: ArrayLike) -> NDArray[np.float64]:

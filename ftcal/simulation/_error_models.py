@@ -112,25 +112,20 @@ class ErrorModel:
     spread: float = 0.10
 
     def __post_init__(self) -> None:
-        # plain checks, not scikit-learn's: the presets are built when the CLI starts
-        def refuse(name: str, allowed: str) -> None:
+        # plain checks, not scikit-learn's: the presets are built when the CLI starts.
+        # Relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5
+        # (beyond 2 a gain changes sign): a larger value is a unit mistake. Rows: (name, low, high, integer, allowed).
+        magnitude = "a number from 0 to 1 (a relative magnitude, 1 = 100 %)"
+        checks = [(name, 0, 1, False, magnitude)
+                  for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread")]
+        checks += [(name, 0, top, True, f"an integer from 0 to {top}") for name, top in
+                   (("creep_axes", 6), ("nonlinearity_axes", 6), ("asymmetry_axes", 6), ("crosstalk_pairs", 30))]
+        checks.append(("nonlinearity_exponent", 1, 10, False, "a number from 1 to 10 (thesis: 2.5)"))
+        for name, low, high, integer, allowed in checks:
             value = getattr(self, name)
-            raise CalibrationInputError(f"ErrorModel.{name} must be {allowed}; got {value!r} "
-                                        f"({type(value).__name__}).")
-
-        def number(name: str) -> bool:
-            return is_finite_number(getattr(self, name))
-
-        for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread"):
-            # relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5
-            # (beyond 2 a gain changes sign): a larger value is a unit mistake
-            if not (number(name) and 0 <= getattr(self, name) <= 1):
-                refuse(name, "a number from 0 to 1 (a relative magnitude, 1 = 100 %)")
-        for name, top in (("creep_axes", 6), ("nonlinearity_axes", 6), ("asymmetry_axes", 6), ("crosstalk_pairs", 30)):
-            if not (number(name) and isinstance(getattr(self, name), Integral) and 0 <= getattr(self, name) <= top):
-                refuse(name, f"an integer from 0 to {top}")
-        if not (number("nonlinearity_exponent") and 1 <= self.nonlinearity_exponent <= 10):
-            refuse("nonlinearity_exponent", "a number from 1 to 10 (thesis: 2.5)")
+            if not (is_finite_number(value) and (isinstance(value, Integral) or not integer) and low <= value <= high):
+                raise CalibrationInputError(f"ErrorModel.{name} must be {allowed}; got {value!r} "
+                                            f"({type(value).__name__}).")
 
     def to_dict(self) -> dict:
         """Plain-JSON form."""

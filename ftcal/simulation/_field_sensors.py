@@ -29,6 +29,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 from sklearn.utils._param_validation import Interval, Options
 
 from ..core._exceptions import CalibrationInputError
@@ -128,8 +129,7 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
         if i == 0 or press_of_row[i] != press_of_row[i - 1] or rng.random() < 0.3:
             target = rng.uniform(-1, 1, size=6)
             target[2] = rng.uniform(0, 1)  # pressing only
-        previous = z[i - 1] if i else np.zeros(6)
-        z[i] = previous + 0.6 * (target - previous) + 0.05 * rng.normal(size=6)
+        z[i] = z[i - 1] + 0.6 * (target - z[i - 1]) + 0.05 * rng.normal(size=6)  # z[-1]: still zero at i = 0
         z[i, 2] = abs(z[i, 2])
     lag = np.zeros_like(z)
     for i in range(1, n_samples):
@@ -140,12 +140,6 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
     wrench = z * span
     noise = rng.normal(size=wrench.shape) * 0.01 * span
     return _with_floor(raw, wrench, noise, press_of_row, {"preset": "soft_sensor", "random_state": random_state})
-
-
-def _rotations(n: int, rng) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.random(n, random_state=int(rng.integers(2**31))).as_matrix()
 
 
 def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_mass_kg: float = 1.5,
@@ -197,7 +191,7 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
     _check_rows("make_robot_held_dataset", "n_samples", n_samples, 120)
     rng = np.random.default_rng(random_state)
     pose = np.sort(np.concatenate([np.arange(n_poses), rng.integers(0, n_poses, size=n_samples - n_poses)]))
-    rotations = _rotations(n_poses, rng)
+    rotations = Rotation.random(n_poses, random_state=int(rng.integers(2**31))).as_matrix()
     com = np.array([0.0, 0.0, 0.08])
     gravity_in_sensor = np.einsum("pji,j->pi", rotations, np.array([0.0, 0.0, -9.81 * tool_mass_kg]))
     tool = np.hstack([gravity_in_sensor, np.cross(com, gravity_in_sensor)])[pose]
