@@ -34,9 +34,19 @@ from numpy.typing import ArrayLike, NDArray
 from ..core._exceptions import KinematicsError
 from ._robot import RobotModel, sensor_pose_in_base
 
-__all__ = ["STANDARD_GRAVITY", "GRAVITY_IN_BASE", "THESIS_LOAD_CENTER_MM", "TABLE_I_TRANSLATIONS_MM",
-           "LoadConfiguration", "thesis_load_configurations", "THESIS_FIXTURE", "read_load_configurations",
-           "load_fixture", "reference_wrench", "reference_wrench_at_joints"]
+__all__ = [
+    "STANDARD_GRAVITY",
+    "GRAVITY_IN_BASE",
+    "THESIS_LOAD_CENTER_MM",
+    "TABLE_I_TRANSLATIONS_MM",
+    "LoadConfiguration",
+    "thesis_load_configurations",
+    "THESIS_FIXTURE",
+    "read_load_configurations",
+    "load_fixture",
+    "reference_wrench",
+    "reference_wrench_at_joints",
+]
 
 #: Standard gravity [m/s²].
 STANDARD_GRAVITY: float = 9.80665

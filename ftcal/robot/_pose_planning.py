@@ -97,11 +97,25 @@ from ._ik import DEFAULT_LIMIT_MARGIN_RAD, anchor_configuration, solve_gravity_d
 from ._loads import thesis_load_configurations
 from ._robot import RobotModel, sensor_pose_in_base
 
-__all__ = ["icosphere", "gravity_directions_in_sensor", "pitch_yaw_from_gravity_in_sensor",
-           "gravity_in_sensor_from_pitch_yaw", "sensor_rotation_from_pitch_yaw", "CalibrationPlan", "CandidatePoses",
-           "plan_calibration_poses", "reachable_candidates", "select_poses", "select_load_configurations",
-           "d_criterion", "linear_design_rows", "PLAN_STRATEGIES", "LINEAR_MODEL_PARAMETERS", "THESIS_SUBDIVISIONS",
-           "THESIS_EXCLUDED_CAP_DEG"]
+__all__ = [
+    "icosphere",
+    "gravity_directions_in_sensor",
+    "pitch_yaw_from_gravity_in_sensor",
+    "gravity_in_sensor_from_pitch_yaw",
+    "sensor_rotation_from_pitch_yaw",
+    "CalibrationPlan",
+    "CandidatePoses",
+    "plan_calibration_poses",
+    "reachable_candidates",
+    "select_poses",
+    "select_load_configurations",
+    "d_criterion",
+    "linear_design_rows",
+    "PLAN_STRATEGIES",
+    "LINEAR_MODEL_PARAMETERS",
+    "THESIS_SUBDIVISIONS",
+    "THESIS_EXCLUDED_CAP_DEG",
+]
 
 #: Icosphere subdivision level of the thesis' spheres (162 vertices).
 THESIS_SUBDIVISIONS: int = 2

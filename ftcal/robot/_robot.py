@@ -31,8 +31,16 @@ from numpy.typing import ArrayLike, NDArray
 
 from ..core._exceptions import KinematicsError, Placeholder
 
-__all__ = ["sensor_mounting_transform", "MOUNTED_SENSOR_FRAME", "RobotModel", "BUILTIN_ROBOTS", "load_robot",
-           "example_robot_data_dir", "sensor_pose_in_base", "frame_pose_in_base"]
+__all__ = [
+    "sensor_mounting_transform",
+    "MOUNTED_SENSOR_FRAME",
+    "RobotModel",
+    "BUILTIN_ROBOTS",
+    "load_robot",
+    "example_robot_data_dir",
+    "sensor_pose_in_base",
+    "frame_pose_in_base",
+]
 
 def _robots_dir() -> Path:
     """The repository's ``robots/`` folder, shipped in the wheel as the data package ``ftcal.robots``."""
