@@ -40,8 +40,9 @@ from sklearn.model_selection import LeaveOneGroupOut, ShuffleSplit
 from ..io._dataset import CalibrationDataset
 from ..experiment._experiment import prepare_dataset
 from ..core._metrics import mean_std, per_sample_rmse, relative_errors, wrench_rmse
-from ..calibrators._baselines import STOCK_BASELINE_NAMES, stock_baselines
-from ..compose._registry import make_calibrator, training_schedule
+from ..calibrators._baselines import STOCK_BASELINE_NAMES
+from ..compose._registry import training_schedule
+from ._artificial import make_model
 from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
 from ..core._wrench import alpha_from_wrenches
@@ -71,10 +72,9 @@ def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     """Held-out predictions of one model (a registry name or a stock baseline's name) on one split."""
     y_true, y_pred, fit_s = [], [], 0.0
     for train, test in _folds(dataset, split, random_state):
-        if model_name in STOCK_BASELINE_NAMES:
-            est = stock_baselines(dataset.n_channels, random_state=random_state)[model_name]
-        else:
-            est = make_calibrator(model_name, schedule=schedule, random_state=random_state)
+        # alpha=None (every calibrator's default): the torque scale derived from the training wrenches
+        est = make_model(model_name, n_channels=dataset.n_channels, alpha=None, schedule=schedule,
+                         random_state=random_state)
         t0 = time.perf_counter()
         est.fit(dataset.raw[train], dataset.wrench[train])
         fit_s += time.perf_counter() - t0

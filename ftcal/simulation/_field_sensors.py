@@ -103,7 +103,7 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
         "n_presses": [Interval(Integral, 1, None, closed="left")],
         "hysteresis": [Interval(Real, 0, 10, closed="both")],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_zero=n_zero, n_presses=n_presses, hysteresis=hysteresis, random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     if n_zero > max(n_samples - 5, 0):
         raise CalibrationInputError(
             f"make_soft_sensor_dataset: n_zero={n_zero} rows at zero load do not fit in n_samples={n_samples} (the "
@@ -182,8 +182,7 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
         "tool_mass_kg": [Interval(Real, 0, 1000, closed="both")],
         "pose_offset": [Interval(Real, 0, 1, closed="both")],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_poses=n_poses, tool_mass_kg=tool_mass_kg, pose_offset=pose_offset,
-        random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     if n_poses > n_samples:
         raise CalibrationInputError(
             f"make_robot_held_dataset: n_poses={n_poses} poses need at least one row each; n_samples is {n_samples}. "
@@ -263,8 +262,7 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
         "nonlinearity": [Interval(Real, -1, 1, closed="both")],
         "loaded_axes": [Options(int, {3, 6}), None],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_validation=n_validation, range_factor=range_factor, n_channels=n_channels,
-        nonlinearity=nonlinearity, loaded_axes=loaded_axes, random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     for name, rows in (("n_samples", n_samples), ("n_validation", n_validation)):
         _check_rows("make_dead_weight_dataset", name, rows, 8 * n_channels + 40)
     rng = np.random.default_rng(random_state)
