@@ -331,11 +331,10 @@ def markdown_tables(summary: dict, meta: dict) -> str:
             "|---|---|---|---|---|---|---|---|",
         ]
         for m, t in s["models"].items():
-            lines.append(
-                f"| {m} | {t['n_datasets']} | {format_mean_std(t['rmse'], 2)} | {_thesis_cell(preset, m, 'rmse', 1)} | "
-                f"{format_mean_std(t['rel_force'], 4)} | {_thesis_cell(preset, m, 'rel_force', 3)} | {format_mean_std(t['rel_torque'], 4)} | "
-                f"{_thesis_cell(preset, m, 'rel_torque', 3)} |"
-            )
+            # ours beside the thesis', each with its digits
+            cells = [f"{format_mean_std(t[key], ours)} | {_thesis_cell(preset, m, key, theirs)}"
+                     for key, ours, theirs in (("rmse", 2, 1), ("rel_force", 4, 3), ("rel_torque", 4, 3))]
+            lines.append(f"| {m} | {t['n_datasets']} | {' | '.join(cells)} |")
         lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]
         for pair, w in s["wilcoxon"].items():
             if w["n"] == 0:
@@ -347,7 +346,7 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 
 
 # ----------------------------------------------------------------- driver
-def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **arguments) -> None:
+def _check_args(n_datasets, models, schedule, n_jobs, stack=1, **arguments) -> None:
     """Check the benchmark's arguments (``arguments``: ``seed``, ``n_per_sphere``, ``n_test``,
     ``test_distribution``, ``n_spheres``) before any work; the counts within the CLI's bounds."""
     from ..calibrators._baselines import STOCK_BASELINE_NAMES
@@ -542,7 +541,7 @@ def run_artificial_benchmark(
         raise CalibrationInputError(f"progress must be a function (done, total, record) or None; got {progress!r:.80}.")
     preset_models = _preset_models(presets)
     presets, models = tuple(preset_models), _names(models, "models", "('linear', 'directional')")
-    _check_args(n_datasets, presets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
+    _check_args(n_datasets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
                 n_test=n_test, test_distribution=test_distribution, n_spheres=n_spheres)
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])

@@ -115,9 +115,7 @@ def _plot(results: dict, path: Path) -> Path:
             mu, sd = r["rmse_mean"], max(r["rmse_std"], 1e-12)
             ax.plot(grid, np.exp(-0.5 * ((grid - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi)), color=c,
                     label=f"{name}: {mu:.3f} ± {r['rmse_std']:.3f}")
-        ax.set_title(f"per-sample RMSE, split {split}")
-        ax.set_xlabel("RMSE of the torque-scaled wrench [N]")
-        ax.set_ylabel("density")
+        ax.set(title=f"per-sample RMSE, split {split}", xlabel="RMSE of the torque-scaled wrench [N]", ylabel="density")
         ax.legend()
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -252,13 +250,8 @@ def real_world_markdown(result: dict) -> str:
         ]
         for name, r in per_model.items():
             t = thesis.get(name)
-
-            def ref(key: str) -> str:
-                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
-
-            lines.append(
-                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
-                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
-                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
-            )
+            cells = [f"{r[key + '_mean']:.3g} ± {r[key + '_std']:.2g} | "  # ours, then the thesis'
+                     + ("—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}")
+                     for key in ("rmse", "rel_force", "rel_torque")]
+            lines.append(f"| {name} | {r['schedule']} | {r['n_test']} | {' | '.join(cells)} |")
     return "\n".join(lines)

@@ -126,11 +126,11 @@ def _solve(
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
             err_o, proj = task(data.oMf[sid].rotation)
-            J = proj @ pin.getFrameJacobian(model, data, sid, _WORLD)[3:]
             e_o = float(np.linalg.norm(err_o))
             err_p = anchor_position - data.oMf[aid].translation
             e_p = float(np.linalg.norm(err_p))
-            J = np.vstack([J, position_weight * pin.getFrameJacobian(model, data, aid, _WORLD)[:3]])
+            J = np.vstack([proj @ pin.getFrameJacobian(model, data, sid, _WORLD)[3:],
+                           position_weight * pin.getFrameJacobian(model, data, aid, _WORLD)[:3]])
             err = np.concatenate([err_o, position_weight * err_p])
             if e_o < orientation_tol and e_p < position_tol:
                 total += it

@@ -212,9 +212,8 @@ def _configuration(entry: dict, where: str) -> LoadConfiguration:
     if mass is not None and not (np.isfinite(mass) and mass > 0):
         raise CalibrationInputError(f"{where}: mass_kg must be a positive mass in kg; got {mass!r}.")
     if inertia is not None:
-        if len(inertia) == 9:  # a 3x3 matrix
-            m = np.reshape(inertia, (3, 3))
-            inertia = (m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
+        if len(inertia) == 9:  # a 3x3 matrix: its diagonal, then xy, xz, yz
+            inertia = tuple(np.reshape(inertia, (3, 3))[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]])
         if len(inertia) != 6 or not np.all(np.isfinite(inertia)) or min(inertia[:3]) < 0:
             raise CalibrationInputError(f"{where}: inertia_kg_m2 must be Ixx,Iyy,Izz (>= 0),Ixy,Ixz,Iyz [kg·m²] or a "
                                         f"3x3 matrix; got {list(inertia)}.")
@@ -262,7 +261,7 @@ def read_load_configurations(path) -> tuple[LoadConfiguration, ...]:
                                         "{\"configurations\": [...]}.")
         entries = [(e, f"{path}: configuration {i + 1}") for i, e in enumerate(items)]
     elif path.suffix.lower() == ".csv":
-        rows = [r for r in csv.reader(line for line in text.splitlines() if line.strip() and not line.startswith("#"))]
+        rows = list(csv.reader(line for line in text.splitlines() if line.strip() and not line.startswith("#")))
         if not rows:
             raise CalibrationInputError(f"{path}: empty fixture file; expected a header {_FIXTURE_CSV}.")
         head = [h.strip() for h in rows[0]]

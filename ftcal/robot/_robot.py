@@ -244,8 +244,8 @@ def _mount_sensor(model: pin.Model, frame: str, mounting) -> str:
     """Add the mounted sensor frame (``frame`` composed with ``mounting``) to ``model``; return its name."""
     fid = model.getFrameId(frame)
     parent = model.frames[fid]
-    placement = parent.placement * sensor_mounting_transform(mounting)
-    model.addFrame(pin.Frame(MOUNTED_SENSOR_FRAME, parent.parentJoint, fid, placement, pin.FrameType.OP_FRAME))
+    model.addFrame(pin.Frame(MOUNTED_SENSOR_FRAME, parent.parentJoint, fid,
+                             parent.placement * sensor_mounting_transform(mounting), pin.FrameType.OP_FRAME))
     return MOUNTED_SENSOR_FRAME
 
 
