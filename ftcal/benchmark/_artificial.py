@@ -139,8 +139,8 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
         for m in models:
             rows = [by_model[m][i] for i in sorted(by_model[m])]
             table[m] = {
-                **{name: across_datasets([r[key] for r in rows])
-                   for name, key in (("rmse", "rmse"), ("rel_force", "rel_force_mean"), ("rel_torque", "rel_torque_mean"))},
+                **{name: across_datasets([r[key] for r in rows]) for name, key in
+                   (("rmse", "rmse"), ("rel_force", "rel_force_mean"), ("rel_torque", "rel_torque_mean"))},
                 "rmse_per_dataset": {str(r["dataset"]): r["rmse"] for r in rows},
                 "n_datasets": len(rows),
             }

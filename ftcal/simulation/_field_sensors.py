@@ -195,8 +195,7 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
     gravity_in_sensor = np.einsum("pji,j->pi", rotations, np.array([0.0, 0.0, -9.81 * tool_mass_kg]))
     tool = np.hstack([gravity_in_sensor, np.cross(com, gravity_in_sensor)])[pose]
     # hand loads: a smooth random walk per pose (AR(1) with a ~50-row time constant)
-    push = np.zeros((n_samples, 3))
-    lever = np.zeros((n_samples, 3))
+    push, lever = np.zeros((2, n_samples, 3))
     shock = rng.normal(size=(n_samples, 6))
     for i in range(1, n_samples):
         keep = 0.0 if pose[i] != pose[i - 1] else 0.98

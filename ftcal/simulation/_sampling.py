@@ -95,8 +95,8 @@ def check_dataset_arguments(caller: str, *, n_per_sphere=None, n_test=None, test
     if test_distribution is not None and not (isinstance(test_distribution, str)
                                               and test_distribution in TEST_DISTRIBUTIONS):
         raise CalibrationInputError(f"The 'test_distribution' parameter of {caller} must be one of "
-                                    f"{', '.join(map(repr, TEST_DISTRIBUTIONS))} or None. Got {test_distribution!r:.80} "
-                                    "instead.")
+                                    f"{', '.join(map(repr, TEST_DISTRIBUTIONS))} or None. "
+                                    f"Got {test_distribution!r:.80} instead.")
     points = [Interval(Integral, 1, MAX_POINTS, closed="both"), None]
     check_arguments(caller, {"n_per_sphere": points, "n_test": points,
                              "n_spheres": [Interval(Integral, 1, N_SPHERES, closed="both")]},
