@@ -43,6 +43,7 @@ Statistics
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import itertools
 import json
@@ -101,9 +102,8 @@ def wilcoxon_pvalue(a: Sequence[float], b: Sequence[float]) -> tuple[float, str]
     from scipy.stats import wilcoxon
 
     a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
-    n = a.size
-    if n < 6:
-        return float("nan"), f"only {n} paired datasets; the signed-rank test needs at least 6 to reach p < 0.05"
+    if a.size < 6:
+        return float("nan"), f"only {a.size} paired datasets; the signed-rank test needs at least 6 to reach p < 0.05"
     if np.all(a == b):
         return float("nan"), "all paired differences are zero; the test is undefined"
     with warnings.catch_warnings():
@@ -113,10 +113,6 @@ def wilcoxon_pvalue(a: Sequence[float], b: Sequence[float]) -> tuple[float, str]
         except ValueError as exc:
             return float("nan"), f"scipy could not compute the test ({exc})"
     return p, ""
-
-
-def _across_datasets(values: Sequence[float]) -> dict:
-    return mean_std(values, ddof=1)
 
 
 def summarize_results(results: list[dict], models: Sequence[str], presets: Sequence[str]) -> dict:
@@ -134,6 +130,7 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
     {'mean': 3.0, 'std': 1.414..., 'n': 2}
     """
     out: dict = {}
+    across_datasets = functools.partial(mean_std, ddof=1)
     for preset in presets:
         recs = [r for r in results if r["preset"] == preset]
         by_model = {m: {r["dataset"]: r for r in recs if r["model"] == m} for m in models}
@@ -142,9 +139,8 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
         for m in models:
             rows = [by_model[m][i] for i in sorted(by_model[m])]
             table[m] = {
-                "rmse": _across_datasets([r["rmse"] for r in rows]),
-                "rel_force": _across_datasets([r["rel_force_mean"] for r in rows]),
-                "rel_torque": _across_datasets([r["rel_torque_mean"] for r in rows]),
+                **{name: across_datasets([r[key] for r in rows]) for name, key in
+                   (("rmse", "rmse"), ("rel_force", "rel_force_mean"), ("rel_torque", "rel_torque_mean"))},
                 "rmse_per_dataset": {str(r["dataset"]): r["rmse"] for r in rows},
                 "n_datasets": len(rows),
             }
@@ -155,19 +151,11 @@ def summarize_results(results: list[dict], models: Sequence[str], presets: Seque
             common = sorted(set(by_model[m1]) & set(by_model[m2]))
             p, note = wilcoxon_pvalue([by_model[m1][i]["rmse"] for i in common], [by_model[m2][i]["rmse"] for i in common])
             pairs[f"{m1} vs {m2}"] = {"p": p, "n": len(common), "note": note}
-        out[preset] = {
-            "models": table,
-            "wilcoxon": pairs,
-            "noise_floor": _across_datasets(list(floors.values())),
-        }
+        out[preset] = {"models": table, "wilcoxon": pairs, "noise_floor": across_datasets(list(floors.values()))}
     return out
 
 
 # ----------------------------------------------------------------- one result
-def _config_hash(config: dict) -> str:
-    return hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
-
-
 def dataset_seeds(seed: int, index: int) -> tuple[int, int]:
     """(dataset seed, model seed) of dataset ``index`` under master ``seed``: the same data for every preset and model.
 
@@ -200,11 +188,10 @@ def _data_key(data, profile) -> str:
 
 def _data_and_model(task: dict):
     """The task's dataset ``(train, test, info)``, its unfitted model and the sensor profile."""
-    (train, test, info), profile = _dataset(task)
-    _, model_seed = dataset_seeds(task["seed"], task["dataset"])
+    data, profile = _dataset(task)
     model = make_model(task["model"], n_channels=profile.n_channels, alpha=profile.alpha, schedule=task["schedule"],
-                       random_state=model_seed, overrides=task["overrides"])
-    return (train, test, info), model, profile
+                       random_state=dataset_seeds(task["seed"], task["dataset"])[1], overrides=task["overrides"])
+    return data, model, profile
 
 
 def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "thesis", random_state: int = 0,
@@ -237,15 +224,11 @@ def _record(task: dict, data, model, profile, fit_seconds: float, stacked: int =
     members = getattr(model, "estimators_", None)
     member_rmse = None if members is None else [
         wrench_rmse(test.wrench, m.predict(test.raw), profile.alpha) for m in members]
-    net = getattr(model, "net_", None)
-    history = getattr(net, "history", None)
+    history = getattr(getattr(model, "net_", None), "history", None)
     return {
-        **{k: task[k] for k in ("preset", "dataset", "model")},
-        "config_hash": task["hash"],
+        **{k: task[k] for k in ("preset", "dataset", "model", "config_hash")},
         "config": task["config"],
-        "rmse": report.rmse,
-        "rel_force_mean": report.rel_force_mean,
-        "rel_torque_mean": report.rel_torque_mean,
+        **{k: getattr(report, k) for k in ("rmse", "rel_force_mean", "rel_torque_mean")},
         "report": report.to_dict(),
         "noise_floor": info["noise_floor"],
         "data": _data_key(data, profile),
@@ -290,8 +273,7 @@ def _groups(pending: list[dict], stack: int) -> list[list[dict]]:
 
     if stack <= 1:
         return [[t] for t in pending]
-    groups: dict[tuple, list[dict]] = {}
-    units = []
+    groups, units = {}, []
     tags = {m: calibration_tags(make_calibrator(m)) for m in {t["model"] for t in pending} if m in CALIBRATOR_NAMES}
     stackable = {m: m in tags and tags[m].network and tags[m].stackable for m in {t["model"] for t in pending}}
     for task in pending:
@@ -349,11 +331,10 @@ def markdown_tables(summary: dict, meta: dict) -> str:
             "|---|---|---|---|---|---|---|---|",
         ]
         for m, t in s["models"].items():
-            lines.append(
-                f"| {m} | {t['n_datasets']} | {format_mean_std(t['rmse'], 2)} | {_thesis_cell(preset, m, 'rmse', 1)} | "
-                f"{format_mean_std(t['rel_force'], 4)} | {_thesis_cell(preset, m, 'rel_force', 3)} | {format_mean_std(t['rel_torque'], 4)} | "
-                f"{_thesis_cell(preset, m, 'rel_torque', 3)} |"
-            )
+            # ours beside the thesis', each with its digits
+            cells = [f"{format_mean_std(t[key], ours)} | {_thesis_cell(preset, m, key, theirs)}"
+                     for key, ours, theirs in (("rmse", 2, 1), ("rel_force", 4, 3), ("rel_torque", 4, 3))]
+            lines.append(f"| {m} | {t['n_datasets']} | {' | '.join(cells)} |")
         lines += ["", "| Wilcoxon pair | paired datasets | p | note |", "|---|---|---|---|"]
         for pair, w in s["wilcoxon"].items():
             if w["n"] == 0:
@@ -365,7 +346,7 @@ def markdown_tables(summary: dict, meta: dict) -> str:
 
 
 # ----------------------------------------------------------------- driver
-def _check_args(n_datasets, presets, models, schedule, n_jobs, stack=1, **arguments) -> None:
+def _check_args(n_datasets, models, schedule, n_jobs, stack=1, **arguments) -> None:
     """Check the benchmark's arguments (``arguments``: ``seed``, ``n_per_sphere``, ``n_test``,
     ``test_distribution``, ``n_spheres``) before any work; the counts within the CLI's bounds."""
     from ..calibrators._baselines import STOCK_BASELINE_NAMES
@@ -421,21 +402,22 @@ def _tasks(n_datasets, presets: dict, models, schedule, seed, quick, n_per_spher
     # dataset-major order: a run stopped early still covers every preset and model
     for index, preset, model in itertools.product(range(n_datasets), presets, models):
         overrides = {}
-        distribution = test_distribution or default_test_distribution(preset)
         if quick and model in CALIBRATOR_NAMES and training_schedule(schedule, model):
             overrides = {k: QUICK[k] for k in ("phase1_epochs", "plateau_epochs", "max_recover_epochs")}
         config = {
             "format": _FORMAT, "preset": preset, "error_model": presets[preset].to_dict(), "model": model,
             "schedule": schedule, "overrides": overrides, "seed": seed, "n_per_sphere": n_per_sphere,
-            "n_test": n_test, "test_distribution": distribution,
+            "n_test": n_test, "test_distribution": test_distribution or default_test_distribution(preset),
             **({} if n_spheres == 4 else {"n_spheres": int(n_spheres)}),  # 4: the hash of earlier caches
         }
-        tasks.append({**config, "dataset": index, "config": config, "hash": _config_hash(config)})
+        config_hash = hashlib.sha256(json.dumps(config, sort_keys=True).encode()).hexdigest()[:12]
+        tasks.append({**config, "dataset": index, "config": config, "config_hash": config_hash})
     return tasks
 
 
 def _cache_path(cache_dir: Path, task: dict) -> Path:
-    return cache_dir / task["preset"] / f"ds{task['dataset']:03d}_{task['model']}_{task['hash']}.json"
+    """The cache file of a task or of its record (both hold ``preset``, ``dataset``, ``model``, ``config_hash``)."""
+    return cache_dir / task["preset"] / f"ds{task['dataset']:03d}_{task['model']}_{task['config_hash']}.json"
 
 
 def _load_cached(path: Path, task: dict, datasets: dict) -> dict | None:
@@ -467,8 +449,7 @@ def _plot_presets(outputs: OutputFiles, summary: dict, presets: Sequence[str], m
 
     files = {}
     for preset in presets:
-        per_model = {m: list(summary[preset]["models"][m]["rmse_per_dataset"].values()) for m in models}
-        per_model = {m: v for m, v in per_model.items() if v}
+        per_model = {m: v for m in models if (v := list(summary[preset]["models"][m]["rmse_per_dataset"].values()))}
         if per_model:
             name = f"artificial_rmse_{preset}.png"
             with outputs.write(name) as tmp:
@@ -560,7 +541,7 @@ def run_artificial_benchmark(
         raise CalibrationInputError(f"progress must be a function (done, total, record) or None; got {progress!r:.80}.")
     preset_models = _preset_models(presets)
     presets, models = tuple(preset_models), _names(models, "models", "('linear', 'directional')")
-    _check_args(n_datasets, presets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
+    _check_args(n_datasets, models, schedule, n_jobs, stack, seed=seed, n_per_sphere=n_per_sphere,
                 n_test=n_test, test_distribution=test_distribution, n_spheres=n_spheres)
     if quick:
         n_datasets = min(int(n_datasets), QUICK["n_datasets"])
@@ -585,8 +566,7 @@ def run_artificial_benchmark(
         workers = min(effective_n_jobs(n_jobs), len(units))  # never a worker process without a fit to do
         gen = Parallel(n_jobs=workers, return_as="generator_unordered")(delayed(_run_group)(u) for u in units)
         for rec in itertools.chain.from_iterable(gen):
-            path = cache_dir / rec["preset"] / f"ds{rec['dataset']:03d}_{rec['model']}_{rec['config_hash']}.json"
-            write_json(path, rec, indent=1)  # atomic: a killed run leaves no half file
+            write_json(_cache_path(cache_dir, rec), rec, indent=1)  # atomic: a killed run leaves no half file
             results.append(rec)
             if progress is not None:
                 progress(len(results), len(tasks), rec)
@@ -596,11 +576,10 @@ def run_artificial_benchmark(
     meta = {
         "n_datasets": int(n_datasets), "presets": list(presets), "models": list(models), "schedule": schedule,
         "seed": int(seed), "quick": bool(quick), "n_per_sphere": n_per_sphere, "n_spheres": int(n_spheres),
-        "n_test": n_test,
-        "test_distribution": test_distribution,
-        "test_distributions": {p: test_distribution or default_test_distribution(p) for p in presets}, "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
+        "n_test": n_test, "test_distribution": test_distribution,
+        "test_distributions": {p: test_distribution or default_test_distribution(p) for p in presets},
+        "n_jobs": n_jobs, "stack": int(stack), "n_expected": len(tasks),
         "n_complete": len(results), "n_from_cache": n_cached, "n_computed": len(results) - n_cached,
-        "wall_seconds": None,
     }
     files = _plot_presets(outputs, summary, presets, models) if plot else {}
     meta["wall_seconds"] = time.perf_counter() - t0

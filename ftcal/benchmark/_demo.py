@@ -191,8 +191,8 @@ def _write(out: Path, result: DemoResult, alpha: float) -> list[Path]:
         f"# ftcal demo (alpha = {alpha:.4g} 1/m)\n\n{result.table}\n\nRMSE per axis:\n\n{axis_table(result.reports)}\n",
         encoding="utf-8",
     )
-    paths = {"distribution": out / EVALUATION_PLOTS[0], "axis": out / EVALUATION_PLOTS[1]}
-    paths.update({name: out / predicted_plot_name(name) for name in result.models})
+    paths = {"distribution": out / EVALUATION_PLOTS[0], "axis": out / EVALUATION_PLOTS[1],
+             **{name: out / predicted_plot_name(name) for name in result.models}}
     write_evaluation_plots(
         paths, result.test.wrench, result.predictions, alpha, result.info["noise_floor"], dataset_name="demo test set"
     )

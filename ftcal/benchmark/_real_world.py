@@ -27,6 +27,7 @@ Table V). The figure shows the distribution of per-sample RMSE per model
 
 from __future__ import annotations
 
+import contextlib
 import platform
 import tempfile
 import time
@@ -39,8 +40,9 @@ from sklearn.model_selection import LeaveOneGroupOut, ShuffleSplit
 from ..io._dataset import CalibrationDataset
 from ..experiment._experiment import prepare_dataset
 from ..core._metrics import mean_std, per_sample_rmse, relative_errors, wrench_rmse
-from ..calibrators._baselines import STOCK_BASELINE_NAMES, stock_baselines
-from ..compose._registry import make_calibrator, training_schedule
+from ..calibrators._baselines import STOCK_BASELINE_NAMES
+from ..compose._registry import training_schedule
+from ._artificial import make_model
 from ..robot._robot import load_robot
 from ..experiment._virtual_experiment import DEFAULT_LOAD_MASS_KG, simulate_experiment
 from ..core._wrench import alpha_from_wrenches
@@ -68,13 +70,11 @@ def _folds(dataset: CalibrationDataset, split: str, random_state: int):
 
 def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     """Held-out predictions of one model (a registry name or a stock baseline's name) on one split."""
-    y_true, y_pred = [], []
-    fit_s = 0.0
+    y_true, y_pred, fit_s = [], [], 0.0
     for train, test in _folds(dataset, split, random_state):
-        if model_name in STOCK_BASELINE_NAMES:
-            est = stock_baselines(dataset.n_channels, random_state=random_state)[model_name]
-        else:
-            est = make_calibrator(model_name, schedule=schedule, random_state=random_state)
+        # alpha=None (every calibrator's default): the torque scale derived from the training wrenches
+        est = make_model(model_name, n_channels=dataset.n_channels, alpha=None, schedule=schedule,
+                         random_state=random_state)
         t0 = time.perf_counter()
         est.fit(dataset.raw[train], dataset.wrench[train])
         fit_s += time.perf_counter() - t0
@@ -84,7 +84,9 @@ def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     rmse = per_sample_rmse(yt, yp, alpha)
     rf, rt = relative_errors(yt, yp)
     return {
-        "schedule": schedule if ftcal_training_schedule(model_name) else "-",
+        # only models with a training schedule (the networks) show it; stock baselines and closed forms do not
+        "schedule": schedule if model_name not in STOCK_BASELINE_NAMES and training_schedule("short", model_name)
+        else "-",
         "n_test": int(yt.shape[0]),
         "rmse": wrench_rmse(yt, yp, alpha),
         **{f"{name}_{k}": stat[k] for name, values in (("rmse", rmse), ("rel_force", rf), ("rel_torque", rt))
@@ -94,20 +96,14 @@ def _evaluate(dataset, model_name, split, schedule, random_state, alpha):
     }
 
 
-def ftcal_training_schedule(model_name: str) -> bool:
-    """Whether a model has a training schedule (the networks); stock baselines and closed forms do not."""
-    return model_name not in STOCK_BASELINE_NAMES and bool(training_schedule("short", model_name))
-
-
 def _plot(results: dict, path: Path) -> Path:
-    import matplotlib
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from ..reporting._plots import model_color
 
     splits = list(results["splits"])
-    fig, axes = plt.subplots(1, len(splits), figsize=(6 * len(splits), 4), squeeze=False)
-    from ..reporting._plots import model_color
+    fig = Figure(figsize=(6 * len(splits), 4))
+    axes = fig.subplots(1, len(splits), squeeze=False)
     for ax, split in zip(axes[0], splits):
         per_model = results["splits"][split]
         top = max(max(r["per_sample_rmse"]) for r in per_model.values())
@@ -119,14 +115,11 @@ def _plot(results: dict, path: Path) -> Path:
             mu, sd = r["rmse_mean"], max(r["rmse_std"], 1e-12)
             ax.plot(grid, np.exp(-0.5 * ((grid - mu) / sd) ** 2) / (sd * np.sqrt(2 * np.pi)), color=c,
                     label=f"{name}: {mu:.3f} ± {r['rmse_std']:.3f}")
-        ax.set_title(f"per-sample RMSE, split {split}")
-        ax.set_xlabel("RMSE of the torque-scaled wrench [N]")
-        ax.set_ylabel("density")
+        ax.set(title=f"per-sample RMSE, split {split}", xlabel="RMSE of the torque-scaled wrench [N]", ylabel="density")
         ax.legend()
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=120)
-    plt.close(fig)
     return path
 
 
@@ -189,11 +182,9 @@ def run_real_world_benchmark(
     """
     t_start = time.perf_counter()
     timing = {}
-    tmp = None
-    if log_dir is None:
-        tmp = tempfile.TemporaryDirectory(prefix="ftcal_real_world_")
-        log_dir = tmp.name
-    try:
+    # no log_dir: a temporary folder, removed once the dataset is read
+    with (tempfile.TemporaryDirectory(prefix="ftcal_real_world_") if log_dir is None
+          else contextlib.nullcontext(log_dir)) as log_dir:
         robot = load_robot("kuka_iiwa14")
         t0 = time.perf_counter()
         paths = simulate_experiment(log_dir, robot=robot, load_mass=load_mass, subdivisions=subdivisions,
@@ -202,9 +193,6 @@ def run_real_world_benchmark(
         t0 = time.perf_counter()
         dataset = prepare_dataset(paths, robot, load_mass)
         timing["prepare_s"] = time.perf_counter() - t0
-    finally:
-        if tmp is not None:
-            tmp.cleanup()
     alpha = alpha_from_wrenches(dataset.wrench)
     results: dict = {"splits": {}}
     for split in splits:
@@ -262,13 +250,8 @@ def real_world_markdown(result: dict) -> str:
         ]
         for name, r in per_model.items():
             t = thesis.get(name)
-
-            def ref(key: str) -> str:
-                return "—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}"
-
-            lines.append(
-                f"| {name} | {r['schedule']} | {r['n_test']} | {r['rmse_mean']:.3g} ± {r['rmse_std']:.2g} | {ref('rmse')} | "
-                f"{r['rel_force_mean']:.3g} ± {r['rel_force_std']:.2g} | {ref('rel_force')} | "
-                f"{r['rel_torque_mean']:.3g} ± {r['rel_torque_std']:.2g} | {ref('rel_torque')} |"
-            )
+            cells = [f"{r[key + '_mean']:.3g} ± {r[key + '_std']:.2g} | "  # ours, then the thesis'
+                     + ("—" if t is None else f"{t[key + '_mean']:.3g} ± {t[key + '_std']:.2g}")
+                     for key in ("rmse", "rel_force", "rel_torque")]
+            lines.append(f"| {name} | {r['schedule']} | {r['n_test']} | {' | '.join(cells)} |")
     return "\n".join(lines)

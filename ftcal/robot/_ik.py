@@ -116,7 +116,7 @@ def _solve(
     if np.any(lo > hi):
         raise KinematicsError(f"limit_margin {limit_margin} rad leaves no room inside the joint limits of {robot.name!r}.")
     sid, aid = robot.sensor_frame_id, robot.anchor_frame_id
-    best: IKResult | None = None
+    best: tuple | None = None  # (summed error, q, orientation error, position error) of the best failed seed
     total = 0
     for seed in seeds:
         q = np.clip(seed, lo, hi)
@@ -126,11 +126,11 @@ def _solve(
             pin.computeJointJacobians(model, data, q)
             pin.updateFramePlacements(model, data)
             err_o, proj = task(data.oMf[sid].rotation)
-            J = proj @ pin.getFrameJacobian(model, data, sid, _WORLD)[3:]
             e_o = float(np.linalg.norm(err_o))
             err_p = anchor_position - data.oMf[aid].translation
             e_p = float(np.linalg.norm(err_p))
-            J = np.vstack([J, position_weight * pin.getFrameJacobian(model, data, aid, _WORLD)[:3]])
+            J = np.vstack([proj @ pin.getFrameJacobian(model, data, sid, _WORLD)[3:],
+                           position_weight * pin.getFrameJacobian(model, data, aid, _WORLD)[:3]])
             err = np.concatenate([err_o, position_weight * err_p])
             if e_o < orientation_tol and e_p < position_tol:
                 total += it
@@ -155,11 +155,9 @@ def _solve(
                 dq *= max_step / step
             q = np.clip(q + dq, lo, hi)
         total += it
-        cand = IKResult(q.copy(), False, e_o, e_p, total)
-        if best is None or (cand.orientation_error + cand.position_error) < (best.orientation_error + best.position_error):
-            best = cand
-    assert best is not None
-    return IKResult(best.q, False, best.orientation_error, best.position_error, total)
+        if best is None or e_o + e_p < best[0]:
+            best = (e_o + e_p, q.copy(), e_o, e_p)
+    return IKResult(best[1], False, best[2], best[3], total)
 
 
 def _seeds(robot: RobotModel, q_seed: ArrayLike | None, n_random: int, random_state: int) -> list[NDArray[np.float64]]:

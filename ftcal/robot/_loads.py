@@ -103,11 +103,9 @@ def thesis_load_configurations() -> tuple[LoadConfiguration, ...]:
     (0.347, 0.093, 0.079)
     """
     centre = np.array(THESIS_LOAD_CENTER_MM)
-    out = [LoadConfiguration(0, "centre", tuple(float(v) for v in np.round(centre / 1000.0, 9)))]
-    for i, (name, shift) in enumerate(TABLE_I_TRANSLATIONS_MM.items(), start=1):
-        pos = np.round((centre + np.array(shift)) / 1000.0, 9)
-        out.append(LoadConfiguration(i, name, tuple(float(v) for v in pos)))
-    return tuple(out)
+    shifts = {"centre": (0.0, 0.0, 0.0), **TABLE_I_TRANSLATIONS_MM}
+    return tuple(LoadConfiguration(i, name, tuple(float(v) for v in np.round((centre + np.array(shift)) / 1000.0, 9)))
+                 for i, (name, shift) in enumerate(shifts.items()))
 
 
 def _vector3(v: ArrayLike, name: str, n: int | None = None) -> NDArray[np.float64]:
@@ -198,9 +196,8 @@ def _configuration(entry: dict, where: str) -> LoadConfiguration:
     try:
         cid = entry["id"]
         com = [float(v) for v in entry["center_of_mass_m"]]
-        mass = entry.get("mass_kg")
+        mass, inertia = entry.get("mass_kg"), entry.get("inertia_kg_m2")
         mass = None if mass is None else float(mass)
-        inertia = entry.get("inertia_kg_m2")
         inertia = None if inertia is None else tuple(float(v) for v in np.ravel(inertia))
     except (KeyError, TypeError, ValueError) as exc:
         raise CalibrationInputError(f"{where}: each configuration needs 'id' and 'center_of_mass_m' (3 numbers, m), "
@@ -215,9 +212,8 @@ def _configuration(entry: dict, where: str) -> LoadConfiguration:
     if mass is not None and not (np.isfinite(mass) and mass > 0):
         raise CalibrationInputError(f"{where}: mass_kg must be a positive mass in kg; got {mass!r}.")
     if inertia is not None:
-        if len(inertia) == 9:  # a 3x3 matrix
-            m = np.reshape(inertia, (3, 3))
-            inertia = (m[0, 0], m[1, 1], m[2, 2], m[0, 1], m[0, 2], m[1, 2])
+        if len(inertia) == 9:  # a 3x3 matrix: its diagonal, then xy, xz, yz
+            inertia = tuple(np.reshape(inertia, (3, 3))[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]])
         if len(inertia) != 6 or not np.all(np.isfinite(inertia)) or min(inertia[:3]) < 0:
             raise CalibrationInputError(f"{where}: inertia_kg_m2 must be Ixx,Iyy,Izz (>= 0),Ixy,Ixz,Iyz [kg·m²] or a "
                                         f"3x3 matrix; got {list(inertia)}.")
@@ -265,7 +261,7 @@ def read_load_configurations(path) -> tuple[LoadConfiguration, ...]:
                                         "{\"configurations\": [...]}.")
         entries = [(e, f"{path}: configuration {i + 1}") for i, e in enumerate(items)]
     elif path.suffix.lower() == ".csv":
-        rows = [r for r in csv.reader(line for line in text.splitlines() if line.strip() and not line.startswith("#"))]
+        rows = list(csv.reader(line for line in text.splitlines() if line.strip() and not line.startswith("#")))
         if not rows:
             raise CalibrationInputError(f"{path}: empty fixture file; expected a header {_FIXTURE_CSV}.")
         head = [h.strip() for h in rows[0]]

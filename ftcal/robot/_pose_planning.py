@@ -88,6 +88,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial.transform import Rotation
 
@@ -174,7 +175,7 @@ def _rotation_onto(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np
         perp = np.cross(a, [1.0, 0, 0] if abs(a[0]) < 0.9 else [0, 1.0, 0])
         perp /= np.linalg.norm(perp)
         return 2 * np.outer(perp, perp) - np.eye(3)
-    K = np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+    K = pin.skew(v)
     return np.eye(3) + K + K @ K / (1 + c)
 
 
@@ -226,9 +227,7 @@ def pitch_yaw_from_gravity_in_sensor(gravity_in_sensor: ArrayLike) -> tuple[NDAr
     """
     g = np.asarray(gravity_in_sensor, dtype=float).reshape(-1, 3)
     g = g / np.linalg.norm(g, axis=1, keepdims=True)
-    pitch = np.arccos(np.clip(-g[:, 2], -1.0, 1.0))
-    yaw = np.arctan2(-g[:, 1], g[:, 0])
-    return pitch, yaw
+    return np.arccos(np.clip(-g[:, 2], -1.0, 1.0)), np.arctan2(-g[:, 1], g[:, 0])
 
 
 def gravity_in_sensor_from_pitch_yaw(pitch: ArrayLike, yaw: ArrayLike) -> NDArray[np.float64]:
@@ -325,37 +324,28 @@ class CandidatePoses:
         return int(self.gravity_in_sensor.shape[0])
 
 
-def _solve_in_order(robot: RobotModel, dirs: NDArray[np.float64], order: list[int], ik: dict,
-                    fallback_q: NDArray[np.float64] | None = None) -> tuple[list, list[int], list[int]]:
-    """IK for ``dirs`` in ``order``, each from the previous solution; ``fallback_q`` rows are known solutions."""
-    qs, reached, dropped = [], [], []
-    prev = robot.home_configuration
-    for i in order:
-        res = solve_gravity_direction_ik(robot, dirs[i], q_seed=prev, **ik)
-        if res.success:
-            q = res.q
-        elif fallback_q is not None:
-            q = fallback_q[i]
-        else:
-            dropped.append(i)
-            continue
-        qs.append(q)
-        reached.append(i)
-        prev = q
-    return qs, reached, dropped
-
-
 def _solve_directions(robot: RobotModel, dirs: NDArray[np.float64], anchor_position_in_base, gravity_in_base,
                       orientation_tol, limit_margin, max_iterations, n_random_seeds,
                       fallback_q: NDArray[np.float64] | None = None) -> tuple[dict, list, list[int], list[int]]:
-    """IK of ``dirs`` along a nearest-neighbour tour from the home posture's gravity direction: the IK settings,
-    the joint configurations and the indices of the directions reached and dropped (:func:`_solve_in_order`)."""
+    """IK of ``dirs`` along a nearest-neighbour tour from the home posture's gravity direction, each from the
+    previous solution (``fallback_q`` rows are known solutions): the IK settings, the joint configurations and
+    the indices of the directions reached and dropped."""
     ik = dict(anchor_position_in_base=anchor_configuration(robot, anchor_position_in_base),
               gravity_in_base=np.asarray(gravity_in_base, dtype=float), orientation_tol=orientation_tol,
               limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
     R_home = sensor_pose_in_base(robot, robot.home_configuration)[:3, :3]
     start = R_home.T @ (ik["gravity_in_base"] / np.linalg.norm(ik["gravity_in_base"]))
-    return ik, *_solve_in_order(robot, dirs, _travel_order(dirs, start), ik, fallback_q)
+    qs, reached, dropped = [], [], []
+    prev = robot.home_configuration
+    for i in _travel_order(dirs, start):
+        res = solve_gravity_direction_ik(robot, dirs[i], q_seed=prev, **ik)
+        if not res.success and fallback_q is None:
+            dropped.append(i)
+            continue
+        prev = res.q if res.success else fallback_q[i]
+        qs.append(prev)
+        reached.append(i)
+    return ik, qs, reached, dropped
 
 
 def reachable_candidates(
@@ -752,9 +742,7 @@ def plan_calibration_poses(
                                 "'d-optimal' or 'random' for a given number of poses.")
         dirs = gravity_directions_in_sensor(subdivisions, excluded_direction=excluded_direction,
                                             excluded_cap_deg=excluded_cap_deg)
-        ik, qs, reached, dropped = _solve_directions(robot, dirs, anchor_position_in_base, gravity_in_base,
-                                                     orientation_tol, limit_margin, max_iterations, n_random_seeds)
-        n_candidates, unreachable = len(dirs), dirs[dropped]
+        anchor, fallback_q = anchor_position_in_base, None
         settings = {"strategy": "geodesic", "subdivisions": int(subdivisions),
                     "excluded_cap_deg": float(excluded_cap_deg),
                     "excluded_direction": np.asarray(excluded_direction, dtype=float).tolist()}
@@ -769,11 +757,12 @@ def plan_calibration_poses(
                 limit_margin=limit_margin, max_iterations=max_iterations, n_random_seeds=n_random_seeds)
         picked, settings = _chosen_directions(candidates, strategy, n_poses, load_positions_in_sensor,
                                               space_filling, n_load_configurations, random_state)
-        dirs = candidates.gravity_in_sensor[picked]
-        ik, qs, reached, dropped = _solve_directions(
-            robot, dirs, candidates.anchor_position_in_base, gravity_in_base, orientation_tol, limit_margin,
-            max_iterations, n_random_seeds, fallback_q=candidates.q[picked])
-        n_candidates, unreachable = candidates.n_candidates, candidates.unreachable
+        dirs, anchor, fallback_q = candidates.gravity_in_sensor[picked], candidates.anchor_position_in_base, \
+            candidates.q[picked]
+    ik, qs, reached, dropped = _solve_directions(robot, dirs, anchor, gravity_in_base, orientation_tol, limit_margin,
+                                                 max_iterations, n_random_seeds, fallback_q)
+    n_candidates, unreachable = (len(dirs), dirs[dropped]) if strategy == "geodesic" else \
+        (candidates.n_candidates, candidates.unreachable)
     g = dirs[reached].reshape(-1, 3)
     pitch, yaw = pitch_yaw_from_gravity_in_sensor(g)
     settings.update({"gravity_in_base": ik["gravity_in_base"].tolist(), "limit_margin_rad": float(limit_margin)})

@@ -19,6 +19,7 @@ revolute and [m] for prismatic joints.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.metadata
 import sysconfig
 from dataclasses import dataclass, field
@@ -174,26 +175,17 @@ def example_robot_data_dir() -> Path:
     KinematicsError
         When ``example-robot-data`` is not installed.
     """
-    candidates: list[Path] = []
-    try:
-        candidates.append(Path(importlib.metadata.distribution("example-robot-data").locate_file(_ERD_SUBDIR)))
-    except importlib.metadata.PackageNotFoundError:
-        pass
-    for key in ("purelib", "platlib"):
-        candidates.append(Path(sysconfig.get_paths()[key]) / _ERD_SUBDIR)
-    for path in candidates:
-        if path.is_dir():
-            return path
+    candidates = [Path(sysconfig.get_paths()[key]) / _ERD_SUBDIR for key in ("purelib", "platlib")]
+    with contextlib.suppress(importlib.metadata.PackageNotFoundError):
+        candidates.insert(0, Path(importlib.metadata.distribution("example-robot-data").locate_file(_ERD_SUBDIR)))
+    found = next((path for path in candidates if path.is_dir()), None)
+    if found is not None:
+        return found
     raise KinematicsError(
         "example-robot-data is not installed (looked in "
         + ", ".join(map(str, candidates))
         + "); install it with `pip install example-robot-data` or pass a URDF path."
     )
-
-
-def _builtin_urdf(spec: _BuiltinRobot) -> Path:
-    source, _, rel = spec.urdf.partition(":")
-    return _robots_dir() / rel if source == "ftcal" else example_robot_data_dir() / rel
 
 
 def _arm_model(full: pin.Model, sensor_frame: str, urdf: Path) -> pin.Model:
@@ -252,8 +244,8 @@ def _mount_sensor(model: pin.Model, frame: str, mounting) -> str:
     """Add the mounted sensor frame (``frame`` composed with ``mounting``) to ``model``; return its name."""
     fid = model.getFrameId(frame)
     parent = model.frames[fid]
-    placement = parent.placement * sensor_mounting_transform(mounting)
-    model.addFrame(pin.Frame(MOUNTED_SENSOR_FRAME, parent.parentJoint, fid, placement, pin.FrameType.OP_FRAME))
+    model.addFrame(pin.Frame(MOUNTED_SENSOR_FRAME, parent.parentJoint, fid,
+                             parent.placement * sensor_mounting_transform(mounting), pin.FrameType.OP_FRAME))
     return MOUNTED_SENSOR_FRAME
 
 
@@ -332,9 +324,9 @@ def load_robot(name_or_urdf_path: str | Path = "kuka_iiwa14", sensor_frame: str 
     key = str(name_or_urdf_path)
     spec = BUILTIN_ROBOTS.get(key)
     if spec is not None:
-        urdf = _builtin_urdf(spec)
-        frame = sensor_frame or spec.sensor_frame
-        name = key
+        source, _, rel = spec.urdf.partition(":")
+        urdf = _robots_dir() / rel if source == "ftcal" else example_robot_data_dir() / rel
+        frame, name = sensor_frame or spec.sensor_frame, key
     else:
         urdf = Path(name_or_urdf_path)
         if urdf.suffix.lower() != ".urdf":

@@ -125,10 +125,8 @@ class VirtualSensor:
         else:
             self.profile = SensorProfile(calibration_matrix=calibration_matrix, fmax=fmax, tmax=tmax, name="user matrix")
         self._rng = np.random.default_rng(random_state)
-        if isinstance(errors, SampledErrors):
-            self.errors_ = errors
-        else:
-            self.errors_ = error_preset(errors).sample(self.profile.full_scale, self.profile.alpha, self._rng)
+        self.errors_ = errors if isinstance(errors, SampledErrors) else \
+            error_preset(errors).sample(self.profile.full_scale, self.profile.alpha, self._rng)
         n = self.profile.n_channels
         if zero_offset is None:
             self.zero_offset = np.zeros(n)
@@ -239,8 +237,7 @@ def make_artificial_dataset(
     }, random_state=random_state, profile=profile)
     model = error_preset(preset)
     rng = np.random.default_rng(random_state)
-    if test_distribution is None:
-        test_distribution = default_test_distribution(preset)
+    test_distribution = test_distribution or default_test_distribution(preset)  # None: the preset's
     profile = SensorProfile.default() if profile is None else profile
     sensor = VirtualSensor(profile, errors=model, zero_offset=zero_offset, random_state=rng)
     radii = np.array(SPHERE_FRACTIONS[len(SPHERE_FRACTIONS) - int(n_spheres):]) * profile.fmax

@@ -67,11 +67,17 @@ def _unit_factor(path: Path, cal: ET.Element, attribute: str, table: dict[str, f
         ) from None
 
 
-def _number(path: Path, element: ET.Element, attribute: str) -> float:
-    text = element.get(attribute)
+def _attribute(path: Path, element: ET.Element, attribute: str) -> tuple[str, str]:
+    """The text of ``attribute`` of ``element`` and how messages name the element; an error when it is missing."""
     where = f"<{element.tag} Name={element.get('Name')!r}>" if element.get("Name") else f"<{element.tag}>"
+    text = element.get(attribute)
     if text is None:
         raise CalFileError(f"{path}: {where} has no {attribute!r} attribute.")
+    return text, where
+
+
+def _number(path: Path, element: ET.Element, attribute: str) -> float:
+    text, where = _attribute(path, element, attribute)
     try:
         value = float(text)
     except ValueError:
@@ -101,9 +107,7 @@ def _axis_rows(path: Path, cal: ET.Element, tag: str, n_gauges: int | None) -> t
     rows, maxima = [], []
     for name in WRENCH_LABELS:
         el = elements[name]
-        text = el.get("values")
-        if text is None:
-            raise CalFileError(f"{path}: <{tag} Name={name!r}> has no 'values' attribute.")
+        text, _ = _attribute(path, el, "values")
         try:
             row = [float(v) for v in text.split()]
         except ValueError:
@@ -121,10 +125,6 @@ def _axis_rows(path: Path, cal: ET.Element, tag: str, n_gauges: int | None) -> t
     return np.array(rows), np.array(maxima), [elements[n] for n in WRENCH_LABELS]
 
 
-def _skew(v: NDArray[np.float64]) -> NDArray[np.float64]:
-    return np.array([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
-
-
 def _basic_transform(path: Path, cal: ET.Element, dist_factor: float) -> NDArray[np.float64]:
     """6 x 6 map from basic-frame to user-frame wrenches [N, N·m] (identity without BasicTransform)."""
     el = cal.find("BasicTransform")
@@ -133,11 +133,8 @@ def _basic_transform(path: Path, cal: ET.Element, dist_factor: float) -> NDArray
     d = np.array([_number(path, el, k) if el.get(k) is not None else 0.0 for k in ("Dx", "Dy", "Dz")]) * dist_factor
     angles = [np.deg2rad(_number(path, el, k)) if el.get(k) is not None else 0.0 for k in ("Rx", "Ry", "Rz")]
     rt = Rotation.from_euler("XYZ", angles).as_matrix().T  # Rx Ry Rz
-    out = np.zeros((6, 6))
-    out[:3, :3] = rt
-    out[3:, 3:] = rt
-    out[3:, :3] = -rt @ _skew(d)
-    return out
+    skew_d = np.cross(d, np.eye(3)).T  # skew_d @ F = d x F
+    return np.block([[rt, np.zeros((3, 3))], [-rt @ skew_d, rt]])
 
 
 def _parse(path: Path) -> ET.Element:
@@ -197,20 +194,16 @@ def read_ati_calibration(path: str | Path, calibration_index: int = 0) -> Sensor
     if not 0 <= calibration_index < len(cals):
         raise CalFileError(f"{path}: calibration_index={calibration_index} but the file holds {len(cals)} <Calibration>.")
     cal = cals[calibration_index]
-    n_gauges = None
-    if root.get("NumGages") is not None:
-        n_gauges = int(_number(path, root, "NumGages"))
+    n_gauges = int(_number(path, root, "NumGages")) if root.get("NumGages") is not None else None
     force_unit, f_factor = _unit_factor(path, cal, "ForceUnits", _FORCE_TO_N, "N")
     torque_unit, t_factor = _unit_factor(path, cal, "TorqueUnits", _TORQUE_TO_NM, "N-m")
     dist_unit, d_factor = _unit_factor(path, cal, "DistUnits", _DIST_TO_M, "m")
     to_si = np.array([f_factor] * 3 + [t_factor] * 3)
-    if cal.findall("UserAxis"):
-        form = "UserAxis"
-        rows, maxima, _ = _axis_rows(path, cal, "UserAxis", n_gauges)
+    form = "UserAxis" if cal.findall("UserAxis") else "Axis"
+    rows, maxima, elements = _axis_rows(path, cal, form, n_gauges)
+    if form == "UserAxis":
         matrix = rows * to_si[:, None]
     else:
-        form = "Axis"
-        rows, maxima, elements = _axis_rows(path, cal, "Axis", n_gauges)
         scales = np.array([_number(path, el, "scale") for el in elements])
         zero = [a for a, s in zip(WRENCH_LABELS, scales) if s == 0]
         if zero:

@@ -40,7 +40,7 @@ The errors, in the order they are applied
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, fields
 from numbers import Integral
 
 import numpy as np
@@ -112,25 +112,20 @@ class ErrorModel:
     spread: float = 0.10
 
     def __post_init__(self) -> None:
-        # plain checks, not scikit-learn's: the presets are built when the CLI starts
-        def refuse(name: str, allowed: str) -> None:
+        # plain checks, not scikit-learn's: the presets are built when the CLI starts.
+        # Relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5
+        # (beyond 2 a gain changes sign): a larger value is a unit mistake. Rows: (name, low, high, integer, allowed).
+        magnitude = "a number from 0 to 1 (a relative magnitude, 1 = 100 %)"
+        checks = [(name, 0, 1, False, magnitude)
+                  for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread")]
+        checks += [(name, 0, top, True, f"an integer from 0 to {top}") for name, top in
+                   (("creep_axes", 6), ("nonlinearity_axes", 6), ("asymmetry_axes", 6), ("crosstalk_pairs", 30))]
+        checks.append(("nonlinearity_exponent", 1, 10, False, "a number from 1 to 10 (thesis: 2.5)"))
+        for name, low, high, integer, allowed in checks:
             value = getattr(self, name)
-            raise CalibrationInputError(f"ErrorModel.{name} must be {allowed}; got {value!r} "
-                                        f"({type(value).__name__}).")
-
-        def number(name: str) -> bool:
-            return is_finite_number(getattr(self, name))
-
-        for name in ("creep", "noise", "crosstalk", "nonlinearity", "asymmetry", "spread"):
-            # relative magnitudes: 1 is 100 %; a sign-dependent gain of a = 1 already means gains of 1.5 and 0.5
-            # (beyond 2 a gain changes sign): a larger value is a unit mistake
-            if not (number(name) and 0 <= getattr(self, name) <= 1):
-                refuse(name, "a number from 0 to 1 (a relative magnitude, 1 = 100 %)")
-        for name, top in (("creep_axes", 6), ("nonlinearity_axes", 6), ("asymmetry_axes", 6), ("crosstalk_pairs", 30)):
-            if not (number(name) and isinstance(getattr(self, name), Integral) and 0 <= getattr(self, name) <= top):
-                refuse(name, f"an integer from 0 to {top}")
-        if not (number("nonlinearity_exponent") and 1 <= self.nonlinearity_exponent <= 10):
-            refuse("nonlinearity_exponent", "a number from 1 to 10 (thesis: 2.5)")
+            if not (is_finite_number(value) and (isinstance(value, Integral) or not integer) and low <= value <= high):
+                raise CalibrationInputError(f"ErrorModel.{name} must be {allowed}; got {value!r} "
+                                            f"({type(value).__name__}).")
 
     def to_dict(self) -> dict:
         """Plain-JSON form."""
@@ -138,6 +133,14 @@ class ErrorModel:
 
     def _draw(self, mean: float, size: int, rng: np.random.Generator) -> NDArray[np.float64]:
         return rng.normal(mean, self.spread * mean, size=size)
+
+    def _on_axes(self, mean: float, count: int, n: int, rng: np.random.Generator) -> NDArray[np.float64]:
+        """``n`` values, zero but on ``count`` of them drawn at random, which get draws around ``mean``."""
+        values = np.zeros(n)
+        if mean > 0 and count:
+            chosen = rng.choice(n, count, replace=False)
+            values[chosen] = self._draw(mean, chosen.size, rng)
+        return values
 
     def sample(self, full_scale: ArrayLike, alpha: float, rng: np.random.Generator) -> "SampledErrors":
         """Draw one dataset's error parameters.
@@ -151,38 +154,17 @@ class ErrorModel:
         rng : numpy.random.Generator
             Random source.
         """
-        fs = np.asarray(full_scale, dtype=float)
-        creep_gain = np.ones(6)
-        if self.creep > 0 and self.creep_axes:
-            axes = rng.choice(6, self.creep_axes, replace=False)
-            creep_gain[axes] += self._draw(self.creep, axes.size, rng)
+        creep_gain = 1.0 + self._on_axes(self.creep, self.creep_axes, 6, rng)
+        # the ordered pairs (j, i), i != j, in row-major order: the off-diagonal entries of the coupling matrix
         coupling = np.zeros((6, 6))
-        if self.crosstalk > 0 and self.crosstalk_pairs:
-            pairs = [(j, i) for j in range(6) for i in range(6) if i != j]
-            chosen = rng.choice(len(pairs), self.crosstalk_pairs, replace=False)
-            ks = self._draw(self.crosstalk, chosen.size, rng)
-            for c, k in zip(chosen, ks):
-                coupling[pairs[c]] = k
-        gamma = np.zeros(6)
-        if self.nonlinearity > 0 and self.nonlinearity_axes:
-            axes = rng.choice(6, self.nonlinearity_axes, replace=False)
-            gamma[axes] = self._draw(self.nonlinearity, axes.size, rng)
-        asym = np.zeros(6)
-        if self.asymmetry > 0 and self.asymmetry_axes:
-            axes = rng.choice(6, self.asymmetry_axes, replace=False)
-            asym[axes] = self._draw(self.asymmetry, axes.size, rng)
+        coupling[~np.eye(6, dtype=bool)] = self._on_axes(self.crosstalk, self.crosstalk_pairs, 30, rng)
+        gamma = self._on_axes(self.nonlinearity, self.nonlinearity_axes, 6, rng)
+        asym = self._on_axes(self.asymmetry, self.asymmetry_axes, 6, rng)
         sigma = float(max(self._draw(self.noise, 1, rng)[0], 0.0)) if self.noise > 0 else 0.0
-        return SampledErrors(
-            alpha=float(alpha),
-            full_scale=tuple(float(v) for v in fs),
-            creep_gain=creep_gain,
-            crosstalk=coupling,
-            nonlinearity_gamma=gamma,
-            nonlinearity_exponent=float(self.nonlinearity_exponent),
-            asymmetry=asym,
-            noise_sigma=sigma,
-            noise_sigma_spread=self.spread * sigma,
-        )
+        return SampledErrors(alpha=float(alpha), full_scale=np.asarray(full_scale, dtype=float), creep_gain=creep_gain,
+                             crosstalk=coupling, nonlinearity_gamma=gamma, asymmetry=asym,
+                             nonlinearity_exponent=float(self.nonlinearity_exponent), noise_sigma=sigma,
+                             noise_sigma_spread=self.spread * sigma)
 
 
 @dataclass
@@ -222,10 +204,8 @@ class SampledErrors:
     noise_sigma_spread: float = 0.0
 
     def __post_init__(self) -> None:
-        self.creep_gain = np.asarray(self.creep_gain, dtype=float).reshape(6)
-        self.crosstalk = np.asarray(self.crosstalk, dtype=float).reshape(6, 6)
-        self.nonlinearity_gamma = np.asarray(self.nonlinearity_gamma, dtype=float).reshape(6)
-        self.asymmetry = np.asarray(self.asymmetry, dtype=float).reshape(6)
+        for name, shape in (("creep_gain", 6), ("crosstalk", (6, 6)), ("nonlinearity_gamma", 6), ("asymmetry", 6)):
+            setattr(self, name, np.asarray(getattr(self, name), dtype=float).reshape(shape))
         self.full_scale = tuple(float(v) for v in self.full_scale)
 
     def apply_deterministic(self, wrench: ArrayLike) -> NDArray[np.float64]:
@@ -253,14 +233,13 @@ class SampledErrors:
         d["crosstalk_pairs"] = [
             f"{WRENCH_LABELS[i]}->{WRENCH_LABELS[j]}" for j, i in zip(*np.nonzero(self.crosstalk))
         ]
-        d["creep_axes"] = [WRENCH_LABELS[i] for i in np.flatnonzero(self.creep_gain != 1.0)]
-        d["nonlinearity_axes"] = [WRENCH_LABELS[i] for i in np.flatnonzero(self.nonlinearity_gamma)]
-        d["asymmetry_axes"] = [WRENCH_LABELS[i] for i in np.flatnonzero(self.asymmetry)]
+        for name, hit in (("creep", self.creep_gain != 1.0), ("nonlinearity", self.nonlinearity_gamma),
+                          ("asymmetry", self.asymmetry)):
+            d[f"{name}_axes"] = [WRENCH_LABELS[i] for i in np.flatnonzero(hit)]
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "SampledErrors":
         """Inverse of :meth:`to_dict` (the derived axis lists are ignored)."""
-        keys = {"alpha", "full_scale", "creep_gain", "crosstalk", "nonlinearity_gamma", "nonlinearity_exponent",
-                "asymmetry", "noise_sigma", "noise_sigma_spread"}
+        keys = {f.name for f in fields(cls)}
         return cls(**{k: v for k, v in d.items() if k in keys})

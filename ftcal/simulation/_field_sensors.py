@@ -29,6 +29,7 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 from sklearn.utils._param_validation import Interval, Options
 
 from ..core._exceptions import CalibrationInputError
@@ -102,7 +103,7 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
         "n_presses": [Interval(Integral, 1, None, closed="left")],
         "hysteresis": [Interval(Real, 0, 10, closed="both")],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_zero=n_zero, n_presses=n_presses, hysteresis=hysteresis, random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     if n_zero > max(n_samples - 5, 0):
         raise CalibrationInputError(
             f"make_soft_sensor_dataset: n_zero={n_zero} rows at zero load do not fit in n_samples={n_samples} (the "
@@ -128,8 +129,7 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
         if i == 0 or press_of_row[i] != press_of_row[i - 1] or rng.random() < 0.3:
             target = rng.uniform(-1, 1, size=6)
             target[2] = rng.uniform(0, 1)  # pressing only
-        previous = z[i - 1] if i else np.zeros(6)
-        z[i] = previous + 0.6 * (target - previous) + 0.05 * rng.normal(size=6)
+        z[i] = z[i - 1] + 0.6 * (target - z[i - 1]) + 0.05 * rng.normal(size=6)  # z[-1]: still zero at i = 0
         z[i, 2] = abs(z[i, 2])
     lag = np.zeros_like(z)
     for i in range(1, n_samples):
@@ -140,12 +140,6 @@ def make_soft_sensor_dataset(n_samples: int = 418, *, n_zero: int = 48, n_presse
     wrench = z * span
     noise = rng.normal(size=wrench.shape) * 0.01 * span
     return _with_floor(raw, wrench, noise, press_of_row, {"preset": "soft_sensor", "random_state": random_state})
-
-
-def _rotations(n: int, rng) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.random(n, random_state=int(rng.integers(2**31))).as_matrix()
 
 
 def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_mass_kg: float = 1.5,
@@ -188,8 +182,7 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
         "tool_mass_kg": [Interval(Real, 0, 1000, closed="both")],
         "pose_offset": [Interval(Real, 0, 1, closed="both")],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_poses=n_poses, tool_mass_kg=tool_mass_kg, pose_offset=pose_offset,
-        random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     if n_poses > n_samples:
         raise CalibrationInputError(
             f"make_robot_held_dataset: n_poses={n_poses} poses need at least one row each; n_samples is {n_samples}. "
@@ -197,13 +190,12 @@ def make_robot_held_dataset(n_samples: int = 90_000, *, n_poses: int = 47, tool_
     _check_rows("make_robot_held_dataset", "n_samples", n_samples, 120)
     rng = np.random.default_rng(random_state)
     pose = np.sort(np.concatenate([np.arange(n_poses), rng.integers(0, n_poses, size=n_samples - n_poses)]))
-    rotations = _rotations(n_poses, rng)
+    rotations = Rotation.random(n_poses, random_state=int(rng.integers(2**31))).as_matrix()
     com = np.array([0.0, 0.0, 0.08])
     gravity_in_sensor = np.einsum("pji,j->pi", rotations, np.array([0.0, 0.0, -9.81 * tool_mass_kg]))
     tool = np.hstack([gravity_in_sensor, np.cross(com, gravity_in_sensor)])[pose]
     # hand loads: a smooth random walk per pose (AR(1) with a ~50-row time constant)
-    push = np.zeros((n_samples, 3))
-    lever = np.zeros((n_samples, 3))
+    push, lever = np.zeros((2, n_samples, 3))
     shock = rng.normal(size=(n_samples, 6))
     for i in range(1, n_samples):
         keep = 0.0 if pose[i] != pose[i - 1] else 0.98
@@ -269,8 +261,7 @@ def make_dead_weight_dataset(n_samples: int = 15, *, n_validation: int = 200, ra
         "nonlinearity": [Interval(Real, -1, 1, closed="both")],
         "loaded_axes": [Options(int, {3, 6}), None],
         "random_state": _SEED,
-    }, n_samples=n_samples, n_validation=n_validation, range_factor=range_factor, n_channels=n_channels,
-        nonlinearity=nonlinearity, loaded_axes=loaded_axes, random_state=random_state)
+    }, **locals())  # every argument, in the signature's order
     for name, rows in (("n_samples", n_samples), ("n_validation", n_validation)):
         _check_rows("make_dead_weight_dataset", name, rows, 8 * n_channels + 40)
     rng = np.random.default_rng(random_state)

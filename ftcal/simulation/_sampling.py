@@ -43,8 +43,8 @@ from numpy.typing import NDArray
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import unscale_torques
 
-__all__ = ["sphere_wrenches", "continuous_wrenches", "check_points", "check_dataset_arguments",
-           "check_test_distribution", "TEST_DISTRIBUTIONS", "MAX_POINTS", "SPHERE_FRACTIONS", "N_SPHERES"]
+__all__ = ["sphere_wrenches", "continuous_wrenches", "check_points", "check_dataset_arguments", "TEST_DISTRIBUTIONS",
+           "MAX_POINTS", "SPHERE_FRACTIONS", "N_SPHERES"]
 
 #: Names accepted by :func:`continuous_wrenches`.
 TEST_DISTRIBUTIONS = ("radial", "box", "ball")
@@ -56,26 +56,15 @@ SPHERE_FRACTIONS = (0.2, 0.4, 0.6, 0.8)
 N_SPHERES = len(SPHERE_FRACTIONS)
 
 
-def _unit_directions(n: int, rng: np.random.Generator) -> NDArray[np.float64]:
-    """``n`` directions uniform on the unit 5-sphere, shape (n, 6)."""
-    v = rng.standard_normal((n, 6))
+def _unit_directions(n: int, rng: np.random.Generator, dim: int = 6) -> NDArray[np.float64]:
+    """``n`` directions uniform on the unit sphere of ``dim`` dimensions (the 5-sphere by default), shape (n, dim)."""
+    v = rng.standard_normal((n, dim))
     return v / np.linalg.norm(v, axis=1, keepdims=True)
 
 
 def _uniform_ball_3d(n: int, radius: float, rng: np.random.Generator) -> NDArray[np.float64]:
     """``n`` points uniform in the 3-D ball of ``radius``: uniform direction, radius ``R u^(1/3)``."""
-    v = rng.standard_normal((n, 3))
-    v /= np.linalg.norm(v, axis=1, keepdims=True)
-    return v * (radius * np.cbrt(rng.uniform(0.0, 1.0, size=(n, 1))))
-
-
-def check_test_distribution(caller: str, test_distribution) -> None:
-    """Refuse a ``test_distribution`` that is neither one of :data:`TEST_DISTRIBUTIONS` nor None (the default)."""
-    if test_distribution is not None and not (isinstance(test_distribution, str)
-                                              and test_distribution in TEST_DISTRIBUTIONS):
-        raise CalibrationInputError(f"The 'test_distribution' parameter of {caller} must be one of "
-                                    f"{', '.join(map(repr, TEST_DISTRIBUTIONS))} or None. Got {test_distribution!r:.80} "
-                                    "instead.")
+    return _unit_directions(n, rng, 3) * (radius * np.cbrt(rng.uniform(0.0, 1.0, size=(n, 1))))
 
 
 def check_points(caller: str, **counts) -> None:
@@ -102,7 +91,12 @@ def check_dataset_arguments(caller: str, *, n_per_sphere=None, n_test=None, test
 
     from ..core._validation import check_arguments
 
-    check_test_distribution(caller, test_distribution)
+    # a test_distribution that is neither one of TEST_DISTRIBUTIONS nor None (the default)
+    if test_distribution is not None and not (isinstance(test_distribution, str)
+                                              and test_distribution in TEST_DISTRIBUTIONS):
+        raise CalibrationInputError(f"The 'test_distribution' parameter of {caller} must be one of "
+                                    f"{', '.join(map(repr, TEST_DISTRIBUTIONS))} or None. "
+                                    f"Got {test_distribution!r:.80} instead.")
     points = [Interval(Integral, 1, MAX_POINTS, closed="both"), None]
     check_arguments(caller, {"n_per_sphere": points, "n_test": points,
                              "n_spheres": [Interval(Integral, 1, N_SPHERES, closed="both")]},

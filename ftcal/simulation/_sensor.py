@@ -90,11 +90,9 @@ def default_calibration_matrix(fmax: float = 2000.0, tmax: float = 40.0) -> NDAr
     radius = tmax / fmax
     shear = _beam_shear_matrix(radius)  # (6 rows: V0 V1 V2 H0 H1 H2, 6 wrench components)
     vert, horiz = shear[:3], shear[3:]
-    vert_mixed = vert + _V_FROM_H * horiz
-    horiz_mixed = horiz + _H_FROM_V * vert
     compliance = np.empty((6, 6))
-    compliance[0::2] = vert_mixed
-    compliance[1::2] = horiz_mixed
+    compliance[0::2] = vert + _V_FROM_H * horiz
+    compliance[1::2] = horiz + _H_FROM_V * vert
     full_scale = np.array([fmax] * 3 + [tmax] * 3)
     largest_shear = np.max(np.abs(shear * full_scale))
     compliance *= (_FULL_SCALE_VOLTS / largest_shear) * _BRIDGE_GAINS[:, None]
@@ -172,13 +170,8 @@ class SensorProfile:
     @classmethod
     def default(cls) -> "SensorProfile":
         """The thesis' sensor: 2000 N, 40 N·m, with the representative 3-beam matrix."""
-        return cls(
-            calibration_matrix=default_calibration_matrix(2000.0, 40.0),
-            fmax=2000.0,
-            tmax=40.0,
-            name="representative 3-beam/6-bridge sensor, 2000 N / 40 N·m (thesis NRS-6200 range)",
-            raw_unit="V",
-        )
+        return cls(calibration_matrix=default_calibration_matrix(2000.0, 40.0), fmax=2000.0, tmax=40.0,
+                   name="representative 3-beam/6-bridge sensor, 2000 N / 40 N·m (thesis NRS-6200 range)")
 
     @property
     def n_channels(self) -> int:
@@ -193,9 +186,7 @@ class SensorProfile:
     @property
     def full_scale(self) -> NDArray[np.float64]:
         """Rated range per axis, shape (6,), [N] x3 then [N·m] x3."""
-        if self.axis_max is not None:
-            return np.array(self.axis_max)
-        return np.array([self.fmax] * 3 + [self.tmax] * 3)
+        return np.array(self.axis_max if self.axis_max is not None else [self.fmax] * 3 + [self.tmax] * 3)
 
     def wrench_from_reading(self, raw: ArrayLike) -> NDArray[np.float64]:
         """Wrench [N, N·m] of raw readings (n, N) through the calibration matrix."""
