@@ -75,8 +75,10 @@ def _naming(exc: OSError, tmp: Path, path: Path) -> OSError | None:
     return None
 
 
-def _temporary_beside(path: Path) -> Path:
-    """A fresh, empty temporary file beside ``path`` (unique per call), readable as the umask allows."""
+@contextlib.contextmanager
+def _temporary_beside(path: Path) -> Iterator[Path]:
+    """Yield a fresh, empty temporary file beside ``path`` (unique per call), readable as the umask allows; an
+    ``OSError`` of writing it is raised again naming ``path``, and a block that fails removes it."""
     directory = path.parent if str(path.parent) else Path(".")
     try:
         fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
@@ -85,16 +87,12 @@ def _temporary_beside(path: Path) -> Path:
     os.close(fd)
     tmp = Path(tmp_name)
     os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
-    return tmp
-
-
-@contextlib.contextmanager
-def _writing_named(tmp: Path, path: Path) -> Iterator[Path]:
-    """Yield ``tmp``; an ``OSError`` of writing it is raised again naming ``path``."""
     try:
         yield tmp
-    except OSError as exc:
-        named = _naming(exc, tmp, path)
+    except BaseException as exc:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        named = _naming(exc, tmp, path) if isinstance(exc, OSError) else None
         if named is None:
             raise
         raise named from None
@@ -130,10 +128,9 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     'hello'
     """
     path = Path(path)
-    tmp = _temporary_beside(path)
+    with _temporary_beside(path) as tmp:
+        yield tmp
     try:
-        with _writing_named(tmp, path):
-            yield tmp
         _move_into_place(tmp, path, overwrite, error)
     finally:
         with contextlib.suppress(FileNotFoundError):
@@ -180,14 +177,8 @@ class OutputSet:
         """Yield the temporary path of ``path`` (a new one each time: the last written wins); an ``OSError`` of
         the write names ``path``. The file is renamed into place when the whole set is committed."""
         path = Path(path)
-        tmp = _temporary_beside(path)
-        try:
-            with _writing_named(tmp, path):
-                yield tmp
-        except BaseException:
-            with contextlib.suppress(FileNotFoundError):
-                tmp.unlink()
-            raise
+        with _temporary_beside(path) as tmp:
+            yield tmp
         previous = self._pending.pop(path, None)
         if previous is not None:
             with contextlib.suppress(FileNotFoundError):

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
-from ._wrench import WRENCH_LABELS, default_axes, force_columns, torque_columns
+from ._wrench import WRENCH_LABELS, default_axes, force_columns, scale_torques, torque_columns
 
 __all__ = ["wrench_rmse", "per_sample_rmse", "axis_rmse", "relative_errors", "CalibrationMetrics",
            "calibration_metrics", "neg_scaled_rmse", "mean_std"]
@@ -60,25 +60,6 @@ def _axes(width: int, axes) -> tuple[str, ...]:
     return axes
 
 
-def _scaled_errors(errors: NDArray[np.float64], alpha: float, axes) -> NDArray[np.float64]:
-    """The errors with the torque columns of ``axes`` multiplied by ``alpha`` (eq. 6)."""
-    from ._wrench import check_alpha
-
-    alpha = check_alpha(alpha)
-    out = np.array(errors, dtype=float, copy=True)
-    columns = torque_columns(_axes(out.shape[1], axes))
-    if columns:
-        with np.errstate(over="ignore", invalid="ignore"):
-            scaled = out[:, columns] * alpha
-        if not np.isfinite(scaled).all() and np.isfinite(out[:, columns]).all():
-            raise CalibrationInputError(
-                f"multiplying the torques (largest |value| {float(np.abs(out[:, columns]).max()):.3g}) by alpha = "
-                f"{alpha:.3g} 1/m overflows float64. Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) "
-                "and the torques' unit.")
-        out[:, columns] = scaled
-    return out
-
-
 def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> float:
     """RMSE over all components of the torque-scaled wrench (eq. 18) [N], over the axes that exist.
 
@@ -93,7 +74,7 @@ def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=N
     2.449...
     """
     t, p = _pair(y_true, y_pred)
-    return float(_checked_rms(_scaled_errors(t - p, alpha, axes), alpha))
+    return float(_checked_rms(scale_torques(t - p, alpha, axes), alpha))
 
 
 def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> NDArray[np.float64]:
@@ -106,7 +87,7 @@ def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, ax
     array([2.449..., 0. ])
     """
     t, p = _pair(y_true, y_pred)
-    return _checked_rms(_scaled_errors(t - p, alpha, axes), alpha, axis=1)
+    return _checked_rms(scale_torques(t - p, alpha, axes), alpha, axis=1)
 
 
 def _checked_rms(errors: NDArray[np.float64], alpha: float, axis: int | None = None):

@@ -22,7 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ..core._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
-           "choice_beats_simplest", "paired_excess", "mean_and_se", "tie_margin", "se_units_name",
+           "choice_beats_simplest", "paired_excess", "mean_and_se", "tie_margin",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -640,17 +640,3 @@ def se_units(groups: NDArray | None) -> NDArray | None:
     if groups is None or np.unique(groups).size < 2:
         return None
     return groups
-
-
-def se_units_name(units: NDArray | None) -> str:
-    """What the standard errors of a comparison with these ``units`` (:func:`se_units`) are over, in words.
-
-    Examples
-    --------
-    >>> se_units_name(None), se_units_name(np.array([0, 0, 1, 1, 2, 2]))
-    ('rows', 'rows or groups, the larger (fewer than 5 groups)')
-    """
-    if units is None:
-        return "rows"
-    return "groups" if np.unique(units).size >= MIN_SE_GROUPS else \
-        f"rows or groups, the larger (fewer than {MIN_SE_GROUPS} groups)"
