@@ -213,7 +213,11 @@ class OutputSet:
         """
         pending = list(self._pending.items())
         for _, tmp in pending:  # on disk before any rename: a full disk fails here, with nothing in place yet
-            _fsync(tmp)
+            fd = os.open(tmp, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
         with _locked({path.parent for path, _ in pending}), \
                 _signals_held():
             self._put_in_place(pending)
@@ -244,8 +248,9 @@ class OutputSet:
         backups: dict[Path, Path | None] = {}
         kept: set[Path] = set()  # backups that could not be put back: never deleted (the old file lives on there)
         try:
-            for path, tmp in pending:
-                backups[path] = _second_name(path)
+            for path, tmp in pending:  # each file replaced keeps a second name: a hard link under a fresh hidden one
+                backups[path] = _fresh_link(path, (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous")
+                                                   for k in itertools.count(1))) if path.is_file() else None
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
@@ -280,14 +285,6 @@ class OutputSet:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
         self._pending.clear()
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 @contextlib.contextmanager
@@ -340,15 +337,6 @@ def _signals_held() -> Iterator[None]:
             signal.signal(sig, signal.SIG_DFL if handler is None else handler)
         for sig in dict.fromkeys(caught):  # acted on now, by the handler that was there (default, ignore, ftcal's)
             signal.raise_signal(sig)
-
-
-def _second_name(path: Path) -> Path | None:
-    """A hard link to the existing ``path`` under a fresh hidden name beside it (None when ``path`` does not exist
-    or is not a regular file; a file system without hard links gets a copy)."""
-    if not path.is_file():
-        return None
-    names = (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous") for k in itertools.count(1))
-    return _fresh_link(path, names)
 
 
 @contextlib.contextmanager
@@ -444,9 +432,7 @@ def _umask() -> int:
 def check_writable_dir(directory: str | os.PathLike, error: type[Exception], what: str = "output folder") -> None:
     """Raise ``error`` now if files cannot be created in ``directory`` (or in its nearest existing parent)."""
     d = Path(directory)
-    while not d.exists():
-        if d.parent == d:
-            break
+    while not d.exists() and d.parent != d:
         d = d.parent
     if d.exists() and not d.is_dir():
         raise error(f"{what} {directory}: {d} is a file, not a directory; choose another {what}.")

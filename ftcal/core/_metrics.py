@@ -232,14 +232,12 @@ def calibration_metrics(
     (0.4082, 0.1, 1.0)
     """
     t, p = _pair(y_true, y_pred)
-    named = _axes(t.shape[1], axes) if axes is not None else (
-        WRENCH_LABELS if t.shape[1] == len(WRENCH_LABELS) else default_axes(t.shape[1]))
-    scaled_axes = axes if axes is not None or t.shape[1] == len(WRENCH_LABELS) else None
-    ps = per_sample_rmse(t, p, alpha, scaled_axes)
-    f, tq = relative_errors(t, p, min_norm, scaled_axes)
+    named = _axes(t.shape[1], axes) if axes is not None else default_axes(t.shape[1])
+    ps = per_sample_rmse(t, p, alpha, axes)
+    f, tq = relative_errors(t, p, min_norm, axes)
     force, torque, per_sample = mean_std(f, ddof=0), mean_std(tq, ddof=0), mean_std(ps, ddof=0)
     return CalibrationMetrics(
-        rmse=wrench_rmse(t, p, alpha, scaled_axes),
+        rmse=wrench_rmse(t, p, alpha, axes),
         rmse_per_sample_mean=per_sample["mean"],
         rmse_per_sample_std=per_sample["std"],
         rel_force_mean=force["mean"],
