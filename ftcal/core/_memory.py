@@ -142,9 +142,7 @@ def _read_npy_header_3_0(fh, max_header_size: int = 10000):
     header = ast.literal_eval(raw.decode("utf-8"))
     if not isinstance(header, dict) or header.keys() != {"descr", "fortran_order", "shape"}:
         raise ValueError("the header is not a dictionary of descr, fortran_order and shape")
-    shape, fortran = header["shape"], header["fortran_order"]
-    if not isinstance(shape, tuple) or not all(isinstance(d, int) and d >= 0 for d in shape):
-        raise ValueError(f"shape is not valid: {shape!r}")
+    shape, fortran = header["shape"], header["fortran_order"]  # the shape is checked by the caller, as numpy's
     if not isinstance(fortran, bool):
         raise ValueError(f"fortran_order is not a valid bool: {fortran!r}")
     try:

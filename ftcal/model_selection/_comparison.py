@@ -251,11 +251,10 @@ class Comparison:
         """What the standard errors are over, in words: ``"groups"``, ``"folds"``, ``"rows"``, or with fewer than
         :data:`~ftcal.model_selection._selection.MIN_SE_GROUPS` units ``"rows or groups, the larger (fewer than 5
         groups)"`` (:func:`mean_and_se`)."""
-        if self.facts.get("se_units"):  # an earlier file's words
-            return str(self.facts["se_units"])
-        name = self.facts.get("units_name", "row")
-        units = self._units()
-        count = np.unique(units).size if units is not None else self.facts.get("n_units")
+        facts = self.facts
+        if facts.get("se_units"):  # an earlier file's words
+            return str(facts["se_units"])
+        name, count = facts.get("units_name", "row"), facts.get("n_units")
         if name == "row" or count is None or count >= MIN_SE_GROUPS:
             return name + "s"
         return f"rows or {name}s, the larger (fewer than {MIN_SE_GROUPS} {name}s)"

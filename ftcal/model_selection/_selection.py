@@ -163,11 +163,8 @@ def fold_predictions(estimator, X: NDArray, y: NDArray, folds, *, groups: ArrayL
         blocks = [test[i:i + step] for i in range(0, len(test), step)]
         parts = [model.predict(X[rows], return_std=True) if std else (model.predict(X[rows]), None) for rows in blocks]
         pred = np.concatenate([np.asarray(p, dtype=float) for p, _ in parts]).reshape(len(test), -1)
-        if has_std is None:
-            out.append((test, pred))
-        else:
-            out.append((test, pred, np.concatenate([np.asarray(s, dtype=float) for _, s in parts]).reshape(
-                len(test), -1) if std else None))
+        sd = np.concatenate([np.asarray(s, dtype=float) for _, s in parts]).reshape(len(test), -1) if std else None
+        out.append((test, pred) if has_std is None else (test, pred, sd))
     return out
 
 
