@@ -197,11 +197,8 @@ class OutputSet:
         source = self._pending.get(path)
         if source is None:
             raise KeyError(f"{path} was not written in this set")
-        digest = hashlib.sha256()
         with open(source if source.exists() else path, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(block)
-        return digest.hexdigest()
+            return hashlib.file_digest(fh, "sha256").hexdigest()
 
     def commit(self) -> None:
         """Rename every written file into place, all or none.
@@ -508,17 +505,15 @@ def _row_tables(arrays) -> tuple[list, list] | None:
         scalars.append(("column", len(a), a.reshape(len(a), -1).shape[1], a.dtype.kind in "biufc"))
     tables = []
     for n, parts in columns.items():
-        numeric = [p.astype(np.float64) for p in parts if p.dtype.kind in "biufc"]
-        numbers = np.hstack(numeric) if numeric else np.zeros((n, 0))
-        text_parts = [p.astype(str) for p in parts if p.dtype.kind not in "biufc"]
-        text = np.hstack(text_parts) if text_parts else np.zeros((n, 0), dtype=str)
+        numbers = np.hstack([np.zeros((n, 0))] + [p.astype(np.float64) for p in parts if p.dtype.kind in "biufc"])
+        text = np.hstack([np.zeros((n, 0), dtype=str)] + [p.astype(str) for p in parts if p.dtype.kind not in "biufc"])
         # sorted on a grid of 1e-9 of each column's largest value: finer than any reading's noise (the samples of one
         # pose, equal in their reference wrench, are ordered by their readings), coarser than round-off (a rotation
         # matrix's zeros written as a quaternion, -1e-17 and 1e-17, must not reorder the poses that share them)
         scale = np.abs(np.where(np.isfinite(numbers), numbers, 0.0)).max(axis=0, initial=0.0)
         step = np.where(scale > 0, scale * 1e-9, 1.0)
         sortable = np.nan_to_num(np.round(numbers / step), nan=np.inf)
-        keys = [sortable[:, j] for j in range(sortable.shape[1])][::-1] + [text[:, j] for j in range(text.shape[1])][::-1]
+        keys = list(sortable.T[::-1]) + list(text.T[::-1])  # the last key sorts first: the text, then the numbers
         order = np.lexsort(keys) if keys else np.arange(n)
         tables.append((numbers[order], text[order]))
     return scalars, tables

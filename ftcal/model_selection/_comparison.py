@@ -233,8 +233,7 @@ class Comparison:
 
     def best(self) -> ComparisonRow | None:
         """The eligible scored row of lowest held-out RMSE (None when none is)."""
-        rows = [r for r in self.scored() if r.eligible and r.rmse is not None]
-        return min(rows, key=lambda r: r.rmse) if rows else None
+        return min((r for r in self.scored() if r.eligible and r.rmse is not None), key=lambda r: r.rmse, default=None)
 
     @property
     def facts(self) -> dict:

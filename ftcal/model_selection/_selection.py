@@ -550,8 +550,7 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
     pred = np.asarray(predictions, dtype=float).reshape(len(y), -1)
     if not np.isfinite(pred).all():
         return "its held-out predictions hold NaN or inf"
-    scale = lambda a: scale_torques(a, alpha, axes)  # noqa: E731 - the torques of the axes y has
-    ys, ps = scale(y), scale(pred)
+    ys, ps = (scale_torques(a, alpha, axes) for a in (y, pred))  # the torques of the axes y has
     spread = np.ptp(ys, axis=0)
     if not spread.any():
         return None  # constant targets: nothing to be degenerate against (refused as input elsewhere)
