@@ -683,14 +683,12 @@ def describe_file_start(path: str | os.PathLike) -> str:
         head = f.read(512)
     if not head:
         return "the file is empty"
-    if head.startswith(b"\x93NUMPY"):
-        return "it is a single .npy array, not an .npz archive"
-    if head[:1] == b"\x80" or head.startswith((b"(dp", b"(lp", b"cnumpy", b"ccopy_reg")):
-        return "it looks like a Python pickle, which ftcal never loads"
-    if head.startswith(b"PK"):
-        return "a damaged zip archive"
-    if head.startswith(b"\x89HDF"):
-        return "it is an HDF5 file"
+    for starts, words in ((b"\x93NUMPY", "it is a single .npy array, not an .npz archive"),
+                          ((b"\x80", b"(dp", b"(lp", b"cnumpy", b"ccopy_reg"),
+                           "it looks like a Python pickle, which ftcal never loads"),
+                          (b"PK", "a damaged zip archive"), (b"\x89HDF", "it is an HDF5 file")):
+        if head.startswith(starts):
+            return words
     if head.startswith(b"\x08") and b"onnx" in head.lower():
         return "it looks like an ONNX file (an export of a model)"
     try:

@@ -77,14 +77,13 @@ def check_allocation(n_bytes: float, what: str, fix: str, *, settings: dict | No
     ftcal.core._memory.MemoryLimitError: the kernel matrix would need 9.09 TiB, over ftcal's memory limit of 4.00 GiB; lower max_samples (or raise the limit with FTCAL_MEMORY_LIMIT_GB).
     """
     limit = memory_limit_bytes()
-    if n_bytes > limit and settings:
-        raise MemoryLimitError(f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of "
-                               f"{format_bytes(limit)}.", fix=f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB)",
-                               settings=settings)
-    if n_bytes > limit:
-        raise MemoryLimitError(
-            f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of {format_bytes(limit)}; "
-            f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB).")
+    if n_bytes <= limit:
+        return
+    need = f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of {format_bytes(limit)}"
+    fix = f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB)"
+    if settings:
+        raise MemoryLimitError(f"{need}.", fix=fix, settings=settings)
+    raise MemoryLimitError(f"{need}; {fix}.")
 
 
 def rows_within_limit(bytes_per_row_pair: float) -> int:
