@@ -420,8 +420,7 @@ class Comparison:
             raw = get("row_status", i)
             if raw is None:  # an earlier file: the state was a prefix of the status text
                 head, _, rest = status_text.partition(": ")
-                status = {"skipped": RowStatus.SKIPPED, "failed": RowStatus.FAILED,
-                          "stopped": RowStatus.STOPPED}.get(head, RowStatus.SCORED)
+                status = RowStatus(head) if head in ("skipped", "failed", "stopped") else RowStatus.SCORED
                 reason = rest if status is not RowStatus.SCORED else (None if status_text == "scored"
                                                                       else status_text)
             else:
