@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
-from ._wrench import WRENCH_LABELS, default_axes, force_columns, scale_torques, torque_columns
+from ._wrench import WRENCH_LABELS, default_axes, force_columns, scale_torques, torque_columns, torque_slice
 
 __all__ = ["wrench_rmse", "per_sample_rmse", "axis_rmse", "relative_errors", "CalibrationMetrics",
            "calibration_metrics", "neg_scaled_rmse", "mean_std"]
@@ -54,10 +54,8 @@ def _axes(width: int, axes) -> tuple[str, ...]:
     (a target of another width is not torque-scaled, as in the calibrators)."""
     if axes is None:
         return WRENCH_LABELS if width == len(WRENCH_LABELS) else ("F",) * width
-    axes = tuple(axes)
-    if len(axes) != width:
-        raise CalibrationInputError(f"axes {axes} name {len(axes)} axes but the wrenches have {width} columns.")
-    return axes
+    torque_slice(width, axes)  # the one check that the axes name every column, with its message
+    return tuple(axes)
 
 
 def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> float:
