@@ -116,7 +116,11 @@ class FtcalError(Exception):
     def located(self, prefix: str) -> "FtcalError":
         """The same error (class and fields) with ``prefix`` in front of its message: where it happened
         (``"data.csv: "``), for a caller that knows more than the function that raised it."""
-        return _with_prefix(self, prefix)
+        copy = type(self).__new__(type(self))
+        copy.__dict__.update(self.__dict__)
+        copy.template = prefix + self.template
+        Exception.__init__(copy, copy.render(api_spelling))
+        return copy
 
     @property
     def fields(self) -> list[str]:
@@ -150,14 +154,6 @@ class FtcalError(Exception):
             text = text.rstrip()
             text = f"{text} Fix: {advice}" if text.endswith((".", ":", ";", "?", "!")) else f"{text}. Fix: {advice}"
         return text
-
-
-def _with_prefix(error: FtcalError, prefix: str) -> FtcalError:
-    copy = type(error).__new__(type(error))
-    copy.__dict__.update(error.__dict__)
-    copy.template = prefix + error.template
-    Exception.__init__(copy, copy.render(api_spelling))
-    return copy
 
 
 class CalibrationInputError(FtcalError, ValueError):

@@ -75,8 +75,10 @@ def _naming(exc: OSError, tmp: Path, path: Path) -> OSError | None:
     return None
 
 
-def _temporary_beside(path: Path) -> Path:
-    """A fresh, empty temporary file beside ``path`` (unique per call), readable as the umask allows."""
+@contextlib.contextmanager
+def _temporary_beside(path: Path) -> Iterator[Path]:
+    """Yield a fresh, empty temporary file beside ``path`` (unique per call), readable as the umask allows; an
+    ``OSError`` of writing it is raised again naming ``path``, and a block that fails removes it."""
     directory = path.parent if str(path.parent) else Path(".")
     try:
         fd, tmp_name = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=f".partial{path.suffix}", dir=directory)
@@ -85,16 +87,12 @@ def _temporary_beside(path: Path) -> Path:
     os.close(fd)
     tmp = Path(tmp_name)
     os.chmod(tmp, 0o666 & ~_umask())  # mkstemp's 0600 would make every output private
-    return tmp
-
-
-@contextlib.contextmanager
-def _writing_named(tmp: Path, path: Path) -> Iterator[Path]:
-    """Yield ``tmp``; an ``OSError`` of writing it is raised again naming ``path``."""
     try:
         yield tmp
-    except OSError as exc:
-        named = _naming(exc, tmp, path)
+    except BaseException as exc:
+        with contextlib.suppress(FileNotFoundError):
+            tmp.unlink()
+        named = _naming(exc, tmp, path) if isinstance(exc, OSError) else None
         if named is None:
             raise
         raise named from None
@@ -130,10 +128,9 @@ def atomic_output(path: str | os.PathLike, *, overwrite: bool, error: type[Excep
     'hello'
     """
     path = Path(path)
-    tmp = _temporary_beside(path)
+    with _temporary_beside(path) as tmp:
+        yield tmp
     try:
-        with _writing_named(tmp, path):
-            yield tmp
         _move_into_place(tmp, path, overwrite, error)
     finally:
         with contextlib.suppress(FileNotFoundError):
@@ -180,14 +177,8 @@ class OutputSet:
         """Yield the temporary path of ``path`` (a new one each time: the last written wins); an ``OSError`` of
         the write names ``path``. The file is renamed into place when the whole set is committed."""
         path = Path(path)
-        tmp = _temporary_beside(path)
-        try:
-            with _writing_named(tmp, path):
-                yield tmp
-        except BaseException:
-            with contextlib.suppress(FileNotFoundError):
-                tmp.unlink()
-            raise
+        with _temporary_beside(path) as tmp:
+            yield tmp
         previous = self._pending.pop(path, None)
         if previous is not None:
             with contextlib.suppress(FileNotFoundError):
@@ -206,11 +197,8 @@ class OutputSet:
         source = self._pending.get(path)
         if source is None:
             raise KeyError(f"{path} was not written in this set")
-        digest = hashlib.sha256()
         with open(source if source.exists() else path, "rb") as fh:
-            for block in iter(lambda: fh.read(1 << 20), b""):
-                digest.update(block)
-        return digest.hexdigest()
+            return hashlib.file_digest(fh, "sha256").hexdigest()
 
     def commit(self) -> None:
         """Rename every written file into place, all or none.
@@ -222,7 +210,11 @@ class OutputSet:
         """
         pending = list(self._pending.items())
         for _, tmp in pending:  # on disk before any rename: a full disk fails here, with nothing in place yet
-            _fsync(tmp)
+            fd = os.open(tmp, os.O_RDONLY)
+            try:
+                os.fsync(fd)
+            finally:
+                os.close(fd)
         with _locked({path.parent for path, _ in pending}), \
                 _signals_held():
             self._put_in_place(pending)
@@ -253,8 +245,9 @@ class OutputSet:
         backups: dict[Path, Path | None] = {}
         kept: set[Path] = set()  # backups that could not be put back: never deleted (the old file lives on there)
         try:
-            for path, tmp in pending:
-                backups[path] = _second_name(path)
+            for path, tmp in pending:  # each file replaced keeps a second name: a hard link under a fresh hidden one
+                backups[path] = _fresh_link(path, (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous")
+                                                   for k in itertools.count(1))) if path.is_file() else None
                 try:
                     os.replace(tmp, path)
                 except OSError as exc:
@@ -289,14 +282,6 @@ class OutputSet:
             with contextlib.suppress(FileNotFoundError):
                 tmp.unlink()
         self._pending.clear()
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
 
 
 @contextlib.contextmanager
@@ -349,15 +334,6 @@ def _signals_held() -> Iterator[None]:
             signal.signal(sig, signal.SIG_DFL if handler is None else handler)
         for sig in dict.fromkeys(caught):  # acted on now, by the handler that was there (default, ignore, ftcal's)
             signal.raise_signal(sig)
-
-
-def _second_name(path: Path) -> Path | None:
-    """A hard link to the existing ``path`` under a fresh hidden name beside it (None when ``path`` does not exist
-    or is not a regular file; a file system without hard links gets a copy)."""
-    if not path.is_file():
-        return None
-    names = (path.with_name(f".{path.name}.{os.getpid()}.{k}.previous") for k in itertools.count(1))
-    return _fresh_link(path, names)
 
 
 @contextlib.contextmanager
@@ -453,9 +429,7 @@ def _umask() -> int:
 def check_writable_dir(directory: str | os.PathLike, error: type[Exception], what: str = "output folder") -> None:
     """Raise ``error`` now if files cannot be created in ``directory`` (or in its nearest existing parent)."""
     d = Path(directory)
-    while not d.exists():
-        if d.parent == d:
-            break
+    while not d.exists() and d.parent != d:
         d = d.parent
     if d.exists() and not d.is_dir():
         raise error(f"{what} {directory}: {d} is a file, not a directory; choose another {what}.")
@@ -531,17 +505,15 @@ def _row_tables(arrays) -> tuple[list, list] | None:
         scalars.append(("column", len(a), a.reshape(len(a), -1).shape[1], a.dtype.kind in "biufc"))
     tables = []
     for n, parts in columns.items():
-        numeric = [p.astype(np.float64) for p in parts if p.dtype.kind in "biufc"]
-        numbers = np.hstack(numeric) if numeric else np.zeros((n, 0))
-        text_parts = [p.astype(str) for p in parts if p.dtype.kind not in "biufc"]
-        text = np.hstack(text_parts) if text_parts else np.zeros((n, 0), dtype=str)
+        numbers = np.hstack([np.zeros((n, 0))] + [p.astype(np.float64) for p in parts if p.dtype.kind in "biufc"])
+        text = np.hstack([np.zeros((n, 0), dtype=str)] + [p.astype(str) for p in parts if p.dtype.kind not in "biufc"])
         # sorted on a grid of 1e-9 of each column's largest value: finer than any reading's noise (the samples of one
         # pose, equal in their reference wrench, are ordered by their readings), coarser than round-off (a rotation
         # matrix's zeros written as a quaternion, -1e-17 and 1e-17, must not reorder the poses that share them)
         scale = np.abs(np.where(np.isfinite(numbers), numbers, 0.0)).max(axis=0, initial=0.0)
         step = np.where(scale > 0, scale * 1e-9, 1.0)
         sortable = np.nan_to_num(np.round(numbers / step), nan=np.inf)
-        keys = [sortable[:, j] for j in range(sortable.shape[1])][::-1] + [text[:, j] for j in range(text.shape[1])][::-1]
+        keys = list(sortable.T[::-1]) + list(text.T[::-1])  # the last key sorts first: the text, then the numbers
         order = np.lexsort(keys) if keys else np.arange(n)
         tables.append((numbers[order], text[order]))
     return scalars, tables
@@ -711,14 +683,12 @@ def describe_file_start(path: str | os.PathLike) -> str:
         head = f.read(512)
     if not head:
         return "the file is empty"
-    if head.startswith(b"\x93NUMPY"):
-        return "it is a single .npy array, not an .npz archive"
-    if head[:1] == b"\x80" or head.startswith((b"(dp", b"(lp", b"cnumpy", b"ccopy_reg")):
-        return "it looks like a Python pickle, which ftcal never loads"
-    if head.startswith(b"PK"):
-        return "a damaged zip archive"
-    if head.startswith(b"\x89HDF"):
-        return "it is an HDF5 file"
+    for starts, words in ((b"\x93NUMPY", "it is a single .npy array, not an .npz archive"),
+                          ((b"\x80", b"(dp", b"(lp", b"cnumpy", b"ccopy_reg"),
+                           "it looks like a Python pickle, which ftcal never loads"),
+                          (b"PK", "a damaged zip archive"), (b"\x89HDF", "it is an HDF5 file")):
+        if head.startswith(starts):
+            return words
     if head.startswith(b"\x08") and b"onnx" in head.lower():
         return "it looks like an ONNX file (an export of a model)"
     try:

@@ -77,14 +77,13 @@ def check_allocation(n_bytes: float, what: str, fix: str, *, settings: dict | No
     ftcal.core._memory.MemoryLimitError: the kernel matrix would need 9.09 TiB, over ftcal's memory limit of 4.00 GiB; lower max_samples (or raise the limit with FTCAL_MEMORY_LIMIT_GB).
     """
     limit = memory_limit_bytes()
-    if n_bytes > limit and settings:
-        raise MemoryLimitError(f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of "
-                               f"{format_bytes(limit)}.", fix=f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB)",
-                               settings=settings)
-    if n_bytes > limit:
-        raise MemoryLimitError(
-            f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of {format_bytes(limit)}; "
-            f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB).")
+    if n_bytes <= limit:
+        return
+    need = f"{what} would need {format_bytes(n_bytes)}, over ftcal's memory limit of {format_bytes(limit)}"
+    fix = f"{fix} (or raise the limit with FTCAL_MEMORY_LIMIT_GB)"
+    if settings:
+        raise MemoryLimitError(f"{need}.", fix=fix, settings=settings)
+    raise MemoryLimitError(f"{need}; {fix}.")
 
 
 def rows_within_limit(bytes_per_row_pair: float) -> int:
@@ -142,9 +141,7 @@ def _read_npy_header_3_0(fh, max_header_size: int = 10000):
     header = ast.literal_eval(raw.decode("utf-8"))
     if not isinstance(header, dict) or header.keys() != {"descr", "fortran_order", "shape"}:
         raise ValueError("the header is not a dictionary of descr, fortran_order and shape")
-    shape, fortran = header["shape"], header["fortran_order"]
-    if not isinstance(shape, tuple) or not all(isinstance(d, int) and d >= 0 for d in shape):
-        raise ValueError(f"shape is not valid: {shape!r}")
+    shape, fortran = header["shape"], header["fortran_order"]  # the shape is checked by the caller, as numpy's
     if not isinstance(fortran, bool):
         raise ValueError(f"fortran_order is not a valid bool: {fortran!r}")
     try:

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._exceptions import CalibrationInputError
-from ._wrench import WRENCH_LABELS, default_axes, force_columns, torque_columns
+from ._wrench import WRENCH_LABELS, default_axes, force_columns, scale_torques, torque_columns, torque_slice
 
 __all__ = ["wrench_rmse", "per_sample_rmse", "axis_rmse", "relative_errors", "CalibrationMetrics",
            "calibration_metrics", "neg_scaled_rmse", "mean_std"]
@@ -54,29 +54,8 @@ def _axes(width: int, axes) -> tuple[str, ...]:
     (a target of another width is not torque-scaled, as in the calibrators)."""
     if axes is None:
         return WRENCH_LABELS if width == len(WRENCH_LABELS) else ("F",) * width
-    axes = tuple(axes)
-    if len(axes) != width:
-        raise CalibrationInputError(f"axes {axes} name {len(axes)} axes but the wrenches have {width} columns.")
-    return axes
-
-
-def _scaled_errors(errors: NDArray[np.float64], alpha: float, axes) -> NDArray[np.float64]:
-    """The errors with the torque columns of ``axes`` multiplied by ``alpha`` (eq. 6)."""
-    from ._wrench import check_alpha
-
-    alpha = check_alpha(alpha)
-    out = np.array(errors, dtype=float, copy=True)
-    columns = torque_columns(_axes(out.shape[1], axes))
-    if columns:
-        with np.errstate(over="ignore", invalid="ignore"):
-            scaled = out[:, columns] * alpha
-        if not np.isfinite(scaled).all() and np.isfinite(out[:, columns]).all():
-            raise CalibrationInputError(
-                f"multiplying the torques (largest |value| {float(np.abs(out[:, columns]).max()):.3g}) by alpha = "
-                f"{alpha:.3g} 1/m overflows float64. Fix: check alpha (Fmax / Tmax of the sensor, usually 1-1000 1/m) "
-                "and the torques' unit.")
-        out[:, columns] = scaled
-    return out
+    torque_slice(width, axes)  # the one check that the axes name every column, with its message
+    return tuple(axes)
 
 
 def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> float:
@@ -93,7 +72,7 @@ def wrench_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=N
     2.449...
     """
     t, p = _pair(y_true, y_pred)
-    return float(_checked_rms(_scaled_errors(t - p, alpha, axes), alpha))
+    return float(_checked_rms(scale_torques(t - p, alpha, axes), alpha))
 
 
 def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, axes=None) -> NDArray[np.float64]:
@@ -106,7 +85,7 @@ def per_sample_rmse(y_true: ArrayLike, y_pred: ArrayLike, alpha: float = 1.0, ax
     array([2.449..., 0. ])
     """
     t, p = _pair(y_true, y_pred)
-    return _checked_rms(_scaled_errors(t - p, alpha, axes), alpha, axis=1)
+    return _checked_rms(scale_torques(t - p, alpha, axes), alpha, axis=1)
 
 
 def _checked_rms(errors: NDArray[np.float64], alpha: float, axis: int | None = None):
@@ -251,14 +230,12 @@ def calibration_metrics(
     (0.4082, 0.1, 1.0)
     """
     t, p = _pair(y_true, y_pred)
-    named = _axes(t.shape[1], axes) if axes is not None else (
-        WRENCH_LABELS if t.shape[1] == len(WRENCH_LABELS) else default_axes(t.shape[1]))
-    scaled_axes = axes if axes is not None or t.shape[1] == len(WRENCH_LABELS) else None
-    ps = per_sample_rmse(t, p, alpha, scaled_axes)
-    f, tq = relative_errors(t, p, min_norm, scaled_axes)
+    named = _axes(t.shape[1], axes) if axes is not None else default_axes(t.shape[1])
+    ps = per_sample_rmse(t, p, alpha, axes)
+    f, tq = relative_errors(t, p, min_norm, axes)
     force, torque, per_sample = mean_std(f, ddof=0), mean_std(tq, ddof=0), mean_std(ps, ddof=0)
     return CalibrationMetrics(
-        rmse=wrench_rmse(t, p, alpha, scaled_axes),
+        rmse=wrench_rmse(t, p, alpha, axes),
         rmse_per_sample_mean=per_sample["mean"],
         rmse_per_sample_std=per_sample["std"],
         rel_force_mean=force["mean"],

@@ -170,15 +170,10 @@ class ChoiceStability:
 def _short(words: str) -> str:
     """The verdict part of :meth:`PairedDifference.words` for a table cell: ``"2.1 % worse"``, ``"equivalent
     within noise"`` (empty for none)."""
-    if not words:
-        return ""
     if "equivalent within noise" in words:
         return "equivalent within noise"
     head = words.split(" (")[0]
-    for verdict in ("better", "worse"):
-        if f" % {verdict} than " in head:
-            return head.split(" is ")[-1].split(" than ")[0]
-    return head
+    return head.split(" is ")[-1].split(" than ")[0] if " % better than " in head or " % worse than " in head else head
 
 
 def _number(value) -> float | None:
@@ -238,8 +233,7 @@ class Comparison:
 
     def best(self) -> ComparisonRow | None:
         """The eligible scored row of lowest held-out RMSE (None when none is)."""
-        rows = [r for r in self.scored() if r.eligible and r.rmse is not None]
-        return min(rows, key=lambda r: r.rmse) if rows else None
+        return min((r for r in self.scored() if r.eligible and r.rmse is not None), key=lambda r: r.rmse, default=None)
 
     @property
     def facts(self) -> dict:
@@ -251,11 +245,10 @@ class Comparison:
         """What the standard errors are over, in words: ``"groups"``, ``"folds"``, ``"rows"``, or with fewer than
         :data:`~ftcal.model_selection._selection.MIN_SE_GROUPS` units ``"rows or groups, the larger (fewer than 5
         groups)"`` (:func:`mean_and_se`)."""
-        if self.facts.get("se_units"):  # an earlier file's words
-            return str(self.facts["se_units"])
-        name = self.facts.get("units_name", "row")
-        units = self._units()
-        count = np.unique(units).size if units is not None else self.facts.get("n_units")
+        facts = self.facts
+        if facts.get("se_units"):  # an earlier file's words
+            return str(facts["se_units"])
+        name, count = facts.get("units_name", "row"), facts.get("n_units")
         if name == "row" or count is None or count >= MIN_SE_GROUPS:
             return name + "s"
         return f"rows or {name}s, the larger (fewer than {MIN_SE_GROUPS} {name}s)"
@@ -365,13 +358,12 @@ class Comparison:
             why = (f"{c.name} won: the simplest of the {n_within} models within one standard error of the best, "
                    f"{b.name} ({b.rmse:.4g} ± {b.rmse_se:.2g} N; {c.name} {c.rmse:.4g} N; standard errors over "
                    f"the {unit})")
-        stock = [r for r in self.scored() if r.kind in ("stock", "baseline") and r.rmse is not None]
-        if stock:
-            s = min(stock, key=lambda r: r.rmse)
-            if s is c:
-                why += f". It is the best stock model itself ({s.name})"
-            elif c.row_errors is not None and s.row_errors is not None:
-                why += f"; against the best stock model: {self.paired(c.name, s.name).words()}"
+        s = min((r for r in self.scored() if r.kind in ("stock", "baseline") and r.rmse is not None),
+                key=lambda r: r.rmse, default=None)
+        if s is c:
+            why += f". It is the best stock model itself ({s.name})"
+        elif s is not None and c.row_errors is not None and s.row_errors is not None:
+            why += f"; against the best stock model: {self.paired(c.name, s.name).words()}"
         return why + "."
 
     # ------------------------------------------------------------------ output
@@ -428,8 +420,7 @@ class Comparison:
             raw = get("row_status", i)
             if raw is None:  # an earlier file: the state was a prefix of the status text
                 head, _, rest = status_text.partition(": ")
-                status = {"skipped": RowStatus.SKIPPED, "failed": RowStatus.FAILED,
-                          "stopped": RowStatus.STOPPED}.get(head, RowStatus.SCORED)
+                status = RowStatus(head) if head in ("skipped", "failed", "stopped") else RowStatus.SCORED
                 reason = rest if status is not RowStatus.SCORED else (None if status_text == "scored"
                                                                       else status_text)
             else:
@@ -474,16 +465,14 @@ class Comparison:
         head = ("| model | kind | held-out RMSE (eq. 18) [N] | ± SE | / best stock model | fit [s] | "
                 "excess MSE over best [N²] | ± paired SE [N²] | against the choice | status |")
         lines = [head, "|---" * 10 + "|"]
-        stock = [r.rmse for r in self.rows if r.kind in ("stock", "baseline") and r.rmse is not None]
-        best_stock = min(stock) if stock else None
+        best_stock = min((r.rmse for r in self.rows if r.kind in ("stock", "baseline") and r.rmse is not None),
+                         default=None)
         num = lambda v, form: "" if v is None else format(v, form)  # noqa: E731
-        chosen = self.chosen
         for r in self.rows:
-            mark = " **(chosen)**" if r.name == chosen else ""
-            against = _short(r.against)
+            mark = " **(chosen)**" if r.name == self.chosen else ""
             ratio = None if r.rmse is None or not best_stock else r.rmse / best_stock
             cells = [num(r.rmse, ".4g"), num(r.rmse_se, ".2g"), num(ratio, ".3f"), num(r.seconds, ".1f"), num(r.excess_mse, ".3g"),
-                     num(r.excess_se, ".2g"), against, r.verdict or r.status_text]
+                     num(r.excess_se, ".2g"), _short(r.against), r.verdict or r.status_text]
             lines.append(f"| {r.name}{mark} | {r.kind} | " + " | ".join(cells) + " |")
         units = self.se_units
         if self.tie_mse is not None and self.best_name:
@@ -618,18 +607,14 @@ class _Work:
 
 
 def _runner(n_jobs, jobs: list):
-    """Run ``jobs`` (callables) in this process (one job or ``n_jobs`` 1), else in joblib's processes; yields
-    ``(position, result)`` as each finishes."""
-    from joblib import effective_n_jobs
-
+    """Run ``jobs`` (callables) in this process (one job or ``n_jobs`` 1: joblib runs them in order, each as it is
+    asked for), else in joblib's processes; yields ``(position, result)`` as each finishes."""
     import os
 
-    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, len(jobs)) if jobs else 1
-    if workers <= 1:
-        for i, job in enumerate(jobs):
-            yield i, job()
-        return
+    from joblib import effective_n_jobs
     from sklearn.utils.parallel import Parallel, delayed
+
+    workers = min(effective_n_jobs(n_jobs), os.cpu_count() or 1, len(jobs)) if jobs else 1
 
     def tagged(i, job):
         return i, job()

@@ -11,20 +11,13 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from sklearn.model_selection import GroupKFold
 
 from ..core._exceptions import CalibrationInputError
 from ..core._wrench import WRENCH_LABELS
 from ._selection import calibration_folds, check_groups, unseen_outputs
 
 __all__ = ["FoldPlan"]
-
-
-def _shuffled_group_folds(n: int, groups: NDArray, cv: int, seed: int) -> list:
-    """Grouped folds with the groups shuffled by ``seed`` (the repeats of :func:`choice_stability`)."""
-    from sklearn.model_selection import GroupKFold
-
-    splitter = GroupKFold(n_splits=min(int(cv), np.unique(groups).size), shuffle=True, random_state=seed)
-    return list(splitter.split(np.arange(n), groups=groups))
 
 
 @dataclass(frozen=True, eq=False)
@@ -112,7 +105,8 @@ class FoldPlan:
             g = np.asarray(groups)
             if np.unique(g).size <= self.n_splits:
                 return None
-            folds = _shuffled_group_folds(self.n_rows, g, self.cv, seed)
+            splitter = GroupKFold(n_splits=min(int(self.cv), np.unique(g).size), shuffle=True, random_state=seed)
+            folds = list(splitter.split(np.arange(self.n_rows), groups=g))  # the groups shuffled by ``seed``
             if unseen_outputs(np.asarray(y, dtype=float), folds):
                 return None
             return FoldPlan(tuple(folds), self.units, "group", self.note, self.cv, int(seed), self.n_rows)

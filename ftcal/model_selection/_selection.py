@@ -22,7 +22,7 @@ from sklearn.model_selection import GroupKFold, KFold
 from ..core._exceptions import CalibrationInputError
 
 __all__ = ["check_groups", "calibration_folds", "grouped_subsample", "rmse_and_se", "simplest_within_one_se",
-           "choice_beats_simplest", "paired_excess", "mean_and_se", "tie_margin", "se_units_name",
+           "choice_beats_simplest", "paired_excess", "mean_and_se", "tie_margin",
            "held_out_predictions", "fold_predictions", "routed_groups"]
 
 
@@ -163,11 +163,8 @@ def fold_predictions(estimator, X: NDArray, y: NDArray, folds, *, groups: ArrayL
         blocks = [test[i:i + step] for i in range(0, len(test), step)]
         parts = [model.predict(X[rows], return_std=True) if std else (model.predict(X[rows]), None) for rows in blocks]
         pred = np.concatenate([np.asarray(p, dtype=float) for p, _ in parts]).reshape(len(test), -1)
-        if has_std is None:
-            out.append((test, pred))
-        else:
-            out.append((test, pred, np.concatenate([np.asarray(s, dtype=float) for _, s in parts]).reshape(
-                len(test), -1) if std else None))
+        sd = np.concatenate([np.asarray(s, dtype=float) for _, s in parts]).reshape(len(test), -1) if std else None
+        out.append((test, pred) if has_std is None else (test, pred, sd))
     return out
 
 
@@ -553,8 +550,7 @@ def degenerate_reason(y: ArrayLike, predictions: ArrayLike, *, alpha: float = 1.
     pred = np.asarray(predictions, dtype=float).reshape(len(y), -1)
     if not np.isfinite(pred).all():
         return "its held-out predictions hold NaN or inf"
-    scale = lambda a: scale_torques(a, alpha, axes)  # noqa: E731 - the torques of the axes y has
-    ys, ps = scale(y), scale(pred)
+    ys, ps = (scale_torques(a, alpha, axes) for a in (y, pred))  # the torques of the axes y has
     spread = np.ptp(ys, axis=0)
     if not spread.any():
         return None  # constant targets: nothing to be degenerate against (refused as input elsewhere)
@@ -640,17 +636,3 @@ def se_units(groups: NDArray | None) -> NDArray | None:
     if groups is None or np.unique(groups).size < 2:
         return None
     return groups
-
-
-def se_units_name(units: NDArray | None) -> str:
-    """What the standard errors of a comparison with these ``units`` (:func:`se_units`) are over, in words.
-
-    Examples
-    --------
-    >>> se_units_name(None), se_units_name(np.array([0, 0, 1, 1, 2, 2]))
-    ('rows', 'rows or groups, the larger (fewer than 5 groups)')
-    """
-    if units is None:
-        return "rows"
-    return "groups" if np.unique(units).size >= MIN_SE_GROUPS else \
-        f"rows or groups, the larger (fewer than {MIN_SE_GROUPS} groups)"
