@@ -324,7 +324,9 @@ def test_gravity_declared_the_wrong_way_gives_a_negative_mass_refused_as_not_pos
 @pytest.mark.parametrize("gravity, slip", [((0, 0, -981.0), r"cm/s² \(divide by 100\)"),
                                            ((0, 0, -0.00981), r"km/s² \(multiply by 1000\)"),
                                            ((0, 0, -1.0), r"in g \(multiply by 9\.81\)"),
-                                           ((0, 0, -9810.0), r"mm/s² \(divide by 1000\)")])
+                                           ((0, 0, -9810.0), r"mm/s² \(divide by 1000\)"),
+                                           ((0, 0, -32.17), r"ft/s² \(multiply by 0\.3048\)"),
+                                           ((0, 0, -386.1), r"in/s² \(multiply by 0\.0254\)")])
 def test_a_gravity_in_another_unit_is_refused_naming_its_magnitude_and_the_slip(robot, plan_q, gravity, slip):
     """A gravity of 981 (cm/s²) would give a tool 100 times too light, without a word: its magnitude is not the
     Earth's surface gravity (9.78-9.84 m/s²), so it is refused, its magnitude and the likely unit named."""

@@ -131,7 +131,7 @@ def _check_limit(name: str, a: NDArray[np.float64], owner: str = "ToolLoad ") ->
 
 #: The magnitudes [m/s²] of gravity :func:`identify_tool_load` accepts: the Earth's surface spans 9.78 (equator)
 #: to 9.84 (poles, and altitude lowers it); the margin allows a rounded value (9.8) and local surveys. Beyond it
-#: a gravity is in another unit (cm/s², mm/s², g), and the mass would come out scaled by its inverse.
+#: a gravity is in another unit (cm/s², mm/s², g, ft/s², in/s²), and the mass would come out scaled by its inverse.
 GRAVITY_MAGNITUDE_RANGE = (9.7, 9.9)
 
 
@@ -145,7 +145,8 @@ def _check_gravity_magnitude(gravity: ArrayLike) -> None:
     if low <= size <= high:
         return
     slips = [(980.665, "in cm/s² (divide by 100)"), (9806.65, "in mm/s² (divide by 1000)"),
-             (1.0, "in g (multiply by 9.81)"), (0.00980665, "in km/s² (multiply by 1000)")]
+             (1.0, "in g (multiply by 9.81)"), (0.00980665, "in km/s² (multiply by 1000)"),
+             (32.174, "in ft/s² (multiply by 0.3048)"), (386.09, "in in/s² (multiply by 0.0254)")]
     near, words = min(slips, key=lambda item: abs(np.log(size / item[0])))
     slip = words if abs(np.log(size / near)) < np.log(1.5) else f"scaled by {size / 9.81:.3g}"
     raise CalibrationInputError(
