@@ -52,8 +52,8 @@ from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileErr
 from ..core._files import atomic_output, content_twins
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
-from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       checked_temperature, read_utf8_text, _slice_columns)
+from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, checked_temperature,
+                       named_axes, parse_column_slice, read_utf8_text, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -282,18 +282,11 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
                 "wrench cannot be an input.", parameter="channels", value=named[0],
                 fix="name only the sensor's raw channels in {channels}; if that column really is a raw channel, "
                 "name the wrench columns with {wrench}", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
-        seen: dict[str, int] = {}
         taken = set(channels)
-        for i, name in enumerate(names):
-            axis = canonical_wrench_name(name) if i not in taken else None
-            if axis is None:
-                continue
-            if axis in seen:
-                raise DatasetFileError(
-                    f"{where}: columns {names[seen[axis]]!r} and {name!r} both read as the wrench axis {axis}; "
-                    "keep one, or name the wrench columns with {wrench} (e.g. {wrench} Fx,Fy,Fz,Mx,My,Mz).",
-                    parameter="wrench")
-            seen[axis] = i
+        seen = named_axes([None if i in taken else n for i, n in enumerate(names)], lambda first, name, axis:
+                          DatasetFileError(f"{where}: columns {first!r} and {name!r} both read as the wrench axis "
+                                           f"{axis}; keep one, or name the wrench columns with {{wrench}} (e.g. "
+                                           "{wrench} Fx,Fy,Fz,Mx,My,Mz).", parameter="wrench"))
         if not seen:
             raise DatasetFileError(f"{where}: the header names no wrench columns (Fx, Fy, Fz, Tx, Ty, Tz, or Mx, "
                                    f"force_x, ...). Expected header: {_CSV_LAYOUT}.", parameter="wrench",
@@ -899,15 +892,10 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     """The dataset the mapped arrays of ``source`` make (only those arrays are read)."""
     where = source.where
     available = source.names()
-    found: dict[str, str] = {}
-    for n in available:
-        axis = canonical_wrench_name(n)
-        if axis is not None:
-            if axis in found:
-                raise DatasetFileError(f"{where}: {source.kind}s {found[axis]!r} and {n!r} both read as the wrench "
-                                       f"axis {axis}; name the wrench with {{wrench}}.", parameter="wrench")
-            found[axis] = n
-    vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
+    found = named_axes(available, lambda first, n, axis: DatasetFileError(
+        f"{where}: {source.kind}s {first!r} and {n!r} both read as the wrench axis {axis}; name the wrench with "
+        "{wrench}.", parameter="wrench"))
+    vector_wrench = [available[found[a]] for a in WRENCH_LABELS if a in found]
     wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench", "wrench")
     raw, raw_labels, raw_base = _select(source, columns.channels, "raw", _channel_vectors(source), "raw channels",
                                         "channels")

@@ -41,7 +41,7 @@ from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
 from ._logs import _parse_comments, read_text_lines, text_rows
-from ._readers import ColumnMap, canonical_wrench_name
+from ._readers import ColumnMap, named_axes
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
 
@@ -183,13 +183,8 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
         hint = f" (it has part of the {partial[0]}: {','.join(ORIENTATION_LAYOUTS[partial[0]])})" if partial else ""
         raise LogFormatError(f"{where}: the header names no orientation of the sensor{hint}; expected {_EXPECTED}.")
     layout = layouts[0] if layouts else ""
-    wrench_cols: dict[str, str] = {}
-    for n in names:
-        canonical = canonical_wrench_name(n)
-        if canonical is not None:
-            if canonical in wrench_cols:
-                raise LogFormatError(f"{where}: columns {wrench_cols[canonical]!r} and {n!r} both hold {canonical}.")
-            wrench_cols[canonical] = n
+    wrench_cols = named_axes(names, lambda first, n, axis: LogFormatError(
+        f"{where}: columns {first!r} and {n!r} both hold {axis}."))
     channels = [n for n in names if n[:1] == "s" and n[1:].isdigit()]
     if wrench_cols and len(wrench_cols) != 6:
         missing = [c for c in WRENCH_LABELS if c not in wrench_cols]
@@ -206,7 +201,7 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     if not rows:
         raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
     orientation_cols = ORIENTATION_LAYOUTS[layout] if layout else ()
-    value_cols = list(orientation_cols) + ([wrench_cols[c] for c in WRENCH_LABELS] if wrench_cols else channels)
+    value_cols = list(orientation_cols) + ([names[wrench_cols[c]] for c in WRENCH_LABELS] if wrench_cols else channels)
     value_cols += [c for c in ("time", "temperature") if c in head]
     values = np.empty((len(rows), len(value_cols)))
     line = np.array([lineno for lineno, _ in rows], dtype=np.int64)

@@ -42,7 +42,7 @@ from ..core._memory import check_allocation, read_npy_member
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
 __all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
-           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
+           "expand_names", "named_axes", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
            "check_real_array", "has_header", "join_headerless", "JoinedTable"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
@@ -171,6 +171,20 @@ def canonical_wrench_name(name: str) -> str | None:
         if found:
             return letter + found.group(1).lower()
     return None
+
+
+def named_axes(names: Sequence[str | None], clash) -> dict[str, int]:
+    """Each wrench axis ``names`` holds by name or alias (:func:`canonical_wrench_name`; ``None`` entries are
+    skipped) -> its position, in the order found; a second name of one axis raises ``clash(first, second, axis)``
+    (the error to raise, worded for the file's kind)."""
+    found: dict[str, int] = {}
+    for i, name in enumerate(names):
+        axis = None if name is None else canonical_wrench_name(name)
+        if axis in found:
+            raise clash(names[found[axis]], name, axis)
+        if axis is not None:
+            found[axis] = i
+    return found
 
 
 _RANGE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*?)(\d+)\s*\.\.\s*(?:\1)?(\d+)")
