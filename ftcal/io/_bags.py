@@ -660,14 +660,11 @@ class _TfTree:
 
         R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
         for edge in chain:  # base -> ... -> sensor
-            if edge in self.static:
-                Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
+            times, quats = ((), self.static[edge][None]) if edge in self.static else _distinct_times(self.edges[edge])
+            if len(quats) == 1:  # a static transform, or a dynamic one recorded once
+                Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
             else:
-                times, quats = _distinct_times(self.edges[edge])
-                if len(times) == 1:
-                    Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
-                else:
-                    Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
+                Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
             R = R @ Re
         return R
 

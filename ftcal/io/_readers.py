@@ -187,6 +187,8 @@ def named_axes(names: Sequence[str | None], clash) -> dict[str, int]:
     return found
 
 
+#: An integer as written (group labels, config and pose ids are read exactly, not through float64).
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 _RANGE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*?)(\d+)\s*\.\.\s*(?:\1)?(\d+)")
 _SLICE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*)\s*\[\s*:\s*,\s*(?:(-?\d+)|(-?\d*)\s*:\s*(-?\d*))\s*\]")
 #: Most columns one range may name (a typo such as s0..s99999999 would otherwise build a huge list).
