@@ -102,14 +102,6 @@ class PoseRecording:
         return self.wrench if self.wrench is not None else self.raw
 
 
-def _header_and_rows(path: Path) -> tuple[list[str], int, list[tuple[int, list[str]]]]:
-    lines = read_text_lines(path, "pose file", "split the recording into several files")
-    n_comment = _parse_comments(path, lines)[1]
-    if n_comment >= len(lines) or not lines[n_comment].strip():
-        raise LogFormatError(f"{path}: line {n_comment + 1}: no header line; expected {_EXPECTED}.")
-    return next(csv.reader([lines[n_comment]])), n_comment + 1, text_rows(lines, n_comment + 1)
-
-
 def is_pose_file(path: str | Path) -> bool:
     """Whether the CSV at ``path`` is meant as a pose file: its header names an orientation column (qx, R00, roll, ...).
 
@@ -170,7 +162,11 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     (2, 'quaternion (x, y, z, w)', [0.0, 0.0, -1.0])
     """
     path = Path(path)
-    fields, head_line, rows = _header_and_rows(path)
+    lines = read_text_lines(path, "pose file", "split the recording into several files")
+    head_line = _parse_comments(path, lines)[1] + 1  # the header follows the comments
+    if head_line > len(lines) or not lines[head_line - 1].strip():
+        raise LogFormatError(f"{path}: line {head_line}: no header line; expected {_EXPECTED}.")
+    fields, rows = next(csv.reader([lines[head_line - 1]])), text_rows(lines, head_line)
     where = f"{path}: line {head_line}"
     head = read_header(fields, where=where, error=LogFormatError, numbered=(), allow_other=True, expected=_EXPECTED)
     names = list(head.names)

@@ -266,17 +266,6 @@ def _slice_columns(spec: tuple[str, int | None, int | None], width: int, where: 
     return range(b, e)
 
 
-def _axis_list(value, what: str) -> tuple[str, ...]:
-    names = tuple(str(v).strip() for v in value)
-    unknown = [n for n in names if n not in WRENCH_LABELS]
-    if unknown or not names:
-        raise DatasetFileError(f"{{{what}}} {','.join(names)!r}: name each output axis as one of "
-                               f"{', '.join(WRENCH_LABELS)} (e.g. {{{what}}} Fx,Fy,Fz for a 3-axis load cell).",
-                               parameter=what, value=names)
-    _refuse_repeated(names, f"{{{what}}} names the axis", what, "each axis once")
-    return names
-
-
 def _refuse_repeated(names: tuple[str, ...], said: str, parameter: str, fix: str = "each column once") -> None:
     """Refuse a name given twice (the first in sorted order): ``said`` begins the message."""
     dups = repeated_names(names)
@@ -359,8 +348,13 @@ class ColumnMap:
                                        "FIRST..STOP-1 counted from 0, e.g. data[:,0:8]).", parameter=field,
                                        value=bad)
         if self.axes is not None:
-            object.__setattr__(self, "axes", _axis_list(self.axes.split(",") if isinstance(self.axes, str)
-                                                        else self.axes, "axes"))
+            axes = tuple(str(v).strip() for v in (self.axes.split(",") if isinstance(self.axes, str) else self.axes))
+            if not axes or any(n not in WRENCH_LABELS for n in axes):
+                raise DatasetFileError(f"{{axes}} {','.join(axes)!r}: name each output axis as one of "
+                                       f"{', '.join(WRENCH_LABELS)} (e.g. {{axes}} Fx,Fy,Fz for a 3-axis load cell).",
+                                       parameter="axes", value=axes)
+            _refuse_repeated(axes, "{axes} names the axis", "axes", "each axis once")
+            object.__setattr__(self, "axes", axes)
         if self.channels and self.wrench:
             self._check_no_overlap()
         if self.groups is not None:
@@ -836,11 +830,6 @@ def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -
 
 
 # ------------------------------------------------------------------ headerless text files named by the user
-def _text_fields(line: str) -> list[str]:
-    """A text line's fields: comma-separated, or separated by spaces / tabs when the line holds no comma."""
-    return [f.strip() for f in line.split(",")] if "," in line else line.split()
-
-
 def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]], list[str] | None]:
     """A text file's leading ``#`` comment lines, its data rows ``(1-based line, fields)`` and its header's fields
     (None without one: a header is a first line holding a field that is not a number)."""
@@ -857,7 +846,8 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
             if not rows:
                 comments.append(stripped)
             continue
-        rows.append((no, _text_fields(stripped)))
+        # the fields: comma-separated, or separated by spaces / tabs when the line holds no comma
+        rows.append((no, [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()))
     if rows and _names_columns(rows[0][1], rows[1][1] if len(rows) > 1 else None):
         return comments, rows[1:], rows[0][1]
     return comments, rows, None
