@@ -32,6 +32,7 @@ the topics the bag holds.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 from dataclasses import dataclass, field
@@ -148,7 +149,7 @@ class _Reader:
         from rosbags.typesys import Stores, get_typestore
 
         self.path = path
-        try:  # a path the file system refuses to look at is named as the bag's failure too
+        with self.failures():  # a path the file system refuses to look at is named as the bag's failure too
             if path.suffix in (".db3", ".mcap") and (path.parent / "metadata.yaml").is_file():
                 path = path.parent  # the storage file of a rosbag2 folder: the folder
             if not path.exists():
@@ -160,22 +161,25 @@ class _Reader:
             if not self.reader.is2:  # streamed chunk by chunk (rosbags' reader indexes every message first)
                 self.reader.readers = [_streaming_ros1_reader()(path)]
             self.reader.open()
+
+    @contextlib.contextmanager
+    def failures(self):
+        """Every failure of the reader within (truncated, damaged, not a bag) raised as one LogFormatError naming
+        the bag and the fix; ftcal's own errors pass as they are."""
+        try:
+            yield
         except LogFormatError:
             raise
         except Exception as exc:  # rosbags raises its own errors, sqlite3's, struct's, KeyError on damaged data
-            raise self.damaged(exc) from None
-
-    def damaged(self, exc: BaseException) -> LogFormatError:
-        text = " ".join(str(exc).split())[:160] or type(exc).__name__
-        return LogFormatError(f"{self.path}: cannot read the bag ({text}); is it truncated or damaged (a recording "
-                              "cut short)? Re-index or re-record it (ROS 1: rosbag reindex; ROS 2: ros2 bag reindex).")
+            text = " ".join(str(exc).split())[:160] or type(exc).__name__
+            raise LogFormatError(f"{self.path}: cannot read the bag ({text}); is it truncated or damaged (a "
+                                 "recording cut short)? Re-index or re-record it (ROS 1: rosbag reindex; ROS 2: ros2 "
+                                 "bag reindex).") from None
 
     def __enter__(self) -> "_Reader":
         return self
 
     def __exit__(self, *exc) -> None:
-        import contextlib
-
         with contextlib.suppress(Exception):  # closing a damaged bag may fail too; the first error is the one to show
             self.reader.close()
 
@@ -255,7 +259,7 @@ def bag_values(path: str | Path, head: int | None = None):
         # with head: the topics still short of their first messages; the bag is read no further once none is
         listed = r.topics()
         pending = {t for t, (_, n) in listed.items() if n > 0} if head is not None else None
-        try:
+        with r.failures():
             for conn, _receive_ns, data in r.reader.messages():
                 topic = conn.topic
                 if topic in digests and digests[topic] is None or head is not None and counts.get(topic, 0) >= head:
@@ -273,8 +277,6 @@ def bag_values(path: str | Path, head: int | None = None):
                     pending.discard(topic)
                     if not pending:
                         break
-        except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
-            raise r.damaged(exc) from None
     used = sorted(t for t, digest in digests.items() if digest is not None)
     return [np.array([f"{t} {listed[t][0]} {listed[t][1]}" for t in used]),
             *(np.array([digests[t].hexdigest()]) for t in used)]
@@ -439,7 +441,7 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
     wanted = [c for c in r.reader.connections if c.topic in ("/tf", "/tf_static", sensor)]
     edges: set[tuple[str, str]] = set()
     sensor_frame, seen = "", 0
-    try:
+    with r.failures():
         for conn, _, data in r.reader.messages(connections=wanted):
             msg = r.reader.deserialize(data, conn.msgtype)
             if conn.topic == sensor:
@@ -450,8 +452,6 @@ def _refuse_without_joints(path: Path, r: "_Reader", topics: dict, sensor: str, 
                 seen += 1
             if seen >= n_messages and sensor_frame:
                 break
-    except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
-        raise r.damaged(exc) from None
     parents, children = {p for p, _ in edges}, {c for _, c in edges}
     frames = sorted(parents | children)
     base = (sorted(parents - children) or frames or ["BASE"])[0]  # a root of the tree, else any frame
@@ -660,14 +660,11 @@ class _TfTree:
 
         R = np.broadcast_to(np.eye(3), (len(t), 3, 3)).copy()
         for edge in chain:  # base -> ... -> sensor
-            if edge in self.static:
-                Re = np.broadcast_to(Rotation.from_quat(self.static[edge]).as_matrix(), (len(t), 3, 3))
+            times, quats = ((), self.static[edge][None]) if edge in self.static else _distinct_times(self.edges[edge])
+            if len(quats) == 1:  # a static transform, or a dynamic one recorded once
+                Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
             else:
-                times, quats = _distinct_times(self.edges[edge])
-                if len(times) == 1:
-                    Re = np.broadcast_to(Rotation.from_quat(quats[0]).as_matrix(), (len(t), 3, 3))
-                else:
-                    Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
+                Re = Slerp(times, Rotation.from_quat(quats))(np.clip(t, times[0], times[-1])).as_matrix()
             R = R @ Re
         return R
 
@@ -788,7 +785,7 @@ def _read_messages(path: Path, r: _Reader, topics: dict, sensor: str, kind: str,
                   tree=_TfTree(max_samples))
     width = None
     wanted = [c for c in r.reader.connections if c.topic in {sensor, *pose_topics}]
-    try:
+    with r.failures():
         for conn, receive_ns, data in r.reader.messages(connections=wanted):
             topic = conn.topic
             msg = r.reader.deserialize(data, conn.msgtype)
@@ -812,10 +809,6 @@ def _read_messages(path: Path, r: _Reader, topics: dict, sensor: str, kind: str,
                 m.streams[sensor].add(t, receive, value)
             else:  # joint states: grouped by the joints each message names (an arm's, a gripper's)
                 _add_joint_state(path, topic, topics[topic][1], max_samples, m.joint_groups, msg, t, receive)
-    except LogFormatError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - a damaged or truncated bag fails in the reader's own ways
-        raise r.damaged(exc) from None
     return m
 
 

@@ -317,9 +317,6 @@ class _Finder:
                                             channel=None if channel is None else self.names[channel],
                                             value=value, reason=reason))
 
-    def place(self, row: int) -> str:
-        return self.sources.describe(row)
-
     # ---------------------------------------------------------------- spikes (and the statistics the range needs)
     def side_statistics(self, exclude=None):
         """Per row and channel: the same-direction distance to both sides' medians over the robust scale (0 where
@@ -459,7 +456,7 @@ class _Finder:
                     moving = np.ptp(np.delete(self.raw[span], j, axis=1), axis=0) > 0
                     if span.size < needed or moving.size == 0 or moving.mean() <= 0.5:
                         continue
-                    first, last = self.place(int(span[0])), self.place(int(span[-1]))
+                    first, last = self.sources.describe(int(span[0])), self.sources.describe(int(span[-1]))
                     self.add(FindingKind.STUCK, span, j, float(self.raw[span[0], j]),
                              f"constant over {span.size} rows ({first} to {last}) while the other channels move "
                              f"(a live reading gives one value with chance {p:.2g} at most: runs of "
@@ -552,8 +549,8 @@ class _Finder:
             return
         for row, original in copies:
             self.add(FindingKind.REPEATED, row, None, None,
-                     f"repeats {self.place(original)} exactly; {observed} equal pairs of rows where quantisation "
-                     f"explains {expected:.2g}")
+                     f"repeats {self.sources.describe(original)} exactly; {observed} equal pairs of rows where "
+                     f"quantisation explains {expected:.2g}")
 
 
 def check_readings(raw: ArrayLike, *, wrench: ArrayLike | None = None, groups: ArrayLike | None = None,

@@ -52,8 +52,8 @@ from ..core._exceptions import NO_SETTING, CalibrationInputError, DatasetFileErr
 from ..core._files import atomic_output, content_twins
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
-from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, parse_column_slice,
-                       checked_temperature, read_utf8_text, _slice_columns)
+from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, checked_temperature,
+                       named_axes, parse_column_slice, read_utf8_text, _INTEGER, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -161,9 +161,6 @@ def _group_column(texts: list[str], line_nos: list[int], path, column: str) -> t
     return np.array(labels, dtype=np.int64), None
 
 
-_INTEGER = re.compile(r"[+-]?[0-9]+")
-
-
 def _csv_fields(line: str) -> list[str]:
     """A CSV line's fields (quoted names such as ``"time [s]"`` unquoted), spaces around each dropped."""
     if '"' not in line:
@@ -201,14 +198,14 @@ class _CsvColumns:
     temperature: int | None
 
 
-def _find(names: list[str], name: str, option: str, where: str, positions: dict[str, list[int]] | None = None) -> int:
+def _find(names: list[str], name: str, option: str, where: str, positions: dict[str, list[int]]) -> int:
     """The position of the column ``name`` (mapped by the argument ``option``, e.g. ``"channels"``) in the header
     ``names`` (``positions``: each name's positions in it, made once for many look-ups: linear time)."""
     if parse_column_slice(name) is not None:
         raise DatasetFileError(f"{where}: {{{option}}} {name}: a column slice selects columns of one array of a .mat "
                                "or .npz file; in a CSV name the columns, or a range such as s0..s7.", parameter=option,
                                value=name)
-    hits = positions.get(name, []) if positions is not None else [i for i, n in enumerate(names) if n == name]
+    hits = positions.get(name, [])
     if not hits:
         shown = ", ".join(n or "''" for n in names)
         raise DatasetFileError(f"{where}: {{{option}}} names column {name!r}, which the header lacks; the header has "
@@ -272,7 +269,7 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     channels = _channel_positions(names, where) if columns.channels is None else \
         [_find(names, n, "channels", where, positions) for n in columns.channels]
     if columns.wrench is not None:
-        wrench = [_find(names, n, "wrench", where) for n in columns.wrench]
+        wrench = [_find(names, n, "wrench", where, positions) for n in columns.wrench]
         axes = columns.resolve_axes(list(columns.wrench), len(wrench), where)
     else:
         named = [names[i] for i in channels if canonical_wrench_name(names[i])]
@@ -282,18 +279,11 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
                 "wrench cannot be an input.", parameter="channels", value=named[0],
                 fix="name only the sensor's raw channels in {channels}; if that column really is a raw channel, "
                 "name the wrench columns with {wrench}", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
-        seen: dict[str, int] = {}
         taken = set(channels)
-        for i, name in enumerate(names):
-            axis = canonical_wrench_name(name) if i not in taken else None
-            if axis is None:
-                continue
-            if axis in seen:
-                raise DatasetFileError(
-                    f"{where}: columns {names[seen[axis]]!r} and {name!r} both read as the wrench axis {axis}; "
-                    "keep one, or name the wrench columns with {wrench} (e.g. {wrench} Fx,Fy,Fz,Mx,My,Mz).",
-                    parameter="wrench")
-            seen[axis] = i
+        seen = named_axes([None if i in taken else n for i, n in enumerate(names)], lambda first, name, axis:
+                          DatasetFileError(f"{where}: columns {first!r} and {name!r} both read as the wrench axis "
+                                           f"{axis}; keep one, or name the wrench columns with {{wrench}} (e.g. "
+                                           "{wrench} Fx,Fy,Fz,Mx,My,Mz).", parameter="wrench"))
         if not seen:
             raise DatasetFileError(f"{where}: the header names no wrench columns (Fx, Fy, Fz, Tx, Ty, Tz, or Mx, "
                                    f"force_x, ...). Expected header: {_CSV_LAYOUT}.", parameter="wrench",
@@ -309,13 +299,13 @@ def _csv_columns(names: list[str], columns: ColumnMap, where: str) -> _CsvColumn
     used = channels + wrench
     group = None
     if columns.groups not in (None, "file"):
-        group = _find(names, columns.groups, GROUPS, where)
+        group = _find(names, columns.groups, GROUPS, where, positions)
         if group in used:
             raise DatasetFileError(f"{where}: {{{GROUPS}}} {columns.groups!r} is also mapped as a channel or wrench "
                                    "column.", parameter=GROUPS, value=columns.groups)
-    elif names.count("group") == 1 and names.index("group") not in used:
-        group = names.index("group")
-    temperature = names.index("temperature") if names.count("temperature") == 1 else None
+    elif len(positions.get("group", ())) == 1 and positions["group"][0] not in used:
+        group = positions["group"][0]
+    temperature = positions["temperature"][0] if len(positions.get("temperature", ())) == 1 else None
     temperature = None if temperature in used else temperature
     order = np.argsort([WRENCH_LABELS.index(a) for a in axes], kind="stable")  # the wrench in Fx..Tz order
     return _CsvColumns(channels=channels, wrench=[wrench[k] for k in order], axes=tuple(axes[k] for k in order),
@@ -705,15 +695,14 @@ class CalibrationDataset:
                 parameter="channels", fix=f"add a header line naming the columns ({_CSV_LAYOUT}), or name them with "
                 "{channels}/{wrench} after adding one", settings={"channels": NO_SETTING, "wrench": NO_SETTING})
         used = _csv_columns(names, columns, where)
-        body_lines = [lines[no - 1] for no in line_nos]
-        if not body_lines:
+        if not line_nos:
             raise DatasetFileError(f"{path}: no data rows after the header.")
         width = len(names)
         numeric = used.channels + used.wrench + ([used.temperature] if used.temperature is not None else [])
         shown = [n or f"{i + 1} (unnamed)" for i, n in enumerate(names)]
         rows, group_texts = [], []
-        for no, line in zip(line_nos, body_lines):  # numpy's own message counts data rows, not the file's lines
-            fields = _csv_fields(line)
+        for no in line_nos:  # numpy's own message counts data rows, not the file's lines
+            fields = _csv_fields(lines[no - 1])
             if len(fields) != width:
                 raise DatasetFileError(f"{path}: line {no}: {len(fields)} values but the header names "
                                        f"{width} columns; repair or remove that line.")
@@ -738,9 +727,9 @@ class CalibrationDataset:
             meta = {**meta, "channel_names": [str(names[i]) for i in used.channels]}  # (the report prints them)
         bad = np.argwhere(~np.isfinite(data[:, :n_ch + n_w]))
         if bad.size:
-            row, col = int(bad[0, 0]), numeric[int(bad[0, 1])]
-            raise DatasetFileError(f"{path}: line {line_nos[row]}, column {shown[col]}: "
-                                   f"{_csv_fields(body_lines[row])[col]!r} is NaN or inf (or beyond float64); "
+            row, k = (int(v) for v in bad[0])
+            raise DatasetFileError(f"{path}: line {line_nos[row]}, column {shown[numeric[k]]}: "
+                                   f"{rows[row][k]!r} is NaN or inf (or beyond float64); "
                                    "remove or repair that line.")
         group = None
         if used.group is not None:
@@ -899,15 +888,10 @@ def _dataset_from_arrays(cls, source: ArrayFile, columns: ColumnMap, meta: dict)
     """The dataset the mapped arrays of ``source`` make (only those arrays are read)."""
     where = source.where
     available = source.names()
-    found: dict[str, str] = {}
-    for n in available:
-        axis = canonical_wrench_name(n)
-        if axis is not None:
-            if axis in found:
-                raise DatasetFileError(f"{where}: {source.kind}s {found[axis]!r} and {n!r} both read as the wrench "
-                                       f"axis {axis}; name the wrench with {{wrench}}.", parameter="wrench")
-            found[axis] = n
-    vector_wrench = [found[a] for a in WRENCH_LABELS if a in found]
+    found = named_axes(available, lambda first, n, axis: DatasetFileError(
+        f"{where}: {source.kind}s {first!r} and {n!r} both read as the wrench axis {axis}; name the wrench with "
+        "{wrench}.", parameter="wrench"))
+    vector_wrench = [available[found[a]] for a in WRENCH_LABELS if a in found]
     wrench, wrench_labels, wrench_base = _select(source, columns.wrench, "wrench", vector_wrench, "wrench", "wrench")
     raw, raw_labels, raw_base = _select(source, columns.channels, "raw", _channel_vectors(source), "raw channels",
                                         "channels")

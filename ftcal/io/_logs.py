@@ -43,7 +43,6 @@ from __future__ import annotations
 
 import csv
 import json
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -55,7 +54,7 @@ from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import checked_temperature, read_utf8_text
+from ._readers import _INTEGER, checked_temperature, read_utf8_text
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -73,8 +72,6 @@ _FIXED_COLUMNS = ("timestamp", "run", "config", "pose")
 _MAX_PLAUSIBLE_RAD = 2 * np.pi + 1e-6
 #: Memory of a log read into Python strings, per byte of the file (the text, its lines, the rows' fields).
 _TEXT_MEMORY_FACTOR = 8
-#: An integer as written (config and pose ids are read exactly, not through float64).
-_INTEGER = re.compile(r"[+-]?[0-9]+")
 
 
 @dataclass

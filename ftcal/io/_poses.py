@@ -41,7 +41,7 @@ from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
 from ._logs import _parse_comments, read_text_lines, text_rows
-from ._readers import ColumnMap, canonical_wrench_name
+from ._readers import ColumnMap, named_axes
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
 
@@ -100,14 +100,6 @@ class PoseRecording:
     def reading(self) -> NDArray[np.float64]:
         """The wrench, or the raw channels when the file has no wrench."""
         return self.wrench if self.wrench is not None else self.raw
-
-
-def _header_and_rows(path: Path) -> tuple[list[str], int, list[tuple[int, list[str]]]]:
-    lines = read_text_lines(path, "pose file", "split the recording into several files")
-    n_comment = _parse_comments(path, lines)[1]
-    if n_comment >= len(lines) or not lines[n_comment].strip():
-        raise LogFormatError(f"{path}: line {n_comment + 1}: no header line; expected {_EXPECTED}.")
-    return next(csv.reader([lines[n_comment]])), n_comment + 1, text_rows(lines, n_comment + 1)
 
 
 def is_pose_file(path: str | Path) -> bool:
@@ -170,7 +162,11 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     (2, 'quaternion (x, y, z, w)', [0.0, 0.0, -1.0])
     """
     path = Path(path)
-    fields, head_line, rows = _header_and_rows(path)
+    lines = read_text_lines(path, "pose file", "split the recording into several files")
+    head_line = _parse_comments(path, lines)[1] + 1  # the header follows the comments
+    if head_line > len(lines) or not lines[head_line - 1].strip():
+        raise LogFormatError(f"{path}: line {head_line}: no header line; expected {_EXPECTED}.")
+    fields, rows = next(csv.reader([lines[head_line - 1]])), text_rows(lines, head_line)
     where = f"{path}: line {head_line}"
     head = read_header(fields, where=where, error=LogFormatError, numbered=(), allow_other=True, expected=_EXPECTED)
     names = list(head.names)
@@ -183,13 +179,8 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
         hint = f" (it has part of the {partial[0]}: {','.join(ORIENTATION_LAYOUTS[partial[0]])})" if partial else ""
         raise LogFormatError(f"{where}: the header names no orientation of the sensor{hint}; expected {_EXPECTED}.")
     layout = layouts[0] if layouts else ""
-    wrench_cols: dict[str, str] = {}
-    for n in names:
-        canonical = canonical_wrench_name(n)
-        if canonical is not None:
-            if canonical in wrench_cols:
-                raise LogFormatError(f"{where}: columns {wrench_cols[canonical]!r} and {n!r} both hold {canonical}.")
-            wrench_cols[canonical] = n
+    wrench_cols = named_axes(names, lambda first, n, axis: LogFormatError(
+        f"{where}: columns {first!r} and {n!r} both hold {axis}."))
     channels = [n for n in names if n[:1] == "s" and n[1:].isdigit()]
     if wrench_cols and len(wrench_cols) != 6:
         missing = [c for c in WRENCH_LABELS if c not in wrench_cols]
@@ -206,7 +197,7 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
     if not rows:
         raise LogFormatError(f"{path}: no data rows after the header (line {head_line}).")
     orientation_cols = ORIENTATION_LAYOUTS[layout] if layout else ()
-    value_cols = list(orientation_cols) + ([wrench_cols[c] for c in WRENCH_LABELS] if wrench_cols else channels)
+    value_cols = list(orientation_cols) + ([names[wrench_cols[c]] for c in WRENCH_LABELS] if wrench_cols else channels)
     value_cols += [c for c in ("time", "temperature") if c in head]
     values = np.empty((len(rows), len(value_cols)))
     line = np.array([lineno for lineno, _ in rows], dtype=np.int64)

@@ -42,7 +42,7 @@ from ..core._memory import check_allocation, read_npy_member
 from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
 __all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
-           "expand_names", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
+           "expand_names", "named_axes", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
            "check_real_array", "has_header", "join_headerless", "JoinedTable"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
@@ -173,6 +173,22 @@ def canonical_wrench_name(name: str) -> str | None:
     return None
 
 
+def named_axes(names: Sequence[str | None], clash) -> dict[str, int]:
+    """Each wrench axis ``names`` holds by name or alias (:func:`canonical_wrench_name`; ``None`` entries are
+    skipped) -> its position, in the order found; a second name of one axis raises ``clash(first, second, axis)``
+    (the error to raise, worded for the file's kind)."""
+    found: dict[str, int] = {}
+    for i, name in enumerate(names):
+        axis = None if name is None else canonical_wrench_name(name)
+        if axis in found:
+            raise clash(names[found[axis]], name, axis)
+        if axis is not None:
+            found[axis] = i
+    return found
+
+
+#: An integer as written (group labels, config and pose ids are read exactly, not through float64).
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 _RANGE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*?)(\d+)\s*\.\.\s*(?:\1)?(\d+)")
 _SLICE = re.compile(r"([A-Za-z_][A-Za-z0-9_\-]*)\s*\[\s*:\s*,\s*(?:(-?\d+)|(-?\d*)\s*:\s*(-?\d*))\s*\]")
 #: Most columns one range may name (a typo such as s0..s99999999 would otherwise build a huge list).
@@ -248,17 +264,6 @@ def _slice_columns(spec: tuple[str, int | None, int | None], width: int, where: 
                                f"columns (0..{width - 1}). Fix: give a slice within them, e.g. {name}[:,0:{width}].",
                                parameter=option, value=f"{name}[:,{start}:{stop}]")
     return range(b, e)
-
-
-def _axis_list(value, what: str) -> tuple[str, ...]:
-    names = tuple(str(v).strip() for v in value)
-    unknown = [n for n in names if n not in WRENCH_LABELS]
-    if unknown or not names:
-        raise DatasetFileError(f"{{{what}}} {','.join(names)!r}: name each output axis as one of "
-                               f"{', '.join(WRENCH_LABELS)} (e.g. {{{what}}} Fx,Fy,Fz for a 3-axis load cell).",
-                               parameter=what, value=names)
-    _refuse_repeated(names, f"{{{what}}} names the axis", what, "each axis once")
-    return names
 
 
 def _refuse_repeated(names: tuple[str, ...], said: str, parameter: str, fix: str = "each column once") -> None:
@@ -343,8 +348,13 @@ class ColumnMap:
                                        "FIRST..STOP-1 counted from 0, e.g. data[:,0:8]).", parameter=field,
                                        value=bad)
         if self.axes is not None:
-            object.__setattr__(self, "axes", _axis_list(self.axes.split(",") if isinstance(self.axes, str)
-                                                        else self.axes, "axes"))
+            axes = tuple(str(v).strip() for v in (self.axes.split(",") if isinstance(self.axes, str) else self.axes))
+            if not axes or any(n not in WRENCH_LABELS for n in axes):
+                raise DatasetFileError(f"{{axes}} {','.join(axes)!r}: name each output axis as one of "
+                                       f"{', '.join(WRENCH_LABELS)} (e.g. {{axes}} Fx,Fy,Fz for a 3-axis load cell).",
+                                       parameter="axes", value=axes)
+            _refuse_repeated(axes, "{axes} names the axis", "axes", "each axis once")
+            object.__setattr__(self, "axes", axes)
         if self.channels and self.wrench:
             self._check_no_overlap()
         if self.groups is not None:
@@ -820,11 +830,6 @@ def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -
 
 
 # ------------------------------------------------------------------ headerless text files named by the user
-def _text_fields(line: str) -> list[str]:
-    """A text line's fields: comma-separated, or separated by spaces / tabs when the line holds no comma."""
-    return [f.strip() for f in line.split(",")] if "," in line else line.split()
-
-
 def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]], list[str] | None]:
     """A text file's leading ``#`` comment lines, its data rows ``(1-based line, fields)`` and its header's fields
     (None without one: a header is a first line holding a field that is not a number)."""
@@ -841,7 +846,8 @@ def _data_lines(path, what: str) -> tuple[list[str], list[tuple[int, list[str]]]
             if not rows:
                 comments.append(stripped)
             continue
-        rows.append((no, _text_fields(stripped)))
+        # the fields: comma-separated, or separated by spaces / tabs when the line holds no comma
+        rows.append((no, [f.strip() for f in stripped.split(",")] if "," in stripped else stripped.split()))
     if rows and _names_columns(rows[0][1], rows[1][1] if len(rows) > 1 else None):
         return comments, rows[1:], rows[0][1]
     return comments, rows, None
