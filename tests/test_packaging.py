@@ -40,7 +40,7 @@ def test_wheel_holds_every_package_folder(wheel):
         names = set(archive.namelist())
     missing = sorted(p for p in packages if f"{p}/__init__.py" not in names)
     assert not missing, f"packages missing from the wheel (add them to pyproject.toml): {missing}"
-    assert "ftcal/robots/kuka_iiwa14_ft.urdf" in names
+    assert {"ftcal/robots/kuka_iiwa14_ft.urdf", "ftcal/reporting/certificate_page.html"} <= names
 
 
 def test_unpacked_wheel_imports_every_subpackage(wheel, tmp_path):
@@ -55,6 +55,8 @@ def test_unpacked_wheel_imports_every_subpackage(wheel, tmp_path):
             "    module = importlib.import_module('ftcal.' + name)\n"
             "    assert module.__file__.startswith(%r), module.__file__\n"
             "from ftcal.workflow import calibrate\n"
+            "from ftcal.reporting._page import PAGE\n"  # its template is package data
+            "assert '$summary' in PAGE.template\n"
             "print('ok')\n") % (str(site), str(site))
     done = subprocess.run([sys.executable, "-I", "-c", f"import sys; sys.path.insert(0, {str(site)!r})\n" + code],
                           cwd=tmp_path, capture_output=True, text=True, timeout=300)

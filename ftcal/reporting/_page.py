@@ -22,60 +22,9 @@ CASES_ON_PAGE = 30
 #: Readings dropped or flagged listed on the page (all are in the JSON).
 READINGS_ON_PAGE = 40
 
-_CSS = """
-body{font-family:system-ui,-apple-system,'Segoe UI',Roboto,sans-serif;margin:1.5em auto;max-width:60em;color:#222;
-line-height:1.4;padding:0 1em}h1{font-size:1.55em;margin:0 0 .2em}h2{font-size:1.2em;border-bottom:1px solid #ccc;
-margin-top:1.4em}h3{font-size:1.02em;margin:1em 0 .3em}table{border-collapse:collapse;margin:.5em 0;font-size:.9em}
-th,td{border:1px solid #bbb;padding:.2em .55em;text-align:right}th{background:#eee}
-td:first-child,th:first-child{text-align:left;white-space:nowrap}.note{color:#444;font-size:.88em}img{max-width:100%;height:auto}
-code{background:#f3f3f3;padding:0 .2em;word-break:break-all}.best{font-weight:bold}
-.PASS{color:#0a6b2a;font-weight:bold}.FAIL{color:#b00020;font-weight:bold}
-.verdict{font-size:1.25em;padding:.35em .7em;border:2px solid;display:inline-block;margin:.3em 0}
-.verdict.PASS{border-color:#0a6b2a}.verdict.FAIL{border-color:#b00020}.verdict.none{border-color:#888;color:#444}
-.warnings li{margin:.15em 0}.warn-kind{font-weight:bold}.summary-grid td:first-child{width:11em}
-.not-stated{color:#8a5a00;font-style:italic}table.kv td{text-align:left}table.kv thead{display:none}
-section{margin-top:1em}
-@page{size:A4;margin:14mm 12mm 16mm 12mm;
-@bottom-right{content:"page " counter(page) " of " counter(pages);font-size:9pt;color:#444}
-@bottom-left{content:"ftcal calibration report";font-size:9pt;color:#444}}
-.cases{overflow-x:auto}.cases table{font-size:.8em}.cases td,.cases th{padding:.15em .3em}
-@page wide{size:A4 landscape;margin:12mm 12mm 16mm 12mm;
-@bottom-right{content:"page " counter(page) " of " counter(pages);font-size:9pt;color:#444}
-@bottom-left{content:"ftcal calibration report";font-size:9pt;color:#444}}
-@media print{body{margin:0;max-width:none;font-size:10pt}section#cases{page:wide}.cases{overflow:visible}
-.cases table{font-size:7pt}section{break-before:page;margin-top:0}
-section.first{break-before:auto}h2{break-after:avoid}table,img,figure{break-inside:avoid}
-table.long{break-inside:auto}thead{display:table-header-group}tr{break-inside:avoid}}
-"""
-
-#: The page's skeleton: every ``$name`` is one section's HTML (:func:`render_page`).
-PAGE = Template("""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<meta http-equiv="Content-Security-Policy" content="default-src 'none'; img-src data:; style-src 'unsafe-inline'">
-<title>$title</title><style>$css</style></head><body>
-<section class="first" id="summary">
-<h1>$title</h1>
-$summary
-</section>
-<section id="calibration"><h2>The calibration</h2>
-$calibration
-</section>
-<section id="accuracy"><h2>Held-out accuracy per axis</h2>
-$accuracy
-</section>
-$cases
-<section id="choice"><h2>Model choice (same folds)</h2>
-$choice
-</section>
-$readings
-<section id="range"><h2>Calibrated range</h2>
-$range
-<h2>Conditions and traceability</h2>
-$conditions
-</section>
-$extras
-</body></html>
-""")
+#: The page's skeleton, ``certificate_page.html`` beside this module (its style sheet inline): every ``$name`` is
+#: one section's HTML (:func:`render_page`).
+PAGE = Template((Path(__file__).parent / "certificate_page.html").read_text(encoding="utf-8"))
 
 
 def _fmt(value: Any, digits: int = 3) -> str:
@@ -384,6 +333,6 @@ def render_page(certificate) -> str:
     """The certificate's HTML page: :data:`PAGE` filled with each section's HTML."""
     c = certificate
     return PAGE.substitute(
-        title=f"Calibration report: {_fmt(c.sensor)}", css=_CSS, summary=_summary(c), calibration=_calibration(c),
+        title=f"Calibration report: {_fmt(c.sensor)}", summary=_summary(c), calibration=_calibration(c),
         accuracy=_accuracy(c), cases=_cases(c), choice=_choice(c), readings=_readings(c), range=_range(c),
         conditions=_conditions(c), extras=_extras(c))
