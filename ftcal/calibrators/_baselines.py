@@ -422,11 +422,9 @@ class StockCalibrator(BaseCalibrator):
             for channel in range(1, z.shape[1]):
                 features *= by_power[:, channel, self.powers_[:, channel]]
             return features @ self.coef_.T + self.intercept_
-        from scipy.spatial.distance import cdist
+        from sklearn.gaussian_process.kernels import RBF
 
-        kernel = cdist(z / self.length_scale_, self.train_inputs_ / self.length_scale_, "sqeuclidean")
-        kernel *= -0.5
-        np.exp(kernel, out=kernel)
+        kernel = RBF(self.length_scale_)(z, self.train_inputs_)  # exp(-d² / 2), d the distance in length scales
         return self.amplitude_ * (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_
 
 
