@@ -721,15 +721,13 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         u = g.op("Div", g.op("Sub", xc, g.const(self.input_mean_)), g.const(self.input_scale_))
         columns = []
         for gp in self.regressors():  # each from its kernel less the noise, de-normalised by its own scale
-            body = gp.kernel_.k1
-            stationary, linear = (body.k1, body.k2) if self.kernel_.endswith("+linear") else (body, None)
-            ell = np.asarray(stationary.k2.length_scale, dtype=float) * np.ones(self.train_inputs_.shape[1])
-            kernel = onnx_kernel(g, u, self.train_inputs_, ell, float(stationary.k1.constant_value),
-                                 matern=self.kernel_.startswith("matern52"))
-            if linear is not None:
-                dot = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)),
-                           g.const(float(linear.k2.sigma_0) ** 2))
-                kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear.k1.constant_value)), dot))
+            constant, stationary, linear_constant, dot, _ = _kernel_parts(gp.kernel_)  # make_kernel's terms
+            ell = np.asarray(stationary.length_scale, dtype=float) * np.ones(self.train_inputs_.shape[1])
+            kernel = onnx_kernel(g, u, self.train_inputs_, ell, float(constant.constant_value),
+                                 matern=type(stationary) is Matern)
+            if dot is not None:
+                linear = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)), g.const(float(dot.sigma_0) ** 2))
+                kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear_constant.constant_value)), linear))
             columns.append(g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(gp.alpha_)),
                                              g.const(gp._y_train_std)), g.const(gp._y_train_mean)))
         residual = columns[0] if len(columns) == 1 else g.op("Concat", *columns, axis=1)
