@@ -64,7 +64,7 @@ def test_the_likelihood_gradient_from_matrix_products_is_scikit_learns(family, n
         size=(n_rows, n_outputs))
     for bounds in ("ftcal", "stock"):
         kernel = make_kernel(family, n_channels, bounds)
-        ours = _regressor(kernel, 0, 0, optimizer=None).fit(X, y)
+        ours = _regressor(kernel, 0, optimizer=None).fit(X, y)
         theirs = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None).fit(X, y)
         for theta in rng.uniform(np.log(1e-2), np.log(1e2), size=(4, kernel.n_dims)):
             value, gradient = ours.log_marginal_likelihood(theta, eval_gradient=True)
@@ -78,13 +78,13 @@ def test_the_likelihood_gradient_from_matrix_products_is_scikit_learns(family, n
     kernel = make_kernel(family, n_channels)
     theta = kernel.theta.copy()
     theta[1:1 + n_channels], theta[-1] = np.log(1e-2), np.log(1e-8)
-    ours = _regressor(kernel, 0, 0, optimizer=None).fit(clustered, target)
+    ours = _regressor(kernel, 0, optimizer=None).fit(clustered, target)
     theirs = GaussianProcessRegressor(kernel, normalize_y=True, optimizer=None).fit(clustered, target)
     expected_gradient = theirs.log_marginal_likelihood(theta, eval_gradient=True)[1]
     np.testing.assert_allclose(ours.log_marginal_likelihood(theta, eval_gradient=True)[1], expected_gradient,
                                rtol=1e-6, atol=1e-8 * np.abs(expected_gradient).max())
     other = RBF(np.ones(n_channels)) + WhiteKernel()  # not make_kernel's form: scikit-learn computes it
-    ours = _regressor(other, 0, 0, optimizer=None).fit(X, y)
+    ours = _regressor(other, 0, optimizer=None).fit(X, y)
     theirs = GaussianProcessRegressor(other, normalize_y=True, optimizer=None).fit(X, y)
     np.testing.assert_array_equal(ours.log_marginal_likelihood(other.theta, eval_gradient=True)[1],
                                   theirs.log_marginal_likelihood(other.theta, eval_gradient=True)[1])
@@ -95,7 +95,7 @@ def test_left_out_errors_are_those_of_refits_without_the_rows():
     each row, and without each group."""
     raw, wrench = correlated_sensor(40, 3, seed=5, torque_in_nmm=False)
     u = (raw - raw.mean(axis=0)) / raw.std(axis=0)
-    gp = _regressor(make_kernel("rbf", 3), 0, 0).fit(u, wrench)
+    gp = _regressor(make_kernel("rbf", 3), 0).fit(u, wrench)
     y = (wrench - gp._y_train_mean) / gp._y_train_std
     K = gp.kernel_(u)
     groups = np.repeat(np.arange(8), 5)

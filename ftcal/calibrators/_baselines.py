@@ -339,8 +339,7 @@ class StockCalibrator(BaseCalibrator):
             self.coef_, self.intercept_ = np.atleast_2d(model.coef_), np.atleast_1d(model.intercept_)
             return
         if isinstance(model, SubsampledRegressor):
-            rows, model = model.sample_rows_, model.estimator_
-            y = y[rows]
+            model = model.estimator_
         scaler, last = model.steps[0][1], model.steps[-1][1]
         self.input_mean_, self.input_scale_ = np.asarray(scaler.mean_), np.asarray(scaler.scale_)
         if self.baseline in ("sk_poly2", "sk_poly3"):
@@ -360,9 +359,8 @@ class StockCalibrator(BaseCalibrator):
             self.length_scale_ = np.broadcast_to(np.asarray(kernel.k1.k2.length_scale, dtype=float),
                                                  (X.shape[1],)).copy()
             self.amplitude_ = float(kernel.k1.k1.constant_value)
-            mean, scale = y.mean(axis=0), y.std(axis=0)
-            self.target_mean_ = mean
-            self.target_scale_ = np.where(scale < 10 * np.finfo(float).eps, 1.0, scale)  # as scikit-learn's
+            # normalize_y's own mean and scale of the subsample's targets (a scale of 0 made 1)
+            self.target_mean_, self.target_scale_ = np.asarray(last._y_train_mean), np.asarray(last._y_train_std)
 
     def _predict_wrench(self, X):
         if self.estimator_ is not None:
@@ -424,11 +422,9 @@ class StockCalibrator(BaseCalibrator):
             for channel in range(1, z.shape[1]):
                 features *= by_power[:, channel, self.powers_[:, channel]]
             return features @ self.coef_.T + self.intercept_
-        from scipy.spatial.distance import cdist
+        from sklearn.gaussian_process.kernels import RBF
 
-        kernel = cdist(z / self.length_scale_, self.train_inputs_ / self.length_scale_, "sqeuclidean")
-        kernel *= -0.5
-        np.exp(kernel, out=kernel)
+        kernel = RBF(self.length_scale_)(z, self.train_inputs_)  # exp(-d² / 2), d the distance in length scales
         return self.amplitude_ * (kernel @ self.dual_coef_) * self.target_scale_ + self.target_mean_
 
 

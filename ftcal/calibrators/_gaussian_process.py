@@ -187,16 +187,18 @@ def _kernel_parts(kernel):
     return body.k1, body.k2, linear_constant, dot, kernel.k2
 
 
-def _regressor(kernel, random_state, n_restarts: int, optimizer="fmin_l_bfgs_b") -> GaussianProcessRegressor:
-    return _Regressor(kernel, normalize_y=True, n_restarts_optimizer=n_restarts, copy_X_train=False,
-                      random_state=random_state, optimizer=optimizer)
+def _regressor(kernel, random_state, optimizer="fmin_l_bfgs_b") -> GaussianProcessRegressor:
+    """The GP of this kernel (``normalize_y``; its optimiser from the kernel's own start only: ftcal draws the
+    restarts itself, :meth:`GaussianProcessCalibrator._starts`)."""
+    return _Regressor(kernel, normalize_y=True, copy_X_train=False, random_state=random_state, optimizer=optimizer)
 
 
-def _fit_quietly(gp: GaussianProcessRegressor, u, target) -> GaussianProcessRegressor:
+def _fit_quietly(kernel, seed, u, target, optimizer="fmin_l_bfgs_b") -> GaussianProcessRegressor:
+    """:func:`_regressor` of ``kernel`` fitted on ``u``, ``target``, without the optimiser's convergence warnings."""
     with warnings.catch_warnings():
         # a length scale at its upper bound is the expected answer for a channel without nonlinearity
         warnings.simplefilter("ignore", ConvergenceWarning)
-        return gp.fit(u, target)
+        return _regressor(kernel, seed, optimizer).fit(u, target)
 
 
 def _mean_basis(mean: str, u: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -505,8 +507,8 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         columns = [[j] for j in range(target.shape[1])] if per_output else [list(range(target.shape[1]))]
         regressors, errors = [], []
         for j, cols in enumerate(columns):  # each from the start of least held-out error (not of most likelihood)
-            tried = [_fit_quietly(_regressor(make_kernel(family, n_channels, bounds).clone_with_theta(start[j]),
-                                             seed, 0), u, target[:, cols]) for start in starts]
+            tried = [_fit_quietly(make_kernel(family, n_channels, bounds).clone_with_theta(start[j]), seed, u,
+                                  target[:, cols]) for start in starts]
             scores = [_held_out_mse(gp, basis, group_rows) for gp in tried]
             best = int(np.argmin(scores))
             regressors.append(tried[best])
@@ -561,8 +563,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         errors, fitted = {}, {}
         for combo in combos:
             mean, family, bounds = combo
-            fitted[combo] = gp = _fit_quietly(_regressor(make_kernel(family, n_channels, bounds), seed, 0), u,
-                                              targets[mean])
+            fitted[combo] = gp = _fit_quietly(make_kernel(family, n_channels, bounds), seed, u, targets[mean])
             errors[combo] = _held_out_mse(gp, bases[mean], groups)
             self.log_marginal_likelihood_["/".join(combo)] = _log_evidence(gp, targets[mean])
             self.held_out_rmse_["/".join(combo)] = float(np.sqrt(errors[combo]))
@@ -575,8 +576,8 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
             check_random_state(seed).choice(n, size=_PER_OUTPUT_ROWS, replace=False))
         u, target, basis = u[few], targets[mean][few], bases[mean][few]
         groups = None if groups is None else groups[few]
-        shared_few = _fit_quietly(_regressor(shared.kernel_, seed, 0, optimizer=None), u, target)
-        separate = [_fit_quietly(_regressor(shared.kernel_, seed, 0), u, target[:, [j]]) for j in range(k)]
+        shared_few = _fit_quietly(shared.kernel_, seed, u, target, optimizer=None)
+        separate = [_fit_quietly(shared.kernel_, seed, u, target[:, [j]]) for j in range(k)]
         shared_error = _held_out_mse(shared_few, basis, groups)
         separate_error = float(np.mean([_held_out_mse(g, basis, groups) for g in separate]))
         self.held_out_rmse_["per_output_shared"] = float(np.sqrt(shared_error))
@@ -668,7 +669,7 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         k = self.theta_.shape[0]
         regressors = []
         for i in range(k):
-            gp = _regressor(make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]), None, 0)
+            gp = _regressor(make_kernel(self.kernel_, n_channels).clone_with_theta(self.theta_[i]), None)
             cols = slice(None) if k == 1 else slice(i, i + 1)
             gp.kernel_, gp.X_train_, gp.L_ = gp.kernel, self.train_inputs_, self.cholesky_[i]
             gp.alpha_, gp._y_train_mean = self.dual_coef_[:, cols], self.target_mean_[cols]
@@ -720,15 +721,13 @@ class GaussianProcessCalibrator(GroupsFit, BaseCalibrator):
         u = g.op("Div", g.op("Sub", xc, g.const(self.input_mean_)), g.const(self.input_scale_))
         columns = []
         for gp in self.regressors():  # each from its kernel less the noise, de-normalised by its own scale
-            body = gp.kernel_.k1
-            stationary, linear = (body.k1, body.k2) if self.kernel_.endswith("+linear") else (body, None)
-            ell = np.asarray(stationary.k2.length_scale, dtype=float) * np.ones(self.train_inputs_.shape[1])
-            kernel = onnx_kernel(g, u, self.train_inputs_, ell, float(stationary.k1.constant_value),
-                                 matern=self.kernel_.startswith("matern52"))
-            if linear is not None:
-                dot = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)),
-                           g.const(float(linear.k2.sigma_0) ** 2))
-                kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear.k1.constant_value)), dot))
+            constant, stationary, linear_constant, dot, _ = _kernel_parts(gp.kernel_)  # make_kernel's terms
+            ell = np.asarray(stationary.length_scale, dtype=float) * np.ones(self.train_inputs_.shape[1])
+            kernel = onnx_kernel(g, u, self.train_inputs_, ell, float(constant.constant_value),
+                                 matern=type(stationary) is Matern)
+            if dot is not None:
+                linear = g.op("Add", g.op("MatMul", u, g.const(self.train_inputs_.T)), g.const(float(dot.sigma_0) ** 2))
+                kernel = g.op("Add", kernel, g.op("Mul", g.const(float(linear_constant.constant_value)), linear))
             columns.append(g.op("Add", g.op("Mul", g.op("MatMul", kernel, g.const(gp.alpha_)),
                                              g.const(gp._y_train_std)), g.const(gp._y_train_mean)))
         residual = columns[0] if len(columns) == 1 else g.op("Concat", *columns, axis=1)

@@ -294,16 +294,13 @@ class HistoryCalibrator(GroupsFit, CalibratorWrapper):
                 f"taus must be a non-empty flat list of at most {MAX_TAUS} time constants >= 1 [rows], e.g. (1, 2, 4, "
                 f"8, 16); got {why}: {self.taus!r:.120}.")
 
-    def _folds(self, n: int, groups: NDArray | None) -> list[tuple[NDArray, NDArray]]:
+    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
+        n, taus = len(X), [float(t) for t in self._taus()]
         if groups is None and n < self.cv:
             raise CalibrationInputError(f"X has {n} rows, fewer than cv={self.cv} folds; lower cv or record more.",
                                         parameter="X", value=n)
         # ftcal's folds, unshuffled: contiguous blocks of rows (a time series), or whole groups
-        return calibration_folds(n, groups, int(self.cv), shuffle=False)
-
-    def _fit(self, X: NDArray[np.float64], y: NDArray[np.float64], groups: NDArray | None = None) -> None:
-        n, taus = len(X), [float(t) for t in self._taus()]
-        folds = self._folds(n, groups)
+        folds = calibration_folds(n, groups, int(self.cv), shuffle=False)
         template = self._inner()
         refuse_history_inside(template, type(self).__name__)
         static = calibration_tags(template)

@@ -123,16 +123,6 @@ def parse_search_space(entries: Iterable[str]) -> dict[str, Any]:
     return space
 
 
-def _check_space(estimator, space: Mapping[str, Any]) -> None:
-    valid = estimator.get_params(deep=True)
-    unknown = sorted(set(space) - set(valid))
-    if unknown:
-        raise CalibrationInputError(
-            f"{type(estimator).__name__} has no parameter(s) {unknown}; searchable: "
-            f"{sorted(k for k in valid if not k.endswith('random_state'))}."
-        )
-
-
 def search_calibrator(model: str, X: ArrayLike, y: ArrayLike, *, space: Mapping[str, Any] | None = None,
                       n_iter: int | None = None, cv: int = 3, groups: ArrayLike | None = None, schedule: str = "short",
                       random_state: int | None = 0, n_jobs: int | None = None, **params):
@@ -198,7 +188,13 @@ def search_calibrator(model: str, X: ArrayLike, y: ArrayLike, *, space: Mapping[
     space = dict(space)
     if not space:
         raise CalibrationInputError("the search space is empty; give at least one parameter and its values.")
-    _check_space(estimator, space)
+    valid = estimator.get_params(deep=True)
+    unknown = sorted(set(space) - set(valid))
+    if unknown:
+        raise CalibrationInputError(
+            f"{type(estimator).__name__} has no parameter(s) {unknown}; searchable: "
+            f"{sorted(k for k in valid if not k.endswith('random_state'))}."
+        )
     if isinstance(cv, bool) or not isinstance(cv, (int, np.integer)) or cv < 2:
         raise CalibrationInputError(f"cv must be an integer >= 2 (number of folds); got {cv!r}.")
     if groups is not None:

@@ -54,21 +54,21 @@ class _MLPNet(nn.Module):
         self.layers = nn.Sequential(*layers, nn.Linear(widths[-1], n_outputs))
         self._plan = mlp_layers(self)
 
-    @staticmethod
-    def state_shapes(n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int) -> dict[str, tuple[int, ...]]:
-        """The ``state_dict`` names and shapes of this net for these widths, without building it (model files check
-        a file's arrays against them before reading any).
+    @classmethod
+    def state_shapes(cls, n_inputs: int, hidden_layer_sizes: Sequence[int], n_outputs: int
+                     ) -> dict[str, tuple[int, ...]]:
+        """The ``state_dict`` names and shapes of this net for these widths, without allocating it (built on torch's
+        ``meta`` device, which holds shapes only: model files check a file's arrays against them before reading
+        any).
 
         Examples
         --------
         >>> DirectionalNet.state_shapes(6, (8,), 7)
         {'layers.0.weight': (8, 6), 'layers.0.bias': (8,), 'layers.2.weight': (7, 8), 'layers.2.bias': (7,)}
         """
-        widths, shapes = [n_inputs, *map(int, hidden_layer_sizes), n_outputs], {}
-        for i in range(len(widths) - 1):  # Linear layers at the even places of `layers` (activations between)
-            shapes[f"layers.{2 * i}.weight"] = (widths[i + 1], widths[i])
-            shapes[f"layers.{2 * i}.bias"] = (widths[i + 1],)
-        return shapes
+        with torch.device("meta"):
+            net = cls(n_inputs, hidden_layer_sizes, n_outputs)
+        return {name: tuple(value.shape) for name, value in net.state_dict().items()}
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         for layer, activation in self._plan:  # the layers' arithmetic without a module call per layer
