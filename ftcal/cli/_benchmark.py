@@ -235,14 +235,21 @@ def _models(args: argparse.Namespace) -> tuple[str, ...]:
     return tuple(dict.fromkeys(args.models or ("linear", "comparative", "directional")))
 
 
+def _artificial_models(args: argparse.Namespace) -> tuple[str, ...]:
+    """``benchmark artificial``'s models: the named ones, and the stock baselines unless only named models are
+    asked for (``--baselines`` / ``--no-baselines`` decide when given)."""
+    from ..calibrators import STOCK_BASELINE_NAMES
+
+    wanted = not args.models if args.baselines is None else args.baselines
+    return _models(args) + (STOCK_BASELINE_NAMES if wanted else ())
+
+
 def run_artificial(args: argparse.Namespace) -> int:
     import ftcal
-    from ..calibrators import STOCK_BASELINE_NAMES
     from ._scale_out import dask_backend
 
     console = Console(args.quiet)
     presets = tuple(dict.fromkeys(args.presets or ("thesis",)))
-    baselines = STOCK_BASELINE_NAMES if (not args.models if args.baselines is None else args.baselines) else ()
     n_jobs = -1 if args.scheduler else args.jobs  # on a cluster: as many tasks at once as it has workers
     with dask_backend(args.scheduler), console.progress(total=None, desc="fits", unit="fit") as bar:
 
@@ -252,7 +259,7 @@ def run_artificial(args: argparse.Namespace) -> int:
             bar.update(done - bar.n)
 
         result = ftcal.benchmark.run_artificial_benchmark(
-            n_datasets=args.n_datasets, presets=presets, models=_models(args) + baselines, schedule=args.schedule,
+            n_datasets=args.n_datasets, presets=presets, models=_artificial_models(args), schedule=args.schedule,
             test_distribution=args.test_distribution, seed=args.seed, n_jobs=n_jobs, out_dir=args.out,
             quick=args.quick, progress=progress, force=args.force, stack=args.stack)
     md = result.get("files", {}).get("markdown")  # the benchmark's markdown tables (its .md file) on stdout
