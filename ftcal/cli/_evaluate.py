@@ -11,8 +11,9 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
 from ._data_options import add_alpha_option, add_dataset_options, load_dataset_for_models
-from ._models import evaluation_alpha, model_inputs, model_label
-from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
+from ._models import evaluation_alpha, model_label
+from ..reporting import (EVALUATION_PLOTS, axis_table, comparison_table, model_inputs, predicted_plot_name,
+                         write_evaluation_plots)
 
 EXAMPLE = """\
 examples:
