@@ -117,10 +117,8 @@ def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_siz
         if width is not None and len(fields) != width:
             raise CliError(f"{source}: line {line_no}: {len(fields)} values but the header names {width} columns")
         where = f"{source}: line {line_no}"
-        if columns is not None:  # only the channel columns are read: other columns are ignored, whatever they hold
-            values = [parse_number(fields[i], where, CliError) for i in columns]
-        else:
-            values = [parse_number(f, where, CliError) for f in fields]
+        picked = fields if columns is None else [fields[i] for i in columns]  # other columns are ignored, unread
+        values = [parse_number(f, where, CliError) for f in picked]
         if len(values) != n_channels:
             read = ",".join(names) if names is not None else "s0,s1,..." + (",temperature" if temperature else "")
             given = f"{len(values)} values" if columns is None else f"{len(values)} channel columns ({read})"
@@ -263,7 +261,7 @@ def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> Cli
     from ._messages import cli_error
 
     row = exc.row if isinstance(exc, FtcalError) else None
-    unit = "row" if source.endswith(".npz") else "line"
+    unit = "row" if Path(source).suffix.lower() in (".npz", ".mat") else "line"
     if row is not None and 0 <= row < len(lines):
         reading = "the reading" if exc.parameter in (None, "X") else f"the reading's {exc.parameter}"
         return cli_error(exc, args, f"{source}: {unit} {int(lines[row])}", row=reading)
