@@ -11,7 +11,7 @@ import numpy as np
 
 from ._common import CliError, Console, OutputPlan, existing_file, finish_command, write_json
 from ._data_options import add_alpha_option, add_dataset_options, load_dataset_for_models
-from ._models import evaluation_alpha, model_inputs, model_label
+from ._models import evaluation_alpha, model_label
 from ..reporting import EVALUATION_PLOTS, axis_table, comparison_table, predicted_plot_name, write_evaluation_plots
 
 EXAMPLE = """\
@@ -45,6 +45,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
+    from ..reporting import model_inputs  # scikit-learn behind it: not at `ftcal --help`
 
     console = Console(args.quiet)
     labels = [model_label(m) for m in args.models]
@@ -116,6 +117,7 @@ def extrapolation(model, model_path, data) -> dict:
     readings beyond the calibration's readings per channel (``"readings"``, as ``predict --range`` counts them)."""
     from ..calibrators import retare_shift
     from ..io import range_excess
+    from ..reporting import model_inputs
     from ._data_options import channel_names, model_wrench_range
 
     found = {}

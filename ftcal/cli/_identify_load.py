@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
-                      existing_file, finish_command, load_robot_from_args, numbers, path_problem, refuse_twins)
+                      existing_file, finish_command, load_robot_from_args, numbers, refuse_twins)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._messages import cli_error
@@ -117,11 +117,10 @@ def existing_input(text: str) -> str:
     """argparse type: a readable file, or a readable folder (of run logs, or a rosbag2 bag)."""
     import os
 
-    if Path(text).is_dir() and not os.access(text, os.R_OK | os.X_OK):
+    if not Path(text).is_dir():
+        existing_file(text)  # a file: refused as every input file is, by what it is
+    elif not os.access(text, os.R_OK | os.X_OK):
         raise argparse.ArgumentTypeError(f"{text}: permission denied (the folder is not readable by this user)")
-    problem = None if Path(text).is_dir() else path_problem(text)
-    if problem is not None:
-        raise argparse.ArgumentTypeError(problem)
     return text
 
 

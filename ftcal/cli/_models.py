@@ -14,21 +14,13 @@ from ..core import alpha_from_wrenches
 from ..core import MODEL_SUFFIX, model_file_name
 from ._common import CliError, note_dataset, path_problem
 
-__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_dataset", "model_inputs",
+__all__ = ["MODEL_SUFFIX", "model_file_name", "model_label", "load_dataset",
            "parse_param", "dataset_alpha", "evaluation_alpha", "calibrator_params", "check_fold_count"]
 
 def model_label(path: Path) -> str:
     """Short name of a model file for tables and plots (its name without the suffix)."""
     name = Path(path).name
     return name[: -len(MODEL_SUFFIX)] if name.endswith(MODEL_SUFFIX) else Path(path).stem
-
-
-def model_inputs(model, dataset: CalibrationDataset):
-    """The ``X`` a fitted model takes from a dataset (the library's one definition,
-    :func:`ftcal.reporting.model_inputs`)."""
-    from ..reporting import model_inputs as inputs
-
-    return inputs(model, dataset)
 
 
 def load_dataset(path: str | Path, role: str = "dataset", columns=None) -> CalibrationDataset:

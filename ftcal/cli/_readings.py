@@ -117,10 +117,8 @@ def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_siz
         if width is not None and len(fields) != width:
             raise CliError(f"{source}: line {line_no}: {len(fields)} values but the header names {width} columns")
         where = f"{source}: line {line_no}"
-        if columns is not None:  # only the channel columns are read: other columns are ignored, whatever they hold
-            values = [parse_number(fields[i], where, CliError) for i in columns]
-        else:
-            values = [parse_number(f, where, CliError) for f in fields]
+        picked = fields if columns is None else [fields[i] for i in columns]  # other columns are ignored, unread
+        values = [parse_number(f, where, CliError) for f in picked]
         if len(values) != n_channels:
             read = ",".join(names) if names is not None else "s0,s1,..." + (",temperature" if temperature else "")
             given = f"{len(values)} values" if columns is None else f"{len(values)} channel columns ({read})"
@@ -222,51 +220,25 @@ def _bounded_lines(stream: IO[str], source: str) -> Iterator[str]:
         yield line
 
 
-def _npz_member_header(archive, member: str, path: str) -> tuple[tuple[int, ...], np.dtype]:
-    """Shape and dtype an ``.npy`` member of a zip declares, checked against its stored size and ftcal's memory
-    limit *before* anything is decompressed into an array."""
-    from ..core import check_allocation
-
-    info = archive.getinfo(member)
-    with archive.open(member) as fh:
-        try:
-            version = np.lib.format.read_magic(fh)
-            shape, _, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
-                               else np.lib.format.read_array_header_2_0(fh))
-        except (ValueError, EOFError, SyntaxError) as exc:
-            raise CliError(f"{path}: array 'raw' is not a numpy array ({' '.join(str(exc).split())[:120]})") from None
-    n_bytes = float(np.prod([float(d) for d in shape])) * dtype.itemsize
-    check_allocation(n_bytes, f"{path}: array 'raw' of shape {shape}", "split the readings into smaller files")
-    if n_bytes > info.file_size:
-        raise CliError(f"{path}: array 'raw' declares shape {shape} ({n_bytes:.0f} bytes) but holds only "
-                       f"{info.file_size} bytes; the file is damaged or not written by numpy")
-    return shape, dtype
-
-
 def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
-    """The array ``raw`` of a ``.npz`` file, checked for size (before reading), type, shape and finiteness."""
-    import zipfile
+    """The array ``raw`` of a ``.npz`` file, checked for type, shape and finiteness; the library's
+    :class:`ftcal.io.ArrayFile` refuses a file that is not a readable archive and reads the array bounded (its
+    declared size checked against the stored bytes and the memory limit before anything is decompressed).
 
-    from ..core import MemoryLimitError
+    ``raw`` is read as stored, one reading per row: not transposed when it has fewer rows than columns (as
+    :func:`ftcal.io.read_channels` does for MATLAB's layout), since a few readings of many channels are common here.
+    """
+    from ..io import ArrayFile
 
-    try:
-        with zipfile.ZipFile(path) as archive:
-            names = {n[:-4] if n.endswith(".npy") else n: n for n in archive.namelist()}
-            if "raw" not in names:
-                raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(names)}); save the readings "
-                               "with numpy.savez(path, raw=readings)")
-            _, dtype = _npz_member_header(archive, names["raw"], path)
-            if dtype.kind not in "iuf":
-                kind = "complex numbers" if dtype.kind == "c" else f"values of type {dtype}"
-                raise CliError(f"{path}: array 'raw' holds {kind}; raw readings are real numbers (float or int)")
-            with archive.open(names["raw"]) as fh:
-                raw = np.asarray(np.lib.format.read_array(fh, allow_pickle=False), dtype=float)
-    except (CliError, MemoryLimitError):
-        raise
-    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
-        reason = "not a zip archive" if isinstance(exc, zipfile.BadZipFile) else " ".join(str(exc).split())[:120]
-        raise CliError(f"{path}: not a readable .npz file ({reason}); save the readings with "
-                       "numpy.savez(path, raw=readings)") from None
+    with ArrayFile(path) as archive:
+        if "raw" not in archive.names():
+            raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(archive.names())}); save the "
+                           "readings with numpy.savez(path, raw=readings)")
+        raw = archive.read("raw")
+    if raw.dtype.kind not in "iuf":
+        kind = "complex numbers" if raw.dtype.kind == "c" else f"values of type {raw.dtype}"
+        raise CliError(f"{path}: array 'raw' holds {kind}; raw readings are real numbers (float or int)")
+    raw = raw.astype(float)
     if raw.ndim != 2 or raw.shape[1] != n_channels:
         raise CliError(f"{path}: array 'raw' has shape {raw.shape}; the model needs (n_samples, {n_channels})")
     bad = np.argwhere(~np.isfinite(raw))
@@ -289,7 +261,7 @@ def located_error(exc: Exception, source: str, lines: NDArray, args=None) -> Cli
     from ._messages import cli_error
 
     row = exc.row if isinstance(exc, FtcalError) else None
-    unit = "row" if source.endswith(".npz") else "line"
+    unit = "row" if Path(source).suffix.lower() in (".npz", ".mat") else "line"
     if row is not None and 0 <= row < len(lines):
         reading = "the reading" if exc.parameter in (None, "X") else f"the reading's {exc.parameter}"
         return cli_error(exc, args, f"{source}: {unit} {int(lines[row])}", row=reading)

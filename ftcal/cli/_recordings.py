@@ -91,7 +91,7 @@ def positive_int_10(text: str) -> int:
     try:
         value = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r}: give an integer >= 10") from None
+        value = 0  # not an integer: refused below, in the same words
     if value < 10:
         raise argparse.ArgumentTypeError(f"{text!r}: give an integer >= 10")
     return value

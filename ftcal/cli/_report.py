@@ -15,7 +15,7 @@ from ..core import CalibrationInputError, TooFewSamplesError
 from ._common import CliError, Console, OutputPlan, add_jobs_option, existing_file, finish_command
 from ._data_options import add_dataset_options, add_fold_options, load_dataset_for_models
 from ._messages import cli_error, cli_message
-from ._models import model_inputs, model_label
+from ._models import model_label
 
 EXAMPLE = """\
 examples:
@@ -291,7 +291,7 @@ def _fold_too_small(exc: TooFewSamplesError, n_rows: int, cv: int, dataset_path)
 
 def run(args: argparse.Namespace) -> int:
     import ftcal
-    from ..reporting import bytes_sha256, calibration_certificate, file_sha256
+    from ..reporting import bytes_sha256, calibration_certificate, file_sha256, model_inputs
 
     console = Console(args.quiet)
     label = model_label(args.model)
