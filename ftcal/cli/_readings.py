@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core import is_number, parse_number, read_header
+from ..io import check_separator, not_utf8_error
 from ._common import CliError
 
 __all__ = ["iter_reading_chunks", "read_readings_npz", "write_wrench_rows", "takes_temperature", "located_error"]
@@ -105,8 +106,8 @@ def iter_reading_chunks(stream: IO[str], source: str, n_channels: int, chunk_siz
         text = line.lstrip("\ufeff").strip() if line_no == 1 else line.strip()
         if not text or text.startswith("#"):
             continue
-        if columns is None and not seen_data:  # the first line read: its separator
-            _refuse_other_separator(text, numbered, f"{source}: line {line_no}")
+        if columns is None and not seen_data:  # the first line read: its separator, in fit's words
+            _check_separator(text, numbered, f"{source}: line {line_no}")
         fields = _split(text)
         first_word = next((f for f in fields if f and not is_number(f)), None)
         if not seen_data and columns is None and first_word is not None and first_word[:1].isalpha():
@@ -143,26 +144,13 @@ _CHUNK_BYTES = 256 * 2**20
 MAX_LINE_CHARS = 1 << 20
 
 
-def _refuse_other_separator(text: str, rest, where: str) -> None:
-    """Refuse a first line whose fields are separated by tabs or ``;`` (``rest``: the numbered lines after it, where
-    the first data row tells decimal commas after a header), in the words of ``ftcal fit``'s dataset reader: the
-    conversion that makes it comma-separated with decimal points."""
-    fields = [f.strip() for f in text.split(",")]
-    separator = next((sep for sep in (";", "\t") if any(sep in f for f in fields)), None)
-    if separator is None:
-        return
-    if text[:1].isalpha():  # a header: refused as one field (fit's rule); its first data row says the decimal mark
-        if len(fields) > 1:
-            return
-        text = next((t for t in (line.strip() for _, line in rest) if t and not t.startswith("#")), "")
-    decimal_comma = "," in text
-    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")
-    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma
-           else f"{said} to ',', e.g. tr '{typed}' ','")
-    raise CliError(f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
-                   f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal "
-                   "reads comma-separated values with decimal points. Fix: convert the file: "
-                   f"{how} < IN.csv > OUT.csv.")
+def _check_separator(text: str, rest, where: str) -> None:
+    """:func:`ftcal.io.check_separator` on a first line: a header (its first data row, read from the numbered
+    lines ``rest`` only when the header is refused, tells decimal commas) or a first line of data."""
+    fields, header = [f.strip() for f in text.split(",")], text[:1].isalpha()
+    refused = header and len(fields) == 1 and any(sep in text for sep in ";\t")
+    rows = (t for t in (line.strip() for _, line in rest) if t and not t.startswith("#")) if refused else iter(())
+    check_separator(fields, where, header=header, next_row=next(rows, ""), error=CliError)
 
 
 def utf8_lines(stream: IO[str]) -> IO[str]:
@@ -175,23 +163,17 @@ def utf8_lines(stream: IO[str]) -> IO[str]:
 
 def _not_utf8(source: str, line_no: int, line: str, offset: int) -> CliError:
     """The refusal of a line holding bytes that are not UTF-8 (``line`` decoded with ``surrogateescape``, starting at
-    byte ``offset``), in the words of the library's dataset reader: the line, the byte and the conversion."""
+    byte ``offset``), in the words of the library's readers: the line, the byte and the conversion."""
     import codecs
 
     data = line.encode("utf-8", "surrogateescape")
-    utf16 = line_no == 1 and data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
-    iconv, path = f"iconv -f {'UTF-16' if utf16 else 'LATIN1'} -t UTF-8", Path(source)
-    fix = f"pipe it through {iconv}" if source == "stdin" else \
-        f"save it as UTF-8, e.g. {iconv} {path.name} > {path.stem}-utf8{path.suffix}"
     what = "raw readings are a text file in UTF-8 (or a .npz with array 'raw')"
-    if utf16:
-        return CliError(f"{source}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what}. Fix: "
-                        f"{fix}.")
+    if line_no == 1 and data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
+        return not_utf8_error(source, what, utf16=True, error=CliError)
     try:
         data.decode("utf-8")
     except UnicodeDecodeError as exc:  # always: the surrogates stand for bytes that are not UTF-8
-        return CliError(f"{source}: line {line_no} (byte {offset + exc.start}): not UTF-8 text ({exc.reason}); "
-                        f"{what}. Fix: {fix} if it is Latin-1 (Windows-1252: -f CP1252).")
+        return not_utf8_error(source, what, line=line_no, byte=offset + exc.start, reason=exc.reason, error=CliError)
     raise AssertionError("a line with a lone surrogate decoded as UTF-8")
 
 

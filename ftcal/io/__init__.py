@@ -21,7 +21,8 @@ _PUBLIC.update(  # names the CLI uses
     DEFAULT_MAX_SAMPLES="_bags", PLAUSIBLE_LEVER_ARM_M="_readers", canonical_wrench_name="_readers",
     check_rosbags="_bags", bag_values="_bags", expand_names="_readers", is_bag="_bags", is_pose_file="_poses",
     lever_arm_m="_readers", lever_arm_problem="_readers", parse_column_slice="_readers",
-    read_channels="_dataset", unit_scale="_readers", ArrayFile="_readers",
+    read_channels="_dataset", unit_scale="_readers", ArrayFile="_readers", not_utf8_error="_readers",
+    check_separator="_readers",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)

@@ -53,7 +53,7 @@ from ..core._files import atomic_output, content_twins
 from ..core._temperature import check_temperature
 from ..core._wrench import MIN_CHANNELS, WRENCH_LABELS, default_axes
 from ._readers import (GROUPS, ArrayFile, ColumnMap, canonical_wrench_name, check_real_array, checked_temperature,
-                       named_axes, parse_column_slice, read_utf8_text, _INTEGER, _slice_columns)
+                       named_axes, parse_column_slice, read_utf8_text, check_separator, _INTEGER, _slice_columns)
 
 __all__ = ["CalibrationDataset", "RowSources", "DATASET_SUFFIXES", "read_channels"]
 
@@ -166,25 +166,6 @@ def _csv_fields(line: str) -> list[str]:
     if '"' not in line:
         return [f.strip() for f in line.split(",")]
     return [f.strip() for f in next(csv.reader([line], skipinitialspace=True))]
-
-
-def _refuse_other_separator(names: list[str], first_rows: list[str], where: str) -> None:
-    """Refuse a CSV whose fields are separated by ``;`` (a spreadsheet's export where the decimal mark is a comma)
-    or tabs, naming the conversion that makes it a comma-separated file with decimal points (checked on its first
-    data row: a comma there is a decimal comma)."""
-    if len(names) != 1:
-        return
-    separator = next((sep for sep in (";", "\t") if sep in names[0]), None)
-    if separator is None:
-        return
-    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")  # as said, and as typed for tr
-    decimal_comma = any("," in row for row in first_rows)
-    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma else
-           f"{said} to ',', e.g. tr '{typed}' ','") + " < IN.csv > OUT.csv"
-    raise DatasetFileError(
-        f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
-        f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal reads "
-        f"comma-separated values with decimal points. Fix: convert the file: {how}.")
 
 
 @dataclass(frozen=True)
@@ -688,7 +669,7 @@ class CalibrationDataset:
             raise DatasetFileError(f"{path}: no header line; expected {_CSV_LAYOUT}.")
         where = f"{path}: line {header_no}"
         names = _csv_fields(lines[header_no - 1].lstrip("\ufeff"))
-        _refuse_other_separator(names, [lines[no - 1] for no in line_nos[:1]], where)
+        check_separator(names, where, next_row=lines[line_nos[0] - 1] if line_nos else "")
         if all(f and is_number(f) for f in names):
             raise DatasetFileError(
                 f"{where}: the file has no header: its first line holds numbers, not column names.",

@@ -43,7 +43,7 @@ from ..core._wrench import WRENCH_LABELS, force_columns, torque_columns
 
 __all__ = ["FORCE_UNITS", "TORQUE_UNITS", "STANDARD_GRAVITY", "ColumnMap", "unit_scale", "canonical_wrench_name",
            "expand_names", "named_axes", "parse_column_slice", "lever_arm_m", "lever_arm_problem", "ArrayFile",
-           "check_real_array", "has_header", "join_headerless", "JoinedTable"]
+           "check_real_array", "has_header", "join_headerless", "JoinedTable", "not_utf8_error", "check_separator"]
 
 #: Standard gravity [m/s²] (ISO 80000-3): a mass unit read as a force is its weight, ``1 g`` = 9.80665 mN.
 STANDARD_GRAVITY = 9.80665
@@ -818,15 +818,59 @@ def read_utf8_text(path, what: str, error: type[Exception] = DatasetFileError) -
     try:
         return data.decode("utf-8-sig").replace("\r\n", "\n").replace("\r", "\n")
     except UnicodeDecodeError as exc:
-        fixed = f"{path.stem}-utf8{path.suffix}"
         if data[:2] in (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE):
-            raise error(f"{path}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what} in UTF-8. "
-                        f"Fix: save it as UTF-8, e.g. iconv -f UTF-16 -t UTF-8 {path.name} > {fixed}.") from None
+            raise not_utf8_error(str(path), f"{what} in UTF-8", utf16=True, error=error) from None
         at = exc.start + (3 if data.startswith(codecs.BOM_UTF8) else 0)  # counted after the mark
-        line = data[:at].count(b"\n") + 1
-        raise error(f"{path}: line {line} (byte {at}): not UTF-8 text ({exc.reason}); {what} in UTF-8. Fix: save it "
-                    f"as UTF-8, e.g. iconv -f LATIN1 -t UTF-8 {path.name} > {fixed} if it is Latin-1 (Windows-1252: "
-                    "-f CP1252).") from None
+        raise not_utf8_error(str(path), f"{what} in UTF-8", line=data[:at].count(b"\n") + 1, byte=at,
+                             reason=exc.reason, error=error) from None
+
+
+def not_utf8_error(source: str, what: str, *, line: int = 0, byte: int = 0, reason: str = "", utf16: bool = False,
+                   error: type[Exception] = DatasetFileError) -> Exception:
+    """The refusal of text that is not UTF-8: ``source`` (a path, or ``"stdin"``), where it stops being UTF-8
+    (1-based ``line``, 0-based ``byte``, the decoder's ``reason``) or that it is UTF-16 (``utf16``, told by its
+    byte-order mark), ``what`` the file must be, and the ``iconv`` conversion that fixes it.
+
+    Examples
+    --------
+    >>> str(not_utf8_error("stdin", "readings are UTF-8 text", line=2, byte=9, reason="invalid start byte"))
+    'stdin: line 2 (byte 9): not UTF-8 text (invalid start byte); readings are UTF-8 text. Fix: pipe it through iconv -f LATIN1 -t UTF-8 if it is Latin-1 (Windows-1252: -f CP1252).'
+    """
+    path, iconv = Path(source), f"iconv -f {'UTF-16' if utf16 else 'LATIN1'} -t UTF-8"
+    fix = f"pipe it through {iconv}" if source == "stdin" else \
+        f"save it as UTF-8, e.g. {iconv} {path.name} > {path.stem}-utf8{path.suffix}"
+    if utf16:
+        return error(f"{source}: UTF-16 text (it starts with a UTF-16 byte-order mark), not UTF-8; {what}. Fix: {fix}.")
+    return error(f"{source}: line {line} (byte {byte}): not UTF-8 text ({reason}); {what}. Fix: {fix} if it is "
+                 "Latin-1 (Windows-1252: -f CP1252).")
+
+
+def check_separator(fields: Sequence[str], where: str, *, header: bool = True, next_row: str = "",
+                    error: type[Exception] = DatasetFileError) -> None:
+    """Refuse a table whose fields are separated by ``;`` (a spreadsheet's export where the decimal mark is a
+    comma) or tabs, naming the conversion that makes it comma-separated with decimal points. ``fields``: the first
+    line's comma-separated fields; a ``header`` is refused only as one field, and its ``next_row`` (the first data
+    row) tells a decimal comma; a first line of data tells it itself.
+
+    Examples
+    --------
+    >>> check_separator(["s0", "s1", "Fx"], "d.csv: line 1")  # comma-separated: nothing to say
+    >>> check_separator(["s0;s1;Fx"], "d.csv: line 1", next_row="1,5;2;3")
+    Traceback (most recent call last):
+    ...
+    ftcal.core._exceptions.DatasetFileError: d.csv: line 1: the fields are separated by ';' with decimal commas (a spreadsheet export in a locale with a decimal comma?); ftcal reads comma-separated values with decimal points. Fix: convert the file: decimal commas to points and ';' to ',', e.g. tr ',;' '.,' < IN.csv > OUT.csv.
+    """
+    separator = next((sep for sep in (";", "\t") if any(sep in f for f in fields)), None)
+    if separator is None or (header and len(fields) > 1):
+        return
+    said, typed = ("';'", ";") if separator == ";" else ("tabs", "\\t")  # as said, and as typed for tr
+    decimal_comma = "," in next_row if header else len(fields) > 1
+    how = (f"decimal commas to points and {said} to ',', e.g. tr ',{typed}' '.,'" if decimal_comma else
+           f"{said} to ',', e.g. tr '{typed}' ','") + " < IN.csv > OUT.csv"
+    raise error(
+        f"{where}: the fields are separated by {said}{' with decimal commas' if decimal_comma else ''}"
+        f"{' (a spreadsheet export in a locale with a decimal comma?)' if separator == ';' else ''}; ftcal reads "
+        f"comma-separated values with decimal points. Fix: convert the file: {how}.")
 
 
 # ------------------------------------------------------------------ headerless text files named by the user
