@@ -357,3 +357,27 @@ def test_plan_warns_when_too_few_poses_remain_for_the_linear_model(tmp_path, cap
     assert main(["plan", "--excluded-cap-deg", "179.9", "--out", str(tmp_path / "p"), "-q"]) == 0
     err = capsys.readouterr().err
     assert "ftcal: warning: 1 poses cannot calibrate even the linear model (it needs 7" in err
+
+
+@pytest.mark.parametrize("make, words", [
+    (lambda p: p.write_text("s0,s1\n1,2\n"), "not an .npz (zip) archive"),
+    (lambda p: np.savez(p, raw=np.array([[1, "a"]], dtype=object)), "holds Python objects"),
+    (lambda p: p.write_bytes(_valid_npz_bytes()[:200]), "not an .npz (zip) archive"),
+])
+def test_a_broken_readings_npz_gets_advice_for_readings_not_for_a_dataset(affine_dir, tmp_path, capsys, make, words):
+    # predict reads its .npz through the library's ArrayFile: the advice must name readings (the array raw), not a
+    # dataset's raw and wrench
+    path = tmp_path / "readings.npz"
+    make(path)
+    assert main(["predict", str(affine_dir / "models" / "linear.model.npz"), str(path)]) == 2
+    line = one_error_line(capsys)
+    assert words in line and str(path) in line and "raw" in line
+    assert "wrench" not in line and "dataset" not in line
+
+
+def _valid_npz_bytes() -> bytes:
+    import io
+
+    buffer = io.BytesIO()
+    np.savez(buffer, raw=np.ones((50, 6)))
+    return buffer.getvalue()

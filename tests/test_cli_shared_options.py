@@ -78,6 +78,7 @@ def test_removed_old_spellings_are_refused_in_one_line(argv, old, tmp_path, monk
     code = main(argv + old)
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2 and len(err) == 1 and old[0] in err[0] and err[0].startswith("ftcal: error: ")
+    assert f"{old[0]} is now --" in err[0]  # what to write instead
 
 
 @pytest.mark.parametrize("argv", [["fit", "d.csv"], ["tune", "d.csv"], ["identify-load", "d.csv"]])

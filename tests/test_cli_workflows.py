@@ -185,7 +185,7 @@ def test_prepare_bad_inputs_give_one_line(tmp_path, capsys):
     assert not (tmp_path / "d").exists()
 
 
-def test_prepare_channel_count_is_n_channels_and_the_old_spelling_warns(tmp_path):
+def test_prepare_channel_count_is_n_channels_and_the_old_spelling_says_so(tmp_path):
     def ftcal_cli(*argv):
         return subprocess.run([sys.executable, "-m", "ftcal", *map(str, argv)], capture_output=True, text=True)
 
@@ -199,7 +199,8 @@ def test_prepare_channel_count_is_n_channels_and_the_old_spelling_warns(tmp_path
     assert ftcal_cli("prepare", logs, "--n-channels", n, "--out", tmp_path / "a", "--force", "-q").returncode == 0
     spec = ftcal_cli("prepare", logs, "--channels", "g1..g4", "--out", tmp_path / "c")  # a column spec: not here
     err = spec.stderr.strip().splitlines()
-    assert spec.returncode == 2 and len(err) == 1 and "--channels" in err[0] and not (tmp_path / "c").exists()
+    assert spec.returncode == 2 and len(err) == 1 and not (tmp_path / "c").exists()
+    assert "--channels is now --n-channels N on prepare" in err[0]
 
 
 def test_benchmark_real_world_quick(tmp_path, capsys):

@@ -330,7 +330,8 @@ _OWN_SPLITS = {
 }
 #: The modules that judge a model (auto's choice, the save gate, the certificate and its report): they take their
 #: folds from one :class:`~ftcal.model_selection.FoldPlan` and make none of their own.
-_JUDGES = ("compose/_auto.py", "workflow/_calibrate.py", "reporting/_certificate.py", "reporting/_calibration_report.py")
+_JUDGES = ("compose/_auto.py", "workflow/_calibrate.py", "reporting/_certificate.py",
+           "reporting/_calibration_report.py")
 
 
 def _splitters_and_fold_calls(source: str) -> tuple[set[str], set[str]]:
@@ -347,7 +348,7 @@ def _splitters_and_fold_calls(source: str) -> tuple[set[str], set[str]]:
             imported.add(node.attr)
         elif isinstance(node, ast.Call):
             name = ast.unparse(node.func).rsplit(".", 1)[-1]
-            if name in {"calibration_folds", "_shuffled_group_folds"} | splitters:
+            if name in {"calibration_folds"} | splitters:
                 called.add(name)
     return imported, called
 

@@ -212,7 +212,7 @@ def make_model(name: str, *, n_channels: int, alpha: float, schedule: str = "the
     from ..compose._registry import make_calibrator
 
     if name in STOCK_BASELINE_NAMES:
-        return stock_baselines(int(n_channels), random_state=int(random_state))[name]
+        return stock_baselines(n_channels, random_state=random_state)[name]
     return make_calibrator(name, schedule=schedule, random_state=random_state, alpha=alpha, **(overrides or {}))
 
 

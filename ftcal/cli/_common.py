@@ -53,6 +53,11 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
         return f"{text} (default: %(default)s)"
 
 
+#: Spellings removed before the first release -> what to write now (said when one is given).
+REMOVED_SPELLINGS = {"--group-folds": "--folds group", "--random-folds": "--folds kfold", "--drift-cv": "--cv K",
+                     "--channels": "--n-channels N on prepare (--channels names columns on the other commands)"}
+
+
 class Parser(argparse.ArgumentParser):
     """An ArgumentParser that raises :class:`UsageError` instead of printing usage and exiting."""
 
@@ -65,7 +70,9 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def error(self, message: str) -> None:  # type: ignore[override]
-        raise UsageError(f"{message} (see '{self.prog} --help')")
+        given = message.split() if message.startswith("unrecognized arguments:") else []
+        hints = "".join(f"; {old} is now {new}" for old, new in REMOVED_SPELLINGS.items() if old in given)
+        raise UsageError(f"{message}{hints} (see '{self.prog} --help')")
 
     def _get_values(self, action, arg_strings):
         # argparse drops a value of exactly "--" (`--name=--`) and hands the option an empty list; an empty value

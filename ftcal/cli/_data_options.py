@@ -196,7 +196,8 @@ def _sources_of_joined(data, path: str):
 
 
 def add_fold_options(g, *, cv_default: int, folds: bool = True) -> None:
-    """``--cv K`` (default ``cv_default``) and, with ``folds``, ``--folds auto|group|kfold``: the same options on every command that cross-validates."""
+    """``--cv K`` (default ``cv_default``) and, with ``folds``, ``--folds auto|group|kfold``: the same options on
+    every command that cross-validates."""
     g.add_argument("--cv", type=int_in_range(2, 1000, "folds"), default=cv_default, metavar="K", help=CV_HELP)
     if folds:
         g.add_argument("--folds", choices=("auto", "group", "kfold"), default="auto", help=FOLDS_HELP)

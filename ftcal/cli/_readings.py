@@ -212,7 +212,7 @@ def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
     """
     from ..io import ArrayFile
 
-    with ArrayFile(path) as archive:
+    with ArrayFile(path, holds=("readings", "raw")) as archive:
         if "raw" not in archive.names():
             raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(archive.names())}); save the "
                            "readings with numpy.savez(path, raw=readings)")

@@ -645,9 +645,13 @@ class ArrayFile:
     path : path
         The file; ``.npz`` (any letter case) is a zip of ``.npy`` members, ``.mat`` a MATLAB v4-v7 file (v7.3 is
         HDF5, which ftcal does not read: refused with the fix).
+    holds : (str, str), default=("dataset", "raw, wrench")
+        What the file is and the arrays it holds, for the advice of a refusal (``("readings", "raw")`` for
+        raw readings to predict).
     """
 
-    def __init__(self, path) -> None:
+    def __init__(self, path, holds: tuple[str, str] = ("dataset", "raw, wrench")) -> None:
+        self.holds = holds
         self.path = Path(path)
         self.where = str(path)
         self.is_npz = self.path.suffix.lower() == ".npz"
@@ -667,13 +671,15 @@ class ArrayFile:
         from ..core._files import describe_file_start
 
         if not zipfile.is_zipfile(self.path):  # np.load would try it as a pickle and advise allow_pickle=True
+            what, arrays = self.holds
+            said = "the arrays raw and wrench" if arrays == "raw, wrench" else f"the array {arrays}"
+            text = f"a .csv {what} must keep its .csv suffix" if what == "dataset" else f"{what} as text are not .npz"
             raise DatasetFileError(f"{self.where}: not an .npz (zip) archive: {describe_file_start(self.path)}. A "
-                                   "dataset .npz holds the arrays raw and wrench (numpy.savez); a .csv dataset must "
-                                   "keep its .csv suffix.")
+                                   f"{what} .npz holds {said} (numpy.savez); {text}.")
         try:
             self._zip = zipfile.ZipFile(self.path)
         except (OSError, zipfile.BadZipFile) as exc:
-            raise DatasetFileError(f"{self.where}: not a readable .npz dataset ({exc}).") from None
+            raise DatasetFileError(f"{self.where}: not a readable .npz {self.holds[0]} ({exc}).") from None
         for member in self._zip.namelist():
             if member.endswith(".npy"):
                 self.entries[member[:-4]] = ((), "?")  # the header is read when the array is used
@@ -731,7 +737,8 @@ class ArrayFile:
         :func:`check_real_array` when it is used."""
         if self.is_npz:
             return read_npy_member(self._zip, f"{name}.npy", f"{self.where}: array {name!r}", DatasetFileError,
-                                   "save numeric arrays (numpy.savez(path, raw=..., wrench=...))",
+                                   "save numeric arrays (numpy.savez(path, "
+                                   f"{', '.join(f'{a}=...' for a in self.holds[1].split(', '))}))",
                                    "split the data into smaller files")
         shape, cls = self.entries[name]
         check_allocation(float(np.prod([float(d) for d in shape])) * _MAT_ITEM_BYTES.get(cls, 8),

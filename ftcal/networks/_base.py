@@ -125,7 +125,8 @@ class NetworkCalibrator(BaseCalibrator):
     def _schedule_epochs(self) -> tuple[int, int]:
         """``(phase 1's length, the cap on all epochs)`` from ``phase1_epochs`` and ``max_epochs``."""
         phase1 = self._default_phase1_epochs if self.phase1_epochs is None else int(self.phase1_epochs)
-        cap = phase1 + self.plateau_epochs + self.max_recover_epochs if self.max_epochs is None else int(self.max_epochs)
+        full = phase1 + self.plateau_epochs + self.max_recover_epochs
+        cap = full if self.max_epochs is None else int(self.max_epochs)
         return phase1, cap
 
     _parameter_constraints: dict = {
