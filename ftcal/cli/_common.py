@@ -565,44 +565,6 @@ def note_inputs(args: argparse.Namespace, parser: argparse.ArgumentParser | None
                         file_id, f"the {role} file itself" if child is path else f"one of the {role} files ({child})")
 
 
-def refuse_twins(paths: Iterable[str | os.PathLike], what: str) -> None:
-    """Refuse inputs that hold the same values (one recording given twice: under two names, twice in a folder, in
-    two formats, with other number formatting, its rows in another order, a bag with its receive times shifted or
-    a log topic added): it would count its poses twice, and its twins would fall in different folds, so a model
-    would be judged on its own training rows. ``what`` says what the inputs are (``"ROS bag"``, ``"run log"``,
-    ``"pose file"``); they are compared by what their reader reads, as sets of rows, each number within 1e-7 of itself
-    (:func:`ftcal.core.content_twins`: a truncated copy or another recording sharing most rows is not a twin; a
-    bag by a streamed digest of each usable topic's values, :func:`ftcal.io.bag_values`),
-    after a cheap key (a bag's usable topics and first messages, a text file's row count: only inputs alike in
-    it are read)."""
-    from ..core import content_twins, values_sha256
-    from ..io import bag_values, read_pose_file, read_run_log
-
-    def rows(path: Path) -> int:
-        with open(path, "rb") as fh:
-            lines = (line.strip().removeprefix(b"\xef\xbb\xbf") for line in fh)
-            return sum(1 for line in lines if line and not line.startswith(b"#"))
-
-    def text_values(path: Path):
-        if what == "run log":
-            log = read_run_log(path)
-            return [log.timestamp, log.run_kind, log.config, log.pose, log.q, log.raw, log.temperature,
-                    log.load_mass]  # the declared load makes the reference wrenches: another mass, another run
-        rec = read_pose_file(path, orientation_required=False)
-        return [rec.rotation, rec.wrench, rec.raw, rec.time, rec.temperature]
-
-    if what == "ROS bag":
-        twins = content_twins(paths, bag_values, key=lambda p: values_sha256(bag_values(p, head=20)))
-    else:
-        twins = content_twins(paths, text_values, key=rows)
-    if twins:
-        first, second = twins[0]
-        more = f" (and {len(twins) - 1} more pairs)" if len(twins) > 1 else ""
-        raise CliError(f"{second} holds the same {what} as {first} (the same values read from both){more}: one "
-                       "recording given twice would count its poses twice and judge a model on its own rows; give "
-                       "each recording once")
-
-
 def check_not_an_input(output: str | os.PathLike) -> None:
     """Raise :class:`CliError` when ``output`` is (a link to, another name of) a file the command reads."""
     file_id = _file_id(output)

@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_name_option, add_output_file_options, add_robot_options,
-                      existing_file, finish_command, load_robot_from_args, numbers, refuse_twins)
+                      existing_file, finish_command, load_robot_from_args, numbers)
 from ._data_options import add_unit_options, check_lever_arm, named_inputs
 from ._prepare import log_files
 from ._messages import cli_error
@@ -15,6 +15,7 @@ from ._recordings import (add_bag_options, add_recording_options, bag_files, rec
                           say_notes)
 from ._tool_drift import add_drift_options
 from ..core import FtcalError
+from ..io import refuse_twin_recordings
 
 IDENTIFY_EXAMPLE = """\
 examples:
@@ -155,7 +156,7 @@ def _read_inputs(args, console: Console, reader):
     else:
         refuse_bag_options(args, f"{kind}s")
         if kind == "pose file":
-            refuse_twins(args.inputs, "pose file")
+            refuse_twin_recordings(args.inputs, "pose file", CliError)
         paths = log_files(args.inputs) if kind == "run log" else [Path(p) for p in args.inputs]
     if kind == "run log" and args.model is None:
         raise CliError("run logs hold raw channels: give the calibration model that turns them into a wrench, "

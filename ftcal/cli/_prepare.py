@@ -7,8 +7,8 @@ import sys
 from pathlib import Path
 
 from ._common import (CliError, Console, OutputPlan, add_robot_options, finish_command, int_in_range,
-                      load_robot_from_args, path_problem, positive_float, refuse_twins)
-from ..io import run_log_files
+                      load_robot_from_args, path_problem, positive_float)
+from ..io import refuse_twin_recordings, run_log_files
 from ._data_options import add_columns_option, named_inputs
 from ._messages import cli_spelling
 from ._recordings import add_bag_options, add_recording_options, bag_files, bag_run_log, refuse_bag_options
@@ -76,7 +76,7 @@ def log_files(items: list[str]) -> list[Path]:
         else:
             raise CliError(f"{path_problem(path)} (a run log, or a directory of *.csv run logs)")
     files = list(dict.fromkeys(files))
-    refuse_twins(files, "run log")
+    refuse_twin_recordings(files, "run log", CliError)
     return files
 
 

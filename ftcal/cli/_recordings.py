@@ -10,7 +10,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ._common import CliError, Console, finite_float, positive_float, refuse_twins
+from ..io import refuse_twin_recordings
+from ._common import CliError, Console, finite_float, positive_float
 
 __all__ = ["add_recording_options", "add_bag_options", "bag_files", "bag_run_log", "refuse_bag_options",
            "recording_options", "say_notes"]
@@ -113,7 +114,7 @@ def bag_files(items: list[str]) -> list[Path] | None:
             other.append(path)
     if found and other:
         raise CliError(f"the inputs mix ROS bags ({found[0]}) and other files ({other[0]}); give one kind")
-    refuse_twins(found, "ROS bag")
+    refuse_twin_recordings(found, "ROS bag", CliError)
     return found or None
 
 

@@ -22,7 +22,7 @@ _PUBLIC.update(  # names the CLI uses
     check_rosbags="_bags", bag_values="_bags", expand_names="_readers", is_bag="_bags", is_pose_file="_poses",
     lever_arm_m="_readers", lever_arm_problem="_readers", parse_column_slice="_readers",
     read_channels="_dataset", unit_scale="_readers", ArrayFile="_readers", not_utf8_error="_readers",
-    check_separator="_readers",
+    check_separator="_readers", refuse_twin_recordings="_twins",
 )
 __all__ = list(_PUBLIC)
 __getattr__, __dir__ = lazy_namespace(__name__, _PUBLIC)
