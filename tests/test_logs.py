@@ -153,3 +153,20 @@ def test_raw_values_no_calibration_can_square_are_refused_with_their_line(tmp_pa
     p = _break_row(_write(tmp_path), 11, "s1", "1e300")
     with pytest.raises(LogFormatError, match=r"run\.csv: line 11: column s1 is 1e\+300, beyond the 1e\+100"):
         read_run_log(p)
+
+
+@pytest.mark.parametrize("separator, said", [("\t", "tabs"), (";", "';'")])
+def test_a_run_log_or_pose_file_in_another_separator_is_refused_with_the_conversion(tmp_path, separator, said):
+    # a run log re-saved by a spreadsheet: its header is one field; it was refused as a column name not in ASCII
+    from ftcal.io import read_pose_file
+
+    p = _write(tmp_path)
+    lines = p.read_text().splitlines()
+    p.write_text("\n".join(line if line.startswith("#") else line.replace(",", separator) for line in lines) + "\n")
+    with pytest.raises(LogFormatError, match=rf"run\.csv: line 9: the fields are separated by {said}.*Fix: convert"):
+        read_run_log(p)
+    poses = tmp_path / "poses.csv"
+    poses.write_text(separator.join(["qw", "qx", "qy", "qz", "Fx", "Fy", "Fz", "Tx", "Ty", "Tz"]) + "\n"
+                     + separator.join(["1", "0", "0", "0", "1", "2", "3", "0.1", "0.2", "0.3"]) + "\n")
+    with pytest.raises(LogFormatError, match=rf"poses\.csv: line 1: the fields are separated by {said}"):
+        read_pose_file(poses)

@@ -54,7 +54,7 @@ from ..core._exceptions import CalibrationInputError, LogFormatError
 from ..core._memory import check_allocation
 from ..core._temperature import check_temperature
 from ..core._wrench import MAX_LOAD_MASS_KG
-from ._readers import _INTEGER, checked_temperature, read_utf8_text
+from ._readers import _INTEGER, check_separator, checked_temperature, read_utf8_text
 
 __all__ = ["RunLog", "read_run_log", "write_run_log", "run_log_files", "RUN_KINDS", "SHARED_NO_LOAD_CONFIG"]
 
@@ -226,6 +226,8 @@ def read_run_log(path: str | Path, *, n_channels: int | None = None, n_joints: i
     info, n_comment, info_line = _parse_comments(path, text_lines)
     units = _log_units(path, info, info_line, text_lines, n_comment)
     head_line = n_comment + 1
+    check_separator(text_lines[n_comment].split(","), f"{path}: line {head_line}", error=LogFormatError,
+                    next_row=text_lines[n_comment + 1] if n_comment + 1 < len(text_lines) else "")
     header, q_cols, s_cols = _log_columns(path, text_lines[n_comment], head_line, n_channels, n_joints)
     rows = text_rows(text_lines, head_line)
     for lineno, fields in rows:

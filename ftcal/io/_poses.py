@@ -41,7 +41,7 @@ from ..core._columns import parse_number, read_header
 from ..core._exceptions import LogFormatError
 from ..core._wrench import WRENCH_LABELS
 from ._logs import _parse_comments, read_text_lines, text_rows
-from ._readers import ColumnMap, named_axes
+from ._readers import ColumnMap, check_separator, named_axes
 
 __all__ = ["PoseRecording", "read_pose_file", "ORIENTATION_LAYOUTS", "is_pose_file"]
 
@@ -168,6 +168,7 @@ def read_pose_file(path: str | Path, *, force_unit: str = "N", torque_unit: str 
         raise LogFormatError(f"{path}: line {head_line}: no header line; expected {_EXPECTED}.")
     fields, rows = next(csv.reader([lines[head_line - 1]])), text_rows(lines, head_line)
     where = f"{path}: line {head_line}"
+    check_separator(fields, where, next_row=lines[head_line] if head_line < len(lines) else "", error=LogFormatError)
     head = read_header(fields, where=where, error=LogFormatError, numbered=(), allow_other=True, expected=_EXPECTED)
     names = list(head.names)
     layouts = [name for name, cols in ORIENTATION_LAYOUTS.items() if all(c in head for c in cols)]
