@@ -242,3 +242,11 @@ def test_infinities_must_stand_in_the_same_places_with_the_same_values_around_th
     values = {"a": [np.array([1.0, 2.0, np.inf])], "b": [np.array([5.0, 7.0, np.inf])],
               "c": [np.array([2.0, np.inf, 1.0])]}
     assert content_twins(list(values), lambda p: values[str(p)]) == [(Path("a"), Path("c"))]
+
+
+def test_refuse_twin_recordings_names_an_unknown_kind(tmp_path):
+    from ftcal.core import CalibrationInputError
+    from ftcal.io import refuse_twin_recordings
+
+    with pytest.raises(CalibrationInputError, match=r"what must be one of .*'pose file'.*got 'poses'"):
+        refuse_twin_recordings([tmp_path / "a.csv"], "poses")

@@ -149,8 +149,10 @@ def _check_separator(text: str, rest, where: str) -> None:
     lines ``rest`` only when the header is refused, tells decimal commas) or a first line of data."""
     fields, header = [f.strip() for f in text.split(",")], text[:1].isalpha()
     refused = header and len(fields) == 1 and any(sep in text for sep in ";\t")
-    rows = (t for t in (line.strip() for _, line in rest) if t and not t.startswith("#")) if refused else iter(())
-    check_separator(fields, where, header=header, next_row=next(rows, ""), error=CliError)
+    following = ""
+    if refused:  # read on only for the refusal's words
+        following = next((t for t in (line.strip() for _, line in rest) if t and not t.startswith("#")), "")
+    check_separator(fields, where, header=header, next_row=following, error=CliError)
 
 
 def utf8_lines(stream: IO[str]) -> IO[str]:
@@ -212,7 +214,7 @@ def read_readings_npz(path: str, n_channels: int) -> NDArray[np.float64]:
     """
     from ..io import ArrayFile
 
-    with ArrayFile(path, holds=("readings", "raw")) as archive:
+    with ArrayFile(path, holds=("readings", ("raw",))) as archive:
         if "raw" not in archive.names():
             raise CliError(f"{path}: no array 'raw' in the .npz (it holds {sorted(archive.names())}); save the "
                            "readings with numpy.savez(path, raw=readings)")

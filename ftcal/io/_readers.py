@@ -645,12 +645,12 @@ class ArrayFile:
     path : path
         The file; ``.npz`` (any letter case) is a zip of ``.npy`` members, ``.mat`` a MATLAB v4-v7 file (v7.3 is
         HDF5, which ftcal does not read: refused with the fix).
-    holds : (str, str), default=("dataset", "raw, wrench")
-        What the file is and the arrays it holds, for the advice of a refusal (``("readings", "raw")`` for
+    holds : (str, tuple of str), default=("dataset", ("raw", "wrench"))
+        What the file is and the arrays it holds, for the advice of a refusal (``("readings", ("raw",))`` for
         raw readings to predict).
     """
 
-    def __init__(self, path, holds: tuple[str, str] = ("dataset", "raw, wrench")) -> None:
+    def __init__(self, path, holds: tuple[str, tuple[str, ...]] = ("dataset", ("raw", "wrench"))) -> None:
         self.holds = holds
         self.path = Path(path)
         self.where = str(path)
@@ -672,7 +672,7 @@ class ArrayFile:
 
         if not zipfile.is_zipfile(self.path):  # np.load would try it as a pickle and advise allow_pickle=True
             what, arrays = self.holds
-            said = "the arrays raw and wrench" if arrays == "raw, wrench" else f"the array {arrays}"
+            said = f"the arrays {' and '.join(arrays)}" if len(arrays) > 1 else f"the array {arrays[0]}"
             text = f"a .csv {what} must keep its .csv suffix" if what == "dataset" else f"{what} as text are not .npz"
             raise DatasetFileError(f"{self.where}: not an .npz (zip) archive: {describe_file_start(self.path)}. A "
                                    f"{what} .npz holds {said} (numpy.savez); {text}.")
@@ -738,7 +738,7 @@ class ArrayFile:
         if self.is_npz:
             return read_npy_member(self._zip, f"{name}.npy", f"{self.where}: array {name!r}", DatasetFileError,
                                    "save numeric arrays (numpy.savez(path, "
-                                   f"{', '.join(f'{a}=...' for a in self.holds[1].split(', '))}))",
+                                   f"{', '.join(f'{a}=...' for a in self.holds[1])}))",
                                    "split the data into smaller files")
         shape, cls = self.entries[name]
         check_allocation(float(np.prod([float(d) for d in shape])) * _MAT_ITEM_BYTES.get(cls, 8),

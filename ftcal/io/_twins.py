@@ -11,7 +11,7 @@ import os
 from collections.abc import Iterable
 from pathlib import Path
 
-from ..core._exceptions import DatasetFileError
+from ..core._exceptions import CalibrationInputError, DatasetFileError
 from ..core._files import content_twins, values_sha256
 
 __all__ = ["refuse_twin_recordings"]
@@ -51,7 +51,7 @@ def refuse_twin_recordings(paths: Iterable[str | os.PathLike], what: str,
     from ._poses import read_pose_file
 
     if what not in _KINDS:
-        raise ValueError(f"what must be one of {_KINDS}; got {what!r}")
+        raise CalibrationInputError(f"what must be one of {_KINDS}; got {what!r}", parameter="what", value=what)
 
     def text_values(path: Path):
         if what == "run log":
